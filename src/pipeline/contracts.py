@@ -1,0 +1,331 @@
+"""Table contracts: a pydantic model per port, compiled once into an Arrow schema and
+vectorised checks.
+
+A contract is a subclass of :class:`TableContract` with one field per column::
+
+    class Stations(TableContract):
+        md: float = column(unit="m", ge=0, monotonic="strict", description="measured depth")
+        inc: float = column(unit="deg", ge=0, le=180, description="inclination")
+
+The field's Python type gives the Arrow type (``float`` → float64, ``int`` → int64, ``str`` →
+string, ``bool`` → bool); ``X | None`` makes the column nullable. Units live in each Arrow
+field's metadata under ``unit`` and are checked; azimuth columns also carry
+``north_reference`` (true, grid or magnetic). Checks run on whole columns with NumPy and
+``pyarrow.compute``; rows are pulled out only to describe a failure.
+"""
+
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass
+from functools import cache
+from typing import Any, ClassVar, Literal, Union, get_args, get_origin
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.errors import ContractViolation, RuleFailure
+
+UNIT_KEY = b"unit"
+NORTH_KEY = b"north_reference"
+NORTH_REFERENCES = ("true", "grid", "magnetic")
+Monotonic = Literal["increasing", "strict"]
+EXAMPLES = 5
+
+_ARROW_TYPES: dict[type, pa.DataType] = {
+    float: pa.float64(),
+    int: pa.int64(),
+    str: pa.string(),
+    bool: pa.bool_(),
+}
+
+
+def column(
+    *,
+    unit: str | None,
+    description: str,
+    ge: float | None = None,
+    le: float | None = None,
+    gt: float | None = None,
+    lt: float | None = None,
+    monotonic: Monotonic | None = None,
+    north_reference: bool = False,
+    finite: bool = True,
+    default: Any = ...,
+) -> Any:
+    """Declare a contract column.
+
+    ``unit`` is the canonical unit string stored in the Arrow field metadata (``None`` for
+    dimensionless or text columns). ``monotonic`` is ``"increasing"`` (non-decreasing) or
+    ``"strict"`` (strictly increasing), within each group when the contract sets
+    ``group_by``. ``north_reference`` requires the field to state its north reference.
+    ``finite`` forbids NaN and ±inf in float columns. A ``default`` makes the column optional.
+    """
+    extra: dict[str, Any] = {"x-unit": unit, "x-finite": finite}
+    if monotonic:
+        extra["x-monotonic"] = monotonic
+    if north_reference:
+        extra["x-north-reference"] = list(NORTH_REFERENCES)
+    return Field(
+        default,
+        description=description,
+        ge=ge,
+        le=le,
+        gt=gt,
+        lt=lt,
+        json_schema_extra=extra,
+    )
+
+
+class TableContract(BaseModel):
+    """Base class of table contracts; a model instance describes one row."""
+
+    model_config = ConfigDict(frozen=True, extra="allow")
+
+    group_by: ClassVar[str | None] = None
+    """Column whose equal values delimit independent groups (e.g. many surveys per table)."""
+
+    @classmethod
+    def compiled(cls) -> CompiledContract:
+        """The Arrow schema and checks of this contract (built once per class)."""
+        return _compile(cls)
+
+    @classmethod
+    def validate_table(cls, table: pa.Table) -> None:
+        """Raise :class:`ContractViolation` listing every rule the table breaks."""
+        cls.compiled().validate(table)
+
+
+@dataclass(frozen=True)
+class ColumnSpec:
+    """One compiled column rule set."""
+
+    name: str
+    type: pa.DataType
+    unit: str | None
+    nullable: bool
+    required: bool
+    finite: bool
+    ge: float | None
+    le: float | None
+    gt: float | None
+    lt: float | None
+    monotonic: Monotonic | None
+    north_reference: bool
+
+    def field(self, north_reference: str | None = None) -> pa.Field:
+        meta: dict[bytes, bytes] = {}
+        if self.unit is not None:
+            meta[UNIT_KEY] = self.unit.encode()
+        if self.north_reference and north_reference is not None:
+            meta[NORTH_KEY] = north_reference.encode()
+        return pa.field(self.name, self.type, nullable=self.nullable, metadata=meta or None)
+
+
+@dataclass(frozen=True)
+class CompiledContract:
+    """A contract compiled to an Arrow schema and vectorised checks."""
+
+    name: str
+    columns: tuple[ColumnSpec, ...]
+    group_by: str | None
+
+    def schema(self, north_reference: str | None = None) -> pa.Schema:
+        """Arrow schema with unit (and north reference) metadata on each field."""
+        return pa.schema([c.field(north_reference) for c in self.columns])
+
+    def make_table(
+        self, data: dict[str, Any], *, north_reference: str | None = None
+    ) -> pa.Table:
+        """Build a table of this contract from column arrays, attaching units.
+
+        Columns of ``data`` not in the contract are kept (without unit metadata unless they
+        are already Arrow arrays whose field carries it).
+        """
+        known = {c.name: c for c in self.columns}
+        fields: list[pa.Field] = []
+        arrays: list[pa.Array | pa.ChunkedArray] = []
+        for name, values in data.items():
+            spec = known.get(name)
+            if spec is None:
+                arr = values if isinstance(values, pa.Array | pa.ChunkedArray) else pa.array(values)
+                fields.append(pa.field(name, arr.type))
+            else:
+                arr = pa.array(values, type=spec.type) if not isinstance(
+                    values, pa.Array | pa.ChunkedArray
+                ) else values.cast(spec.type)
+                fields.append(spec.field(north_reference))
+            arrays.append(arr)
+        return pa.Table.from_arrays(arrays, schema=pa.schema(fields))
+
+    def validate(self, table: pa.Table) -> None:
+        """Raise :class:`ContractViolation` listing every failed rule (all columns)."""
+        failures: list[RuleFailure] = []
+        groups = self._group_starts(table, failures)
+        for spec in self.columns:
+            if spec.name not in table.column_names:
+                if spec.required:
+                    failures.append(RuleFailure(spec.name, "present", "a column of that name"))
+                continue
+            failures.extend(_check_column(spec, table, groups))
+        if failures:
+            raise ContractViolation(self.name, failures)
+
+    def _group_starts(
+        self, table: pa.Table, failures: list[RuleFailure]
+    ) -> np.ndarray | None:
+        """Boolean mask, True at rows that start a new group (None: one group)."""
+        if self.group_by is None or self.group_by not in table.column_names:
+            return None
+        keys = table.column(self.group_by)
+        if keys.null_count:
+            failures.append(RuleFailure(self.group_by, "not null", "a group key on every row"))
+            return None
+        values = keys.to_numpy()
+        starts = np.ones(len(values), dtype=bool)
+        starts[1:] = values[1:] != values[:-1]
+        return starts
+
+
+def _check_column(
+    spec: ColumnSpec, table: pa.Table, group_starts: np.ndarray | None
+) -> list[RuleFailure]:
+    field = table.schema.field(spec.name)
+    col = table.column(spec.name)
+    failures: list[RuleFailure] = []
+    if not _same_type(field.type, spec.type):
+        return [RuleFailure(spec.name, "type", str(spec.type) + f", got {field.type}")]
+    meta = field.metadata or {}
+    if spec.unit is not None and meta.get(UNIT_KEY) != spec.unit.encode():
+        got = meta.get(UNIT_KEY)
+        failures.append(
+            RuleFailure(
+                spec.name,
+                "unit",
+                f"unit {spec.unit!r} in field metadata, got "
+                + (repr(got.decode()) if got is not None else "none"),
+            )
+        )
+    if spec.north_reference and meta.get(NORTH_KEY, b"").decode() not in NORTH_REFERENCES:
+        failures.append(
+            RuleFailure(spec.name, "north reference", f"one of {', '.join(NORTH_REFERENCES)}")
+        )
+    if not spec.nullable and col.null_count:
+        mask = pc.is_null(col).to_numpy(zero_copy_only=False)
+        failures.append(_failure(spec.name, "not null", "no missing values", mask, col))
+    if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
+        failures.extend(_check_numbers(spec, col, group_starts))
+    return failures
+
+
+def _check_numbers(
+    spec: ColumnSpec, col: pa.ChunkedArray, group_starts: np.ndarray | None
+) -> list[RuleFailure]:
+    values = col.to_numpy() if col.null_count == 0 else col.to_numpy(zero_copy_only=False)
+    if len(values) == 0:
+        return []
+    valid = ~pc.is_null(col).to_numpy(zero_copy_only=False) if col.null_count else None
+    failures: list[RuleFailure] = []
+    is_float = values.dtype.kind == "f"
+    if valid is not None:
+        checked = values[valid]
+        if len(checked) == 0:
+            return []
+    else:
+        checked = values
+    # One pass each for min and max: NaN propagates through them, so finite data and
+    # in-range data (the common case) need no per-row work at all.
+    lo, hi = checked.min(), checked.max()
+    if is_float and spec.finite and not (np.isfinite(lo) and np.isfinite(hi)):
+        bad = ~np.isfinite(values) if valid is None else (~np.isfinite(values) & valid)
+        failures.append(_failure(spec.name, "finite", "finite numbers (no NaN/inf)", bad, col))
+    bounds = (
+        ("ge", spec.ge, lo < spec.ge if spec.ge is not None else False, np.less, ">="),
+        ("le", spec.le, hi > spec.le if spec.le is not None else False, np.greater, "<="),
+        ("gt", spec.gt, lo <= spec.gt if spec.gt is not None else False, np.less_equal, ">"),
+        ("lt", spec.lt, hi >= spec.lt if spec.lt is not None else False, np.greater_equal, "<"),
+    )
+    for rule, bound, tripped, bad_op, symbol in bounds:
+        if bound is not None and tripped:
+            bad = bad_op(values, bound)
+            if valid is not None:
+                bad &= valid
+            failures.append(_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col))
+    if spec.monotonic and len(values) > 1:
+        step = values[1:] - values[:-1]
+        bad_step = step <= 0 if spec.monotonic == "strict" else step < 0
+        if group_starts is not None:
+            bad_step &= ~group_starts[1:]
+        if bad_step.any():
+            bad = np.zeros(len(values), dtype=bool)
+            bad[1:] = bad_step
+            what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
+            scope = " within each group" if group_starts is not None else ""
+            failures.append(
+                _failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
+            )
+    return failures
+
+
+def _failure(
+    name: str, rule: str, expected: str, bad: np.ndarray, col: pa.ChunkedArray
+) -> RuleFailure:
+    rows = np.flatnonzero(bad)
+    examples = tuple((int(i), col[int(i)].as_py()) for i in rows[:EXAMPLES])
+    return RuleFailure(name, rule, expected, bad_rows=len(rows), examples=examples)
+
+
+def _same_type(actual: pa.DataType, expected: pa.DataType) -> bool:
+    if pa.types.is_string(expected):
+        return pa.types.is_string(actual) or pa.types.is_large_string(actual)
+    return bool(actual == expected)
+
+
+def _arrow_type(annotation: Any) -> tuple[pa.DataType, bool]:
+    """Arrow type and nullability of a field annotation (``float``, ``float | None``…)."""
+    nullable = False
+    origin = get_origin(annotation)
+    if origin in (Union, types.UnionType):
+        args = [a for a in get_args(annotation) if a is not type(None)]
+        nullable = len(args) < len(get_args(annotation))
+        if len(args) != 1:
+            raise TypeError(f"contract column type {annotation!r} must be one type or X | None")
+        annotation = args[0]
+    try:
+        return _ARROW_TYPES[annotation], nullable
+    except KeyError:
+        raise TypeError(
+            f"contract column type {annotation!r} is not one of "
+            f"{', '.join(t.__name__ for t in _ARROW_TYPES)}"
+        ) from None
+
+
+@cache
+def _compile(model: type[TableContract]) -> CompiledContract:
+    specs = []
+    for name, info in model.model_fields.items():
+        arrow_type, nullable = _arrow_type(info.annotation)
+        extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+        bounds: dict[str, float | None] = {"ge": None, "le": None, "gt": None, "lt": None}
+        for meta in info.metadata:
+            for key in bounds:
+                if hasattr(meta, key):
+                    bounds[key] = float(getattr(meta, key))
+        unit = extra.get("x-unit")
+        monotonic = extra.get("x-monotonic")
+        specs.append(
+            ColumnSpec(
+                name=name,
+                type=arrow_type,
+                unit=unit if isinstance(unit, str) else None,
+                nullable=nullable,
+                required=info.is_required(),
+                finite=bool(extra.get("x-finite", True)),
+                monotonic=monotonic if monotonic in ("increasing", "strict") else None,
+                north_reference="x-north-reference" in extra,
+                **bounds,
+            )
+        )
+    return CompiledContract(model.__name__, tuple(specs), model.group_by)

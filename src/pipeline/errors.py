@@ -1,0 +1,148 @@
+"""Typed errors. Every failure a user can cause names where it happened and what was expected."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+class GyropipeError(Exception):
+    """Base of every error gyropipe raises on purpose."""
+
+
+@dataclass(frozen=True)
+class Location:
+    """A place in a text file: 1-based line and column (0 means unknown)."""
+
+    file: str
+    line: int = 0
+    column: int = 0
+
+    def __str__(self) -> str:
+        if self.line and self.column:
+            return f"{self.file}:{self.line}:{self.column}"
+        if self.line:
+            return f"{self.file}:{self.line}"
+        return self.file
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One validation problem of a pipeline spec."""
+
+    location: Location
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.location}: {self.message}"
+
+
+class SpecError(GyropipeError):
+    """A pipeline spec is invalid; carries every problem found, each with its YAML location."""
+
+    def __init__(self, problems: list[Problem]) -> None:
+        self.problems = problems
+        lines = "\n".join(f"  {p}" for p in problems)
+        super().__init__(f"invalid pipeline ({len(problems)} problem(s)):\n{lines}")
+
+
+class InputFileError(GyropipeError):
+    """An input file is malformed: names the file, the line (1-based, 0 if unknown) and the issue."""
+
+    def __init__(self, path: str | Path, message: str, line: int = 0, column: str = "") -> None:
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        where = f"{self.path}:{line}" if line else self.path
+        col = f" (column {column!r})" if column else ""
+        super().__init__(f"{where}{col}: {message}")
+
+
+class UnitError(GyropipeError):
+    """A unit string is unknown or not convertible to the unit required."""
+
+
+@dataclass(frozen=True)
+class RuleFailure:
+    """One failed contract rule on one column."""
+
+    column: str
+    rule: str
+    expected: str
+    bad_rows: int = 0
+    examples: tuple[tuple[int, object], ...] = ()
+
+    def __str__(self) -> str:
+        text = f"column {self.column!r}: {self.rule}: expected {self.expected}"
+        if self.bad_rows:
+            shown = ", ".join(f"row {i}: {v!r}" for i, v in self.examples)
+            text += f"; {self.bad_rows} bad row(s), first: {shown}"
+        return text
+
+
+class ContractViolation(GyropipeError):
+    """A table broke its port contract. Names pipeline, stage, port and every failed rule."""
+
+    def __init__(
+        self,
+        contract: str,
+        failures: list[RuleFailure],
+        *,
+        pipeline: str = "",
+        stage: str = "",
+        port: str = "",
+        direction: str = "",
+    ) -> None:
+        self.contract = contract
+        self.failures = failures
+        self.pipeline = pipeline
+        self.stage = stage
+        self.port = port
+        self.direction = direction
+        where = " ".join(
+            part
+            for part in (
+                f"pipeline {pipeline!r}" if pipeline else "",
+                f"stage {stage!r}" if stage else "",
+                f"{direction} port {port!r}" if port else "",
+            )
+            if part
+        )
+        head = f"{where}: " if where else ""
+        body = "\n".join(f"  {f}" for f in failures)
+        super().__init__(f"{head}table violates contract {contract}:\n{body}")
+
+    def located(
+        self, *, pipeline: str, stage: str, port: str, direction: str
+    ) -> ContractViolation:
+        """The same violation, annotated with where in the pipeline it happened."""
+        return ContractViolation(
+            self.contract,
+            self.failures,
+            pipeline=pipeline,
+            stage=stage,
+            port=port,
+            direction=direction,
+        )
+
+
+class StageError(GyropipeError):
+    """A stage raised: names the stage id, its registered name and the plugin that provides it."""
+
+    def __init__(self, stage_id: str, uses: str, plugin: str, cause: BaseException) -> None:
+        self.stage_id = stage_id
+        self.uses = uses
+        self.plugin = plugin
+        super().__init__(
+            f"stage {stage_id!r} ({uses} from plugin {plugin}) failed: "
+            f"{type(cause).__name__}: {cause}"
+        )
+
+
+class PluginError(GyropipeError):
+    """A plugin failed to load or registered something invalid."""
+
+    def __init__(self, plugin: str, version: str, message: str) -> None:
+        self.plugin = plugin
+        self.version = version
+        super().__init__(f"plugin {plugin} {version}: {message}")

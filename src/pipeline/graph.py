@@ -1,0 +1,284 @@
+"""The DAG of a pipeline: stages resolved against the registry, params validated, ports
+wired, contracts matched and an execution order found — or every problem, located."""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from pipeline.contracts import TableContract
+from pipeline.errors import Problem, SpecError
+from pipeline.registry import Registry, StageDef
+from pipeline.spec import LoadedSpec, PathKey, PipelineSpec, SourceMap, validation_problems
+
+PIPELINE_INPUT = "x-pipeline-input"
+"""JSON-schema marker of a params field that names one of the pipeline's ``inputs``."""
+
+
+@dataclass(frozen=True)
+class PlannedStage:
+    """A stage ready to run."""
+
+    id: str
+    uses: str
+    definition: StageDef
+    plugin: str
+    params: BaseModel
+    wiring: dict[str, tuple[str, str]]
+    """input port → (upstream stage id, output port)"""
+    persist: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A validated pipeline in execution order."""
+
+    spec: PipelineSpec
+    file: str
+    stages: tuple[PlannedStage, ...]
+
+    @property
+    def digest(self) -> str:
+        return self.spec.digest()
+
+
+def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
+    """Resolve, validate and order a loaded spec. Raises :class:`SpecError` with all
+    problems found (nothing runs before the whole pipeline is valid)."""
+    spec, source = loaded.spec, loaded.source
+    problems: list[Problem] = []
+    defs: dict[str, tuple[StageDef, str]] = {}
+    index: dict[str, int] = {}
+    for i, stage in enumerate(spec.stages):
+        if stage.id in index:
+            problems.append(
+                Problem(source.locate(("stages", i, "id")), f"duplicate stage id {stage.id!r}")
+            )
+            continue
+        index[stage.id] = i
+        found = registry.stages.get(stage.uses)
+        if found is None:
+            problems.append(
+                Problem(source.locate(("stages", i, "uses")), _unknown_stage(stage.uses, registry))
+            )
+            continue
+        defs[stage.id] = found
+
+    params: dict[str, BaseModel] = {}
+    wiring: dict[str, dict[str, tuple[str, str]]] = {}
+    for stage_id, (definition, _) in defs.items():
+        i = index[stage_id]
+        model = _params(spec, i, definition, source, problems)
+        if model is not None:
+            params[stage_id] = model
+        wiring[stage_id] = _wire(spec, i, definition, defs, index, source, problems)
+        _check_persist(spec, i, definition, source, problems)
+
+    order = _order(spec, wiring, index, source, problems)
+    if problems:
+        raise SpecError(problems)
+    planned = []
+    for stage_id in order:
+        stage = spec.stages[index[stage_id]]
+        definition, plugin = defs[stage_id]
+        persist = (
+            tuple(definition.outputs) if stage.persist is True
+            else tuple(stage.persist) if stage.persist else ()
+        )
+        planned.append(
+            PlannedStage(stage_id, stage.uses, definition, plugin, params[stage_id],
+                         wiring[stage_id], persist)
+        )
+    return Plan(spec, source.file, tuple(planned))
+
+
+def _unknown_stage(name: str, registry: Registry) -> str:
+    known = sorted(registry.stages)
+    close = difflib.get_close_matches(name, known, n=3)
+    hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+    return f"unknown stage {name!r}{hint} (registered: {', '.join(known) or 'none'})"
+
+
+def _params(
+    spec: PipelineSpec,
+    i: int,
+    definition: StageDef,
+    source: SourceMap,
+    problems: list[Problem],
+) -> BaseModel | None:
+    stage = spec.stages[i]
+    fields = definition.params.model_fields
+    values: dict[str, Any] = {k: v for k, v in spec.defaults.with_.items() if k in fields}
+    values.update(stage.with_)
+    try:
+        model = definition.params.model_validate(values)
+    except ValidationError as exc:
+        problems += [
+            Problem(p.location, f"stage {stage.id!r} ({stage.uses}): {p.message}")
+            for p in validation_problems(exc, ("stages", i, "with"), source)
+        ]
+        return None
+    for name, info in fields.items():
+        extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+        value = getattr(model, name)
+        if extra.get(PIPELINE_INPUT) and value not in spec.inputs:
+            problems.append(
+                Problem(
+                    source.locate(("stages", i, "with", name)),
+                    f"stage {stage.id!r}: {name} {value!r} is not a pipeline input "
+                    f"(declared inputs: {', '.join(spec.inputs) or 'none'})",
+                )
+            )
+    return model
+
+
+def _wire(
+    spec: PipelineSpec,
+    i: int,
+    definition: StageDef,
+    defs: dict[str, tuple[StageDef, str]],
+    index: dict[str, int],
+    source: SourceMap,
+    problems: list[Problem],
+) -> dict[str, tuple[str, str]]:
+    stage = spec.stages[i]
+    wired: dict[str, tuple[str, str]] = {}
+    here: PathKey = ("stages", i, "inputs")
+    for port, ref in stage.inputs.items():
+        loc = source.locate((*here, port))
+        if port not in definition.inputs:
+            problems.append(
+                Problem(
+                    source.locate((*here, port), key=True),
+                    f"stage {stage.id!r} ({stage.uses}) has no input port {port!r} "
+                    f"(ports: {', '.join(definition.inputs) or 'none'})",
+                )
+            )
+            continue
+        upstream, _, out_port = ref.partition(".")
+        if upstream not in index:
+            problems.append(Problem(loc, f"input {port!r}: no stage with id {upstream!r}"))
+            continue
+        if upstream not in defs:
+            continue  # its unknown `uses` is already reported
+        up_def = defs[upstream][0]
+        if not out_port:
+            if len(up_def.outputs) != 1:
+                problems.append(
+                    Problem(
+                        loc,
+                        f"input {port!r}: {upstream!r} is ambiguous, stage {upstream!r} has "
+                        f"outputs {', '.join(up_def.outputs) or 'none'}; write "
+                        f"'{upstream}.<port>'",
+                    )
+                )
+                continue
+            out_port = next(iter(up_def.outputs))
+        if out_port not in up_def.outputs:
+            problems.append(
+                Problem(
+                    loc,
+                    f"input {port!r}: stage {upstream!r} has no output port {out_port!r} "
+                    f"(outputs: {', '.join(up_def.outputs) or 'none'})",
+                )
+            )
+            continue
+        mismatch = contract_mismatch(up_def.outputs[out_port], definition.inputs[port])
+        if mismatch:
+            problems.append(
+                Problem(loc, f"input {port!r} from {upstream}.{out_port}: {mismatch}")
+            )
+            continue
+        wired[port] = (upstream, out_port)
+    for port in definition.inputs:
+        if port not in stage.inputs and port not in definition.optional_inputs:
+            problems.append(
+                Problem(
+                    source.locate(("stages", i, "inputs") if stage.inputs else ("stages", i)),
+                    f"stage {stage.id!r} ({stage.uses}): input port {port!r} is not wired",
+                )
+            )
+    return wired
+
+
+def contract_mismatch(produced: type[TableContract], wanted: type[TableContract]) -> str:
+    """Why a table of contract ``produced`` cannot feed a port of contract ``wanted``
+    (empty string if it can)."""
+    if issubclass(produced, wanted):
+        return ""
+    have = {c.name: c for c in produced.compiled().columns}
+    reasons = []
+    for col in wanted.compiled().columns:
+        if not col.required:
+            continue
+        other = have.get(col.name)
+        if other is None:
+            reasons.append(f"column {col.name!r} missing")
+        elif other.type != col.type or other.unit != col.unit:
+            reasons.append(
+                f"column {col.name!r} is {other.type} [{other.unit}], needs {col.type} [{col.unit}]"
+            )
+    if not reasons:
+        return ""
+    return f"{produced.__name__} does not satisfy {wanted.__name__}: " + "; ".join(reasons)
+
+
+def _check_persist(
+    spec: PipelineSpec, i: int, definition: StageDef, source: SourceMap, problems: list[Problem]
+) -> None:
+    stage = spec.stages[i]
+    if isinstance(stage.persist, bool):
+        return
+    for j, port in enumerate(stage.persist):
+        if port not in definition.outputs:
+            problems.append(
+                Problem(
+                    source.locate(("stages", i, "persist", j)),
+                    f"stage {stage.id!r} has no output port {port!r} to persist "
+                    f"(outputs: {', '.join(definition.outputs) or 'none'})",
+                )
+            )
+
+
+def _order(
+    spec: PipelineSpec,
+    wiring: dict[str, dict[str, tuple[str, str]]],
+    index: dict[str, int],
+    source: SourceMap,
+    problems: list[Problem],
+) -> list[str]:
+    """Stages in dependency order (stable: ties keep the file's order); cycles reported."""
+    deps = {s: {up for up, _ in ports.values()} for s, ports in wiring.items()}
+    order: list[str] = []
+    done: set[str] = set()
+    pending = sorted(deps, key=index.__getitem__)
+    while pending:
+        ready = [s for s in pending if deps[s] <= done]
+        if not ready:
+            cycle = _find_cycle(pending, deps)
+            first = cycle[0]
+            problems.append(
+                Problem(
+                    source.locate(("stages", index[first], "inputs")),
+                    "cycle between stages: " + " → ".join([*cycle, first]),
+                )
+            )
+            return order
+        order += ready
+        done.update(ready)
+        pending = [s for s in pending if s not in done]
+    return order
+
+
+def _find_cycle(nodes: list[str], deps: dict[str, set[str]]) -> list[str]:
+    """One cycle among ``nodes`` (each of which has an unmet dependency)."""
+    remaining = set(nodes)
+    path: list[str] = []
+    node = nodes[0]
+    while node not in path:
+        path.append(node)
+        node = min(d for d in deps[node] if d in remaining)
+    return path[path.index(node):][::-1]

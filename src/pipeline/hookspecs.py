@@ -1,0 +1,48 @@
+"""Hook specifications: how plugins (built-in or third-party) add to gyropipe.
+
+A plugin is a module or object with functions named like the hooks below, decorated with
+``pipeline.hookimpl``. Third-party plugins are found through the entry-point group
+``gyropipe``. Each hook receives a ``register`` callback; call it once per item. The host
+validates every item and tags it with the plugin's name, so a bad registration is reported
+against its plugin and the rest keep working.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pluggy
+
+from pipeline.registry import CheckDef, ReaderDef, StageDef, WriterDef
+
+PROJECT = "gyropipe"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+
+@hookspec
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    """Register stage types: call ``register(StageDef(...))`` for each.
+
+    A stage's name is what a pipeline's ``uses:`` refers to; it must be unique across
+    plugins (lower-case, digits, ``_`` and ``.``; prefix with your plugin name).
+    """
+
+
+@hookspec
+def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
+    """Register file readers: call ``register(ReaderDef(...))`` for each.
+
+    Readers are chosen by name (``reader: las``) or, with ``reader: auto``, by the first
+    whose ``sniff(path)`` accepts the file.
+    """
+
+
+@hookspec
+def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
+    """Register table writers: call ``register(WriterDef(...))`` for each."""
+
+
+@hookspec
+def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
+    """Register QC checks: call ``register(CheckDef(...))`` for each."""

@@ -1,0 +1,1 @@
+"""Built-in readers and writers (each module is a plugin registered through the hooks)."""

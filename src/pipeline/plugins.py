@@ -1,0 +1,124 @@
+"""Plugin manager: loads built-in and third-party plugins into a :class:`Registry`.
+
+Each entry point of the group ``gyropipe`` is loaded in its own try/except and each plugin's
+hook implementations are called one plugin at a time, so a plugin that fails to import,
+misspells a hook, raises, or registers something invalid is reported by name and version
+while every other plugin keeps working.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Iterable
+from importlib.metadata import entry_points
+
+import pluggy
+
+import pipeline
+from pipeline import hookspecs
+from pipeline.errors import PluginError
+from pipeline.registry import (
+    CheckDef,
+    PluginInfo,
+    ReaderDef,
+    Registry,
+    StageDef,
+    WriterDef,
+)
+
+ENTRY_POINT_GROUP = "gyropipe"
+
+BUILTIN_PLUGINS = {
+    "builtin.files": "pipeline.stages.files",
+    "builtin.survey": "pipeline.stages.survey",
+    "builtin.csv": "pipeline.io.csv",
+    "builtin.parquet": "pipeline.io.parquet",
+}
+"""Built-in plugins by name → module; they register through the same hooks as any other."""
+
+HOOKS: tuple[tuple[str, type], ...] = (
+    ("gyropipe_register_stages", StageDef),
+    ("gyropipe_register_readers", ReaderDef),
+    ("gyropipe_register_writers", WriterDef),
+    ("gyropipe_register_checks", CheckDef),
+)
+
+
+def load_registry(disabled: Iterable[str] = ()) -> Registry:
+    """Load all plugins except those named in ``disabled`` and collect their registrations."""
+    blocked = set(disabled)
+    registry = Registry()
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    candidates: list[tuple[PluginInfo, object]] = []
+
+    for name, module_name in BUILTIN_PLUGINS.items():
+        info = PluginInfo(name, pipeline.__version__, builtin=True)
+        if name not in blocked:
+            candidates.append((info, importlib.import_module(module_name)))
+
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        version = ep.dist.version if ep.dist is not None else "unknown"
+        dist = f" ({ep.dist.name})" if ep.dist is not None else ""
+        if ep.name in blocked:
+            continue
+        try:
+            obj = ep.load()
+        except Exception as exc:  # any import failure is this plugin's, not ours
+            _fail(registry, PluginInfo(ep.name, version, builtin=False),
+                  f"failed to load entry point {ep.value!r}{dist}: {type(exc).__name__}: {exc}")
+            continue
+        candidates.append((PluginInfo(ep.name, version, builtin=False), obj))
+
+    for info, obj in candidates:
+        try:
+            pm.register(obj, name=info.name)
+        except Exception as exc:  # pluggy rejects malformed hook implementations
+            _fail(registry, info, f"cannot be registered: {exc}")
+            continue
+        unknown = _unknown_hooks(pm, obj)
+        if unknown:
+            pm.unregister(obj)
+            _fail(registry, info, f"implements unknown hook(s) {', '.join(unknown)}")
+            continue
+        registry.plugins[info.name] = info
+        _collect(pm, registry, info)
+
+    pm.check_pending()  # every unknown hook was refused above; this guards the invariant
+    for name, info in list(registry.plugins.items()):
+        registry.plugins[name] = PluginInfo(
+            info.name, info.version, info.builtin, tuple(registry.provides(name)), info.error
+        )
+    return registry
+
+
+def _collect(pm: pluggy.PluginManager, registry: Registry, info: PluginInfo) -> None:
+    """Call this plugin's hook implementations only, tagging what they register."""
+    for hook_name, expected in HOOKS:
+        caller = getattr(pm.hook, hook_name)
+        for impl in caller.get_hookimpls():
+            if impl.plugin_name != info.name:
+                continue
+            try:
+                impl.function(register=lambda item, e=expected: registry.add(item, info, e))
+            except Exception as exc:  # a raising hook is reported against its plugin
+                registry.problems.append(
+                    PluginError(info.name, info.version,
+                                f"{hook_name} raised {type(exc).__name__}: {exc}")
+                )
+
+
+def _unknown_hooks(pm: pluggy.PluginManager, obj: object) -> list[str]:
+    known = {name for name, _ in HOOKS}
+    return sorted(
+        name
+        for name in dir(obj)
+        if name.startswith("gyropipe_") and name not in known
+        and callable(getattr(obj, name))
+    )
+
+
+def _fail(registry: Registry, info: PluginInfo, message: str) -> None:
+    registry.plugins[info.name] = PluginInfo(info.name, info.version, info.builtin, error=message)
+    registry.problems.append(PluginError(info.name, info.version, message))
+

@@ -1,0 +1,1 @@
+"""Built-in stages (each module is a plugin registered through the hooks)."""

@@ -1,0 +1,1 @@
+"""Survey geometry: minimum-curvature integration of inclination/azimuth surveys."""

@@ -1,0 +1,233 @@
+"""Batched, vectorised minimum-curvature integration of inclination/azimuth surveys.
+
+Frame: NED — north, east, true vertical depth (down positive). Inclination I is measured from
+vertical, azimuth A clockwise from north, so the tool axis is t = (sin I cos A, sin I sin A, cos I).
+Angles are in radians and lengths in metres; the stage layer converts.
+
+Per step (station 1 → 2):
+
+    β   = 2·asin(√(sin²((I2−I1)/2) + sin I1 sin I2 sin²((A2−A1)/2)))      dogleg
+    RF  = tan(β/2)/(β/2)                                                   ratio factor
+    Δ   = ΔMD/2 · (t1 + t2) · RF                                           displacement
+    DLS = β/ΔMD
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["MinCurveResult", "closure", "minimum_curvature", "vertical_section"]
+
+FloatArray = NDArray[np.float64]
+IndexArray = NDArray[np.intp]
+
+#: Below this dogleg (rad) RF is its Taylor series 1 + β²/12 + β⁴/120 + 17β⁶/20160, whose
+#: truncation error there is < 1e-28. tan(β/2)/(β/2) has no cancellation (it is accurate to a
+#: few ulp for any β > 0), so the threshold only has to keep it away from 0/0.
+SERIES_BELOW = 1e-4
+
+#: Steps whose dogleg is within this margin (rad) of π are rejected with a ValueError. At β = π
+#: the tool axes are opposite, every plane through them holds a 180° arc and RF is infinite;
+#: near π the haversine dogleg loses accuracy as ~3e-16/(π−β)², i.e. ~3e-10 of ΔMD at the margin.
+REVERSAL_MARGIN = 1e-3
+
+_TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class MinCurveResult:
+    """Per-station results, aligned with the input arrays.
+
+    Positions are in metres (NED, TVD down positive), with each survey's first station at that
+    survey's tie-in point.
+    """
+
+    north: FloatArray
+    east: FloatArray
+    tvd: FloatArray
+    #: rad, dogleg from the previous station (0 at each survey's first station).
+    dogleg: FloatArray
+    #: rad/m, dogleg / ΔMD (0 at each survey's first station and for zero-length steps).
+    dls: FloatArray
+
+
+def minimum_curvature(
+    md: ArrayLike,
+    inc: ArrayLike,
+    azi: ArrayLike,
+    *,
+    offsets: ArrayLike | None = None,
+    tie_north: ArrayLike = 0.0,
+    tie_east: ArrayLike = 0.0,
+    tie_tvd: ArrayLike = 0.0,
+) -> MinCurveResult:
+    """Integrate one or many surveys by minimum curvature in a single vectorised pass.
+
+    Args:
+        md: measured depth (m), 1-D; several surveys may be concatenated.
+        inc: inclination from vertical (rad), same shape as ``md``.
+        azi: azimuth clockwise from north (rad), same shape as ``md``.
+        offsets: CSR bounds of the surveys, ints of length n_surveys + 1, strictly increasing
+            from 0 to ``len(md)``; ``None`` means a single survey.
+        tie_north, tie_east, tie_tvd: position (m) of each survey's first station, a scalar or
+            one value per survey.
+
+    Each survey is accumulated on its own, so its result does not depend on the batch it is in.
+    Value checks (finite, MD increasing, inclination range) are the caller's contracts.
+
+    Raises:
+        ValueError: on malformed shapes or offsets, or on a step whose dogleg is within
+            ``REVERSAL_MARGIN`` of π (named by survey and station).
+    """
+    md_a, inc_a, azi_a = _stations(md, inc, azi)
+    n = md_a.size
+    bounds = _bounds(offsets, n)
+    ties = _ties(bounds.size - 1, tie_north=tie_north, tie_east=tie_east, tie_tvd=tie_tvd)
+    crossing = bounds[1:-1] - 1  # steps leading from one survey into the next
+
+    sin_i, cos_i = np.sin(inc_a), np.cos(inc_a)
+    sin_a, cos_a = np.sin(azi_a), np.cos(azi_a)
+
+    hav = np.sin(0.5 * (azi_a[1:] - azi_a[:-1]))
+    hav *= hav
+    hav *= sin_i[:-1]
+    hav *= sin_i[1:]
+    hav += np.sin(0.5 * (inc_a[1:] - inc_a[:-1])) ** 2
+    hav[crossing] = 0.0
+    np.clip(hav, 0.0, 1.0, out=hav)
+    half = np.arcsin(np.sqrt(hav))
+    _reject_reversals(half, bounds)
+
+    dogleg = np.zeros(n)
+    np.multiply(half, 2.0, out=dogleg[1:])
+    dmd = md_a[1:] - md_a[:-1]
+    dmd[crossing] = 0.0
+    dls = np.zeros(n)
+    np.divide(dogleg[1:], dmd, out=dls[1:], where=dmd != 0.0)
+
+    pos = np.empty((3, n))
+    t_north = sin_i * cos_a
+    t_east = np.multiply(sin_i, sin_a, out=sin_i)
+    np.add(t_north[:-1], t_north[1:], out=pos[0, 1:])
+    np.add(t_east[:-1], t_east[1:], out=pos[1, 1:])
+    np.add(cos_i[:-1], cos_i[1:], out=pos[2, 1:])
+    dmd *= 0.5
+    dmd *= _ratio_factor(dogleg[1:])
+    pos[:, 1:] *= dmd
+    pos[:, bounds[:-1]] = ties
+    _cumsum_per_survey(pos, bounds)
+    return MinCurveResult(north=pos[0], east=pos[1], tvd=pos[2], dogleg=dogleg, dls=dls)
+
+
+def vertical_section(north: ArrayLike, east: ArrayLike, azimuth_rad: ArrayLike) -> FloatArray:
+    """Horizontal displacement (m) projected on the vertical plane of azimuth ``azimuth_rad``."""
+    az = np.asarray(azimuth_rad, dtype=np.float64)
+    vs: FloatArray = np.asarray(north, dtype=np.float64) * np.cos(az)
+    vs += np.asarray(east, dtype=np.float64) * np.sin(az)
+    return vs
+
+
+def closure(north: ArrayLike, east: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Closure distance (m) and direction (rad in [0, 2π), clockwise from north)."""
+    n = np.asarray(north, dtype=np.float64)
+    e = np.asarray(east, dtype=np.float64)
+    direction = np.arctan2(e, n)
+    direction = np.where(direction < 0.0, direction + _TWO_PI, direction)
+    # a tiny negative angle + 2π rounds to exactly 2π, which is north again
+    direction = np.where(direction < _TWO_PI, direction, 0.0)
+    return np.hypot(n, e), direction
+
+
+def _ratio_factor(beta: FloatArray) -> FloatArray:
+    """RF = tan(β/2)/(β/2); its Taylor series below ``SERIES_BELOW``, so no 0/0 at β = 0."""
+    b2 = beta * beta
+    rf: FloatArray = 1.0 + b2 * (1.0 / 12.0 + b2 * (1.0 / 120.0 + b2 * (17.0 / 20160.0)))
+    half = 0.5 * beta
+    np.divide(np.tan(half), half, out=rf, where=beta >= SERIES_BELOW)
+    return rf
+
+
+def _stations(md: ArrayLike, inc: ArrayLike, azi: ArrayLike) -> tuple[FloatArray, ...]:
+    arrays = tuple(np.asarray(x, dtype=np.float64) for x in (md, inc, azi))
+    shapes = [a.shape for a in arrays]
+    if arrays[0].ndim != 1 or len(set(shapes)) != 1:
+        raise ValueError(
+            f"md, inc and azi must be 1-D arrays of equal length; got shapes {shapes}"
+        )
+    return arrays
+
+
+def _bounds(offsets: ArrayLike | None, n: int) -> IndexArray:
+    if offsets is None:
+        if n == 0:
+            raise ValueError("expected at least one station; md, inc and azi are empty")
+        return np.array([0, n], dtype=np.intp)
+    bounds = np.asarray(offsets)
+    if bounds.ndim != 1 or bounds.size < 2 or not np.issubdtype(bounds.dtype, np.integer):
+        raise ValueError(
+            "offsets must be a 1-D integer array of length n_surveys + 1 >= 2; "
+            f"got dtype {bounds.dtype} and shape {bounds.shape}"
+        )
+    if bounds[0] != 0 or bounds[-1] != n:
+        raise ValueError(
+            f"offsets must start at 0 and end at len(md) = {n}; got {bounds[0]} and {bounds[-1]}"
+        )
+    empty = np.flatnonzero(bounds[1:] <= bounds[:-1])
+    if empty.size:
+        k = int(empty[0])
+        raise ValueError(
+            "offsets must be strictly increasing (every survey needs a station); "
+            f"got offsets[{k}] = {bounds[k]} and offsets[{k + 1}] = {bounds[k + 1]}"
+        )
+    return bounds.astype(np.intp, copy=False)
+
+
+def _ties(n_surveys: int, **ties: ArrayLike) -> FloatArray:
+    out = np.empty((3, n_surveys))
+    for row, (name, value) in enumerate(ties.items()):
+        tie = np.asarray(value, dtype=np.float64)
+        if tie.ndim > 1 or (tie.ndim == 1 and tie.size != n_surveys):
+            raise ValueError(
+                f"{name} must be a scalar or a 1-D array with one value per survey "
+                f"({n_surveys}); got shape {tie.shape}"
+            )
+        out[row] = tie
+    return out
+
+
+def _reject_reversals(half: FloatArray, bounds: IndexArray) -> None:
+    limit = 0.5 * (np.pi - REVERSAL_MARGIN)
+    if half.max(initial=0.0) > limit:
+        station = int(np.argmax(half > limit)) + 1
+        survey = int(np.searchsorted(bounds, station, side="right")) - 1
+        raise ValueError(
+            f"survey {survey}, station {station - bounds[survey]} (index {station}): dogleg "
+            f"{2.0 * half[station - 1]:.6f} rad is within {REVERSAL_MARGIN} rad of π; a reversal "
+            "has no unique circular arc"
+        )
+
+
+def _cumsum_per_survey(pos: FloatArray, bounds: IndexArray) -> None:
+    """Cumulative sum of ``pos`` (3, n) along axis 1, restarting at every survey, in place.
+
+    Each survey is summed sequentially along its own row of a zero-padded grid, so its values
+    are bit-identical whether it is integrated alone or in any batch. Surveys are grouped by
+    power-of-two length class, which keeps the padding below 2x for any mix of lengths.
+    """
+    lengths = np.diff(bounds)
+    length_class = np.frexp(lengths)[1]
+    for cls in np.unique(length_class):
+        ids = np.flatnonzero(length_class == cls)
+        count = lengths[ids]
+        width = int(count.max())
+        first = bounds[ids]
+        stations = np.arange(count.sum()) + np.repeat(first - (np.cumsum(count) - count), count)
+        cells = stations - np.repeat(first - np.arange(ids.size) * width, count)
+        grid = np.zeros((3, ids.size * width))
+        grid[:, cells] = pos[:, stations]
+        rows = grid.reshape(3, ids.size, width)
+        np.cumsum(rows, axis=2, out=rows)
+        pos[:, stations] = grid[:, cells]

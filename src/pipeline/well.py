@@ -1,0 +1,71 @@
+"""Well metadata: the header that travels with a well's tables.
+
+It is stored as JSON in the Arrow schema metadata under ``gyropipe.well``, so it survives
+Parquet files and stage boundaries.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from typing import Any, Literal
+
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+
+WELL_KEY = b"gyropipe.well"
+NorthReference = Literal["true", "grid", "magnetic"]
+
+
+class WellMetadata(BaseModel):
+    """Header of one well and survey run. Angles in degrees, lengths in metres."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    well: str | None = Field(None, description="well name")
+    uwi: str | None = Field(None, description="unique well identifier (UWI/API)")
+    field: str | None = Field(None, description="field name")
+    company: str | None = Field(None, description="operator")
+    service_company: str | None = Field(None, description="survey service company")
+    latitude: float | None = Field(
+        None, ge=-90, le=90, description="wellhead geodetic latitude, deg (WGS84)"
+    )
+    longitude: float | None = Field(
+        None, ge=-180, le=360, description="wellhead longitude, deg east (WGS84)"
+    )
+    elevation: float | None = Field(
+        None, description="depth reference elevation above mean sea level, m"
+    )
+    depth_reference: str | None = Field(
+        None, description="depth reference point (RKB, DF, GL, MSL…)"
+    )
+    survey_date: dt.date | None = Field(None, description="date of the survey run")
+    tool_type: str | None = Field(None, description="survey tool type")
+    tool_serial: str | None = Field(None, description="survey tool serial number")
+    north_reference: NorthReference | None = Field(
+        None, description="north reference of the azimuths: true, grid or magnetic"
+    )
+
+    def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
+        """A copy where every field set in ``other`` overrides this one."""
+        update = (
+            other.model_dump(exclude_unset=True)
+            if isinstance(other, WellMetadata)
+            else WellMetadata.model_validate(other).model_dump(exclude_unset=True)
+        )
+        return self.model_copy(update=update)
+
+
+def attach(table: pa.Table, well: WellMetadata) -> pa.Table:
+    """The table with ``well`` stored in its schema metadata."""
+    meta = dict(table.schema.metadata or {})
+    meta[WELL_KEY] = well.model_dump_json(exclude_unset=True).encode()
+    return table.replace_schema_metadata(meta)
+
+
+def well_of(table: pa.Table) -> WellMetadata | None:
+    """The well metadata stored in a table's schema, if any."""
+    raw = (table.schema.metadata or {}).get(WELL_KEY)
+    if raw is None:
+        return None
+    return WellMetadata.model_validate(json.loads(raw))
