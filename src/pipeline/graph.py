@@ -11,11 +11,9 @@ from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import TableContract
 from pipeline.errors import Problem, SpecError
-from pipeline.registry import Registry, StageDef
+from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PathKey, PipelineSpec, SourceMap, validation_problems
 
-PIPELINE_INPUT = "x-pipeline-input"
-"""JSON-schema marker of a params field that names one of the pipeline's ``inputs``."""
 
 
 @dataclass(frozen=True)
@@ -71,7 +69,7 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     wiring: dict[str, dict[str, tuple[str, str]]] = {}
     for stage_id, (definition, _) in defs.items():
         i = index[stage_id]
-        model = _params(spec, i, definition, source, problems)
+        model = _params(spec, i, definition, registry, source, problems)
         if model is not None:
             params[stage_id] = model
         wiring[stage_id] = _wire(spec, i, definition, defs, index, source, problems)
@@ -106,6 +104,7 @@ def _params(
     spec: PipelineSpec,
     i: int,
     definition: StageDef,
+    registry: Registry,
     source: SourceMap,
     problems: list[Problem],
 ) -> BaseModel | None:
@@ -114,7 +113,7 @@ def _params(
     values: dict[str, Any] = {k: v for k, v in spec.defaults.with_.items() if k in fields}
     values.update(stage.with_)
     try:
-        model = definition.params.model_validate(values)
+        model = definition.params.model_validate(values, context={"registry": registry})
     except ValidationError as exc:
         problems += [
             Problem(p.location, f"stage {stage.id!r} ({stage.uses}): {p.message}")

@@ -31,6 +31,7 @@ ENTRY_POINT_GROUP = "gyropipe"
 BUILTIN_PLUGINS = {
     "builtin.files": "pipeline.stages.files",
     "builtin.survey": "pipeline.stages.survey",
+    "builtin.qc": "pipeline.stages.qc",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
 }
@@ -54,8 +55,12 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
 
     for name, module_name in BUILTIN_PLUGINS.items():
         info = PluginInfo(name, pipeline.__version__, builtin=True)
-        if name not in blocked:
+        if name in blocked:
+            continue
+        try:
             candidates.append((info, importlib.import_module(module_name)))
+        except Exception as exc:  # a broken built-in is reported like any other plugin
+            _fail(registry, info, f"failed to import {module_name}: {type(exc).__name__}: {exc}")
 
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         version = ep.dist.version if ep.dist is not None else "unknown"

@@ -12,13 +12,33 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo
 
 from pipeline.contracts import TableContract
 from pipeline.errors import PluginError
 from pipeline.well import WellMetadata
 
 NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
+PIPELINE_INPUT = "x-pipeline-input"
+"""JSON-schema marker of a params field that names one of the pipeline's ``inputs``."""
+
+
+def pipeline_input(default: str, description: str) -> Any:
+    """A params field naming a pipeline input; the planner checks the name is declared."""
+    return Field(default, description=description, json_schema_extra={PIPELINE_INPUT: True})
+
+
+def require_registered(info: ValidationInfo, kind: str, name: str) -> str:
+    """Params validator helper: ``name`` must be a registered ``kind`` (reader, writer,
+    check). Checked when the planner validates params with the registry in the context."""
+    registry = (info.context or {}).get("registry")
+    if isinstance(registry, Registry):
+        table = getattr(registry, kind + "s")
+        if name not in table:
+            raise ValueError(
+                f"no {kind} named {name!r} (installed: {', '.join(sorted(table)) or 'none'})"
+            )
+    return name
 
 
 class NoParams(BaseModel):

@@ -148,7 +148,12 @@ def parse_spec(text: str, file: str, overrides: list[str] | None = None) -> Load
         raise SpecError([Problem(Location(file), f"malformed YAML: {exc}")]) from exc
     if node is None:
         raise SpecError([Problem(Location(file, 1, 1), "empty pipeline file")])
-    raw = _to_data(node, (), source, problems)
+    try:
+        raw = _to_data(node, (), source, problems)
+    except yaml.MarkedYAMLError as exc:  # e.g. a tag the safe loader refuses
+        mark = exc.problem_mark or exc.context_mark
+        loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
+        raise SpecError([Problem(loc, f"invalid YAML value: {exc.problem or exc}")]) from exc
     if not isinstance(raw, dict):
         loc = Location(file, node.start_mark.line + 1, node.start_mark.column + 1)
         raise SpecError([Problem(loc, "a pipeline must be a mapping (name, version, stages…)")])
@@ -225,6 +230,12 @@ def _to_data(
     node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]
 ) -> Any:
     source.values[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+    standard = _STANDARD_TAGS.get(type(node))
+    if standard is not None and node.tag != standard:
+        problems.append(
+            Problem(source.locate(path), f"YAML tag {node.tag!r} is not allowed in a pipeline")
+        )
+        return None
     if isinstance(node, yaml.MappingNode):
         out: dict[str, Any] = {}
         for key_node, value_node in node.value:
@@ -246,6 +257,10 @@ def _to_data(
 
 
 _CONSTRUCTOR = yaml.SafeLoader("")
+_STANDARD_TAGS: dict[type, str] = {
+    yaml.MappingNode: "tag:yaml.org,2002:map",
+    yaml.SequenceNode: "tag:yaml.org,2002:seq",
+}
 
 
 def _scalar(node: yaml.Node) -> Any:

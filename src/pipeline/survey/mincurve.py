@@ -35,6 +35,7 @@ SERIES_BELOW = 1e-4
 REVERSAL_MARGIN = 1e-3
 
 _TWO_PI = 2.0 * np.pi
+_BLOCK = 4096  # stations per block: keeps the temporaries of the step arithmetic in cache
 
 
 @dataclass(frozen=True)
@@ -86,40 +87,27 @@ def minimum_curvature(
     n = md_a.size
     bounds = _bounds(offsets, n)
     ties = _ties(bounds.size - 1, tie_north=tie_north, tie_east=tie_east, tie_tvd=tie_tvd)
-    crossing = bounds[1:-1] - 1  # steps leading from one survey into the next
 
-    sin_i, cos_i = np.sin(inc_a), np.cos(inc_a)
-    sin_a, cos_a = np.sin(azi_a), np.cos(azi_a)
-
-    hav = np.sin(0.5 * (azi_a[1:] - azi_a[:-1]))
-    hav *= hav
-    hav *= sin_i[:-1]
-    hav *= sin_i[1:]
-    hav += np.sin(0.5 * (inc_a[1:] - inc_a[:-1])) ** 2
-    hav[crossing] = 0.0
-    np.clip(hav, 0.0, 1.0, out=hav)
-    half = np.arcsin(np.sqrt(hav))
-    _reject_reversals(half, bounds)
-
+    steps = np.empty((3, n))  # displacement from the previous station, then positions
     dogleg = np.zeros(n)
-    np.multiply(half, 2.0, out=dogleg[1:])
-    dmd = md_a[1:] - md_a[:-1]
-    dmd[crossing] = 0.0
     dls = np.zeros(n)
-    np.divide(dogleg[1:], dmd, out=dls[1:], where=dmd != 0.0)
-
-    pos = np.empty((3, n))
-    t_north = sin_i * cos_a
-    t_east = np.multiply(sin_i, sin_a, out=sin_i)
-    np.add(t_north[:-1], t_north[1:], out=pos[0, 1:])
-    np.add(t_east[:-1], t_east[1:], out=pos[1, 1:])
-    np.add(cos_i[:-1], cos_i[1:], out=pos[2, 1:])
-    dmd *= 0.5
-    dmd *= _ratio_factor(dogleg[1:])
-    pos[:, 1:] *= dmd
-    pos[:, bounds[:-1]] = ties
-    _cumsum_per_survey(pos, bounds)
-    return MinCurveResult(north=pos[0], east=pos[1], tvd=pos[2], dogleg=dogleg, dls=dls)
+    for lo in range(0, n - 1, _BLOCK):
+        hi = min(lo + _BLOCK, n - 1) + 1
+        _steps(
+            md_a[lo:hi],
+            inc_a[lo:hi],
+            azi_a[lo:hi],
+            steps[:, lo + 1 : hi],
+            dogleg[lo + 1 : hi],
+            dls[lo + 1 : hi],
+        )
+    first = bounds[:-1]  # the step into a survey's first station comes from the previous survey
+    dogleg[first] = 0.0
+    dls[first] = 0.0
+    _reject_reversals(dogleg, bounds)
+    steps[:, first] = ties
+    _cumsum_per_survey(steps, bounds)
+    return MinCurveResult(north=steps[0], east=steps[1], tvd=steps[2], dogleg=dogleg, dls=dls)
 
 
 def vertical_section(north: ArrayLike, east: ArrayLike, azimuth_rad: ArrayLike) -> FloatArray:
@@ -141,6 +129,39 @@ def closure(north: ArrayLike, east: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return np.hypot(n, e), direction
 
 
+def _steps(
+    md: FloatArray,
+    inc: FloatArray,
+    azi: FloatArray,
+    steps: FloatArray,
+    dogleg: FloatArray,
+    dls: FloatArray,
+) -> None:
+    """Write the (3, k) displacements, doglegs and DLS of the k steps between k + 1 stations."""
+    sin_i, cos_i = np.sin(inc), np.cos(inc)
+    sin_a, cos_a = np.sin(azi), np.cos(azi)
+
+    hav = np.sin(0.5 * (azi[1:] - azi[:-1]))
+    hav *= hav
+    hav *= sin_i[:-1]
+    hav *= sin_i[1:]
+    hav += np.sin(0.5 * (inc[1:] - inc[:-1])) ** 2
+    np.clip(hav, 0.0, 1.0, out=hav)
+    np.arcsin(np.sqrt(hav, out=hav), out=dogleg)
+    dogleg *= 2.0
+    dmd = md[1:] - md[:-1]
+    np.divide(dogleg, dmd, out=dls, where=dmd != 0.0)
+
+    np.multiply(sin_i, cos_a, out=cos_a)
+    np.multiply(sin_i, sin_a, out=sin_a)
+    np.add(cos_a[:-1], cos_a[1:], out=steps[0])
+    np.add(sin_a[:-1], sin_a[1:], out=steps[1])
+    np.add(cos_i[:-1], cos_i[1:], out=steps[2])
+    dmd *= 0.5
+    dmd *= _ratio_factor(dogleg)
+    steps *= dmd
+
+
 def _ratio_factor(beta: FloatArray) -> FloatArray:
     """RF = tan(β/2)/(β/2); its Taylor series below ``SERIES_BELOW``, so no 0/0 at β = 0."""
     b2 = beta * beta
@@ -154,9 +175,7 @@ def _stations(md: ArrayLike, inc: ArrayLike, azi: ArrayLike) -> tuple[FloatArray
     arrays = tuple(np.asarray(x, dtype=np.float64) for x in (md, inc, azi))
     shapes = [a.shape for a in arrays]
     if arrays[0].ndim != 1 or len(set(shapes)) != 1:
-        raise ValueError(
-            f"md, inc and azi must be 1-D arrays of equal length; got shapes {shapes}"
-        )
+        raise ValueError(f"md, inc and azi must be 1-D arrays of equal length; got shapes {shapes}")
     return arrays
 
 
@@ -198,36 +217,42 @@ def _ties(n_surveys: int, **ties: ArrayLike) -> FloatArray:
     return out
 
 
-def _reject_reversals(half: FloatArray, bounds: IndexArray) -> None:
-    limit = 0.5 * (np.pi - REVERSAL_MARGIN)
-    if half.max(initial=0.0) > limit:
-        station = int(np.argmax(half > limit)) + 1
+def _reject_reversals(dogleg: FloatArray, bounds: IndexArray) -> None:
+    limit = np.pi - REVERSAL_MARGIN
+    if dogleg.max() > limit:
+        station = int(np.argmax(dogleg > limit))
         survey = int(np.searchsorted(bounds, station, side="right")) - 1
         raise ValueError(
             f"survey {survey}, station {station - bounds[survey]} (index {station}): dogleg "
-            f"{2.0 * half[station - 1]:.6f} rad is within {REVERSAL_MARGIN} rad of π; a reversal "
-            "has no unique circular arc"
+            f"{dogleg[station]:.6f} rad from the previous station is within {REVERSAL_MARGIN} "
+            "rad of π; a reversal has no unique circular arc"
         )
 
 
-def _cumsum_per_survey(pos: FloatArray, bounds: IndexArray) -> None:
-    """Cumulative sum of ``pos`` (3, n) along axis 1, restarting at every survey, in place.
+def _cumsum_per_survey(steps: FloatArray, bounds: IndexArray) -> None:
+    """Cumulative sums of ``steps`` (3, n) along axis 1, restarting at every survey, in place.
 
-    Each survey is summed sequentially along its own row of a zero-padded grid, so its values
-    are bit-identical whether it is integrated alone or in any batch. Surveys are grouped by
-    power-of-two length class, which keeps the padding below 2x for any mix of lengths.
+    Each survey is summed sequentially along its own row of a zero-padded grid, so its sums are
+    bit-identical whether it is integrated alone or in any batch. Surveys are grouped by
+    power-of-two length class, one grid each, which keeps the padding below 2x for any mix of
+    lengths.
     """
     lengths = np.diff(bounds)
     length_class = np.frexp(lengths)[1]
+    row_start = np.empty(lengths.size, dtype=np.intp)  # first grid cell of each survey
+    grids = []  # (first cell, rows, width) of each class's grid
+    size = 0
     for cls in np.unique(length_class):
         ids = np.flatnonzero(length_class == cls)
-        count = lengths[ids]
-        width = int(count.max())
-        first = bounds[ids]
-        stations = np.arange(count.sum()) + np.repeat(first - (np.cumsum(count) - count), count)
-        cells = stations - np.repeat(first - np.arange(ids.size) * width, count)
-        grid = np.zeros((3, ids.size * width))
-        grid[:, cells] = pos[:, stations]
-        rows = grid.reshape(3, ids.size, width)
-        np.cumsum(rows, axis=2, out=rows)
-        pos[:, stations] = grid[:, cells]
+        width = int(lengths[ids].max())
+        row_start[ids] = size + np.arange(ids.size) * width
+        grids.append((size, ids.size, width))
+        size += ids.size * width
+    cell = np.arange(steps.shape[1]) + np.repeat(row_start - bounds[:-1], lengths)
+    padded = np.zeros((3, size))
+    for src, dst in zip(steps, padded, strict=True):
+        dst[cell] = src
+    for first, rows, width in grids:
+        grid = padded[:, first : first + rows * width].reshape(3, rows, width)
+        np.cumsum(grid, axis=2, out=grid)
+    np.take(padded, cell, axis=1, out=steps)

@@ -1,0 +1,184 @@
+"""The ``gyropipe`` command.
+
+Exit codes: 0 success; 1 the run failed (bad input data, a stage raised, a contract was
+broken); 2 the pipeline, its configuration or the command line is invalid.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from pipeline import __version__
+from pipeline.errors import GyropipeError, SpecError
+from pipeline.graph import Plan, build_plan
+from pipeline.plugins import load_registry
+from pipeline.registry import Registry
+from pipeline.runner import RunInputError, run_plan
+from pipeline.spec import load_spec
+from pipeline.well import WellMetadata
+
+EXIT_FAILED = 1
+EXIT_CONFIG = 2
+
+set_option = click.option(
+    "--set",
+    "overrides",
+    multiple=True,
+    metavar="STAGE.PARAM=VALUE",
+    help="Override a stage parameter (value parsed as YAML). Repeatable.",
+)
+disable_option = click.option(
+    "--disable-plugin",
+    "disabled",
+    multiple=True,
+    metavar="NAME",
+    help="Do not load the plugin NAME (built-in or third-party). Repeatable.",
+)
+
+
+def _registry(disabled: tuple[str, ...]) -> Registry:
+    registry = load_registry(disabled)
+    for problem in registry.problems:
+        click.echo(f"warning: {problem}", err=True)
+    return registry
+
+
+def _plan(pipeline_file: str, overrides: tuple[str, ...], registry: Registry) -> Plan:
+    try:
+        return build_plan(load_spec(pipeline_file, list(overrides)), registry)
+    except SpecError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+
+
+@click.group()
+@click.version_option(__version__, prog_name="gyropipe")
+def main() -> None:
+    """gyropipe: gyro-survey processing pipelines."""
+
+
+@main.command()
+@click.argument("pipeline_file", metavar="PIPELINE.yaml", type=click.Path(dir_okay=False))
+@set_option
+@disable_option
+def validate(pipeline_file: str, overrides: tuple[str, ...], disabled: tuple[str, ...]) -> None:
+    """Validate a pipeline without running anything."""
+    plan = _plan(pipeline_file, overrides, _registry(disabled))
+    click.echo(
+        f"ok: pipeline {plan.spec.name!r} {plan.spec.version}: "
+        + " → ".join(f"{s.id}({s.uses})" for s in plan.stages)
+    )
+
+
+@main.command()
+@click.argument("pipeline_file", metavar="PIPELINE.yaml", type=click.Path(dir_okay=False))
+@click.option(
+    "--input",
+    "inputs",
+    multiple=True,
+    required=True,
+    metavar="[NAME=]FILE",
+    help="A pipeline input file; NAME may be left out when the pipeline has one input.",
+)
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Output directory.")
+@click.option("--well", "well_items", multiple=True, metavar="FIELD=VALUE",
+              help="Override a well metadata field (e.g. latitude=61.25). Repeatable.")
+@set_option
+@disable_option
+def run(
+    pipeline_file: str,
+    inputs: tuple[str, ...],
+    out_dir: str,
+    well_items: tuple[str, ...],
+    overrides: tuple[str, ...],
+    disabled: tuple[str, ...],
+) -> None:
+    """Run a pipeline on one well's input files."""
+    registry = _registry(disabled)
+    plan = _plan(pipeline_file, overrides, registry)
+    try:
+        files = _input_files(plan, inputs)
+        well = _well_overrides(well_items)
+    except (click.BadParameter, RunInputError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    try:
+        result = run_plan(plan, registry, inputs=files, out_dir=Path(out_dir), well=well)
+    except RunInputError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    except GyropipeError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
+    for stage in result.manifest["stages"]:
+        rows = ", ".join(f"{p}={n}" for p, n in stage["rows_out"].items()) or "-"
+        click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
+    for path in result.outputs:
+        click.echo(f"wrote {path}")
+    click.echo(f"ok: {result.out_dir / 'run.json'}")
+
+
+@main.command()
+@disable_option
+def plugins(disabled: tuple[str, ...]) -> None:
+    """List plugins, their versions and what each provides."""
+    registry = load_registry(disabled)
+    for info in registry.plugins.values():
+        kind = "built-in" if info.builtin else "third-party"
+        status = f"FAILED: {info.error}" if info.error else ", ".join(info.provides) or "nothing"
+        click.echo(f"{info.name} {info.version} ({kind}): {status}")
+    for problem in registry.problems:
+        click.echo(f"problem: {problem}")
+
+
+@main.command()
+@click.option("--out", "out_dir", default="schemas", show_default=True,
+              type=click.Path(file_okay=False))
+@click.option("--check", is_flag=True, help="Only check the files are up to date (exit 1 if not).")
+def schemas(out_dir: str, check: bool) -> None:
+    """Write the JSON Schemas of the pipeline YAML, well metadata and table contracts."""
+    from pipeline import schemas as schema_files
+
+    registry = load_registry()
+    if check:
+        stale = schema_files.stale(registry, Path(out_dir))
+        for name in stale:
+            click.echo(f"stale: {Path(out_dir) / name}")
+        sys.exit(EXIT_FAILED if stale else 0)
+    for path in schema_files.write(registry, Path(out_dir)):
+        click.echo(f"wrote {path}")
+
+
+def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
+    declared = list(plan.spec.inputs)
+    files: dict[str, Path] = {}
+    for item in items:
+        name, sep, file = item.partition("=")
+        if not sep:
+            if len(declared) != 1:
+                raise click.BadParameter(
+                    f"{item!r}: name the input (NAME=FILE); pipeline inputs: "
+                    f"{', '.join(declared) or 'none'}"
+                )
+            name, file = declared[0], item
+        if name in files:
+            raise click.BadParameter(f"input {name!r} given twice")
+        files[name] = Path(file)
+    return files
+
+
+def _well_overrides(items: tuple[str, ...]) -> WellMetadata:
+    values = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise click.BadParameter(f"--well {item!r}: expected FIELD=VALUE")
+        values[key.strip()] = value.strip() or None  # pydantic converts text to the field type
+    try:
+        return WellMetadata.model_validate(values)
+    except ValueError as exc:
+        raise click.BadParameter(f"--well: {exc}") from None

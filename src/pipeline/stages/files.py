@@ -1,0 +1,134 @@
+"""Built-in plugin: the stages that bring files into a pipeline and write tables out.
+
+Readers and writers themselves are plugins of their own (``gyropipe_register_readers``,
+``gyropipe_register_writers``); these stages choose one by name or by sniffing the file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator
+
+from pipeline.errors import GyropipeError
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import (
+    ReaderDef,
+    StageContext,
+    StageDef,
+    pipeline_input,
+    require_registered,
+)
+from pipeline.tables import AnyTable, Stations
+from pipeline.well import attach
+
+
+class ReaderChoiceError(GyropipeError):
+    """No installed reader can read a file as the requested kind of table."""
+
+
+class ReadParams(BaseModel):
+    """Parameters of a read stage."""
+
+    model_config = ConfigDict(extra="forbid")
+    input: str = pipeline_input("stations", "name of the pipeline input to read")
+    reader: str = Field("auto", description="reader name, or 'auto' to sniff the file")
+    options: dict[str, Any] = Field(
+        default_factory=dict, description="reader options (see the reader's documentation)"
+    )
+
+    @field_validator("reader")
+    @classmethod
+    def _known_reader(cls, name: str, info: ValidationInfo) -> str:
+        return name if name == "auto" else require_registered(info, "reader", name)
+
+
+class WriteParams(BaseModel):
+    """Parameters of the write stage."""
+
+    model_config = ConfigDict(extra="forbid")
+    writer: str = Field(description="writer name (csv, parquet, …)")
+    filename: str | None = Field(
+        None, description="output file name; default '<stage id>.<writer extension>'"
+    )
+
+    @field_validator("writer")
+    @classmethod
+    def _known_writer(cls, name: str, info: ValidationInfo) -> str:
+        return require_registered(info, "writer", name)
+
+
+def choose_reader(ctx: StageContext, kind: str, name: str, path: Path) -> ReaderDef:
+    """The reader ``name``, or with ``auto`` the first reader of ``kind`` that sniffs
+    ``path`` as its own."""
+    if name != "auto":
+        reader = ctx.reader(name)
+        if kind not in reader.kinds:
+            raise ReaderChoiceError(
+                f"reader {name!r} cannot read {kind} (it reads: {', '.join(reader.kinds)})"
+            )
+        return reader
+    able = [r for r in ctx.readers() if kind in r.kinds]
+    for reader in able:
+        if reader.sniff(path):
+            return reader
+    raise ReaderChoiceError(
+        f"no installed reader recognises {str(path)!r} as {kind} (readers of {kind}: "
+        f"{', '.join(r.name for r in able) or 'none'}); name one with `reader:`"
+    )
+
+
+def read_stage(kind: str) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, pa.Table]]:
+    """Stage function reading the pipeline input into a table of ``kind``."""
+
+    def read(
+        inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
+    ) -> dict[str, pa.Table]:
+        path = ctx.input_path(params.input)
+        reader = choose_reader(ctx, kind, params.reader, path)
+        options = dict(params.options)
+        if "north_reference" in reader.options.model_fields and ctx.well.north_reference:
+            options.setdefault("north_reference", ctx.well.north_reference)
+        try:
+            parsed = reader.options.model_validate(options)
+        except ValidationError as exc:
+            raise ReaderChoiceError(f"options of reader {reader.name!r}: {exc}") from None
+        table, header = reader.read(path, kind, parsed)
+        return {kind: attach(table, header)}
+
+    return read
+
+
+def write(
+    inputs: Mapping[str, pa.Table], params: WriteParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Write the input table through the chosen writer (published when the run succeeds)."""
+    writer = ctx.writer(params.writer)
+    path = ctx.output_path(params.filename or f"{ctx.stage_id}.{writer.extension}")
+    writer.write(attach(inputs["table"], ctx.well), path, ctx.well)
+    return {}
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="read_stations",
+            func=read_stage("stations"),
+            description="Read survey stations (MD, inclination, azimuth) from a pipeline input.",
+            outputs={"stations": Stations},
+            params=ReadParams,
+        )
+    )
+    register(
+        StageDef(
+            name="write",
+            func=write,
+            description="Write a table to a file in the output directory with a named writer.",
+            inputs={"table": AnyTable},
+            params=WriteParams,
+        )
+    )

@@ -1,0 +1,143 @@
+"""Built-in plugin: survey integration stages and survey QC checks."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.contracts import NORTH_KEY
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import CheckDef, StageContext, StageDef
+from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
+from pipeline.tables import CheckResults, DLS_UNIT, Stations, Trajectory
+from pipeline.well import WellMetadata
+
+DLS_COURSE_M = 30.0
+
+
+class MinCurveParams(BaseModel):
+    """Parameters of the minimum-curvature stage (lengths m, angles deg)."""
+
+    model_config = ConfigDict(extra="forbid")
+    vs_azimuth: float = Field(
+        0.0, description="vertical-section plane azimuth, deg, same north reference as the survey"
+    )
+    tie_north: float = Field(0.0, description="northing of the first station from the wellhead, m")
+    tie_east: float = Field(0.0, description="easting of the first station from the wellhead, m")
+    tie_tvd: float | None = Field(
+        None,
+        description="TVD of the first station, m; default: its MD (straight vertical hole "
+        "above the first station)",
+    )
+
+
+def survey_offsets(stations: pa.Table) -> np.ndarray:
+    """CSR offsets of the contiguous surveys of a stations table (one survey if no ids)."""
+    n = stations.num_rows
+    if "survey" not in stations.column_names or n == 0:
+        return np.array([0, n])
+    ids = stations.column("survey").to_numpy(zero_copy_only=False)
+    starts = np.flatnonzero(ids[1:] != ids[:-1]) + 1
+    return np.concatenate(([0], starts, [n]))
+
+
+def north_reference_of(table: pa.Table, column: str) -> str:
+    """The north reference stored in a column's field metadata."""
+    return (table.schema.field(column).metadata or {})[NORTH_KEY].decode()
+
+
+def min_curve(
+    inputs: Mapping[str, pa.Table], params: MinCurveParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Stations → trajectory by minimum curvature, every survey of the table in one call."""
+    stations = inputs["stations"]
+    md = stations.column("md").to_numpy()
+    inc_deg = stations.column("inc").to_numpy()
+    azi_deg = np.mod(stations.column("azi").to_numpy(), 360.0)
+    azi_deg[azi_deg >= 360.0] = 0.0  # mod of a tiny negative number rounds up to 360
+    offsets = survey_offsets(stations)
+    first_md = md[offsets[:-1]]
+    tie_tvd = first_md if params.tie_tvd is None else params.tie_tvd
+    result = minimum_curvature(
+        md, np.radians(inc_deg), np.radians(azi_deg), offsets=offsets,
+        tie_north=params.tie_north, tie_east=params.tie_east, tie_tvd=tie_tvd,
+    )
+    distance, direction = closure(result.north, result.east)
+    columns = {
+        "md": md,
+        "inc": inc_deg,
+        "azi": azi_deg,
+        "tvd": result.tvd,
+        "north": result.north,
+        "east": result.east,
+        "dogleg": np.degrees(result.dogleg),
+        "dls": np.degrees(result.dls) * DLS_COURSE_M,
+        "vertical_section": vertical_section(
+            result.north, result.east, np.radians(params.vs_azimuth)
+        ),
+        "closure_distance": distance,
+        "closure_direction": np.degrees(direction) % 360.0,
+    }
+    if "survey" in stations.column_names:
+        columns = {"survey": stations.column("survey"), **columns}
+    table = Trajectory.compiled().make_table(
+        columns, north_reference=north_reference_of(stations, "azi")
+    )
+    return {"trajectory": table}
+
+
+class DlsLimitParams(BaseModel):
+    """Parameters of the dogleg-severity check."""
+
+    model_config = ConfigDict(extra="forbid")
+    limit: float = Field(
+        10.0, gt=0, description=f"largest plausible dogleg severity, {DLS_UNIT}"
+    )
+
+
+def dls_limit(table: pa.Table, params: DlsLimitParams, well: WellMetadata) -> pa.Table:
+    """Flag stations whose dogleg severity exceeds a limit (survey busts, bad stations)."""
+    dls = table.column("dls").to_numpy()
+    n = len(dls)
+    return CheckResults.compiled().make_table(
+        {
+            "check": ["dls_limit"] * n,
+            "row": np.arange(n),
+            "md": table.column("md"),
+            "value": dls,
+            "limit": np.full(n, params.limit),
+            "unit": [DLS_UNIT] * n,
+            "passed": dls <= params.limit,
+        }
+    )
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="minimum_curvature",
+            func=min_curve,
+            description="Integrate stations into a trajectory by minimum curvature "
+            "(TVD, north, east, dogleg, DLS, vertical section, closure).",
+            inputs={"stations": Stations},
+            outputs={"trajectory": Trajectory},
+            params=MinCurveParams,
+        )
+    )
+
+
+@hookimpl
+def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
+    register(
+        CheckDef(
+            name="dls_limit",
+            description="dogleg severity of each station within a plausible limit",
+            contract=Trajectory,
+            func=dls_limit,
+            params=DlsLimitParams,
+        )
+    )
