@@ -17,7 +17,7 @@ field's metadata under ``unit`` and are checked; azimuth columns also carry
 from __future__ import annotations
 
 import types
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from typing import Any, ClassVar, Literal, Union, get_args, get_origin
 
@@ -29,6 +29,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.errors import ContractViolation, RuleFailure
 
 UNIT_KEY = b"unit"
+SOURCE_KEY = b"gyropipe.source"
+"""Schema metadata: the file a table was read from (named in contract violations)."""
+SOURCE_LINE = "source_line"
+"""Optional column: the 1-based file line of each row (named in contract violations)."""
 NORTH_KEY = b"north_reference"
 NORTH_REFERENCES = ("true", "grid", "magnetic")
 Monotonic = Literal["increasing", "strict"]
@@ -171,7 +175,14 @@ class CompiledContract:
                 continue
             failures.extend(_check_column(spec, table, groups))
         if failures:
-            raise ContractViolation(self.name, failures)
+            source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
+            if SOURCE_LINE in table.column_names:
+                lines = table.column(SOURCE_LINE)
+                failures = [
+                    replace(f, lines=tuple(int(lines[i].as_py()) for i, _ in f.examples))
+                    for f in failures
+                ]
+            raise ContractViolation(self.name, failures, source=source)
 
     def _group_starts(
         self, table: pa.Table, failures: list[RuleFailure]

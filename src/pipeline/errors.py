@@ -71,11 +71,16 @@ class RuleFailure:
     expected: str
     bad_rows: int = 0
     examples: tuple[tuple[int, object], ...] = ()
+    lines: tuple[int, ...] = ()
+    """source file line of each example row, when the table records it"""
 
     def __str__(self) -> str:
         text = f"column {self.column!r}: {self.rule}: expected {self.expected}"
         if self.bad_rows:
-            shown = ", ".join(f"row {i}: {v!r}" for i, v in self.examples)
+            where = [f"row {i}" for i, _ in self.examples]
+            if self.lines:
+                where = [f"{w} (line {n})" for w, n in zip(where, self.lines, strict=True)]
+            shown = ", ".join(f"{w}: {v!r}" for w, (_, v) in zip(where, self.examples, strict=True))
             text += f"; {self.bad_rows} bad row(s), first: {shown}"
         return text
 
@@ -88,6 +93,7 @@ class ContractViolation(GyropipeError):
         contract: str,
         failures: list[RuleFailure],
         *,
+        source: str = "",
         pipeline: str = "",
         stage: str = "",
         port: str = "",
@@ -95,6 +101,7 @@ class ContractViolation(GyropipeError):
     ) -> None:
         self.contract = contract
         self.failures = failures
+        self.source = source
         self.pipeline = pipeline
         self.stage = stage
         self.port = port
@@ -109,6 +116,8 @@ class ContractViolation(GyropipeError):
             if part
         )
         head = f"{where}: " if where else ""
+        if source:
+            head += f"data from {source}: "
         body = "\n".join(f"  {f}" for f in failures)
         super().__init__(f"{head}table violates contract {contract}:\n{body}")
 
@@ -119,6 +128,7 @@ class ContractViolation(GyropipeError):
         return ContractViolation(
             self.contract,
             self.failures,
+            source=self.source,
             pipeline=pipeline,
             stage=stage,
             port=port,

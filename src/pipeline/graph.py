@@ -47,7 +47,7 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     """Resolve, validate and order a loaded spec. Raises :class:`SpecError` with all
     problems found (nothing runs before the whole pipeline is valid)."""
     spec, source = loaded.spec, loaded.source
-    problems: list[Problem] = []
+    problems: list[Problem] = list(loaded.problems)
     defs: dict[str, tuple[StageDef, str]] = {}
     index: dict[str, int] = {}
     for i, stage in enumerate(spec.stages):

@@ -92,39 +92,40 @@ class PipelineSpec(BaseModel):
 
 @dataclass
 class SourceMap:
-    """Line/column of YAML nodes by their path in the loaded data."""
+    """Where each node of the loaded data came from (YAML line/column, or a ``--set``)."""
 
     file: str
-    values: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
-    keys: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
+    values: dict[PathKey, Location] = field(default_factory=dict)
+    keys: dict[PathKey, Location] = field(default_factory=dict)
 
     def locate(self, path: PathKey, *, key: bool = False) -> Location:
         """Location of the node at ``path`` (of its key if ``key``), else of its nearest
         ancestor that has one."""
-        table = self.keys if key else self.values
+        if key and path in self.keys:
+            return self.keys[path]
         for end in range(len(path), -1, -1):
-            probe = path[:end]
-            hit = table.get(probe) if end == len(path) else None
-            hit = hit or self.values.get(probe)
-            if hit:
-                return Location(self.file, *hit)
+            if path[:end] in self.values:
+                return self.values[path[:end]]
         return Location(self.file)
 
 
 @dataclass
 class LoadedSpec:
-    """A validated spec with the source map of its YAML."""
+    """A spec of valid shape, the source map of its YAML, and the problems found so far
+    that did not prevent building it (reported with the planner's, all together)."""
 
     spec: PipelineSpec
     source: SourceMap
     raw: dict[str, Any]
+    problems: list[Problem]
 
 
 def load_spec(path: str | Path, overrides: list[str] | None = None) -> LoadedSpec:
     """Read a pipeline YAML, apply ``--set stage.param=value`` overrides, validate its shape.
 
-    Raises :class:`SpecError` with every problem found. Stage names, params and wiring are
-    checked later, against the plugin registry (:mod:`pipeline.graph`).
+    Raises :class:`SpecError` if the spec cannot be built at all. Stage names, params and
+    wiring are checked against the plugin registry by :func:`pipeline.graph.build_plan`,
+    which reports them together with the problems already found here.
     """
     path = Path(path)
     try:
@@ -157,15 +158,16 @@ def parse_spec(text: str, file: str, overrides: list[str] | None = None) -> Load
     if not isinstance(raw, dict):
         loc = Location(file, node.start_mark.line + 1, node.start_mark.column + 1)
         raise SpecError([Problem(loc, "a pipeline must be a mapping (name, version, stages…)")])
-    problems += apply_overrides(raw, overrides or [])
+    problems += apply_overrides(raw, overrides or [], source)
     try:
         spec = PipelineSpec.model_validate(raw)
     except ValidationError as exc:
-        problems += validation_problems(exc, (), source)
+        reported = {p.location for p in problems}
+        problems += [
+            p for p in validation_problems(exc, (), source) if p.location not in reported
+        ]
         raise SpecError(problems) from None
-    if problems:
-        raise SpecError(problems)
-    return LoadedSpec(spec, source, raw)
+    return LoadedSpec(spec, source, raw, problems)
 
 
 def validation_problems(
@@ -191,8 +193,11 @@ def validation_problems(
     return out
 
 
-def apply_overrides(raw: dict[str, Any], overrides: list[str]) -> list[Problem]:
-    """Apply ``stage.param[.sub]=value`` overrides in place; values are parsed as YAML."""
+def apply_overrides(
+    raw: dict[str, Any], overrides: list[str], source: SourceMap
+) -> list[Problem]:
+    """Apply ``stage.param[.sub]=value`` overrides in place (values parsed as YAML); later
+    problems with an overridden value point at its ``--set``."""
     problems = []
     stages = raw.get("stages")
     by_id = {
@@ -216,6 +221,8 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str]) -> list[Problem]:
         except yaml.YAMLError as exc:
             problems.append(Problem(where, f"value is not valid YAML: {exc}"))
             continue
+        index = stages.index(stage) if isinstance(stages, list) else 0
+        source.values[("stages", index, "with", *parts[1:])] = where
         params = stage.setdefault("with", {})
         for part in parts[1:-1]:
             params = params.setdefault(part, {}) if isinstance(params, dict) else None
@@ -229,7 +236,7 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str]) -> list[Problem]:
 def _to_data(
     node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]
 ) -> Any:
-    source.values[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+    source.values[path] = Location(source.file, node.start_mark.line + 1, node.start_mark.column + 1)
     standard = _STANDARD_TAGS.get(type(node))
     if standard is not None and node.tag != standard:
         problems.append(
@@ -248,7 +255,7 @@ def _to_data(
             if key in out:
                 problems.append(Problem(loc, f"duplicate key {key!r}"))
                 continue
-            source.keys[(*path, key)] = (loc.line, loc.column)
+            source.keys[(*path, key)] = loc
             out[key] = _to_data(value_node, (*path, key), source, problems)
         return out
     if isinstance(node, yaml.SequenceNode):

@@ -13,6 +13,7 @@ from typing import Any
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator
 
+from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import GyropipeError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
@@ -97,7 +98,8 @@ def read_stage(kind: str) -> Callable[[Mapping[str, pa.Table], ReadParams, Stage
         except ValidationError as exc:
             raise ReaderChoiceError(f"options of reader {reader.name!r}: {exc}") from None
         table, header = reader.read(path, kind, parsed)
-        return {kind: attach(table, header)}
+        meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(path).encode()}
+        return {kind: attach(table.replace_schema_metadata(meta), header)}
 
     return read
 

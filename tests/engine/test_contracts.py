@@ -1,0 +1,188 @@
+"""Table contracts: each rule passes on good tables and fails, with rows, on bad ones."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from pipeline.contracts import TableContract, column
+from pipeline.errors import ContractViolation, RuleFailure
+from pipeline.tables import Stations, Trajectory
+
+
+class Sample(TableContract):
+    group_by = "well"
+
+    well: str | None = column(unit=None, description="group key", default=None)
+    md: float = column(unit="m", ge=0, monotonic="strict", description="depth")
+    inc: float = column(unit="deg", ge=0, le=180, description="inclination")
+    azi: float = column(unit="deg", north_reference=True, description="azimuth")
+    t: float = column(unit="s", gt=0, lt=10, monotonic="increasing", description="time")
+    gap: float | None = column(unit="m", ge=0, description="nullable")
+    n: int = column(unit=None, ge=1, description="count")
+
+
+def table(**overrides: object) -> pa.Table:
+    data: dict[str, object] = {
+        "md": [0.0, 10.0, 20.0, 30.0],
+        "inc": [0.0, 1.0, 2.0, 3.0],
+        "azi": [10.0, 11.0, 12.0, 13.0],
+        "t": [1.0, 1.0, 2.0, 3.0],
+        "gap": [None, 1.0, None, 2.0],
+        "n": [1, 2, 3, 4],
+    }
+    data.update(overrides)
+    return Sample.compiled().make_table(data, north_reference="true")
+
+
+def failures(t: pa.Table) -> list[RuleFailure]:
+    with pytest.raises(ContractViolation) as info:
+        Sample.validate_table(t)
+    return info.value.failures
+
+
+def only(t: pa.Table) -> RuleFailure:
+    (failure,) = failures(t)
+    return failure
+
+
+def test_valid_table_passes_and_schema_carries_units():
+    Sample.validate_table(table())
+    schema = Sample.compiled().schema("grid")
+    assert schema.field("md").metadata == {b"unit": b"m"}
+    assert schema.field("azi").metadata == {b"unit": b"deg", b"north_reference": b"grid"}
+    assert schema.field("gap").nullable and not schema.field("md").nullable
+    assert schema.field("n").type == pa.int64()
+
+
+def test_missing_column():
+    f = only(table().drop_columns(["inc"]))
+    assert (f.column, f.rule) == ("inc", "present")
+
+
+def test_wrong_type():
+    t = table().set_column(5, pa.field("n", pa.float64()), pa.array([1.0, 2, 3, 4]))
+    f = only(t)
+    assert (f.column, f.rule) == ("n", "type")
+    assert "int64, got double" in f.expected
+
+
+def test_wrong_or_missing_unit():
+    t = table()
+    i = t.schema.get_field_index("md")
+    ft = t.set_column(i, pa.field("md", pa.float64(), metadata={"unit": "ft"}), t.column("md"))
+    f = only(ft)
+    assert (f.column, f.rule) == ("md", "unit")
+    assert "'m'" in f.expected and "'ft'" in f.expected
+    bare = t.set_column(i, pa.field("md", pa.float64()), t.column("md"))
+    assert "got none" in only(bare).expected
+
+
+def test_north_reference_required():
+    t = table()
+    i = t.schema.get_field_index("azi")
+    t = t.set_column(i, pa.field("azi", pa.float64(), metadata={"unit": "deg"}), t.column("azi"))
+    f = only(t)
+    assert (f.column, f.rule) == ("azi", "north reference")
+
+
+def test_nulls_in_non_nullable_column():
+    f = only(table(inc=[0.0, None, 2.0, None]))
+    assert (f.column, f.rule, f.bad_rows) == ("inc", "not null", 2)
+    assert f.examples == ((1, None), (3, None))
+
+
+def test_nulls_allowed_in_nullable_column_and_range_skips_them():
+    Sample.validate_table(table(gap=[None, None, None, None]))
+    f = only(table(gap=[None, -1.0, None, 2.0]))
+    assert (f.column, f.rule, f.examples) == ("gap", "range", ((1, -1.0),))
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_values(bad):
+    f = only(table(azi=[1.0, 2.0, bad, 4.0]))
+    assert (f.column, f.rule, f.bad_rows) == ("azi", "finite", 1)
+    assert f.examples[0][0] == 2
+
+
+@pytest.mark.parametrize(
+    ("col", "values", "rows", "expected"),
+    [
+        ("inc", [0.0, 180.5, -1.0, 3.0], [1], "values <= 180"),
+        ("inc", [0.0, 180.5, -1.0, 3.0], [2], "values >= 0"),
+        ("t", [0.0, 1.0, 2.0, 3.0], [0], "values > 0"),
+        ("t", [1.0, 1.0, 2.0, 10.0], [3], "values < 10"),
+        ("n", [1, 0, 3, 4], [1], "values >= 1"),
+    ],
+)
+def test_range_rules(col, values, rows, expected):
+    found = [f for f in failures(table(**{col: values})) if f.expected == expected]
+    assert len(found) == 1
+    assert [i for i, _ in found[0].examples] == rows
+
+
+def test_strict_and_non_strict_monotonic():
+    f = only(table(md=[0.0, 10.0, 10.0, 5.0]))
+    assert (f.column, f.rule, f.bad_rows) == ("md", "monotonic", 2)
+    assert f.examples == ((2, 10.0), (3, 5.0))
+    assert "strictly increasing" in f.expected
+    Sample.validate_table(table(t=[1.0, 1.0, 1.0, 2.0]))  # non-decreasing is enough for t
+    f = only(table(t=[1.0, 3.0, 2.0, 4.0]))
+    assert (f.column, f.rule, f.examples) == ("t", "monotonic", ((2, 2.0),))
+
+
+def test_monotonic_within_groups():
+    grouped = table(well=["a", "a", "b", "b"], md=[5.0, 10.0, 0.0, 3.0])
+    Sample.validate_table(grouped)
+    f = only(table(well=["a", "a", "b", "b"], md=[5.0, 10.0, 3.0, 0.0]))
+    assert f.examples == ((3, 0.0),)
+    assert "within each group" in f.expected
+
+
+def test_every_failure_is_reported_with_location_when_raised_by_engine():
+    bad = table(inc=[0.0, 200.0, None, 3.0], azi=[1.0, math.nan, 2.0, 3.0])
+    with pytest.raises(ContractViolation) as info:
+        Sample.validate_table(bad)
+    located = info.value.located(pipeline="p", stage="s", port="stations", direction="input")
+    text = str(located)
+    assert text.startswith("pipeline 'p' stage 's' input port 'stations': table violates contract Sample")
+    assert "column 'inc': not null" in text and "column 'inc': range" in text
+    assert "column 'azi': finite" in text and "row 1: nan" in text
+
+
+def test_empty_table_passes():
+    Sample.validate_table(table().slice(0, 0))
+
+
+def test_builtin_contracts_reject_bad_survey_values():
+    good = Stations.compiled().make_table(
+        {"md": [0.0, 30.0], "inc": [0.0, 5.0], "azi": [0.0, 359.9]}, north_reference="true"
+    )
+    Stations.validate_table(good)
+    bad = Stations.compiled().make_table(
+        {"md": [0.0, 0.0], "inc": [0.0, 181.0], "azi": [0.0, np.inf]}, north_reference="true"
+    )
+    rules = {(f.column, f.rule) for f in pytest.raises(ContractViolation,
+             Stations.validate_table, bad).value.failures}
+    assert rules == {("md", "monotonic"), ("inc", "range"), ("azi", "finite")}
+    assert {c.name for c in Stations.compiled().columns} < {
+        c.name for c in Trajectory.compiled().columns
+    }
+
+
+def test_contract_json_schema_carries_units_and_bounds():
+    schema = Sample.model_json_schema()
+    md = schema["properties"]["md"]
+    assert md["x-unit"] == "m" and md["minimum"] == 0 and md["x-monotonic"] == "strict"
+    assert schema["properties"]["azi"]["x-north-reference"] == ["true", "grid", "magnetic"]
+
+
+def test_unsupported_column_type_is_refused():
+    class Bad(TableContract):
+        x: list[int] = column(unit=None, description="not a scalar")
+
+    with pytest.raises(TypeError, match="not one of"):
+        Bad.compiled()

@@ -1,0 +1,231 @@
+"""The runner end to end: CLI run on the bundled sample, manifest, bad inputs, failing
+stages, contract checks at boundaries, and atomic outputs under SIGKILL."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import textwrap
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.errors import ContractViolation, StageError
+from pipeline.graph import build_plan
+from pipeline.registry import StageContext, StageDef
+from pipeline.runner import RunInputError, run_plan
+from pipeline.spec import load_spec
+from pipeline.survey.mincurve import minimum_curvature
+from pipeline.tables import Stations, Trajectory
+from tests_support import ROOT, gyropipe
+
+SAMPLE = ROOT / "examples" / "stations-j-well.csv"
+SURVEY = ROOT / "pipelines" / "survey.yaml"
+
+
+def cli(*args: str, env: Mapping[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*gyropipe(), *args], capture_output=True, text=True, cwd=ROOT,
+                          env={**os.environ, **(env or {})}, timeout=120)
+
+
+def sample_values() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """MD, inclination and azimuth of the sample, parsed independently of the reader."""
+    lines = SAMPLE.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("MD (m)")) + 1
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[start:] if line])
+    return rows[:, 0], rows[:, 1], rows[:, 2]
+
+
+def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
+    out_dir = tmp_path / "out"
+    result = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir))
+    assert result.returncode == 0, result.stderr
+    names = sorted(p.name for p in out_dir.iterdir())
+    assert names == [
+        "dls_check.results.parquet", "run.json", "trajectory.csv",
+        "trajectory.trajectory.parquet",
+    ]
+
+    trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
+    Trajectory.validate_table(trajectory)  # units and north reference survived the file
+    md, inc, azi = sample_values()
+    expected = minimum_curvature(md, np.radians(inc), np.radians(azi), tie_tvd=md[0])
+    np.testing.assert_allclose(trajectory.column("md").to_numpy(), md)
+    np.testing.assert_allclose(trajectory.column("tvd").to_numpy(), expected.tvd, atol=1e-9)
+    np.testing.assert_allclose(trajectory.column("north").to_numpy(), expected.north, atol=1e-9)
+    np.testing.assert_allclose(trajectory.column("east").to_numpy(), expected.east, atol=1e-9)
+    assert trajectory.schema.field("azi").metadata[b"north_reference"] == b"true"
+    # closure of the last station from north/east, vertical section along azimuth 0 = north
+    n, e = expected.north[-1], expected.east[-1]
+    assert trajectory.column("closure_distance")[-1].as_py() == pytest.approx(np.hypot(n, e))
+    np.testing.assert_allclose(trajectory.column("vertical_section").to_numpy(), expected.north)
+
+    manifest = json.loads((out_dir / "run.json").read_text())
+    plan = build_plan(load_spec(SURVEY), __import__("pipeline.plugins").plugins.load_registry())
+    assert manifest["status"] == "ok"
+    assert manifest["pipeline"]["sha256"] == plan.digest
+    assert manifest["inputs"]["stations"]["sha256"] == hashlib.sha256(SAMPLE.read_bytes()).hexdigest()
+    assert [s["id"] for s in manifest["stages"]] == ["read", "trajectory", "dls_check", "export_csv"]
+    assert manifest["stages"][1]["rows_out"] == {"trajectory": len(md)}
+    assert manifest["plugins"]["builtin.survey"]
+    assert manifest["well"]["well"] == "J-12" and manifest["well"]["latitude"] == 61.25
+    assert manifest["well"]["north_reference"] == "true"
+    for entry in manifest["outputs"]:
+        assert hashlib.sha256(Path(entry["path"]).read_bytes()).hexdigest() == entry["sha256"]
+
+    qc = pq.read_table(out_dir / "dls_check.results.parquet")
+    assert qc.num_rows == len(md) and all(qc.column("passed").to_pylist())
+
+
+def test_cli_overrides_and_well_metadata(tmp_path: Path):
+    out_dir = tmp_path / "out"
+    result = cli("run", str(SURVEY), "--input", f"stations={SAMPLE}", "--out", str(out_dir),
+                 "--set", "trajectory.vs_azimuth=90", "--well", "tool_serial=GX-7")
+    assert result.returncode == 0, result.stderr
+    trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
+    np.testing.assert_allclose(trajectory.column("vertical_section").to_numpy(),
+                               trajectory.column("east").to_numpy(), atol=1e-9)
+    manifest = json.loads((out_dir / "run.json").read_text())
+    assert manifest["well"]["tool_serial"] == "GX-7"
+
+
+BAD_INPUTS = {
+    "missing column": ("MD (m),Inc (deg)\n0,0\n30,1\n", ["azi", "accepted"]),
+    "non-numeric cell": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,abc,1\n",
+                         [":3", "abc"]),
+    "md not increasing": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,1\n20,2,2\n",
+                          ["stage 'read'", "column 'md': monotonic", "row 2 (line 4): 20.0"]),
+    "inclination out of range": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,181,1\n",
+                                 ["column 'inc': range", "values <= 180", "row 1 (line 3)"]),
+    "azimuth not finite": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,inf\n",
+                           ["column 'azi': finite", "row 1 (line 3): inf"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_INPUTS))
+def test_bad_input_is_a_clear_error_and_writes_nothing(case: str, tmp_path: Path):
+    text, fragments = BAD_INPUTS[case]
+    bad = tmp_path / "bad.csv"
+    bad.write_text(text)
+    out_dir = tmp_path / "out"
+    result = cli("run", str(SURVEY), "--input", str(bad), "--out", str(out_dir))
+    assert result.returncode == 1
+    assert str(bad) in result.stderr
+    for fragment in fragments:
+        assert fragment in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+    assert list(out_dir.iterdir()) == []
+
+
+def test_missing_input_file_is_a_configuration_error(tmp_path: Path):
+    result = cli("run", str(SURVEY), "--input", str(tmp_path / "nope.csv"), "--out",
+                 str(tmp_path / "out"))
+    assert result.returncode == 2
+    assert "no such file" in result.stderr
+
+
+def make_plan(write_yaml, registry, body: str):
+    path = write_yaml("name: t\nversion: 1\ninputs: {stations: {}}\nstages:\n" +
+                      textwrap.dedent(body))
+    return build_plan(load_spec(path), registry)
+
+
+def stations_table() -> pa.Table:
+    return Stations.compiled().make_table(
+        {"md": [0.0, 30.0, 60.0], "inc": [0.0, 3.0, 6.0], "azi": [0.0, 45.0, 45.0]},
+        north_reference="grid",
+    )
+
+
+def test_stage_with_undeclared_ports_or_bad_output_is_reported(
+    write_yaml, registry, add_stage, tmp_path: Path
+):
+    def wrong_ports(inputs: Mapping[str, pa.Table], params: object, ctx: StageContext):
+        return {"oops": inputs["stations"]}
+
+    def breaks_contract(inputs: Mapping[str, pa.Table], params: object, ctx: StageContext):
+        return {"trajectory": inputs["stations"]}  # no tvd/north/east…
+
+    add_stage(StageDef("tests.wrong_ports", wrong_ports, "bad", inputs={"stations": Stations},
+                       outputs={"trajectory": Trajectory}))
+    add_stage(StageDef("tests.breaks", breaks_contract, "bad", inputs={"stations": Stations},
+                       outputs={"trajectory": Trajectory}))
+    src = tmp_path / "st.parquet"
+    pq.write_table(stations_table(), src)
+    for uses, error, fragment in [
+        ("tests.wrong_ports", StageError,
+         "stage 't1' (tests.wrong_ports from plugin tests.helpers 9.9) failed: ValueError: "
+         "returned ports ['oops'], declared ['trajectory']"),
+        ("tests.breaks", ContractViolation,
+         "pipeline 't' stage 't1' output port 'trajectory': table violates contract Trajectory"),
+    ]:
+        plan = make_plan(write_yaml, registry, f"""
+          - id: read
+            uses: read_stations
+          - id: t1
+            uses: {uses}
+            inputs: {{stations: read}}
+            persist: true
+        """)
+        out_dir = tmp_path / uses
+        with pytest.raises(error) as info:
+            run_plan(plan, registry, inputs={"stations": src}, out_dir=out_dir)
+        assert fragment in str(info.value)
+        assert list(out_dir.iterdir()) == []
+
+
+def test_inputs_must_match_declaration(write_yaml, registry, tmp_path: Path):
+    plan = make_plan(write_yaml, registry, "  - id: read\n    uses: read_stations\n")
+    with pytest.raises(RunInputError, match="missing input 'stations'"):
+        run_plan(plan, registry, inputs={}, out_dir=tmp_path / "o")
+    with pytest.raises(RunInputError, match="unknown input 'other'"):
+        run_plan(plan, registry, inputs={"stations": SAMPLE, "other": SAMPLE},
+                 out_dir=tmp_path / "o")
+
+
+KILLER = '''
+import os, signal
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import WriterDef
+
+def write(table, path, well):
+    with open(path, "wb") as fh:
+        fh.write(b"partial,data\\n" * 1000)
+        fh.flush()
+        os.kill(os.getpid(), signal.SIGKILL)
+
+@hookimpl
+def gyropipe_register_writers(register):
+    register(WriterDef("killer", "dies mid-write", "csv", write))
+'''
+
+
+def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "killerplugin.py").write_text(KILLER)
+    info = site / "killerplugin-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: killerplugin\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text("[gyropipe]\nkillerplugin = killerplugin\n")
+    out_dir = tmp_path / "out"
+    env = {"PYTHONPATH": str(site)}
+    killed = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir),
+                 "--set", "export_csv.writer=killer", env=env)
+    assert killed.returncode == -9
+    leftovers = [p.name for p in out_dir.iterdir()]
+    assert all(name.startswith(".") for name in leftovers), leftovers  # only hidden staging
+    assert not (out_dir / "trajectory.csv").exists() and not (out_dir / "run.json").exists()
+
+    again = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir), env=env)
+    assert again.returncode == 0, again.stderr
+    assert sorted(p.name for p in out_dir.iterdir()) == [
+        "dls_check.results.parquet", "run.json", "trajectory.csv",
+        "trajectory.trajectory.parquet",
+    ]  # the dead run's staging directory was cleaned up
