@@ -83,10 +83,16 @@ def validate(pipeline_file: str, overrides: tuple[str, ...], disabled: tuple[str
     metavar="[NAME=]FILE",
     help="A pipeline input file; NAME may be left out when the pipeline has one input.",
 )
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Output directory.")
-@click.option("--well", "well_items", multiple=True, metavar="FIELD=VALUE",
-              help="Override a well metadata field (e.g. latitude=61.25). Repeatable.")
+@click.option(
+    "--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory."
+)
+@click.option(
+    "--well",
+    "well_items",
+    multiple=True,
+    metavar="FIELD=VALUE",
+    help="Override a well metadata field (e.g. latitude=61.25). Repeatable.",
+)
 @set_option
 @disable_option
 def run(
@@ -136,8 +142,9 @@ def plugins(disabled: tuple[str, ...]) -> None:
 
 
 @main.command()
-@click.option("--out", "out_dir", default="schemas", show_default=True,
-              type=click.Path(file_okay=False))
+@click.option(
+    "--out", "out_dir", default="schemas", show_default=True, type=click.Path(file_okay=False)
+)
 @click.option("--check", is_flag=True, help="Only check the files are up to date (exit 1 if not).")
 def schemas(out_dir: str, check: bool) -> None:
     """Write the JSON Schemas of the pipeline YAML, well metadata and table contracts."""

@@ -19,7 +19,7 @@ from __future__ import annotations
 import types
 from dataclasses import dataclass, replace
 from functools import cache
-from typing import Any, ClassVar, Literal, Union, get_args, get_origin
+from typing import Any, ClassVar, Literal, Union, cast, get_args, get_origin
 
 import numpy as np
 import pyarrow as pa
@@ -140,9 +140,7 @@ class CompiledContract:
         """Arrow schema with unit (and north reference) metadata on each field."""
         return pa.schema([c.field(north_reference) for c in self.columns])
 
-    def make_table(
-        self, data: dict[str, Any], *, north_reference: str | None = None
-    ) -> pa.Table:
+    def make_table(self, data: dict[str, Any], *, north_reference: str | None = None) -> pa.Table:
         """Build a table of this contract from column arrays, attaching units.
 
         Columns of ``data`` not in the contract are kept (without unit metadata unless they
@@ -157,9 +155,11 @@ class CompiledContract:
                 arr = values if isinstance(values, pa.Array | pa.ChunkedArray) else pa.array(values)
                 fields.append(pa.field(name, arr.type))
             else:
-                arr = pa.array(values, type=spec.type) if not isinstance(
-                    values, pa.Array | pa.ChunkedArray
-                ) else values.cast(spec.type)
+                arr = (
+                    pa.array(values, type=spec.type)
+                    if not isinstance(values, pa.Array | pa.ChunkedArray)
+                    else values.cast(spec.type)
+                )
                 fields.append(spec.field(north_reference))
             arrays.append(arr)
         return pa.Table.from_arrays(arrays, schema=pa.schema(fields))
@@ -184,9 +184,7 @@ class CompiledContract:
                 ]
             raise ContractViolation(self.name, failures, source=source)
 
-    def _group_starts(
-        self, table: pa.Table, failures: list[RuleFailure]
-    ) -> np.ndarray | None:
+    def _group_starts(self, table: pa.Table, failures: list[RuleFailure]) -> np.ndarray | None:
         """Boolean mask, True at rows that start a new group (None: one group)."""
         if self.group_by is None or self.group_by not in table.column_names:
             return None
@@ -252,14 +250,14 @@ def _check_numbers(
     if is_float and spec.finite and not (np.isfinite(lo) and np.isfinite(hi)):
         bad = ~np.isfinite(values) if valid is None else (~np.isfinite(values) & valid)
         failures.append(_failure(spec.name, "finite", "finite numbers (no NaN/inf)", bad, col))
-    bounds = (
-        ("ge", spec.ge, lo < spec.ge if spec.ge is not None else False, np.less, ">="),
-        ("le", spec.le, hi > spec.le if spec.le is not None else False, np.greater, "<="),
-        ("gt", spec.gt, lo <= spec.gt if spec.gt is not None else False, np.less_equal, ">"),
-        ("lt", spec.lt, hi >= spec.lt if spec.lt is not None else False, np.greater_equal, "<"),
+    bounds = (  # (bound, symbol, test of a bad value, extreme that shows any bad value)
+        (spec.ge, ">=", np.less, lo),
+        (spec.le, "<=", np.greater, hi),
+        (spec.gt, ">", np.less_equal, lo),
+        (spec.lt, "<", np.greater_equal, hi),
     )
-    for rule, bound, tripped, bad_op, symbol in bounds:
-        if bound is not None and tripped:
+    for bound, symbol, bad_op, extreme in bounds:
+        if bound is not None and bad_op(extreme, bound):
             bad = bad_op(values, bound)
             if valid is not None:
                 bad &= valid
@@ -274,9 +272,7 @@ def _check_numbers(
             bad[1:] = bad_step
             what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
             scope = " within each group" if group_starts is not None else ""
-            failures.append(
-                _failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
-            )
+            failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
     return failures
 
 
@@ -290,7 +286,7 @@ def _failure(
 
 def _same_type(actual: pa.DataType, expected: pa.DataType) -> bool:
     if pa.types.is_string(expected):
-        return pa.types.is_string(actual) or pa.types.is_large_string(actual)
+        return bool(pa.types.is_string(actual) or pa.types.is_large_string(actual))
     return bool(actual == expected)
 
 
@@ -326,6 +322,8 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                     bounds[key] = float(getattr(meta, key))
         unit = extra.get("x-unit")
         monotonic = extra.get("x-monotonic")
+        if monotonic not in (None, "increasing", "strict"):
+            raise TypeError(f"column {name!r}: monotonic must be 'increasing' or 'strict'")
         specs.append(
             ColumnSpec(
                 name=name,
@@ -334,7 +332,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                 nullable=nullable,
                 required=info.is_required(),
                 finite=bool(extra.get("x-finite", True)),
-                monotonic=monotonic if monotonic in ("increasing", "strict") else None,
+                monotonic=cast(Monotonic | None, monotonic),
                 north_reference="x-north-reference" in extra,
                 **bounds,
             )

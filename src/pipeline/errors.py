@@ -47,7 +47,8 @@ class SpecError(GyropipeError):
 
 
 class InputFileError(GyropipeError):
-    """An input file is malformed: names the file, the line (1-based, 0 if unknown) and the issue."""
+    """An input file is malformed: names the file, the line (1-based; 0 if unknown) and
+    what was expected."""
 
     def __init__(self, path: str | Path, message: str, line: int = 0, column: str = "") -> None:
         self.path = str(path)
@@ -121,9 +122,7 @@ class ContractViolation(GyropipeError):
         body = "\n".join(f"  {f}" for f in failures)
         super().__init__(f"{head}table violates contract {contract}:\n{body}")
 
-    def located(
-        self, *, pipeline: str, stage: str, port: str, direction: str
-    ) -> ContractViolation:
+    def located(self, *, pipeline: str, stage: str, port: str, direction: str) -> ContractViolation:
         """The same violation, annotated with where in the pipeline it happened."""
         return ContractViolation(
             self.contract,

@@ -15,7 +15,6 @@ from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PathKey, PipelineSpec, SourceMap, validation_problems
 
 
-
 @dataclass(frozen=True)
 class PlannedStage:
     """A stage ready to run."""
@@ -83,12 +82,22 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
         stage = spec.stages[index[stage_id]]
         definition, plugin = defs[stage_id]
         persist = (
-            tuple(definition.outputs) if stage.persist is True
-            else tuple(stage.persist) if stage.persist else ()
+            tuple(definition.outputs)
+            if stage.persist is True
+            else tuple(stage.persist)
+            if stage.persist
+            else ()
         )
         planned.append(
-            PlannedStage(stage_id, stage.uses, definition, plugin, params[stage_id],
-                         wiring[stage_id], persist)
+            PlannedStage(
+                stage_id,
+                stage.uses,
+                definition,
+                plugin,
+                params[stage_id],
+                wiring[stage_id],
+                persist,
+            )
         )
     return Plan(spec, source.file, tuple(planned))
 
@@ -187,9 +196,7 @@ def _wire(
             continue
         mismatch = contract_mismatch(up_def.outputs[out_port], definition.inputs[port])
         if mismatch:
-            problems.append(
-                Problem(loc, f"input {port!r} from {upstream}.{out_port}: {mismatch}")
-            )
+            problems.append(Problem(loc, f"input {port!r} from {upstream}.{out_port}: {mismatch}"))
             continue
         wired[port] = (upstream, out_port)
     for port in definition.inputs:
@@ -280,4 +287,4 @@ def _find_cycle(nodes: list[str], deps: dict[str, set[str]]) -> list[str]:
     while node not in path:
         path.append(node)
         node = min(d for d in deps[node] if d in remaining)
-    return path[path.index(node):][::-1]
+    return path[path.index(node) :][::-1]

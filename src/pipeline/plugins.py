@@ -70,8 +70,11 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
         try:
             obj = ep.load()
         except Exception as exc:  # any import failure is this plugin's, not ours
-            _fail(registry, PluginInfo(ep.name, version, builtin=False),
-                  f"failed to load entry point {ep.value!r}{dist}: {type(exc).__name__}: {exc}")
+            _fail(
+                registry,
+                PluginInfo(ep.name, version, builtin=False),
+                f"failed to load entry point {ep.value!r}{dist}: {type(exc).__name__}: {exc}",
+            )
             continue
         candidates.append((PluginInfo(ep.name, version, builtin=False), obj))
 
@@ -108,8 +111,9 @@ def _collect(pm: pluggy.PluginManager, registry: Registry, info: PluginInfo) -> 
                 impl.function(register=lambda item, e=expected: registry.add(item, info, e))
             except Exception as exc:  # a raising hook is reported against its plugin
                 registry.problems.append(
-                    PluginError(info.name, info.version,
-                                f"{hook_name} raised {type(exc).__name__}: {exc}")
+                    PluginError(
+                        info.name, info.version, f"{hook_name} raised {type(exc).__name__}: {exc}"
+                    )
                 )
 
 
@@ -118,12 +122,10 @@ def _unknown_hooks(pm: pluggy.PluginManager, obj: object) -> list[str]:
     return sorted(
         name
         for name in dir(obj)
-        if name.startswith("gyropipe_") and name not in known
-        and callable(getattr(obj, name))
+        if name.startswith("gyropipe_") and name not in known and callable(getattr(obj, name))
     )
 
 
 def _fail(registry: Registry, info: PluginInfo, message: str) -> None:
     registry.plugins[info.name] = PluginInfo(info.name, info.version, info.builtin, error=message)
     registry.problems.append(PluginError(info.name, info.version, message))
-

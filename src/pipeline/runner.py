@@ -187,9 +187,7 @@ def _call(
             st.id,
             st.uses,
             plugin,
-            ValueError(
-                f"returned ports {sorted(outs)}, declared {sorted(st.definition.outputs)}"
-            ),
+            ValueError(f"returned ports {sorted(outs)}, declared {sorted(st.definition.outputs)}"),
         )
     return dict(outs)
 
@@ -210,9 +208,7 @@ def _check_ports(
 def _check_inputs(plan: Plan, given: Mapping[str, Path]) -> dict[str, Path]:
     declared = plan.spec.inputs
     problems = [f"unknown input {n!r}" for n in given if n not in declared]
-    problems += [
-        f"missing input {n!r}: give --input {n}=FILE" for n in declared if n not in given
-    ]
+    problems += [f"missing input {n!r}: give --input {n}=FILE" for n in declared if n not in given]
     problems += [
         f"input {n!r}: no such file {str(p)!r}"
         for n, p in given.items()
@@ -299,7 +295,7 @@ def sha256_file(path: Path) -> str:
 def _remove_stale_staging(out_dir: Path) -> None:
     """Remove staging directories of runs whose process no longer exists."""
     for entry in out_dir.glob(STAGING_PREFIX + "*"):
-        pid_text = entry.name[len(STAGING_PREFIX):].split("-", 1)[0]
+        pid_text = entry.name[len(STAGING_PREFIX) :].split("-", 1)[0]
         if pid_text.isdigit() and not _alive(int(pid_text)):
             shutil.rmtree(entry, ignore_errors=True)
 

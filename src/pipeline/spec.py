@@ -71,16 +71,16 @@ class PipelineSpec(BaseModel):
     version: str = Field(description="pipeline version (numbers are read as text)")
     description: str = ""
     inputs: dict[str, InputSpec] = Field(default_factory=dict)
-    well: WellMetadata = Field(
-        default_factory=WellMetadata, description="default well metadata"
-    )
+    well: WellMetadata = Field(default_factory=WellMetadata, description="default well metadata")
     defaults: Defaults = Field(default_factory=Defaults)
     stages: list[StageSpec] = Field(min_length=1)
 
     @field_validator("version", mode="before")
     @classmethod
     def _version_text(cls, value: Any) -> Any:
-        return str(value) if isinstance(value, int | float) and not isinstance(value, bool) else value
+        return (
+            str(value) if isinstance(value, int | float) and not isinstance(value, bool) else value
+        )
 
     def digest(self) -> str:
         """SHA-256 of the canonical JSON of the resolved spec (after overrides)."""
@@ -163,16 +163,12 @@ def parse_spec(text: str, file: str, overrides: list[str] | None = None) -> Load
         spec = PipelineSpec.model_validate(raw)
     except ValidationError as exc:
         reported = {p.location for p in problems}
-        problems += [
-            p for p in validation_problems(exc, (), source) if p.location not in reported
-        ]
+        problems += [p for p in validation_problems(exc, (), source) if p.location not in reported]
         raise SpecError(problems) from None
     return LoadedSpec(spec, source, raw, problems)
 
 
-def validation_problems(
-    exc: ValidationError, prefix: PathKey, source: SourceMap
-) -> list[Problem]:
+def validation_problems(exc: ValidationError, prefix: PathKey, source: SourceMap) -> list[Problem]:
     """One problem per pydantic error, located at the YAML node it concerns."""
     out = []
     for err in exc.errors():
@@ -193,16 +189,14 @@ def validation_problems(
     return out
 
 
-def apply_overrides(
-    raw: dict[str, Any], overrides: list[str], source: SourceMap
-) -> list[Problem]:
+def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap) -> list[Problem]:
     """Apply ``stage.param[.sub]=value`` overrides in place (values parsed as YAML); later
     problems with an overridden value point at its ``--set``."""
     problems = []
     stages = raw.get("stages")
-    by_id = {
-        s.get("id"): s for s in stages if isinstance(s, dict)
-    } if isinstance(stages, list) else {}
+    by_id = (
+        {s.get("id"): s for s in stages if isinstance(s, dict)} if isinstance(stages, list) else {}
+    )
     for item in overrides:
         where = Location(f"--set {item}")
         target, sep, value = item.partition("=")
@@ -233,10 +227,10 @@ def apply_overrides(
     return problems
 
 
-def _to_data(
-    node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]
-) -> Any:
-    source.values[path] = Location(source.file, node.start_mark.line + 1, node.start_mark.column + 1)
+def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]) -> Any:
+    source.values[path] = Location(
+        source.file, node.start_mark.line + 1, node.start_mark.column + 1
+    )
     standard = _STANDARD_TAGS.get(type(node))
     if standard is not None and node.tag != standard:
         problems.append(
@@ -247,7 +241,9 @@ def _to_data(
         out: dict[str, Any] = {}
         for key_node, value_node in node.value:
             key = _scalar(key_node)
-            loc = Location(source.file, key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+            loc = Location(
+                source.file, key_node.start_mark.line + 1, key_node.start_mark.column + 1
+            )
             if not isinstance(key, str | int | float | bool) or key is None:
                 problems.append(Problem(loc, "mapping keys must be plain scalars"))
                 continue

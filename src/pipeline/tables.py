@@ -36,7 +36,10 @@ class Trajectory(Stations):
     wellhead, dogleg, vertical section and closure."""
 
     azi: float = column(
-        unit="deg", ge=0, lt=360, north_reference=True,
+        unit="deg",
+        ge=0,
+        lt=360,
+        north_reference=True,
         description="azimuth in [0, 360), clockwise from north",
     )
     tvd: float = column(unit="m", description="true vertical depth below the depth reference")
@@ -49,9 +52,14 @@ class Trajectory(Stations):
     vertical_section: float = column(
         unit="m", description="horizontal displacement projected on the section azimuth"
     )
-    closure_distance: float = column(unit="m", ge=0, description="horizontal distance from the wellhead")
+    closure_distance: float = column(
+        unit="m", ge=0, description="horizontal distance from the wellhead"
+    )
     closure_direction: float = column(
-        unit="deg", ge=0, lt=360, north_reference=True,
+        unit="deg",
+        ge=0,
+        lt=360,
+        north_reference=True,
         description="direction of the closure, clockwise from north",
     )
 

@@ -15,7 +15,9 @@ from tests_support import ROOT, gyropipe
 
 PLUGINS = {
     # name: (version, module source)
-    "goodplugin": ("1.2.3", """
+    "goodplugin": (
+        "1.2.3",
+        """
         from collections.abc import Callable
         from pipeline.hookspecs import hookimpl
         from pipeline.registry import StageDef
@@ -28,11 +30,17 @@ PLUGINS = {
         def gyropipe_register_stages(register):
             register(StageDef("goodplugin.explode", explode, "raises",
                               inputs={"trajectory": Trajectory}))
-    """),
-    "brokenplugin": ("0.1.0", """
+    """,
+    ),
+    "brokenplugin": (
+        "0.1.0",
+        """
         import not_a_module_that_exists  # noqa: F401
-    """),
-    "badregplugin": ("2.0.0", """
+    """,
+    ),
+    "badregplugin": (
+        "2.0.0",
+        """
         from pipeline.hookspecs import hookimpl
         from pipeline.registry import StageDef
 
@@ -43,21 +51,28 @@ PLUGINS = {
             register(StageDef("badregplugin.params", print, "bad params", params=dict))
             register(StageDef("minimum_curvature", print, "clashes with a built-in"))
             register(StageDef("badregplugin.ok", print, "valid, kept"))
-    """),
-    "raisingplugin": ("0.0.1", """
+    """,
+    ),
+    "raisingplugin": (
+        "0.0.1",
+        """
         from pipeline.hookspecs import hookimpl
 
         @hookimpl
         def gyropipe_register_stages(register):
             raise RuntimeError("hook blew up")
-    """),
-    "typoplugin": ("3.1.4", """
+    """,
+    ),
+    "typoplugin": (
+        "3.1.4",
+        """
         from pipeline.hookspecs import hookimpl
 
         @hookimpl
         def gyropipe_register_stagez(register):
             pass
-    """),
+    """,
+    ),
 }
 
 
@@ -76,8 +91,9 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(site)}
-    return subprocess.run([*gyropipe(), *args], capture_output=True, text=True, env=env,
-                          cwd=ROOT, timeout=120)
+    return subprocess.run(
+        [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
+    )
 
 
 def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
@@ -85,23 +101,38 @@ def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
     assert out.returncode == 0, out.stderr
     text = out.stdout
     assert "goodplugin 1.2.3 (third-party): stage:goodplugin.explode" in text
-    assert "brokenplugin 0.1.0 (third-party): FAILED: failed to load entry point 'brokenplugin'" in text
+    assert (
+        "brokenplugin 0.1.0 (third-party): FAILED: failed to load entry point 'brokenplugin'"
+        in text
+    )
     assert "ModuleNotFoundError" in text
     assert "problem: plugin badregplugin 2.0.0: registered a str where a StageDef is needed" in text
     assert "problem: plugin badregplugin 2.0.0: stage name 'Bad Name' is invalid" in text
-    assert "problem: plugin badregplugin 2.0.0: stage 'badregplugin.params': params must be a BaseModel subclass" in text
-    assert ("problem: plugin badregplugin 2.0.0: stage 'minimum_curvature' is already "
-            "registered by plugin builtin.survey") in text
+    assert (
+        "problem: plugin badregplugin 2.0.0: stage 'badregplugin.params': params must be a BaseModel subclass"
+        in text
+    )
+    assert (
+        "problem: plugin badregplugin 2.0.0: stage 'minimum_curvature' is already "
+        "registered by plugin builtin.survey"
+    ) in text
     assert "badregplugin 2.0.0 (third-party): stage:badregplugin.ok" in text
-    assert "problem: plugin raisingplugin 0.0.1: gyropipe_register_stages raised RuntimeError: hook blew up" in text
-    assert "typoplugin 3.1.4 (third-party): FAILED: implements unknown hook(s) gyropipe_register_stagez" in text
+    assert (
+        "problem: plugin raisingplugin 0.0.1: gyropipe_register_stages raised RuntimeError: hook blew up"
+        in text
+    )
+    assert (
+        "typoplugin 3.1.4 (third-party): FAILED: implements unknown hook(s) gyropipe_register_stagez"
+        in text
+    )
     # the built-ins still work alongside
     assert "builtin.survey" in text and "stage:minimum_curvature" in text
 
 
 def test_disabling_a_plugin(site: Path):
-    out = run_cli(site, "plugins", "--disable-plugin", "brokenplugin",
-                  "--disable-plugin", "builtin.qc")
+    out = run_cli(
+        site, "plugins", "--disable-plugin", "brokenplugin", "--disable-plugin", "builtin.qc"
+    )
     assert "brokenplugin" not in out.stdout
     assert "builtin.qc" not in out.stdout
     assert "goodplugin 1.2.3" in out.stdout
@@ -111,7 +142,8 @@ def test_pipeline_runs_despite_broken_plugins_and_stage_error_names_plugin(
     site: Path, tmp_path: Path
 ):
     pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(textwrap.dedent("""
+    pipeline.write_text(
+        textwrap.dedent("""
         name: explode
         version: 1
         inputs: {stations: {}}
@@ -124,13 +156,17 @@ def test_pipeline_runs_despite_broken_plugins_and_stage_error_names_plugin(
           - id: boom
             uses: goodplugin.explode
             inputs: {trajectory: traj}
-    """))
+    """)
+    )
     out_dir = tmp_path / "out"
-    out = run_cli(site, "run", str(pipeline), "--input", "examples/stations-j-well.csv",
-                  "--out", str(out_dir))
+    out = run_cli(
+        site, "run", str(pipeline), "--input", "examples/stations-j-well.csv", "--out", str(out_dir)
+    )
     assert out.returncode == 1
-    assert ("stage 'boom' (goodplugin.explode from plugin goodplugin 1.2.3) failed: "
-            "ValueError: deliberate failure in a plugin stage") in out.stderr
+    assert (
+        "stage 'boom' (goodplugin.explode from plugin goodplugin 1.2.3) failed: "
+        "ValueError: deliberate failure in a plugin stage"
+    ) in out.stderr
     assert "warning: plugin brokenplugin 0.1.0" in out.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == []  # nothing half-written
     assert "Traceback" not in out.stderr

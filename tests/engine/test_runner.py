@@ -30,8 +30,14 @@ SURVEY = ROOT / "pipelines" / "survey.yaml"
 
 
 def cli(*args: str, env: Mapping[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*gyropipe(), *args], capture_output=True, text=True, cwd=ROOT,
-                          env={**os.environ, **(env or {})}, timeout=120)
+    return subprocess.run(
+        [*gyropipe(), *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, **(env or {})},
+        timeout=120,
+    )
 
 
 def sample_values() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -48,7 +54,9 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
     assert result.returncode == 0, result.stderr
     names = sorted(p.name for p in out_dir.iterdir())
     assert names == [
-        "dls_check.results.parquet", "run.json", "trajectory.csv",
+        "dls_check.results.parquet",
+        "run.json",
+        "trajectory.csv",
         "trajectory.trajectory.parquet",
     ]
 
@@ -70,8 +78,15 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
     plan = build_plan(load_spec(SURVEY), __import__("pipeline.plugins").plugins.load_registry())
     assert manifest["status"] == "ok"
     assert manifest["pipeline"]["sha256"] == plan.digest
-    assert manifest["inputs"]["stations"]["sha256"] == hashlib.sha256(SAMPLE.read_bytes()).hexdigest()
-    assert [s["id"] for s in manifest["stages"]] == ["read", "trajectory", "dls_check", "export_csv"]
+    assert (
+        manifest["inputs"]["stations"]["sha256"] == hashlib.sha256(SAMPLE.read_bytes()).hexdigest()
+    )
+    assert [s["id"] for s in manifest["stages"]] == [
+        "read",
+        "trajectory",
+        "dls_check",
+        "export_csv",
+    ]
     assert manifest["stages"][1]["rows_out"] == {"trajectory": len(md)}
     assert manifest["plugins"]["builtin.survey"]
     assert manifest["well"]["well"] == "J-12" and manifest["well"]["latitude"] == 61.25
@@ -85,26 +100,44 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
 
 def test_cli_overrides_and_well_metadata(tmp_path: Path):
     out_dir = tmp_path / "out"
-    result = cli("run", str(SURVEY), "--input", f"stations={SAMPLE}", "--out", str(out_dir),
-                 "--set", "trajectory.vs_azimuth=90", "--well", "tool_serial=GX-7")
+    result = cli(
+        "run",
+        str(SURVEY),
+        "--input",
+        f"stations={SAMPLE}",
+        "--out",
+        str(out_dir),
+        "--set",
+        "trajectory.vs_azimuth=90",
+        "--well",
+        "tool_serial=GX-7",
+    )
     assert result.returncode == 0, result.stderr
     trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
-    np.testing.assert_allclose(trajectory.column("vertical_section").to_numpy(),
-                               trajectory.column("east").to_numpy(), atol=1e-9)
+    np.testing.assert_allclose(
+        trajectory.column("vertical_section").to_numpy(),
+        trajectory.column("east").to_numpy(),
+        atol=1e-9,
+    )
     manifest = json.loads((out_dir / "run.json").read_text())
     assert manifest["well"]["tool_serial"] == "GX-7"
 
 
 BAD_INPUTS = {
     "missing column": ("MD (m),Inc (deg)\n0,0\n30,1\n", ["azi", "accepted"]),
-    "non-numeric cell": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,abc,1\n",
-                         [":3", "abc"]),
-    "md not increasing": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,1\n20,2,2\n",
-                          ["stage 'read'", "column 'md': monotonic", "row 2 (line 4): 20.0"]),
-    "inclination out of range": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,181,1\n",
-                                 ["column 'inc': range", "values <= 180", "row 1 (line 3)"]),
-    "azimuth not finite": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,inf\n",
-                           ["column 'azi': finite", "row 1 (line 3): inf"]),
+    "non-numeric cell": ("MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,abc,1\n", [":3", "abc"]),
+    "md not increasing": (
+        "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,1\n20,2,2\n",
+        ["stage 'read'", "column 'md': monotonic", "row 2 (line 4): 20.0"],
+    ),
+    "inclination out of range": (
+        "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,181,1\n",
+        ["column 'inc': range", "values <= 180", "row 1 (line 3)"],
+    ),
+    "azimuth not finite": (
+        "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,inf\n",
+        ["column 'azi': finite", "row 1 (line 3): inf"],
+    ),
 }
 
 
@@ -124,15 +157,17 @@ def test_bad_input_is_a_clear_error_and_writes_nothing(case: str, tmp_path: Path
 
 
 def test_missing_input_file_is_a_configuration_error(tmp_path: Path):
-    result = cli("run", str(SURVEY), "--input", str(tmp_path / "nope.csv"), "--out",
-                 str(tmp_path / "out"))
+    result = cli(
+        "run", str(SURVEY), "--input", str(tmp_path / "nope.csv"), "--out", str(tmp_path / "out")
+    )
     assert result.returncode == 2
     assert "no such file" in result.stderr
 
 
 def make_plan(write_yaml, registry, body: str):
-    path = write_yaml("name: t\nversion: 1\ninputs: {stations: {}}\nstages:\n" +
-                      textwrap.dedent(body))
+    path = write_yaml(
+        "name: t\nversion: 1\ninputs: {stations: {}}\nstages:\n" + textwrap.dedent(body)
+    )
     return build_plan(load_spec(path), registry)
 
 
@@ -152,27 +187,51 @@ def test_stage_with_undeclared_ports_or_bad_output_is_reported(
     def breaks_contract(inputs: Mapping[str, pa.Table], params: object, ctx: StageContext):
         return {"trajectory": inputs["stations"]}  # no tvd/north/east…
 
-    add_stage(StageDef("tests.wrong_ports", wrong_ports, "bad", inputs={"stations": Stations},
-                       outputs={"trajectory": Trajectory}))
-    add_stage(StageDef("tests.breaks", breaks_contract, "bad", inputs={"stations": Stations},
-                       outputs={"trajectory": Trajectory}))
+    add_stage(
+        StageDef(
+            "tests.wrong_ports",
+            wrong_ports,
+            "bad",
+            inputs={"stations": Stations},
+            outputs={"trajectory": Trajectory},
+        )
+    )
+    add_stage(
+        StageDef(
+            "tests.breaks",
+            breaks_contract,
+            "bad",
+            inputs={"stations": Stations},
+            outputs={"trajectory": Trajectory},
+        )
+    )
     src = tmp_path / "st.parquet"
     pq.write_table(stations_table(), src)
     for uses, error, fragment in [
-        ("tests.wrong_ports", StageError,
-         "stage 't1' (tests.wrong_ports from plugin tests.helpers 9.9) failed: ValueError: "
-         "returned ports ['oops'], declared ['trajectory']"),
-        ("tests.breaks", ContractViolation,
-         "pipeline 't' stage 't1' output port 'trajectory': table violates contract Trajectory"),
+        (
+            "tests.wrong_ports",
+            StageError,
+            "stage 't1' (tests.wrong_ports from plugin tests.helpers 9.9) failed: ValueError: "
+            "returned ports ['oops'], declared ['trajectory']",
+        ),
+        (
+            "tests.breaks",
+            ContractViolation,
+            "pipeline 't' stage 't1' output port 'trajectory': table violates contract Trajectory",
+        ),
     ]:
-        plan = make_plan(write_yaml, registry, f"""
+        plan = make_plan(
+            write_yaml,
+            registry,
+            f"""
           - id: read
             uses: read_stations
           - id: t1
             uses: {uses}
             inputs: {{stations: read}}
             persist: true
-        """)
+        """,
+        )
         out_dir = tmp_path / uses
         with pytest.raises(error) as info:
             run_plan(plan, registry, inputs={"stations": src}, out_dir=out_dir)
@@ -185,11 +244,12 @@ def test_inputs_must_match_declaration(write_yaml, registry, tmp_path: Path):
     with pytest.raises(RunInputError, match="missing input 'stations'"):
         run_plan(plan, registry, inputs={}, out_dir=tmp_path / "o")
     with pytest.raises(RunInputError, match="unknown input 'other'"):
-        run_plan(plan, registry, inputs={"stations": SAMPLE, "other": SAMPLE},
-                 out_dir=tmp_path / "o")
+        run_plan(
+            plan, registry, inputs={"stations": SAMPLE, "other": SAMPLE}, out_dir=tmp_path / "o"
+        )
 
 
-KILLER = '''
+KILLER = """
 import os, signal
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import WriterDef
@@ -203,7 +263,7 @@ def write(table, path, well):
 @hookimpl
 def gyropipe_register_writers(register):
     register(WriterDef("killer", "dies mid-write", "csv", write))
-'''
+"""
 
 
 def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
@@ -216,8 +276,17 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     (info / "entry_points.txt").write_text("[gyropipe]\nkillerplugin = killerplugin\n")
     out_dir = tmp_path / "out"
     env = {"PYTHONPATH": str(site)}
-    killed = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir),
-                 "--set", "export_csv.writer=killer", env=env)
+    killed = cli(
+        "run",
+        str(SURVEY),
+        "--input",
+        str(SAMPLE),
+        "--out",
+        str(out_dir),
+        "--set",
+        "export_csv.writer=killer",
+        env=env,
+    )
     assert killed.returncode == -9
     leftovers = [p.name for p in out_dir.iterdir()]
     assert all(name.startswith(".") for name in leftovers), leftovers  # only hidden staging
@@ -226,6 +295,8 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     again = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir), env=env)
     assert again.returncode == 0, again.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == [
-        "dls_check.results.parquet", "run.json", "trajectory.csv",
+        "dls_check.results.parquet",
+        "run.json",
+        "trajectory.csv",
         "trajectory.trajectory.parquet",
     ]  # the dead run's staging directory was cleaned up

@@ -98,7 +98,9 @@ def test_python_tags_are_refused(write_yaml, registry):
 def test_unknown_stage_suggests_close_names(write_yaml, registry):
     path = write_yaml(HEAD + "  - id: a\n    uses: minimum_curvatur\n")
     (msg,) = problems(path, registry)
-    assert msg.startswith("7:11: unknown stage 'minimum_curvatur'; did you mean 'minimum_curvature'")
+    assert msg.startswith(
+        "7:11: unknown stage 'minimum_curvatur'; did you mean 'minimum_curvature'"
+    )
     assert "registered:" in msg
 
 
@@ -117,10 +119,14 @@ def test_unknown_and_mistyped_params(write_yaml, registry):
 """
     )
     found = problems(path, registry)
-    assert any(m.startswith("13:7: stage 'traj' (minimum_curvature): unknown field 'vs_azimut'")
-               for m in found), found
-    assert any(m.startswith("14:18: stage 'traj' (minimum_curvature): tie_north:") and
-               "'north'" in m for m in found), found
+    assert any(
+        m.startswith("13:7: stage 'traj' (minimum_curvature): unknown field 'vs_azimut'")
+        for m in found
+    ), found
+    assert any(
+        m.startswith("14:18: stage 'traj' (minimum_curvature): tie_north:") and "'north'" in m
+        for m in found
+    ), found
     assert len(found) == 2
 
 
@@ -141,7 +147,9 @@ def test_missing_required_param_and_unregistered_writer(write_yaml, registry):
     )
     found = problems(path, registry)
     assert found[0] == "9:5: stage 'out1' (write): missing required field 'writer'"
-    assert found[1].startswith("15:20: stage 'out2' (write): writer: Value error, no writer named 'xlsx'")
+    assert found[1].startswith(
+        "15:20: stage 'out2' (write): writer: Value error, no writer named 'xlsx'"
+    )
 
 
 def test_pipeline_input_must_be_declared(write_yaml, registry):
@@ -180,8 +188,13 @@ def test_wiring_problems(write_yaml, registry):
 
 def test_ambiguous_input(write_yaml, registry, add_stage):
     add_stage(
-        StageDef("tests.split", passthrough, "two outputs", inputs={"table": AnyTable},
-                 outputs={"left": AnyTable, "right": AnyTable})
+        StageDef(
+            "tests.split",
+            passthrough,
+            "two outputs",
+            inputs={"table": AnyTable},
+            outputs={"left": AnyTable, "right": AnyTable},
+        )
     )
     path = write_yaml(
         HEAD
@@ -198,13 +211,20 @@ def test_ambiguous_input(write_yaml, registry, add_stage):
 """
     )
     (msg,) = problems(path, registry)
-    assert msg.startswith("14:21: input 'table': 'split' is ambiguous, stage 'split' has outputs left, right")
+    assert msg.startswith(
+        "14:21: input 'table': 'split' is ambiguous, stage 'split' has outputs left, right"
+    )
 
 
 def test_contract_mismatch_between_ports(write_yaml, registry, add_stage):
     add_stage(
-        StageDef("tests.wants_trajectory", passthrough, "needs tvd",
-                 inputs={"table": Trajectory}, outputs={"left": AnyTable, "right": AnyTable})
+        StageDef(
+            "tests.wants_trajectory",
+            passthrough,
+            "needs tvd",
+            inputs={"table": Trajectory},
+            outputs={"left": AnyTable, "right": AnyTable},
+        )
     )
     path = write_yaml(
         HEAD
@@ -217,7 +237,9 @@ def test_contract_mismatch_between_ports(write_yaml, registry, add_stage):
 """
     )
     (msg,) = problems(path, registry)
-    assert msg.startswith("11:21: input 'table' from read.stations: Stations does not satisfy Trajectory")
+    assert msg.startswith(
+        "11:21: input 'table' from read.stations: Stations does not satisfy Trajectory"
+    )
     assert "column 'tvd' missing" in msg
     assert issubclass(Trajectory, Stations)  # the reverse direction is accepted
 
@@ -241,8 +263,13 @@ def test_duplicate_ids_and_persist_of_unknown_port(write_yaml, registry):
 
 def test_cycle_is_reported_with_its_path(write_yaml, registry, add_stage):
     add_stage(
-        StageDef("tests.loop", passthrough, "loop", inputs={"table": AnyTable},
-                 outputs={"left": AnyTable, "right": AnyTable})
+        StageDef(
+            "tests.loop",
+            passthrough,
+            "loop",
+            inputs={"table": AnyTable},
+            outputs={"left": AnyTable, "right": AnyTable},
+        )
     )
     path = write_yaml(
         HEAD
@@ -318,4 +345,3 @@ def test_cli_validate_reports_locations_and_exit_code(write_yaml, tmp_path: Path
     ok = CliRunner().invoke(main, ["validate", "pipelines/survey.yaml"])
     assert ok.exit_code == 0, ok.output
     assert "ok: pipeline 'survey'" in ok.output
-

@@ -82,7 +82,9 @@ def choose_reader(ctx: StageContext, kind: str, name: str, path: Path) -> Reader
     )
 
 
-def read_stage(kind: str) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, pa.Table]]:
+def read_stage(
+    kind: str,
+) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, pa.Table]]:
     """Stage function reading the pipeline input into a table of ``kind``."""
 
     def read(

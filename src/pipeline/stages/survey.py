@@ -12,7 +12,7 @@ from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import CheckDef, StageContext, StageDef
 from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
-from pipeline.tables import CheckResults, DLS_UNIT, Stations, Trajectory
+from pipeline.tables import DLS_UNIT, CheckResults, Stations, Trajectory
 from pipeline.well import WellMetadata
 
 DLS_COURSE_M = 30.0
@@ -46,7 +46,8 @@ def survey_offsets(stations: pa.Table) -> np.ndarray:
 
 def north_reference_of(table: pa.Table, column: str) -> str:
     """The north reference stored in a column's field metadata."""
-    return (table.schema.field(column).metadata or {})[NORTH_KEY].decode()
+    raw: bytes = (table.schema.field(column).metadata or {})[NORTH_KEY]
+    return raw.decode()
 
 
 def min_curve(
@@ -62,8 +63,13 @@ def min_curve(
     first_md = md[offsets[:-1]]
     tie_tvd = first_md if params.tie_tvd is None else params.tie_tvd
     result = minimum_curvature(
-        md, np.radians(inc_deg), np.radians(azi_deg), offsets=offsets,
-        tie_north=params.tie_north, tie_east=params.tie_east, tie_tvd=tie_tvd,
+        md,
+        np.radians(inc_deg),
+        np.radians(azi_deg),
+        offsets=offsets,
+        tie_north=params.tie_north,
+        tie_east=params.tie_east,
+        tie_tvd=tie_tvd,
     )
     distance, direction = closure(result.north, result.east)
     columns = {
@@ -93,9 +99,7 @@ class DlsLimitParams(BaseModel):
     """Parameters of the dogleg-severity check."""
 
     model_config = ConfigDict(extra="forbid")
-    limit: float = Field(
-        10.0, gt=0, description=f"largest plausible dogleg severity, {DLS_UNIT}"
-    )
+    limit: float = Field(10.0, gt=0, description=f"largest plausible dogleg severity, {DLS_UNIT}")
 
 
 def dls_limit(table: pa.Table, params: DlsLimitParams, well: WellMetadata) -> pa.Table:

@@ -25,13 +25,13 @@ FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
 
 #: Below this dogleg (rad) RF is its Taylor series 1 + β²/12 + β⁴/120 + 17β⁶/20160, whose
-#: truncation error there is < 1e-28. tan(β/2)/(β/2) has no cancellation (it is accurate to a
+#: truncation error there is < 1e-36. tan(β/2)/(β/2) has no cancellation (it is accurate to a
 #: few ulp for any β > 0), so the threshold only has to keep it away from 0/0.
 SERIES_BELOW = 1e-4
 
 #: Steps whose dogleg is within this margin (rad) of π are rejected with a ValueError. At β = π
 #: the tool axes are opposite, every plane through them holds a 180° arc and RF is infinite;
-#: near π the haversine dogleg loses accuracy as ~3e-16/(π−β)², i.e. ~3e-10 of ΔMD at the margin.
+#: near π the haversine dogleg loses accuracy as ~3e-16/(π−β)², i.e. ~4e-10 of ΔMD at the margin.
 REVERSAL_MARGIN = 1e-3
 
 _TWO_PI = 2.0 * np.pi
@@ -88,7 +88,7 @@ def minimum_curvature(
     bounds = _bounds(offsets, n)
     ties = _ties(bounds.size - 1, tie_north=tie_north, tie_east=tie_east, tie_tvd=tie_tvd)
 
-    steps = np.empty((3, n))  # displacement from the previous station, then positions
+    steps = np.empty((3, n))  # displacement from the previous station (tie-in at first ones)
     dogleg = np.zeros(n)
     dls = np.zeros(n)
     for lo in range(0, n - 1, _BLOCK):
@@ -106,8 +106,8 @@ def minimum_curvature(
     dls[first] = 0.0
     _reject_reversals(dogleg, bounds)
     steps[:, first] = ties
-    _cumsum_per_survey(steps, bounds)
-    return MinCurveResult(north=steps[0], east=steps[1], tvd=steps[2], dogleg=dogleg, dls=dls)
+    north, east, tvd = _cumsum_per_survey(steps, bounds)
+    return MinCurveResult(north=north, east=east, tvd=tvd, dogleg=dogleg, dls=dls)
 
 
 def vertical_section(north: ArrayLike, east: ArrayLike, azimuth_rad: ArrayLike) -> FloatArray:
@@ -152,10 +152,10 @@ def _steps(
     dmd = md[1:] - md[:-1]
     np.divide(dogleg, dmd, out=dls, where=dmd != 0.0)
 
-    np.multiply(sin_i, cos_a, out=cos_a)
-    np.multiply(sin_i, sin_a, out=sin_a)
-    np.add(cos_a[:-1], cos_a[1:], out=steps[0])
-    np.add(sin_a[:-1], sin_a[1:], out=steps[1])
+    t_north = np.multiply(sin_i, cos_a, out=cos_a)
+    t_east = np.multiply(sin_i, sin_a, out=sin_a)
+    np.add(t_north[:-1], t_north[1:], out=steps[0])
+    np.add(t_east[:-1], t_east[1:], out=steps[1])
     np.add(cos_i[:-1], cos_i[1:], out=steps[2])
     dmd *= 0.5
     dmd *= _ratio_factor(dogleg)
@@ -229,8 +229,8 @@ def _reject_reversals(dogleg: FloatArray, bounds: IndexArray) -> None:
         )
 
 
-def _cumsum_per_survey(steps: FloatArray, bounds: IndexArray) -> None:
-    """Cumulative sums of ``steps`` (3, n) along axis 1, restarting at every survey, in place.
+def _cumsum_per_survey(steps: FloatArray, bounds: IndexArray) -> FloatArray:
+    """Cumulative sums of ``steps`` (3, n) along axis 1, restarting at every survey.
 
     Each survey is summed sequentially along its own row of a zero-padded grid, so its sums are
     bit-identical whether it is integrated alone or in any batch. Surveys are grouped by
@@ -240,7 +240,7 @@ def _cumsum_per_survey(steps: FloatArray, bounds: IndexArray) -> None:
     lengths = np.diff(bounds)
     length_class = np.frexp(lengths)[1]
     row_start = np.empty(lengths.size, dtype=np.intp)  # first grid cell of each survey
-    grids = []  # (first cell, rows, width) of each class's grid
+    grids: list[tuple[int, int, int]] = []  # (first cell, rows, width) of each class's grid
     size = 0
     for cls in np.unique(length_class):
         ids = np.flatnonzero(length_class == cls)
@@ -248,11 +248,12 @@ def _cumsum_per_survey(steps: FloatArray, bounds: IndexArray) -> None:
         row_start[ids] = size + np.arange(ids.size) * width
         grids.append((size, ids.size, width))
         size += ids.size * width
-    cell = np.arange(steps.shape[1]) + np.repeat(row_start - bounds[:-1], lengths)
+    cell = np.repeat(row_start - bounds[:-1], lengths)
+    cell += np.arange(cell.size)
     padded = np.zeros((3, size))
     for src, dst in zip(steps, padded, strict=True):
         dst[cell] = src
     for first, rows, width in grids:
         grid = padded[:, first : first + rows * width].reshape(3, rows, width)
         np.cumsum(grid, axis=2, out=grid)
-    np.take(padded, cell, axis=1, out=steps)
+    return np.take(padded, cell, axis=1)
