@@ -167,7 +167,7 @@ class CompiledContract:
     def validate(self, table: pa.Table) -> None:
         """Raise :class:`ContractViolation` listing every failed rule (all columns)."""
         failures: list[RuleFailure] = []
-        groups = self._group_starts(table, failures)
+        groups = self._group_keys(table)
         for spec in self.columns:
             if spec.name not in table.column_names:
                 if spec.required:
@@ -184,22 +184,15 @@ class CompiledContract:
                 ]
             raise ContractViolation(self.name, failures, source=source)
 
-    def _group_starts(self, table: pa.Table, failures: list[RuleFailure]) -> np.ndarray | None:
-        """Boolean mask, True at rows that start a new group (None: one group)."""
+    def _group_keys(self, table: pa.Table) -> pa.ChunkedArray | None:
         if self.group_by is None or self.group_by not in table.column_names:
             return None
-        keys = table.column(self.group_by)
-        if keys.null_count:
-            failures.append(RuleFailure(self.group_by, "not null", "a group key on every row"))
-            return None
-        values = keys.to_numpy()
-        starts = np.ones(len(values), dtype=bool)
-        starts[1:] = values[1:] != values[:-1]
-        return starts
+        keys: pa.ChunkedArray = table.column(self.group_by)
+        return keys
 
 
 def _check_column(
-    spec: ColumnSpec, table: pa.Table, group_starts: np.ndarray | None
+    spec: ColumnSpec, table: pa.Table, groups: pa.ChunkedArray | None
 ) -> list[RuleFailure]:
     field = table.schema.field(spec.name)
     col = table.column(spec.name)
@@ -225,12 +218,12 @@ def _check_column(
         mask = pc.is_null(col).to_numpy(zero_copy_only=False)
         failures.append(_failure(spec.name, "not null", "no missing values", mask, col))
     if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
-        failures.extend(_check_numbers(spec, col, group_starts))
+        failures.extend(_check_numbers(spec, col, groups))
     return failures
 
 
 def _check_numbers(
-    spec: ColumnSpec, col: pa.ChunkedArray, group_starts: np.ndarray | None
+    spec: ColumnSpec, col: pa.ChunkedArray, groups: pa.ChunkedArray | None
 ) -> list[RuleFailure]:
     values = col.to_numpy() if col.null_count == 0 else col.to_numpy(zero_copy_only=False)
     if len(values) == 0:
@@ -263,16 +256,21 @@ def _check_numbers(
                 bad &= valid
             failures.append(_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col))
     if spec.monotonic and len(values) > 1:
-        step = values[1:] - values[:-1]
-        bad_step = step <= 0 if spec.monotonic == "strict" else step < 0
-        if group_starts is not None:
-            bad_step &= ~group_starts[1:]
+        compare = np.less_equal if spec.monotonic == "strict" else np.less
+        bad_step = compare(values[1:], values[:-1])
         if bad_step.any():
-            bad = np.zeros(len(values), dtype=bool)
-            bad[1:] = bad_step
-            what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
-            scope = " within each group" if group_starts is not None else ""
-            failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
+            rows = np.flatnonzero(bad_step) + 1
+            if groups is not None:  # a step into a new group is no violation
+                same = pc.equal(groups.take(rows), groups.take(rows - 1)).fill_null(True)
+                rows = rows[same.to_numpy(zero_copy_only=False)]
+            if len(rows):
+                bad = np.zeros(len(values), dtype=bool)
+                bad[rows] = True
+                what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
+                scope = " within each group" if groups is not None else ""
+                failures.append(
+                    _failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
+                )
     return failures
 
 

@@ -197,12 +197,22 @@ def _check_ports(
 ) -> None:
     contracts = st.definition.inputs if direction == "input" else st.definition.outputs
     for port, table in tables.items():
+        if direction == "input" and _checked_upstream(plan, st, port):
+            continue
         try:
             contracts[port].validate_table(table)
         except ContractViolation as exc:
             raise exc.located(
                 pipeline=plan.spec.name, stage=st.id, port=port, direction=direction
             ) from None
+
+
+def _checked_upstream(plan: Plan, st: PlannedStage, port: str) -> bool:
+    """True if the table on ``port`` was already checked against the very same contract as
+    the upstream stage's output (tables are immutable, so checking again proves nothing)."""
+    upstream, out_port = st.wiring[port]
+    producer = next(s for s in plan.stages if s.id == upstream)
+    return producer.definition.outputs[out_port] is st.definition.inputs[port]
 
 
 def _check_inputs(plan: Plan, given: Mapping[str, Path]) -> dict[str, Path]:
