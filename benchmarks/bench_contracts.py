@@ -47,8 +47,9 @@ def main() -> int:
     share = (check_in + check_out) / stage
     print(f"rows: {stations.num_rows:,}")
     print(f"minimum_curvature stage: {stage * 1e3:8.1f} ms")
-    print(f"input contract (Stations, {len(Stations.compiled().columns)} cols): {check_in * 1e3:8.1f} ms")
-    print(f"output contract (Trajectory, {len(Trajectory.compiled().columns)} cols): {check_out * 1e3:8.1f} ms")
+    n_in, n_out = len(Stations.compiled().columns), len(Trajectory.compiled().columns)
+    print(f"input contract (Stations, {n_in} cols): {check_in * 1e3:8.1f} ms")
+    print(f"output contract (Trajectory, {n_out} cols): {check_out * 1e3:8.1f} ms")
     print(f"contract checks / stage time: {share:.1%} (target <= 5%)")
     return 0 if share <= 0.05 else 1
 

@@ -268,9 +268,7 @@ def _check_numbers(
                 bad[rows] = True
                 what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
                 scope = " within each group" if groups is not None else ""
-                failures.append(
-                    _failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
-                )
+                failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
     return failures
 
 

@@ -117,10 +117,9 @@ class ContractViolation(GyropipeError):
             if part
         )
         head = f"{where}: " if where else ""
-        if source:
-            head += f"data from {source}: "
+        read_from = f" (data read from {source})" if source else ""
         body = "\n".join(f"  {f}" for f in failures)
-        super().__init__(f"{head}table violates contract {contract}:\n{body}")
+        super().__init__(f"{head}table violates contract {contract}{read_from}:\n{body}")
 
     def located(self, *, pipeline: str, stage: str, port: str, direction: str) -> ContractViolation:
         """The same violation, annotated with where in the pipeline it happened."""

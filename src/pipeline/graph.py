@@ -265,6 +265,8 @@ def _order(
         ready = [s for s in pending if deps[s] <= done]
         if not ready:
             cycle = _find_cycle(pending, deps)
+            k = cycle.index(min(cycle, key=index.__getitem__))
+            cycle = cycle[k:] + cycle[:k]  # start from the stage that comes first in the file
             first = cycle[0]
             problems.append(
                 Problem(

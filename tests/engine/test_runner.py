@@ -136,7 +136,7 @@ BAD_INPUTS = {
     ),
     "azimuth not finite": (
         "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,inf\n",
-        ["column 'azi': finite", "row 1 (line 3): inf"],
+        [":3 (column 'Azi True (deg)')", "expected a number, got 'inf'"],
     ),
 }
 
@@ -154,6 +154,21 @@ def test_bad_input_is_a_clear_error_and_writes_nothing(case: str, tmp_path: Path
         assert fragment in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
     assert list(out_dir.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("header", "expected"), [("Azi (deg)", b"true"), ("Azimuth Grid (deg)", b"grid")]
+)
+def test_file_north_reference_wins_over_the_pipeline_default(
+    header: str, expected: bytes, tmp_path: Path
+):
+    src = tmp_path / "st.csv"
+    src.write_text(f"MD (m),Inc (deg),{header}\n0,0,0\n30,1,1\n")
+    out_dir = tmp_path / "out"
+    result = cli("run", str(SURVEY), "--input", str(src), "--out", str(out_dir))
+    assert result.returncode == 0, result.stderr
+    trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
+    assert trajectory.schema.field("azi").metadata[b"north_reference"] == expected
 
 
 def test_missing_input_file_is_a_configuration_error(tmp_path: Path):

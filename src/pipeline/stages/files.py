@@ -93,8 +93,8 @@ def read_stage(
         path = ctx.input_path(params.input)
         reader = choose_reader(ctx, kind, params.reader, path)
         options = dict(params.options)
-        if "north_reference" in reader.options.model_fields and ctx.well.north_reference:
-            options.setdefault("north_reference", ctx.well.north_reference)
+        if "default_north_reference" in reader.options.model_fields and ctx.well.north_reference:
+            options.setdefault("default_north_reference", ctx.well.north_reference)
         try:
             parsed = reader.options.model_validate(options)
         except ValidationError as exc:

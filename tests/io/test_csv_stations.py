@@ -1,0 +1,611 @@
+"""The built-in CSV plugin, exercised through its registered ReaderDef and WriterDef on real
+files: header spellings, units, encodings, delimiters, title blocks, footers, every error,
+writer → reader round trips and a mutation fuzz test."""
+
+from __future__ import annotations
+
+import datetime as dt
+import random
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.errors import InputFileError, UnitError
+from pipeline.io import csv as csv_plugin
+from pipeline.registry import ReaderDef, WriterDef
+from pipeline.tables import Stations
+from pipeline.well import WellMetadata
+
+
+def _reader() -> ReaderDef:
+    found: list[ReaderDef] = []
+    csv_plugin.gyropipe_register_readers(register=found.append)
+    (reader,) = found
+    return reader
+
+
+def _writer() -> WriterDef:
+    found: list[WriterDef] = []
+    csv_plugin.gyropipe_register_writers(register=found.append)
+    (writer,) = found
+    return writer
+
+
+READER = _reader()
+WRITER = _writer()
+
+
+def put(tmp_path: Path, content: str | bytes, name: str = "survey.csv") -> Path:
+    path = tmp_path / name
+    path.write_bytes(content.encode() if isinstance(content, str) else content)
+    return path
+
+
+def read(path: Path, **options: Any) -> tuple[pa.Table, WellMetadata]:
+    return READER.read(path, "stations", READER.options.model_validate(options))
+
+
+def column(table: pa.Table, name: str) -> list[Any]:
+    return list(table.column(name).to_pylist())
+
+
+def north(table: pa.Table) -> str:
+    return str(table.schema.field("azi").metadata[NORTH_KEY].decode())
+
+
+def failure(path: Path, **options: Any) -> InputFileError:
+    with pytest.raises(InputFileError) as info:
+        read(path, **options)
+    return info.value
+
+
+BODY = "0,0,0\n100,1.5,45\n200,3,46.5\n"
+
+
+def test_registration() -> None:
+    assert READER.name == "csv"
+    assert READER.kinds == {"stations": Stations}
+    assert READER.options is csv_plugin.CsvStationsOptions
+    assert (WRITER.name, WRITER.extension) == ("csv", "csv")
+
+
+@pytest.mark.parametrize(
+    ("header", "ref"),
+    [
+        ("MD[m],INC[DEG],AZI[deg]", None),
+        ("MD (m),Incl (deg),Azim (deg)", None),
+        ("Measured Depth ( m ),Inclination ( deg ),Azimuth Grid ( deg )", "grid"),
+        ("DEPTH [M],DEVI [DEG],HAZI [DEG]", None),
+        ("DEPT(m),SDEV(deg),Azimuth True(deg)", "true"),
+        ("Meas. Depth [m],Deviation [deg],Azimuth Magnetic [deg]", "magnetic"),
+        ("md [m],inc [deg],Grid Azimuth [deg]", "grid"),
+        ("MD [m],INC [deg],AZI (GN) [deg]", "grid"),
+        ("MD [m],INC [deg],AZI_MN [deg]", "magnetic"),
+        ("MD [m],INC [deg],Azimuth True North [deg]", "true"),
+        ("MD [m],INC [deg],AZI TN [deg],TVD [m]", "true"),
+        ('"MD [m]","INC [deg]","AZI [deg]"', None),
+    ],
+)
+def test_header_spellings(tmp_path: Path, header: str, ref: str | None) -> None:
+    extra = ",0" if "TVD" in header else ""
+    body = "".join(line + extra + "\n" for line in BODY.splitlines())
+    options = {} if ref else {"north_reference": "grid"}
+    table, well = read(put(tmp_path, header + "\n" + body), **options)
+    assert table.column_names == ["md", "inc", "azi", "source_line"]
+    assert column(table, "md") == [0.0, 100.0, 200.0]
+    assert column(table, "inc") == [0.0, 1.5, 3.0]
+    assert column(table, "azi") == [0.0, 45.0, 46.5]
+    assert column(table, "source_line") == [2, 3, 4]
+    assert north(table) == (ref or "grid")
+    assert well == WellMetadata()
+    Stations.validate_table(table)
+
+
+def test_units_in_field_metadata_and_types(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n" + BODY))
+    schema = table.schema
+    assert [schema.field(n).type for n in table.column_names] == [pa.float64()] * 3 + [pa.int64()]
+    assert schema.field("md").metadata[UNIT_KEY] == b"m"
+    assert schema.field("inc").metadata[UNIT_KEY] == b"deg"
+    assert schema.field("azi").metadata[UNIT_KEY] == b"deg"
+    assert schema.field("source_line").metadata is None
+
+
+def test_survey_column(tmp_path: Path) -> None:
+    text = "Survey ID,MD[m],INC[deg],AZI TN[deg]\nS1,0,0,0\nS1,10,1,2\n S2 ,0,0,0\n,5,1,1\n"
+    table, _ = read(put(tmp_path, text))
+    assert table.column_names == ["survey", "md", "inc", "azi", "source_line"]
+    assert column(table, "survey") == ["S1", "S1", "S2", None]
+
+
+def test_feet_converted_to_metres(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, "MD (ft),INC (deg),AZI TN (deg)\n0,0,0\n1000,1,2\n100.5,1,2\n"))
+    assert column(table, "md") == [0.0, 1000 * 0.3048, 100.5 * 0.3048]
+    assert column(table, "md")[1] == 304.8
+
+
+def test_declared_units_override_the_header(tmp_path: Path) -> None:
+    path = put(tmp_path, "MD [m],INC [deg],AZI TN [deg]\n1000,3.141592653589793,0\n")
+    table, _ = read(path, md_unit="ft", angle_unit="rad")
+    assert column(table, "md") == [304.8]
+    assert column(table, "inc") == [180.0]
+
+
+def test_units_declared_only_in_options(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, "MD,INC,AZI TN\n10,1,2\n"), md_unit="FEET", angle_unit="DEGA")
+    assert column(table, "md") == [10 * 0.3048]
+
+
+@pytest.mark.parametrize("newline", ["\n", "\r\n", "\r"])
+def test_line_endings(tmp_path: Path, newline: str) -> None:
+    text = "# north_reference=true\nMD[m],INC[deg],AZI[deg]\n\n" + BODY + "End of survey\n"
+    table, _ = read(put(tmp_path, text.replace("\n", newline)))
+    assert column(table, "md") == [0.0, 100.0, 200.0]
+    assert column(table, "source_line") == [4, 5, 6]
+    assert north(table) == "true"
+
+
+def test_byte_order_mark(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, b"\xef\xbb\xbfMD[m],INC[deg],AZI TN[deg]\r\n1,2,3\r\n"))
+    assert column(table, "md") == [1.0]
+
+
+def test_semicolon_with_decimal_commas_detected(tmp_path: Path) -> None:
+    text = "MD [m];INC [deg];AZI TN [deg]\n0;0;0\n100,5;1,25;45\n1e3;2,5;350,75\n"
+    table, _ = read(put(tmp_path, text))
+    assert column(table, "md") == [0.0, 100.5, 1000.0]
+    assert column(table, "azi") == [0.0, 45.0, 350.75]
+
+
+def test_decimal_comma_declared(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, "MD [m]|INC [deg]|AZI TN [deg]\n1,5|2|3\n"), decimal=",")
+    assert column(table, "md") == [1.5]
+
+
+def test_mixed_decimal_marks_are_an_error(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD [m];INC [deg];AZI TN [deg]\n1,5;2.5;3\n"))
+    assert (err.line, err.column) == (2, "MD [m]")
+    assert "got '1,5'" in str(err)
+    assert "decimal=','" in str(err)
+
+
+def test_declared_decimal_comma_refuses_dots(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD [m];INC [deg];AZI TN [deg]\n1,5;2.5;3\n"), decimal=",")
+    assert (err.line, err.column) == (2, "INC [deg]")
+
+
+def test_decimal_comma_with_comma_delimiter_is_refused() -> None:
+    with pytest.raises(ValueError, match="decimal ','"):
+        READER.options.model_validate({"decimal": ",", "delimiter": ","})
+
+
+def test_tab_delimited(tmp_path: Path) -> None:
+    text = "Measured Depth (ft)\tInclination (deg)\tAzimuth Grid (deg)\n0\t0\t0\n10\t 1.5 \t20\n"
+    table, _ = read(put(tmp_path, text, "survey.tsv"))
+    assert column(table, "md") == [0.0, 3.048]
+    assert column(table, "inc") == [0.0, 1.5]
+    assert north(table) == "grid"
+
+
+def test_delimiter_option(tmp_path: Path) -> None:
+    table, _ = read(put(tmp_path, "MD[m]|INC[deg]|AZI TN[deg]\n1|2|3\n"), delimiter="|")
+    assert column(table, "azi") == [3.0]
+
+
+def test_title_block_and_footer(tmp_path: Path) -> None:
+    text = (
+        "ACME Gyro Services - survey report\n"
+        "Generated: 2024-05-02 10:11\n"
+        "# comment line\n"
+        "Units as stated in the header\n"
+        "\n"
+        "MD (m),INC (deg),AZI (deg)\n"
+        "0,0,0\n"
+        "# a comment inside the data\n"
+        "\n"
+        "100,1,10\n"
+        "200,2,20\n"
+        "\n"
+        "Total,,,200\n"
+        "End of survey\n"
+        "\n"
+    )
+    table, well = read(put(tmp_path, text), north_reference="true")
+    assert column(table, "md") == [0.0, 100.0, 200.0]
+    assert column(table, "source_line") == [7, 10, 11]
+    assert well == WellMetadata()
+
+
+def test_title_block_well_metadata(tmp_path: Path) -> None:
+    text = (
+        "Well Name: A-12\n"
+        "API: 42-501-20130\n"
+        "Field:,Ekofisk,,\n"
+        "Operator = North Oil\n"
+        "Lat: 61.25\n"
+        "Long: 73.4 deg\n"
+        "Elevation: 82 ft\n"
+        "Survey Date: 2024-05-01\n"
+        "Tool: GWD\n"
+        "Serial: SN-7\n"
+        "# depth_reference=RKB\n"
+        "Comment: nothing to see\n"
+        "Azimuth reference: Grid North\n"
+        "MD (m),INC (deg),AZI (deg)\n" + BODY
+    )
+    table, well = read(put(tmp_path, text))
+    assert well == WellMetadata(
+        well="A-12",
+        uwi="42-501-20130",
+        field="Ekofisk",
+        company="North Oil",
+        latitude=61.25,
+        longitude=73.4,
+        elevation=82 * 0.3048,
+        survey_date=dt.date(2024, 5, 1),
+        tool_type="GWD",
+        tool_serial="SN-7",
+        depth_reference="RKB",
+    )
+    assert north(table) == "grid"
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("Latitude: 95", "invalid latitude '95'"),
+        ("Latitude: north", "invalid latitude 'north'"),
+        ("Elevation: 12 deg", "is an angle, expected a length"),
+        ("Date: 05/01/2024", "invalid survey_date '05/01/2024'"),
+        ("north_reference: sideways", "north reference 'sideways' is not one of"),
+    ],
+)
+def test_invalid_title_values(tmp_path: Path, line: str, message: str) -> None:
+    err = failure(put(tmp_path, f"Survey report\n{line}\nMD[m],INC[deg],AZI TN[deg]\n1,2,3\n"))
+    assert err.line == 2
+    assert message in str(err)
+
+
+def test_title_value_given_twice(tmp_path: Path) -> None:
+    text = "Well: A\nWell Name: B\nMD[m],INC[deg],AZI TN[deg]\n1,2,3\n"
+    err = failure(put(tmp_path, text))
+    assert err.line == 2
+    assert "given twice" in str(err)
+
+
+def test_explicit_columns_option(tmp_path: Path) -> None:
+    text = "Hole Depth (ft),Hole Angle (deg),Direction (deg),MD (m)\n100,1,2,5\n"
+    columns = {"md": "hole depth", "inc": "Hole Angle (deg)", "azi": "Direction"}
+    table, _ = read(put(tmp_path, text), columns=columns, north_reference="true")
+    assert column(table, "md") == [30.48]
+    assert column(table, "inc") == [1.0]
+
+
+def test_azimuth_column_chosen_by_north_reference(tmp_path: Path) -> None:
+    path = put(tmp_path, "MD[m],INC[deg],AZI TN[deg],AZI GN[deg]\n1,2,3,4\n")
+    table, _ = read(path, north_reference="grid")
+    assert column(table, "azi") == [4.0]
+    err = failure(path)
+    assert "several columns look like azi" in str(err)
+    assert err.line == 1
+
+
+def test_ambiguous_depth_columns(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],DEPTH[m],INC[deg],AZI TN[deg]\n1,1,2,3\n"))
+    assert "several columns look like md: 'MD[m]', 'DEPTH[m]'" in str(err)
+
+
+# --------------------------------------------------------------------------- errors
+
+
+def test_missing_column(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "Report\nMD[m],INC[deg],Bearing[deg]\n1,2,3\n"))
+    assert err.line == 2
+    message = str(err)
+    assert "missing column(s) azi" in message
+    assert "'MD[m]', 'INC[deg]', 'Bearing[deg]'" in message
+    assert "AZIMUTH" in message
+
+
+def test_no_header_at_all(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "1,2,3\n4,5,6\n"))
+    assert "no header row" in str(err)
+    assert "MEASURED DEPTH" in str(err)
+
+
+def test_non_numeric_cell(tmp_path: Path) -> None:
+    text = "Title\n\nMD[m],INC[deg],AZI TN[deg]\n0,0,0\n\n100,abc,3\n200,2,3\n"
+    err = failure(put(tmp_path, text))
+    assert (err.line, err.column) == (6, "INC[deg]")
+    assert "expected a number, got 'abc'" in str(err)
+    assert str(err).startswith(f"{tmp_path / 'survey.csv'}:6 (column 'INC[deg]'):")
+
+
+def test_many_non_numeric_cells_are_listed(tmp_path: Path) -> None:
+    rows = "".join(f"{i},x{i},1\n" for i in range(8))
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n" + rows))
+    assert err.line == 2
+    message = str(err)
+    assert "8 bad cells" in message
+    assert "'x4' (line 6)" in message
+    assert "'x5'" not in message
+
+
+def test_non_numeric_cell_inside_the_data_is_not_a_footer(tmp_path: Path) -> None:
+    text = "MD[m],INC[deg],AZI TN[deg]\n0,0,0\nEnd of survey\n100,1,2\n"
+    err = failure(put(tmp_path, text))
+    assert err.line == 3
+
+
+@pytest.mark.parametrize("last", ["100,1", "100", "1oo,1,2", "abc,1,2", "nan,1,2"])
+def test_corrupt_last_row_is_not_a_footer(tmp_path: Path, last: str) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n" + last + "\nEnd\n"))
+    assert err.line == 3
+
+
+def test_empty_cell(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n100,1, \n"))
+    assert (err.line, err.column) == (3, "AZI TN[deg]")
+    assert "got an empty cell" in str(err)
+
+
+def test_wrong_number_of_cells(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n1,2,3,4\n5,6,7,8\n"))
+    assert err.line == 3
+    assert "expected 3 cells as in the header (line 1), got 4; 2 such rows" in str(err)
+
+
+def test_unbalanced_quote(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, 'MD[m],INC[deg],AZI TN[deg]\n0,0,0\n"1,2,3\n4,5,6\n7,8,9\n'))
+    assert err.line == 3
+    assert "unbalanced double quote" in str(err)
+
+
+def test_unknown_unit(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "Title\nMD[furlong],INC[deg],AZI TN[deg]\n1,2,3\n"))
+    assert (err.line, err.column) == (2, "MD[furlong]")
+    assert "unknown unit 'furlong'" in str(err)
+    assert "md_unit" in str(err)
+
+
+def test_wrong_dimension_unit(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[ft],AZI TN[deg]\n1,2,3\n"))
+    assert err.column == "INC[ft]"
+    assert "unit 'ft' is a length, expected an angle" in str(err)
+
+
+def test_unknown_unit_option() -> None:
+    with pytest.raises(ValueError, match="unit 'deg' is an angle, expected a length"):
+        READER.options.model_validate({"md_unit": "deg"})
+
+
+def test_no_unit(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD,INC[deg],AZI TN[deg]\n1,2,3\n"))
+    assert (err.line, err.column) == (1, "MD")
+    assert "no unit" in str(err)
+    assert "md_unit" in str(err)
+    err = failure(put(tmp_path, "MD[m],INC,AZI TN[deg]\n1,2,3\n"))
+    assert err.column == "INC"
+    assert "angle_unit" in str(err)
+
+
+@pytest.mark.parametrize(
+    ("text", "options"),
+    [
+        ("MD[m],INC[deg],AZI TN[deg]\n1,2,3\n", {"north_reference": "grid"}),
+        ("north_reference: grid\nMD[m],INC[deg],AZI[deg]\n1,2,3\n", {"north_reference": "true"}),
+        ("# north_reference=grid\nMD[m],INC[deg],AZI TN[deg]\n1,2,3\n", {}),
+        ("# north_reference=grid\n# north_reference=true\nMD[m],INC[deg],AZI[deg]\n1,2,3\n", {}),
+    ],
+)
+def test_conflicting_north_references(tmp_path: Path, text: str, options: dict[str, Any]) -> None:
+    err = failure(put(tmp_path, text), **options)
+    assert "conflicting north references: " in str(err)
+    assert "grid" in str(err)
+    assert "true" in str(err)
+
+
+def test_no_north_reference(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI[deg]\n1,2,3\n"))
+    assert (err.line, err.column) == (1, "AZI[deg]")
+    assert "no north reference" in str(err)
+    assert "north_reference" in str(err)
+
+
+@pytest.mark.parametrize("content", [b"", b"\n\n  \r\n", b"\xef\xbb\xbf"])
+def test_empty_file(tmp_path: Path, content: bytes) -> None:
+    assert "empty" in str(failure(put(tmp_path, content)))
+
+
+def test_header_without_data(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n\nEnd of survey\n"))
+    assert "no data rows" in str(err)
+
+
+def test_binary_garbage(tmp_path: Path) -> None:
+    garbage = bytes(random.Random(7).randrange(256) for _ in range(4096))
+    failure(put(tmp_path, garbage))
+
+
+def test_invalid_utf8_names_its_line(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, b"MD[m],INC[deg],AZI TN[deg]\n1,2,3\n4,\xff,6\n"))
+    assert err.line == 3
+    assert "not UTF-8" in str(err)
+
+
+def test_nul_byte(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, b"MD[m],INC[deg],AZI TN[deg]\r\n1,2,3\r\n4,\x00,6\r\n"))
+    assert err.line == 3
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    assert "cannot read" in str(failure(tmp_path / "absent.csv"))
+
+
+def test_other_kinds_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="kind 'stations'"):
+        READER.read(put(tmp_path, "x"), "trajectory", None)
+
+
+# ---------------------------------------------------------------------------- sniff
+
+
+def test_sniff(tmp_path: Path) -> None:
+    for name in ("a.csv", "b.TXT", "c.tsv"):
+        assert READER.sniff(put(tmp_path, "anything", name))
+    assert READER.sniff(put(tmp_path, "Title\nMD[m];INC[deg];AZI[deg]\n1;2;3\n", "s.dat"))
+    assert not READER.sniff(put(tmp_path, "~Version\nVERS. 2.0\n", "s.las"))
+    assert not READER.sniff(put(tmp_path, bytes(range(256)) * 300, "s.bin"))
+    assert not READER.sniff(tmp_path / "absent.dat")
+    assert not READER.sniff(tmp_path)
+
+
+# --------------------------------------------------------------------------- writer
+
+
+def _stations(md: list[float], inc: list[float], azi: list[float], ref: str) -> pa.Table:
+    surveys = ["S1"] * len(md)
+    data = {"survey": surveys, "md": md, "inc": inc, "azi": azi}
+    return Stations.compiled().make_table(data, north_reference=ref)
+
+
+WELL = WellMetadata(
+    well="A-12, side track",
+    uwi="42-501-20130",
+    company="North Oil",
+    latitude=61.25,
+    longitude=73.4,
+    elevation=24.9936,
+    depth_reference="RKB",
+    survey_date=dt.date(2024, 5, 1),
+    tool_type="GWD: north-seeking",
+    tool_serial="SN=7",
+    north_reference="true",
+)
+
+_finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+
+@settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(
+    rows=st.lists(st.tuples(_finite, _finite, _finite), min_size=1, max_size=30),
+    ref=st.sampled_from(["true", "grid", "magnetic"]),
+)
+def test_round_trip(tmp_path: Path, rows: list[tuple[float, float, float]], ref: str) -> None:
+    md, inc, azi = (list(c) for c in zip(*rows, strict=True))
+    table = _stations(md, inc, azi, ref)
+    path = tmp_path / "out.csv"
+    WRITER.write(table, path, WELL)
+    back, well = read(path)
+    assert well == WELL
+    assert back.schema.field("azi").metadata == table.schema.field("azi").metadata
+    for name in ("md", "inc", "azi"):
+        assert back.schema.field(name).metadata == table.schema.field(name).metadata
+        expected = table.column(name).to_numpy().view(np.int64)
+        assert np.array_equal(back.column(name).to_numpy().view(np.int64), expected), name
+    assert column(back, "survey") == column(table, "survey")
+
+
+def test_writer_format(tmp_path: Path) -> None:
+    table = _stations([0.0, 0.1], [0.0, 1 / 3], [359.5, 1e-300], "grid")
+    path = tmp_path / "out.csv"
+    WRITER.write(table, path, WellMetadata(well="A-1", survey_date=dt.date(2024, 5, 1)))
+    assert path.read_text().splitlines() == [
+        "# gyropipe A-1",
+        "# north_reference=grid",
+        "# well.well=A-1",
+        "# well.survey_date=2024-05-01",
+        "survey,md[m],inc[deg],azi[deg]",
+        '"S1",0,0,359.5',
+        '"S1",0.1,0.3333333333333333,1e-300',
+    ]
+
+
+def test_writer_any_table(tmp_path: Path) -> None:
+    table = pa.table({"name": ["a,b", 'q"'], "count": [1, 2], "ok": [True, None]})
+    path = tmp_path / "any.csv"
+    WRITER.write(table, path, WellMetadata())
+    assert path.read_text().splitlines() == [
+        "# gyropipe -",
+        "name,count,ok",
+        '"a,b",1,true',
+        '"q""",2,',
+    ]
+
+
+def test_writer_refuses_what_it_cannot_write(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="line break"):
+        WRITER.write(
+            _stations([1.0], [2.0], [3.0], "true"), tmp_path / "x.csv", WellMetadata(well="a\nb")
+        )
+    grid = pa.field("b", pa.float64(), metadata={NORTH_KEY: b"grid"})
+    true = pa.field("a", pa.float64(), metadata={NORTH_KEY: b"true"})
+    table = pa.Table.from_arrays([pa.array([1.0]), pa.array([2.0])], schema=pa.schema([true, grid]))
+    with pytest.raises(ValueError, match="different north references"):
+        WRITER.write(table, tmp_path / "y.csv", WellMetadata())
+
+
+# ----------------------------------------------------------------------------- fuzz
+
+VALID = (
+    b"Well: A-12\n# north_reference=grid\nMD (ft);INC [deg];Azimuth Grid (deg);Survey\n"
+    b"0;0;0;S1\n100,5;1,25;45;S1\n200;2,5;46;S1\nEnd of survey\n"
+)
+_position = st.integers(min_value=0, max_value=len(VALID))
+_mutation = st.one_of(
+    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
+    st.tuples(st.just("truncate"), _position, st.just(0)),
+    st.tuples(st.just("insert"), _position, st.sampled_from(b',;\t|"\r\n#:=[]()e.- ')),
+    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
+)
+
+
+def _mutate(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
+    buf = bytearray(data)
+    for op, at, arg in mutations:
+        at = min(at, len(buf))
+        if op == "flip" and at < len(buf):
+            buf[at] = arg
+        elif op == "truncate":
+            del buf[at:]
+        elif op == "insert":
+            buf[at:at] = bytes([arg])
+        elif op == "delete":
+            del buf[at : at + arg]
+    return bytes(buf)
+
+
+@pytest.fixture(scope="module")
+def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fuzz")
+
+
+def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:
+    table, well = read(put(fuzz_dir, VALID))
+    assert column(table, "md") == [0.0, 100.5 * 0.3048, 200 * 0.3048]
+    assert well.well == "A-12"
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(mutations=st.lists(_mutation, min_size=1, max_size=4))
+def test_fuzz_mutations_raise_typed_errors_only(
+    fuzz_dir: Path, mutations: list[tuple[str, int, int]]
+) -> None:
+    path = put(fuzz_dir, _mutate(VALID, mutations))
+    try:
+        table, _ = read(path)
+    except (InputFileError, UnitError):
+        return
+    assert table.num_rows >= 1
+    assert table.column_names[-4:] == ["md", "inc", "azi", "source_line"]
