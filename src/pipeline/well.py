@@ -20,7 +20,7 @@ NorthReference = Literal["true", "grid", "magnetic"]
 class WellMetadata(BaseModel):
     """Header of one well and survey run. Angles in degrees, lengths in metres."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
     well: str | None = Field(None, description="well name")
     uwi: str | None = Field(None, description="unique well identifier (UWI/API)")
