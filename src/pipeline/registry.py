@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationInfo
 
 from pipeline.contracts import TableContract
 from pipeline.errors import PluginError
@@ -28,17 +28,23 @@ def pipeline_input(default: str, description: str) -> Any:
     return Field(default, description=description, json_schema_extra={PIPELINE_INPUT: True})
 
 
-def require_registered(info: ValidationInfo, kind: str, name: str) -> str:
-    """Params validator helper: ``name`` must be a registered ``kind`` (reader, writer,
-    check). Checked when the planner validates params with the registry in the context."""
-    registry = (info.context or {}).get("registry")
-    if isinstance(registry, Registry):
+def registered(kind: str, *, also: tuple[str, ...] = ()) -> AfterValidator:
+    """Annotation for a params field naming a registered ``kind`` (reader, writer, check);
+    names in ``also`` are accepted as they are (e.g. ``auto``). Checked when the planner
+    validates params with the registry in the validation context."""
+
+    def check(name: str, info: ValidationInfo) -> str:
+        registry = (info.context or {}).get("registry")
+        if name in also or not isinstance(registry, Registry):
+            return name
         table = getattr(registry, kind + "s")
         if name not in table:
             raise ValueError(
                 f"no {kind} named {name!r} (installed: {', '.join(sorted(table)) or 'none'})"
             )
-    return name
+        return name
+
+    return AfterValidator(check)
 
 
 class NoParams(BaseModel):

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import GyropipeError
@@ -21,7 +21,7 @@ from pipeline.registry import (
     StageContext,
     StageDef,
     pipeline_input,
-    require_registered,
+    registered,
 )
 from pipeline.tables import AnyTable, Stations
 from pipeline.well import attach
@@ -36,30 +36,24 @@ class ReadParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     input: str = pipeline_input("stations", "name of the pipeline input to read")
-    reader: str = Field("auto", description="reader name, or 'auto' to sniff the file")
+    reader: Annotated[str, registered("reader", also=("auto",))] = Field(
+        "auto", description="reader name, or 'auto' to sniff the file"
+    )
     options: dict[str, Any] = Field(
         default_factory=dict, description="reader options (see the reader's documentation)"
     )
-
-    @field_validator("reader")
-    @classmethod
-    def _known_reader(cls, name: str, info: ValidationInfo) -> str:
-        return name if name == "auto" else require_registered(info, "reader", name)
 
 
 class WriteParams(BaseModel):
     """Parameters of the write stage."""
 
     model_config = ConfigDict(extra="forbid")
-    writer: str = Field(description="writer name (csv, parquet, …)")
+    writer: Annotated[str, registered("writer")] = Field(
+        description="writer name (csv, parquet, …)"
+    )
     filename: str | None = Field(
         None, description="output file name; default '<stage id>.<writer extension>'"
     )
-
-    @field_validator("writer")
-    @classmethod
-    def _known_writer(cls, name: str, info: ValidationInfo) -> str:
-        return require_registered(info, "writer", name)
 
 
 def choose_reader(ctx: StageContext, kind: str, name: str, path: Path) -> ReaderDef:

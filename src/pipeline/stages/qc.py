@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Annotated, Any
 
 import pyarrow as pa
 from pydantic import (
@@ -12,12 +12,11 @@ from pydantic import (
     Field,
     ValidationError,
     ValidationInfo,
-    field_validator,
     model_validator,
 )
 
 from pipeline.hookspecs import hookimpl
-from pipeline.registry import Registry, StageContext, StageDef, require_registered
+from pipeline.registry import Registry, StageContext, StageDef, registered
 from pipeline.tables import AnyTable, CheckResults
 
 
@@ -25,13 +24,8 @@ class CheckParams(BaseModel):
     """Parameters of the check stage: which check, and its own parameters."""
 
     model_config = ConfigDict(extra="forbid")
-    check: str = Field(description="registered check name")
+    check: Annotated[str, registered("check")] = Field(description="registered check name")
     params: dict[str, Any] = Field(default_factory=dict, description="the check's parameters")
-
-    @field_validator("check")
-    @classmethod
-    def _known_check(cls, name: str, info: ValidationInfo) -> str:
-        return require_registered(info, "check", name)
 
     @model_validator(mode="after")
     def _check_params(self, info: ValidationInfo) -> CheckParams:
