@@ -1,0 +1,1 @@
+"""Earth references: rotation rate, normal gravity, frames (NED navigation, tool body)."""

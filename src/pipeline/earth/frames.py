@@ -1,0 +1,71 @@
+"""Canonical frames and attitude (DOMAIN.md §2), vectorised over leading axes.
+
+Navigation frame NED (x north, y east, z down). Tool body frame b: z along the tool axis,
+pointing downhole; x, y transverse. Attitude ``C_b^n = Rz(A) · Ry(I) · Rz(ψ)`` with A the
+azimuth (clockwise from north), I the inclination and ψ the gravity toolface of the x axis
+(0 when x points to the high side, growing clockwise looking downhole). All angles in
+radians.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+OMEGA_EARTH = 7.2921150e-5
+"""Earth's rotation rate, rad/s (WGS84)."""
+
+FloatArray = NDArray[np.float64]
+
+
+def rot_z(angle: ArrayLike) -> FloatArray:
+    """Rotation matrices about z, shape (..., 3, 3): [[c, -s, 0], [s, c, 0], [0, 0, 1]]."""
+    a = np.asarray(angle, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros((*a.shape, 3, 3))
+    out[..., 0, 0], out[..., 0, 1] = c, -s
+    out[..., 1, 0], out[..., 1, 1] = s, c
+    out[..., 2, 2] = 1.0
+    return out
+
+
+def rot_y(angle: ArrayLike) -> FloatArray:
+    """Rotation matrices about y, shape (..., 3, 3): [[c, 0, s], [0, 1, 0], [-s, 0, c]]."""
+    a = np.asarray(angle, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros((*a.shape, 3, 3))
+    out[..., 0, 0], out[..., 0, 2] = c, s
+    out[..., 1, 1] = 1.0
+    out[..., 2, 0], out[..., 2, 2] = -s, c
+    return out
+
+
+def body_to_ned(azimuth: ArrayLike, inclination: ArrayLike, toolface: ArrayLike) -> FloatArray:
+    """``C_b^n = Rz(A) Ry(I) Rz(ψ)``, shape (..., 3, 3); maps body vectors to NED."""
+    return rot_z(azimuth) @ rot_y(inclination) @ rot_z(toolface)
+
+
+def tool_axis(azimuth: ArrayLike, inclination: ArrayLike) -> FloatArray:
+    """Unit tool axis in NED, (sin I cos A, sin I sin A, cos I), shape (..., 3)."""
+    a, i = np.asarray(azimuth, dtype=float), np.asarray(inclination, dtype=float)
+    return np.stack([np.sin(i) * np.cos(a), np.sin(i) * np.sin(a), np.cos(i)], axis=-1)
+
+
+def earth_rate_ned(latitude: ArrayLike) -> FloatArray:
+    """Earth rate in NED at geodetic latitude φ (rad): Ω·(cos φ, 0, −sin φ), rad/s."""
+    lat = np.asarray(latitude, dtype=float)
+    zero = np.zeros_like(lat)
+    return OMEGA_EARTH * np.stack([np.cos(lat), zero, -np.sin(lat)], axis=-1)
+
+
+def to_body(c_bn: FloatArray, v_ned: ArrayLike) -> FloatArray:
+    """Express NED vectors in the body frame: ``C_n^b v = C_b^nᵀ v``, shape (..., 3)."""
+    return np.einsum("...ji,...j->...i", c_bn, np.asarray(v_ned, dtype=float))
+
+
+def inclination_toolface(g_body: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Inclination and gravity toolface (rad) from body gravity (gravity sign convention,
+    ``g_b = C_n^b (0, 0, g)``): I = atan2(√(gx²+gy²), gz), ψ = atan2(gy, −gx)."""
+    g = np.asarray(g_body, dtype=float)
+    gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]
+    return np.arctan2(np.hypot(gx, gy), gz), np.arctan2(gy, -gx)

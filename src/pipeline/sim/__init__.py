@@ -1,0 +1,1 @@
+"""Survey simulator: the forward model every estimator is tested against."""
