@@ -12,7 +12,8 @@ from pydantic import BaseModel, ValidationError
 from pipeline.contracts import TableContract
 from pipeline.errors import Problem, SpecError
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
-from pipeline.spec import LoadedSpec, PathKey, PipelineSpec, SourceMap, validation_problems
+from pipeline.spec import LoadedSpec, PipelineSpec
+from pipeline.yamlsource import PathKey, SourceMap, validation_problems
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,7 @@ def test_malformed_yaml_points_at_the_syntax_error(write_yaml, registry):
 
 
 def test_empty_and_non_mapping_files(write_yaml, registry):
-    assert problems(write_yaml("", "a.yaml"), registry) == ["1:1: empty pipeline file"]
+    assert problems(write_yaml("", "a.yaml"), registry) == ["1:1: empty file"]
     (msg,) = problems(write_yaml("- a\n- b\n", "b.yaml"), registry)
     assert msg.startswith("1:1: a pipeline must be a mapping")
 

@@ -60,7 +60,8 @@ def earth_rate_ned(latitude: ArrayLike) -> FloatArray:
 
 def to_body(c_bn: FloatArray, v_ned: ArrayLike) -> FloatArray:
     """Express NED vectors in the body frame: ``C_n^b v = C_b^nᵀ v``, shape (..., 3)."""
-    return np.einsum("...ji,...j->...i", c_bn, np.asarray(v_ned, dtype=float))
+    out: FloatArray = np.einsum("...ji,...j->...i", c_bn, np.asarray(v_ned, dtype=float))
+    return out
 
 
 def inclination_toolface(g_body: ArrayLike) -> tuple[FloatArray, FloatArray]:
