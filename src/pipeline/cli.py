@@ -6,17 +6,20 @@ broken); 2 the pipeline, its configuration or the command line is invalid.
 
 from __future__ import annotations
 
+import json
 import sys
+import time
 from pathlib import Path
 
 import click
 
 from pipeline import __version__
+from pipeline.atomic import atomic_path, atomic_write_bytes
 from pipeline.errors import GyropipeError, SpecError
 from pipeline.graph import Plan, build_plan
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
-from pipeline.runner import RunInputError, run_plan
+from pipeline.runner import RunInputError, run_plan, sha256_file
 from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
 
@@ -158,6 +161,64 @@ def schemas(out_dir: str, check: bool) -> None:
         sys.exit(EXIT_FAILED if stale else 0)
     for path in schema_files.write(registry, Path(out_dir)):
         click.echo(f"wrote {path}")
+
+
+@main.command()
+@click.argument("plan_file", metavar="PLAN.yaml", type=click.Path(dir_okay=False))
+@click.option(
+    "--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory."
+)
+@click.option("--seed", type=int, default=None, help="Random seed (default: the plan's).")
+@click.option(
+    "--format",
+    "writer_name",
+    default="parquet",
+    show_default=True,
+    help="Registered writer for the tables (parquet, csv, …).",
+)
+def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -> None:
+    """Simulate a gyro survey: raw sensor samples, truth and stations."""
+    from pipeline.sim.spec import load_simulation
+    from pipeline.stages.simulation import simulation_tables, well_of_simulation
+
+    registry = _registry(())
+    try:
+        writer = registry.writers[writer_name][0]
+    except KeyError:
+        click.echo(
+            f"error: no writer named {writer_name!r} "
+            f"(installed: {', '.join(sorted(registry.writers))})",
+            err=True,
+        )
+        sys.exit(EXIT_CONFIG)
+    try:
+        spec = load_simulation(plan_file, seed=seed)
+        started = time.perf_counter()
+        tables = simulation_tables(spec)
+    except SpecError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    except (GyropipeError, ValueError) as exc:
+        click.echo(f"error: {plan_file}: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    wall = time.perf_counter() - started
+    out = Path(out_dir)
+    well = well_of_simulation(spec)
+    outputs = {}
+    for name, table in tables.items():
+        path = out / f"{name}.{writer.extension}"
+        with atomic_path(path) as tmp:
+            writer.write(table, tmp, well)
+        outputs[name] = {"file": path.name, "rows": table.num_rows}
+        click.echo(f"wrote {path} ({table.num_rows} rows)")
+    manifest = {
+        "gyropipe": __version__,
+        "plan": {"file": plan_file, "sha256": sha256_file(Path(plan_file))},
+        "seed": spec.seed,
+        "wall_time_s": round(wall, 3),
+        "outputs": outputs,
+    }
+    atomic_write_bytes(out / "simulation.json", json.dumps(manifest, indent=2).encode())
 
 
 def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:

@@ -32,6 +32,7 @@ BUILTIN_PLUGINS = {
     "builtin.files": "pipeline.stages.files",
     "builtin.survey": "pipeline.stages.survey",
     "builtin.qc": "pipeline.stages.qc",
+    "builtin.simulation": "pipeline.stages.simulation",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
 }

@@ -74,3 +74,97 @@ class CheckResults(TableContract):
     limit: float = column(unit=None, description="tolerance (in `unit`)")
     unit: str = column(unit=None, description="unit of value and limit")
     passed: bool = column(unit=None, description="value within tolerance")
+
+
+RATE_UNIT = "deg/h"
+ACCEL_UNIT = "m/s2"
+FIELD_UNIT = "nT"
+
+
+class RawSamples(TableContract):
+    """Raw sensor samples in the canonical body frame (DOMAIN.md §2): gyros in °/h,
+    accelerometers in m/s² with the gravity sign convention (a tool at rest reads
+    C_n^b·(0, 0, g)), magnetometers in nT. Axes a tool lacks are absent."""
+
+    time: float = column(unit="s", monotonic="strict", description="time since the start")
+    md: float = column(unit="m", description="measured depth from the odometer")
+    frame_angle: float = column(
+        unit="deg", ge=0, lt=360, description="angle of the sensor frame relative to the housing"
+    )
+    gyro_x: float = column(unit=RATE_UNIT, description="angular rate about frame x")
+    gyro_y: float | None = column(unit=RATE_UNIT, description="rate about y", default=None)
+    gyro_z: float | None = column(unit=RATE_UNIT, description="rate about z", default=None)
+    acc_x: float = column(unit=ACCEL_UNIT, description="acceleration along x")
+    acc_y: float = column(unit=ACCEL_UNIT, description="acceleration along y")
+    acc_z: float = column(unit=ACCEL_UNIT, description="acceleration along z (tool axis)")
+    mag_x: float | None = column(unit=FIELD_UNIT, description="magnetic field x", default=None)
+    mag_y: float | None = column(unit=FIELD_UNIT, description="magnetic field y", default=None)
+    mag_z: float | None = column(unit=FIELD_UNIT, description="magnetic field z", default=None)
+    station: int | None = column(
+        unit=None, ge=0, description="station index while stopped at a station", default=None
+    )
+    position: int | None = column(
+        unit=None, ge=0, description="frame position index while dwelling", default=None
+    )
+
+
+class SimTruth(TableContract):
+    """What the simulator's tool truly did at each sample (azimuths true north)."""
+
+    time: float = column(unit="s", monotonic="strict", description="time since the start")
+    md: float = column(unit="m", description="true measured depth")
+    inc: float = column(unit="deg", ge=0, le=180, description="inclination")
+    azi: float = column(unit="deg", ge=0, lt=360, north_reference=True, description="azimuth")
+    toolface: float = column(
+        unit="deg", ge=0, lt=360, description="gravity toolface of the frame x axis"
+    )
+    housing_toolface: float = column(
+        unit="deg", ge=0, lt=360, description="gravity toolface of the housing"
+    )
+    frame_angle: float = column(unit="deg", ge=0, lt=360, description="true frame angle")
+    north: float = column(unit="m", description="northing from the wellhead")
+    east: float = column(unit="m", description="easting from the wellhead")
+    tvd: float = column(unit="m", description="true vertical depth")
+
+
+class FreeGyroReadings(TableContract):
+    """Station readings of a free (directional) gyro, in time order: the in-run down the
+    hole, then the out-run back up. ``azi`` is the gyro's reading, drift included."""
+
+    run: str = column(unit=None, description="'in' or 'out'")
+    station: int = column(unit=None, ge=0, description="station index along the in-run")
+    time: float = column(unit="s", monotonic="strict", description="time of the reading")
+    md: float = column(unit="m", ge=0, description="measured depth")
+    inc: float = column(unit="deg", ge=0, le=180, description="inclination reading")
+    azi: float = column(
+        unit="deg", ge=0, lt=360, north_reference=True, description="azimuth reading (drifts)"
+    )
+    true_inc: float | None = column(
+        unit="deg", ge=0, le=180, description="true inclination (simulations)", default=None
+    )
+    true_azi: float | None = column(
+        unit="deg",
+        ge=0,
+        lt=360,
+        north_reference=True,
+        description="true azimuth (simulations)",
+        default=None,
+    )
+
+
+class ErrorBudget(TableContract):
+    """Predicted 1σ errors of each station of a planned survey (degrees)."""
+
+    md: float = column(unit="m", ge=0, monotonic="strict", description="station MD")
+    inc: float = column(unit="deg", ge=0, le=180, description="planned inclination")
+    azi: float = column(
+        unit="deg", ge=0, lt=360, north_reference=True, description="planned azimuth"
+    )
+    sigma_inc: float = column(unit="deg", ge=0, description="inclination σ")
+    sigma_azi: float = column(unit="deg", ge=0, finite=False, description="azimuth σ (total)")
+    sigma_azi_gyro: float = column(
+        unit="deg", ge=0, finite=False, description="azimuth σ from the gyro"
+    )
+    sigma_azi_accel: float = column(
+        unit="deg", ge=0, finite=False, description="azimuth σ from the accelerometers"
+    )

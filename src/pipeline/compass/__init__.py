@@ -1,0 +1,1 @@
+"""Gyrocompassing: north from the Earth rate measured by gyros (DOMAIN.md §5)."""

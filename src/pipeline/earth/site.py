@@ -1,0 +1,52 @@
+"""The survey site: wellhead position, date and the Earth references derived from them."""
+
+from __future__ import annotations
+
+import datetime as dt
+from functools import cached_property
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.earth.frames import FloatArray, earth_rate_ned
+from pipeline.earth.gravity import normal_gravity
+
+
+class MagneticReference(BaseModel):
+    """Geomagnetic field at the site (from a reference model such as IGRF or WMM)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    total_field: float = Field(gt=0, description="total field intensity, nT")
+    dip: float = Field(ge=-90, le=90, description="dip (inclination) angle, deg, down positive")
+    declination: float = Field(
+        ge=-180, le=180, description="declination, deg, east of true north positive"
+    )
+
+    def ned(self) -> FloatArray:
+        """Field vector in NED, nT."""
+        dip, dec = np.radians(self.dip), np.radians(self.declination)
+        return self.total_field * np.array(
+            [np.cos(dip) * np.cos(dec), np.cos(dip) * np.sin(dec), np.sin(dip)]
+        )
+
+
+class Site(BaseModel):
+    """Wellhead position (WGS84) and survey date."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    latitude: float = Field(ge=-90, le=90, description="geodetic latitude, deg")
+    longitude: float = Field(0.0, ge=-180, le=360, description="longitude, deg east")
+    elevation: float = Field(0.0, description="height of the wellhead above the ellipsoid, m")
+    date: dt.date = Field(description="survey date")
+    magnetic: MagneticReference | None = Field(
+        None, description="geomagnetic reference at the site (needed for magnetometers)"
+    )
+
+    @cached_property
+    def gravity(self) -> float:
+        """Normal gravity at the wellhead, m/s² (WGS84, Somigliana)."""
+        return float(normal_gravity(self.latitude, self.elevation))
+
+    def earth_rate(self) -> FloatArray:
+        """Earth rate in NED at the wellhead, rad/s."""
+        return earth_rate_ned(np.radians(self.latitude))

@@ -1,0 +1,75 @@
+"""Error budget of a point survey before the job: the azimuth and inclination precision a
+tool preset will deliver at each station of a plan (DOMAIN.md §5, seed 004 Eqs. 8–9).
+
+Per station, for the frame positions and dwell of the plan:
+- gyro: white noise averaged over each dwell (σ = 60·ARW/√τ °/h) plus the bias
+  instability taken as an independent per-position error (conservative: the trend term
+  absorbs its slow part), propagated through the (h, r, bias, trend) least squares and the
+  maximum-likelihood azimuth; reported for the least favourable starting toolface;
+- accelerometers: white noise averaged over the whole stop, and the axial bias (transverse
+  biases cancel over opposite frame positions) → σ_I; its leak into the azimuth through
+  ∂A/∂I = −sin A (cos A tan I − tan φ).
+Gyro biases and linear drift are removed by the multi-position scheme and do not appear.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.compass.precision import azimuth_sigma, hr_covariance
+from pipeline.sim.plan import build_path
+from pipeline.sim.sensors import per_axis
+from pipeline.sim.simulate import station_mds
+from pipeline.sim.spec import PointSurvey, SimulationSpec
+from pipeline.tables import ErrorBudget
+
+OFFSETS = np.radians(np.arange(0.0, 360.0, 10.0))
+
+
+def error_budget(spec: SimulationSpec) -> pa.Table:
+    """Predicted 1σ inclination and azimuth errors at each station of a point survey."""
+    survey = spec.survey
+    if not isinstance(survey, PointSurvey):
+        raise ValueError(f"an error budget needs a point survey, not {survey.mode!r}")
+    tool = spec.tool.model()
+    path = build_path(spec.well)
+    mds = station_mds(survey, path)
+    state = path.evaluate(mds)
+    lat = np.radians(spec.site.latitude)
+    g = spec.site.gravity
+
+    theta = np.radians(survey.positions)
+    step = survey.dwell + survey.move_time
+    times = np.arange(len(theta)) * step + survey.dwell / 2
+    gyro_sigma = np.hypot(
+        60.0 * per_axis(tool.gyro.noise_density)[0] / np.sqrt(survey.dwell),
+        per_axis(tool.gyro.bias_instability)[0],
+    )
+    covs = [hr_covariance(theta + off, times, gyro_sigma) for off in OFFSETS]
+
+    stop = len(theta) * survey.dwell
+    accel_noise = per_axis(tool.accelerometer.noise_density) / (60.0 * np.sqrt(stop))
+    accel_bias_z = abs(per_axis(tool.accelerometer.bias)[2])
+    sigma_inc = np.hypot(accel_noise[:2].mean() / g, accel_bias_z * np.sin(state.inc) / g)
+
+    sigma_gyro = np.array(
+        [
+            max(azimuth_sigma(c, a, i, lat) for c in covs)
+            for a, i in zip(state.azi, state.inc, strict=True)
+        ]
+    )
+    leak = np.abs(np.sin(state.azi) * (np.cos(state.azi) * np.tan(state.inc) - np.tan(lat)))
+    sigma_accel = leak * sigma_inc
+    return ErrorBudget.compiled().make_table(
+        {
+            "md": mds,
+            "inc": np.degrees(state.inc),
+            "azi": np.degrees(state.azi) % 360.0,
+            "sigma_inc": np.degrees(sigma_inc),
+            "sigma_azi": np.degrees(np.hypot(sigma_gyro, sigma_accel)),
+            "sigma_azi_gyro": np.degrees(sigma_gyro),
+            "sigma_azi_accel": np.degrees(sigma_accel),
+        },
+        north_reference="true",
+    )

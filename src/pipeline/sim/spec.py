@@ -1,0 +1,170 @@
+"""Simulation plans: a YAML file naming the site, the well, the tool and the survey.
+
+Angles in degrees, lengths in metres, times in seconds, speeds in m/s, dogleg severity in
+°/30 m. Errors name the field and its ``file:line:column``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from pipeline.earth.site import Site
+from pipeline.errors import Location, Problem, SpecError
+from pipeline.sim.plan import WellPlan
+from pipeline.sim.sensors import PRESETS, ToolModel, tool_preset
+from pipeline.yamlsource import load_mapping, validate_located
+
+DEFAULT_POSITIONS = (0.0, 90.0, 180.0, 270.0, 0.0)
+"""Frame positions of seed 004's five-position scheme, deg."""
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class Torsion(Strict):
+    """Rotation of the tool housing about its axis while it moves (cable torsion): a smooth
+    random spin rate plus an oscillation, scaled by the tool's speed (zero at rest)."""
+
+    spin_sigma: float = Field(20.0, ge=0, description="σ of the random spin rate, deg/s")
+    spin_correlation: float = Field(20.0, gt=0, description="correlation time of the spin, s")
+    oscillation: float = Field(10.0, ge=0, description="amplitude of the roll oscillation, deg")
+    oscillation_period: float = Field(8.0, gt=0, description="period of the roll oscillation, s")
+
+
+class StopScheme(Strict):
+    """How the frame is turned at a compassing stop."""
+
+    positions: list[float] = Field(
+        default_factory=lambda: list(DEFAULT_POSITIONS),
+        min_length=1,
+        description="frame angles of the successive positions, deg (relative to the housing)",
+    )
+    dwell: float = Field(40.0, gt=0, description="time at each position, s")
+    move_time: float = Field(3.0, gt=0, description="duration of each frame move, s")
+    settle_time: float = Field(
+        2.0, ge=0, description="rest before the first position after arriving, s"
+    )
+
+
+class PointSurvey(StopScheme):
+    """Stop-and-go survey: compassing stops at stations, travel between them."""
+
+    mode: Literal["point"] = "point"
+    stations: list[float] | None = Field(None, description="station MDs, m")
+    every: float | None = Field(None, gt=0, description="station spacing from the plan start, m")
+    speed: float = Field(1.0, gt=0, description="mean travel speed between stations, m/s")
+    torsion: Torsion = Field(default_factory=Torsion)
+    start_roll: float = Field(
+        0.0, description="initial north-referenced roll of the housing (A + ψ), deg"
+    )
+
+    @model_validator(mode="after")
+    def _stations_given(self) -> PointSurvey:
+        if (self.stations is None) == (self.every is None):
+            raise ValueError("give exactly one of 'stations' (MD list) or 'every' (spacing)")
+        if self.stations is not None and any(
+            b <= a for a, b in zip(self.stations, self.stations[1:], strict=False)
+        ):
+            raise ValueError("stations: MDs must increase")
+        return self
+
+
+class Stabilisation(Strict):
+    """Frame servo keeping the gyro (frame x) axis near the high side while moving."""
+
+    residual: float = Field(2.0, ge=0, description="σ of the residual toolface error, deg")
+    correlation: float = Field(5.0, gt=0, description="correlation time of the residual, s")
+
+
+class ContinuousSurvey(Strict):
+    """Continuous survey: compassing stop at the start and end, moving survey between."""
+
+    mode: Literal["continuous"] = "continuous"
+    start_md: float | None = Field(None, ge=0, description="start MD, m (default plan start)")
+    end_md: float | None = Field(None, ge=0, description="end MD, m (default plan end)")
+    speed: float = Field(1.0, gt=0, description="logging speed, m/s")
+    ramp_time: float = Field(5.0, gt=0, description="acceleration and braking time, s")
+    stop: StopScheme = Field(default_factory=StopScheme)
+    torsion: Torsion = Field(default_factory=Torsion)
+    stabilisation: Stabilisation = Field(default_factory=Stabilisation)
+    start_roll: float = Field(0.0, description="initial north-referenced housing roll, deg")
+
+
+class Drift(Strict):
+    """Azimuth drift of a free gyro: ΔA(t) = offset + rate·t + curvature·t²."""
+
+    offset: float = Field(0.0, description="azimuth error at the start, deg")
+    rate: float = Field(2.0, description="drift rate, deg/h")
+    curvature: float = Field(0.0, description="non-linear drift term, deg/h²")
+
+
+class FreeGyroSurvey(Strict):
+    """Free (directional) gyro survey: azimuth readings that drift in time; in-run down the
+    stations and, optionally, out-run back up."""
+
+    mode: Literal["free_gyro"] = "free_gyro"
+    every: float = Field(30.0, gt=0, description="station spacing, m")
+    dwell: float = Field(30.0, gt=0, description="time per reading, s")
+    speed: float = Field(1.0, gt=0, description="travel speed, m/s")
+    drift: Drift = Field(default_factory=Drift)
+    reading_noise: float = Field(0.2, ge=0, description="σ of a reading's azimuth error, deg")
+    inclination_noise: float = Field(0.05, ge=0, description="σ of a reading's inclination, deg")
+    out_run: bool = Field(True, description="also survey on the way out")
+
+
+Survey = Annotated[PointSurvey | ContinuousSurvey | FreeGyroSurvey, Field(discriminator="mode")]
+
+
+class ToolChoice(Strict):
+    """A tool preset with optional overrides of any of its fields."""
+
+    preset: str = Field(description=f"tool preset: {', '.join(PRESETS)}")
+    overrides: dict[str, Any] = Field(default_factory=dict, description="fields to override")
+
+    @field_validator("preset")
+    @classmethod
+    def _known(cls, name: str) -> str:
+        if name not in PRESETS:
+            raise ValueError(f"unknown tool preset {name!r} (presets: {', '.join(PRESETS)})")
+        return name
+
+    def model(self) -> ToolModel:
+        return tool_preset(self.preset, **self.overrides)
+
+
+class SimulationSpec(Strict):
+    """A whole simulation: where, which well, which tool, which survey, which seed."""
+
+    name: str = Field(description="simulation name")
+    seed: int = Field(0, description="random seed: same seed, same output")
+    site: Site
+    well: WellPlan
+    tool: ToolChoice
+    survey: Survey
+
+    @model_validator(mode="after")
+    def _tool_builds(self) -> SimulationSpec:
+        self.tool.model()  # overrides are validated here, against the preset's models
+        return self
+
+
+def load_simulation(path: str | Path, seed: int | None = None) -> SimulationSpec:
+    """Read and validate a simulation plan; every problem is located in the file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SpecError([Problem(Location(str(path)), f"cannot read plan: {exc}")]) from exc
+    raw, source, problems = load_mapping(
+        text, str(path), "a simulation plan must be a mapping (site, well, tool, survey)"
+    )
+    if seed is not None:
+        raw["seed"] = seed
+    spec = validate_located(SimulationSpec, raw, source, problems)
+    if problems:
+        raise SpecError(problems)
+    return spec
