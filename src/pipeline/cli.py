@@ -221,6 +221,44 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
     atomic_write_bytes(out / "simulation.json", json.dumps(manifest, indent=2).encode())
 
 
+@main.command()
+@click.argument("plan_file", metavar="PLAN.yaml", type=click.Path(dir_okay=False))
+@click.option("--out", "out_file", type=click.Path(dir_okay=False), default=None,
+              help="Also write the budget table to this file (.csv or .parquet).")
+def budget(plan_file: str, out_file: str | None) -> None:
+    """Predict the 1σ inclination and azimuth error at each station of a point survey."""
+    from pipeline.sim.budget import error_budget
+    from pipeline.sim.spec import load_simulation
+    from pipeline.stages.simulation import well_of_simulation
+
+    try:
+        spec = load_simulation(plan_file)
+        table = error_budget(spec)
+    except SpecError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    except (GyropipeError, ValueError) as exc:
+        click.echo(f"error: {plan_file}: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    click.echo(f"{spec.name}: tool {spec.tool.preset}, latitude {spec.site.latitude}°")
+    click.echo(f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'acc':>7}")
+    for row in table.to_pylist():
+        click.echo(
+            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.3f} "
+            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_accel']:7.3f}"
+        )
+    if out_file:
+        registry = load_registry()
+        ext = Path(out_file).suffix.lstrip(".")
+        writers = [w for w, _ in registry.writers.values() if w.extension == ext]
+        if not writers:
+            click.echo(f"error: no writer for .{ext} files", err=True)
+            sys.exit(EXIT_CONFIG)
+        with atomic_path(Path(out_file)) as tmp:
+            writers[0].write(table, tmp, well_of_simulation(spec))
+        click.echo(f"wrote {out_file}")
+
+
 def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
     declared = list(plan.spec.inputs)
     files: dict[str, Path] = {}

@@ -31,10 +31,10 @@ def mincurve(md: Floats, inc_deg: Floats, azi_deg: Floats, tie_tvd: float | None
 
 
 def dogleg(inc0: float, azi0: float, inc1: float, azi1: float) -> float:
-    """Angle (rad) between two attitudes (deg) by the spherical law of cosines."""
+    """Angle (rad) between two attitudes (deg), haversine form."""
     i0, a0, i1, a1 = np.radians([inc0, azi0, inc1, azi1])
-    cos = np.cos(i0) * np.cos(i1) + np.sin(i0) * np.sin(i1) * np.cos(a1 - a0)
-    return float(np.arccos(np.clip(cos, -1.0, 1.0)))
+    hav = np.sin((i1 - i0) / 2) ** 2 + np.sin(i0) * np.sin(i1) * np.sin((a1 - a0) / 2) ** 2
+    return float(2 * np.arcsin(np.sqrt(min(hav, 1.0))))
 
 
 def smooth_survey(rng: np.random.Generator, n: int) -> tuple[Floats, Floats, Floats]:
@@ -76,19 +76,21 @@ MIXED_PLAN = WellPlan(start_md=100.0, start_azi=20.0, sections=[s for s, _, _ in
 
 
 def mixed_section_ends() -> tuple[Floats, Floats, Floats]:
-    """MD, inclination, azimuth of the ends of MIXED, from the closed-form arc lengths."""
+    """MD, inclination, azimuth of the ends of the sections of MIXED and of the arcs within
+    them, from the closed-form arc lengths."""
     md, inc, azi = [100.0], [0.0], [20.0]
     for section, end_inc, end_azi in MIXED:
-        arc = 0.0
+        ends = []
         if "dls" in section:
             arc = dogleg(inc[-1], azi[-1], end_inc, end_azi) / (section["dls"] * PER_DLS)
+            ends.append(md[-1] + arc)
         if "to_md" in section:
-            end = section["to_md"]
-        else:
-            end = md[-1] + section.get("length", arc)
-        md.append(end)
-        inc.append(end_inc)
-        azi.append(end_azi)
+            ends.append(section["to_md"])
+        elif "length" in section:
+            ends.append(md[-1] + section["length"])
+        md.extend(ends)
+        inc.extend([end_inc] * len(ends))
+        azi.extend([end_azi] * len(ends))
     return np.array(md), np.array(inc), np.array(azi)
 
 
@@ -117,9 +119,8 @@ def test_j_well_lands_at_the_closed_form_position() -> None:
 def test_section_ends_equal_minimum_curvature() -> None:
     md, inc, azi = mixed_section_ends()
     path = build_path(MIXED_PLAN)
-    joints = np.append(path.md0, path.end_md)
-    assert joints.size == 11  # two of the eight sections are an arc and a hold
-    np.testing.assert_allclose(joints[[0, 1, 2, 3, 4, 6, 7, 8, 10]], md, rtol=1e-13)
+    assert md.size == 11  # two of the eight sections are an arc and a hold
+    np.testing.assert_allclose(np.append(path.md0, path.end_md), md, rtol=1e-13)
     state = path.evaluate(md)
     np.testing.assert_allclose(state.position, mincurve(md, inc, azi), rtol=0, atol=TOL)
     np.testing.assert_allclose(state.tangent, tool_axis(np.radians(azi), np.radians(inc)), atol=1e-12)
@@ -139,7 +140,7 @@ def test_from_stations_reproduces_minimum_curvature() -> None:
 attitudes = st.tuples(st.floats(0.0, 180.0), st.floats(-720.0, 720.0))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300, deadline=None, derandomize=True)
 @given(start=attitudes, end=attitudes, length=st.floats(0.01, 500.0))
 def test_any_arc_is_the_minimum_curvature_arc(
     start: tuple[float, float], end: tuple[float, float], length: float
@@ -279,7 +280,7 @@ def test_build_from_vertical() -> None:
     np.testing.assert_allclose(np.degrees(state.azi), [0.0, 0.0, 120.0, 120.0, 120.0, 120.0])
     np.testing.assert_allclose(state.inc[:3], 0.0, atol=0)
     np.testing.assert_allclose(state.dinc, [0, 0] + [3.0 * PER_DLS] * 4, rtol=1e-12)
-    np.testing.assert_array_equal(state.dazi, 0.0)
+    np.testing.assert_allclose(state.dazi, 0.0, atol=1e-15)
     np.testing.assert_allclose(state.sin_inc_dazi, 0.0, atol=1e-15)
 
 

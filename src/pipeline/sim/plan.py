@@ -256,6 +256,8 @@ class WellPath:
         curved = self.beta >= STRAIGHT_BELOW
         chord = self.t1 - self.t0
         bend = chord - np.sum(chord * self.t0, axis=1, keepdims=True) * self.t0
+        # again: near a reversal the first pass leaves a part along t0 of ~1e-16/sin β
+        bend -= np.sum(bend * self.t0, axis=1, keepdims=True) * self.t0
         norm = np.linalg.norm(bend, axis=1, keepdims=True)
         bend = np.divide(bend, norm, out=np.zeros_like(bend), where=curved[:, None])
         kappa = np.divide(
