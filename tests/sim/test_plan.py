@@ -22,11 +22,9 @@ TOL = 1e-9  # m
 PER_DLS = np.radians(1.0) / 30.0  # rad/m of 1 deg/30m
 
 
-def mincurve(md: Floats, inc_deg: Floats, azi_deg: Floats, tie_tvd: float | None = None) -> Floats:
-    """Minimum-curvature positions (n, 3), first station at (0, 0, tie_tvd or md[0])."""
-    r = minimum_curvature(
-        md, np.radians(inc_deg), np.radians(azi_deg), tie_tvd=md[0] if tie_tvd is None else tie_tvd
-    )
+def mincurve(md: Floats, inc_deg: Floats, azi_deg: Floats) -> Floats:
+    """Minimum-curvature positions (n, 3), first station at (0, 0, md[0])."""
+    r = minimum_curvature(md, np.radians(inc_deg), np.radians(azi_deg), tie_tvd=md[0])
     return np.stack([r.north, r.east, r.tvd], axis=-1)
 
 
@@ -49,7 +47,8 @@ def interior(path: WellPath, n: int, margin: float) -> Floats:
     """n MDs spread along the path, none within ``margin`` m of an arc joint."""
     md = np.linspace(path.start_md + margin, path.end_md - margin, n)
     joints = np.append(path.md0, path.end_md)
-    return md[np.min(np.abs(md[:, None] - joints[None, :]), axis=1) > margin]
+    far: Floats = md[np.min(np.abs(md[:, None] - joints[None, :]), axis=1) > margin]
+    return far
 
 
 J_WELL = WellPlan(
@@ -106,7 +105,9 @@ def test_j_well_lands_at_the_closed_form_position() -> None:
     azi = np.radians(37.0)
     s45 = np.sin(np.pi / 4)
     horizontal = radius * (1.0 - s45)
-    at_build_end = np.array([horizontal * np.cos(azi), horizontal * np.sin(azi), 500 + radius * s45])
+    at_build_end = np.array(
+        [horizontal * np.cos(azi), horizontal * np.sin(azi), 500 + radius * s45]
+    )
     at_td = at_build_end + hold * np.array([s45 * np.cos(azi), s45 * np.sin(azi), s45])
     state = path.evaluate([0.0, 500.0, build_end, 2500.0])
     np.testing.assert_allclose(state.position[0], [0.0, 0.0, 0.0], atol=TOL)
@@ -123,7 +124,9 @@ def test_section_ends_equal_minimum_curvature() -> None:
     np.testing.assert_allclose(np.append(path.md0, path.end_md), md, rtol=1e-13)
     state = path.evaluate(md)
     np.testing.assert_allclose(state.position, mincurve(md, inc, azi), rtol=0, atol=TOL)
-    np.testing.assert_allclose(state.tangent, tool_axis(np.radians(azi), np.radians(inc)), atol=1e-12)
+    np.testing.assert_allclose(
+        state.tangent, tool_axis(np.radians(azi), np.radians(inc)), atol=1e-12
+    )
 
 
 def test_from_stations_reproduces_minimum_curvature() -> None:
@@ -154,7 +157,9 @@ def test_any_arc_is_the_minimum_curvature_arc(
     s = np.linspace(md[0], md[1], 7)
     state = path.evaluate(s)
     np.testing.assert_allclose(state.position[[0, -1]], mincurve(md, inc, azi), atol=TOL)
-    np.testing.assert_allclose(state.tangent[-1], tool_axis(*np.radians([end[1], end[0]])), atol=1e-12)
+    np.testing.assert_allclose(
+        state.tangent[-1], tool_axis(*np.radians([end[1], end[0]])), atol=1e-12
+    )
     # the tangent turns at a constant rate in one plane
     np.testing.assert_allclose(np.linalg.norm(state.tangent, axis=1), 1.0, rtol=1e-14)
     turned = 2 * np.arcsin(np.linalg.norm(state.tangent - state.tangent[0], axis=1) / 2)
@@ -167,9 +172,9 @@ def test_tiny_doglegs_have_no_cancellation() -> None:
     for beta in (1e-7, 1e-10, 1e-13):
         inc = np.array([30.0, 30.0 + np.degrees(beta)])
         md = np.array([0.0, 80.0])
-        path = WellPath.from_stations(md, inc, np.array([45.0, 45.0]))
-        state = path.evaluate(np.linspace(0, 80, 9))
-        np.testing.assert_allclose(state.position[-1], mincurve(md, inc, [45.0, 45.0])[-1], atol=TOL)
+        azi = np.array([45.0, 45.0])
+        state = WellPath.from_stations(md, inc, azi).evaluate(np.linspace(0, 80, 9))
+        np.testing.assert_allclose(state.position[-1], mincurve(md, inc, azi)[-1], atol=TOL)
         curvature = np.linalg.norm(state.dtangent, axis=1)
         if beta >= 1e-12:
             np.testing.assert_allclose(curvature, beta / 80.0, rtol=1e-6)
@@ -196,7 +201,9 @@ def test_stations_table_round_trips() -> None:
     Stations.validate_table(table)
     assert table.schema.field("azi").metadata[b"north_reference"] == b"true"
     again = WellPath.from_stations(
-        table.column("md").to_numpy(), table.column("inc").to_numpy(), table.column("azi").to_numpy()
+        table.column("md").to_numpy(),
+        table.column("inc").to_numpy(),
+        table.column("azi").to_numpy(),
     )
     md = interior(path, 500, 0.0)
     np.testing.assert_allclose(again.evaluate(md).position, path.evaluate(md).position, atol=TOL)
@@ -294,9 +301,7 @@ def test_low_inclination_turn() -> None:
     h = 1e-4
     s = md[1:-1]
     dazi = np.angle(np.exp(1j * (path.evaluate(s + h).azi - path.evaluate(s - h).azi))) / (2 * h)
-    np.testing.assert_allclose(
-        state.sin_inc_dazi[1:-1], np.sin(state.inc[1:-1]) * dazi, rtol=1e-6
-    )
+    np.testing.assert_allclose(state.sin_inc_dazi[1:-1], np.sin(state.inc[1:-1]) * dazi, rtol=1e-6)
     assert state.inc.min() < np.radians(2.0)  # the arc dips towards vertical mid-way
     np.testing.assert_allclose(np.degrees(state.azi[[0, -1]]), [0.0, 90.0], atol=1e-9)
 
@@ -319,7 +324,10 @@ def test_arc_through_vertical() -> None:
 
 BAD_PLANS = [
     (
-        {"start_inc": 10.0, "sections": [{"kind": "hold", "length": 10}, {"kind": "vertical", "length": 10}]},
+        {
+            "start_inc": 10.0,
+            "sections": [{"kind": "hold", "length": 10}, {"kind": "vertical", "length": 10}],
+        },
         r"sections\[1\] \(vertical\): kind: the current inclination is 10.0 deg",
     ),
     (
@@ -331,7 +339,12 @@ BAD_PLANS = [
         r"sections\[0\] \(drop\): inc: target 40.0 deg is above",
     ),
     (
-        {"sections": [{"kind": "vertical", "length": 100}, {"kind": "build", "dls": 3, "inc": 15, "length": 100}]},
+        {
+            "sections": [
+                {"kind": "vertical", "length": 100},
+                {"kind": "build", "dls": 3, "inc": 15, "length": 100},
+            ]
+        },
         r"sections\[1\] \(build\): needs 15.0 deg of dogleg at dls 3.0 deg/30m = 150.0 m, "
         r"but length is 100.0 m",
     ),
