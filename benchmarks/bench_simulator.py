@@ -17,13 +17,18 @@ from pipeline.sim.spec import SimulationSpec
 SPEC = SimulationSpec.model_validate(
     {
         "name": "hour",
-        "site": {"latitude": 61.25, "date": "2026-11-21",
-                 "magnetic": {"total_field": 59731, "dip": 78.29, "declination": 17.0}},
-        "well": {"sections": [
-            {"kind": "vertical", "length": 500},
-            {"kind": "build", "dls": 2.0, "inc": 45, "azi": 37},
-            {"kind": "hold", "to_md": 4000},
-        ]},
+        "site": {
+            "latitude": 61.25,
+            "date": "2026-11-21",
+            "magnetic": {"total_field": 59731, "dip": 78.29, "declination": 17.0},
+        },
+        "well": {
+            "sections": [
+                {"kind": "vertical", "length": 500},
+                {"kind": "build", "dls": 2.0, "inc": 45, "azi": 37},
+                {"kind": "hold", "to_md": 4000},
+            ]
+        },
         "tool": {"preset": "mems-vrg"},
         # 3,285 m at 1 m/s plus two 5-position stops ≈ 3,600 s
         "survey": {"mode": "continuous", "start_md": 200, "end_md": 3485, "speed": 1.0},

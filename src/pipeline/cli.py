@@ -223,8 +223,13 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
 
 @main.command()
 @click.argument("plan_file", metavar="PLAN.yaml", type=click.Path(dir_okay=False))
-@click.option("--out", "out_file", type=click.Path(dir_okay=False), default=None,
-              help="Also write the budget table to this file (.csv or .parquet).")
+@click.option(
+    "--out",
+    "out_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Also write the budget table to this file (.csv or .parquet).",
+)
 def budget(plan_file: str, out_file: str | None) -> None:
     """Predict the 1σ inclination and azimuth error at each station of a point survey."""
     from pipeline.sim.budget import error_budget

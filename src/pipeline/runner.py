@@ -82,9 +82,6 @@ class _Context:
         self.staged.append(path)
         return path
 
-    def reader(self, name: str) -> ReaderDef:
-        return _lookup(self.registry.readers, name, "reader")
-
     def readers(self) -> list[ReaderDef]:
         return [r for r, _ in self.registry.readers.values()]
 

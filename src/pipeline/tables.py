@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pipeline.contracts import TableContract, column
 
+DLS_COURSE_M = 30.0
+"""Course length of the dogleg severity unit, m."""
 DLS_UNIT = "deg/30m"
 
 

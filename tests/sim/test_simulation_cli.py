@@ -52,8 +52,12 @@ def test_every_example_plan_is_valid():
 def test_simulate_command_writes_contracted_tables(tmp_path: Path):
     plan = write(tmp_path, SMALL)
     out = tmp_path / "out"
-    result = subprocess.run([*gyropipe(), "simulate", str(plan), "--out", str(out)],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 0, result.stderr
     samples = pq.read_table(out / "samples.parquet")
     RawSamples.validate_table(samples)
@@ -66,18 +70,34 @@ def test_simulate_command_writes_contracted_tables(tmp_path: Path):
     assert manifest["seed"] == 7
     assert manifest["outputs"]["samples"]["rows"] == samples.num_rows
     again = tmp_path / "again"
-    subprocess.run([*gyropipe(), "simulate", str(plan), "--out", str(again)], check=True,
-                   capture_output=True)
+    subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(again)], check=True, capture_output=True
+    )
     assert pq.read_table(again / "samples.parquet").equals(samples)  # reproducible
-    csv = subprocess.run([*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "c"),
-                          "--format", "csv", "--seed", "8"], capture_output=True, text=True)
+    csv = subprocess.run(
+        [
+            *gyropipe(),
+            "simulate",
+            str(plan),
+            "--out",
+            str(tmp_path / "c"),
+            "--format",
+            "csv",
+            "--seed",
+            "8",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert csv.returncode == 0, csv.stderr
     assert (tmp_path / "c" / "stations.csv").read_text().startswith("# gyropipe small")
 
 
 def test_pipeline_starts_from_a_simulation(tmp_path: Path):
     plan = write(tmp_path, SMALL)
-    pipeline = write(tmp_path, """
+    pipeline = write(
+        tmp_path,
+        """
         name: simulated-survey
         version: 1
         inputs: {plan: {}}
@@ -89,10 +109,16 @@ def test_pipeline_starts_from_a_simulation(tmp_path: Path):
             uses: minimum_curvature
             inputs: {stations: sim.stations}
             persist: [trajectory]
-    """, "pipeline.yaml")
+    """,
+        "pipeline.yaml",
+    )
     out = tmp_path / "out"
-    result = subprocess.run([*gyropipe(), "run", str(pipeline), "--input", str(plan),
-                             "--out", str(out)], capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [*gyropipe(), "run", str(pipeline), "--input", str(plan), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 0, result.stderr
     trajectory = pq.read_table(out / "trajectory.trajectory.parquet")
     truth = pq.read_table(out / "sim.samples.parquet")
@@ -129,13 +155,21 @@ def test_bad_plan_parameters_name_the_field(tmp_path: Path, edit: str, fragment:
 
 
 def test_impossible_dls_for_the_section_length(tmp_path: Path):
-    plan = write(tmp_path, SMALL.replace("{kind: build, dls: 6.0, inc: 20, azi: 37}",
-                                         "{kind: build, dls: 1.0, inc: 20, azi: 37, length: 100}"))
+    plan = write(
+        tmp_path,
+        SMALL.replace(
+            "{kind: build, dls: 6.0, inc: 20, azi: 37}",
+            "{kind: build, dls: 1.0, inc: 20, azi: 37, length: 100}",
+        ),
+    )
     with pytest.raises(SpecError) as info:
         load_simulation(plan)
     assert "sections[1]" in str(info.value) and "100" in str(info.value)
-    result = subprocess.run([*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+    )
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and not (tmp_path / "o").exists()
 
@@ -145,8 +179,9 @@ def test_free_gyro_readings_drift_as_configured():
     readings = simulate_free_gyro(spec)
     FreeGyroReadings.validate_table(readings)
     t = readings.column("time").to_numpy() / 3600
-    error = (readings.column("azi").to_numpy() - readings.column("true_azi").to_numpy()
-             + 180) % 360 - 180
+    error = (
+        readings.column("azi").to_numpy() - readings.column("true_azi").to_numpy() + 180
+    ) % 360 - 180
     inclined = readings.column("true_inc").to_numpy() > 1  # azimuth is defined there
     slope, offset = np.polyfit(t[inclined], error[inclined], 1)
     assert slope == pytest.approx(3.0, abs=0.1)  # deg/h, configured
@@ -195,9 +230,34 @@ def test_error_budget_of_the_j_well():
     # white noise only: σ_A ∝ 1/√dwell
     white = {"preset": "mems-vrg", "overrides": {"gyro": {"bias_instability": 0.0}}}
     base = spec.model_copy(update={"tool": spec.tool.model_validate(white)})
-    longer = base.model_copy(
-        update={"survey": base.survey.model_copy(update={"dwell": 160.0})}
+    longer = base.model_copy(update={"survey": base.survey.model_copy(update={"dwell": 160.0})})
+    ratio = (
+        error_budget(longer).column("sigma_azi_gyro").to_numpy()
+        / error_budget(base).column("sigma_azi_gyro").to_numpy()
     )
-    ratio = (error_budget(longer).column("sigma_azi_gyro").to_numpy()
-             / error_budget(base).column("sigma_azi_gyro").to_numpy())
     np.testing.assert_allclose(ratio, 0.5, rtol=1e-9)
+
+
+def test_well_from_a_stations_file(tmp_path: Path):
+    (tmp_path / "st.csv").write_text(
+        "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n30,2,40\n60,5,45\n90,9,47\n"
+    )
+    plan = write(
+        tmp_path,
+        SMALL.replace(
+            "  sections:\n    - {kind: vertical, length: 30}\n"
+            "    - {kind: build, dls: 6.0, inc: 20, azi: 37}\n",
+            "  stations: st.csv\n",
+        ),
+    )
+    spec = load_simulation(plan)
+    from pipeline.sim.simulate import simulate
+
+    stations = simulate(spec).stations
+    np.testing.assert_allclose(stations.column("md").to_numpy(), [0, 30, 60, 90])
+    np.testing.assert_allclose(stations.column("inc").to_numpy(), [0, 2, 5, 9], atol=1e-12)
+    np.testing.assert_allclose(stations.column("azi").to_numpy()[1:], [40, 45, 47], atol=1e-9)
+    (tmp_path / "grid.csv").write_text("MD (m),Inc (deg),Azimuth Grid (deg)\n0,0,0\n30,2,40\n")
+    grid = write(tmp_path, plan.read_text().replace("st.csv", "grid.csv"), "grid.yaml")
+    with pytest.raises(ValueError, match="true-north"):
+        load_simulation(grid).path()

@@ -18,7 +18,6 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.compass.precision import azimuth_sigma, hr_covariance
-from pipeline.sim.plan import build_path
 from pipeline.sim.sensors import per_axis
 from pipeline.sim.simulate import station_mds
 from pipeline.sim.spec import PointSurvey, SimulationSpec
@@ -33,7 +32,7 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     if not isinstance(survey, PointSurvey):
         raise ValueError(f"an error budget needs a point survey, not {survey.mode!r}")
     tool = spec.tool.model()
-    path = build_path(spec.well)
+    path = spec.path()
     mds = station_mds(survey, path)
     state = path.evaluate(mds)
     lat = np.radians(spec.site.latitude)

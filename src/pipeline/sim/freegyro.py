@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from pipeline.sim.plan import build_path
 from pipeline.sim.spec import Drift, FreeGyroSurvey, SimulationSpec
 from pipeline.tables import FreeGyroReadings
 
@@ -27,7 +26,7 @@ def simulate_free_gyro(spec: SimulationSpec) -> pa.Table:
     if not isinstance(survey, FreeGyroSurvey):
         raise TypeError("simulate_free_gyro() runs free_gyro surveys")
     rng = np.random.default_rng(spec.seed)
-    path = build_path(spec.well)
+    path = spec.path()
     down = np.arange(path.start_md, path.end_md + 1e-9, survey.every)
     mds = np.concatenate([down, down[::-1][1:]]) if survey.out_run else down
     run = np.where(np.arange(len(mds)) < len(down), "in", "out")

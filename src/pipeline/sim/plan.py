@@ -34,12 +34,11 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from pipeline.earth.frames import tool_axis
 from pipeline.survey.mincurve import REVERSAL_MARGIN, minimum_curvature
-from pipeline.tables import DLS_UNIT, Stations
+from pipeline.tables import DLS_COURSE_M, DLS_UNIT, Stations
 
 __all__ = ["PathState", "Section", "WellPath", "WellPlan", "build_path"]
 
 FloatArray = NDArray[np.float64]
-IndexArray = NDArray[np.intp]
 
 #: Arcs whose dogleg (rad) is below this are straight. The arc formulas have no cancellation,
 #: so the threshold only guards the bend direction's 0/0; the position error it allows is
@@ -51,19 +50,19 @@ VERTICAL_BELOW = 1e-9
 #: Slack (m) when comparing a section's arc length with its given length.
 LENGTH_TOL = 1e-9
 #: Course length (m) of a dogleg severity in DLS_UNIT.
-DLS_COURSE = 30.0
 
 _TWO_PI = 2.0 * np.pi
-_CURVES = ("build", "drop", "turn", "curve")
 
 
 class Section(BaseModel):
     """One plan section. Lengths in m, angles in deg, dogleg severity in deg/30m.
 
-    ``vertical`` and ``hold`` run straight (needs ``length`` or ``to_md``). ``build``,
-    ``drop``, ``turn`` and ``curve`` turn at ``dls`` to the target (``inc``, ``azi``) (each
-    defaults to the current value) along a great-circle arc; with ``length`` or ``to_md`` the
-    arc is followed by a hold to the end of the section.
+    ``vertical`` (only from inclination 0) and ``hold`` run straight and need ``length`` or
+    ``to_md``. ``build``, ``drop``, ``turn`` and ``curve`` turn at ``dls`` to the target
+    (``inc``, ``azi``) (each defaults to the current value) along the great-circle arc, the
+    short way round; with ``length`` or ``to_md`` the arc is followed by a hold to the end of
+    the section, which must leave room for the arc. A build may not lower the inclination, a
+    drop may not raise it, and a turn changes only the azimuth of an inclined hole.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
@@ -82,7 +81,7 @@ class WellPlan(BaseModel):
     The start point is at NED (``start_north``, ``start_east``, ``start_tvd``); ``start_tvd``
     defaults to ``start_md`` (a straight vertical hole above the start). On a vertical hole
     ``start_azi`` is the nominal azimuth reported until the path leaves vertical. Sections are
-    checked against the attitude they start from when the plan is built.
+    checked against the attitude they start from when the plan is validated.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
@@ -376,7 +375,7 @@ def _arc(
             "split it into two sections"
         )
     if beta >= STRAIGHT_BELOW:
-        return beta, beta / np.radians(sec.dls) * DLS_COURSE
+        return beta, beta / np.radians(sec.dls) * DLS_COURSE_M
     if sec.length is None and sec.to_md is None:
         raise ValueError(
             f"{where}: inc/azi: the target ({tgt_inc}, {tgt_azi}) deg is the current attitude, "

@@ -26,7 +26,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.interpolate import CubicSpline
 
 from pipeline.earth.frames import FloatArray, body_to_ned, to_body
-from pipeline.sim.plan import WellPath, build_path
+from pipeline.sim.plan import WellPath
 from pipeline.sim.sensors import ToolModel, gauss_markov, measure, odometer_md
 from pipeline.sim.spec import ContinuousSurvey, PointSurvey, SimulationSpec, Torsion
 from pipeline.sim.timeline import Sampled, Timeline, continuous_timeline, point_timeline
@@ -68,7 +68,7 @@ def simulate(spec: SimulationSpec) -> Simulation:
     if not isinstance(survey, PointSurvey | ContinuousSurvey):
         raise TypeError("simulate() runs point and continuous surveys; use simulate_free_gyro")
     rng = np.random.default_rng(spec.seed)
-    path = build_path(spec.well)
+    path = spec.path()
     tool = spec.tool.model()
     kin = kinematics(spec, path, tool, rng)
     return Simulation(

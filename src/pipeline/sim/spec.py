@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from pipeline.earth.site import Site
 from pipeline.errors import Location, Problem, SpecError
-from pipeline.sim.plan import WellPlan
+from pipeline.sim.plan import WellPath, WellPlan, build_path
 from pipeline.sim.sensors import PRESETS, ToolModel, tool_preset
 from pipeline.yamlsource import load_mapping, validate_located
 
@@ -136,15 +136,48 @@ class ToolChoice(Strict):
         return tool_preset(self.preset, **self.overrides)
 
 
+class StationsWell(Strict):
+    """A well given by a stations file (MD, inclination, azimuth true north), joined by
+    minimum-curvature arcs; read by any installed stations reader (CSV, Parquet, …)."""
+
+    stations: Path = Field(description="stations file; a relative path is from the plan file")
+    reader: str = Field("auto", description="reader name, or 'auto' to sniff the file")
+    start_north: float = Field(0.0, description="northing of the first station, m")
+    start_east: float = Field(0.0, description="easting of the first station, m")
+    start_tvd: float | None = Field(None, description="TVD of the first station, m (default MD)")
+
+    def path(self) -> WellPath:
+        from pipeline.plugins import load_registry
+        from pipeline.stages.files import choose_reader
+
+        readers = [r for r, _ in load_registry().readers.values()]
+        reader = choose_reader(readers, "stations", self.reader, self.stations)
+        table, _ = reader.read(self.stations, "stations", reader.options())
+        if (table.schema.field("azi").metadata or {}).get(b"north_reference") != b"true":
+            raise ValueError(f"{self.stations}: the simulator needs true-north azimuths")
+        return WellPath.from_stations(
+            table.column("md").to_numpy(),
+            table.column("inc").to_numpy(),
+            table.column("azi").to_numpy(),
+            start_north=self.start_north,
+            start_east=self.start_east,
+            start_tvd=self.start_tvd,
+        )
+
+
 class SimulationSpec(Strict):
     """A whole simulation: where, which well, which tool, which survey, which seed."""
 
     name: str = Field(description="simulation name")
     seed: int = Field(0, description="random seed: same seed, same output")
     site: Site
-    well: WellPlan
+    well: WellPlan | StationsWell = Field(description="a plan of sections or a stations file")
     tool: ToolChoice
     survey: Survey
+
+    def path(self) -> WellPath:
+        """The well path (NED, m) of the plan's sections or stations file."""
+        return build_path(self.well) if isinstance(self.well, WellPlan) else self.well.path()
 
     @model_validator(mode="after")
     def _tool_builds(self) -> SimulationSpec:
@@ -164,6 +197,9 @@ def load_simulation(path: str | Path, seed: int | None = None) -> SimulationSpec
     )
     if seed is not None:
         raw["seed"] = seed
+    well = raw.get("well")
+    if isinstance(well, dict) and isinstance(well.get("stations"), str):
+        well["stations"] = str(path.parent / well["stations"])
     spec = validate_located(SimulationSpec, raw, source, problems)
     if problems:
         raise SpecError(problems)

@@ -6,7 +6,7 @@ Readers and writers themselves are plugins of their own (``gyropipe_register_rea
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -56,17 +56,23 @@ class WriteParams(BaseModel):
     )
 
 
-def choose_reader(ctx: StageContext, kind: str, name: str, path: Path) -> ReaderDef:
-    """The reader ``name``, or with ``auto`` the first reader of ``kind`` that sniffs
-    ``path`` as its own."""
+def choose_reader(readers: Iterable[ReaderDef], kind: str, name: str, path: Path) -> ReaderDef:
+    """Among ``readers``, the one called ``name``, or with ``auto`` the first reader of
+    ``kind`` that sniffs ``path`` as its own."""
+    readers = list(readers)
     if name != "auto":
-        reader = ctx.reader(name)
+        found = [r for r in readers if r.name == name]
+        if not found:
+            raise ReaderChoiceError(
+                f"no reader named {name!r} (installed: {', '.join(r.name for r in readers)})"
+            )
+        reader = found[0]
         if kind not in reader.kinds:
             raise ReaderChoiceError(
                 f"reader {name!r} cannot read {kind} (it reads: {', '.join(reader.kinds)})"
             )
         return reader
-    able = [r for r in ctx.readers() if kind in r.kinds]
+    able = [r for r in readers if kind in r.kinds]
     for reader in able:
         if reader.sniff(path):
             return reader
@@ -85,7 +91,7 @@ def read_stage(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
     ) -> dict[str, pa.Table]:
         path = ctx.input_path(params.input)
-        reader = choose_reader(ctx, kind, params.reader, path)
+        reader = choose_reader(ctx.readers(), kind, params.reader, path)
         options = dict(params.options)
         if "default_north_reference" in reader.options.model_fields and ctx.well.north_reference:
             options.setdefault("default_north_reference", ctx.well.north_reference)

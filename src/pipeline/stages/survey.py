@@ -12,10 +12,8 @@ from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import CheckDef, StageContext, StageDef
 from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
-from pipeline.tables import DLS_UNIT, CheckResults, Stations, Trajectory
+from pipeline.tables import DLS_COURSE_M, DLS_UNIT, CheckResults, Stations, Trajectory
 from pipeline.well import WellMetadata
-
-DLS_COURSE_M = 30.0
 
 
 class MinCurveParams(BaseModel):
