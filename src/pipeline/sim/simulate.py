@@ -22,8 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
-from scipy.integrate import cumulative_trapezoid
-from scipy.interpolate import CubicSpline
 
 from pipeline.earth.frames import FloatArray, body_to_ned, to_body
 from pipeline.sim.plan import WellPath
@@ -117,7 +115,8 @@ def kinematics(
     housing_spin = spin_rate * moving
     # Φ̇ = ω_h + (1 − cos I)·Ȧ = ω_h + tan(I/2)·(sin I·Ȧ): bounded through vertical
     roll_rate = housing_spin + np.tan(inc / 2) * sin_inc_azi_rate
-    roll = np.radians(survey.start_roll) + cumulative_trapezoid(roll_rate, t, initial=0.0)
+    steps = np.diff(t) * (roll_rate[1:] + roll_rate[:-1]) / 2  # trapezoidal integral
+    roll = np.radians(survey.start_roll) + np.concatenate([[0.0], np.cumsum(steps)])
     housing_tf = roll - azi
     theta, theta_rate = s.theta, s.theta_rate
     if isinstance(survey, ContinuousSurvey):
@@ -189,6 +188,8 @@ def _smooth_gauss_markov(
     step = correlation / 4
     knots = np.arange(0.0, t[-1] + 2 * step, step)
     values = gauss_markov(len(knots), step, sigma, correlation, rng)
+    from scipy.interpolate import CubicSpline  # imported on use: slow to import
+
     spline = CubicSpline(knots, values)
     return spline(t), spline(t, 1)
 
