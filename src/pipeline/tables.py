@@ -89,9 +89,15 @@ class RawSamples(TableContract):
     C_n^b·(0, 0, g)), magnetometers in nT. Axes a tool lacks are absent."""
 
     time: float = column(unit="s", monotonic="strict", description="time since the start")
-    md: float = column(unit="m", description="measured depth from the odometer")
-    frame_angle: float = column(
-        unit="deg", ge=0, lt=360, description="angle of the sensor frame relative to the housing"
+    md: float | None = column(
+        unit="m", description="measured depth from the odometer (absent: no depth)", default=None
+    )
+    frame_angle: float | None = column(
+        unit="deg",
+        ge=0,
+        lt=360,
+        description="angle of the sensor frame relative to the housing (absent: fixed frame)",
+        default=None,
     )
     gyro_x: float = column(unit=RATE_UNIT, description="angular rate about frame x")
     gyro_y: float | None = column(unit=RATE_UNIT, description="rate about y", default=None)

@@ -23,7 +23,7 @@ from pipeline.registry import (
     pipeline_input,
     registered,
 )
-from pipeline.tables import AnyTable, Stations
+from pipeline.tables import AnyTable, RawSamples, Stations
 from pipeline.well import attach
 
 
@@ -42,6 +42,12 @@ class ReadParams(BaseModel):
     options: dict[str, Any] = Field(
         default_factory=dict, description="reader options (see the reader's documentation)"
     )
+
+
+class ReadSamplesParams(ReadParams):
+    """Parameters of the read_samples stage."""
+
+    input: str = pipeline_input("samples", "name of the pipeline input to read")
 
 
 class WriteParams(BaseModel):
@@ -125,6 +131,16 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             description="Read survey stations (MD, inclination, azimuth) from a pipeline input.",
             outputs={"stations": Stations},
             params=ReadParams,
+        )
+    )
+    register(
+        StageDef(
+            name="read_samples",
+            func=read_stage("samples"),
+            description="Read raw sensor samples (gyros, accelerometers, magnetometers) from "
+            "a pipeline input.",
+            outputs={"samples": RawSamples},
+            params=ReadSamplesParams,
         )
     )
     register(
