@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import click
+import yaml
 
 from pipeline import __version__
 from pipeline.atomic import atomic_path, atomic_write_bytes
@@ -262,6 +263,84 @@ def budget(plan_file: str, out_file: str | None) -> None:
         with atomic_path(Path(out_file)) as tmp:
             writers[0].write(table, tmp, well_of_simulation(spec))
         click.echo(f"wrote {out_file}")
+
+
+@main.command()
+@click.argument("input_file", metavar="INPUT", type=click.Path(dir_okay=False))
+@click.argument("output_file", metavar="OUTPUT", type=click.Path(dir_okay=False))
+@click.option(
+    "--kind",
+    type=click.Choice(["auto", "stations", "samples"]),
+    default="auto",
+    show_default=True,
+    help="What the input holds (auto: try each kind the reader knows).",
+)
+@click.option(
+    "--reader",
+    "reader_name",
+    default="auto",
+    show_default=True,
+    help="Reader name, or auto to sniff the input.",
+)
+@click.option(
+    "--option",
+    "options",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Reader option (value parsed as YAML), e.g. units={md: ft}. Repeatable.",
+)
+@click.option(
+    "--well",
+    "well_items",
+    multiple=True,
+    metavar="FIELD=VALUE",
+    help="Override a well metadata field. Repeatable.",
+)
+def convert(
+    input_file: str,
+    output_file: str,
+    kind: str,
+    reader_name: str,
+    options: tuple[str, ...],
+    well_items: tuple[str, ...],
+) -> None:
+    """Convert a readable input to Parquet, CSV, LAS or MCAP (format from OUTPUT's extension),
+    normalised to gyropipe's units and frames on the way."""
+    from pipeline.convert import convert_file
+
+    registry = _registry(())
+    try:
+        parsed = _options(options)
+        well = _well_overrides(well_items)
+        table, written = convert_file(
+            registry,
+            Path(input_file),
+            Path(output_file),
+            kind=kind,
+            reader=reader_name,
+            options=parsed,
+            well=well,
+        )
+    except (click.BadParameter, ValueError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    except GyropipeError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
+    click.echo(f"wrote {written} ({table.num_rows} rows, {table.num_columns} columns)")
+
+
+def _options(items: tuple[str, ...]) -> dict[str, object]:
+    values: dict[str, object] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise click.BadParameter(f"--option {item!r}: expected KEY=VALUE")
+        try:
+            values[key.strip()] = yaml.safe_load(value)
+        except yaml.YAMLError as exc:
+            raise click.BadParameter(f"--option {item!r}: value is not valid YAML: {exc}") from None
+    return values
 
 
 def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
