@@ -33,6 +33,7 @@ BUILTIN_PLUGINS = {
     "builtin.survey": "pipeline.stages.survey",
     "builtin.qc": "pipeline.stages.qc",
     "builtin.simulation": "pipeline.stages.simulation",
+    "builtin.compass": "pipeline.stages.compass",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
 }

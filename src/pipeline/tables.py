@@ -26,7 +26,9 @@ class Stations(TableContract):
     survey: str | None = column(
         unit=None, description="survey id when a table holds several surveys", default=None
     )
-    md: float = column(unit="m", ge=0, monotonic="strict", description="measured depth")
+    md: float = column(
+        unit="m", monotonic="strict", description="measured depth from the depth reference"
+    )
     inc: float = column(unit="deg", ge=0, le=180, description="inclination from vertical")
     azi: float = column(
         unit="deg", north_reference=True, description="azimuth, clockwise from north"
@@ -142,7 +144,7 @@ class FreeGyroReadings(TableContract):
     run: str = column(unit=None, description="'in' or 'out'")
     station: int = column(unit=None, ge=0, description="station index along the in-run")
     time: float = column(unit="s", monotonic="strict", description="time of the reading")
-    md: float = column(unit="m", ge=0, description="measured depth")
+    md: float = column(unit="m", description="measured depth")
     inc: float = column(unit="deg", ge=0, le=180, description="inclination reading")
     azi: float = column(
         unit="deg", ge=0, lt=360, north_reference=True, description="azimuth reading (drifts)"
@@ -176,3 +178,87 @@ class ErrorBudget(TableContract):
     sigma_azi_accel: float = column(
         unit="deg", ge=0, finite=False, description="azimuth σ from the accelerometers"
     )
+
+
+class PositionReadings(TableContract):
+    """Pre-averaged readings of a point survey: one row per station × frame position, in
+    time order (the documented input of compassing; also what raw samples reduce to).
+    Rates in °/h, accelerations in m/s² (gravity sign convention), time in s."""
+
+    station: int = column(unit=None, ge=0, description="station index")
+    md: float = column(unit="m", description="measured depth of the station")
+    position: int = column(unit=None, ge=0, description="frame position index within the station")
+    t: float = column(unit="s", monotonic="strict", description="mid-time of the dwell")
+    frame_angle: float | None = column(
+        unit="deg",
+        ge=0,
+        lt=360,
+        description="frame angle sensor (absent: fixed frame)",
+        default=None,
+    )
+    gyro_x: float = column(unit=RATE_UNIT, description="mean rate about frame x")
+    gyro_y: float | None = column(unit=RATE_UNIT, description="mean rate about y", default=None)
+    gyro_z: float | None = column(unit=RATE_UNIT, description="mean rate about z", default=None)
+    acc_x: float = column(unit=ACCEL_UNIT, description="mean acceleration along x")
+    acc_y: float = column(unit=ACCEL_UNIT, description="mean acceleration along y")
+    acc_z: float = column(unit=ACCEL_UNIT, description="mean acceleration along z")
+    gyro_x_std: float | None = column(
+        unit=RATE_UNIT, ge=0, description="sample standard deviation of gyro_x", default=None
+    )
+    gyro_y_std: float | None = column(
+        unit=RATE_UNIT, ge=0, description="std of gyro_y", default=None
+    )
+    gyro_z_std: float | None = column(
+        unit=RATE_UNIT, ge=0, description="std of gyro_z", default=None
+    )
+    acc_x_std: float | None = column(
+        unit=ACCEL_UNIT, ge=0, description="std of acc_x", default=None
+    )
+    acc_y_std: float | None = column(
+        unit=ACCEL_UNIT, ge=0, description="std of acc_y", default=None
+    )
+    acc_z_std: float | None = column(
+        unit=ACCEL_UNIT, ge=0, description="std of acc_z", default=None
+    )
+    n: int | None = column(unit=None, ge=1, description="samples averaged", default=None)
+    duration: float | None = column(unit="s", gt=0, description="averaging time", default=None)
+
+
+class CompassStations(Stations):
+    """Stations solved by gyrocompassing (azimuths true north; toolfaces of the frame x
+    axis at the station's first position)."""
+
+    station: int = column(unit=None, ge=0, description="station index")
+    azi: float = column(
+        unit="deg", ge=0, lt=360, north_reference=True, description="azimuth, true north"
+    )
+    gyro_toolface: float = column(
+        unit="deg", ge=0, lt=360, description="north-referenced (gyro) toolface"
+    )
+    highside_toolface: float = column(
+        unit="deg", ge=0, lt=360, description="gravity (high-side) toolface"
+    )
+    sigma_inc: float = column(unit="deg", ge=0, description="predicted σ of inc")
+    sigma_azi: float = column(unit="deg", ge=0, finite=False, description="predicted σ of azi")
+    sigma_toolface: float = column(
+        unit="deg", ge=0, finite=False, description="predicted σ of gyro_toolface"
+    )
+    bias: float = column(unit=RATE_UNIT, description="estimated bias of gyro x")
+    trend: float = column(unit="deg/h2", description="estimated linear trend of gyro x, °/h per h")
+    residual_rms: float = column(unit=RATE_UNIT, ge=0, description="RMS of the fit residuals")
+    chi2: float = column(unit=None, ge=0, description="χ² of the residuals against the σ")
+    positions: int = column(unit=None, ge=1, description="frame positions used")
+    solver: str = column(unit=None, description="ml, sine, atan2 or toolface")
+    mode: str = column(unit=None, description="inclined or near-vertical")
+    flags: str = column(
+        unit=None, description="comma-separated warnings (inconsistent, frame_mismatch, …)"
+    )
+    time: float = column(unit="s", description="mid-time of the station")
+
+
+class CompassRejects(TableContract):
+    """Stations compassing could not solve, and why."""
+
+    station: int = column(unit=None, ge=0, description="station index")
+    md: float = column(unit="m", description="measured depth")
+    reason: str = column(unit=None, description="why the station was not solved")

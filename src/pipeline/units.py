@@ -57,6 +57,7 @@ ALIASES: dict[str, str] = {
     "deg/s": "degree / second",
     "°/s": "degree / second",
     "rad/s": "radian / second",
+    "mrad/s": "milliradian / second",
     # acceleration
     "g": "standard_gravity",  # 9.80665 m/s², never gram
     "m/s2": "meter / second ** 2",
@@ -71,6 +72,7 @@ ALIASES: dict[str, str] = {
     # time
     "s": "second",
     "sec": "second",
+    "ms": "millisecond",
     "min": "minute",
     "h": "hour",
     "hr": "hour",

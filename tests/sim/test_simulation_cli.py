@@ -12,7 +12,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.compass.precision import azimuth_sigma, hr_covariance, position_design
+from pipeline.compass.azimuth import cramer_rao
+from pipeline.compass.precision import hr_covariance, position_design
 from pipeline.errors import SpecError
 from pipeline.sim.budget import error_budget
 from pipeline.sim.freegyro import simulate_free_gyro
@@ -209,7 +210,11 @@ def test_azimuth_sigma_limits():
     cov = np.diag([0.4, 0.4]) ** 2
     lat = np.radians(61.25)
     k = 15.041067 * np.cos(lat)
+
     # vertical hole: both channels carry the azimuth equally → σ/k
+    def azimuth_sigma(c, a, i, lat):
+        return float(cramer_rao(np.array(a), np.array(i), lat, c))
+
     assert azimuth_sigma(cov, 0.7, 0.0, lat) == pytest.approx(0.4 / k, rel=1e-4)
     # east-west horizontal hole: h carries nothing, r nothing about A → undefined
     assert azimuth_sigma(cov, np.pi / 2, np.pi / 2, lat) > 1e6

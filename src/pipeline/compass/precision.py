@@ -40,12 +40,3 @@ def hr_covariance(toolface: ArrayLike, time: ArrayLike, sigma: ArrayLike) -> Flo
         raise ValueError("the frame positions do not separate h, r, bias and trend")
     cov: FloatArray = np.asarray(np.linalg.inv(normal)[:2, :2], dtype=np.float64)
     return cov
-
-
-def azimuth_sigma(hr_cov: ArrayLike, azimuth: float, inclination: float, latitude: float) -> float:
-    """Standard deviation of the maximum-likelihood azimuth (rad) fitted to h and r with
-    covariance ``hr_cov`` — never worse than either the sine or the atan2 form."""
-    k = OMEGA_DEG_H * np.cos(latitude)
-    jac = np.array([-k * np.sin(azimuth) * np.cos(inclination), -k * np.cos(azimuth)])
-    fisher = jac @ np.linalg.solve(np.asarray(hr_cov, dtype=float), jac)
-    return float(1.0 / np.sqrt(fisher)) if fisher > 0 else float("inf")

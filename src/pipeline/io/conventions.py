@@ -104,10 +104,14 @@ def to_canonical(table: pa.Table, conventions: Conventions) -> pa.Table:
         if column in table.column_names and (direction != "clockwise" or offset):
             values = table.column(column).to_numpy(zero_copy_only=False)
             sign = -1.0 if direction == "counterclockwise" else 1.0
-            table = _replace(table, column, np.mod(sign * (values - offset), 360.0))
+            angle = np.mod(sign * (values - offset), 360.0)
+            table = _replace(table, column, np.where(angle >= 360.0, 0.0, angle))
     return table
 
 
 def _replace(table: pa.Table, name: str, values: FloatArray) -> pa.Table:
+    """Replace a column's values, keeping its field (units) and its nulls."""
     index = table.schema.get_field_index(name)
-    return table.set_column(index, table.schema.field(name), pa.array(values))
+    column = table.column(name)
+    mask = column.is_null().to_numpy(zero_copy_only=False) if column.null_count else None
+    return table.set_column(index, table.schema.field(name), pa.array(values, mask=mask))

@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from pipeline.compass.precision import azimuth_sigma, hr_covariance
+from pipeline.compass.azimuth import cramer_rao
+from pipeline.compass.precision import hr_covariance
 from pipeline.sim.sensors import per_axis
 from pipeline.sim.simulate import station_mds
 from pipeline.sim.spec import PointSurvey, SimulationSpec
@@ -52,11 +53,9 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     accel_bias_z = abs(per_axis(tool.accelerometer.bias)[2])
     sigma_inc = np.hypot(accel_noise[:2].mean() / g, accel_bias_z * np.sin(state.inc) / g)
 
-    sigma_gyro = np.array(
-        [
-            max(azimuth_sigma(c, a, i, lat) for c in covs)
-            for a, i in zip(state.azi, state.inc, strict=True)
-        ]
+    sigma_gyro = np.max(
+        [cramer_rao(state.azi, state.inc, lat, np.broadcast_to(c, (len(mds), 2, 2))) for c in covs],
+        axis=0,
     )
     leak = np.abs(np.sin(state.azi) * (np.cos(state.azi) * np.tan(state.inc) - np.tan(lat)))
     sigma_accel = leak * sigma_inc

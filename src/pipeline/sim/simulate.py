@@ -89,7 +89,7 @@ def station_mds(survey: PointSurvey, path: WellPath) -> FloatArray:
             f"survey.stations: MD {outside[0]:g} m is outside the plan "
             f"({path.start_md:g}–{path.end_md:g} m)"
         )
-    return mds
+    return np.clip(mds, path.start_md, path.end_md)  # within rounding of the ends
 
 
 def kinematics(

@@ -23,7 +23,7 @@ from pipeline.registry import (
     pipeline_input,
     registered,
 )
-from pipeline.tables import AnyTable, RawSamples, Stations
+from pipeline.tables import AnyTable, PositionReadings, RawSamples, Stations
 from pipeline.well import attach
 
 
@@ -48,6 +48,12 @@ class ReadSamplesParams(ReadParams):
     """Parameters of the read_samples stage."""
 
     input: str = pipeline_input("samples", "name of the pipeline input to read")
+
+
+class ReadReadingsParams(ReadParams):
+    """Parameters of the read_readings stage."""
+
+    input: str = pipeline_input("readings", "name of the pipeline input to read")
 
 
 class WriteParams(BaseModel):
@@ -141,6 +147,16 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "a pipeline input.",
             outputs={"samples": RawSamples},
             params=ReadSamplesParams,
+        )
+    )
+    register(
+        StageDef(
+            name="read_readings",
+            func=read_stage("readings"),
+            description="Read pre-averaged point-survey readings (one row per station and "
+            "frame position) from a pipeline input.",
+            outputs={"readings": PositionReadings},
+            params=ReadReadingsParams,
         )
     )
     register(

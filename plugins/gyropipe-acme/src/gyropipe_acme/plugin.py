@@ -1,0 +1,47 @@
+"""The gyropipe plugin ``acme`` (entry point ``acme = "gyropipe_acme.plugin"`` in the group
+``gyropipe``): a reader and a writer of Acme GyroLog ``.agl`` raw-sample files."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+
+from gyropipe_acme import gyrolog
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import ReaderDef, WriterDef
+from pipeline.tables import RawSamples
+from pipeline.well import WellMetadata
+
+
+def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
+    """Read an Acme file as canonical RawSamples (``kind`` is always ``samples``, the one
+    kind this reader declares; it takes no options)."""
+    return gyrolog.read_samples(path)
+
+
+@hookimpl
+def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
+    register(
+        ReaderDef(
+            name="acme",
+            description="Acme GyroLog v2 raw samples (.agl), converted from Acme's units and axes",
+            kinds={"samples": RawSamples},
+            read=read,
+            sniff=gyrolog.sniff,
+        )
+    )
+
+
+@hookimpl
+def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
+    register(
+        WriterDef(
+            name="acme",
+            description="Acme GyroLog v2 raw samples, in Acme's units and axes",
+            extension="agl",
+            write=gyrolog.write_samples,
+        )
+    )

@@ -1,0 +1,359 @@
+"""Point-survey raw samples reduced to one reading per station × frame position (the first
+step of multi-position gyrocompassing, DOMAIN.md §5).
+
+A *dwell* is a run of samples with the frame held in one position and the tool stopped.
+Dwells come from the samples' ``station``/``position`` markers when they have them, else
+they are detected from the frame angle and the odometer MD:
+
+- a dwell starts at the first sample (after the previous dwell) from which the frame angle
+  stays within ``angle_tolerance`` and the MD — smoothed by a moving average over
+  ``md_smoothing`` to ride over odometer noise — within ``md_tolerance`` of that sample's
+  values for long enough to leave ``min_dwell`` after trimming; it ends at the first sample
+  where either leaves its tolerance around its median over that first stretch (a stop
+  creeping in at the edge of the tolerance does not cut the dwell short);
+- consecutive dwells belong to one station until the stop MD differs from the previous one
+  by more than ``station_gap``, or the MD strayed farther than that between them (the tool
+  moved and came back); stations and positions are numbered from 0.
+
+Each dwell loses ``trim_start`` seconds at its start and ``trim_end`` at its end (frame-move
+transients, settling); the rest is averaged. Rates in °/h, accelerations in m/s², MD in m,
+angles in degrees, times in seconds; the sample rate comes from the (uniform) time column.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.tables import PositionReadings, RawSamples
+
+FloatArray = NDArray[np.float64]
+IndexArray = NDArray[np.intp]
+
+SIGNALS = ("gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
+"""Sensor columns averaged per reading (the gyro axes a tool lacks are skipped)."""
+UNIFORM_RTOL = 0.01
+"""Largest deviation of a time step from the mean step, as a fraction of it: a dropped or
+doubled sample, or a change of sample rate, breaks uniform sampling; clock jitter does not."""
+
+
+class ReadingOptions(BaseModel):
+    """How raw samples are cut into position readings (times in s, angles in deg, MD in m)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    trim_start: float = Field(
+        1.0,
+        ge=0,
+        description="time dropped at the start of each dwell (frame-move transients, settling), s",
+    )
+    trim_end: float = Field(0.0, ge=0, description="time dropped at the end of each dwell, s")
+    min_dwell: float = Field(
+        5.0,
+        ge=0,
+        description="shortest averaging time left after trimming, s: shorter detected dwells "
+        "are not positions; a shorter marked position is an error",
+    )
+    angle_tolerance: float = Field(
+        0.5, gt=0, description="detection: the frame angle stays within this during a dwell, deg"
+    )
+    md_tolerance: float = Field(
+        0.05, gt=0, description="detection: the smoothed MD stays within this during a dwell, m"
+    )
+    md_smoothing: float = Field(
+        1.0,
+        ge=0,
+        description="detection: moving-average window applied to the MD before the "
+        "md_tolerance test, s (0: none)",
+    )
+    station_gap: float = Field(
+        0.5,
+        gt=0,
+        description="detection: a new station starts when the stop MD changes by more than "
+        "this, or the MD strays farther than this between two dwells, m",
+    )
+
+
+DEFAULTS = ReadingOptions()
+
+
+def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> pa.Table:
+    """Reduce a point survey's raw samples (:class:`RawSamples`) to :class:`PositionReadings`:
+    per dwell, the station, its MD (median odometer MD over all the station's averaged
+    samples, m), the position, the mid-time of the averaged samples (s), the circular mean
+    frame angle (deg, [0, 360)), the mean and sample standard deviation (ddof = 1) of every
+    gyro (°/h) and accelerometer (m/s²) axis, the number of samples and their duration
+    (n / sample rate, s). Raises ``ValueError`` naming the problem: no markers and no frame
+    angle, a marked position repeated or too short after trimming, non-uniform time, no
+    positions found."""
+    RawSamples.validate_table(samples)
+    time = samples.column("time").to_numpy()
+    rate = _sample_rate(time)
+    md = _optional(samples, "md")
+    if md is None:
+        raise ValueError("samples have no md column: position readings need the station MD")
+    angle = _optional(samples, "frame_angle")
+    k_start = round(options.trim_start * rate)
+    k_end = round(options.trim_end * rate)
+    need = max(2, int(np.ceil(options.min_dwell * rate - 1e-6)))  # samples; slack for rounding
+    markers = _markers(samples)
+    if markers is not None:
+        starts, ends, station, position = markers
+        _check_lengths(ends - starts - k_start - k_end, need, time[starts], station, position)
+    else:
+        if angle is None:
+            raise ValueError(
+                "samples have neither station/position markers nor a frame_angle column: "
+                "cannot tell the frame positions apart"
+            )
+        window = max(1, round(options.md_smoothing * rate))
+        smooth_md = _moving_average(md, window)
+        starts, ends = _detect_dwells(
+            (np.unwrap(angle, period=360.0), smooth_md),
+            (options.angle_tolerance, options.md_tolerance),
+            k_start + need + k_end,
+        )
+        station, position = _number_stations(smooth_md, starts, options.station_gap)
+    return _reduce(
+        samples, time, rate, md, angle, starts + k_start, ends - k_end, station, position
+    )
+
+
+def _optional(samples: pa.Table, name: str) -> FloatArray | None:
+    """A float column as an array; None when absent or all null; ValueError when partly null."""
+    if name not in samples.column_names:
+        return None
+    column = samples.column(name)
+    if column.null_count == len(column):
+        return None
+    if column.null_count:
+        raise ValueError(
+            f"column {name!r} has {column.null_count} missing values of {len(column)}: "
+            "position readings need it complete or absent"
+        )
+    values: FloatArray = column.to_numpy()
+    return values
+
+
+def _sample_rate(time: FloatArray) -> float:
+    """Sample rate (Hz) of uniformly spaced times (s); ValueError otherwise."""
+    if time.size < 2:
+        raise ValueError(f"need at least 2 samples to know the sample rate, got {time.size}")
+    dt = float(time[-1] - time[0]) / (time.size - 1)
+    steps = np.diff(time)
+    off = np.abs(steps - dt) > UNIFORM_RTOL * dt
+    if off.any():
+        i = int(np.argmax(off))
+        raise ValueError(
+            f"time is not uniformly sampled: mean step {dt:g} s, but the step at "
+            f"t = {time[i]:g} s is {steps[i]:g} s ({int(off.sum())} such steps; "
+            "samples dropped or doubled?)"
+        )
+    return 1.0 / dt
+
+
+def _markers(samples: pa.Table) -> tuple[IndexArray, IndexArray, IndexArray, IndexArray] | None:
+    """Runs of consecutive samples with the same non-null (station, position) markers, as
+    (start, end) sample indices and their markers; None when the samples carry no markers."""
+    codes = {}
+    for name in ("station", "position"):
+        if name in samples.column_names and samples.column(name).null_count < samples.num_rows:
+            codes[name] = samples.column(name).fill_null(-1).to_numpy()
+    if not codes:
+        return None
+    if len(codes) == 1:
+        (have,) = codes
+        lack = "position" if have == "station" else "station"
+        raise ValueError(f"samples have {have} markers but no {lack} markers: give both or neither")
+    station, position = codes["station"], codes["position"]
+    orphans = int(np.count_nonzero((station < 0) & (position >= 0)))
+    if orphans:
+        raise ValueError(f"{orphans} samples have a position marker but no station marker")
+    change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1])) + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change, [station.size]])
+    keep = (station[starts] >= 0) & (position[starts] >= 0)
+    starts, ends = starts[keep], ends[keep]
+    keys = np.stack([station[starts], position[starts]], axis=-1)
+    unique, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    if (counts > 1).any():
+        time = samples.column("time").to_numpy()
+        repeated = [
+            f"station {s} position {p} at t = "
+            + ", ".join(f"{time[i]:g}" for i in starts[inverse.ravel() == k])
+            + " s"
+            for k, (s, p) in enumerate(unique)
+            if counts[k] > 1
+        ]
+        raise ValueError(
+            "markers label a (station, position) in separate runs of samples: "
+            + "; ".join(repeated)
+        )
+    return starts, ends, keys[:, 0], keys[:, 1]
+
+
+def _check_lengths(
+    n: IndexArray, need: int, t0: FloatArray, station: IndexArray, position: IndexArray
+) -> None:
+    """ValueError naming every marked position with fewer than ``need`` samples left."""
+    short = np.flatnonzero(n < need)
+    if short.size:
+        listed = ", ".join(
+            f"station {station[i]} position {position[i]} (t = {t0[i]:g} s): {max(int(n[i]), 0)}"
+            for i in short
+        )
+        raise ValueError(
+            f"marked positions too short after trimming (samples left; need ≥ {need} for "
+            f"min_dwell and at least 2): {listed}"
+        )
+
+
+def _moving_average(values: FloatArray, window: int) -> FloatArray:
+    """Centred moving average over ``window`` samples (edges: nearest value repeated)."""
+    if window == 1:
+        return values
+    from scipy.ndimage import uniform_filter1d  # imported on use: slow to import
+
+    smooth: FloatArray = uniform_filter1d(values, window, mode="nearest")
+    return smooth
+
+
+def _detect_dwells(
+    signals: tuple[FloatArray, ...], tolerances: tuple[float, ...], length: int
+) -> tuple[IndexArray, IndexArray]:
+    """(start, end) sample indices of dwells: each starts at the first sample from which
+    every signal stays within its tolerance of its value there for ``length`` samples, and
+    ends where :func:`_leave` says (module docstring)."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    size = signals[0].size
+    count = size - length + 1
+    if count <= 0:
+        return np.empty(0, np.intp), np.empty(0, np.intp)
+    steady = np.ones(count, dtype=bool)
+    lo = length // 2  # the centred filters' window at lo + s spans samples s … s + length − 1
+    for x, tol in zip(signals, tolerances, strict=True):
+        first = x[:count]
+        steady &= maximum_filter1d(x, length)[lo : lo + count] - first <= tol
+        steady &= first - minimum_filter1d(x, length)[lo : lo + count] <= tol
+    candidates = np.flatnonzero(steady)
+    starts: list[int] = []
+    ends: list[int] = []
+    i = 0
+    while i < candidates.size:
+        start = int(candidates[i])
+        end = _leave(signals, tolerances, start, start + length)
+        starts.append(start)
+        ends.append(end)
+        i = int(np.searchsorted(candidates, end))
+    return np.asarray(starts, dtype=np.intp), np.asarray(ends, dtype=np.intp)
+
+
+def _leave(
+    signals: tuple[FloatArray, ...], tolerances: tuple[float, ...], start: int, begin: int
+) -> int:
+    """First sample from ``begin`` on where a signal leaves its tolerance around its median
+    over samples ``start`` … ``begin`` − 1; the signals' length if none does. Searches
+    chunks of doubling size."""
+    size = signals[0].size
+    levels = [float(np.median(x[start:begin])) for x in signals]
+    chunk = max(begin - start, 1024)
+    while begin < size:
+        end = min(size, begin + chunk)
+        out = np.zeros(end - begin, dtype=bool)
+        for x, level, tol in zip(signals, levels, tolerances, strict=True):
+            out |= np.abs(x[begin:end] - level) > tol
+        if out.any():
+            return begin + int(np.argmax(out))
+        begin, chunk = end, 2 * chunk
+    return size
+
+
+def _number_stations(
+    md: FloatArray, starts: IndexArray, gap: float
+) -> tuple[IndexArray, IndexArray]:
+    """Station and position numbers of consecutive dwells (from 0): a new station when the
+    stop MD (``md`` at the dwell's start) changes by more than ``gap``, or ``md`` strays
+    farther than ``gap`` from it before the next dwell."""
+    if starts.size == 0:
+        return np.empty(0, np.intp), np.empty(0, np.intp)
+    stop = md[starts]
+    high = np.maximum.reduceat(md, starts)[:-1] - stop[:-1]  # from a dwell to the next one
+    low = stop[:-1] - np.minimum.reduceat(md, starts)[:-1]
+    new = (np.abs(np.diff(stop)) > gap) | (np.maximum(high, low) > gap)
+    station = np.concatenate([[0], np.cumsum(new)]).astype(np.intp)
+    first = np.flatnonzero(np.concatenate([[True], new]))
+    position = np.arange(starts.size) - first[station]
+    return station, position
+
+
+def _reduce(
+    samples: pa.Table,
+    time: FloatArray,
+    rate: float,
+    md: FloatArray,
+    angle: FloatArray | None,
+    a: IndexArray,
+    b: IndexArray,
+    station: IndexArray,
+    position: IndexArray,
+) -> pa.Table:
+    """PositionReadings from the samples [a, b) of each reading."""
+    if a.size == 0:
+        raise ValueError(
+            "no frame positions found: no dwell long enough for min_dwell after trimming"
+        )
+    n = b - a
+    offsets = np.concatenate([[0], np.cumsum(n)[:-1]])
+    index = np.arange(int(n.sum())) - np.repeat(offsets - a, n)  # samples used, reading by reading
+    groups, inverse = np.unique(station, return_inverse=True)
+    label = inverse.ravel()  # station of each reading as 0 … groups − 1
+    columns: dict[str, object] = {
+        "station": station,
+        "md": _group_median(md[index], np.repeat(label, n), groups.size)[label],
+        "position": position,
+        "t": (time[a] + time[b - 1]) / 2,
+    }
+    if angle is not None:
+        columns["frame_angle"] = _circular_mean(angle[index], offsets)
+    stds: dict[str, FloatArray] = {}
+    for name in SIGNALS:
+        values = _optional(samples, name)
+        if values is not None:
+            columns[name], stds[f"{name}_std"] = _mean_std(values[index], offsets, n)
+    columns |= stds
+    columns["n"] = n
+    columns["duration"] = n / rate
+    return PositionReadings.compiled().make_table(columns)
+
+
+def _mean_std(x: FloatArray, offsets: IndexArray, n: IndexArray) -> tuple[FloatArray, FloatArray]:
+    """Mean and sample standard deviation (ddof = 1) of each reading's samples, taken about
+    the reading's first sample so that constant signals average exactly."""
+    first = x[offsets]
+    dev = x - np.repeat(first, n)
+    shift = np.add.reduceat(dev, offsets) / n
+    dev -= np.repeat(shift, n)
+    var = np.add.reduceat(dev * dev, offsets) / (n - 1)
+    return first + shift, np.sqrt(var)
+
+
+def _circular_mean(degrees: FloatArray, offsets: IndexArray) -> FloatArray:
+    """Circular mean (deg, [0, 360)) of each reading's angles."""
+    rad = np.radians(degrees)
+    sin, cos = np.add.reduceat(np.sin(rad), offsets), np.add.reduceat(np.cos(rad), offsets)
+    mean = np.degrees(np.arctan2(sin, cos)) % 360.0
+    wrapped: FloatArray = np.where(mean < 360.0, mean, 0.0)  # −tiny % 360 rounds to 360
+    return wrapped
+
+
+def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatArray:
+    """Median of ``values`` per group label 0 … groups − 1 (every group non-empty)."""
+    order = np.lexsort((values, label))
+    counts = np.bincount(label, minlength=groups)
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ranked = values[order]
+    median: FloatArray = (ranked[first + (counts - 1) // 2] + ranked[first + counts // 2]) / 2
+    return median

@@ -1,0 +1,388 @@
+"""Station solver: position readings → inclination, azimuth, toolfaces and their σ.
+
+Per station (DOMAIN.md §5), from the frame positions k:
+
+1. Accelerometers give the inclination I_k and the gravity toolface ψ_k of the frame x axis
+   (I = atan2(√(gx²+gy²), gz), ψ = atan2(gy, −gx)); I is their weighted mean.
+2. The gyros are fitted by weighted linear least squares against the frame's angle α_k —
+   the accelerometer toolface ψ_k in an inclined hole, the frame-angle sensor θ_k near
+   vertical (where ψ is ill-defined) — with a bias and a linear trend per gyro axis:
+   ``x_k = u cos α_k + v sin α_k + b_x + d_x·(t_k − t̄)``,
+   ``y_k = −u sin α_k + v cos α_k + b_y + d_y·(t_k − t̄)``.
+   Inclined: (u, v) = (h, r), the high-side and right-side Earth rate; the azimuth follows
+   (:mod:`pipeline.compass.azimuth`). Near vertical the vertical Earth rate that leaks into
+   the transverse gyros through the tilt is removed first (x_k + Ω sin φ·g_x,k/|g|, likewise
+   y), leaving (u, v) = Ω cos φ·(n_x, n_y) of the north direction in the reference frame:
+   the north-referenced (gyro) toolface Φ = atan2(−n_y, n_x).
+3. Residuals against each position's σ give a χ² consistency test (tool moved, frame
+   slipped); the frame-angle sensor is checked against the accelerometer toolfaces.
+Rates in °/h, accelerations in m/s², angles in radians internally, degrees in outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.stats import chi2
+
+from pipeline.compass.azimuth import Method, solve_azimuth
+from pipeline.compass.precision import OMEGA_DEG_H
+from pipeline.earth.frames import FloatArray
+from pipeline.tables import CompassRejects, CompassStations
+
+
+class CompassOptions(BaseModel):
+    """Compassing parameters (angles deg, rates °/h)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    latitude: float | None = Field(
+        None, ge=-89.9, le=89.9, description="site latitude, deg (default: the well metadata's)"
+    )
+    gyro_axes: Literal["auto", "x", "xy", "xyz"] = Field(
+        "auto", description="gyro axes to use (auto: every gyro column present)"
+    )
+    azimuth_method: Method = Field("ml", description="ml, auto (sine/atan2), sine or atan2")
+    vertical_below: float = Field(
+        3.0, gt=0, lt=45, description="inclination below which the near-vertical mode is used"
+    )
+    trend: bool = Field(True, description="fit a linear gyro trend (needs enough positions)")
+    gyro_sigma: float | None = Field(
+        None,
+        gt=0,
+        description="σ of one position's mean gyro reading when the readings "
+        "carry no std/n columns",
+    )
+    acc_sigma: float | None = Field(
+        None, gt=0, description="σ of one position's mean acceleration, m/s², likewise"
+    )
+    noise_floor: float = Field(
+        0.0, ge=0, description="added in quadrature to each position's gyro σ (bias instability)"
+    )
+    consistency: float = Field(
+        1e-3, gt=0, lt=1, description="χ² tail probability below which a station is flagged"
+    )
+    frame_tolerance: float = Field(
+        2.0, gt=0, description="largest disagreement of frame angle and accelerometer toolface"
+    )
+    max_sigma_azi: float = Field(5.0, gt=0, description="σ_azi above which a station is flagged")
+    z_bias_sigma: float | None = Field(
+        None,
+        gt=0,
+        description="σ of the axial gyro's bias, °/h: when given, a three-axis "
+        "tool's z gyro joins the azimuth fit (its bias is not removed by turning the frame)",
+    )
+
+
+@dataclass
+class _Station:
+    """One station's readings as arrays (positions in time order)."""
+
+    station: int
+    md: float
+    t: FloatArray
+    frame: FloatArray | None
+    gyro: FloatArray  # (n, axes)
+    gyro_sigma: FloatArray  # (n, axes)
+    acc: FloatArray  # (n, 3)
+    acc_sigma: FloatArray  # (n, 3)
+
+
+@dataclass
+class _Solution:
+    rows: list[dict[str, object]] = field(default_factory=list)
+    rejects: list[dict[str, object]] = field(default_factory=list)
+
+
+def compass(
+    readings: pa.Table, latitude: float, options: CompassOptions
+) -> tuple[pa.Table, pa.Table]:
+    """Solve every station of a PositionReadings table at ``latitude`` (deg). Returns the
+    solved stations (CompassStations) and the stations that could not be solved, with why
+    (CompassRejects) — never a silently wrong azimuth."""
+    axes = _axes(readings, options.gyro_axes)
+    lat = np.radians(latitude)
+    out = _Solution()
+    for st in _stations(readings, axes, options):
+        try:
+            out.rows.append(_solve(st, lat, options))
+        except _Reject as exc:
+            out.rejects.append({"station": st.station, "md": st.md, "reason": str(exc)})
+    stations = CompassStations.compiled().make_table(
+        {name: [row[name] for row in out.rows] for name in _OUTPUT}, north_reference="true"
+    )
+    rejects = CompassRejects.compiled().make_table(
+        {name: [row[name] for row in out.rejects] for name in ("station", "md", "reason")}
+    )
+    return stations, rejects
+
+
+class _Reject(Exception):
+    """A station that cannot be solved, and why."""
+
+
+_OUTPUT = (
+    "station",
+    "md",
+    "inc",
+    "azi",
+    "gyro_toolface",
+    "highside_toolface",
+    "sigma_inc",
+    "sigma_azi",
+    "sigma_toolface",
+    "bias",
+    "trend",
+    "residual_rms",
+    "chi2",
+    "positions",
+    "solver",
+    "mode",
+    "flags",
+    "time",
+)
+
+
+def _axes(readings: pa.Table, wanted: str) -> str:
+    present = "".join(a for a in "xyz" if f"gyro_{a}" in readings.column_names)
+    axes = present if wanted == "auto" else wanted
+    if any(a not in present for a in axes):
+        raise ValueError(f"gyro_axes {wanted!r}: the readings have gyro axes {present!r}")
+    return axes
+
+
+def _column(readings: pa.Table, name: str) -> FloatArray | None:
+    if name not in readings.column_names:
+        return None
+    col = readings.column(name)
+    return None if col.null_count == len(col) else col.to_numpy(zero_copy_only=False)
+
+
+def _sigmas(readings: pa.Table, names: list[str], fallback: float | None, what: str) -> FloatArray:
+    """σ of each position's mean: std/√n from the readings, else the declared fallback."""
+    n = _column(readings, "n")
+    stds = [_column(readings, f"{name}_std") for name in names]
+    if n is not None and all(s is not None for s in stds):
+        return np.stack([s / np.sqrt(n) for s in stds if s is not None], axis=-1)
+    if fallback is None:
+        raise ValueError(
+            f"the readings carry no {what} std/n columns: declare {what}_sigma "
+            "(σ of one position's mean reading)"
+        )
+    return np.full((readings.num_rows, len(names)), fallback)
+
+
+def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_Station]:
+    gyro_names = [f"gyro_{a}" for a in axes]
+    acc_names = ["acc_x", "acc_y", "acc_z"]
+    gyro = np.stack([readings.column(n).to_numpy() for n in gyro_names], axis=-1)
+    gyro_sigma = np.hypot(
+        _sigmas(readings, gyro_names, options.gyro_sigma, "gyro"), options.noise_floor
+    )
+    acc = np.stack([readings.column(n).to_numpy() for n in acc_names], axis=-1)
+    acc_sigma = _sigmas(readings, acc_names, options.acc_sigma, "acc")
+    station = readings.column("station").to_numpy()
+    frame = _column(readings, "frame_angle")
+    t = readings.column("t").to_numpy()
+    md = readings.column("md").to_numpy()
+    starts = np.flatnonzero(np.r_[True, station[1:] != station[:-1]])
+    ends = np.r_[starts[1:], len(station)]
+    return [
+        _Station(
+            int(station[a]),
+            float(md[a]),
+            t[a:b],
+            None if frame is None else np.radians(frame[a:b]),
+            gyro[a:b],
+            gyro_sigma[a:b],
+            acc[a:b],
+            acc_sigma[a:b],
+        )
+        for a, b in zip(starts, ends, strict=True)
+    ]
+
+
+def _solve(st: _Station, lat: float, options: CompassOptions) -> dict[str, object]:
+    flags: list[str] = []
+    inc, sigma_inc, psi, sigma_psi = _inclination(st)
+    near_vertical = min(inc, np.pi - inc) < np.radians(options.vertical_below)
+    if st.frame is not None:
+        offset = _wrap(psi - st.frame)
+        spread = np.abs(_wrap(offset - _circmean(offset)))
+        if not near_vertical and np.degrees(spread.max()) > options.frame_tolerance:
+            flags.append("frame_mismatch")
+    use_frame = near_vertical and st.frame is not None
+    alpha = st.frame if use_frame and st.frame is not None else psi
+    gyro = st.gyro.copy()
+    if near_vertical:  # remove the vertical Earth rate leaking in through the tilt
+        down = st.acc / np.linalg.norm(st.acc, axis=1, keepdims=True)
+        gyro += OMEGA_DEG_H * np.sin(lat) * down[:, : gyro.shape[1]]
+    fit = _fit(alpha, st.t, gyro, st.gyro_sigma, options.trend)
+    if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
+        flags.append("inconsistent")
+    if near_vertical:
+        # (u, v) = k (n_x, n_y) of north in the reference (frame angle 0, or the high side)
+        ref_toolface = np.arctan2(-fit.uv[1], fit.uv[0])
+        jac = np.array([fit.uv[1], -fit.uv[0]]) / (fit.uv @ fit.uv)
+        sigma_tf = float(np.sqrt(jac @ fit.cov[:2, :2] @ jac))
+        gyro_tf = ref_toolface + alpha[0]
+        d = gyro_tf - psi[0]  # (cos I cos A, −sin A) ∝ (cos d, −sin d)
+        azimuth = float(np.arctan2(np.sin(d), np.cos(d) / np.cos(inc)))
+        sigma_azi = float(np.hypot(sigma_tf, sigma_psi))
+        solver, mode = "toolface", "near-vertical"
+        flags.append("azimuth_from_toolface")  # A = Φ − ψ: as good as the accelerometer ψ
+    else:
+        obs, cov = fit.uv, fit.cov[:2, :2]
+        if options.z_bias_sigma is not None and st.gyro.shape[1] == 3:
+            var_z = 1.0 / np.sum(1.0 / st.gyro_sigma[:, 2] ** 2) + options.z_bias_sigma**2
+            obs = np.append(obs, np.average(st.gyro[:, 2], weights=st.gyro_sigma[:, 2] ** -2))
+            cov = np.pad(cov, (0, 1))
+            cov[2, 2] = var_z
+        solution = solve_azimuth(obs[None], cov[None], np.array([inc]), lat, options.azimuth_method)
+        azimuth, sigma_gyro = float(solution.azimuth[0]), float(solution.sigma[0])
+        sigma_azi = float(np.hypot(sigma_gyro, _leak(azimuth, inc, lat) * sigma_inc))
+        gyro_tf = gyro_toolface(azimuth, inc, float(psi[0]))
+        sigma_tf = float(np.hypot(sigma_azi, sigma_psi))
+        solver, mode = str(solution.method[0]), "inclined"
+    if not np.isfinite(sigma_azi) or np.degrees(sigma_azi) > options.max_sigma_azi:
+        flags.append("poor_azimuth")
+    return {
+        "station": st.station,
+        "md": st.md,
+        "inc": float(np.degrees(inc)),
+        "azi": float(np.degrees(azimuth)) % 360.0,
+        "gyro_toolface": float(np.degrees(gyro_tf)) % 360.0,
+        "highside_toolface": float(np.degrees(psi[0])) % 360.0,
+        "sigma_inc": float(np.degrees(sigma_inc)),
+        "sigma_azi": float(np.degrees(sigma_azi)),
+        "sigma_toolface": float(np.degrees(sigma_tf)),
+        "bias": float(fit.bias),
+        "trend": float(fit.trend * 3600.0),
+        "residual_rms": fit.rms,
+        "chi2": fit.chi2,
+        "positions": len(st.t),
+        "solver": solver,
+        "mode": mode,
+        "flags": ",".join(flags),
+        "time": float(st.t.mean()),
+    }
+
+
+def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
+    """Inclination (rad) and its σ; per-position toolface ψ_k (rad) and σ of ψ."""
+    g = np.linalg.norm(st.acc, axis=1)
+    transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
+    inc_k = np.arctan2(transverse, st.acc[:, 2])
+    psi = np.arctan2(st.acc[:, 1], -st.acc[:, 0])
+    # σ of I_k: in-plane transverse part (cos I) and axial part (sin I) of the accel noise
+    sx, sy, sz = st.acc_sigma.T
+    in_plane = np.hypot(np.cos(psi) * sx, np.sin(psi) * sy)
+    var_k = (np.cos(inc_k) * in_plane) ** 2 + (np.sin(inc_k) * sz) ** 2
+    var_k = np.maximum(var_k / g**2, 1e-30)
+    weight = 1.0 / var_k
+    inc = float(np.sum(weight * inc_k) / weight.sum())
+    sigma_inc = float(np.sqrt(1.0 / weight.sum()))
+    across = np.hypot(np.sin(psi) * sx, np.cos(psi) * sy)
+    sigma_psi = float(np.sqrt(np.mean((across / np.maximum(transverse, 1e-12)) ** 2) / len(psi)))
+    if not np.isfinite(inc) or len(inc_k) == 0:
+        raise _Reject("accelerometer readings give no inclination")
+    return inc, sigma_inc, psi, sigma_psi
+
+
+@dataclass(frozen=True)
+class _Fit:
+    uv: FloatArray
+    cov: FloatArray
+    bias: float
+    trend: float
+    rms: float
+    chi2: float
+    dof: int
+
+
+def _fit(
+    alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, trend: bool
+) -> _Fit:
+    """Weighted least squares of the gyro readings (see the module docstring)."""
+    n, m = gyro.shape
+    if not np.all(sigma > 0):
+        raise _Reject("a position's gyro σ is zero (noise-free data?): set noise_floor")
+    tau = t - t.mean()
+    c, s = np.cos(alpha), np.sin(alpha)
+    per_axis = 2 if trend else 1
+    columns = 2 + per_axis * min(m, 2)
+    rows = []
+    values = []
+    weights = []
+    for axis in range(min(m, 2)):
+        design = np.zeros((n, columns))
+        design[:, 0], design[:, 1] = (c, s) if axis == 0 else (-s, c)
+        design[:, 2 + per_axis * axis] = 1.0
+        if trend:
+            design[:, 3 + per_axis * axis] = tau
+        rows.append(design)
+        values.append(gyro[:, axis])
+        weights.append(1.0 / sigma[:, axis] ** 2)
+    a = np.concatenate(rows)
+    y = np.concatenate(values)
+    w = np.concatenate(weights)
+    if len(y) < columns:
+        raise _Reject(
+            f"{n} position(s) cannot resolve {columns} unknowns (Earth rate, bias"
+            + (", trend" if trend else "")
+            + "); use more positions or trend: false"
+        )
+    normal = a.T @ (a * w[:, None])
+    if np.linalg.cond(normal) > 1e10:
+        raise _Reject("the frame positions do not span the circle (ill-conditioned fit)")
+    cov = np.asarray(np.linalg.inv(normal), dtype=np.float64)
+    params = cov @ (a.T @ (w * y))
+    res = y - a @ params
+    chi = float(np.sum(w * res**2))
+    return _Fit(
+        uv=params[:2],
+        cov=cov,
+        bias=float(params[2]),
+        trend=float(params[3]) if trend else 0.0,
+        rms=float(np.sqrt(np.mean(res**2))),
+        chi2=chi,
+        dof=len(y) - columns,
+    )
+
+
+def gyro_toolface(azimuth: float, inclination: float, toolface: float) -> float:
+    """North-referenced toolface Φ = atan2(−n_y, n_x) of the body x axis (rad), from the
+    body's north direction n = C_n^b (1, 0, 0) (equals A + ψ at I = 0)."""
+    n_x = np.cos(toolface) * np.cos(inclination) * np.cos(azimuth) - np.sin(toolface) * np.sin(
+        azimuth
+    )
+    n_y = -np.sin(toolface) * np.cos(inclination) * np.cos(azimuth) - np.cos(toolface) * np.sin(
+        azimuth
+    )
+    return float(np.arctan2(-n_y, n_x))
+
+
+def _leak(azimuth: float, inc: float, lat: float) -> float:
+    """|∂A/∂I| at fixed h and r: sin A (cos A tan I − tan φ) (seed 004 Eqs. 8–9)."""
+    return float(abs(np.sin(azimuth) * (np.cos(azimuth) * np.tan(inc) - np.tan(lat))))
+
+
+def _wrap(angle: FloatArray | float) -> FloatArray:
+    return np.mod(np.asarray(angle) + np.pi, 2 * np.pi) - np.pi
+
+
+def _circmean(angle: FloatArray) -> float:
+    return float(np.arctan2(np.sin(angle).mean(), np.cos(angle).mean()))
+
+
+def five_position_closed_form(y: FloatArray) -> tuple[float, float]:
+    """Seed 004's closed form for readings at ψ0, ψ0+90°, ψ0+180°, ψ0+270°, ψ0 taken at
+    equal time steps (corrected, DOMAIN.md §5): the Earth rate along frame x at ψ0 and at
+    ψ0 + 90°, free of a constant bias and a linear trend."""
+    y0a, y90, y180, y270, y0b = y
+    w1 = ((y0a + y0b) / 2 - y180) / 2
+    w2 = (y90 - y270) / 2 + (y0b - y0a) / 4
+    return float(w1), float(w2)

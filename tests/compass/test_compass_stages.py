@@ -1,0 +1,169 @@
+"""Compassing through the public interface: pipelines from raw samples and from
+pre-averaged readings, and the bad inputs that must be rejected or flagged."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.compass.solve import CompassOptions, compass
+from pipeline.tables import PositionReadings
+from tests_support import ROOT, gyropipe
+
+PLAN = """
+name: short-j
+seed: 11
+site: {latitude: 61.25, longitude: 73.4, date: 2026-11-21}
+well:
+  sections:
+    - {kind: vertical, length: 60}
+    - {kind: build, dls: 9.0, inc: 40, azi: 37}
+    - {kind: hold, length: 60}
+tool: {preset: mems-vrg}
+survey: {mode: point, every: 30, dwell: 20, move_time: 2}
+"""
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("sim")
+    (root / "plan.yaml").write_text(PLAN)
+    subprocess.run(
+        [*gyropipe(), "simulate", str(root / "plan.yaml"), "--out", str(root)],
+        check=True,
+        capture_output=True,
+    )
+    return root
+
+
+def run(pipeline: str, input_file: Path, out: Path, *extra: str):
+    return subprocess.run(
+        [
+            *gyropipe(),
+            "run",
+            str(ROOT / "pipelines" / pipeline),
+            "--input",
+            str(input_file),
+            "--out",
+            str(out),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_point_gyro_pipeline_from_raw_samples(simulated: Path, tmp_path: Path):
+    result = run("point-gyro.yaml", simulated / "samples.parquet", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    stations = pq.read_table(tmp_path / "out" / "compass.stations.parquet")
+    truth = pq.read_table(simulated / "stations.parquet")
+    assert stations.num_rows == truth.num_rows
+    inclined = np.array(stations.column("mode").to_pylist()) == "inclined"
+    assert inclined.sum() >= 5
+    err = (stations.column("azi").to_numpy() - truth.column("azi").to_numpy() + 180) % 360 - 180
+    sigma = stations.column("sigma_azi").to_numpy()
+    assert np.all(np.abs(err[inclined]) < 4 * sigma[inclined])
+    np.testing.assert_allclose(
+        stations.column("inc").to_numpy(), truth.column("inc").to_numpy(), atol=0.05
+    )
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.schema.field("azi").metadata[b"north_reference"] == b"true"
+    manifest = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert manifest["well"]["latitude"] == 61.25
+
+
+def test_pipeline_from_pre_averaged_readings(simulated: Path, tmp_path: Path):
+    first = run("point-gyro.yaml", simulated / "samples.parquet", tmp_path / "a")
+    assert first.returncode == 0, first.stderr
+    readings = tmp_path / "a" / "readings.readings.parquet"
+    second = run("point-gyro-readings.yaml", readings, tmp_path / "b")
+    assert second.returncode == 0, second.stderr
+    a = pq.read_table(tmp_path / "a" / "compass.stations.parquet")
+    b = pq.read_table(tmp_path / "b" / "compass.stations.parquet")
+    np.testing.assert_allclose(a.column("azi").to_numpy(), b.column("azi").to_numpy())
+
+
+def test_missing_latitude_is_a_clear_error(simulated: Path, tmp_path: Path):
+    readings = tmp_path / "r.parquet"
+    table = pq.read_table(simulated / "samples.parquet").replace_schema_metadata({})
+    pq.write_table(table, readings)
+    result = run("point-gyro.yaml", readings, tmp_path / "out")
+    assert result.returncode == 1
+    assert "stage 'compass'" in result.stderr and "latitude is unknown" in result.stderr
+    assert not (tmp_path / "out" / "run.json").exists()
+    ok = run("point-gyro.yaml", readings, tmp_path / "ok", "--well", "latitude=61.25")
+    assert ok.returncode == 0, ok.stderr
+
+
+def readings_table(alphas_deg, *, frame=None, axes="x") -> pa.Table:
+    """Noise-free readings of one inclined station (A = 37°, I = 40°, 61.25° N)."""
+    k, s = 15.041067 * np.cos(np.radians(61.25)), 15.041067 * np.sin(np.radians(61.25))
+    a, i = np.radians(37.0), np.radians(40.0)
+    h, r = k * np.cos(a) * np.cos(i) + s * np.sin(i), -k * np.sin(a)
+    psi = np.radians(alphas_deg)
+    g = 9.82
+    n = len(psi)
+    data = {
+        "station": np.zeros(n, dtype=int),
+        "md": np.full(n, 500.0),
+        "position": np.arange(n),
+        "t": 10.0 + 40.0 * np.arange(n),
+        "gyro_x": h * np.cos(psi) + r * np.sin(psi) + 2.0,
+        "acc_x": -g * np.sin(i) * np.cos(psi),
+        "acc_y": g * np.sin(i) * np.sin(psi),
+        "acc_z": np.full(n, g * np.cos(i)),
+    }
+    if frame is not None:
+        data["frame_angle"] = np.mod(frame, 360.0)
+    return PositionReadings.compiled().make_table(data)
+
+
+OPTIONS = CompassOptions(gyro_sigma=0.05, acc_sigma=1e-4)
+
+
+def test_fewer_positions_than_unknowns_is_rejected():
+    stations, rejects = compass(readings_table([0, 90, 180]), 61.25, OPTIONS)
+    assert stations.num_rows == 0
+    assert "3 position(s) cannot resolve 4 unknowns" in rejects.column("reason")[0].as_py()
+    ok, _ = compass(
+        readings_table([0, 90, 180]), 61.25, OPTIONS.model_copy(update={"trend": False})
+    )
+    assert ok.column("azi")[0].as_py() == pytest.approx(37.0, abs=1e-6)
+
+
+def test_positions_not_spanning_the_circle_are_rejected():
+    _, rejects = compass(readings_table([0, 2, 4, 6, 8]), 61.25, OPTIONS)
+    assert "do not span the circle" in rejects.column("reason")[0].as_py()
+
+
+def test_frame_angle_disagreeing_with_accelerometers_is_flagged():
+    good = readings_table([10, 100, 190, 280, 10], frame=np.array([0, 90, 180, 270, 0]))
+    stations, _ = compass(good, 61.25, OPTIONS)
+    assert stations.column("flags")[0].as_py() == ""
+    slipped = readings_table([10, 100, 190, 280, 10], frame=np.array([0, 90, 170, 270, 0]))
+    stations, _ = compass(slipped, 61.25, OPTIONS)
+    assert "frame_mismatch" in stations.column("flags")[0].as_py()
+
+
+def test_inconsistent_residuals_are_flagged():
+    table = readings_table([0, 90, 180, 270, 0, 45, 135])
+    gyro = table.column("gyro_x").to_numpy().copy()
+    gyro[3] += 1.0  # the tool moved during one position: 20σ off the model
+    table = table.set_column(
+        table.schema.get_field_index("gyro_x"), table.schema.field("gyro_x"), pa.array(gyro)
+    )
+    stations, _ = compass(table, 61.25, OPTIONS)
+    assert "inconsistent" in stations.column("flags")[0].as_py()
+
+
+def test_missing_sigma_is_a_clear_error():
+    with pytest.raises(ValueError, match="declare gyro_sigma"):
+        compass(readings_table([0, 90, 180, 270, 0]), 61.25, CompassOptions())
