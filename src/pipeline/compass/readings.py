@@ -22,6 +22,8 @@ angles in degrees, times in seconds; the sample rate comes from the (uniform) ti
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
@@ -351,9 +353,9 @@ def _circular_mean(degrees: FloatArray, offsets: IndexArray) -> FloatArray:
 
 def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatArray:
     """Median of ``values`` per group label 0 … groups − 1 (every group non-empty)."""
-    order = np.lexsort((values, label))
-    counts = np.bincount(label, minlength=groups)
-    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    ranked = values[order]
-    median: FloatArray = (ranked[first + (counts - 1) // 2] + ranked[first + counts // 2]) / 2
+    if np.any(np.diff(label) < 0):  # stations come in time order; sort only if they do not
+        order = np.argsort(label, kind="stable")
+        values, label = values[order], label[order]
+    bounds = np.searchsorted(label, np.arange(groups + 1))
+    median: FloatArray = np.array([np.median(values[a:b]) for a, b in itertools.pairwise(bounds)])
     return median

@@ -21,7 +21,7 @@ Rates in °/h, accelerations in m/s², angles in radians internally, degrees in 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -92,9 +92,38 @@ class _Station:
 
 
 @dataclass
-class _Solution:
-    rows: list[dict[str, object]] = field(default_factory=list)
-    rejects: list[dict[str, object]] = field(default_factory=list)
+class _Row:
+    """One solved station; angles in radians until :func:`_table`."""
+
+    station: int
+    md: float
+    inc: float
+    highside_toolface: float
+    sigma_inc: float
+    bias: float
+    trend: float
+    residual_rms: float
+    chi2: float
+    positions: int
+    time: float
+    flags: list[str]
+    azi: float = float("nan")
+    gyro_toolface: float = float("nan")
+    sigma_azi: float = float("nan")
+    sigma_toolface: float = float("nan")
+    solver: str = ""
+    mode: str = ""
+
+
+@dataclass
+class _Pending:
+    """An inclined station waiting for the (vectorised) azimuth solve."""
+
+    row: _Row
+    obs: FloatArray
+    cov: FloatArray
+    psi0: float
+    sigma_psi: float
 
 
 def compass(
@@ -105,45 +134,61 @@ def compass(
     (CompassRejects) — never a silently wrong azimuth."""
     axes = _axes(readings, options.gyro_axes)
     lat = np.radians(latitude)
-    out = _Solution()
+    rows: list[_Row] = []
+    pending: list[_Pending] = []
+    rejects: dict[str, list[object]] = {"station": [], "md": [], "reason": []}
     for st in _stations(readings, axes, options):
         try:
-            out.rows.append(_solve(st, lat, options))
+            solved = _solve(st, lat, options)
         except _Reject as exc:
-            out.rejects.append({"station": st.station, "md": st.md, "reason": str(exc)})
-    stations = CompassStations.compiled().make_table(
-        {name: [row[name] for row in out.rows] for name in _OUTPUT}, north_reference="true"
-    )
-    rejects = CompassRejects.compiled().make_table(
-        {name: [row[name] for row in out.rejects] for name in ("station", "md", "reason")}
-    )
-    return stations, rejects
+            for key, value in (("station", st.station), ("md", st.md), ("reason", str(exc))):
+                rejects[key].append(value)
+            continue
+        if isinstance(solved, _Pending):
+            pending.append(solved)
+        else:
+            rows.append(solved)
+    for m in (2, 3):  # one vectorised azimuth solve per observation size
+        group = [p for p in pending if len(p.obs) == m]
+        if group:
+            solution = solve_azimuth(
+                np.stack([p.obs for p in group]),
+                np.stack([p.cov for p in group]),
+                np.array([p.row.inc for p in group]),
+                lat,
+                options.azimuth_method,
+            )
+            for p, azi, sigma, method in zip(
+                group, solution.azimuth, solution.sigma, solution.method, strict=True
+            ):
+                rows.append(_finish(p, float(azi), float(sigma), str(method), lat))
+    rows.sort(key=lambda row: row.station)
+    return _table(rows, options), CompassRejects.compiled().make_table(rejects)
 
 
 class _Reject(Exception):
     """A station that cannot be solved, and why."""
 
 
-_OUTPUT = (
-    "station",
-    "md",
-    "inc",
-    "azi",
-    "gyro_toolface",
-    "highside_toolface",
-    "sigma_inc",
-    "sigma_azi",
-    "sigma_toolface",
-    "bias",
-    "trend",
-    "residual_rms",
-    "chi2",
-    "positions",
-    "solver",
-    "mode",
-    "flags",
-    "time",
-)
+def _table(rows: list[_Row], options: CompassOptions) -> pa.Table:
+    """CompassStations from solved rows: angles in degrees, the poor-azimuth flag added."""
+    for row in rows:
+        if not np.isfinite(row.sigma_azi) or np.degrees(row.sigma_azi) > options.max_sigma_azi:
+            row.flags.append("poor_azimuth")
+    columns: dict[str, object] = {
+        name: np.array([getattr(r, name) for r in rows])
+        for name in _Row.__dataclass_fields__
+        if name != "flags"
+    }
+    for name in ("inc", "sigma_inc", "sigma_azi", "sigma_toolface"):
+        columns[name] = np.degrees(np.asarray(columns[name], dtype=float))
+    for name in ("azi", "gyro_toolface", "highside_toolface"):
+        wrapped = np.degrees(np.asarray(columns[name], dtype=float)) % 360.0
+        columns[name] = np.where(wrapped >= 360.0, 0.0, wrapped)
+    columns["flags"] = [",".join(r.flags) for r in rows]
+    if not rows:  # empty columns need their contract types
+        columns = {name: [] for name in columns}
+    return CompassStations.compiled().make_table(columns, north_reference="true")
 
 
 def _axes(readings: pa.Table, wanted: str) -> str:
@@ -205,7 +250,7 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
     ]
 
 
-def _solve(st: _Station, lat: float, options: CompassOptions) -> dict[str, object]:
+def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending:
     flags: list[str] = []
     inc, sigma_inc, psi, sigma_psi = _inclination(st)
     near_vertical = min(inc, np.pi - inc) < np.radians(options.vertical_below)
@@ -223,52 +268,49 @@ def _solve(st: _Station, lat: float, options: CompassOptions) -> dict[str, objec
     fit = _fit(alpha, st.t, gyro, st.gyro_sigma, options.trend)
     if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
-    if near_vertical:
-        # (u, v) = k (n_x, n_y) of north in the reference (frame angle 0, or the high side)
-        ref_toolface = np.arctan2(-fit.uv[1], fit.uv[0])
-        jac = np.array([fit.uv[1], -fit.uv[0]]) / (fit.uv @ fit.uv)
-        sigma_tf = float(np.sqrt(jac @ fit.cov[:2, :2] @ jac))
-        gyro_tf = ref_toolface + alpha[0]
-        d = gyro_tf - psi[0]  # (cos I cos A, −sin A) ∝ (cos d, −sin d)
-        azimuth = float(np.arctan2(np.sin(d), np.cos(d) / np.cos(inc)))
-        sigma_azi = float(np.hypot(sigma_tf, sigma_psi))
-        solver, mode = "toolface", "near-vertical"
-        flags.append("azimuth_from_toolface")  # A = Φ − ψ: as good as the accelerometer ψ
-    else:
+    row = _Row(
+        station=st.station,
+        md=st.md,
+        inc=inc,
+        highside_toolface=float(psi[0]),
+        sigma_inc=sigma_inc,
+        bias=fit.bias,
+        trend=fit.trend * 3600.0,
+        residual_rms=fit.rms,
+        chi2=fit.chi2,
+        positions=len(st.t),
+        time=float(st.t.mean()),
+        flags=flags,
+    )
+    if not near_vertical:
         obs, cov = fit.uv, fit.cov[:2, :2]
         if options.z_bias_sigma is not None and st.gyro.shape[1] == 3:
             var_z = 1.0 / np.sum(1.0 / st.gyro_sigma[:, 2] ** 2) + options.z_bias_sigma**2
             obs = np.append(obs, np.average(st.gyro[:, 2], weights=st.gyro_sigma[:, 2] ** -2))
             cov = np.pad(cov, (0, 1))
             cov[2, 2] = var_z
-        solution = solve_azimuth(obs[None], cov[None], np.array([inc]), lat, options.azimuth_method)
-        azimuth, sigma_gyro = float(solution.azimuth[0]), float(solution.sigma[0])
-        sigma_azi = float(np.hypot(sigma_gyro, _leak(azimuth, inc, lat) * sigma_inc))
-        gyro_tf = gyro_toolface(azimuth, inc, float(psi[0]))
-        sigma_tf = float(np.hypot(sigma_azi, sigma_psi))
-        solver, mode = str(solution.method[0]), "inclined"
-    if not np.isfinite(sigma_azi) or np.degrees(sigma_azi) > options.max_sigma_azi:
-        flags.append("poor_azimuth")
-    return {
-        "station": st.station,
-        "md": st.md,
-        "inc": float(np.degrees(inc)),
-        "azi": float(np.degrees(azimuth)) % 360.0,
-        "gyro_toolface": float(np.degrees(gyro_tf)) % 360.0,
-        "highside_toolface": float(np.degrees(psi[0])) % 360.0,
-        "sigma_inc": float(np.degrees(sigma_inc)),
-        "sigma_azi": float(np.degrees(sigma_azi)),
-        "sigma_toolface": float(np.degrees(sigma_tf)),
-        "bias": float(fit.bias),
-        "trend": float(fit.trend * 3600.0),
-        "residual_rms": fit.rms,
-        "chi2": fit.chi2,
-        "positions": len(st.t),
-        "solver": solver,
-        "mode": mode,
-        "flags": ",".join(flags),
-        "time": float(st.t.mean()),
-    }
+        return _Pending(row, obs, cov, float(psi[0]), sigma_psi)
+    # (u, v) = k (n_x, n_y) of north in the reference (frame angle 0, or the high side)
+    jac = np.array([fit.uv[1], -fit.uv[0]]) / (fit.uv @ fit.uv)
+    row.sigma_toolface = float(np.sqrt(jac @ fit.cov[:2, :2] @ jac))
+    row.gyro_toolface = float(np.arctan2(-fit.uv[1], fit.uv[0]) + alpha[0])
+    d = row.gyro_toolface - psi[0]  # (cos I cos A, −sin A) ∝ (cos d, −sin d)
+    row.azi = float(np.arctan2(np.sin(d), np.cos(d) / np.cos(inc)))
+    row.sigma_azi = float(np.hypot(row.sigma_toolface, sigma_psi))
+    row.solver, row.mode = "toolface", "near-vertical"
+    flags.append("azimuth_from_toolface")  # A = Φ − ψ: as good as the accelerometer ψ
+    return row
+
+
+def _finish(p: _Pending, azimuth: float, sigma_gyro: float, method: str, lat: float) -> _Row:
+    """Complete an inclined station from its azimuth solution (rad)."""
+    row = p.row
+    row.azi = azimuth
+    row.sigma_azi = float(np.hypot(sigma_gyro, _leak(azimuth, row.inc, lat) * row.sigma_inc))
+    row.gyro_toolface = gyro_toolface(azimuth, row.inc, p.psi0)
+    row.sigma_toolface = float(np.hypot(row.sigma_azi, p.sigma_psi))
+    row.solver, row.mode = method, "inclined"
+    return row
 
 
 def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:

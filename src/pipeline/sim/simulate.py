@@ -89,7 +89,8 @@ def station_mds(survey: PointSurvey, path: WellPath) -> FloatArray:
             f"survey.stations: MD {outside[0]:g} m is outside the plan "
             f"({path.start_md:g}–{path.end_md:g} m)"
         )
-    return np.clip(mds, path.start_md, path.end_md)  # within rounding of the ends
+    clipped: FloatArray = np.clip(mds, path.start_md, path.end_md)  # rounding at the ends
+    return clipped
 
 
 def kinematics(
