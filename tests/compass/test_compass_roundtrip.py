@@ -157,13 +157,13 @@ def test_noise_free_recovery_over_the_grid(tmp_path: Path, axes: str, latitude: 
 def test_closed_form_agrees_with_least_squares_on_equal_steps():
     rng = np.random.default_rng(3)
     for _ in range(50):
-        h, r, b, d = rng.normal(0, 10, 2).tolist() + [rng.normal(0, 5), rng.normal(0, 0.01)]
+        h, r, b, d = [*rng.normal(0, 10, 2).tolist(), rng.normal(0, 5), rng.normal(0, 0.01)]
         psi0 = rng.uniform(0, 2 * np.pi)
         alpha = psi0 + np.radians([0, 90, 180, 270, 360])
         t = 100.0 + np.arange(5) * 43.0
         y = h * np.cos(alpha) + r * np.sin(alpha) + b + d * (t - t.mean())
         w1, w2 = five_position_closed_form(y)
-        u, v = _fit(alpha, t, y[:, None], np.ones((5, 1)), True).uv
+        u, v = _fit(alpha, t, y[:, None], np.ones((5, 1)), 2).uv
         assert w1 == pytest.approx(u * np.cos(psi0) + v * np.sin(psi0), abs=1e-9)
         assert w2 == pytest.approx(-u * np.sin(psi0) + v * np.cos(psi0), abs=1e-9)
 
@@ -238,3 +238,33 @@ def test_near_vertical_toolface_and_the_mode_switch(tmp_path: Path):
     assert len(z) >= 100
     assert 0.7 < z.std() < 1.3, z.std()
     assert set(stations.column("solver").to_numpy()[nv]) == {"toolface"}
+
+
+def test_single_position_three_axis_tool_uses_the_general_formula(tmp_path: Path):
+    """One position, no frame turn: biases cannot be removed (flagged); with bias-free
+    gyros the maximum-likelihood azimuth equals DOMAIN's general formula d × ω."""
+    from pipeline.compass.solve import general_azimuth
+
+    tool = {"preset": "ideal", "overrides": {"gyro_axes": "xyz"}}
+    sim, stations, rejects = run(
+        grid_well(tmp_path, [20, 60, 100], AZIS),
+        61.25,
+        tool,
+        [0],
+        options=CompassOptions(noise_floor=0.01, z_bias_sigma=0.01),
+    )
+    assert rejects.num_rows == 0
+    inclined = stations.filter(pa.compute.equal(stations.column("mode"), "inclined"))
+    assert all("bias_not_removed" in f for f in inclined.column("flags").to_pylist())
+    truth = truth_at(sim, inclined)
+    err = angle_error(inclined.column("azi").to_numpy(), truth["azi"])
+    assert np.abs(err).max() < 1e-6
+    samples = sim.samples.to_pandas()
+    at_rest = samples[samples.position == 0].groupby("station").mean(numeric_only=True)
+    for row in inclined.to_pylist():
+        mean = at_rest.loc[row["station"]]
+        a = general_azimuth(
+            mean[["gyro_x", "gyro_y", "gyro_z"]].to_numpy(float),
+            mean[["acc_x", "acc_y", "acc_z"]].to_numpy(float),
+        )
+        assert angle_error(np.degrees(a), row["azi"]) == pytest.approx(0.0, abs=1e-6)

@@ -167,3 +167,14 @@ def test_inconsistent_residuals_are_flagged():
 def test_missing_sigma_is_a_clear_error():
     with pytest.raises(ValueError, match="declare gyro_sigma"):
         compass(readings_table([0, 90, 180, 270, 0]), 61.25, CompassOptions())
+
+
+def test_accelerometers_not_measuring_gravity_are_rejected():
+    table = readings_table([0, 90, 180, 270, 0])
+    for name in ("acc_x", "acc_y", "acc_z"):  # as if the file were in g, not m/s²
+        i = table.schema.get_field_index(name)
+        table = table.set_column(
+            i, table.schema.field(name), pa.array(table.column(name).to_numpy() / 9.81)
+        )
+    _, rejects = compass(table, 61.25, OPTIONS)
+    assert "not gravity" in rejects.column("reason")[0].as_py()

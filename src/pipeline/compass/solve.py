@@ -32,6 +32,7 @@ from scipy.stats import chi2
 from pipeline.compass.azimuth import Method, solve_azimuth
 from pipeline.compass.precision import OMEGA_DEG_H
 from pipeline.earth.frames import FloatArray
+from pipeline.earth.gravity import STANDARD_GRAVITY
 from pipeline.tables import CompassRejects, CompassStations
 
 
@@ -265,7 +266,12 @@ def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending
     if near_vertical:  # remove the vertical Earth rate leaking in through the tilt
         down = st.acc / np.linalg.norm(st.acc, axis=1, keepdims=True)
         gyro += OMEGA_DEG_H * np.sin(lat) * down[:, : gyro.shape[1]]
-    fit = _fit(alpha, st.t, gyro, st.gyro_sigma, options.trend)
+    if len(st.t) == 1 and gyro.shape[1] >= 2:
+        terms = 0  # one position of a multi-axis tool: the general formula, biases stay
+        flags.append("bias_not_removed")
+    else:
+        terms = 2 if options.trend else 1
+    fit = _fit(alpha, st.t, gyro, st.gyro_sigma, terms)
     if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
     row = _Row(
@@ -317,6 +323,11 @@ def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
     """Inclination (rad) and its σ; per-position toolface ψ_k (rad) and σ of ψ."""
     g = np.linalg.norm(st.acc, axis=1)
     transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
+    if np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY):
+        raise _Reject(
+            f"accelerometers read |g| = {g.min():.3g}…{g.max():.3g} m/s², not gravity: "
+            "check units and the sign convention"
+        )
     inc_k = np.arctan2(transverse, st.acc[:, 2])
     psi = np.arctan2(st.acc[:, 1], -st.acc[:, 0])
     # σ of I_k: in-plane transverse part (cos I) and axial part (sin I) of the accel noise
@@ -345,37 +356,31 @@ class _Fit:
     dof: int
 
 
-def _fit(
-    alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, trend: bool
-) -> _Fit:
-    """Weighted least squares of the gyro readings (see the module docstring)."""
+def _fit(alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, terms: int) -> _Fit:
+    """Weighted least squares of the gyro readings (see the module docstring) with
+    ``terms`` extra unknowns per transverse axis: 0 none, 1 a bias, 2 a bias and a trend."""
     n, m = gyro.shape
     if not np.all(sigma > 0):
         raise _Reject("a position's gyro σ is zero (noise-free data?): set noise_floor")
     tau = t - t.mean()
     c, s = np.cos(alpha), np.sin(alpha)
-    per_axis = 2 if trend else 1
-    columns = 2 + per_axis * min(m, 2)
-    rows = []
-    values = []
-    weights = []
-    for axis in range(min(m, 2)):
-        design = np.zeros((n, columns))
-        design[:, 0], design[:, 1] = (c, s) if axis == 0 else (-s, c)
-        design[:, 2 + per_axis * axis] = 1.0
-        if trend:
-            design[:, 3 + per_axis * axis] = tau
-        rows.append(design)
-        values.append(gyro[:, axis])
-        weights.append(1.0 / sigma[:, axis] ** 2)
-    a = np.concatenate(rows)
-    y = np.concatenate(values)
-    w = np.concatenate(weights)
+    axes = min(m, 2)
+    columns = 2 + terms * axes
+    a = np.zeros((n * axes, columns))
+    for axis in range(axes):
+        block = a[axis * n : (axis + 1) * n]
+        block[:, 0], block[:, 1] = (c, s) if axis == 0 else (-s, c)
+        if terms:
+            block[:, 2 + terms * axis] = 1.0
+        if terms == 2:
+            block[:, 3 + terms * axis] = tau
+    y = gyro[:, :axes].T.ravel()
+    w = 1.0 / sigma[:, :axes].T.ravel() ** 2
     if len(y) < columns:
+        what = ("Earth rate", "bias", "trend")[: 1 + terms]
         raise _Reject(
-            f"{n} position(s) cannot resolve {columns} unknowns (Earth rate, bias"
-            + (", trend" if trend else "")
-            + "); use more positions or trend: false"
+            f"{n} position(s) cannot resolve {columns} unknowns ({', '.join(what)}); "
+            "use more positions or trend: false"
         )
     normal = a.T @ (a * w[:, None])
     if np.linalg.cond(normal) > 1e10:
@@ -383,16 +388,25 @@ def _fit(
     cov = np.asarray(np.linalg.inv(normal), dtype=np.float64)
     params = cov @ (a.T @ (w * y))
     res = y - a @ params
-    chi = float(np.sum(w * res**2))
     return _Fit(
         uv=params[:2],
         cov=cov,
-        bias=float(params[2]),
-        trend=float(params[3]) if trend else 0.0,
+        bias=float(params[2]) if terms else 0.0,
+        trend=float(params[3]) if terms == 2 else 0.0,
         rms=float(np.sqrt(np.mean(res**2))),
-        chi2=chi,
+        chi2=float(np.sum(w * res**2)),
         dof=len(y) - columns,
     )
+
+
+def general_azimuth(rate: FloatArray, accel: FloatArray) -> float:
+    """Azimuth (rad) of the tool axis from one three-axis gyro and accelerometer reading
+    (DOMAIN.md §5): d = g/|g|, e = d × ω/|d × ω|, n = e × d, A = atan2(e_z, n_z)."""
+    down = accel / np.linalg.norm(accel)
+    east = np.cross(down, rate)
+    east /= np.linalg.norm(east)
+    north = np.cross(east, down)
+    return float(np.mod(np.arctan2(east[2], north[2]), 2 * np.pi))
 
 
 def gyro_toolface(azimuth: float, inclination: float, toolface: float) -> float:
