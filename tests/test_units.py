@@ -50,6 +50,7 @@ EXPECTED: dict[str, tuple[str, float]] = {
     "DEG/S": ("angular_rate", 3600.0),
     "°/S": ("angular_rate", 3600.0),
     "RAD/S": ("angular_rate", RAD * 3600),
+    "MRAD/S": ("angular_rate", RAD * 3600 / 1000),
     "G": ("acceleration", G0),
     "M/S2": ("acceleration", 1.0),
     "M/S^2": ("acceleration", 1.0),
@@ -61,6 +62,7 @@ EXPECTED: dict[str, tuple[str, float]] = {
     "GAUSS": ("magnetic_field", 1e-4 * 1e9),  # 1 G = 1e-4 T
     "S": ("time", 1.0),
     "SEC": ("time", 1.0),
+    "MS": ("time", 1e-3),
     "MIN": ("time", 60.0),
     "H": ("time", 3600.0),
     "HR": ("time", 3600.0),

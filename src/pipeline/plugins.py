@@ -36,6 +36,7 @@ BUILTIN_PLUGINS = {
     "builtin.compass": "pipeline.stages.compass",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
+    "builtin.mcap": "pipeline.io.mcap",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
 

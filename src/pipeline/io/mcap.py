@@ -1,0 +1,233 @@
+"""Built-in MCAP plugin: raw sensor streams (kind ``samples``) in and out of MCAP files.
+
+**Writer** ``mcap``: gyropipe's own batched, columnar layout — Arrow IPC record batches on
+``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
+column units in metadata records, uncompressed chunks with CRCs
+(:mod:`pipeline.io.mcap_arrow`). Time series only: other tables are refused.
+
+**Reader** ``mcap`` (kind ``samples``; files starting with the MCAP magic
+``\\x89MCAP0\\r\\n``):
+
+* gyropipe's channel → the table exactly as written (bit-for-bit values, nulls, units,
+  schema metadata, markers), fast: columns are mapped from the file, not copied;
+* otherwise the readable channels — per-sample JSON, ROS 2 ``sensor_msgs`` Imu and
+  MagneticField, protobuf with its schema — decoded (:mod:`pipeline.io.mcap_keyed`,
+  :mod:`pipeline.io.mcap_sources`), converted to canonical units and conventions and
+  joined on the base channel's times.
+
+Well metadata comes from the ``gyropipe.well`` metadata record. Every CRC the file carries
+is checked first (:mod:`pipeline.io.mcap_records`); every problem raises
+:class:`~pipeline.errors.InputFileError` naming the file and the record or message.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Literal
+
+import pyarrow as pa
+from mcap.records import Channel
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from pipeline.errors import UnitError
+from pipeline.hookspecs import hookimpl
+from pipeline.io import mcap_sources as sources
+from pipeline.io.conventions import Conventions
+from pipeline.io.mcap_arrow import (
+    ARROW_MESSAGE_ENCODING,
+    ARROW_SCHEMA_ENCODING,
+    MARKERS_TOPIC,
+    SAMPLES_TOPIC,
+    WELL_RECORD,
+    read_batches,
+    write_samples,
+)
+from pipeline.io.mcap_keyed import SAMPLE_COLUMNS, TRIADS
+from pipeline.io.mcap_records import MAGIC, McapFile, scan
+from pipeline.io.mnemonics import CURVES
+from pipeline.registry import ReaderDef, WriterDef
+from pipeline.tables import RawSamples
+from pipeline.units import conversion_factor
+from pipeline.well import WellMetadata
+
+
+class McapOptions(BaseModel):
+    """Options of the MCAP reader; gyropipe's own files need none."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    topics: list[str] | None = Field(
+        None, description="topics to read (default: every channel readable as samples)"
+    )
+    columns: dict[str, str] = Field(
+        default_factory=dict,
+        description="message key of a canonical column (JSON/protobuf), e.g. {gyro_x: wx}",
+    )
+    units: dict[str, str] = Field(
+        default_factory=dict,
+        description="unit of a canonical column or of a whole triad (gyro, acc, mag), "
+        "e.g. {gyro: rad/s, time: s}; wins over units declared in the file",
+    )
+    ignore: list[str] = Field(
+        default_factory=list, description="message keys to skip (with their sub-keys)"
+    )
+    conventions: Conventions | None = Field(
+        None,
+        description="vendor conventions of the sensor data (default: canonical, except ROS "
+        "Imu accelerometers: specific force)",
+    )
+    join: Literal["exact", "interpolate"] = Field(
+        "exact", description="how other topics join the base topic's sample times"
+    )
+
+    @field_validator("columns")
+    @classmethod
+    def _canonical(cls, columns: dict[str, str]) -> dict[str, str]:
+        unknown = sorted(set(columns) - set(SAMPLE_COLUMNS))
+        if unknown:
+            raise ValueError(
+                f"unknown columns {unknown}; raw-samples columns: {list(SAMPLE_COLUMNS)}"
+            )
+        return columns
+
+    @field_validator("units")
+    @classmethod
+    def _units(cls, units: dict[str, str]) -> dict[str, str]:
+        for name, unit in units.items():
+            curve = CURVES.get(f"{name}_x" if name in TRIADS else name)
+            if curve is None or curve.quantity is None or curve.name not in SAMPLE_COLUMNS:
+                raise ValueError(f"units: {name!r} is not a raw-samples column with a unit")
+            try:
+                conversion_factor(unit, curve.quantity)
+            except UnitError as exc:
+                raise ValueError(f"units: {name}: {exc}") from None
+        return units
+
+
+# ---------------------------------------------------------------------------- reader
+
+
+def sniff(path: Path) -> bool:
+    """True if the file starts with the MCAP magic bytes."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(len(MAGIC)) == MAGIC
+    except OSError:
+        return False
+
+
+def read_samples(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table, WellMetadata]:
+    """Raw samples of an MCAP file (see the module docstring) and its well metadata."""
+    file = scan(path)
+    well = _well(file)
+    selected = _selected(file, options)
+    if any(c.topic == SAMPLES_TOPIC for c in selected):
+        if len(selected) > 1:
+            others = [c.topic for c in selected if c.topic != SAMPLES_TOPIC]
+            raise file.fail(f"read {SAMPLES_TOPIC} alone, not with {others}")
+        table = read_batches(file, selected[0])
+    else:
+        table = _read_sources(file, selected, options)
+    return table, well
+
+
+def _selected(file: McapFile, options: McapOptions) -> list[Channel]:
+    channels = list(file.channels.values())
+    if not channels:
+        raise file.fail("the file has no channels (no messages)")
+    if options.topics is None:
+        own = [c for c in channels if c.topic == SAMPLES_TOPIC]
+        chosen = own or [
+            c
+            for c in channels
+            if c.topic != MARKERS_TOPIC
+            and sources.readable(c, file.schemas.get(c.schema_id)) is None
+        ]
+        if not chosen:
+            found = ", ".join(f"{c.topic} ({c.message_encoding})" for c in channels)
+            raise file.fail(f"no channel readable as samples; channels: {found}")
+        return chosen
+    by_topic = {c.topic: c for c in channels}
+    missing = [t for t in options.topics if t not in by_topic]
+    if missing:
+        raise file.fail(f"no topics {missing} in the file (topics: {sorted(by_topic)})")
+    chosen = [by_topic[t] for t in options.topics]
+    for channel in chosen:
+        reason = sources.readable(channel, file.schemas.get(channel.schema_id))
+        if channel.topic != SAMPLES_TOPIC and reason is not None:
+            raise file.fail(f"topic {channel.topic!r}: {reason}")
+    return chosen
+
+
+def _read_sources(file: McapFile, channels: list[Channel], options: McapOptions) -> pa.Table:
+    decoded = []
+    for channel in channels:
+        try:
+            decoded.append(
+                sources.decode(file, channel, file.schemas.get(channel.schema_id), options)
+            )
+        except ValueError as exc:  # conventions that need a whole triad
+            raise file.fail(f"topic {channel.topic!r}: {exc}") from None
+    columns, origin = sources.join(file.path, decoded, options.join)
+    ordered = {name: columns[name] for name in SAMPLE_COLUMNS if name in columns}
+    table = RawSamples.compiled().make_table(ordered)
+    if origin is None:
+        return table
+    return table.replace_schema_metadata({sources.TIME_ORIGIN_KEY: str(origin).encode()})
+
+
+def _well(file: McapFile) -> WellMetadata:
+    well = WellMetadata()
+    for name, entries, offset in file.metadata:
+        if name != WELL_RECORD:
+            continue
+        try:
+            well = well.merged(WellMetadata.model_validate(entries))
+        except ValidationError as exc:
+            problem = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
+            raise file.fail(f"metadata record {WELL_RECORD} at byte {offset}: {problem}") from None
+    return well
+
+
+# ---------------------------------------------------------------------------- hooks
+
+
+@hookimpl
+def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
+    register(
+        ReaderDef(
+            name="mcap",
+            description="raw sensor samples from MCAP: gyropipe's Arrow channel, per-sample "
+            "JSON, ROS 2 Imu/MagneticField or protobuf",
+            kinds={"samples": RawSamples},
+            read=read_samples,
+            sniff=sniff,
+            options=McapOptions,
+        )
+    )
+
+
+@hookimpl
+def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
+    register(
+        WriterDef(
+            name="mcap",
+            description="time series (raw samples) as MCAP: Arrow record batches, station and "
+            "position markers, well metadata records",
+            extension="mcap",
+            write=write_samples,
+        )
+    )
+
+
+__all__ = [
+    "ARROW_MESSAGE_ENCODING",
+    "ARROW_SCHEMA_ENCODING",
+    "MARKERS_TOPIC",
+    "SAMPLES_TOPIC",
+    "McapOptions",
+    "read_samples",
+    "sniff",
+    "write_samples",
+]
