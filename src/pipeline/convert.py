@@ -9,12 +9,13 @@ import pyarrow as pa
 from pydantic import ValidationError
 
 from pipeline.atomic import atomic_path
+from pipeline.contracts import SOURCE_LINE
 from pipeline.errors import GyropipeError, InputFileError
 from pipeline.registry import ReaderDef, Registry, WriterDef
 from pipeline.stages.files import choose_reader
 from pipeline.well import WellMetadata, attach
 
-KINDS = ("stations", "samples")
+KINDS = ("stations", "samples", "readings")
 
 
 def writer_for(registry: Registry, path: Path) -> WriterDef:
@@ -69,6 +70,8 @@ def convert_file(
     writer = writer_for(registry, target)
     table, header = read_any(registry, source, kind=kind, reader=reader, options=options or {})
     merged = header.merged(well) if well is not None else header
+    if SOURCE_LINE in table.column_names:  # line numbers of the source mean nothing in the copy
+        table = table.drop_columns([SOURCE_LINE])
     with atomic_path(target) as tmp:
         writer.write(attach(table, merged), tmp, merged)
     return table, target

@@ -91,6 +91,19 @@ def test_pipeline_from_pre_averaged_readings(simulated: Path, tmp_path: Path):
     np.testing.assert_allclose(a.column("azi").to_numpy(), b.column("azi").to_numpy())
 
 
+def test_bundled_readings_csv_runs_through_the_readings_pipeline(tmp_path: Path):
+    result = run(
+        "point-gyro-readings.yaml", ROOT / "examples" / "readings-j-well.csv", tmp_path / "out"
+    )
+    assert result.returncode == 0, result.stderr
+    stations = pq.read_table(tmp_path / "out" / "compass.stations.parquet")
+    inclined = np.array(stations.column("mode").to_pylist()) == "inclined"
+    azi = stations.column("azi").to_numpy()[inclined]
+    sigma = stations.column("sigma_azi").to_numpy()[inclined]
+    # the J well's plan azimuth is 37° once it builds (the file is a simulated run)
+    assert np.all(np.abs(azi - 37.0) < 4 * sigma)
+
+
 def test_missing_latitude_is_a_clear_error(simulated: Path, tmp_path: Path):
     readings = tmp_path / "r.parquet"
     table = pq.read_table(simulated / "samples.parquet").replace_schema_metadata({})

@@ -19,7 +19,7 @@ from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.registry import ReaderDef, WriterDef
-from pipeline.tables import Stations
+from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata
 
 
@@ -70,8 +70,12 @@ BODY = "0,0,0\n100,1.5,45\n200,3,46.5\n"
 
 def test_registration() -> None:
     assert READER.name == "csv"
-    assert READER.kinds == {"stations": Stations}
-    assert READER.options is csv_plugin.CsvStationsOptions
+    assert READER.kinds == {
+        "stations": Stations,
+        "samples": RawSamples,
+        "readings": PositionReadings,
+    }
+    assert READER.options is csv_plugin.CsvOptions
     assert (WRITER.name, WRITER.extension) == ("csv", "csv")
 
 
@@ -88,12 +92,12 @@ def test_registration() -> None:
         ("MD [m],INC [deg],AZI (GN) [deg]", "grid"),
         ("MD [m],INC [deg],AZI_MN [deg]", "magnetic"),
         ("MD [m],INC [deg],Azimuth True North [deg]", "true"),
-        ("MD [m],INC [deg],AZI TN [deg],TVD [m]", "true"),
+        ("MD [m],INC [deg],AZI TN [deg],Comment", "true"),
         ('"MD [m]","INC [deg]","AZI [deg]"', None),
     ],
 )
 def test_header_spellings(tmp_path: Path, header: str, ref: str | None) -> None:
-    extra = ",0" if "TVD" in header else ""
+    extra = ",0" if "Comment" in header else ""
     body = "".join(line + extra + "\n" for line in BODY.splitlines())
     options = {} if ref else {"north_reference": "grid"}
     table, well = read(put(tmp_path, header + "\n" + body), **options)
@@ -279,6 +283,86 @@ def test_title_value_given_twice(tmp_path: Path) -> None:
     assert "given twice" in str(err)
 
 
+WELLPATH_REPORT = """\
+WELLPATH REPORT
+Well: A-12
+Company: North Oil
+Azimuth reference: Grid North
+Elevation: 82 ft
+
+MD [ft],Inc [deg],Azi [deg],TVD [m],+N/-S [m],+E/-W [m],DLS [deg/100ft],Comment
+0.00,0.00,0.00,0.00,0.00,0.00,,tie-in
+100.00,1.00,45.00,30.48,0.19,0.19,1.00,
+200.00,2.50,46.00,60.94,0.94,-0.96,1.50,
+
+End of report
+"""
+
+
+def test_wellpath_report_with_mixed_units(tmp_path: Path) -> None:
+    table, well = read(put(tmp_path, WELLPATH_REPORT))
+    assert table.column_names == [
+        *("md", "inc", "azi", "tvd", "north", "east", "dls"),
+        "source_line",
+    ]
+    assert column(table, "md") == [0.0, 30.48, 60.96]  # ft → m
+    assert column(table, "tvd") == [0.0, 30.48, 60.94]  # already m
+    assert column(table, "north") == [0.0, 0.19, 0.94]
+    assert column(table, "east") == [0.0, 0.19, -0.96]
+    assert column(table, "dls")[0] is None  # no dogleg at the tie-in: empty cell, null
+    assert column(table, "dls")[1:] == pytest.approx([30 / 30.48, 1.5 * 30 / 30.48])
+    assert column(table, "source_line") == [8, 9, 10]
+    units = {f.name: f.metadata[UNIT_KEY].decode() for f in table.schema if f.metadata}
+    assert units == {
+        **dict.fromkeys(["md", "tvd", "north", "east"], "m"),
+        **dict.fromkeys(["inc", "azi"], "deg"),
+        "dls": "deg/30m",
+    }
+    assert north(table) == "grid"
+    assert (well.well, well.company, well.elevation) == ("A-12", "North Oil", 82 * 0.3048)
+    Stations.validate_table(table)
+
+
+def test_extra_column_units(tmp_path: Path) -> None:
+    text = "MD[ft],INC[deg],AZI TN[deg],TVD\n1000,2,3,300\n"
+    err = failure(put(tmp_path, text))
+    assert (err.line, err.column) == (1, "TVD")
+    assert "no unit for this column" in str(err)
+    assert "units: {tvd: …}" in str(err)
+    table, _ = read(put(tmp_path, text), units={"tvd": "ft", "md": "m"})
+    assert column(table, "tvd") == [300 * 0.3048]
+    assert column(table, "md") == [1000.0]  # units: win over the header
+
+
+def test_mnemonics_table_names_the_columns(tmp_path: Path) -> None:
+    text = "DMEA (m),Zenith Angle (deg),AZTN (deg),Dogleg Severity (deg/30m)\n10,1,2,3\n"
+    table, _ = read(put(tmp_path, text), north_reference="true")
+    assert table.column_names == ["md", "inc", "azi", "dls", "source_line"]
+    assert not hasattr(csv_plugin, "COLUMN_ALIASES")
+
+
+def test_aliases_option(tmp_path: Path) -> None:
+    text = "Bohrtiefe (m),Neigung (deg),Direction (deg),GX (m)\n10,1,2,3\n"
+    aliases = {"Bohrtiefe": "md", "NEIGUNG": "inc", "gx": "north"}
+    table, _ = read(put(tmp_path, text), aliases=aliases, north_reference="grid")
+    assert column(table, "md") == [10.0]
+    assert column(table, "azi") == [2.0]  # DIRECTION is a built-in mnemonic
+    assert column(table, "north") == [3.0]  # the option wins over GX = acc_x
+    with pytest.raises(ValueError, match="unknown column 'depth'"):
+        READER.options.model_validate({"aliases": {"Bohrtiefe": "depth"}})
+
+
+def test_header_line_option(tmp_path: Path) -> None:
+    text = "MD[m],INC[deg],AZI TN[deg]\n# copy\nMD[m],INC[deg],AZI TN[deg]\n1,2,3\n"
+    err = failure(put(tmp_path, text))  # found on line 1: line 3 is not a number row
+    assert err.line == 3
+    table, _ = read(put(tmp_path, text), header_line=3)
+    assert column(table, "source_line") == [4]
+    err = failure(put(tmp_path, text), header_line=4)
+    assert "no header row with md, inc, azi columns on line 4 (option header_line)" in str(err)
+    assert err.line == 4
+
+
 def test_explicit_columns_option(tmp_path: Path) -> None:
     text = "Hole Depth (ft),Hole Angle (deg),Direction (deg),MD (m)\n100,1,2,5\n"
     columns = {"md": "hole depth", "inc": "Hole Angle (deg)", "azi": "Direction"}
@@ -449,7 +533,7 @@ def test_missing_file(tmp_path: Path) -> None:
 
 
 def test_other_kinds_are_refused(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="kind 'stations'"):
+    with pytest.raises(ValueError, match="reads kinds stations, samples, readings"):
         READER.read(put(tmp_path, "x"), "trajectory", None)
 
 

@@ -104,6 +104,19 @@ CURVES: dict[str, Curve] = {
         *_triad("gyro", "angular_rate", "angular rate", ("W", "GYRO", "GYR", "RATE", "OMEGA")),
         *_triad("acc", "acceleration", "acceleration", ("G", "ACC", "ACCEL")),
         *_triad("mag", "magnetic_field", "magnetic field", ("B", "MAG", "H")),
+        Curve("t", "time", ("MID TIME", "DWELL TIME"), "mid-time of a frame position's dwell"),
+        Curve("duration", "time", ("DURATION", "AVERAGING TIME"), "averaging time"),
+        Curve("n", None, ("SAMPLES", "COUNT"), "samples averaged"),
+        *[
+            Curve(
+                f"{triad}_{axis}_std",
+                quantity,
+                (f"{triad} {axis} std",),
+                f"standard deviation of {triad}_{axis}",
+            )
+            for triad, quantity in (("gyro", "angular_rate"), ("acc", "acceleration"))
+            for axis in "xyz"
+        ],
         Curve("station", None, ("STATION", "STN", "STATION ID"), "station index"),
         Curve("position", None, ("POSITION", "POS", "FRAME POSITION"), "frame position index"),
         Curve("survey", None, ("SURVEY", "SURVEY ID"), "survey id"),

@@ -1,0 +1,331 @@
+"""Header row and title block of a CSV file (see :mod:`pipeline.io.csv` for the layout).
+
+Header cells name canonical columns through :mod:`pipeline.io.mnemonics` (the ``aliases``
+option is consulted first), carry units in brackets (``MD [ft]``, ``Rate X (deg/h)``) and,
+for azimuths, their north reference as a word (``Azimuth True``, ``AZI (GN)``).
+"""
+
+from __future__ import annotations
+
+import csv as stdcsv
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from pipeline.errors import InputFileError, UnitError
+from pipeline.io.csv_options import SHORTHANDS, CsvOptions
+from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.units import canonical_unit, conversion_factor
+from pipeline.well import NorthReference, WellMetadata
+
+DELIMITERS = (",", ";", "\t", "|")
+HEADER_SEARCH_LINES = 500
+
+NORTH_WORDS: dict[str, NorthReference] = {
+    "true": "true",
+    "tn": "true",
+    "grid": "grid",
+    "gn": "grid",
+    "magnetic": "magnetic",
+    "mag": "magnetic",
+    "mn": "magnetic",
+}
+"""Words naming a north reference in an azimuth header (``Azimuth Grid``, ``AZI (MN)``) or a
+``north_reference`` title line."""
+WELL_ALIASES = {
+    "wellname": "well",
+    "api": "uwi",
+    "uwiapi": "uwi",
+    "operator": "company",
+    "lat": "latitude",
+    "long": "longitude",
+    "lon": "longitude",
+    "date": "survey_date",
+    "tool": "tool_type",
+    "serial": "tool_serial",
+}
+"""Title-block keys naming WellMetadata fields besides the field names themselves."""
+NORTH_KEYS = ("northreference", "azimuthreference")
+"""Title-block keys declaring the azimuths' north reference (``north_reference: grid``);
+``well.north_reference`` is well metadata instead."""
+UNIT_FIELDS = {"latitude": "angle", "longitude": "angle", "elevation": "length"}
+"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``)."""
+UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
+
+_BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
+_TITLE_KEY = re.compile(r"[A-Za-z][\w .\-/]*")
+_TITLE_SEPARATOR = re.compile(r"[:=]")
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One header cell: its index, text, unit and the north references it names."""
+
+    index: int
+    text: str
+    unit: str | None
+    north: tuple[NorthReference, ...]
+
+
+@dataclass(frozen=True)
+class Header:
+    """The header row: 0-based line index, delimiter, cells and the cells naming each
+    canonical column."""
+
+    index: int
+    delimiter: str
+    cells: list[Cell]
+    found: dict[str, list[Cell]]
+
+
+def cells_of(line: str, delimiter: str) -> list[str]:
+    """The cells of one line (quotes as in CSV)."""
+    try:
+        return next(stdcsv.reader([line], delimiter=delimiter), [])
+    except stdcsv.Error:  # e.g. a field over the csv module's size limit: not a header
+        return [line]
+
+
+def _words(text: str) -> list[str]:
+    return [w for w in re.split(r"[^0-9a-z]+", text.casefold()) if w]
+
+
+def _parse_cell(index: int, text: str, aliases: dict[str, str]) -> tuple[Cell, str | None]:
+    """A header cell and the canonical column its name recognises (None when none)."""
+
+    def name_of(words: list[str]) -> str | None:
+        key = normalise("".join(words))
+        return aliases.get(key) or canonical_name(key)
+
+    text = text.strip()
+    units: list[str] = []
+    north: list[NorthReference] = []
+    for inner in _BRACKETS.findall(text):
+        ref = NORTH_WORDS.get("".join(_words(inner)))
+        if ref:
+            north.append(ref)
+        elif inner.strip():
+            units.append(inner.strip())
+    words = _words(_BRACKETS.sub(" ", text))
+    name = name_of(words)
+    if name is None:
+        refs = [NORTH_WORDS[w] for w in words if w in NORTH_WORDS]
+        rest = [w for w in words if w not in NORTH_WORDS and w != "north"]
+        if refs and name_of(rest) == "azi":
+            name, north = "azi", north + refs
+    return Cell(index, text, units[-1] if units else None, tuple(north)), name
+
+
+def _spaced(text: str) -> str:
+    return " ".join(text.split()).casefold()
+
+
+def _recognise(cells: list[str], opts: CsvOptions) -> tuple[list[Cell], dict[str, list[Cell]]]:
+    aliases = {normalise(text): name for text, name in opts.aliases.items()}
+    parsed = [_parse_cell(i, text, aliases) for i, text in enumerate(cells)]
+    found: dict[str, list[Cell]] = {}
+    explicit = {name: _spaced(text) for name, text in opts.columns.items()}
+    claimed: set[int] = set()
+    for name, wanted in explicit.items():
+        for cell, _ in parsed:
+            bare = _BRACKETS.sub(" ", cell.text)
+            if wanted in (_spaced(cell.text), _spaced(bare)):
+                found.setdefault(name, []).append(cell)
+                claimed.add(cell.index)
+    for cell, guess in parsed:
+        if guess is not None and guess not in explicit and cell.index not in claimed:
+            found.setdefault(guess, []).append(cell)
+    return [cell for cell, _ in parsed], found
+
+
+def find_header(
+    path: Path, lines: list[str], opts: CsvOptions, required: tuple[str, ...]
+) -> Header:
+    """The header row: line ``header_line`` if set, else the first non-comment line naming
+    every ``required`` column; the delimiter giving most cells wins a tie."""
+    delimiters = (
+        [opts.delimiter]
+        if opts.delimiter
+        else [d for d in DELIMITERS if not (opts.decimal == "," and d == ",")]
+    )
+    if opts.header_line is not None:
+        searched = range(opts.header_line - 1, min(opts.header_line, len(lines)))
+    else:
+        searched = range(min(HEADER_SEARCH_LINES, len(lines)))
+    best: Header | None = None
+    for index in searched:
+        line = lines[index]
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        candidates = []
+        for delimiter in delimiters:
+            cells, found = _recognise(cells_of(line, delimiter), opts)
+            candidates.append(Header(index, delimiter, cells, found))
+        for header in sorted(candidates, key=lambda h: -len(h.cells)):
+            if all(n in header.found for n in required):
+                return header
+            if _score(header, required) > max(_score(best, required), 0):
+                best = header
+    accepted = (
+        "; ".join(f"{name}: {', '.join(CURVES[name].aliases)}" for name in required)
+        + (" (azimuth names may add True/Grid/Magnetic)" if "azi" in required else "")
+        + "; or set the option columns or aliases"
+    )
+    if best is None:
+        where = (
+            f"on line {opts.header_line} (option header_line)"
+            if opts.header_line is not None
+            else f"in the first {HEADER_SEARCH_LINES} lines"
+        )
+        raise InputFileError(
+            path,
+            f"no header row with {', '.join(required)} columns {where}; accepted names: "
+            + accepted,
+            line=opts.header_line or 0,
+        )
+    missing = [n for n in required if n not in best.found]
+    raise InputFileError(
+        path,
+        f"missing column(s) {', '.join(missing)} in the header row; found "
+        f"{', '.join(repr(c.text) for c in best.cells)}; accepted names: {accepted}",
+        line=best.index + 1,
+    )
+
+
+def _score(header: Header | None, required: tuple[str, ...]) -> int:
+    return -1 if header is None else sum(1 for n in required if n in header.found)
+
+
+def choose(
+    path: Path, header: Header, name: str, declared: list[tuple[str, NorthReference]]
+) -> Cell:
+    """The one cell of column ``name``; among azimuths, the one of the declared reference."""
+    cells = header.found[name]
+    if len(cells) > 1 and name == "azi":
+        matching = [c for c in cells if set(c.north) & {ref for _, ref in declared}]
+        if len(matching) == 1:
+            return matching[0]
+    if len(cells) > 1:
+        raise InputFileError(
+            path,
+            f"several columns look like {name}: {', '.join(repr(c.text) for c in cells)}; "
+            f"choose one with the option columns (e.g. columns: {{{name}: {cells[0].text!r}}})"
+            + (" or north_reference" if name == "azi" else ""),
+            line=header.index + 1,
+        )
+    return cells[0]
+
+
+def north_reference(
+    path: Path, header: Header, azi: Cell, declared: list[tuple[str, NorthReference]]
+) -> NorthReference | None:
+    """The one north reference the azimuth cell and the declarations agree on, if any."""
+    sources = [(f"header cell {azi.text!r}", ref) for ref in azi.north] + declared
+    refs = sorted({ref for _, ref in sources})
+    if len(refs) > 1:
+        raise InputFileError(
+            path,
+            "conflicting north references: " + ", ".join(f"{r} ({s})" for s, r in sources),
+            line=header.index + 1,
+            column=azi.text,
+        )
+    return refs[0] if refs else None
+
+
+def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) -> float:
+    """Factor from the unit of column ``name`` (declared in the options, else the header's)
+    to its canonical unit."""
+    quantity = CURVES[name].quantity
+    assert quantity is not None, name
+    shorthand = next((opt for opt, names in SHORTHANDS.items() if name in names), None)
+    option = f"units: {{{name}: …}}" + (f" or {shorthand}" if shorthand else "")
+    unit = opts.unit_of(name) or cell.unit
+    if unit is None:
+        one, *other = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))
+        spelled = f"'{cell.text} [{one}]'" + (f" or '{cell.text} ({other[0]})'" if other else "")
+        raise InputFileError(
+            path,
+            f"no unit for this column: write it in the header (e.g. {spelled}) or set the "
+            f"option {option}",
+            line=header.index + 1,
+            column=cell.text,
+        )
+    try:
+        return conversion_factor(unit, quantity)
+    except UnitError as exc:
+        raise InputFileError(
+            path, f"{exc} (or set the option {option})", line=header.index + 1, column=cell.text
+        ) from None
+
+
+# ------------------------------------------------------------------------ title block
+
+
+def read_title(
+    path: Path, lines: list[str], delimiter: str
+) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
+    """Well metadata and north-reference declarations of the lines above the header."""
+    fields = {"".join(_words(name)): name for name in WellMetadata.model_fields}
+    keys = {k: v for k, v in fields.items() if k != "northreference"} | WELL_ALIASES
+    values: dict[str, tuple[Any, int]] = {}
+    north: list[tuple[str, NorthReference]] = []
+    for number, line in enumerate(lines, start=1):
+        entry = _key_value(line, delimiter)
+        if entry is None:
+            continue
+        key, value = entry
+        prefixed = key[:5].casefold() == "well."
+        name = "".join(_words(key[5:] if prefixed else key))
+        field = fields.get(name) if prefixed else keys.get(name)
+        if not prefixed and name in NORTH_KEYS:
+            north.append((f"line {number}", _north_word(path, value, number)))
+        elif field is not None:
+            parsed = _well_value(path, field, value, number)
+            if field in values and values[field][0] != parsed:
+                raise InputFileError(
+                    path,
+                    f"{field} is given twice with different values (also on line "
+                    f"{values[field][1]})",
+                    line=number,
+                )
+            values[field] = (parsed, number)
+    return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+
+
+def _key_value(line: str, delimiter: str) -> tuple[str, str] | None:
+    """``(key, value)`` of a ``key: value`` / ``# key=value`` line with a non-empty value."""
+    comment = line.lstrip().startswith("#")
+    junk = " \t" if comment else ' \t"' + delimiter
+    text = line.strip().lstrip("#").strip(junk)
+    separator = _TITLE_SEPARATOR.search(text)
+    if separator is None:
+        return None
+    key, value = text[: separator.start()].strip(), text[separator.end() :].strip(junk)
+    return (key, value) if value and _TITLE_KEY.fullmatch(key) else None
+
+
+def _north_word(path: Path, value: str, line: int) -> NorthReference:
+    words = [w for w in _words(value) if w != "north"]
+    if len(words) == 1 and words[0] in NORTH_WORDS:
+        return NORTH_WORDS[words[0]]
+    raise InputFileError(
+        path, f"north reference {value!r} is not one of true, grid, magnetic", line=line
+    )
+
+
+def _well_value(path: Path, field: str, value: str, line: int) -> Any:
+    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS."""
+    parsed: Any = value
+    quantity = UNIT_FIELDS.get(field)
+    number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
+    try:
+        if quantity and number:
+            scale = conversion_factor(number[2], quantity) if number[2] else 1.0
+            parsed = float(number[1]) * scale
+        return getattr(WellMetadata.model_validate({field: parsed}), field)
+    except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
+        reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
+        raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None

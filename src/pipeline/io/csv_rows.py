@@ -1,0 +1,390 @@
+"""Bytes, lines and data rows of a CSV file (see :mod:`pipeline.io.csv` for the layout).
+
+The file is read once as bytes. Only its first lines (where the title block and the header
+row are) are decoded to text; the data rows stay bytes and are handed to ``pyarrow.csv``,
+which parses them with the declared column types on all cores. A file that does not parse
+that way (a bad cell, a wrong cell count, decimal commas to detect) is parsed again as
+strings on one thread, which locates every problem on its file line.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.csv as pacsv
+from numpy.typing import NDArray
+
+from pipeline.errors import InputFileError
+from pipeline.io.csv_header import Cell, Header, cells_of
+
+SHOWN = 5
+"""Bad cells quoted in one error message."""
+
+_NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
+_NUMBER = {
+    ".": r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$",
+    ",": r"^[+-]?([0-9]+(,[0-9]*)?|,[0-9]+)([eE][+-]?[0-9]+)?$",
+}
+_INTEGER = r"^-?[0-9]{1,18}$"
+_BLANKS = (ord(" "), ord("\t"))
+
+
+@dataclass(frozen=True)
+class Text:
+    """A readable CSV file: its bytes with LF line ends, its first lines decoded and the
+    byte offset where each of those lines starts."""
+
+    data: bytes
+    head: list[str]
+    starts: list[int]
+
+
+@dataclass(frozen=True)
+class Rows:
+    """The data rows: ``data[start:end]``, LF-separated, without blank or comment lines.
+    Row 0 is file line ``first_line`` (1-based); ``lines`` holds each row's file line when
+    skipped lines lay between them (else rows are consecutive lines)."""
+
+    data: bytes
+    start: int
+    end: int
+    first_line: int
+    lines: NDArray[np.int64] | None = None
+
+    def buffer(self) -> pa.Buffer:
+        """The rows' bytes, without a copy."""
+        return pa.py_buffer(memoryview(self.data)[self.start : self.end])
+
+    def count(self) -> int:
+        """Number of rows (lines)."""
+        if self.lines is not None:
+            return len(self.lines)
+        return self.data.count(b"\n", self.start, self.end) + 1
+
+    def source_lines(self, count: int) -> NDArray[np.int64]:
+        """File line of each of the first ``count`` rows."""
+        if self.lines is not None:
+            return self.lines[:count]
+        return np.arange(self.first_line, self.first_line + count, dtype=np.int64)
+
+    def line(self, row: int) -> int:
+        """File line of row ``row`` (0-based)."""
+        return int(self.lines[row]) if self.lines is not None else self.first_line + row
+
+    def text_lines(self) -> list[str]:
+        return self.data[self.start : self.end].decode("utf-8").split("\n")
+
+
+def load(path: Path, head_lines: int) -> Text:
+    """Read ``path``: UTF-8 (optional BOM), any line ends; the first ``head_lines`` lines
+    decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
+    data = newlines(data.removeprefix(b"\xef\xbb\xbf"))
+    nul = data.find(b"\0")
+    if nul >= 0:
+        line = data.count(b"\n", 0, nul) + 1
+        raise InputFileError(path, "NUL byte: this is not a text CSV file", line=line)
+    if not data.isascii():
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = data.count(b"\n", 0, exc.start) + 1
+            raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=line) from None
+    if not data or data.isspace():
+        raise InputFileError(path, "the file is empty")
+    head, starts = split_head(data, head_lines)
+    return Text(data, head, starts)
+
+
+def newlines(data: bytes) -> bytes:
+    """``data`` with CRLF and lone CR line ends made LF (as pyarrow.csv splits rows)."""
+    return data.replace(b"\r\n", b"\n").replace(b"\r", b"\n") if b"\r" in data else data
+
+
+def split_head(data: bytes, limit: int) -> tuple[list[str], list[int]]:
+    """The first ``limit`` lines of LF-separated ``data`` as text, and their byte offsets."""
+    starts = [0]
+    while len(starts) < limit:
+        nl = data.find(b"\n", starts[-1])
+        if nl < 0:
+            break
+        starts.append(nl + 1)
+    end = data.find(b"\n", starts[-1])
+    head = data[: len(data) if end < 0 else end].decode("utf-8", "replace").split("\n")
+    return head, starts
+
+
+def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Rows:
+    """The data rows: every line after the header up to the footer (a trailing run of text
+    lines, see :func:`_is_footer`), blank and comment lines left out. ``required`` are the
+    indices of the cells a data row must fill."""
+    data = text.data
+    after = data.find(b"\n", text.starts[header.index])
+    start = len(data) if after < 0 else after + 1
+    end = None
+    for line_start, line_end in _lines_backwards(data, start):
+        line = data[line_start:line_end]
+        if _skipped(line):
+            continue
+        cells = cells_of(line.decode("utf-8"), header.delimiter)
+        if not _is_footer(cells, len(header.cells), required):
+            end = line_end
+            break
+    if end is None:
+        raise InputFileError(path, "no data rows after the header", line=header.index + 1)
+    first_line = header.index + 2
+    while _skipped(data[start : (nl := _line_end(data, start, end))]):
+        start, first_line = nl + 1, first_line + 1
+    rows = Rows(data, start, end, first_line)
+    # A comment line could parse as a row (a commented-out row); blank lines cannot.
+    return _without_skipped(rows) if data.find(b"#", start, end) >= 0 else rows
+
+
+def _line_end(data: bytes, start: int, end: int) -> int:
+    nl = data.find(b"\n", start, end)
+    return end if nl < 0 else nl
+
+
+def _lines_backwards(data: bytes, start: int) -> Iterator[tuple[int, int]]:
+    """``(start, end)`` byte offsets of the lines of ``data[start:]``, last line first."""
+    end = len(data)
+    while True:
+        nl = data.rfind(b"\n", start, end)
+        yield (start if nl < 0 else nl + 1), end
+        if nl < 0:
+            return
+        end = nl
+
+
+def _skipped(line: bytes) -> bool:
+    """A blank line or a ``#`` comment line."""
+    return line.lstrip(b" \t")[:1] in (b"", b"#")
+
+
+def _without_skipped(rows: Rows) -> Rows:
+    """``rows`` without blank and comment lines (vectorised: files can be large); ``rows``
+    itself when it has none."""
+    block = np.frombuffer(rows.data, np.uint8, count=rows.end - rows.start, offset=rows.start)
+    starts = np.concatenate(([0], np.flatnonzero(block == ord("\n")) + 1))
+    first = starts.copy()  # first byte of each line that is not a space or tab
+    pending = np.flatnonzero(np.isin(block[first], _BLANKS))
+    while len(pending):  # the last line has text, so no walk leaves the block
+        first[pending] += 1
+        pending = pending[np.isin(block[first[pending]], _BLANKS)]
+    keep = ~np.isin(block[first], (ord("\n"), ord("#")))
+    if keep.all():
+        return rows
+    lengths = np.diff(np.append(starts, len(block) + 1))  # each line with its newline
+    kept = block[np.repeat(keep, lengths)[: len(block)]].tobytes()
+    lines = rows.source_lines(len(keep))[keep]
+    return Rows(kept, 0, len(kept), int(lines[0]), lines)
+
+
+def _is_footer(cells: list[str], width: int, required: list[int]) -> bool:
+    """A line after the data that is text: non-numeric first cell, and fewer cells than the
+    header or no numeric cell in a required column."""
+    first = next((c.strip() for c in cells if c.strip()), "")
+    if _NUMBERISH.match(first):
+        return False
+    numeric = any(i < len(cells) and _NUMBERISH.match(cells[i].strip()) for i in required)
+    return len(cells) < width or not numeric
+
+
+# ------------------------------------------------------------------------- parsing
+
+
+def parse(
+    path: Path,
+    rows: Rows,
+    header: Header,
+    chosen: dict[str, Cell],
+    types: dict[str, pa.DataType],
+    blanks: frozenset[str],
+    decimal: str | None,
+    detect_from: list[str],
+) -> tuple[dict[str, Any], Rows]:
+    """Columns ``chosen`` of the rows as arrays of ``types`` (float64, int64 or string), and
+    the rows they came from (blank and comment lines left out).
+
+    Floats must be finite decimal numbers, integers integers; an empty cell is null in the
+    ``blanks`` columns, an error elsewhere. Strings are trimmed, empty ones null. ``decimal``
+    None means ',' when the delimiter is not ',' and no value of the ``detect_from`` columns
+    holds a '.' but some hold a ','. Any bad cell or row raises :class:`InputFileError`
+    naming its line and column.
+    """
+    names = [f"c{i}" for i in range(len(header.cells))]
+    wanted = {name: names[cell.index] for name, cell in chosen.items()}
+    comma = rows.data.find(b",", rows.start, rows.end) >= 0
+    guess = decimal or ("," if header.delimiter != "," and comma else ".")
+    typed = _typed(rows, header, names, wanted, types, blanks, guess)
+    if typed is None and (kept := _without_skipped(rows)) is not rows:
+        rows = kept
+        typed = _typed(rows, header, names, wanted, types, blanks, guess)
+    if typed is None:
+        strings = _strings(path, rows, header, names, wanted)
+        if decimal is None:
+            decimal = _detect_decimal(header.delimiter, [strings[n] for n in detect_from])
+        typed = {
+            name: _converted(
+                path, strings[name], types[name], name in blanks, decimal, rows, chosen[name].text
+            )
+            for name in wanted
+        }
+    columns = {
+        name: _blank_to_null(values) if pa.types.is_string(types[name]) else values
+        for name, values in typed.items()
+    }
+    return columns, rows
+
+
+def _typed(
+    rows: Rows,
+    header: Header,
+    names: list[str],
+    wanted: dict[str, str],
+    types: dict[str, pa.DataType],
+    blanks: frozenset[str],
+    decimal: str,
+) -> dict[str, Any] | None:
+    """The columns parsed by pyarrow with their types, on all cores; None when that does
+    not give exactly the rows' values (then :func:`_strings` finds out why). A blank line
+    is an invalid row here, so it cannot go unnoticed."""
+    try:
+        table = pacsv.read_csv(
+            pa.BufferReader(rows.buffer()),
+            read_options=pacsv.ReadOptions(column_names=names),
+            parse_options=pacsv.ParseOptions(delimiter=header.delimiter, ignore_empty_lines=False),
+            convert_options=pacsv.ConvertOptions(
+                column_types={wanted[n]: types[n] for n in wanted},
+                include_columns=list(wanted.values()),
+                null_values=[""],
+                strings_can_be_null=False,
+                quoted_strings_can_be_null=False,
+                decimal_point=decimal,
+            ),
+        )
+    except pa.ArrowException:
+        return None
+    quoted = rows.data.find(b'"', rows.start, rows.end) >= 0
+    if quoted and table.num_rows != rows.count():  # a quoted cell spans lines
+        return None
+    columns = {name: table.column(col) for name, col in wanted.items()}
+    for name, values in columns.items():
+        if values.null_count and name not in blanks and not pa.types.is_string(types[name]):
+            return None
+        if pa.types.is_floating(types[name]) and not pc.all(pc.is_finite(values)).as_py():
+            return None
+    return columns
+
+
+def _strings(
+    path: Path, rows: Rows, header: Header, names: list[str], wanted: dict[str, str]
+) -> dict[str, pa.Array]:
+    """The wanted columns as strings (one thread, so bad rows are located)."""
+    invalid: list[tuple[int, int]] = []
+
+    def on_invalid(row: Any) -> str:
+        invalid.append((row.number, row.actual_columns))
+        return "skip"
+
+    size = rows.end - rows.start
+    try:
+        table = pacsv.read_csv(
+            pa.BufferReader(rows.buffer()),
+            read_options=pacsv.ReadOptions(
+                column_names=names, use_threads=False, block_size=min(size + 1, 1 << 30)
+            ),
+            parse_options=pacsv.ParseOptions(
+                delimiter=header.delimiter, invalid_row_handler=on_invalid
+            ),
+            convert_options=pacsv.ConvertOptions(
+                column_types=dict.fromkeys(names, pa.string()),
+                include_columns=list(wanted.values()),
+                strings_can_be_null=False,
+                quoted_strings_can_be_null=False,
+            ),
+        )
+    except pa.ArrowException as exc:
+        raise InputFileError(path, f"cannot parse the data rows: {exc}") from None
+    if table.num_rows + len(invalid) != rows.count():
+        lines = rows.text_lines()
+        odd = next((i for i, line in enumerate(lines) if line.count('"') % 2), 0)
+        raise InputFileError(
+            path, "unbalanced double quote: a quoted cell spans lines", line=rows.line(odd)
+        )
+    if invalid:
+        number, got = invalid[0]
+        raise InputFileError(
+            path,
+            f"expected {len(names)} cells as in the header (line {header.index + 1}), got {got}"
+            + (f"; {len(invalid)} such rows" if len(invalid) > 1 else ""),
+            line=rows.line(number - 1),
+        )
+    return {name: table.column(col).combine_chunks() for name, col in wanted.items()}
+
+
+def _detect_decimal(delimiter: str, columns: Iterable[pa.Array]) -> str:
+    """',' when the delimiter is not ',' and the values use ',' but never '.'; else '.'."""
+    if delimiter == ",":
+        return "."
+    cols = list(columns)
+    comma = any(pc.any(pc.match_substring(c, ",")).as_py() for c in cols)
+    dot = any(pc.any(pc.match_substring(c, ".")).as_py() for c in cols)
+    return "," if comma and not dot else "."
+
+
+def _converted(
+    path: Path,
+    strings: pa.Array,
+    kind: pa.DataType,
+    blank: bool,
+    decimal: str,
+    rows: Rows,
+    column: str,
+) -> pa.Array:
+    """A column of strings as ``kind``; a bad cell (an empty one too unless ``blank``: then
+    it is null) raises with its line. Accepted around whitespace: decimal numbers with
+    optional sign and exponent (not nan/inf) and integers with an optional '-'."""
+    if pa.types.is_string(kind):
+        return strings
+    integer = pa.types.is_integer(kind)
+    cells = _blank_to_null(strings) if blank else pc.utf8_trim_whitespace(strings)
+    bad = pc.invert(pc.match_substring_regex(cells, _INTEGER if integer else _NUMBER[decimal]))
+    found = np.flatnonzero(pc.fill_null(bad, False).to_numpy(zero_copy_only=False))
+    if len(found):
+        shown = ", ".join(
+            f"{_cell_text(cells[int(i)].as_py())} (line {rows.line(int(i))})" for i in found[:SHOWN]
+        )
+        hint = " (for decimal commas set the option decimal=',')"
+        raise InputFileError(
+            path,
+            f"expected {'an integer' if integer else 'a number'}, got "
+            f"{_cell_text(cells[int(found[0])].as_py())}"
+            + (hint if decimal == "." and not integer else "")
+            + (f"; {len(found)} bad cells: {shown}" if len(found) > 1 else ""),
+            line=rows.line(int(found[0])),
+            column=column,
+        )
+    if decimal == "," and not integer:
+        cells = pc.replace_substring(cells, ",", ".")
+    return pc.cast(cells, kind)
+
+
+def _blank_to_null(strings: Any) -> Any:
+    """Trimmed strings, empty ones null."""
+    trimmed = pc.utf8_trim_whitespace(strings)
+    return pc.if_else(pc.equal(trimmed, ""), pa.scalar(None, pa.string()), trimmed)
+
+
+def _cell_text(value: str) -> str:
+    return "an empty cell" if value == "" else repr(value)
