@@ -8,13 +8,20 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 WELL_KEY = b"gyropipe.well"
-NorthReference = Literal["true", "grid", "magnetic"]
+
+
+def _yaml_true(value: Any) -> Any:
+    """YAML reads an unquoted ``true`` as a boolean; as a north reference it means true north."""
+    return "true" if value is True else value
+
+
+NorthReference = Annotated[Literal["true", "grid", "magnetic"], BeforeValidator(_yaml_true)]
 
 
 class WellMetadata(BaseModel):
