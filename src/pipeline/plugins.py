@@ -34,9 +34,10 @@ BUILTIN_PLUGINS = {
     "builtin.qc": "pipeline.stages.qc",
     "builtin.simulation": "pipeline.stages.simulation",
     "builtin.compass": "pipeline.stages.compass",
+    "builtin.las": "pipeline.io.las",
+    "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
-    "builtin.mcap": "pipeline.io.mcap",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
 

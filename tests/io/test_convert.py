@@ -40,6 +40,20 @@ def test_stations_csv_to_parquet_and_back(tmp_path: Path):
     assert well.well == "J-12" and well.latitude == 61.25
 
 
+def test_stations_through_las(tmp_path: Path):
+    las = tmp_path / "st.las"
+    result = cli(str(SAMPLE), str(las))
+    assert result.returncode == 0, result.stderr
+    assert las.read_text().startswith("~V")
+    table, well = read_any(load_registry(), las, kind="auto", reader="auto", options={})
+    original, _ = read_any(load_registry(), SAMPLE, kind="stations", reader="auto", options={})
+    for name in ("md", "inc", "azi"):
+        np.testing.assert_array_equal(
+            table.column(name).to_numpy(), original.column(name).to_numpy()
+        )
+    assert well.well == "J-12" and well.north_reference == "true"
+
+
 def test_feet_are_converted_on_the_way(tmp_path: Path):
     src = tmp_path / "ft.csv"
     src.write_text("MD (ft),Inc (deg),Azimuth Grid (deg)\n0,0,0\n1000,2,45\n")

@@ -1,0 +1,67 @@
+"""Contracts of the QC outputs: one row per check evaluation, a per-station verdict and the
+magnetic anomaly intervals found along depth."""
+
+from __future__ import annotations
+
+from pipeline.contracts import TableContract, column
+
+STATUSES = ("ok", "flag", "drop", "stop")
+"""Station verdicts, in increasing severity."""
+
+
+class QcResults(TableContract):
+    """One row per check and reading (station × frame position), station (station-level
+    checks: ``position`` null) or data window (``window_start``/``window_end`` set, station
+    and position null). ``measured``, ``reference`` and ``tolerance`` are in ``unit``; the
+    check passes when ``|measured − reference| ≤ tolerance``. ``passed`` is null when the
+    check could not be evaluated (``detail`` says why)."""
+
+    station: int | None = column(unit=None, ge=0, description="station index (null: window)")
+    position: int | None = column(
+        unit=None, ge=0, description="frame position within the station (null: station-level)"
+    )
+    window_start: float | None = column(unit="s", description="start time of the window")
+    window_end: float | None = column(unit="s", description="end time of the window")
+    md: float | None = column(unit="m", description="measured depth (null: unknown)")
+    check: str = column(unit=None, description="check name (an option of QcOptions)")
+    measured: float = column(unit=None, finite=False, description="measured value (in `unit`)")
+    reference: float = column(unit=None, finite=False, description="reference value (`unit`)")
+    tolerance: float = column(
+        unit=None, finite=False, description="allowed |measured − reference| (in `unit`)"
+    )
+    unit: str = column(unit=None, description="unit of measured, reference and tolerance")
+    passed: bool | None = column(unit=None, description="within tolerance (null: not evaluated)")
+    suspect: str = column(
+        unit=None,
+        description="suspected sensor ('gyro y', 'acc x', …), 'undetermined' when the data "
+        "cannot tell, '' when not failed or not a sensor check",
+    )
+    detail: str = column(unit=None, description="what failed, by how much, and the diagnosis")
+
+
+class QcSummary(TableContract):
+    """Verdict per station: the most severe policy among its failed checks."""
+
+    station: int = column(unit=None, ge=0, description="station index")
+    md: float = column(unit="m", description="measured depth of the station")
+    status: str = column(unit=None, description="ok, flag, drop (exclude downstream) or stop")
+    failed_checks: str = column(unit=None, description="comma-separated names of failed checks")
+    suspect: str = column(unit=None, description="suspected sensor, 'undetermined' or ''")
+    diagnosis: str = column(unit=None, description="fault isolation result, e.g. bias estimate")
+
+
+class MagneticAnomalies(TableContract):
+    """Intervals of continuous data whose magnetic field or dip departs from the reference
+    model: overlapping or touching failed windows merged."""
+
+    start: float = column(unit="s", description="start time of the first failed window")
+    end: float = column(unit="s", description="end time of the last failed window")
+    md_from: float | None = column(unit="m", description="smallest window MD (null: no MD)")
+    md_to: float | None = column(unit="m", description="largest window MD (null: no MD)")
+    field_error: float = column(
+        unit="nT", finite=False, description="largest |measured − reference| total field"
+    )
+    dip_error: float = column(
+        unit="deg", finite=False, description="largest |measured − reference| dip"
+    )
+    windows: int = column(unit=None, ge=1, description="failed windows merged")
