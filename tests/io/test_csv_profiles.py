@@ -258,7 +258,7 @@ def test_profile_conflicting_with_the_options(tmp_path: Path) -> None:
         ("columns:\n  tyme: Zeit\n", 2, "unknown column 'tyme'"),
         ("units:\n  time: s\n  md: furlong\n", 2, "2:3: units: Value error, md: unknown unit"),
         ("conventions:\n  axes: [x, x, z]\n", 2, "2:9: conventions.axes: Value error, axes must"),
-        ("north_reference: true\n", 1, "north_reference: Input should be 'true'"),
+        ("north_reference: north\n", 1, "north_reference: Input should be 'true'"),
         ("delimiter: ';'\ndelimiter: ','\n", 2, "2:1: duplicate key 'delimiter'"),
         ("delimiter: [\n", 2, "malformed YAML"),
         ("- delimiter\n", 1, "1:1: a CSV profile must be a mapping of reader options"),
@@ -351,3 +351,9 @@ def test_fuzz_mutated_profiles(fuzz_dir: Path, ops: list[tuple[str, int, int]], 
     profile = put(fuzz_dir, _mutate(source.read_bytes(), ops, b":"), "profile.yaml")
     data = put(fuzz_dir, GYRO_LOG if kind == "samples" else REPORT, "data.csv")
     _typed_errors_only(data, kind, profile)
+
+
+def test_unquoted_yaml_true_is_true_north(tmp_path: Path) -> None:
+    profile = tmp_path / "p.yaml"
+    profile.write_text("north_reference: true\n")
+    assert CsvOptions.model_validate({"profile": str(profile)}).resolved().north_reference == "true"
