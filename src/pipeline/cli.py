@@ -6,9 +6,11 @@ broken); 2 the pipeline, its configuration or the command line is invalid.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import click
@@ -192,16 +194,10 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
             err=True,
         )
         sys.exit(EXIT_CONFIG)
-    try:
+    with _plan_errors(plan_file):
         spec = load_simulation(plan_file, seed=seed)
         started = time.perf_counter()
         tables = simulation_tables(spec)
-    except SpecError as exc:
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(EXIT_CONFIG)
-    except (GyropipeError, ValueError) as exc:
-        click.echo(f"error: {plan_file}: {exc}", err=True)
-        sys.exit(EXIT_CONFIG)
     wall = time.perf_counter() - started
     out = Path(out_dir)
     well = well_of_simulation(spec)
@@ -237,15 +233,9 @@ def budget(plan_file: str, out_file: str | None) -> None:
     from pipeline.sim.spec import load_simulation
     from pipeline.stages.simulation import well_of_simulation
 
-    try:
+    with _plan_errors(plan_file):
         spec = load_simulation(plan_file)
         table = error_budget(spec)
-    except SpecError as exc:
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(EXIT_CONFIG)
-    except (GyropipeError, ValueError) as exc:
-        click.echo(f"error: {plan_file}: {exc}", err=True)
-        sys.exit(EXIT_CONFIG)
     click.echo(f"{spec.name}: tool {spec.tool.preset}, latitude {spec.site.latitude}°")
     click.echo(f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'acc':>7}")
     for row in table.to_pylist():
@@ -341,6 +331,19 @@ def _options(items: tuple[str, ...]) -> dict[str, object]:
         except yaml.YAMLError as exc:
             raise click.BadParameter(f"--option {item!r}: value is not valid YAML: {exc}") from None
     return values
+
+
+@contextlib.contextmanager
+def _plan_errors(plan_file: str) -> Iterator[None]:
+    """Report an invalid simulation plan (or one the simulator cannot run) and exit 2."""
+    try:
+        yield
+    except SpecError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+    except (GyropipeError, ValueError) as exc:
+        click.echo(f"error: {plan_file}: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
 
 
 def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:

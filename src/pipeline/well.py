@@ -22,6 +22,16 @@ def _yaml_true(value: Any) -> Any:
 
 
 NorthReference = Annotated[Literal["true", "grid", "magnetic"], BeforeValidator(_yaml_true)]
+NORTH_WORDS: dict[str, NorthReference] = {
+    "true": "true",
+    "tn": "true",
+    "grid": "grid",
+    "gn": "grid",
+    "magnetic": "magnetic",
+    "mag": "magnetic",
+    "mn": "magnetic",
+}
+"""Words naming a north reference in file headers (``Azimuth Grid``, ``AZI (MN)``, NREF)."""
 
 
 class WellMetadata(BaseModel):

@@ -19,22 +19,11 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv_options import SHORTHANDS, CsvOptions
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.units import canonical_unit, conversion_factor
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
 DELIMITERS = (",", ";", "\t", "|")
 HEADER_SEARCH_LINES = 500
 
-NORTH_WORDS: dict[str, NorthReference] = {
-    "true": "true",
-    "tn": "true",
-    "grid": "grid",
-    "gn": "grid",
-    "magnetic": "magnetic",
-    "mag": "magnetic",
-    "mn": "magnetic",
-}
-"""Words naming a north reference in an azimuth header (``Azimuth Grid``, ``AZI (MN)``) or a
-``north_reference`` title line."""
 WELL_ALIASES = {
     "wellname": "well",
     "api": "uwi",

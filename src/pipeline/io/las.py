@@ -85,7 +85,7 @@ from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
 Floats = NDArray[np.float64]
 Lines = NDArray[np.int64]
@@ -108,16 +108,6 @@ SECTION_NAMES: dict[Role, str] = {
 }
 """lasio's name of each section role (its header grammar depends on it)."""
 
-NORTH_WORDS: dict[str, NorthReference] = {
-    "true": "true",
-    "tn": "true",
-    "grid": "grid",
-    "gn": "grid",
-    "magnetic": "magnetic",
-    "mag": "magnetic",
-    "mn": "magnetic",
-}
-"""Words of an azimuth description or an NREF value naming a north reference."""
 NORTH_SUFFIXES: dict[str, NorthReference] = {"TN": "true", "GN": "grid", "MN": "magnetic"}
 """Endings of an azimuth mnemonic naming its north reference."""
 NORTH_ITEMS = ("NREF", "NORTHREF", "AZIREF", "AZREF")
