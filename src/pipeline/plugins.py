@@ -34,6 +34,7 @@ BUILTIN_PLUGINS = {
     "builtin.qc": "pipeline.stages.qc",
     "builtin.simulation": "pipeline.stages.simulation",
     "builtin.compass": "pipeline.stages.compass",
+    "builtin.validity": "pipeline.stages.validity",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",

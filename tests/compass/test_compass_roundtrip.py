@@ -13,7 +13,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, _fit, compass, five_position_closed_form
+from pipeline.compass.solve import (
+    CompassOptions,
+    compass,
+    fit_positions,
+    five_position_closed_form,
+)
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 
@@ -163,7 +168,7 @@ def test_closed_form_agrees_with_least_squares_on_equal_steps():
         t = 100.0 + np.arange(5) * 43.0
         y = h * np.cos(alpha) + r * np.sin(alpha) + b + d * (t - t.mean())
         w1, w2 = five_position_closed_form(y)
-        u, v = _fit(alpha, t, y[:, None], np.ones((5, 1)), 2).uv
+        u, v = fit_positions(alpha, t, y[:, None], np.ones((5, 1)), 2).uv
         assert w1 == pytest.approx(u * np.cos(psi0) + v * np.sin(psi0), abs=1e-9)
         assert w2 == pytest.approx(-u * np.sin(psi0) + v * np.cos(psi0), abs=1e-9)
 

@@ -141,7 +141,7 @@ def compass(
     for st in _stations(readings, axes, options):
         try:
             solved = _solve(st, lat, options)
-        except _Reject as exc:
+        except StationReject as exc:
             for key, value in (("station", st.station), ("md", st.md), ("reason", str(exc))):
                 rejects[key].append(value)
             continue
@@ -167,7 +167,7 @@ def compass(
     return _table(rows, options), CompassRejects.compiled().make_table(rejects)
 
 
-class _Reject(Exception):
+class StationReject(Exception):
     """A station that cannot be solved, and why."""
 
 
@@ -271,7 +271,7 @@ def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending
         flags.append("bias_not_removed")
     else:
         terms = 2 if options.trend else 1
-    fit = _fit(alpha, st.t, gyro, st.gyro_sigma, terms)
+    fit = fit_positions(alpha, st.t, gyro, st.gyro_sigma, terms)
     if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
     row = _Row(
@@ -324,7 +324,7 @@ def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
     g = np.linalg.norm(st.acc, axis=1)
     transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
     if np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY):
-        raise _Reject(
+        raise StationReject(
             f"accelerometers read |g| = {g.min():.3g}…{g.max():.3g} m/s², not gravity: "
             "check units and the sign convention"
         )
@@ -341,7 +341,7 @@ def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
     across = np.hypot(np.sin(psi) * sx, np.cos(psi) * sy)
     sigma_psi = float(np.sqrt(np.mean((across / np.maximum(transverse, 1e-12)) ** 2) / len(psi)))
     if not np.isfinite(inc) or len(inc_k) == 0:
-        raise _Reject("accelerometer readings give no inclination")
+        raise StationReject("accelerometer readings give no inclination")
     return inc, sigma_inc, psi, sigma_psi
 
 
@@ -356,12 +356,14 @@ class _Fit:
     dof: int
 
 
-def _fit(alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, terms: int) -> _Fit:
+def fit_positions(
+    alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, terms: int
+) -> _Fit:
     """Weighted least squares of the gyro readings (see the module docstring) with
     ``terms`` extra unknowns per transverse axis: 0 none, 1 a bias, 2 a bias and a trend."""
     n, m = gyro.shape
     if not np.all(sigma > 0):
-        raise _Reject("a position's gyro σ is zero (noise-free data?): set noise_floor")
+        raise StationReject("a position's gyro σ is zero (noise-free data?): set noise_floor")
     tau = t - t.mean()
     c, s = np.cos(alpha), np.sin(alpha)
     axes = min(m, 2)
@@ -378,13 +380,13 @@ def _fit(alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, 
     w = 1.0 / sigma[:, :axes].T.ravel() ** 2
     if len(y) < columns:
         what = ("Earth rate", "bias", "trend")[: 1 + terms]
-        raise _Reject(
+        raise StationReject(
             f"{n} position(s) cannot resolve {columns} unknowns ({', '.join(what)}); "
             "use more positions or trend: false"
         )
     normal = a.T @ (a * w[:, None])
     if np.linalg.cond(normal) > 1e10:
-        raise _Reject("the frame positions do not span the circle (ill-conditioned fit)")
+        raise StationReject("the frame positions do not span the circle (ill-conditioned fit)")
     cov = np.asarray(np.linalg.inv(normal), dtype=np.float64)
     params = cov @ (a.T @ (w * y))
     res = y - a @ params

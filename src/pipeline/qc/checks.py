@@ -15,7 +15,7 @@ horizontal_rate      |ω − (ω·u) u|                                 Ω cos �
 rate_along_gravity   ω·g/|g|                                       −Ω sin φ
 magnetic_field       |B|                                           F
 magnetic_dip         asin(B·d/|B|), d = g/|g| (down)               δ
-earth_rate_fit       k = √((u'/cos I)² + v²) from the position fit Ω cos φ
+earth_rate_fit       k = √((u'/cos I)² + v'²) of the position fit   Ω cos φ
 rest_gyro, rest_acc  largest per-axis sample std of a reading      0 (limit)
 ===================  ============================================  ======================
 
@@ -24,12 +24,13 @@ rest_gyro, rest_acc  largest per-axis sample std of a reading      0 (limit)
 hemisphere). ``latitude``, ``horizontal_rate`` and ``rate_along_gravity`` couple the gyro
 and accelerometer triads: they see a misalignment between them, which the magnitudes miss.
 
-The first five need a three-axis gyro; single-axis and XY tools get rows saying so and the
-``earth_rate_fit`` check instead: their frame positions k are fitted (compassing's
-least squares, bias and trend removed) after removing the vertical Earth rate from each
-reading (``ω + Ω sin φ·g/|g|`` leaves ``Ω cos φ·n_b``, n the north direction in the body),
-giving ``(u', v') = Ω cos φ (cos A cos I, −sin A)`` in the high-side frame, hence k. Near
-vertical (I below ``vertical_below``) the fit is referenced to the frame-angle sensor and
+The gyro checks (earth_rate, latitude, horizontal_rate, rate_along_gravity) need a
+three-axis gyro; single-axis and XY tools get rows saying so and the ``earth_rate_fit``
+check instead: their frame positions are fitted (compassing's least squares, bias and
+trend removed) after removing the vertical Earth rate from each reading (``ω + Ω sin φ·g/|g|``
+leaves ``Ω cos φ·n_b``, n the north direction in the body), giving
+``(u', v') = Ω cos φ (cos A cos I, −sin A)`` in the high-side frame, hence k. Near vertical
+(I below ``vertical_below``) the fit is referenced to the frame-angle sensor and
 k ≈ √(u'² + v'²), low by at most 1 − cos I (0.14 % at 3°). Near horizontal σ_k grows as
 1/cos I: the check weakens there. A fit cannot see a constant gyro bias (it removes it).
 
@@ -39,13 +40,16 @@ measured value propagated (first order) from the σ of each mean reading, std/�
 made per reading (station × frame position), so a fault that changes sign as the frame
 turns is not averaged away; a station of N positions has N rows per check and fails when
 any does (false-alarm rate per station ≈ N × the rate per row).
+
+PositionReadings carry no magnetometers: :func:`station_checks` averages them from the raw
+samples over the span of each reading (its ``n`` samples around ``t``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import pyarrow as pa
@@ -54,7 +58,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.compass.precision import OMEGA_DEG_H
-from pipeline.compass.solve import _fit, _Reject
+from pipeline.compass.solve import StationReject, fit_positions
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.geomagnetic import ModelKey, reference_field
 from pipeline.earth.site import MagneticReference, Site
@@ -169,6 +173,13 @@ class QcOptions(_Options):
     rest_speed: float = Field(
         0.02, gt=0, description="windows: largest |dMD/dt| (LSQ slope) of a stationary one, m/s"
     )
+    steady_accel: float = Field(
+        0.02,
+        gt=0,
+        description="windows: the dip is checked only where the MD acceleration (quadratic "
+        "fit) is below this, m/s² (an acceleration a tilts the measured gravity by a/g rad; "
+        "without MD, only in stationary windows)",
+    )
     motion_rate: Limit = Field(
         Limit(limit=100.0), description="moving windows: largest |ω| of any sample, deg/s"
     )
@@ -227,6 +238,11 @@ CHECKS = (
     "acc_saturation",
 )
 """Every check, in report order; each is the name of its option in :class:`QcOptions`."""
+FIT_UNDETERMINED = (
+    "the fit removes gyro biases and one or two gyro axes cannot be told apart: a scale "
+    "error, motion or a frame fault"
+)
+"""Diagnosis of a failed earth_rate_fit (single-axis and XY tools are not isolated)."""
 ISOLATED = ("earth_rate", "gravity", "latitude", "horizontal_rate", "rate_along_gravity")
 """Checks whose failure starts fault isolation (:mod:`pipeline.qc.faults`)."""
 
@@ -402,7 +418,7 @@ def _dip(b: FloatArray, g: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class _Vector:
+class VectorCheck:
     """A check on mean vectors: its unit, the triads it uses, the measured function of
     them and its reference."""
 
@@ -411,6 +427,11 @@ class _Vector:
     func: Callable[..., FloatArray]
     reference: Callable[[EarthReference], float]
     symbol: str
+    note: str = ""
+    """appended to the detail of a failure"""
+
+
+MAGNETIC_NOTE = "a magnetometer fault or magnetic interference (not told apart)"
 
 
 def _field(e: EarthReference) -> float:
@@ -423,26 +444,26 @@ def _ref_dip(e: EarthReference) -> float:
     return e.magnetic.dip
 
 
-VECTOR_CHECKS: dict[str, _Vector] = {
-    "earth_rate": _Vector("deg/h", ("gyro",), _norm, lambda e: e.rate, "|ω|"),
-    "gravity": _Vector("m/s2", ("acc",), _norm, lambda e: e.gravity, "|g|"),
-    "latitude": _Vector("deg", ("gyro", "acc"), _latitude, lambda e: e.latitude, "φ"),
-    "horizontal_rate": _Vector(
+VECTOR_CHECKS: dict[str, VectorCheck] = {
+    "earth_rate": VectorCheck("deg/h", ("gyro",), _norm, lambda e: e.rate, "|ω|"),
+    "gravity": VectorCheck("m/s2", ("acc",), _norm, lambda e: e.gravity, "|g|"),
+    "latitude": VectorCheck("deg", ("gyro", "acc"), _latitude, lambda e: e.latitude, "φ"),
+    "horizontal_rate": VectorCheck(
         "deg/h",
         ("gyro", "acc"),
         _horizontal,
         lambda e: e.rate * np.cos(np.radians(e.latitude)),
         "ω_h",
     ),
-    "rate_along_gravity": _Vector(
+    "rate_along_gravity": VectorCheck(
         "deg/h",
         ("gyro", "acc"),
         _along_gravity,
         lambda e: -e.rate * np.sin(np.radians(e.latitude)),
         "ω·g/|g|",
     ),
-    "magnetic_field": _Vector("nT", ("mag",), _norm, _field, "|B|"),
-    "magnetic_dip": _Vector("deg", ("mag", "acc"), _dip, _ref_dip, "dip"),
+    "magnetic_field": VectorCheck("nT", ("mag",), _norm, _field, "|B|", MAGNETIC_NOTE),
+    "magnetic_dip": VectorCheck("deg", ("mag", "acc"), _dip, _ref_dip, "dip", MAGNETIC_NOTE),
 }
 
 
@@ -499,6 +520,7 @@ def vector_checks(
                 reference,
                 getattr(options, name),
                 keys,
+                spec.note,
             )
         )
     return out
@@ -514,8 +536,10 @@ def judge(
     reference: FloatArray,
     tolerance: Tolerance,
     keys: Keys,
+    note: str = "",
 ) -> Rows:
-    """Rows of a statistical check: tolerance, pass/fail and the detail of each row."""
+    """Rows of a statistical check: tolerance, pass/fail and the detail of each row
+    (``note`` is appended to failures)."""
     tol = tolerance.of(sigma, reference)
     evaluated = tol > 0
     detail = np.full(len(measured), "", dtype=object)
@@ -527,7 +551,7 @@ def judge(
         detail[i] = (
             f"{symbol} = {measured[i]:.6g} {unit}, {off:+.3g} {unit} off the reference "
             f"{reference[i]:.6g} ({abs(off) / tol[i]:.1f} × tolerance)"
-            + (f"; {detail[i]}" if detail[i] else "")
+            + "".join(f"; {text}" for text in (detail[i], note) if text)
         )
     return rows
 
@@ -566,19 +590,19 @@ def readings_sensors(readings: pa.Table, samples: pa.Table | None = None) -> Sen
     gyro, gyro_sigma = triad("gyro")
     acc, acc_sigma = triad("acc")
     mag = mag_sigma = None
-    if samples is not None and "mag_x" in samples.column_names:
+    if samples is not None and all(has_data(samples, f"mag_{a}") for a in "xyz"):
         mag, mag_sigma = magnetic_means(readings, samples)
     return Sensors(gyro, gyro_sigma, acc, acc_sigma, mag, mag_sigma, gyro_axes(readings))
 
 
+def has_data(table: pa.Table, name: str) -> bool:
+    """Whether ``table`` has a column ``name`` with any data."""
+    return name in table.column_names and table.column(name).null_count < table.num_rows
+
+
 def gyro_axes(table: pa.Table) -> str:
     """Gyro axes with data in a samples or readings table ("x", "xy", "xyz"…)."""
-    return "".join(
-        a
-        for a in "xyz"
-        if f"gyro_{a}" in table.column_names
-        and table.column(f"gyro_{a}").null_count < table.num_rows
-    )
+    return "".join(a for a in "xyz" if has_data(table, f"gyro_{a}"))
 
 
 def magnetic_means(readings: pa.Table, samples: pa.Table) -> tuple[FloatArray, FloatArray]:
@@ -673,8 +697,8 @@ def fit_checks(
         n_obs = (b - a) * m
         terms = 2 if options.fit_trend and n_obs >= 2 + 2 * m else 1
         try:
-            fit = _fit(alpha, t[a:b], gyro[a:b], sigma[a:b], terms)
-        except _Reject as exc:
+            fit = fit_positions(alpha, t[a:b], gyro[a:b], sigma[a:b], terms)
+        except StationReject as exc:
             detail[i] = f"skipped: {exc}"
             continue
         u, v = fit.uv
@@ -701,10 +725,13 @@ def fit_checks(
     skipped = np.isnan(measured)
     rows.evaluated &= ~skipped
     rows.detail[skipped] = detail[skipped]
+    failed = rows.failed
+    rows.suspect[failed] = "undetermined"
+    rows.detail[failed] = [f"{text}; {FIT_UNDETERMINED}" for text in rows.detail[failed]]
     return rows
 
 
-def _reader(spec: _Vector) -> Callable[[FloatArray, FloatArray], FloatArray]:
+def _reader(spec: VectorCheck) -> Callable[[FloatArray, FloatArray], FloatArray]:
     """A check's function as a function of (ω, g)."""
 
     def func(w: FloatArray, g: FloatArray) -> FloatArray:
@@ -745,7 +772,6 @@ def isolate_rows(
             tol = np.where(by_name[name].evaluated, by_name[name].tolerance, np.inf)
             equations.append(
                 Equation(
-                    name,
                     "gyro" in spec.sensors,
                     _reader(spec),
                     float(by_name[name].reference[0]),
@@ -775,27 +801,24 @@ def isolate_rows(
 def results_table(rows: list[Rows]) -> pa.Table:
     """QcResults from evaluated rows, sorted by station, window start, position (station-
     level rows after the positions) and check."""
-    cat = {
-        name: np.concatenate([getattr(r.keys, name) for r in rows]) if rows else np.empty(0)
-        for name in ("station", "position", "md", "start", "end")
-    }
-    sizes = [len(r.measured) for r in rows]
-    check = np.repeat([r.check for r in rows], sizes) if rows else np.empty(0, dtype=object)
-    order_of = {name: i for i, name in enumerate(CHECKS)}
-    check_order = np.repeat([order_of[r.check] for r in rows], sizes) if rows else np.empty(0)
 
-    def join(attr: str) -> NDArray[np.generic]:
-        return np.concatenate([getattr(r, attr) for r in rows]) if rows else np.empty(0)
+    def join(get: Callable[[Rows], NDArray[Any]]) -> NDArray[Any]:
+        return np.concatenate([get(r) for r in rows])
 
-    position_key = np.where(cat["position"] < 0, np.iinfo(np.int64).max, cat["position"])
-    order = np.lexsort((check_order, position_key, np.nan_to_num(cat["start"]), cat["station"]))
-    evaluated = join("evaluated").astype(bool)[order]
-    station, position = cat["station"][order], cat["position"][order]
-    md, start, end = cat["md"][order], cat["start"][order], cat["end"][order]
-    measured, reference, tolerance = (
-        join(a).astype(float)[order] for a in ("measured", "reference", "tolerance")
+    station, position = join(lambda r: r.keys.station), join(lambda r: r.keys.position)
+    md, start, end = (
+        join(lambda r: r.keys.md),
+        join(lambda r: r.keys.start),
+        join(lambda r: r.keys.end),
     )
-    passed = np.abs(measured - reference) <= tolerance
+    check = join(lambda r: np.full(len(r.measured), r.check, dtype=object))
+    rank = join(lambda r: np.full(len(r.measured), CHECKS.index(r.check)))
+    last = np.iinfo(np.int64).max
+    order = np.lexsort(
+        (rank, np.where(position < 0, last, position), np.nan_to_num(start), station)
+    )
+    station, position, md, start, end = (a[order] for a in (station, position, md, start, end))
+    evaluated = join(lambda r: r.evaluated)[order]
     return QcResults.compiled().make_table(
         {
             "station": pa.array(station, pa.int64(), mask=station < 0),
@@ -803,17 +826,16 @@ def results_table(rows: list[Rows]) -> pa.Table:
             "window_start": pa.array(start, pa.float64(), mask=np.isnan(start)),
             "window_end": pa.array(end, pa.float64(), mask=np.isnan(end)),
             "md": pa.array(md, pa.float64(), mask=np.isnan(md)),
-            "check": pa.array(check[order].tolist(), pa.string()),
-            "measured": measured,
-            "reference": reference,
-            "tolerance": tolerance,
+            "check": pa.array(check[order], pa.string()),
+            "measured": join(lambda r: r.measured)[order],
+            "reference": join(lambda r: r.reference)[order],
+            "tolerance": join(lambda r: r.tolerance)[order],
             "unit": pa.array(
-                np.repeat([r.unit for r in rows], sizes)[order].tolist() if rows else [],
-                pa.string(),
+                join(lambda r: np.full(len(r.measured), r.unit, dtype=object))[order], pa.string()
             ),
-            "passed": pa.array(passed, pa.bool_(), mask=~evaluated),
-            "suspect": pa.array(join("suspect")[order].tolist(), pa.string()),
-            "detail": pa.array(join("detail")[order].tolist(), pa.string()),
+            "passed": pa.array(~join(lambda r: r.failed)[order], pa.bool_(), mask=~evaluated),
+            "suspect": pa.array(join(lambda r: r.suspect)[order], pa.string()),
+            "detail": pa.array(join(lambda r: r.detail)[order], pa.string()),
         }
     )
 
@@ -846,6 +868,10 @@ def station_checks(
     if sensors.gyro_axes != "xyz" and n:
         rows.append(fit_checks(readings, sensors, earth, options))
     findings = isolate_rows(rows, station, sensors, earth, options)
+    for r in rows:
+        if r.check == "earth_rate_fit":
+            for s in r.keys.station[r.failed]:
+                findings.setdefault(int(s), Finding("undetermined", FIT_UNDETERMINED))
     qc = results_table(rows)
     summary = _summary(rows, station, md, findings, options)
     raise_on_stop(qc, options, summary)

@@ -64,24 +64,17 @@ class Finding:
 @dataclass(frozen=True)
 class _Candidate:
     sensor: str
-    model: str
     params: int
     step: float
-    """finite-difference step of the parameter"""
+    """finite-difference step of the parameters"""
     limit: float
-    """largest plausible |parameter|: a correction beyond it is not considered"""
+    """largest plausible |parameters|: a correction beyond it is not considered"""
     correct: Correction
     describe: Callable[[FloatArray], str]
 
 
-def _unit(j: int) -> FloatArray:
-    e = np.zeros(3)
-    e[j] = 1.0
-    return e
-
-
 def _bias(j: int, on_gyro: bool) -> Correction:
-    e = _unit(j)
+    e = np.eye(3)[j]
 
     def correct(w: FloatArray, g: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
         shift = p[:, None, :1] * e
@@ -118,41 +111,38 @@ def candidates(gyro: bool) -> list[_Candidate]:
     """The single-sensor corrections tried (module docstring); gyro ones only for a
     three-axis gyro."""
     out = []
+    triads = [("gyro", "°/h", 1e-3, "{:+.2f}")] if gyro else []
+    triads.append(("acc", "m/s²", 1e-5, "{:+.4f}"))
     for j, axis in enumerate("xyz"):
-        sensors = [("gyro", "°/h", 1e-3, "{:+.2f}")] if gyro else []
-        sensors.append(("acc", "m/s²", 1e-5, "{:+.4f}"))
-        for name, unit, step, fmt in sensors:
+        for name, unit, step, digits in triads:
             on_gyro = name == "gyro"
             out += [
                 _Candidate(
-                    f"{name} {axis}",
-                    "bias",
-                    1,
-                    step,
-                    np.inf,
-                    _bias(j, on_gyro),
-                    _text(f"bias ≈ {fmt} {unit}"),
+                    sensor=f"{name} {axis}",
+                    params=1,
+                    step=step,
+                    limit=np.inf,
+                    correct=_bias(j, on_gyro),
+                    describe=_text(f"bias ≈ {digits} {unit}"),
                 ),
                 _Candidate(
-                    f"{name} {axis}",
-                    "scale",
-                    1,
-                    1e-6,
-                    MAX_SCALE,
-                    _scale(j, on_gyro),
-                    _text("scale ≈ {:+.0f} ppm", 1e6),
+                    sensor=f"{name} {axis}",
+                    params=1,
+                    step=1e-6,
+                    limit=MAX_SCALE,
+                    correct=_scale(j, on_gyro),
+                    describe=_text("scale ≈ {:+.0f} ppm", 1e6),
                 ),
             ]
     if gyro:
         out.append(
             _Candidate(
-                "triads",
-                "misalignment",
-                3,
-                1e-6,
-                MAX_ROTATION,
-                _rotate,
-                lambda p: f"rotated by ≈ {np.linalg.norm(p) * 1e3:.1f} mrad",
+                sensor="triads",
+                params=3,
+                step=1e-6,
+                limit=MAX_ROTATION,
+                correct=_rotate,
+                describe=lambda p: f"rotated by ≈ {np.linalg.norm(p) * 1e3:.1f} mrad",
             )
         )
     return out
@@ -163,7 +153,6 @@ class Equation:
     """A check as an isolation equation: ``func(ω, g)`` of readings (S, N, 3) → (S, N),
     its reference and the tolerance of every reading (S, N; inf: not used)."""
 
-    name: str
     gyro: bool
     """whether func reads the gyros (skipped without a three-axis gyro)"""
     func: Callable[[FloatArray, FloatArray], FloatArray]

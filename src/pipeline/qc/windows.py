@@ -13,9 +13,11 @@ samples at the mean sample rate). Each window is either
 
 The magnetic checks run on every window, moving or not: per sample |B| and the dip
 ``asin(B·d/|B|)`` (d = g/|g|) are rotation-invariant, so they are averaged over the window
-(σ = std/√n) and compared with the reference field. Failed windows merged along time are
-the magnetic anomaly intervals (:func:`anomaly_intervals`). While the tool accelerates the
-per-sample dip carries a/g of error; at logging speeds the window mean rides over it.
+(σ = std/√n) and compared with the reference field. An acceleration a of the tool tilts the
+measured gravity by up to a/g rad, so the dip is checked only in windows whose MD
+acceleration (least-squares quadratic in time) is below ``steady_accel`` — or, without an
+MD column, in stationary windows. Failed windows merged along time are the magnetic anomaly
+intervals (:func:`anomaly_intervals`).
 
 Overlapping windows (step < window) repeat evaluations of the same samples: count failures
 per interval, not per row. Windows carry no station: ``drop`` policies only mark rows;
@@ -24,17 +26,20 @@ per interval, not per row. Windows carry no station: ``drop`` policies only mark
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 from numpy.lib.stride_tricks import sliding_window_view
 
 from pipeline.earth.frames import FloatArray
-from pipeline.earth.site import Site
+from pipeline.earth.site import MagneticReference, Site
 from pipeline.qc.checks import (
     DEFAULTS,
     VECTOR_CHECKS,
     BoolArray,
+    IntArray,
     Keys,
     QcInputError,
     QcOptions,
@@ -42,6 +47,7 @@ from pipeline.qc.checks import (
     Sensors,
     earth_reference,
     gyro_axes,
+    has_data,
     isolate_rows,
     judge,
     limit_rows,
@@ -90,20 +96,78 @@ class _Windows:
         return out
 
 
-def _triad(samples: pa.Table, prefix: str) -> FloatArray | None:
-    """(n, 3) columns of a triad, NaN for absent axes; None when no axis is present."""
-    names = [f"{prefix}_{a}" for a in "xyz"]
-    if not any(n in samples.column_names for n in names):
-        return None
-    return np.stack(
-        [
-            samples.column(n).to_numpy(zero_copy_only=False).astype(float)
-            if n in samples.column_names
-            else np.full(samples.num_rows, np.nan)
-            for n in names
-        ],
-        axis=-1,
-    )
+@dataclass(frozen=True)
+class _Samples:
+    """Per-sample columns: time s, gyros °/h and accelerometers m/s² (n, 3; absent gyro
+    axes NaN), magnetometers nT (n, 3) and MD m when present."""
+
+    time: FloatArray
+    gyro: FloatArray
+    acc: FloatArray
+    mag: FloatArray | None
+    md: FloatArray | None
+    gyro_axes: str
+
+    @classmethod
+    def read(cls, samples: pa.Table) -> _Samples:
+        RawSamples.validate_table(samples)
+
+        def triad(prefix: str) -> FloatArray:
+            return np.stack(
+                [
+                    samples.column(f"{prefix}_{a}").to_numpy(zero_copy_only=False).astype(float)
+                    if f"{prefix}_{a}" in samples.column_names
+                    else np.full(samples.num_rows, np.nan)
+                    for a in "xyz"
+                ],
+                axis=-1,
+            )
+
+        md = None
+        if has_data(samples, "md"):
+            column = samples.column("md")
+            if column.null_count:
+                raise QcInputError(
+                    f"column 'md' has {column.null_count} missing values: give all or none"
+                )
+            md = column.to_numpy()
+        return cls(
+            samples.column("time").to_numpy(),
+            triad("gyro"),
+            triad("acc"),
+            triad("mag") if all(has_data(samples, f"mag_{a}") for a in "xyz") else None,
+            md,
+            gyro_axes(samples),
+        )
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """Per window: times (s), mean and sample std of the gyros and accelerometers, the MD
+    speed (m/s) and acceleration (m/s²) when there is an MD, and whether it is stationary."""
+
+    start: FloatArray
+    end: FloatArray
+    gyro: tuple[FloatArray, FloatArray]
+    acc: tuple[FloatArray, FloatArray]
+    speed: FloatArray | None
+    accel: FloatArray | None
+    still: BoolArray
+
+    @classmethod
+    def of(cls, data: _Samples, win: _Windows, options: QcOptions) -> _Motion:
+        gyro, acc = win.mean_std(data.gyro), win.mean_std(data.acc)
+        still = (np.nanmax(gyro[1], axis=1) <= options.rest_gyro.limit) & (
+            acc[1].max(axis=1) <= options.rest_acc.limit
+        )
+        speed = accel = None
+        if data.md is not None:
+            speed, accel = _md_motion(win, data.time, data.md)
+            still &= np.abs(speed) <= options.rest_speed
+        time = data.time
+        return cls(
+            time[win.starts], time[win.starts + win.length - 1], gyro, acc, speed, accel, still
+        )
 
 
 def stationary(
@@ -111,41 +175,21 @@ def stationary(
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
     """Window start and end times (s) and whether each window is stationary (module
     docstring)."""
-    time = samples.column("time").to_numpy()
-    win = _Windows(time, options)
-    return _stationary(samples, time, win, options)
+    data = _Samples.read(samples)
+    motion = _Motion.of(data, _Windows(data.time, options), options)
+    return motion.start, motion.end, motion.still
 
 
-def _stationary(
-    samples: pa.Table, time: FloatArray, win: _Windows, options: QcOptions
-) -> tuple[FloatArray, FloatArray, BoolArray]:
-    gyro = _triad(samples, "gyro")
-    acc = _triad(samples, "acc")
-    assert gyro is not None and acc is not None  # required by RawSamples
-    present = ~np.isnan(gyro).all(axis=0)
-    _, gyro_std = win.mean_std(gyro[:, present])
-    _, acc_std = win.mean_std(acc)
-    still = (gyro_std.max(axis=1) <= options.rest_gyro.limit) & (
-        acc_std.max(axis=1) <= options.rest_acc.limit
-    )
-    md = _md(samples)
-    if md is not None:
-        t = win.view(time)
-        tc = t - t.mean(axis=1, keepdims=True)
-        m = win.view(md)
-        speed = np.sum(tc * (m - m.mean(axis=1, keepdims=True)), axis=1) / np.sum(tc * tc, axis=1)
-        still &= np.abs(speed) <= options.rest_speed
-    return time[win.starts], time[win.starts + win.length - 1], still
-
-
-def _md(samples: pa.Table) -> FloatArray | None:
-    if "md" not in samples.column_names or samples.column("md").null_count == samples.num_rows:
-        return None
-    col = samples.column("md")
-    if col.null_count:
-        raise QcInputError(f"column 'md' has {col.null_count} missing values: give all or none")
-    values: FloatArray = col.to_numpy()
-    return values
+def _md_motion(win: _Windows, time: FloatArray, md: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Speed (m/s) at the mid-time and acceleration (m/s²) of each window's MD, from a
+    least-squares quadratic in time (odometer noise averages out)."""
+    t = win.view(time)
+    tc = t - t.mean(axis=1, keepdims=True)
+    design = np.stack([np.ones_like(tc), tc, tc * tc], axis=-1)  # (W, L, 3)
+    normal = np.einsum("wli,wlj->wij", design, design)
+    rhs = np.einsum("wli,wl->wi", design, win.view(md) - md[win.starts][:, None])
+    coef = np.linalg.solve(normal, rhs[..., None])[..., 0]
+    return coef[:, 1], 2 * coef[:, 2]
 
 
 def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) -> pa.Table:
@@ -154,22 +198,17 @@ def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) 
     median MD). Raises :class:`~pipeline.qc.checks.QcStop` when a check with policy
     ``stop`` fails, :class:`~pipeline.qc.checks.QcInputError` for data shorter than a
     window."""
-    RawSamples.validate_table(samples)
-    time = samples.column("time").to_numpy()
-    win = _Windows(time, options)
-    start, end, still = _stationary(samples, time, win, options)
-    count = len(start)
-    md = _md(samples)
-    md_w = np.median(win.view(md), axis=1) if md is not None else np.full(count, np.nan)
-    keys = Keys(np.full(count, -1), np.full(count, -1), md_w, start, end)
-    gyro, acc, mag = (_triad(samples, p) for p in ("gyro", "acc", "mag"))
-    assert gyro is not None and acc is not None
-    earth = earth_reference(site, magnetic=mag is not None, model=options.magnetic_model)
+    data = _Samples.read(samples)
+    win = _Windows(data.time, options)
+    motion = _Motion.of(data, win, options)
+    count = len(motion.start)
+    md = np.full(count, np.nan) if data.md is None else np.median(win.view(data.md), axis=1)
+    keys = Keys(np.full(count, -1), np.full(count, -1), md, motion.start, motion.end)
+    earth = earth_reference(site, magnetic=data.mag is not None, model=options.magnetic_model)
 
-    rest = np.flatnonzero(still)
-    gyro_mean, gyro_std = win.mean_std(gyro)
-    acc_mean, acc_std = win.mean_std(acc)
+    rest = np.flatnonzero(motion.still)
     root_n = np.sqrt(win.length)
+    (gyro_mean, gyro_std), (acc_mean, acc_std) = motion.gyro, motion.acc
     sensors = Sensors(
         gyro_mean[rest],
         gyro_std[rest] / root_n,
@@ -177,75 +216,70 @@ def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) 
         acc_std[rest] / root_n,
         None,
         None,
-        gyro_axes(samples),
+        data.gyro_axes,
     )
     rows = vector_checks(sensors, earth, options, keys.take(rest))
     isolate_rows(rows, np.arange(len(rest)), sensors, earth, options)
-
-    moving = np.flatnonzero(~still)
-    moving_keys = keys.take(moving)
-    rate = np.sqrt(np.nansum(gyro**2, axis=1)) / DEG_S
-    rows += [
-        limit_rows(
-            "motion_rate",
-            "deg/s",
-            "|ω|",
-            win.largest(rate)[moving],
-            options.motion_rate,
-            moving_keys,
-        ),
-        limit_rows(
-            "motion_accel",
-            "m/s2",
-            "||a| − g₀|",
-            win.largest(np.abs(np.linalg.norm(acc, axis=1) - earth.gravity))[moving],
-            options.motion_accel,
-            moving_keys,
-        ),
-        limit_rows(
-            "gyro_saturation",
-            "deg/s",
-            "|gyro axis|",
-            win.largest(np.nanmax(np.abs(gyro), axis=1) / DEG_S)[moving],
-            options.gyro_saturation,
-            moving_keys,
-        ),
-        limit_rows(
-            "acc_saturation",
-            "m/s2",
-            "|accelerometer axis|",
-            win.largest(np.abs(acc).max(axis=1))[moving],
-            options.acc_saturation,
-            moving_keys,
-        ),
-    ]
-    if mag is not None and earth.magnetic is not None:
-        rows += _magnetic(
-            win, mag, acc, earth.magnetic.total_field, earth.magnetic.dip, options, keys
+    rows += _motion_bounds(data, win, earth.gravity, options, keys, np.flatnonzero(~motion.still))
+    if data.mag is not None and earth.magnetic is not None:
+        steady = (
+            motion.still if motion.accel is None else np.abs(motion.accel) <= options.steady_accel
         )
+        rows += _magnetic(win, data.mag, data.acc, earth.magnetic, options, keys, steady)
     qc = results_table(rows)
     raise_on_stop(qc, options)
     return qc
+
+
+def _motion_bounds(
+    data: _Samples, win: _Windows, gravity: float, options: QcOptions, keys: Keys, moving: IntArray
+) -> list[Rows]:
+    """Largest sample values of the ``moving`` windows (indices) against the motion and
+    range limits (gravity: the reference, m/s²)."""
+    gyro, acc = data.gyro, data.acc
+    largest = {
+        "motion_rate": np.sqrt(np.nansum(gyro**2, axis=1)) / DEG_S,
+        "motion_accel": np.abs(np.linalg.norm(acc, axis=1) - gravity),
+        "gyro_saturation": np.nanmax(np.abs(gyro), axis=1) / DEG_S,
+        "acc_saturation": np.abs(acc).max(axis=1),
+    }
+    what = {
+        "motion_rate": ("deg/s", "|ω|"),
+        "motion_accel": ("m/s2", "||a| − g₀|"),
+        "gyro_saturation": ("deg/s", "|gyro axis|"),
+        "acc_saturation": ("m/s2", "|accelerometer axis|"),
+    }
+    return [
+        limit_rows(
+            name,
+            unit,
+            text,
+            win.largest(largest[name])[moving],
+            getattr(options, name),
+            keys.take(moving),
+        )
+        for name, (unit, text) in what.items()
+    ]
 
 
 def _magnetic(
     win: _Windows,
     mag: FloatArray,
     acc: FloatArray,
-    field: float,
-    dip: float,
+    reference: MagneticReference,
     options: QcOptions,
     keys: Keys,
+    steady: BoolArray,
 ) -> list[Rows]:
-    """magnetic_field and magnetic_dip from per-sample invariants averaged per window."""
+    """magnetic_field and magnetic_dip from per-sample invariants averaged per window; the
+    dip only in ``steady`` windows (the others get rows saying why not)."""
     out = []
-    per_sample = {
-        "magnetic_field": VECTOR_CHECKS["magnetic_field"].func(mag),
-        "magnetic_dip": VECTOR_CHECKS["magnetic_dip"].func(mag, acc),
-    }
-    for name, reference in (("magnetic_field", field), ("magnetic_dip", dip)):
+    for name, per_sample, value in (
+        ("magnetic_field", (mag,), reference.total_field),
+        ("magnetic_dip", (mag, acc), reference.dip),
+    ):
         spec = VECTOR_CHECKS[name]
-        mean, std = win.mean_std(per_sample[name][:, None])
+        mean, std = win.mean_std(spec.func(*per_sample)[:, None])
         out.append(
             judge(
                 name,
@@ -254,11 +288,15 @@ def _magnetic(
                 mean[:, 0],
                 std[:, 0] / np.sqrt(win.length),
                 np.zeros(len(mean), bool),
-                np.full(len(mean), reference),
+                np.full(len(mean), value),
                 getattr(options, name),
                 keys,
+                spec.note,
             )
         )
+    dip = out[1]
+    dip.evaluated &= steady
+    dip.detail[~steady] = "skipped: the tool accelerates (MD), the measured gravity is tilted"
     return out
 
 

@@ -1,0 +1,70 @@
+"""Validity checks inside a pipeline: a clean survey passes, a biased gyro is caught and
+named, the station still reaches compassing unless its policy drops it."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pyarrow.parquet as pq
+
+from tests_support import ROOT, gyropipe
+
+PLAN = """
+name: qc-run
+seed: 5
+site: {{latitude: 61.25, longitude: 73.4, date: 2026-11-21,
+        magnetic: {{total_field: 59731.0, dip: 78.29, declination: 17.0}}}}
+well:
+  sections:
+    - {{kind: vertical, length: 30}}
+    - {{kind: build, dls: 9.0, inc: 45, azi: 120}}
+tool: {{preset: nav-grade, overrides: {overrides}}}
+survey: {{mode: point, every: 30, dwell: 20, move_time: 2}}
+"""
+
+
+def run(tmp_path: Path, overrides: str) -> Path:
+    (tmp_path / "plan.yaml").write_text(PLAN.format(overrides=overrides))
+    subprocess.run(
+        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
+        check=True,
+        capture_output=True,
+    )
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [
+            *gyropipe(),
+            "run",
+            str(ROOT / "pipelines" / "point-gyro.yaml"),
+            "--input",
+            str(tmp_path / "sim" / "samples.parquet"),
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+def test_clean_survey_passes(tmp_path: Path):
+    out = run(tmp_path, "{}")
+    summary = pq.read_table(out / "validity.summary.parquet")
+    assert set(summary.column("status").to_pylist()) == {"ok"}
+    qc = pq.read_table(out / "validity.qc.parquet")
+    checks = set(qc.column("check").to_pylist())
+    assert {"earth_rate", "gravity", "latitude", "rate_along_gravity"} <= checks
+
+
+def test_biased_gyro_is_caught_and_named(tmp_path: Path):
+    out = run(tmp_path, "{gyro: {bias: [0.0, 3.0, 0.0]}}")
+    summary = pq.read_table(out / "validity.summary.parquet").to_pylist()
+    flagged = [row for row in summary if row["status"] != "ok"]
+    assert len(flagged) >= len(summary) - 1
+    named = [row for row in flagged if row["suspect"].startswith("gyro y")]
+    assert len(named) >= 0.9 * len(flagged), [row["diagnosis"] for row in flagged]
+    stations = pq.read_table(out / "compass.stations.parquet")
+    assert stations.num_rows == len(summary)  # flag policy: stations are kept, marked
