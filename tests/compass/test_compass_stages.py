@@ -110,7 +110,7 @@ def test_missing_latitude_is_a_clear_error(simulated: Path, tmp_path: Path):
     pq.write_table(table, readings)
     result = run("point-gyro.yaml", readings, tmp_path / "out")
     assert result.returncode == 1
-    assert "stage 'compass'" in result.stderr and "latitude is unknown" in result.stderr
+    assert "stage 'validity'" in result.stderr and "latitude" in result.stderr
     assert not (tmp_path / "out" / "run.json").exists()
     ok = run("point-gyro.yaml", readings, tmp_path / "ok", "--well", "latitude=61.25")
     assert ok.returncode == 0, ok.stderr

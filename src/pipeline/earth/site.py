@@ -37,7 +37,9 @@ class Site(BaseModel):
     latitude: float = Field(ge=-90, le=90, description="geodetic latitude, deg")
     longitude: float = Field(0.0, ge=-180, le=360, description="longitude, deg east")
     elevation: float = Field(0.0, description="height of the wellhead above the ellipsoid, m")
-    date: dt.date = Field(description="survey date")
+    date: dt.date | None = Field(
+        None, description="survey date (needed for a geomagnetic model's field)"
+    )
     magnetic: MagneticReference | None = Field(
         None, description="geomagnetic reference at the site (needed for magnetometers)"
     )

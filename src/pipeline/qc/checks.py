@@ -269,17 +269,21 @@ def earth_reference(site: Site, *, magnetic: bool, model: ModelKey = "wmm2025") 
     default tolerances."""
     reference = None
     if magnetic:
-        reference = site.magnetic or (
-            reference_field(
+        reference = site.magnetic
+        if reference is None:
+            if site.date is None:
+                raise QcInputError("magnetometer checks need the survey date (field model)")
+            reference = reference_field(
                 site.latitude, site.longitude, site.elevation, site.date, model=model
             ).reference()
-        )
     return EarthReference(OMEGA_DEG_H, site.latitude, site.gravity, reference)
 
 
-def site_from_well(well: WellMetadata, magnetic: MagneticReference | None = None) -> Site:
+def site_from_well(
+    well: WellMetadata, magnetic: MagneticReference | None = None, *, field: bool = True
+) -> Site:
     """The QC site of a well: latitude and survey date are required, and so is the longitude
-    unless a ``magnetic`` reference is given (the geomagnetic model needs it). The well's
+    when the geomagnetic model is needed (``field`` and no ``magnetic`` reference given). The well's
     elevation (above sea level) stands in for the ellipsoidal height: the geoid's tens of
     metres change gravity by < 1e-4 m/s². Raises :class:`QcInputError` naming what is
     missing."""
@@ -287,8 +291,11 @@ def site_from_well(well: WellMetadata, magnetic: MagneticReference | None = None
         what
         for what, absent in (
             ("latitude", well.latitude is None),
-            ("survey_date", well.survey_date is None),
-            ("longitude (for the geomagnetic model)", well.longitude is None and not magnetic),
+            ("survey_date (for the geomagnetic model)", field and well.survey_date is None),
+            (
+                "longitude (for the geomagnetic model)",
+                field and well.longitude is None and not magnetic,
+            ),
         )
         if absent
     ]
@@ -297,7 +304,7 @@ def site_from_well(well: WellMetadata, magnetic: MagneticReference | None = None
             "validity checks need the well's " + ", ".join(missing) + ": set them in the file "
             "header, the pipeline's `well:` or --well"
         )
-    assert well.latitude is not None and well.survey_date is not None
+    assert well.latitude is not None
     return Site(
         latitude=well.latitude,
         longitude=well.longitude or 0.0,

@@ -22,10 +22,9 @@ def station_stage(
     inputs: Mapping[str, pa.Table], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Check every station × frame position; the readings of dropped stations are removed."""
-    readings = inputs["readings"]
-    qc, summary = station_checks(
-        readings, site_from_well(ctx.well), params, samples=inputs.get("samples")
-    )
+    readings, samples = inputs["readings"], inputs.get("samples")
+    site = site_from_well(ctx.well, field=_has_field(samples))
+    qc, summary = station_checks(readings, site, params, samples=samples)
     return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}
 
 
@@ -33,8 +32,14 @@ def window_stage(
     inputs: Mapping[str, pa.Table], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Check continuous samples on sliding windows; list magnetic anomaly intervals."""
-    qc = window_checks(inputs["samples"], site_from_well(ctx.well), params)
+    samples = inputs["samples"]
+    qc = window_checks(samples, site_from_well(ctx.well, field=_has_field(samples)), params)
     return {"qc": qc, "anomalies": anomaly_intervals(qc)}
+
+
+def _has_field(samples: pa.Table | None) -> bool:
+    """True if the samples carry magnetometer data (then the geomagnetic model is needed)."""
+    return samples is not None and "mag_x" in samples.column_names
 
 
 @hookimpl
