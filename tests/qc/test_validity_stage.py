@@ -3,6 +3,7 @@ named, the station still reaches compassing unless its policy drops it."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 from pathlib import Path
 
@@ -57,6 +58,8 @@ def test_clean_survey_passes(tmp_path: Path):
     qc = pq.read_table(out / "validity.qc.parquet")
     checks = set(qc.column("check").to_pylist())
     assert {"earth_rate", "gravity", "latitude", "rate_along_gravity"} <= checks
+    references = json.loads(qc.schema.metadata[b"gyropipe.references"])
+    assert "boule" in references["gravity"] and "7.292115e-05" in references["earth_rate"]
 
 
 def test_biased_gyro_is_caught_and_named(tmp_path: Path):

@@ -6,16 +6,23 @@ geomagnetic reference from the model chosen in the options.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Mapping
+from importlib.metadata import version
 
 import pyarrow as pa
 
+from pipeline.earth.frames import OMEGA_EARTH
+from pipeline.earth.geomagnetic import field_model
+from pipeline.earth.site import Site
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.checks import QcOptions, drop_stations, site_from_well, station_checks
 from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
 from pipeline.qc.windows import anomaly_intervals, window_checks
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import PositionReadings, RawSamples
+
+REFERENCES_KEY = b"gyropipe.references"
 
 
 def station_stage(
@@ -25,6 +32,7 @@ def station_stage(
     readings, samples = inputs["readings"], inputs.get("samples")
     site = site_from_well(ctx.well, field=_has_field(samples))
     qc, summary = station_checks(readings, site, params, samples=samples)
+    qc = with_references(qc, site, params, field=_has_field(samples))
     return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}
 
 
@@ -33,8 +41,35 @@ def window_stage(
 ) -> dict[str, pa.Table]:
     """Check continuous samples on sliding windows; list magnetic anomaly intervals."""
     samples = inputs["samples"]
-    qc = window_checks(samples, site_from_well(ctx.well, field=_has_field(samples)), params)
+    site = site_from_well(ctx.well, field=_has_field(samples))
+    qc = with_references(
+        window_checks(samples, site, params), site, params, field=_has_field(samples)
+    )
     return {"qc": qc, "anomalies": anomaly_intervals(qc)}
+
+
+def with_references(qc: pa.Table, site: Site, options: QcOptions, *, field: bool) -> pa.Table:
+    """``qc`` with the reference models used recorded in its schema metadata
+    (``gyropipe.references``, JSON): Earth rate, normal gravity, geomagnetic model."""
+    references = {
+        "earth_rate": f"WGS84 Ω = {OMEGA_EARTH} rad/s",
+        "gravity": f"WGS84 normal gravity (boule {version('boule')}), "
+        f"{site.gravity:.6f} m/s² at the wellhead",
+        "geomagnetic": (
+            "given by the site"
+            if site.magnetic is not None
+            else _model_label(options)
+            if field
+            else "not used"
+        ),
+    }
+    meta = {**(qc.schema.metadata or {}), REFERENCES_KEY: json.dumps(references).encode()}
+    return qc.replace_schema_metadata(meta)
+
+
+def _model_label(options: QcOptions) -> str:
+    model = field_model(options.magnetic_model)
+    return f"{model.name} ({model.version})"
 
 
 def _has_field(samples: pa.Table | None) -> bool:
