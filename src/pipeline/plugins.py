@@ -35,6 +35,7 @@ BUILTIN_PLUGINS = {
     "builtin.simulation": "pipeline.stages.simulation",
     "builtin.compass": "pipeline.stages.compass",
     "builtin.validity": "pipeline.stages.validity",
+    "builtin.drift": "pipeline.stages.drift",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",

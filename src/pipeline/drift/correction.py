@@ -1,0 +1,317 @@
+"""Drift correction of free-gyro surveys and their in-run/out-run QC (DOMAIN.md §4).
+
+A free gyro's azimuth reading drifts linearly in time: ``A_corr(t) = A(t) − ω_d·(t − t0)``,
+t0 the time of the first in-run reading at the tie-in station (else of the first reading).
+The drift rate ω_d (°/h) is
+
+- ``calibration``: the instrument's calibrated rate (:mod:`pipeline.drift.calibration`),
+  matched by serial (the stage's ``instrument``, else the well's ``tool_serial``; a table of
+  one instrument needs no serial), with its σ;
+- ``given``: a rate (and σ) named in the parameters;
+- ``tie_in``: the survey's own misclosure at the tie-in station — the first in-run and the
+  last out-run readings there see the same azimuth, so ω_d = wrap(A_last − A_first) /
+  (t_last − t_first): the misclosure distributed linearly in time.
+
+With a ``reference_azimuth`` (the known azimuth at the tie-in station) the orientation
+offset A_first − reference is removed as well; without one, azimuths stay referenced to the
+gyro's orientation at the tie-in.
+
+Predicted errors: the corrected errors are a linear map of the reading errors ε (σ_r each)
+plus the rate error δω (σ_ω): ``err = G·ε + τ·δω`` with τ = t − t0 in hours, so
+``Cov = σ_r²·G·Gᵀ + σ_ω²·τ·τᵀ`` exactly (tie-in: G = I − u·(e_last − e_first)ᵀ,
+u = (t − t0)/(t_last − t_first); a reference subtracts e_first from every row). σ_r is the
+``reading_sigma`` parameter, or estimated robustly from the in/out differences d_k of the
+stations read twice: the σ_r² making ``median(d_k²/Var(d_k)) = 0.4549`` (the median of
+χ²₁), so a few bad stations do not inflate it. Azimuths in degrees, times in seconds.
+
+QC: each station read on both runs is compared after correction; it fails when
+``|inc_in − inc_out| > inc_tolerance`` (default 0.23°) or ``|azi_in − azi_out|`` exceeds
+``azi_tolerance`` (1.0°) at a mean inclination ≥ ``low_inclination`` (10°), or
+``azi_tolerance_low`` (5.0°) below it — industry gyro in/out-run tolerances.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.optimize import brentq
+
+from pipeline.contracts import NORTH_KEY
+from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
+from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
+
+CHI2_1_MEDIAN = 0.454936
+"""Median of the χ² distribution with one degree of freedom."""
+
+
+class CorrectionOptions(BaseModel):
+    """Parameters of drift correction (angles deg, rates °/h)."""
+
+    model_config = ConfigDict(extra="forbid")
+    source: Literal["auto", "calibration", "given", "tie_in"] = Field(
+        "auto",
+        description="drift rate from the calibration input, the given rate, or the tie-in "
+        "misclosure; auto: calibration if wired, else given if set, else tie-in",
+    )
+    drift_rate: float | None = Field(None, description="given drift rate, °/h")
+    drift_sigma: float = Field(0.0, ge=0, description="σ of the given drift rate, °/h")
+    instrument: str | None = Field(
+        None, description="serial to look up in the calibration (default: well tool_serial)"
+    )
+    estimate: str | None = Field(
+        None, description="calibration method to use (default: the selected estimate)"
+    )
+    allow_nonlinear: bool = Field(
+        False, description="use a calibration whose verdict is not linear"
+    )
+    reference_azimuth: float | None = Field(
+        None, description="known azimuth at the tie-in station (removes the orientation offset)"
+    )
+    tie_station: int = Field(0, ge=0, description="station index of the tie-in (surface)")
+    reading_sigma: float | None = Field(
+        None, gt=0, description="σ of one azimuth reading (default: from the in/out pairs)"
+    )
+    stations_from: Literal["mean", "in", "out"] = Field(
+        "mean", description="stations from the mean of both runs, the in-run or the out-run"
+    )
+    inc_tolerance: float = Field(0.23, gt=0, description="in/out inclination tolerance")
+    azi_tolerance: float = Field(1.0, gt=0, description="in/out azimuth tolerance")
+    azi_tolerance_low: float = Field(5.0, gt=0, description="azimuth tolerance below…")
+    low_inclination: float = Field(10.0, ge=0, description="…this mean inclination")
+
+
+@dataclass(frozen=True)
+class DriftRate:
+    """A drift rate (°/h), its σ and where it came from."""
+
+    rate: float
+    sigma: float
+    source: str
+
+
+@dataclass(frozen=True)
+class CorrectedSurvey:
+    """Corrected readings, combined stations, in/out QC, the rate used and σ_r (deg)."""
+
+    readings: pa.Table
+    stations: pa.Table
+    qc: pa.Table
+    rate: DriftRate
+    reading_sigma: float
+
+
+def azimuth360(angle: FloatArray) -> FloatArray:
+    """Angles (deg) in [0, 360) (``%`` alone rounds tiny negative angles up to 360)."""
+    wrapped = np.mod(angle, 360.0)
+    out: FloatArray = np.where(wrapped >= 360.0, 0.0, wrapped)
+    return out
+
+
+def calibration_rate(
+    calibration: pa.Table, serial: str | None, estimate: str | None, allow_nonlinear: bool
+) -> DriftRate:
+    """The drift rate of instrument ``serial`` from a :class:`CalibrationResult` table: the
+    row of method ``estimate``, else its selected row."""
+    instruments = calibration.column("instrument").to_pylist()
+    if serial is None:
+        if len(set(instruments)) != 1:
+            raise ValueError(
+                "the tool serial is unknown (well tool_serial or the stage's `instrument`) and "
+                f"the calibration holds instruments {sorted(set(instruments))}"
+            )
+        serial = instruments[0]
+    methods = calibration.column("method").to_pylist()
+    selected = calibration.column("selected").to_pylist()
+    rows = [
+        i
+        for i, name in enumerate(instruments)
+        if name == serial and (methods[i] == estimate if estimate else selected[i])
+    ]
+    if not rows:
+        raise ValueError(
+            f"no calibration estimate {estimate or 'selected'!r} of instrument {serial!r} "
+            f"(calibrated: {', '.join(sorted(set(instruments)))})"
+        )
+    if len(rows) > 1:
+        raise ValueError(f"{len(rows)} calibration rows of {serial!r} match: name one estimate")
+    row = calibration.slice(rows[0], 1).to_pylist()[0]
+    if row["verdict"] not in (LINEAR, UNTESTED) and not allow_nonlinear:
+        raise ValueError(
+            f"instrument {serial}: calibration verdict {row['verdict']!r} "
+            f"(p = {row['p_value']:.3g}); set allow_nonlinear to correct anyway"
+        )
+    return DriftRate(
+        float(row["drift_deg_h"]),
+        float(row["sigma_deg_h"]),
+        f"calibration {serial} {row['method']} {row['label']}",
+    )
+
+
+def correct_survey(
+    readings: pa.Table, options: CorrectionOptions, rate: DriftRate | None = None
+) -> CorrectedSurvey:
+    """Remove the drift from :class:`~pipeline.tables.FreeGyroReadings`: with ``rate``
+    (calibrated or given), else from the tie-in misclosure."""
+    run = np.array(readings.column("run").to_pylist(), dtype=object)
+    station = readings.column("station").to_numpy()
+    time = readings.column("time").to_numpy().astype(float)
+    azi = readings.column("azi").to_numpy().astype(float)
+    n = len(time)
+    tie_in = np.flatnonzero((run == "in") & (station == options.tie_station))
+    tie_out = np.flatnonzero((run == "out") & (station == options.tie_station))
+    first = int(tie_in[0]) if len(tie_in) else None
+    t0 = time[first] if first is not None else time[0]
+    tau = (time - t0) / 3600.0
+    mix = np.eye(n)
+    if rate is None:
+        if first is None or not len(tie_out) or tie_out[-1] <= first:
+            raise ValueError(
+                f"tie-in needs an in-run and a later out-run reading at station "
+                f"{options.tie_station}; give a calibration or a drift_rate instead"
+            )
+        last = int(tie_out[-1])
+        span = tau[last]
+        rate = DriftRate(float(wrap(azi[last] - azi[first]) / span), 0.0, "tie-in misclosure")
+        mix[:, last] -= tau / span
+        mix[:, first] += tau / span
+    correction = rate.rate * tau
+    if options.reference_azimuth is not None:
+        if first is None:
+            raise ValueError(
+                f"a reference azimuth needs an in-run reading at the tie station "
+                f"{options.tie_station}"
+            )
+        correction = correction + wrap(azi[first] - options.reference_azimuth)
+        mix[:, first] -= 1.0
+    corrected = azimuth360(azi - correction)
+    pairs = _pairs(run, station)
+    sigma_r = options.reading_sigma
+    if sigma_r is None:
+        sigma_r = _reading_sigma(corrected, mix, tau, rate.sigma, pairs)
+    cov = sigma_r**2 * mix @ mix.T + rate.sigma**2 * np.outer(tau, tau)
+    north = (readings.schema.field("azi").metadata or {}).get(NORTH_KEY, b"true").decode()
+    table = readings
+    for name, values in (
+        ("azi", corrected),
+        ("azi_raw", azi),
+        ("correction", correction),
+        ("sigma_azi", np.sqrt(np.diag(cov))),
+    ):
+        spec = next(c for c in CorrectedFreeGyroReadings.compiled().columns if c.name == name)
+        field = spec.field(north)
+        array = pa.array(values, type=pa.float64())
+        if name in table.column_names:
+            table = table.set_column(table.column_names.index(name), field, array)
+        else:
+            table = table.append_column(field, array)
+    return CorrectedSurvey(
+        readings=table,
+        stations=_stations(readings, corrected, cov, run, station, options, north),
+        qc=_in_out(readings, corrected, cov, pairs, options),
+        rate=rate,
+        reading_sigma=float(sigma_r),
+    )
+
+
+def _pairs(run: np.ndarray, station: np.ndarray) -> np.ndarray:
+    """(k, 2) row indices of the in-run and out-run readings of each station read twice."""
+    rows_in = {int(s): i for i, s in enumerate(station) if run[i] == "in"}
+    rows_out = {int(s): i for i, s in enumerate(station) if run[i] == "out"}
+    both = sorted(set(rows_in) & set(rows_out))
+    return np.array([[rows_in[s], rows_out[s]] for s in both], dtype=np.int64).reshape(-1, 2)
+
+
+def _reading_sigma(
+    corrected: FloatArray, mix: FloatArray, tau: FloatArray, rate_sigma: float, pairs: np.ndarray
+) -> float:
+    """Robust σ_r from the in/out differences (module docstring)."""
+    diff = wrap(corrected[pairs[:, 0]] - corrected[pairs[:, 1]]) ** 2
+    gain = np.sum((mix[pairs[:, 0]] - mix[pairs[:, 1]]) ** 2, axis=1)
+    known = rate_sigma**2 * (tau[pairs[:, 0]] - tau[pairs[:, 1]]) ** 2
+    usable = gain > 1e-12
+    if not usable.any():
+        raise ValueError("no station read on both runs: give reading_sigma")
+    diff, gain, known = diff[usable], gain[usable], known[usable]
+
+    def excess(var: float) -> float:
+        return float(np.median(diff / np.maximum(var * gain + known, 1e-300))) - CHI2_1_MEDIAN
+
+    if excess(0.0) <= 0:
+        return 0.0
+    upper = float(np.max(diff / gain)) / CHI2_1_MEDIAN + 1e-12
+    return float(np.sqrt(brentq(excess, 0.0, upper, xtol=1e-15, rtol=1e-10)))
+
+
+def _stations(
+    readings: pa.Table,
+    corrected: FloatArray,
+    cov: FloatArray,
+    run: np.ndarray,
+    station: np.ndarray,
+    options: CorrectionOptions,
+    north: str,
+) -> pa.Table:
+    keep = (
+        np.ones(len(run), dtype=bool)
+        if options.stations_from == "mean"
+        else (run == options.stations_from)
+    )
+    ids = np.unique(station[keep])
+    weights = np.zeros((len(ids), len(run)))
+    rows = np.searchsorted(ids, station[keep])
+    weights[rows, np.flatnonzero(keep)] = 1.0
+    count = weights.sum(axis=1)
+    weights /= count[:, None]
+    anchor = corrected[np.argmax(weights > 0, axis=1)]  # average around a station's reading
+    offset = np.zeros(len(run))
+    offset[keep] = wrap(corrected[keep] - anchor[rows])
+    azi = azimuth360(anchor + weights @ offset)
+    md = weights @ readings.column("md").to_numpy()
+    inc = weights @ readings.column("inc").to_numpy()
+    order = np.argsort(md, kind="stable")
+    return DriftStations.compiled().make_table(
+        {
+            "md": md[order],
+            "inc": inc[order],
+            "azi": azi[order],
+            "station": ids[order],
+            "sigma_azi": np.sqrt(np.einsum("ij,jk,ik->i", weights, cov, weights))[order],
+            "readings": count[order].astype(np.int64),
+        },
+        north_reference=north,
+    )
+
+
+def _in_out(
+    readings: pa.Table,
+    corrected: FloatArray,
+    cov: FloatArray,
+    pairs: np.ndarray,
+    options: CorrectionOptions,
+) -> pa.Table:
+    i, o = pairs[:, 0], pairs[:, 1]
+    inc = readings.column("inc").to_numpy()
+    inc_diff = inc[i] - inc[o]
+    azi_diff = wrap(corrected[i] - corrected[o])
+    low = (inc[i] + inc[o]) / 2 < options.low_inclination
+    azi_tol = np.where(low, options.azi_tolerance_low, options.azi_tolerance)
+    return InOutQc.compiled().make_table(
+        {
+            "station": readings.column("station").to_numpy()[i],
+            "md": readings.column("md").to_numpy()[i],
+            "inc_in": inc[i],
+            "inc_out": inc[o],
+            "inc_diff": inc_diff,
+            "azi_in": corrected[i],
+            "azi_out": corrected[o],
+            "azi_diff": azi_diff,
+            "sigma_azi_diff": np.sqrt(np.maximum(cov[i, i] + cov[o, o] - 2 * cov[i, o], 0.0)),
+            "inc_tolerance": np.full(len(i), options.inc_tolerance),
+            "azi_tolerance": azi_tol,
+            "passed": (np.abs(inc_diff) <= options.inc_tolerance) & (np.abs(azi_diff) <= azi_tol),
+        }
+    )

@@ -1,0 +1,240 @@
+"""Drift correction of simulated free-gyro surveys: corrected azimuths within their predicted
+σ (tie-in, given and calibrated rates), in/out-run QC flags, and the free-gyro pipeline."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.drift.calibration import CalibrationOptions, calibrate
+from pipeline.drift.correction import CorrectionOptions, DriftRate, correct_survey
+from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
+from pipeline.graph import build_plan
+from pipeline.io.csv import write_csv
+from pipeline.plugins import load_registry
+from pipeline.registry import PluginInfo, ReaderDef, Registry, StageDef
+from pipeline.runner import run_plan
+from pipeline.sim.calibration import CalibrationPlan, simulate_calibration
+from pipeline.sim.freegyro import simulate_free_gyro
+from pipeline.sim.spec import Drift, SimulationSpec
+from pipeline.spec import load_spec
+from pipeline.stages import drift as drift_plugin
+from pipeline.well import WellMetadata
+from tests_support import ROOT
+
+NOISE = 0.2  # deg, σ of an azimuth reading
+RATE = 3.0  # deg/h
+ROWS = [15, 40, 60]  # an in-run, a deep in-run and an out-run reading (inclined)
+
+
+def spec(seed: int = 0, **survey: object) -> SimulationSpec:
+    return SimulationSpec.model_validate(
+        {
+            "name": "free",
+            "seed": seed,
+            "site": {"latitude": 61.25, "longitude": 73.4, "date": "2026-11-21"},
+            "well": {
+                "sections": [
+                    {"kind": "vertical", "length": 200},
+                    {"kind": "build", "dls": 3.0, "inc": 40, "azi": 37},
+                    {"kind": "hold", "to_md": 1200},
+                ]
+            },
+            "tool": {"preset": "mems-vrg"},
+            "survey": {
+                "mode": "free_gyro",
+                "every": 30,
+                "reading_noise": NOISE,
+                "drift": {"offset": 0.7, "rate": RATE},
+            }
+            | survey,
+        }
+    )
+
+
+def azimuth_error(table: pa.Table) -> np.ndarray:
+    err = table.column("azi").to_numpy() - table.column("true_azi").to_numpy()
+    return (err + 180) % 360 - 180
+
+
+def normalised(options: CorrectionOptions, rate_sigma: float | None, runs: int) -> np.ndarray:
+    """(runs, len(ROWS)) errors of corrected azimuths over their predicted σ."""
+    z = []
+    for seed in range(runs):
+        readings = simulate_free_gyro(spec(seed))
+        rate = None
+        if rate_sigma is not None:  # a calibrated rate: true rate + its own error
+            error = np.random.default_rng([seed, 99]).normal(0.0, rate_sigma)
+            rate = DriftRate(RATE + error, rate_sigma, "test")
+        ref = readings.column("true_azi")[0].as_py()
+        out = correct_survey(readings, options.model_copy(update={"reference_azimuth": ref}), rate)
+        sigma = out.readings.column("sigma_azi").to_numpy()
+        z.append(azimuth_error(out.readings)[ROWS] / sigma[ROWS])
+    return np.array(z)
+
+
+def test_tie_in_correction_restores_the_survey_within_predicted_error():
+    readings = simulate_free_gyro(spec())
+    assert readings.column("run")[ROWS[-1]].as_py() == "out"
+    assert np.all(readings.column("true_inc").to_numpy()[ROWS] > 10)
+    z = normalised(CorrectionOptions(reading_sigma=NOISE), None, 300)
+    assert np.all((z.std(axis=0) > 0.8) & (z.std(axis=0) < 1.2)), z.std(axis=0)
+    assert np.all(np.abs(z.mean(axis=0)) < 0.15)
+
+
+def test_calibrated_rate_correction_carries_the_rate_sigma():
+    z = normalised(CorrectionOptions(reading_sigma=NOISE), 0.5, 300)
+    assert np.all((z.std(axis=0) > 0.8) & (z.std(axis=0) < 1.2)), z.std(axis=0)
+    assert np.all(np.abs(z.mean(axis=0)) < 0.15)
+
+
+def test_reading_sigma_is_estimated_from_the_in_out_pairs():
+    estimates = [
+        correct_survey(simulate_free_gyro(spec(seed)), CorrectionOptions()).reading_sigma
+        for seed in range(60)
+    ]
+    assert np.mean(estimates) == pytest.approx(NOISE, rel=0.1)
+
+
+def test_uncorrected_drift_is_removed_and_outputs_keep_their_contracts():
+    readings = simulate_free_gyro(spec(4))
+    before = np.abs(azimuth_error(readings)).max()
+    out = correct_survey(readings, CorrectionOptions(reference_azimuth=0.0))
+    CorrectedFreeGyroReadings.validate_table(out.readings)
+    DriftStations.validate_table(out.stations)
+    InOutQc.validate_table(out.qc)
+    assert before > 3.0  # drift of ~3 °/h over the run
+    assert np.abs(azimuth_error(out.readings)).max() < 5 * NOISE
+    assert out.rate.rate == pytest.approx(RATE, abs=0.3)
+    raw = out.readings.column("azi_raw").to_numpy() - out.readings.column("correction").to_numpy()
+    residue = (raw - out.readings.column("azi").to_numpy() + 180) % 360 - 180
+    assert np.abs(residue).max() < 1e-9
+    stations = out.stations
+    assert stations.num_rows == len(set(readings.column("station").to_pylist()))
+    assert stations.schema.field("azi").metadata[b"north_reference"] == b"true"
+    assert stations.column("readings").to_pylist()[-1] == 1  # the deepest is read once
+    assert out.qc.column("passed").to_pylist() == [True] * out.qc.num_rows
+
+
+def test_in_out_qc_flags_injected_station_errors():
+    readings = simulate_free_gyro(spec(5))
+    out = correct_survey(readings, CorrectionOptions())
+    assert all(out.qc.column("passed").to_pylist())  # clean survey passes
+    station = readings.column("station").to_numpy()
+    run = np.array(readings.column("run").to_pylist())
+    azi, inc = readings.column("azi").to_numpy().copy(), readings.column("inc").to_numpy().copy()
+    bad_azi = int(np.flatnonzero((run == "out") & (station == 20))[0])  # inclined station
+    bad_inc = int(np.flatnonzero((run == "in") & (station == 30))[0])
+    azi[bad_azi] = (azi[bad_azi] + 2.5) % 360  # beyond the 1° tolerance
+    inc[bad_inc] += 0.5  # beyond 0.23°
+    vertical = int(np.flatnonzero((run == "out") & (station == 3))[0])
+    azi[vertical] = (azi[vertical] + 3.0) % 360  # within 5° below 10° inclination
+    faulty = readings.set_column(
+        readings.column_names.index("azi"), readings.schema.field("azi"), pa.array(azi)
+    ).set_column(readings.column_names.index("inc"), readings.schema.field("inc"), pa.array(inc))
+    qc = correct_survey(faulty, CorrectionOptions()).qc.to_pydict()
+    failed = {s for s, ok in zip(qc["station"], qc["passed"], strict=True) if not ok}
+    assert failed == {20, 30}
+    low = qc["station"].index(3)
+    assert qc["azi_tolerance"][low] == 5.0 and abs(qc["azi_diff"][low]) > 2.5
+
+
+def test_tie_in_needs_the_out_run():
+    readings = simulate_free_gyro(spec(out_run=False))
+    with pytest.raises(ValueError, match="tie-in needs"):
+        correct_survey(readings, CorrectionOptions(reading_sigma=NOISE))
+    out = correct_survey(
+        readings, CorrectionOptions(reading_sigma=NOISE), DriftRate(RATE, 0.0, "given")
+    )
+    assert out.qc.num_rows == 0 and out.stations.num_rows == readings.num_rows
+
+
+def _context(serial: str | None) -> SimpleNamespace:
+    return SimpleNamespace(well=WellMetadata(tool_serial=serial), stage_id="drift")
+
+
+def test_correct_stage_uses_the_calibration_of_the_tool_serial():
+    calibration, _ = calibrate(
+        pa.concat_tables(
+            [
+                simulate_calibration(
+                    CalibrationPlan(instrument="IG50-1", reading_noise=0.5, drift=Drift(rate=RATE))
+                ),
+                simulate_calibration(CalibrationPlan(instrument="IG50-2", seed=2)),
+            ]
+        ),
+        CalibrationOptions(),
+    )
+    readings = simulate_free_gyro(spec(7))
+    inputs = {"readings": readings, "calibration": calibration}
+    out = drift_plugin.correct_stage(inputs, CorrectionOptions(), _context("IG50-1"))
+    fit = calibration.filter(calibration.column("selected")).to_pylist()[0]
+    expected = fit["drift_deg_h"] * (readings.column("time").to_numpy() - 15.0) / 3600
+    np.testing.assert_allclose(out["readings"].column("correction").to_numpy(), expected)
+    with pytest.raises(ValueError, match="no calibration estimate 'selected' of instrument 'X'"):
+        drift_plugin.correct_stage(inputs, CorrectionOptions(), _context("X"))
+    with pytest.raises(ValueError, match="the tool serial is unknown"):
+        drift_plugin.correct_stage(inputs, CorrectionOptions(), _context(None))
+    given = drift_plugin.correct_stage(
+        {"readings": readings}, CorrectionOptions(drift_rate=2.0), _context(None)
+    )
+    assert given["readings"].column("correction")[-1].as_py() == pytest.approx(
+        2.0 * (readings.column("time")[-1].as_py() - 15.0) / 3600
+    )
+
+
+def test_non_linear_calibration_is_refused_unless_allowed():
+    calibration, _ = calibrate(
+        simulate_calibration(
+            CalibrationPlan(drift=Drift(rate=RATE, curvature=120.0), reading_noise=2.0)
+        ),
+        CalibrationOptions(),
+    )
+    inputs = {"readings": simulate_free_gyro(spec()), "calibration": calibration}
+    with pytest.raises(ValueError, match="non-linear"):
+        drift_plugin.correct_stage(inputs, CorrectionOptions(), _context(None))
+    out = drift_plugin.correct_stage(
+        inputs, CorrectionOptions(allow_nonlinear=True, estimate="mean"), _context(None)
+    )
+    assert out["qc"].num_rows > 0
+
+
+def drift_registry() -> Registry:
+    """The real registry, with the drift plugin added unless it is already built in."""
+    registry = load_registry()
+    if "correct_drift" not in registry.stages:
+        plugin = PluginInfo("builtin.drift", "test", builtin=True)
+        registry.plugins[plugin.name] = plugin
+        drift_plugin.gyropipe_register_stages(lambda s: registry.add(s, plugin, StageDef))
+        drift_plugin.gyropipe_register_readers(lambda r: registry.add(r, plugin, ReaderDef))
+    assert not registry.problems, registry.problems
+    return registry
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+def test_free_gyro_pipeline(tmp_path: Path, fmt: str):
+    readings = simulate_free_gyro(spec(8))
+    path = tmp_path / f"readings.{fmt}"
+    if fmt == "parquet":
+        pq.write_table(readings, path)
+    else:
+        write_csv(readings, path, WellMetadata(well="free"))
+    registry = drift_registry()
+    plan = build_plan(load_spec(ROOT / "pipelines" / "free-gyro.yaml"), registry)
+    run_plan(plan, registry, inputs={"readings": path}, out_dir=tmp_path / "out")
+    qc = pq.read_table(tmp_path / "out" / "drift.qc.parquet")
+    assert all(qc.column("passed").to_pylist())
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    stations = pq.read_table(tmp_path / "out" / "drift.stations.parquet")
+    assert trajectory.num_rows == stations.num_rows
+    inclined = trajectory.column("inc").to_numpy() > 10
+    # no reference azimuth: corrected azimuths keep the orientation offset at the tie-in
+    offset = readings.column("azi")[0].as_py() - readings.column("true_azi")[0].as_py()
+    truth = readings.filter(pa.compute.equal(readings.column("run"), "in"))
+    err = trajectory.column("azi").to_numpy() - truth.column("true_azi").to_numpy() - offset
+    assert np.all(np.abs((err[inclined] + 180) % 360 - 180) < 4 * NOISE)
