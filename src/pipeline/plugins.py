@@ -36,6 +36,8 @@ BUILTIN_PLUGINS = {
     "builtin.compass": "pipeline.stages.compass",
     "builtin.validity": "pipeline.stages.validity",
     "builtin.drift": "pipeline.stages.drift",
+    "builtin.continuous": "pipeline.stages.continuous",
+    "builtin.stations": "pipeline.stages.stations",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",

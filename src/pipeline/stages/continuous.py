@@ -1,0 +1,51 @@
+"""Built-in plugin: continuous-mode gyro survey (moving run between two compassed stops)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import pyarrow as pa
+
+from pipeline.continuous.integrate import (
+    ContinuousOptions,
+    ContinuousSeries,
+    ContinuousStations,
+    integrate_continuous,
+)
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import StageContext, StageDef
+from pipeline.stages.compass import MissingLatitude
+from pipeline.tables import CompassStations, RawSamples
+
+
+def continuous_stage(
+    inputs: Mapping[str, pa.Table], params: ContinuousOptions, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Integrate the azimuth of the moving run; close it on the end stop."""
+    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
+    if latitude is None:
+        raise MissingLatitude(
+            "the site latitude is unknown: set the well's latitude or the stage's `latitude`"
+        )
+    result = integrate_continuous(inputs["samples"], inputs["stops"], latitude, params)
+    misclosure = f"{result.misclosure:.6g}".encode()
+    stations = result.stations.replace_schema_metadata(
+        {**(result.stations.schema.metadata or {}), b"misclosure_deg": misclosure}
+    )
+    return {"stations": stations, "series": result.series}
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="integrate_continuous",
+            func=continuous_stage,
+            description="Continuous-mode gyro: integrate the azimuth of the moving run from "
+            "the start stop, remove the misclosure on the end stop linearly in time, flag "
+            "near-vertical sections; stations at a fixed MD spacing and the full-rate series.",
+            inputs={"samples": RawSamples, "stops": CompassStations},
+            outputs={"stations": ContinuousStations, "series": ContinuousSeries},
+            params=ContinuousOptions,
+        )
+    )

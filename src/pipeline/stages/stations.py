@@ -1,0 +1,357 @@
+"""Built-in plugin: survey methods, interpolation along the path, north-reference conversion."""
+
+from __future__ import annotations
+
+import datetime as dt
+import itertools
+from collections.abc import Callable, Mapping
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from pipeline.contracts import column
+from pipeline.earth.geomagnetic import ModelKey
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import StageContext, StageDef
+from pipeline.stages.survey import north_reference_of, survey_offsets
+from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
+from pipeline.survey.methods import Method, build_turn_rates, survey_positions
+from pipeline.survey.mincurve import closure, vertical_section
+from pipeline.survey.north import convergence_at, convert_table, declination_at
+from pipeline.tables import DLS_COURSE_M, DLS_UNIT, Stations, Trajectory
+from pipeline.well import NorthReference
+
+
+class MethodTrajectory(Trajectory):
+    """A trajectory computed by a named survey method, with build and turn rates."""
+
+    build: float = column(unit=DLS_UNIT, description="build rate ΔI/ΔMD from the previous station")
+    turn: float = column(
+        unit=DLS_UNIT, description="turn rate ΔA/ΔMD from the previous station (short way)"
+    )
+
+
+class PathPoints(Stations):
+    """Points interpolated on the minimum-curvature path (positions NED from the wellhead)."""
+
+    azi: float = column(
+        unit="deg",
+        ge=0,
+        lt=360,
+        north_reference=True,
+        description="azimuth in [0, 360), clockwise from north",
+    )
+    tvd: float = column(unit="m", description="true vertical depth below the depth reference")
+    north: float = column(unit="m", description="northing from the wellhead")
+    east: float = column(unit="m", description="easting from the wellhead")
+
+
+class TvdCrossings(PathPoints):
+    """Where the path crosses requested TVDs, in MD order."""
+
+    target_tvd: float = column(unit="m", description="the requested TVD this point crosses")
+
+
+# --- survey_method ------------------------------------------------------------------------------
+
+
+class SurveyMethodParams(BaseModel):
+    """Parameters of the survey-method stage (lengths m, angles deg)."""
+
+    model_config = ConfigDict(extra="forbid")
+    method: Method = Field("minimum_curvature", description="survey calculation method")
+    vs_azimuth: float = Field(
+        0.0, description="vertical-section plane azimuth, deg, same north reference as the survey"
+    )
+    tie_north: float = Field(0.0, description="northing of the first station from the wellhead, m")
+    tie_east: float = Field(0.0, description="easting of the first station from the wellhead, m")
+    tie_tvd: float | None = Field(
+        None, description="TVD of the first station, m; default: its MD (vertical above it)"
+    )
+
+
+def _angles(stations: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    md = stations.column("md").to_numpy().astype(np.float64)
+    inc = stations.column("inc").to_numpy().astype(np.float64)
+    azi = np.mod(stations.column("azi").to_numpy().astype(np.float64), 360.0)
+    azi[azi >= 360.0] = 0.0
+    return md, inc, azi
+
+
+def survey_method(
+    inputs: Mapping[str, pa.Table], params: SurveyMethodParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Stations → trajectory by the chosen method, every survey of the table in one call."""
+    stations = inputs["stations"]
+    md, inc_deg, azi_deg = _angles(stations)
+    offsets = survey_offsets(stations)
+    tie_tvd = md[offsets[:-1]] if params.tie_tvd is None else params.tie_tvd
+    inc, azi = np.radians(inc_deg), np.radians(azi_deg)
+    result = survey_positions(
+        params.method,
+        md,
+        inc,
+        azi,
+        offsets=offsets,
+        tie_north=params.tie_north,
+        tie_east=params.tie_east,
+        tie_tvd=tie_tvd,
+    )
+    build, turn = build_turn_rates(md, inc, azi, offsets=offsets)
+    distance, direction = closure(result.north, result.east)
+    columns: dict[str, object] = {
+        "md": md,
+        "inc": inc_deg,
+        "azi": azi_deg,
+        "tvd": result.tvd,
+        "north": result.north,
+        "east": result.east,
+        "dogleg": np.degrees(result.dogleg),
+        "dls": np.degrees(result.dls) * DLS_COURSE_M,
+        "vertical_section": vertical_section(
+            result.north, result.east, np.radians(params.vs_azimuth)
+        ),
+        "closure_distance": distance,
+        "closure_direction": np.degrees(direction) % 360.0,
+        "build": build,
+        "turn": turn,
+    }
+    if "survey" in stations.column_names:
+        columns = {"survey": stations.column("survey"), **columns}
+    table = MethodTrajectory.compiled().make_table(
+        columns, north_reference=north_reference_of(stations, "azi")
+    )
+    return {"trajectory": table}
+
+
+# --- interpolation ------------------------------------------------------------------------------
+
+
+class InterpolateMdParams(BaseModel):
+    """Parameters of MD interpolation: explicit MDs, a spacing, or both (merged)."""
+
+    model_config = ConfigDict(extra="forbid")
+    md: list[float] | None = Field(
+        None, description="MDs to interpolate at, m; those outside a survey's range are skipped"
+    )
+    spacing: float | None = Field(
+        None, gt=0, description="also every multiple of this spacing within each survey, m"
+    )
+    include_stations: bool = Field(False, description="also output the stations themselves")
+
+    @model_validator(mode="after")
+    def _something(self) -> InterpolateMdParams:
+        if self.md is None and self.spacing is None and not self.include_stations:
+            raise ValueError("give md, spacing or include_stations")
+        return self
+
+
+class InterpolateTvdParams(BaseModel):
+    """Parameters of TVD interpolation."""
+
+    model_config = ConfigDict(extra="forbid")
+    tvd: list[float] = Field(min_length=1, description="TVDs whose every crossing is wanted, m")
+
+
+def _per_survey(
+    trajectory: pa.Table,
+    solve: Callable[[np.ndarray, np.ndarray, np.ndarray, tuple[float, float, float]], Interpolated],
+) -> tuple[list[Interpolated], list[int]]:
+    md, inc_deg, azi_deg = _angles(trajectory)
+    north = trajectory.column("north").to_numpy()
+    east = trajectory.column("east").to_numpy()
+    tvd = trajectory.column("tvd").to_numpy()
+    offsets = survey_offsets(trajectory)
+    found: list[Interpolated] = []
+    firsts: list[int] = []
+    for lo, hi in itertools.pairwise(offsets):
+        if hi - lo < 2:
+            continue
+        tie = (float(north[lo]), float(east[lo]), float(tvd[lo]))
+        sl = slice(int(lo), int(hi))
+        found.append(solve(md[sl], np.radians(inc_deg[sl]), np.radians(azi_deg[sl]), tie))
+        firsts.append(int(lo))
+    return found, firsts
+
+
+def _points_table(
+    trajectory: pa.Table,
+    found: list[Interpolated],
+    firsts: list[int],
+    contract: type[PathPoints],
+    extra: Mapping[str, object] | None = None,
+) -> pa.Table:
+    columns: dict[str, object] = {}
+    if "survey" in trajectory.column_names:
+        ids = trajectory.column("survey").to_pylist()
+        columns["survey"] = [ids[f] for f, p in zip(firsts, found, strict=True) for _ in p.md]
+    cat = {
+        key: np.concatenate([getattr(p, key) for p in found]) if found else np.zeros(0)
+        for key in ("md", "inc", "azi", "tvd", "north", "east")
+    }
+    columns.update(
+        md=cat["md"],
+        inc=np.degrees(cat["inc"]),
+        azi=np.degrees(cat["azi"]) % 360.0,
+        tvd=cat["tvd"],
+        north=cat["north"],
+        east=cat["east"],
+    )
+    columns.update(extra or {})
+    return contract.compiled().make_table(
+        columns, north_reference=north_reference_of(trajectory, "azi")
+    )
+
+
+def interpolate_md_stage(
+    inputs: Mapping[str, pa.Table], params: InterpolateMdParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Trajectory → points on its minimum-curvature path at requested MDs."""
+    trajectory = inputs["trajectory"]
+
+    def solve(
+        md: np.ndarray, inc: np.ndarray, azi: np.ndarray, tie: tuple[float, float, float]
+    ) -> Interpolated:
+        wanted = [np.asarray(params.md or [], dtype=np.float64)]
+        if params.spacing is not None:
+            step = params.spacing
+            first = np.ceil(md[0] / step)
+            last = np.floor(md[-1] / step)
+            wanted.append(np.arange(first, last + 1.0) * step)
+        if params.include_stations:
+            wanted.append(md)
+        at = np.unique(np.concatenate(wanted))
+        at = at[(at >= md[0]) & (at <= md[-1])]
+        return interpolate_md(md, inc, azi, at, tie=tie)
+
+    found, firsts = _per_survey(trajectory, solve)
+    return {"points": _points_table(trajectory, found, firsts, PathPoints)}
+
+
+def interpolate_tvd_stage(
+    inputs: Mapping[str, pa.Table], params: InterpolateTvdParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Trajectory → every crossing of its minimum-curvature path with each requested TVD."""
+    trajectory = inputs["trajectory"]
+    targets = np.unique(np.asarray(params.tvd, dtype=np.float64))
+
+    def solve(
+        md: np.ndarray, inc: np.ndarray, azi: np.ndarray, tie: tuple[float, float, float]
+    ) -> Interpolated:
+        return interpolate_tvd(md, inc, azi, targets, tie=tie)
+
+    found, firsts = _per_survey(trajectory, solve)
+    target_tvd = np.concatenate([targets[p.target] for p in found]) if found else np.zeros(0)
+    table = _points_table(trajectory, found, firsts, TvdCrossings, extra={"target_tvd": target_tvd})
+    return {"crossings": table}
+
+
+# --- north reference ----------------------------------------------------------------------------
+
+
+class NorthReferenceParams(BaseModel):
+    """Parameters of the north-reference conversion (angles deg). Corrections not given are
+    derived from the well header: γ from ``crs`` at the wellhead, D from the geomagnetic
+    ``model`` at the wellhead on ``date`` (default: the survey date)."""
+
+    model_config = ConfigDict(extra="forbid")
+    target: NorthReference = Field(description="north reference to convert the azimuths to")
+    convergence: float | None = Field(
+        None, description="grid convergence γ, deg (grid north east of true north positive)"
+    )
+    crs: str | None = Field(None, description="projected CRS of the grid (EPSG:…) for γ")
+    declination: float | None = Field(
+        None, description="magnetic declination D, deg (east positive)"
+    )
+    model: ModelKey = Field("wmm2025", description="geomagnetic model for D")
+    date: dt.date | None = Field(None, description="date for D; default the well's survey date")
+
+
+def _needs(stations: pa.Table, target: str) -> set[str]:
+    refs = {target}
+    for fld in stations.schema:
+        raw = (fld.metadata or {}).get(b"north_reference")
+        if raw is not None:
+            refs.add(raw.decode())
+    return refs
+
+
+def north_reference_stage(
+    inputs: Mapping[str, pa.Table], params: NorthReferenceParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Stations → the same stations with every azimuth column converted to ``target`` north."""
+    stations = inputs["stations"]
+    refs = _needs(stations, params.target)
+    well = ctx.well
+    convergence = params.convergence
+    declination = params.declination
+    if len(refs) > 1 and "grid" in refs and convergence is None:
+        if params.crs is None or well.latitude is None or well.longitude is None:
+            raise ValueError(
+                "grid north needs `convergence`, or `crs` and the well's latitude and longitude"
+            )
+        convergence = convergence_at(well.latitude, well.longitude, params.crs)
+    if len(refs) > 1 and "magnetic" in refs and declination is None:
+        date = params.date or well.survey_date
+        if well.latitude is None or well.longitude is None or date is None:
+            raise ValueError(
+                "magnetic north needs `declination`, or the well's latitude, longitude "
+                "and a date (`date` or the well's survey_date)"
+            )
+        declination = declination_at(
+            well.latitude, well.longitude, date, height_m=well.elevation or 0.0, model=params.model
+        )
+    table = convert_table(
+        stations, params.target, convergence_deg=convergence, declination_deg=declination
+    )
+    return {"stations": table}
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="survey_method",
+            func=survey_method,
+            description="Integrate stations into a trajectory by a chosen method (minimum "
+            "curvature, tangential, balanced tangential, average angle, radius of curvature), "
+            "with build and turn rates.",
+            inputs={"stations": Stations},
+            outputs={"trajectory": MethodTrajectory},
+            params=SurveyMethodParams,
+        )
+    )
+    register(
+        StageDef(
+            name="interpolate_md",
+            func=interpolate_md_stage,
+            description="Points on the minimum-curvature path of a trajectory at given MDs "
+            "or a regular spacing.",
+            inputs={"trajectory": Trajectory},
+            outputs={"points": PathPoints},
+            params=InterpolateMdParams,
+        )
+    )
+    register(
+        StageDef(
+            name="interpolate_tvd",
+            func=interpolate_tvd_stage,
+            description="Every crossing of the minimum-curvature path of a trajectory with "
+            "given TVDs.",
+            inputs={"trajectory": Trajectory},
+            outputs={"crossings": TvdCrossings},
+            params=InterpolateTvdParams,
+        )
+    )
+    register(
+        StageDef(
+            name="north_reference",
+            func=north_reference_stage,
+            description="Convert the azimuth columns of stations to true, grid or magnetic "
+            "north (γ from a CRS, D from a geomagnetic model, or given).",
+            inputs={"stations": Stations},
+            outputs={"stations": Stations},
+            params=NorthReferenceParams,
+        )
+    )

@@ -1,0 +1,153 @@
+"""Continuous-mode integration against noise-free simulations (DOMAIN.md §6)."""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from pipeline.compass.readings import ReadingOptions, position_readings
+from pipeline.compass.solve import CompassOptions, compass
+from pipeline.continuous.integrate import (
+    FLAG_NEAR_VERTICAL,
+    ContinuousOptions,
+    ContinuousResult,
+    integrate_continuous,
+)
+from pipeline.sim.simulate import Simulation, simulate
+from pipeline.sim.spec import SimulationSpec
+from pipeline.survey.mincurve import minimum_curvature
+
+LAT = 61.25
+SITE = {
+    "latitude": LAT,
+    "longitude": 73.4,
+    "elevation": 120.0,
+    "date": "2026-11-21",
+    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
+}
+SECTIONS = [
+    {"kind": "vertical", "length": 20},
+    {"kind": "build", "dls": 6.0, "inc": 30, "azi": 60},
+    {"kind": "curve", "dls": 4.0, "inc": 35, "azi": 100},
+    {"kind": "hold", "length": 60},
+]
+SURVEY = {
+    "mode": "continuous",
+    "start_md": 130,
+    "speed": 1.0,
+    "ramp_time": 3.0,
+    "stop": {"dwell": 3.0, "move_time": 1.0},
+    "stabilisation": {"residual": 3.0, "correlation": 2.0},
+}
+
+
+def make_spec(tool: dict[str, Any], survey: dict[str, Any] | None = None) -> SimulationSpec:
+    return SimulationSpec.model_validate(
+        {
+            "name": "t",
+            "seed": 4,
+            "site": SITE,
+            "well": {"sections": SECTIONS},
+            "tool": tool,
+            "survey": survey or SURVEY,
+        }
+    )
+
+
+@cache
+def run(bias: float = 0.0) -> tuple[Simulation, pa.Table]:
+    overrides: dict[str, Any] = {"gyro_axes": "x"}
+    if bias:
+        overrides["gyro"] = {"bias": (bias, 0.0, 0.0)}
+    sim = simulate(make_spec({"preset": "ideal", "overrides": overrides}))
+    readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
+    stops, _ = compass(readings, LAT, CompassOptions(noise_floor=0.01))
+    return sim, stops
+
+
+def integrate(bias: float = 0.0, closure: bool = True) -> ContinuousResult:
+    sim, stops = run(bias)
+    return integrate_continuous(
+        sim.samples,
+        stops,
+        LAT,
+        ContinuousOptions(spacing=5.0, closure=closure, odometer_window=0.07),
+    )
+
+
+def azimuth_error(result: ContinuousResult, sim: Simulation) -> np.ndarray:
+    series = result.series
+    truth_t = sim.truth.column("time").to_numpy()
+    truth_azi = sim.truth.column("azi").to_numpy()
+    t = series.column("time").to_numpy()
+    rows = np.searchsorted(truth_t, t)
+    assert np.allclose(truth_t[rows], t)
+    err = series.column("azi").to_numpy() - truth_azi[rows]
+    ok = series.column("flags").to_numpy() & FLAG_NEAR_VERTICAL == 0
+    wrapped: np.ndarray = ((err + 180) % 360 - 180)[ok]
+    return wrapped
+
+
+def test_noise_free_run_recovers_azimuth_and_trajectory() -> None:
+    sim, _ = run()
+    result = integrate()
+    err = azimuth_error(result, sim)
+    assert err.size > 1000
+    assert np.abs(err).max() < 0.01
+    assert abs(result.misclosure) < 0.01
+    stations = result.stations
+    md = stations.column("md").to_numpy()
+    assert np.all(stations.column("flags").to_numpy() == 0)
+    truth = make_spec({"preset": "ideal"}).path().evaluate(md)
+    mc = minimum_curvature(
+        md,
+        np.radians(stations.column("inc").to_numpy()),
+        np.radians(stations.column("azi").to_numpy()),
+        tie_north=truth.position[0, 0],
+        tie_east=truth.position[0, 1],
+        tie_tvd=truth.position[0, 2],
+    )
+    position = np.stack([mc.north, mc.east, mc.tvd], axis=-1)
+    assert np.abs(position - truth.position).max() < 0.01
+    assert md[0] == pytest.approx(130.0) and np.diff(md).max() <= 5.0 + 1e-9
+
+
+def test_constant_gyro_bias_drifts_linearly_and_closure_removes_it() -> None:
+    bias = 2.0  # deg/h on the gyro
+    sim, _ = run(bias)
+    raw = integrate(bias, closure=False)
+    clean = integrate(bias, closure=True)
+    err_raw = azimuth_error(raw, sim)
+    t = raw.series.column("time").to_numpy()
+    t = t - t[0]
+    slope, offset = np.polyfit(t, err_raw, 1)
+    linear = slope * t + offset
+    # the drift is linear in time (constant inclination ⇒ constant ∂Ȧ/∂h ≈ −1/sin I)
+    assert np.abs(err_raw).max() > 0.05
+    assert np.abs(err_raw - linear).max() < 0.1 * np.abs(err_raw).max()
+    assert raw.misclosure == pytest.approx(err_raw[-1], abs=0.01)
+    assert np.abs(azimuth_error(clean, sim)).max() < 0.1 * np.abs(err_raw).max()
+
+
+def test_stage_registers_and_runs() -> None:
+    from types import SimpleNamespace
+
+    from pipeline.stages.continuous import continuous_stage, gyropipe_register_stages
+
+    defs: list[Any] = []
+    gyropipe_register_stages(defs.append)
+    assert defs[0].name == "integrate_continuous"
+    sim, stops = run()
+    ctx: Any = SimpleNamespace(well=SimpleNamespace(latitude=LAT), stage_id="c")
+    out = continuous_stage(
+        {"samples": sim.samples, "stops": stops},
+        ContinuousOptions(spacing=10.0, odometer_window=0.07),
+        ctx,
+    )
+    assert set(out) == {"stations", "series"}
+    assert b"misclosure_deg" in (out["stations"].schema.metadata or {})
+    assert out["stations"].num_rows > 20
