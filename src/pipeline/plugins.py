@@ -38,6 +38,7 @@ BUILTIN_PLUGINS = {
     "builtin.drift": "pipeline.stages.drift",
     "builtin.continuous": "pipeline.stages.continuous",
     "builtin.stations": "pipeline.stages.stations",
+    "builtin.uncertainty": "pipeline.stages.uncertainty",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",

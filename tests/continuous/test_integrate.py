@@ -13,6 +13,7 @@ from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.compass.solve import CompassOptions, compass
 from pipeline.continuous.integrate import (
     FLAG_NEAR_VERTICAL,
+    FLAG_NO_CLOSURE,
     ContinuousOptions,
     ContinuousResult,
     integrate_continuous,
@@ -151,3 +152,19 @@ def test_stage_registers_and_runs() -> None:
     assert set(out) == {"stations", "series"}
     assert b"misclosure_deg" in (out["stations"].schema.metadata or {})
     assert out["stations"].num_rows > 20
+
+
+def test_run_starting_near_vertical_is_tied_to_the_end_stop() -> None:
+    """The start stop in the vertical section has no azimuth: integrate back from the end."""
+    survey = {**SURVEY, "start_md": 5.0}
+    sim = simulate(make_spec({"preset": "ideal", "overrides": {"gyro_axes": "x"}}, survey))
+    readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
+    stops, _ = compass(readings, LAT, CompassOptions(noise_floor=0.01))
+    result = integrate_continuous(
+        sim.samples, stops, LAT, ContinuousOptions(spacing=5.0, odometer_window=0.07)
+    )
+    assert np.isnan(result.misclosure)
+    flags = result.series.column("flags").to_numpy()
+    assert np.all(flags & FLAG_NO_CLOSURE)
+    err = azimuth_error(result, sim)
+    assert np.abs(err).max() < 0.01

@@ -15,7 +15,9 @@ frame x axis (the gyro) is kept near the high side by the servo. Per sample:
   A) from the start stop's azimuth.
 
 Closure ("continuous-gyro drift"): the integrated azimuth at the end stop minus the end
-stop's compassed azimuth is the misclosure; it is distributed linearly in time over the run
+stop's compassed azimuth is the misclosure; it is distributed linearly in time over the run.
+A run starting near vertical (where the start stop's azimuth means nothing) is integrated
+backward from the end stop instead, with no closure (misclosure reported as NaN)
 and removed, which cancels a constant gyro bias exactly (its azimuth error grows linearly in
 time at constant inclination). The misclosure is reported.
 
@@ -47,6 +49,8 @@ FLAG_NEAR_VERTICAL = 1
 FLAG_AFTER_VERTICAL = 2
 """Azimuth integrated after a held near-vertical section (closure absorbs its change)."""
 FLAG_LARGE_MISALIGNMENT = 4
+FLAG_NO_CLOSURE = 8
+"""Integrated back from the end stop alone: the gyro bias is not removed by a closure."""
 """Gyro more than ``max_misalignment`` from the high side: h is ill-conditioned."""
 
 _DEG_H = np.pi / 180.0 / 3600.0  # °/h → rad/s
@@ -159,7 +163,9 @@ def _stop(stops: pa.Table, station: int) -> dict[str, float]:
             f"stop {station} is not among the compassed stops (rejected by compassing?)"
         )
     row = int(rows[0])
-    return {n: float(_column(stops, n)[row]) for n in ("azi", "sigma_azi", "sigma_inc", "md")}
+    return {
+        n: float(_column(stops, n)[row]) for n in ("azi", "inc", "sigma_azi", "sigma_inc", "md")
+    }
 
 
 def integrate_continuous(
@@ -192,6 +198,11 @@ def integrate_continuous(
     oc, os_ = OMEGA_EARTH * np.cos(phi), OMEGA_EARTH * np.sin(phi)
     azi_rate = np.zeros(t.size)
     inc_rate = np.zeros(t.size)
+    vertical_stop = np.sin(np.radians(options.vertical_below))
+    backward = bool(
+        np.sin(np.radians(start["inc"])) < vertical_stop
+        and np.sin(np.radians(finish["inc"])) >= vertical_stop
+    )
     for _ in range(options.passes):
         # remove the tool's acceleration: along the axis a, across it v·(İ·hs + sin I·Ȧ·rs)
         tf = np.arctan2(gy, -gx)
@@ -207,15 +218,35 @@ def integrate_continuous(
             if t.size > window
             else np.gradient(inc, t)
         )
-        azi, flags, held = _integrate(
-            t, y, inc, inc_rate, tf, float(np.radians(start["azi"])), oc, os_, options
-        )
+        if backward:  # tie to the inclined end stop and integrate back in time
+            rev = slice(None, None, -1)
+            azi, flags, held = _integrate(
+                t[rev],
+                y[rev],
+                inc[rev],
+                inc_rate[rev],
+                tf[rev],
+                float(np.radians(finish["azi"])),
+                oc,
+                os_,
+                options,
+            )
+            azi, flags, held = azi[rev], flags[rev], held[rev]
+        else:
+            azi, flags, held = _integrate(
+                t, y, inc, inc_rate, tf, float(np.radians(start["azi"])), oc, os_, options
+            )
         azi_rate = np.gradient(azi, t)
-    misclosure = float(_wrap(azi[-1] - np.radians(finish["azi"])))
     weight = (t - t[0]) / (t[-1] - t[0])
-    if options.closure:
-        azi = azi - misclosure * weight
-    after = np.cumsum(held) > 0
+    if backward:  # one usable tie only: no closure, and the start stop's azimuth is not used
+        misclosure = float("nan")
+    else:
+        misclosure = float(_wrap(azi[-1] - np.radians(finish["azi"])))
+        if options.closure:
+            azi = azi - misclosure * weight
+    after = (np.cumsum(held[::-1]) > 0)[::-1] if backward else np.cumsum(held) > 0
+    if backward:
+        flags |= FLAG_NO_CLOSURE
     flags[after & ~held] |= FLAG_AFTER_VERTICAL
     inc_deg = np.degrees(inc)
     azi_deg = np.degrees(azi) % 360.0
@@ -255,7 +286,7 @@ def _integrate(
     flags[misaligned & ~vertical] |= FLAG_LARGE_MISALIGNMENT
     held = vertical | misaligned
     held[0] = held[-1] = False  # the stops themselves: tool at rest
-    usable = ~held
+    usable = ~held & ~vertical  # a stop at rest is not held, but Ȧ is still singular there
 
     def rate(k: int, a: float) -> float:
         if not usable[k]:

@@ -1,0 +1,88 @@
+"""Benchmark the GYRO-NS position-uncertainty propagation against welleng.
+
+Run from the repository root: ``python benchmarks/bench_uncertainty.py [--repeat N]``.
+For surveys of several lengths it prints the best-of-N time of ours (minimum curvature +
+per-term covariance) and of welleng (``Survey(..., error_model="GYRO-NS")``, which also
+integrates the survey), the speed-up, and the largest total-covariance difference relative to
+welleng's largest element, with both in the ISCWSA convention (balanced tangent, Rev 5 surface
+tie-on). Exits with status 1 if the relative difference exceeds 1e-4.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import timeit
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+import welleng as we
+from numpy.typing import NDArray
+
+from pipeline.survey.mincurve import minimum_curvature
+from pipeline.uncertainty.gyro import Survey, gyro_covariance
+
+Floats = NDArray[np.float64]
+LATITUDE = 60.0
+TOLERANCE = 1e-4
+
+
+def profile(n: int) -> tuple[Floats, Floats, Floats]:
+    """A build-and-turn well of n stations, 30 m apart, from MD 0."""
+    md = np.arange(n, dtype=np.float64) * 30.0
+    kickoff = 0.15 * md[-1]
+    inc = np.clip((md - kickoff) / (0.6 * md[-1]) * 60.0, 0.0, 60.0).astype(np.float64)
+    azi: Floats = np.where(md > kickoff, 45.0 + (md - kickoff) / 100.0, 45.0) % 360.0
+    return md, inc, azi
+
+
+def ours(md: Floats, inc: Floats, azi: Floats) -> Floats:
+    i, a = np.radians(inc), np.radians(azi)
+    tvd = minimum_curvature(md, i, a).tvd
+    _, cov = gyro_covariance(
+        Survey.of(md, i, a, tvd), LATITUDE, basis="balanced_tangent", surface_tie=True
+    )
+    total: Floats = cov.sum(axis=0)
+    return total
+
+
+def welleng(md: Floats, inc: Floats, azi: Floats) -> Floats:
+    header = we.survey.SurveyHeader(
+        latitude=LATITUDE, longitude=2.0, G=9.80665, azi_reference="true"
+    )
+    survey = we.survey.Survey(md=md, inc=inc, azi=azi, header=header, error_model="GYRO-NS")
+    terms = survey.err.errors.errors  # type: ignore[union-attr]
+    total: Floats = np.sum([np.asarray(e.cov_NEV, dtype=np.float64) for e in terms.values()], 0)
+    return total
+
+
+def best(func: Callable[..., object], repeat: int) -> float:
+    timer = timeit.Timer(func)
+    loops, _ = timer.autorange()
+    return min(timer.repeat(repeat=repeat, number=loops)) / loops
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args(argv)
+    warnings.simplefilter("ignore")
+    print(f"{'stations':>8} {'ours ms':>9} {'weng ms':>9} {'speed-up':>8} {'max rel diff':>12}")
+    worst = 0.0
+    for n in (100, 1000, 5000):
+        md, inc, azi = profile(n)
+        a, b = ours(md, inc, azi), welleng(md, inc, azi)
+        rel = float(np.abs(a - b).max() / np.abs(b).max())
+        worst = max(worst, rel)
+        t_ours = best(lambda md=md, inc=inc, azi=azi: ours(md, inc, azi), args.repeat)
+        t_weng = best(lambda md=md, inc=inc, azi=azi: welleng(md, inc, azi), args.repeat)
+        print(
+            f"{n:>8} {t_ours * 1e3:>9.2f} {t_weng * 1e3:>9.2f} "
+            f"{t_weng / t_ours:>7.1f}x {rel:>12.2e}"
+        )
+    return 0 if worst <= TOLERANCE else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,60 @@
+"""Horizontal error ellipses and vertical σ from NEV covariances.
+
+For the horizontal block C = [[nn, ne], [ne, ee]] the semi-axes at 1σ are √λ of its
+eigenvalues λ = (nn + ee)/2 ± √(((nn − ee)/2)² + ne²), and the major axis points at azimuth
+θ = ½·atan2(2·ne, nn − ee) clockwise from north (folded to [0°, 180°)). An ellipse containing
+the position with probability p scales both axes by k₂ = √(χ²₂(p)) = √(−2 ln(1 − p)); the
+vertical interval uses the two-sided normal quantile k₁ = Φ⁻¹((1 + p)/2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from statistics import NormalDist
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["Ellipses", "ellipses", "horizontal_scale", "vertical_scale"]
+
+FloatArray = NDArray[np.float64]
+
+
+def horizontal_scale(confidence: float) -> float:
+    """k with P(χ²₂ ≤ k²) = confidence: the 2-D ellipse scale factor."""
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1); got {confidence}")
+    return float(np.sqrt(-2.0 * np.log1p(-confidence)))
+
+
+def vertical_scale(confidence: float) -> float:
+    """Two-sided normal quantile for a 1-D interval of probability ``confidence``."""
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1); got {confidence}")
+    return NormalDist().inv_cdf(0.5 * (1.0 + confidence))
+
+
+@dataclass(frozen=True)
+class Ellipses:
+    """Per-station horizontal ellipses (1σ semi-axes, m; azimuth of major axis, rad) and σ_V."""
+
+    semi_major: FloatArray
+    semi_minor: FloatArray
+    azimuth: FloatArray
+    sigma_v: FloatArray
+
+
+def ellipses(
+    cov_nn: ArrayLike, cov_ne: ArrayLike, cov_ee: ArrayLike, cov_vv: ArrayLike
+) -> Ellipses:
+    """1σ ellipses of the horizontal covariance blocks (any shape, element-wise)."""
+    nn = np.asarray(cov_nn, dtype=np.float64)
+    ne = np.asarray(cov_ne, dtype=np.float64)
+    ee = np.asarray(cov_ee, dtype=np.float64)
+    mean = 0.5 * (nn + ee)
+    radius = np.hypot(0.5 * (nn - ee), ne)
+    major = np.sqrt(np.clip(mean + radius, 0.0, None))
+    minor = np.sqrt(np.clip(mean - radius, 0.0, None))
+    azimuth = np.mod(0.5 * np.arctan2(2.0 * ne, nn - ee), np.pi)
+    sigma_v = np.sqrt(np.clip(np.asarray(cov_vv, dtype=np.float64), 0.0, None))
+    return Ellipses(semi_major=major, semi_minor=minor, azimuth=azimuth, sigma_v=sigma_v)
