@@ -14,12 +14,17 @@ from pipeline.contracts import column
 from pipeline.earth.geomagnetic import ModelKey
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
-from pipeline.stages.survey import north_reference_of, survey_offsets
+from pipeline.stages.survey import (
+    MinCurveParams,
+    north_reference_of,
+    station_angles,
+    survey_offsets,
+    trajectory_columns,
+)
 from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
-from pipeline.survey.methods import Method, build_turn_rates, survey_positions
-from pipeline.survey.mincurve import closure, vertical_section
+from pipeline.survey.methods import Method, build_turn_rates
 from pipeline.survey.north import convergence_at, convert_table, declination_at
-from pipeline.tables import DLS_COURSE_M, DLS_UNIT, Stations, Trajectory
+from pipeline.tables import DLS_UNIT, Stations, Trajectory
 from pipeline.well import NorthReference
 
 
@@ -56,71 +61,25 @@ class TvdCrossings(PathPoints):
 # --- survey_method ------------------------------------------------------------------------------
 
 
-class SurveyMethodParams(BaseModel):
+class SurveyMethodParams(MinCurveParams):
     """Parameters of the survey-method stage (lengths m, angles deg)."""
 
-    model_config = ConfigDict(extra="forbid")
     method: Method = Field("minimum_curvature", description="survey calculation method")
-    vs_azimuth: float = Field(
-        0.0, description="vertical-section plane azimuth, deg, same north reference as the survey"
-    )
-    tie_north: float = Field(0.0, description="northing of the first station from the wellhead, m")
-    tie_east: float = Field(0.0, description="easting of the first station from the wellhead, m")
-    tie_tvd: float | None = Field(
-        None, description="TVD of the first station, m; default: its MD (vertical above it)"
-    )
-
-
-def _angles(stations: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    md = stations.column("md").to_numpy().astype(np.float64)
-    inc = stations.column("inc").to_numpy().astype(np.float64)
-    azi = np.mod(stations.column("azi").to_numpy().astype(np.float64), 360.0)
-    azi[azi >= 360.0] = 0.0
-    return md, inc, azi
 
 
 def survey_method(
     inputs: Mapping[str, pa.Table], params: SurveyMethodParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Stations → trajectory by the chosen method, every survey of the table in one call."""
+    """Stations → trajectory by the chosen method, with build and turn rates."""
     stations = inputs["stations"]
-    md, inc_deg, azi_deg = _angles(stations)
-    offsets = survey_offsets(stations)
-    tie_tvd = md[offsets[:-1]] if params.tie_tvd is None else params.tie_tvd
-    inc, azi = np.radians(inc_deg), np.radians(azi_deg)
-    result = survey_positions(
-        params.method,
-        md,
-        inc,
-        azi,
-        offsets=offsets,
-        tie_north=params.tie_north,
-        tie_east=params.tie_east,
-        tie_tvd=tie_tvd,
+    columns = trajectory_columns(stations, params, params.method)
+    md, inc, azi = station_angles(stations)
+    build, turn = build_turn_rates(
+        md, np.radians(inc), np.radians(azi), offsets=survey_offsets(stations)
     )
-    build, turn = build_turn_rates(md, inc, azi, offsets=offsets)
-    distance, direction = closure(result.north, result.east)
-    columns: dict[str, object] = {
-        "md": md,
-        "inc": inc_deg,
-        "azi": azi_deg,
-        "tvd": result.tvd,
-        "north": result.north,
-        "east": result.east,
-        "dogleg": np.degrees(result.dogleg),
-        "dls": np.degrees(result.dls) * DLS_COURSE_M,
-        "vertical_section": vertical_section(
-            result.north, result.east, np.radians(params.vs_azimuth)
-        ),
-        "closure_distance": distance,
-        "closure_direction": np.degrees(direction) % 360.0,
-        "build": build,
-        "turn": turn,
-    }
-    if "survey" in stations.column_names:
-        columns = {"survey": stations.column("survey"), **columns}
     table = MethodTrajectory.compiled().make_table(
-        columns, north_reference=north_reference_of(stations, "azi")
+        columns | {"build": build, "turn": turn},
+        north_reference=north_reference_of(stations, "azi"),
     )
     return {"trajectory": table}
 
@@ -158,7 +117,7 @@ def _per_survey(
     trajectory: pa.Table,
     solve: Callable[[np.ndarray, np.ndarray, np.ndarray, tuple[float, float, float]], Interpolated],
 ) -> tuple[list[Interpolated], list[int]]:
-    md, inc_deg, azi_deg = _angles(trajectory)
+    md, inc_deg, azi_deg = station_angles(trajectory)
     north = trajectory.column("north").to_numpy()
     east = trajectory.column("east").to_numpy()
     tvd = trajectory.column("tvd").to_numpy()

@@ -11,7 +11,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import CheckDef, StageContext, StageDef
-from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
+from pipeline.survey.methods import Method, survey_positions
+from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.tables import DLS_COURSE_M, DLS_UNIT, CheckResults, Stations, Trajectory
 from pipeline.well import WellMetadata
 
@@ -48,19 +49,24 @@ def north_reference_of(table: pa.Table, column: str) -> str:
     return raw.decode()
 
 
-def min_curve(
-    inputs: Mapping[str, pa.Table], params: MinCurveParams, ctx: StageContext
-) -> dict[str, pa.Table]:
-    """Stations → trajectory by minimum curvature, every survey of the table in one call."""
-    stations = inputs["stations"]
-    md = stations.column("md").to_numpy()
-    inc_deg = stations.column("inc").to_numpy()
-    azi_deg = np.mod(stations.column("azi").to_numpy(), 360.0)
-    azi_deg[azi_deg >= 360.0] = 0.0  # mod of a tiny negative number rounds up to 360
+def station_angles(stations: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """MD (m), inclination and azimuth (deg, azimuth wrapped into [0, 360)) of a table."""
+    md = stations.column("md").to_numpy().astype(np.float64)
+    inc = stations.column("inc").to_numpy().astype(np.float64)
+    azi = np.mod(stations.column("azi").to_numpy().astype(np.float64), 360.0)
+    azi[azi >= 360.0] = 0.0  # mod of a tiny negative number rounds up to 360
+    return md, inc, azi
+
+
+def trajectory_columns(
+    stations: pa.Table, params: MinCurveParams, method: Method = "minimum_curvature"
+) -> dict[str, object]:
+    """Trajectory columns of every survey of ``stations`` by ``method``, in one call."""
+    md, inc_deg, azi_deg = station_angles(stations)
     offsets = survey_offsets(stations)
-    first_md = md[offsets[:-1]]
-    tie_tvd = first_md if params.tie_tvd is None else params.tie_tvd
-    result = minimum_curvature(
+    tie_tvd = md[offsets[:-1]] if params.tie_tvd is None else params.tie_tvd
+    result = survey_positions(
+        method,
         md,
         np.radians(inc_deg),
         np.radians(azi_deg),
@@ -70,7 +76,7 @@ def min_curve(
         tie_tvd=tie_tvd,
     )
     distance, direction = closure(result.north, result.east)
-    columns = {
+    columns: dict[str, object] = {
         "md": md,
         "inc": inc_deg,
         "azi": azi_deg,
@@ -87,8 +93,16 @@ def min_curve(
     }
     if "survey" in stations.column_names:
         columns = {"survey": stations.column("survey"), **columns}
+    return columns
+
+
+def min_curve(
+    inputs: Mapping[str, pa.Table], params: MinCurveParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Stations → trajectory by minimum curvature, every survey of the table in one call."""
+    stations = inputs["stations"]
     table = Trajectory.compiled().make_table(
-        columns, north_reference=north_reference_of(stations, "azi")
+        trajectory_columns(stations, params), north_reference=north_reference_of(stations, "azi")
     )
     return {"trajectory": table}
 
