@@ -49,8 +49,8 @@ from pipeline.drift.tables import (
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
-from pipeline.registry import ReaderDef, StageContext, StageDef, pipeline_input
-from pipeline.stages.files import ReadParams, read_stage
+from pipeline.registry import ReaderDef, StageContext, StageDef
+from pipeline.stages.files import read_stage_def
 from pipeline.tables import FreeGyroReadings, RawSamples
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
@@ -208,18 +208,6 @@ def _value(path: Path, spec: ColumnSpec, cell: str, factor: float, line: int) ->
     return text
 
 
-class ReadCalibrationParams(ReadParams):
-    """Parameters of the read_calibration stage."""
-
-    input: str = pipeline_input("calibration", "name of the pipeline input to read")
-
-
-class ReadFreeGyroParams(ReadParams):
-    """Parameters of the read_free_gyro stage."""
-
-    input: str = pipeline_input("readings", "name of the pipeline input to read")
-
-
 def calibrate_stage(
     inputs: Mapping[str, pa.Table], params: CalibrationOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
@@ -288,33 +276,30 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
 
 @hookimpl
 def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
-    register(
-        StageDef(
-            name="read_calibration",
-            func=read_stage("calibration"),
-            description="Read free-gyro calibration readings (series × set azimuths).",
-            outputs={"calibration": CalibrationReadings},
-            params=ReadCalibrationParams,
-        )
-    )
-    register(
-        StageDef(
-            name="read_calibration_result",
-            func=read_stage("calibration_result"),
-            description="Read a drift calibration result written by calibrate_drift.",
-            outputs={"calibration_result": CalibrationResult},
-            params=ReadCalibrationParams,
-        )
-    )
-    register(
-        StageDef(
-            name="read_free_gyro",
-            func=read_stage("free_gyro"),
-            description="Read free-gyro in-run/out-run station readings.",
-            outputs={"free_gyro": FreeGyroReadings},
-            params=ReadFreeGyroParams,
-        )
-    )
+    for name, kind, contract, description, default_input in (
+        (
+            "read_calibration",
+            "calibration",
+            CalibrationReadings,
+            "Read free-gyro calibration readings (series × set azimuths).",
+            "calibration",
+        ),
+        (
+            "read_calibration_result",
+            "calibration_result",
+            CalibrationResult,
+            "Read a drift calibration result written by calibrate_drift.",
+            "calibration",
+        ),
+        (
+            "read_free_gyro",
+            "free_gyro",
+            FreeGyroReadings,
+            "Read free-gyro in-run/out-run station readings.",
+            "readings",
+        ),
+    ):
+        register(read_stage_def(name, kind, contract, description, default_input))
     register(
         StageDef(
             name="calibrate_drift",

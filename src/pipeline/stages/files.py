@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
-from pipeline.contracts import SOURCE_KEY
+from pipeline.contracts import SOURCE_KEY, TableContract
 from pipeline.errors import GyropipeError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
@@ -42,18 +42,6 @@ class ReadParams(BaseModel):
     options: dict[str, Any] = Field(
         default_factory=dict, description="reader options (see the reader's documentation)"
     )
-
-
-class ReadSamplesParams(ReadParams):
-    """Parameters of the read_samples stage."""
-
-    input: str = pipeline_input("samples", "name of the pipeline input to read")
-
-
-class ReadReadingsParams(ReadParams):
-    """Parameters of the read_readings stage."""
-
-    input: str = pipeline_input("readings", "name of the pipeline input to read")
 
 
 class WriteParams(BaseModel):
@@ -118,6 +106,26 @@ def read_stage(
     return read
 
 
+def read_stage_def(
+    name: str, kind: str, contract: type[TableContract], description: str, default_input: str
+) -> StageDef:
+    """A stage reading the pipeline input ``default_input`` (unless told another) into a
+    table of ``kind`` on the output port ``kind``."""
+    params = create_model(
+        f"{kind.title().replace('_', '')}ReadParams",
+        __base__=ReadParams,
+        __doc__=f"Parameters of the {name} stage.",
+        input=(str, pipeline_input(default_input, "name of the pipeline input to read")),
+    )
+    return StageDef(
+        name=name,
+        func=read_stage(kind),
+        description=description,
+        outputs={kind: contract},
+        params=params,
+    )
+
+
 def write(
     inputs: Mapping[str, pa.Table], params: WriteParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
@@ -130,35 +138,28 @@ def write(
 
 @hookimpl
 def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
-    register(
-        StageDef(
-            name="read_stations",
-            func=read_stage("stations"),
-            description="Read survey stations (MD, inclination, azimuth) from a pipeline input.",
-            outputs={"stations": Stations},
-            params=ReadParams,
-        )
-    )
-    register(
-        StageDef(
-            name="read_samples",
-            func=read_stage("samples"),
-            description="Read raw sensor samples (gyros, accelerometers, magnetometers) from "
-            "a pipeline input.",
-            outputs={"samples": RawSamples},
-            params=ReadSamplesParams,
-        )
-    )
-    register(
-        StageDef(
-            name="read_readings",
-            func=read_stage("readings"),
-            description="Read pre-averaged point-survey readings (one row per station and "
-            "frame position) from a pipeline input.",
-            outputs={"readings": PositionReadings},
-            params=ReadReadingsParams,
-        )
-    )
+    for name, kind, contract, description in (
+        (
+            "read_stations",
+            "stations",
+            Stations,
+            "Read survey stations (MD, inclination, azimuth) from a pipeline input.",
+        ),
+        (
+            "read_samples",
+            "samples",
+            RawSamples,
+            "Read raw sensor samples (gyros, accelerometers, magnetometers) from a pipeline input.",
+        ),
+        (
+            "read_readings",
+            "readings",
+            PositionReadings,
+            "Read pre-averaged point-survey readings (one row per station and frame position) "
+            "from a pipeline input.",
+        ),
+    ):
+        register(read_stage_def(name, kind, contract, description, kind))
     register(
         StageDef(
             name="write",
