@@ -6,6 +6,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from hypothesis import strategies as st
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -17,3 +19,62 @@ def gyropipe() -> list[str]:
     found = shutil.which("gyropipe")
     assert found, "the gyropipe console script is not installed"
     return [found]
+
+
+def mutate_bytes(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
+    """Byte-level fuzz mutations at positions: flip, truncate, insert, delete (n bytes),
+    delete_line, swap_columns (two whitespace-separated cells of the line)."""
+    buf = bytearray(data)
+    for op, at, arg in mutations:
+        at = min(at, len(buf))
+        start = buf.rfind(b"\n", 0, at) + 1
+        end = buf.find(b"\n", at)
+        end = len(buf) if end < 0 else end
+        if op == "flip" and at < len(buf):
+            buf[at] = arg
+        elif op == "truncate":
+            del buf[at:]
+        elif op == "insert":
+            buf[at:at] = bytes([arg])
+        elif op == "delete":
+            del buf[at : at + arg]
+        elif op == "delete_line":
+            del buf[start : end + 1]
+        elif op == "swap_columns":
+            cells = bytes(buf[start:end]).split()
+            if len(cells) > arg + 1:
+                cells[arg], cells[arg + 1] = cells[arg + 1], cells[arg]
+                buf[start:end] = b" ".join(cells)
+    return bytes(buf)
+
+
+def mutate_lines(data: bytes, ops: list[tuple[str, int, int]], delimiter: bytes) -> bytes:
+    """Line-aware fuzz mutations: truncate, flip a byte, delete a line, swap two columns (in
+    every line: a valid file stays valid) or two cells of one line (``swap_row``)."""
+    for op, a, b in ops:
+        lines = data.split(b"\n")
+        if op == "truncate":
+            data = data[: a % (len(data) + 1)]
+        elif op == "flip" and data:
+            i = a % len(data)
+            data = data[:i] + bytes([b % 256]) + data[i + 1 :]
+        elif op == "delete":
+            del lines[a % len(lines)]
+            data = b"\n".join(lines)
+        elif op in ("swap", "swap_row"):
+            for n in range(len(lines)) if op == "swap" else [b % len(lines)]:
+                cells = lines[n].split(delimiter)
+                i, j = a % len(cells), (a // 7) % len(cells)
+                cells[i], cells[j] = cells[j], cells[i]
+                lines[n] = delimiter.join(cells)
+            data = b"\n".join(lines)
+    return data
+
+
+def line_ops() -> st.SearchStrategy[tuple[str, int, int]]:
+    """One :func:`mutate_lines` operation."""
+    return st.tuples(
+        st.sampled_from(["truncate", "flip", "delete", "swap", "swap_row"]),
+        st.integers(0, 10_000),
+        st.integers(0, 10_000),
+    )

@@ -26,6 +26,7 @@ from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import conversion_factor
 from pipeline.well import WellMetadata
+from tests_support import line_ops, mutate_lines
 
 ROOT = Path(__file__).resolve().parents[2]
 PROFILES = ROOT / "examples" / "profiles"
@@ -294,33 +295,7 @@ def test_unreadable_profiles(tmp_path: Path) -> None:
 
 # ----------------------------------------------------------------------------- fuzz
 
-_op = st.tuples(
-    st.sampled_from(["truncate", "flip", "delete", "swap", "swap_row"]),
-    st.integers(0, 10_000),
-    st.integers(0, 10_000),
-)
-
-
-def _mutate(data: bytes, ops: list[tuple[str, int, int]], delimiter: bytes) -> bytes:
-    """Truncate, flip a byte, delete a line, swap two columns (every line) or two cells."""
-    for op, a, b in ops:
-        lines = data.split(b"\n")
-        if op == "truncate":
-            data = data[: a % (len(data) + 1)]
-        elif op == "flip" and data:
-            i = a % len(data)
-            data = data[:i] + bytes([b % 256]) + data[i + 1 :]
-        elif op == "delete":
-            del lines[a % len(lines)]
-            data = b"\n".join(lines)
-        elif op in ("swap", "swap_row"):
-            for n in range(len(lines)) if op == "swap" else [b % len(lines)]:
-                cells = lines[n].split(delimiter)
-                i, j = a % len(cells), (a // 7) % len(cells)
-                cells[i], cells[j] = cells[j], cells[i]
-                lines[n] = delimiter.join(cells)
-            data = b"\n".join(lines)
-    return data
+_op = line_ops()
 
 
 @pytest.fixture(scope="module")
@@ -340,7 +315,7 @@ def _typed_errors_only(path: Path, kind: str, profile: Path) -> None:
 @settings(max_examples=150, deadline=None, derandomize=True)
 @given(ops=st.lists(_op, min_size=1, max_size=3))
 def test_fuzz_data_read_with_a_profile(fuzz_dir: Path, ops: list[tuple[str, int, int]]) -> None:
-    path = put(fuzz_dir, _mutate(GYRO_LOG.encode(), ops, b","), "log.csv")
+    path = put(fuzz_dir, mutate_lines(GYRO_LOG.encode(), ops, b","), "log.csv")
     _typed_errors_only(path, "samples", ACME_GYRO)
 
 
@@ -348,7 +323,7 @@ def test_fuzz_data_read_with_a_profile(fuzz_dir: Path, ops: list[tuple[str, int,
 @given(ops=st.lists(_op, min_size=1, max_size=3), kind=st.sampled_from(["samples", "stations"]))
 def test_fuzz_mutated_profiles(fuzz_dir: Path, ops: list[tuple[str, int, int]], kind: str) -> None:
     source = ACME_GYRO if kind == "samples" else ACME_REPORT
-    profile = put(fuzz_dir, _mutate(source.read_bytes(), ops, b":"), "profile.yaml")
+    profile = put(fuzz_dir, mutate_lines(source.read_bytes(), ops, b":"), "profile.yaml")
     data = put(fuzz_dir, GYRO_LOG if kind == "samples" else REPORT, "data.csv")
     _typed_errors_only(data, kind, profile)
 

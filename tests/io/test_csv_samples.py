@@ -24,6 +24,7 @@ from pipeline.sim.spec import SimulationSpec
 from pipeline.stages.files import choose_reader
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
+from tests_support import line_ops, mutate_lines
 
 
 def _plugin() -> tuple[ReaderDef, WriterDef]:
@@ -393,35 +394,7 @@ VALID = (
 )
 
 
-def _mutate(data: bytes, ops: list[tuple[str, int, int]]) -> bytes:
-    """Line-aware mutations: truncate, flip a byte, delete a line, swap two columns (in every
-    line: a valid file stays valid) or two cells of one line."""
-    for op, a, b in ops:
-        lines = data.split(b"\n")
-        if op == "truncate":
-            data = data[: a % (len(data) + 1)]
-        elif op == "flip" and data:
-            i = a % len(data)
-            data = data[:i] + bytes([b % 256]) + data[i + 1 :]
-        elif op == "delete":
-            del lines[a % len(lines)]
-            data = b"\n".join(lines)
-        elif op in ("swap", "swap_row"):
-            chosen = range(len(lines)) if op == "swap" else [b % len(lines)]
-            for n in chosen:
-                cells = lines[n].split(b";")
-                i, j = a % len(cells), (a // 7) % len(cells)
-                cells[i], cells[j] = cells[j], cells[i]
-                lines[n] = b";".join(cells)
-            data = b"\n".join(lines)
-    return data
-
-
-_op = st.tuples(
-    st.sampled_from(["truncate", "flip", "delete", "swap", "swap_row"]),
-    st.integers(0, 10_000),
-    st.integers(0, 10_000),
-)
+_op = line_ops()
 
 
 @pytest.fixture(scope="module")
@@ -439,7 +412,9 @@ def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:
 
 def test_swapped_columns_read_the_same(fuzz_dir: Path) -> None:
     table, _ = read(put(fuzz_dir, VALID))
-    swapped, _ = read(put(fuzz_dir, _mutate(VALID, [("swap", 7 * 3 + 1, 0)]), "swapped.csv"))
+    swapped, _ = read(
+        put(fuzz_dir, mutate_lines(VALID, [("swap", 7 * 3 + 1, 0)], b";"), "swapped.csv")
+    )
     assert swapped.select(table.column_names).equals(table)
 
 
@@ -448,7 +423,7 @@ def test_swapped_columns_read_the_same(fuzz_dir: Path) -> None:
 def test_fuzz_mutations_raise_typed_errors_only(
     fuzz_dir: Path, ops: list[tuple[str, int, int]]
 ) -> None:
-    path = put(fuzz_dir, _mutate(VALID, ops))
+    path = put(fuzz_dir, mutate_lines(VALID, ops, b";"))
     try:
         table, _ = read(path)
     except (InputFileError, UnitError):

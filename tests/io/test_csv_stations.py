@@ -21,6 +21,7 @@ from pipeline.io import csv as csv_plugin
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata
+from tests_support import mutate_bytes
 
 
 def _reader() -> ReaderDef:
@@ -655,21 +656,6 @@ _mutation = st.one_of(
 )
 
 
-def _mutate(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
-    buf = bytearray(data)
-    for op, at, arg in mutations:
-        at = min(at, len(buf))
-        if op == "flip" and at < len(buf):
-            buf[at] = arg
-        elif op == "truncate":
-            del buf[at:]
-        elif op == "insert":
-            buf[at:at] = bytes([arg])
-        elif op == "delete":
-            del buf[at : at + arg]
-    return bytes(buf)
-
-
 @pytest.fixture(scope="module")
 def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("fuzz")
@@ -686,7 +672,7 @@ def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:
 def test_fuzz_mutations_raise_typed_errors_only(
     fuzz_dir: Path, mutations: list[tuple[str, int, int]]
 ) -> None:
-    path = put(fuzz_dir, _mutate(VALID, mutations))
+    path = put(fuzz_dir, mutate_bytes(VALID, mutations))
     try:
         table, _ = read(path)
     except (InputFileError, UnitError):

@@ -28,6 +28,7 @@ from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata
+from tests_support import mutate_bytes
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
@@ -1302,31 +1303,6 @@ _mutation = st.one_of(
 )
 
 
-def _mutate(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
-    buf = bytearray(data)
-    for op, at, arg in mutations:
-        at = min(at, len(buf))
-        start = buf.rfind(b"\n", 0, at) + 1
-        end = buf.find(b"\n", at)
-        end = len(buf) if end < 0 else end
-        if op == "flip" and at < len(buf):
-            buf[at] = arg
-        elif op == "truncate":
-            del buf[at:]
-        elif op == "insert":
-            buf[at:at] = bytes([arg])
-        elif op == "delete":
-            del buf[at : at + arg]
-        elif op == "delete_line":
-            del buf[start : end + 1]
-        elif op == "swap_columns":
-            cells = bytes(buf[start:end]).split()
-            if len(cells) > arg + 1:
-                cells[arg], cells[arg + 1] = cells[arg + 1], cells[arg]
-                buf[start:end] = b" ".join(cells)
-    return bytes(buf)
-
-
 def _lasio_curves(path: Path) -> list[np.ndarray] | None:
     """lasio's numeric curves, each also in every canonical unit its unit converts to;
     None when lasio fails or finds no data rows (e.g. a ``~a`` title, which it does not
@@ -1366,7 +1342,7 @@ def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:
 def test_fuzz_mutations_raise_typed_errors_or_read_what_lasio_reads(
     fuzz_dir: Path, mutations: list[tuple[str, int, int]]
 ) -> None:
-    path = put(fuzz_dir, _mutate(VALID, mutations))
+    path = put(fuzz_dir, mutate_bytes(VALID, mutations))
     try:
         table, _ = read(path)
     except (InputFileError, UnitError):
