@@ -1,11 +1,13 @@
-"""Benchmark the GYRO-NS position-uncertainty propagation against welleng.
+"""Benchmark the GYRO-NS, GYRO-NS-CT and ISCWSA MWD Rev 5.11 position-uncertainty
+propagation against welleng.
 
 Run from the repository root: ``python benchmarks/bench_uncertainty.py [--repeat N]``.
-For surveys of several lengths it prints the best-of-N time of ours (minimum curvature +
-per-term covariance) and of welleng (``Survey(..., error_model="GYRO-NS")``, which also
-integrates the survey), the speed-up, and the largest total-covariance difference relative to
-welleng's largest element, with both in the ISCWSA convention (balanced tangent, Rev 5 surface
-tie-on). Exits with status 1 if the relative difference exceeds 1e-4.
+For each model and surveys of several lengths it prints the best-of-N time of ours (minimum
+curvature + per-term covariance) and of welleng (``Survey(..., error_model=MODEL)``, which
+also integrates the survey), the speed-up, and the largest total-covariance difference
+relative to welleng's largest element, with both in the ISCWSA convention (balanced tangent,
+Rev 5 surface tie-on). Exits with status 1 if the relative difference exceeds 1e-4.
+The MWD runs use the ISCWSA test well #1 field (50,000 nT, dip 72°, declination −4°).
 """
 
 from __future__ import annotations
@@ -20,12 +22,22 @@ import numpy as np
 import welleng as we
 from numpy.typing import NDArray
 
+from pipeline.earth.site import MagneticReference
 from pipeline.survey.mincurve import minimum_curvature
-from pipeline.uncertainty.gyro import Survey, gyro_covariance
+from pipeline.uncertainty.gyro import gyro_covariance
+from pipeline.uncertainty.mwd import mwd_covariance
+from pipeline.uncertainty.terms import Survey
 
 Floats = NDArray[np.float64]
 LATITUDE = 60.0
+FIELD = MagneticReference(total_field=50000.0, dip=72.0, declination=-4.0)
 TOLERANCE = 1e-4
+#: Our model name → welleng's.
+MODELS = {
+    "GYRO-NS": "GYRO-NS",
+    "GYRO-NS-CT": "GYRO-NS-CT",
+    "ISCWSA-MWD-REV5.11": "ISCWSA MWD Rev5.11",
+}
 
 
 def profile(n: int) -> tuple[Floats, Floats, Floats]:
@@ -37,21 +49,30 @@ def profile(n: int) -> tuple[Floats, Floats, Floats]:
     return md, inc, azi
 
 
-def ours(md: Floats, inc: Floats, azi: Floats) -> Floats:
+def ours(model: str, md: Floats, inc: Floats, azi: Floats) -> Floats:
     i, a = np.radians(inc), np.radians(azi)
-    tvd = minimum_curvature(md, i, a).tvd
-    _, cov = gyro_covariance(
-        Survey.of(md, i, a, tvd), LATITUDE, basis="balanced_tangent", surface_tie=True
-    )
+    survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
+    if model.startswith("ISCWSA-MWD"):
+        _, cov = mwd_covariance(survey, FIELD, model, basis="balanced_tangent", surface_tie=True)
+    else:
+        _, cov = gyro_covariance(
+            survey, LATITUDE, model, basis="balanced_tangent", surface_tie=True
+        )
     total: Floats = cov.sum(axis=0)
     return total
 
 
-def welleng(md: Floats, inc: Floats, azi: Floats) -> Floats:
+def welleng(model: str, md: Floats, inc: Floats, azi: Floats) -> Floats:
     header = we.survey.SurveyHeader(
-        latitude=LATITUDE, longitude=2.0, G=9.80665, azi_reference="true"
+        latitude=LATITUDE,
+        longitude=2.0,
+        G=9.80665,
+        azi_reference="true",
+        b_total=FIELD.total_field,
+        dip=FIELD.dip,
+        declination=FIELD.declination,
     )
-    survey = we.survey.Survey(md=md, inc=inc, azi=azi, header=header, error_model="GYRO-NS")
+    survey = we.survey.Survey(md=md, inc=inc, azi=azi, header=header, error_model=MODELS[model])
     terms = survey.err.errors.errors  # type: ignore[union-attr]
     total: Floats = np.sum([np.asarray(e.cov_NEV, dtype=np.float64) for e in terms.values()], 0)
     return total
@@ -68,19 +89,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
-    print(f"{'stations':>8} {'ours ms':>9} {'weng ms':>9} {'speed-up':>8} {'max rel diff':>12}")
+    print(
+        f"{'model':>18} {'stations':>8} {'ours ms':>9} {'weng ms':>9} {'speed-up':>8} "
+        f"{'max rel diff':>12}"
+    )
     worst = 0.0
-    for n in (100, 1000, 5000):
-        md, inc, azi = profile(n)
-        a, b = ours(md, inc, azi), welleng(md, inc, azi)
-        rel = float(np.abs(a - b).max() / np.abs(b).max())
-        worst = max(worst, rel)
-        t_ours = best(lambda md=md, inc=inc, azi=azi: ours(md, inc, azi), args.repeat)
-        t_weng = best(lambda md=md, inc=inc, azi=azi: welleng(md, inc, azi), args.repeat)
-        print(
-            f"{n:>8} {t_ours * 1e3:>9.2f} {t_weng * 1e3:>9.2f} "
-            f"{t_weng / t_ours:>7.1f}x {rel:>12.2e}"
-        )
+    for model in MODELS:
+        for n in (100, 1000, 5000):
+            md, inc, azi = profile(n)
+            a, b = ours(model, md, inc, azi), welleng(model, md, inc, azi)
+            rel = float(np.abs(a - b).max() / np.abs(b).max())
+            worst = max(worst, rel)
+            args_ = (model, md, inc, azi)
+            t_ours = best(lambda a_=args_: ours(*a_), args.repeat)
+            t_weng = best(lambda a_=args_: welleng(*a_), args.repeat)
+            print(
+                f"{model:>18} {n:>8} {t_ours * 1e3:>9.2f} {t_weng * 1e3:>9.2f} "
+                f"{t_weng / t_ours:>7.1f}x {rel:>12.2e}"
+            )
     return 0 if worst <= TOLERANCE else 1
 
 

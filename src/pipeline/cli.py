@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
+import signal
 import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
 
 import click
 import yaml
@@ -25,6 +28,9 @@ from pipeline.registry import Registry
 from pipeline.runner import RunInputError, run_plan, sha256_file
 from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
+
+if TYPE_CHECKING:
+    from pipeline.batch.ledger import Ledger
 
 EXIT_FAILED = 1
 EXIT_CONFIG = 2
@@ -132,6 +138,208 @@ def run(
     for path in result.outputs:
         click.echo(f"wrote {path}")
     click.echo(f"ok: {result.out_dir / 'run.json'}")
+
+
+@main.command()
+@click.argument("pipeline_file", metavar="PIPELINE.yaml", type=click.Path(dir_okay=False))
+@click.option(
+    "--inputs",
+    "inputs_glob",
+    metavar="GLOB",
+    help="One well per matching file (id: file name without extension); one-input pipelines.",
+)
+@click.option(
+    "--manifest",
+    type=click.Path(dir_okay=False),
+    help="CSV: well_id, one column per pipeline input, header fields (latitude, …).",
+)
+@click.option(
+    "--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory."
+)
+@click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Parallel wells (default: the number of CPUs).",
+)
+@click.option(
+    "--executor",
+    type=click.Choice(["local", "dask"]),
+    default="local",
+    show_default=True,
+    help="local: a process pool; dask: a Dask distributed cluster (extra 'dask').",
+)
+@click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    default=None,
+    help="Dask scheduler address (default: a LocalCluster on 127.0.0.1).",
+)
+@click.option("--only-changed", is_flag=True, help="Skip wells whose run would be unchanged.")
+@click.option("--rerun-failed", is_flag=True, help="Run only wells whose last run failed.")
+@click.option(
+    "--ledger",
+    "ledger_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Run ledger (default: OUT/ledger.sqlite).",
+)
+@click.option("--quiet", is_flag=True, help="No progress bar or table: JSON log lines on stderr.")
+@click.option(
+    "--well",
+    "well_items",
+    multiple=True,
+    metavar="FIELD=VALUE",
+    help="Header field for every well (a manifest column overrides it). Repeatable.",
+)
+@set_option
+@disable_option
+def batch(
+    pipeline_file: str,
+    inputs_glob: str | None,
+    manifest: str | None,
+    out_dir: str,
+    workers: int | None,
+    executor: str,
+    scheduler: str | None,
+    only_changed: bool,
+    rerun_failed: bool,
+    ledger_file: str | None,
+    quiet: bool,
+    well_items: tuple[str, ...],
+    overrides: tuple[str, ...],
+    disabled: tuple[str, ...],
+) -> None:
+    """Run a pipeline on many wells: one run per well into OUT/<well_id>/, recorded in a
+    run ledger. Exit 0 all wells done or skipped, 1 some failed, 2 configuration error."""
+    from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
+    from pipeline.batch.policy import Mode
+    from pipeline.batch.progress import reporter
+    from pipeline.batch.run import BatchOptions, run_batch
+    from pipeline.batch.summary import table_text
+
+    def config_error(message: str) -> NoReturn:
+        click.echo(f"error: {message}", err=True)
+        sys.exit(EXIT_CONFIG)
+
+    if (inputs_glob is None) == (manifest is None):
+        config_error("give either --inputs GLOB or --manifest FILE")
+    if scheduler is not None and executor != "dask":
+        config_error("--scheduler needs --executor dask")
+    registry = _registry(disabled)
+    plan = _plan(pipeline_file, overrides, registry)
+    names = list(plan.spec.inputs)
+    try:
+        defaults = _well_overrides(well_items)
+        jobs = (
+            jobs_from_manifest(Path(manifest), names, defaults)
+            if manifest is not None
+            else jobs_from_glob(str(inputs_glob), names, defaults)
+        )
+    except (click.BadParameter, BatchConfigError) as exc:
+        config_error(str(exc))
+    options = BatchOptions(
+        out_dir=Path(out_dir),
+        workers=workers or os.cpu_count() or 1,
+        executor=executor,
+        scheduler=scheduler,
+        mode=Mode(only_changed=only_changed, rerun_failed=rerun_failed),
+        ledger=Path(ledger_file) if ledger_file else None,
+        overrides=overrides,
+        disabled=disabled,
+    )
+    previous = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        report = run_batch(plan, registry, jobs, options, reporter(quiet))
+    except (BatchConfigError, ImportError, OSError) as exc:
+        config_error(str(exc))
+    except KeyboardInterrupt:
+        click.echo("interrupted: run the same command again to resume", err=True)
+        sys.exit(EXIT_FAILED)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    if not quiet:
+        click.echo(table_text(report.results))
+        click.echo(f"summary: {', '.join(map(str, report.summary_files))}")
+    sys.exit(report.exit_code)
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:
+    from pipeline.batch.jobs import BatchConfigError
+    from pipeline.batch.ledger import Ledger
+    from pipeline.batch.run import LEDGER
+
+    path = Path(ledger_file) if ledger_file else Path(out_dir) / LEDGER
+    if not path.is_file():
+        click.echo(f"error: no ledger at {path}", err=True)
+        sys.exit(EXIT_CONFIG)
+    try:
+        return Ledger(path)
+    except BatchConfigError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_CONFIG)
+
+
+ledger_option = click.option(
+    "--ledger",
+    "ledger_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Ledger file (default: DIR/ledger.sqlite).",
+)
+json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+
+
+@main.command()
+@click.argument("out_dir", metavar="DIR", type=click.Path(file_okay=False))
+@ledger_option
+@json_option
+def status(out_dir: str, ledger_file: str | None, as_json: bool) -> None:
+    """Batches and the latest run of every well in a batch output directory."""
+    from pipeline.batch.views import status_document, status_text
+
+    ledger = _open_ledger(out_dir, ledger_file)
+    try:
+        if as_json:
+            click.echo(json.dumps(status_document(ledger), indent=2))
+        else:
+            click.echo(status_text(ledger))
+    finally:
+        ledger.close()
+
+
+@main.command()
+@click.argument("well_id", metavar="WELL")
+@click.option(
+    "--dir",
+    "out_dir",
+    default=".",
+    show_default=True,
+    type=click.Path(file_okay=False),
+    help="Batch output directory holding ledger.sqlite.",
+)
+@ledger_option
+@json_option
+def history(well_id: str, out_dir: str, ledger_file: str | None, as_json: bool) -> None:
+    """Every recorded run of one well: why it ran, inputs, versions, calibration, result."""
+    from pipeline.batch.views import history_document, history_text
+
+    ledger = _open_ledger(out_dir, ledger_file)
+    try:
+        runs = ledger.history(well_id)
+    finally:
+        ledger.close()
+    if not runs:
+        click.echo(f"error: no runs of well {well_id!r} in {ledger.path}", err=True)
+        sys.exit(EXIT_CONFIG)
+    if as_json:
+        click.echo(json.dumps(history_document(well_id, runs), indent=2))
+    else:
+        click.echo(history_text(well_id, runs))
 
 
 @main.command()

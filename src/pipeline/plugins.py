@@ -39,10 +39,14 @@ BUILTIN_PLUGINS = {
     "builtin.continuous": "pipeline.stages.continuous",
     "builtin.stations": "pipeline.stages.stations",
     "builtin.uncertainty": "pipeline.stages.uncertainty",
+    "builtin.report": "pipeline.stages.report",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
     "builtin.csv": "pipeline.io.csv",
     "builtin.parquet": "pipeline.io.parquet",
+    "builtin.witsml": "pipeline.io.witsml",
+    "builtin.json_summary": "pipeline.io.json_summary",
+    "builtin.exports": "pipeline.stages.exports",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
 

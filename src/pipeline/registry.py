@@ -5,6 +5,7 @@ Every registration is tagged with the plugin that made it, so any later error ca
 
 from __future__ import annotations
 
+import datetime as dt
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -53,6 +54,45 @@ class NoParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+@dataclass(frozen=True)
+class InputFile:
+    """A pipeline input file as the run received it."""
+
+    path: str
+    sha256: str
+    bytes: int
+
+
+@dataclass(frozen=True)
+class StageSetup:
+    """One stage of the running plan: what it uses, from which plugin, with which params."""
+
+    id: str
+    uses: str
+    plugin: str
+    """plugin name and version"""
+    params: Mapping[str, Any]
+    """validated params, JSON-compatible"""
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a run's results come from (what ``run.json`` records), known while it runs."""
+
+    pipeline: str
+    pipeline_version: str
+    pipeline_file: str
+    pipeline_sha256: str
+    gyropipe: str
+    plugins: Mapping[str, str]
+    """plugin name → version (plugins that loaded)"""
+    inputs: Mapping[str, InputFile]
+    started: dt.datetime
+    """UTC start of the run"""
+    stages: tuple[StageSetup, ...]
+    """every stage of the plan, in execution order"""
+
+
 class StageContext(Protocol):
     """What the runner gives a stage besides its tables and params."""
 
@@ -61,6 +101,11 @@ class StageContext(Protocol):
 
     @property
     def well(self) -> WellMetadata: ...
+
+    @property
+    def provenance(self) -> Provenance:
+        """The run's pipeline, software versions, input file hashes and start time."""
+        ...
 
     def input_path(self, name: str) -> Path:
         """The file given for the pipeline input ``name`` (readers only)."""
@@ -120,6 +165,14 @@ class WriterDef:
     description: str
     extension: str
     write: Callable[[pa.Table, Path, WellMetadata], None]
+    write_tables: (
+        Callable[[Mapping[str, pa.Table], Path, WellMetadata, Provenance], None] | None
+    ) = None
+    """Writers whose file holds several tables of a run (the ``export`` stage): the tables by
+    role (``trajectory``, ``qc``…), the path, the well and the run's provenance."""
+    schema: type[BaseModel] | None = None
+    """Writers of JSON documents: the model of the document (``gyropipe schemas`` publishes
+    its JSON Schema)."""
 
 
 @dataclass(frozen=True)
@@ -229,6 +282,11 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
         models += [(f"kind {k}", c, TableContract) for k, c in item.kinds.items()]
     elif isinstance(item, CheckDef):
         models += [("params", item.params, BaseModel), ("contract", item.contract, TableContract)]
+    elif isinstance(item, WriterDef):
+        if item.write_tables is not None and not callable(item.write_tables):
+            raise TypeError(f"writer {name!r}: write_tables is not callable")
+        if item.schema is not None:
+            models.append(("schema", item.schema, BaseModel))
     for what, model, base in models:
         if not (isinstance(model, type) and issubclass(model, base)):
             raise TypeError(f"{kind} {name!r}: {what} must be a {base.__name__} subclass")

@@ -8,6 +8,7 @@ or interrupted run leaves no final-named file behind.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 import hashlib
 import json
@@ -26,7 +27,15 @@ import pipeline
 from pipeline.atomic import atomic_write_bytes, publish
 from pipeline.errors import ContractViolation, GyropipeError, StageError
 from pipeline.graph import Plan, PlannedStage
-from pipeline.registry import CheckDef, ReaderDef, Registry, WriterDef
+from pipeline.registry import (
+    CheckDef,
+    InputFile,
+    Provenance,
+    ReaderDef,
+    Registry,
+    StageSetup,
+    WriterDef,
+)
 from pipeline.well import WellMetadata, attach, well_of
 
 MANIFEST = "run.json"
@@ -71,6 +80,7 @@ class _Context:
     inputs: Mapping[str, Path]
     staging: Path
     staged: list[Path]
+    provenance: Provenance
 
     def input_path(self, name: str) -> Path:
         return self.inputs[name]
@@ -129,6 +139,7 @@ def run_plan(
     tables: dict[tuple[str, str], pa.Table] = {}
     records: list[StageRecord] = []
     started = dt.datetime.now(dt.UTC)
+    provenance = _provenance(plan, registry, files, started)
     t_run = time.perf_counter()
     try:
         for st in plan.stages:
@@ -137,7 +148,7 @@ def run_plan(
             ins = {port: tables[src] for port, src in st.wiring.items()}
             record.rows_in = {p: t.num_rows for p, t in ins.items()}
             _check_ports(plan, st, ins, "input")
-            ctx = _Context(st.id, current, registry, files, staging, staged)
+            ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
             t0 = time.perf_counter()
             outs = _call(st, ins, ctx, registry)
             record.wall_time_s = time.perf_counter() - t0
@@ -160,7 +171,7 @@ def run_plan(
             raise RunInputError(f"several outputs would be written as {sorted(clashes)}")
         for src, dst in zip(staged + persisted, final, strict=True):
             publish(src, dst)
-        manifest = _manifest(plan, registry, files, current, records, final, started, wall)
+        manifest = _manifest(provenance, current, records, final, wall)
         atomic_write_bytes(out_dir / MANIFEST, json.dumps(manifest, indent=2).encode())
     finally:
         shutil.rmtree(staging, ignore_errors=True)
@@ -246,29 +257,47 @@ def _persist(
     return paths
 
 
+def _provenance(
+    plan: Plan, registry: Registry, files: dict[str, Path], started: dt.datetime
+) -> Provenance:
+    return Provenance(
+        pipeline=plan.spec.name,
+        pipeline_version=plan.spec.version,
+        pipeline_file=plan.file,
+        pipeline_sha256=plan.digest,
+        gyropipe=pipeline.__version__,
+        plugins={n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
+        inputs={n: InputFile(**_file_entry(p)) for n, p in files.items()},
+        started=started,
+        stages=tuple(
+            StageSetup(
+                st.id, st.uses, registry.plugin_label(st.plugin), st.params.model_dump(mode="json")
+            )
+            for st in plan.stages
+        ),
+    )
+
+
 def _manifest(
-    plan: Plan,
-    registry: Registry,
-    files: dict[str, Path],
+    provenance: Provenance,
     well: WellMetadata,
     records: list[StageRecord],
     outputs: list[Path],
-    started: dt.datetime,
     wall: float,
 ) -> dict[str, Any]:
     return {
         "status": "ok",
-        "gyropipe": pipeline.__version__,
+        "gyropipe": provenance.gyropipe,
         "pipeline": {
-            "name": plan.spec.name,
-            "version": plan.spec.version,
-            "file": plan.file,
-            "sha256": plan.digest,
+            "name": provenance.pipeline,
+            "version": provenance.pipeline_version,
+            "file": provenance.pipeline_file,
+            "sha256": provenance.pipeline_sha256,
         },
-        "started": started.isoformat(),
+        "started": provenance.started.isoformat(),
         "wall_time_s": round(wall, 6),
-        "plugins": {n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
-        "inputs": {n: _file_entry(p) for n, p in files.items()},
+        "plugins": dict(provenance.plugins),
+        "inputs": {n: dataclasses.asdict(f) for n, f in provenance.inputs.items()},
         "well": well.model_dump(mode="json", exclude_none=True),
         "stages": [
             {

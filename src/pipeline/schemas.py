@@ -1,4 +1,5 @@
-"""JSON Schema of the pipeline YAML, the well metadata and every built-in table contract.
+"""JSON Schema of the pipeline YAML, the well metadata, every built-in table contract and
+the JSON documents built-in writers produce.
 
 ``gyropipe schemas`` writes them under ``schemas/``; a test checks the committed files equal
 what the models generate, so the schemas never drift from the code.
@@ -41,6 +42,9 @@ def generate(registry: Registry) -> dict[str, str]:
     }
     for name, contract in builtin_contracts(registry).items():
         docs[f"contracts/{name}.schema.json"] = contract.model_json_schema()
+    for writer, plugin in registry.writers.values():
+        if writer.schema is not None and registry.plugins[plugin].builtin:
+            docs[f"writers/{writer.name}.schema.json"] = writer.schema.model_json_schema()
     return {name: json.dumps(doc, indent=2, sort_keys=True) + "\n" for name, doc in docs.items()}
 
 

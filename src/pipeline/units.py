@@ -131,6 +131,12 @@ def conversion_factor(unit: str, quantity: str) -> float:
     return factor
 
 
+def is_unit_of(unit: str, quantity: str) -> bool:
+    """True if ``unit`` is an accepted spelling of a unit of ``quantity``."""
+    entry = _table().get(_key(unit))
+    return entry is not None and entry[0] == quantity
+
+
 def _key(unit: str) -> str:
     return "".join(unit.split()).casefold()
 

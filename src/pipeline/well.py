@@ -40,6 +40,9 @@ class WellMetadata(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
     well: str | None = Field(None, description="well name")
+    wellbore: str | None = Field(
+        None, description="wellbore name (a sidetrack's); default: the well's name"
+    )
     uwi: str | None = Field(None, description="unique well identifier (UWI/API)")
     field: str | None = Field(None, description="field name")
     company: str | None = Field(None, description="operator")
@@ -61,6 +64,20 @@ class WellMetadata(BaseModel):
     tool_serial: str | None = Field(None, description="survey tool serial number")
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths: true, grid or magnetic"
+    )
+    declination: float | None = Field(
+        None,
+        ge=-180,
+        le=180,
+        description="magnetic declination at the wellhead on the survey date, deg "
+        "(magnetic north east of true north positive)",
+    )
+    grid_convergence: float | None = Field(
+        None,
+        ge=-180,
+        le=180,
+        description="grid convergence at the wellhead, deg (grid north east of true north "
+        "positive)",
     )
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:

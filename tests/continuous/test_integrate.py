@@ -11,7 +11,7 @@ import pytest
 
 from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.compass.solve import CompassOptions, compass
-from pipeline.continuous.integrate import (
+from pipeline.continuous import (
     FLAG_NEAR_VERTICAL,
     FLAG_NO_CLOSURE,
     ContinuousOptions,

@@ -55,9 +55,14 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
     names = sorted(p.name for p in out_dir.iterdir())
     assert names == [
         "dls_check.results.parquet",
+        "report.html",
+        "report.pdf",
         "run.json",
+        "summary.json",
         "trajectory.csv",
+        "trajectory.las",
         "trajectory.trajectory.parquet",
+        "trajectory.xml",
     ]
 
     trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
@@ -86,6 +91,10 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
         "trajectory",
         "dls_check",
         "export_csv",
+        "export_las",
+        "export_witsml",
+        "export_summary",
+        "report",
     ]
     assert manifest["stages"][1]["rows_out"] == {"trajectory": len(md)}
     assert manifest["plugins"]["builtin.survey"]
@@ -311,7 +320,12 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     assert again.returncode == 0, again.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == [
         "dls_check.results.parquet",
+        "report.html",
+        "report.pdf",
         "run.json",
+        "summary.json",
         "trajectory.csv",
+        "trajectory.las",
         "trajectory.trajectory.parquet",
+        "trajectory.xml",
     ]  # the dead run's staging directory was cleaned up

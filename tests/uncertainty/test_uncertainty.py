@@ -176,6 +176,74 @@ def test_agreement_with_welleng_gyro_ns() -> None:
         assert np.abs(total - total_ref).max() / np.abs(total_ref).max() < 1e-5
 
 
+def test_agreement_with_welleng_gyro_ns_ct() -> None:
+    """GYRO-NS-CT (OWSG A021Gc): the stationary terms as the sheet has them, GXY-GD and
+    GXY-GRW accumulating above the 15° static end inclination; term by term and in total."""
+    we = pytest.importorskip("welleng")
+    md = np.arange(0.0, 3001.0, 30.0)
+    inc_deg, azi_deg = _profile(md)
+    survey = _survey(md, inc_deg, azi_deg)
+    for basis in ("balanced_tangent", "min_curve"):
+        header = we.survey.SurveyHeader(
+            latitude=LAT, longitude=2.0, G=9.80665, azi_reference="true", dp_basis=basis
+        )
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ref = we.survey.Survey(
+                md=md, inc=inc_deg, azi=azi_deg, header=header, error_model="GYRO-NS-CT"
+            ).err.errors.errors
+        names, cov = gyro_covariance(survey, LAT, "GYRO-NS-CT", basis=basis, surface_tie=True)
+        assert sorted(names) == sorted(ref)
+        assert {"GXY-GD", "GXY-GRW", "GXY-B1S", "GXY-B2S"} <= set(names)
+        total_ref = np.zeros_like(cov[0])
+        for k, name in enumerate(names):
+            theirs = ref[name].cov_NEV
+            total_ref += theirs
+            diff = np.abs(theirs - cov[k]).max() / np.abs(theirs).max()
+            limit = 2e-2 if name.startswith("XCL") else 1e-4 if basis == "min_curve" else 1e-9
+            assert diff < limit, (basis, name, diff)
+        total = cov.sum(axis=0)
+        assert np.abs(total - total_ref).max() / np.abs(total_ref).max() < 1e-5
+
+
+def test_continuous_drift_and_random_walk_coefficients() -> None:
+    """At constant inclination I and running speed c the drift coefficient is the time
+    spent, ΔMD/(c sin I) hours, the random walk's √(ΔMD/(c sin² I)); both restart after a
+    station at or below the static end inclination."""
+    md = np.arange(0.0, 601.0, 30.0)
+    inc = np.where(md <= 90.0, 5.0, 40.0)
+    inc[md == 300.0] = 10.0  # drops below the 15° gate: the accumulation restarts
+    s = _survey(md, inc, np.full(md.size, 30.0))
+    tool = GyroTool(continuous=True, gxy_gd=1.0, gxy_grw=1.0, running_speed=1800.0)
+    terms = {t.name: t for t in gyro_terms(tool, LAT)}
+    gd = terms["GXY-GD"].weight(s)[:, 2] / np.sin(s.inc)
+    grw = terms["GXY-GRW"].weight(s)[:, 2] / np.sin(s.inc)
+    mean_sin = np.sin(np.radians((inc[1:] + inc[:-1]) / 2))
+    step = np.concatenate([[0.0], 30.0 / (1800.0 * mean_sin)])
+    step_rw = np.concatenate([[0.0], 30.0 / (1800.0 * mean_sin**2)])
+    restart = int(np.flatnonzero(md == 300.0)[0])
+    for k in range(md.size):
+        first = 4 if k < restart else restart + 1  # first leg ending above the gate
+        expected = step[first : k + 1].sum() if k >= first else 0.0
+        assert gd[k] == pytest.approx(expected, abs=1e-15)
+        expected_rw = np.sqrt(step_rw[first : k + 1].sum()) if k >= first else 0.0
+        assert grw[k] == pytest.approx(expected_rw, abs=1e-15)
+
+
+def test_measured_initial_error_replaces_the_stationary_gyro_terms() -> None:
+    """A continuous run from a compassed stop: one systematic azimuth error of the stop's
+    measured σ, drift and random walk from the first station."""
+    md = np.arange(0.0, 301.0, 10.0)
+    s = _survey(md, np.full(md.size, 30.0), np.full(md.size, 70.0))
+    tool = GyroTool(continuous=True, init_sigma_azi=2.0)
+    terms = {t.name: t for t in gyro_terms(tool, LAT)}
+    assert not any(n.startswith("GXY-B") or n in ("GXY-G4", "GXY-RN") for n in terms)
+    init = terms["AZ-INIT"]
+    assert init.mode == "systematic"
+    np.testing.assert_allclose(init.sigma * init.weight(s)[:, 2] / np.sin(s.inc), np.radians(2.0))
+    assert terms["GXY-GD"].weight(s)[1, 2] > 0.0  # accumulating from the first leg
+
+
 # ---------------------------------------------------------------- ellipses
 
 
@@ -235,6 +303,72 @@ def test_stage_outputs_contract_and_matches_library() -> None:
     np.testing.assert_allclose(out.column("cov_ev").to_numpy(), total[:, 1, 2])
     major = out.column("ellipse_major").to_numpy()
     np.testing.assert_allclose(out.column("ellipse_major_conf").to_numpy(), 2.4477468 * major)
+
+
+def test_stage_gyro_ns_ct_with_tool_magnitudes() -> None:
+    md = np.arange(0.0, 1501.0, 30.0)
+    inc, azi = _profile(md, kickoff=0.0)
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
+    params = UncertaintyParams(
+        model="GYRO-NS-CT", init_sigma_azi=1.5, tool={"gxy_gd": 2.0, "running_speed": 3600.0}
+    )
+    out = position_uncertainty(traj, params, ctx)["trajectory"]
+    tool = GyroTool(
+        continuous=True,
+        sage=0.08,
+        noise_reduction=0.4082,
+        gxy_gd=2.0,
+        running_speed=3600.0,
+        init_sigma_azi=1.5,
+    )
+    _, cov = gyro_covariance(_survey(md, inc, azi), LAT, tool)
+    np.testing.assert_allclose(out.column("cov_ee").to_numpy(), cov.sum(axis=0)[:, 1, 1])
+    with pytest.raises(ValueError, match="unknown tool fields"):
+        UncertaintyParams(model="GYRO-NS-CT", tool={"gxy_bogus": 1.0})
+    with pytest.raises(ValueError, match="continuous"):
+        position_uncertainty(traj, UncertaintyParams(init_sigma_azi=1.0), ctx)
+
+
+def test_stage_ties_a_continuous_model_to_the_start_stops_sigma() -> None:
+    md = np.arange(300.0, 1501.0, 30.0)
+    inc, azi = _profile(md, kickoff=0.0)
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
+    # the stop nearest the first station (300 m) is the run's tie
+    stops = pa.table({"md": [1500.0, 300.2], "inc": [50.0, 30.0], "sigma_azi": [3.0, 0.7]})
+    wired = position_uncertainty(
+        {**traj, "stops": stops}, UncertaintyParams(model="GYRO-NS-CT"), ctx
+    )
+    explicit = position_uncertainty(
+        traj, UncertaintyParams(model="GYRO-NS-CT", init_sigma_azi=0.7), ctx
+    )
+    untied = position_uncertainty(traj, UncertaintyParams(model="GYRO-NS-CT"), ctx)
+    for name in ("cov_nn", "cov_ee", "cov_ne"):
+        np.testing.assert_array_equal(
+            wired["trajectory"].column(name).to_numpy(),
+            explicit["trajectory"].column(name).to_numpy(),
+        )
+    assert not np.allclose(
+        wired["trajectory"].column("cov_ee").to_numpy(),
+        untied["trajectory"].column("cov_ee").to_numpy(),
+    )
+    # a near-vertical tie stop does not initialise the run: as if no stops were wired
+    vertical = stops.set_column(1, "inc", pa.array([50.0, 2.0]))
+    as_untied = position_uncertainty(
+        {**traj, "stops": vertical}, UncertaintyParams(model="GYRO-NS-CT"), ctx
+    )
+    np.testing.assert_array_equal(
+        as_untied["trajectory"].column("cov_ee").to_numpy(),
+        untied["trajectory"].column("cov_ee").to_numpy(),
+    )
+    # an explicit parameter wins over the wired stops
+    ct2 = UncertaintyParams(model="GYRO-NS-CT", init_sigma_azi=2.0)
+    overridden = position_uncertainty({**traj, "stops": stops}, ct2, ctx)
+    np.testing.assert_array_equal(
+        overridden["trajectory"].column("cov_ee").to_numpy(),
+        position_uncertainty(traj, ct2, ctx)["trajectory"].column("cov_ee").to_numpy(),
+    )
 
 
 def test_stage_needs_latitude() -> None:

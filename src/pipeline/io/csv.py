@@ -48,8 +48,10 @@ Every problem of the file (or profile) is an InputFileError naming the file, the
 for a cell, its column: wrong cell counts, non-numeric or empty cells, unknown units,
 invalid UTF-8, NUL bytes, a quote left open.
 
-Writing puts ``# gyropipe <well>``, ``# north_reference=<ref>`` and ``# well.<field>=<value>``
-lines above a ``name[unit]`` header; the reader reads stations and samples back exactly.
+Writing puts ``# gyropipe <well>``, ``# north_reference=<ref>``, ``# well.<field>=<value>``
+and, for a trajectory, ``# survey_method=…`` and ``# vs_azimuth=… deg`` lines above a
+``name[unit]`` header; the reader reads stations and samples back exactly (of several
+columns that look like one, the one whose unit fits: ``dogleg[deg]`` is no DLS).
 """
 
 from __future__ import annotations
@@ -83,6 +85,7 @@ from pipeline.io.csv_options import CsvOptions
 from pipeline.io.csv_rows import data_rows, load, newlines, parse, split_head
 from pipeline.io.mnemonics import CURVES
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.units import canonical_unit
 from pipeline.well import NorthReference, WellMetadata
@@ -255,6 +258,11 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     comments = [f"# gyropipe {well.well or '-'}"]
     comments += [f"# north_reference={ref}" for ref in refs]
     comments += [f"# well.{key}={value}" for key, value in meta.items()]
+    if (calculation := calculation_of(table)) is not None:
+        comments += [
+            f"# survey_method={calculation.method}",
+            f"# vs_azimuth={calculation.vs_azimuth!r} deg",
+        ]
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
     with path.open("wb") as fh:

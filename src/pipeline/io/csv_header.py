@@ -18,7 +18,7 @@ from pydantic import ValidationError
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv_options import SHORTHANDS, CsvOptions
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
-from pipeline.units import canonical_unit, conversion_factor
+from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
 DELIMITERS = (",", ";", "\t", "|")
@@ -40,7 +40,13 @@ WELL_ALIASES = {
 NORTH_KEYS = ("northreference", "azimuthreference")
 """Title-block keys declaring the azimuths' north reference (``north_reference: grid``);
 ``well.north_reference`` is well metadata instead."""
-UNIT_FIELDS = {"latitude": "angle", "longitude": "angle", "elevation": "length"}
+UNIT_FIELDS = {
+    "latitude": "angle",
+    "longitude": "angle",
+    "elevation": "length",
+    "declination": "angle",
+    "grid_convergence": "angle",
+}
 """Well fields whose title-block value may carry a unit (``Elevation: 82 ft``)."""
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
@@ -197,6 +203,11 @@ def choose(
         matching = [c for c in cells if set(c.north) & {ref for _, ref in declared}]
         if len(matching) == 1:
             return matching[0]
+    quantity = CURVES[name].quantity
+    if len(cells) > 1 and quantity is not None:  # the one whose unit fits: dogleg[deg] no DLS
+        fitting = [c for c in cells if c.unit is not None and is_unit_of(c.unit, quantity)]
+        if len(fitting) == 1:
+            return fitting[0]
     if len(cells) > 1:
         raise InputFileError(
             path,

@@ -40,14 +40,20 @@ Reading
   is the latest such year not after today; ``05/06/2024`` is refused as ambiguous);
   elevation from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB,
   DF→EDF, GL→EGL, else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no
-  reference item: an error). ``north_reference`` is the one the file names (an option's is
-  not the file's).
+  reference item: an error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE,
+  GRIDCORR) in degrees or the item's angle unit. ``north_reference`` is the one the file
+  names (an option's is not the file's).
 
 Writing
 -------
 LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless all steps are
-exactly equal), NULL, every well metadata field, NREF, DREF, EREF; ``~Curve`` (mnemonic =
-column name, unit = the field's ``unit`` metadata as stored, e.g. ``deg/h``); ``~Other``;
+exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE,
+UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
+the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
+well's magnetic declination and grid convergence, deg, east of true north positive),
+METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
+records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
+the field's ``unit`` metadata as stored, e.g. ``deg/h``); ``~Other``;
 ``~ASCII`` with each value in shortest round-trip form. The first (index) column is ``md``
 for a stations-like table (md, inc and azi present), else ``time`` (raw samples dwell at one
 depth: only their time increases), else ``md``, else the first numeric column. NULL is
@@ -83,8 +89,9 @@ from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.survey.calculation import calculation_of
 from pipeline.tables import RawSamples, Stations
-from pipeline.units import canonical_unit, conversion_factor
+from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
 Floats = NDArray[np.float64]
@@ -121,6 +128,11 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
     "tool_serial": ("TOOLSN",),
 }
 """Well metadata text fields and the mnemonics holding them, preferred first."""
+ANGLE_ITEMS = {
+    "declination": ("DECL", "MAGDEC", "DECLINATION"),
+    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE", "GRIDCORR"),
+}
+"""Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
 COORDINATE_ITEMS = {
     "latitude": (("LAT", "LATI", "LATITUDE"), "NS"),
     "longitude": (("LON", "LONG", "LONGITUDE"), "EW"),
@@ -146,6 +158,7 @@ _DMS_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
 _MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name}
 _MNEMONIC = re.compile(r"[A-Za-z0-9_][^\s.:]*")
+_API = re.compile(r"[0-9]{2}-?[0-9]{3}-?[0-9]{5}(?:-?[0-9]{2}){0,2}")
 _UNIT = re.compile(r"[^\s:]*")
 
 
@@ -529,6 +542,9 @@ def _choose(
     for name, indices in found.items():
         if len(indices) > 1 and name == "azi":  # the one of the declared north reference
             indices = [i for i in indices if set(_curve_north(curves[i])) & refs] or indices
+        quantity = CURVES[name].quantity
+        if len(indices) > 1 and quantity is not None:  # the unit tells: DOGLEG.deg is no DLS
+            indices = [i for i in indices if is_unit_of(curves[i].unit, quantity)] or indices
         if len(indices) > 1:
             raise InputFileError(
                 path,
@@ -1053,6 +1069,9 @@ def _well_metadata(path: Path, header: Header, north: NorthReference | None) -> 
     for name, (mnemonics, hemispheres) in COORDINATE_ITEMS.items():
         if (item := header.find(path, *mnemonics)) is not None:
             found[name] = (_coordinate(path, item, hemispheres), item)
+    for name, mnemonics in ANGLE_ITEMS.items():
+        if (item := header.find(path, *mnemonics)) is not None:
+            found[name] = (_header_number(path, item) * _angle_factor(path, item), item)
     if (item := header.find(path, "DATE")) is not None:
         found["survey_date"] = (_date(path, item), item)
     elevation, reference = _elevation(path, header)
@@ -1068,6 +1087,14 @@ def _well_metadata(path: Path, header: Header, north: NorthReference | None) -> 
                 path, f"{item.mnemonic} {item.value!r}: {exc.errors()[0]['msg']}", line=item.line
             ) from None
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _angle_factor(path: Path, item: Item) -> float:
+    """Degrees per unit of an angle item (no unit: degrees)."""
+    try:
+        return conversion_factor(item.unit, "angle") if item.unit else 1.0
+    except UnitError as exc:
+        raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
 
 
 def _coordinate(path: Path, item: Item, hemispheres: str) -> float:
@@ -1302,6 +1329,7 @@ def _header_text(
     first, last = (values[0], values[-1]) if values.size else (None, None)
     unit = _field_unit(numeric[0])
     meta = well.model_dump(mode="json")
+    calculation = calculation_of(table)
     lines = [
         "~Version Information",
         _line("VERS", "", "2.0", "CWLS log ASCII Standard - version 2.0"),
@@ -1314,16 +1342,32 @@ def _header_text(
         _line("COMP", "", meta["company"], "company"),
         _line("WELL", "", meta["well"], "well"),
         _line("FLD", "", meta["field"], "field"),
+        _line("LOC", "", _location(well), "location"),
         _line("SRVC", "", meta["service_company"], "service company"),
         _line("DATE", "", meta["survey_date"], "survey date"),
         _line("UWI", "", meta["uwi"], "unique well identifier"),
-        _line("LAT", "deg", meta["latitude"], "latitude (WGS84)"),
-        _line("LON", "deg", meta["longitude"], "longitude east (WGS84)"),
-        _line("NREF", "", north, "north reference of the azimuths"),
+        _line("API", "", _api(well.uwi), "API number"),
+        _line("LATI", "deg", meta["latitude"], "latitude (WGS84)"),
+        _line("LONG", "deg", meta["longitude"], "longitude east (WGS84)"),
         _line("DREF", "", meta["depth_reference"], "depth reference"),
         _line("EREF", "m", meta["elevation"], "elevation of the depth reference above MSL"),
         _line("TOOL", "", meta["tool_type"], "survey tool type"),
         _line("TOOLSN", "", meta["tool_serial"], "survey tool serial number"),
+        "~Parameter Information",
+        _line("NREF", "", north, "north reference of the azimuths"),
+        _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
+        _line(
+            "GRIDCONV", "deg", meta["grid_convergence"], "grid convergence, east of true north +"
+        ),
+        _line(
+            "METHOD", "", calculation and calculation.method.replace("_", " "), "survey calculation"
+        ),
+        _line(
+            "VSAZ",
+            "deg",
+            calculation and calculation.vs_azimuth,
+            "vertical section azimuth (origin: wellhead)",
+        ),
         "~Curve Information",
         *(_line(f.name, _field_unit(f), None, _description(f)) for f in numeric),
         "~Other",
@@ -1336,6 +1380,22 @@ def _header_text(
         lines.append("Columns not written (~A holds numbers only): " + ", ".join(dropped))
     lines.append("~ASCII " + " ".join(f.name for f in numeric))
     return "\n".join(lines) + "\n"
+
+
+def _location(well: WellMetadata) -> str | None:
+    """The wellhead as text, e.g. ``61.25 N 73.4 E (WGS84)``."""
+    if well.latitude is None or well.longitude is None:
+        return None
+    lon = (well.longitude + 180.0) % 360.0 - 180.0
+    north = f"{abs(well.latitude)!r} {'N' if well.latitude >= 0 else 'S'}"
+    return f"{north} {abs(lon)!r} {'E' if lon >= 0 else 'W'} (WGS84)"
+
+
+def _api(uwi: str | None) -> str | None:
+    """The UWI when it is a US API number (10, 12 or 14 digits)."""
+    if uwi is None or not _API.fullmatch(uwi):
+        return None
+    return uwi
 
 
 def _line(mnemonic: str, unit: str, value: object, descr: str) -> str:

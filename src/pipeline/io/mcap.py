@@ -3,7 +3,9 @@
 **Writer** ``mcap``: gyropipe's own batched, columnar layout — Arrow IPC record batches on
 ``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
 column units in metadata records, uncompressed chunks with CRCs
-(:mod:`pipeline.io.mcap_arrow`). Time series only: other tables are refused.
+(:mod:`pipeline.io.mcap_arrow`). Time series only: other tables are refused. Through the
+``export`` stage it writes several processed tables, each on its own topic
+(:mod:`pipeline.io.mcap_tables`).
 
 **Reader** ``mcap`` (kind ``samples``; files starting with the MCAP magic
 ``\\x89MCAP0\\r\\n``):
@@ -28,7 +30,7 @@ from typing import Literal
 
 import pyarrow as pa
 from mcap.records import Channel
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from pipeline.errors import UnitError
 from pipeline.hookspecs import hookimpl
@@ -39,12 +41,13 @@ from pipeline.io.mcap_arrow import (
     ARROW_SCHEMA_ENCODING,
     MARKERS_TOPIC,
     SAMPLES_TOPIC,
-    WELL_RECORD,
     read_batches,
+    read_well,
     write_samples,
 )
 from pipeline.io.mcap_keyed import SAMPLE_COLUMNS, TRIADS
 from pipeline.io.mcap_records import MAGIC, McapFile, scan
+from pipeline.io.mcap_tables import write_tables
 from pipeline.io.mnemonics import CURVES
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import RawSamples
@@ -120,7 +123,7 @@ def sniff(path: Path) -> bool:
 def read_samples(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table, WellMetadata]:
     """Raw samples of an MCAP file (see the module docstring) and its well metadata."""
     file = scan(path)
-    well = _well(file)
+    well = read_well(file)
     selected = _selected(file, options)
     if any(c.topic == SAMPLES_TOPIC for c in selected):
         if len(selected) > 1:
@@ -177,19 +180,6 @@ def _read_sources(file: McapFile, channels: list[Channel], options: McapOptions)
     return table.replace_schema_metadata({sources.TIME_ORIGIN_KEY: str(origin).encode()})
 
 
-def _well(file: McapFile) -> WellMetadata:
-    well = WellMetadata()
-    for name, entries, offset in file.metadata:
-        if name != WELL_RECORD:
-            continue
-        try:
-            well = well.merged(WellMetadata.model_validate(entries))
-        except ValidationError as exc:
-            problem = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
-            raise file.fail(f"metadata record {WELL_RECORD} at byte {offset}: {problem}") from None
-    return well
-
-
 # ---------------------------------------------------------------------------- hooks
 
 
@@ -214,9 +204,11 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
         WriterDef(
             name="mcap",
             description="time series (raw samples) as MCAP: Arrow record batches, station and "
-            "position markers, well metadata records",
+            "position markers, well metadata records; with the export stage, processed tables "
+            "(trajectory, stations, series, QC…) each on its own topic",
             extension="mcap",
             write=write_samples,
+            write_tables=write_tables,
         )
     )
 

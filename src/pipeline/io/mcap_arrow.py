@@ -32,12 +32,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import pyarrow as pa
 from mcap.records import Channel
 from mcap.writer import CompressionType, Writer
+from pydantic import ValidationError
 
 import pipeline
 from pipeline.contracts import UNIT_KEY
@@ -67,9 +68,7 @@ _MAX_NS = 2**64 - 1
 def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write a time-series table (raw samples) in gyropipe's batched MCAP layout."""
     times = _checked_times(table)
-    for f in table.schema:
-        if pa.types.is_dictionary(f.type):
-            raise ValueError(f"column {f.name!r} is dictionary-encoded: decode it first")
+    check_encodable(table)
     markers = [
         m for m in MARKER_COLUMNS if m in table.column_names and pa.types.is_integer(table[m].type)
     ]
@@ -77,24 +76,10 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
     data = table.drop_columns(markers)
     path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
     with path.open("wb") as fh:
-        writer = Writer(
-            fh,
-            chunk_size=CHUNK_BYTES,
-            compression=CompressionType.NONE,
-            enable_crcs=True,
-            enable_data_crcs=True,
+        writer = start_writer(fh)
+        add_arrow_channel(
+            writer, SAMPLES_TOPIC, SAMPLES_SCHEMA, data, table.schema.with_metadata(meta), times
         )
-        writer.start(profile=PROFILE, library=f"gyropipe {pipeline.__version__}")
-        schema_id = writer.register_schema(
-            SAMPLES_SCHEMA, ARROW_SCHEMA_ENCODING, table.schema.with_metadata(meta).serialize()
-        )
-        channel = writer.register_channel(SAMPLES_TOPIC, ARROW_MESSAGE_ENCODING, schema_id)
-        row = 0
-        for sequence, batch in enumerate(data.to_batches(max_chunksize=BATCH_ROWS)):
-            if batch.num_rows:
-                stamp = _ns(times[row])
-                writer.add_message(channel, stamp, batch.serialize().to_pybytes(), stamp, sequence)
-                row += batch.num_rows
         if markers and table.num_rows:
             marker_schema = writer.register_schema(
                 MARKER_SCHEMA, "jsonschema", json.dumps(_marker_json_schema(markers)).encode()
@@ -105,19 +90,63 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
                 writer.add_message(
                     marker_channel, stamp, json.dumps(event).encode(), stamp, sequence
                 )
-        writer.add_metadata(WELL_RECORD, _well_strings(well))
-        writer.add_metadata(
-            UNITS_RECORD,
-            {f.name: (f.metadata or {}).get(UNIT_KEY, b"").decode() for f in table.schema},
-        )
+        writer.add_metadata(WELL_RECORD, well_strings(well))
+        writer.add_metadata(UNITS_RECORD, units_of(table))
         writer.finish()  # type: ignore[no-untyped-call]
+
+
+def start_writer(fh: BinaryIO) -> Writer:
+    """An MCAP writer of gyropipe's profile: uncompressed chunks with CRCs, started."""
+    writer = Writer(
+        fh,
+        chunk_size=CHUNK_BYTES,
+        compression=CompressionType.NONE,
+        enable_crcs=True,
+        enable_data_crcs=True,
+    )
+    writer.start(profile=PROFILE, library=f"gyropipe {pipeline.__version__}")
+    return writer
+
+
+def add_arrow_channel(
+    writer: Writer,
+    topic: str,
+    schema_name: str,
+    data: pa.Table,
+    schema: pa.Schema,
+    times: np.ndarray | None,
+) -> None:
+    """A channel ``topic`` whose schema record is ``schema`` (the whole Arrow IPC schema),
+    with ``data`` as record batches of up to :data:`BATCH_ROWS` rows; each message's log time
+    is ``times`` (s) at its first row, or 0."""
+    schema_id = writer.register_schema(schema_name, ARROW_SCHEMA_ENCODING, schema.serialize())
+    channel = writer.register_channel(topic, ARROW_MESSAGE_ENCODING, schema_id)
+    row = 0
+    for sequence, batch in enumerate(data.to_batches(max_chunksize=BATCH_ROWS)):
+        if batch.num_rows:
+            stamp = _ns(times[row]) if times is not None else 0
+            writer.add_message(channel, stamp, batch.serialize().to_pybytes(), stamp, sequence)
+            row += batch.num_rows
+
+
+def check_encodable(table: pa.Table) -> None:
+    """Refuse columns the batched layout does not hold (dictionary-encoded ones)."""
+    for f in table.schema:
+        if pa.types.is_dictionary(f.type):
+            raise ValueError(f"column {f.name!r} is dictionary-encoded: decode it first")
+
+
+def units_of(table: pa.Table) -> dict[str, str]:
+    """Column → unit (``""`` when unitless), for tools without Arrow."""
+    return {f.name: (f.metadata or {}).get(UNIT_KEY, b"").decode() for f in table.schema}
 
 
 def _checked_times(table: pa.Table) -> np.ndarray:
     if "time" not in table.column_names or table.schema.field("time").type != pa.float64():
         raise ValueError(
             "the mcap writer writes time series: the table needs a float64 'time' column "
-            "(s); write other tables with the parquet or csv writer"
+            "(s); write other tables with the parquet or csv writer, or several processed "
+            "tables with the export stage"
         )
     column = table.column("time")
     if column.null_count:
@@ -166,28 +195,36 @@ def _marker_json_schema(markers: list[str]) -> dict[str, Any]:
     }
 
 
-def _well_strings(well: WellMetadata) -> dict[str, str]:
+def well_strings(well: WellMetadata) -> dict[str, str]:
+    """The set well metadata fields as the strings of the ``gyropipe.well`` record."""
     return {k: str(v) for k, v in well.model_dump(mode="json", exclude_none=True).items()}
+
+
+def read_well(file: McapFile) -> WellMetadata:
+    """The well metadata of the file's ``gyropipe.well`` records (later ones override)."""
+    well = WellMetadata()
+    for name, entries, offset in file.metadata:
+        if name != WELL_RECORD:
+            continue
+        try:
+            well = well.merged(WellMetadata.model_validate(entries))
+        except ValidationError as exc:
+            problem = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
+            raise file.fail(f"metadata record {WELL_RECORD} at byte {offset}: {problem}") from None
+    return well
 
 
 # ---------------------------------------------------------------------------- reader
 
 
 def read_batches(file: McapFile, channel: Channel) -> pa.Table:
-    """gyropipe's batched channel, markers forward-filled back into their columns."""
+    """gyropipe's batched samples channel, markers forward-filled back into their columns."""
     where = f"topic {SAMPLES_TOPIC}"
-    schema = file.schemas.get(channel.schema_id)
-    if channel.message_encoding != ARROW_MESSAGE_ENCODING or schema is None:
-        raise file.fail(f"{where}: expected {ARROW_MESSAGE_ENCODING} messages with a schema")
-    if schema.encoding != ARROW_SCHEMA_ENCODING:
-        raise file.fail(
-            f"{where}: schema encoding {schema.encoding!r}, not {ARROW_SCHEMA_ENCODING}"
-        )
+    full = arrow_schema(file, channel)
+    meta = dict(full.metadata or {})
     try:
-        full = pa.ipc.read_schema(pa.py_buffer(schema.data))
-        meta = dict(full.metadata or {})
         markers = json.loads(meta.pop(MARKERS_KEY, b"[]"))
-    except (pa.ArrowException, ValueError) as exc:
+    except ValueError as exc:
         raise file.fail(f"{where}: unreadable Arrow schema: {exc}") from None
     if "time" not in full.names or full.field("time").type != pa.float64():
         raise file.fail(f"{where}: the Arrow schema has no float64 'time' column")
@@ -198,17 +235,7 @@ def read_batches(file: McapFile, channel: Channel) -> pa.Table:
     ):
         raise file.fail(f"{where}: schema metadata names unknown marker columns {markers!r}")
     markers.sort(key=full.get_field_index)  # inserted back in schema order
-    batch_schema = pa.schema([f for f in full if f.name not in markers])
-    batches = []
-    for block, rows in messages_of(file, channel.id):
-        for row in rows.tolist():
-            try:
-                batches.append(
-                    pa.ipc.read_record_batch(pa.py_buffer(block.payload(row)), batch_schema)
-                )
-            except (pa.ArrowException, ValueError) as exc:
-                raise file.fail(f"{where}: bad Arrow batch ({block.locate(row)}): {exc}") from None
-    table = pa.Table.from_batches(batches, schema=batch_schema)
+    table = arrow_batches(file, channel, pa.schema([f for f in full if f.name not in markers]))
     for name, column in _marker_columns(file, table, markers).items():
         field = full.field(name)
         try:
@@ -218,6 +245,37 @@ def read_batches(file: McapFile, channel: Channel) -> pa.Table:
             raise file.fail(problem) from None
         table = table.add_column(full.get_field_index(name), field, column)
     return table.replace_schema_metadata(meta or None)
+
+
+def arrow_schema(file: McapFile, channel: Channel) -> pa.Schema:
+    """The whole Arrow schema of one of gyropipe's batched channels."""
+    where = f"topic {channel.topic}"
+    schema = file.schemas.get(channel.schema_id)
+    if channel.message_encoding != ARROW_MESSAGE_ENCODING or schema is None:
+        raise file.fail(f"{where}: expected {ARROW_MESSAGE_ENCODING} messages with a schema")
+    if schema.encoding != ARROW_SCHEMA_ENCODING:
+        raise file.fail(
+            f"{where}: schema encoding {schema.encoding!r}, not {ARROW_SCHEMA_ENCODING}"
+        )
+    try:
+        found: pa.Schema = pa.ipc.read_schema(pa.py_buffer(schema.data))
+    except (pa.ArrowException, ValueError) as exc:
+        raise file.fail(f"{where}: unreadable Arrow schema: {exc}") from None
+    return found
+
+
+def arrow_batches(file: McapFile, channel: Channel, schema: pa.Schema) -> pa.Table:
+    """The record batches of a batched channel as one table of ``schema`` (zero-copy)."""
+    batches = []
+    for block, rows in messages_of(file, channel.id):
+        for row in rows.tolist():
+            try:
+                batches.append(pa.ipc.read_record_batch(pa.py_buffer(block.payload(row)), schema))
+            except (pa.ArrowException, ValueError) as exc:
+                raise file.fail(
+                    f"topic {channel.topic}: bad Arrow batch ({block.locate(row)}): {exc}"
+                ) from None
+    return pa.Table.from_batches(batches, schema=schema)
 
 
 def _marker_columns(

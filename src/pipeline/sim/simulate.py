@@ -24,7 +24,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray, body_to_ned, to_body
-from pipeline.sim.plan import WellPath
+from pipeline.sim.plan import VERTICAL_BELOW, WellPath
 from pipeline.sim.sensors import ToolModel, gauss_markov, measure, odometer_md
 from pipeline.sim.spec import ContinuousSurvey, PointSurvey, SimulationSpec, Torsion
 from pipeline.sim.timeline import Sampled, Timeline, continuous_timeline, point_timeline
@@ -120,11 +120,15 @@ def kinematics(
     roll = np.radians(survey.start_roll) + np.concatenate([[0.0], np.cumsum(steps)])
     housing_tf = roll - azi
     theta, theta_rate = s.theta, s.theta_rate
-    if isinstance(survey, ContinuousSurvey):
+    if isinstance(survey, ContinuousSurvey) and survey.stabilisation.enabled:
         residual, residual_rate = _smooth_gauss_markov(
             t, np.radians(survey.stabilisation.residual), survey.stabilisation.correlation, rng
         )
-        servo = residual - housing_tf  # frame angle that puts the gyro at the high side
+        # frame angle that puts the gyro at the high side; on an exactly vertical hole (no
+        # high side) it aims at the azimuth the hole leaves vertical toward, so the frame
+        # does not jump at the kick-off
+        servo_tf = roll - _leaving_azimuth(azi, inc)
+        servo = residual - servo_tf
         first = int(np.argmax(s.stabilised))
         timeline = continuous_timeline(
             survey, timeline.md_a[0], timeline.md, align=float(servo[first])
@@ -132,10 +136,17 @@ def kinematics(
         s = timeline.at(t)
         stab = s.stabilised.astype(bool)
         last = len(t) - 1 - int(np.argmax(stab[::-1]))
-        correction = np.where(stab, servo - servo[first], 0.0)
+        # the servo's error grows in with the speed (smoothstep of it): the frame rate has
+        # no step where the servo engages or lets go, nor a kink where the ramps end
+        speed_rate = np.sign(s.md_rate) * s.md_accel / survey.speed
+        engage = moving**2 * (3 - 2 * moving)
+        engage_rate = 6 * moving * (1 - moving) * speed_rate
+        error = engage * (residual - residual[first])
+        error_rate = engage_rate * (residual - residual[first]) + engage * residual_rate
+        correction = np.where(stab, error - (servo_tf - servo_tf[first]), 0.0)
         correction[last + 1 :] = correction[last]
         azi_rate = state.dazi * s.md_rate
-        correction_rate = np.where(stab, residual_rate - (roll_rate - azi_rate), 0.0)
+        correction_rate = np.where(stab, error_rate - (roll_rate - azi_rate), 0.0)
         theta, theta_rate = s.theta + correction, s.theta_rate + correction_rate
     toolface = housing_tf + theta
     c_bn = body_to_ned(azi, inc, toolface)
@@ -167,6 +178,18 @@ def kinematics(
         accel_body=accel_body,
         field_body=field_body,
     )
+
+
+def _leaving_azimuth(azi: FloatArray, inc: FloatArray) -> FloatArray:
+    """Azimuth (rad) with each exactly vertical sample's replaced by that of the next inclined
+    sample (unchanged where none follows): constant, hence rate-free, through vertical."""
+    inclined = np.sin(inc) >= VERTICAL_BELOW
+    index = np.where(inclined, np.arange(azi.size), azi.size)
+    following = np.minimum.accumulate(index[::-1])[::-1]
+    leaving: FloatArray = np.where(
+        following < azi.size, azi[np.minimum(following, azi.size - 1)], azi
+    )
+    return leaving
 
 
 def _torsion_rate(torsion: Torsion, t: FloatArray, rng: np.random.Generator) -> FloatArray:

@@ -74,8 +74,14 @@ class PointSurvey(StopScheme):
 
 
 class Stabilisation(Strict):
-    """Frame servo keeping the gyro (frame x) axis near the high side while moving."""
+    """Frame servo keeping the gyro (frame x) axis near the high side while moving; its
+    error grows in with the speed, so the frame rate is continuous where it engages."""
 
+    enabled: bool = Field(
+        True,
+        description="false: no servo, the frame stays at the stop's last position and rolls "
+        "with the housing (a free-rotating two- or three-axis tool)",
+    )
     residual: float = Field(2.0, ge=0, description="σ of the residual toolface error, deg")
     correlation: float = Field(5.0, gt=0, description="correlation time of the residual, s")
 

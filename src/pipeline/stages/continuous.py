@@ -6,7 +6,7 @@ from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
-from pipeline.continuous.integrate import (
+from pipeline.continuous import (
     ContinuousOptions,
     ContinuousSeries,
     ContinuousStations,
@@ -42,8 +42,9 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="integrate_continuous",
             func=continuous_stage,
             description="Continuous-mode gyro: integrate the azimuth of the moving run from "
-            "the start stop, remove the misclosure on the end stop linearly in time, flag "
-            "near-vertical sections; stations at a fixed MD spacing and the full-rate series.",
+            "the start stop (servo'd single-axis, two-axis or three-axis strapdown tools), "
+            "remove the misclosure on the end stop linearly in time, flag near-vertical "
+            "sections; stations at a fixed MD spacing and the full-rate series.",
             inputs={"samples": RawSamples, "stops": CompassStations},
             outputs={"stations": ContinuousStations, "series": ContinuousSeries},
             params=ContinuousOptions,

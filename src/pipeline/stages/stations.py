@@ -21,11 +21,12 @@ from pipeline.stages.survey import (
     survey_offsets,
     trajectory_columns,
 )
+from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
 from pipeline.survey.methods import Method, build_turn_rates
 from pipeline.survey.north import convergence_at, convert_table, declination_at
 from pipeline.tables import DLS_UNIT, Stations, Trajectory
-from pipeline.well import NorthReference
+from pipeline.well import NorthReference, WellMetadata, attach, well_of
 
 
 class MethodTrajectory(Trajectory):
@@ -81,7 +82,8 @@ def survey_method(
         columns | {"build": build, "turn": turn},
         north_reference=north_reference_of(stations, "azi"),
     )
-    return {"trajectory": table}
+    calculation = SurveyCalculation(method=params.method, vs_azimuth=params.vs_azimuth)
+    return {"trajectory": with_calculation(table, calculation)}
 
 
 # --- interpolation ------------------------------------------------------------------------------
@@ -211,8 +213,10 @@ def interpolate_tvd_stage(
 
 class NorthReferenceParams(BaseModel):
     """Parameters of the north-reference conversion (angles deg). Corrections not given are
-    derived from the well header: γ from ``crs`` at the wellhead, D from the geomagnetic
-    ``model`` at the wellhead on ``date`` (default: the survey date)."""
+    the well's ``grid_convergence`` and ``declination``, else derived from the well header:
+    γ from ``crs`` at the wellhead, D from the geomagnetic ``model`` at the wellhead on
+    ``date`` (default: the survey date). The output's well metadata records the new north
+    reference and the corrections applied, so exports state them."""
 
     model_config = ConfigDict(extra="forbid")
     target: NorthReference = Field(description="north reference to convert the azimuths to")
@@ -243,8 +247,8 @@ def north_reference_stage(
     stations = inputs["stations"]
     refs = _needs(stations, params.target)
     well = ctx.well
-    convergence = params.convergence
-    declination = params.declination
+    convergence = _correction("convergence", params.convergence, well.grid_convergence)
+    declination = _correction("declination", params.declination, well.declination)
     if len(refs) > 1 and "grid" in refs and convergence is None:
         if params.crs is None or well.latitude is None or well.longitude is None:
             raise ValueError(
@@ -264,7 +268,21 @@ def north_reference_stage(
     table = convert_table(
         stations, params.target, convergence_deg=convergence, declination_deg=declination
     )
-    return {"stations": table}
+    used = WellMetadata(
+        north_reference=params.target,
+        grid_convergence=convergence if len(refs) > 1 and "grid" in refs else None,
+        declination=declination if len(refs) > 1 and "magnetic" in refs else None,
+    )
+    header = (well_of(stations) or WellMetadata()).merged(used.model_dump(exclude_none=True))
+    return {"stations": attach(table, header)}
+
+
+def _correction(name: str, given: float | None, well: float | None) -> float | None:
+    """The stage's correction or the well's; both given must agree (exports state one)."""
+    if given is not None and well is not None and given != well:
+        field = "grid_convergence" if name == "convergence" else name
+        raise ValueError(f"{name} {given} contradicts the well's {field} {well}: give one of them")
+    return given if given is not None else well
 
 
 @hookimpl

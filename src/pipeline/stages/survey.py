@@ -11,6 +11,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import CheckDef, StageContext, StageDef
+from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.tables import DLS_COURSE_M, DLS_UNIT, CheckResults, Stations, Trajectory
@@ -104,7 +105,8 @@ def min_curve(
     table = Trajectory.compiled().make_table(
         trajectory_columns(stations, params), north_reference=north_reference_of(stations, "azi")
     )
-    return {"trajectory": table}
+    calculation = SurveyCalculation(method="minimum_curvature", vs_azimuth=params.vs_azimuth)
+    return {"trajectory": with_calculation(table, calculation)}
 
 
 class DlsLimitParams(BaseModel):

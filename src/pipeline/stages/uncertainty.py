@@ -1,22 +1,29 @@
-"""Built-in plugin: the ``position_uncertainty`` stage (ISCWSA gyro error model)."""
+"""Built-in plugin: the ``position_uncertainty`` stage (ISCWSA gyro and MWD error models)."""
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Mapping
-from typing import Literal
+from dataclasses import fields, replace
+from typing import Any, Literal
 
 import numpy as np
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from pipeline.contracts import column
+from pipeline.earth.geomagnetic import reference_field
+from pipeline.earth.site import MagneticReference
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.stages.survey import north_reference_of, survey_offsets
-from pipeline.tables import Trajectory
+from pipeline.survey.north import convert_azimuth
+from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
-from pipeline.uncertainty.gyro import GYRO_PRESETS, Survey, gyro_covariance
+from pipeline.uncertainty.gyro import GYRO_PRESETS, GyroTool, gyro_covariance
+from pipeline.uncertainty.mwd import MWD_PRESETS, MwdTool, mwd_covariance
+from pipeline.uncertainty.terms import Survey
+from pipeline.well import WellMetadata
 
 AREA = "m2"
 
@@ -56,12 +63,27 @@ class UncertaintyParams(BaseModel):
     """Parameters of the position-uncertainty stage."""
 
     model_config = ConfigDict(extra="forbid")
-    model: str = Field("GYRO-NS", description=f"tool preset, one of {sorted(GYRO_PRESETS)}")
+    model: str = Field(
+        "GYRO-NS",
+        description=f"error model and tool preset, one of {sorted(GYRO_PRESETS)} "
+        "(GYRO-NS-CT: continuous mode, drift and random walk along the hole) or of "
+        f"{sorted(MWD_PRESETS)} (magnetic MWD: ISCWSA MWD Rev 5 as in its example workbook, "
+        "or Rev 5.11 with DEC-OH 0.21°)",
+    )
     confidence: float = Field(
         0.95, gt=0, lt=1, description="probability content of the *_conf ellipse columns"
     )
     latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="latitude, deg; default: the well's latitude"
+        None,
+        ge=-89.9,
+        le=89.9,
+        description="latitude, deg (gyro models); default: the well's latitude",
+    )
+    magnetic: MagneticReference | None = Field(
+        None,
+        description="MWD models: geomagnetic reference at the wellhead (total field nT, dip "
+        "deg, declination deg east); default: WMM2025 at the well's latitude, longitude, "
+        "elevation and survey date",
     )
     basis: Literal["min_curve", "balanced_tangent"] = Field(
         "min_curve",
@@ -75,6 +97,44 @@ class UncertaintyParams(BaseModel):
         ge=0,
         description="measured 1σ compassing azimuth scatter, deg; sets GXY-RN when given",
     )
+    init_sigma_azi: float | None = Field(
+        None,
+        ge=0,
+        description="GYRO-NS-CT: measured 1σ azimuth of the stop the continuous run starts "
+        "from (the compass stage's sigma_azi), deg; replaces the stationary gyro terms and "
+        "starts the continuous section at the first station",
+    )
+    tool: dict[str, float] = Field(
+        default_factory=dict,
+        description="tool magnitudes overriding the preset's, by term field, in the model "
+        "sheet's units (e.g. gxy_gd deg/h, gxy_grw deg/√h, running_speed m/h, axyz_zb m/s²; "
+        "MWD: abz m/s², mbz nT, dec_u deg, dbh_u deg·nT, amil nT; dsfs, drfr m)",
+    )
+
+    @model_validator(mode="after")
+    def _model_and_fields(self) -> UncertaintyParams:
+        if self.model not in GYRO_PRESETS and self.model not in MWD_PRESETS:
+            known = sorted(GYRO_PRESETS) + sorted(MWD_PRESETS)
+            raise ValueError(f"unknown model {self.model!r}; expected one of {known}")
+        mwd = self.model in MWD_PRESETS
+        tool_type = MwdTool if mwd else GyroTool
+        names = {f.name for f in fields(tool_type) if f.type == "float"}
+        unknown = sorted(set(self.tool) - names)
+        if unknown:
+            raise ValueError(
+                f"unknown tool fields {unknown} for {self.model}; expected some of {sorted(names)}"
+            )
+        if mwd:
+            gyro_only = [
+                name
+                for name in ("latitude", "measured_sigma_azi", "init_sigma_azi")
+                if getattr(self, name) is not None
+            ]
+            if gyro_only:
+                raise ValueError(f"{gyro_only} apply to gyro models, not {self.model!r}")
+        elif self.magnetic is not None:
+            raise ValueError(f"magnetic applies to MWD models, not {self.model!r}")
+        return self
 
 
 def position_uncertainty(
@@ -82,26 +142,20 @@ def position_uncertainty(
 ) -> dict[str, pa.Table]:
     """Trajectory → trajectory with NEV covariance and error ellipses per station."""
     table = inputs["trajectory"]
-    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
-    if latitude is None:
-        raise ValueError("position_uncertainty needs a latitude: set it or the well's latitude")
-    if params.model not in GYRO_PRESETS:
-        raise ValueError(f"unknown model {params.model!r}; expected one of {sorted(GYRO_PRESETS)}")
-    tool = GYRO_PRESETS[params.model]
-    if params.measured_sigma_azi is not None:
-        tool = tool.with_measured_noise(params.measured_sigma_azi, latitude)
+    azi_deg = table.column("azi").to_numpy()
+    if params.model in MWD_PRESETS:
+        covariance, azi_deg = _mwd(params, ctx.well, azi_deg, north_reference_of(table, "azi"))
+    else:
+        covariance = _gyro(params, ctx.well, _start_stop_sigma(inputs.get("stops"), table))
     md = table.column("md").to_numpy()
     inc = np.radians(table.column("inc").to_numpy())
-    azi = np.radians(table.column("azi").to_numpy())
+    azi = np.radians(azi_deg)
     tvd = table.column("tvd").to_numpy()
     cov = np.zeros((md.size, 3, 3))
     offsets = survey_offsets(table)
     for lo, hi in itertools.pairwise(offsets):
         survey = Survey.of(md[lo:hi], inc[lo:hi], azi[lo:hi], tvd[lo:hi])
-        _, per_term = gyro_covariance(
-            survey, latitude, tool, basis=params.basis, surface_tie=params.surface_tie
-        )
-        cov[lo:hi] = per_term.sum(axis=0)
+        cov[lo:hi] = covariance(survey).sum(axis=0)
     ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
     k2 = horizontal_scale(params.confidence)
     k1 = vertical_scale(params.confidence)
@@ -124,7 +178,89 @@ def position_uncertainty(
     out = PositionUncertainty.compiled().make_table(
         columns, north_reference=north_reference_of(table, "azi")
     )
-    return {"trajectory": out}
+    return {"trajectory": out.replace_schema_metadata(table.schema.metadata)}
+
+
+Covariance = Callable[[Survey], np.ndarray]
+
+
+def _start_stop_sigma(stops: pa.Table | None, trajectory: pa.Table) -> tuple[float, float] | None:
+    """Azimuth σ and inclination (deg) of the compassed stop nearest the trajectory's first
+    MD (the tie of a continuous run); None without stops."""
+    if stops is None or stops.num_rows == 0:
+        return None
+    md = stops.column("md").to_numpy(zero_copy_only=False)
+    first = float(trajectory.column("md")[0].as_py()) if trajectory.num_rows else 0.0
+    row = int(np.argmin(np.abs(md - first)))
+    return float(stops.column("sigma_azi")[row].as_py()), float(stops.column("inc")[row].as_py())
+
+
+def _gyro(
+    params: UncertaintyParams, well: WellMetadata, start_stop: tuple[float, float] | None
+) -> Covariance:
+    """The per-term covariance of one survey under the gyro model of ``params``. A
+    continuous model starts from ``params.init_sigma_azi``, or else from the wired start
+    stop's σ when that stop is inclined at least the model's ``static_end_inc`` (a
+    near-vertical stop's azimuth does not initialise the run: the model's stationary terms
+    and its inclination gate apply, as without stops)."""
+    latitude = params.latitude if params.latitude is not None else well.latitude
+    if latitude is None:
+        raise ValueError("position_uncertainty needs a latitude: set it or the well's latitude")
+    overrides: dict[str, Any] = dict(params.tool)
+    tool = replace(GYRO_PRESETS[params.model], **overrides)
+    if params.init_sigma_azi is not None and not tool.continuous:
+        raise ValueError(f"init_sigma_azi applies to continuous models, not {params.model!r}")
+    init_sigma = params.init_sigma_azi
+    if init_sigma is None and start_stop is not None and start_stop[1] >= tool.static_end_inc:
+        init_sigma = start_stop[0]
+    if init_sigma is not None and tool.continuous:
+        tool = replace(tool, init_sigma_azi=init_sigma)
+    if params.measured_sigma_azi is not None:
+        tool = tool.with_measured_noise(params.measured_sigma_azi, latitude)
+
+    def covariance(survey: Survey) -> np.ndarray:
+        return gyro_covariance(
+            survey, latitude, tool, basis=params.basis, surface_tie=params.surface_tie
+        )[1]
+
+    return covariance
+
+
+def _mwd(
+    params: UncertaintyParams, well: WellMetadata, azi_deg: np.ndarray, north: str
+) -> tuple[Covariance, np.ndarray]:
+    """The per-term covariance of one survey under the MWD model of ``params``, and the
+    azimuths referred to true north (grid via the well's convergence, magnetic via the
+    reference declination)."""
+    magnetic = params.magnetic or _wellhead_field(well)
+    azi_true, _ = convert_azimuth(
+        azi_deg,
+        north,
+        "true",
+        convergence_deg=well.grid_convergence,
+        declination_deg=magnetic.declination,
+    )
+    overrides: dict[str, Any] = dict(params.tool)
+    tool = replace(MWD_PRESETS[params.model], **overrides)
+
+    def covariance(survey: Survey) -> np.ndarray:
+        return mwd_covariance(
+            survey, magnetic, tool, basis=params.basis, surface_tie=params.surface_tie
+        )[1]
+
+    return covariance, azi_true
+
+
+def _wellhead_field(well: WellMetadata) -> MagneticReference:
+    """WMM2025 at the wellhead on the survey date (elevation above sea level as height)."""
+    lat, lon, date = well.latitude, well.longitude, well.survey_date
+    if lat is None or lon is None or date is None:
+        named = (("latitude", lat), ("longitude", lon), ("survey_date", date))
+        raise ValueError(
+            "position_uncertainty with an MWD model needs `magnetic` or the well's "
+            f"{[name for name, value in named if value is None]} (for the WMM2025 field)"
+        )
+    return reference_field(lat, lon, well.elevation or 0.0, date).reference()
 
 
 @hookimpl
@@ -133,9 +269,10 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
         StageDef(
             name="position_uncertainty",
             func=position_uncertainty,
-            description="Propagate the ISCWSA gyro error model (GYRO-NS) into NEV covariance "
-            "and error ellipses per station.",
-            inputs={"trajectory": Trajectory},
+            description="Propagate the ISCWSA gyro (GYRO-NS, GYRO-NS-CT) or MWD (Rev 5) error "
+            "models into NEV covariance and error ellipses per station.",
+            inputs={"trajectory": Trajectory, "stops": CompassStations},
+            optional_inputs=frozenset({"stops"}),
             outputs={"trajectory": PositionUncertainty},
             params=UncertaintyParams,
         )

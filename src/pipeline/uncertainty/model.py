@@ -15,15 +15,17 @@ and the covariance of station K sums over k < K by propagation mode:
 
     random       C_K = Σ_{k<K} e_k e_kᵀ + e*_K e*_Kᵀ
     systematic   C_K = s_K s_Kᵀ,  s_K = Σ_{k<K} e_k + e*_K
-    global       as systematic within one survey (it differs only between surveys/legs)
+    well_by_well as systematic within one survey (correlated between the legs of a well)
+    global       as systematic within one survey (correlated between wells too)
 
 Frame: NEV = north, east, vertical (down positive). Lengths m, angles rad.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -32,12 +34,14 @@ __all__ = [
     "Basis",
     "Propagation",
     "StationJacobians",
+    "leg_effects",
     "propagate",
+    "propagate_nev",
     "station_jacobians",
 ]
 
 FloatArray = NDArray[np.float64]
-Propagation = Literal["random", "systematic", "global"]
+Propagation = Literal["random", "systematic", "well_by_well", "global"]
 Basis = Literal["min_curve", "balanced_tangent"]
 
 #: Below this dogleg (rad) RF'(β)/sin β is its series 1/6 + 11β²/180 (error < 1e-13).
@@ -143,9 +147,21 @@ def station_jacobians(
     return StationJacobians(into=into, out=out)
 
 
+def leg_effects(e_dia: ArrayLike, jac: StationJacobians) -> tuple[FloatArray, FloatArray]:
+    """Each term's NEV effect (full e_k, own e*_k), each (m, n, 3), of the 1σ station errors
+    ``e_dia`` (m, n, 3) of (MD, I, α) (m, rad, rad)."""
+    e = np.asarray(e_dia, dtype=np.float64)
+    if e.ndim != 3 or e.shape[2] != 3:
+        raise ValueError(f"e_dia must be (m, n, 3); got {e.shape}")
+    if e.shape[1] != jac.into.shape[0]:
+        raise ValueError("e_dia and the Jacobians disagree on the number of stations")
+    star = _apply(jac.into, e)
+    return star + _apply(jac.out, e), star
+
+
 def propagate(
     e_dia: ArrayLike,
-    modes: list[Propagation] | tuple[Propagation, ...],
+    modes: Sequence[Propagation],
     jac: StationJacobians,
 ) -> FloatArray:
     """NEV covariance (m, n, 3, 3) of each of m error terms at each of n stations.
@@ -153,30 +169,36 @@ def propagate(
     ``e_dia`` is (m, n, 3): each term's 1σ error of (MD, I, α) at each station (m, rad, rad).
     """
     e = np.asarray(e_dia, dtype=np.float64)
-    if e.ndim != 3 or e.shape[2] != 3 or len(modes) != e.shape[0]:
+    if e.ndim != 3 or len(modes) != e.shape[0]:
         raise ValueError(f"e_dia must be (m, n, 3) with m = len(modes); got {e.shape}")
-    if e.shape[1] != jac.into.shape[0]:
-        raise ValueError("e_dia and the Jacobians disagree on the number of stations")
-    star = _apply(jac.into, e)
-    full = star + _apply(jac.out, e)
-    above = np.cumsum(full, axis=1)
-    above = np.concatenate((np.zeros_like(above[:, :1]), above[:, :-1]), axis=1)
-    cov = np.empty((*e.shape[:2], 3, 3))
-    random = np.array([m == "random" for m in modes])
-    unknown = set(modes) - {"random", "systematic", "global"}
+    full, star = leg_effects(e, jac)
+    return propagate_nev(full, star, modes)
+
+
+def propagate_nev(full: FloatArray, star: FloatArray, modes: Sequence[Propagation]) -> FloatArray:
+    """NEV covariance (m, n, 3, 3) from each term's NEV effects (m, n, 3) on the stations
+    below (``full``, e_k) and on its own station (``star``, e*_k), by propagation mode."""
+    if full.shape != star.shape or full.ndim != 3 or len(modes) != full.shape[0]:
+        raise ValueError(f"full and star must be (m, n, 3) with m = len(modes); got {full.shape}")
+    unknown = set(modes) - set(get_args(Propagation))
     if unknown:
         raise ValueError(f"unknown propagation modes {sorted(unknown)}")
-    if random.any():
-        f = full[random]
-        s = star[random]
-        outer = f[..., :, None] * f[..., None, :]
-        acc = np.cumsum(outer, axis=1)
-        acc = np.concatenate((np.zeros_like(acc[:, :1]), acc[:, :-1]), axis=1)
-        acc += s[..., :, None] * s[..., None, :]
-        cov[random] = acc
-    if (~random).any():
-        tot = above[~random] + star[~random]
-        cov[~random] = tot[..., :, None] * tot[..., None, :]
+    cov = np.zeros((*full.shape[:2], 3, 3))
+    if full.shape[1] == 0:
+        return cov
+    for k, mode in enumerate(modes):  # per term: 2× faster than stacked, cache-sized arrays
+        f, s = full[k], star[k]
+        if mode == "random":  # C_K = Σ_{k<K} e_k e_kᵀ + e*_K e*_Kᵀ
+            acc = cov[k]
+            acc[0] = 0.0
+            np.cumsum(f[:-1, :, None] * f[:-1, None, :], axis=0, out=acc[1:])
+            acc += s[:, :, None] * s[:, None, :]
+        else:  # s_K = Σ_{k<K} e_k + e*_K, C_K = s_K s_Kᵀ
+            tot = np.empty_like(f)
+            tot[0] = 0.0
+            np.cumsum(f[:-1], axis=0, out=tot[1:])
+            tot += s
+            np.multiply(tot[:, :, None], tot[:, None, :], out=cov[k])
     return cov
 
 

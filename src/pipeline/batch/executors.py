@@ -1,0 +1,173 @@
+"""Where the per-well tasks run: a local process pool (default) or a Dask cluster.
+
+Both run :func:`~pipeline.batch.worker.run_well` on a :class:`WellTask` and hand back its
+:class:`WellOutcome`, so the results do not depend on the executor.
+
+On Linux the local pool forks its workers from the batch process when it is created — before
+the batch opens its ledger or starts any thread — so they start with gyropipe and its plugins
+already imported; elsewhere, and for pools created later, workers come from a ``forkserver``
+that imports gyropipe once. Each worker exits as soon as the batch process is gone, so a
+killed batch leaves no orphan still writing outputs. A worker killed by the OS (out of
+memory, a crash in native code) breaks the pool: the wells that were in it are run again,
+each alone in a one-process pool, so only the well that kills its worker fails.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import importlib
+import logging
+import multiprocessing
+import os
+import sys
+from typing import Any, Protocol
+
+from .worker import PipelineRef, WellOutcome, WellTask, run_well, worker_init
+
+PRELOAD = ["pipeline.batch.preload"]
+
+
+class Executor(Protocol):
+    """Runs well tasks; ``wait`` returns those finished within ``timeout`` seconds."""
+
+    name: str
+
+    def submit(self, task: WellTask) -> None: ...
+
+    def wait(self, timeout: float) -> list[WellOutcome]: ...
+
+    def close(self, cancel: bool) -> None:
+        """Wait for the submitted tasks, or with ``cancel`` stop them at once."""
+        ...
+
+
+class LocalExecutor:
+    """``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes."""
+
+    name = "local"
+
+    def __init__(self, workers: int, ref: PipelineRef) -> None:
+        self._workers = workers
+        self._ref = ref
+        self._later = multiprocessing.get_context("forkserver")
+        self._later.set_forkserver_preload(PRELOAD)
+        early = multiprocessing.get_context("fork") if sys.platform == "linux" else self._later
+        self._pool = self._new_pool(workers, early)
+        self._pool.submit(os.getpid)  # a forking pool starts all its workers on a first task
+        self._solo: cf.ProcessPoolExecutor | None = None
+        self._futures: dict[cf.Future[WellOutcome], tuple[WellTask, cf.ProcessPoolExecutor]] = {}
+
+    def _new_pool(
+        self, workers: int, context: multiprocessing.context.BaseContext | None = None
+    ) -> cf.ProcessPoolExecutor:
+        return cf.ProcessPoolExecutor(
+            workers,
+            mp_context=context or self._later,
+            initializer=worker_init,
+            initargs=(self._ref, os.getpid()),
+        )
+
+    def submit(self, task: WellTask) -> None:
+        self._futures[self._pool.submit(run_well, task)] = (task, self._pool)
+
+    def wait(self, timeout: float) -> list[WellOutcome]:
+        done, _ = cf.wait(self._futures, timeout=timeout, return_when=cf.FIRST_COMPLETED)
+        outcomes = []
+        for future in done:
+            task, pool = self._futures.pop(future)
+            try:
+                outcomes.append(future.result())
+            except cf.process.BrokenProcessPool:
+                if pool is self._solo:
+                    self._solo = None
+                    outcomes.append(_failed(task, "its worker process died (killed by the OS?)"))
+                else:
+                    self._retry_alone(task, pool)
+        return outcomes
+
+    def _retry_alone(self, task: WellTask, broken: cf.ProcessPoolExecutor) -> None:
+        if broken is self._pool:  # replace the broken pool once, not per failed future
+            broken.shutdown(wait=False)
+            self._pool = self._new_pool(self._workers)
+        if self._solo is None:
+            self._solo = self._new_pool(1)
+        self._futures[self._solo.submit(run_well, task)] = (task, self._solo)
+
+    def close(self, cancel: bool) -> None:
+        for pool in (self._pool, self._solo):
+            if pool is None:
+                continue
+            processes = list((pool._processes or {}).values())  # shutdown forgets them
+            pool.shutdown(wait=not cancel, cancel_futures=True)
+            if cancel:
+                for process in processes:
+                    process.kill()
+
+
+class DaskExecutor:
+    """Tasks on a Dask distributed cluster: the scheduler at ``address``, or a
+    ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker processes."""
+
+    name = "dask"
+
+    def __init__(self, workers: int, address: str | None) -> None:
+        try:
+            self._dask: Any = importlib.import_module("distributed")  # the optional extra
+        except ImportError:
+            raise ImportError(
+                "the dask executor needs the optional extra: pip install 'gyropipe[dask]'"
+            ) from None
+        self._cluster: Any = None
+        if address is None:
+            self._cluster = self._dask.LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+            self._client: Any = self._dask.Client(self._cluster)
+        else:
+            self._client = self._dask.Client(address)
+        self._futures: dict[Any, WellTask] = {}
+
+    def submit(self, task: WellTask) -> None:
+        future = self._client.submit(
+            run_well, task, key=f"gyropipe-{task.well_id}-{task.run_id}", pure=False
+        )
+        self._futures[future] = task
+
+    def wait(self, timeout: float) -> list[WellOutcome]:
+        if not self._futures:
+            return []
+        try:
+            self._dask.wait(list(self._futures), timeout=timeout, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            return []
+        outcomes = []
+        for future in [f for f in self._futures if f.done()]:
+            task = self._futures.pop(future)
+            try:
+                outcomes.append(future.result())
+            except Exception as exc:  # the cluster lost the task (worker died, cancelled…)
+                outcomes.append(_failed(task, f"dask: {type(exc).__name__}: {exc}"))
+        return outcomes
+
+    def close(self, cancel: bool) -> None:
+        if cancel:
+            self._client.cancel(list(self._futures))
+        self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def make_executor(kind: str, workers: int, ref: PipelineRef, scheduler: str | None) -> Executor:
+    """The executor named ``kind`` (local or dask)."""
+    if kind == "dask":
+        return DaskExecutor(workers, scheduler)
+    return LocalExecutor(workers, ref)
+
+
+def _failed(task: WellTask, error: str) -> WellOutcome:
+    return WellOutcome(task.well_id, task.run_id, "failed", error=error)

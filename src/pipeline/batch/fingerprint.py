@@ -1,0 +1,150 @@
+"""What a well's result depends on, and why a well must be run again.
+
+A :class:`Fingerprint` holds the SHA-256 of every input file, the hash of the pipeline's
+structure (its spec without stage parameters), the resolved parameters of every stage, the
+gyropipe version and the versions of third-party plugins, and the well's header overrides.
+Two runs with equal fingerprints produce the same outputs; :func:`changes` says in words
+what differs ("input changed: stations", "plugin acme 1.2→1.3").
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import pipeline
+from pipeline.graph import Plan
+from pipeline.registry import Registry
+from pipeline.runner import sha256_file
+from pipeline.well import WellMetadata
+
+from .jobs import WellJob
+
+UNREADABLE = "unreadable"
+
+
+@dataclass(frozen=True)
+class Fingerprint:
+    """Everything a well run's outputs depend on (module docstring)."""
+
+    inputs: Mapping[str, str]
+    """pipeline input name → SHA-256 of the file"""
+    pipeline: str
+    """SHA-256 of the pipeline spec without stage parameters"""
+    params: Mapping[str, Mapping[str, Any]]
+    """stage id → validated parameters (JSON values)"""
+    gyropipe: str
+    plugins: Mapping[str, str]
+    """third-party plugin name → version (built-ins go with the gyropipe version)"""
+    well: Mapping[str, Any]
+    """header fields the batch overrides (JSON values)"""
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True, separators=(",", ":"))
+
+    @classmethod
+    def from_json(cls, text: str) -> Fingerprint:
+        return cls(**json.loads(text))
+
+
+@dataclass(frozen=True)
+class PlanIdentity:
+    """The parts of a fingerprint shared by every well of a batch."""
+
+    pipeline: str
+    params: Mapping[str, Mapping[str, Any]]
+    gyropipe: str
+    plugins: Mapping[str, str]
+
+    @classmethod
+    def of(cls, plan: Plan, registry: Registry) -> PlanIdentity:
+        spec = plan.spec.model_dump(mode="json", by_alias=True)
+        for stage in spec["stages"]:
+            stage.pop("with", None)
+        spec["defaults"].pop("with", None)
+        canonical = json.dumps(spec, sort_keys=True, separators=(",", ":"))
+        return cls(
+            pipeline=hashlib.sha256(canonical.encode()).hexdigest(),
+            params={st.id: st.params.model_dump(mode="json") for st in plan.stages},
+            gyropipe=pipeline.__version__,
+            plugins={
+                name: info.version
+                for name, info in sorted(registry.plugins.items())
+                if not info.builtin and not info.error
+            },
+        )
+
+    def fingerprint(self, job: WellJob) -> tuple[Fingerprint, list[str]]:
+        """The fingerprint of ``job`` (hashes its input files), and the problems of the
+        input files that cannot be read (their hash is recorded as ``unreadable``)."""
+        hashes: dict[str, str] = {}
+        problems: list[str] = []
+        for name, path in sorted(job.inputs.items()):
+            try:
+                hashes[name] = sha256_file(path)
+            except OSError as exc:
+                hashes[name] = UNREADABLE
+                problems.append(f"input {name!r}: cannot read {str(path)!r}: {exc.strerror}")
+        fingerprint = Fingerprint(
+            inputs=hashes,
+            pipeline=self.pipeline,
+            params=self.params,
+            gyropipe=self.gyropipe,
+            plugins=self.plugins,
+            well=well_overrides(job.well),
+        )
+        return fingerprint, problems
+
+
+def well_overrides(well: WellMetadata) -> dict[str, Any]:
+    """The header fields set on ``well``, as JSON values."""
+    return well.model_dump(mode="json", exclude_unset=True)
+
+
+def changes(old: Fingerprint, new: Fingerprint) -> list[str]:
+    """Why a run with fingerprint ``new`` differs from one with ``old``; empty if equal."""
+    reasons: list[str] = []
+    for name in sorted(set(old.inputs) | set(new.inputs)):
+        if name not in old.inputs:
+            reasons.append(f"new input {name}")
+        elif name not in new.inputs:
+            reasons.append(f"input {name} removed")
+        elif old.inputs[name] != new.inputs[name]:
+            reasons.append(f"input changed: {name}")
+    if old.pipeline != new.pipeline:
+        reasons.append("pipeline changed")
+    reasons += _diff("params changed", _flatten(old.params), _flatten(new.params))
+    if old.gyropipe != new.gyropipe:
+        reasons.append(f"gyropipe {old.gyropipe}→{new.gyropipe}")
+    for name in sorted(set(old.plugins) | set(new.plugins)):
+        before, after = old.plugins.get(name), new.plugins.get(name)
+        if before != after:
+            reasons.append(
+                f"plugin {name} added ({after})"
+                if before is None
+                else f"plugin {name} removed (was {before})"
+                if after is None
+                else f"plugin {name} {before}→{after}"
+            )
+    reasons += _diff("well header changed", dict(old.well), dict(new.well))
+    return reasons
+
+
+def _flatten(params: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    return {f"{stage}.{key}": value for stage, p in params.items() for key, value in p.items()}
+
+
+def _diff(what: str, old: dict[str, Any], new: dict[str, Any], shown: int = 3) -> list[str]:
+    keys = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+    if not keys:
+        return []
+    parts = [f"{k} {_text(old.get(k))}→{_text(new.get(k))}" for k in keys[:shown]]
+    more = f" (+{len(keys) - shown} more)" if len(keys) > shown else ""
+    return [f"{what}: {', '.join(parts)}{more}"]
+
+
+def _text(value: Any) -> str:
+    return "unset" if value is None else json.dumps(value, sort_keys=True)

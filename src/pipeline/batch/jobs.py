@@ -1,0 +1,156 @@
+"""The wells of a batch: from a manifest CSV or from a glob of input files.
+
+A manifest is a CSV file with a header row. Column ``well_id`` names each well (it becomes
+the well's output directory ``OUT/<well_id>/``); one column per pipeline input holds that
+input's file (relative paths are relative to the manifest's directory); any other column
+must be a :class:`~pipeline.well.WellMetadata` field (``latitude``, ``longitude``,
+``elevation``, ``tool_serial``…) and overrides that header field for the well. Empty cells
+leave a header field unset. Lines starting with ``#`` are comments.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from pipeline.errors import GyropipeError
+from pipeline.well import WellMetadata
+
+WELL_ID_COLUMN = "well_id"
+WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
+RESERVED_NAMES = frozenset({"ledger.sqlite", "summary.csv", "summary.json"})
+"""Names the batch itself writes in the output directory; no well may be called so."""
+
+
+class BatchConfigError(GyropipeError):
+    """The batch cannot start: bad manifest, glob matching nothing, unusable ledger…"""
+
+
+@dataclass(frozen=True)
+class WellJob:
+    """One well to process: its id, its input files by pipeline input name, and the header
+    fields that override the pipeline's and the files' well metadata."""
+
+    well_id: str
+    inputs: Mapping[str, Path]
+    well: WellMetadata
+
+
+def jobs_from_manifest(
+    manifest: Path, input_names: Sequence[str], defaults: WellMetadata
+) -> list[WellJob]:
+    """Read a manifest (module docstring). ``defaults`` (``--well``) apply to every well;
+    a manifest cell overrides them. Raises :class:`BatchConfigError` naming file and line."""
+    try:
+        text = manifest.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise BatchConfigError(f"{manifest}: cannot read the manifest: {exc}") from None
+    rows = [
+        (number, cells)
+        for number, cells in enumerate(csv.reader(text.splitlines()), 1)
+        if cells and any(c.strip() for c in cells) and not cells[0].lstrip().startswith("#")
+    ]
+    if not rows:
+        raise BatchConfigError(f"{manifest}: empty manifest (expected a header row)")
+    header_line, header = rows[0]
+    columns = [c.strip() for c in header]
+    _check_header(manifest, header_line, columns, input_names)
+    base = manifest.parent
+    jobs: list[WellJob] = []
+    seen: dict[str, int] = {}
+    for line, cells in rows[1:]:
+        if len(cells) != len(columns):
+            raise BatchConfigError(
+                f"{manifest}:{line}: {len(cells)} cells, the header has {len(columns)}"
+            )
+        values = dict(zip(columns, (c.strip() for c in cells), strict=True))
+        well_id = _well_id(values.pop(WELL_ID_COLUMN), f"{manifest}:{line}")
+        if well_id in seen:
+            raise BatchConfigError(
+                f"{manifest}:{line}: well {well_id!r} already listed on line {seen[well_id]}"
+            )
+        seen[well_id] = line
+        inputs: dict[str, Path] = {}
+        for name in input_names:
+            cell = values.pop(name)
+            if not cell:
+                raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: no file for {name!r}")
+            inputs[name] = (base / cell).resolve()
+        overrides = {k: v for k, v in values.items() if v}
+        try:
+            well = defaults.merged(WellMetadata.model_validate(overrides))
+        except ValidationError as exc:
+            problems = "; ".join(
+                f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors()
+            )
+            raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: {problems}") from None
+        jobs.append(WellJob(well_id, inputs, well))
+    if not jobs:
+        raise BatchConfigError(f"{manifest}: no wells listed below the header")
+    return jobs
+
+
+def jobs_from_glob(
+    pattern: str, input_names: Sequence[str], defaults: WellMetadata
+) -> list[WellJob]:
+    """One well per file matching ``pattern`` (recursive ``**`` allowed), its id the file
+    name without extension. Only for pipelines with exactly one input."""
+    if len(input_names) != 1:
+        raise BatchConfigError(
+            f"--inputs works for pipelines with one input; this one has "
+            f"{', '.join(input_names) or 'none'}: give a --manifest"
+        )
+    files = sorted(Path(p) for p in glob.glob(pattern, recursive=True) if Path(p).is_file())
+    if not files:
+        raise BatchConfigError(f"--inputs {pattern!r} matches no file")
+    jobs: list[WellJob] = []
+    seen: dict[str, Path] = {}
+    for path in files:
+        well_id = _well_id(path.stem, str(path))
+        if well_id in seen:
+            raise BatchConfigError(
+                f"--inputs {pattern!r}: {seen[well_id]} and {path} would both be well "
+                f"{well_id!r}: use a --manifest"
+            )
+        seen[well_id] = path
+        jobs.append(WellJob(well_id, {input_names[0]: path.resolve()}, defaults))
+    return jobs
+
+
+def _check_header(
+    manifest: Path, line: int, columns: list[str], input_names: Sequence[str]
+) -> None:
+    fields = list(WellMetadata.model_fields)
+    allowed = (
+        f"{WELL_ID_COLUMN}, inputs {', '.join(input_names)}, header fields {', '.join(fields)}"
+    )
+    duplicates = sorted({c for c in columns if columns.count(c) > 1})
+    if duplicates:
+        raise BatchConfigError(f"{manifest}:{line}: duplicate columns {duplicates}")
+    missing = [c for c in (WELL_ID_COLUMN, *input_names) if c not in columns]
+    if missing:
+        raise BatchConfigError(
+            f"{manifest}:{line}: missing column(s) {', '.join(missing)} (columns: {allowed})"
+        )
+    unknown = [
+        c for c in columns if c not in fields and c not in input_names and c != WELL_ID_COLUMN
+    ]
+    if unknown:
+        raise BatchConfigError(
+            f"{manifest}:{line}: unknown column(s) {', '.join(unknown)} (columns: {allowed})"
+        )
+
+
+def _well_id(text: str, where: str) -> str:
+    if not WELL_ID.match(text) or text in RESERVED_NAMES:
+        raise BatchConfigError(
+            f"{where}: well id {text!r} is not a plain directory name (letters, digits, '.', "
+            f"'_', '-'; starting with a letter or digit; not {', '.join(sorted(RESERVED_NAMES))})"
+        )
+    return text

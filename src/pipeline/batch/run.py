@@ -1,0 +1,308 @@
+"""``gyropipe batch``: one DAG run per well, on an executor, recorded in the ledger.
+
+The batch process hashes each well's inputs, claims the well in the ledger (or skips it,
+see :mod:`pipeline.batch.policy`), hands claimed wells to the executor a few at a time, and
+records each outcome once the well's outputs are published. A failing well never stops the
+others. Killed at any point and started again with the same command, it completes the
+remaining wells and recomputes none that finished.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pipeline
+from pipeline.graph import Plan
+from pipeline.registry import Registry
+
+from .executors import Executor, make_executor
+from .fingerprint import Fingerprint, PlanIdentity
+from .jobs import WellJob
+from .ledger import LEASE_S, Busy, Claimed, Ledger, Skipped
+from .policy import Mode, decide
+from .progress import Reporter
+from .publish import clean_work_dir, read_published
+from .records import BatchRow
+from .summary import WellResult, counts, write_summary
+from .worker import PipelineRef, WellOutcome, WellTask
+
+LEDGER = "ledger.sqlite"
+BUSY_POLL_S = 0.5
+"""how often a well held by another batch is looked at again"""
+PREFETCH = 2
+"""wells claimed per worker ahead of time, so no worker waits for the ledger"""
+
+
+@dataclass(frozen=True)
+class BatchOptions:
+    """How to run a batch (``gyropipe batch`` options)."""
+
+    out_dir: Path
+    workers: int
+    executor: str = "local"
+    scheduler: str | None = None
+    mode: Mode = field(default_factory=Mode)
+    ledger: Path | None = None
+    overrides: tuple[str, ...] = ()
+    disabled: tuple[str, ...] = ()
+
+
+@dataclass
+class BatchReport:
+    """What a batch did. ``exit_code``: 0 every well done or skipped, 1 otherwise."""
+
+    batch: BatchRow
+    results: list[WellResult]
+    summary_files: list[Path]
+    not_processed: int = 0
+
+    @property
+    def exit_code(self) -> int:
+        bad = any(r.status in ("failed", "interrupted") for r in self.results)
+        return 1 if bad or self.not_processed else 0
+
+
+def run_batch(
+    plan: Plan,
+    registry: Registry,
+    jobs: Sequence[WellJob],
+    options: BatchOptions,
+    reporter: Reporter,
+) -> BatchReport:
+    """Run ``jobs`` (module docstring). Raises
+    :class:`~pipeline.batch.jobs.BatchConfigError` if the ledger cannot be used; a
+    ``KeyboardInterrupt`` stops the batch and is re-raised after the ledger is closed."""
+    out = options.out_dir.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    ref = PipelineRef(
+        str(Path(plan.file).resolve()), options.overrides, options.disabled, plan.digest
+    )
+    # first: local workers fork before the ledger is open and before any thread starts
+    executor = make_executor(options.executor, options.workers, ref, options.scheduler)
+    try:
+        ledger = Ledger(options.ledger or out / LEDGER)
+    except BaseException:
+        executor.close(cancel=True)
+        raise
+    try:
+        return _Batch(plan, registry, jobs, options, reporter, out, ledger, ref).run(executor)
+    finally:
+        ledger.close()
+
+
+class _Batch:
+    def __init__(
+        self,
+        plan: Plan,
+        registry: Registry,
+        jobs: Sequence[WellJob],
+        options: BatchOptions,
+        reporter: Reporter,
+        out: Path,
+        ledger: Ledger,
+        ref: PipelineRef,
+    ) -> None:
+        self.plan = plan
+        self.jobs = list(jobs)
+        self.options = options
+        self.reporter = reporter
+        self.out = out
+        self.ledger = ledger
+        self.identity = PlanIdentity.of(plan, registry)
+        self.versions = {
+            "gyropipe": pipeline.__version__,
+            "plugins": {n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
+        }
+        self.ref = ref
+        self.results: dict[str, WellResult] = {}
+        self.inflight: dict[int, tuple[WellJob, Fingerprint, list[str]]] = {}
+        self.waiting: dict[str, tuple[float, WellJob]] = {}
+        self.noted: set[str] = set()
+
+    def run(self, executor: Executor) -> BatchReport:
+        try:
+            self._begin()
+        except BaseException:
+            executor.close(cancel=True)
+            raise
+        t0 = time.perf_counter()
+        status = "interrupted"
+        try:
+            self._loop(executor)
+            status = "finished"
+        finally:
+            executor.close(cancel=status != "finished")
+            for job, _, _ in self.inflight.values():
+                self._report(WellResult(job.well_id, "interrupted", "the batch was stopped"))
+            results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
+            self.ledger.end_batch(self.batch.id, status, counts(results))
+            files = write_summary(self.out, self.batch, results)
+            self.reporter.end(self.batch.id, time.perf_counter() - t0)
+        return BatchReport(self.batch, results, files, len(self.jobs) - len(results))
+
+    def _begin(self) -> None:
+        """Settle dead batches, register this one, clean stale staging, announce it."""
+        for swept in self.ledger.sweep():
+            self.reporter.note(
+                f"batch {swept.id} (pid {swept.pid} on {swept.host}) had stopped; "
+                "its unfinished runs were settled"
+            )
+        key = self._key()
+        self.batch = self.ledger.start_batch(
+            key,
+            self.ref.file,
+            self.plan.digest,
+            self.out,
+            {
+                "executor": self.options.executor,
+                "workers": self.options.workers,
+                "only_changed": self.options.mode.only_changed,
+                "rerun_failed": self.options.mode.rerun_failed,
+                "wells": len(self.jobs),
+            },
+        )
+        self.resume_since = self.ledger.resume_since(key, self.batch.id)
+        if self.resume_since is not None:
+            self.reporter.note(f"resuming the interrupted batch {self.resume_since}")
+        clean_work_dir(self.out, self.ledger.running_ids())
+        self.reporter.start(
+            self.batch.id,
+            self.plan.file,
+            len(self.jobs),
+            self.options.executor,
+            self.options.workers,
+        )
+
+    def _loop(self, executor: Executor) -> None:
+        # largest inputs first: the long wells do not end up alone at the end of the batch
+        queue = deque(sorted(self.jobs, key=_input_bytes, reverse=True))
+        capacity = max(1, self.options.workers) * PREFETCH
+        beat = time.monotonic()
+        while queue or self.inflight or self.waiting:
+            now = time.monotonic()
+            for well, (due, job) in list(self.waiting.items()):
+                if due <= now:
+                    del self.waiting[well]
+                    queue.appendleft(job)
+            while queue and len(self.inflight) < capacity:
+                self._consider(queue.popleft(), executor)
+            if self.inflight:
+                for outcome in executor.wait(BUSY_POLL_S if self.waiting else LEASE_S / 6):
+                    self._record(outcome)
+            elif self.waiting and not queue:
+                time.sleep(BUSY_POLL_S)
+            if time.monotonic() - beat > LEASE_S / 6:
+                self.ledger.heartbeat(self.batch.id)
+                beat = time.monotonic()
+
+    def _consider(self, job: WellJob, executor: Executor) -> None:
+        fingerprint, problems = self.identity.fingerprint(job)
+        well_dir = self.out / job.well_id
+        choose = functools.partial(
+            decide,
+            self.options.mode,
+            current=fingerprint,
+            batch_id=self.batch.id,
+            batch_started=self.batch.started,
+            resume_since=self.resume_since,
+        )
+        claim = self.ledger.claim(
+            job.well_id, self.batch, fingerprint, self.versions, well_dir, choose
+        )
+        if isinstance(claim, Skipped):
+            self._report(WellResult(job.well_id, "skipped", claim.reason))
+        elif isinstance(claim, Busy):
+            if job.well_id not in self.noted:
+                self.noted.add(job.well_id)
+                self.reporter.note(
+                    f"{job.well_id}: being run by batch {claim.batch} (pid {claim.pid} on "
+                    f"{claim.host}); waiting for it"
+                )
+            self.waiting[job.well_id] = (time.monotonic() + BUSY_POLL_S, job)
+        elif isinstance(claim, Claimed):
+            self.inflight[claim.run_id] = (job, fingerprint, claim.reasons)
+            if problems:
+                self._record(WellOutcome(job.well_id, claim.run_id, "failed", "; ".join(problems)))
+                return
+            executor.submit(
+                WellTask(
+                    job.well_id,
+                    claim.run_id,
+                    self.batch.id,
+                    self.ref,
+                    {name: str(path) for name, path in job.inputs.items()},
+                    dict(fingerprint.well),
+                    str(self.out),
+                    fingerprint.to_json(),
+                )
+            )
+
+    def _record(self, outcome: WellOutcome) -> None:
+        job, fingerprint, reasons = self.inflight.pop(outcome.run_id)
+        error = self._inconsistency(outcome, fingerprint) if outcome.status == "done" else None
+        self.ledger.finish(outcome, error)
+        if outcome.status == "done" and error is None:
+            result = WellResult(
+                job.well_id, "done", "; ".join(reasons), outcome.wall_time_s, outcome.run_id
+            )
+        else:
+            detail = error or outcome.error or "failed"
+            result = WellResult(job.well_id, "failed", detail, outcome.wall_time_s, outcome.run_id)
+        self._report(result)
+
+    def _inconsistency(self, outcome: WellOutcome, fingerprint: Fingerprint) -> str | None:
+        """Why a worker's done outcome cannot be recorded as done, if it cannot."""
+        manifest = outcome.manifest
+        read = {name: entry["sha256"] for name, entry in manifest["inputs"].items()}
+        changed = sorted(n for n in read if read[n] != fingerprint.inputs.get(n))
+        if changed:
+            return f"input changed while the well ran: {', '.join(changed)}; run it again"
+        plugins = self.versions["plugins"]
+        if manifest["gyropipe"] != pipeline.__version__ or manifest["plugins"] != plugins:
+            return (
+                f"the worker ran gyropipe {manifest['gyropipe']} with plugins "
+                f"{manifest['plugins']}, the batch process has {pipeline.__version__} with "
+                f"{plugins}: install the same versions everywhere"
+            )
+        published = read_published(self.out / outcome.well_id)
+        if published is None or published.run_id != outcome.run_id:
+            return (
+                f"the outputs are not visible at {self.out / outcome.well_id} from the batch "
+                "process (workers must share the output directory)"
+            )
+        return None
+
+    def _report(self, result: WellResult) -> None:
+        self.results[result.well] = result
+        self.reporter.well(result)
+
+    def _key(self) -> str:
+        """Identity of the batch command, to recognise it when started again."""
+        wells = [
+            [j.well_id, {n: str(p) for n, p in sorted(j.inputs.items())}, j.well.model_dump_json()]
+            for j in self.jobs
+        ]
+        text = json.dumps(
+            [
+                self.plan.digest,
+                sorted(self.options.disabled),
+                str(self.out),
+                self.options.mode.only_changed,
+                self.options.mode.rerun_failed,
+                wells,
+            ],
+            sort_keys=True,
+        )
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _input_bytes(job: WellJob) -> int:
+    """Total size of a well's input files (missing files count 0)."""
+    return sum(path.stat().st_size if path.is_file() else 0 for path in job.inputs.values())

@@ -1,0 +1,73 @@
+"""The end-of-batch summary: one row per well (status, why it ran or what failed, time),
+printed as a table and written to ``DIR/summary.json`` and ``DIR/summary.csv``."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections import Counter
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from pipeline.atomic import atomic_write_bytes
+
+from .records import BatchRow, iso
+
+STATUSES = ("done", "failed", "skipped", "interrupted")
+
+
+@dataclass(frozen=True)
+class WellResult:
+    """What a batch did with one well."""
+
+    well: str
+    status: str
+    """done, failed, skipped, or interrupted (the batch was stopped while it ran)"""
+    detail: str
+    """why it ran (done), the error (failed) or why it was skipped"""
+    time_s: float | None = None
+    """wall time of the run in its worker, s"""
+    run_id: int | None = None
+
+
+def counts(results: list[WellResult]) -> dict[str, int]:
+    found = Counter(r.status for r in results)
+    return {status: found.get(status, 0) for status in STATUSES}
+
+
+def table_text(results: list[WellResult], width: int = 100) -> str:
+    """A plain-text table of ``results``; long details are cut to ``width`` characters."""
+    name = max([4, *(len(r.well) for r in results)])
+    lines = [f"{'well':<{name}}  {'status':<7} {'time s':>8}  detail"]
+    for r in results:
+        time_s = f"{r.time_s:8.2f}" if r.time_s is not None else f"{'-':>8}"
+        detail = " ".join(r.detail.split())
+        if len(detail) > width:
+            detail = detail[: width - 1] + "…"
+        lines.append(f"{r.well:<{name}}  {r.status:<7} {time_s}  {detail}")
+    return "\n".join(lines)
+
+
+def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> list[Path]:
+    """Write ``summary.json`` (batch, counts, rows) and ``summary.csv`` (rows) atomically."""
+    document: dict[str, Any] = {
+        "batch": batch.id,
+        "pipeline": batch.pipeline_file,
+        "pipeline_sha256": batch.pipeline_sha256,
+        "started": iso(batch.started),
+        "options": batch.options,
+        "counts": counts(results),
+        "wells": [asdict(r) for r in results],
+    }
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(["well", "status", "detail", "time_s", "run_id"])
+    for r in results:
+        time_s = "" if r.time_s is None else f"{r.time_s:.3f}"
+        writer.writerow([r.well, r.status, r.detail, time_s, r.run_id or ""])
+    paths = [out_dir / "summary.json", out_dir / "summary.csv"]
+    atomic_write_bytes(paths[0], json.dumps(document, indent=2).encode())
+    atomic_write_bytes(paths[1], text.getvalue().encode())
+    return paths

@@ -1,0 +1,124 @@
+"""What ``gyropipe status DIR`` and ``gyropipe history WELL`` show from a ledger."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any
+
+from .ledger import Ledger, alive
+from .records import BatchRow, RunRow, iso
+
+
+def status_document(ledger: Ledger) -> dict[str, Any]:
+    """Batches and the latest run of every well, as JSON values."""
+    batches = ledger.batches()
+    return {
+        "ledger": str(ledger.path),
+        "batches": [{**asdict(b), "alive": _live(b)} for b in batches],
+        "wells": [_run_document(r) for r in ledger.latest_runs()],
+    }
+
+
+def status_text(ledger: Ledger) -> str:
+    """A readable status: counts, batches, then one line per well."""
+    batches = {b.id: b for b in ledger.batches()}
+    runs = ledger.latest_runs()
+    tally: dict[str, int] = {}
+    for run in runs:
+        tally[run.status] = tally.get(run.status, 0) + 1
+    lines = [
+        f"ledger {ledger.path}: {len(runs)} wells — "
+        + (", ".join(f"{n} {s}" for s, n in sorted(tally.items())) or "no runs")
+    ]
+    for b in batches.values():
+        state = b.status
+        if b.status == "running":
+            state += f" (pid {b.pid} on {b.host})" if _live(b) else " (its process is gone)"
+        done = ", ".join(f"{n} {s}" for s, n in b.counts.items() if n)
+        lines.append(
+            f"  batch {b.id:<4} {state:<12} started {iso(b.started)}"
+            + (f", ended {iso(b.finished)}" if b.finished else "")
+            + (f": {done}" if done else "")
+        )
+    if runs:
+        width = max(4, *(len(r.well) for r in runs))
+        lines.append(f"{'well':<{width}}  {'status':<11} {'finished':<25} {'time s':>8}  detail")
+        for r in runs:
+            time_s = f"{r.wall_time_s:8.2f}" if r.wall_time_s is not None else f"{'-':>8}"
+            lines.append(
+                f"{r.well:<{width}}  {_state(r, batches):<11} {iso(r.finished):<25} {time_s}  "
+                f"{_detail(r)}"
+            )
+    return "\n".join(lines)
+
+
+def history_text(well: str, runs: list[RunRow]) -> str:
+    """Every run of ``well``: when, status, why it ran, what it read, versions, outputs."""
+    lines = [f"well {well}: {len(runs)} run(s)"]
+    for r in runs:
+        time_s = f"{r.wall_time_s:.2f} s" if r.wall_time_s is not None else "-"
+        lines.append(
+            f"run {r.id} (batch {r.batch}) {r.status} started {iso(r.started)} "
+            f"finished {iso(r.finished) or '-'} ({time_s})"
+        )
+        lines.append(f"  why: {'; '.join(r.reasons)}")
+        if r.error:
+            lines.append(f"  error: {r.error}")
+        if r.note:
+            lines.append(f"  note: {r.note}")
+        for name, entry in (r.inputs or {}).items():
+            lines.append(f"  input {name}: {entry['path']} sha256 {entry['sha256'][:16]}…")
+        if not r.inputs:
+            for name, digest in r.fingerprint.inputs.items():
+                lines.append(f"  input {name}: sha256 {digest[:16]}")
+        lines.append(f"  gyropipe {r.versions.get('gyropipe')}; plugins: {_plugins(r.versions)}")
+        lines.append(f"  pipeline sha256 {r.fingerprint.pipeline[:16]}…")
+        if r.fingerprint.well:
+            lines.append(f"  well header: {dict(r.fingerprint.well)}")
+        for cal in r.calibration:
+            chosen = ", ".join(
+                f"{s['instrument']} {s['method']} {s['drift_deg_h']:.4f} deg/h"
+                for s in cal["selected"]
+            )
+            lines.append(
+                f"  calibration ({cal['stage']}, input {cal['input']} sha256 "
+                f"{(cal['sha256'] or '')[:16]}…): tool {cal['tool_serial']}; {chosen}"
+            )
+        if r.outputs:
+            lines.append(f"  outputs: {r.out_dir} ({len(r.outputs)} files)")
+    return "\n".join(lines)
+
+
+def history_document(well: str, runs: list[RunRow]) -> dict[str, Any]:
+    return {"well": well, "runs": [_run_document(r) for r in runs]}
+
+
+def _run_document(run: RunRow) -> dict[str, Any]:
+    document = asdict(run)
+    document["started_iso"] = iso(run.started)
+    document["finished_iso"] = iso(run.finished)
+    return document
+
+
+def _live(batch: BatchRow) -> bool:
+    return batch.status == "running" and alive(batch)
+
+
+def _state(run: RunRow, batches: dict[int, BatchRow]) -> str:
+    if run.status != "running":
+        return run.status
+    owner = batches.get(run.batch)
+    return "running" if owner is not None and _live(owner) else "stale"
+
+
+def _plugins(versions: dict[str, Any]) -> str:
+    plugins: dict[str, str] = versions.get("plugins", {})
+    builtin = sum(1 for n in plugins if n.startswith("builtin."))
+    others = [f"{n} {v}" for n, v in plugins.items() if not n.startswith("builtin.")]
+    return ", ".join([f"{builtin} built-in", *others])
+
+
+def _detail(run: RunRow) -> str:
+    text = run.error or run.note or "; ".join(run.reasons)
+    text = " ".join(text.split())
+    return text if len(text) <= 100 else text[:99] + "…"

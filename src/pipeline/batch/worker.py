@@ -1,0 +1,243 @@
+"""The per-well task every executor runs: one DAG run into a staging directory, published
+whole to ``OUT/<well>``. It never raises: any failure comes back as a failed
+:class:`WellOutcome`. It never touches the ledger (only the batch process does), so it can
+run on any machine that sees the input and output files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import select
+import shutil
+import socket
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pipeline.atomic import atomic_write_bytes
+from pipeline.drift.tables import CalibrationResult
+from pipeline.errors import GyropipeError
+from pipeline.graph import Plan, build_plan
+from pipeline.plugins import load_registry
+from pipeline.registry import Registry
+from pipeline.runner import MANIFEST, RunResult, run_plan
+from pipeline.spec import load_spec
+from pipeline.well import WellMetadata
+
+from .publish import publish_dir, staging_dir, write_marker
+
+EXIT_ORPHAN = 70
+ORPHAN_POLL_S = 0.5
+
+
+@dataclass(frozen=True)
+class PipelineRef:
+    """How a worker rebuilds the batch's plan; ``sha256`` guards against a pipeline file
+    edited while the batch runs."""
+
+    file: str
+    overrides: tuple[str, ...]
+    disabled: tuple[str, ...]
+    sha256: str
+
+
+@dataclass(frozen=True)
+class WellTask:
+    """One claimed run of one well."""
+
+    well_id: str
+    run_id: int
+    batch_id: int
+    pipeline: PipelineRef
+    inputs: dict[str, str]
+    """pipeline input name → absolute file path"""
+    well: dict[str, Any]
+    """header overrides (WellMetadata fields, JSON values)"""
+    out_root: str
+    fingerprint: str
+    """the claim's fingerprint (JSON), recorded in ``batch.json``"""
+
+
+@dataclass(frozen=True)
+class WellOutcome:
+    """What a worker reports back. Times in seconds; memory in bytes."""
+
+    well_id: str
+    run_id: int
+    status: str
+    """done or failed"""
+    error: str | None = None
+    manifest: dict[str, Any] = field(default_factory=dict)
+    """the published ``run.json``"""
+    calibration: list[dict[str, Any]] = field(default_factory=list)
+    wall_time_s: float = 0.0
+    """the whole task in the worker"""
+    run_time_s: float = 0.0
+    """the runner (read, stages, contracts, writes, run.json)"""
+    process_time_s: float = 0.0
+    """the stages alone"""
+    peak_rss_bytes: int = 0
+    """the worker process's peak resident memory so far (OS accounting)"""
+    worker: str = ""
+
+
+_PLANS: dict[tuple[str, tuple[str, ...], tuple[str, ...]], tuple[Plan, Registry]] = {}
+
+
+def worker_init(ref: PipelineRef, batch_pid: int) -> None:
+    """Process-pool initialiser: load the plan once, and exit as soon as the batch process
+    ``batch_pid`` is gone (killed), so no orphan goes on writing outputs."""
+    threading.Thread(target=_exit_with, args=(batch_pid,), daemon=True).start()
+    try:
+        _plan(ref)
+    except Exception:  # reported per well by run_well
+        return
+
+
+def _exit_with(pid: int) -> None:
+    """Wait for process ``pid`` to end (a pidfd on Linux, else polling), then exit."""
+    try:
+        fd = os.pidfd_open(pid)
+    except ProcessLookupError:
+        os._exit(EXIT_ORPHAN)
+    except (AttributeError, OSError):  # no pidfd: poll
+        while _running(pid):
+            time.sleep(ORPHAN_POLL_S)
+        os._exit(EXIT_ORPHAN)
+    select.select([fd], [], [])
+    os._exit(EXIT_ORPHAN)
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def run_well(task: WellTask) -> WellOutcome:
+    """Run one well (module docstring)."""
+    t0 = time.perf_counter()
+    staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        plan, registry = _plan(task.pipeline)
+        shutil.rmtree(staging, ignore_errors=True)
+        staging.mkdir(parents=True)
+        t_run = time.perf_counter()
+        result = run_plan(
+            plan,
+            registry,
+            inputs={name: Path(path) for name, path in task.inputs.items()},
+            out_dir=staging,
+            well=WellMetadata.model_validate(task.well),
+        )
+        run_time = time.perf_counter() - t_run
+        final = Path(task.out_root) / task.well_id
+        manifest = _relocated(result.manifest, final)
+        atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
+        write_marker(
+            staging,
+            {
+                "well_id": task.well_id,
+                "run_id": task.run_id,
+                "batch_id": task.batch_id,
+                "fingerprint": json.loads(task.fingerprint),
+            },
+        )
+        publish_dir(staging, final)
+        return WellOutcome(
+            task.well_id,
+            task.run_id,
+            "done",
+            manifest=manifest,
+            calibration=_calibration(plan, result),
+            wall_time_s=time.perf_counter() - t0,
+            run_time_s=run_time,
+            process_time_s=sum(s["wall_time_s"] for s in manifest["stages"]),
+            peak_rss_bytes=peak_rss_bytes(),
+            worker=worker,
+        )
+    except Exception as exc:  # a failing well is reported, never raised into the batch
+        error = str(exc) if isinstance(exc, GyropipeError) else f"{type(exc).__name__}: {exc}"
+        return WellOutcome(
+            task.well_id,
+            task.run_id,
+            "failed",
+            error=error,
+            wall_time_s=time.perf_counter() - t0,
+            peak_rss_bytes=peak_rss_bytes(),
+            worker=worker,
+        )
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+class PipelineChanged(GyropipeError):
+    """The pipeline file changed after the batch started."""
+
+
+def _plan(ref: PipelineRef) -> tuple[Plan, Registry]:
+    key = (ref.file, ref.overrides, ref.disabled)
+    cached = _PLANS.get(key)
+    if cached is not None and cached[0].digest == ref.sha256:
+        return cached
+    registry = load_registry(ref.disabled)
+    plan = build_plan(load_spec(ref.file, list(ref.overrides)), registry)
+    if plan.digest != ref.sha256:
+        raise PipelineChanged(
+            f"{ref.file} changed after the batch started (sha256 {ref.sha256[:12]}… → "
+            f"{plan.digest[:12]}…); start the batch again"
+        )
+    _PLANS[key] = (plan, registry)
+    return plan, registry
+
+
+def _relocated(manifest: dict[str, Any], final: Path) -> dict[str, Any]:
+    """The manifest with output paths naming the published directory, not the staging one."""
+    outputs = [{**entry, "path": str(final / entry["file"])} for entry in manifest["outputs"]]
+    return {**manifest, "outputs": outputs}
+
+
+def _calibration(plan: Plan, result: RunResult) -> list[dict[str, Any]]:
+    """The drift calibration results a run consumed: the stage that brought each in, its
+    input file, the instruments it calibrates with their selected estimates, and the tool
+    serial of the well (which picks the instrument)."""
+    inputs = result.manifest["inputs"]
+    found = []
+    for st in plan.stages:
+        for port, contract in st.definition.outputs.items():
+            table = result.tables.get((st.id, port))
+            if contract is not CalibrationResult or table is None:
+                continue
+            name = getattr(st.params, "input", None)
+            rows = table.select(["instrument", "method", "drift_deg_h", "selected"]).to_pylist()
+            found.append(
+                {
+                    "stage": st.id,
+                    "input": name,
+                    "sha256": inputs[name]["sha256"] if name in inputs else None,
+                    "instruments": sorted({r["instrument"] for r in rows}),
+                    "selected": [
+                        {k: r[k] for k in ("instrument", "method", "drift_deg_h")}
+                        for r in rows
+                        if r["selected"]
+                    ],
+                    "tool_serial": result.well.tool_serial,
+                }
+            )
+    return found
+
+
+def peak_rss_bytes() -> int:
+    """Peak resident set size of this process (``ru_maxrss``: KiB on Linux, bytes on macOS)."""
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return int(peak if sys.platform == "darwin" else peak * 1024)

@@ -1,0 +1,304 @@
+"""Built-in plugin: the JSON summary of a survey, for machines (writer ``json_summary``).
+
+One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): the well
+header, the run's provenance, the azimuths' north reference, the calculation method, and per
+survey the station count, MD range, the final station's position, the largest dogleg
+severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
+then QC counts per check, flagged and rejected stations. Lengths in m, angles in degrees,
+DLS in °/30 m (``units`` says so in the document too).
+
+Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
+``stations`` and ``rejects``; through ``write`` one trajectory table.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import itertools
+import json
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Final, Literal
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+from pydantic import BaseModel, ConfigDict, Field
+
+import pipeline
+from pipeline.contracts import NORTH_KEY
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import Provenance, WriterDef
+from pipeline.stages.survey import survey_offsets
+from pipeline.survey.calculation import SurveyCalculation, calculation_of
+from pipeline.tables import Trajectory
+from pipeline.well import NorthReference, WellMetadata
+
+FORMAT: Final = "gyropipe.survey-summary"
+FORMAT_VERSION: Final = "1.0"
+ELLIPSE_COLUMNS = ("ellipse_major", "ellipse_minor", "ellipse_azimuth", "sigma_v")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Units(_Model):
+    """Units of the document's numbers."""
+
+    length: Literal["m"] = "m"
+    angle: Literal["deg"] = "deg"
+    dls: Literal["deg/30m"] = "deg/30m"
+
+
+class Station(_Model):
+    """A station's position: NED from the wellhead, TVD below the depth reference."""
+
+    md: float = Field(description="measured depth, m")
+    inc: float = Field(description="inclination, deg")
+    azi: float = Field(description="azimuth, deg, in the document's north reference")
+    tvd: float = Field(description="true vertical depth, m")
+    north: float = Field(description="northing from the wellhead, m")
+    east: float = Field(description="easting from the wellhead, m")
+    vertical_section: float = Field(description="vertical section, m")
+    closure_distance: float = Field(description="horizontal distance from the wellhead, m")
+    closure_direction: float = Field(description="direction of the closure, deg")
+
+
+class MaxDls(_Model):
+    """The largest dogleg severity of a survey and where it is."""
+
+    dls: float = Field(description="dogleg severity, deg/30m")
+    md: float = Field(description="measured depth of the station ending that course, m")
+
+
+class Uncertainty(_Model):
+    """Horizontal error ellipse and vertical σ of the final station."""
+
+    md: float = Field(description="measured depth, m")
+    semi_major: float = Field(description="semi-major axis at 1σ, m")
+    semi_minor: float = Field(description="semi-minor axis at 1σ, m")
+    azimuth: float = Field(description="azimuth of the semi-major axis, deg")
+    sigma_vertical: float = Field(description="vertical σ, m")
+    confidence: float | None = Field(
+        None, description="probability content of the *_conf values (null: not stated)"
+    )
+    semi_major_conf: float | None = Field(None, description="semi-major axis at confidence, m")
+    semi_minor_conf: float | None = Field(None, description="semi-minor axis at confidence, m")
+    vertical_conf: float | None = Field(None, description="vertical half-interval, m")
+
+
+class Survey(_Model):
+    """One survey (a block of rows with one ``survey`` id)."""
+
+    survey: str | None = Field(description="survey id (null: the table has one survey)")
+    station_count: int = Field(ge=1)
+    md_start: float = Field(description="first station MD, m")
+    md_end: float = Field(description="last station MD, m")
+    final: Station = Field(description="the last station (TD)")
+    max_dls: MaxDls
+    uncertainty_at_td: Uncertainty | None = Field(
+        None, description="position uncertainty of the last station, when computed"
+    )
+
+
+class CheckCount(_Model):
+    """Evaluations of one QC check."""
+
+    check: str
+    evaluated: int = Field(ge=0)
+    passed: int = Field(ge=0)
+    failed: int = Field(ge=0)
+    not_evaluated: int = Field(ge=0, description="rows the check could not evaluate")
+
+
+class Qc(_Model):
+    """QC counts."""
+
+    checks: list[CheckCount] = Field(description="per check, in name order")
+    failed: int = Field(ge=0, description="failed evaluations over all checks")
+    not_evaluated: int = Field(ge=0)
+    flagged_stations: int | None = Field(
+        None, description="stations with a warning flag (null: no stations table given)"
+    )
+    rejected_stations: int | None = Field(
+        None, description="stations rejected (null: no rejects table given)"
+    )
+
+
+class Run(_Model):
+    """The run that produced the results."""
+
+    pipeline: str
+    pipeline_version: str
+    pipeline_sha256: str
+    started: dt.datetime = Field(description="UTC start of the run")
+    gyropipe: str = Field(description="gyropipe version")
+    plugins: dict[str, str] = Field(description="plugin name → version")
+    inputs: dict[str, str] = Field(description="pipeline input → SHA-256 of the file")
+
+
+class SurveySummary(_Model):
+    """Machine-readable summary of a processed survey."""
+
+    format: Literal["gyropipe.survey-summary"] = FORMAT
+    format_version: Literal["1.0"] = FORMAT_VERSION
+    gyropipe: str = Field(description="version of gyropipe that wrote the document")
+    well: WellMetadata
+    run: Run | None = Field(description="provenance (null: written outside a pipeline run)")
+    north_reference: NorthReference = Field(description="north reference of every azimuth")
+    calculation: SurveyCalculation | None = Field(
+        description="survey calculation method and vertical-section azimuth (null: unknown)"
+    )
+    units: Units = Units()
+    station_count: int = Field(ge=0, description="stations over all surveys")
+    surveys: list[Survey]
+    qc: Qc | None = Field(None, description="QC counts (null: no QC table given)")
+
+
+def summarize(
+    tables: Mapping[str, pa.Table], well: WellMetadata, provenance: Provenance | None
+) -> SurveySummary:
+    """The summary of a run's ``trajectory`` and its ``qc``, ``stations`` and ``rejects``."""
+    if "trajectory" not in tables:
+        raise ValueError("the JSON summary needs the trajectory (wire the port 'trajectory')")
+    trajectory = tables["trajectory"]
+    Trajectory.validate_table(trajectory)
+    if trajectory.num_rows == 0:
+        raise ValueError("the trajectory has no stations")
+    north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
+    return SurveySummary(
+        gyropipe=pipeline.__version__,
+        well=well,
+        run=_run(provenance) if provenance is not None else None,
+        north_reference=north,
+        calculation=calculation_of(trajectory),
+        station_count=trajectory.num_rows,
+        surveys=_surveys(trajectory),
+        qc=_qc(tables) if {"qc", "stations", "rejects"} & set(tables) else None,
+    )
+
+
+def _run(provenance: Provenance) -> Run:
+    return Run(
+        pipeline=provenance.pipeline,
+        pipeline_version=provenance.pipeline_version,
+        pipeline_sha256=provenance.pipeline_sha256,
+        started=provenance.started,
+        gyropipe=provenance.gyropipe,
+        plugins=dict(provenance.plugins),
+        inputs={name: file.sha256 for name, file in provenance.inputs.items()},
+    )
+
+
+def _surveys(trajectory: pa.Table) -> list[Survey]:
+    cols = {
+        name: trajectory.column(name).to_numpy(zero_copy_only=False)
+        for name in Station.model_fields
+    }
+    dls = trajectory.column("dls").to_numpy()
+    ids = trajectory.column("survey").to_pylist() if "survey" in trajectory.column_names else None
+    found = []
+    for lo, hi in itertools.pairwise(survey_offsets(trajectory).tolist()):
+        worst = lo + int(np.argmax(dls[lo:hi]))
+        found.append(
+            Survey(
+                survey=ids[lo] if ids else None,
+                station_count=hi - lo,
+                md_start=float(cols["md"][lo]),
+                md_end=float(cols["md"][hi - 1]),
+                final=Station(**{name: float(v[hi - 1]) for name, v in cols.items()}),
+                max_dls=MaxDls(dls=float(dls[worst]), md=float(cols["md"][worst])),
+                uncertainty_at_td=_uncertainty(trajectory, hi - 1),
+            )
+        )
+    return found
+
+
+def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
+    if not set(ELLIPSE_COLUMNS) <= set(trajectory.column_names):
+        return None
+    at = {name: trajectory.column(name)[row].as_py() for name in trajectory.column_names}
+    conf = at.get("ellipse_major_conf")
+    major = at["ellipse_major"]
+    # the stage scales the 1σ ellipse by k = √(−2 ln(1 − p)) (χ², 2 dof): p = 1 − e^(−k²/2)
+    confidence = (
+        float(-np.expm1(-0.5 * (conf / major) ** 2)) if conf is not None and major > 0 else None
+    )
+    return Uncertainty(
+        md=at["md"],
+        semi_major=major,
+        semi_minor=at["ellipse_minor"],
+        azimuth=at["ellipse_azimuth"],
+        sigma_vertical=at["sigma_v"],
+        confidence=confidence,
+        semi_major_conf=conf,
+        semi_minor_conf=at.get("ellipse_minor_conf"),
+        vertical_conf=at.get("vertical_conf"),
+    )
+
+
+def _qc(tables: Mapping[str, pa.Table]) -> Qc:
+    checks: list[CheckCount] = []
+    if "qc" in tables:
+        qc = tables["qc"]
+        names = qc.column("check")
+        passed = qc.column("passed")
+        for name in sorted(set(names.to_pylist())):
+            rows = passed.filter(pc.equal(names, name))
+            true = int(pc.sum(rows).as_py() or 0)
+            checks.append(
+                CheckCount(
+                    check=name,
+                    evaluated=len(rows) - rows.null_count,
+                    passed=true,
+                    failed=len(rows) - rows.null_count - true,
+                    not_evaluated=rows.null_count,
+                )
+            )
+    stations = tables.get("stations")
+    flagged = None
+    if stations is not None and "flags" in stations.column_names:
+        flags = stations.column("flags")
+        empty = "" if pa.types.is_string(flags.type) else 0
+        flagged = int(pc.sum(pc.not_equal(flags, empty)).as_py() or 0)
+    rejects = tables.get("rejects")
+    return Qc(
+        checks=checks,
+        failed=sum(c.failed for c in checks),
+        not_evaluated=sum(c.not_evaluated for c in checks),
+        flagged_stations=flagged,
+        rejected_stations=rejects.num_rows if rejects is not None else None,
+    )
+
+
+def write_tables(
+    tables: Mapping[str, pa.Table], path: Path, well: WellMetadata, provenance: Provenance
+) -> None:
+    """Write the summary of the run's tables as JSON."""
+    _write(summarize(tables, well, provenance), path)
+
+
+def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
+    """Write the summary of one trajectory (no provenance, no QC) as JSON."""
+    _write(summarize({"trajectory": table}, well, None), path)
+
+
+def _write(summary: SurveySummary, path: Path) -> None:
+    doc = summary.model_dump(mode="json")
+    path.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+
+@hookimpl
+def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
+    register(
+        WriterDef(
+            name="json_summary",
+            description="machine-readable JSON summary: well, run, north reference, final "
+            "position, max DLS, uncertainty at TD, QC counts",
+            extension="json",
+            write=write,
+            write_tables=write_tables,
+            schema=SurveySummary,
+        )
+    )

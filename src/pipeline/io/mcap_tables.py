@@ -1,0 +1,97 @@
+"""Processed tables of a run in one MCAP file (writer ``mcap`` through the ``export`` stage).
+
+Each table goes on its own topic ``/gyropipe/<role>`` (``trajectory``, ``stations``,
+``readings``, ``series``, ``qc``, ``rejects``: the export stage's port names) in gyropipe's
+batched Arrow IPC encoding (:mod:`pipeline.io.mcap_arrow`): the channel's schema record is
+the table's whole Arrow schema — every unit, north reference and the schema metadata — and
+each message a record batch of up to 10,000 rows, logged at its first row's ``time`` (s) when
+the table has a complete float64 ``time`` column, else at 0. Metadata records:
+``gyropipe.well`` (the header), ``gyropipe.units/<role>`` (column → unit, for tools without
+Arrow) and ``gyropipe.run`` (pipeline, its SHA-256, start, gyropipe version).
+
+:func:`read_tables` gives the tables back exactly as written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.io.mcap_arrow import (
+    ARROW_MESSAGE_ENCODING,
+    SAMPLES_TOPIC,
+    UNITS_RECORD,
+    WELL_RECORD,
+    add_arrow_channel,
+    arrow_batches,
+    arrow_schema,
+    check_encodable,
+    read_well,
+    start_writer,
+    units_of,
+    well_strings,
+)
+from pipeline.io.mcap_records import scan
+from pipeline.registry import Provenance
+from pipeline.well import WellMetadata
+
+TOPIC_PREFIX = "/gyropipe/"
+RUN_RECORD = "gyropipe.run"
+
+
+def write_tables(
+    tables: Mapping[str, pa.Table], path: Path, well: WellMetadata, provenance: Provenance
+) -> None:
+    """Write each table on the topic ``/gyropipe/<role>`` of one MCAP file."""
+    for table in tables.values():
+        check_encodable(table)
+    path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
+    with path.open("wb") as fh:
+        writer = start_writer(fh)
+        for role, table in tables.items():
+            add_arrow_channel(
+                writer, TOPIC_PREFIX + role, f"gyropipe.{role}", table, table.schema, _times(table)
+            )
+        writer.add_metadata(WELL_RECORD, well_strings(well))
+        for role, table in tables.items():
+            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(table))
+        writer.add_metadata(
+            RUN_RECORD,
+            {
+                "pipeline": provenance.pipeline,
+                "pipeline_sha256": provenance.pipeline_sha256,
+                "started": provenance.started.isoformat(),
+                "gyropipe": provenance.gyropipe,
+            },
+        )
+        writer.finish()  # type: ignore[no-untyped-call]
+
+
+def _times(table: pa.Table) -> np.ndarray | None:
+    """The ``time`` column (s) when it can stamp messages: float64, complete, finite."""
+    if "time" not in table.column_names or table.schema.field("time").type != pa.float64():
+        return None
+    column = table.column("time")
+    times: np.ndarray = column.to_numpy(zero_copy_only=False)
+    return times if column.null_count == 0 and np.isfinite(times).all() else None
+
+
+def read_tables(path: Path) -> tuple[dict[str, pa.Table], WellMetadata]:
+    """The processed tables of a file :func:`write_tables` wrote, by role, and its well
+    metadata; problems are :class:`~pipeline.errors.InputFileError` naming the record."""
+    file = scan(path)
+    tables = {
+        channel.topic[len(TOPIC_PREFIX) :]: arrow_batches(
+            file, channel, arrow_schema(file, channel)
+        )
+        for channel in file.channels.values()
+        if channel.topic.startswith(TOPIC_PREFIX)
+        and channel.topic != SAMPLES_TOPIC
+        and channel.message_encoding == ARROW_MESSAGE_ENCODING
+    }
+    if not tables:
+        raise file.fail("no processed-table channel (/gyropipe/<role>) in the file")
+    return tables, read_well(file)

@@ -1,0 +1,83 @@
+"""Built-in WITSML plugin: survey trajectories as WITSML 1.4.1.1 ``trajectory`` documents
+(writer ``witsml``) and back (reader ``witsml``, kind ``stations``).
+
+Document (namespace ``http://www.witsml.org/schemas/1series``, ``version="1.4.1.1"``): one
+``<trajectory uidWell uidWellbore uid>`` per survey of the table (its ``survey`` id is the
+trajectory's name and uid), holding
+
+* ``nameWell`` (``unnamed`` when the header names no well), ``nameWellbore`` (the well's
+  ``wellbore``, else its name), ``name`` (the survey id, else ``survey <date>``);
+  ``uidWell`` is the UWI (else the well name), ``uidWellbore`` the wellbore name, spaces
+  as ``_``. Names and uids longer than WITSML's 64 characters are refused, never cut;
+* ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day);
+  ``mdMn``/``mdMx``; ``serviceCompany``;
+* ``magDeclUsed`` and ``gridCorUsed`` — the well's ``declination`` and ``grid_convergence``
+  (set in the header, or recorded by the ``north_reference`` stage when it applied them;
+  both positive east of true north, as WITSML defines them);
+* ``aziVertSect`` with its origin at the wellhead, from the calculation record of the
+  trajectory (:mod:`pipeline.survey.calculation`); ``aziRef`` from the azimuth column's
+  north reference;
+* per row a ``trajectoryStation``: ``typeTrajStation`` (``tie in point`` for the first,
+  else the station type of the tool), ``typeSurveyTool`` (from the well's free-text
+  ``tool_type``: 'gyro north-seeking' → ``gyroscopic north seeking``…, ``unknown`` when it
+  names no WITSML tool type), ``calcAlgorithm`` (when the trajectory records its method),
+  ``md``, ``tvd``, ``incl``, ``azi``, ``dispNs``, ``dispEw``, ``vertSect``, ``dls``,
+  ``rateTurn``, ``rateBuild`` for the columns present (uom ``m``, ``dega``, ``dega/30m``),
+  and ``matrixCov`` (varianceNN … varianceVertVert, m², vertical down) from the ``cov_*``
+  columns of a position-uncertainty trajectory;
+* ``commonData``: a comment on the frames, and every set well metadata field as an
+  ``extensionNameValue`` named ``gyropipe.well.<field>`` so gyropipe reads the whole header
+  back.
+
+Numbers are written in shortest round-trip form, so they read back bit for bit. Documents
+validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings of it).
+
+The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one
+named by the option ``trajectory``) as stations in canonical units — md, inc, azi required
+per station; tvd, north, east, dls kept when present — sorted by MD, with a ``survey``
+column (the names) when there are several and the ``source_line`` of each station;
+``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). The north reference
+is ``aziRef`` (``unknown`` or absent: the option ``north_reference``). Well metadata: the
+gyropipe extension values, overridden by the standard elements (nameWell, nameWellbore,
+serviceCompany, dTimTrajStart, magDeclUsed, gridCorUsed, typeSurveyTool). Every problem
+is an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from pipeline.hookspecs import hookimpl
+from pipeline.io.witsml_read import WitsmlOptions, read_witsml, sniff
+from pipeline.io.witsml_write import write_witsml
+from pipeline.registry import ReaderDef, WriterDef
+from pipeline.tables import Stations
+
+__all__ = ["WitsmlOptions", "read_witsml", "sniff", "write_witsml"]
+
+
+@hookimpl
+def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
+    register(
+        ReaderDef(
+            name="witsml",
+            description="survey stations from WITSML 1.4.1.x trajectory XML",
+            kinds={"stations": Stations},
+            read=read_witsml,
+            sniff=sniff,
+            options=WitsmlOptions,
+        )
+    )
+
+
+@hookimpl
+def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
+    register(
+        WriterDef(
+            name="witsml",
+            description="stations or trajectories as WITSML 1.4.1.1 trajectory XML (aziRef, "
+            "declination and grid correction used, calcAlgorithm, covariance)",
+            extension="xml",
+            write=write_witsml,
+        )
+    )

@@ -1,0 +1,353 @@
+"""WITSML 1.4.1.x ``trajectory`` reader (kind ``stations``; layout in :mod:`pipeline.io.witsml`).
+
+Parsed with expat, keeping each element's line so every problem names it; a DOCTYPE or an
+entity declaration is refused (a WITSML document needs neither, and they are how XML
+documents attack their readers).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+from xml.parsers import expat
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from pipeline.contracts import SOURCE_LINE
+from pipeline.errors import InputFileError, UnitError
+from pipeline.io.csv import LAYOUTS
+from pipeline.io.witsml_terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
+from pipeline.well import NorthReference, WellMetadata
+
+SNIFF_BYTES = 4096
+STATION_MEASURES = (
+    ("md", "md", "length", True),
+    ("inc", "incl", "angle", True),
+    ("azi", "azi", "angle", True),
+    ("tvd", "tvd", "length", False),
+    ("north", "dispNs", "length", False),
+    ("east", "dispEw", "length", False),
+    ("dls", "dls", "dogleg_severity", False),
+)
+"""Column, ``trajectoryStation`` element, quantity, required."""
+WELL_ELEMENTS = (
+    ("service_company", "serviceCompany", None),
+    ("declination", "magDeclUsed", "angle"),
+    ("grid_convergence", "gridCorUsed", "angle"),
+    ("grid_convergence", "gridConUsed", "angle"),
+)
+"""Well metadata field, ``trajectory`` element holding it, quantity of a measure."""
+EXTENSION_QUANTITY = {
+    "latitude": "angle",
+    "longitude": "angle",
+    "elevation": "length",
+    "declination": "angle",
+    "grid_convergence": "angle",
+}
+_NORTH = {text: ref for ref, text in AZI_REF.items()}
+_ROOT = re.compile(rb"<(?:[A-Za-z_][\w.-]*:)?trajectorys[\s>/]")
+
+
+class WitsmlOptions(BaseModel):
+    """Options of the WITSML reader; files need none."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    trajectory: str | None = Field(
+        None, description="uid or name of the one trajectory to read (default: all)"
+    )
+    north_reference: NorthReference | None = Field(
+        None,
+        description="north reference of the azimuths when aziRef is absent or 'unknown' "
+        "(must agree with it otherwise)",
+    )
+    default_north_reference: NorthReference | None = Field(
+        None,
+        description="used only when neither the file nor north_reference names one (the "
+        "engine passes the well metadata's)",
+    )
+
+
+@dataclass
+class Node:
+    """One XML element: local name, namespace, attributes, text, children and its line."""
+
+    name: str
+    namespace: str
+    attrs: dict[str, str]
+    line: int
+    children: list[Node] = field(default_factory=list)
+    text: str = ""
+
+    def all(self, name: str) -> list[Node]:
+        """Children of this local name in the WITSML namespace."""
+        return [c for c in self.children if c.name == name and c.namespace == NS]
+
+    def get(self, name: str) -> Node | None:
+        found = self.all(name)
+        return found[0] if found else None
+
+
+class _Refused(Exception):
+    """Something the parser refuses to read."""
+
+
+def sniff(path: Path) -> bool:
+    """True if the file's first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(SNIFF_BYTES)
+    except OSError:
+        return False
+    return bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
+
+
+def parse(path: Path) -> Node:
+    """The document's root element, with lines; malformed XML is an InputFileError."""
+    parser = expat.ParserCreate(namespace_separator=" ")
+    parser.buffer_text = True
+    stack: list[Node] = []
+    roots: list[Node] = []
+
+    def start(name: str, attrs: dict[str, str]) -> None:
+        namespace, _, local = name.rpartition(" ")
+        node = Node(local, namespace, attrs, parser.CurrentLineNumber)
+        (stack[-1].children if stack else roots).append(node)
+        stack.append(node)
+
+    def end(name: str) -> None:
+        stack.pop()
+
+    def text(data: str) -> None:
+        if stack:
+            stack[-1].text += data
+
+    def refuse(*args: Any) -> None:
+        raise _Refused("DOCTYPE and entity declarations are not accepted in WITSML")
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.CharacterDataHandler = text
+    parser.StartDoctypeDeclHandler = refuse
+    parser.EntityDeclHandler = refuse
+    try:
+        with path.open("rb") as fh:
+            parser.ParseFile(fh)
+    except expat.ExpatError as exc:
+        raise InputFileError(
+            path,
+            f"not well-formed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})",
+            line=exc.lineno,
+        ) from None
+    except _Refused as exc:
+        raise InputFileError(path, str(exc), line=parser.CurrentLineNumber) from None
+    except OSError as exc:
+        raise InputFileError(path, f"cannot read the file: {exc}") from None
+    return roots[0]
+
+
+def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
+    """Stations (md, inc, azi; tvd, north, east, dls when the file has them) of every
+    trajectory of a WITSML 1.4.1.x ``trajectorys`` document, in canonical units, with a
+    ``survey`` column when there are several, and the well metadata it holds."""
+    if kind != "stations":
+        raise ValueError(f"the witsml reader reads kind 'stations', not {kind!r}")
+    opts = WitsmlOptions.model_validate(options or {})
+    root = parse(path)
+    if root.name != "trajectorys" or root.namespace != NS:
+        raise InputFileError(
+            path,
+            f"root element is <{root.name}> in namespace {root.namespace or 'none'!r}; "
+            f"expected <trajectorys> in {NS!r} (WITSML 1.4.1.x)",
+            line=root.line,
+        )
+    version = root.attrs.get("version", "")
+    if not version.startswith("1.4.1"):
+        raise InputFileError(
+            path, f"version {version!r}: this reader reads WITSML 1.4.1.x", line=root.line
+        )
+    trajectories = _chosen(path, root, opts.trajectory)
+    north = _north(path, trajectories, opts)
+    labels = _labels(trajectories) if len(trajectories) > 1 else None
+    data: dict[str, list[Any]] = {name: [] for name, *_ in STATION_MEASURES}
+    data[SOURCE_LINE] = []
+    survey: list[str] = []
+    for index, traj in enumerate(trajectories):
+        rows = [_station(path, node) for node in traj.all("trajectoryStation")]
+        if not rows:
+            raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
+        rows.sort(key=lambda row: row["md"])
+        for row in rows:
+            for name in data:
+                data[name].append(row.get(name))
+        if labels is not None:
+            survey += [labels[index]] * len(rows)
+    columns: dict[str, Any] = {"survey": survey} if labels is not None else {}
+    for name, _, _, required in STATION_MEASURES:
+        if required:
+            columns[name] = np.asarray(data[name], dtype=np.float64)
+        elif any(v is not None for v in data[name]):
+            columns[name] = data[name]
+    columns[SOURCE_LINE] = pa.array(data[SOURCE_LINE], pa.int64())
+    table = LAYOUTS["stations"].table(columns, north)
+    return table, _well(path, trajectories, north)
+
+
+def _chosen(path: Path, root: Node, wanted: str | None) -> list[Node]:
+    trajectories = root.all("trajectory")
+    if not trajectories:
+        raise InputFileError(path, "no <trajectory> element", line=root.line)
+    if wanted is None:
+        return trajectories
+    found = [t for t in trajectories if wanted in (t.attrs.get("uid"), _text(t, "name"))]
+    if not found:
+        known = [t.attrs.get("uid") or _text(t, "name") for t in trajectories]
+        raise InputFileError(path, f"no trajectory with uid or name {wanted!r} (found {known})")
+    return found[:1]
+
+
+def _labels(trajectories: list[Node]) -> list[str]:
+    """Survey ids: the trajectories' names, or their uids when names repeat."""
+    for key in (lambda t: _text(t, "name"), lambda t: t.attrs.get("uid")):
+        labels = [key(t) for t in trajectories]
+        if all(labels) and len(set(labels)) == len(labels):
+            return [str(label) for label in labels]
+    return [f"trajectory {i + 1}" for i in range(len(trajectories))]
+
+
+def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthReference:
+    """The one north reference of the azimuths (aziRef, else the options')."""
+    found: set[NorthReference] = set()
+    for traj in trajectories:
+        node = traj.get("aziRef")
+        text = " ".join(node.text.split()) if node is not None else "unknown"
+        if text == "unknown":
+            continue
+        if text not in _NORTH:
+            raise InputFileError(
+                path,
+                f"aziRef {text!r}: expected {', '.join(_NORTH)} or unknown",
+                line=node.line if node else traj.line,
+            )
+        if opts.north_reference is not None and _NORTH[text] != opts.north_reference:
+            raise InputFileError(
+                path,
+                f"aziRef {text!r} contradicts the option north_reference {opts.north_reference!r}",
+                line=node.line if node else traj.line,
+            )
+        found.add(_NORTH[text])
+    if len(found) > 1:
+        raise InputFileError(
+            path, f"trajectories have different aziRef {sorted(found)}: read one (trajectory:)"
+        )
+    north = found.pop() if found else opts.north_reference or opts.default_north_reference
+    if north is None:
+        raise InputFileError(
+            path,
+            "aziRef is absent or 'unknown': set the reader option north_reference (or the "
+            "well's north_reference)",
+            line=trajectories[0].line,
+        )
+    return north
+
+
+def _station(path: Path, node: Node) -> dict[str, Any]:
+    row: dict[str, Any] = {SOURCE_LINE: node.line}
+    for column, element, quantity, required in STATION_MEASURES:
+        child = node.get(element)
+        if child is None:
+            if required:
+                raise InputFileError(
+                    path, f"trajectoryStation has no <{element}>", line=node.line, column=element
+                )
+            continue
+        row[column] = _measure(path, child, quantity)
+    return row
+
+
+def _measure(path: Path, node: Node, quantity: str) -> float:
+    """A measure element's value in the canonical unit of ``quantity``."""
+    uom = node.attrs.get("uom")
+    if not uom:
+        raise InputFileError(path, f"<{node.name}> has no uom", line=node.line, column=node.name)
+    try:
+        value = float(node.text.strip())
+    except ValueError:
+        raise InputFileError(
+            path,
+            f"<{node.name}> {node.text.strip()!r} is not a number",
+            line=node.line,
+            column=node.name,
+        ) from None
+    try:
+        return value * uom_factor(uom, quantity)
+    except UnitError as exc:
+        raise InputFileError(path, f"<{node.name}>: {exc}", line=node.line) from None
+
+
+def _text(node: Node, name: str) -> str | None:
+    child = node.get(name)
+    return " ".join(child.text.split()) or None if child is not None else None
+
+
+def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMetadata:
+    """Well metadata: gyropipe's extension values, then the WITSML elements (which win)."""
+    first = trajectories[0]
+    found: dict[str, tuple[Any, int]] = {}
+    common = first.get("commonData")
+    for entry in common.all("extensionNameValue") if common is not None else []:
+        name = _text(entry, "name") or ""
+        holder = entry.get("value")
+        field_name = name[len(EXTENSION_PREFIX) :]
+        if not name.startswith(EXTENSION_PREFIX) or holder is None:
+            continue
+        if field_name not in WellMetadata.model_fields or field_name == "north_reference":
+            continue
+        quantity = EXTENSION_QUANTITY.get(field_name)
+        found[field_name] = (
+            _measure(path, holder, quantity) if quantity else holder.text.strip(),
+            holder.line,
+        )
+    names = {_text(t, "nameWell") for t in trajectories}
+    if len(names) > 1:
+        raise InputFileError(path, f"trajectories of several wells {sorted(map(str, names))}")
+    if (well := _text(first, "nameWell")) is not None:
+        found["well"] = (well, first.line)
+    wellbore = _text(first, "nameWellbore")
+    if wellbore is not None and wellbore != well:
+        found["wellbore"] = (wellbore, first.line)
+    for name, element, quantity in WELL_ELEMENTS:
+        node = first.get(element)
+        if node is not None:
+            value = _measure(path, node, quantity) if quantity else " ".join(node.text.split())
+            found[name] = (value, node.line)
+    start = first.get("dTimTrajStart")
+    if start is not None:
+        found["survey_date"] = (_date(path, start), start.line)
+    station = first.get("trajectoryStation")
+    tool = _text(station, "typeSurveyTool") if station is not None else None
+    if "tool_type" not in found and tool is not None and survey_tool(tool) != "unknown":
+        found["tool_type"] = (tool, station.line if station else first.line)
+    for name, (value, line) in found.items():
+        try:
+            WellMetadata.model_validate({name: value})
+        except ValidationError as exc:
+            raise InputFileError(
+                path, f"{name} {value!r}: {exc.errors()[0]['msg']}", line=line
+            ) from None
+    return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _date(path: Path, node: Node) -> dt.date:
+    text = node.text.strip()
+    try:
+        return dt.datetime.fromisoformat(text.replace("Z", "+00:00")).date()
+    except ValueError:
+        raise InputFileError(
+            path, f"<{node.name}> {text!r} is not an ISO 8601 date and time", line=node.line
+        ) from None

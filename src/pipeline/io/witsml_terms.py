@@ -1,0 +1,116 @@
+"""WITSML 1.4.1.1 vocabulary shared by the trajectory writer and reader: namespace, units of
+measure, north references, calculation methods and survey tool types.
+
+Values of the extensible enumerations (``typeSurveyTool``, ``calcAlgorithm``) are the ones
+the WITSML data schema documents; ``typeTrajStation`` and ``aziRef`` are closed enumerations.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Final
+
+from pipeline.errors import UnitError
+from pipeline.survey.methods import Method
+from pipeline.tables import DLS_COURSE_M
+from pipeline.units import conversion_factor
+from pipeline.well import NorthReference
+
+NS: Final = "http://www.witsml.org/schemas/1series"
+VERSION: Final = "1.4.1.1"
+EXTENSION_PREFIX: Final = "gyropipe.well."
+"""``commonData/extensionNameValue`` names holding the well metadata WITSML has no element for."""
+
+NAME_MAX = 64
+"""Longest name and uid (WITSML ``nameString``, ``uidString``)."""
+TYPE_MAX = 40
+"""Longest value of an extensible enumeration (WITSML ``abstractTypeEnum``)."""
+
+AZI_REF: dict[NorthReference, str] = {
+    "true": "true north",
+    "grid": "grid north",
+    "magnetic": "magnetic north",
+}
+"""North reference → ``aziRef``."""
+
+CALC_ALGORITHM: dict[Method, str] = {
+    "minimum_curvature": "minimum curvature",
+    "tangential": "tangential",
+    "balanced_tangential": "balanced tangential",
+    "average_angle": "average angle",
+    "radius_of_curvature": "radius of curvature",
+}
+"""Survey calculation method → ``calcAlgorithm``."""
+
+SURVEY_TOOLS: dict[str, str] = {
+    "gyroscopic north seeking": "gyro north seeking",
+    "gyroscopic inertial": "gyro inertial",
+    "gyroscopic MWD": "gyro MWD",
+    "magnetic MWD": "magnetic MWD",
+    "magnetic single-shot": "magnetic single shot",
+    "magnetic multiple-shot": "magnetic multi-shot",
+    "unknown": "unknown",
+}
+"""``typeSurveyTool`` → the ``typeTrajStation`` of the stations it measures."""
+TIE_IN = "tie in point"
+
+UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
+"""Canonical column unit → WITSML uom (what the writer writes)."""
+_UOM_SPELLING = {"m": "m", "ft": "ft", "ftUS": "usft", "dega": "deg", "rad": "rad"}
+"""WITSML uom → the spelling :mod:`pipeline.units` reads (what the reader accepts)."""
+_RATE_UOM = re.compile(r"(dega|rad)/([0-9]*)(m|ft|ftUS)")
+_TOOL_WORDS = (
+    (("gyro", "north seeking"), "gyroscopic north seeking"),
+    (("gyro", "northseeking"), "gyroscopic north seeking"),
+    (("gyrocompass",), "gyroscopic north seeking"),
+    (("gyro", "inertial"), "gyroscopic inertial"),
+    (("gyro", "mwd"), "gyroscopic MWD"),
+    (("mwd",), "magnetic MWD"),
+    (("single shot",), "magnetic single-shot"),
+    (("multi shot",), "magnetic multiple-shot"),
+    (("multishot",), "magnetic multiple-shot"),
+    (("multiple shot",), "magnetic multiple-shot"),
+)
+"""Words of a free-text tool type (all present) → ``typeSurveyTool``, first match wins."""
+
+
+def survey_tool(tool_type: str | None) -> str:
+    """The ``typeSurveyTool`` a free-text tool type names ('unknown' when it names none:
+    a bare 'gyro' may be north-seeking, inertial or MWD)."""
+    if tool_type is None:
+        return "unknown"
+    text = " ".join(tool_type.casefold().replace("-", " ").replace("_", " ").split())
+    for value in SURVEY_TOOLS:
+        if text == value.casefold().replace("-", " "):
+            return value
+    for words, value in _TOOL_WORDS:
+        if all(word in text for word in words):
+            return value
+    return "unknown"
+
+
+def uom_factor(uom: str, quantity: str) -> float:
+    """Multiplier taking values in the WITSML ``uom`` to the canonical unit of ``quantity``
+    (``length``, ``angle`` or ``dogleg_severity``). Raises :class:`UnitError`."""
+    if quantity == "dogleg_severity":
+        match = _RATE_UOM.fullmatch(uom)
+        if match is None:
+            raise UnitError(f"uom {uom!r} is not an angle per length WITSML writes for a DLS")
+        angle = conversion_factor(_UOM_SPELLING[match[1]], "angle")
+        length = conversion_factor(_UOM_SPELLING[match[3]], "length") * float(match[2] or 1)
+        return angle / length * DLS_COURSE_M
+    spelling = _UOM_SPELLING.get(uom)
+    if spelling is None:
+        raise UnitError(
+            f"uom {uom!r} is not supported for {quantity} (supported: "
+            f"{', '.join(k for k in _UOM_SPELLING if _is(k, quantity))})"
+        )
+    return conversion_factor(spelling, quantity)
+
+
+def _is(uom: str, quantity: str) -> bool:
+    try:
+        conversion_factor(_UOM_SPELLING[uom], quantity)
+    except UnitError:
+        return False
+    return True

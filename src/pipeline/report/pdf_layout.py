@@ -1,0 +1,146 @@
+"""Page primitives of the PDF report: the A4 page geometry, text and rectangles placed in
+inches from the page's bottom-left corner, text measurement and wrapping, and the flow that
+puts pieces on pages."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import cache
+
+from matplotlib.backends.backend_agg import RendererAgg
+from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
+from matplotlib.patches import Rectangle
+
+from pipeline.report.plots import INK
+
+PAGE_W, PAGE_H = 8.27, 11.69
+LEFT, RIGHT = 0.7, 0.7
+TOP, BOTTOM = 0.85, 0.8
+WIDTH = PAGE_W - LEFT - RIGHT
+MUTED = "#616e7c"
+SANS = "DejaVu Sans"
+MONO = "DejaVu Sans Mono"
+
+Draw = Callable[[Figure, float], None]
+"""Draws one piece onto a page with its top at the given height (inches)."""
+
+
+@cache
+def font(size: float, bold: bool = False, family: str = SANS) -> FontProperties:
+    return FontProperties(family=family, size=size, weight="bold" if bold else "normal")
+
+
+MEASURE_DPI = 720.0
+"""Text is measured at this resolution, where hinting no longer rounds the advances."""
+
+
+@cache
+def renderer() -> RendererAgg:
+    return RendererAgg(10, 10, MEASURE_DPI)  # type: ignore[no-untyped-call]
+
+
+def text_width(text: str, size: float, bold: bool = False) -> float:
+    """Width of ``text`` in inches at ``size`` points."""
+    if not text:
+        return 0.0
+    measure = renderer().get_text_width_height_descent
+    width, _, _ = measure(text, font(size, bold), False)  # type: ignore[no-untyped-call]
+    return float(width) / MEASURE_DPI
+
+
+def wrap(text: str, width: float, size: float, bold: bool = False) -> list[str]:
+    """Greedy word wrap of ``text`` into lines no wider than ``width`` inches (a word
+    longer than a line is cut)."""
+    lines: list[str] = []
+    for paragraph in text.split("\n"):
+        line = ""
+        for word in paragraph.split(" "):
+            trial = f"{line} {word}" if line else word
+            if text_width(trial, size, bold) <= width:
+                line = trial
+                continue
+            if line:
+                lines.append(line)
+            while text_width(word, size, bold) > width and len(word) > 1:
+                cut = max(1, int(len(word) * width / text_width(word, size, bold)) - 1)
+                lines.append(word[:cut])
+                word = word[cut:]
+            line = word
+        lines.append(line)
+    return lines
+
+
+def text(
+    fig: Figure,
+    x: float,
+    y: float,
+    content: str,
+    size: float,
+    *,
+    bold: bool = False,
+    family: str = SANS,
+    color: str = INK,
+    ha: str = "left",
+    va: str = "top",
+) -> None:
+    """Text at (x, y) inches (never parsed as mathtext)."""
+    fig.text(
+        x,
+        y,
+        content,
+        fontproperties=font(size, bold, family),
+        transform=fig.dpi_scale_trans,
+        parse_math=False,
+        color=color,
+        ha=ha,
+        va=va,
+    )
+
+
+def lines(
+    fig: Figure,
+    x: float,
+    top: float,
+    rows: Sequence[str],
+    size: float,
+    step: float,
+    *,
+    bold: bool = False,
+    color: str = INK,
+) -> None:
+    """Lines of text ``step`` inches apart, the first with its top at ``top``."""
+    for k, row in enumerate(rows):
+        text(fig, x, top - k * step, row, size, bold=bold, color=color)
+
+
+def rect(fig: Figure, x: float, y: float, w: float, h: float, colour: str) -> None:
+    """A filled rectangle with its bottom-left corner at (x, y) inches."""
+    fig.patches.append(
+        Rectangle((x, y), w, h, transform=fig.dpi_scale_trans, facecolor=colour, linewidth=0)
+    )
+
+
+@dataclass
+class Flow:
+    """Pieces placed on pages from the top down: each page a list of (draw, top)."""
+
+    pages: list[list[tuple[Draw, float]]] = field(default_factory=lambda: [[]])
+    y: float = PAGE_H - TOP
+
+    def room(self) -> float:
+        """Inches left on the current page."""
+        return self.y - BOTTOM
+
+    def new_page(self) -> None:
+        self.pages.append([])
+        self.y = PAGE_H - TOP
+
+    def place(self, height: float, draw: Draw, keep: float = 0.0) -> None:
+        """Put a piece of ``height`` here (with ``keep`` more inches after it on the same
+        page), or at the top of a new page if it does not fit."""
+        if height + keep > self.room() and self.pages[-1]:
+            self.new_page()
+        self.pages[-1].append((draw, self.y))
+        self.y -= height

@@ -1,0 +1,208 @@
+"""Tables of the PDF report, set in a monospaced font: each printed line of a row is one
+string whose columns align by character count, which keeps a long survey listing to a few
+dozen text objects per page. Tables continue over pages with their header repeated."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from dataclasses import dataclass
+from functools import cache
+
+from matplotlib.figure import Figure
+
+from pipeline.report.document import Table
+from pipeline.report.pdf_layout import (
+    LEFT,
+    MEASURE_DPI,
+    MONO,
+    MUTED,
+    WIDTH,
+    Draw,
+    Flow,
+    font,
+    lines,
+    rect,
+    renderer,
+    text,
+    wrap,
+)
+from pipeline.report.plots import NAVY
+
+FONT_SIZES = (7.0, 6.5, 6.0, 5.5, 5.0)
+GAP = 2
+"""Spaces between columns at least."""
+STRETCH_ABOVE = 0.55
+"""Tables wider than this share of the text width are spread over all of it."""
+MIN_ROWS = 4
+"""A table starts on a new page unless this many of its rows fit below the header."""
+KEEP_WHOLE = 20
+"""Tables of at most this many rows are not split (they move to the next page)."""
+MIN_WRAP = 12
+"""Characters a wrapped column keeps at least."""
+TAIL = 0.15
+"""Space below a table, inches."""
+ZEBRA = "#f3f5f8"
+MARKED = "#fbe3e0"
+UNIT_INK = "#d5dfeb"
+
+
+@cache
+def char_width(size: float) -> float:
+    """Advance of one character of the monospaced font, inches."""
+    sample = "0" * 20
+    measure = renderer().get_text_width_height_descent
+    width, _, _ = measure(sample, font(size, family=MONO), False)  # type: ignore[no-untyped-call]
+    return float(width) / len(sample) / MEASURE_DPI
+
+
+@dataclass(frozen=True)
+class _Setting:
+    size: float
+    widths: list[int]
+    gaps: list[int]
+    header: list[str]
+    unit: str
+    rows: list[list[str]]
+    """per table row, its printed lines"""
+
+    @property
+    def pitch(self) -> float:
+        return self.size * 1.32 / 72.0
+
+    @property
+    def width(self) -> float:
+        return (sum(self.widths) + sum(self.gaps) + 2) * char_width(self.size)
+
+    def row_height(self, k: int) -> float:
+        return len(self.rows[k]) * self.pitch + 0.035
+
+
+def _setting(table: Table) -> _Setting:
+    cols = table.columns
+    data = [[row[j] for row in table.rows] for j in range(len(cols))]
+    natural = [
+        max(
+            max((len(c) for c in data[j]), default=0),
+            max((len(w) for w in col.header.split()), default=0),
+            len(col.unit),
+        )
+        for j, col in enumerate(cols)
+    ]
+    gaps = [GAP] * (len(cols) - 1)
+    for size in FONT_SIZES:
+        room = math.floor(WIDTH / char_width(size)) - 2 - sum(gaps)
+        fixed = sum(w for w, c in zip(natural, cols, strict=True) if not c.wrap)
+        wraps = [j for j, c in enumerate(cols) if c.wrap]
+        if fixed + MIN_WRAP * len(wraps) <= room or size == FONT_SIZES[-1]:
+            break
+    widths = list(natural)
+    spare = room - fixed
+    for j in wraps:
+        widths[j] = max(MIN_WRAP, min(natural[j], spare // len(wraps)))
+    used = sum(widths) + sum(gaps) + 2
+    if used * char_width(size) > STRETCH_ABOVE * WIDTH and gaps:
+        extra = max(room + sum(gaps) + 2 - used, 0)
+        gaps = [
+            g + extra // len(gaps) + (1 if k < extra % len(gaps) else 0) for k, g in enumerate(gaps)
+        ]
+    header_lines = [textwrap.wrap(c.header, w) or [""] for c, w in zip(cols, widths, strict=True)]
+    depth = max(len(h) for h in header_lines)
+    padded = [[""] * (depth - len(h)) + h for h in header_lines]  # headers sit on the units
+    header = [_line([p[i] for p in padded], widths, gaps, table) for i in range(depth)]
+    unit = _line([c.unit for c in cols], widths, gaps, table) if any(c.unit for c in cols) else ""
+    rows = []
+    for row in table.rows:
+        cells = [
+            textwrap.wrap(v, w, break_long_words=True) or [""] if c.wrap else [v]
+            for v, c, w in zip(row, cols, widths, strict=True)
+        ]
+        depth = max(len(c) for c in cells)
+        rows.append(
+            [
+                _line([c[i] if i < len(c) else "" for c in cells], widths, gaps, table)
+                for i in range(depth)
+            ]
+        )
+    return _Setting(size, widths, gaps, header, unit, rows)
+
+
+def _line(cells: list[str], widths: list[int], gaps: list[int], table: Table) -> str:
+    out = " "
+    for j, (cell, width, col) in enumerate(zip(cells, widths, table.columns, strict=True)):
+        out += cell.rjust(width) if col.align == "right" else cell.ljust(width)
+        if j < len(gaps):
+            out += " " * gaps[j]
+    return out
+
+
+def place_table(flow: Flow, table: Table) -> None:
+    """Put ``table`` on the pages, continued with its header repeated where it breaks."""
+    setting = _setting(table)
+    head_h = (len(setting.header) + (1 if setting.unit else 0)) * setting.pitch + 0.07
+    title_h = 0.26 if table.title else 0.0
+    count = len(setting.rows)
+    start = 0
+    while True:
+        room = flow.room() - title_h - head_h - TAIL
+        end, used = start, 0.0
+        while end < count and used + setting.row_height(end) <= room:
+            used += setting.row_height(end)
+            end += 1
+        short = start == 0 and count <= KEEP_WHOLE and end < count
+        if (short or end - start < min(MIN_ROWS, count - start)) and flow.pages[-1]:
+            flow.new_page()
+            continue
+        end = min(max(end, start + 1), count)
+        chunk = range(start, end)
+        title = table.title if start == 0 else f"{table.title} (continued)"
+        height = title_h + head_h + sum(setting.row_height(k) for k in chunk) + TAIL
+        flow.place(height, _piece(table, setting, chunk, title, head_h))
+        start = end
+        if start >= count:
+            break
+        flow.new_page()
+    if table.note:
+        note = wrap(table.note, WIDTH, 7)
+        flow.place(
+            0.13 * len(note) + 0.12,
+            lambda fig, top: lines(fig, LEFT, top, note, 7, 0.13, color=MUTED),
+        )
+
+
+def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: float) -> Draw:
+    size, pitch, width = setting.size, setting.pitch, setting.width
+
+    def draw(fig: Figure, top: float) -> None:
+        y = top
+        if table.title:
+            text(fig, LEFT, y, title, 8.5, bold=True, color=NAVY)
+            y -= 0.26
+        rect(fig, LEFT, y - head_h, width, head_h, NAVY)
+        for i, line in enumerate(setting.header):
+            text(
+                fig, LEFT, y - 0.035 - i * pitch, line, size, bold=True, family=MONO, color="white"
+            )
+        if setting.unit:
+            text(
+                fig,
+                LEFT,
+                y - 0.035 - len(setting.header) * pitch,
+                setting.unit,
+                size,
+                family=MONO,
+                color=UNIT_INK,
+            )
+        y -= head_h
+        for n, k in enumerate(rows):
+            h = setting.row_height(k)
+            if k in table.marked:
+                rect(fig, LEFT, y - h, width, h, MARKED)
+            elif n % 2:
+                rect(fig, LEFT, y - h, width, h, ZEBRA)
+            for i, line in enumerate(setting.rows[k]):
+                text(fig, LEFT, y - 0.02 - i * pitch, line, size, family=MONO)
+            y -= h
+        rect(fig, LEFT, y - 0.006, width, 0.006, NAVY)
+
+    return draw

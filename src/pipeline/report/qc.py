@@ -1,0 +1,191 @@
+"""QC results of a run turned into report material: per-check series with their tolerance
+bands, per-check summary rows, and a QC flag per survey station.
+
+Sources: the validity checks' :class:`~pipeline.qc.tables.QcResults` (|measured −
+reference| ≤ tolerance) and :class:`~pipeline.qc.tables.QcSummary`, generic
+:class:`~pipeline.tables.CheckResults` (value ≤ limit) and free-gyro
+:class:`~pipeline.drift.tables.InOutQc` (in − out within tolerance).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.continuous.tables import describe_flags
+from pipeline.report.document import fmt_sig
+from pipeline.report.plots import FloatArray, QcSeries
+
+MD_MATCH = 1e-3
+"""Two MDs within this many metres are the same station."""
+
+
+@dataclass(frozen=True)
+class QcSources:
+    """The QC tables wired into a report (any may be absent)."""
+
+    qc: pa.Table | None = None
+    summary: pa.Table | None = None
+    checks: pa.Table | None = None
+    inout: pa.Table | None = None
+    stations: pa.Table | None = None
+
+    def any(self) -> bool:
+        return any(t is not None for t in (self.qc, self.summary, self.checks, self.inout))
+
+
+def _floats(table: pa.Table, name: str) -> FloatArray:
+    values: FloatArray = table.column(name).to_numpy(zero_copy_only=False).astype(float)
+    return values
+
+
+def validity_series(qc: pa.Table) -> list[QcSeries]:
+    """One series per validity check, evaluated rows with an MD only."""
+    checks = qc.column("check").to_pylist()
+    passed = qc.column("passed").to_pylist()
+    units = qc.column("unit").to_pylist()
+    md = _floats(qc, "md")
+    deviation = _floats(qc, "measured") - _floats(qc, "reference")
+    tolerance = _floats(qc, "tolerance")
+    out = []
+    for name in dict.fromkeys(checks):
+        rows = np.array([c == name for c in checks])
+        done = rows & np.array([p is not None for p in passed]) & ~np.isnan(md)
+        if not done.any():
+            continue
+        out.append(
+            QcSeries(
+                name=name,
+                unit=units[int(np.flatnonzero(rows)[0])],
+                x=md[done],
+                value=deviation[done],
+                low=-tolerance[done],
+                high=tolerance[done],
+                passed=np.array([passed[i] for i in np.flatnonzero(done)], dtype=bool),
+                quantity="measured − reference",
+                skipped=int(rows.sum() - done.sum()),
+            )
+        )
+    return out
+
+
+def check_series(checks: pa.Table) -> list[QcSeries]:
+    """One series per generic check: the value with the band from 0 (or −limit for signed
+    quantities) up to the limit."""
+    names = checks.column("check").to_pylist()
+    md = _floats(checks, "md") if "md" in checks.column_names else np.full(checks.num_rows, np.nan)
+    x = np.where(np.isnan(md), _floats(checks, "row"), md)
+    value, limit = _floats(checks, "value"), _floats(checks, "limit")
+    passed = np.array(checks.column("passed").to_pylist(), dtype=bool)
+    units = checks.column("unit").to_pylist()
+    out = []
+    for name in dict.fromkeys(names):
+        rows = np.array([n == name for n in names])
+        low = np.zeros(rows.sum()) if (value[rows] >= 0).all() else -limit[rows]
+        out.append(
+            QcSeries(
+                name,
+                units[int(np.flatnonzero(rows)[0])],
+                x[rows],
+                value[rows],
+                low,
+                limit[rows],
+                passed[rows],
+                "value",
+            )
+        )
+    return out
+
+
+def inout_series(inout: pa.Table) -> list[QcSeries]:
+    """In-run minus out-run inclination and azimuth with their tolerances."""
+    md = _floats(inout, "md")
+    out = []
+    for quantity, name in (("inc", "in/out inclination"), ("azi", "in/out azimuth")):
+        diff = _floats(inout, f"{quantity}_diff")
+        tol = _floats(inout, f"{quantity}_tolerance")
+        out.append(QcSeries(name, "°", md, diff, -tol, tol, np.abs(diff) <= tol, "in − out"))
+    return out
+
+
+def all_series(src: QcSources) -> list[tuple[str, list[QcSeries]]]:
+    """(title, series) of every QC source present, for charts and the summary table."""
+    groups = []
+    if src.qc is not None:
+        groups.append(("Validity checks", validity_series(src.qc)))
+    if src.checks is not None:
+        groups.append(("Survey checks", check_series(src.checks)))
+    if src.inout is not None:
+        groups.append(("In-run / out-run comparison", inout_series(src.inout)))
+    return [(title, series) for title, series in groups if series]
+
+
+def summary_rows(series: list[QcSeries]) -> list[tuple[str, ...]]:
+    """Per check: unit, evaluated, passed, failed, not evaluated, worst |value|/limit."""
+    rows: list[tuple[str, ...]] = []
+    for s in series:
+        span = np.maximum(np.abs(np.where(s.value >= 0, s.high, s.low)), 1e-300)
+        worst = float(np.max(np.abs(s.value) / span)) if len(s.value) else float("nan")
+        rows.append(
+            (
+                s.name,
+                s.unit,
+                str(len(s.value)),
+                str(int(s.passed.sum())),
+                str(int((~s.passed).sum())),
+                str(s.skipped),
+                fmt_sig(worst, 2),
+            )
+        )
+    return rows
+
+
+def _flag_text(flags: str | int | None) -> str:
+    """A station's flags as text: strings as they are, continuous-mode bit flags by name."""
+    if isinstance(flags, int):
+        return describe_flags(flags)
+    return flags or ""
+
+
+def station_flags(md: FloatArray, src: QcSources) -> list[str]:
+    """A QC flag per trajectory station: 'ok', or what was flagged at that MD (station
+    verdicts, failed checks, in/out differences, compassing warnings)."""
+    found: dict[int, list[str]] = defaultdict(list)
+
+    def at(mds: FloatArray, labels: list[str]) -> None:
+        index = np.clip(np.searchsorted(md, mds), 0, len(md) - 1)
+        for value, i, label in zip(mds, index, labels, strict=True):
+            near = [j for j in (i - 1, i) if 0 <= j < len(md) and abs(md[j] - value) <= MD_MATCH]
+            if label and near and label not in found[near[0]]:
+                found[near[0]].append(label)
+
+    if src.summary is not None:
+        status = src.summary.column("status").to_pylist()
+        failed = src.summary.column("failed_checks").to_pylist()
+        at(
+            _floats(src.summary, "md"),
+            [f"{s}: {f}" if s != "ok" else "" for s, f in zip(status, failed, strict=True)],
+        )
+    if src.checks is not None and "md" in src.checks.column_names:
+        passed = src.checks.column("passed").to_pylist()
+        names = src.checks.column("check").to_pylist()
+        md_checks = _floats(src.checks, "md")
+        keep = ~np.isnan(md_checks)
+        at(
+            md_checks[keep],
+            [n if not p else "" for n, p, k in zip(names, passed, keep, strict=True) if k],
+        )
+    if src.inout is not None:
+        at(
+            _floats(src.inout, "md"),
+            ["" if p else "in/out" for p in src.inout.column("passed").to_pylist()],
+        )
+    if src.stations is not None and "flags" in src.stations.column_names:
+        at(
+            _floats(src.stations, "md"),
+            [_flag_text(f) for f in src.stations.column("flags").to_pylist()],
+        )
+    return ["; ".join(found[i]) if found.get(i) else "ok" for i in range(len(md))]

@@ -1,0 +1,214 @@
+"""Report parts shared by the survey and calibration reports: the well header, the method
+statements read from the run's stages, and the provenance section."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from typing import Any
+
+import pyarrow as pa
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.registry import Provenance, StageSetup
+from pipeline.report.document import (
+    Block,
+    Column,
+    Fields,
+    Paragraph,
+    Section,
+    Table,
+    fmt,
+    items,
+)
+from pipeline.well import WellMetadata
+
+NORTH_NAMES = {"true": "true north", "grid": "grid north", "magnetic": "magnetic north"}
+UNIT_LABELS = {"deg": "°", "deg/30m": "°/30 m", "deg/h": "°/h", "deg/min": "°/min", "m2": "m²"}
+
+
+def north_label(table: pa.Table, column: str) -> str:
+    """'true north', 'grid north' or 'magnetic north' of an azimuth column."""
+    raw = (table.schema.field(column).metadata or {}).get(NORTH_KEY, b"").decode()
+    return NORTH_NAMES.get(raw, raw or "unstated north")
+
+
+def unit_label(table: pa.Table, column: str) -> str:
+    """The unit of a column as printed in a report (``deg`` → ``°``)."""
+    raw: str = (table.schema.field(column).metadata or {}).get(UNIT_KEY, b"").decode()
+    return UNIT_LABELS.get(raw, raw)
+
+
+def run_time(provenance: Provenance) -> str:
+    return provenance.started.strftime("%Y-%m-%d %H:%M UTC")
+
+
+def footer(provenance: Provenance) -> str:
+    """The provenance line printed on every page."""
+    return (
+        f"gyropipe {provenance.gyropipe} · pipeline {provenance.pipeline} "
+        f"{provenance.pipeline_version} (sha256 {provenance.pipeline_sha256[:12]}) · "
+        f"run {run_time(provenance)}"
+    )
+
+
+def _angle(value: float | None, positive: str, negative: str) -> str | None:
+    if value is None:
+        return None
+    return f"{abs(value):.6f}° {positive if value >= 0 else negative}"
+
+
+def site_fields(well: WellMetadata) -> Fields:
+    """Well name, identifiers and wellhead position."""
+    elevation = None
+    if well.elevation is not None:
+        ref = f" ({well.depth_reference})" if well.depth_reference else ""
+        elevation = f"{fmt(well.elevation)} m above MSL{ref}"
+    return Fields(
+        "Well and site",
+        items(
+            [
+                ("Well", well.well),
+                ("UWI", well.uwi),
+                ("Field", well.field),
+                ("Operator", well.company),
+                ("Service company", well.service_company),
+                ("Latitude", _angle(well.latitude, "N", "S")),
+                ("Longitude", _angle(well.longitude, "E", "W")),
+                ("Depth reference", None if elevation else well.depth_reference),
+                ("Reference elevation", elevation),
+            ]
+        ),
+    )
+
+
+def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[str, str]]) -> Fields:
+    """Tool and run: tool type and serial, survey date, pipeline, run time, ``extra``."""
+    return Fields(
+        "Tool and run",
+        items(
+            [
+                ("Tool type", well.tool_type),
+                ("Tool serial", well.tool_serial),
+                ("Survey date", well.survey_date.isoformat() if well.survey_date else None),
+                *extra,
+                ("Pipeline", f"{provenance.pipeline} {provenance.pipeline_version}"),
+                ("Processed", run_time(provenance)),
+            ]
+        ),
+    )
+
+
+def _param(stage: StageSetup, name: str, default: Any = "?") -> Any:
+    return stage.params.get(name, default)
+
+
+def _describe(stage: StageSetup) -> tuple[str, str] | None:
+    """What a known processing stage says about the method, as (label, statement)."""
+    match stage.uses:
+        case "minimum_curvature":
+            return "Survey calculation", "minimum curvature"
+        case "survey_method":
+            return "Survey calculation", str(_param(stage, "method")).replace("_", " ")
+        case "compass":
+            return (
+                "Gyrocompassing",
+                f"multi-position least squares, azimuth solver {_param(stage, 'azimuth_method')}, "
+                f"gyro toolface below {_param(stage, 'vertical_below')}° inclination",
+            )
+        case "integrate_continuous":
+            return (
+                "Continuous survey",
+                "azimuth rate integrated between compassing stops, closed on the end stop, "
+                f"stations every {_param(stage, 'spacing')} m",
+            )
+        case "position_uncertainty":
+            confidence = float(_param(stage, "confidence", 0.0)) * 100
+            return (
+                "Position uncertainty",
+                f"ISCWSA {_param(stage, 'model')} error model (SPE 67616 propagation), "
+                f"ellipses at {confidence:g} %",
+            )
+        case "correct_drift":
+            return "Drift correction", f"A − ω·(t − t₀), rate from {_param(stage, 'source')}"
+        case "calibrate_drift":
+            return (
+                "Drift calibration",
+                f"series means (seed 000), estimate used: {_param(stage, 'use')}, "
+                f"linearity test at α = {_param(stage, 'alpha')}",
+            )
+        case "north_reference":
+            return "North reference conversion", f"to {_param(stage, 'target')} north"
+        case "validity_checks" | "window_checks":
+            return "Validity checks", "sensor triads at rest against the site's Earth references"
+    return None
+
+
+def method_items(provenance: Provenance) -> list[tuple[str, str]]:
+    """Method statements of the run's known stages (first stage of each kind)."""
+    found: dict[str, str] = {}
+    for stage in provenance.stages:
+        described = _describe(stage)
+        if described and described[0] not in found:
+            found[described[0]] = described[1]
+    return list(found.items())
+
+
+def references(table: pa.Table | None) -> list[tuple[str, str]]:
+    """Reference models recorded by the validity checks in a QC table's metadata."""
+    if table is None:
+        return []
+    raw = (table.schema.metadata or {}).get(b"gyropipe.references")
+    if raw is None:
+        return []
+    names = {"earth_rate": "Earth rate", "gravity": "Normal gravity", "geomagnetic": "Geomagnetic"}
+    recorded: Mapping[str, str] = json.loads(raw)
+    return [(names.get(k, k), str(v)) for k, v in recorded.items()]
+
+
+def _params_text(params: Mapping[str, Any]) -> str:
+    return ", ".join(f"{k}={json.dumps(v, ensure_ascii=False)}" for k, v in params.items())
+
+
+def provenance_section(provenance: Provenance) -> Section:
+    """Pipeline, software, input files and every stage with its parameters."""
+    run = Fields(
+        "Run",
+        items(
+            [
+                ("Pipeline", f"{provenance.pipeline} {provenance.pipeline_version}"),
+                ("Pipeline file", provenance.pipeline_file),
+                ("Pipeline sha256", provenance.pipeline_sha256),
+                ("gyropipe", provenance.gyropipe),
+                ("Run started", provenance.started.isoformat(timespec="seconds")),
+            ]
+        ),
+    )
+    inputs = Table(
+        "Input files",
+        (
+            Column("Input", align="left"),
+            Column("File", align="left", wrap=True),
+            Column("Bytes"),
+            Column("SHA-256", align="left", wrap=True),
+        ),
+        tuple((name, f.path, str(f.bytes), f.sha256) for name, f in provenance.inputs.items()),
+        kind="inputs",
+    )
+    stages = Table(
+        "Processing stages",
+        (
+            Column("Stage", align="left"),
+            Column("Uses", align="left"),
+            Column("Plugin", align="left"),
+            Column("Parameters", align="left", wrap=True),
+        ),
+        tuple((s.id, s.uses, s.plugin, _params_text(s.params) or "—") for s in provenance.stages),
+        kind="stages",
+    )
+    plugins = ", ".join(f"{n} {v}" for n, v in provenance.plugins.items())
+    blocks: list[Block] = [run]
+    blocks += [inputs] if inputs.rows else []
+    blocks += [stages] if stages.rows else []
+    blocks += [Paragraph(f"Plugins loaded: {plugins}.")] if plugins else []
+    return Section("Provenance", tuple(blocks), key="provenance")

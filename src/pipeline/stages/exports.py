@@ -1,0 +1,82 @@
+"""Built-in plugin: the ``export`` stage — several tables of a run into one file.
+
+Writers whose file holds several tables (``WriterDef.write_tables``: the MCAP of processed
+streams, the JSON summary) receive the tables wired to the stage's ports, each under its
+port name, with the well metadata and the run's provenance. One table goes through ``write``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Annotated
+
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.contracts import TableContract, column
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import StageContext, StageDef, registered
+from pipeline.tables import AnyTable, Stations, Trajectory
+from pipeline.well import attach
+
+
+class QcTable(TableContract):
+    """QC results of any check family: one row per evaluation (``check`` results,
+    ``validity_checks`` QC…)."""
+
+    check: str = column(unit=None, description="check name")
+    passed: bool | None = column(unit=None, description="within tolerance (null: not evaluated)")
+
+
+PORTS: dict[str, type[TableContract]] = {
+    "trajectory": Trajectory,
+    "stations": Stations,
+    "readings": AnyTable,
+    "series": AnyTable,
+    "qc": QcTable,
+    "rejects": AnyTable,
+}
+"""Input ports (all optional): the survey's trajectory, its stations (compassed, continuous),
+per-position readings, continuous series, QC results and the stations rejected."""
+
+
+class ExportParams(BaseModel):
+    """Parameters of the export stage."""
+
+    model_config = ConfigDict(extra="forbid")
+    writer: Annotated[str, registered("writer")] = Field(
+        description="writer of several tables (mcap, json_summary, …)"
+    )
+    filename: str | None = Field(
+        None, description="output file name; default '<stage id>.<writer extension>'"
+    )
+
+
+def export(
+    inputs: Mapping[str, pa.Table], params: ExportParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Write the wired tables into one file (published when the run succeeds)."""
+    writer = ctx.writer(params.writer)
+    if writer.write_tables is None:
+        raise ValueError(f"writer {params.writer!r} writes one table: use the write stage for it")
+    if not inputs:
+        raise ValueError(f"wire at least one of the ports {', '.join(PORTS)}")
+    path = ctx.output_path(params.filename or f"{ctx.stage_id}.{writer.extension}")
+    tables = {port: attach(table, ctx.well) for port, table in inputs.items()}
+    writer.write_tables(tables, path, ctx.well, ctx.provenance)
+    return {}
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="export",
+            func=export,
+            description="Write several tables of the run (trajectory, stations, readings, "
+            "series, QC, rejects) into one file with a writer that holds several.",
+            inputs=PORTS,
+            params=ExportParams,
+            optional_inputs=frozenset(PORTS),
+        )
+    )

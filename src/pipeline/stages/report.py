@@ -1,0 +1,141 @@
+"""Built-in plugin: report stages — the survey report and the drift calibration report, each
+one self-contained HTML file and an A4 PDF with the same content, written into the run's
+output directory (published atomically with the other outputs).
+
+The report modules (and matplotlib) are imported only when a report is made, so loading the
+plugins stays fast for every other command.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Literal
+
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.contracts import TableContract
+from pipeline.drift.tables import (
+    AllanResult,
+    CalibrationReadings,
+    CalibrationResult,
+    CalibrationSeries,
+    CorrectedFreeGyroReadings,
+    InOutQc,
+    NoiseParameters,
+)
+from pipeline.hookspecs import hookimpl
+from pipeline.qc.tables import QcResults, QcSummary
+from pipeline.registry import StageContext, StageDef
+from pipeline.tables import CheckResults, Stations, Trajectory
+
+if TYPE_CHECKING:
+    from pipeline.report.document import Document
+
+FILENAME = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
+
+
+class ReportParams(BaseModel):
+    """Parameters of the report stages."""
+
+    model_config = ConfigDict(extra="forbid")
+    title: str | None = Field(None, description="report title (default: the stage's own)")
+    filename: str | None = Field(
+        None,
+        pattern=FILENAME,
+        description="base file name: <filename>.html, <filename>.pdf (default: the stage id)",
+    )
+    formats: list[Literal["html", "pdf"]] = Field(
+        ["html", "pdf"], min_length=1, description="files to write"
+    )
+    image_format: Literal["auto", "png", "svg"] = Field(
+        "auto", description="figures in the HTML: PNG, SVG, or per figure the smaller (auto)"
+    )
+    dpi: int = Field(110, ge=50, le=300, description="resolution of PNG figures in the HTML")
+
+
+def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
+    from pipeline.report.html import render_html
+    from pipeline.report.pdf import render_pdf
+
+    name = params.filename or ctx.stage_id
+    if "html" in params.formats:
+        html = render_html(doc, params.image_format, params.dpi)
+        ctx.output_path(f"{name}.html").write_text(html, encoding="utf-8")
+    if "pdf" in params.formats:
+        render_pdf(doc, ctx.output_path(f"{name}.pdf"))
+
+
+def survey_report(
+    inputs: Mapping[str, pa.Table], params: ReportParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Trajectory (and whatever QC, drift and noise tables are wired) → survey report."""
+    from pipeline.report.survey import SurveyTables, survey_document
+
+    doc = survey_document(
+        SurveyTables(**inputs), ctx.well, ctx.provenance, params.title or "Gyro survey report"
+    )
+    _write(doc, params, ctx)
+    return {}
+
+
+def calibration_report(
+    inputs: Mapping[str, pa.Table], params: ReportParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Drift calibration result and series (and the readings, if wired) → calibration report."""
+    from pipeline.report.calibration import calibration_document
+
+    doc = calibration_document(
+        inputs["result"],
+        inputs["series"],
+        inputs.get("readings"),
+        ctx.well,
+        ctx.provenance,
+        params.title or "Gyro drift calibration report",
+    )
+    _write(doc, params, ctx)
+    return {}
+
+
+SURVEY_INPUTS: dict[str, type[TableContract]] = {
+    "trajectory": Trajectory,
+    "stations": Stations,
+    "qc": QcResults,
+    "qc_summary": QcSummary,
+    "checks": CheckResults,
+    "inout": InOutQc,
+    "drift": CorrectedFreeGyroReadings,
+    "calibration": CalibrationResult,
+    "allan": AllanResult,
+    "noise": NoiseParameters,
+}
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="report",
+            func=survey_report,
+            description="Survey report (HTML and PDF): header, method and reference models, "
+            "listing, trajectory plots, ellipses, QC charts, drift and Allan plots, provenance.",
+            inputs=SURVEY_INPUTS,
+            optional_inputs=frozenset(SURVEY_INPUTS) - {"trajectory"},
+            params=ReportParams,
+        )
+    )
+    register(
+        StageDef(
+            name="calibration_report",
+            func=calibration_report,
+            description="Drift calibration report (HTML and PDF): linearity verdict, drift "
+            "estimates with σ beside the traditional one, series table and plot.",
+            inputs={
+                "result": CalibrationResult,
+                "series": CalibrationSeries,
+                "readings": CalibrationReadings,
+            },
+            optional_inputs=frozenset({"readings"}),
+            params=ReportParams,
+        )
+    )

@@ -1,0 +1,41 @@
+"""How a trajectory's positions were calculated, carried in its Arrow schema metadata.
+
+The stages that integrate stations record the survey calculation method and the azimuth of
+the vertical-section plane under ``gyropipe.survey_calculation`` (JSON), so exports state
+them (WITSML ``calcAlgorithm`` and ``aziVertSect``, the LAS ``~Parameter`` section, the JSON
+summary) instead of assuming them. Stages that add columns to a trajectory keep the record.
+"""
+
+from __future__ import annotations
+
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field
+
+from pipeline.survey.methods import Method
+
+CALCULATION_KEY = b"gyropipe.survey_calculation"
+
+
+class SurveyCalculation(BaseModel):
+    """The calculation behind a trajectory's positions."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    method: Method = Field(description="survey calculation method")
+    vs_azimuth: float = Field(
+        description="azimuth of the vertical-section plane, deg, in the azimuths' north "
+        "reference; the section's origin is the wellhead"
+    )
+
+
+def with_calculation(table: pa.Table, calculation: SurveyCalculation) -> pa.Table:
+    """``table`` with ``calculation`` recorded in its schema metadata."""
+    meta = dict(table.schema.metadata or {})
+    meta[CALCULATION_KEY] = calculation.model_dump_json().encode()
+    return table.replace_schema_metadata(meta)
+
+
+def calculation_of(table: pa.Table) -> SurveyCalculation | None:
+    """The calculation recorded in a table's schema metadata, if any."""
+    raw = (table.schema.metadata or {}).get(CALCULATION_KEY)
+    return None if raw is None else SurveyCalculation.model_validate_json(raw)

@@ -1,0 +1,156 @@
+"""Helpers of the batch tests: wells made of copies of the bundled station listing (and
+corrupt copies) in a temporary directory, the CLI run in-process or as a real subprocess,
+and independent readers of the ledger (plain sqlite3) and of the published outputs."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sqlite3
+import subprocess
+from pathlib import Path
+from typing import Any
+
+from click.testing import CliRunner, Result
+
+from pipeline.cli import main
+from tests_support import ROOT, gyropipe
+
+STATIONS = ROOT / "examples" / "stations-j-well.csv"
+SURVEY_YAML = """\
+# The survey job of pipelines/survey.yaml without its report: fast, and fixed while the
+# shipped pipeline evolves.
+name: survey
+version: "1.0"
+inputs:
+  stations: {description: Survey stations file}
+well:
+  north_reference: "true"
+stages:
+  - id: read
+    uses: read_stations
+  - id: trajectory
+    uses: minimum_curvature
+    inputs: {stations: read.stations}
+    with: {vs_azimuth: 0.0}
+    persist: [trajectory]
+  - id: dls_check
+    uses: check
+    inputs: {table: trajectory.trajectory}
+    with: {check: dls_limit, params: {limit: 10.0}}
+    persist: [results]
+  - id: export_csv
+    uses: write
+    inputs: {table: trajectory.trajectory}
+    with: {writer: csv, filename: trajectory.csv}
+"""
+
+
+def survey_pipeline(directory: Path) -> Path:
+    """Write the survey test pipeline into ``directory``."""
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / "survey.yaml"
+    path.write_text(SURVEY_YAML)
+    return path
+
+
+def cli(*args: str | Path) -> Result:
+    """``gyropipe ARGS`` in this process (stderr not a terminal: JSON log lines)."""
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def spawn(*args: str | Path, stderr: Path) -> subprocess.Popen[str]:
+    """``gyropipe ARGS`` as a real subprocess, its stderr to a file."""
+    with open(stderr, "w") as err:
+        return subprocess.Popen(
+            [*gyropipe(), *map(str, args)],
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            cwd=ROOT,
+            env={**os.environ, "COLUMNS": "200"},
+        )
+
+
+def make_wells(directory: Path, names: list[str]) -> list[Path]:
+    """A copy of the bundled station listing per name (``<name>.csv``)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    text = STATIONS.read_text()
+    paths = []
+    for name in names:
+        path = directory / f"{name}.csv"
+        path.write_text(text)
+        paths.append(path)
+    return paths
+
+
+def corrupt(path: Path) -> str:
+    """Make ``path`` a station listing whose 15th data row lost a cell; returns the
+    1-based line number of that row."""
+    lines = STATIONS.read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
+    bad = header + 15
+    lines[bad] = ",".join(lines[bad].split(",")[:2])
+    path.write_text("\n".join(lines) + "\n")
+    return str(bad + 1)
+
+
+def change_one_azimuth(path: Path) -> None:
+    """Change the azimuth of the last station (a real content change)."""
+    lines = path.read_text().rstrip("\n").splitlines()
+    md, inc, _ = lines[-1].split(",")
+    lines[-1] = f"{md},{inc},45.00"
+    path.write_text("\n".join(lines) + "\n")
+
+
+def runs(ledger: Path) -> list[dict[str, Any]]:
+    """Every run row of a ledger, oldest first (read with plain sqlite3)."""
+    with sqlite3.connect(ledger) as db:
+        db.row_factory = sqlite3.Row
+        return [dict(r) for r in db.execute("SELECT * FROM runs ORDER BY id")]
+
+
+def batches(ledger: Path) -> list[dict[str, Any]]:
+    with sqlite3.connect(ledger) as db:
+        db.row_factory = sqlite3.Row
+        return [dict(r) for r in db.execute("SELECT * FROM batches ORDER BY id")]
+
+
+def summary(out: Path) -> dict[str, dict[str, Any]]:
+    """summary.json rows by well."""
+    return {row["well"]: row for row in json.loads((out / "summary.json").read_text())["wells"]}
+
+
+def log_events(stderr: str) -> list[dict[str, Any]]:
+    """The JSON log lines of a batch."""
+    return [json.loads(line) for line in stderr.splitlines() if line.startswith("{")]
+
+
+def assert_complete(well_dir: Path) -> dict[str, Any]:
+    """``well_dir`` holds one complete run: every output of its run.json on disk with the
+    recorded hash, batch.json naming a run, nothing else. Returns run.json."""
+    manifest = json.loads((well_dir / "run.json").read_text())
+    listed = {o["file"] for o in manifest["outputs"]}
+    assert sorted(p.name for p in well_dir.iterdir()) == sorted(listed | {"run.json", "batch.json"})
+    for entry in manifest["outputs"]:
+        path = well_dir / entry["file"]
+        assert entry["path"] == str(path)
+        assert hashlib.sha256(path.read_bytes()).hexdigest() == entry["sha256"]
+    assert json.loads((well_dir / "batch.json").read_text())["well_id"] == well_dir.name
+    return manifest
+
+
+def output_hashes(out: Path, wells: list[str]) -> dict[str, dict[str, str]]:
+    return {
+        w: {
+            o["file"]: o["sha256"]
+            for o in json.loads((out / w / "run.json").read_text())["outputs"]
+        }
+        for w in wells
+    }
+
+
+def no_staging_left(out: Path) -> bool:
+    work = out / ".gyropipe-batch"
+    return not work.exists() or not any(work.iterdir())

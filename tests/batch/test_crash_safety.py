@@ -1,0 +1,256 @@
+"""Crash safety and concurrency with real processes: a batch SIGKILLed mid-run and started
+again (twice), a worker process killed by the OS, a run that published just before its batch
+died, and two batches on one ledger at once."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from batch_support import (
+    STATIONS,
+    assert_complete,
+    batches,
+    cli,
+    log_events,
+    make_wells,
+    no_staging_left,
+    runs,
+    spawn,
+    summary,
+)
+
+from pipeline.batch.ledger import Ledger
+
+TIMEOUT_S = 90
+
+
+def wait_for(condition: Callable[[], bool], proc: subprocess.Popen[str] | None = None) -> None:
+    """Poll ``condition`` every 5 ms; fail if ``proc`` ends first or after TIMEOUT_S."""
+    deadline = time.monotonic() + TIMEOUT_S
+    while not condition():
+        if proc is not None and proc.poll() is not None:
+            pytest.fail(f"the batch ended (exit {proc.returncode}) before the kill")
+        if time.monotonic() > deadline:
+            pytest.fail("timed out")
+        time.sleep(0.005)
+
+
+def done_runs(ledger: Path) -> dict[str, dict[str, object]]:
+    """Done runs by well, read-only (retries while the batch holds a lock)."""
+    if not ledger.exists():
+        return {}
+    try:
+        with sqlite3.connect(f"file:{ledger}?mode=ro", uri=True) as db:
+            db.row_factory = sqlite3.Row
+            rows = db.execute("SELECT * FROM runs WHERE status = 'done'").fetchall()
+    except sqlite3.Error:
+        return {}
+    return {r["well"]: dict(r) for r in rows}
+
+
+def published_unrecorded(out: Path) -> dict[str, int]:
+    """Wells whose claimed ('running') run had published its outputs when the batch died."""
+    found = {}
+    for row in runs(out / "ledger.sqlite"):
+        marker = out / row["well"] / "batch.json"
+        published = marker.exists() and json.loads(marker.read_text())["run_id"] == row["id"]
+        if row["status"] == "running" and published:
+            found[row["well"]] = int(row["id"])
+    return found
+
+
+def gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    # a zombie still answers kill(0); it is not running
+    return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
+
+
+def test_sigkilled_batch_restarted_completes_and_recomputes_nothing(tmp_path: Path, survey: Path):
+    names = [f"W{i:02d}" for i in range(16)]
+    make_wells(tmp_path / "in", names)
+    out = tmp_path / "out"
+    ledger = out / "ledger.sqlite"
+    args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--workers", "1")
+
+    finished_before: dict[str, int] = {}
+    for attempt, kill_after in enumerate((2, 7)):
+        proc = spawn(*args, "--quiet", stderr=tmp_path / f"kill{attempt}.log")
+        wait_for(lambda n=kill_after: len(done_runs(ledger)) >= n, proc)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(TIMEOUT_S)
+        done = done_runs(ledger)
+        assert len(done) < len(names), "the kill came too late to test anything"
+        # the batch's workers do not outlive it (no orphan goes on writing outputs)
+        workers = {int(str(r["worker"]).rsplit(":", 1)[1]) for r in done.values() if r["worker"]}
+        wait_for(lambda w=workers: all(gone(pid) for pid in w))
+        finished_before.update({w: int(str(r["id"])) for w, r in done.items()})
+        finished_before.update(published_unrecorded(out))  # killed between publish and record
+
+    final = spawn(*args, stderr=tmp_path / "final.log")
+    assert final.wait(TIMEOUT_S) == 0, (tmp_path / "final.log").read_text()
+
+    rows = runs(ledger)
+    for well in names:
+        mine = [r for r in rows if r["well"] == well]
+        assert [r["status"] for r in mine].count("done") == 1, mine
+        done = next(r for r in mine if r["status"] == "done")
+        if well in finished_before:  # finished before a kill: never run again
+            assert done["id"] == finished_before[well]
+            assert mine[-1] is done
+        assert {r["status"] for r in mine} <= {"done", "interrupted"}
+        published = assert_complete(out / well)
+        assert json.loads((out / well / "batch.json").read_text())["run_id"] == done["id"]
+        assert published["outputs"] == json.loads(str(done["outputs"]))
+    assert no_staging_left(out)
+    assert [b["status"] for b in batches(ledger)] == ["interrupted", "interrupted", "finished"]
+    last = summary(out)
+    assert {w for w, r in last.items() if r["status"] == "skipped"} == set(finished_before)
+    assert all(
+        r["detail"].startswith("done before the interruption (batch ")
+        for w, r in last.items()
+        if w in finished_before
+    )
+
+
+def big_listing(path: Path, rows: int) -> None:
+    """The bundled listing's header over ``rows`` stations every 0.5 m (a slower well)."""
+    lines = STATIONS.read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
+    body = (f"{0.5 * i:.2f},{min(0.01 * i, 60.0):.2f},37.00" for i in range(rows))
+    path.write_text("\n".join([*lines[: header + 1], *body]) + "\n")
+
+
+def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Path):
+    (tmp_path / "in").mkdir()
+    for i in range(3):
+        big_listing(tmp_path / "in" / f"B{i}.csv", 30_000)
+    out = tmp_path / "out"
+    proc = spawn(
+        "batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--workers", "2",
+        "--quiet", stderr=tmp_path / "log",
+    )  # fmt: skip
+
+    def running_worker() -> int | None:
+        for nested in (out / ".gyropipe-batch").glob("*.staging/.gyropipe-staging-*"):
+            return int(nested.name.removeprefix(".gyropipe-staging-").split("-")[0])
+        return None
+
+    wait_for(lambda: running_worker() is not None, proc)
+    victim = running_worker()
+    assert victim is not None and victim != proc.pid
+    os.kill(victim, signal.SIGKILL)
+    assert proc.wait(TIMEOUT_S) == 0, (tmp_path / "log").read_text()
+    rows = runs(out / "ledger.sqlite")
+    assert sorted(r["well"] for r in rows) == ["B0", "B1", "B2"]  # one run each
+    assert {r["status"] for r in rows} == {"done"}
+    assert str(victim) not in {str(r["worker"]).rsplit(":", 1)[1] for r in rows}
+    for well in ("B0", "B1", "B2"):
+        assert_complete(out / well)
+
+
+DYING_BATCH = """
+import os, signal, sys
+from pathlib import Path
+from pipeline.batch.fingerprint import PlanIdentity
+from pipeline.batch.jobs import jobs_from_glob
+from pipeline.batch.ledger import Ledger
+from pipeline.batch.policy import Mode, decide
+from pipeline.batch.worker import PipelineRef, WellTask, run_well
+from pipeline.graph import build_plan
+from pipeline.plugins import load_registry
+from pipeline.spec import load_spec
+from pipeline.well import WellMetadata
+
+survey, pattern, out = sys.argv[1], sys.argv[2], Path(sys.argv[3])
+registry = load_registry()
+plan = build_plan(load_spec(survey), registry)
+(job,) = jobs_from_glob(pattern, ["stations"], WellMetadata())
+fingerprint, _ = PlanIdentity.of(plan, registry).fingerprint(job)
+ledger = Ledger(out / "ledger.sqlite")
+batch = ledger.start_batch("key", survey, plan.digest, out, {})
+claim = ledger.claim(
+    "W", batch, fingerprint, {}, out / "W",
+    lambda state: decide(Mode(), state, fingerprint, batch_id=batch.id,
+                         batch_started=batch.started, resume_since=None),
+)
+ref = PipelineRef(survey, (), (), plan.digest)
+task = WellTask("W", claim.run_id, batch.id, ref, {"stations": str(job.inputs["stations"])},
+                {}, str(out), fingerprint.to_json())
+assert run_well(task).status == "done"
+print(claim.run_id, flush=True)
+os.kill(os.getpid(), signal.SIGKILL)  # dies after publishing, before recording the outcome
+"""
+
+
+def test_a_run_published_before_its_batch_died_is_recovered_not_recomputed(
+    tmp_path: Path, survey: Path
+):
+    make_wells(tmp_path / "in", ["W"])
+    out = tmp_path / "out"
+    pattern = str(tmp_path / "in" / "*.csv")
+    dying = subprocess.run(
+        [sys.executable, "-c", DYING_BATCH, str(survey), pattern, str(out)],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+    )
+    assert dying.returncode == -signal.SIGKILL, dying.stderr
+    run_id = int(dying.stdout)
+    assert runs(out / "ledger.sqlite")[0]["status"] == "running"
+
+    ledger = Ledger(out / "ledger.sqlite")
+    (swept,) = ledger.sweep()
+    recovered = ledger.run(run_id)
+    ledger.close()
+    assert swept.status == "running" and recovered is not None
+    assert recovered.status == "done"
+    assert recovered.note == "recovered: its outputs were published before its batch process ended"
+    assert recovered.outputs == assert_complete(out / "W")["outputs"]
+    # started again, the batch does not recompute the well
+    again = cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
+    assert again.exit_code == 0, again.output
+    assert summary(out)["W"] == {**summary(out)["W"], "status": "skipped", "detail": "unchanged"}
+    assert [r["id"] for r in runs(out / "ledger.sqlite")] == [run_id]
+
+
+def test_two_batches_on_one_ledger_run_each_well_once(tmp_path: Path, survey: Path):
+    names = [f"W{i:02d}" for i in range(12)]
+    make_wells(tmp_path / "in", names)
+    out = tmp_path / "out"
+    args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    procs = [
+        spawn(*args, "--workers", "1", "--only-changed", "--quiet", stderr=tmp_path / f"b{i}.log")
+        for i in range(2)
+    ]
+    codes = [p.wait(TIMEOUT_S) for p in procs]
+    assert codes == [0, 0], [(tmp_path / f"b{i}.log").read_text() for i in range(2)]
+
+    rows = runs(out / "ledger.sqlite")
+    assert sorted(r["well"] for r in rows) == names  # exactly one run per well, none failed
+    assert {r["status"] for r in rows} == {"done"}
+    assert len({r["batch"] for r in rows}) == 2  # both batches did work
+    per_batch: dict[int, set[str]] = {}
+    for log in (tmp_path / "b0.log", tmp_path / "b1.log"):
+        events = log_events(log.read_text())
+        batch = next(e["batch"] for e in events if e["event"] == "start")
+        wells = [e for e in events if e["event"] == "well"]
+        assert sorted(e["well"] for e in wells) == names  # each batch accounts for every well
+        per_batch[batch] = {e["well"] for e in wells if e["status"] == "done"}
+        skipped = {e["detail"] for e in wells if e["status"] == "skipped"}
+        assert skipped <= {"unchanged", *(f"done by batch {b} meanwhile" for b in (1, 2))}
+    assert set.union(*per_batch.values()) == set(names)
+    assert set.intersection(*per_batch.values()) == set()
+    for well in names:
+        assert_complete(out / well)

@@ -1,0 +1,64 @@
+"""The Dask executor gives the same outputs, statuses and errors as the local process pool:
+on a scheduler given by address (a LocalCluster on 127.0.0.1 in this process) and on the
+LocalCluster the batch starts itself."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from batch_support import (
+    assert_complete,
+    cli,
+    corrupt,
+    log_events,
+    make_wells,
+    output_hashes,
+    summary,
+)
+
+distributed = pytest.importorskip("distributed")
+
+
+def statuses(out: Path) -> dict[str, tuple[str, str]]:
+    return {w: (r["status"], r["detail"]) for w, r in summary(out).items()}
+
+
+def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path):
+    names = ["D1", "D2", "D3", "D4"]
+    paths = make_wells(tmp_path / "in", names)
+    corrupt(paths[2])
+    pattern = tmp_path / "in" / "*.csv"
+    local = cli("batch", survey, "--inputs", pattern, "--out", tmp_path / "local", "--workers", "2")
+    assert local.exit_code == 1, local.output
+
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=False,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
+        on_cluster = cli(
+            "batch", survey, "--inputs", pattern, "--out", tmp_path / "dask", "--executor", "dask",
+            "--scheduler", cluster.scheduler_address,
+        )  # fmt: skip
+    assert on_cluster.exit_code == 1, on_cluster.output
+    assert log_events(on_cluster.stderr)[0]["executor"] == "dask"
+    good = ["D1", "D2", "D4"]
+    assert output_hashes(tmp_path / "dask", good) == output_hashes(tmp_path / "local", good)
+    assert statuses(tmp_path / "dask") == statuses(tmp_path / "local")
+    for well in good:
+        assert_complete(tmp_path / "dask" / well)
+
+    # no --scheduler: the batch starts a LocalCluster of worker processes on 127.0.0.1
+    own = cli(
+        "batch", survey, "--inputs", tmp_path / "in" / "D[12].csv", "--out", tmp_path / "own",
+        "--executor", "dask", "--workers", "1",
+    )  # fmt: skip
+    assert own.exit_code == 0, own.output
+    assert output_hashes(tmp_path / "own", ["D1", "D2"]) == output_hashes(
+        tmp_path / "local", ["D1", "D2"]
+    )

@@ -1,0 +1,136 @@
+"""Listings of a real run: LAS 2.0 with a complete header read by lasio and by our reader,
+the CSV listing read back (units, north reference, calculation lines, DLS told from the
+dogleg by its unit) and the Parquet listing's metadata."""
+
+from __future__ import annotations
+
+import datetime as dt
+import logging
+from pathlib import Path
+
+import lasio
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.io.csv import read as read_csv
+from pipeline.io.las import read_las, write_las
+from pipeline.runner import RunResult
+from pipeline.survey.calculation import calculation_of
+from pipeline.tables import Stations
+from pipeline.well import WellMetadata, well_of
+
+logging.getLogger("lasio").setLevel(logging.CRITICAL)
+STATION_COLUMNS = ("md", "inc", "azi", "tvd", "north", "east", "dls")
+
+
+@pytest.fixture(scope="module")
+def run(exports_run: RunResult) -> RunResult:
+    return exports_run
+
+
+@pytest.fixture(scope="module")
+def trajectory(run: RunResult) -> pa.Table:
+    return pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
+
+
+def values(table: pa.Table, name: str) -> np.ndarray:
+    return np.asarray(table.column(name).to_numpy(), dtype=np.float64)
+
+
+def test_las_header_is_complete_for_lasio(run: RunResult, trajectory: pa.Table):
+    las = lasio.read(str(run.out_dir / "trajectory.las"), mnemonic_case="preserve")
+    well = {item.mnemonic: item for item in las.well}
+    md = values(trajectory, "md")
+    assert (well["STRT"].value, well["STOP"].value, well["STEP"].value) == (md[0], md[-1], 30.0)
+    assert well["STRT"].unit == "m" and well["NULL"].value == -999.25
+    expected = {
+        "COMP": "Example Operator",
+        "WELL": "J-12",
+        "FLD": "Samotlor",
+        "LOC": "61.25 N 73.4 E (WGS84)",
+        "SRVC": "Gyro Services",
+        "DATE": "2026-11-21",
+        "UWI": "05-123-45678",
+        "API": "05-123-45678",
+        "LATI": 61.25,
+        "LONG": 73.4,
+        "DREF": "RKB",
+        "EREF": 54.3,
+        "TOOL": "gyro (example)",
+    }
+    assert {m: well[m].value for m in expected} == expected
+    assert (well["LATI"].unit, well["LONG"].unit, well["EREF"].unit) == ("deg", "deg", "m")
+    params = {item.mnemonic: (item.value, item.unit) for item in las.params}
+    assert params == {
+        "NREF": ("grid", ""),
+        "DECL": (17.0, "deg"),
+        "GRIDCONV": (1.25, "deg"),
+        "METHOD": ("minimum curvature", ""),
+        "VSAZ": (30.0, "deg"),
+    }
+    numeric = [f for f in trajectory.schema if pa.types.is_floating(f.type)]
+    assert [c.mnemonic for c in las.curves] == [f.name for f in numeric]
+    assert [c.unit for c in las.curves] == [f.metadata[UNIT_KEY].decode() for f in numeric]
+    assert "grid north" in las.curves["azi"].descr
+    for f in numeric:
+        np.testing.assert_array_equal(las[f.name], values(trajectory, f.name), err_msg=f.name)
+
+
+def test_las_round_trips_through_our_reader(run: RunResult, trajectory: pa.Table):
+    table, well = read_las(run.out_dir / "trajectory.las", "stations", None)
+    Stations.validate_table(table)
+    for name in STATION_COLUMNS:
+        np.testing.assert_array_equal(values(table, name), values(trajectory, name), name)
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+    original = well_of(trajectory)
+    assert original is not None
+    # every header field LAS has an item for comes back; it has none for the wellbore
+    assert well == original.model_copy(update={"wellbore": None})
+
+
+def test_las_location_api_and_absent_fields(tmp_path: Path, trajectory: pa.Table):
+    path = tmp_path / "t.las"
+    well = WellMetadata(well="S-1", latitude=-33.5, longitude=200.0, uwi="CA 100/01-02-003")
+    write_las(trajectory.select(["md", "inc", "azi"]).replace_schema_metadata(None), path, well)
+    las = lasio.read(str(path))
+    assert las.well["LOC"].value == "33.5 S 160.0 W (WGS84)"
+    assert (las.well["UWI"].value, las.well["API"].value) == ("CA 100/01-02-003", "")
+    assert las.params["DECL"].value == "" and las.params["METHOD"].value == ""
+    _, back = read_las(path, "stations", None)
+    assert (back.latitude, back.longitude, back.declination) == (-33.5, 200.0, None)
+
+
+def test_csv_listing_reads_back_with_units_and_north_reference(
+    run: RunResult, trajectory: pa.Table
+):
+    path = run.out_dir / "trajectory.csv"
+    head = path.read_text().splitlines()
+    assert "# north_reference=grid" in head
+    assert "# survey_method=minimum_curvature" in head and "# vs_azimuth=30.0 deg" in head
+    header = next(line for line in head if line.startswith("md["))
+    for f in trajectory.schema:
+        assert f"{f.name}[{f.metadata[UNIT_KEY].decode()}]" in header.split(",")
+    table, well = read_csv(path, "stations", None)
+    for name in STATION_COLUMNS:  # dls[deg/30m] is the DLS, dogleg[deg] is not
+        np.testing.assert_array_equal(values(table, name), values(trajectory, name), name)
+        assert (
+            table.schema.field(name).metadata[UNIT_KEY]
+            == trajectory.schema.field(name).metadata[UNIT_KEY]
+        )
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+    assert well == well_of(trajectory)
+    assert well.survey_date == dt.date(2026, 11, 21)
+
+
+def test_parquet_listing_keeps_units_north_reference_and_calculation(trajectory: pa.Table):
+    for f in trajectory.schema:
+        assert f.metadata[UNIT_KEY], f.name
+    assert trajectory.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+    assert trajectory.schema.field("ellipse_azimuth").metadata[NORTH_KEY] == b"grid"
+    calculation = calculation_of(trajectory)
+    assert calculation is not None and calculation.vs_azimuth == 30.0
+    well = well_of(trajectory)
+    assert well is not None and well.grid_convergence == 1.25

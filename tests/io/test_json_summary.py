@@ -1,0 +1,215 @@
+"""The JSON summary: a real run's summary validated against the committed JSON Schema, its
+numbers taken from the run's tables, the confidence of the ellipse recovered, QC counts of
+known tables, several surveys, and the export stage's refusals."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from export_support import SAMPLE, run_yaml
+
+from pipeline.errors import ContractViolation, StageError
+from pipeline.io import json_summary
+from pipeline.registry import InputFile, Provenance
+from pipeline.runner import RunResult
+from pipeline.tables import CheckResults, Trajectory
+from pipeline.well import WellMetadata, well_of
+from tests_support import ROOT
+
+SCHEMA = json.loads((ROOT / "schemas" / "writers" / "json_summary.schema.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def run(exports_run: RunResult) -> RunResult:
+    return exports_run
+
+
+def load(path: Path) -> dict:
+    doc = json.loads(path.read_text())
+    jsonschema.validate(doc, SCHEMA)
+    return doc
+
+
+def test_summary_of_a_run(run: RunResult):
+    doc = load(run.out_dir / "summary.json")
+    trajectory = pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
+    last = {name: trajectory.column(name)[-1].as_py() for name in trajectory.column_names}
+    assert doc["format"] == "gyropipe.survey-summary"
+    assert doc["well"] == json.loads(well_of(trajectory).model_dump_json())
+    assert doc["well"]["declination"] == 17.0 and doc["well"]["grid_convergence"] == 1.25
+    manifest = json.loads((run.out_dir / "run.json").read_text())
+    assert doc["run"]["pipeline_sha256"] == manifest["pipeline"]["sha256"]
+    assert doc["run"]["inputs"] == {"stations": manifest["inputs"]["stations"]["sha256"]}
+    assert doc["north_reference"] == "grid"
+    assert doc["calculation"] == {"method": "minimum_curvature", "vs_azimuth": 30.0}
+    assert doc["units"] == {"length": "m", "angle": "deg", "dls": "deg/30m"}
+    assert doc["station_count"] == trajectory.num_rows == 85
+    (survey,) = doc["surveys"]
+    assert survey["final"] == {name: last[name] for name in survey["final"]}
+    assert (survey["md_start"], survey["md_end"]) == (0.0, last["md"])
+    dls = trajectory.column("dls").to_numpy()
+    assert survey["max_dls"] == {
+        "dls": float(dls.max()),
+        "md": trajectory.column("md")[int(dls.argmax())].as_py(),
+    }
+    ellipse = survey["uncertainty_at_td"]
+    assert ellipse["semi_major"] == last["ellipse_major"] > 1.0
+    assert ellipse["sigma_vertical"] == last["sigma_v"]
+    assert ellipse["semi_major_conf"] == last["ellipse_major_conf"]
+    assert ellipse["confidence"] == pytest.approx(0.9, abs=1e-12)  # the stage's parameter
+    results = pq.read_table(run.out_dir / "dls_check.results.parquet")
+    failed = results.num_rows - sum(results.column("passed").to_pylist())
+    assert 0 < failed < results.num_rows  # the 2°/30 m limit fails some of the build
+    assert doc["qc"] == {
+        "checks": [
+            {
+                "check": "dls_limit",
+                "evaluated": 85,
+                "passed": 85 - failed,
+                "failed": failed,
+                "not_evaluated": 0,
+            }
+        ],
+        "failed": failed,
+        "not_evaluated": 0,
+        "flagged_stations": None,
+        "rejected_stations": None,
+    }
+
+
+def _trajectory(surveys: list[str], md: list[float], dls: list[float]) -> pa.Table:
+    n = len(md)
+    columns = {
+        "survey": surveys,
+        "md": md,
+        "inc": [10.0] * n,
+        "azi": [20.0] * n,
+        "tvd": md,
+        "north": [0.0] * n,
+        "east": [0.0] * n,
+        "dogleg": [0.0] * n,
+        "dls": dls,
+        "vertical_section": [0.0] * n,
+        "closure_distance": [0.0] * n,
+        "closure_direction": [0.0] * n,
+    }
+    return Trajectory.compiled().make_table(columns, north_reference="magnetic")
+
+
+def test_qc_counts_and_several_surveys(tmp_path: Path):
+    trajectory = _trajectory(["a", "a", "b", "b", "b"], [0, 10, 0, 5, 9], [0, 1, 0, 4, 3])
+    qc = pa.table(
+        {
+            "check": ["gravity", "gravity", "gravity", "earth_rate", "earth_rate"],
+            "passed": pa.array([True, False, None, None, True]),
+        }
+    )
+    stations = pa.table({"flags": ["", "inconsistent", "poor_azimuth,frame_mismatch", ""]})
+    rejects = pa.table({"station": [7, 9]})
+    path = tmp_path / "s.json"
+    tables = {"trajectory": trajectory, "qc": qc, "stations": stations, "rejects": rejects}
+    json_summary.write_tables(tables, path, WellMetadata(well="Q"), _provenance())
+    doc = load(path)
+    assert [(s["survey"], s["station_count"], s["md_end"]) for s in doc["surveys"]] == [
+        ("a", 2, 10.0),
+        ("b", 3, 9.0),
+    ]
+    assert doc["surveys"][1]["max_dls"] == {"dls": 4.0, "md": 5.0}
+    assert doc["surveys"][0]["uncertainty_at_td"] is None
+    assert doc["north_reference"] == "magnetic" and doc["calculation"] is None
+    assert doc["qc"] == {
+        "checks": [
+            {"check": "earth_rate", "evaluated": 1, "passed": 1, "failed": 0, "not_evaluated": 1},
+            {"check": "gravity", "evaluated": 2, "passed": 1, "failed": 1, "not_evaluated": 1},
+        ],
+        "failed": 1,
+        "not_evaluated": 2,
+        "flagged_stations": 2,
+        "rejected_stations": 2,
+    }
+    int_flags = {"trajectory": trajectory, "stations": pa.table({"flags": [0, 4, 0, 1, 1]})}
+    json_summary.write_tables(int_flags, path, WellMetadata(well="Q"), _provenance())
+    assert load(path)["qc"]["flagged_stations"] == 3
+
+
+def _provenance() -> Provenance:
+    """A run's provenance as the runner builds it."""
+    return Provenance(
+        pipeline="p",
+        pipeline_version="1",
+        pipeline_file="p.yaml",
+        pipeline_sha256="0" * 64,
+        gyropipe="0.1.0",
+        plugins={"builtin.survey": "0.1.0"},
+        inputs={"stations": InputFile("s.csv", "1" * 64, 10)},
+        started=dt.datetime(2026, 11, 21, 12, 0, tzinfo=dt.UTC),
+        stages=(),
+    )
+
+
+def test_write_summarises_one_trajectory_and_refuses_other_tables(tmp_path: Path):
+    path = tmp_path / "one.json"
+    json_summary.write(_trajectory(["x", "x"], [0.0, 30.0], [0.0, 2.5]), path, WellMetadata())
+    doc = load(path)
+    assert doc["run"] is None and doc["qc"] is None
+    assert doc["surveys"][0]["final"]["md"] == 30.0
+    checks = CheckResults.compiled().make_table(
+        {
+            "check": ["c"],
+            "row": [0],
+            "md": [1.0],
+            "value": [np.nan],
+            "limit": [1.0],
+            "unit": [""],
+            "passed": [True],
+        }
+    )
+    with pytest.raises(ContractViolation, match="column 'inc': present"):
+        json_summary.write(checks, path, WellMetadata())
+    with pytest.raises(ValueError, match="wire the port 'trajectory'"):
+        json_summary.write_tables({"qc": checks}, path, WellMetadata(), _provenance())
+
+
+def test_export_stage_refuses_single_table_writers_and_no_tables(tmp_path: Path):
+    head = """
+        name: bad
+        version: "1.0"
+        inputs:
+          stations: {description: stations}
+        well: {north_reference: "true"}
+        stages:
+          - id: read
+            uses: read_stations
+          - id: trajectory
+            uses: minimum_curvature
+            inputs: {stations: read.stations}
+    """
+    csv_export = (
+        head
+        + """
+          - id: out
+            uses: export
+            inputs: {trajectory: trajectory.trajectory}
+            with: {writer: csv}
+    """
+    )
+    with pytest.raises(StageError, match="writer 'csv' writes one table: use the write stage"):
+        run_yaml(csv_export, {"stations": SAMPLE}, tmp_path / "a")
+    nothing = (
+        head
+        + """
+          - id: out
+            uses: export
+            with: {writer: json_summary}
+    """
+    )
+    with pytest.raises(StageError, match="wire at least one of the ports trajectory, stations"):
+        run_yaml(nothing, {"stations": SAMPLE}, tmp_path / "b")
+    assert list((tmp_path / "a").iterdir()) == []  # a failed run publishes nothing

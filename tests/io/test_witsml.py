@@ -1,0 +1,490 @@
+"""WITSML 1.4.1.1 trajectory export and ingest: exports of a real run validated against the
+WITSML write schema (komle's PyXB bindings of the Energistics XSDs, an independent parser),
+every number round-tripped bit for bit through it and through our reader, the export read
+back by a pipeline, several surveys, tool types, refusals, unit conversions, typed errors
+with their lines, and a mutation fuzz test of the reader."""
+
+from __future__ import annotations
+
+import datetime as dt
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from export_support import SAMPLE, run_yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from komle.bindings.v1411.write import witsml as wml
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.errors import InputFileError
+from pipeline.io import witsml as witsml_plugin
+from pipeline.io.witsml_terms import survey_tool
+from pipeline.registry import ReaderDef, WriterDef
+from pipeline.runner import RunResult
+from pipeline.tables import Stations
+from pipeline.well import WellMetadata, well_of
+from tests_support import mutate_bytes
+
+
+def _registered() -> tuple[ReaderDef, WriterDef]:
+    readers: list[ReaderDef] = []
+    writers: list[WriterDef] = []
+    witsml_plugin.gyropipe_register_readers(register=readers.append)
+    witsml_plugin.gyropipe_register_writers(register=writers.append)
+    return readers[0], writers[0]
+
+
+READER, WRITER = _registered()
+NS = "http://www.witsml.org/schemas/1series"
+STATION_ELEMENTS = {
+    "md": "md",
+    "tvd": "tvd",
+    "inc": "incl",
+    "azi": "azi",
+    "north": "dispNs",
+    "east": "dispEw",
+    "vertical_section": "vertSect",
+    "dls": "dls",
+}
+UOMS = {"md": "m", "tvd": "m", "inc": "dega", "azi": "dega", "north": "m", "east": "m"}
+COVARIANCE = {
+    "cov_nn": "varianceNN",
+    "cov_ne": "varianceNE",
+    "cov_nv": "varianceNVert",
+    "cov_ee": "varianceEE",
+    "cov_ev": "varianceEVert",
+    "cov_vv": "varianceVertVert",
+}
+
+
+@pytest.fixture(scope="module")
+def run(exports_run: RunResult) -> RunResult:
+    return exports_run
+
+
+@pytest.fixture(scope="module")
+def trajectory(run: RunResult) -> pa.Table:
+    return pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
+
+
+def schema_parse(path: Path) -> Any:
+    """The document parsed and validated by the WITSML 1.4.1.1 write-schema bindings."""
+    return wml.CreateFromDocument(path.read_bytes())
+
+
+def column(table: pa.Table, name: str) -> np.ndarray:
+    return np.asarray(table.column(name).to_numpy(), dtype=np.float64)
+
+
+def test_export_is_valid_witsml_and_keeps_every_number(run: RunResult, trajectory: pa.Table):
+    doc = schema_parse(run.out_dir / "trajectory.xml")
+    assert doc.version == "1.4.1.1"
+    (traj,) = doc.trajectory
+    assert (traj.uidWell, traj.uidWellbore) == ("05-123-45678", "J-12_ST1")
+    assert (traj.nameWell, traj.nameWellbore, traj.serviceCompany) == (
+        "J-12",
+        "J-12 ST1",
+        "Gyro Services",
+    )
+    assert traj.aziRef == "grid north"
+    assert (traj.gridCorUsed.value(), traj.gridCorUsed.uom) == (1.25, "dega")
+    assert (traj.magDeclUsed.value(), traj.magDeclUsed.uom) == (17.0, "dega")
+    assert traj.aziVertSect.value() == 30.0
+    assert traj.dispNsVertSectOrig.value() == traj.dispEwVertSectOrig.value() == 0.0
+    assert traj.dTimTrajStart == dt.datetime(2026, 11, 21, tzinfo=dt.UTC)
+    md = column(trajectory, "md")
+    assert (traj.mdMn.value(), traj.mdMx.value()) == (md[0], md[-1])
+    stations = traj.trajectoryStation
+    assert len(stations) == trajectory.num_rows == 85
+    assert [s.typeTrajStation for s in stations[:2]] == ["tie in point", "unknown"]
+    assert {s.typeSurveyTool for s in stations} == {"unknown"}  # 'gyro (example)' names none
+    assert {s.calcAlgorithm for s in stations} == {"minimum curvature"}
+    for name, element in STATION_ELEMENTS.items():
+        written = np.array([getattr(s, element).value() for s in stations])
+        np.testing.assert_array_equal(written, column(trajectory, name), err_msg=name)
+        uoms = {getattr(s, element).uom for s in stations}
+        assert uoms == {UOMS.get(name, "dega/30m" if name == "dls" else "m")}
+    for name, element in COVARIANCE.items():
+        written = np.array([getattr(s.matrixCov, element).value() for s in stations])
+        np.testing.assert_array_equal(written, column(trajectory, name), err_msg=name)
+    assert column(trajectory, "cov_nn")[-1] > 1.0  # real uncertainty, not zeros
+    extensions = {e.name: e.value_ for e in traj.commonData.extensionNameValue}
+    assert float(extensions["gyropipe.well.latitude"].value()) == 61.25
+    assert extensions["gyropipe.well.latitude"].uom == "dega"
+    assert extensions["gyropipe.well.field"].value() == "Samotlor"
+
+
+def test_reader_reads_the_export_back_exactly(run: RunResult, trajectory: pa.Table):
+    path = run.out_dir / "trajectory.xml"
+    assert READER.sniff(path)
+    table, well = READER.read(path, "stations", READER.options())
+    Stations.validate_table(table)
+    for name in ("md", "inc", "azi", "tvd", "north", "east", "dls"):
+        np.testing.assert_array_equal(column(table, name), column(trajectory, name), name)
+        assert (
+            table.schema.field(name).metadata[UNIT_KEY]
+            == trajectory.schema.field(name).metadata[UNIT_KEY]
+        )
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+    assert table.column("source_line").to_pylist()[:2] == [17, 38]  # <trajectoryStation> lines
+    assert well == well_of(trajectory)
+    assert (well.declination, well.grid_convergence, well.wellbore) == (17.0, 1.25, "J-12 ST1")
+
+
+def test_a_pipeline_ingests_the_export(run: RunResult, trajectory: pa.Table, tmp_path: Path):
+    again = run_yaml(
+        """
+        name: ingest
+        version: "1.0"
+        inputs:
+          stations: {description: WITSML trajectory}
+        stages:
+          - id: read
+            uses: read_stations
+          - id: trajectory
+            uses: minimum_curvature
+            inputs: {stations: read.stations}
+            with: {vs_azimuth: 30.0}
+            persist: [trajectory]
+        """,
+        {"stations": run.out_dir / "trajectory.xml"},
+        tmp_path / "out",
+    )
+    back = again.tables[("trajectory", "trajectory")]
+    for name in ("md", "inc", "azi"):
+        np.testing.assert_array_equal(column(back, name), column(trajectory, name))
+    for name in ("tvd", "north", "east", "vertical_section", "dls"):
+        np.testing.assert_allclose(column(back, name), column(trajectory, name), atol=1e-9)
+    assert back.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+    assert again.well.grid_convergence == 1.25 and again.well.latitude == 61.25
+
+
+def _stations(columns: dict[str, list[Any]], north: str | None = "true") -> pa.Table:
+    return Stations.compiled().make_table(columns, north_reference=north)
+
+
+def test_several_surveys_become_several_trajectories(tmp_path: Path):
+    table = _stations(
+        {
+            "survey": ["run 1", "run 1", "run 2", "run 2", "run 2"],
+            "md": [0.0, 100.0, 50.0, 75.5, 120.25],
+            "inc": [0.0, 1.5, 2.0, 2.5, 3.0],
+            "azi": [0.0, 45.0, 90.0, 91.0, 359.5],
+        }
+    )
+    path = tmp_path / "two.xml"
+    WRITER.write(table, path, WellMetadata(well="W-2", tool_type="gyro north-seeking"))
+    doc = schema_parse(path)
+    assert [t.name for t in doc.trajectory] == ["run 1", "run 2"]
+    assert [len(t.trajectoryStation) for t in doc.trajectory] == [2, 3]
+    first, later = doc.trajectory[1].trajectoryStation[:2]
+    assert (first.typeTrajStation, later.typeTrajStation) == ("tie in point", "gyro north seeking")
+    assert later.typeSurveyTool == "gyroscopic north seeking"
+    assert later.calcAlgorithm is None and later.tvd is None  # stations: no method, no tvd
+    back, well = READER.read(path, "stations", READER.options())
+    assert back.column("survey").to_pylist() == table.column("survey").to_pylist()
+    for name in ("md", "inc", "azi"):
+        assert back.column(name).to_pylist() == table.column(name).to_pylist()
+    assert back.column_names == ["survey", "md", "inc", "azi", "source_line"]
+    assert well == WellMetadata(well="W-2", tool_type="gyro north-seeking", north_reference="true")
+    one, _ = READER.read(path, "stations", READER.options(trajectory="run 2"))
+    assert one.column("md").to_pylist() == [50.0, 75.5, 120.25]
+
+
+def test_a_well_without_a_name_is_written_as_unnamed(tmp_path: Path):
+    path = tmp_path / "anon.xml"
+    WRITER.write(
+        _stations({"md": [0.0, 10.0], "inc": [0.0, 1.0], "azi": [0.0, 2.0]}), path, WellMetadata()
+    )
+    (traj,) = schema_parse(path).trajectory
+    assert (traj.nameWell, traj.nameWellbore, traj.name, traj.uidWell) == (
+        "unnamed",
+        "unnamed",
+        "survey",
+        "unnamed",
+    )
+
+
+@pytest.mark.parametrize(
+    ("tool_type", "expected"),
+    [
+        ("Gyro north-seeking (GWD70)", "gyroscopic north seeking"),
+        ("north seeking gyro", "gyroscopic north seeking"),
+        ("gyrocompass", "gyroscopic north seeking"),
+        ("inertial gyro", "gyroscopic inertial"),
+        ("Gyro-MWD", "gyroscopic MWD"),
+        ("MWD", "magnetic MWD"),
+        ("magnetic single shot", "magnetic single-shot"),
+        ("EMS multishot", "magnetic multiple-shot"),
+        ("gyroscopic north seeking", "gyroscopic north seeking"),
+        ("gyro (example)", "unknown"),
+        ("simulated mems-vrg", "unknown"),
+        (None, "unknown"),
+    ],
+)
+def test_survey_tool_types(tool_type: str | None, expected: str):
+    assert survey_tool(tool_type) == expected
+
+
+@pytest.mark.parametrize(
+    ("table", "well", "message"),
+    [
+        (
+            _stations({"survey": [" "], "md": [0.0], "inc": [0.0], "azi": [0.0]}),
+            WellMetadata(well="W", wellbore="  "),
+            "wellbore name",
+        ),
+        (
+            _stations({"md": [0.0], "inc": [0.0], "azi": [0.0]}),
+            WellMetadata(well="x" * 65),
+            "longer than the 64 characters",
+        ),
+        (
+            _stations({"md": [0.0], "inc": [0.0], "azi": [0.0]}, north=None),
+            WellMetadata(well="W"),
+            "no north reference",
+        ),
+        (pa.table({"md": [0.0], "inc": [0.0]}), WellMetadata(well="W"), "need columns ['azi']"),
+        (
+            pa.table(
+                {
+                    "md": pa.array([0.0]),
+                    "inc": pa.array([0.0]),
+                    "azi": pa.array([0.0]),
+                }
+            ).cast(
+                pa.schema(
+                    [
+                        pa.field("md", pa.float64(), metadata={UNIT_KEY: b"ft"}),
+                        pa.field("inc", pa.float64(), metadata={UNIT_KEY: b"deg"}),
+                        pa.field(
+                            "azi", pa.float64(), metadata={UNIT_KEY: b"deg", NORTH_KEY: b"true"}
+                        ),
+                    ]
+                )
+            ),
+            WellMetadata(well="W"),
+            "column 'md' is in 'ft'",
+        ),
+        (
+            _stations({"md": [0.0], "inc": [0.0], "azi": [0.0]}),
+            WellMetadata(well="bell\x07"),
+            "which XML cannot",
+        ),
+    ],
+)
+def test_writer_refuses_what_witsml_cannot_hold(
+    tmp_path: Path, table: pa.Table, well: WellMetadata, message: str
+):
+    path = tmp_path / "x.xml"
+    with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("(", r"\(")):
+        WRITER.write(table, path, well)
+
+
+STATION = (
+    '    <trajectoryStation uid="s{i}"><typeTrajStation>unknown</typeTrajStation>'
+    '<md uom="{md_uom}">{md}</md><incl uom="dega">{inc}</incl><azi uom="dega">{azi}</azi>'
+    "</trajectoryStation>"
+)
+
+
+def document(
+    stations: list[str] | None = None,
+    head: str = "<aziRef>true north</aziRef>",
+    root: str = f'trajectorys xmlns="{NS}" version="1.4.1.1"',
+) -> str:
+    """A small trajectory document: line 7 is ``head``, stations from line 8, one per line."""
+    if stations is None:
+        stations = [
+            STATION.format(i=i, md_uom="m", md=md, inc=inc, azi=azi)
+            for i, (md, inc, azi) in enumerate([(0, 0, 0), (100, 1.5, 45), (200, 3, 46.5)])
+        ]
+    body = "\n".join(stations)
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        f"<{root}>\n"
+        '  <trajectory uidWell="w" uidWellbore="b" uid="t">\n'
+        "    <nameWell>W-1</nameWell>\n"
+        "    <nameWellbore>W-1</nameWellbore>\n"
+        "    <name>t</name>\n"
+        f"    {head}\n"
+        f"{body}\n"
+        "  </trajectory>\n"
+        f"</{root.split()[0]}>\n"
+    )
+
+
+def put(tmp_path: Path, text: str, name: str = "t.xml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_reader_converts_units(tmp_path: Path):
+    stations = [
+        '    <trajectoryStation uid="a"><md uom="ft">0</md><tvd uom="ftUS">0</tvd>'
+        '<incl uom="rad">0</incl><azi uom="dega">0</azi><dls uom="dega/100ft">0</dls>'
+        "</trajectoryStation>",
+        '    <trajectoryStation uid="b"><md uom="ft">100</md><tvd uom="ftUS">100</tvd>'
+        '<incl uom="rad">0.5</incl><azi uom="rad">1</azi><dls uom="dega/100ft">3</dls>'
+        "</trajectoryStation>",
+    ]
+    head = (
+        '<dTimTrajStart>2024-05-01T10:30:00+03:00</dTimTrajStart><magDeclUsed uom="rad">0.1'
+        "</magDeclUsed><aziRef>magnetic north</aziRef>"
+    )
+    table, well = READER.read(put(tmp_path, document(stations, head)), "stations", READER.options())
+    assert table.column("md").to_pylist() == [0.0, 100 * 0.3048]
+    assert table.column("tvd").to_pylist() == [0.0, pytest.approx(100 * 1200 / 3937, abs=1e-12)]
+    assert table.column("inc").to_pylist() == [0.0, pytest.approx(np.degrees(0.5), abs=1e-12)]
+    assert table.column("azi").to_pylist()[1] == pytest.approx(np.degrees(1.0), abs=1e-12)
+    assert table.column("dls").to_pylist()[1] == pytest.approx(3 * 30 / 30.48, abs=1e-12)
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"magnetic"
+    assert well.declination == pytest.approx(np.degrees(0.1), abs=1e-12)
+    assert well.survey_date is not None and well.survey_date.isoformat() == "2024-05-01"
+    assert (well.well, well.wellbore, well.north_reference) == ("W-1", None, "magnetic")
+
+
+def test_unknown_azimuth_reference_takes_the_option(tmp_path: Path):
+    path = put(tmp_path, document(head="<aziRef>unknown</aziRef>"))
+    table, _ = READER.read(path, "stations", READER.options(default_north_reference="grid"))
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
+
+
+def _bad_station(**replace: str) -> list[str]:
+    fields = {"i": "0", "md_uom": "m", "md": "0", "inc": "0", "azi": "0"} | replace
+    return [STATION.format(**fields)]
+
+
+@pytest.mark.parametrize(
+    ("text", "options", "message", "line"),
+    [
+        (document().replace("</md>", "</mdx>", 1), {}, "not well-formed XML: mismatched tag", 8),
+        (document().replace("</trajectorys>", ""), {}, "no element found", 13),  # at EOF
+        (document(root=f'log xmlns="{NS}" version="1.4.1.1"'), {}, "root element is <log>", 2),
+        (
+            document(
+                root='trajectorys xmlns="http://www.witsml.org/schemas/131" version="1.3.1.1"'
+            ),
+            {},
+            "in namespace 'http://www.witsml.org/schemas/131'",
+            2,
+        ),
+        (document(root=f'trajectorys xmlns="{NS}" version="1.3.1.1"'), {}, "version '1.3.1.1'", 2),
+        (document(_bad_station(inc="abc")), {}, "<incl> 'abc' is not a number", 8),
+        (document(_bad_station(md_uom="furlong")), {}, "uom 'furlong' is not supported", 8),
+        (
+            document([STATION.replace(' uom="{md_uom}"', "").format(i=0, md=0, inc=0, azi=0)]),
+            {},
+            "<md> has no uom",
+            8,
+        ),
+        (
+            document(
+                [STATION.replace('<md uom="{md_uom}">{md}</md>', "").format(i=0, inc=0, azi=0)]
+            ),
+            {},
+            "trajectoryStation has no <md>",
+            8,
+        ),
+        (
+            document().replace(
+                "<trajectorys", '<!DOCTYPE trajectorys [<!ENTITY x "y">]>\n<trajectorys'
+            ),
+            {},
+            "DOCTYPE and entity declarations are not accepted",
+            2,
+        ),
+        (document(head="<aziRef>unknown</aziRef>"), {}, "aziRef is absent or 'unknown'", 3),
+        (document(head="<aziRef>north-ish</aziRef>"), {}, "aziRef 'north-ish'", 7),
+        (
+            document(head="<aziRef>grid north</aziRef>"),
+            {"north_reference": "true"},
+            "contradicts the option north_reference",
+            7,
+        ),
+        (document([]), {}, "trajectory has no trajectoryStation", 3),
+        (
+            f'<?xml version="1.0"?>\n<trajectorys xmlns="{NS}" version="1.4.1.1"/>\n',
+            {},
+            "no <trajectory> element",
+            2,
+        ),
+        (
+            document(head="<dTimTrajStart>yesterday</dTimTrajStart><aziRef>true north</aziRef>"),
+            {},
+            "not an ISO 8601",
+            7,
+        ),
+        (
+            document(
+                head="<aziRef>true north</aziRef><commonData><extensionNameValue uid='x'>"
+                "<name>gyropipe.well.latitude</name><value uom='dega'>95</value>"
+                "<dataType>double</dataType></extensionNameValue></commonData>"
+            ),
+            {},
+            "latitude 95.0: Input should be less than or equal to 90",
+            7,
+        ),
+        (document(), {"trajectory": "nope"}, "no trajectory with uid or name 'nope'", 0),
+    ],
+)
+def test_malformed_input_is_a_typed_error_with_its_line(
+    tmp_path: Path, text: str, options: dict[str, Any], message: str, line: int
+):
+    path = put(tmp_path, text)
+    with pytest.raises(InputFileError) as caught:
+        READER.read(path, "stations", READER.options(**options))
+    assert message in str(caught.value)
+    assert caught.value.path == str(path)
+    assert caught.value.line == line
+
+
+def test_sniff_recognises_witsml_only(tmp_path: Path):
+    assert READER.sniff(put(tmp_path, document()))
+    assert not READER.sniff(SAMPLE)
+    assert not READER.sniff(put(tmp_path, "<trajectorys/>", "other.xml"))
+    assert not READER.sniff(tmp_path / "missing.xml")
+
+
+VALID = document().encode()
+
+
+@settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["flip", "truncate", "insert", "delete", "delete_line"]),
+            st.integers(0, len(VALID)),
+            st.integers(0, 255),
+        ),
+        min_size=1,
+        max_size=4,
+    )
+)
+def test_mutated_files_raise_typed_errors_or_read_what_expat_reads(
+    tmp_path: Path, mutations: list[tuple[str, int, int]]
+):
+    path = tmp_path / "fuzz.xml"
+    data = mutate_bytes(VALID, mutations)
+    path.write_bytes(data)
+    error: InputFileError | None = None
+    try:
+        table, _ = READER.read(path, "stations", READER.options(default_north_reference="true"))
+    except InputFileError as exc:
+        error = exc
+    if error is not None:
+        assert error.path == str(path)
+        return
+    root = ET.fromstring(data)  # an independent parser accepts what we read
+    assert table.num_rows == len(root.findall(f".//{{{NS}}}trajectoryStation")) >= 1

@@ -1,0 +1,197 @@
+"""Helpers of the report tests: runs through the `gyropipe` command, the HTML inspected in
+headless Chromium (Debian's, driven by Playwright), the PDF rasterised by pdftoppm."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests_support import ROOT, gyropipe
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+PDF_DPI = 50
+
+
+def run(*args: str) -> subprocess.CompletedProcess[str]:
+    """``gyropipe ARGS`` from the repository root (relative paths as a user types them)."""
+    return subprocess.run(
+        [*gyropipe(), *args], capture_output=True, text=True, cwd=ROOT, timeout=300
+    )
+
+
+def run_ok(*args: str) -> None:
+    result = run(*args)
+    assert result.returncode == 0, result.stderr
+
+
+@dataclass
+class PageReport:
+    """What Chromium saw when it loaded a report."""
+
+    console_errors: list[str]
+    requests: list[str]
+    images: list[dict[str, Any]]
+    tables: dict[str, list[list[str]]]
+    headers: dict[str, list[str]]
+    units: dict[str, list[str]]
+    figures: list[str]
+    text: str
+
+
+INSPECT = """async () => {
+  const images = Array.from(document.images);
+  const decoded = await Promise.all(images.map(i => i.decode().then(() => true, () => false)));
+  const tables = {}, headers = {}, units = {};
+  document.querySelectorAll('table').forEach((t, k) => {
+    const key = t.classList[0] + (tables[t.classList[0]] ? '-' + k : '');
+    tables[key] = Array.from(t.tBodies[0].rows).map(r => Array.from(r.cells).map(c => c.textContent));
+    headers[key] = Array.from(t.tHead.rows[0].cells).map(c => c.firstChild.textContent);
+    units[key] = Array.from(t.tHead.rows[0].cells).map(
+      c => c.querySelector('.unit') ? c.querySelector('.unit').textContent.trim() : '');
+  });
+  return {
+    images: images.map((i, k) => ({
+      figure: i.closest('figure') ? i.closest('figure').id : null,
+      width: i.naturalWidth, height: i.naturalHeight, decoded: decoded[k],
+      shown: i.getBoundingClientRect().width, src: i.getAttribute('src').slice(0, 22),
+    })),
+    tables, headers, units,
+    figures: Array.from(document.querySelectorAll('figure')).map(f => f.id),
+    text: document.body.innerText,
+  };
+}"""
+
+
+@pytest.fixture(scope="session")
+def browser() -> Iterator[Any]:
+    """A headless Chromium context with a fresh profile (skipped without Chromium)."""
+    if not Path(CHROMIUM).exists():
+        pytest.skip(f"Chromium not found at {CHROMIUM}: apt-get install chromium")
+    from playwright.sync_api import sync_playwright
+
+    with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(
+            profile,
+            executable_path=CHROMIUM,
+            headless=True,
+            args=CHROMIUM_ARGS,
+            viewport={"width": 1100, "height": 900},
+        )
+        yield context
+        context.close()
+
+
+def inspect(browser: Any, html: Path) -> PageReport:
+    """Load ``html`` from disk and report console errors, requests, images and tables."""
+    page = browser.new_page()
+    errors: list[str] = []
+    requests: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("request", lambda r: requests.append(r.url))
+    page.goto(html.resolve().as_uri(), wait_until="load")
+    found = page.evaluate(INSPECT)
+    page.close()
+    return PageReport(
+        errors,
+        [u for u in requests if not u.startswith("data:")],
+        found["images"],
+        found["tables"],
+        found["headers"],
+        found["units"],
+        found["figures"],
+        found["text"],
+    )
+
+
+def assert_self_contained(report: PageReport, html: Path) -> None:
+    """No console error, nothing fetched but the page, every image decoded and shown."""
+    assert report.console_errors == []
+    assert report.requests == [html.resolve().as_uri()]
+    source = html.read_text(encoding="utf-8")
+    assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", source)
+    assert "<script" not in source and "url(" not in source
+    assert report.images, "no images"
+    for image in report.images:
+        assert image["decoded"], image
+        assert image["width"] > 100 and image["height"] > 100, image
+        assert image["shown"] > 100, image
+
+
+@dataclass
+class PdfPage:
+    pixels: np.ndarray
+    """RGB, uint8, rendered at PDF_DPI"""
+    words: list[tuple[str, float, float, float, float]]
+    """(word, x0, y0, x1, y1) in points from the top-left corner"""
+
+    def region(self, x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
+        s = PDF_DPI / 72.0
+        return self.pixels[int(y0 * s) : int(y1 * s), int(x0 * s) : int(x1 * s)]
+
+
+def pdf_pages(pdf: Path, tmp: Path) -> list[PdfPage]:
+    """Every page of ``pdf`` rasterised with pdftoppm, with its words from pdftotext."""
+    for tool in ("pdftoppm", "pdftotext"):
+        if shutil.which(tool) is None:
+            pytest.skip(f"{tool} not found: apt-get install poppler-utils")
+    prefix = tmp / "page"
+    subprocess.run(["pdftoppm", "-r", str(PDF_DPI), "-png", str(pdf), str(prefix)], check=True)
+    bbox = subprocess.run(
+        ["pdftotext", "-bbox", str(pdf), "-"], check=True, capture_output=True, text=True
+    ).stdout
+    word = re.compile(
+        r'<word xMin="([\d.]+)" yMin="([\d.]+)" xMax="([\d.]+)" yMax="([\d.]+)">([^<]*)</word>'
+    )
+    pages_words = [
+        [(m[4], float(m[0]), float(m[1]), float(m[2]), float(m[3])) for m in word.findall(page)]
+        for page in bbox.split("<page ")[1:]
+    ]
+    images = sorted(tmp.glob("page-*.png"), key=lambda p: int(p.stem.rsplit("-", 1)[1]))
+    assert len(images) == len(pages_words)
+    return [
+        PdfPage(np.asarray(Image.open(p).convert("RGB")), w)
+        for p, w in zip(images, pages_words, strict=True)
+    ]
+
+
+def ink(pixels: np.ndarray) -> float:
+    """Share of pixels that are not (near) white."""
+    return float((pixels.min(axis=2) < 235).mean())
+
+
+def colour(pixels: np.ndarray) -> float:
+    """Share of clearly coloured pixels (plot lines and markers; text is grey or black)."""
+    spread = pixels.max(axis=2).astype(int) - pixels.min(axis=2).astype(int)
+    return float((spread > 60).mean())
+
+
+def figure_regions(pages: list[PdfPage]) -> dict[int, np.ndarray]:
+    """Figure number → the page area just above its caption (where the figure is drawn)."""
+    found = {}
+    for page in pages:
+        for k, (text, x0, y0, _, _) in enumerate(page.words[:-1]):
+            number = page.words[k + 1][0]
+            if text == "Figure" and re.fullmatch(r"\d+\.", number) and x0 < 60:
+                found[int(number[:-1])] = page.region(60, max(y0 - 150, 40), 535, y0 - 6)
+    return found
