@@ -332,11 +332,12 @@ def _remove_stale_staging(out_dir: Path) -> None:
     """Remove staging directories of runs whose process no longer exists."""
     for entry in out_dir.glob(STAGING_PREFIX + "*"):
         pid_text = entry.name[len(STAGING_PREFIX) :].split("-", 1)[0]
-        if pid_text.isdigit() and not _alive(int(pid_text)):
+        if pid_text.isdigit() and not process_alive(int(pid_text)):
             shutil.rmtree(entry, ignore_errors=True)
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether a process ``pid`` exists on this host (one of another user counts)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

@@ -25,7 +25,7 @@ from pipeline.errors import GyropipeError
 from pipeline.graph import Plan, build_plan
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
-from pipeline.runner import MANIFEST, RunResult, run_plan
+from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
 from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
 
@@ -106,21 +106,11 @@ def _exit_with(pid: int) -> None:
     except ProcessLookupError:
         os._exit(EXIT_ORPHAN)
     except (AttributeError, OSError):  # no pidfd: poll
-        while _running(pid):
+        while process_alive(pid):
             time.sleep(ORPHAN_POLL_S)
         os._exit(EXIT_ORPHAN)
     select.select([fd], [], [])
     os._exit(EXIT_ORPHAN)
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def run_well(task: WellTask) -> WellOutcome:
