@@ -336,7 +336,7 @@ def _inclination_noise_variance(
     d_inc: FloatArray,
     d_inc_rate: FloatArray,
     sin_i: FloatArray,
-    cells: int = 2_000_000,
+    cells: int = 500_000,
 ) -> FloatArray:
     """Variance at each station of the azimuth error the inclination's sample noise makes.
 
