@@ -5,8 +5,11 @@ from __future__ import annotations
 import shutil
 import sys
 from pathlib import Path
+from types import ModuleType
 
 from hypothesis import strategies as st
+
+from pipeline.registry import ReaderDef, WriterDef
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -19,6 +22,17 @@ def gyropipe() -> list[str]:
     found = shutil.which("gyropipe")
     assert found, "the gyropipe console script is not installed"
     return [found]
+
+
+def plugin_io(plugin: ModuleType) -> tuple[ReaderDef, WriterDef]:
+    """The one reader and the one writer an I/O plugin module registers."""
+    readers: list[ReaderDef] = []
+    writers: list[WriterDef] = []
+    plugin.gyropipe_register_readers(register=readers.append)
+    plugin.gyropipe_register_writers(register=writers.append)
+    (reader,) = readers
+    (writer,) = writers
+    return reader, writer
 
 
 def mutate_bytes(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:

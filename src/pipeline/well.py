@@ -22,6 +22,14 @@ def _yaml_true(value: Any) -> Any:
 
 
 NorthReference = Annotated[Literal["true", "grid", "magnetic"], BeforeValidator(_yaml_true)]
+DefaultNorthReference = Annotated[
+    NorthReference | None,
+    Field(
+        description="north reference used only when neither the file nor north_reference "
+        "names one (the engine passes the well metadata's)"
+    ),
+]
+"""A reader option: the fallback north reference the engine fills from the well metadata."""
 NORTH_WORDS: dict[str, NorthReference] = {
     "true": "true",
     "tn": "true",

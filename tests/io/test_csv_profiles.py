@@ -20,13 +20,12 @@ from pipeline.io import csv as csv_plugin
 from pipeline.io.conventions import to_canonical
 from pipeline.io.csv_options import CsvOptions, load_profile
 from pipeline.io.mnemonics import CURVES
-from pipeline.registry import ReaderDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import conversion_factor
 from pipeline.well import WellMetadata
-from tests_support import line_ops, mutate_lines
+from tests_support import line_ops, mutate_lines, plugin_io
 
 ROOT = Path(__file__).resolve().parents[2]
 PROFILES = ROOT / "examples" / "profiles"
@@ -35,13 +34,7 @@ ACME_REPORT = PROFILES / "wellpath-report.yaml"
 G = 9.80665
 
 
-def _reader() -> ReaderDef:
-    found: list[ReaderDef] = []
-    csv_plugin.gyropipe_register_readers(register=found.append)
-    return found[0]
-
-
-READER = _reader()
+READER = plugin_io(csv_plugin)[0]
 
 
 def put(tmp_path: Path, content: str | bytes, name: str) -> Path:

@@ -18,24 +18,14 @@ from pipeline.contracts import UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.io import csv_rows
-from pipeline.registry import ReaderDef, WriterDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.stages.files import choose_reader
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
-from tests_support import line_ops, mutate_lines
+from tests_support import line_ops, mutate_lines, plugin_io
 
-
-def _plugin() -> tuple[ReaderDef, WriterDef]:
-    readers: list[ReaderDef] = []
-    writers: list[WriterDef] = []
-    csv_plugin.gyropipe_register_readers(register=readers.append)
-    csv_plugin.gyropipe_register_writers(register=writers.append)
-    return readers[0], writers[0]
-
-
-READER, WRITER = _plugin()
+READER, WRITER = plugin_io(csv_plugin)
 G = 9.80665
 
 

@@ -18,28 +18,11 @@ from hypothesis import strategies as st
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
-from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata
-from tests_support import mutate_bytes
+from tests_support import mutate_bytes, plugin_io
 
-
-def _reader() -> ReaderDef:
-    found: list[ReaderDef] = []
-    csv_plugin.gyropipe_register_readers(register=found.append)
-    (reader,) = found
-    return reader
-
-
-def _writer() -> WriterDef:
-    found: list[WriterDef] = []
-    csv_plugin.gyropipe_register_writers(register=found.append)
-    (writer,) = found
-    return writer
-
-
-READER = _reader()
-WRITER = _writer()
+READER, WRITER = plugin_io(csv_plugin)
 
 
 def put(tmp_path: Path, content: str | bytes, name: str = "survey.csv") -> Path:

@@ -11,8 +11,6 @@ from pathlib import Path
 import lasio
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
-import pytest
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.csv import read as read_csv
@@ -26,22 +24,12 @@ logging.getLogger("lasio").setLevel(logging.CRITICAL)
 STATION_COLUMNS = ("md", "inc", "azi", "tvd", "north", "east", "dls")
 
 
-@pytest.fixture(scope="module")
-def run(exports_run: RunResult) -> RunResult:
-    return exports_run
-
-
-@pytest.fixture(scope="module")
-def trajectory(run: RunResult) -> pa.Table:
-    return pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
-
-
 def values(table: pa.Table, name: str) -> np.ndarray:
     return np.asarray(table.column(name).to_numpy(), dtype=np.float64)
 
 
-def test_las_header_is_complete_for_lasio(run: RunResult, trajectory: pa.Table):
-    las = lasio.read(str(run.out_dir / "trajectory.las"), mnemonic_case="preserve")
+def test_las_header_is_complete_for_lasio(exports_run: RunResult, trajectory: pa.Table):
+    las = lasio.read(str(exports_run.out_dir / "trajectory.las"), mnemonic_case="preserve")
     well = {item.mnemonic: item for item in las.well}
     md = values(trajectory, "md")
     assert (well["STRT"].value, well["STOP"].value, well["STEP"].value) == (md[0], md[-1], 30.0)
@@ -79,8 +67,8 @@ def test_las_header_is_complete_for_lasio(run: RunResult, trajectory: pa.Table):
         np.testing.assert_array_equal(las[f.name], values(trajectory, f.name), err_msg=f.name)
 
 
-def test_las_round_trips_through_our_reader(run: RunResult, trajectory: pa.Table):
-    table, well = read_las(run.out_dir / "trajectory.las", "stations", None)
+def test_las_round_trips_through_our_reader(exports_run: RunResult, trajectory: pa.Table):
+    table, well = read_las(exports_run.out_dir / "trajectory.las", "stations", None)
     Stations.validate_table(table)
     for name in STATION_COLUMNS:
         np.testing.assert_array_equal(values(table, name), values(trajectory, name), name)
@@ -104,9 +92,9 @@ def test_las_location_api_and_absent_fields(tmp_path: Path, trajectory: pa.Table
 
 
 def test_csv_listing_reads_back_with_units_and_north_reference(
-    run: RunResult, trajectory: pa.Table
+    exports_run: RunResult, trajectory: pa.Table
 ):
-    path = run.out_dir / "trajectory.csv"
+    path = exports_run.out_dir / "trajectory.csv"
     head = path.read_text().splitlines()
     assert "# north_reference=grid" in head
     assert "# survey_method=minimum_curvature" in head and "# vs_azimuth=30.0 deg" in head

@@ -22,18 +22,13 @@ from pipeline.runner import RunResult
 from pipeline.well import WellMetadata, attach
 
 
-@pytest.fixture(scope="module")
-def run(exports_run: RunResult) -> RunResult:
-    return exports_run
-
-
-def test_processed_streams_read_back_exactly(run: RunResult):
-    tables, well = read_tables(run.out_dir / "processed.mcap")
+def test_processed_streams_read_back_exactly(exports_run: RunResult):
+    tables, well = read_tables(exports_run.out_dir / "processed.mcap")
     assert sorted(tables) == ["qc", "stations", "trajectory"]
     expected = {
-        "trajectory": pq.read_table(run.out_dir / "uncertainty.trajectory.parquet"),
-        "qc": pq.read_table(run.out_dir / "dls_check.results.parquet"),
-        "stations": attach(run.tables[("grid", "stations")], run.well),
+        "trajectory": pq.read_table(exports_run.out_dir / "uncertainty.trajectory.parquet"),
+        "qc": pq.read_table(exports_run.out_dir / "dls_check.results.parquet"),
+        "stations": attach(exports_run.tables[("grid", "stations")], exports_run.well),
     }
     for role, table in expected.items():
         assert tables[role].equals(table, check_metadata=True), role
@@ -42,11 +37,11 @@ def test_processed_streams_read_back_exactly(run: RunResult):
         UNIT_KEY: b"deg",
         NORTH_KEY: b"grid",
     }
-    assert well == run.well
+    assert well == exports_run.well
 
 
-def test_file_as_the_mcap_library_sees_it(run: RunResult):
-    with (run.out_dir / "processed.mcap").open("rb") as fh:
+def test_file_as_the_mcap_library_sees_it(exports_run: RunResult):
+    with (exports_run.out_dir / "processed.mcap").open("rb") as fh:
         reader = make_reader(fh)
         summary = reader.get_summary()
         assert summary is not None
@@ -62,7 +57,7 @@ def test_file_as_the_mcap_library_sees_it(run: RunResult):
             "gyropipe.trajectory",
         }
         records = {m.name: m.metadata for m in reader.iter_metadata()}
-    manifest = json.loads((run.out_dir / "run.json").read_text())
+    manifest = json.loads((exports_run.out_dir / "run.json").read_text())
     assert records["gyropipe.run"]["pipeline_sha256"] == manifest["pipeline"]["sha256"]
     assert records["gyropipe.well"]["well"] == "J-12"
     assert records["gyropipe.well"]["grid_convergence"] == "1.25"

@@ -26,25 +26,20 @@ from tests_support import ROOT
 SCHEMA = json.loads((ROOT / "schemas" / "writers" / "json_summary.schema.json").read_text())
 
 
-@pytest.fixture(scope="module")
-def run(exports_run: RunResult) -> RunResult:
-    return exports_run
-
-
 def load(path: Path) -> dict:
     doc = json.loads(path.read_text())
     jsonschema.validate(doc, SCHEMA)
     return doc
 
 
-def test_summary_of_a_run(run: RunResult):
-    doc = load(run.out_dir / "summary.json")
-    trajectory = pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
+def test_summary_of_a_run(exports_run: RunResult):
+    doc = load(exports_run.out_dir / "summary.json")
+    trajectory = pq.read_table(exports_run.out_dir / "uncertainty.trajectory.parquet")
     last = {name: trajectory.column(name)[-1].as_py() for name in trajectory.column_names}
     assert doc["format"] == "gyropipe.survey-summary"
     assert doc["well"] == json.loads(well_of(trajectory).model_dump_json())
     assert doc["well"]["declination"] == 17.0 and doc["well"]["grid_convergence"] == 1.25
-    manifest = json.loads((run.out_dir / "run.json").read_text())
+    manifest = json.loads((exports_run.out_dir / "run.json").read_text())
     assert doc["run"]["pipeline_sha256"] == manifest["pipeline"]["sha256"]
     assert doc["run"]["inputs"] == {"stations": manifest["inputs"]["stations"]["sha256"]}
     assert doc["north_reference"] == "grid"
@@ -64,7 +59,7 @@ def test_summary_of_a_run(run: RunResult):
     assert ellipse["sigma_vertical"] == last["sigma_v"]
     assert ellipse["semi_major_conf"] == last["ellipse_major_conf"]
     assert ellipse["confidence"] == pytest.approx(0.9, abs=1e-12)  # the stage's parameter
-    results = pq.read_table(run.out_dir / "dls_check.results.parquet")
+    results = pq.read_table(exports_run.out_dir / "dls_check.results.parquet")
     failed = results.num_rows - sum(results.column("passed").to_pylist())
     assert 0 < failed < results.num_rows  # the 2°/30 m limit fails some of the build
     assert doc["qc"] == {

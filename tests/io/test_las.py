@@ -22,33 +22,17 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import las as las_plugin
-from pipeline.registry import ReaderDef, WriterDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata
-from tests_support import mutate_bytes
+from tests_support import mutate_bytes, plugin_io
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
 
-def _reader() -> ReaderDef:
-    found: list[ReaderDef] = []
-    las_plugin.gyropipe_register_readers(register=found.append)
-    (reader,) = found
-    return reader
-
-
-def _writer() -> WriterDef:
-    found: list[WriterDef] = []
-    las_plugin.gyropipe_register_writers(register=found.append)
-    (writer,) = found
-    return writer
-
-
-READER = _reader()
-WRITER = _writer()
+READER, WRITER = plugin_io(las_plugin)
 
 STATION_CURVES = " DEPT.M : depth\n INCL.DEG : inclination\n AZIM.DEG : azimuth (grid north)\n"
 STATION_DATA = "0 0 0\n100 1.5 45\n200 3 46.5\n"

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
 import pytest
 from export_support import SAMPLE, run_yaml
 from hypothesis import HealthCheck, given, settings
@@ -24,22 +23,12 @@ from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError
 from pipeline.io import witsml as witsml_plugin
 from pipeline.io.witsml_terms import survey_tool
-from pipeline.registry import ReaderDef, WriterDef
 from pipeline.runner import RunResult
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata, well_of
-from tests_support import mutate_bytes
+from tests_support import mutate_bytes, plugin_io
 
-
-def _registered() -> tuple[ReaderDef, WriterDef]:
-    readers: list[ReaderDef] = []
-    writers: list[WriterDef] = []
-    witsml_plugin.gyropipe_register_readers(register=readers.append)
-    witsml_plugin.gyropipe_register_writers(register=writers.append)
-    return readers[0], writers[0]
-
-
-READER, WRITER = _registered()
+READER, WRITER = plugin_io(witsml_plugin)
 NS = "http://www.witsml.org/schemas/1series"
 STATION_ELEMENTS = {
     "md": "md",
@@ -62,16 +51,6 @@ COVARIANCE = {
 }
 
 
-@pytest.fixture(scope="module")
-def run(exports_run: RunResult) -> RunResult:
-    return exports_run
-
-
-@pytest.fixture(scope="module")
-def trajectory(run: RunResult) -> pa.Table:
-    return pq.read_table(run.out_dir / "uncertainty.trajectory.parquet")
-
-
 def schema_parse(path: Path) -> Any:
     """The document parsed and validated by the WITSML 1.4.1.1 write-schema bindings."""
     return wml.CreateFromDocument(path.read_bytes())
@@ -81,8 +60,10 @@ def column(table: pa.Table, name: str) -> np.ndarray:
     return np.asarray(table.column(name).to_numpy(), dtype=np.float64)
 
 
-def test_export_is_valid_witsml_and_keeps_every_number(run: RunResult, trajectory: pa.Table):
-    doc = schema_parse(run.out_dir / "trajectory.xml")
+def test_export_is_valid_witsml_and_keeps_every_number(
+    exports_run: RunResult, trajectory: pa.Table
+):
+    doc = schema_parse(exports_run.out_dir / "trajectory.xml")
     assert doc.version == "1.4.1.1"
     (traj,) = doc.trajectory
     assert (traj.uidWell, traj.uidWellbore) == ("05-123-45678", "J-12_ST1")
@@ -119,8 +100,8 @@ def test_export_is_valid_witsml_and_keeps_every_number(run: RunResult, trajector
     assert extensions["gyropipe.well.field"].value() == "Samotlor"
 
 
-def test_reader_reads_the_export_back_exactly(run: RunResult, trajectory: pa.Table):
-    path = run.out_dir / "trajectory.xml"
+def test_reader_reads_the_export_back_exactly(exports_run: RunResult, trajectory: pa.Table):
+    path = exports_run.out_dir / "trajectory.xml"
     assert READER.sniff(path)
     table, well = READER.read(path, "stations", READER.options())
     Stations.validate_table(table)
@@ -136,7 +117,9 @@ def test_reader_reads_the_export_back_exactly(run: RunResult, trajectory: pa.Tab
     assert (well.declination, well.grid_convergence, well.wellbore) == (17.0, 1.25, "J-12 ST1")
 
 
-def test_a_pipeline_ingests_the_export(run: RunResult, trajectory: pa.Table, tmp_path: Path):
+def test_a_pipeline_ingests_the_export(
+    exports_run: RunResult, trajectory: pa.Table, tmp_path: Path
+):
     again = run_yaml(
         """
         name: ingest
@@ -152,7 +135,7 @@ def test_a_pipeline_ingests_the_export(run: RunResult, trajectory: pa.Table, tmp
             with: {vs_azimuth: 30.0}
             persist: [trajectory]
         """,
-        {"stations": run.out_dir / "trajectory.xml"},
+        {"stations": exports_run.out_dir / "trajectory.xml"},
         tmp_path / "out",
     )
     back = again.tables[("trajectory", "trajectory")]

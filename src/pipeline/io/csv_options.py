@@ -31,7 +31,7 @@ from pipeline.errors import InputFileError, SpecError, UnitError
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
 from pipeline.units import conversion_factor
-from pipeline.well import NorthReference
+from pipeline.well import DefaultNorthReference, NorthReference
 from pipeline.yamlsource import load_mapping, validate_located
 
 SHORTHANDS = {"md_unit": ("md",), "angle_unit": ("inc", "azi")}
@@ -147,11 +147,7 @@ class CsvOptions(CsvSettings):
         description="YAML profile of options merged under these (relative to the current "
         "directory)",
     )
-    default_north_reference: NorthReference | None = Field(
-        None,
-        description="north reference used only when neither the file nor north_reference "
-        "declares one (the engine passes the well metadata's)",
-    )
+    default_north_reference: DefaultNorthReference = None
 
     def resolved(self) -> CsvOptions:
         """These options with the profile, if any, merged under them."""

@@ -88,11 +88,12 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.io.sniffing import file_head
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
-from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
+from pipeline.well import NORTH_WORDS, DefaultNorthReference, NorthReference, WellMetadata
 
 Floats = NDArray[np.float64]
 Lines = NDArray[np.int64]
@@ -181,11 +182,7 @@ class LasOptions(BaseModel):
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths (true, grid or magnetic)"
     )
-    default_north_reference: NorthReference | None = Field(
-        None,
-        description="north reference used only when neither the file nor north_reference "
-        "names one (the engine passes the well metadata's)",
-    )
+    default_north_reference: DefaultNorthReference = None
     conventions: Conventions = Field(
         default_factory=Conventions,
         description="vendor axis and sign conventions of the sensor curves (samples)",
@@ -346,10 +343,8 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
 
 def sniff(path: Path) -> bool:
     """True if the first line that is neither blank nor a ``#`` comment opens ``~V``."""
-    try:
-        with path.open("rb") as fh:
-            head = fh.read(SNIFF_BYTES)
-    except OSError:
+    head = file_head(path, SNIFF_BYTES)
+    if head is None:
         return False
     for line in head.removeprefix(BOM).splitlines():
         text = line.strip()

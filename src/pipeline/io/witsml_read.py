@@ -21,8 +21,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from pipeline.contracts import SOURCE_LINE
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv import LAYOUTS
+from pipeline.io.sniffing import file_head
 from pipeline.io.witsml_terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
 
 SNIFF_BYTES = 4096
 STATION_MEASURES = (
@@ -66,11 +67,7 @@ class WitsmlOptions(BaseModel):
         description="north reference of the azimuths when aziRef is absent or 'unknown' "
         "(must agree with it otherwise)",
     )
-    default_north_reference: NorthReference | None = Field(
-        None,
-        description="used only when neither the file nor north_reference names one (the "
-        "engine passes the well metadata's)",
-    )
+    default_north_reference: DefaultNorthReference = None
 
 
 @dataclass
@@ -99,12 +96,8 @@ class _Refused(Exception):
 
 def sniff(path: Path) -> bool:
     """True if the file's first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
-    try:
-        with path.open("rb") as fh:
-            head = fh.read(SNIFF_BYTES)
-    except OSError:
-        return False
-    return bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
+    head = file_head(path, SNIFF_BYTES)
+    return head is not None and bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
 
 
 def parse(path: Path) -> Node:

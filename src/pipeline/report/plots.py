@@ -350,27 +350,15 @@ def drift_correction(
     read and as corrected against MD (in-run filled, out-run hollow)."""
     ax_t, ax_md = axes_grid(fig, 1, 2, wspace=0.8)
     for mask, label, face in ((~outbound, "in-run", None), (outbound, "out-run", "none")):
-        ax_t.plot(
-            time_h[mask],
-            correction[mask],
-            marker="o",
-            markersize=2.6,
-            linestyle="none",
-            color=BLUE,
-            markerfacecolor=face,
-            label=label,
-        )
+        dots: dict[str, Any] = {
+            "marker": "o",
+            "markersize": 2.6,
+            "linestyle": "none",
+            "markerfacecolor": face,
+        }
+        ax_t.plot(time_h[mask], correction[mask], color=BLUE, label=label, **dots)
         ax_md.plot(md[mask], azi_raw[mask], marker=".", markersize=2, linestyle="none", color=GREY)
-        ax_md.plot(
-            md[mask],
-            azi[mask],
-            marker="o",
-            markersize=2.6,
-            linestyle="none",
-            color=TEAL,
-            markerfacecolor=face,
-            label=f"corrected, {label}",
-        )
+        ax_md.plot(md[mask], azi[mask], color=TEAL, label=f"corrected, {label}", **dots)
     ax_md.plot([], [], marker=".", linestyle="none", color=GREY, label="as read")
     ax_t.set_xlabel("Time (h)")
     ax_t.set_ylabel("Drift correction (°)")

@@ -11,11 +11,12 @@ from collections.abc import Callable, Mapping
 from typing import Annotated
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from pipeline.contracts import TableContract, column
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, registered
+from pipeline.stages.files import WriteParams
 from pipeline.tables import AnyTable, Stations, Trajectory
 from pipeline.well import attach
 
@@ -40,15 +41,11 @@ PORTS: dict[str, type[TableContract]] = {
 per-position readings, continuous series, QC results and the stations rejected."""
 
 
-class ExportParams(BaseModel):
+class ExportParams(WriteParams):
     """Parameters of the export stage."""
 
-    model_config = ConfigDict(extra="forbid")
     writer: Annotated[str, registered("writer")] = Field(
         description="writer of several tables (mcap, json_summary, …)"
-    )
-    filename: str | None = Field(
-        None, description="output file name; default '<stage id>.<writer extension>'"
     )
 
 
@@ -61,7 +58,7 @@ def export(
         raise ValueError(f"writer {params.writer!r} writes one table: use the write stage for it")
     if not inputs:
         raise ValueError(f"wire at least one of the ports {', '.join(PORTS)}")
-    path = ctx.output_path(params.filename or f"{ctx.stage_id}.{writer.extension}")
+    path = params.output_path(ctx, writer.extension)
     tables = {port: attach(table, ctx.well) for port, table in inputs.items()}
     writer.write_tables(tables, path, ctx.well, ctx.provenance)
     return {}

@@ -55,6 +55,10 @@ class WriteParams(BaseModel):
         None, description="output file name; default '<stage id>.<writer extension>'"
     )
 
+    def output_path(self, ctx: StageContext, extension: str) -> Path:
+        """Where the stage writes: ``filename``, or ``<stage id>.<extension>``."""
+        return ctx.output_path(self.filename or f"{ctx.stage_id}.{extension}")
+
 
 def choose_reader(readers: Iterable[ReaderDef], kind: str, name: str, path: Path) -> ReaderDef:
     """Among ``readers``, the one called ``name``, or with ``auto`` the first reader of
@@ -131,7 +135,7 @@ def write(
 ) -> dict[str, pa.Table]:
     """Write the input table through the chosen writer (published when the run succeeds)."""
     writer = ctx.writer(params.writer)
-    path = ctx.output_path(params.filename or f"{ctx.stage_id}.{writer.extension}")
+    path = params.output_path(ctx, writer.extension)
     writer.write(attach(inputs["table"], ctx.well), path, ctx.well)
     return {}
 
