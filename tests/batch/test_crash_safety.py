@@ -28,7 +28,12 @@ from batch_support import (
     summary,
 )
 
+from pipeline.batch.executors import LocalExecutor
 from pipeline.batch.ledger import Ledger
+from pipeline.batch.worker import PipelineRef, WellOutcome, WellTask
+from pipeline.graph import build_plan
+from pipeline.plugins import load_registry
+from pipeline.spec import load_spec
 
 TIMEOUT_S = 90
 
@@ -254,3 +259,27 @@ def test_two_batches_on_one_ledger_run_each_well_once(tmp_path: Path, survey: Pa
     assert set.intersection(*per_batch.values()) == set()
     for well in names:
         assert_complete(out / well)
+
+
+def test_a_pool_broken_between_waits_still_takes_new_wells(tmp_path: Path, survey: Path):
+    """A worker dies while the batch is busy elsewhere: the next submit meets a broken pool
+    (the CI failure of 2026-11-21) and must go to a fresh pool, not end the batch."""
+    make_wells(tmp_path / "in", ["W"])
+    registry = load_registry()
+    plan = build_plan(load_spec(survey), registry)
+    ref = PipelineRef(str(survey), (), (), plan.digest)
+    executor = LocalExecutor(2, ref)
+    try:
+        pool = executor._pool
+        wait_for(lambda: len(pool._processes or {}) == 2)
+        os.kill(next(iter(pool._processes or {})), signal.SIGKILL)
+        wait_for(lambda: bool(pool._broken))
+        inputs = {"stations": str(tmp_path / "in" / "W.csv")}
+        task = WellTask("W", 1, 1, ref, inputs, {}, str(tmp_path / "out"), "{}")
+        executor.submit(task)
+        outcomes: list[WellOutcome] = []
+        wait_for(lambda: bool(outcomes.extend(executor.wait(0.05)) or outcomes))
+    finally:
+        executor.close(cancel=True)
+    assert [(o.well_id, o.status) for o in outcomes] == [("W", "done")], outcomes
+    assert_complete(tmp_path / "out" / "W")

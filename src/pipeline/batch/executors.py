@@ -68,7 +68,12 @@ class LocalExecutor:
         )
 
     def submit(self, task: WellTask) -> None:
-        self._futures[self._pool.submit(run_well, task)] = (task, self._pool)
+        try:
+            future = self._pool.submit(run_well, task)
+        except cf.process.BrokenProcessPool:  # a worker died since the last wait
+            self._replace_broken(self._pool)
+            future = self._pool.submit(run_well, task)
+        self._futures[future] = (task, self._pool)
 
     def wait(self, timeout: float) -> list[WellOutcome]:
         done, _ = cf.wait(self._futures, timeout=timeout, return_when=cf.FIRST_COMPLETED)
@@ -85,10 +90,13 @@ class LocalExecutor:
                     self._retry_alone(task, pool)
         return outcomes
 
-    def _retry_alone(self, task: WellTask, broken: cf.ProcessPoolExecutor) -> None:
+    def _replace_broken(self, broken: cf.ProcessPoolExecutor) -> None:
         if broken is self._pool:  # replace the broken pool once, not per failed future
             broken.shutdown(wait=False)
             self._pool = self._new_pool(self._workers)
+
+    def _retry_alone(self, task: WellTask, broken: cf.ProcessPoolExecutor) -> None:
+        self._replace_broken(broken)
         if self._solo is None:
             self._solo = self._new_pool(1)
         self._futures[self._solo.submit(run_well, task)] = (task, self._solo)
