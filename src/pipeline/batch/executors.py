@@ -25,6 +25,10 @@ from typing import Any, Protocol
 from .worker import PipelineRef, WellOutcome, WellTask, run_well, worker_init
 
 PRELOAD = ["pipeline.batch.preload"]
+WORKER_ENVIRON = {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1}
+"""The environment of the local Dask cluster's workers: Dask's default without its
+``MALLOC_TRIM_THRESHOLD_``, which turns off glibc's adaptive mmap threshold and made a
+continuous survey's processing 44 % slower (one hour at 100 Hz: 13.7 s → 19.6 s)."""
 
 
 class Executor(Protocol):
@@ -127,14 +131,16 @@ class DaskExecutor:
             ) from None
         self._cluster: Any = None
         if address is None:
-            self._cluster = self._dask.LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+            config = importlib.import_module("dask").config
+            with config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+                self._cluster = self._dask.LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    host="127.0.0.1",
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                )
             self._client: Any = self._dask.Client(self._cluster)
         else:
             self._client = self._dask.Client(address)
