@@ -8,9 +8,8 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pytest
+from continuous_support import LAT, SITE, azimuth_error, compassed, position_error
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, compass
 from pipeline.continuous import (
     FLAG_NEAR_VERTICAL,
     FLAG_NO_CLOSURE,
@@ -20,16 +19,8 @@ from pipeline.continuous import (
 )
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
-from pipeline.survey.mincurve import minimum_curvature
 
-LAT = 61.25
-SITE = {
-    "latitude": LAT,
-    "longitude": 73.4,
-    "elevation": 120.0,
-    "date": "2026-11-21",
-    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-}
+MAGNETIC = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
 SECTIONS = [
     {"kind": "vertical", "length": 20},
     {"kind": "build", "dls": 6.0, "inc": 30, "azi": 60},
@@ -51,7 +42,7 @@ def make_spec(tool: dict[str, Any], survey: dict[str, Any] | None = None) -> Sim
         {
             "name": "t",
             "seed": 4,
-            "site": SITE,
+            "site": {**SITE, "magnetic": MAGNETIC},
             "well": {"sections": SECTIONS},
             "tool": tool,
             "survey": survey or SURVEY,
@@ -65,8 +56,7 @@ def run(bias: float = 0.0) -> tuple[Simulation, pa.Table]:
     if bias:
         overrides["gyro"] = {"bias": (bias, 0.0, 0.0)}
     sim = simulate(make_spec({"preset": "ideal", "overrides": overrides}))
-    readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
-    stops, _ = compass(readings, LAT, CompassOptions(noise_floor=0.01))
+    _, stops, _ = compassed(sim.samples)
     return sim, stops
 
 
@@ -80,40 +70,24 @@ def integrate(bias: float = 0.0, closure: bool = True) -> ContinuousResult:
     )
 
 
-def azimuth_error(result: ContinuousResult, sim: Simulation) -> np.ndarray:
-    series = result.series
-    truth_t = sim.truth.column("time").to_numpy()
-    truth_azi = sim.truth.column("azi").to_numpy()
-    t = series.column("time").to_numpy()
-    rows = np.searchsorted(truth_t, t)
-    assert np.allclose(truth_t[rows], t)
-    err = series.column("azi").to_numpy() - truth_azi[rows]
-    ok = series.column("flags").to_numpy() & FLAG_NEAR_VERTICAL == 0
-    wrapped: np.ndarray = ((err + 180) % 360 - 180)[ok]
-    return wrapped
+def usable_azimuth_error(result: ContinuousResult, sim: Simulation) -> np.ndarray:
+    """Integrated minus true azimuth (deg) where the hole is not near vertical."""
+    err, flags = azimuth_error(result, sim)
+    usable: np.ndarray = err[flags & FLAG_NEAR_VERTICAL == 0]
+    return usable
 
 
 def test_noise_free_run_recovers_azimuth_and_trajectory() -> None:
     sim, _ = run()
     result = integrate()
-    err = azimuth_error(result, sim)
+    err = usable_azimuth_error(result, sim)
     assert err.size > 1000
     assert np.abs(err).max() < 0.01
     assert abs(result.misclosure) < 0.01
     stations = result.stations
     md = stations.column("md").to_numpy()
     assert np.all(stations.column("flags").to_numpy() == 0)
-    truth = make_spec({"preset": "ideal"}).path().evaluate(md)
-    mc = minimum_curvature(
-        md,
-        np.radians(stations.column("inc").to_numpy()),
-        np.radians(stations.column("azi").to_numpy()),
-        tie_north=truth.position[0, 0],
-        tie_east=truth.position[0, 1],
-        tie_tvd=truth.position[0, 2],
-    )
-    position = np.stack([mc.north, mc.east, mc.tvd], axis=-1)
-    assert np.abs(position - truth.position).max() < 0.01
+    assert np.abs(position_error(result, make_spec({"preset": "ideal"}))).max() < 0.01
     assert md[0] == pytest.approx(130.0) and np.diff(md).max() <= 5.0 + 1e-9
 
 
@@ -122,7 +96,7 @@ def test_constant_gyro_bias_drifts_linearly_and_closure_removes_it() -> None:
     sim, _ = run(bias)
     raw = integrate(bias, closure=False)
     clean = integrate(bias, closure=True)
-    err_raw = azimuth_error(raw, sim)
+    err_raw = usable_azimuth_error(raw, sim)
     t = raw.series.column("time").to_numpy()
     t = t - t[0]
     slope, offset = np.polyfit(t, err_raw, 1)
@@ -131,7 +105,7 @@ def test_constant_gyro_bias_drifts_linearly_and_closure_removes_it() -> None:
     assert np.abs(err_raw).max() > 0.05
     assert np.abs(err_raw - linear).max() < 0.1 * np.abs(err_raw).max()
     assert raw.misclosure == pytest.approx(err_raw[-1], abs=0.01)
-    assert np.abs(azimuth_error(clean, sim)).max() < 0.1 * np.abs(err_raw).max()
+    assert np.abs(usable_azimuth_error(clean, sim)).max() < 0.1 * np.abs(err_raw).max()
 
 
 def test_stage_registers_and_runs() -> None:
@@ -158,13 +132,12 @@ def test_run_starting_near_vertical_is_tied_to_the_end_stop() -> None:
     """The start stop in the vertical section has no azimuth: integrate back from the end."""
     survey = {**SURVEY, "start_md": 5.0}
     sim = simulate(make_spec({"preset": "ideal", "overrides": {"gyro_axes": "x"}}, survey))
-    readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
-    stops, _ = compass(readings, LAT, CompassOptions(noise_floor=0.01))
+    _, stops, _ = compassed(sim.samples)
     result = integrate_continuous(
         sim.samples, stops, LAT, ContinuousOptions(spacing=5.0, odometer_window=0.07)
     )
     assert np.isnan(result.misclosure)
     flags = result.series.column("flags").to_numpy()
     assert np.all(flags & FLAG_NO_CLOSURE)
-    err = azimuth_error(result, sim)
+    err = usable_azimuth_error(result, sim)
     assert np.abs(err).max() < 0.01

@@ -20,10 +20,10 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pytest
+from continuous_support import LAT, SITE, compassed
 from numpy.typing import NDArray
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, compass
+from pipeline.compass.solve import CompassOptions
 from pipeline.continuous import (
     FLAG_NEAR_VERTICAL,
     ContinuousOptions,
@@ -37,12 +37,10 @@ from pipeline.uncertainty import horizontal_scale
 from pipeline.well import WellMetadata
 
 FloatArray = NDArray[np.float64]
-LAT = 61.25
 N_RUNS = 60
 Z95 = 1.959963984540054
 OPTIONS = ContinuousOptions(spacing=10.0)
 ODOMETER_SCALE = 500e-6  # 1σ depth scale of the wireline odometer (ISCWSA DSFS order)
-SITE = {"latitude": LAT, "longitude": 73.4, "elevation": 120.0, "date": "2026-11-21"}
 SECTIONS = [
     {"kind": "vertical", "length": 20},
     {"kind": "build", "dls": 6.0, "inc": 30, "azi": 60},
@@ -176,8 +174,7 @@ def runs(true_stops: bool) -> tuple[Run, ...]:
             }
         )
         sim = simulate(spec)
-        readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
-        stops, rejects = compass(readings, LAT, CompassOptions())
+        _, stops, rejects = compassed(sim.samples, CompassOptions())
         assert rejects.num_rows == 0 and stops.num_rows == 2
         if true_stops:
             stops = _true_stops(stops, sim.stations)

@@ -16,23 +16,20 @@ from functools import cache
 import numpy as np
 import pyarrow as pa
 import pytest
+from continuous_support import LAT, SITE, compassed
 from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, compass
 from pipeline.continuous import ContinuousError, ContinuousOptions, integrate_continuous
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.survey.mincurve import minimum_curvature
 
 FloatArray = NDArray[np.float64]
-LAT = 61.25
 N_RUNS = 40
 RATE = 20.0  # Hz
 ODOMETER_NOISE = 0.05  # m per sample
 OPTIONS = ContinuousOptions(spacing=10.0)  # stations ≥ 6 s apart: independent fit errors
-SITE = {"latitude": LAT, "longitude": 73.4, "elevation": 120.0, "date": "2026-11-21"}
 SECTIONS = [
     {"kind": "vertical", "length": 20},
     {"kind": "build", "dls": 6.0, "inc": 30, "azi": 60},
@@ -95,8 +92,7 @@ def _simulate(seed: int) -> tuple[Simulation, pa.Table, pa.Table]:
         }
     )
     sim = simulate(spec)
-    readings = position_readings(sim.samples, ReadingOptions(trim_start=0.5, min_dwell=1.0))
-    stops, _ = compass(readings, LAT, CompassOptions(noise_floor=0.01))
+    readings, stops, _ = compassed(sim.samples)
     return sim, readings, stops
 
 
