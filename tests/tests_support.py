@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
+import pyarrow as pa
 from hypothesis import strategies as st
 
 from pipeline.registry import ReaderDef, WriterDef
@@ -22,6 +23,14 @@ def gyropipe() -> list[str]:
     found = shutil.which("gyropipe")
     assert found, "the gyropipe console script is not installed"
     return [found]
+
+
+def read_stations(path: Path, reader: str) -> pa.Table:
+    """A stations file read with the engine's reader choice, as the CLI gives it to the
+    simulator (``StationsWell.load``)."""
+    from pipeline.plugins import load_registry
+
+    return load_registry().read(path, "stations", reader=reader)[0]
 
 
 def plugin_io(plugin: ModuleType) -> tuple[ReaderDef, WriterDef]:

@@ -12,7 +12,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
@@ -21,7 +21,7 @@ import yaml
 
 from pipeline import __version__
 from pipeline.atomic import atomic_path, atomic_write_bytes
-from pipeline.errors import GyropipeError, SpecError
+from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
 from pipeline.graph import Plan, build_plan
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
@@ -30,6 +30,8 @@ from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
 
 if TYPE_CHECKING:
+    import pyarrow as pa
+
     from pipeline.batch.ledger import Ledger
 
 EXIT_FAILED = 1
@@ -351,6 +353,12 @@ def plugins(disabled: tuple[str, ...]) -> None:
         kind = "built-in" if info.builtin else "third-party"
         status = f"FAILED: {info.error}" if info.error else ", ".join(info.provides) or "nothing"
         click.echo(f"{info.name} {info.version} ({kind}): {status}")
+    if registry.readers:
+        click.echo("readers (reader: auto takes the surest claim; third-party wins a tie):")
+    for name, (reader, owner) in sorted(registry.readers.items()):
+        kinds = ", ".join(reader.kinds)
+        claims = reader.what_it_claims()
+        click.echo(f"  {name} ({registry.plugin_label(owner)}) reads {kinds}: {claims}")
     for problem in registry.problems:
         click.echo(f"problem: {problem}")
 
@@ -403,7 +411,7 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
         )
         sys.exit(EXIT_CONFIG)
     with _plan_errors(plan_file):
-        spec = load_simulation(plan_file, seed=seed)
+        spec = load_simulation(plan_file, seed=seed, read_stations=_stations_reader(registry))
         started = time.perf_counter()
         tables = simulation_tables(spec)
     wall = time.perf_counter() - started
@@ -442,7 +450,7 @@ def budget(plan_file: str, out_file: str | None) -> None:
     from pipeline.stages.simulation import well_of_simulation
 
     with _plan_errors(plan_file):
-        spec = load_simulation(plan_file)
+        spec = load_simulation(plan_file, read_stations=_stations_reader())
         table = error_budget(spec)
     click.echo(f"{spec.name}: tool {spec.tool.preset}, latitude {spec.site.latitude}°")
     click.echo(f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'acc':>7}")
@@ -519,7 +527,7 @@ def convert(
             options=parsed,
             well=well,
         )
-    except (click.BadParameter, ValueError) as exc:
+    except (click.BadParameter, ValueError, ReaderOptionsError) as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
     except GyropipeError as exc:
@@ -539,6 +547,16 @@ def _options(items: tuple[str, ...]) -> dict[str, object]:
         except yaml.YAMLError as exc:
             raise click.BadParameter(f"--option {item!r}: value is not valid YAML: {exc}") from None
     return values
+
+
+def _stations_reader(registry: Registry | None = None) -> Callable[[Path, str], pa.Table]:
+    """Reads a simulation plan's stations file with the engine's reader choice (the plugins
+    are loaded only if the plan has one)."""
+
+    def read(path: Path, reader: str) -> pa.Table:
+        return (registry or _registry(())).read(path, "stations", reader=reader)[0]
+
+    return read
 
 
 @contextlib.contextmanager

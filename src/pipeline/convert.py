@@ -6,13 +6,11 @@ from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
-from pydantic import ValidationError
 
 from pipeline.atomic import atomic_path
 from pipeline.contracts import SOURCE_LINE
-from pipeline.errors import GyropipeError, InputFileError
-from pipeline.registry import ReaderDef, Registry, WriterDef
-from pipeline.stages.files import choose_reader
+from pipeline.errors import GyropipeError, InputFileError, ReaderChoiceError, ReaderOptionsError
+from pipeline.registry import Registry, WriterDef
 from pipeline.well import WellMetadata, attach
 
 KINDS = ("stations", "samples", "readings")
@@ -35,20 +33,18 @@ def read_any(
     returning the table of the first kind that reads and the file's well metadata."""
     if not path.is_file():
         raise InputFileError(path, "no such file")
-    readers = [r for r, _ in registry.readers.values()]
     kinds = KINDS if kind == "auto" else (kind,)
     problems: list[str] = []
     for candidate in kinds:
         try:
-            chosen: ReaderDef = choose_reader(readers, candidate, reader, path)
-        except GyropipeError as exc:
+            chosen = registry.reader_for(path, candidate, reader)
+        except ReaderChoiceError as exc:
             problems.append(f"as {candidate}: {exc}")
             continue
         try:
-            parsed = chosen.options.model_validate(options)
-            return chosen.read(path, candidate, parsed)
-        except ValidationError as exc:
-            raise ValueError(f"options of reader {chosen.name!r}: {exc}") from None
+            return registry.read(path, candidate, reader=chosen.name, options=options)
+        except ReaderOptionsError:
+            raise
         except GyropipeError as exc:
             if kind != "auto":
                 raise

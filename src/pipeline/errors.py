@@ -147,6 +147,27 @@ class StageError(GyropipeError):
         )
 
 
+class ReaderChoiceError(GyropipeError):
+    """No installed reader, or more than one equally sure, can read a file as the kind of
+    table asked for."""
+
+
+class ReaderOptionsError(GyropipeError):
+    """Options given to a reader are not valid for it."""
+
+
+class ReaderError(GyropipeError):
+    """A reader failed on a file: names the reader and the plugin that provides it."""
+
+    def __init__(self, reader: str, plugin: str, cause: BaseException) -> None:
+        self.reader = reader
+        self.plugin = plugin
+        self.cause = cause
+        super().__init__(
+            f"reader {reader!r} (plugin {plugin}) failed: {type(cause).__name__}: {cause}"
+        )
+
+
 class PluginError(GyropipeError):
     """A plugin failed to load or registered something invalid."""
 

@@ -33,8 +33,10 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
 def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
     """Register file readers: call ``register(ReaderDef(...))`` for each.
 
-    Readers are chosen by name (``reader: las``) or, with ``reader: auto``, by the first
-    whose ``sniff(path)`` accepts the file.
+    Readers are chosen by name (``reader: las``) or, with ``reader: auto``, by how sure each
+    reader of the kind wanted is that the file is its own: ``sniff(path)`` returns a
+    :class:`~pipeline.registry.Claim` (content recognised beats a fitting name; at equal
+    strength a third-party reader beats a built-in one; a tie left is an error).
     """
 
 

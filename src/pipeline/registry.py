@@ -6,6 +6,7 @@ Every registration is tagged with the plugin that made it, so any later error ca
 from __future__ import annotations
 
 import datetime as dt
+import enum
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -13,11 +14,17 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import pyarrow as pa
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationInfo
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, ValidationInfo
 
 from pipeline.contracts import TableContract
-from pipeline.errors import PluginError
-from pipeline.well import WellMetadata
+from pipeline.errors import (
+    GyropipeError,
+    PluginError,
+    ReaderChoiceError,
+    ReaderError,
+    ReaderOptionsError,
+)
+from pipeline.well import WELL_DEFAULT, WellMetadata
 
 NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
 PIPELINE_INPUT = "x-pipeline-input"
@@ -115,7 +122,17 @@ class StageContext(Protocol):
         """Where a writer stage writes ``filename``; published atomically when the run ends."""
         ...
 
-    def readers(self) -> list[ReaderDef]: ...
+    def read(
+        self,
+        path: Path,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[pa.Table, WellMetadata]:
+        """Read ``path`` as a table of ``kind`` with the reader the engine chooses
+        (:meth:`Registry.read`); options marked as well defaults come from the run's well."""
+        ...
 
     def writer(self, name: str) -> WriterDef: ...
 
@@ -143,17 +160,53 @@ class StageDef:
     optional_inputs: frozenset[str] = frozenset()
 
 
+class Claim(enum.IntEnum):
+    """How sure a reader is that a file is its own (xarray's ``guess_can_open``, graded).
+
+    With ``reader: auto`` the engine asks every reader of the wanted kind: the strongest claim
+    wins; at equal strength a third-party plugin's reader beats a built-in one; a tie that is
+    left is an error naming the candidates. A reader's ``sniff`` may also return a bool:
+    ``True`` counts as :attr:`CONTENT`, ``False`` as :attr:`NO`.
+    """
+
+    NO = 0
+    """not this reader's file"""
+    NAME = 1
+    """only the file name fits (an extension such as ``.csv``)"""
+    CONTENT = 2
+    """the content was recognised (magic bytes, a header this reader parses)"""
+
+
 @dataclass(frozen=True)
 class ReaderDef:
     """A file reader. ``read(path, kind, options)`` returns a table of ``kinds[kind]`` and the
-    well metadata found in the file; ``sniff(path)`` says whether it can open the file."""
+    well metadata found in the file; ``options`` is an instance of the ``options`` model.
+    ``sniff(path)`` says how sure the reader is that the file is its own (:class:`Claim`);
+    it must not raise. ``recognises`` says in a few words what it claims (for
+    ``gyropipe plugins``; default: the first line of ``sniff``'s docstring)."""
 
     name: str
     description: str
     kinds: Mapping[str, type[TableContract]]
     read: Callable[[Path, str, Any], tuple[pa.Table, WellMetadata]]
-    sniff: Callable[[Path], bool]
+    sniff: Callable[[Path], Claim | bool]
     options: type[BaseModel] = NoParams
+    recognises: str = ""
+
+    def claim(self, path: Path) -> Claim:
+        """:meth:`sniff` as a :class:`Claim`; a sniff that raises claims nothing."""
+        try:
+            said = self.sniff(path)
+        except Exception:  # a reader's bug must not stop the others being asked
+            return Claim.NO
+        if isinstance(said, Claim):
+            return said
+        return Claim.CONTENT if said is True else Claim.NO
+
+    def what_it_claims(self) -> str:
+        """What the reader recognises, in words."""
+        doc = (self.sniff.__doc__ or "").strip().split("\n\n")[0]
+        return self.recognises or " ".join(doc.split()) or "(not described)"
 
 
 @dataclass(frozen=True)
@@ -241,6 +294,97 @@ class Registry:
         info = self.plugins.get(plugin)
         return f"{plugin} {info.version}" if info else plugin
 
+    def reader_for(self, path: Path, kind: str, name: str = "auto") -> ReaderDef:
+        """The reader called ``name`` (it must read ``kind``) or, with ``auto``, the reader of
+        ``kind`` surest that ``path`` is its own: the strongest :class:`Claim` wins, then a
+        third-party reader over a built-in one; a tie left is a :class:`ReaderChoiceError`."""
+        if name != "auto":
+            found = self.readers.get(name)
+            if found is None:
+                raise ReaderChoiceError(
+                    f"no reader named {name!r} (installed: {', '.join(sorted(self.readers))})"
+                )
+            if kind not in found[0].kinds:
+                raise ReaderChoiceError(
+                    f"reader {name!r} cannot read {kind} (it reads: {', '.join(found[0].kinds)})"
+                )
+            return found[0]
+        able = [(r, owner) for r, owner in self.readers.values() if kind in r.kinds]
+        claims = [(r.claim(path), not self._builtin(owner), r) for r, owner in able]
+        best = max((claim for claim, _, _ in claims), default=Claim.NO)
+        if best is Claim.NO:
+            raise ReaderChoiceError(
+                f"no installed reader recognises {str(path)!r} as {kind} (readers of {kind}: "
+                f"{', '.join(r.name for r, _ in able) or 'none'}); name one with `reader:`"
+            )
+        top = [(third, r) for claim, third, r in claims if claim == best]
+        if any(third for third, _ in top):
+            top = [(third, r) for third, r in top if third]
+        if len(top) > 1:
+            named = ", ".join(
+                f"{r.name} ({self.plugin_label(self.readers[r.name][1])})" for _, r in top
+            )
+            how = "by its content" if best is Claim.CONTENT else "by its name"
+            raise ReaderChoiceError(
+                f"several readers claim {str(path)!r} as {kind} {how}: {named}; "
+                f"choose one with `reader:` (e.g. reader: {top[0][1].name})"
+            )
+        return top[0][1]
+
+    def read(
+        self,
+        path: Path,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+        well: WellMetadata | None = None,
+    ) -> tuple[pa.Table, WellMetadata]:
+        """Read ``path`` as a table of ``kind`` (canonical units, contract of the kind) and
+        return it with the well metadata found in the file.
+
+        The reader is :meth:`reader_for`'s choice; ``options`` are validated by its options
+        model, options marked as well defaults filled from ``well``. A third-party reader's
+        failure (and any reader's unexpected exception) is a :class:`ReaderError` naming the
+        reader and its plugin; built-in readers' located errors pass unchanged.
+        """
+        chosen = self.reader_for(path, kind, reader)
+        parsed = reader_options(chosen, options or {}, well)
+        owner = self.readers[chosen.name][1]
+        try:
+            return chosen.read(path, kind, parsed)
+        except GyropipeError as exc:
+            if self._builtin(owner):
+                raise
+            raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
+        except Exception as exc:  # a reader's bug is reported against the reader
+            raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
+
+    def check_reader_options(self, kind: str, reader: str, options: Mapping[str, Any]) -> None:
+        """Raise the :class:`ValidationError` of ``options`` for the reader called ``reader``
+        or, with ``auto``, unless some reader of ``kind`` takes them, for the reader they fit
+        best (fewest errors). Used when a pipeline is validated, before any file is seen."""
+        if reader != "auto":
+            found = self.readers.get(reader)
+            candidates = [found[0]] if found is not None else []
+        else:
+            if not options:
+                return
+            candidates = [r for r, _ in self.readers.values() if kind in r.kinds]
+        errors: list[ValidationError] = []
+        for candidate in candidates:
+            try:
+                candidate.options.model_validate(dict(options))
+                return
+            except ValidationError as exc:
+                errors.append(exc)
+        if errors:
+            raise min(errors, key=lambda e: e.error_count())
+
+    def _builtin(self, plugin: str) -> bool:
+        info = self.plugins.get(plugin)
+        return info is None or info.builtin
+
     def provides(self, plugin: str) -> list[str]:
         """``kind:name`` of everything ``plugin`` registered."""
         return [
@@ -249,6 +393,27 @@ class Registry:
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
+
+
+def reader_options(
+    reader: ReaderDef, options: Mapping[str, Any], well: WellMetadata | None
+) -> BaseModel:
+    """``options`` validated by ``reader``'s options model; an option marked as a well default
+    (:data:`~pipeline.well.WELL_DEFAULT`) and not given takes the well metadata's value."""
+    values = dict(options)
+    for name, info in reader.options.model_fields.items():
+        extra = info.json_schema_extra
+        source = extra.get(WELL_DEFAULT) if isinstance(extra, dict) else None
+        default = getattr(well, str(source), None) if source and well is not None else None
+        if default is not None and name not in values:
+            values[name] = default
+    try:
+        return reader.options.model_validate(values)
+    except ValidationError as exc:
+        problems = "; ".join(
+            f"{'.'.join(str(p) for p in e['loc']) or 'options'}: {e['msg']}" for e in exc.errors()
+        )
+        raise ReaderOptionsError(f"options of reader {reader.name!r}: {problems}") from None
 
 
 def _validate(item: object, expected: type) -> tuple[str, str]:

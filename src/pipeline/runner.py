@@ -31,7 +31,6 @@ from pipeline.registry import (
     CheckDef,
     InputFile,
     Provenance,
-    ReaderDef,
     Registry,
     StageSetup,
     WriterDef,
@@ -92,8 +91,15 @@ class _Context:
         self.staged.append(path)
         return path
 
-    def readers(self) -> list[ReaderDef]:
-        return [r for r, _ in self.registry.readers.values()]
+    def read(
+        self,
+        path: Path,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[pa.Table, WellMetadata]:
+        return self.registry.read(path, kind, reader=reader, options=options, well=self.well)
 
     def writer(self, name: str) -> WriterDef:
         return _lookup(self.registry.writers, name, "writer")

@@ -22,14 +22,18 @@ def _yaml_true(value: Any) -> Any:
 
 
 NorthReference = Annotated[Literal["true", "grid", "magnetic"], BeforeValidator(_yaml_true)]
+WELL_DEFAULT = "x-well-default"
+"""JSON-schema marker of a reader option whose default is a well metadata field: when the
+option is not given, the engine fills it from the run's well metadata (named by the marker)."""
 DefaultNorthReference = Annotated[
     NorthReference | None,
     Field(
         description="north reference used only when neither the file nor north_reference "
-        "names one (the engine passes the well metadata's)"
+        "names one (default: the well metadata's north_reference)",
+        json_schema_extra={WELL_DEFAULT: "north_reference"},
     ),
 ]
-"""A reader option: the fallback north reference the engine fills from the well metadata."""
+"""A reader option: the fallback north reference, by default the well metadata's."""
 NORTH_WORDS: dict[str, NorthReference] = {
     "true": "true",
     "tn": "true",

@@ -21,6 +21,7 @@ from pipeline.compass.solve import (
 )
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
+from tests_support import read_stations
 
 INCS = [5, 10, 20, 30, 45, 60, 75, 85, 95, 105, 120]
 AZIS = list(range(0, 360, 30))
@@ -75,6 +76,7 @@ def run(
             },
         }
     )
+    spec.well.load(read_stations)
     sim = simulate(spec)
     readings = position_readings(sim.samples, TRIM)
     stations, rejects = compass(readings, latitude, options or CompassOptions())

@@ -18,9 +18,9 @@ from pipeline.contracts import UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.io import csv_rows
+from pipeline.plugins import load_registry
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
-from pipeline.stages.files import choose_reader
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
 from tests_support import line_ops, mutate_lines, plugin_io
@@ -371,7 +371,7 @@ def test_crlf_and_bom(tmp_path: Path) -> None:
 def test_sniff_and_choice(tmp_path: Path) -> None:
     path = put(tmp_path, "Log\n" + HEADER.replace(",", ";") + "\n0;1;2;3;4;5;6\n", "log.dat")
     assert READER.sniff(path)
-    assert choose_reader([READER], "samples", "auto", path) is READER
+    assert load_registry().reader_for(path, "samples").name == "csv"
     assert not READER.sniff(put(tmp_path, "a;b;c\n1;2;3\n", "other.dat"))
 
 

@@ -145,7 +145,11 @@ def test_plugins_command_lists_acme(site: Path):
     out = run_cli(site, "plugins")
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
-    assert "acme 0.1.0 (third-party): reader:acme, writer:acme" in lines
+    assert "acme 0.1.0 (third-party): reader:acme, reader:acme_survey, writer:acme" in lines
+    assert (
+        "  acme_survey (acme 0.1.0) reads stations: By content: the first line is the title "
+        "``ACME SURVEY REPORT``." in lines
+    )
     assert not [line for line in lines if line.startswith("problem:") and "acme" in line]
 
 
@@ -244,3 +248,51 @@ def test_malformed_file_is_reported_by_file_and_line(
     assert f"{agl}:{line}" in result.stderr
     assert message in result.stderr
     assert not (tmp_path / "out" / "read.samples.parquet").exists()
+
+
+REPORT = """\
+ACME SURVEY REPORT
+WELL=Acme-2
+NORTH=GRID
+MD(ft) INC(deg) AZI(deg)
+0.0 0.0 0.0
+100.0 2.5 47.5
+200.0 5.0 48.0
+"""
+
+
+def test_vendor_txt_reader_wins_over_the_builtin_csv_reader(site: Path, tmp_path: Path):
+    """A .txt file with MD/INC/AZI in its header: the built-in CSV reader claims it by its
+    name and fails on it; with the plugin installed its reader claims it by content and
+    reads it (feet → m, grid north as the file declares, the well name from the header)."""
+    report = tmp_path / "report.txt"
+    report.write_text(REPORT)
+    survey = ROOT / "pipelines" / "survey.yaml"
+    without = subprocess.run(
+        [*gyropipe(), "run", str(survey), "--input", str(report), "--out", str(tmp_path / "a")],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert without.returncode == 1
+    assert "builtin.files" in without.stderr and "no header row with md, inc, azi" in without.stderr
+    out = tmp_path / "b"
+    result = run_cli(site, "run", str(survey), "--input", str(report), "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    table = pq.read_table(out / "trajectory.trajectory.parquet")
+    assert column(table, "md").tolist() == [0.0, 30.48, 60.96]
+    assert column(table, "inc").tolist() == [0.0, 2.5, 5.0]
+    assert table.schema.field("azi").metadata[b"north_reference"] == b"grid"
+    assert well_of(table).well == "Acme-2"
+
+
+def test_a_failing_vendor_reader_is_named(site: Path, tmp_path: Path):
+    report = tmp_path / "report.txt"
+    report.write_text(REPORT.replace("100.0 2.5 47.5", "100.0 2.5"))
+    survey = ROOT / "pipelines" / "survey.yaml"
+    result = run_cli(site, "run", str(survey), "--input", str(report), "--out", str(tmp_path / "o"))
+    assert result.returncode == 1
+    assert "Traceback" not in result.stderr
+    assert "reader 'acme_survey' (plugin acme 0.1.0) failed: InputFileError:" in result.stderr
+    assert f"{report}:6: expected three numbers, got '100.0 2.5'" in result.stderr

@@ -32,6 +32,7 @@ from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata
+from tests_support import read_stations
 
 OMEGA_DEG_H = np.degrees(OMEGA_EARTH) * 3600
 MAGNETIC = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
@@ -89,6 +90,7 @@ def point_run(
             },
         }
     )
+    spec.well.load(read_stations)
     sim = simulate(spec)
     return sim, position_readings(sim.samples, TRIM), spec.site
 

@@ -25,6 +25,7 @@ from pipeline.qc.checks import (
 )
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
+from tests_support import read_stations
 
 SITE = {"latitude": 61.25, "longitude": 73.4, "date": "2026-11-21"}
 TRIM = ReadingOptions(trim_start=0.5, min_dwell=1.0)
@@ -79,6 +80,7 @@ def run(
             },
         }
     )
+    spec.well.load(read_stations)
     readings = position_readings(simulate(spec).samples, TRIM)
     qc, summary = station_checks(readings, spec.site, options or QcOptions())
     return readings, qc, summary

@@ -19,7 +19,7 @@ from pipeline.sim.budget import error_budget
 from pipeline.sim.freegyro import simulate_free_gyro
 from pipeline.sim.spec import load_simulation
 from pipeline.tables import FreeGyroReadings, RawSamples, SimTruth, Stations
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, read_stations
 
 PLANS = ROOT / "examples" / "plans"
 SMALL = """
@@ -255,7 +255,7 @@ def test_well_from_a_stations_file(tmp_path: Path):
             "  stations: st.csv\n",
         ),
     )
-    spec = load_simulation(plan)
+    spec = load_simulation(plan, read_stations=read_stations)
     from pipeline.sim.simulate import simulate
 
     stations = simulate(spec).stations
@@ -265,4 +265,4 @@ def test_well_from_a_stations_file(tmp_path: Path):
     (tmp_path / "grid.csv").write_text("MD (m),Inc (deg),Azimuth Grid (deg)\n0,0,0\n30,2,40\n")
     grid = write(tmp_path, plan.read_text().replace("st.csv", "grid.csv"), "grid.yaml")
     with pytest.raises(ValueError, match="true-north"):
-        load_simulation(grid).path()
+        load_simulation(grid, read_stations=read_stations).path()

@@ -84,7 +84,7 @@ from pipeline.io.csv_header import (
 from pipeline.io.csv_options import CsvOptions
 from pipeline.io.csv_rows import data_rows, load, newlines, parse, split_head
 from pipeline.io.mnemonics import CURVES
-from pipeline.registry import ReaderDef, WriterDef
+from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.units import canonical_unit
@@ -216,24 +216,23 @@ def _azimuth_reference(
     return north
 
 
-def sniff(path: Path) -> bool:
-    """True for a .csv/.txt/.tsv file or one whose first 64 KiB hold a stations or samples
-    header."""
+def sniff(path: Path) -> Claim:
+    """By content, a stations, samples or readings header in the first 64 KiB; by name, a
+    .csv/.txt/.tsv file."""
+    by_name = Claim.NAME if path.suffix.lower() in SNIFF_SUFFIXES else Claim.NO
     try:
-        if path.suffix.lower() in SNIFF_SUFFIXES:
-            return True
         with path.open("rb") as fh:
             head = fh.read(SNIFF_BYTES)
         lines, _ = split_head(newlines(head), HEADER_SEARCH_LINES)
         for layout in LAYOUTS.values():
             try:
                 find_header(path, lines, CsvOptions(), layout.required)
-                return True
+                return Claim.CONTENT
             except InputFileError:
                 continue
-        return False
-    except Exception:  # sniffing never raises: any failure means "not a CSV I can read"
-        return False
+        return by_name
+    except Exception:  # sniffing never raises: a failure leaves only the name to go by
+        return by_name
 
 
 # ---------------------------------------------------------------------------- writer

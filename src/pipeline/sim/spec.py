@@ -6,10 +6,12 @@ Angles in degrees, lengths in metres, times in seconds, speeds in m/s, dogleg se
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, field_validator, model_validator
 
 from pipeline.earth.site import Site
 from pipeline.errors import Location, Problem, SpecError
@@ -142,6 +144,10 @@ class ToolChoice(Strict):
         return tool_preset(self.preset, **self.overrides)
 
 
+ReadStations = Callable[[Path, str], pa.Table]
+"""Reads a stations file with the named reader (``auto``: the engine's choice)."""
+
+
 class StationsWell(Strict):
     """A well given by a stations file (MD, inclination, azimuth true north), joined by
     minimum-curvature arcs; read by any installed stations reader (CSV, Parquet, …)."""
@@ -151,14 +157,19 @@ class StationsWell(Strict):
     start_north: float = Field(0.0, description="northing of the first station, m")
     start_east: float = Field(0.0, description="easting of the first station, m")
     start_tvd: float | None = Field(None, description="TVD of the first station, m (default MD)")
+    _table: pa.Table | None = PrivateAttr(None)
+
+    def load(self, read: ReadStations) -> None:
+        """Read the stations file (``read(path, reader name)``, the engine's reader choice)."""
+        self._table = read(self.stations, self.reader)
 
     def path(self) -> WellPath:
-        from pipeline.plugins import load_registry
-        from pipeline.stages.files import choose_reader
-
-        readers = [r for r, _ in load_registry().readers.values()]
-        reader = choose_reader(readers, "stations", self.reader, self.stations)
-        table, _ = reader.read(self.stations, "stations", reader.options())
+        table = self._table
+        if table is None:
+            raise ValueError(
+                f"{self.stations}: the stations file was not read; "
+                "give load_simulation a read_stations function"
+            )
         if (table.schema.field("azi").metadata or {}).get(b"north_reference") != b"true":
             raise ValueError(f"{self.stations}: the simulator needs true-north azimuths")
         return WellPath.from_stations(
@@ -191,8 +202,11 @@ class SimulationSpec(Strict):
         return self
 
 
-def load_simulation(path: str | Path, seed: int | None = None) -> SimulationSpec:
-    """Read and validate a simulation plan; every problem is located in the file."""
+def load_simulation(
+    path: str | Path, seed: int | None = None, *, read_stations: ReadStations | None = None
+) -> SimulationSpec:
+    """Read and validate a simulation plan; every problem is located in the file. A plan
+    whose well is a stations file needs ``read_stations`` to read it."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -209,4 +223,6 @@ def load_simulation(path: str | Path, seed: int | None = None) -> SimulationSpec
     spec = validate_located(SimulationSpec, raw, source, problems)
     if problems:
         raise SpecError(problems)
+    if isinstance(spec.well, StationsWell) and read_stations is not None:
+        spec.well.load(read_stations)
     return spec

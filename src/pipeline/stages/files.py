@@ -1,23 +1,32 @@
 """Built-in plugin: the stages that bring files into a pipeline and write tables out.
 
 Readers and writers themselves are plugins of their own (``gyropipe_register_readers``,
-``gyropipe_register_writers``); these stages choose one by name or by sniffing the file.
+``gyropipe_register_writers``); the engine chooses the reader (:meth:`Registry.reader_for`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ModelWrapValidatorHandler,
+    ValidationError,
+    ValidationInfo,
+    create_model,
+    model_validator,
+)
+from pydantic_core import InitErrorDetails
 
 from pipeline.contracts import SOURCE_KEY, TableContract
-from pipeline.errors import GyropipeError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
-    ReaderDef,
+    Registry,
     StageContext,
     StageDef,
     pipeline_input,
@@ -25,10 +34,6 @@ from pipeline.registry import (
 )
 from pipeline.tables import AnyTable, PositionReadings, RawSamples, Stations
 from pipeline.well import attach
-
-
-class ReaderChoiceError(GyropipeError):
-    """No installed reader can read a file as the requested kind of table."""
 
 
 class ReadParams(BaseModel):
@@ -42,6 +47,36 @@ class ReadParams(BaseModel):
     options: dict[str, Any] = Field(
         default_factory=dict, description="reader options (see the reader's documentation)"
     )
+    reads: ClassVar[str] = "stations"
+    """the kind of table the stage reads"""
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _options_fit_the_reader(
+        cls, data: Any, handler: ModelWrapValidatorHandler[ReadParams], info: ValidationInfo
+    ) -> ReadParams:
+        """With the registry in the validation context (when a pipeline is validated), the
+        options are validated by the reader's own options model, each problem located at its
+        option."""
+        params = handler(data)
+        registry = (info.context or {}).get("registry")
+        if isinstance(registry, Registry):
+            try:
+                registry.check_reader_options(cls.reads, params.reader, params.options)
+            except ValidationError as exc:
+                raise ValidationError.from_exception_data(
+                    cls.__name__,
+                    [
+                        InitErrorDetails(
+                            type=e["type"],
+                            loc=("options", *e["loc"]),
+                            input=e["input"],
+                            ctx=e.get("ctx", {}),
+                        )
+                        for e in exc.errors()
+                    ],
+                ) from None
+        return params
 
 
 class WriteParams(BaseModel):
@@ -60,32 +95,6 @@ class WriteParams(BaseModel):
         return ctx.output_path(self.filename or f"{ctx.stage_id}.{extension}")
 
 
-def choose_reader(readers: Iterable[ReaderDef], kind: str, name: str, path: Path) -> ReaderDef:
-    """Among ``readers``, the one called ``name``, or with ``auto`` the first reader of
-    ``kind`` that sniffs ``path`` as its own."""
-    readers = list(readers)
-    if name != "auto":
-        found = [r for r in readers if r.name == name]
-        if not found:
-            raise ReaderChoiceError(
-                f"no reader named {name!r} (installed: {', '.join(r.name for r in readers)})"
-            )
-        reader = found[0]
-        if kind not in reader.kinds:
-            raise ReaderChoiceError(
-                f"reader {name!r} cannot read {kind} (it reads: {', '.join(reader.kinds)})"
-            )
-        return reader
-    able = [r for r in readers if kind in r.kinds]
-    for reader in able:
-        if reader.sniff(path):
-            return reader
-    raise ReaderChoiceError(
-        f"no installed reader recognises {str(path)!r} as {kind} (readers of {kind}: "
-        f"{', '.join(r.name for r in able) or 'none'}); name one with `reader:`"
-    )
-
-
 def read_stage(
     kind: str,
 ) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, pa.Table]]:
@@ -95,15 +104,7 @@ def read_stage(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
     ) -> dict[str, pa.Table]:
         path = ctx.input_path(params.input)
-        reader = choose_reader(ctx.readers(), kind, params.reader, path)
-        options = dict(params.options)
-        if "default_north_reference" in reader.options.model_fields and ctx.well.north_reference:
-            options.setdefault("default_north_reference", ctx.well.north_reference)
-        try:
-            parsed = reader.options.model_validate(options)
-        except ValidationError as exc:
-            raise ReaderChoiceError(f"options of reader {reader.name!r}: {exc}") from None
-        table, header = reader.read(path, kind, parsed)
+        table, header = ctx.read(path, kind, reader=params.reader, options=params.options)
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(path).encode()}
         return {kind: attach(table.replace_schema_metadata(meta), header)}
 
@@ -121,6 +122,7 @@ def read_stage_def(
         __doc__=f"Parameters of the {name} stage.",
         input=(str, pipeline_input(default_input, "name of the pipeline input to read")),
     )
+    params.reads = kind
     return StageDef(
         name=name,
         func=read_stage(kind),

@@ -54,7 +54,11 @@ def simulation_tables(spec: SimulationSpec) -> dict[str, pa.Table]:
 
 
 def _load(params: SimulateParams, ctx: StageContext) -> SimulationSpec:
-    return load_simulation(ctx.input_path(params.plan), seed=params.seed)
+    return load_simulation(
+        ctx.input_path(params.plan),
+        seed=params.seed,
+        read_stations=lambda path, reader: ctx.read(path, "stations", reader=reader)[0],
+    )
 
 
 def run_simulation(

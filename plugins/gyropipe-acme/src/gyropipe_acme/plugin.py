@@ -9,10 +9,10 @@ from typing import Any
 
 import pyarrow as pa
 
-from gyropipe_acme import gyrolog
+from gyropipe_acme import gyrolog, survey_report
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import ReaderDef, WriterDef
-from pipeline.tables import RawSamples
+from pipeline.tables import RawSamples, Stations
 from pipeline.well import WellMetadata
 
 
@@ -31,6 +31,16 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
             kinds={"samples": RawSamples},
             read=read,
             sniff=gyrolog.sniff,
+        )
+    )
+    register(
+        ReaderDef(
+            name="acme_survey",
+            description="Acme survey report stations (.txt), depths in feet",
+            kinds={"stations": Stations},
+            read=lambda path, kind, options: survey_report.read_stations(path, options),
+            sniff=survey_report.sniff,
+            options=survey_report.SurveyReportOptions,
         )
     )
 
