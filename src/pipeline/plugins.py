@@ -46,6 +46,7 @@ BUILTIN_PLUGINS = {
     "builtin.parquet": "pipeline.io.parquet",
     "builtin.witsml": "pipeline.io.witsml",
     "builtin.json_summary": "pipeline.io.json_summary",
+    "builtin.drift_tables": "pipeline.io.drift_tables",
     "builtin.exports": "pipeline.stages.exports",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
