@@ -29,8 +29,8 @@ import pipeline
 from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
-from pipeline.stages.survey import survey_offsets
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
+from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
 from pipeline.well import NorthReference, WellMetadata
 

@@ -25,8 +25,8 @@ from pipeline.io.witsml_terms import (
     VERSION,
     survey_tool,
 )
-from pipeline.stages.survey import survey_offsets
 from pipeline.survey.calculation import calculation_of
+from pipeline.survey.stations import survey_offsets
 from pipeline.well import NorthReference, WellMetadata
 
 STATION_COLUMNS: tuple[tuple[str, str, str], ...] = (
