@@ -14,7 +14,6 @@ from importlib.metadata import entry_points
 
 import pluggy
 
-import pipeline
 from pipeline import hookspecs
 from pipeline.errors import PluginError
 from pipeline.registry import (
@@ -25,6 +24,7 @@ from pipeline.registry import (
     StageDef,
     WriterDef,
 )
+from pipeline.version import __version__
 
 ENTRY_POINT_GROUP = "gyropipe"
 
@@ -68,7 +68,7 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
     candidates: list[tuple[PluginInfo, object]] = []
 
     for name, module_name in BUILTIN_PLUGINS.items():
-        info = PluginInfo(name, pipeline.__version__, builtin=True)
+        info = PluginInfo(name, __version__, builtin=True)
         if name in blocked:
             continue
         try:
