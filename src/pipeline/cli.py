@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING, NoReturn
 import click
 import yaml
 
-from pipeline import __version__
 from pipeline.atomic import atomic_path, atomic_write_bytes
 from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
 from pipeline.graph import Plan, build_plan
@@ -27,6 +26,7 @@ from pipeline.plugins import load_registry
 from pipeline.registry import Registry
 from pipeline.runner import RunInputError, run_plan, sha256_file
 from pipeline.spec import load_spec
+from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
 if TYPE_CHECKING:

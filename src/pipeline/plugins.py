@@ -14,7 +14,6 @@ from importlib.metadata import entry_points
 
 import pluggy
 
-import pipeline
 from pipeline import hookspecs
 from pipeline.errors import PluginError
 from pipeline.registry import (
@@ -25,6 +24,7 @@ from pipeline.registry import (
     StageDef,
     WriterDef,
 )
+from pipeline.version import __version__
 
 ENTRY_POINT_GROUP = "gyropipe"
 
@@ -46,6 +46,7 @@ BUILTIN_PLUGINS = {
     "builtin.parquet": "pipeline.io.parquet",
     "builtin.witsml": "pipeline.io.witsml",
     "builtin.json_summary": "pipeline.io.json_summary",
+    "builtin.drift_tables": "pipeline.io.drift_tables",
     "builtin.exports": "pipeline.stages.exports",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
@@ -67,7 +68,7 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
     candidates: list[tuple[PluginInfo, object]] = []
 
     for name, module_name in BUILTIN_PLUGINS.items():
-        info = PluginInfo(name, pipeline.__version__, builtin=True)
+        info = PluginInfo(name, __version__, builtin=True)
         if name in blocked:
             continue
         try:

@@ -23,7 +23,6 @@ from typing import Any, TypeVar
 
 import pyarrow as pa
 
-import pipeline
 from pipeline.atomic import atomic_write_bytes, publish
 from pipeline.errors import ContractViolation, GyropipeError, StageError
 from pipeline.graph import Plan, PlannedStage
@@ -35,6 +34,7 @@ from pipeline.registry import (
     StageSetup,
     WriterDef,
 )
+from pipeline.version import __version__
 from pipeline.well import WellMetadata, attach, well_of
 
 MANIFEST = "run.json"
@@ -271,7 +271,7 @@ def _provenance(
         pipeline_version=plan.spec.version,
         pipeline_file=plan.file,
         pipeline_sha256=plan.digest,
-        gyropipe=pipeline.__version__,
+        gyropipe=__version__,
         plugins={n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
         inputs={n: InputFile(**_file_entry(p)) for n, p in files.items()},
         started=started,

@@ -22,6 +22,7 @@ from pipeline.drift.calibration import (
 from pipeline.drift.tables import CalibrationReadings
 from pipeline.errors import InputFileError
 from pipeline.graph import build_plan
+from pipeline.io import drift_tables
 from pipeline.plugins import load_registry
 from pipeline.registry import PluginInfo, ReaderDef, Registry, StageDef
 from pipeline.runner import run_plan
@@ -42,7 +43,10 @@ def drift_registry() -> Registry:
         plugin = PluginInfo("builtin.drift", "test", builtin=True)
         registry.plugins[plugin.name] = plugin
         drift_plugin.gyropipe_register_stages(lambda s: registry.add(s, plugin, StageDef))
-        drift_plugin.gyropipe_register_readers(lambda r: registry.add(r, plugin, ReaderDef))
+    if "drift_tables" not in registry.readers:
+        plugin = PluginInfo("builtin.drift_tables", "test", builtin=True)
+        registry.plugins[plugin.name] = plugin
+        drift_tables.gyropipe_register_readers(lambda r: registry.add(r, plugin, ReaderDef))
     assert not registry.problems, registry.problems
     return registry
 
@@ -232,15 +236,15 @@ def test_csv_reader_names_the_problem(tmp_path: Path):
     path = tmp_path / "cal.csv"
     path.write_text("series,set_azimuth,measured_azimuth[deg],time[s]\n1,0,1.0,30\n")
     with pytest.raises(InputFileError, match=r"cal.csv:1 \(column 'set_azimuth'\).*unit"):
-        drift_plugin.read_drift_table(path, "calibration", None)
+        drift_tables.read_drift_table(path, "calibration", None)
     path.write_text("series,set_azimuth[deg],time[fortnight]\n1,0,30\n")
     with pytest.raises(InputFileError, match="unknown unit 'fortnight'"):
-        drift_plugin.read_drift_table(path, "calibration", None)
+        drift_tables.read_drift_table(path, "calibration", None)
     path.write_text("# well.tool_serial=X\nseries,set_azimuth[deg],azimuth_error[deg]\n1,0,x\n")
     with pytest.raises(InputFileError, match=r"cal.csv:3 \(column 'azimuth_error'\): not a number"):
-        drift_plugin.read_drift_table(path, "calibration", None)
+        drift_tables.read_drift_table(path, "calibration", None)
     path.write_text("series,set_azimuth[rad],azimuth_error[deg],extra\n1,3.14159265358979,2,z\n")
-    table, _ = drift_plugin.read_drift_table(path, "calibration", None)
+    table, _ = drift_tables.read_drift_table(path, "calibration", None)
     assert table.column("set_azimuth")[0].as_py() == pytest.approx(180.0)
     assert table.column("source_line").to_pylist() == [2]
 

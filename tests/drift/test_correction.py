@@ -15,6 +15,7 @@ from pipeline.drift.calibration import CalibrationOptions, calibrate
 from pipeline.drift.correction import CorrectionOptions, DriftRate, correct_survey
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
 from pipeline.graph import build_plan
+from pipeline.io import drift_tables
 from pipeline.io.csv import write_csv
 from pipeline.plugins import load_registry
 from pipeline.registry import PluginInfo, ReaderDef, Registry, StageDef
@@ -211,7 +212,10 @@ def drift_registry() -> Registry:
         plugin = PluginInfo("builtin.drift", "test", builtin=True)
         registry.plugins[plugin.name] = plugin
         drift_plugin.gyropipe_register_stages(lambda s: registry.add(s, plugin, StageDef))
-        drift_plugin.gyropipe_register_readers(lambda r: registry.add(r, plugin, ReaderDef))
+    if "drift_tables" not in registry.readers:
+        plugin = PluginInfo("builtin.drift_tables", "test", builtin=True)
+        registry.plugins[plugin.name] = plugin
+        drift_tables.gyropipe_register_readers(lambda r: registry.add(r, plugin, ReaderDef))
     assert not registry.problems, registry.problems
     return registry
 

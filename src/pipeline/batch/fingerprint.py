@@ -15,10 +15,10 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
-import pipeline
 from pipeline.graph import Plan
 from pipeline.registry import Registry
 from pipeline.runner import sha256_file
+from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
 from .jobs import WellJob
@@ -69,7 +69,7 @@ class PlanIdentity:
         return cls(
             pipeline=hashlib.sha256(canonical.encode()).hexdigest(),
             params={st.id: st.params.model_dump(mode="json") for st in plan.stages},
-            gyropipe=pipeline.__version__,
+            gyropipe=__version__,
             plugins={
                 name: info.version
                 for name, info in sorted(registry.plugins.items())

@@ -18,9 +18,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pipeline
 from pipeline.graph import Plan
 from pipeline.registry import Registry
+from pipeline.version import __version__
 
 from .executors import Executor, make_executor
 from .fingerprint import Fingerprint, PlanIdentity
@@ -117,7 +117,7 @@ class _Batch:
         self.ledger = ledger
         self.identity = PlanIdentity.of(plan, registry)
         self.versions = {
-            "gyropipe": pipeline.__version__,
+            "gyropipe": __version__,
             "plugins": {n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
         }
         self.ref = ref
@@ -265,10 +265,10 @@ class _Batch:
         if changed:
             return f"input changed while the well ran: {', '.join(changed)}; run it again"
         plugins = self.versions["plugins"]
-        if manifest["gyropipe"] != pipeline.__version__ or manifest["plugins"] != plugins:
+        if manifest["gyropipe"] != __version__ or manifest["plugins"] != plugins:
             return (
                 f"the worker ran gyropipe {manifest['gyropipe']} with plugins "
-                f"{manifest['plugins']}, the batch process has {pipeline.__version__} with "
+                f"{manifest['plugins']}, the batch process has {__version__} with "
                 f"{plugins}: install the same versions everywhere"
             )
         published = read_published(self.out / outcome.well_id)

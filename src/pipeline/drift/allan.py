@@ -38,11 +38,11 @@ from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import minimize_scalar, nnls
 
 from pipeline.compass.azimuth import cramer_rao
+from pipeline.compass.positions import DEFAULT_POSITIONS
 from pipeline.compass.precision import hr_covariance
 from pipeline.drift.calibration import FloatArray
 from pipeline.drift.tables import AllanResult, DwellRecommendation, NoiseParameters
 from pipeline.earth.gravity import STANDARD_GRAVITY
-from pipeline.sim.spec import DEFAULT_POSITIONS
 
 FLICKER_FLOOR = float(np.sqrt(2.0 * np.log(2.0) / np.pi))
 """Allan deviation of a flicker bias of instability B, per unit B (0.664)."""

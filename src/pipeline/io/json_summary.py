@@ -25,13 +25,13 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from pydantic import BaseModel, ConfigDict, Field
 
-import pipeline
 from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
-from pipeline.stages.survey import survey_offsets
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
+from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
+from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
 FORMAT: Final = "gyropipe.survey-summary"
@@ -168,7 +168,7 @@ def summarize(
         raise ValueError("the trajectory has no stations")
     north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
     return SurveySummary(
-        gyropipe=pipeline.__version__,
+        gyropipe=__version__,
         well=well,
         run=_run(provenance) if provenance is not None else None,
         north_reference=north,

@@ -82,7 +82,6 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-import pipeline
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
@@ -93,6 +92,7 @@ from pipeline.registry import ReaderDef, WriterDef
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
+from pipeline.version import __version__
 from pipeline.well import NORTH_WORDS, DefaultNorthReference, NorthReference, WellMetadata
 
 Floats = NDArray[np.float64]
@@ -1366,7 +1366,7 @@ def _header_text(
         "~Curve Information",
         *(_line(f.name, _field_unit(f), None, _description(f)) for f in numeric),
         "~Other",
-        f"Written by gyropipe {pipeline.__version__}.",
+        f"Written by gyropipe {__version__}.",
     ]
     dropped = [
         f"{f.name} ({f.type})" for f in table.schema if f not in numeric and f.name != SOURCE_LINE

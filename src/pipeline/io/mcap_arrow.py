@@ -40,9 +40,9 @@ from mcap.records import Channel
 from mcap.writer import CompressionType, Writer
 from pydantic import ValidationError
 
-import pipeline
 from pipeline.contracts import UNIT_KEY
 from pipeline.io.mcap_records import McapFile, iter_payloads, messages_of
+from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
 SAMPLES_TOPIC = "/gyropipe/samples"
@@ -104,7 +104,7 @@ def start_writer(fh: BinaryIO) -> Writer:
         enable_crcs=True,
         enable_data_crcs=True,
     )
-    writer.start(profile=PROFILE, library=f"gyropipe {pipeline.__version__}")
+    writer.start(profile=PROFILE, library=f"gyropipe {__version__}")
     return writer
 
 

@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-import pipeline
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.witsml_terms import (
     AZI_REF,
@@ -25,8 +24,9 @@ from pipeline.io.witsml_terms import (
     VERSION,
     survey_tool,
 )
-from pipeline.stages.survey import survey_offsets
 from pipeline.survey.calculation import calculation_of
+from pipeline.survey.stations import survey_offsets
+from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
 STATION_COLUMNS: tuple[tuple[str, str, str], ...] = (
@@ -197,7 +197,7 @@ def _common_data(traj: ET.Element, well: WellMetadata) -> None:
     """Provenance comment and every set well metadata field as an extension value."""
     common = _sub(traj, "commonData")
     comment = (
-        f"Written by gyropipe {pipeline.__version__}. dispNs/dispEw from the wellhead; tvd "
+        f"Written by gyropipe {__version__}. dispNs/dispEw from the wellhead; tvd "
         f"below the depth reference ({well.depth_reference or 'not stated'}); matrixCov: "
         "position covariance north-east-vertical (vertical down), 1 sigma squared."
     )

@@ -39,7 +39,7 @@ from pipeline.report.sections import (
     tool_fields,
     unit_label,
 )
-from pipeline.stages.survey import survey_offsets
+from pipeline.survey.stations import survey_offsets
 from pipeline.well import WellMetadata
 
 ELLIPSE_COLUMNS = ("ellipse_major_conf", "ellipse_minor_conf", "ellipse_azimuth", "vertical_conf")

@@ -14,17 +14,12 @@ from pipeline.contracts import column
 from pipeline.earth.geomagnetic import ModelKey
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
-from pipeline.stages.survey import (
-    MinCurveParams,
-    north_reference_of,
-    station_angles,
-    survey_offsets,
-    trajectory_columns,
-)
+from pipeline.stages.survey import MinCurveParams, trajectory_columns
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
 from pipeline.survey.methods import Method, build_turn_rates
 from pipeline.survey.north import convergence_at, convert_table, declination_at
+from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
 from pipeline.tables import DLS_UNIT, Stations, Trajectory
 from pipeline.well import NorthReference, WellMetadata, attach, well_of
 

@@ -8,12 +8,12 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
-from pipeline.contracts import NORTH_KEY
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import CheckDef, StageContext, StageDef
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
+from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
 from pipeline.tables import DLS_COURSE_M, DLS_UNIT, CheckResults, Stations, Trajectory
 from pipeline.well import WellMetadata
 
@@ -32,31 +32,6 @@ class MinCurveParams(BaseModel):
         description="TVD of the first station, m; default: its MD (straight vertical hole "
         "above the first station)",
     )
-
-
-def survey_offsets(stations: pa.Table) -> np.ndarray:
-    """CSR offsets of the contiguous surveys of a stations table (one survey if no ids)."""
-    n = stations.num_rows
-    if "survey" not in stations.column_names or n == 0:
-        return np.array([0, n])
-    ids = stations.column("survey").to_numpy(zero_copy_only=False)
-    starts = np.flatnonzero(ids[1:] != ids[:-1]) + 1
-    return np.concatenate(([0], starts, [n]))
-
-
-def north_reference_of(table: pa.Table, column: str) -> str:
-    """The north reference stored in a column's field metadata."""
-    raw: bytes = (table.schema.field(column).metadata or {})[NORTH_KEY]
-    return raw.decode()
-
-
-def station_angles(stations: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """MD (m), inclination and azimuth (deg, azimuth wrapped into [0, 360)) of a table."""
-    md = stations.column("md").to_numpy().astype(np.float64)
-    inc = stations.column("inc").to_numpy().astype(np.float64)
-    azi = np.mod(stations.column("azi").to_numpy().astype(np.float64), 360.0)
-    azi[azi >= 360.0] = 0.0  # mod of a tiny negative number rounds up to 360
-    return md, inc, azi
 
 
 def trajectory_columns(

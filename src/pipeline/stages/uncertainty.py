@@ -16,8 +16,8 @@ from pipeline.earth.geomagnetic import reference_field
 from pipeline.earth.site import MagneticReference
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
-from pipeline.stages.survey import north_reference_of, survey_offsets
 from pipeline.survey.north import convert_azimuth
+from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
 from pipeline.uncertainty.gyro import GYRO_PRESETS, GyroTool, gyro_covariance
