@@ -19,7 +19,8 @@ from pathlib import Path
 import lasio
 import numpy as np
 
-from pipeline.io.las import LasOptions, read_las
+from pipeline.io.las import read_las
+from pipeline.io.las_options import LasOptions
 
 CURVES = [
     ("TIME", "S", "elapsed time"),

@@ -30,7 +30,8 @@ import pyarrow.compute as pc
 from mcap.reader import make_reader
 from mcap.writer import Writer
 
-from pipeline.io.mcap import McapOptions, read_samples, write_samples
+from pipeline.io.mcap import read_samples, write_samples
+from pipeline.io.mcap_options import McapOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata

@@ -22,6 +22,8 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import las as las_plugin
+from pipeline.io import las_header, las_rows
+from pipeline.io.las_options import LasOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
@@ -103,7 +105,7 @@ def as_nan(table: pa.Table, name: str) -> np.ndarray:
 def test_registration() -> None:
     assert READER.name == "las"
     assert READER.kinds == {"stations": Stations, "samples": RawSamples}
-    assert READER.options is las_plugin.LasOptions
+    assert READER.options is LasOptions
     assert (WRITER.name, WRITER.extension) == ("las", "las")
 
 
@@ -1020,14 +1022,14 @@ def data_sections(draw: st.DrawFn) -> tuple[str, int]:
     return end.join(lines) + draw(st.sampled_from(["", end, end + end])), n
 
 
-def _both_paths(path: Path) -> tuple[dict[int, np.ndarray] | None, las_plugin.Data]:
+def _both_paths(path: Path) -> tuple[dict[int, np.ndarray] | None, las_rows.Data]:
     """Values of every curve by the fast path (None if it declines) and the careful path."""
-    source = las_plugin._load(path)
-    header = las_plugin._parse_header(path, source.header)
+    source = las_header.load(path)
+    header = las_header.parse_header(path, source.header)
     wanted = list(range(len(header.curves)))
-    fast = las_plugin._fast_values(source.raw, source.start, len(header.curves), wanted)
-    lines = las_plugin._split_lines(source.raw[source.start :].decode())
-    slow = las_plugin._slow_values(path, header, lines, source.title_line, wanted)
+    fast = las_rows._fast_values(source.raw, source.start, len(header.curves), wanted)
+    lines = las_header.split_lines(source.raw[source.start :].decode())
+    slow = las_rows._slow_values(path, header, lines, source.title_line, wanted)
     return (fast[0] if fast else None), slow
 
 
@@ -1070,7 +1072,7 @@ def test_fast_path_equals_careful_path_and_lasio(tmp_path: Path, section: tuple[
 )
 def test_fast_path_declines_what_it_cannot_prove(data: bytes) -> None:
     head = b"~Curve\n D.M : d\n~A\n"
-    assert las_plugin._fast_values(head + data, len(head), 3, [0, 1, 2]) is None
+    assert las_rows._fast_values(head + data, len(head), 3, [0, 1, 2]) is None
 
 
 # ------------------------------------------------------------------------- writer

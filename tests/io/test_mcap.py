@@ -20,6 +20,7 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.io import mcap as plugin
 from pipeline.io import mcap_arrow, mcap_keyed
 from pipeline.io.conventions import Conventions
+from pipeline.io.mcap_options import McapOptions
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
@@ -673,14 +674,14 @@ def test_bad_well_metadata_names_the_record(tmp_path: Path) -> None:
 
 def test_options_are_validated() -> None:
     with pytest.raises(ValidationError, match="unknown columns"):
-        plugin.McapOptions(columns={"gyro_w": "x"})
+        McapOptions(columns={"gyro_w": "x"})
     with pytest.raises(ValidationError, match="unknown unit"):
-        plugin.McapOptions(units={"gyro": "furlong"})
+        McapOptions(units={"gyro": "furlong"})
     with pytest.raises(ValidationError, match="not a raw-samples column"):
-        plugin.McapOptions(units={"azi": "deg"})
+        McapOptions(units={"azi": "deg"})
     with pytest.raises(ValidationError):
-        plugin.McapOptions(speed=3)
-    assert plugin.McapOptions(conventions=Conventions(axes=("x", "-y", "-z"))).join == "exact"
+        McapOptions(speed=3)
+    assert McapOptions(conventions=Conventions(axes=("x", "-y", "-z"))).join == "exact"
 
 
 # -------------------------------------------------------------------------------- fuzz

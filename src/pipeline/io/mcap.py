@@ -8,7 +8,7 @@ column units in metadata records, uncompressed chunks with CRCs
 (:mod:`pipeline.io.mcap_tables`).
 
 **Reader** ``mcap`` (kind ``samples``; files starting with the MCAP magic
-``\\x89MCAP0\\r\\n``):
+``\\x89MCAP0\\r\\n``; options: :mod:`pipeline.io.mcap_options`):
 
 * gyropipe's channel → the table exactly as written (bit-for-bit values, nulls, units,
   schema metadata, markers), fast: columns are mapped from the file, not copied;
@@ -26,16 +26,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Literal
 
 import pyarrow as pa
 from mcap.records import Channel
-from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from pipeline.errors import UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import mcap_sources as sources
-from pipeline.io.conventions import Conventions
 from pipeline.io.mcap_arrow import (
     ARROW_MESSAGE_ENCODING,
     ARROW_SCHEMA_ENCODING,
@@ -45,68 +41,12 @@ from pipeline.io.mcap_arrow import (
     read_well,
     write_samples,
 )
-from pipeline.io.mcap_keyed import SAMPLE_COLUMNS, TRIADS
+from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
 from pipeline.io.mcap_records import MAGIC, McapFile, scan
 from pipeline.io.mcap_tables import write_tables
-from pipeline.io.mnemonics import CURVES
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import RawSamples
-from pipeline.units import conversion_factor
 from pipeline.well import WellMetadata
-
-
-class McapOptions(BaseModel):
-    """Options of the MCAP reader; gyropipe's own files need none."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    topics: list[str] | None = Field(
-        None, description="topics to read (default: every channel readable as samples)"
-    )
-    columns: dict[str, str] = Field(
-        default_factory=dict,
-        description="message key of a canonical column (JSON/protobuf), e.g. {gyro_x: wx}",
-    )
-    units: dict[str, str] = Field(
-        default_factory=dict,
-        description="unit of a canonical column or of a whole triad (gyro, acc, mag), "
-        "e.g. {gyro: rad/s, time: s}; wins over units declared in the file",
-    )
-    ignore: list[str] = Field(
-        default_factory=list, description="message keys to skip (with their sub-keys)"
-    )
-    conventions: Conventions | None = Field(
-        None,
-        description="vendor conventions of the sensor data (default: canonical, except ROS "
-        "Imu accelerometers: specific force)",
-    )
-    join: Literal["exact", "interpolate"] = Field(
-        "exact", description="how other topics join the base topic's sample times"
-    )
-
-    @field_validator("columns")
-    @classmethod
-    def _canonical(cls, columns: dict[str, str]) -> dict[str, str]:
-        unknown = sorted(set(columns) - set(SAMPLE_COLUMNS))
-        if unknown:
-            raise ValueError(
-                f"unknown columns {unknown}; raw-samples columns: {list(SAMPLE_COLUMNS)}"
-            )
-        return columns
-
-    @field_validator("units")
-    @classmethod
-    def _units(cls, units: dict[str, str]) -> dict[str, str]:
-        for name, unit in units.items():
-            curve = CURVES.get(f"{name}_x" if name in TRIADS else name)
-            if curve is None or curve.quantity is None or curve.name not in SAMPLE_COLUMNS:
-                raise ValueError(f"units: {name!r} is not a raw-samples column with a unit")
-            try:
-                conversion_factor(unit, curve.quantity)
-            except UnitError as exc:
-                raise ValueError(f"units: {name}: {exc}") from None
-        return units
-
 
 # ---------------------------------------------------------------------------- reader
 

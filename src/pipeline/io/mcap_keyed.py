@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -34,17 +34,12 @@ import pyarrow.json as pajson
 from mcap.records import Channel, Schema
 
 from pipeline.errors import UnitError
+from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
 from pipeline.io.mcap_records import MESSAGE_HEAD, McapFile, Messages, count, iter_payloads
 from pipeline.io.mnemonics import CURVES, canonical_name
-from pipeline.tables import RawSamples
 from pipeline.units import conversion_factor
 
-if TYPE_CHECKING:
-    from pipeline.io.mcap import McapOptions
-
-SAMPLE_COLUMNS = tuple(c.name for c in RawSamples.compiled().columns)
 INTEGER_COLUMNS = ("station", "position")
-TRIADS = ("gyro", "acc", "mag")
 
 
 class Nanoseconds(int):

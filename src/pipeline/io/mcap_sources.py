@@ -25,7 +25,7 @@ relative to the base's first sample (kept in the schema metadata as
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -35,11 +35,9 @@ from pipeline.errors import InputFileError
 from pipeline.io import mcap_keyed as keyed
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mcap_keyed import Source
+from pipeline.io.mcap_options import McapOptions
 from pipeline.io.mcap_records import McapFile, Messages, iter_payloads, messages_of
 from pipeline.units import conversion_factor
-
-if TYPE_CHECKING:
-    from pipeline.io.mcap import McapOptions
 
 IMU = "sensor_msgs/msg/Imu"
 MAGNETIC_FIELD = "sensor_msgs/msg/MagneticField"

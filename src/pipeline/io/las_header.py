@@ -1,0 +1,237 @@
+"""Text and header of a LAS file: the file split at its data title, decoded, and the header
+sections read as items.
+
+* **Header** — the lines before the ``~A`` (LAS 3: ``~Log_Data``) title are split into
+  sections at their ``~`` titles; each item line of ``~V``, ``~W``, ``~C`` and ``~P`` (LAS 3:
+  ``~Log_Definition``, ``~Log_Parameter``) is parsed with lasio's header grammar
+  (:func:`lasio.reader.read_header_line`: ``MNEM.UNIT  VALUE : DESCRIPTION``), keeping the
+  raw text and line of every item (``lasio.read`` turns a UWI ``0012`` into ``12``, and
+  even with ``ignore_data`` scans the whole file: 4 s for 100 MB). LAS 1.x ``~W`` items
+  other than STRT/STOP/STEP/NULL hold their value after the colon, as the 1.2 standard
+  (and lasio) says. Other sections (``~O``, unknown ones) are skipped.
+* **Text** — UTF-8 (BOM or not) when the bytes are valid UTF-8, else Windows-1252 (Latin-1
+  plus ``°``, ``µ``…); a byte neither accepts, or a NUL byte, is an error naming its line.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from pipeline.errors import InputFileError
+
+SNIFF_BYTES = 64 * 1024
+BOM = b"\xef\xbb\xbf"
+SHOWN = 8
+
+Role = Literal["version", "well", "curves", "parameter", "data"]
+SECTION_NAMES: dict[Role, str] = {
+    "version": "Version",
+    "well": "Well",
+    "curves": "Curves",
+    "parameter": "Parameter",
+    "data": "Data",
+}
+"""lasio's name of each section role (its header grammar depends on it)."""
+
+_DATA_TITLE = re.compile(rb"^[ \t]*~(?:A|LOG_DATA)", re.IGNORECASE | re.MULTILINE)
+NUMBER = r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$"
+
+
+@dataclass(frozen=True)
+class Item:
+    """One header line: upper-case mnemonic, unit, value and description as written."""
+
+    mnemonic: str
+    unit: str
+    value: str
+    descr: str
+    line: int
+
+
+@dataclass(frozen=True)
+class Header:
+    """The header sections read."""
+
+    version: float
+    wrapped: bool
+    delimiter: str
+    """SPACE, COMMA or TAB (LAS 3 ``DLM``)"""
+    well: list[Item]
+    parameters: list[Item]
+    curves: list[Item]
+
+    def find(self, path: Path, *mnemonics: str) -> Item | None:
+        """The first item with a value among ``mnemonics`` (preferred first), in ~Well then
+        ~Parameter. One mnemonic given twice with different values is an error."""
+        for section in (self.well, self.parameters):
+            for mnemonic in mnemonics:
+                items = [i for i in section if i.mnemonic == mnemonic and i.value]
+                if len({i.value for i in items}) > 1:
+                    raise InputFileError(
+                        path,
+                        f"{mnemonic} is given twice with different values "
+                        f"({items[0].value!r} on line {items[0].line}, {items[1].value!r})",
+                        line=items[1].line,
+                    )
+                if items:
+                    return items[0]
+        return None
+
+
+@dataclass(frozen=True)
+class Source:
+    """A LAS file split at its data title: the header lines, and the file's bytes with the
+    offset of the data (the line after the title), not copied."""
+
+    header: list[str]
+    title_line: int
+    """1-based line of the data section title (0: there is none)"""
+    raw: bytes
+    start: int
+
+
+# ------------------------------------------------------------------------- file text
+
+
+def load(path: Path) -> Source:
+    """The file's header lines (decoded) and data bytes."""
+    try:
+        raw = path.read_bytes().removeprefix(BOM)
+    except OSError as exc:
+        raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
+    if not raw or raw.isspace():
+        raise InputFileError(path, "the file is empty")
+    head = raw[:SNIFF_BYTES]
+    if head.count(b"\r") != head.count(b"\r\n"):  # old Mac line ends: lone CRs
+        raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    title = _DATA_TITLE.search(raw)
+    if title is None:
+        return Source(split_lines(decode(path, raw, 1)), 0, b"", 0)
+    end = raw.find(b"\n", title.start())
+    lines = split_lines(decode(path, raw[: title.start()], 1))
+    return Source(lines[:-1], len(lines), raw, len(raw) if end < 0 else end + 1)
+
+
+def decode(path: Path, data: bytes, first_line: int) -> str:
+    """UTF-8 text if ``data`` is valid UTF-8, else Windows-1252; ``data`` starts on file
+    line ``first_line``."""
+    if b"\0" in data:
+        line = first_line + data[: data.index(b"\0")].count(b"\n")
+        raise InputFileError(path, "NUL byte: this is not a LAS text file", line=line)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        pass
+    try:
+        return data.decode("cp1252")
+    except UnicodeDecodeError as exc:
+        line = first_line + data[: exc.start].count(b"\n")
+        raise InputFileError(
+            path,
+            f"byte 0x{data[exc.start]:02x} is neither UTF-8 nor Windows-1252 (Latin-1) text",
+            line=line,
+        ) from None
+
+
+def split_lines(text: str) -> list[str]:
+    """Lines of ``text`` split at LF, CRLF or a lone CR."""
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+# ---------------------------------------------------------------------------- header
+
+
+def parse_header(path: Path, lines: list[str]) -> Header:
+    sections: dict[Role, list[Item]] = {role: [] for role in SECTION_NAMES}
+    role: Role | None = None
+    for number, line in enumerate(lines, start=1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        if text.startswith("~"):
+            role = section_role(text)
+        elif role is not None:
+            sections[role].append(_item(path, text, number, role))
+    version, wrapped, delimiter = _version(path, sections["version"])
+    if not sections["curves"]:
+        raise InputFileError(path, "no curves: the ~Curve section is missing or empty")
+    well = sections["well"]
+    if version < 2:
+        well = [_las1_well_item(item) for item in well]
+    return Header(version, wrapped, delimiter, well, sections["parameter"], sections["curves"])
+
+
+def section_role(title: str) -> Role | None:
+    """The role of a section from its ``~`` title (None: a section not read)."""
+    name = title[1:].strip().upper()
+    if name.startswith("LOG_DEFINITION") or (name.startswith("C") and "_" not in name):
+        return "curves"
+    if name.startswith("LOG_PARAMETER") or (name.startswith("P") and "_" not in name):
+        return "parameter"
+    if name.startswith(("A", "LOG_DATA")):
+        return "data"
+    if name.startswith("V"):
+        return "version"
+    if name.startswith("W"):
+        return "well"
+    return None
+
+
+def _item(path: Path, text: str, number: int, role: Role) -> Item:
+    from lasio.reader import read_header_line  # imported on use: lasio is slow to import
+
+    try:
+        parsed = read_header_line(text, section_name=SECTION_NAMES[role])
+    except AttributeError:  # lasio's grammar does not match the line
+        raise InputFileError(
+            path,
+            f"cannot read header line {text!r}: expected 'MNEMONIC.UNIT  VALUE : DESCRIPTION'",
+            line=number,
+        ) from None
+    unit = parsed["unit"]
+    if len(unit) >= 2 and unit[0] + unit[-1] in ("[]", "()"):  # as lasio strips them
+        unit = unit[1:-1].strip()
+    return Item(parsed["name"].upper(), unit, parsed["value"], parsed["descr"], number)
+
+
+def _las1_well_item(item: Item) -> Item:
+    """A LAS 1.x ~Well item holds its value after the colon (except STRT/STOP/STEP/NULL);
+    a value written on one side only is taken where it is."""
+    if item.mnemonic in ("STRT", "STOP", "STEP", "NULL") or not item.descr:
+        return item
+    return Item(item.mnemonic, item.unit, item.descr, item.value, item.line)
+
+
+def _version(path: Path, items: list[Item]) -> tuple[float, bool, str]:
+    """LAS version (2.0 if not given), whether the data are wrapped, the data delimiter."""
+
+    def value(mnemonic: str, default: str) -> tuple[str, int]:
+        found = [i for i in items if i.mnemonic == mnemonic and i.value]
+        return (found[0].value.upper(), found[0].line) if found else (default, 0)
+
+    vers, line = value("VERS", "2.0")
+    version = float(vers) if re.fullmatch(r"[0-9]+(\.[0-9]*)?", vers) else 0.0
+    if int(version) not in (1, 2, 3):
+        raise InputFileError(path, f"VERS {vers!r}: not a LAS version (1.2, 2.0, 3.0)", line=line)
+    wrap, line = value("WRAP", "NO")
+    if wrap not in ("YES", "NO"):
+        raise InputFileError(path, f"WRAP {wrap!r}: expected YES or NO", line=line)
+    delimiter, line = value("DLM", "SPACE")
+    if delimiter not in ("SPACE", "COMMA", "TAB"):
+        raise InputFileError(path, f"DLM {delimiter!r}: expected SPACE, COMMA or TAB", line=line)
+    return version, wrap == "YES", delimiter
+
+
+def header_number(path: Path, item: Item) -> float:
+    if re.fullmatch(NUMBER, item.value):
+        return float(item.value)
+    raise InputFileError(path, f"{item.mnemonic} {item.value!r} is not a number", line=item.line)
+
+
+def mnemonics(curves: list[Item]) -> str:
+    names = [c.mnemonic for c in curves]
+    more = f" and {len(names) - SHOWN} more" if len(names) > SHOWN else ""
+    return ", ".join(names[:SHOWN]) + more

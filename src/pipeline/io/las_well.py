@@ -1,0 +1,236 @@
+"""Well metadata of a LAS file, from its ~Well, then ~Parameter items.
+
+WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN; LAT/LATI/LATITUDE and
+LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds
+(``61 15 00.5 N``, ``73°24'30"E``); DATE as ISO or another unambiguous form
+(``13-DEC-1986``, ``Dec 13, 1986``, ``13/12/1986``; a two-digit year after a month name is
+the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
+from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
+else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
+error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR) in degrees or
+the item's angle unit. ``north_reference`` is the one the file names (an option's is not
+the file's).
+"""
+
+from __future__ import annotations
+
+import calendar
+import datetime as dt
+import re
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from pipeline.errors import InputFileError, UnitError
+from pipeline.io.las_header import NUMBER, Header, Item, header_number
+from pipeline.units import conversion_factor
+from pipeline.well import NorthReference, WellMetadata
+
+TEXT_ITEMS: dict[str, tuple[str, ...]] = {
+    "well": ("WELL",),
+    "uwi": ("UWI", "API"),
+    "field": ("FLD", "FIELD"),
+    "company": ("COMP",),
+    "service_company": ("SRVC",),
+    "tool_type": ("TOOL",),
+    "tool_serial": ("TOOLSN",),
+}
+"""Well metadata text fields and the mnemonics holding them, preferred first."""
+ANGLE_ITEMS = {
+    "declination": ("DECL", "MAGDEC", "DECLINATION"),
+    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE", "GRIDCORR"),
+}
+"""Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
+COORDINATE_ITEMS = {
+    "latitude": (("LAT", "LATI", "LATITUDE"), "NS"),
+    "longitude": (("LON", "LONG", "LONGITUDE"), "EW"),
+}
+"""Coordinate fields: their mnemonics and hemisphere letters (positive, negative)."""
+REFERENCE_ITEMS = ("DREF", "LMF", "DMF")
+ELEVATION_ITEMS: dict[str, str | None] = {
+    "EREF": None,
+    "EKB": "KB",
+    "EDF": "DF",
+    "EGL": "GL",
+    "ELEV": None,
+}
+"""Elevation items and the depth reference each implies."""
+REFERENCE_ELEVATION = {"KB": "EKB", "RKB": "EKB", "DF": "EDF", "RDF": "EDF", "GL": "EGL"}
+
+_DMS_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
+_DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
+_MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name}
+
+
+def well_metadata(path: Path, header: Header, north: NorthReference | None) -> WellMetadata:
+    """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's."""
+    found: dict[str, tuple[Any, Item]] = {}
+    for name, mnemonics in TEXT_ITEMS.items():
+        if (item := header.find(path, *mnemonics)) is not None:
+            found[name] = (item.value, item)
+    for name, (mnemonics, hemispheres) in COORDINATE_ITEMS.items():
+        if (item := header.find(path, *mnemonics)) is not None:
+            found[name] = (_coordinate(path, item, hemispheres), item)
+    for name, mnemonics in ANGLE_ITEMS.items():
+        if (item := header.find(path, *mnemonics)) is not None:
+            found[name] = (header_number(path, item) * _angle_factor(path, item), item)
+    if (item := header.find(path, "DATE")) is not None:
+        found["survey_date"] = (_date(path, item), item)
+    elevation, reference = _elevation(path, header)
+    if elevation is not None:
+        found["elevation"] = elevation
+    if reference is not None:
+        found["depth_reference"] = reference
+    for name, (value, item) in found.items():
+        try:
+            WellMetadata.model_validate({name: value})
+        except ValidationError as exc:
+            raise InputFileError(
+                path, f"{item.mnemonic} {item.value!r}: {exc.errors()[0]['msg']}", line=item.line
+            ) from None
+    return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _angle_factor(path: Path, item: Item) -> float:
+    """Degrees per unit of an angle item (no unit: degrees)."""
+    try:
+        return conversion_factor(item.unit, "angle") if item.unit else 1.0
+    except UnitError as exc:
+        raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
+
+
+def _coordinate(path: Path, item: Item, hemispheres: str) -> float:
+    """Degrees of a latitude/longitude: a decimal number (in the item's unit, default deg)
+    or degrees, minutes and seconds, with an optional hemisphere letter (S and W: −)."""
+
+    def fail(reason: str) -> InputFileError:
+        return InputFileError(
+            path,
+            f"{item.mnemonic} {item.value!r}: {reason}; write decimal degrees (61.25, -73.4) "
+            "or degrees, minutes and seconds (61 15 00.0 N)",
+            line=item.line,
+        )
+
+    text = item.value.strip().upper()
+    sign = 1.0
+    if found := re.fullmatch(rf"([{hemispheres}])\s*(.*)|(.*?)\s*([{hemispheres}])", text):
+        text = found[2] if found[1] else found[3]
+        sign = -1.0 if (found[1] or found[4]) == hemispheres[1] else 1.0
+        if text.startswith(("-", "+")):
+            raise fail("both a sign and a hemisphere")
+    try:
+        if not re.fullmatch(NUMBER, text):
+            return sign * _dms(text)
+        return sign * float(text) * (conversion_factor(item.unit, "angle") if item.unit else 1.0)
+    except (ValueError, UnitError) as exc:
+        raise fail(str(exc)) from None
+
+
+def _dms(text: str) -> float:
+    """Degrees of degrees-minutes(-seconds) text (marks ° ' " or spaces; sign on degrees)."""
+    numbers = re.findall(_DMS_NUMBER, text)
+    if _DMS_MARKS.sub("", re.sub(_DMS_NUMBER, "", text)) or not 2 <= len(numbers) <= 3:
+        raise ValueError("not a coordinate")
+    degrees, *rest = (float(n) for n in numbers)
+    if not degrees.is_integer() or any(
+        r >= 60 or n[0] in "+-" for r, n in zip(rest, numbers[1:], strict=True)
+    ):
+        raise ValueError("minutes and seconds must be in [0, 60) after whole degrees")
+    magnitude = abs(degrees) + sum(r / 60.0**k for k, r in enumerate(rest, start=1))
+    return -magnitude if numbers[0].startswith("-") else magnitude
+
+
+def _date(path: Path, item: Item) -> dt.date:
+    """The date of a DATE item (a time of day after it is ignored)."""
+    text = re.sub(
+        r"[T\s]+\d{1,2}:\d{2}(:\d{2}(\.\d*)?)?\s*(Z|UTC|GMT|[+-]\d{2}:?\d{2})?$",
+        "",
+        item.value.strip(),
+        flags=re.IGNORECASE,
+    )
+    try:
+        return _parse_date(text)
+    except ValueError as exc:
+        raise InputFileError(
+            path, f"DATE {item.value!r}: {exc}; write it as YYYY-MM-DD", line=item.line
+        ) from None
+
+
+def _parse_date(text: str) -> dt.date:
+    """ISO and other unambiguous dates; see the module docstring."""
+    if re.fullmatch(r"\d{8}", text):
+        return dt.date(int(text[:4]), int(text[4:6]), int(text[6:]))
+    tokens = re.findall(r"[A-Za-z]+|\d+", text)
+    words = [t for t in tokens if t.isalpha()]
+    numbers = [t for t in tokens if t.isdigit()]
+    if not re.fullmatch(r"[A-Za-z0-9\s,./-]+", text) or len(tokens) != 3 or len(words) > 1:
+        raise ValueError("not a date")
+    if words:
+        where = tokens.index(words[0])
+        if where == 2:
+            raise ValueError("not a date")
+        year, day = numbers if where == 1 and len(numbers[0]) == 4 else numbers[::-1]
+        return dt.date(_year(year), _month(words[0]), int(day))
+    if len(numbers[0]) == 4:
+        return dt.date(int(numbers[0]), int(numbers[1]), int(numbers[2]))
+    if len(numbers[2]) != 4:
+        raise ValueError("ambiguous order of day, month and a two-digit year")
+    a, b = int(numbers[0]), int(numbers[1])
+    if a != b and a <= 12 and b <= 12:
+        raise ValueError(f"ambiguous: day {a} of month {b}, or day {b} of month {a}")
+    day, month = (a, b) if a > 12 or a == b else (b, a)
+    return dt.date(int(numbers[2]), month, day)
+
+
+def _month(word: str) -> int:
+    matches = [i for name, i in _MONTHS.items() if len(word) >= 3 and name.startswith(word.upper())]
+    if len(matches) != 1:
+        raise ValueError(f"{word!r} is not a month")
+    return matches[0]
+
+
+def _year(text: str) -> int:
+    """A four-digit year, or a two-digit one as the latest such year not after today."""
+    if len(text) not in (2, 4):
+        raise ValueError(f"year {text!r}")
+    if len(text) == 4:
+        return int(text)
+    this_year = dt.date.today().year
+    return this_year - (this_year - int(text)) % 100
+
+
+def _elevation(
+    path: Path, header: Header
+) -> tuple[tuple[float, Item] | None, tuple[str, Item] | None]:
+    """(elevation m, its item) and (depth reference, its item), each when known."""
+    reference = header.find(path, *REFERENCE_ITEMS)
+    present = {m: i for m in ELEVATION_ITEMS if (i := header.find(path, m)) is not None}
+    item = present.get("EREF")
+    if item is None and reference is not None:
+        item = present.get(
+            REFERENCE_ELEVATION.get(reference.value.upper(), ""), present.get("ELEV")
+        )
+    elif item is None and len(present) > 1:
+        raise InputFileError(
+            path,
+            f"elevations {', '.join(present)} are given but no DREF, LMF or DMF item says "
+            "which one depths are measured from",
+            line=max(i.line for i in present.values()),
+        )
+    elif item is None and present:
+        item = next(iter(present.values()))
+    depth: tuple[str, Item] | None = None
+    if reference is not None:
+        depth = (reference.value, reference)
+    elif item is not None and (implied := ELEVATION_ITEMS[item.mnemonic]) is not None:
+        depth = (implied, item)
+    if item is None:
+        return None, depth
+    try:
+        if not item.unit:
+            raise UnitError(f"no unit: write e.g. '{item.mnemonic}.M  {item.value}'")
+        factor = conversion_factor(item.unit, "length")
+    except UnitError as exc:
+        raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
+    return (header_number(path, item) * factor, item), depth
