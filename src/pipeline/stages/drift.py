@@ -46,6 +46,7 @@ from pipeline.drift.tables import (
     InOutQc,
     NoiseParameters,
 )
+from pipeline.earth.site import resolve_site
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
@@ -64,10 +65,6 @@ CSV_SUFFIXES = (".csv", ".txt", ".tsv")
 HEADER_CELL = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[\[(]\s*([^\])]*?)\s*[\])])?\s*$")
 QUANTITY_OF = {q.canonical: name for name, q in QUANTITIES.items()}
 TRUE_WORDS = {"true": True, "1": True, "yes": True, "false": False, "0": False, "no": False}
-
-
-class MissingLatitude(ValueError):
-    """The dwell recommendation needs the site latitude."""
 
 
 class DriftReaderOptions(BaseModel):
@@ -249,13 +246,8 @@ def allan_stage(
     inputs: Mapping[str, pa.Table], params: AllanOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Static raw samples → Allan deviations, noise terms and the recommended dwell."""
-    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
-    if latitude is None:
-        raise MissingLatitude(
-            "the dwell recommendation needs the site latitude: set the well's latitude or "
-            "the allan stage's `latitude`"
-        )
-    allan, noise, dwell = analyse_static(inputs["samples"], params, latitude)
+    site = resolve_site(ctx.well, stage="allan", latitude=params.latitude)
+    allan, noise, dwell = analyse_static(inputs["samples"], params, site.latitude)
     return {"allan": allan, "noise": noise, "dwell": dwell}
 
 
