@@ -63,6 +63,38 @@ class UnitError(GyropipeError):
     """A unit string is unknown or not convertible to the unit required."""
 
 
+class MissingSiteError(GyropipeError):
+    """A stage needs the site (its latitude; longitude and survey date for a geomagnetic
+    model) and neither the stage's parameters nor the well metadata give it. Names the stage
+    and every place the values may be given."""
+
+    def __init__(self, stage: str, missing: list[str], param: str | None = None) -> None:
+        self.stage = stage
+        self.missing = missing
+        self.param = param
+        model = [name for name in missing if name != "latitude"]
+        why = (
+            ""
+            if not model
+            else " (for the geomagnetic model)"
+            if model == missing
+            else f" (the geomagnetic model needs the {_listed(model)})"
+        )
+        given = f"the {stage} stage's `{param}`, or " if param else ""
+        fields = _listed([f"`{name}`" for name in missing])
+        flags = " ".join(f"--well {name}=…" for name in missing)
+        super().__init__(
+            f"the {stage} stage needs the site {_listed(missing)}{why}: set {given}the well's "
+            f"{fields} in the pipeline's `well:` block, on the command line ({flags}) or in "
+            "the input file's header"
+        )
+
+
+def _listed(names: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
+
+
 @dataclass(frozen=True)
 class RuleFailure:
     """One failed contract rule on one column."""

@@ -112,12 +112,13 @@ def test_stage_registers_and_runs() -> None:
     from types import SimpleNamespace
 
     from pipeline.stages.continuous import continuous_stage, gyropipe_register_stages
+    from pipeline.well import WellMetadata
 
     defs: list[Any] = []
     gyropipe_register_stages(defs.append)
     assert defs[0].name == "integrate_continuous"
     sim, stops = run()
-    ctx: Any = SimpleNamespace(well=SimpleNamespace(latitude=LAT), stage_id="c")
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), stage_id="c")
     out = continuous_stage(
         {"samples": sim.samples, "stops": stops},
         ContinuousOptions(spacing=10.0, odometer_window=0.07),

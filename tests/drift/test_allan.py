@@ -18,6 +18,7 @@ from pipeline.drift.allan import (
     recommend_dwell,
 )
 from pipeline.drift.tables import AllanResult, DwellRecommendation, NoiseParameters
+from pipeline.errors import MissingSiteError
 from pipeline.sim.sensors import AccelerometerErrors, GyroErrors, measure
 from pipeline.stages import drift as drift_plugin
 from pipeline.tables import RawSamples
@@ -145,7 +146,7 @@ def test_allan_stage_on_raw_samples():
     dwell = out["dwell"].to_pylist()[0]
     assert dwell["achievable"] and dwell["sigma_azi"] <= 1.0
     assert dwell["axis"] in ("gyro_x", "gyro_y", "gyro_z")
-    with pytest.raises(drift_plugin.MissingLatitude):
+    with pytest.raises(MissingSiteError, match="allan stage's `latitude`"):
         drift_plugin.allan_stage({"samples": samples}, params, SimpleNamespace(well=WellMetadata()))
     gap = samples.filter(pa.array(np.arange(samples.num_rows) != 5000))
     with pytest.raises(ValueError, match="uniformly sampled"):

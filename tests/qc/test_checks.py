@@ -18,16 +18,10 @@ from scipy.stats import t as student_t
 from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import ModelValidityError
-from pipeline.earth.site import Site
-from pipeline.qc.checks import (
-    QcInputError,
-    QcOptions,
-    QcStop,
-    Tolerance,
-    drop_stations,
-    site_from_well,
-    station_checks,
-)
+from pipeline.earth.site import Site, resolve_site
+from pipeline.errors import MissingSiteError
+from pipeline.qc.engine import drop_stations, station_checks
+from pipeline.qc.options import QcInputError, QcOptions, QcStop, Tolerance
 from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
@@ -341,15 +335,16 @@ def test_readings_without_std_are_checked_against_the_absolute_parts_only(tmp_pa
 
 
 def test_bad_metadata_raises_typed_errors(tmp_path: Path):
-    with pytest.raises(QcInputError, match="latitude"):
-        site_from_well(WellMetadata(longitude=73.4, survey_date=dt.date(2026, 11, 21)))
-    with pytest.raises(QcInputError, match="survey_date"):
-        site_from_well(WellMetadata(latitude=61.25, longitude=73.4))
-    with pytest.raises(QcInputError, match="longitude"):
-        site_from_well(WellMetadata(latitude=61.25, survey_date=dt.date(2026, 11, 21)))
-    site = site_from_well(
-        WellMetadata(latitude=61.25, longitude=73.4, survey_date=dt.date(2026, 11, 21))
-    )
+    def qc_site(well: WellMetadata) -> Site:
+        return resolve_site(well, stage="validity_checks", param=None, field=True)
+
+    with pytest.raises(MissingSiteError, match="latitude"):
+        qc_site(WellMetadata(longitude=73.4, survey_date=dt.date(2026, 11, 21)))
+    with pytest.raises(MissingSiteError, match="survey_date"):
+        qc_site(WellMetadata(latitude=61.25, longitude=73.4))
+    with pytest.raises(MissingSiteError, match="longitude"):
+        qc_site(WellMetadata(latitude=61.25, survey_date=dt.date(2026, 11, 21)))
+    site = qc_site(WellMetadata(latitude=61.25, longitude=73.4, survey_date=dt.date(2026, 11, 21)))
     assert site.latitude == 61.25 and site.magnetic is None
 
     sim, readings, _ = point_run(random_well(tmp_path / "w.csv", 2, seed=4), WHITE)

@@ -15,14 +15,10 @@ import pyarrow.compute as pc
 import pytest
 
 from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.qc.checks import (
-    ISOLATED,
-    VECTOR_CHECKS,
-    QcOptions,
-    Tolerance,
-    readings_sensors,
-    station_checks,
-)
+from pipeline.qc.engine import ISOLATED, station_checks
+from pipeline.qc.options import QcOptions, Tolerance
+from pipeline.qc.sensors import readings_sensors
+from pipeline.qc.vector_checks import VECTOR_CHECKS
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from tests_support import read_stations

@@ -13,7 +13,7 @@ import pytest
 
 from pipeline.earth.frames import body_to_ned, earth_rate_ned, to_body
 from pipeline.earth.site import Site
-from pipeline.qc.checks import Limit, QcInputError, QcOptions, QcStop
+from pipeline.qc.options import Limit, QcInputError, QcOptions, QcStop
 from pipeline.qc.tables import MagneticAnomalies, QcResults
 from pipeline.qc.windows import anomaly_intervals, stationary, window_checks
 from pipeline.sim.simulate import Simulation, simulate

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from pipeline.earth.frames import body_to_ned, inclination_toolface, to_body
 from pipeline.earth.geomagnetic import reference_field
 from pipeline.earth.site import MagneticReference
+from pipeline.errors import MissingSiteError
 from pipeline.stages.survey import MinCurveParams, min_curve
 from pipeline.stages.uncertainty import (
     PositionUncertainty,
@@ -358,5 +359,5 @@ def test_stage_mwd_parameters_are_checked() -> None:
         UncertaintyParams(model="MWD")
     md = np.arange(0.0, 91.0, 30.0)
     traj, ctx = _trajectory(md, np.zeros(4), np.zeros(4), "true", WellMetadata(latitude=60.0))
-    with pytest.raises(ValueError, match=r"needs `magnetic`.*longitude.*survey_date"):
+    with pytest.raises(MissingSiteError, match=r"longitude and survey_date.*stage's `magnetic`"):
         position_uncertainty(traj, UncertaintyParams(model="ISCWSA-MWD-REV5"), ctx)

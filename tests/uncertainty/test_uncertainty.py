@@ -11,6 +11,7 @@ import pyarrow as pa
 import pytest
 from numpy.typing import NDArray
 
+from pipeline.errors import MissingSiteError
 from pipeline.stages.survey import MinCurveParams, min_curve
 from pipeline.stages.uncertainty import (
     PositionUncertainty,
@@ -351,7 +352,7 @@ def test_stage_needs_latitude() -> None:
     md = np.arange(0.0, 91.0, 30.0)
     ctx: Any = SimpleNamespace(well=WellMetadata())
     traj = min_curve({"stations": _stations(md, [0, 1, 2, 3], [0, 0, 0, 0])}, MinCurveParams(), ctx)
-    with pytest.raises(ValueError, match="latitude"):
+    with pytest.raises(MissingSiteError, match="position_uncertainty stage's `latitude`"):
         position_uncertainty(traj, UncertaintyParams(), ctx)
 
 

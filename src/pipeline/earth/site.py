@@ -1,4 +1,5 @@
-"""The survey site: wellhead position, date and the Earth references derived from them."""
+"""The survey site: wellhead position, date and the Earth references derived from them; and
+where a stage finds it (:func:`resolve_site`)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.earth.frames import FloatArray, earth_rate_ned
 from pipeline.earth.gravity import normal_gravity
+from pipeline.errors import MissingSiteError
+from pipeline.well import WellMetadata
 
 
 class MagneticReference(BaseModel):
@@ -52,3 +55,40 @@ class Site(BaseModel):
     def earth_rate(self) -> FloatArray:
         """Earth rate in NED at the wellhead, rad/s."""
         return earth_rate_ned(np.radians(self.latitude))
+
+
+def resolve_site(
+    well: WellMetadata,
+    *,
+    stage: str,
+    latitude: float | None = None,
+    param: str | None = "latitude",
+    field: bool = False,
+) -> Site:
+    """The site a stage works at. The latitude is the stage's own (``latitude``, from its
+    parameter ``param``) when given, else the well's; with ``field`` (a geomagnetic model
+    will be evaluated) the well's longitude and survey date are needed too. Whatever else the
+    well knows is kept: longitude (else 0), survey date, and its elevation above sea level
+    standing in for the ellipsoidal height (else 0; the geoid's tens of metres change
+    gravity by < 1e-4 m/s²). Raises :class:`~pipeline.errors.MissingSiteError` naming
+    ``stage``, every value missing and where each may be given."""
+    if latitude is None:
+        latitude = well.latitude
+    missing = [
+        name
+        for name, absent in (
+            ("latitude", latitude is None),
+            ("longitude", field and well.longitude is None),
+            ("survey_date", field and well.survey_date is None),
+        )
+        if absent
+    ]
+    if missing:
+        raise MissingSiteError(stage, missing, param)
+    assert latitude is not None
+    return Site(
+        latitude=latitude,
+        longitude=well.longitude or 0.0,
+        elevation=well.elevation or 0.0,
+        date=well.survey_date,
+    )

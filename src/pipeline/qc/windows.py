@@ -21,7 +21,7 @@ intervals (:func:`anomaly_intervals`).
 
 Overlapping windows (step < window) repeat evaluations of the same samples: count failures
 per interval, not per row. Windows carry no station: ``drop`` policies only mark rows;
-``stop`` raises :class:`~pipeline.qc.checks.QcStop` naming the window's times.
+``stop`` raises :class:`~pipeline.qc.options.QcStop` naming the window's times.
 """
 
 from __future__ import annotations
@@ -35,27 +35,21 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import MagneticReference, Site
-from pipeline.qc.checks import (
-    DEFAULTS,
+from pipeline.qc.engine import isolate_rows, raise_on_stop, results_table
+from pipeline.qc.options import DEFAULTS, QcInputError, QcOptions
+from pipeline.qc.reference import earth_reference
+from pipeline.qc.sensors import Sensors, gyro_axes, has_data
+from pipeline.qc.tables import MagneticAnomalies
+from pipeline.qc.vector_checks import (
     VECTOR_CHECKS,
     BoolArray,
     IntArray,
     Keys,
-    QcInputError,
-    QcOptions,
     Rows,
-    Sensors,
-    earth_reference,
-    gyro_axes,
-    has_data,
-    isolate_rows,
     judge,
     limit_rows,
-    raise_on_stop,
-    results_table,
     vector_checks,
 )
-from pipeline.qc.tables import MagneticAnomalies
 from pipeline.tables import RawSamples
 
 DEG_S = 3600.0
@@ -195,8 +189,8 @@ def _md_motion(win: _Windows, time: FloatArray, md: FloatArray) -> tuple[FloatAr
 def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) -> pa.Table:
     """Check continuous raw samples (RawSamples) window by window (module docstring).
     Returns QcResults rows with window times (station and position null, md the window's
-    median MD). Raises :class:`~pipeline.qc.checks.QcStop` when a check with policy
-    ``stop`` fails, :class:`~pipeline.qc.checks.QcInputError` for data shorter than a
+    median MD). Raises :class:`~pipeline.qc.options.QcStop` when a check with policy
+    ``stop`` fails, :class:`~pipeline.qc.options.QcInputError` for data shorter than a
     window."""
     data = _Samples.read(samples)
     win = _Windows(data.time, options)

@@ -8,13 +8,10 @@ import pyarrow as pa
 
 from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.compass.solve import CompassOptions, compass
+from pipeline.earth.site import resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
-
-
-class MissingLatitude(ValueError):
-    """Compassing needs the site latitude."""
 
 
 def readings_stage(
@@ -28,13 +25,8 @@ def compass_stage(
     inputs: Mapping[str, pa.Table], params: CompassOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Solve inclination, azimuth and toolfaces of every station."""
-    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
-    if latitude is None:
-        raise MissingLatitude(
-            "the site latitude is unknown: set the well's latitude (file header, pipeline "
-            "`well:`, --well latitude=…) or the compass stage's `latitude`"
-        )
-    stations, rejects = compass(inputs["readings"], latitude, params)
+    site = resolve_site(ctx.well, stage="compass", latitude=params.latitude)
+    stations, rejects = compass(inputs["readings"], site.latitude, params)
     return {"stations": stations, "rejects": rejects}
 
 

@@ -12,9 +12,9 @@ from pipeline.continuous import (
     ContinuousStations,
     integrate_continuous,
 )
+from pipeline.earth.site import resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
-from pipeline.stages.compass import MissingLatitude
 from pipeline.tables import CompassStations, RawSamples
 
 
@@ -22,12 +22,8 @@ def continuous_stage(
     inputs: Mapping[str, pa.Table], params: ContinuousOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Integrate the azimuth of the moving run; close it on the end stop."""
-    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
-    if latitude is None:
-        raise MissingLatitude(
-            "the site latitude is unknown: set the well's latitude or the stage's `latitude`"
-        )
-    result = integrate_continuous(inputs["samples"], inputs["stops"], latitude, params)
+    site = resolve_site(ctx.well, stage="integrate_continuous", latitude=params.latitude)
+    result = integrate_continuous(inputs["samples"], inputs["stops"], site.latitude, params)
     misclosure = f"{result.misclosure:.6g}".encode()
     stations = result.stations.replace_schema_metadata(
         {**(result.stations.schema.metadata or {}), b"misclosure_deg": misclosure}

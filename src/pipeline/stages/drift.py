@@ -31,14 +31,11 @@ from pipeline.drift.tables import (
     InOutQc,
     NoiseParameters,
 )
+from pipeline.earth.site import resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.stages.files import read_stage_def
 from pipeline.tables import FreeGyroReadings, RawSamples
-
-
-class MissingLatitude(ValueError):
-    """The dwell recommendation needs the site latitude."""
 
 
 def calibrate_stage(
@@ -82,13 +79,8 @@ def allan_stage(
     inputs: Mapping[str, pa.Table], params: AllanOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Static raw samples → Allan deviations, noise terms and the recommended dwell."""
-    latitude = params.latitude if params.latitude is not None else ctx.well.latitude
-    if latitude is None:
-        raise MissingLatitude(
-            "the dwell recommendation needs the site latitude: set the well's latitude or "
-            "the allan stage's `latitude`"
-        )
-    allan, noise, dwell = analyse_static(inputs["samples"], params, latitude)
+    site = resolve_site(ctx.well, stage="allan", latitude=params.latitude)
+    allan, noise, dwell = analyse_static(inputs["samples"], params, site.latitude)
     return {"allan": allan, "noise": noise, "dwell": dwell}
 
 

@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from pipeline.contracts import column
 from pipeline.earth.geomagnetic import reference_field
-from pipeline.earth.site import MagneticReference
+from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.survey.north import convert_azimuth
@@ -203,9 +203,7 @@ def _gyro(
     stop's σ when that stop is inclined at least the model's ``static_end_inc`` (a
     near-vertical stop's azimuth does not initialise the run: the model's stationary terms
     and its inclination gate apply, as without stops)."""
-    latitude = params.latitude if params.latitude is not None else well.latitude
-    if latitude is None:
-        raise ValueError("position_uncertainty needs a latitude: set it or the well's latitude")
+    latitude = resolve_site(well, stage="position_uncertainty", latitude=params.latitude).latitude
     overrides: dict[str, Any] = dict(params.tool)
     tool = replace(GYRO_PRESETS[params.model], **overrides)
     if params.init_sigma_azi is not None and not tool.continuous:
@@ -253,14 +251,9 @@ def _mwd(
 
 def _wellhead_field(well: WellMetadata) -> MagneticReference:
     """WMM2025 at the wellhead on the survey date (elevation above sea level as height)."""
-    lat, lon, date = well.latitude, well.longitude, well.survey_date
-    if lat is None or lon is None or date is None:
-        named = (("latitude", lat), ("longitude", lon), ("survey_date", date))
-        raise ValueError(
-            "position_uncertainty with an MWD model needs `magnetic` or the well's "
-            f"{[name for name, value in named if value is None]} (for the WMM2025 field)"
-        )
-    return reference_field(lat, lon, well.elevation or 0.0, date).reference()
+    site = resolve_site(well, stage="position_uncertainty", param="magnetic", field=True)
+    assert site.date is not None
+    return reference_field(site.latitude, site.longitude, site.elevation, site.date).reference()
 
 
 @hookimpl

@@ -1,7 +1,8 @@
 """Built-in plugin: validity checks of raw sensor data (DOMAIN.md §3) as pipeline stages.
 
-The site (latitude, longitude, elevation, survey date) comes from the well metadata; the
-geomagnetic reference from the model chosen in the options.
+The site (latitude, longitude, elevation, survey date) comes from the well metadata
+(:func:`~pipeline.earth.site.resolve_site`); the geomagnetic reference from the model chosen
+in the options.
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ import pyarrow as pa
 
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import field_model
-from pipeline.earth.site import Site
+from pipeline.earth.site import Site, resolve_site
 from pipeline.hookspecs import hookimpl
-from pipeline.qc.checks import QcOptions, drop_stations, site_from_well, station_checks
+from pipeline.qc.engine import drop_stations, station_checks
+from pipeline.qc.options import QcOptions
 from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
 from pipeline.qc.windows import anomaly_intervals, window_checks
 from pipeline.registry import StageContext, StageDef
@@ -30,7 +32,7 @@ def station_stage(
 ) -> dict[str, pa.Table]:
     """Check every station × frame position; the readings of dropped stations are removed."""
     readings, samples = inputs["readings"], inputs.get("samples")
-    site = site_from_well(ctx.well, field=_has_field(samples))
+    site = resolve_site(ctx.well, stage="validity_checks", param=None, field=_has_field(samples))
     qc, summary = station_checks(readings, site, params, samples=samples)
     qc = with_references(qc, site, params, field=_has_field(samples))
     return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}
@@ -41,7 +43,7 @@ def window_stage(
 ) -> dict[str, pa.Table]:
     """Check continuous samples on sliding windows; list magnetic anomaly intervals."""
     samples = inputs["samples"]
-    site = site_from_well(ctx.well, field=_has_field(samples))
+    site = resolve_site(ctx.well, stage="window_checks", param=None, field=_has_field(samples))
     qc = with_references(
         window_checks(samples, site, params), site, params, field=_has_field(samples)
     )
