@@ -75,17 +75,6 @@ LAYERS: dict[str, int] = {
 """Module prefix → layer rank (higher imports lower). A prefix covers its submodules, except
 the bare package name, which is ``pipeline/__init__.py`` alone."""
 
-KNOWN_VIOLATIONS = {
-    # the mcap reader's modules import each other (being untangled)
-    "circle: pipeline.io.mcap, pipeline.io.mcap_keyed, pipeline.io.mcap_sources",
-    # choose_reader lives in a stage module (being moved down)
-    "upward: pipeline.convert -> pipeline.stages.files",
-    "upward: pipeline.sim.spec -> pipeline.stages.files",
-}
-"""Violations being fixed elsewhere. The list can only shrink: a listed violation that is
-gone fails the test too, so that it is struck from here."""
-
-
 @dataclass(frozen=True)
 class Import:
     importer: str
@@ -97,7 +86,7 @@ class Import:
 @dataclass(frozen=True)
 class Violation:
     key: str
-    """What :data:`KNOWN_VIOLATIONS` names it by."""
+    """A short name of the violation (``circle: a, b`` or ``upward: a -> b``)."""
     detail: str
 
 
@@ -273,11 +262,8 @@ def _layer_name(rank: int, names: Mapping[int, str]) -> str:
 
 
 def test_layers_are_kept() -> None:
-    found = violations(ROOT / "src", PACKAGE, LAYERS)
-    new = [v.detail for v in found if v.key not in KNOWN_VIOLATIONS]
-    assert not new, "layering violations (docs/architecture.md):\n" + "\n".join(new)
-    gone = sorted(KNOWN_VIOLATIONS - {v.key for v in found})
-    assert not gone, "fixed; strike from KNOWN_VIOLATIONS:\n" + "\n".join(gone)
+    found = [v.detail for v in violations(ROOT / "src", PACKAGE, LAYERS)]
+    assert not found, "layering violations (docs/architecture.md):\n" + "\n".join(found)
 
 
 def test_every_layer_prefix_names_a_module() -> None:

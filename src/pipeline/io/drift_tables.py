@@ -30,7 +30,7 @@ from pipeline.drift.tables import CalibrationReadings, CalibrationResult
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
-from pipeline.registry import ReaderDef
+from pipeline.registry import Claim, ReaderDef
 from pipeline.tables import FreeGyroReadings
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
@@ -66,9 +66,11 @@ def read_drift_table(path: Path, kind: str, options: Any) -> tuple[pa.Table, Wel
     return _read_csv(path, contract, default)
 
 
-def sniff(path: Path) -> bool:
-    """Parquet files and .csv/.txt/.tsv files."""
-    return parquet.sniff(path) or path.suffix.lower() in CSV_SUFFIXES
+def sniff(path: Path) -> Claim:
+    """By content, a Parquet file; by name, a .csv/.txt/.tsv file."""
+    if parquet.sniff(path):
+        return Claim.CONTENT
+    return Claim.NAME if path.suffix.lower() in CSV_SUFFIXES else Claim.NO
 
 
 def _read_csv(

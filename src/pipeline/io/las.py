@@ -76,7 +76,7 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
 
 
 def sniff(path: Path) -> bool:
-    """True if the first line that is neither blank nor a ``#`` comment opens ``~V``."""
+    """By content: the first line that is neither blank nor a ``#`` comment opens ``~V``."""
     head = file_head(path, SNIFF_BYTES)
     if head is None:
         return False

@@ -52,7 +52,7 @@ from pipeline.well import WellMetadata
 
 
 def sniff(path: Path) -> bool:
-    """True if the file starts with the MCAP magic bytes."""
+    """By content: the file starts with the MCAP magic bytes."""
     try:
         with open(path, "rb") as fh:
             return fh.read(len(MAGIC)) == MAGIC

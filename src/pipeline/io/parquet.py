@@ -22,7 +22,7 @@ MAGIC = b"PAR1"
 
 
 def sniff(path: Path) -> bool:
-    """True if the file starts with the Parquet magic bytes."""
+    """By content: the file starts with the Parquet magic bytes."""
     try:
         with open(path, "rb") as fh:
             return fh.read(4) == MAGIC

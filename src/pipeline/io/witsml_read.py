@@ -95,7 +95,7 @@ class _Refused(Exception):
 
 
 def sniff(path: Path) -> bool:
-    """True if the file's first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
+    """By content: the first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
     head = file_head(path, SNIFF_BYTES)
     return head is not None and bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
 

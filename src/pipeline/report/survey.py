@@ -84,7 +84,7 @@ def section_azimuth(
     (c, s), *_ = np.linalg.lstsq(design, vs, rcond=None)
     if np.hypot(c, s) < 0.5:
         return None
-    return float(np.degrees(np.arctan2(s, c)) % 360.0)
+    return round(float(np.degrees(np.arctan2(s, c))), 6) % 360.0  # −1e-13° is 0°, not 360°
 
 
 def survey_document(
