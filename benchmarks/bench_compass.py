@@ -13,8 +13,8 @@ from __future__ import annotations
 import sys
 import timeit
 
-from pipeline.compass.readings import position_readings
-from pipeline.compass.solve import CompassOptions, compass
+from pipeline.gyrocompass.readings import position_readings
+from pipeline.gyrocompass.solve import CompassOptions, compass
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 

@@ -1,5 +1,113 @@
-"""gyropipe: gyroscopic well-survey processing as a DAG of pluggable stages over Arrow tables."""
+"""gyropipe: gyroscopic well-survey processing as a DAG of pluggable stages over Arrow tables.
+
+The Python API (``import pipeline as gp``)::
+
+    stations = gp.read("survey.csv")                  # DataFrame, units in .attrs
+    trajectory = gp.minimum_curvature(stations, vs_azimuth=37.5)
+    result = gp.run("pipelines/point-gyro.yaml", {"samples": "well-1.mcap"})
+    result.frame("trajectory.trajectory")
+
+Functions take pandas DataFrames or Arrow tables and return the same kind; units are
+canonical (m, deg, deg/h, m/s², nT, s) unless a table declares others, which are converted
+(:mod:`pipeline.api.frames`). Everything not listed in ``__all__`` is internal. Plugin
+authors import from :mod:`pipeline.plugin`.
+
+Names are loaded on first use, so ``import pipeline`` (and the command line) stays fast.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from pipeline.version import __version__
 
-__all__ = ["__version__"]
+if TYPE_CHECKING:
+    from pipeline.api.frames import TableLike, to_frame, to_table
+    from pipeline.api.functions import (
+        Tables,
+        calibrate_drift,
+        compass,
+        correct_drift,
+        integrate_continuous,
+        interpolate,
+        minimum_curvature,
+        position_readings,
+        position_uncertainty,
+        read,
+        read_table,
+        report,
+        simulate,
+        survey_method,
+        validity_checks,
+        write,
+    )
+    from pipeline.api.run import RunResult, run
+    from pipeline.errors import GyropipeError
+    from pipeline.well import WellMetadata
+
+_HOMES = {
+    "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
+    "pipeline.api.functions": (
+        "Tables",
+        "calibrate_drift",
+        "compass",
+        "correct_drift",
+        "integrate_continuous",
+        "interpolate",
+        "minimum_curvature",
+        "position_readings",
+        "position_uncertainty",
+        "read",
+        "read_table",
+        "report",
+        "simulate",
+        "survey_method",
+        "validity_checks",
+        "write",
+    ),
+    "pipeline.api.run": ("RunResult", "run"),
+    "pipeline.errors": ("GyropipeError",),
+    "pipeline.well": ("WellMetadata",),
+}
+_HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
+
+__all__ = [
+    "GyropipeError",
+    "RunResult",
+    "TableLike",
+    "Tables",
+    "WellMetadata",
+    "__version__",
+    "calibrate_drift",
+    "compass",
+    "correct_drift",
+    "integrate_continuous",
+    "interpolate",
+    "minimum_curvature",
+    "position_readings",
+    "position_uncertainty",
+    "read",
+    "read_table",
+    "report",
+    "run",
+    "simulate",
+    "survey_method",
+    "to_frame",
+    "to_table",
+    "validity_checks",
+    "write",
+]
+
+
+def __getattr__(name: str) -> Any:
+    module = _HOME_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module 'pipeline' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -7,12 +7,17 @@ even if the process is killed mid-write.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import errno
 import os
+import shutil
+import sys
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
 TEMP_PREFIX = ".gyropipe-tmp-"
+TRASH_SUFFIX = ".trash"
 
 
 @contextlib.contextmanager
@@ -35,14 +40,6 @@ def atomic_write_bytes(final: Path, data: bytes) -> None:
         tmp.write_bytes(data)
 
 
-def publish(staged: Path, final: Path) -> None:
-    """Move a complete, staged file to its final name atomically (same filesystem)."""
-    fsync_file(staged)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    os.replace(staged, final)
-    fsync_dir(final.parent)
-
-
 def fsync_file(path: Path) -> None:
     with open(path, "rb") as fh:
         os.fsync(fh.fileno())
@@ -54,3 +51,51 @@ def fsync_dir(path: Path) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+def replace_dir(staging: Path, final: Path) -> None:
+    """Put the complete directory ``staging`` at ``final`` (same filesystem) and delete what
+    was there. Where the OS can swap two paths in one step (Linux ``renameat2`` with
+    ``RENAME_EXCHANGE``) a reader sees the old complete directory or the new one, never
+    neither and never a mixture; elsewhere the old one is first renamed away, so for a moment
+    neither exists. Several publishers of one ``final`` leave the last one's directory."""
+    fsync_dir(staging)
+    trash = staging.parent / f".{final.name}.{uuid.uuid4().hex[:8]}{TRASH_SUFFIX}"
+    while True:
+        try:
+            os.rename(staging, final)
+            break
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR):
+                raise
+        if _exchange(staging, final):
+            os.rename(staging, trash)  # ``staging`` now holds the old directory
+            break
+        try:
+            os.rename(final, trash)
+        except FileNotFoundError:
+            continue  # another publisher moved it away first: try again
+    fsync_dir(final.parent)
+    if staging.parent != final.parent:
+        fsync_dir(staging.parent)
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two existing paths atomically; False where the OS or filesystem cannot."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except AttributeError:  # glibc < 2.28
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p]
+    renameat2.argtypes += [ctypes.c_uint]
+    done = renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange)
+    if done == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+        return False
+    raise OSError(code, os.strerror(code), str(b))

@@ -24,7 +24,7 @@ from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
 from pipeline.graph import Plan, build_plan
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
-from pipeline.runner import RunInputError, run_plan, sha256_file
+from pipeline.runner import RunInputError, sha256_file
 from pipeline.spec import load_spec
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -118,6 +118,8 @@ def run(
     disabled: tuple[str, ...],
 ) -> None:
     """Run a pipeline on one well's input files."""
+    from pipeline.api.run import execute
+
     registry = _registry(disabled)
     plan = _plan(pipeline_file, overrides, registry)
     try:
@@ -127,7 +129,7 @@ def run(
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
     try:
-        result = run_plan(plan, registry, inputs=files, out_dir=Path(out_dir), well=well)
+        result = execute(plan, registry, files, well=well, out=Path(out_dir))
     except RunInputError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
@@ -139,7 +141,7 @@ def run(
         click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
     for path in result.outputs:
         click.echo(f"wrote {path}")
-    click.echo(f"ok: {result.out_dir / 'run.json'}")
+    click.echo(f"ok: {Path(out_dir) / 'run.json'}")
 
 
 @main.command()

@@ -27,10 +27,17 @@ def writer_for(registry: Registry, path: Path) -> WriterDef:
 
 
 def read_any(
-    registry: Registry, path: Path, *, kind: str, reader: str, options: dict[str, Any]
+    registry: Registry,
+    path: Path,
+    *,
+    kind: str,
+    reader: str,
+    options: dict[str, Any],
+    well: WellMetadata | None = None,
 ) -> tuple[pa.Table, WellMetadata]:
     """Read ``path`` as ``kind`` (``auto``: each kind the reader knows, stations first),
-    returning the table of the first kind that reads and the file's well metadata."""
+    returning the table of the first kind that reads and the file's well metadata; reader
+    options marked as well defaults come from ``well``."""
     if not path.is_file():
         raise InputFileError(path, "no such file")
     kinds = KINDS if kind == "auto" else (kind,)
@@ -42,7 +49,7 @@ def read_any(
             problems.append(f"as {candidate}: {exc}")
             continue
         try:
-            return registry.read(path, candidate, reader=chosen.name, options=options)
+            return registry.read(path, candidate, reader=chosen.name, options=options, well=well)
         except ReaderOptionsError:
             raise
         except GyropipeError as exc:

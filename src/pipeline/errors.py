@@ -179,6 +179,10 @@ class StageError(GyropipeError):
         )
 
 
+class ParameterError(GyropipeError):
+    """Parameters given to a function or stage are not valid for it; names each one."""
+
+
 class ReaderChoiceError(GyropipeError):
     """No installed reader, or more than one equally sure, can read a file as the kind of
     table asked for."""

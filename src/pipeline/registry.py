@@ -118,11 +118,23 @@ class StageContext(Protocol):
         """The file given for the pipeline input ``name`` (readers only)."""
         ...
 
+    def read_input(
+        self,
+        name: str,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[pa.Table, WellMetadata]:
+        """The pipeline input ``name`` as a table of ``kind`` and the well metadata it
+        carries: read from its file by :meth:`read_file`, or the table the caller gave."""
+        ...
+
     def output_path(self, filename: str) -> Path:
         """Where a writer stage writes ``filename``; published atomically when the run ends."""
         ...
 
-    def read(
+    def read_file(
         self,
         path: Path,
         kind: str,

@@ -1,29 +1,33 @@
 """Runs one well's DAG: inputs checked against contracts before each stage, outputs after,
-chosen outputs persisted, everything published atomically, a manifest written last.
+chosen outputs persisted, the manifest written, everything published in one step.
 
-Files a run produces are written into a private staging directory inside the output
-directory and moved to their final names only when every stage has succeeded, so a failed
-or interrupted run leaves no final-named file behind.
+A run's files are written into a private staging directory beside the output directory,
+which replaces the output directory whole when every stage has succeeded: a failed or
+killed run changes nothing, and the output directory holds one complete run.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime as dt
+import glob
 import hashlib
 import json
 import os
 import shutil
+import tempfile
 import time
 import uuid
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeAlias, TypeVar
 
 import pyarrow as pa
 
-from pipeline.atomic import atomic_write_bytes, publish
+from pipeline.atomic import atomic_write_bytes, fsync_file, replace_dir
+from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import ContractViolation, GyropipeError, StageError
 from pipeline.graph import Plan, PlannedStage
 from pipeline.registry import (
@@ -60,13 +64,18 @@ class StageRecord:
 
 @dataclass
 class RunResult:
-    """The outcome of a successful run."""
+    """The outcome of a successful run: every stage output table by (stage id, port), the
+    well metadata at the end, and (a run with an output directory) the files published."""
 
-    out_dir: Path
+    out_dir: Path | None
     manifest: dict[str, Any]
     tables: dict[tuple[str, str], pa.Table]
     well: WellMetadata
     outputs: list[Path]
+
+
+Source: TypeAlias = "Path | pa.Table"
+"""What a pipeline input is given as: a file, or a table already read (the Python API)."""
 
 
 @dataclass
@@ -76,13 +85,31 @@ class _Context:
     stage_id: str
     well: WellMetadata
     registry: Registry
-    inputs: Mapping[str, Path]
+    inputs: Mapping[str, Source]
     staging: Path
     staged: list[Path]
     provenance: Provenance
 
     def input_path(self, name: str) -> Path:
-        return self.inputs[name]
+        given = self.inputs[name]
+        if isinstance(given, pa.Table):
+            raise RunInputError(f"input {name!r} was given as a table; this stage needs a file")
+        return given
+
+    def read_input(
+        self,
+        name: str,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[pa.Table, WellMetadata]:
+        given = self.inputs[name]
+        if isinstance(given, pa.Table):
+            return given, well_of(given) or WellMetadata()
+        table, header = self.read_file(given, kind, reader=reader, options=options)
+        meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
+        return table.replace_schema_metadata(meta), header
 
     def output_path(self, filename: str) -> Path:
         path = self.staging / filename
@@ -91,7 +118,7 @@ class _Context:
         self.staged.append(path)
         return path
 
-    def read(
+    def read_file(
         self,
         path: Path,
         kind: str,
@@ -124,33 +151,40 @@ def run_plan(
     plan: Plan,
     registry: Registry,
     *,
-    inputs: Mapping[str, Path],
-    out_dir: Path,
+    inputs: Mapping[str, Source],
+    out_dir: Path | None,
     well: WellMetadata | None = None,
 ) -> RunResult:
     """Run ``plan`` for one well. ``well`` overrides metadata from the pipeline and files.
 
-    Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`; on
-    any failure no output file appears under ``out_dir``.
+    With ``out_dir``, the run's files (stage outputs, persisted tables, ``run.json``) are
+    written into a private staging directory beside it, and ``out_dir`` is replaced by it in
+    one step when every stage has succeeded (:func:`~pipeline.atomic.replace_dir`): a reader
+    sees the previous run or the new one whole, and a failed or killed run changes nothing.
+    ``out_dir`` must be new, empty or hold a previous run (files its ``run.json`` lists);
+    anything else there is refused, never deleted. Without ``out_dir`` nothing is written:
+    stages that only write files are skipped, and the tables are returned.
+
+    Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`.
     """
     files = _check_inputs(plan, inputs)
+    if out_dir is not None:
+        _check_out_dir(out_dir)
     overrides = well or WellMetadata()
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    _remove_stale_staging(out_dir)
-    staging = out_dir / f"{STAGING_PREFIX}{os.getpid()}-{uuid.uuid4().hex[:8]}"
-    staging.mkdir()
     staged: list[Path] = []
     tables: dict[tuple[str, str], pa.Table] = {}
     records: list[StageRecord] = []
-    started = dt.datetime.now(dt.UTC)
-    provenance = _provenance(plan, registry, files, started)
+    provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
-    try:
+    with _staging(out_dir) as staging:
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
+            if out_dir is None and not st.definition.outputs:
+                record.status = "skipped"  # it only writes files
+                continue
             ins = {port: tables[src] for port, src in st.wiring.items()}
             record.rows_in = {p: t.num_rows for p, t in ins.items()}
             _check_ports(plan, st, ins, "input")
@@ -167,21 +201,98 @@ def run_plan(
                 tables[(st.id, port)] = table
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"
-        persisted = _persist(plan, registry, tables, current, staging)
-        wall = time.perf_counter() - t_run
-        final = [out_dir / p.name for p in staged + persisted]
-        clashes = {p.name for p in final if final.count(p) > 1} | (
-            {MANIFEST} & {p.name for p in final}
+        if out_dir is None:
+            manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
+            return RunResult(None, manifest, tables, current, [])
+        written = staged + _persist(plan, registry, tables, current, staging)
+        clashes = {p.name for p in written if written.count(p) > 1} | (
+            {MANIFEST} & {p.name for p in written}
         )
         if clashes:
             raise RunInputError(f"several outputs would be written as {sorted(clashes)}")
-        for src, dst in zip(staged + persisted, final, strict=True):
-            publish(src, dst)
-        manifest = _manifest(provenance, current, records, final, wall)
-        atomic_write_bytes(out_dir / MANIFEST, json.dumps(manifest, indent=2).encode())
+        for path in written:
+            fsync_file(path)
+        final = [out_dir / p.name for p in written]
+        wall = time.perf_counter() - t_run
+        manifest = _manifest(
+            provenance, current, records, list(zip(written, final, strict=True)), wall
+        )
+        atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
+        replace_dir(staging, out_dir)
+    return RunResult(out_dir, manifest, tables, current, final)
+
+
+@contextlib.contextmanager
+def _staging(out_dir: Path | None) -> Iterator[Path]:
+    """A private directory for the run's files: beside ``out_dir`` (so it can be renamed to
+    it), or a temporary one; removed unless it was published."""
+    if out_dir is None:
+        with tempfile.TemporaryDirectory(prefix=STAGING_PREFIX) as tmp:
+            yield Path(tmp)
+        return
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale_staging(out_dir)
+    staging = out_dir.parent / f"{_staging_prefix(out_dir)}{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    staging.mkdir()
+    try:
+        yield staging
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    return RunResult(out_dir, manifest, tables, current, final)
+
+
+def _staging_prefix(out_dir: Path) -> str:
+    return f".{out_dir.name}{STAGING_PREFIX}"
+
+
+def _check_out_dir(out_dir: Path) -> None:
+    """``out_dir`` is new, empty, or holds only a previous run's files (module docstring)."""
+    if not out_dir.exists():
+        return
+    if not out_dir.is_dir():
+        raise RunInputError(f"output directory {str(out_dir)!r} is a file")
+    entries = {p.name for p in out_dir.iterdir()}
+    if not entries:
+        return
+    try:
+        previous = json.loads((out_dir / MANIFEST).read_text())
+        known = {MANIFEST} | {entry["file"] for entry in previous["outputs"]}
+    except (OSError, ValueError, KeyError, TypeError):
+        known = set()
+    foreign = sorted(entries - known)
+    if foreign:
+        shown = ", ".join(foreign[:5]) + (", …" if len(foreign) > 5 else "")
+        raise RunInputError(
+            f"output directory {str(out_dir)!r} holds files that are not a previous run's "
+            f"({shown}); a run replaces its output directory whole: give a new or empty one"
+        )
+
+
+def start_time() -> dt.datetime:
+    """Now (UTC), or the time ``SOURCE_DATE_EPOCH`` gives (s since 1970, the reproducible-
+    builds convention): with it set, a run's outputs are byte-identical from run to run."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch is not None and epoch.strip().isdigit():
+        return dt.datetime.fromtimestamp(int(epoch), dt.UTC)
+    return dt.datetime.now(dt.UTC)
+
+
+def run_stage(
+    stage: PlannedStage,
+    inputs: Mapping[str, pa.Table],
+    *,
+    registry: Registry,
+    well: WellMetadata,
+    provenance: Provenance,
+    out_dir: Path,
+) -> tuple[dict[str, pa.Table], list[Path]]:
+    """Run one stage outside a plan (the Python API): its input and output tables checked
+    against the stage's contracts, a failure inside it a :class:`StageError`; it writes its
+    files (if any) into ``out_dir``. Returns its output tables and the files written."""
+    _check_contracts("", stage, inputs, "input")
+    ctx = _Context(stage.id, well, registry, {}, out_dir, [], provenance)
+    outputs = _call(stage, dict(inputs), ctx, registry)
+    _check_contracts("", stage, outputs, "output")
+    return outputs, ctx.staged
 
 
 def _call(
@@ -209,15 +320,21 @@ def _call(
 def _check_ports(
     plan: Plan, st: PlannedStage, tables: Mapping[str, pa.Table], direction: str
 ) -> None:
+    if direction == "input":
+        tables = {p: t for p, t in tables.items() if not _checked_upstream(plan, st, p)}
+    _check_contracts(plan.spec.name, st, tables, direction)
+
+
+def _check_contracts(
+    pipeline: str, st: PlannedStage, tables: Mapping[str, pa.Table], direction: str
+) -> None:
     contracts = st.definition.inputs if direction == "input" else st.definition.outputs
     for port, table in tables.items():
-        if direction == "input" and _checked_upstream(plan, st, port):
-            continue
         try:
             contracts[port].validate_table(table)
         except ContractViolation as exc:
             raise exc.located(
-                pipeline=plan.spec.name, stage=st.id, port=port, direction=direction
+                pipeline=pipeline, stage=st.id, port=port, direction=direction
             ) from None
 
 
@@ -229,21 +346,21 @@ def _checked_upstream(plan: Plan, st: PlannedStage, port: str) -> bool:
     return producer.definition.outputs[out_port] is st.definition.inputs[port]
 
 
-def _check_inputs(plan: Plan, given: Mapping[str, Path]) -> dict[str, Path]:
+def _check_inputs(plan: Plan, given: Mapping[str, Source]) -> dict[str, Source]:
     declared = plan.spec.inputs
     problems = [f"unknown input {n!r}" for n in given if n not in declared]
     problems += [f"missing input {n!r}: give --input {n}=FILE" for n in declared if n not in given]
     problems += [
         f"input {n!r}: no such file {str(p)!r}"
         for n, p in given.items()
-        if n in declared and not Path(p).is_file()
+        if n in declared and not isinstance(p, pa.Table) and not Path(p).is_file()
     ]
     if problems:
         names = ", ".join(declared) or "none"
         raise RunInputError(
             f"pipeline {plan.spec.name!r} (inputs: {names}): " + "; ".join(problems)
         )
-    return {n: Path(p) for n, p in given.items()}
+    return {n: p if isinstance(p, pa.Table) else Path(p) for n, p in given.items()}
 
 
 def _persist(
@@ -273,7 +390,7 @@ def _provenance(
         pipeline_sha256=plan.digest,
         gyropipe=__version__,
         plugins={n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
-        inputs={n: InputFile(**_file_entry(p)) for n, p in files.items()},
+        inputs={n: _input_entry(source) for n, source in files.items()},
         started=started,
         stages=tuple(
             StageSetup(
@@ -288,9 +405,10 @@ def _manifest(
     provenance: Provenance,
     well: WellMetadata,
     records: list[StageRecord],
-    outputs: list[Path],
+    outputs: list[tuple[Path, Path]],
     wall: float,
 ) -> dict[str, Any]:
+    """``run.json``; ``outputs`` are (file written, its published path) pairs."""
     return {
         "status": "ok",
         "gyropipe": provenance.gyropipe,
@@ -317,12 +435,26 @@ def _manifest(
             }
             for r in records
         ],
-        "outputs": [{"file": p.name, **_file_entry(p)} for p in outputs],
+        "outputs": [
+            {"file": final.name, **_file_entry(written), "path": str(final)}
+            for written, final in outputs
+        ],
     }
 
 
 def _file_entry(path: Path) -> dict[str, Any]:
     return {"path": str(path), "sha256": sha256_file(path), "bytes": path.stat().st_size}
+
+
+def _input_entry(source: Source) -> InputFile:
+    """A file's path, hash and size; a table given in memory: its Arrow IPC stream's."""
+    if isinstance(source, Path):
+        return InputFile(**_file_entry(source))
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, source.schema) as writer:
+        writer.write_table(source)
+    data = sink.getvalue()
+    return InputFile("<table>", hashlib.sha256(data).hexdigest(), data.size)
 
 
 def sha256_file(path: Path) -> str:
@@ -335,9 +467,10 @@ def sha256_file(path: Path) -> str:
 
 
 def _remove_stale_staging(out_dir: Path) -> None:
-    """Remove staging directories of runs whose process no longer exists."""
-    for entry in out_dir.glob(STAGING_PREFIX + "*"):
-        pid_text = entry.name[len(STAGING_PREFIX) :].split("-", 1)[0]
+    """Remove staging directories of runs into ``out_dir`` whose process no longer exists."""
+    prefix = _staging_prefix(out_dir)
+    for entry in out_dir.parent.glob(glob.escape(prefix) + "*"):
+        pid_text = entry.name[len(prefix) :].split("-", 1)[0]
         if pid_text.isdigit() and not process_alive(int(pid_text)):
             shutil.rmtree(entry, ignore_errors=True)
 

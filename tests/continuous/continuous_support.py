@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, compass
 from pipeline.continuous import ContinuousResult
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.solve import CompassOptions, compass
 from pipeline.sim.simulate import Simulation
 from pipeline.sim.spec import SimulationSpec
 from pipeline.survey.mincurve import minimum_curvature

@@ -23,12 +23,12 @@ import pytest
 from continuous_support import LAT, SITE, compassed
 from numpy.typing import NDArray
 
-from pipeline.compass.solve import CompassOptions
 from pipeline.continuous import (
     FLAG_NEAR_VERTICAL,
     ContinuousOptions,
     integrate_continuous,
 )
+from pipeline.gyrocompass.solve import CompassOptions
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.stages.survey import MinCurveParams, min_curve

@@ -15,11 +15,11 @@ import pytest
 from scipy.stats import binom
 from scipy.stats import t as student_t
 
-from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import ModelValidityError
 from pipeline.earth.site import Site, resolve_site
 from pipeline.errors import MissingSiteError
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.qc.engine import drop_stations, station_checks
 from pipeline.qc.options import QcInputError, QcOptions, QcStop, Tolerance
 from pipeline.qc.tables import QcResults, QcSummary

@@ -14,7 +14,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
 
-from pipeline.compass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.qc.engine import ISOLATED, station_checks
 from pipeline.qc.options import QcOptions, Tolerance
 from pipeline.qc.sensors import readings_sensors

@@ -12,9 +12,9 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.compass.azimuth import cramer_rao
-from pipeline.compass.precision import hr_covariance, position_design
 from pipeline.errors import SpecError
+from pipeline.gyrocompass.azimuth import cramer_rao
+from pipeline.gyrocompass.precision import hr_covariance, position_design
 from pipeline.sim.budget import error_budget
 from pipeline.sim.freegyro import simulate_free_gyro
 from pipeline.sim.spec import load_simulation

@@ -7,22 +7,18 @@ the ledger run that produced it — or does not exist.
 
 from __future__ import annotations
 
-import errno
 import json
-import os
 import shutil
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.atomic import atomic_write_bytes, fsync_dir
+from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes
 from pipeline.runner import MANIFEST
 
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
 STAGING_SUFFIX = ".staging"
-TRASH_SUFFIX = ".trash"
 
 
 @dataclass(frozen=True)
@@ -50,27 +46,6 @@ def staging_run_id(entry: Path) -> int | None:
 def write_marker(staging: Path, record: dict[str, Any]) -> None:
     """Write ``batch.json`` (well, run id, batch id, fingerprint) into the staging dir."""
     atomic_write_bytes(staging / MARKER, json.dumps(record, indent=2).encode())
-
-
-def publish_dir(staging: Path, final: Path) -> None:
-    """Replace ``final`` by ``staging`` (same filesystem). A reader sees the old complete
-    directory or the new one; several publishers of one well leave the last one's."""
-    fsync_dir(staging)
-    trash = staging.parent / f"{final.name}.{uuid.uuid4().hex[:8]}{TRASH_SUFFIX}"
-    while True:
-        try:
-            os.rename(staging, final)
-            break
-        except OSError as exc:
-            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
-                raise
-        try:
-            os.rename(final, trash)
-        except FileNotFoundError:
-            continue  # another publisher moved it away first: try again
-    fsync_dir(final.parent)
-    fsync_dir(staging.parent)
-    shutil.rmtree(trash, ignore_errors=True)
 
 
 def read_published(well_dir: Path) -> PublishedRun | None:

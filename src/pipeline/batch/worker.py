@@ -21,7 +21,7 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
-from pipeline.atomic import atomic_write_bytes
+from pipeline.atomic import atomic_write_bytes, replace_dir
 from pipeline.drift.tables import CalibrationResult
 from pipeline.errors import GyropipeError
 from pipeline.graph import Plan, build_plan
@@ -31,7 +31,7 @@ from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
 from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
 
-from .publish import publish_dir, staging_dir, write_marker
+from .publish import staging_dir, write_marker
 
 EXIT_ORPHAN = 70
 ORPHAN_POLL_S = 0.5
@@ -150,7 +150,7 @@ def run_well(task: WellTask) -> WellOutcome:
                 "fingerprint": json.loads(task.fingerprint),
             },
         )
-        publish_dir(staging, final)
+        replace_dir(staging, final)
         return WellOutcome(
             task.well_id,
             task.run_id,

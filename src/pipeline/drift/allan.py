@@ -18,8 +18,8 @@ model's own variance), so every term is read where it dominates:
 
 Dwell: a frame position averaged for τ s has a rate error of about σ(τ) (the fitted curve);
 with the frame positions at equal steps the (h, r) covariance of the least squares
-(:func:`~pipeline.compass.precision.hr_covariance`) is σ(τ)² times a fixed matrix, and
-:func:`~pipeline.compass.azimuth.cramer_rao` gives the azimuth σ, taken at the worst azimuth
+(:func:`~pipeline.gyrocompass.precision.hr_covariance`) is σ(τ)² times a fixed matrix, and
+:func:`~pipeline.gyrocompass.azimuth.cramer_rao` gives the azimuth σ, taken at the worst azimuth
 and starting toolface. Accelerometer noise over the whole station adds its inclination
 error's leak into azimuth, ∂A/∂I = −sin A (cos A tan I − tan φ). The recommended dwell is the
 shortest on a fine grid meeting the target; when none does, the one with the smallest σ.
@@ -37,12 +37,12 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import minimize_scalar, nnls
 
-from pipeline.compass.azimuth import cramer_rao
-from pipeline.compass.positions import DEFAULT_POSITIONS
-from pipeline.compass.precision import hr_covariance
 from pipeline.drift.calibration import FloatArray
 from pipeline.drift.tables import AllanResult, DwellRecommendation, NoiseParameters
 from pipeline.earth.gravity import STANDARD_GRAVITY
+from pipeline.gyrocompass.azimuth import cramer_rao
+from pipeline.gyrocompass.positions import DEFAULT_POSITIONS
+from pipeline.gyrocompass.precision import hr_covariance
 
 FLICKER_FLOOR = float(np.sqrt(2.0 * np.log(2.0) / np.pi))
 """Allan deviation of a flicker bias of instability B, per unit B (0.664)."""

@@ -27,9 +27,9 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from numpy.typing import NDArray
 
-from pipeline.compass.solve import StationReject, fit_positions
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import Site
+from pipeline.gyrocompass.solve import StationReject, fit_positions
 from pipeline.qc.faults import Equation, Finding, isolate
 from pipeline.qc.options import CHECKS, DEFAULTS, QcOptions, QcStop
 from pipeline.qc.reference import EarthReference, earth_reference

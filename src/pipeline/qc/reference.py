@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from pipeline.compass.precision import OMEGA_DEG_H
 from pipeline.earth.geomagnetic import ModelKey, reference_field
 from pipeline.earth.site import MagneticReference, Site
+from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.qc.options import QcInputError
 
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from pipeline.compass.azimuth import cramer_rao
-from pipeline.compass.precision import hr_covariance
+from pipeline.gyrocompass.azimuth import cramer_rao
+from pipeline.gyrocompass.precision import hr_covariance
 from pipeline.sim.sensors import per_axis
 from pipeline.sim.simulate import station_mds
 from pipeline.sim.spec import PointSurvey, SimulationSpec

@@ -13,9 +13,9 @@ from typing import Annotated, Any, Literal
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, field_validator, model_validator
 
-from pipeline.compass.positions import DEFAULT_POSITIONS
 from pipeline.earth.site import Site
 from pipeline.errors import Location, Problem, SpecError
+from pipeline.gyrocompass.positions import DEFAULT_POSITIONS
 from pipeline.sim.plan import WellPath, WellPlan, build_path
 from pipeline.sim.sensors import PRESETS, ToolModel, tool_preset
 from pipeline.yamlsource import load_mapping, validate_located

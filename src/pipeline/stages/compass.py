@@ -6,9 +6,9 @@ from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import CompassOptions, compass
 from pipeline.earth.site import resolve_site
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.solve import CompassOptions, compass
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples

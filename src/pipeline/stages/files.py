@@ -23,7 +23,7 @@ from pydantic import (
 )
 from pydantic_core import InitErrorDetails
 
-from pipeline.contracts import SOURCE_KEY, TableContract
+from pipeline.contracts import TableContract
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
     Registry,
@@ -103,10 +103,10 @@ def read_stage(
     def read(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
     ) -> dict[str, pa.Table]:
-        path = ctx.input_path(params.input)
-        table, header = ctx.read(path, kind, reader=params.reader, options=params.options)
-        meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(path).encode()}
-        return {kind: attach(table.replace_schema_metadata(meta), header)}
+        table, header = ctx.read_input(
+            params.input, kind, reader=params.reader, options=params.options
+        )
+        return {kind: attach(table, header)}
 
     return read
 

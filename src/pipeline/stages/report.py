@@ -30,7 +30,7 @@ from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
-    from pipeline.report.document import Document
+    from pipeline.reports.document import Document
 
 FILENAME = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
 
@@ -55,8 +55,8 @@ class ReportParams(BaseModel):
 
 
 def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
-    from pipeline.report.html import render_html
-    from pipeline.report.pdf import render_pdf
+    from pipeline.reports.html import render_html
+    from pipeline.reports.pdf import render_pdf
 
     name = params.filename or ctx.stage_id
     if "html" in params.formats:
@@ -70,7 +70,7 @@ def survey_report(
     inputs: Mapping[str, pa.Table], params: ReportParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Trajectory (and whatever QC, drift and noise tables are wired) → survey report."""
-    from pipeline.report.survey import SurveyTables, survey_document
+    from pipeline.reports.survey import SurveyTables, survey_document
 
     doc = survey_document(
         SurveyTables(**inputs), ctx.well, ctx.provenance, params.title or "Gyro survey report"
@@ -83,7 +83,7 @@ def calibration_report(
     inputs: Mapping[str, pa.Table], params: ReportParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Drift calibration result and series (and the readings, if wired) → calibration report."""
-    from pipeline.report.calibration import calibration_document
+    from pipeline.reports.calibration import calibration_document
 
     doc = calibration_document(
         inputs["result"],

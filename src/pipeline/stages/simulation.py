@@ -57,7 +57,7 @@ def _load(params: SimulateParams, ctx: StageContext) -> SimulationSpec:
     return load_simulation(
         ctx.input_path(params.plan),
         seed=params.seed,
-        read_stations=lambda path, reader: ctx.read(path, "stations", reader=reader)[0],
+        read_stations=lambda path, reader: ctx.read_file(path, "stations", reader=reader)[0],
     )
 
 

@@ -11,7 +11,7 @@ import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.registry import Provenance, StageSetup
-from pipeline.report.document import (
+from pipeline.reports.document import (
     Block,
     Column,
     Fields,

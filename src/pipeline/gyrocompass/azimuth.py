@@ -20,8 +20,8 @@ from typing import Literal
 
 import numpy as np
 
-from pipeline.compass.precision import OMEGA_DEG_H
 from pipeline.earth.frames import FloatArray
+from pipeline.gyrocompass.precision import OMEGA_DEG_H
 
 Method = Literal["ml", "auto", "sine", "atan2"]
 GRID = np.radians(np.arange(0.0, 360.0, 5.0))

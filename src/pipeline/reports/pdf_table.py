@@ -11,8 +11,8 @@ from functools import cache
 
 from matplotlib.figure import Figure
 
-from pipeline.report.document import Table
-from pipeline.report.pdf_layout import (
+from pipeline.reports.document import Table
+from pipeline.reports.pdf_layout import (
     LEFT,
     MEASURE_DPI,
     MONO,
@@ -27,7 +27,7 @@ from pipeline.report.pdf_layout import (
     text,
     wrap,
 )
-from pipeline.report.plots import NAVY
+from pipeline.reports.plots import NAVY
 
 FONT_SIZES = (7.0, 6.5, 6.0, 5.5, 5.0)
 GAP = 2

@@ -12,10 +12,10 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
 
-from pipeline.compass.readings import ReadingOptions, position_readings
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.gravity import normal_gravity
 from pipeline.errors import ContractViolation
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import PositionReadings, RawSamples

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
 from matplotlib.patches import Rectangle
 
-from pipeline.report.plots import INK
+from pipeline.reports.plots import INK
 
 PAGE_W, PAGE_H = 8.27, 11.69
 LEFT, RIGHT = 0.7, 0.7

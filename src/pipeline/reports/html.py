@@ -1,4 +1,4 @@
-"""A :class:`~pipeline.report.document.Document` as one self-contained HTML file: CSS
+"""A :class:`~pipeline.reports.document.Document` as one self-contained HTML file: CSS
 inline, figures as ``data:`` URIs, no script, and a Content-Security-Policy that forbids
 the page any network fetch."""
 
@@ -8,7 +8,7 @@ import base64
 from collections.abc import Iterator
 from html import escape
 
-from pipeline.report.document import (
+from pipeline.reports.document import (
     Block,
     Document,
     Fields,
@@ -18,7 +18,7 @@ from pipeline.report.document import (
     Table,
     Verdict,
 )
-from pipeline.report.images import ImageFormat, encode
+from pipeline.reports.images import ImageFormat, encode
 
 CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
 

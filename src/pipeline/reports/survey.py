@@ -13,8 +13,8 @@ from scipy import stats
 
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
-from pipeline.report import plots
-from pipeline.report.document import (
+from pipeline.reports import plots
+from pipeline.reports.document import (
     Block,
     Column,
     Document,
@@ -28,8 +28,8 @@ from pipeline.report.document import (
     fmt_sig,
     items,
 )
-from pipeline.report.qc import QcSources, all_series, station_flags, summary_rows
-from pipeline.report.sections import (
+from pipeline.reports.qc import QcSources, all_series, station_flags, summary_rows
+from pipeline.reports.sections import (
     footer,
     method_items,
     north_label,

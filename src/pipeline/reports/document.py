@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
-    from pipeline.report.plots import Canvas
+    from pipeline.reports.plots import Canvas
 
 Level = Literal["ok", "warn", "fail", "info"]
 Align = Literal["left", "right"]

@@ -11,8 +11,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
 
-from pipeline.report.document import Plot
-from pipeline.report.plots import STYLE
+from pipeline.reports.document import Plot
+from pipeline.reports.plots import STYLE
 
 ImageFormat = Literal["auto", "png", "svg"]
 CSS_DPI = 96

@@ -12,8 +12,8 @@ import pyarrow as pa
 
 from pipeline.drift.calibration import LINEAR, reading_errors, reading_times
 from pipeline.registry import Provenance
-from pipeline.report import plots
-from pipeline.report.document import (
+from pipeline.reports import plots
+from pipeline.reports.document import (
     Block,
     Column,
     Document,
@@ -28,8 +28,8 @@ from pipeline.report.document import (
     fmt_sig,
     items,
 )
-from pipeline.report.sections import footer, method_items, provenance_section, tool_fields
-from pipeline.report.survey import ReportInputError
+from pipeline.reports.sections import footer, method_items, provenance_section, tool_fields
+from pipeline.reports.survey import ReportInputError
 from pipeline.well import WellMetadata
 
 METHODS_NOTE = (

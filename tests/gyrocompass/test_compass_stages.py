@@ -12,7 +12,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.compass.solve import CompassOptions, compass
+from pipeline.gyrocompass.solve import CompassOptions, compass
 from pipeline.tables import PositionReadings
 from tests_support import ROOT, gyropipe
 

@@ -12,8 +12,8 @@ import pyarrow as pa
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pipeline.compass.readings import ReadingOptions, position_readings
-from pipeline.compass.solve import (
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.solve import (
     CompassOptions,
     compass,
     fit_positions,
@@ -250,7 +250,7 @@ def test_near_vertical_toolface_and_the_mode_switch(tmp_path: Path):
 def test_single_position_three_axis_tool_uses_the_general_formula(tmp_path: Path):
     """One position, no frame turn: biases cannot be removed (flagged); with bias-free
     gyros the maximum-likelihood azimuth equals DOMAIN's general formula d × ω."""
-    from pipeline.compass.solve import general_azimuth
+    from pipeline.gyrocompass.solve import general_azimuth
 
     tool = {"preset": "ideal", "overrides": {"gyro_axes": "xyz"}}
     sim, stations, rejects = run(

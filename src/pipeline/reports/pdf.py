@@ -1,4 +1,4 @@
-"""A :class:`~pipeline.report.document.Document` as an A4 PDF, laid out with matplotlib
+"""A :class:`~pipeline.reports.document.Document` as an A4 PDF, laid out with matplotlib
 alone: text is vector text, figures are drawn by the same plot functions as the HTML into a
 region of the page, tables continue over pages (:mod:`.pdf_table`)."""
 
@@ -11,7 +11,7 @@ import matplotlib
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 
-from pipeline.report.document import (
+from pipeline.reports.document import (
     Block,
     Document,
     Fields,
@@ -21,7 +21,7 @@ from pipeline.report.document import (
     Table,
     Verdict,
 )
-from pipeline.report.pdf_layout import (
+from pipeline.reports.pdf_layout import (
     BOTTOM,
     LEFT,
     MUTED,
@@ -36,8 +36,8 @@ from pipeline.report.pdf_layout import (
     text_width,
     wrap,
 )
-from pipeline.report.pdf_table import place_table
-from pipeline.report.plots import GREY, NAVY, STYLE
+from pipeline.reports.pdf_table import place_table
+from pipeline.reports.plots import GREY, NAVY, STYLE
 
 LEVEL_COLOURS = {
     "ok": ("#23867a", "#e6f4f1"),

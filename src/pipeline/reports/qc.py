@@ -16,8 +16,8 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.continuous.tables import describe_flags
-from pipeline.report.document import fmt_sig
-from pipeline.report.plots import FloatArray, QcSeries
+from pipeline.reports.document import fmt_sig
+from pipeline.reports.plots import FloatArray, QcSeries
 
 MD_MATCH = 1e-3
 """Two MDs within this many metres are the same station."""

@@ -10,7 +10,7 @@ Per station (DOMAIN.md §5), from the frame positions k:
    ``x_k = u cos α_k + v sin α_k + b_x + d_x·(t_k − t̄)``,
    ``y_k = −u sin α_k + v cos α_k + b_y + d_y·(t_k − t̄)``.
    Inclined: (u, v) = (h, r), the high-side and right-side Earth rate; the azimuth follows
-   (:mod:`pipeline.compass.azimuth`). Near vertical the vertical Earth rate that leaks into
+   (:mod:`pipeline.gyrocompass.azimuth`). Near vertical the vertical Earth rate that leaks into
    the transverse gyros through the tilt is removed first (x_k + Ω sin φ·g_x,k/|g|, likewise
    y), leaving (u, v) = Ω cos φ·(n_x, n_y) of the north direction in the reference frame:
    the north-referenced (gyro) toolface Φ = atan2(−n_y, n_x).
@@ -29,10 +29,10 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.stats import chi2
 
-from pipeline.compass.azimuth import Method, solve_azimuth
-from pipeline.compass.precision import OMEGA_DEG_H
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
+from pipeline.gyrocompass.azimuth import Method, solve_azimuth
+from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.tables import CompassRejects, CompassStations
 
 

@@ -1,0 +1,180 @@
+"""Tables in and out of the Python API.
+
+A table is given as a pandas DataFrame or an Arrow table and returned as the same kind.
+
+- **Arrow tables** carry each column's unit (and an azimuth's north reference) in the field
+  metadata (``unit``, ``north_reference``) and the well metadata in the schema metadata, as
+  every table of a pipeline does.
+- **DataFrames** carry them in ``attrs``: ``attrs["units"]`` maps a column to its unit,
+  ``attrs["north_reference"]`` names the azimuths' north (``true``, ``grid`` or
+  ``magnetic``; ``attrs["north_references"]`` maps azimuth columns to theirs, as returned),
+  ``attrs["well"]`` holds the well metadata (a mapping). A column without a declared unit
+  is taken to be in its canonical unit (m, deg, deg/h, m/s², nT, s, deg/30 m). Integer
+  columns come back as pandas' nullable ``Int64``; float columns as NumPy floats (NaN: an
+  undefined value), or as nullable ``Float64`` when they have missing values (null).
+
+A declared unit that is not the canonical one is converted (``ft`` → m, ``rad/s`` → deg/h…)
+or, if it is not a unit of the column's quantity, refused with a :class:`UnitError` naming
+the column — never silently used.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeAlias
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.compute as pc
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
+from pipeline.errors import ParameterError, UnitError
+from pipeline.units import QUANTITIES, conversion_factor
+from pipeline.well import WellMetadata, attach, well_of
+
+TableLike: TypeAlias = "pd.DataFrame | pa.Table"
+"""A table the API takes: a pandas DataFrame or an Arrow table."""
+WellLike: TypeAlias = "WellMetadata | Mapping[str, Any] | None"
+"""Well metadata the API takes: a :class:`WellMetadata`, a mapping of its fields, or None."""
+
+QUANTITY_OF_UNIT = {q.canonical: name for name, q in QUANTITIES.items()}
+
+
+def well_metadata(*wells: WellLike) -> WellMetadata:
+    """The well metadata of ``wells`` merged in order (later fields win)."""
+    merged = WellMetadata()
+    for well in wells:
+        if well is None:
+            continue
+        merged = merged.merged(
+            well if isinstance(well, WellMetadata) else WellMetadata.model_validate(dict(well))
+        )
+    return merged
+
+
+def well_of_data(data: TableLike) -> WellMetadata:
+    """The well metadata a table carries (none: empty)."""
+    if isinstance(data, pd.DataFrame):
+        return well_metadata(data.attrs.get("well"))
+    return well_of(data) or WellMetadata()
+
+
+def to_table(
+    data: TableLike,
+    contract: type[TableContract] | None = None,
+    *,
+    what: str = "table",
+    well: WellMetadata | None = None,
+) -> pa.Table:
+    """``data`` as an Arrow table in canonical units: the columns of ``contract`` converted
+    from their declared units; azimuths without a north reference take the well's. ``what``
+    names the table in errors (e.g. ``compass input 'readings'``)."""
+    if isinstance(data, pd.DataFrame):
+        table = _from_frame(data)
+        north = data.attrs.get("north_reference")
+    elif isinstance(data, pa.Table):
+        table = data
+        north = None
+    else:
+        raise TypeError(f"{what}: expected a pandas DataFrame or a pyarrow Table, got {data!r}")
+    if contract is None:
+        return table
+    units = {f.name: f.metadata[UNIT_KEY].decode() for f in table.schema if _has(f, UNIT_KEY)}
+    default_north = north or (well.north_reference if well is not None else None)
+    columns = {c.name: c for c in contract.compiled().columns}
+    fields, arrays = [], []
+    for field, array in zip(table.schema, table.columns, strict=True):
+        spec = columns.get(field.name)
+        if spec is None:
+            fields.append(field)
+            arrays.append(array)
+            continue
+        declared = units.get(field.name)
+        if spec.unit is not None and declared is not None and declared != spec.unit:
+            array = pc.multiply(array.cast(pa.float64()), _factor(declared, spec.unit, field, what))
+        ref = field.metadata[NORTH_KEY].decode() if _has(field, NORTH_KEY) else default_north
+        if spec.north_reference and ref is None:
+            raise ParameterError(
+                f"{what}: the north reference of column {field.name!r} is unknown: set "
+                "attrs['north_reference'] to 'true', 'grid' or 'magnetic', or give "
+                "well={'north_reference': …}"
+            )
+        fields.append(spec.field(ref if spec.north_reference else None))
+        arrays.append(array.cast(spec.type) if array.type != spec.type else array)
+    out = pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=table.schema.metadata))
+    return out
+
+
+def to_frame(table: pa.Table) -> pd.DataFrame:
+    """``table`` as a DataFrame whose ``attrs`` hold the units, the north reference (when the
+    table has one) and the well metadata."""
+    frame: pd.DataFrame = table.to_pandas(types_mapper=_NULLABLE.get)
+    for name, column in zip(table.column_names, table.columns, strict=True):
+        if pa.types.is_floating(column.type) and column.null_count:  # null is not NaN
+            frame[name] = column.to_pandas(types_mapper=_NULLABLE_FLOAT.get)
+    frame.attrs["units"] = {
+        f.name: f.metadata[UNIT_KEY].decode() for f in table.schema if _has(f, UNIT_KEY)
+    }
+    norths = {f.name: f.metadata[NORTH_KEY].decode() for f in table.schema if _has(f, NORTH_KEY)}
+    if norths:
+        frame.attrs["north_references"] = norths
+    if len(set(norths.values())) == 1:
+        frame.attrs["north_reference"] = next(iter(norths.values()))
+    well = well_of(table)
+    if well is not None:
+        frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
+    return frame
+
+
+_NULLABLE = {pa.int64(): pd.Int64Dtype(), pa.int32(): pd.Int32Dtype()}
+_NULLABLE_FLOAT = {pa.float64(): pd.Float64Dtype(), pa.float32(): pd.Float32Dtype()}
+
+
+def _from_frame(data: pd.DataFrame) -> pa.Table:
+    """A DataFrame as an Arrow table with its declared units (and azimuths' north references)
+    in the field metadata and its well metadata in the schema metadata."""
+    arrays = [
+        pa.array(column.to_numpy())  # NaN stays NaN (an undefined value), not null
+        if isinstance(column.dtype, np.dtype) and column.dtype.kind == "f"
+        else pa.array(column, from_pandas=True)  # nullable dtypes: NA is null
+        for _, column in data.items()
+    ]
+    table = pa.Table.from_arrays(arrays, names=[str(name) for name in data.columns])
+    units = dict(data.attrs.get("units") or {})
+    norths = dict(data.attrs.get("north_references") or {})
+    fields = []
+    for f in table.schema:
+        meta = {**(f.metadata or {})}
+        if f.name in units:
+            meta[UNIT_KEY] = str(units[f.name]).encode()
+        if f.name in norths:
+            meta[NORTH_KEY] = str(norths[f.name]).encode()
+        fields.append(f.with_metadata(meta) if meta else f)
+    well = well_of_data(data)
+    north = data.attrs.get("north_reference")
+    if north is not None and not norths and well.north_reference is None:
+        well = well.merged(WellMetadata(north_reference=north))  # the azimuths' default
+    return attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
+
+
+def like(template: TableLike, table: pa.Table) -> TableLike:
+    """``table`` as the kind of table ``template`` is (DataFrame or Arrow)."""
+    return to_frame(table) if isinstance(template, pd.DataFrame) else table
+
+
+def _factor(declared: str, canonical: str, field: pa.Field, what: str) -> float:
+    quantity = QUANTITY_OF_UNIT.get(canonical)
+    if quantity is None:
+        raise UnitError(
+            f"{what}: column {field.name!r} is declared in {declared!r}; it must be in "
+            f"{canonical!r}"
+        )
+    try:
+        return conversion_factor(declared, quantity)
+    except UnitError as exc:
+        raise UnitError(f"{what}: column {field.name!r}: {exc}") from None
+
+
+def _has(field: pa.Field, key: bytes) -> bool:
+    return field.metadata is not None and key in field.metadata

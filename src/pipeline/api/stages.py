@@ -1,0 +1,96 @@
+"""Registered stages called one at a time, in memory: what the Python API's functions run.
+
+Each function of :mod:`pipeline.api.functions` is one registered stage, called with the
+same params model, contracts and plugins as in a pipeline, so a notebook and a pipeline
+compute the same thing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+from pydantic import ValidationError
+
+from pipeline.api.frames import TableLike, WellLike, to_table, well_metadata, well_of_data
+from pipeline.errors import ParameterError
+from pipeline.graph import PlannedStage
+from pipeline.plugins import load_registry
+from pipeline.registry import Provenance, Registry, StageSetup
+from pipeline.runner import run_stage, start_time
+from pipeline.version import __version__
+from pipeline.well import WellMetadata, attach
+
+
+@cache
+def registry() -> Registry:
+    """The plugins installed (loaded once per process)."""
+    return load_registry()
+
+
+def call(
+    uses: str,
+    inputs: Mapping[str, TableLike | None],
+    params: Mapping[str, Any],
+    *,
+    well: WellLike = None,
+    out_dir: Path | None = None,
+) -> tuple[dict[str, pa.Table], WellMetadata, list[Path]]:
+    """Run the registered stage ``uses`` on ``inputs`` (None: an optional input left out)
+    with ``params``; the well metadata is the inputs' merged with ``well``. Returns the
+    output tables (carrying that well metadata), the well metadata and the files it wrote
+    into ``out_dir``."""
+    reg = registry()
+    definition, plugin = reg.stages[uses]
+    given = {port: data for port, data in inputs.items() if data is not None}
+    merged = well_metadata(*(well_of_data(d) for d in given.values()), well)
+    try:
+        parsed = definition.params.model_validate(dict(params), context={"registry": reg})
+    except ValidationError as exc:
+        raise ParameterError(f"{uses}: {describe(exc)}") from None
+    tables = {
+        port: to_table(data, definition.inputs[port], what=f"{uses} input {port!r}", well=merged)
+        for port, data in given.items()
+    }
+    stage = PlannedStage(uses, uses, definition, plugin, parsed, {}, ())
+    provenance = Provenance(
+        pipeline="python",
+        pipeline_version="",
+        pipeline_file="",
+        pipeline_sha256="",
+        gyropipe=__version__,
+        plugins={n: p.version for n, p in sorted(reg.plugins.items()) if not p.error},
+        inputs={},
+        started=start_time(),
+        stages=(StageSetup(uses, uses, reg.plugin_label(plugin), parsed.model_dump(mode="json")),),
+    )
+    outs, files = run_stage(
+        stage,
+        tables,
+        registry=reg,
+        well=merged,
+        provenance=provenance,
+        out_dir=out_dir or Path("."),
+    )
+    return {port: attach(table, merged) for port, table in outs.items()}, merged, files
+
+
+def describe(exc: ValidationError) -> str:
+    """A pydantic error as ``field: problem (got value)`` items, one per problem."""
+    return "; ".join(_items(exc))
+
+
+def _items(exc: ValidationError) -> Iterator[str]:
+    for err in exc.errors():
+        where = ".".join(str(p) for p in err["loc"]) or "value"
+        if err["type"] == "extra_forbidden":
+            yield f"unknown parameter {where!r}"
+            continue
+        got = err.get("input")
+        shown = (
+            "" if err["type"] == "missing" or isinstance(got, dict | list) else f" (got {got!r})"
+        )
+        yield f"{where}: {err['msg']}{shown}"
