@@ -42,6 +42,7 @@ if TYPE_CHECKING:
         validity_checks,
         write,
     )
+    from pipeline.api.plots import plot_plan, plot_section
     from pipeline.api.run import RunResult, run
     from pipeline.errors import GyropipeError
     from pipeline.well import WellMetadata
@@ -66,6 +67,7 @@ _HOMES = {
         "validity_checks",
         "write",
     ),
+    "pipeline.api.plots": ("plot_plan", "plot_section"),
     "pipeline.api.run": ("RunResult", "run"),
     "pipeline.errors": ("GyropipeError",),
     "pipeline.well": ("WellMetadata",),
@@ -85,6 +87,8 @@ __all__ = [
     "integrate_continuous",
     "interpolate",
     "minimum_curvature",
+    "plot_plan",
+    "plot_section",
     "position_readings",
     "position_uncertainty",
     "read",

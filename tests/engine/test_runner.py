@@ -162,7 +162,7 @@ def test_bad_input_is_a_clear_error_and_writes_nothing(case: str, tmp_path: Path
     for fragment in fragments:
         assert fragment in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
-    assert list(out_dir.iterdir()) == []
+    assert not out_dir.exists()  # a failed run publishes nothing
 
 
 @pytest.mark.parametrize(
@@ -260,7 +260,8 @@ def test_stage_with_undeclared_ports_or_bad_output_is_reported(
         with pytest.raises(error) as info:
             run_plan(plan, registry, inputs={"stations": src}, out_dir=out_dir)
         assert fragment in str(info.value)
-        assert list(out_dir.iterdir()) == []
+        assert not out_dir.exists()
+        assert not list(tmp_path.glob(f".{uses}.gyropipe-staging-*"))  # staging removed
 
 
 def test_inputs_must_match_declaration(write_yaml, registry, tmp_path: Path):
@@ -312,9 +313,8 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
         env=env,
     )
     assert killed.returncode == -9
-    leftovers = [p.name for p in out_dir.iterdir()]
-    assert all(name.startswith(".") for name in leftovers), leftovers  # only hidden staging
-    assert not (out_dir / "trajectory.csv").exists() and not (out_dir / "run.json").exists()
+    assert not out_dir.exists()  # nothing published
+    assert list(tmp_path.glob(".out.gyropipe-staging-*"))  # the dead run's private staging
 
     again = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir), env=env)
     assert again.returncode == 0, again.stderr
@@ -328,4 +328,5 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
         "trajectory.las",
         "trajectory.trajectory.parquet",
         "trajectory.xml",
-    ]  # the dead run's staging directory was cleaned up
+    ]
+    assert not list(tmp_path.glob(".out.gyropipe-staging-*"))  # the dead run's was cleaned up
