@@ -210,21 +210,40 @@ def test_wrong_parameters_are_named() -> None:
         gp.compass(gp.simulate(POINT).samples.head(0), latitude=161)
 
 
-def test_drift_functions(tmp_path: Path) -> None:
+@pytest.mark.parametrize("kind", KINDS)
+def test_drift_functions(kind: str) -> None:
     calibration = gp.read(ROOT / "examples" / "calibration-ig50.csv", kind="calibration")
-    result = gp.calibrate_drift(calibration)
+    result = gp.calibrate_drift(as_kind(calibration, kind))
     assert set(result) == {"result", "series"}
-    selected = result.result[result.result["selected"]]
-    assert len(selected) == 1 and selected["verdict"].iloc[0] == "linear"
-    free = gp.simulate(ROOT / "examples" / "plans" / "j-well-free-gyro.yaml").readings
+    table = arrow(result.result)
+    selected = table.filter(table.column("selected"))
+    assert selected.num_rows == 1 and selected.column("verdict").to_pylist() == ["linear"]
+    free = as_kind(
+        gp.simulate(ROOT / "examples" / "plans" / "j-well-free-gyro.yaml").readings, kind
+    )
     corrected = gp.correct_drift(free, source="tie_in")
     assert set(corrected) == {"readings", "stations", "qc"}
-    assert len(corrected.stations) > 0
+    assert isinstance(corrected.stations, type(free)) and len(corrected.stations) > 0
     with_calibration = gp.correct_drift(free, calibration=result.result, source="calibration")
     assert len(with_calibration.stations) == len(corrected.stations)
 
 
-def test_continuous_integration() -> None:
+@pytest.mark.parametrize("kind", KINDS)
+def test_station_methods(kind: str) -> None:
+    stations = pd.DataFrame({"md": [0.0, 100.0, 200.0], "inc": [0.0, 10.0, 20.0]})
+    stations["azi"] = [0.0, 40.0, 40.0]
+    stations.attrs = {"north_reference": "true"}
+    given = as_kind(stations, kind) if kind == "frame" else gp.to_table(stations)
+    tangential = arrow(gp.survey_method(given, method="tangential"))
+    exact = arrow(gp.minimum_curvature(given))
+    # tangential puts the whole course at the lower station's inclination: deeper TVD error
+    tvd_t, tvd_m = tangential.column("tvd").to_numpy(), exact.column("tvd").to_numpy()
+    assert tvd_t[-1] < tvd_m[-1]
+    np.testing.assert_allclose(tvd_t[1], 100 * np.cos(np.radians(10.0)), rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_continuous_integration(kind: str) -> None:
     plan = {
         "name": "api-continuous",
         "seed": 2,
@@ -239,12 +258,12 @@ def test_continuous_integration() -> None:
         "tool": {"preset": "ideal"},
         "survey": {"mode": "continuous", "start_md": 120, "end_md": 180, "speed": 2.0},
     }
-    sim = gp.simulate(plan)
-    readings = gp.position_readings(sim.samples, trim_start=0.5, min_dwell=1.0)
+    samples = as_kind(gp.simulate(plan).samples, kind)
+    readings = gp.position_readings(samples, trim_start=0.5, min_dwell=1.0)
     stops = gp.compass(readings, noise_floor=0.01).stations
-    run = gp.integrate_continuous(sim.samples, stops)
+    run = gp.integrate_continuous(samples, stops)
     assert set(run) == {"stations", "series"}
-    azi = run.stations["azi"].to_numpy()
+    azi = arrow(run.stations).column("azi").to_numpy()
     assert np.abs(azi - 40.0).max() < 0.05
 
 
