@@ -58,9 +58,11 @@ def replace_dir(staging: Path, final: Path) -> None:
     was there. Where the OS can swap two paths in one step (Linux ``renameat2`` with
     ``RENAME_EXCHANGE``) a reader sees the old complete directory or the new one, never
     neither and never a mixture; elsewhere the old one is first renamed away, so for a moment
-    neither exists. Several publishers of one ``final`` leave the last one's directory."""
+    neither exists. Several publishers of one ``final`` leave the last one's directory. The
+    old directory goes to ``<staging>.trash`` before it is deleted, so whoever cleans up
+    dead staging directories finds it too."""
     fsync_dir(staging)
-    trash = staging.parent / f".{final.name}.{uuid.uuid4().hex[:8]}{TRASH_SUFFIX}"
+    trash = staging.with_name(staging.name + TRASH_SUFFIX)  # cleaned up like its staging
     while True:
         try:
             os.rename(staging, final)
