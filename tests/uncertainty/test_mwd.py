@@ -23,6 +23,7 @@ import pyarrow as pa
 import pytest
 from numpy.typing import NDArray
 
+import pipeline as gp
 from pipeline.earth.frames import body_to_ned, inclination_toolface, to_body
 from pipeline.earth.geomagnetic import reference_field
 from pipeline.earth.site import MagneticReference
@@ -105,10 +106,10 @@ def test_workbook_well_1_every_source_and_total() -> None:
 
 
 def test_workbook_well_1_with_exact_minimum_curvature() -> None:
-    """The stage's default Jacobian (exact minimum curvature instead of the balanced
-    tangent) stays within the issue's tolerance: 0.46 % and 0.29 m² at worst."""
+    """The opt-in exact minimum-curvature Jacobian (instead of the standard's balanced
+    tangent) stays within 0.46 % and 0.29 m² of the workbook at worst."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(survey, field, "ISCWSA-MWD-REV5", surface_tie=True)
+    names, cov = mwd_covariance(survey, field, "ISCWSA-MWD-REV5", basis="min_curve")
     ours, ref, _ = _workbook_cells(data, survey, names, cov)
     diff = np.abs(ours - ref)
     assert np.all(diff <= _issue_tolerance(ref))
@@ -361,3 +362,26 @@ def test_stage_mwd_parameters_are_checked() -> None:
     traj, ctx = _trajectory(md, np.zeros(4), np.zeros(4), "true", WellMetadata(latitude=60.0))
     with pytest.raises(MissingSiteError, match=r"longitude and survey_date.*stage's `magnetic`"):
         position_uncertainty(traj, UncertaintyParams(model="ISCWSA-MWD-REV5"), ctx)
+
+
+def test_the_default_settings_reproduce_the_workbook_through_the_api() -> None:
+    """``gp.position_uncertainty`` with nothing but the model and the field set gives the
+    workbook's TOTAL covariance at every tabulated depth (the ISCWSA conventions are the
+    defaults; the exact minimum-curvature Jacobian is an opt-in)."""
+    data, _, field = _well_1()
+    stations = Stations.compiled().make_table(
+        {key: data["survey"][key] for key in ("md", "inc", "azi")}, north_reference="true"
+    )
+    trajectory = gp.minimum_curvature(stations, tie_tvd=0.0)
+    out = gp.position_uncertainty(trajectory, model="ISCWSA-MWD-REV5", magnetic=field.__dict__)
+    vd = data["vd"]
+    rows = [i for i, source in enumerate(vd["source"]) if source == "TOTAL"]
+    assert len(rows) == 4
+    for row in rows:
+        k = int(np.flatnonzero(out.column("md").to_numpy() == vd["md"][row])[0])
+        for comp in COMPONENTS:
+            assert abs(out.column(f"cov_{comp}")[k].as_py() - vd[comp][row]) <= 5e-5, comp
+    exact = gp.position_uncertainty(
+        trajectory, model="ISCWSA-MWD-REV5", magnetic=field.__dict__, basis="min_curve"
+    )
+    assert not np.allclose(exact.column("cov_nn").to_numpy(), out.column("cov_nn").to_numpy())

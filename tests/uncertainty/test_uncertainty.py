@@ -55,7 +55,7 @@ def test_min_curve_jacobian_matches_finite_differences() -> None:
     md = np.cumsum(rng.uniform(20.0, 40.0, 12))
     inc = rng.uniform(0.2, 1.4, 12)
     azi = rng.uniform(0.0, 2 * np.pi, 12)
-    jac = station_jacobians(md, inc, azi, basis="min_curve")
+    jac = station_jacobians(md, inc, azi, basis="min_curve", surface_tie=False)
 
     def pos(m: Any, i: Any, a: Any) -> NDArray[np.float64]:
         r = minimum_curvature(m, i, a)
@@ -86,7 +86,7 @@ def test_propagation_modes_closed_form() -> None:
     one shifts every MD alike and moves nothing. All of it in V."""
     n = 6
     md = np.arange(n) * 10.0
-    jac = station_jacobians(md, np.zeros(n), np.zeros(n))
+    jac = station_jacobians(md, np.zeros(n), np.zeros(n), basis="min_curve", surface_tie=False)
     e = np.zeros((2, n, 3))
     e[:, :, 0] = 0.1
     cov = propagate(e, ["random", "systematic"], jac)
@@ -118,7 +118,11 @@ def test_monte_carlo_matches_propagated_covariance() -> None:
     terms = gyro_terms(GyroTool(), LAT)
     e_dia = np.stack([t.sigma * t.weight(survey) for t in terms])
     modes = [t.mode for t in terms]
-    cov = propagate(e_dia, modes, station_jacobians(md, survey.inc, survey.azi)).sum(axis=0)
+    cov = propagate(
+        e_dia,
+        modes,
+        station_jacobians(md, survey.inc, survey.azi, basis="min_curve", surface_tie=False),
+    ).sum(axis=0)
 
     rng = np.random.default_rng(20261121)
     n_mc, n = 4000, md.size

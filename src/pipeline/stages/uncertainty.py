@@ -85,12 +85,15 @@ class UncertaintyParams(BaseModel):
         "deg, declination deg east); default: WMM2025 at the well's latitude, longitude, "
         "elevation and survey date",
     )
-    basis: Literal["min_curve", "balanced_tangent"] = Field(
-        "min_curve",
-        description="leg Jacobian: exact minimum curvature or the ISCWSA balanced tangent",
+    basis: Literal["balanced_tangent", "min_curve"] = Field(
+        "balanced_tangent",
+        description="leg Jacobian: the ISCWSA standard's balanced tangent (default, as the "
+        "ISCWSA workbook) or, opt-in, the exact minimum-curvature derivative",
     )
     surface_tie: bool = Field(
-        False, description="apply the ISCWSA Rev 5 surface tie-on allowance at the first station"
+        True,
+        description="apply the ISCWSA Rev 5 surface tie-on allowance at the first station "
+        "(the standard's default)",
     )
     measured_sigma_azi: float | None = Field(
         None,

@@ -273,8 +273,8 @@ def gyro_covariance(
     latitude_deg: float,
     tool: GyroTool | str = "GYRO-NS",
     *,
-    basis: str = "min_curve",
-    surface_tie: bool = False,
+    basis: str = "balanced_tangent",
+    surface_tie: bool = True,
     g: float = STANDARD_G,
 ) -> tuple[list[str], FloatArray]:
     """Per-term NEV covariance (m, n, 3, 3) of a survey and the term names."""

@@ -89,13 +89,14 @@ def station_jacobians(
     inc: ArrayLike,
     azi: ArrayLike,
     *,
-    basis: Basis = "min_curve",
-    surface_tie: bool = False,
+    basis: Basis = "balanced_tangent",
+    surface_tie: bool = True,
 ) -> StationJacobians:
     """Jacobians of the legs around each station with respect to its (MD, I, α).
 
-    ``basis="min_curve"`` differentiates the minimum-curvature step exactly (RF included);
-    ``"balanced_tangent"`` is the ISCWSA standard approximation (RF = 1, as in SPE 67616).
+    ``basis="balanced_tangent"`` (default) is the ISCWSA standard's approximation (RF = 1, as
+    in SPE 67616 and the ISCWSA example workbook); ``"min_curve"`` differentiates the
+    minimum-curvature step exactly (RF included), an opt-in.
     ``surface_tie`` applies the ISCWSA Rev 5 surface tie-on allowance: station 0's own depth
     error moves it along its tangent, and the first leg's angle weights are doubled (slot
     attitude) in place of station 0's own measurement errors. Off by default: the first

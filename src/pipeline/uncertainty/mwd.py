@@ -325,8 +325,8 @@ def mwd_covariance(
     magnetic: MagneticReference,
     tool: MwdTool | str = "ISCWSA-MWD-REV5.11",
     *,
-    basis: str = "min_curve",
-    surface_tie: bool = False,
+    basis: str = "balanced_tangent",
+    surface_tie: bool = True,
     g: float = STANDARD_G,
 ) -> tuple[list[str], FloatArray]:
     """Per-term NEV covariance (m, n, 3, 3) (m²) of a survey and the term names."""

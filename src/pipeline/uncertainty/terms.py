@@ -158,8 +158,8 @@ def term_covariance(
     survey: Survey,
     terms: Sequence[Term],
     *,
-    basis: str = "min_curve",
-    surface_tie: bool = False,
+    basis: str = "balanced_tangent",
+    surface_tie: bool = True,
 ) -> tuple[list[str], FloatArray]:
     """Per-term NEV covariance (m, n, 3, 3) of a survey (m²) and the term names.
 
