@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import datetime as dt
-import glob
 import hashlib
 import json
 import os
@@ -231,7 +230,7 @@ def _staging(out_dir: Path | None) -> Iterator[Path]:
             yield Path(tmp)
         return
     out_dir.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale_staging(out_dir)
+    remove_stale_staging(out_dir.parent)
     staging = out_dir.parent / f"{_staging_prefix(out_dir)}{os.getpid()}-{uuid.uuid4().hex[:8]}"
     staging.mkdir()
     try:
@@ -466,13 +465,16 @@ def sha256_file(path: Path) -> str:
     return digest.hexdigest()
 
 
-def _remove_stale_staging(out_dir: Path) -> None:
-    """Remove staging directories of runs into ``out_dir`` whose process no longer exists."""
-    prefix = _staging_prefix(out_dir)
-    for entry in out_dir.parent.glob(glob.escape(prefix) + "*"):
-        pid_text = entry.name[len(prefix) :].split("-", 1)[0]
+def remove_stale_staging(directory: Path) -> list[Path]:
+    """Remove the staging directories (and their trash) that runs whose process no longer
+    exists left in ``directory``; returns them."""
+    removed = []
+    for entry in directory.glob(f".*{STAGING_PREFIX}*"):
+        pid_text = entry.name.split(STAGING_PREFIX, 1)[1].split("-", 1)[0]
         if pid_text.isdigit() and not process_alive(int(pid_text)):
             shutil.rmtree(entry, ignore_errors=True)
+            removed.append(entry)
+    return removed
 
 
 def process_alive(pid: int) -> bool:

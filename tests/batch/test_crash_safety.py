@@ -148,9 +148,9 @@ def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Pa
     )  # fmt: skip
 
     def running_worker() -> int | None:
-        for nested in (out / ".gyropipe-batch").glob("*.staging/.gyropipe-staging-*"):
-            return int(nested.name.removeprefix(".gyropipe-staging-").split("-")[0])
-        return None
+        for staging in (out / ".gyropipe-batch").glob(".*.staging.gyropipe-staging-*"):
+            return int(staging.name.split(".gyropipe-staging-")[1].split("-")[0])
+        return None  # a run's private staging beside its well's: .<well>.<run>.staging…
 
     wait_for(lambda: running_worker() is not None, proc)
     victim = running_worker()

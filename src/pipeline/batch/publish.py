@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes
-from pipeline.runner import MANIFEST
+from pipeline.runner import MANIFEST, remove_stale_staging
 
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
@@ -69,6 +69,7 @@ def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
     work = out_root / WORK_DIR
     if not work.is_dir():
         return removed
+    removed += remove_stale_staging(work)  # the runner's own, inside a killed worker's run
     for entry in work.iterdir():
         run_id = staging_run_id(entry)
         if entry.name.endswith(TRASH_SUFFIX) or (run_id is not None and run_id not in active_runs):
