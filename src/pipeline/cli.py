@@ -18,9 +18,10 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 import yaml
+from pydantic import ValidationError
 
 from pipeline.atomic import atomic_path, atomic_write_bytes
-from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
+from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError, did_you_mean
 from pipeline.graph import Plan, build_plan
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
@@ -28,6 +29,8 @@ from pipeline.runner import RunInputError, sha256_file
 from pipeline.spec import load_spec
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
+
+FIELDS = tuple(WellMetadata.model_fields)
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -593,13 +596,23 @@ def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
 
 
 def _well_overrides(items: tuple[str, ...]) -> WellMetadata:
-    values = {}
+    values: dict[str, str | None] = {}
+    given: dict[str, str] = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep:
             raise click.BadParameter(f"--well {item!r}: expected FIELD=VALUE")
         values[key.strip()] = value.strip() or None  # pydantic converts text to the field type
+        given[key.strip()] = item
     try:
         return WellMetadata.model_validate(values)
-    except ValueError as exc:
-        raise click.BadParameter(f"--well: {exc}") from None
+    except ValidationError as exc:
+        problems = []
+        for err in exc.errors():
+            field = str(err["loc"][0]) if err["loc"] else ""
+            where = f"--well {given.get(field, field)}"
+            if err["type"] == "extra_forbidden":
+                problems.append(f"{where}: unknown field {field!r}{did_you_mean(field, FIELDS)}")
+            else:
+                problems.append(f"{where}: {err['msg'][0].lower()}{err['msg'][1:]}")
+        raise click.BadParameter("; ".join(problems)) from None

@@ -3,14 +3,13 @@ wired, contracts matched and an execution order found — or every problem, loca
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import TableContract
-from pipeline.errors import Problem, SpecError
+from pipeline.errors import Problem, SpecError, did_you_mean
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PipelineSpec
 from pipeline.yamlsource import PathKey, SourceMap, validation_problems
@@ -105,8 +104,7 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
 
 def _unknown_stage(name: str, registry: Registry) -> str:
     known = sorted(registry.stages)
-    close = difflib.get_close_matches(name, known, n=3)
-    hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+    hint = did_you_mean(name, known)
     return f"unknown stage {name!r}{hint} (registered: {', '.join(known) or 'none'})"
 
 
