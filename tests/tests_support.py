@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -23,6 +24,13 @@ def gyropipe() -> list[str]:
     found = shutil.which("gyropipe")
     assert found, "the gyropipe console script is not installed"
     return [found]
+
+
+def pythonpath(*dirs: Path) -> dict[str, str]:
+    """``os.environ`` with ``dirs`` first on ``PYTHONPATH`` and what was there kept after
+    them (a worktree's ``src``, so a subprocess runs the gyropipe under test)."""
+    kept = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, dirs), *kept])}
 
 
 def read_stations(path: Path, reader: str) -> pa.Table:

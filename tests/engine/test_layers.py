@@ -35,10 +35,12 @@ LAYER_NAMES = {
 }
 
 LAYERS: dict[str, int] = {
-    # 6 — faces: the command line and the package's public API (``pipeline/__init__.py`` only)
+    # 6 — faces: the command line, the package's public API (``pipeline/__init__.py`` only)
+    # and the plugin authors' API (``pipeline.plugin``)
     "pipeline": 6,
     "pipeline.cli": 6,
     "pipeline.api": 6,
+    "pipeline.plugin": 6,
     # 5 — orchestration: many wells, built-in stages, reports
     "pipeline.batch": 5,
     "pipeline.stages": 5,
@@ -342,6 +344,8 @@ def test_checker_passes_a_clean_package(tmp_path: Path) -> None:
     [
         ("pipeline", 6),
         ("pipeline.cli", 6),
+        ("pipeline.plugin", 6),
+        ("pipeline.plugins", 2),
         ("pipeline.io.drift_tables", 4),
         ("pipeline.survey.stations", 3),
         ("pipeline.gyrocompass.positions", 3),

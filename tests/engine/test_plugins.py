@@ -3,7 +3,6 @@ version, the other plugins keep working, and stage exceptions name their plugin.
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import textwrap
@@ -11,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, pythonpath
 
 PLUGINS = {
     # name: (version, module source)
@@ -90,7 +89,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = pythonpath(site)
     return subprocess.run(
         [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
     )

@@ -3,14 +3,13 @@ point, wired after the survey job, its output checked against its own contract."
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, pythonpath
 
 
 def readme_block(marker: str) -> str:
@@ -55,7 +54,7 @@ def test_readme_plugin_example_runs(tmp_path: Path):
         capture_output=True,
         text=True,
         cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(site)},
+        env=pythonpath(site),
     )
     assert result.returncode == 0, result.stderr
     deep = pq.read_table(out_dir / "deep.deep.parquet")

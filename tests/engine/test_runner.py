@@ -23,7 +23,7 @@ from pipeline.runner import RunInputError, run_plan
 from pipeline.spec import load_spec
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations, Trajectory
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, pythonpath
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
 SURVEY = ROOT / "pipelines" / "survey.yaml"
@@ -300,7 +300,7 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: killerplugin\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text("[gyropipe]\nkillerplugin = killerplugin\n")
     out_dir = tmp_path / "out"
-    env = {"PYTHONPATH": str(site)}
+    env = pythonpath(site)
     killed = cli(
         "run",
         str(SURVEY),

@@ -8,7 +8,6 @@ from __future__ import annotations
 import datetime as dt
 import importlib
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -24,7 +23,7 @@ import pytest
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata, well_of
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, pythonpath
 
 PACKAGE = ROOT / "plugins" / "gyropipe-acme"
 SPEC = {
@@ -119,7 +118,7 @@ def samples() -> pa.Table:
 
 
 def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = pythonpath(site)
     return subprocess.run(
         [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
     )

@@ -16,6 +16,15 @@ Per station (DOMAIN.md §5), from the frame positions k:
    the north-referenced (gyro) toolface Φ = atan2(−n_y, n_x).
 3. Residuals against each position's σ give a χ² consistency test (tool moved, frame
    slipped); the frame-angle sensor is checked against the accelerometer toolfaces.
+4. The Earth rate the fit found must be the Earth's (DOMAIN.md §3, :func:`earth_rate_check`):
+   the horizontal component Ω cos φ and, when the axial gyro joins the fit, the vertical
+   Ω sin φ, within ``earth_rate_tolerance`` (relative) and 4 σ of the fitted value. A
+   station outside is rejected, never solved: gyro rates in the wrong unit (rad/s or deg/s
+   read as °/h), a dead or mis-scaled gyro or a wrong latitude would otherwise give a
+   confident, wrong azimuth (a rad/s record compasses to ≈ 180°, σ 1e-5°). A units mistake
+   is the whole record's: a transverse gyro pointing near the Earth's axis (I ≈ 90° − φ,
+   A ≈ 180°) truly sees almost no Earth rate and cannot tell, so when most stations fail
+   the check, the rest are rejected with them.
 Rates in °/h, accelerations in m/s², angles in radians internally, degrees in outputs.
 """
 
@@ -31,6 +40,7 @@ from scipy.stats import chi2
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
+from pipeline.errors import GyropipeError
 from pipeline.gyrocompass.azimuth import Method, solve_azimuth
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.tables import CompassRejects, CompassStations
@@ -76,6 +86,15 @@ class CompassOptions(BaseModel):
         description="σ of the axial gyro's bias, °/h: when given, a three-axis "
         "tool's z gyro joins the azimuth fit (its bias is not removed by turning the frame)",
     )
+    earth_rate_tolerance: float = Field(
+        0.2,
+        gt=0,
+        lt=1,
+        description="largest relative departure of the fitted horizontal Earth rate from "
+        "Ω cos φ (and, when the z gyro joins the fit, of the vertical one from Ω sin φ), "
+        "beyond 4 σ of the fit, before a station is rejected (rates in the wrong unit, a "
+        "dead or mis-scaled gyro, a wrong latitude)",
+    )
 
 
 @dataclass
@@ -116,6 +135,86 @@ class _Row:
     mode: str = ""
 
 
+EARTH_RATE_SIGMAS = 4.0
+"""Multiples of the fitted Earth rate's σ added (in quadrature) to the relative tolerance."""
+RATE_UNITS = {
+    "rad/s": np.radians(1.0) / 3600.0,
+    "deg/s": 1.0 / 3600.0,
+    "mrad/s": np.radians(1.0) / 3.6,
+}
+"""What 1 °/h reads as in other rate units: the ratio of fitted to expected Earth rate that a
+record in that unit, taken for °/h, shows (a factor 17 or more apart from each other)."""
+LOOKS_LIKE = 2.0
+"""A ratio within this factor of a unit's (:data:`RATE_UNITS`) names the unit in the hint."""
+
+
+@dataclass(frozen=True)
+class EarthRate:
+    """One component of the Earth rate a station's gyro fit found, against the Earth's."""
+
+    component: str
+    """``horizontal`` or ``vertical``"""
+    fitted: float
+    """°/h"""
+    expected: float
+    """°/h (the vertical is positive up: Ω sin φ)"""
+    limit: float
+    """largest allowed |fitted − expected|, °/h"""
+
+    @property
+    def ok(self) -> bool:
+        return bool(abs(self.fitted - self.expected) <= self.limit)
+
+    @property
+    def ratio(self) -> float:
+        return self.fitted / self.expected if self.expected else float("nan")
+
+    def describe(self, latitude: float) -> str:
+        """``fitted horizontal Earth rate 0.000035 °/h is 0.0000048× the expected 7.24 °/h
+        at 61.25° N``."""
+        where = f"{abs(latitude):.2f}° {'N' if latitude >= 0 else 'S'}"
+        times = f" is {_figures(self.ratio)}×" if self.expected else ","
+        return (
+            f"fitted {self.component} Earth rate {_figures(self.fitted)} °/h{times} the "
+            f"expected {self.expected:.2f} °/h at {where}"
+        )
+
+    def looks_like(self) -> str:
+        """The rate unit whose factor the ratio matches within :data:`LOOKS_LIKE`
+        (``they look like rad/s``; the inverse for °/h converted as if in that unit), or ''."""
+        if not self.expected or not self.ratio > 0:
+            return ""
+        for unit, factor in RATE_UNITS.items():
+            if abs(np.log(self.ratio / factor)) <= np.log(LOOKS_LIKE):
+                return f"they look like {unit}"
+            if abs(np.log(self.ratio * factor)) <= np.log(LOOKS_LIKE):
+                return f"they look like °/h converted as if they were {unit}"
+        return ""
+
+
+HINT = "are the gyro rates in °/h?"
+
+
+def _figures(value: float) -> str:
+    """Two significant figures without an exponent (``0.000035``, ``7.2``, ``1800``)."""
+    if not np.isfinite(value) or value == 0:
+        return f"{value:g}"
+    return str(np.format_float_positional(value, precision=2, fractional=False, trim="-"))
+
+
+def _hint(checks: list[EarthRate]) -> str:
+    """The question to ask, and the unit the failed checks' ratios point to if any."""
+    looks = next((c.looks_like() for c in checks if not c.ok and c.looks_like()), "")
+    return f"{HINT} ({looks})" if looks else HINT
+
+
+def _earth_rate_reason(checks: list[EarthRate], latitude: float, hint: str = "") -> str:
+    """Why a station's Earth rate is implausible: each failed component, then the hint
+    (default: the question, with the unit its own ratios point to)."""
+    text = "; ".join(c.describe(latitude) for c in checks if not c.ok)
+    return f"{text}: {hint or _hint(checks)}"
+
+
 @dataclass
 class _Pending:
     """An inclined station waiting for the (vectorised) azimuth solve."""
@@ -137,14 +236,32 @@ def compass(
     lat = np.radians(latitude)
     rows: list[_Row] = []
     pending: list[_Pending] = []
-    rejects: dict[str, list[object]] = {"station": [], "md": [], "reason": []}
+    rejected: list[tuple[int, float, str]] = []
+    implausible: dict[int, list[EarthRate]] = {}  # index in rejected → the failed checks
+    good: list[tuple[_Station, _Row | _Pending, list[EarthRate]]] = []
     for st in _stations(readings, axes, options):
         try:
-            solved = _solve(st, lat, options)
+            solved, checks = _solve(st, lat, options)
         except StationReject as exc:
-            for key, value in (("station", st.station), ("md", st.md), ("reason", str(exc))):
-                rejects[key].append(value)
+            if isinstance(exc, EarthRateReject):
+                implausible[len(rejected)] = exc.checks
+            rejected.append((st.station, st.md, str(exc)))
             continue
+        good.append((st, solved, checks))
+    checked = len(implausible) + sum(1 for *_, checks in good if checks)
+    if implausible and 2 * len(implausible) > checked:
+        # the record's gyro rates are implausible: the stations that seem right are luck,
+        # and the unit the record's ratios point to is every station's
+        hint = _hint([c for checks in implausible.values() for c in checks])
+        for i, checks in implausible.items():
+            station, md, _ = rejected[i]
+            rejected[i] = (station, md, _earth_rate_reason(checks, latitude, hint))
+        most = f"the Earth rate is implausible at {len(implausible)} of {checked} stations"
+        for st, _, checks in good:
+            here = f"{checks[0].describe(latitude)}, but " if checks else ""
+            rejected.append((st.station, st.md, f"{here}{most}: {hint}"))
+        good = []
+    for _, solved, _ in good:
         if isinstance(solved, _Pending):
             pending.append(solved)
         else:
@@ -164,11 +281,96 @@ def compass(
             ):
                 rows.append(_finish(p, float(azi), float(sigma), str(method), lat))
     rows.sort(key=lambda row: row.station)
+    rejected.sort(key=lambda reject: reject[0])
+    rejects = {
+        "station": [r[0] for r in rejected],
+        "md": [r[1] for r in rejected],
+        "reason": [r[2] for r in rejected],
+    }
     return _table(rows, options), CompassRejects.compiled().make_table(rejects)
 
 
 class StationReject(Exception):
     """A station that cannot be solved, and why."""
+
+
+class NoStationSolved(GyropipeError):
+    """Compassing solved none of the stations (a pipeline cannot go on to a trajectory):
+    names the first few and why."""
+
+    SHOWN = 3
+
+    def __init__(self, rejects: pa.Table) -> None:
+        self.rejects = rejects
+        rows = rejects.to_pylist()
+        shown = "; ".join(
+            f"station {r['station']} (MD {round(r['md'], 1) + 0.0:g} m): {r['reason']}"
+            for r in rows[: self.SHOWN]
+        )
+        more = f"; and {len(rows) - self.SHOWN} more" if len(rows) > self.SHOWN else ""
+        super().__init__(f"compassing solved none of the {len(rows)} station(s): {shown}{more}")
+
+
+class EarthRateReject(StationReject):
+    """A station whose fitted Earth rate is not the Earth's (:func:`earth_rate_check`)."""
+
+    def __init__(self, message: str, checks: list[EarthRate]) -> None:
+        self.checks = checks
+        super().__init__(message)
+
+
+def earth_rate_check(
+    obs: FloatArray,
+    cov: FloatArray,
+    inclination: float,
+    latitude: float,
+    tolerance: float,
+    *,
+    near_vertical: bool = False,
+) -> list[EarthRate]:
+    """The Earth rate a station's fit found, against the Earth's (DOMAIN.md §3), per
+    component; latitude and inclination in radians, rates in °/h.
+
+    ``obs`` with covariance ``cov``: inclined, the high-side and right-side components
+    (h, r) or, when the axial gyro joins the fit, (h, r, z); near vertical, the transverse
+    components (u, v) of the tilt-corrected fit, Ω cos φ times north's. The horizontal
+    component, against k = Ω cos φ, is
+
+    - near vertical: √(u² + v²) (low by at most 1 − cos I);
+    - from (h, r, z), free of any assumption: √((h cos I + z sin I)² + r²), and the
+      vertical h sin I − z cos I against Ω sin φ;
+    - from (h, r) alone: √(((h − Ω sin φ sin I)/cos I)² + r²), the vertical share taken
+      from the latitude (the azimuth solver does the same); nothing near horizontal, where
+      cos I → 0 leaves it undetermined.
+
+    Each component may depart from its expected value by
+    ``√((tolerance·expected)² + (4σ)²)``, σ propagated from ``cov`` (first order).
+    """
+    k = OMEGA_DEG_H * np.cos(latitude)
+    up = OMEGA_DEG_H * np.sin(latitude)
+    ci, si = np.cos(inclination), np.sin(inclination)
+    parts: list[tuple[str, float, FloatArray, float]] = []
+    if near_vertical:
+        value = float(np.hypot(obs[0], obs[1]))
+        parts.append(("horizontal", value, obs[:2] / (value or 1.0), k))
+    elif len(obs) == 3:
+        h, r, z = obs
+        along = h * ci + z * si
+        value = float(np.hypot(along, r))
+        grad = np.array([along * ci, r, along * si]) / (value or 1.0)
+        parts.append(("horizontal", value, grad, k))
+        parts.append(("vertical", float(h * si - z * ci), np.array([si, 0.0, -ci]), up))
+    elif abs(ci) > 1e-6:
+        h, r = obs[:2]
+        along = (h - up * si) / ci
+        value = float(np.hypot(along, r))
+        parts.append(("horizontal", value, np.array([along / ci, r]) / (value or 1.0), k))
+    checks = []
+    for component, value, grad, expected in parts:
+        sigma = float(np.sqrt(grad @ cov[: len(grad), : len(grad)] @ grad))
+        limit = float(np.hypot(tolerance * abs(expected), EARTH_RATE_SIGMAS * sigma))
+        checks.append(EarthRate(component, value, float(expected), limit))
+    return checks
 
 
 def _table(rows: list[_Row], options: CompassOptions) -> pa.Table:
@@ -251,7 +453,11 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
     ]
 
 
-def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending:
+def _solve(
+    st: _Station, lat: float, options: CompassOptions
+) -> tuple[_Row | _Pending, list[EarthRate]]:
+    """One station, solved (or pending the azimuth solve), and its Earth-rate checks; a
+    :class:`StationReject` when it cannot be solved."""
     flags: list[str] = []
     inc, sigma_inc, psi, sigma_psi = _inclination(st)
     near_vertical = min(inc, np.pi - inc) < np.radians(options.vertical_below)
@@ -295,7 +501,9 @@ def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending
             obs = np.append(obs, np.average(st.gyro[:, 2], weights=st.gyro_sigma[:, 2] ** -2))
             cov = np.pad(cov, (0, 1))
             cov[2, 2] = var_z
-        return _Pending(row, obs, cov, float(psi[0]), sigma_psi)
+        checks = _plausible(obs, cov, inc, lat, options)
+        return _Pending(row, obs, cov, float(psi[0]), sigma_psi), checks
+    checks = _plausible(fit.uv, fit.cov[:2, :2], inc, lat, options, near_vertical=True)
     # (u, v) = k (n_x, n_y) of north in the reference (frame angle 0, or the high side)
     jac = np.array([fit.uv[1], -fit.uv[0]]) / (fit.uv @ fit.uv)
     row.sigma_toolface = float(np.sqrt(jac @ fit.cov[:2, :2] @ jac))
@@ -305,7 +513,24 @@ def _solve(st: _Station, lat: float, options: CompassOptions) -> _Row | _Pending
     row.sigma_azi = float(np.hypot(row.sigma_toolface, sigma_psi))
     row.solver, row.mode = "toolface", "near-vertical"
     flags.append("azimuth_from_toolface")  # A = Φ − ψ: as good as the accelerometer ψ
-    return row
+    return row, checks
+
+
+def _plausible(
+    obs: FloatArray,
+    cov: FloatArray,
+    inc: float,
+    lat: float,
+    options: CompassOptions,
+    *,
+    near_vertical: bool = False,
+) -> list[EarthRate]:
+    """:func:`earth_rate_check`, raising :class:`EarthRateReject` when a component fails."""
+    tol = options.earth_rate_tolerance
+    checks = earth_rate_check(obs, cov, inc, lat, tol, near_vertical=near_vertical)
+    if not all(c.ok for c in checks):
+        raise EarthRateReject(_earth_rate_reason(checks, float(np.degrees(lat))), checks)
+    return checks
 
 
 def _finish(p: _Pending, azimuth: float, sigma_gyro: float, method: str, lat: float) -> _Row:

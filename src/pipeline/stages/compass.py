@@ -8,7 +8,7 @@ import pyarrow as pa
 
 from pipeline.earth.site import resolve_site
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import CompassOptions, compass
+from pipeline.gyrocompass.solve import CompassOptions, NoStationSolved, compass
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
@@ -24,9 +24,12 @@ def readings_stage(
 def compass_stage(
     inputs: Mapping[str, pa.Table], params: CompassOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Solve inclination, azimuth and toolfaces of every station."""
+    """Solve inclination, azimuth and toolfaces of every station; none solved is an error
+    naming why (a units mistake rejects every station)."""
     site = resolve_site(ctx.well, stage="compass", latitude=params.latitude)
     stations, rejects = compass(inputs["readings"], site.latitude, params)
+    if stations.num_rows == 0 and rejects.num_rows:
+        raise NoStationSolved(rejects)
     return {"stations": stations, "rejects": rejects}
 
 

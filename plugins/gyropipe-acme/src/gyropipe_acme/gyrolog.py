@@ -31,13 +31,17 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from pydantic import ValidationError
 
-from pipeline.contracts import SOURCE_LINE
-from pipeline.errors import InputFileError
-from pipeline.io.conventions import Conventions, to_canonical
-from pipeline.io.mnemonics import CURVES
-from pipeline.tables import RawSamples
-from pipeline.units import conversion_factor
-from pipeline.well import WellMetadata
+from pipeline.plugin import (
+    CURVES,
+    SOURCE_LINE,
+    Claim,
+    Conventions,
+    InputFileError,
+    RawSamples,
+    WellMetadata,
+    conversion_factor,
+    to_canonical,
+)
 
 MAGIC = "ACME GYROLOG v"
 VERSION = "2"
@@ -98,13 +102,14 @@ class Header:
     data_start: int
 
 
-def sniff(path: Path) -> bool:
-    """True if the file starts with the Acme GyroLog magic (any version)."""
+def sniff(path: Path) -> Claim:
+    """By content: the file starts with the magic ``ACME GYROLOG v`` (any version)."""
     try:
         with path.open("rb") as fh:
-            return fh.read(len(MAGIC)) == MAGIC.encode()
+            magic = fh.read(len(MAGIC))
     except OSError:
-        return False
+        return Claim.NO
+    return Claim.CONTENT if magic == MAGIC.encode() else Claim.NO
 
 
 def read_samples(path: Path) -> tuple[pa.Table, WellMetadata]:

@@ -1,5 +1,7 @@
 """The gyropipe plugin ``acme`` (entry point ``acme = "gyropipe_acme.plugin"`` in the group
-``gyropipe``): a reader and a writer of Acme GyroLog ``.agl`` raw-sample files."""
+``gyropipe``): a reader and a writer of Acme GyroLog ``.agl`` raw-sample files and a reader of
+Acme survey reports (``.txt`` stations). Like any plugin, it imports gyropipe only from
+:mod:`pipeline.plugin`."""
 
 from __future__ import annotations
 
@@ -10,10 +12,7 @@ from typing import Any
 import pyarrow as pa
 
 from gyropipe_acme import gyrolog, survey_report
-from pipeline.hookspecs import hookimpl
-from pipeline.registry import ReaderDef, WriterDef
-from pipeline.tables import RawSamples, Stations
-from pipeline.well import WellMetadata
+from pipeline.plugin import RawSamples, ReaderDef, Stations, WellMetadata, WriterDef, hookimpl
 
 
 def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:

@@ -20,12 +20,16 @@ from pathlib import Path
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict
 
-from pipeline.contracts import SOURCE_LINE
-from pipeline.errors import InputFileError
-from pipeline.registry import Claim
-from pipeline.tables import Stations
-from pipeline.units import conversion_factor
-from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
+from pipeline.plugin import (
+    SOURCE_LINE,
+    Claim,
+    DefaultNorthReference,
+    InputFileError,
+    NorthReference,
+    Stations,
+    WellMetadata,
+    conversion_factor,
+)
 
 TITLE = "ACME SURVEY REPORT"
 COLUMNS = ("MD(ft)", "INC(deg)", "AZI(deg)")
