@@ -1132,7 +1132,7 @@ def test_writer_format(tmp_path: Path) -> None:
     assert "UWI . : unique well identifier" in lines
     assert "NREF . grid : north reference of the azimuths" in lines
     assert "azi .deg : azimuth clockwise from north (grid north)" in lines
-    assert "Columns not written (~A holds numbers only): survey (string)" in lines
+    assert "Columns not written: survey (string)" in lines
     assert lines[-3:] == ["~ASCII md inc azi", "0 0 359.5", "0.1 0.3333333333333333 -999.25"]
     assert lasio.read(str(path)).well["WELL"].value == "A-1"
 
@@ -1180,7 +1180,15 @@ def test_writer_refuses_what_it_cannot_write(tmp_path: Path) -> None:
         (pa.table({"name": ["a"]}), WELL, "no numeric column"),
         (pa.table({"md": [1.0, math.inf]}), WELL, "infinite values"),
         (pa.table({"md": [1.0, None]}), WELL, "index column 'md' has missing values"),
-        (pa.table({"a b": [1.0]}), WELL, "cannot be a LAS curve"),
+        (pa.table({"a:b": [1.0]}), WELL, "cannot be a LAS curve"),
+        (
+            pa.table(
+                {"md": [1.0]},
+                schema=pa.schema([pa.field("md", pa.float64(), metadata={UNIT_KEY: b"m s"})]),
+            ),
+            WELL,
+            "cannot be a LAS curve",
+        ),
         (pa.table({"md": [1.0]}), WellMetadata(well="a\nb"), "line break"),
     ]
     grid = pa.field("b", pa.float64(), metadata={NORTH_KEY: b"grid"})

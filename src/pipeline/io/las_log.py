@@ -44,13 +44,12 @@ import pyarrow.compute as pc
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, warn_input
-from pipeline.io.las_header import NUMBER, SHOWN, Header, Item, Source
+from pipeline.io.las_header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
 from pipeline.io.las_options import LasOptions
 from pipeline.io.las_rows import Cells, Data, check_range, null_values, read_all
 from pipeline.io.mnemonics import canonical_name
 from pipeline.units import conversion_factor
 
-DESCRIPTION_KEY = b"description"
 TEXT_NULL = r"^(?:\(null\)|null|[+-]?nan|#n/a|[+-]?1\.#(?:ind|inf|qnan|snan|io)[0-9]*|-+)$"
 """Cells meaning 'no value' whatever the NULL item says (compared ignoring case)."""
 _DECIMAL_COMMA = r"^([+-]?[0-9]*),([0-9]+(?:[eE][+-]?[0-9]+)?)$"
