@@ -93,15 +93,21 @@ EXPLAINED: dict[str, str] = {
 """File name → why gyropipe's reading differs from lasio's and why it is the better one."""
 
 
-def lasio_curves(path: Path) -> tuple[list[str], list[str], list[np.ndarray]]:
+Lasio = tuple[list[str], list[str], list[np.ndarray], float | None]
+
+
+def lasio_curves(path: Path) -> Lasio:
+    """lasio's mnemonics, units, curves and NULL value."""
     logging.disable(logging.CRITICAL)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         las = lasio.read(str(path))
+    null = las.well["NULL"].value if "NULL" in las.well else None
     return (
         [c.mnemonic for c in las.curves],
         [c.unit for c in las.curves],
         [np.asarray(c.data) for c in las.curves],
+        null if isinstance(null, int | float) else None,
     )
 
 
@@ -115,8 +121,9 @@ def gyropipe_curves(path: Path) -> tuple[list[str], list[str], list[pa.Array], l
     return [f.name for f in fields], units, columns, [str(w.message) for w in caught]
 
 
-def _cell(value: Any) -> float | str | None:
-    """A cell in comparable form: None (null), a float or stripped text."""
+def _cell(value: Any, null: float | None = None) -> float | str | None:
+    """A cell in comparable form: None (null), a float or stripped text (a text cell that
+    is the NULL value is null)."""
     if value is None:
         return None
     if isinstance(value, float | np.floating):
@@ -128,16 +135,16 @@ def _cell(value: Any) -> float | str | None:
         number = float(text)
     except ValueError:
         return text
-    return None if math.isnan(number) else number
+    return None if math.isnan(number) or number == null else number
 
 
 def compare(
     ours: tuple[list[str], list[str], list[pa.Array], list[str]],
-    theirs: tuple[list[str], list[str], list[np.ndarray]],
+    theirs: Lasio,
 ) -> tuple[str | None, list[str]]:
     """The first difference (None: equal) and notes on normalisations made."""
     names, units, columns, _ = ours
-    their_names, their_units, their_columns = theirs
+    their_names, their_units, their_columns, null = theirs
     notes: list[str] = []
     if names != their_names:
         return f"mnemonics {names} vs lasio's {their_names}", notes
@@ -153,7 +160,7 @@ def compare(
                 return f"{name}: row {at}: {column[at].as_py()!r} vs lasio's {data[at]!r}", notes
             continue
         mine = [_cell(v) for v in column.to_pylist()]
-        lasios = [_cell(v) for v in data.tolist()]
+        lasios = [_cell(v, null) for v in data.tolist()]
         if mine != lasios:
             at = next(i for i, (a, b) in enumerate(zip(mine, lasios, strict=True)) if a != b)
             return f"{name}: row {at}: {mine[at]!r} vs lasio's {lasios[at]!r}", notes

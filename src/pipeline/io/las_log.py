@@ -7,7 +7,8 @@
   columns ``UNKNOWN:1``… (as many as the first row has values, with a warning). Then
   ``source_line``, the file line of each row.
 * **Units** — each field's ``unit`` metadata is the curve's unit exactly as written (none
-  when the file gives none), and its ``description`` metadata the curve's description. A
+  when the file gives none), and its ``description`` metadata the curve's description
+  (without a LAS 3 format or association: ``{F}``, ``| Run[1]``). A
   log's values are kept in the file's units, never converted: its curves are any of
   hundreds of quantities (GAPI, OHMM, K/M3, CFCF), most without a canonical unit, and a
   table half converted would be worse than one left as logged. Read the file as
@@ -183,8 +184,9 @@ def _table(header: Header, arrays: list[pa.Array], lines: np.ndarray) -> pa.Tabl
         meta: dict[bytes, bytes] = {}
         if curve is not None and curve.unit:
             meta[UNIT_KEY] = curve.unit.encode()
-        if curve is not None and curve.descr:
-            meta[DESCRIPTION_KEY] = curve.descr.encode()
+        descr = _FORMAT.sub("", curve.descr).strip() if curve is not None else ""
+        if descr:
+            meta[DESCRIPTION_KEY] = descr.encode()
         fields.append(pa.field(name, array.type, metadata=meta or None))
     fields.append(pa.field(SOURCE_LINE, pa.int64()))
     return pa.Table.from_arrays([*arrays, pa.array(lines, pa.int64())], schema=pa.schema(fields))
