@@ -20,6 +20,8 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.convert import read_kind
@@ -30,7 +32,7 @@ from pipeline.io.las_log import TEXT_NULL
 from pipeline.plugins import load_registry
 from pipeline.tables import LogTable
 from pipeline.well import WellMetadata
-from tests_support import ROOT, gyropipe, plugin_io
+from tests_support import ROOT, gyropipe, mutate_bytes, plugin_io
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
@@ -508,3 +510,40 @@ def test_auto_keeps_surveys_and_reports_a_broken_one(tmp_path: Path) -> None:
     survey.write_text(survey.read_text().replace("x46.5", "46.5"))
     table, _, kind = read_kind(registry, survey, kind="auto", reader="auto", options={})
     assert kind == "stations" and table.column_names[:3] == ["md", "inc", "azi"]
+
+
+# ------------------------------------------------------------------------------ fuzz
+
+_position = st.integers(0, 1000)
+_mutation = st.one_of(
+    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
+    st.tuples(st.just("truncate"), _position, st.just(0)),
+    st.tuples(st.just("insert"), _position, st.sampled_from(b" \t\r\n#~.:-+eE0123456789,\"'")),
+    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
+    st.tuples(st.just("delete_line"), _position, st.just(0)),
+    st.tuples(st.just("swap_columns"), _position, st.integers(0, 3)),
+)
+
+
+@pytest.fixture(scope="module")
+def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fuzz")
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(mutations=st.lists(_mutation, min_size=1, max_size=3))
+def test_fuzz_mutations_raise_located_errors_or_read_a_log(
+    fuzz_dir: Path, mutations: list[tuple[str, int, int]]
+) -> None:
+    """A broken log is an :class:`InputFileError` (never another exception); one that
+    reads is a table whose columns are its curves, each float64 or text."""
+    path = fuzz_dir / "log.las"
+    path.write_bytes(mutate_bytes((DATA / "gr.las").read_bytes(), mutations))
+    try:
+        table, _, _ = read_log(path)
+    except InputFileError:
+        return
+    assert table.column_names[-1] == SOURCE_LINE
+    for f in table.schema:
+        assert f.type in (pa.float64(), pa.string(), pa.int64()), f
+    LogTable.validate_table(table)

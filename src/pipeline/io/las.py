@@ -83,7 +83,8 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
 
 
 def sniff(path: Path) -> bool:
-    """By content: the first line that is neither blank nor a ``#`` comment opens ``~V``."""
+    """By content: the first line that is neither blank nor a ``#`` comment opens ``~V``
+    (in UTF-8, Windows-1252 or UTF-16 text)."""
     head = file_head(path, SNIFF_BYTES)
     if head is None:
         return False

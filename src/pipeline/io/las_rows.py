@@ -4,8 +4,10 @@ each row, their nulls, and the index checked against STRT/STOP/STEP.
 :func:`_fast_values` (numpy + ``pyarrow.csv``; ≥ 10× faster than ``lasio.read``, see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
 careful path, reads the rest (wrapped files, comment or blank lines, lone CR line ends,
-text in unread curves, LAS 3 delimiters) and locates every error by line. Both give every
-number correctly rounded, so values equal lasio's. ``NULL`` items and the option
+text in unread curves, LAS 3 delimiters, quoted text) and locates every error by line. Both
+give every number correctly rounded, so values equal lasio's. For a log
+(:mod:`pipeline.io.las_log`), :func:`read_all` reads every curve by the fast path, else
+:func:`read_cells` gives the text of every cell. ``NULL`` items and the option
 ``null_values`` become nulls (compared as numbers: ``-999.2500`` is ``-999.25``). A row
 with too many or too few values, a cell that is not a finite number, a null index value and
 an index contradicting STRT/STOP/STEP (a truncated file, a lost row) are errors with their
