@@ -2,8 +2,9 @@
 
 Writes a LAS 2.0 raw-sensor log (TIME index, DEPT, three accelerometers, three gyros; some
 -999.25 nulls) to a temporary directory, reads it with ``lasio.read`` and with the ``las``
-reader (kind ``samples``), best of ``--repeat`` runs each, checks every value and null
-position is identical, and prints both times and their ratio. Target: ≥ 10×.
+reader (kind ``samples``, and kind ``log``: every curve as logged), best of ``--repeat`` runs
+each, checks every value and null position is identical, and prints the times and their
+ratios. Target: ≥ 10× for both.
 
     python benchmarks/bench_las.py [--rows 1000000] [--repeat 3]
 """
@@ -79,8 +80,10 @@ def main() -> int:
         write_file(path, args.rows)
         size = path.stat().st_size / 1e6
         ours = best(lambda: read_las(path, "samples", options), args.repeat)
+        log = best(lambda: read_las(path, "log", options), args.repeat)
         theirs = best(lambda: lasio.read(str(path)), args.repeat)
         table, _ = read_las(path, "samples", options)
+        log_table, _ = read_las(path, "log", options)
         las = lasio.read(str(path))
     same = all(
         np.array_equal(
@@ -88,15 +91,20 @@ def main() -> int:
             las.curves[i].data,
             equal_nan=True,
         )
-        for i, name in enumerate(COLUMNS)
+        and np.array_equal(
+            log_table.column(mnemonic).to_numpy(zero_copy_only=False),
+            las.curves[i].data,
+            equal_nan=True,
+        )
+        for i, (name, (mnemonic, _, _)) in enumerate(zip(COLUMNS, CURVES, strict=True))
     )
-    ratio = theirs / ours
+    ratio, log_ratio = theirs / ours, theirs / log
     print(f"file: {args.rows:,} rows x {len(CURVES)} curves, {size:.0f} MB")
-    print(f"lasio.read:      {theirs * 1e3:8.0f} ms")
-    print(f"gyropipe las:    {ours * 1e3:8.0f} ms")
-    print(f"ratio:           {ratio:8.1f}x (target >= {TARGET:g}x)")
+    print(f"lasio.read:            {theirs * 1e3:8.0f} ms")
+    print(f"gyropipe las, samples: {ours * 1e3:8.0f} ms  {ratio:5.1f}x (target >= {TARGET:g}x)")
+    print(f"gyropipe las, log:     {log * 1e3:8.0f} ms  {log_ratio:5.1f}x")
     print(f"values and nulls identical to lasio: {same}")
-    return 0 if same and ratio >= TARGET else 1
+    return 0 if same and min(ratio, log_ratio) >= TARGET else 1
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ import os
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
@@ -478,13 +479,19 @@ def budget(plan_file: str, out_file: str | None) -> None:
 
 @main.command()
 @click.argument("input_file", metavar="INPUT", type=click.Path(dir_okay=False))
-@click.argument("output_file", metavar="OUTPUT", type=click.Path(dir_okay=False))
+@click.argument("output_file", metavar="[OUTPUT]", required=False, type=click.Path(dir_okay=False))
+@click.option(
+    "--out",
+    "out_file",
+    type=click.Path(dir_okay=False),
+    help="Output file; its extension chooses the format (.parquet, .csv, .las, .mcap…).",
+)
 @click.option(
     "--kind",
-    type=click.Choice(["auto", "stations", "samples"]),
+    type=click.Choice(["auto", "stations", "samples", "readings", "log"]),
     default="auto",
     show_default=True,
-    help="What the input holds (auto: try each kind the reader knows).",
+    help="What the input holds (auto: a survey kind if it is one, else a log).",
 )
 @click.option(
     "--reader",
@@ -507,38 +514,72 @@ def budget(plan_file: str, out_file: str | None) -> None:
     metavar="FIELD=VALUE",
     help="Override a well metadata field. Repeatable.",
 )
+@disable_option
 def convert(
     input_file: str,
-    output_file: str,
+    output_file: str | None,
+    out_file: str | None,
     kind: str,
     reader_name: str,
     options: tuple[str, ...],
     well_items: tuple[str, ...],
+    disabled: tuple[str, ...],
 ) -> None:
-    """Convert a readable input to Parquet, CSV, LAS or MCAP (format from OUTPUT's extension),
-    normalised to gyropipe's units and frames on the way."""
-    from pipeline.convert import convert_file
+    """Convert INPUT to the format of --out's extension (Parquet, CSV, LAS, MCAP): survey
+    stations and samples in gyropipe's units and frames, a well log's curves as logged."""
+    from pipeline.convert import convert as convert_file
+    from pipeline.errors import InputFileWarning
 
-    registry = _registry(())
-    try:
-        parsed = _options(options)
-        well = _well_overrides(well_items)
-        table, written = convert_file(
-            registry,
-            Path(input_file),
-            Path(output_file),
-            kind=kind,
-            reader=reader_name,
-            options=parsed,
-            well=well,
-        )
-    except (click.BadParameter, ValueError, ReaderOptionsError) as exc:
-        click.echo(f"error: {exc}", err=True)
+    if output_file and out_file and Path(output_file) != Path(out_file):
+        click.echo(f"error: two outputs given: {output_file} and --out {out_file}", err=True)
         sys.exit(EXIT_CONFIG)
-    except GyropipeError as exc:
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(EXIT_FAILED)
-    click.echo(f"wrote {written} ({table.num_rows} rows, {table.num_columns} columns)")
+    target = out_file or output_file
+    if not target:
+        click.echo("error: no output file: give --out OUTPUT", err=True)
+        sys.exit(EXIT_CONFIG)
+    registry = _registry(disabled)
+    failure: tuple[int, Exception] | None = None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", InputFileWarning)
+        try:
+            parsed = _options(options)
+            well = _well_overrides(well_items)
+            done = convert_file(
+                registry,
+                Path(input_file),
+                Path(target),
+                kind=kind,
+                reader=reader_name,
+                options=parsed,
+                well=well,
+            )
+        except (click.BadParameter, ValueError, ReaderOptionsError) as exc:
+            failure = (EXIT_CONFIG, exc)
+        except GyropipeError as exc:
+            failure = (EXIT_FAILED, exc)
+    for warning in caught:
+        click.echo(f"warning: {warning.message}", err=True)
+    if failure is not None:
+        click.echo(f"error: {failure[1]}", err=True)
+        sys.exit(failure[0])
+    table = done.table
+    click.echo(
+        f"wrote {done.target}: {KIND_WORDS.get(done.kind, done.kind)}, {table.num_rows} rows × "
+        f"{table.num_columns} columns ({_names(table.column_names)})"
+    )
+
+
+KIND_WORDS = {
+    "stations": "survey stations",
+    "samples": "raw sensor samples",
+    "readings": "position readings",
+    "log": "well log",
+}
+
+
+def _names(names: list[str], shown: int = 8) -> str:
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(names[:shown]) + more
 
 
 def _options(items: tuple[str, ...]) -> dict[str, object]:

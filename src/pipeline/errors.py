@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -62,9 +63,27 @@ class InputFileError(GyropipeError):
         self.path = str(path)
         self.line = line
         self.column = column
+        self.reason = message
         where = f"{self.path}:{line}" if line else self.path
         col = f" (column {column!r})" if column else ""
         super().__init__(f"{where}{col}: {message}")
+
+
+class WrongKindError(InputFileError):
+    """A readable file that holds another kind of table than the one asked for (a well log
+    read as survey stations): the message says what the file looks like and what the kind
+    needs, so a caller may try another kind."""
+
+
+class InputFileWarning(UserWarning):
+    """An input file was read despite a problem, named with its file and line and what the
+    reader did about it (e.g. a header value contradicting the data it kept)."""
+
+
+def warn_input(path: str | Path, message: str, line: int = 0) -> None:
+    """Issue an :class:`InputFileWarning` located at ``path:line``."""
+    where = f"{path}:{line}" if line else str(path)
+    warnings.warn(f"{where}: {message}", InputFileWarning, stacklevel=2)
 
 
 class UnitError(GyropipeError):

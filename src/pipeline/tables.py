@@ -262,3 +262,10 @@ class CompassRejects(TableContract):
     station: int = column(unit=None, ge=0, description="station index")
     md: float = column(unit="m", description="measured depth")
     reason: str = column(unit=None, description="why the station was not solved")
+
+
+class LogTable(TableContract):
+    """A well log as read: the index (depth, time or what the file is indexed by) first,
+    then any curves, each with the unit its file gives in the field's ``unit`` metadata
+    (not converted); float64 curves hold NaN for no value, text curves null. No column is
+    required: a log has whatever curves it was logged with."""

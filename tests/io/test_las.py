@@ -20,13 +20,13 @@ from hypothesis import strategies as st
 from pydantic import ValidationError
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, WrongKindError
 from pipeline.io import las as las_plugin
 from pipeline.io import las_header, las_rows
 from pipeline.io.las_options import LasOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
-from pipeline.tables import RawSamples, Stations
+from pipeline.tables import LogTable, RawSamples, Stations
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata
 from tests_support import mutate_bytes, plugin_io
@@ -104,7 +104,7 @@ def as_nan(table: pa.Table, name: str) -> np.ndarray:
 
 def test_registration() -> None:
     assert READER.name == "las"
-    assert READER.kinds == {"stations": Stations, "samples": RawSamples}
+    assert READER.kinds == {"stations": Stations, "samples": RawSamples, "log": LogTable}
     assert READER.options is LasOptions
     assert (WRITER.name, WRITER.extension) == ("las", "las")
 
@@ -820,10 +820,20 @@ def test_conventions_needing_a_missing_axis(tmp_path: Path) -> None:
 
 
 def test_depth_log_is_not_samples(tmp_path: Path) -> None:
-    err = failure(put(tmp_path, las()), "samples")
-    assert "no curve for time, gyro_x, acc_x, acc_y, acc_z" in str(err)
-    assert "samples need time" in str(err)
-    assert "TIME, TIM, ETIM" in str(err)
+    path = put(tmp_path, las())
+    err = failure(path, "samples")
+    assert isinstance(err, WrongKindError)
+    assert str(err) == (
+        f"{path}: a depth-indexed LAS log with curves INCL, AZIM; not raw sensor samples "
+        "(needs TIME, WX, GX, GY, GZ)"
+    )
+
+
+def test_samples_missing_one_curve_name_the_accepted_mnemonics(tmp_path: Path) -> None:
+    err = failure(put(tmp_path, RAW.replace(" GY   .M/S2", " QQ   .M/S2")), "samples")
+    assert isinstance(err, WrongKindError)
+    assert "no curve for acc_y" in str(err)
+    assert "GY, ACCY, ACCELY" in str(err)
 
 
 def test_integer_columns(tmp_path: Path) -> None:
@@ -1122,7 +1132,7 @@ def test_writer_format(tmp_path: Path) -> None:
     assert "UWI . : unique well identifier" in lines
     assert "NREF . grid : north reference of the azimuths" in lines
     assert "azi .deg : azimuth clockwise from north (grid north)" in lines
-    assert "Columns not written (~A holds numbers only): survey (string)" in lines
+    assert "Columns not written: survey (string)" in lines
     assert lines[-3:] == ["~ASCII md inc azi", "0 0 359.5", "0.1 0.3333333333333333 -999.25"]
     assert lasio.read(str(path)).well["WELL"].value == "A-1"
 
@@ -1170,7 +1180,15 @@ def test_writer_refuses_what_it_cannot_write(tmp_path: Path) -> None:
         (pa.table({"name": ["a"]}), WELL, "no numeric column"),
         (pa.table({"md": [1.0, math.inf]}), WELL, "infinite values"),
         (pa.table({"md": [1.0, None]}), WELL, "index column 'md' has missing values"),
-        (pa.table({"a b": [1.0]}), WELL, "cannot be a LAS curve"),
+        (pa.table({"a:b": [1.0]}), WELL, "cannot be a LAS curve"),
+        (
+            pa.table(
+                {"md": [1.0]},
+                schema=pa.schema([pa.field("md", pa.float64(), metadata={UNIT_KEY: b"m s"})]),
+            ),
+            WELL,
+            "cannot be a LAS curve",
+        ),
         (pa.table({"md": [1.0]}), WellMetadata(well="a\nb"), "line break"),
     ]
     grid = pa.field("b", pa.float64(), metadata={NORTH_KEY: b"grid"})

@@ -75,8 +75,9 @@ def read(
     **options: Any,
 ) -> pd.DataFrame:
     """Read a file as a DataFrame in canonical units (``attrs``: ``units``,
-    ``north_reference``, ``well``). ``kind``: ``stations``, ``samples``, ``readings`` or
-    ``auto`` (the first that reads); ``reader``: a reader's name or ``auto`` (the engine's
+    ``north_reference``, ``well``). ``kind``: ``stations``, ``samples``, ``readings``,
+    ``log`` (any LAS log: every curve as logged, units kept) or ``auto`` (a survey kind if
+    the file is one, else a log); ``reader``: a reader's name or ``auto`` (the engine's
     choice among the installed readers, plugins included, as in pipelines); ``options``: the
     reader's options; ``well``: metadata that fills what the file leaves out (e.g. the north
     reference of azimuths the file does not name)."""

@@ -25,8 +25,9 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY, TableContract
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, WrongKindError
 from pipeline.io.las_header import Header, Item, mnemonics
+from pipeline.io.las_log import describe
 from pipeline.io.las_options import LasOptions
 from pipeline.io.las_rows import Data, Floats, Lines, Mask
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
@@ -137,17 +138,25 @@ def choose(
     return chosen
 
 
+WHAT = {"stations": "survey stations", "samples": "raw sensor samples"}
+NEEDS = {"stations": "MD, INC, AZI", "samples": "TIME, WX, GX, GY, GZ"}
+"""Each kind in words, and the curves it needs (their usual mnemonics)."""
+
+
 def _require(path: Path, header: Header, spec: Kind, chosen: dict[str, int]) -> None:
+    """Every required column has a curve; else a :class:`WrongKindError`: short when the
+    file has none of the kind's curves but its index (a log of other curves), else listing
+    the mnemonics accepted for each missing one."""
     missing = [name for name in spec.required if name not in chosen]
     if not missing:
         return
+    kind = next(k for k, v in KINDS.items() if v is spec)
+    if not any(n in chosen for n in spec.required if n != spec.key):
+        raise WrongKindError(path, f"{describe(header)}; not {WHAT[kind]} (needs {NEEDS[kind]})")
     accepted = "; ".join(f"{n}: {', '.join(CURVES[n].aliases)}" for n in missing)
-    hint = (
-        " (samples need time: a depth-indexed log is not raw samples)" if "time" in missing else ""
-    )
-    raise InputFileError(
+    raise WrongKindError(
         path,
-        f"no curve for {', '.join(missing)}{hint}; curves: {mnemonics(header.curves)}; "
+        f"no curve for {', '.join(missing)}; curves: {mnemonics(header.curves)}; "
         f"accepted mnemonics: {accepted}; or name the curve with the option columns "
         f"(e.g. columns: {{{missing[0]}: MNEMONIC}})",
         line=header.curves[0].line,

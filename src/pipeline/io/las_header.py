@@ -9,7 +9,9 @@ sections read as items.
   even with ``ignore_data`` scans the whole file: 4 s for 100 MB). LAS 1.x ``~W`` items
   other than STRT/STOP/STEP/NULL hold their value after the colon, as the 1.2 standard
   (and lasio) says. Other sections (``~O``, unknown ones) are skipped.
-* **Text** — UTF-8 (BOM or not) when the bytes are valid UTF-8, else Windows-1252 (Latin-1
+* **Text** — UTF-16 with a byte-order mark, or without one when every other byte of the
+  head is a NUL (as Windows tools write it), is transcoded to UTF-8 first (lasio cannot read
+  it); then UTF-8 (BOM or not) when the bytes are valid UTF-8, else Windows-1252 (Latin-1
   plus ``°``, ``µ``…); a byte neither accepts, or a NUL byte, is an error naming its line.
 """
 
@@ -24,6 +26,9 @@ from pipeline.errors import InputFileError
 
 SNIFF_BYTES = 64 * 1024
 BOM = b"\xef\xbb\xbf"
+DESCRIPTION_KEY = b"description"
+"""Field metadata: a curve's description (a log's, kept by its reader and its writer)."""
+UTF16_BOMS = {b"\xff\xfe": "utf-16-le", b"\xfe\xff": "utf-16-be"}
 SHOWN = 8
 
 Role = Literal["version", "well", "curves", "parameter", "data"]
@@ -97,11 +102,15 @@ class Source:
 
 
 def load(path: Path) -> Source:
-    """The file's header lines (decoded) and data bytes."""
+    """The file's header lines (decoded) and data bytes (UTF-16 transcoded to UTF-8)."""
     try:
-        raw = path.read_bytes().removeprefix(BOM)
+        raw = path.read_bytes()
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
+    codec = utf16_codec(raw)
+    if codec is not None:
+        raw = _from_utf16(path, raw, codec)
+    raw = raw.removeprefix(BOM)
     if not raw or raw.isspace():
         raise InputFileError(path, "the file is empty")
     head = raw[:SNIFF_BYTES]
@@ -109,10 +118,54 @@ def load(path: Path) -> Source:
         raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     title = _DATA_TITLE.search(raw)
     if title is None:
-        return Source(split_lines(decode(path, raw, 1)), 0, b"", 0)
+        lines = split_lines(decode(path, raw, 1))
+        if not any(line.lstrip().startswith("~") for line in lines):
+            raise InputFileError(
+                path, "not a LAS file: no section title (~Version, ~Well, ~Curve, ~A)"
+            )
+        return Source(lines, 0, b"", 0)
     end = raw.find(b"\n", title.start())
     lines = split_lines(decode(path, raw[: title.start()], 1))
     return Source(lines[:-1], len(lines), raw, len(raw) if end < 0 else end + 1)
+
+
+def utf16_codec(head: bytes) -> str | None:
+    """``utf-16-le``/``-be`` when ``head`` starts with a UTF-16 byte-order mark or, without
+    one, when NULs fill every other byte (ASCII text in UTF-16); else None."""
+    for bom, codec in UTF16_BOMS.items():
+        if head.startswith(bom):
+            return codec
+    sample = head[:4096]
+    pairs = len(sample) // 2
+    if pairs < 8 or b"\0" not in sample:
+        return None
+    even, odd = sample[0 : 2 * pairs : 2].count(0), sample[1 : 2 * pairs : 2].count(0)
+    if odd > 0.3 * pairs and even < 0.02 * pairs:
+        return "utf-16-le"
+    if even > 0.3 * pairs and odd < 0.02 * pairs:
+        return "utf-16-be"
+    return None
+
+
+def _from_utf16(path: Path, raw: bytes, codec: str) -> bytes:
+    """UTF-16 bytes as UTF-8 (the byte-order mark dropped)."""
+    try:
+        text = raw.decode(codec)
+    except UnicodeDecodeError as exc:
+        line = 1 + raw[: exc.start].decode(codec, errors="replace").count("\n")
+        raise InputFileError(
+            path, f"the file looks like {codec.upper()} but is not", line
+        ) from None
+    return text.removeprefix("\ufeff").encode()
+
+
+def text_head(head: bytes) -> bytes:
+    """The head of a file as UTF-8 bytes (a UTF-16 head transcoded; a cut character
+    dropped), for sniffing."""
+    codec = utf16_codec(head)
+    if codec is None:
+        return head
+    return head.decode(codec, errors="ignore").removeprefix("\ufeff").encode()
 
 
 def decode(path: Path, data: bytes, first_line: int) -> str:
@@ -156,12 +209,16 @@ def parse_header(path: Path, lines: list[str]) -> Header:
         elif role is not None:
             sections[role].append(_item(path, text, number, role))
     version, wrapped, delimiter = _version(path, sections["version"])
-    if not sections["curves"]:
-        raise InputFileError(path, "no curves: the ~Curve section is missing or empty")
     well = sections["well"]
     if version < 2:
         well = [_las1_well_item(item) for item in well]
     return Header(version, wrapped, delimiter, well, sections["parameter"], sections["curves"])
+
+
+def require_curves(path: Path, header: Header) -> None:
+    """A survey kind needs the ~Curve section (a log without one has unnamed columns)."""
+    if not header.curves:
+        raise InputFileError(path, "no curves: the ~Curve section is missing or empty")
 
 
 def section_role(title: str) -> Role | None:

@@ -4,8 +4,10 @@ each row, their nulls, and the index checked against STRT/STOP/STEP.
 :func:`_fast_values` (numpy + ``pyarrow.csv``; ≥ 10× faster than ``lasio.read``, see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
 careful path, reads the rest (wrapped files, comment or blank lines, lone CR line ends,
-text in unread curves, LAS 3 delimiters) and locates every error by line. Both give every
-number correctly rounded, so values equal lasio's. ``NULL`` items and the option
+text in unread curves, LAS 3 delimiters, quoted text) and locates every error by line. Both
+give every number correctly rounded, so values equal lasio's. For a log
+(:mod:`pipeline.io.las_log`), :func:`read_all` reads every curve by the fast path, else
+:func:`read_cells` gives the text of every cell. ``NULL`` items and the option
 ``null_values`` become nulls (compared as numbers: ``-999.2500`` is ``-999.25``). A row
 with too many or too few values, a cell that is not a finite number, a null index value and
 an index contradicting STRT/STOP/STEP (a truncated file, a lost row) are errors with their
@@ -15,6 +17,8 @@ line: no value is ever dropped or shifted. Each row keeps its file line (the tab
 
 from __future__ import annotations
 
+import csv as stdcsv
+import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
@@ -26,7 +30,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.las_header import (
     NUMBER,
     Header,
@@ -157,23 +161,101 @@ def _slow_values(
 ) -> Data:
     """The careful path: rows from lines (wrapped or not, any delimiter; comment and blank
     lines skipped), every value checked as a number with its line."""
-    numbered = _data_lines(path, header, lines, title_line)
-    rows = (
-        _wrapped_rows(path, numbered, len(header.curves))
-        if header.wrapped
-        else _unwrapped_rows(path, header, numbered)
-    )
-    cells: dict[int, list[str]] = {i: [] for i in wanted}
-    starts: list[int] = []
-    for line, row in rows:
-        starts.append(line)
-        for i in wanted:
-            cells[i].append(row[i])
-    lines_of = np.asarray(starts, dtype=np.int64)
+    cells = _slow_cells(path, header, lines, title_line, wanted, len(header.curves))
     return Data(
-        {i: _numbers(path, cells[i], lines_of, header.curves[i].mnemonic) for i in wanted},
-        lines_of,
+        {
+            i: _numbers(path, column, cells.lines, header.curves[i].mnemonic)
+            for i, column in zip(wanted, cells.columns, strict=True)
+        },
+        cells.lines,
     )
+
+
+@dataclass(frozen=True)
+class Cells:
+    """The text of the cells of the curves read (``''``: an empty or unknowable cell) and
+    the file line of each row."""
+
+    columns: list[list[str]]
+    lines: Lines
+
+
+def read_all(path: Path, source: Source, header: Header) -> Data | Cells:
+    """Every curve of a log: their values when the fast path reads them all (blocks of
+    numbers), else the text of every cell (:func:`read_cells`)."""
+    n = len(header.curves)
+    if n and header.version < 3 and not header.wrapped and header.delimiter == "SPACE":
+        fast = _fast_values(source.raw, source.start, n, list(range(n)))
+        if fast is not None:
+            values, rows = fast
+            first = source.title_line + 1
+            return Data(values, np.arange(first, first + rows, dtype=np.int64))
+    return read_cells(path, source, header)
+
+
+def read_cells(path: Path, source: Source, header: Header) -> Cells:
+    """The text of every cell of the data section, for a log: rows as :func:`read_data`
+    reads them, except that a short row whose fixed-width values ran together is split as
+    lasio splits it (``7.330-19508.961``: 7.330 and -19508.961; ``7.020101130.188``: two
+    values whose border cannot be known, read as empty cells with a warning). Without a
+    ~Curve section the first row sets the number of columns."""
+    first = source.title_line + 1
+    text = decode(path, source.raw[source.start :], first)
+    n = len(header.curves)
+    return _slow_cells(path, header, split_lines(text), source.title_line, None, n, repair=True)
+
+
+def _slow_cells(
+    path: Path,
+    header: Header,
+    lines: list[str],
+    title_line: int,
+    wanted: list[int] | None,
+    n: int,
+    *,
+    repair: bool = False,
+) -> Cells:
+    """Cells of the ``wanted`` curves (None: all) of rows of ``n`` values (0: as many as
+    the first row has)."""
+    numbered = _data_lines(path, header, lines, title_line)
+    if n == 0:
+        if header.wrapped:
+            raise InputFileError(path, "wrapped data (WRAP YES) without a ~Curve section")
+        numbered = _first_row_sets_count(path, numbered)
+    rows = (
+        _wrapped_rows(path, numbered, n)
+        if header.wrapped
+        else _unwrapped_rows(path, header, numbered, n, repair=repair)
+    )
+    starts: list[int] = []
+    if wanted is None:
+        table: list[list[str]] = []
+        for line, row in rows:
+            starts.append(line)
+            table.append(row)
+        count = len(table[0]) if table else n
+        columns = [list(c) for c in zip(*table, strict=True)] if table else [[]] * count
+    else:
+        columns = [[] for _ in wanted]
+        for line, row in rows:
+            starts.append(line)
+            for column, i in zip(columns, wanted, strict=True):
+                column.append(row[i])
+    return Cells(columns, np.asarray(starts, dtype=np.int64))
+
+
+def _first_row_sets_count(
+    path: Path, numbered: Iterator[tuple[int, list[str]]]
+) -> Iterator[tuple[int, list[str]]]:
+    """Rows checked against the value count of the first (a file without ~Curve)."""
+    n = 0
+    for number, values in numbered:
+        n = n or len(values)
+        if len(values) != n:
+            raise InputFileError(
+                path, f"expected {n} values (as many as the first row), got {len(values)}", number
+            )
+        yield number, values
 
 
 def _data_lines(
@@ -203,30 +285,81 @@ def _data_lines(
         yield number, split(text)
 
 
-def _splitter(header: Header) -> Callable[[str], list[str]]:
-    """Splits a data line into values: at whitespace (LAS 1.2/2.0), else as lasio splits
-    LAS 3 lines (DLM SPACE/TAB honour quotes, COMMA splits at commas)."""
-    if header.version < 3 and header.delimiter == "SPACE":
-        return str.split
-    from lasio.reader import define_line_splitter
+_SPACE_CELLS = re.compile(r"""([^\s"']+)|"([^"]*)"|'([^']*)'""")
+_TAB_CELLS = re.compile(r"""([^\t"']+)|"([^"]*)"|'([^']*)'""")
 
-    split = define_line_splitter(header.delimiter)
-    return lambda text: ["".join(t).strip() for t in split(text)]
+
+def _splitter(header: Header) -> Callable[[str], list[str]]:
+    """Splits a data line into values as lasio does: at whitespace (DLM SPACE, the
+    default) or tabs (DLM TAB), a value in double or single quotes may hold them; at
+    commas (DLM COMMA; a value in double quotes may hold one)."""
+    if header.delimiter == "COMMA":
+        return lambda text: [cell.strip() for cell in next(stdcsv.reader([text]))]
+    pattern = _TAB_CELLS if header.delimiter == "TAB" else _SPACE_CELLS
+
+    def split(text: str) -> list[str]:
+        if header.delimiter == "SPACE" and '"' not in text and "'" not in text:
+            return text.split()
+        return ["".join(groups).strip() for groups in pattern.findall(text)]
+
+    return split
 
 
 def _unwrapped_rows(
-    path: Path, header: Header, numbered: Iterable[tuple[int, list[str]]]
+    path: Path,
+    header: Header,
+    numbered: Iterable[tuple[int, list[str]]],
+    n: int,
+    *,
+    repair: bool = False,
 ) -> Iterator[tuple[int, list[str]]]:
-    n = len(header.curves)
     for number, values in numbered:
-        if len(values) != n:
+        if len(values) < n and repair:
+            values = _run_on(path, header, number, values, n)
+        if n and len(values) != n:
+            names = f"one per curve: {mnemonics(header.curves)}" if header.curves else "per row"
             raise InputFileError(
-                path,
-                f"expected {n} values (one per curve: {mnemonics(header.curves)}), "
-                f"got {len(values)}",
-                line=number,
+                path, f"expected {n} values ({names}), got {len(values)}", line=number
             )
         yield number, values
+
+
+_RUN_ON_MINUS = re.compile(r"(?<=[0-9.])(?=-[0-9.])")
+_RUN_ON_DOTS = re.compile(r"-?[0-9]*\.[0-9]*(?:\.[0-9]*)+")
+
+
+def _run_on(path: Path, header: Header, line: int, values: list[str], n: int) -> list[str]:
+    """A row of ``n`` values from one whose fixed-width values ran together, or ``values``
+    unchanged: ``1.5-2.0`` is 1.5 and -2.0; ``7.020101130.188`` is two values whose border
+    cannot be known (as many as it has decimal points), read as empty cells with a
+    warning."""
+    fixed: list[str] = []
+    unknown: list[int] = []
+    for value in values:
+        parts = _RUN_ON_MINUS.split(value)
+        if len(parts) > 1 and all(re.fullmatch(NUMBER, p) for p in parts):
+            fixed += parts
+        elif _RUN_ON_DOTS.fullmatch(value):
+            unknown += range(len(fixed), len(fixed) + value.count("."))
+            fixed += [""] * value.count(".")
+        else:
+            fixed.append(value)
+    if len(fixed) != n:
+        return values
+    if unknown:
+        at = 0
+        for value in values:
+            if _RUN_ON_DOTS.fullmatch(value):
+                break
+            at += 1
+        names = [header.curves[i].mnemonic if header.curves else str(i + 1) for i in unknown]
+        warn_input(
+            path,
+            f"{values[at]!r} holds {len(unknown)} values run together ({', '.join(names)}) "
+            "and where one ends cannot be known: read as nulls",
+            line,
+        )
+    return fixed
 
 
 def _wrapped_rows(

@@ -17,12 +17,14 @@ from __future__ import annotations
 import calendar
 import datetime as dt
 import re
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.las_header import NUMBER, Header, Item, header_number
 from pipeline.units import conversion_factor
 from pipeline.well import NorthReference, WellMetadata
@@ -63,32 +65,66 @@ _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
 _MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name}
 
 
-def well_metadata(path: Path, header: Header, north: NorthReference | None) -> WellMetadata:
-    """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's."""
+def well_metadata(
+    path: Path, header: Header, north: NorthReference | None, *, strict: bool = True
+) -> WellMetadata:
+    """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's. Not
+    ``strict`` (a log), an item that cannot be read is left out with a warning."""
     found: dict[str, tuple[Any, Item]] = {}
-    for name, mnemonics in TEXT_ITEMS.items():
-        if (item := header.find(path, *mnemonics)) is not None:
-            found[name] = (item.value, item)
-    for name, (mnemonics, hemispheres) in COORDINATE_ITEMS.items():
-        if (item := header.find(path, *mnemonics)) is not None:
-            found[name] = (_coordinate(path, item, hemispheres), item)
-    for name, mnemonics in ANGLE_ITEMS.items():
-        if (item := header.find(path, *mnemonics)) is not None:
-            found[name] = (header_number(path, item) * _angle_factor(path, item), item)
-    if (item := header.find(path, "DATE")) is not None:
-        found["survey_date"] = (_date(path, item), item)
-    elevation, reference = _elevation(path, header)
-    if elevation is not None:
-        found["elevation"] = elevation
-    if reference is not None:
-        found["depth_reference"] = reference
-    for name, (value, item) in found.items():
+
+    def take(name: str, read: Callable[[], tuple[Any, Item] | None]) -> None:
         try:
-            WellMetadata.model_validate({name: value})
-        except ValidationError as exc:
-            raise InputFileError(
-                path, f"{item.mnemonic} {item.value!r}: {exc.errors()[0]['msg']}", line=item.line
-            ) from None
+            value = read()
+            if value is not None:
+                try:
+                    WellMetadata.model_validate({name: value[0]})
+                except ValidationError as exc:
+                    item = value[1]
+                    raise InputFileError(
+                        path,
+                        f"{item.mnemonic} {item.value!r}: {exc.errors()[0]['msg']}",
+                        line=item.line,
+                    ) from None
+                found[name] = value
+        except InputFileError as exc:
+            if strict:
+                raise
+            warn_input(path, f"{exc.reason}; well metadata {name} left out", exc.line)
+
+    def text(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
+        item = header.find(path, *mnemonics)
+        return None if item is None else (item.value, item)
+
+    def coordinate(mnemonics: tuple[str, ...], hemispheres: str) -> tuple[Any, Item] | None:
+        item = header.find(path, *mnemonics)
+        return None if item is None else (_coordinate(path, item, hemispheres), item)
+
+    def angle(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
+        item = header.find(path, *mnemonics)
+        if item is None:
+            return None
+        return header_number(path, item) * _angle_factor(path, item), item
+
+    def date() -> tuple[Any, Item] | None:
+        item = header.find(path, "DATE")
+        return None if item is None else (_date(path, item), item)
+
+    for name, mnemonics in TEXT_ITEMS.items():
+        take(name, partial(text, mnemonics))
+    for name, (mnemonics, hemispheres) in COORDINATE_ITEMS.items():
+        take(name, partial(coordinate, mnemonics, hemispheres))
+    for name, mnemonics in ANGLE_ITEMS.items():
+        take(name, partial(angle, mnemonics))
+    take("survey_date", date)
+    try:
+        elevation, reference = _elevation(path, header)
+    except InputFileError as exc:
+        if strict:
+            raise
+        warn_input(path, f"{exc.reason}; well metadata elevation left out", exc.line)
+        elevation, reference = None, None
+    take("elevation", lambda: elevation)
+    take("depth_reference", lambda: reference)
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
 
 

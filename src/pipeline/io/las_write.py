@@ -1,4 +1,4 @@
-"""The LAS writer: any numeric table as a LAS 2.0 file.
+"""The LAS writer: any table as a LAS 2.0 file.
 
 LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless all steps are
 exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE,
@@ -7,15 +7,20 @@ the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and G
 well's magnetic declination and grid convergence, deg, east of true north positive),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
-the field's ``unit`` metadata as stored, e.g. ``deg/h``); ``~Other``;
-``~ASCII`` with each value in shortest round-trip form. The first (index) column is ``md``
+the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
+``description`` metadata, a log's own, else the canonical column's); ``~Other``;
+``~ASCII`` with each number in shortest round-trip form. The first (index) column is ``md``
 for a stations-like table (md, inc and azi present), else ``time`` (raw samples dwell at one
-depth: only their time increases), else ``md``, else the first numeric column. NULL is
--999.25, or the first of -9999.25, -99999.25… that no value equals; NaN is written as NULL.
-Text and boolean columns cannot be held by ``~A``: they are left out and named in
-``~Other``; ``source_line`` (a line of the file read) is not written. A file holds one north
-reference: the azimuth columns' (else the well's), in NREF and in each azimuth curve's
-description.
+depth: only their time increases), else ``md``, else the first numeric column (a log's
+index). NULL is -999.25, or the first of -9999.25, -99999.25… that no value equals; NaN is
+written as NULL. Text columns are written as text (in double quotes when a value holds a
+space, as lasio and gyropipe read them; a null as NULL), except a canonical column the
+survey readers read as numbers (``survey``); those and boolean columns are left out and
+named in ``~Other``; ``source_line`` (a line of the file read) is not written. A column
+named ``NAME:2`` (how readers tell apart curves of one mnemonic) is written as ``NAME``. A
+file holds one north reference: the azimuth columns' (else the well's), in NREF and in each
+azimuth curve's description. The file is UTF-8, with a byte-order mark when it is not
+ASCII (lasio takes UTF-8 without one for Windows-1252).
 """
 
 from __future__ import annotations
@@ -26,9 +31,11 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
+from pipeline.io.las_header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
@@ -37,43 +44,89 @@ from pipeline.well import WellMetadata
 NULL_CHOICES = (-999.25, -9999.25, -99999.25, -999999.25, -9999999.25)
 """NULL values the writer may use, in order of preference."""
 
-_MNEMONIC = re.compile(r"[A-Za-z0-9_][^\s.:]*")
+_MNEMONIC = re.compile(r"[^\s.:~#][^\s.:]*")
+_REPEATED = re.compile(r"(.+):[0-9]+")
+BOM = b"\xef\xbb\xbf"
 _API = re.compile(r"[0-9]{2}-?[0-9]{3}-?[0-9]{5}(?:-?[0-9]{2}){0,2}")
 _UNIT = re.compile(r"[^\s:]*")
 
 
 def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
-    """Write the numeric columns of ``table`` as LAS 2.0 (see the module docstring)."""
-    numeric = [
-        f
-        for f in table.schema
-        if f.name != SOURCE_LINE and (pa.types.is_floating(f.type) or pa.types.is_integer(f.type))
-    ]
+    """Write ``table`` as LAS 2.0 (see the module docstring)."""
+    written = [f for f in table.schema if f.name != SOURCE_LINE and _writable_type(f)]
+    numeric = [f for f in written if not pa.types.is_string(f.type)]
     if not numeric:
-        raise ValueError("no numeric column to write: LAS ~A holds numbers only")
-    for f in numeric:
-        if not _MNEMONIC.fullmatch(f.name) or not _UNIT.fullmatch(_field_unit(f)):
-            raise ValueError(
-                f"column {f.name!r} (unit {_field_unit(f)!r}) cannot be a LAS curve: a name "
-                "or unit with spaces, '.' or ':'"
-            )
+        raise ValueError("no numeric column to write: a LAS file needs a numeric index")
+    curve_lines = {f.name: _curve_line(f) for f in written}
     index = _index_column([f.name for f in numeric])
-    numeric.sort(key=lambda f: f.name != index)
-    values = {f.name: _writable(table.column(f.name), f.name) for f in numeric}
+    written.sort(key=lambda f: f.name != index)
+    values = {f.name: _writable(table.column(f.name), f.name) for f in written}
     if values[index].null_count:
         raise ValueError(f"index column {index!r} has missing values")
-    null = _null_value(values.values())
-    text = _header_text(table, numeric, values[index], null, _written_north(numeric, well), well)
-    filled = pa.table(
-        {name: v.fill_null(null) if v.null_count else v for name, v in values.items()}
-    )
+    null = _null_value(v for v in values.values() if not pa.types.is_string(v.type))
+    north = _written_north(numeric, well)
+    text = _header_text(table, written, values[index], null, north, well, curve_lines)
+    filled = [
+        v if not v.null_count else v.fill_null(repr(null) if pa.types.is_string(v.type) else null)
+        for v in values.values()
+    ]
+    texts = [i for i, v in enumerate(filled) if pa.types.is_string(v.type)]
+    head = text.encode()
+    if not head.isascii() or not all(pc.all(pc.string_is_ascii(filled[i])).as_py() for i in texts):
+        head = BOM + head
     with path.open("wb") as fh:
-        fh.write(text.encode())
-        pacsv.write_csv(
-            filled,
-            fh,
-            pacsv.WriteOptions(include_header=False, delimiter=" ", quoting_style="none"),
+        fh.write(head)
+        if not texts:
+            pacsv.write_csv(
+                pa.table({f"c{i}": v for i, v in enumerate(filled)}),
+                fh,
+                pacsv.WriteOptions(include_header=False, delimiter=" ", quoting_style="none"),
+            )
+            return
+        cells = [
+            _text_cells(v) if i in texts else pc.cast(v, pa.string()) for i, v in enumerate(filled)
+        ]
+        lines = pc.binary_join_element_wise(*cells, " ").to_pylist()
+        fh.write("".join(f"{line}\n" for line in lines).encode())
+
+
+def _writable_type(f: pa.Field) -> bool:
+    """Numbers, and text unless a canonical column (the survey readers read those as
+    numbers)."""
+    if pa.types.is_floating(f.type) or pa.types.is_integer(f.type):
+        return True
+    return (pa.types.is_string(f.type) or pa.types.is_large_string(f.type)) and (
+        f.name not in CURVES
+    )
+
+
+def _curve_line(f: pa.Field) -> str:
+    """The ~Curve line of a column. A mnemonic ending in '.' or holding a space (``COND.``,
+    ``I. RES.``, as LAS files have them) is written against its unit (``COND..MS/M``), as
+    lasio's grammar reads it back; a name or unit it would not read back is refused."""
+    mnemonic, unit, descr = _mnemonic(f.name), _field_unit(f), _description(f)
+    if _MNEMONIC.fullmatch(mnemonic) and _UNIT.fullmatch(unit):
+        return _line(mnemonic, unit, None, descr)
+    from lasio.reader import read_header_line  # imported on use: lasio is slow to import
+
+    line = f" {mnemonic}.{unit:<8} {'':<24} : {descr}"
+    try:
+        parsed = read_header_line(line.strip(), section_name="Curves")
+    except AttributeError:
+        parsed = {}
+    if (parsed.get("name"), parsed.get("unit")) != (mnemonic, unit) or ":" in mnemonic:
+        raise ValueError(
+            f"column {f.name!r} (unit {unit!r}) cannot be a LAS curve: a name or unit with "
+            "':', or a unit with spaces"
         )
+    return line
+
+
+def _mnemonic(name: str) -> str:
+    """The curve mnemonic of a column: ``NAME:2`` (a reader's name for a repeated mnemonic)
+    is ``NAME``."""
+    found = _REPEATED.fullmatch(name)
+    return found[1] if found else name
 
 
 def _field_unit(f: pa.Field) -> str:
@@ -89,14 +142,30 @@ def _index_column(names: list[str]) -> str:
 
 
 def _writable(column: pa.ChunkedArray, name: str) -> pa.Array:
-    """A column as int64 (integers without nulls) or float64 (NaN as null)."""
+    """A column as int64 (integers without nulls), float64 (NaN as null) or text."""
     array = column.combine_chunks()
+    if pa.types.is_string(array.type) or pa.types.is_large_string(array.type):
+        return array.cast(pa.string())
     if pa.types.is_integer(array.type) and not array.null_count:
         return array.cast(pa.int64())
     values = array.cast(pa.float64()).to_numpy(zero_copy_only=False)
     if np.isinf(values).any():
         raise ValueError(f"column {name!r} has infinite values: LAS cannot hold them")
     return pa.array(values, mask=np.isnan(values))
+
+
+def _text_cells(values: pa.Array) -> pa.Array:
+    """Text values as ~A cells: as they are, or in double quotes when they hold a space
+    or are empty (in single quotes when they also hold a double quote)."""
+    cells = []
+    for value in values.to_pylist():
+        if "\n" in value or "\r" in value or ('"' in value and "'" in value):
+            raise ValueError(f"text value {value!r} cannot be a LAS cell")
+        elif value and not re.search(r"[\s\"'#~]", value):
+            cells.append(value)
+        else:
+            cells.append(f"'{value}'" if '"' in value else f'"{value}"')
+    return pa.array(cells, pa.string())
 
 
 def _null_value(values: Iterable[pa.Array]) -> float:
@@ -119,11 +188,12 @@ def _written_north(fields: list[pa.Field], well: WellMetadata) -> str | None:
 
 def _header_text(
     table: pa.Table,
-    numeric: list[pa.Field],
+    written: list[pa.Field],
     index: pa.Array,
     null: float,
     north: str | None,
     well: WellMetadata,
+    curve_lines: dict[str, str],
 ) -> str:
     """~Version, ~Well, ~Curve and ~Other sections and the ~ASCII title."""
     values = index.to_numpy(zero_copy_only=False)
@@ -133,7 +203,7 @@ def _header_text(
     )
     step = steps[0] if regular else 0
     first, last = (values[0], values[-1]) if values.size else (None, None)
-    unit = _field_unit(numeric[0])
+    unit = _field_unit(written[0])
     meta = well.model_dump(mode="json")
     calculation = calculation_of(table)
     lines = [
@@ -175,16 +245,16 @@ def _header_text(
             "vertical section azimuth (origin: wellhead)",
         ),
         "~Curve Information",
-        *(_line(f.name, _field_unit(f), None, _description(f)) for f in numeric),
+        *(curve_lines[f.name] for f in written),
         "~Other",
         f"Written by gyropipe {__version__}.",
     ]
     dropped = [
-        f"{f.name} ({f.type})" for f in table.schema if f not in numeric and f.name != SOURCE_LINE
+        f"{f.name} ({f.type})" for f in table.schema if f not in written and f.name != SOURCE_LINE
     ]
     if dropped:
-        lines.append("Columns not written (~A holds numbers only): " + ", ".join(dropped))
-    lines.append("~ASCII " + " ".join(f.name for f in numeric))
+        lines.append("Columns not written: " + ", ".join(dropped))
+    lines.append("~ASCII " + " ".join(_mnemonic(f.name) for f in written))
     return "\n".join(lines) + "\n"
 
 
@@ -218,6 +288,7 @@ def _line(mnemonic: str, unit: str, value: object, descr: str) -> str:
 
 
 def _description(f: pa.Field) -> str:
-    text = CURVES[f.name].description if f.name in CURVES else f.name
+    own = (f.metadata or {}).get(DESCRIPTION_KEY)
+    text = own.decode() if own else CURVES[f.name].description if f.name in CURVES else f.name
     north = (f.metadata or {}).get(NORTH_KEY)
     return text + (f" ({north.decode()} north)" if north else "")

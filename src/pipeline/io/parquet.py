@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 from pipeline.errors import InputFileError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import ReaderDef, WriterDef
-from pipeline.tables import PositionReadings, RawSamples, Stations
+from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata, well_of
 
 MAGIC = b"PAR1"
@@ -50,7 +50,12 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
         ReaderDef(
             name="parquet",
             description="Parquet tables with gyropipe unit metadata",
-            kinds={"stations": Stations, "samples": RawSamples, "readings": PositionReadings},
+            kinds={
+                "stations": Stations,
+                "samples": RawSamples,
+                "readings": PositionReadings,
+                "log": LogTable,
+            },
             read=read,
             sniff=sniff,
         )
