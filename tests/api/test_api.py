@@ -313,3 +313,16 @@ def test_run_errors() -> None:
         gp.run(ROOT / "pipelines" / "survey.yaml", {"stations": "missing.csv"})
     with pytest.raises(RunInputError, match="unknown input 'wrong'"):
         gp.run(ROOT / "pipelines" / "survey.yaml", {"wrong": "x.csv"})
+
+
+def test_read_any_las_log_like_lasio() -> None:
+    import lasio
+
+    path = ROOT / "tests" / "data" / "las" / "gr.las"
+    frame = gp.read(path)
+    theirs = lasio.read(str(path))
+    assert [c for c in frame.columns if c != "source_line"] == [c.mnemonic for c in theirs.curves]
+    assert frame.attrs["units"] == {c.mnemonic: c.unit for c in theirs.curves}
+    for curve in theirs.curves:
+        np.testing.assert_array_equal(frame[curve.mnemonic].to_numpy(), curve.data)
+    assert frame.attrs["well"]["well"] == theirs.well["WELL"].value
