@@ -326,3 +326,17 @@ def test_read_any_las_log_like_lasio() -> None:
     for curve in theirs.curves:
         np.testing.assert_array_equal(frame[curve.mnemonic].to_numpy(), curve.data)
     assert frame.attrs["well"]["well"] == theirs.well["WELL"].value
+
+
+def test_gyro_rates_in_rad_per_s_given_as_deg_per_h_never_give_an_azimuth(
+    simulation: gp.Tables,
+) -> None:
+    """A units mistake (rad/s numbers, no unit declared): every station is rejected with the
+    hint, none is solved."""
+    samples = simulation.samples.copy()
+    samples.attrs = dict(simulation.samples.attrs)
+    for name in [c for c in samples.columns if c.startswith("gyro_")]:
+        samples[name] = samples[name] * (np.pi / 180 / 3600)
+    readings = gp.position_readings(samples, trim_start=1.0)
+    with pytest.raises(gp.GyropipeError, match=r"are the gyro rates in °/h\?"):
+        gp.compass(readings)

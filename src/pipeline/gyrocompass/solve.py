@@ -24,7 +24,8 @@ Per station (DOMAIN.md §5), from the frame positions k:
    confident, wrong azimuth (a rad/s record compasses to ≈ 180°, σ 1e-5°). A units mistake
    is the whole record's: a transverse gyro pointing near the Earth's axis (I ≈ 90° − φ,
    A ≈ 180°) truly sees almost no Earth rate and cannot tell, so when most stations fail
-   the check, the rest are rejected with them.
+   the check, or any fails by a ratio only a rate unit explains (:data:`RATE_UNITS`), the
+   rest are rejected with them.
 Rates in °/h, accelerations in m/s², angles in radians internally, degrees in outputs.
 """
 
@@ -249,9 +250,11 @@ def compass(
             continue
         good.append((st, solved, checks))
     checked = len(implausible) + sum(1 for *_, checks in good if checks)
-    if implausible and 2 * len(implausible) > checked:
-        # the record's gyro rates are implausible: the stations that seem right are luck,
-        # and the unit the record's ratios point to is every station's
+    failed = [c for checks in implausible.values() for c in checks if not c.ok]
+    if implausible and (2 * len(implausible) > checked or any(c.looks_like() for c in failed)):
+        # the record's gyro rates are implausible (most stations, or a ratio that only a rate
+        # unit explains): the stations that seem right are luck — a transverse gyro near
+        # I ≈ 90° − φ cannot tell — and the unit the ratios point to is every station's
         hint = _hint([c for checks in implausible.values() for c in checks])
         for i, checks in implausible.items():
             station, md, _ = rejected[i]
