@@ -373,18 +373,22 @@ def plugins(disabled: tuple[str, ...]) -> None:
 @click.option(
     "--out", "out_dir", default="schemas", show_default=True, type=click.Path(file_okay=False)
 )
+@click.option(
+    "--docs", "docs_dir", default="docs", show_default=True, type=click.Path(file_okay=False)
+)
 @click.option("--check", is_flag=True, help="Only check the files are up to date (exit 1 if not).")
-def schemas(out_dir: str, check: bool) -> None:
-    """Write the JSON Schemas of the pipeline YAML, well metadata and table contracts."""
+def schemas(out_dir: str, docs_dir: str, check: bool) -> None:
+    """Write the JSON Schemas of the pipeline YAML, well metadata and table contracts, and
+    the tables page (docs/tables.md)."""
     from pipeline import schemas as schema_files
 
     registry = load_registry()
     if check:
-        stale = schema_files.stale(registry, Path(out_dir))
-        for name in stale:
-            click.echo(f"stale: {Path(out_dir) / name}")
+        stale = schema_files.stale(registry, Path(out_dir), Path(docs_dir))
+        for path in stale:
+            click.echo(f"stale: {path}")
         sys.exit(EXIT_FAILED if stale else 0)
-    for path in schema_files.write(registry, Path(out_dir)):
+    for path in schema_files.write(registry, Path(out_dir), Path(docs_dir)):
         click.echo(f"wrote {path}")
 
 

@@ -11,7 +11,7 @@ from tests_support import ROOT, gyropipe
 
 
 def test_committed_schemas_match_the_models(registry: Registry):
-    stale = schemas.stale(registry, ROOT / "schemas")
+    stale = schemas.stale(registry, ROOT / "schemas", ROOT / "docs")
     assert stale == [], f"run `gyropipe schemas` to regenerate: {stale}"
 
 
@@ -28,15 +28,29 @@ def test_schemas_command_writes_and_checks(tmp_path: Path):
     import subprocess
 
     out = tmp_path / "schemas"
+    where = ["--out", str(out), "--docs", str(tmp_path / "docs")]
     wrote = subprocess.run(
-        [*gyropipe(), "schemas", "--out", str(out)], capture_output=True, text=True, check=True
+        [*gyropipe(), "schemas", *where], capture_output=True, text=True, check=True
     )
-    assert "pipeline.schema.json" in wrote.stdout
-    ok = subprocess.run([*gyropipe(), "schemas", "--out", str(out), "--check"])
+    assert "pipeline.schema.json" in wrote.stdout and "tables.md" in wrote.stdout
+    ok = subprocess.run([*gyropipe(), "schemas", *where, "--check"])
     assert ok.returncode == 0
     (out / "well.schema.json").write_text("{}")
     stale = subprocess.run(
-        [*gyropipe(), "schemas", "--out", str(out), "--check"], capture_output=True, text=True
+        [*gyropipe(), "schemas", *where, "--check"], capture_output=True, text=True
     )
     assert stale.returncode == 1
     assert "stale:" in stale.stdout and "well.schema.json" in stale.stdout
+
+
+def test_tables_page_lists_every_column_with_its_unit(registry: Registry):
+    page = schemas.tables_page(registry)
+    for name, contract in schemas.builtin_contracts(registry).items():
+        assert f"## {name}\n" in page
+        for column in contract.compiled().columns:
+            assert f"| `{column.name}` |" in page
+    assert (
+        "| `md` | double | `m` | yes | strictly increasing, finite, no nulls | measured depth "
+        "from the depth reference |" in page
+    )
+    assert "north reference stated" in page
