@@ -59,6 +59,12 @@ def test_corrupt_wells_fail_alone_and_the_good_ones_complete(tmp_path: Path, sur
         ["B-2", "failed"],
         ["C-1", "done"],
     ]
+    # a failure's cause is shown whole and readable: stage, file:line, message (wrapped)
+    joined = " ".join(result.stdout.split())
+    assert "A-2 failed" in joined and f"read: A-2.csv:{bad_line}: " in joined
+    cause = rows["A-2"]["detail"].split(f"A-2.csv:{bad_line}", 1)[1]
+    assert " ".join(cause.split()) in joined
+    assert "…" not in result.stdout and "InputFileError" not in result.stdout
     with open(out / "summary.csv", newline="") as fh:
         assert [(r["well"], r["status"]) for r in csv.DictReader(fh)] == [
             (w, r["status"]) for w, r in rows.items()

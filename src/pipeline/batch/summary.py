@@ -6,6 +6,9 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
+import shutil
+import textwrap
 from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -37,16 +40,35 @@ def counts(results: list[WellResult]) -> dict[str, int]:
     return {status: found.get(status, 0) for status in STATUSES}
 
 
-def table_text(results: list[WellResult], width: int = 100) -> str:
-    """A plain-text table of ``results``; long details are cut to ``width`` characters."""
+STAGE_FAILED = re.compile(r"^stage '([^']+)' \([^)]*\) failed: (?:\w+Error: )?")
+PATH = re.compile(r"(?:[^\s:'\"]*/)+([^\s:/'\"]+)")
+
+
+def cause(detail: str) -> str:
+    """A run's failure as a reader wants it on a terminal: ``stage: file:line: message``
+    (the stage's plugin and the error's class dropped, paths shortened to file names)."""
+    text = " ".join(detail.split())
+    text = STAGE_FAILED.sub(lambda m: f"{m.group(1)}: ", text)
+    return PATH.sub(lambda m: m.group(1), text)
+
+
+def wrapped(prefix: str, detail: str, width: int) -> list[str]:
+    """``prefix`` then ``detail`` wrapped to ``width`` columns, continuation lines indented
+    under the detail (nothing is cut)."""
+    room = max(width - len(prefix), 30)
+    parts = textwrap.wrap(detail, room, break_on_hyphens=False) or [""]
+    return [prefix + parts[0], *(" " * len(prefix) + part for part in parts[1:])]
+
+
+def table_text(results: list[WellResult], width: int | None = None) -> str:
+    """A plain-text table of ``results`` for a terminal of ``width`` columns (default: this
+    terminal's); a failure's cause (:func:`cause`) is wrapped, never cut."""
+    width = width or shutil.get_terminal_size((120, 24)).columns
     name = max([4, *(len(r.well) for r in results)])
     lines = [f"{'well':<{name}}  {'status':<7} {'time s':>8}  detail"]
     for r in results:
         time_s = f"{r.time_s:8.2f}" if r.time_s is not None else f"{'-':>8}"
-        detail = " ".join(r.detail.split())
-        if len(detail) > width:
-            detail = detail[: width - 1] + "…"
-        lines.append(f"{r.well:<{name}}  {r.status:<7} {time_s}  {detail}")
+        lines += wrapped(f"{r.well:<{name}}  {r.status:<7} {time_s}  ", cause(r.detail), width)
     return "\n".join(lines)
 
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import shutil
 from dataclasses import asdict
 from typing import Any
 
 from .ledger import Ledger, alive
 from .records import BatchRow, RunRow, iso
+from .summary import cause, wrapped
 
 
 def status_document(ledger: Ledger) -> dict[str, Any]:
@@ -43,12 +45,11 @@ def status_text(ledger: Ledger) -> str:
     if runs:
         width = max(4, *(len(r.well) for r in runs))
         lines.append(f"{'well':<{width}}  {'status':<11} {'finished':<25} {'time s':>8}  detail")
+        columns = shutil.get_terminal_size((120, 24)).columns
         for r in runs:
             time_s = f"{r.wall_time_s:8.2f}" if r.wall_time_s is not None else f"{'-':>8}"
-            lines.append(
-                f"{r.well:<{width}}  {_state(r, batches):<11} {iso(r.finished):<25} {time_s}  "
-                f"{_detail(r)}"
-            )
+            prefix = f"{r.well:<{width}}  {_state(r, batches):<11} {iso(r.finished):<25} {time_s}  "
+            lines += wrapped(prefix, _detail(r), columns)
     return "\n".join(lines)
 
 
@@ -119,6 +120,4 @@ def _plugins(versions: dict[str, Any]) -> str:
 
 
 def _detail(run: RunRow) -> str:
-    text = run.error or run.note or "; ".join(run.reasons)
-    text = " ".join(text.split())
-    return text if len(text) <= 100 else text[:99] + "…"
+    return cause(run.error or run.note or "; ".join(run.reasons))
