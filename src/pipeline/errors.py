@@ -72,7 +72,13 @@ class InputFileError(GyropipeError):
 class WrongKindError(InputFileError):
     """A readable file that holds another kind of table than the one asked for (a well log
     read as survey stations): the message says what the file looks like and what the kind
-    needs, so a caller may try another kind."""
+    needs, so a caller may try another kind; ``found`` names the kind it holds if known."""
+
+    def __init__(
+        self, path: str | Path, message: str, line: int = 0, *, found: str | None = None
+    ) -> None:
+        super().__init__(path, message, line)
+        self.found = found
 
 
 class InputFileWarning(UserWarning):

@@ -41,3 +41,51 @@ def test_well_overrides(tmp_path: Path, items: list[str], expected: str) -> None
     assert result.stderr.startswith(expected), result.stderr
     assert "pydantic" not in result.stderr and "https://" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+TINY = {
+    "name": "tiny",
+    "site": {
+        "latitude": 61.25,
+        "longitude": 73.4,
+        "date": "2026-11-21",
+        "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
+    },
+    "well": {"sections": [{"kind": "vertical", "length": 30}]},
+    "tool": {"preset": "ideal"},
+    "survey": {"mode": "point", "every": 30, "dwell": 2, "move_time": 1.0, "speed": 10.0},
+}
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_raw_samples_given_to_the_survey_pipeline(tmp_path: Path, suffix: str) -> None:
+    """The wrong kind of input is recognised first, and the pipelines that take it named."""
+    import pipeline as gp
+
+    samples = tmp_path / f"samples{suffix}"
+    gp.write(gp.simulate(TINY).samples, samples)
+    result = subprocess.run(
+        [*gyropipe(), "run", str(SURVEY), "--input", str(samples), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert result.returncode == 1
+    assert "a table of raw sensor samples; not survey stations (needs " in result.stderr
+    assert "as in pipelines/point-gyro.yaml and pipelines/continuous-gyro.yaml" in result.stderr
+    assert "strictly increasing" not in result.stderr and "bad rows" not in result.stderr
+
+
+def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
+    pipeline = ROOT / "pipelines" / "point-gyro.yaml"
+    result = subprocess.run(
+        [*gyropipe(), "run", str(pipeline), "--input", str(SAMPLE), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert result.returncode == 1
+    assert "a table of survey stations; not raw sensor samples" in result.stderr
+    assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr

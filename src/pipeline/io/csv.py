@@ -68,7 +68,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import to_canonical
 from pipeline.io.csv_header import (
@@ -158,7 +158,12 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
         raise ValueError(f"the csv reader reads kinds {', '.join(LAYOUTS)}, not {kind!r}")
     opts = CsvOptions.model_validate(options or {}).resolved()
     text = load(path, max(HEADER_SEARCH_LINES, opts.header_line or 0))
-    header = find_header(path, text.head, opts, layout.required)
+    try:
+        header = find_header(path, text.head, opts, layout.required)
+    except InputFileError as exc:
+        _other_kind(path, text.head, opts, kind, exc)
+        raise
+
     well, declared = read_title(path, text.head[: header.index], header.delimiter)
     if opts.north_reference:
         declared.append(("option north_reference", opts.north_reference))
@@ -214,6 +219,35 @@ def _azimuth_reference(
             column=azi.text,
         )
     return north
+
+
+KIND_WORDS = {
+    "stations": "survey stations",
+    "samples": "raw sensor samples",
+    "readings": "position readings",
+}
+"""The kinds in words."""
+
+
+def _other_kind(
+    path: Path, head: list[str], opts: CsvOptions, kind: str, problem: InputFileError
+) -> None:
+    """Raise a :class:`WrongKindError` if the file has another kind's header instead."""
+    for other, layout in LAYOUTS.items():
+        if other == kind:
+            continue
+        try:
+            find_header(path, head, opts, layout.required)
+        except InputFileError:
+            continue
+        needs = ", ".join(LAYOUTS[kind].required)
+        raise WrongKindError(
+            path,
+            f"a table of {KIND_WORDS.get(other, other)}; not {KIND_WORDS.get(kind, kind)} "
+            f"(needs {needs})",
+            problem.line,
+            found=other,
+        ) from None
 
 
 def sniff(path: Path) -> Claim:

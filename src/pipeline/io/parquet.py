@@ -12,13 +12,20 @@ from typing import Any
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pipeline.errors import InputFileError
+from pipeline.contracts import TableContract
+from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata, well_of
 
 MAGIC = b"PAR1"
+KINDS: dict[str, type[TableContract]] = {
+    "stations": Stations,
+    "samples": RawSamples,
+    "readings": PositionReadings,
+    "log": LogTable,
+}
 
 
 def sniff(path: Path) -> bool:
@@ -30,13 +37,40 @@ def sniff(path: Path) -> bool:
         return False
 
 
+KIND_WORDS = {
+    "stations": "survey stations",
+    "samples": "raw sensor samples",
+    "readings": "position readings",
+}
+"""The survey kinds in words."""
+
+
 def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
-    """Read a Parquet table; its units must already be canonical (checked by the contract)."""
+    """Read a Parquet table; its units must already be canonical (checked by the contract).
+    A table of another kind than ``kind`` (its required columns missing, another kind's all
+    there) is a :class:`WrongKindError` saying which kind it is."""
     try:
         table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:
         raise InputFileError(path, f"not a readable Parquet file: {exc}") from exc
+    contract = KINDS.get(kind)  # the drift-table reader reads its own kinds through here
+    missing = _missing(contract, table) if contract is not None else []
+    if missing:
+        others = [k for k in KIND_WORDS if k != kind and not _missing(KINDS[k], table)]
+        if others:
+            raise WrongKindError(
+                path,
+                f"a table of {KIND_WORDS[others[0]]}; not {KIND_WORDS.get(kind, kind)} "
+                f"(needs {', '.join(missing)})",
+                found=others[0],
+            )
     return table, well_of(table) or WellMetadata()
+
+
+def _missing(contract: type[TableContract], table: pa.Table) -> list[str]:
+    """Required columns of ``contract`` that ``table`` lacks."""
+    columns = contract.compiled().columns
+    return [c.name for c in columns if c.required and c.name not in table.column_names]
 
 
 def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
@@ -50,12 +84,7 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
         ReaderDef(
             name="parquet",
             description="Parquet tables with gyropipe unit metadata",
-            kinds={
-                "stations": Stations,
-                "samples": RawSamples,
-                "readings": PositionReadings,
-                "log": LogTable,
-            },
+            kinds=KINDS,
             read=read,
             sniff=sniff,
         )

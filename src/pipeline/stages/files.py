@@ -24,6 +24,7 @@ from pydantic import (
 from pydantic_core import InitErrorDetails
 
 from pipeline.contracts import TableContract
+from pipeline.errors import WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
     Registry,
@@ -34,6 +35,15 @@ from pipeline.registry import (
 )
 from pipeline.tables import AnyTable, PositionReadings, RawSamples, Stations
 from pipeline.well import attach
+
+TAKEN_BY = {
+    "samples": "raw samples are read by read_samples, as in pipelines/point-gyro.yaml and "
+    "pipelines/continuous-gyro.yaml",
+    "stations": "survey stations are read by read_stations, as in pipelines/survey.yaml",
+    "readings": "position readings are read by read_readings, as in "
+    "pipelines/point-gyro-readings.yaml",
+}
+"""The kind a file of another kind holds → the stage and shipped pipelines that take it."""
 
 
 class ReadParams(BaseModel):
@@ -103,9 +113,13 @@ def read_stage(
     def read(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
     ) -> dict[str, pa.Table]:
-        table, header = ctx.read_input(
-            params.input, kind, reader=params.reader, options=params.options
-        )
+        try:
+            table, header = ctx.read_input(
+                params.input, kind, reader=params.reader, options=params.options
+            )
+        except WrongKindError as exc:
+            hint = f"; {TAKEN_BY[exc.found]}" if exc.found in TAKEN_BY else ""
+            raise WrongKindError(exc.path, exc.reason + hint, exc.line, found=exc.found) from None
         return {kind: attach(table, header)}
 
     return read
