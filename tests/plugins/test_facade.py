@@ -77,6 +77,7 @@ HOME = {
             "CompassStations",
             "CompassRejects",
             "SimTruth",
+            "LogTable",
         ],
         "pipeline.tables",
     ),
