@@ -331,22 +331,3 @@ def _many(
     outs, _, _ = stages.call(uses, inputs, params, well=well)
     return Tables({port: like(template, table) for port, table in outs.items()})
 
-
-__all__ = [
-    "Tables",
-    "calibrate_drift",
-    "compass",
-    "correct_drift",
-    "integrate_continuous",
-    "interpolate",
-    "minimum_curvature",
-    "position_readings",
-    "position_uncertainty",
-    "read",
-    "read_table",
-    "report",
-    "simulate",
-    "survey_method",
-    "validity_checks",
-    "write",
-]
