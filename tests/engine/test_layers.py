@@ -75,6 +75,7 @@ LAYERS: dict[str, int] = {
 """Module prefix → layer rank (higher imports lower). A prefix covers its submodules, except
 the bare package name, which is ``pipeline/__init__.py`` alone."""
 
+
 @dataclass(frozen=True)
 class Import:
     importer: str

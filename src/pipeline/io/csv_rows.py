@@ -377,7 +377,30 @@ def _converted(
         )
     if decimal == "," and not integer:
         cells = pc.replace_substring(cells, ",", ".")
-    return pc.cast(cells, kind)
+    values = pc.cast(cells, kind)
+    if not integer:
+        _refuse_overflow(path, strings, values, rows, column)
+    return values
+
+
+def _refuse_overflow(
+    path: Path, strings: pa.Array, values: pa.Array, rows: Rows, column: str
+) -> None:
+    """A decimal number too large for a float (``1e999``, 400 digits) is ±inf: an error
+    naming its line and column, as a ``nan`` cell is."""
+    infinite = np.flatnonzero(pc.fill_null(pc.is_inf(values), False).to_numpy(zero_copy_only=False))
+    if not len(infinite):
+        return
+    first = int(infinite[0])
+    text = str(strings[first].as_py()).strip()
+    shown = text if len(text) <= 40 else f"{text[:20]}…{text[-10:]} ({len(text)} characters)"
+    raise InputFileError(
+        path,
+        f"expected a finite number, got {shown!r}: too large for a 64-bit float (±inf)"
+        + (f"; {len(infinite)} such cells" if len(infinite) > 1 else ""),
+        line=rows.line(first),
+        column=column,
+    )
 
 
 def _blank_to_null(strings: Any) -> Any:
