@@ -128,8 +128,12 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap
     problems with an overridden value point at its ``--set``."""
     problems = []
     stages = raw.get("stages")
+    # Only well-typed ids can be targets: a list or mapping as an id is reported by the
+    # model's validation, located at its node.
     by_id = (
-        {s.get("id"): s for s in stages if isinstance(s, dict)} if isinstance(stages, list) else {}
+        {s["id"]: s for s in stages if isinstance(s, dict) and isinstance(s.get("id"), str)}
+        if isinstance(stages, list)
+        else {}
     )
     for item in overrides:
         where = Location(f"--set {item}")
