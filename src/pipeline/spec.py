@@ -10,12 +10,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from pipeline.errors import Location, Problem, SpecError
 from pipeline.well import WellMetadata
-from pipeline.yamlsource import SourceMap, load_mapping, validate_located
+from pipeline.yamlsource import SourceMap, load_mapping, load_value, validate_located
 
 IDENT = r"^[A-Za-z_][A-Za-z0-9_-]*$"
 
@@ -149,9 +148,9 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap
             )
             continue
         try:
-            parsed = yaml.safe_load(value) if value.strip() else None
-        except yaml.YAMLError as exc:
-            problems.append(Problem(where, f"value is not valid YAML: {exc}"))
+            parsed = load_value(value, where.file) if value.strip() else None
+        except SpecError as exc:
+            problems += [Problem(where, f"value: {p.message}") for p in exc.problems]
             continue
         index = stages.index(stage) if isinstance(stages, list) else 0
         source.values[("stages", index, "with", *parts[1:])] = where

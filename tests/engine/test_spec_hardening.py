@@ -4,15 +4,19 @@ problems, never a traceback."""
 from __future__ import annotations
 
 import subprocess
+import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
 
-from pipeline.errors import SpecError
+from pipeline.errors import InputFileError, SpecError
 from pipeline.graph import build_plan
+from pipeline.io.csv_options import load_profile
+from pipeline.sim.spec import load_simulation
 from pipeline.spec import load_spec
+from pipeline.yamlsource import MAX_NODES
 from tests_support import gyropipe
 
 WRONG: list[Any] = [[], ["x"], {}, {"a": [1]}, 1, 2.5, None, True, [[1]], [{"a": 1}]]
@@ -91,3 +95,118 @@ def test_wrong_types_anywhere_are_located_problems(tmp_path: Path, registry, fie
                         wrong,
                         problem,
                     )
+
+
+# ------------------------------------------------------------------ alias bombs, nesting
+
+
+def laughs(levels: int = 9, width: int = 9, key: str = "stages") -> str:
+    """A "billion laughs" document: each level an anchored list of ``width`` aliases of
+    the level below; ``key`` takes the top level (line ``levels + 4``, column
+    ``len(key) + 3``)."""
+    lines = ["name: p", "version: 1", "a0: &a0 [" + ", ".join(["x"] * width) + "]"]
+    for i in range(1, levels + 1):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * width) + "]")
+    lines.append(f"{key}: *a{levels}")
+    return "\n".join(lines) + "\n"
+
+
+def test_alias_bomb_is_refused_at_once(tmp_path: Path):
+    """Nine levels of nine aliases grew ``validate`` to 387 MB and past 60 s."""
+    path = tmp_path / "laughs.yaml"
+    path.write_text(laughs())
+    start = time.perf_counter()
+    with pytest.raises(SpecError) as info:
+        load_spec(path)
+    assert time.perf_counter() - start < 1.0
+    (problem,) = info.value.problems
+    assert str(problem.location) == f"{path}:13:9"
+    assert "aliases expand the document to" in problem.message
+    assert f"more than {MAX_NODES:,}" in problem.message
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_alias_bomb_is_refused_by_the_cli(tmp_path: Path, command: str):
+    path = tmp_path / "laughs.yaml"
+    path.write_text(laughs())
+    extra = ["--input", f"s={path}", "--out", str(tmp_path / "out")] if command == "run" else []
+    result = subprocess.run(
+        [*gyropipe(), command, str(path), *extra], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    assert f"{path}:13:9: aliases expand the document" in result.stderr
+
+
+def test_alias_bomb_in_a_simulation_plan_and_a_csv_profile(tmp_path: Path):
+    plan = tmp_path / "plan.yaml"
+    plan.write_text(laughs(key="survey"))
+    start = time.perf_counter()
+    with pytest.raises(SpecError, match=r"plan.yaml:13:9: aliases expand"):
+        load_simulation(plan)
+    assert time.perf_counter() - start < 1.0
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "sim")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2 and f"{plan}:13:9: aliases expand" in result.stderr
+    profile = tmp_path / "profile.yaml"
+    profile.write_text(laughs(key="aliases").replace("name: p\nversion: 1\n", ""))
+    with pytest.raises(InputFileError, match=r"profile.yaml:11:10: aliases expand"):
+        load_profile(profile)
+
+
+def test_a_moderate_alias_is_fine_and_located_at_its_anchor(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {s: {}}\nstages:\n"
+        "  - id: read\n    uses: read_stations\n    with: &w {input: s}\n"
+        "  - id: again\n    uses: read_stations\n    with: *w\n"
+    )
+    plan = build_plan(load_spec(path), registry)
+    assert [s.id for s in plan.stages] == ["read", "again"]
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "message"),
+    [
+        ("stages: &a [*a]\n", "3:13", "alias inside the node it refers to"),
+        ("stages: &a {x: [*a]}\n", "3:17", "alias inside the node it refers to"),
+        ("stages: " + "[" * 500 + "]" * 500 + "\n", "3:108", "nested deeper than 100 levels"),
+        (
+            "".join(f"a{i}: &a{i} [*a{i - 1}]\n" if i else "a0: &a0 [x]\n" for i in range(120))
+            + "stages: *a119\n",
+            "",
+            "nested deeper than 100 levels",
+        ),
+    ],
+    ids=["self-alias", "alias-in-mapping", "deep-brackets", "deep-alias-chain"],
+)
+def test_recursive_and_deep_documents_are_located_problems(
+    tmp_path: Path, text: str, where: str, message: str
+):
+    """These ended in RecursionError tracebacks."""
+    path = tmp_path / "p.yaml"
+    path.write_text("name: p\nversion: 1\n" + text)
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr and f"{path}:{where}" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_set_values_have_the_same_limits(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {s: {}}\n"
+        "stages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    bomb = "{" + laughs(5).replace("\n", ", ").replace("stages: ", "z: ").rstrip(", ") + "}"
+    bomb = bomb.replace("name: p, version: 1, ", "")
+    with pytest.raises(SpecError) as info:
+        build_plan(load_spec(path, [f"read.options={bomb}", "read.options=[1"]), registry)
+    found = [str(p) for p in info.value.problems]
+    assert found[0].startswith("--set read.options={a0") and ": value: aliases expand" in found[0]
+    assert "value: malformed YAML" in found[1]
