@@ -24,6 +24,7 @@ from pydantic import (
 from pydantic_core import InitErrorDetails
 
 from pipeline.contracts import SOURCE_KEY, TableContract
+from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
     Registry,
@@ -86,7 +87,7 @@ class WriteParams(BaseModel):
     writer: Annotated[str, registered("writer")] = Field(
         description="writer name (csv, parquet, …)"
     )
-    filename: str | None = Field(
+    filename: OutputFilename | None = Field(
         None, description="output file name; default '<stage id>.<writer extension>'"
     )
 
