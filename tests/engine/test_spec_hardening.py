@@ -210,3 +210,81 @@ def test_set_values_have_the_same_limits(tmp_path: Path, registry):
     found = [str(p) for p in info.value.problems]
     assert found[0].startswith("--set read.options={a0") and ": value: aliases expand" in found[0]
     assert "value: malformed YAML" in found[1]
+
+
+# ------------------------------------------------------------------ every problem at once
+
+
+ALL_AT_ONCE = """\
+name: not a name
+inputs: {stations: {}}
+stages:
+  - id: read
+    uses: read_stations
+  - id: traj
+    uses: minimum_curvatur
+    inputs: {stations: read}
+  - id: out
+    uses: write
+  - id: read
+    uses: write
+    inputs: {table: read}
+    with: {writer: nope, filename: ../x.csv}
+  - id: broken
+    uses: [write]
+  - id: after
+    uses: write
+    inputs: {table: broken}
+    with: {writer: csv, colour: red}
+"""
+
+
+def test_validate_reports_every_problem_in_one_pass(tmp_path: Path):
+    """`validate` used to stop at the first shape error (a missing `version`), and never
+    checked the params of a stage whose id is a duplicate."""
+    path = tmp_path / "p.yaml"
+    path.write_text(ALL_AT_ONCE)
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    found = [line.strip() for line in result.stderr.splitlines()[1:]]
+    expected = [
+        "1:7: name: String should match pattern",  # shape problems first
+        "16:11: stages.4.uses: Input should be a valid string",
+        "7:11: unknown stage 'minimum_curvatur'; did you mean 'minimum_curvature'?",
+        "11:9: duplicate stage id 'read'",
+        "9:5: stage 'out' (write): missing required field 'writer'",  # not wired, no params
+        "9:5: stage 'out' (write): input port 'table' is not wired",
+        "14:20: stage 'read' (write): writer: Value error, no writer named 'nope'",
+        "14:36: stage 'read' (write): filename: Value error, a path",
+        "20:25: stage 'after' (write): unknown field 'colour'",
+    ]
+    assert len(found) == len(expected), result.stderr
+    for line, start in zip(found, expected, strict=True):
+        assert line.startswith(f"{path}:{start}"), (line, start)
+    # the input wired to the stage of invalid shape is not reported again
+    assert "no stage with id 'broken'" not in result.stderr
+
+
+def test_version_is_optional(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\ninputs: {s: {}}\nstages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    plan = build_plan(load_spec(path), registry)
+    assert plan.spec.version == "1"
+    path.write_text(path.read_text().replace("name: p\n", "name: p\nversion: 2.5\n"))
+    assert build_plan(load_spec(path), registry).spec.version == "2.5"
+
+
+def test_invalid_inputs_block_does_not_make_every_read_stage_a_problem(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\ninputs: [s]\nstages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    with pytest.raises(SpecError) as info:
+        build_plan(load_spec(path), registry)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:2:9: inputs: Input should be a valid dictionary"
+    ]
