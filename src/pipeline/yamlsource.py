@@ -90,6 +90,13 @@ def _compose(text: str, file: str) -> yaml.Node | None:
         mark = exc.problem_mark or exc.context_mark
         loc = _location(file, mark) if mark else Location(file)
         raise SpecError([Problem(loc, f"malformed YAML: {exc.problem or exc}")]) from exc
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow: no mark
+        at = min(exc.position, len(text))
+        line, column = text.count("\n", 0, at) + 1, at - text.rfind("\n", 0, at)
+        char = exc.character
+        shown = f"U+{char:04X}" if isinstance(char, int) else repr(char)
+        message = f"malformed YAML: character {shown} is not allowed ({exc.reason})"
+        raise SpecError([Problem(Location(file, line, column), message)]) from exc
     except yaml.YAMLError as exc:
         raise SpecError([Problem(Location(file), f"malformed YAML: {exc}")]) from exc
     if node is not None:

@@ -288,3 +288,15 @@ def test_invalid_inputs_block_does_not_make_every_read_stage_a_problem(tmp_path:
     assert [str(p) for p in info.value.problems] == [
         f"{path}:2:9: inputs: Input should be a valid dictionary"
     ]
+
+
+def test_a_control_character_is_located(tmp_path: Path):
+    """PyYAML's reader error carries no mark: it was reported without a line."""
+    path = tmp_path / "p.yaml"
+    path.write_text("name: p\nstages:\n  - id: b\x01c\n")
+    with pytest.raises(SpecError) as info:
+        load_spec(path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:3:10: malformed YAML: character U+0001 is not allowed "
+        "(special characters are not allowed)"
+    ]
