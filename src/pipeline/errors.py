@@ -92,6 +92,17 @@ def warn_input(path: str | Path, message: str, line: int = 0) -> None:
     warnings.warn(f"{where}: {message}", InputFileWarning, stacklevel=2)
 
 
+class EmptyTableError(GyropipeError, ValueError):
+    """A stage (or writer) can compute nothing from a table with no rows. An empty table is a
+    legal stage output, so this names the table and says that what produced it gave none."""
+
+    def __init__(self, table: str, needs: str) -> None:
+        self.table = table
+        super().__init__(
+            f"the {table} table has no rows (the stage that produced it gave none): {needs}"
+        )
+
+
 class UnitError(GyropipeError):
     """A unit string is unknown or not convertible to the unit required."""
 

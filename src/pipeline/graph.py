@@ -3,6 +3,7 @@ wired, contracts matched and an execution order found — or every problem, loca
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -11,7 +12,7 @@ from pydantic import BaseModel, ValidationError
 from pipeline.contracts import TableContract
 from pipeline.errors import Problem, SpecError, did_you_mean
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
-from pipeline.spec import LoadedSpec, PipelineSpec
+from pipeline.spec import LoadedSpec, PipelineSpec, StageSpec
 from pipeline.yamlsource import PathKey, SourceMap, validation_problems
 
 
@@ -44,37 +45,61 @@ class Plan:
 
 def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     """Resolve, validate and order a loaded spec. Raises :class:`SpecError` with all
-    problems found (nothing runs before the whole pipeline is valid)."""
+    problems found (nothing runs before the whole pipeline is valid): those of the spec's
+    shape and, for every stage, its `uses`, params, wiring and persisted ports — a stage
+    whose id is a duplicate is checked too."""
     spec, source = loaded.spec, loaded.source
     problems: list[Problem] = list(loaded.problems)
-    defs: dict[str, tuple[StageDef, str]] = {}
-    index: dict[str, int] = {}
+    at = loaded.position
+    index: dict[str, int] = {}  # id → its first stage
+    first: dict[str, int] = {}  # id → YAML index of its first stage, left-out stages included
+    for pos, stage_id in sorted([(at(i), s.id) for i, s in enumerate(spec.stages)]):
+        first.setdefault(stage_id, pos)
+    for pos, stage_id in sorted(loaded.dropped.items()):
+        first[stage_id] = min(pos, first.get(stage_id, pos))
+    duplicates = sorted(  # left-out stages whose id is a duplicate: reported in file order
+        (pos, stage_id) for pos, stage_id in loaded.dropped.items() if first[stage_id] != pos
+    )
+    known: dict[int, tuple[StageDef, str]] = {}  # stages whose `uses` is registered
+
+    def duplicate(pos: int, stage_id: str) -> None:
+        problems.append(
+            Problem(source.locate(("stages", pos, "id")), f"duplicate stage id {stage_id!r}")
+        )
+
     for i, stage in enumerate(spec.stages):
-        if stage.id in index:
-            problems.append(
-                Problem(source.locate(("stages", i, "id")), f"duplicate stage id {stage.id!r}")
-            )
-            continue
-        index[stage.id] = i
+        while duplicates and duplicates[0][0] < at(i):
+            duplicate(*duplicates.pop(0))
+        index.setdefault(stage.id, i)
+        if first[stage.id] != at(i):
+            duplicate(at(i), stage.id)
         found = registry.stages.get(stage.uses)
         if found is None:
             problems.append(
-                Problem(source.locate(("stages", i, "uses")), _unknown_stage(stage.uses, registry))
+                Problem(
+                    source.locate(("stages", at(i), "uses")), _unknown_stage(stage.uses, registry)
+                )
             )
             continue
-        defs[stage.id] = found
+        known[i] = found
+    for pos, stage_id in duplicates:
+        duplicate(pos, stage_id)
+    defs = {spec.stages[i].id: found for i, found in known.items() if index[spec.stages[i].id] == i}
+    check_inputs = "inputs" not in loaded.invalid
 
     params: dict[str, BaseModel] = {}
     wiring: dict[str, dict[str, tuple[str, str]]] = {}
-    for stage_id, (definition, _) in defs.items():
-        i = index[stage_id]
-        model = _params(spec, i, definition, registry, source, problems)
-        if model is not None:
-            params[stage_id] = model
-        wiring[stage_id] = _wire(spec, i, definition, defs, index, source, problems)
-        _check_persist(spec, i, definition, source, problems)
+    for i, (definition, _) in known.items():
+        stage, pos = spec.stages[i], at(i)
+        model = _params(spec, stage, pos, definition, registry, source, problems, check_inputs)
+        wired = _wire(stage, pos, definition, defs, index, loaded.dropped, source, problems)
+        _check_persist(stage, pos, definition, source, problems)
+        if index[stage.id] == i:
+            if model is not None:
+                params[stage.id] = model
+            wiring[stage.id] = wired
 
-    order = _order(spec, wiring, index, source, problems)
+    order = _order(wiring, {k: at(i) for k, i in index.items()}, source, problems)
     if problems:
         raise SpecError(problems)
     planned = []
@@ -110,13 +135,14 @@ def _unknown_stage(name: str, registry: Registry) -> str:
 
 def _params(
     spec: PipelineSpec,
-    i: int,
+    stage: StageSpec,
+    pos: int,
     definition: StageDef,
     registry: Registry,
     source: SourceMap,
     problems: list[Problem],
+    check_inputs: bool,
 ) -> BaseModel | None:
-    stage = spec.stages[i]
     fields = definition.params.model_fields
     values: dict[str, Any] = {k: v for k, v in spec.defaults.with_.items() if k in fields}
     values.update(stage.with_)
@@ -125,16 +151,16 @@ def _params(
     except ValidationError as exc:
         problems += [
             Problem(p.location, f"stage {stage.id!r} ({stage.uses}): {p.message}")
-            for p in validation_problems(exc, ("stages", i, "with"), source)
+            for p in validation_problems(exc, ("stages", pos, "with"), source)
         ]
         return None
     for name, info in fields.items():
         extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
         value = getattr(model, name)
-        if extra.get(PIPELINE_INPUT) and value not in spec.inputs:
+        if check_inputs and extra.get(PIPELINE_INPUT) and value not in spec.inputs:
             problems.append(
                 Problem(
-                    source.locate(("stages", i, "with", name)),
+                    source.locate(("stages", pos, "with", name)),
                     f"stage {stage.id!r}: {name} {value!r} is not a pipeline input "
                     f"(declared inputs: {', '.join(spec.inputs) or 'none'})",
                 )
@@ -143,17 +169,17 @@ def _params(
 
 
 def _wire(
-    spec: PipelineSpec,
-    i: int,
+    stage: StageSpec,
+    pos: int,
     definition: StageDef,
     defs: dict[str, tuple[StageDef, str]],
     index: dict[str, int],
+    dropped: Mapping[int, str],
     source: SourceMap,
     problems: list[Problem],
 ) -> dict[str, tuple[str, str]]:
-    stage = spec.stages[i]
     wired: dict[str, tuple[str, str]] = {}
-    here: PathKey = ("stages", i, "inputs")
+    here: PathKey = ("stages", pos, "inputs")
     for port, ref in stage.inputs.items():
         loc = source.locate((*here, port))
         if port not in definition.inputs:
@@ -167,7 +193,8 @@ def _wire(
             continue
         upstream, _, out_port = ref.partition(".")
         if upstream not in index:
-            problems.append(Problem(loc, f"input {port!r}: no stage with id {upstream!r}"))
+            if upstream not in dropped.values():  # else its own problems are reported
+                problems.append(Problem(loc, f"input {port!r}: no stage with id {upstream!r}"))
             continue
         if upstream not in defs:
             continue  # its unknown `uses` is already reported
@@ -202,7 +229,7 @@ def _wire(
         if port not in stage.inputs and port not in definition.optional_inputs:
             problems.append(
                 Problem(
-                    source.locate(("stages", i, "inputs") if stage.inputs else ("stages", i)),
+                    source.locate(here if stage.inputs else ("stages", pos)),
                     f"stage {stage.id!r} ({stage.uses}): input port {port!r} is not wired",
                 )
             )
@@ -232,16 +259,15 @@ def contract_mismatch(produced: type[TableContract], wanted: type[TableContract]
 
 
 def _check_persist(
-    spec: PipelineSpec, i: int, definition: StageDef, source: SourceMap, problems: list[Problem]
+    stage: StageSpec, pos: int, definition: StageDef, source: SourceMap, problems: list[Problem]
 ) -> None:
-    stage = spec.stages[i]
     if isinstance(stage.persist, bool):
         return
     for j, port in enumerate(stage.persist):
         if port not in definition.outputs:
             problems.append(
                 Problem(
-                    source.locate(("stages", i, "persist", j)),
+                    source.locate(("stages", pos, "persist", j)),
                     f"stage {stage.id!r} has no output port {port!r} to persist "
                     f"(outputs: {', '.join(definition.outputs) or 'none'})",
                 )
@@ -249,13 +275,13 @@ def _check_persist(
 
 
 def _order(
-    spec: PipelineSpec,
     wiring: dict[str, dict[str, tuple[str, str]]],
     index: dict[str, int],
     source: SourceMap,
     problems: list[Problem],
 ) -> list[str]:
-    """Stages in dependency order (stable: ties keep the file's order); cycles reported."""
+    """Stages in dependency order (stable: ties keep the file's order, ``index`` giving each
+    stage's place in the YAML); cycles reported."""
     deps = {s: {up for up, _ in ports.values()} for s, ports in wiring.items()}
     order: list[str] = []
     done: set[str] = set()

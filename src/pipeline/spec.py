@@ -6,18 +6,22 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from pipeline.errors import Location, Problem, SpecError
 from pipeline.well import WellMetadata
-from pipeline.yamlsource import SourceMap, load_mapping, validate_located
+from pipeline.yamlsource import SourceMap, load_mapping, load_value, validation_problems
 
 IDENT = r"^[A-Za-z_][A-Za-z0-9_-]*$"
+DEFAULT_VERSION = "1"
+"""The version of a pipeline that declares none (recorded in run.json, shown in reports)."""
+PLACEHOLDER_NAME = "invalid"
+"""Stands for an invalid pipeline name while the rest is checked (its problem reported)."""
 
 
 class InputSpec(BaseModel):
@@ -65,7 +69,7 @@ class PipelineSpec(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     name: str = Field(pattern=IDENT)
-    version: str = Field(description="pipeline version (numbers are read as text)")
+    version: str = Field(DEFAULT_VERSION, description="pipeline version (numbers are read as text)")
     description: str = ""
     inputs: dict[str, InputSpec] = Field(default_factory=dict)
     well: WellMetadata = Field(default_factory=WellMetadata, description="default well metadata")
@@ -90,12 +94,25 @@ class PipelineSpec(BaseModel):
 @dataclass
 class LoadedSpec:
     """A spec of valid shape, the source map of its YAML, and the problems found so far
-    that did not prevent building it (reported with the planner's, all together)."""
+    that did not prevent building it (reported with the planner's, all together).
+
+    When parts of the YAML have the wrong shape, their problems are in ``problems`` and the
+    spec is built from the rest, so the planner can still report every other problem: a
+    stage of invalid shape is left out (``positions`` maps each stage of ``spec`` to its
+    index in the YAML; ``dropped`` maps the index of each stage left out to its id), an invalid
+    top-level field is left at its default (named in ``invalid``)."""
 
     spec: PipelineSpec
     source: SourceMap
     raw: dict[str, Any]
     problems: list[Problem]
+    positions: tuple[int, ...] = ()
+    dropped: Mapping[int, str] = field(default_factory=dict)
+    invalid: frozenset[str] = frozenset()
+
+    def position(self, i: int) -> int:
+        """Index in the YAML's ``stages`` of stage ``i`` of the spec."""
+        return self.positions[i] if self.positions else i
 
 
 def load_spec(path: str | Path, overrides: list[str] | None = None) -> LoadedSpec:
@@ -115,12 +132,50 @@ def load_spec(path: str | Path, overrides: list[str] | None = None) -> LoadedSpe
 
 def parse_spec(text: str, file: str, overrides: list[str] | None = None) -> LoadedSpec:
     """Parse pipeline YAML text (see :func:`load_spec`)."""
-    raw, source, problems = load_mapping(
-        text, file, "a pipeline must be a mapping (name, version, stages…)"
-    )
+    raw, source, problems = load_mapping(text, file, "a pipeline must be a mapping (name, stages…)")
     problems += apply_overrides(raw, overrides or [], source)
-    spec = validate_located(PipelineSpec, raw, source, problems)
+    try:
+        spec = PipelineSpec.model_validate(raw)
+    except ValidationError as exc:
+        reported = {p.location for p in problems}
+        problems += [p for p in validation_problems(exc, (), source) if p.location not in reported]
+        return _salvaged(raw, source, problems, exc)
     return LoadedSpec(spec, source, raw, problems)
+
+
+def _salvaged(
+    raw: dict[str, Any], source: SourceMap, problems: list[Problem], exc: ValidationError
+) -> LoadedSpec:
+    """The spec without the parts ``exc`` found invalid (see :class:`LoadedSpec`); raises
+    :class:`SpecError` when no stage is left to plan."""
+    bad_fields: set[str] = set()
+    bad_stages: set[int] = set()
+    for err in exc.errors():
+        loc = err["loc"]
+        if len(loc) > 1 and loc[0] == "stages" and isinstance(loc[1], int):
+            bad_stages.add(loc[1])
+        elif loc:
+            bad_fields.add(str(loc[0]))
+    stages = raw.get("stages") if "stages" not in bad_fields else None
+    kept = (
+        [i for i in range(len(stages)) if i not in bad_stages] if isinstance(stages, list) else []
+    )
+    if not kept:
+        raise SpecError(problems)
+    patched = {k: v for k, v in raw.items() if k not in bad_fields and k != "stages"}
+    patched["name"] = raw["name"] if "name" not in bad_fields else PLACEHOLDER_NAME
+    assert isinstance(stages, list)
+    patched["stages"] = [stages[i] for i in kept]
+    try:
+        spec = PipelineSpec.model_validate(patched)  # every part left has been validated
+    except ValidationError:  # pragma: no cover - defensive: report what was found
+        raise SpecError(problems) from None
+    dropped = {
+        i: stage["id"]
+        for i, stage in enumerate(stages)
+        if i in bad_stages and isinstance(stage, dict) and isinstance(stage.get("id"), str)
+    }
+    return LoadedSpec(spec, source, raw, problems, tuple(kept), dropped, frozenset(bad_fields))
 
 
 def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap) -> list[Problem]:
@@ -128,8 +183,12 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap
     problems with an overridden value point at its ``--set``."""
     problems = []
     stages = raw.get("stages")
+    # Only well-typed ids can be targets: a list or mapping as an id is reported by the
+    # model's validation, located at its node.
     by_id = (
-        {s.get("id"): s for s in stages if isinstance(s, dict)} if isinstance(stages, list) else {}
+        {s["id"]: s for s in stages if isinstance(s, dict) and isinstance(s.get("id"), str)}
+        if isinstance(stages, list)
+        else {}
     )
     for item in overrides:
         where = Location(f"--set {item}")
@@ -145,9 +204,9 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], source: SourceMap
             )
             continue
         try:
-            parsed = yaml.safe_load(value) if value.strip() else None
-        except yaml.YAMLError as exc:
-            problems.append(Problem(where, f"value is not valid YAML: {exc}"))
+            parsed = load_value(value, where.file) if value.strip() else None
+        except SpecError as exc:
+            problems += [Problem(where, f"value: {p.message}") for p in exc.problems]
             continue
         index = stages.index(stage) if isinstance(stages, list) else 0
         source.values[("stages", index, "with", *parts[1:])] = where

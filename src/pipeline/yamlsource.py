@@ -3,6 +3,11 @@
 YAML is composed with ``yaml.SafeLoader`` (no tag constructs a Python object; non-standard
 tags on collections are refused), then converted to plain data while recording where each
 node came from, so pydantic errors and later checks can point at ``file:line:column``.
+
+Aliases are followed (an alias is a copy of its anchor's node), but a document whose aliases
+expand it beyond :data:`MAX_NODES` nodes (a "billion laughs" document), an alias inside the
+node it refers to, and nesting deeper than :data:`MAX_DEPTH` are refused, located at the
+alias (or node), before anything is expanded.
 """
 
 from __future__ import annotations
@@ -17,6 +22,11 @@ from pipeline.errors import Location, Problem, SpecError
 
 PathKey = tuple[str | int, ...]
 M = TypeVar("M", bound=BaseModel)
+
+MAX_NODES = 100_000
+"""Most nodes a loaded document may hold once its aliases are expanded."""
+MAX_DEPTH = 100
+"""Deepest nesting of collections a loaded document may have (aliases expanded)."""
 
 
 @dataclass
@@ -46,21 +56,56 @@ def load_mapping(
     the text cannot be parsed or is not a mapping (``not_mapping`` is that message)."""
     source = SourceMap(file)
     problems: list[Problem] = []
+    node = _compose(text, file)
+    if node is None:
+        raise SpecError([Problem(Location(file, 1, 1), "empty file")])
+    raw = _to_data(node, (), source, problems)
+    if not isinstance(raw, dict):
+        raise SpecError([Problem(_location(file, node.start_mark), not_mapping)])
+    return raw, source, problems
+
+
+def load_value(text: str, where: str) -> Any:
+    """Parse one YAML value (a ``--set`` value, say) as a document is parsed, with its
+    limits; a problem is a :class:`SpecError` located at ``where``."""
+    problems: list[Problem] = []
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        if node is None:
-            raise SpecError([Problem(Location(file, 1, 1), "empty file")])
-        raw = _to_data(node, (), source, problems)
+        node = _compose(text, where)
+        value = None if node is None else _to_data(node, (), SourceMap(where), problems)
+    except SpecError as exc:
+        problems = exc.problems
+    if problems:
+        raise SpecError([Problem(Location(where), p.message) for p in problems])
+    return value
+
+
+def _compose(text: str, file: str) -> yaml.Node | None:
+    """The YAML node graph of ``text`` (safe tags only), checked against the limits
+    (:func:`_check_size`); None for an empty document."""
+    try:
+        node = yaml.compose(text, Loader=_Loader)
+    except _TooDeep as exc:
+        raise SpecError([Problem(_location(file, exc.mark), exc.message)]) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
-        loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
+        loc = _location(file, mark) if mark else Location(file)
         raise SpecError([Problem(loc, f"malformed YAML: {exc.problem or exc}")]) from exc
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow: no mark
+        at = min(exc.position, len(text))
+        line, column = text.count("\n", 0, at) + 1, at - text.rfind("\n", 0, at)
+        char = exc.character
+        shown = f"U+{char:04X}" if isinstance(char, int) else repr(char)
+        message = f"malformed YAML: character {shown} is not allowed ({exc.reason})"
+        raise SpecError([Problem(Location(file, line, column), message)]) from exc
     except yaml.YAMLError as exc:
         raise SpecError([Problem(Location(file), f"malformed YAML: {exc}")]) from exc
-    if not isinstance(raw, dict):
-        loc = Location(file, node.start_mark.line + 1, node.start_mark.column + 1)
-        raise SpecError([Problem(loc, not_mapping)])
-    return raw, source, problems
+    if node is not None:
+        _check_size(node, file)
+    return node
+
+
+def _location(file: str, mark: yaml.Mark | None) -> Location:
+    return Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
 
 
 def validate_located(
@@ -98,6 +143,8 @@ def validation_problems(exc: ValidationError, prefix: PathKey, source: SourceMap
 
 
 def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]) -> Any:
+    if isinstance(node, _Alias):
+        node = node.value  # located at its anchor, where its content is written
     source.values[path] = Location(
         source.file, node.start_mark.line + 1, node.start_mark.column + 1
     )
@@ -137,6 +184,112 @@ _STANDARD_TAGS: dict[type, str] = {
 
 
 def _scalar(node: yaml.Node) -> Any:
+    if isinstance(node, _Alias):
+        node = node.value
     if isinstance(node, yaml.ScalarNode):
         return _CONSTRUCTOR.construct_object(node, deep=True)
     return node  # a collection used as a key: rejected by the caller
+
+
+# ------------------------------------------------------------------ aliases and limits
+
+
+class _Alias(yaml.Node):
+    """An alias in the node graph: ``value`` is the node it refers to, the marks are where
+    the alias itself is written (PyYAML gives the anchor's node, and forgets the alias)."""
+
+    id = "alias"
+
+    def __init__(self, target: yaml.Node, start_mark: Any, end_mark: Any) -> None:
+        super().__init__(target.tag, target, start_mark, end_mark)
+
+
+class _TooDeep(Exception):
+    def __init__(self, mark: Any, message: str) -> None:
+        self.mark = mark
+        self.message = message
+
+
+class _Loader(yaml.SafeLoader):
+    """The safe loader, keeping aliases as :class:`_Alias` nodes and refusing nesting
+    deeper than :data:`MAX_DEPTH` before PyYAML's recursive composer overflows."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self._depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        event: yaml.Event = self.peek_event()  # type: ignore[no-untyped-call]
+        if isinstance(event, yaml.AliasEvent):
+            target = super().compose_node(parent, index)
+            assert target is not None  # an alias refers to a composed node
+            return _Alias(target, event.start_mark, event.end_mark)
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise _TooDeep(event.start_mark, _too_deep())
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def _too_deep() -> str:
+    return f"collections nested deeper than {MAX_DEPTH} levels: refused"
+
+
+def _check_size(root: yaml.Node, file: str) -> None:
+    """Raise :class:`SpecError` if the document, its aliases expanded, holds more than
+    :data:`MAX_NODES` nodes or nests deeper than :data:`MAX_DEPTH`, or if an alias lies
+    inside the node it refers to. Counts without expanding: each node's expanded size and
+    height is computed once."""
+    measured: dict[int, tuple[int, int]] = {}  # id(node) → (expanded nodes, height)
+    open_nodes: set[int] = set()
+    largest: list[tuple[int, _Alias]] = []  # the alias that expands to the most nodes
+
+    def measure(node: yaml.Node, depth: int) -> tuple[int, int]:
+        target = node.value if isinstance(node, _Alias) else node
+        key = id(target)
+        if key in open_nodes:
+            raise SpecError(
+                [Problem(_location(file, node.start_mark), "alias inside the node it refers to")]
+            )
+        if key not in measured:
+            if depth > MAX_DEPTH:
+                raise SpecError([Problem(_location(file, node.start_mark), _too_deep())])
+            open_nodes.add(key)
+            size, height = 1, 1
+            for child in _children(target):
+                child_size, child_height = measure(child, depth + 1)
+                size += child_size
+                height = max(height, child_height + 1)
+            open_nodes.discard(key)
+            measured[key] = (size, height)
+        size, height = measured[key]
+        if depth + height - 1 > MAX_DEPTH:
+            raise SpecError([Problem(_location(file, node.start_mark), _too_deep())])
+        if isinstance(node, _Alias) and (not largest or size > largest[0][0]):
+            largest[:] = [(size, node)]
+        return size, height
+
+    total, _ = measure(root, 1)
+    if total <= MAX_NODES:
+        return
+    if largest:
+        size, alias = largest[0]
+        where = _location(file, alias.start_mark)
+        message = (
+            f"aliases expand the document to {total:,} nodes, more than {MAX_NODES:,}: "
+            f"refused (this alias alone expands to {size:,})"
+        )
+    else:
+        where = _location(file, root.start_mark)
+        message = f"the document holds {total:,} nodes, more than {MAX_NODES:,}: refused"
+    raise SpecError([Problem(where, message)])
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.MappingNode):
+        return [child for pair in node.value for child in pair]
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    return []

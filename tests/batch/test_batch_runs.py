@@ -126,6 +126,10 @@ def test_manifest_maps_wells_to_files_and_header_overrides(tmp_path: Path, surve
         ("well_id,stations,colour\nW,a.csv,red\n", "wells.csv:1: unknown column(s) colour"),
         ("well_id,latitude\nW,61\n", "wells.csv:1: missing column(s) stations"),
         ("well_id,stations\nW,a.csv\nW,a.csv\n", "wells.csv:3: well 'W' already listed on line 2"),
+        (  # fuzz: 'A' and 'a' collide on a case-insensitive file system
+            "well_id,stations\nA,a.csv\nB,b.csv\na,c.csv\n",
+            "wells.csv:4: well 'a' equals well 'A' of ",
+        ),
         ("well_id,stations\n../up,a.csv\n", "wells.csv:2: well id '../up' is not a plain"),
         ("well_id,stations,latitude\nW,a.csv,north\n", "wells.csv:2: well 'W': latitude"),
         ("well_id,stations\nW,a.csv,extra\n", "wells.csv:2: 3 cells, the header has 2"),
@@ -141,6 +145,32 @@ def test_bad_manifest_is_a_configuration_error(
     assert result.exit_code == 2
     assert message in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_manifest_wells_equal_up_to_case_are_refused_naming_both_lines(
+    tmp_path: Path, survey: Path
+):
+    manifest = tmp_path / "wells.csv"
+    manifest.write_text("well_id,stations\nA,a.csv\nB,b.csv\na,c.csv\n")
+    result = cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
+    assert result.exit_code == 2
+    assert (
+        f"{manifest}:4: well 'a' equals well 'A' of {manifest}:2 up to case: their output "
+        "directories would collide on a case-insensitive file system"
+    ) in result.stderr
+
+
+def test_input_files_naming_wells_equal_up_to_case_are_refused(tmp_path: Path, survey: Path):
+    """Fuzz: wells 'A-1' and 'a-1' from a glob would share one output directory on a
+    case-insensitive file system."""
+    make_wells(tmp_path / "in", ["A-1", "B-1"])
+    (tmp_path / "in" / "a-1.csv").write_bytes((tmp_path / "in" / "A-1.csv").read_bytes())
+    out = tmp_path / "out"
+    result = cli("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    assert result.exit_code == 2, result.output
+    first, second = tmp_path / "in" / "A-1.csv", tmp_path / "in" / "a-1.csv"
+    assert f"{first} and {second} would be wells 'A-1' and 'a-1', equal up to case" in result.output
+    assert not out.exists()
 
 
 def test_configuration_errors_exit_2_and_a_clean_batch_exits_0(tmp_path: Path, survey: Path):

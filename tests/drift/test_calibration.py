@@ -243,6 +243,12 @@ def test_csv_reader_names_the_problem(tmp_path: Path):
     path.write_text("# well.tool_serial=X\nseries,set_azimuth[deg],azimuth_error[deg]\n1,0,x\n")
     with pytest.raises(InputFileError, match=r"cal.csv:3 \(column 'azimuth_error'\): not a number"):
         drift_tables.read_drift_table(path, "calibration", None)
+    for cell in ("1e999", "-inf", "nan"):
+        path.write_text(f"series,set_azimuth[deg],azimuth_error[deg]\n1,0,{cell}\n")
+        with pytest.raises(
+            InputFileError, match=r"cal.csv:2 \(column 'azimuth_error'\): not a finite number"
+        ):
+            drift_tables.read_drift_table(path, "calibration", None)
     path.write_text("series,set_azimuth[rad],azimuth_error[deg],extra\n1,3.14159265358979,2,z\n")
     table, _ = drift_tables.read_drift_table(path, "calibration", None)
     assert table.column("set_azimuth")[0].as_py() == pytest.approx(180.0)

@@ -67,6 +67,7 @@ LAYERS: dict[str, int] = {
     "pipeline.tables": 2,
     "pipeline.schemas": 2,
     "pipeline.yamlsource": 2,
+    "pipeline.filenames": 2,
     "pipeline.units": 2,
     "pipeline.convert": 2,
     # 1 — foundation

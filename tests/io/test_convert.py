@@ -105,3 +105,22 @@ def test_reader_options_pass_through(tmp_path: Path, option: str):
     extra = ["--option", "north_reference=true"] if "units" in option else []
     result = cli(str(src), str(tmp_path / "o.parquet"), "--option", option, *extra)
     assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize(
+    ("cell", "shown"),
+    [("-1e999", "'-1e999'"), ("1E+400", "'1E+400'"), ("9" * 400, "(400 characters)")],
+)
+def test_an_overflowing_number_is_refused_like_nan(tmp_path: Path, cell: str, shown: str):
+    """A cell too large for a float (±inf) is a located error, as ``nan`` is (fuzz)."""
+    src = tmp_path / "inf.csv"
+    src.write_text(f"MD[m],INC[deg],Azimuth True[deg]\n0,0,0\n100,1,{cell}\n200,2,3\n")
+    out = tmp_path / "o.parquet"
+    result = cli(str(src), str(out), "--kind", "stations")
+    assert result.returncode == 1, result.stderr
+    assert f"{src}:3 (column 'Azimuth True[deg]'): expected a finite number" in result.stderr
+    assert shown in result.stderr
+    assert not out.exists()
+    src.write_text("MD[m],INC[deg],Azimuth True[deg]\n0,0,0\n100,1,nan\n200,2,3\n")
+    nan = cli(str(src), str(out), "--kind", "stations")
+    assert nan.returncode == 1 and f"{src}:3 (column 'Azimuth True[deg]')" in nan.stderr

@@ -397,7 +397,10 @@ def test_station_keys_are_integers(tmp_path: Path) -> None:
     messages[4]["station"] = 3.5
     path = tmp_path / "station.mcap"
     write_json(path, messages)
-    with pytest.raises(InputFileError, match=r"message 4: key 'station' is 3.5"):
+    with pytest.raises(
+        InputFileError,
+        match=r"message 4 \(log time 1700000000.04 s, topic /imu; .*\): key 'station' is 3.5",
+    ):
         read(path, **UNITS)
 
 

@@ -330,4 +330,3 @@ def _many(
 ) -> Tables:
     outs, _, _ = stages.call(uses, inputs, params, well=well)
     return Tables({port: like(template, table) for port, table in outs.items()})
-

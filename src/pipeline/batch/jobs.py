@@ -1,11 +1,12 @@
 """The wells of a batch: from a manifest CSV or from a glob of input files.
 
 A manifest is a CSV file with a header row. Column ``well_id`` names each well (it becomes
-the well's output directory ``OUT/<well_id>/``); one column per pipeline input holds that
-input's file (relative paths are relative to the manifest's directory); any other column
-must be a :class:`~pipeline.well.WellMetadata` field (``latitude``, ``longitude``,
-``elevation``, ``tool_serial``…) and overrides that header field for the well. Empty cells
-leave a header field unset. Lines starting with ``#`` are comments.
+the well's output directory ``OUT/<well_id>/``, so no two ids may be equal up to case); one
+column per pipeline input holds that input's file (relative paths are relative to the
+manifest's directory); any other column must be a :class:`~pipeline.well.WellMetadata`
+field (``latitude``, ``longitude``, ``elevation``, ``tool_serial``…) and overrides that
+header field for the well. Empty cells leave a header field unset. Lines starting with
+``#`` are comments.
 """
 
 from __future__ import annotations
@@ -26,6 +27,11 @@ WELL_ID_COLUMN = "well_id"
 WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
 RESERVED_NAMES = frozenset({"ledger.sqlite", "summary.csv", "summary.json"})
 """Names the batch itself writes in the output directory; no well may be called so."""
+
+
+_UP_TO_CASE = (
+    " up to case: their output directories would collide on a case-insensitive file system"
+)
 
 
 class BatchConfigError(GyropipeError):
@@ -63,7 +69,7 @@ def jobs_from_manifest(
     _check_header(manifest, header_line, columns, input_names)
     base = manifest.parent
     jobs: list[WellJob] = []
-    seen: dict[str, int] = {}
+    seen: dict[str, tuple[str, int]] = {}  # casefolded id → (id, line)
     for line, cells in rows[1:]:
         if len(cells) != len(columns):
             raise BatchConfigError(
@@ -71,11 +77,15 @@ def jobs_from_manifest(
             )
         values = dict(zip(columns, (c.strip() for c in cells), strict=True))
         well_id = _well_id(values.pop(WELL_ID_COLUMN), f"{manifest}:{line}")
-        if well_id in seen:
+        if (same := seen.get(well_id.casefold())) is not None:
+            first, first_line = same
             raise BatchConfigError(
-                f"{manifest}:{line}: well {well_id!r} already listed on line {seen[well_id]}"
+                f"{manifest}:{line}: well {well_id!r} already listed on line {first_line}"
+                if first == well_id
+                else f"{manifest}:{line}: well {well_id!r} equals well {first!r} of "
+                f"{manifest}:{first_line}{_UP_TO_CASE}"
             )
-        seen[well_id] = line
+        seen[well_id.casefold()] = (well_id, line)
         inputs: dict[str, Path] = {}
         for name in input_names:
             cell = values.pop(name)
@@ -110,15 +120,20 @@ def jobs_from_glob(
     if not files:
         raise BatchConfigError(f"--inputs {pattern!r} matches no file")
     jobs: list[WellJob] = []
-    seen: dict[str, Path] = {}
+    seen: dict[str, tuple[str, Path]] = {}  # casefolded id → (id, file)
     for path in files:
         well_id = _well_id(path.stem, str(path))
-        if well_id in seen:
-            raise BatchConfigError(
-                f"--inputs {pattern!r}: {seen[well_id]} and {path} would both be well "
-                f"{well_id!r}: use a --manifest"
+        if (same := seen.get(well_id.casefold())) is not None:
+            first, first_path = same
+            what = (
+                f"would both be well {well_id!r}"
+                if first == well_id
+                else f"would be wells {first!r} and {well_id!r}, equal{_UP_TO_CASE}"
             )
-        seen[well_id] = path
+            raise BatchConfigError(
+                f"--inputs {pattern!r}: {first_path} and {path} {what}: use a --manifest"
+            )
+        seen[well_id.casefold()] = (well_id, path)
         jobs.append(WellJob(well_id, {input_names[0]: path.resolve()}, defaults))
     return jobs
 

@@ -13,6 +13,7 @@ import pyarrow as pa
 from scipy.signal import savgol_filter
 
 from pipeline.earth.frames import FloatArray
+from pipeline.errors import GyropipeError
 
 __all__ = [
     "DEG_H",
@@ -35,7 +36,7 @@ RunStops = tuple[dict[str, float], dict[str, float]]
 """The compassed (start, end) stops of a run, as from :func:`compassed_stop`."""
 
 
-class ContinuousError(ValueError):
+class ContinuousError(GyropipeError, ValueError):
     """The samples or stops do not make a continuous run."""
 
 

@@ -41,7 +41,6 @@ from scipy.stats import chi2
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
-from pipeline.errors import GyropipeError
 from pipeline.gyrocompass.azimuth import Method, solve_azimuth
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.tables import CompassRejects, CompassStations
@@ -295,23 +294,6 @@ def compass(
 
 class StationReject(Exception):
     """A station that cannot be solved, and why."""
-
-
-class NoStationSolved(GyropipeError):
-    """Compassing solved none of the stations (a pipeline cannot go on to a trajectory):
-    names the first few and why."""
-
-    SHOWN = 3
-
-    def __init__(self, rejects: pa.Table) -> None:
-        self.rejects = rejects
-        rows = rejects.to_pylist()
-        shown = "; ".join(
-            f"station {r['station']} (MD {round(r['md'], 1) + 0.0:g} m): {r['reason']}"
-            for r in rows[: self.SHOWN]
-        )
-        more = f"; and {len(rows) - self.SHOWN} more" if len(rows) > self.SHOWN else ""
-        super().__init__(f"compassing solved none of the {len(rows)} station(s): {shown}{more}")
 
 
 class EarthRateReject(StationReject):

@@ -1,14 +1,16 @@
 """Bytes, lines and data rows of a CSV file (see :mod:`pipeline.io.csv` for the layout).
 
-The file is read once as bytes. Only its first lines (where the title block and the header
-row are) are decoded to text; the data rows stay bytes and are handed to ``pyarrow.csv``,
-which parses them with the declared column types on all cores. A file that does not parse
+The start of the file is checked to be text (:func:`load`), then the file is read once as
+bytes. Only its first lines (where the title block and the header row are) are decoded to
+text; the data rows stay bytes and are handed to ``pyarrow.csv``, which parses them with
+the declared column types on all cores. A file that does not parse
 that way (a bad cell, a wrong cell count, decimal commas to detect) is parsed again as
 strings on one thread, which locates every problem on its file line.
 """
 
 from __future__ import annotations
 
+import codecs
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -26,6 +28,8 @@ from pipeline.io.csv_header import Cell, Header, cells_of
 
 SHOWN = 5
 """Bad cells quoted in one error message."""
+BLOCK = 64 * 1024
+"""Bytes of a file checked (text, not binary) before the whole file is read."""
 
 _NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
 _NUMBER = {
@@ -84,26 +88,43 @@ class Rows:
 
 def load(path: Path, head_lines: int) -> Text:
     """Read ``path``: UTF-8 (optional BOM), any line ends; the first ``head_lines`` lines
-    decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line."""
+    decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line.
+
+    The first :data:`BLOCK` bytes are checked before the rest is read: a binary file (a
+    NUL byte, bytes that are not UTF-8) is refused without reading it all."""
     try:
-        data = path.read_bytes()
+        with path.open("rb") as fh:
+            first = fh.read(BLOCK)
+            _check_text(path, first, complete=len(first) < BLOCK)
+            if len(first) < BLOCK:
+                data = first
+            else:
+                fh.seek(0)
+                data = fh.read()
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
+    data = _check_text(path, data, complete=True)
+    if not data or data.isspace():
+        raise InputFileError(path, "the file is empty")
+    head, starts = split_head(data, head_lines)
+    return Text(data, head, starts)
+
+
+def _check_text(path: Path, data: bytes, *, complete: bool) -> bytes:
+    """``data`` (the whole file, or its start unless ``complete``) without BOM and with LF
+    line ends; a NUL byte or invalid UTF-8 raises, naming its line."""
     data = newlines(data.removeprefix(b"\xef\xbb\xbf"))
     nul = data.find(b"\0")
     if nul >= 0:
         line = data.count(b"\n", 0, nul) + 1
         raise InputFileError(path, "NUL byte: this is not a text CSV file", line=line)
     if not data.isascii():
-        try:
-            data.decode("utf-8")
+        try:  # a character cut at the end of an incomplete start is no error
+            codecs.getincrementaldecoder("utf-8")().decode(data, final=complete)
         except UnicodeDecodeError as exc:
             line = data.count(b"\n", 0, exc.start) + 1
             raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=line) from None
-    if not data or data.isspace():
-        raise InputFileError(path, "the file is empty")
-    head, starts = split_head(data, head_lines)
-    return Text(data, head, starts)
+    return data
 
 
 def newlines(data: bytes) -> bytes:
@@ -377,7 +398,30 @@ def _converted(
         )
     if decimal == "," and not integer:
         cells = pc.replace_substring(cells, ",", ".")
-    return pc.cast(cells, kind)
+    values = pc.cast(cells, kind)
+    if not integer:
+        _refuse_overflow(path, strings, values, rows, column)
+    return values
+
+
+def _refuse_overflow(
+    path: Path, strings: pa.Array, values: pa.Array, rows: Rows, column: str
+) -> None:
+    """A decimal number too large for a float (``1e999``, 400 digits) is ±inf: an error
+    naming its line and column, as a ``nan`` cell is."""
+    infinite = np.flatnonzero(pc.fill_null(pc.is_inf(values), False).to_numpy(zero_copy_only=False))
+    if not len(infinite):
+        return
+    first = int(infinite[0])
+    text = str(strings[first].as_py()).strip()
+    shown = text if len(text) <= 40 else f"{text[:20]}…{text[-10:]} ({len(text)} characters)"
+    raise InputFileError(
+        path,
+        f"expected a finite number, got {shown!r}: too large for a 64-bit float (±inf)"
+        + (f"; {len(infinite)} such cells" if len(infinite) > 1 else ""),
+        line=rows.line(first),
+        column=column,
+    )
 
 
 def _blank_to_null(strings: Any) -> Any:

@@ -17,6 +17,7 @@ a stage's output contract is fixed).
 from __future__ import annotations
 
 import csv
+import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -175,7 +176,10 @@ def _value(path: Path, spec: ColumnSpec, cell: str, factor: float, line: int) ->
         return None
     try:
         if pa.types.is_floating(spec.type):
-            return float(text) * factor
+            value = float(text) * factor
+            if spec.finite and not math.isfinite(value):
+                raise InputFileError(path, f"not a finite number: {text!r}", line, spec.name)
+            return value
         if pa.types.is_integer(spec.type):
             return int(text)
         if pa.types.is_boolean(spec.type):

@@ -26,6 +26,7 @@ import pyarrow.compute as pc
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.contracts import NORTH_KEY
+from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
@@ -165,7 +166,7 @@ def summarize(
     trajectory = tables["trajectory"]
     Trajectory.validate_table(trajectory)
     if trajectory.num_rows == 0:
-        raise ValueError("the trajectory has no stations")
+        raise EmptyTableError("trajectory", "a survey summary needs at least one station")
     north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
     return SurveySummary(
         gyropipe=__version__,

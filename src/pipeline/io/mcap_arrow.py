@@ -41,7 +41,14 @@ from mcap.writer import CompressionType, Writer
 from pydantic import ValidationError
 
 from pipeline.contracts import UNIT_KEY
-from pipeline.io.mcap_records import McapFile, iter_payloads, messages_of
+from pipeline.io.mcap_records import (
+    McapFile,
+    Messages,
+    describe,
+    iter_messages,
+    iter_payloads,
+    messages_of,
+)
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
@@ -267,14 +274,14 @@ def arrow_schema(file: McapFile, channel: Channel) -> pa.Schema:
 def arrow_batches(file: McapFile, channel: Channel, schema: pa.Schema) -> pa.Table:
     """The record batches of a batched channel as one table of ``schema`` (zero-copy)."""
     batches = []
-    for block, rows in messages_of(file, channel.id):
-        for row in rows.tolist():
-            try:
-                batches.append(pa.ipc.read_record_batch(pa.py_buffer(block.payload(row)), schema))
-            except (pa.ArrowException, ValueError) as exc:
-                raise file.fail(
-                    f"topic {channel.topic}: bad Arrow batch ({block.locate(row)}): {exc}"
-                ) from None
+    for index, block, row in iter_messages(messages_of(file, channel.id)):
+        try:
+            batch = pa.ipc.read_record_batch(pa.py_buffer(block.payload(row)), schema)
+            batch.validate()  # buffer sizes agree with the lengths (cheap, not the values)
+        except (pa.ArrowException, ValueError, OSError, EOFError) as exc:
+            # OSError: a payload cut short; EOFError: an empty one
+            raise file.fail(f"{block.describe(row, index)}: bad Arrow batch: {exc}") from None
+        batches.append(batch)
     return pa.Table.from_batches(batches, schema=schema)
 
 
@@ -285,16 +292,21 @@ def _marker_columns(
     n = table.num_rows
     if n == 0 or not markers:
         return {name: pa.chunked_array([], pa.int64()) for name in markers}
-    events = _marker_events(file, markers)
+    events, messages = _marker_events(file, markers)
     rows = np.array([e["row"] for e in events], dtype=np.int64)
     if not (rows[0] == 0 and (np.diff(rows) > 0).all() and rows[-1] < n):
-        raise file.fail(f"{MARKERS_TOPIC}: event rows must increase from 0 within {n} samples")
+        wrong = np.flatnonzero(np.diff(rows) <= 0) + 1
+        first = 0 if rows[0] != 0 else int(wrong[0]) if len(wrong) else len(rows) - 1
+        raise file.fail(
+            f"{describe(messages, first)}: event rows must increase from 0 within {n} "
+            f"samples, got row {int(rows[first])}"
+        )
     times = _values_at(table.column("time"), rows)
     stated = np.array([e["time"] for e in events], dtype=np.float64)
     if not np.array_equal(times, stated):
         bad = int(np.flatnonzero(times != stated)[0])
         raise file.fail(
-            f"{MARKERS_TOPIC}: event {bad} says time {stated[bad]!r} at row {rows[bad]}, "
+            f"{describe(messages, bad)}: event says time {stated[bad]!r} at row {rows[bad]}, "
             f"the sample's time is {times[bad]!r}"
         )
     lengths = np.diff(np.append(rows, n)).tolist()
@@ -327,12 +339,14 @@ def _runs(values: list[int | None], lengths: list[int]) -> pa.ChunkedArray:
     return pa.chunked_array(chunks, pa.int64())
 
 
-def _marker_events(file: McapFile, markers: list[str]) -> list[dict[str, Any]]:
-    """The marker events, checked: {"row": int, "time": number, marker: int | null}."""
+def _marker_events(file: McapFile, markers: list[str]) -> tuple[list[dict[str, Any]], Messages]:
+    """The marker events, checked: {"row": int, "time": number, marker: int | null}; and
+    their messages."""
     channels = [c for c in file.channels.values() if c.topic == MARKERS_TOPIC]
     if len(channels) != 1:
         raise file.fail(f"expected one {MARKERS_TOPIC} channel, found {len(channels)}")
-    payloads = list(iter_payloads(messages_of(file, channels[0].id)))
+    messages = messages_of(file, channels[0].id)
+    payloads = list(iter_payloads(messages))
     try:  # one parse of all events; message by message only to name a bad one
         events = json.loads(b"[" + b",".join(data for data, _, _ in payloads) + b"]")
     except ValueError:
@@ -342,7 +356,7 @@ def _marker_events(file: McapFile, markers: list[str]) -> list[dict[str, Any]]:
         try:
             event = events[index] if events is not None else json.loads(data)
         except (ValueError, IndexError) as exc:
-            raise file.fail(f"{MARKERS_TOPIC} ({located}): not one JSON event: {exc}") from None
+            raise file.fail(f"{located}: not one JSON event: {exc}") from None
         if (
             not isinstance(event, dict)
             or event.keys() != expected
@@ -350,7 +364,7 @@ def _marker_events(file: McapFile, markers: list[str]) -> list[dict[str, Any]]:
             or type(event["time"]) not in (float, int)
             or not all(event[m] is None or type(event[m]) is int for m in markers)
         ):
-            raise file.fail(f"{MARKERS_TOPIC} ({located}): expected an event {sorted(expected)}")
+            raise file.fail(f"{located}: expected an event {sorted(expected)}")
     if events is None or len(events) != len(payloads) or not events:
         raise file.fail(f"{MARKERS_TOPIC}: expected one JSON event per message, from row 0")
-    return list(events)
+    return list(events), messages

@@ -35,7 +35,14 @@ from mcap.records import Channel, Schema
 
 from pipeline.errors import UnitError
 from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
-from pipeline.io.mcap_records import MESSAGE_HEAD, McapFile, Messages, count, iter_payloads
+from pipeline.io.mcap_records import (
+    MESSAGE_HEAD,
+    McapFile,
+    Messages,
+    count,
+    describe,
+    iter_payloads,
+)
 from pipeline.io.mnemonics import CURVES, canonical_name
 from pipeline.units import conversion_factor
 
@@ -189,8 +196,9 @@ def checked_leaves(
     object with exactly the first message's keys, every value a number."""
     keys: list[str] | None = None
     values: list[list[float]] = []
-    for index, (message, _, located) in enumerate(rows):
-        at = f"{where}, message {index} ({located})"
+    places: list[str] = []
+    for message, _, at in rows:
+        places.append(at)
         if isinstance(message, _Invalid):
             raise file.fail(f"{at}: {message.reason}")
         if not isinstance(message, dict):
@@ -223,8 +231,19 @@ def checked_leaves(
         try:
             leaves[key] = _numbers(array[:, i])
         except OverflowError:
-            raise file.fail(f"{where}: key {key!r} has a number too large for float64") from None
+            row = next(j for j, v in enumerate(array[:, i]) if _too_large(v))
+            raise file.fail(
+                f"{places[row]}: key {key!r} has a number too large for float64"
+            ) from None
     return leaves
+
+
+def _too_large(value: Any) -> bool:
+    try:
+        float(value)
+    except OverflowError:
+        return True
+    return False
 
 
 def _numbers(column: np.ndarray) -> np.ndarray:
@@ -290,7 +309,7 @@ def mapped(
         values = leaves[key]
         quantity = CURVES[canonical].quantity
         if canonical in INTEGER_COLUMNS:
-            columns[canonical] = _integers(file, where, key, values)
+            columns[canonical] = _integers(file, messages, key, values)
         elif canonical == "time" and values.dtype == np.int64:  # protobuf Timestamp: ns
             columns[canonical] = values
         else:
@@ -321,12 +340,13 @@ def _auto_name(key: str, values: np.ndarray) -> str | None:
     return name if name in SAMPLE_COLUMNS else None
 
 
-def _integers(file: McapFile, where: str, key: str, values: np.ndarray) -> np.ndarray:
+def _integers(file: McapFile, messages: Messages, key: str, values: np.ndarray) -> np.ndarray:
+    """``values`` (one per message) as integers; a fraction names its message."""
     integral = (np.abs(values) < 2.0**63) & (values == np.round(values))
     if not integral.all():
         row = int(np.flatnonzero(~integral)[0])
         raise file.fail(
-            f"{where}, message {row}: key {key!r} is {float(values[row])!r}, not an integer"
+            f"{describe(messages, row)}: key {key!r} is {float(values[row])!r}, not an integer"
         )
     ints: np.ndarray = values.astype(np.int64)
     return ints

@@ -56,6 +56,8 @@ class Block:
     size: np.ndarray
     channel: np.ndarray
     log_time: np.ndarray
+    channels: dict[int, Channel] = field(default_factory=dict)
+    """the file's channels by id (for the topic of a message)"""
 
     def payload_start(self, rows: np.ndarray) -> np.ndarray:
         """Offsets in ``data`` of the message data of messages ``rows``."""
@@ -69,8 +71,22 @@ class Block:
         return view
 
     def locate(self, row: int) -> str:
-        """Where message ``row`` is, for error messages."""
+        """Where message ``row`` is in the file, for error messages."""
         return f"{self.where}, record at offset {int(self.pos[row])}"
+
+    def describe(self, row: int, index: int) -> str:
+        """Message ``row``, the ``index``-th of its channel, for error messages: its index,
+        log time, topic and place in the file."""
+        channel = self.channels.get(int(self.channel[row]))
+        topic = channel.topic if channel is not None else f"channel {int(self.channel[row])}"
+        seconds = _seconds(int(self.log_time[row]))
+        return f"message {index} (log time {seconds} s, topic {topic}; {self.locate(row)})"
+
+
+def _seconds(ns: int) -> str:
+    """Integer ns as exact decimal seconds: ``1.25``, ``100``, ``1763700000.060000777``."""
+    whole, frac = divmod(ns, 1_000_000_000)
+    return f"{whole}.{frac:09d}".rstrip("0").rstrip(".")
 
 
 Messages = list[tuple[Block, np.ndarray]]
@@ -257,7 +273,8 @@ def _block(file: McapFile, data: np.ndarray, where: str, pos: np.ndarray) -> Blo
     if len(short):
         raise file.fail(f"{where}: Message record at offset {pos[short[0]]} is too short")
     channel = data[pos + 9].astype(np.uint16) | (data[pos + 10].astype(np.uint16) << 8)
-    return Block(data, where, pos, size, channel, _gather_u64(data, pos + 9 + 6))
+    log_time = _gather_u64(data, pos + 9 + 6)
+    return Block(data, where, pos, size, channel, log_time, file.channels)
 
 
 def _gather_u64(data: np.ndarray, at: np.ndarray) -> np.ndarray:
@@ -355,8 +372,25 @@ def count(messages: Messages) -> int:
     return sum(len(rows) for _, rows in messages)
 
 
-def iter_payloads(messages: Messages) -> Iterator[tuple[bytes, int, str]]:
-    """(data, log time ns, location) of each message."""
+def iter_messages(messages: Messages) -> Iterator[tuple[int, Block, int]]:
+    """(index in the channel, block, row in the block) of each message."""
+    index = 0
     for block, rows in messages:
         for row in rows.tolist():
-            yield block.payload(row).tobytes(), int(block.log_time[row]), block.locate(row)
+            yield index, block, row
+            index += 1
+
+
+def describe(messages: Messages, index: int) -> str:
+    """The ``index``-th message of a channel, for error messages (:meth:`Block.describe`)."""
+    for block, rows in messages:
+        if index < len(rows):
+            return block.describe(int(rows[index]), index)
+        index -= len(rows)
+    raise IndexError(index)
+
+
+def iter_payloads(messages: Messages) -> Iterator[tuple[bytes, int, str]]:
+    """(data, log time ns, description: index, log time, topic, place) of each message."""
+    for index, block, row in iter_messages(messages):
+        yield block.payload(row).tobytes(), int(block.log_time[row]), block.describe(row, index)

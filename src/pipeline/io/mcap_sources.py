@@ -109,7 +109,7 @@ def _ros(file: McapFile, channel: Channel, schema: Schema, messages: Messages) -
     imu = schema.name == IMU
     fields = ("angular_velocity", "linear_acceleration") if imu else ("magnetic_field",)
     stamps, log_times, rows = [], [], []
-    for index, (data, log_time, located) in enumerate(iter_payloads(messages)):
+    for data, log_time, located in iter_payloads(messages):
         try:
             message = decoder(data)
             stamp = message.header.stamp
@@ -117,7 +117,7 @@ def _ros(file: McapFile, channel: Channel, schema: Schema, messages: Messages) -
             vectors = [getattr(message, name) for name in fields]
             rows.append([float(getattr(v, axis)) for v in vectors for axis in "xyz"])
         except Exception as exc:  # CDR decoding of a corrupt payload raises assorted errors
-            raise file.fail(f"{where}, message {index} ({located}): bad CDR: {exc}") from None
+            raise file.fail(f"{located}: bad CDR: {exc}") from None
         log_times.append(log_time)
     values = np.array(rows, dtype=np.float64)
     time = np.array(stamps if any(stamps) else log_times, dtype=np.int64)
@@ -193,11 +193,14 @@ def _joined(
     hit[hit] = base.time[at[hit]] == other.time[hit]
     if not hit.all() or len(np.unique(at)) != len(at):
         missed = int((~hit).sum()) or len(at) - len(np.unique(at))
+        shared = np.flatnonzero(np.diff(at) == 0) + 1
+        first = int(np.flatnonzero(~hit)[0]) if not hit.all() else int(shared[0])
         raise InputFileError(
             path,
             f"{missed} of {len(at)} samples of topic {other.topic!r} have no sample of "
-            f"{base.topic!r} at the same time (or share one); set the option "
-            "join: interpolate to interpolate them at its times",
+            f"{base.topic!r} at the same time (or share one), the first at time "
+            f"{float(times[first])!r} s; set the option join: interpolate to interpolate them "
+            "at its times",
         )
     present = np.zeros(len(base.time), dtype=bool)
     present[at] = True

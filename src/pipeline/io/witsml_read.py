@@ -8,6 +8,7 @@ documents attack their readers).
 from __future__ import annotations
 
 import datetime as dt
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -277,6 +278,13 @@ def _measure(path: Path, node: Node, quantity: str) -> float:
             line=node.line,
             column=node.name,
         ) from None
+    if not math.isfinite(value):
+        raise InputFileError(
+            path,
+            f"<{node.name}> {node.text.strip()!r} is not a finite number",
+            line=node.line,
+            column=node.name,
+        )
     try:
         return value * uom_factor(uom, quantity)
     except UnitError as exc:

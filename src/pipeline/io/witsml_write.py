@@ -12,6 +12,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.errors import EmptyTableError
 from pipeline.io.witsml_terms import (
     AZI_REF,
     CALC_ALGORITHM,
@@ -67,7 +68,10 @@ _XML_CHARS = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]"
 
 def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` (md, inc, azi and any of the trajectory columns) as a WITSML 1.4.1.1
-    ``trajectorys`` document; raises ``ValueError`` for what WITSML cannot hold."""
+    ``trajectorys`` document; raises ``ValueError`` for what WITSML cannot hold (a
+    trajectory without stations among it)."""
+    if table.num_rows == 0:
+        raise EmptyTableError("trajectory", "a WITSML trajectory needs at least one station")
     values = _station_values(table)
     north = _north(table)
     well_name = _name(well.well or UNNAMED, "well name")

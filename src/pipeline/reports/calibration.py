@@ -51,7 +51,13 @@ def calibration_document(
 ) -> Document:
     """The calibration report of every instrument in a calibrate_drift result."""
     if result.num_rows == 0 or series.num_rows == 0:
-        raise ReportInputError("the calibration result is empty: nothing to report")
+        empty = "result" if result.num_rows == 0 else "series"
+        raise ReportInputError(
+            f"the calibration {empty} table has no rows (the stage that produced it gave "
+            "none): nothing to report"
+        )
+    if readings is not None and readings.num_rows == 0:
+        readings = None  # wired but empty: the report as without readings
     instruments = list(dict.fromkeys(result.column("instrument").to_pylist()))
     owner = _reading_owner(readings, instruments) if readings is not None else None
     sections = [

@@ -4,6 +4,7 @@ run produced its tables."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import partial
 
@@ -93,7 +94,10 @@ def survey_document(
     """The survey report of one well."""
     traj = tables.trajectory
     if traj.num_rows == 0:
-        raise ReportInputError("the trajectory has no stations: nothing to report")
+        raise ReportInputError(
+            "the trajectory table has no rows (the stage that produced it gave none): "
+            "no stations to report"
+        )
     md, tvd = _col(traj, "md"), _col(traj, "tvd")
     north, east, vs = _col(traj, "north"), _col(traj, "east"), _col(traj, "vertical_section")
     ref = north_label(traj, "azi")
@@ -125,9 +129,11 @@ def survey_document(
     groups = all_series(src)
     if groups:
         sections.append(_qc(groups))
-    if tables.drift is not None or tables.calibration is not None:
-        sections.append(_drift(tables))
-    if tables.allan is not None:
+    if _rows(tables.drift) or _rows(tables.calibration):
+        drift = tables.drift if _rows(tables.drift) else None
+        calibration = tables.calibration if _rows(tables.calibration) else None
+        sections.append(_drift(dataclasses.replace(tables, drift=drift, calibration=calibration)))
+    if tables.allan is not None and _rows(tables.allan):
         sections.append(_allan(tables.allan, tables.noise))
     sections.append(provenance_section(provenance))
     subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
@@ -407,6 +413,11 @@ def _qc(groups: list[tuple[str, list[plots.QcSeries]]]) -> Section:
             )
         )
     return Section("Quality control", tuple(blocks), key="qc")
+
+
+def _rows(table: pa.Table | None) -> int:
+    """Rows of an optional table (0 when absent): an empty one makes no section."""
+    return 0 if table is None else table.num_rows
 
 
 def _drift(tables: SurveyTables) -> Section:

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
 from pipeline.earth.site import resolve_site
+from pipeline.errors import GyropipeError
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import CompassOptions, NoStationSolved, compass
+from pipeline.gyrocompass.solve import CompassOptions, compass
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
@@ -17,20 +19,47 @@ from pipeline.tables import CompassRejects, CompassStations, PositionReadings, R
 def readings_stage(
     inputs: Mapping[str, pa.Table], params: ReadingOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Average each station's frame positions (transients trimmed)."""
-    return {"readings": position_readings(inputs["samples"], params)}
+    """Average each station's frame positions (transients trimmed); no samples, no readings."""
+    samples = inputs["samples"]
+    if samples.num_rows == 0:
+        return {"readings": PositionReadings.compiled().schema().empty_table()}
+    return {"readings": position_readings(samples, params)}
 
 
 def compass_stage(
     inputs: Mapping[str, pa.Table], params: CompassOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Solve inclination, azimuth and toolfaces of every station; none solved is an error
-    naming why (a units mistake rejects every station)."""
+    """Solve inclination, azimuth and toolfaces of every station. No readings give no
+    stations; readings of which every station is rejected are an error giving the reasons
+    (else they would be found only in ``rejects`` after a later stage's failure)."""
+    readings = inputs["readings"]
+    if readings.num_rows == 0:
+        return {
+            "stations": CompassStations.compiled().schema(north_reference="true").empty_table(),
+            "rejects": CompassRejects.compiled().schema().empty_table(),
+        }
     site = resolve_site(ctx.well, stage="compass", latitude=params.latitude)
-    stations, rejects = compass(inputs["readings"], site.latitude, params)
-    if stations.num_rows == 0 and rejects.num_rows:
-        raise NoStationSolved(rejects)
+    stations, rejects = compass(readings, site.latitude, params)
+    if stations.num_rows == 0:
+        raise AllRejectedError(rejects)
     return {"stations": stations, "rejects": rejects}
+
+
+class AllRejectedError(GyropipeError):
+    """Compassing rejected every station: the reasons, with how many stations each (the
+    first few; a units mistake gives every station its own numbers)."""
+
+    SHOWN = 3
+
+    def __init__(self, rejects: pa.Table) -> None:
+        self.rejects = rejects
+        reasons = Counter(rejects.column("reason").to_pylist()).most_common()
+        shown = "; ".join(f"{count}× {reason}" for reason, count in reasons[: self.SHOWN])
+        more = f"; and {len(reasons) - self.SHOWN} more" if len(reasons) > self.SHOWN else ""
+        super().__init__(
+            f"compass rejected all {rejects.num_rows} stations, so its stations table would "
+            f"have no rows: {shown}{more}"
+        )
 
 
 @hookimpl

@@ -13,6 +13,7 @@ from pipeline.continuous import (
     integrate_continuous,
 )
 from pipeline.earth.site import resolve_site
+from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.tables import CompassStations, RawSamples
@@ -22,6 +23,10 @@ def continuous_stage(
     inputs: Mapping[str, pa.Table], params: ContinuousOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Integrate the azimuth of the moving run; close it on the end stop."""
+    if inputs["samples"].num_rows == 0:
+        raise EmptyTableError("samples", "a continuous run needs samples")
+    if inputs["stops"].num_rows == 0:
+        raise EmptyTableError("stops", "the run starts and closes on compassed stops")
     site = resolve_site(ctx.well, stage="integrate_continuous", latitude=params.latitude)
     result = integrate_continuous(inputs["samples"], inputs["stops"], site.latitude, params)
     misclosure = f"{result.misclosure:.6g}".encode()

@@ -32,6 +32,7 @@ from pipeline.drift.tables import (
     NoiseParameters,
 )
 from pipeline.earth.site import resolve_site
+from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.stages.files import read_stage_def
@@ -42,6 +43,8 @@ def calibrate_stage(
     inputs: Mapping[str, pa.Table], params: CalibrationOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Calibration readings → drift estimates and series means per instrument."""
+    if inputs["readings"].num_rows == 0:
+        raise EmptyTableError("calibration readings", "a drift calibration needs readings")
     result, series = calibrate(inputs["readings"], params, ctx.well.tool_serial)
     return {"result": result, "series": series}
 
@@ -50,6 +53,10 @@ def correct_stage(
     inputs: Mapping[str, pa.Table], params: CorrectionOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Free-gyro readings → drift-corrected readings, stations and in/out QC."""
+    if inputs["readings"].num_rows == 0:
+        raise EmptyTableError("free-gyro readings", "there is nothing to correct")
+    if "calibration" in inputs and inputs["calibration"].num_rows == 0:
+        raise EmptyTableError("calibration result", "it gives no drift rate")
     source = params.source
     if source == "auto":
         source = (
@@ -79,6 +86,8 @@ def allan_stage(
     inputs: Mapping[str, pa.Table], params: AllanOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Static raw samples → Allan deviations, noise terms and the recommended dwell."""
+    if inputs["samples"].num_rows == 0:
+        raise EmptyTableError("samples", "an Allan analysis needs a static record")
     site = resolve_site(ctx.well, stage="allan", latitude=params.latitude)
     allan, noise, dwell = analyse_static(inputs["samples"], params, site.latitude)
     return {"allan": allan, "noise": noise, "dwell": dwell}

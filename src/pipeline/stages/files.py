@@ -25,6 +25,7 @@ from pydantic_core import InitErrorDetails
 
 from pipeline.contracts import TableContract
 from pipeline.errors import WrongKindError
+from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import (
     Registry,
@@ -96,7 +97,7 @@ class WriteParams(BaseModel):
     writer: Annotated[str, registered("writer")] = Field(
         description="writer name (csv, parquet, …)"
     )
-    filename: str | None = Field(
+    filename: OutputFilename | None = Field(
         None, description="output file name; default '<stage id>.<writer extension>'"
     )
 

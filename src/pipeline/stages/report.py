@@ -24,6 +24,7 @@ from pipeline.drift.tables import (
     InOutQc,
     NoiseParameters,
 )
+from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.registry import StageContext, StageDef
@@ -32,17 +33,14 @@ from pipeline.tables import CheckResults, Stations, Trajectory
 if TYPE_CHECKING:
     from pipeline.reports.document import Document
 
-FILENAME = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
-
 
 class ReportParams(BaseModel):
     """Parameters of the report stages."""
 
     model_config = ConfigDict(extra="forbid")
     title: str | None = Field(None, description="report title (default: the stage's own)")
-    filename: str | None = Field(
+    filename: OutputFilename | None = Field(
         None,
-        pattern=FILENAME,
         description="base file name: <filename>.html, <filename>.pdf (default: the stage id)",
     )
     formats: list[Literal["html", "pdf"]] = Field(

@@ -70,8 +70,10 @@ def survey_method(
     stations = inputs["stations"]
     columns = trajectory_columns(stations, params, params.method)
     md, inc, azi = station_angles(stations)
-    build, turn = build_turn_rates(
-        md, np.radians(inc), np.radians(azi), offsets=survey_offsets(stations)
+    build, turn = (
+        build_turn_rates(md, np.radians(inc), np.radians(azi), offsets=survey_offsets(stations))
+        if stations.num_rows
+        else (np.empty(0), np.empty(0))
     )
     table = MethodTrajectory.compiled().make_table(
         columns | {"build": build, "turn": turn},

@@ -37,7 +37,15 @@ class MinCurveParams(BaseModel):
 def trajectory_columns(
     stations: pa.Table, params: MinCurveParams, method: Method = "minimum_curvature"
 ) -> dict[str, object]:
-    """Trajectory columns of every survey of ``stations`` by ``method``, in one call."""
+    """Trajectory columns of every survey of ``stations`` by ``method``, in one call (none
+    of no stations: an empty table is a legal stage output)."""
+    if stations.num_rows == 0:
+        empty: dict[str, object] = {
+            c.name: np.empty(0) for c in Trajectory.compiled().columns if c.required
+        }
+        if "survey" in stations.column_names:
+            empty = {"survey": stations.column("survey"), **empty}
+        return empty
     md, inc_deg, azi_deg = station_angles(stations)
     offsets = survey_offsets(stations)
     tie_tvd = md[offsets[:-1]] if params.tie_tvd is None else params.tie_tvd

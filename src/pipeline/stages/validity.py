@@ -41,8 +41,14 @@ def station_stage(
 def window_stage(
     inputs: Mapping[str, pa.Table], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Check continuous samples on sliding windows; list magnetic anomaly intervals."""
+    """Check continuous samples on sliding windows; list magnetic anomaly intervals (none of
+    no samples)."""
     samples = inputs["samples"]
+    if samples.num_rows == 0:
+        return {
+            "qc": QcResults.compiled().schema().empty_table(),
+            "anomalies": MagneticAnomalies.compiled().schema().empty_table(),
+        }
     site = resolve_site(ctx.well, stage="window_checks", param=None, field=_has_field(samples))
     qc = with_references(
         window_checks(samples, site, params), site, params, field=_has_field(samples)

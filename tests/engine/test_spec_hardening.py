@@ -1,0 +1,302 @@
+"""Hardening of pipeline loading (fuzz findings): wrong-typed fields anywhere are located
+problems, never a traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from pipeline.errors import InputFileError, SpecError
+from pipeline.graph import build_plan
+from pipeline.io.csv_options import load_profile
+from pipeline.sim.spec import load_simulation
+from pipeline.spec import load_spec
+from pipeline.yamlsource import MAX_NODES
+from tests_support import gyropipe
+
+WRONG: list[Any] = [[], ["x"], {}, {"a": [1]}, 1, 2.5, None, True, [[1]], [{"a": 1}]]
+"""Values of the wrong type for some field: lists, mappings, numbers, null."""
+
+BASE: dict[str, Any] = {
+    "name": "demo",
+    "version": "1",
+    "inputs": {"stations": {}},
+    "well": {"latitude": 50.0},
+    "defaults": {"with": {"vs_azimuth": 10.0}, "persist_format": "csv"},
+    "stages": [
+        {"id": "read", "uses": "read_stations", "with": {"input": "stations"}},
+        {
+            "id": "traj",
+            "uses": "minimum_curvature",
+            "description": "integrate",
+            "inputs": {"stations": "read.stations"},
+            "with": {"vs_azimuth": 45.0},
+            "persist": ["trajectory"],
+        },
+    ],
+}
+FIELDS: list[tuple[str | int, ...]] = [
+    ("name",),
+    ("version",),
+    ("inputs",),
+    ("inputs", "stations"),
+    ("well",),
+    ("well", "latitude"),
+    ("defaults",),
+    ("defaults", "with"),
+    ("defaults", "persist_format"),
+    ("stages",),
+    ("stages", 0),
+    *(("stages", 1, key) for key in ("id", "uses", "description", "inputs", "with", "persist")),
+    ("stages", 1, "inputs", "stations"),
+    ("stages", 1, "with", "vs_azimuth"),
+    ("stages", 1, "persist", 0),
+    ("stages", 0, "with", "input"),
+]
+
+
+def test_a_list_as_stage_id_is_a_located_problem_not_a_traceback(tmp_path: Path):
+    """6 of 1,000 mutated pipelines ended in ``TypeError: unhashable type: 'list'``."""
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {stations: {}}\n"
+        "stages: [{id: [], uses: read_stations, with: {input: stations}}]\n"
+    )
+    for extra in ([], ["--set", "read.x=1"]):
+        result = subprocess.run(
+            [*gyropipe(), "validate", str(path), *extra], capture_output=True, text=True
+        )
+        assert result.returncode == 2, result.stderr
+        assert f"{path}:4:15: stages.0.id: Input should be a valid string" in result.stderr
+        assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("field", FIELDS, ids=lambda f: ".".join(map(str, f)))
+def test_wrong_types_anywhere_are_located_problems(tmp_path: Path, registry, field):
+    for wrong in WRONG:
+        data = yaml.safe_load(yaml.safe_dump(BASE))
+        target = data
+        for key in field[:-1]:
+            target = target[key]
+        target[field[-1]] = wrong
+        path = tmp_path / "p.yaml"
+        path.write_text(yaml.safe_dump(data))
+        for overrides in ([], ["traj.vs_azimuth=1"], ["read.input=[1]"]):
+            try:
+                build_plan(load_spec(path, overrides), registry)
+            except SpecError as exc:
+                for problem in exc.problems:
+                    assert problem.location.line or problem.location.file.startswith("--set"), (
+                        wrong,
+                        problem,
+                    )
+
+
+# ------------------------------------------------------------------ alias bombs, nesting
+
+
+def laughs(levels: int = 9, width: int = 9, key: str = "stages") -> str:
+    """A "billion laughs" document: each level an anchored list of ``width`` aliases of
+    the level below; ``key`` takes the top level (line ``levels + 4``, column
+    ``len(key) + 3``)."""
+    lines = ["name: p", "version: 1", "a0: &a0 [" + ", ".join(["x"] * width) + "]"]
+    for i in range(1, levels + 1):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * width) + "]")
+    lines.append(f"{key}: *a{levels}")
+    return "\n".join(lines) + "\n"
+
+
+def test_alias_bomb_is_refused_at_once(tmp_path: Path):
+    """Nine levels of nine aliases grew ``validate`` to 387 MB and past 60 s."""
+    path = tmp_path / "laughs.yaml"
+    path.write_text(laughs())
+    start = time.perf_counter()
+    with pytest.raises(SpecError) as info:
+        load_spec(path)
+    assert time.perf_counter() - start < 1.0
+    (problem,) = info.value.problems
+    assert str(problem.location) == f"{path}:13:9"
+    assert "aliases expand the document to" in problem.message
+    assert f"more than {MAX_NODES:,}" in problem.message
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_alias_bomb_is_refused_by_the_cli(tmp_path: Path, command: str):
+    path = tmp_path / "laughs.yaml"
+    path.write_text(laughs())
+    extra = ["--input", f"s={path}", "--out", str(tmp_path / "out")] if command == "run" else []
+    result = subprocess.run(
+        [*gyropipe(), command, str(path), *extra], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    assert f"{path}:13:9: aliases expand the document" in result.stderr
+
+
+def test_alias_bomb_in_a_simulation_plan_and_a_csv_profile(tmp_path: Path):
+    plan = tmp_path / "plan.yaml"
+    plan.write_text(laughs(key="survey"))
+    start = time.perf_counter()
+    with pytest.raises(SpecError, match=r"plan.yaml:13:9: aliases expand"):
+        load_simulation(plan)
+    assert time.perf_counter() - start < 1.0
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "sim")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2 and f"{plan}:13:9: aliases expand" in result.stderr
+    profile = tmp_path / "profile.yaml"
+    profile.write_text(laughs(key="aliases").replace("name: p\nversion: 1\n", ""))
+    with pytest.raises(InputFileError, match=r"profile.yaml:11:10: aliases expand"):
+        load_profile(profile)
+
+
+def test_a_moderate_alias_is_fine_and_located_at_its_anchor(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {s: {}}\nstages:\n"
+        "  - id: read\n    uses: read_stations\n    with: &w {input: s}\n"
+        "  - id: again\n    uses: read_stations\n    with: *w\n"
+    )
+    plan = build_plan(load_spec(path), registry)
+    assert [s.id for s in plan.stages] == ["read", "again"]
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "message"),
+    [
+        ("stages: &a [*a]\n", "3:13", "alias inside the node it refers to"),
+        ("stages: &a {x: [*a]}\n", "3:17", "alias inside the node it refers to"),
+        ("stages: " + "[" * 500 + "]" * 500 + "\n", "3:108", "nested deeper than 100 levels"),
+        (
+            "".join(f"a{i}: &a{i} [*a{i - 1}]\n" if i else "a0: &a0 [x]\n" for i in range(120))
+            + "stages: *a119\n",
+            "",
+            "nested deeper than 100 levels",
+        ),
+    ],
+    ids=["self-alias", "alias-in-mapping", "deep-brackets", "deep-alias-chain"],
+)
+def test_recursive_and_deep_documents_are_located_problems(
+    tmp_path: Path, text: str, where: str, message: str
+):
+    """These ended in RecursionError tracebacks."""
+    path = tmp_path / "p.yaml"
+    path.write_text("name: p\nversion: 1\n" + text)
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr and f"{path}:{where}" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_set_values_have_the_same_limits(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {s: {}}\n"
+        "stages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    bomb = "{" + laughs(5).replace("\n", ", ").replace("stages: ", "z: ").rstrip(", ") + "}"
+    bomb = bomb.replace("name: p, version: 1, ", "")
+    with pytest.raises(SpecError) as info:
+        build_plan(load_spec(path, [f"read.options={bomb}", "read.options=[1"]), registry)
+    found = [str(p) for p in info.value.problems]
+    assert found[0].startswith("--set read.options={a0") and ": value: aliases expand" in found[0]
+    assert "value: malformed YAML" in found[1]
+
+
+# ------------------------------------------------------------------ every problem at once
+
+
+ALL_AT_ONCE = """\
+name: not a name
+inputs: {stations: {}}
+stages:
+  - id: read
+    uses: read_stations
+  - id: traj
+    uses: minimum_curvatur
+    inputs: {stations: read}
+  - id: out
+    uses: write
+  - id: read
+    uses: write
+    inputs: {table: read}
+    with: {writer: nope, filename: ../x.csv}
+  - id: broken
+    uses: [write]
+  - id: after
+    uses: write
+    inputs: {table: broken}
+    with: {writer: csv, colour: red}
+"""
+
+
+def test_validate_reports_every_problem_in_one_pass(tmp_path: Path):
+    """`validate` used to stop at the first shape error (a missing `version`), and never
+    checked the params of a stage whose id is a duplicate."""
+    path = tmp_path / "p.yaml"
+    path.write_text(ALL_AT_ONCE)
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    found = [line.strip() for line in result.stderr.splitlines()[1:]]
+    expected = [
+        "1:7: name: String should match pattern",  # shape problems first
+        "16:11: stages.4.uses: Input should be a valid string",
+        "7:11: unknown stage 'minimum_curvatur'; did you mean 'minimum_curvature'?",
+        "11:9: duplicate stage id 'read'",
+        "9:5: stage 'out' (write): missing required field 'writer'",  # not wired, no params
+        "9:5: stage 'out' (write): input port 'table' is not wired",
+        "14:20: stage 'read' (write): writer: Value error, no writer named 'nope'",
+        "14:36: stage 'read' (write): filename: Value error, a path",
+        "20:25: stage 'after' (write): unknown field 'colour'",
+    ]
+    assert len(found) == len(expected), result.stderr
+    for line, start in zip(found, expected, strict=True):
+        assert line.startswith(f"{path}:{start}"), (line, start)
+    # the input wired to the stage of invalid shape is not reported again
+    assert "no stage with id 'broken'" not in result.stderr
+
+
+def test_version_is_optional(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\ninputs: {s: {}}\nstages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    plan = build_plan(load_spec(path), registry)
+    assert plan.spec.version == "1"
+    path.write_text(path.read_text().replace("name: p\n", "name: p\nversion: 2.5\n"))
+    assert build_plan(load_spec(path), registry).spec.version == "2.5"
+
+
+def test_invalid_inputs_block_does_not_make_every_read_stage_a_problem(tmp_path: Path, registry):
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\ninputs: [s]\nstages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    with pytest.raises(SpecError) as info:
+        build_plan(load_spec(path), registry)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:2:9: inputs: Input should be a valid dictionary"
+    ]
+
+
+def test_a_control_character_is_located(tmp_path: Path):
+    """PyYAML's reader error carries no mark: it was reported without a line."""
+    path = tmp_path / "p.yaml"
+    path.write_text("name: p\nstages:\n  - id: b\x01c\n")
+    with pytest.raises(SpecError) as info:
+        load_spec(path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:3:10: malformed YAML: character U+0001 is not allowed "
+        "(special characters are not allowed)"
+    ]

@@ -1,0 +1,187 @@
+"""MCAP reader hardening (fuzz findings): a message whose payload is cut short (container
+and CRCs intact) is a located error, not a traceback; every message-level error names the
+message's index, log time and topic. Test files are made with the mcap writer."""
+
+from __future__ import annotations
+
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+from test_mcap import UNITS, flat_messages, gyropipe_file, imu_values, read, write_json, write_ros
+
+from pipeline.errors import InputFileError
+from pipeline.io.mcap_arrow import (
+    ARROW_MESSAGE_ENCODING,
+    ARROW_SCHEMA_ENCODING,
+    MARKERS_KEY,
+    SAMPLES_SCHEMA,
+    SAMPLES_TOPIC,
+    start_writer,
+)
+from pipeline.tables import RawSamples
+from tests_support import gyropipe
+
+Mutate = Callable[[int, str, bytes], bytes]
+
+
+def samples_file(path: Path, cut: Callable[[bytes], bytes], rows: int = 30_000) -> None:
+    """gyropipe's own layout, 10,000-row batches logged at 0, 100, 200 s…, the payload of
+    message 1 passed through ``cut`` (the writer computes the CRCs of what it is given)."""
+    rng = np.random.default_rng(1)
+    columns = {"time": np.arange(rows) * 0.01}
+    columns |= {c: rng.normal(size=rows) for c in ("gyro_x", "acc_x", "acc_y", "acc_z")}
+    table = RawSamples.compiled().make_table(columns)
+    with path.open("wb") as fh:
+        writer = start_writer(fh)
+        schema = table.schema.with_metadata({MARKERS_KEY: b"[]"})
+        schema_id = writer.register_schema(
+            SAMPLES_SCHEMA, ARROW_SCHEMA_ENCODING, schema.serialize()
+        )
+        channel = writer.register_channel(SAMPLES_TOPIC, ARROW_MESSAGE_ENCODING, schema_id)
+        for i, batch in enumerate(table.to_batches(max_chunksize=10_000)):
+            data = batch.serialize().to_pybytes()
+            stamp = i * 100 * 10**9
+            writer.add_message(channel, stamp, cut(data) if i == 1 else data, stamp, i)
+        writer.finish()
+
+
+def rewritten(source: Path, target: Path, mutate: Mutate) -> None:
+    """``source`` copied message by message (uncompressed, fresh CRCs), each payload
+    passed through ``mutate(index in its topic, topic, data)``."""
+    with source.open("rb") as fh:
+        reader = make_reader(fh)
+        summary = reader.get_summary()
+        assert summary is not None
+        messages = list(reader.iter_messages())
+        metadata = list(reader.iter_metadata())
+    with target.open("wb") as out:
+        writer = Writer(out, compression=CompressionType.NONE)
+        writer.start()
+        schemas = {
+            sid: writer.register_schema(s.name, s.encoding, s.data)
+            for sid, s in summary.schemas.items()
+        }
+        channels = {
+            cid: writer.register_channel(
+                c.topic, c.message_encoding, schemas.get(c.schema_id, 0), c.metadata
+            )
+            for cid, c in summary.channels.items()
+        }
+        seen: dict[str, int] = {}
+        for _, channel, message in messages:
+            index = seen.get(channel.topic, 0)
+            seen[channel.topic] = index + 1
+            data = mutate(index, channel.topic, message.data)
+            writer.add_message(
+                channels[channel.id], message.log_time, data, message.publish_time, message.sequence
+            )
+        for record in metadata:
+            writer.add_metadata(record.name, record.metadata)
+        writer.finish()
+
+
+def test_a_payload_cut_short_is_a_located_error_through_convert(tmp_path: Path):
+    """Was ``OSError: Expected to be able to read 560000 bytes for message body, got
+    186378``, without saying where."""
+    path = tmp_path / "cut.mcap"
+    samples_file(path, lambda data: data[: len(data) // 3])
+    out = tmp_path / "out.parquet"
+    result = subprocess.run(
+        [*gyropipe(), "convert", str(path), str(out), "--kind", "samples"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    assert (
+        f"{path}: message 1 (log time 100 s, topic /gyropipe/samples; chunk at byte"
+    ) in result.stderr
+    assert "bad Arrow batch: Expected to be able to read" in result.stderr
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "cut",
+    [lambda d: b"", lambda d: d[:7], lambda d: d[: len(d) - 1]],
+    ids=["empty", "7-bytes", "one-short"],
+)
+def test_any_cut_of_an_arrow_payload_is_located(tmp_path: Path, cut: Callable[[bytes], bytes]):
+    path = tmp_path / "cut.mcap"
+    samples_file(path, cut)
+    with pytest.raises(InputFileError, match="bad Arrow batch") as info:
+        read(path)
+    assert "message 1 (log time 100 s, topic /gyropipe/samples;" in str(info.value)
+
+
+def test_json_ros_and_marker_errors_name_index_log_time_and_topic(tmp_path: Path):
+    json_path = tmp_path / "json.mcap"
+    write_json(json_path, flat_messages(imu_values(50)))
+    bad = tmp_path / "bad.mcap"
+    rewritten(json_path, bad, lambda i, topic, data: data[:5] if i == 12 else data)
+    with pytest.raises(InputFileError) as info:
+        read(bad, **UNITS)
+    assert "message 12 (log time 1700000000.12 s, topic /imu; chunk at byte" in str(info.value)
+    assert "not valid JSON" in str(info.value)
+
+    ros_path = tmp_path / "ros.mcap"
+    write_ros(ros_path, 20)
+    rewritten(
+        ros_path, bad, lambda i, topic, data: data[:10] if (i, topic) == (3, "/mag") else data
+    )
+    with pytest.raises(InputFileError) as info:
+        read(bad)
+    assert "message 3 (log time 1763700000.060000777 s, topic /mag;" in str(info.value)
+    assert "bad CDR" in str(info.value)
+
+    own, _ = gyropipe_file(tmp_path, rows=4000)
+    marked = tmp_path / "marked.mcap"
+    rewritten(
+        own,
+        marked,
+        lambda i, topic, data: b"{}" if (i, topic) == (1, "/gyropipe/markers") else data,
+    )
+    with pytest.raises(InputFileError) as info:
+        read(marked)
+    assert "message 1 (log time " in str(info.value) and "topic /gyropipe/markers;" in str(
+        info.value
+    )
+
+
+def test_every_payload_cut_of_every_channel_kind_is_a_located_error(tmp_path: Path):
+    """A small sweep: each message of each kind of channel cut to a third (CRCs intact)."""
+    own, _ = gyropipe_file(tmp_path, rows=25_000)
+    json_path = tmp_path / "json.mcap"
+    write_json(json_path, flat_messages(imu_values(8)))
+    ros_path = tmp_path / "ros.mcap"
+    write_ros(ros_path, 6)
+    bad = tmp_path / "bad.mcap"
+    failures = []
+    for source, options, count in ((own, {}, 3), (json_path, UNITS, 8), (ros_path, {}, 6)):
+        for target in range(count):
+            rewritten(
+                source,
+                bad,
+                lambda i, topic, data, target=target: (
+                    data[: len(data) // 3] if i == target else data
+                ),
+            )
+            with pytest.raises(InputFileError) as info:
+                read(bad, **options)
+            if f"message {target} (log time " not in str(info.value):
+                failures.append(str(info.value))
+    assert failures == []
+
+
+def test_an_arrow_table_with_a_cut_payload_is_refused_by_the_arrow_reader():
+    """The exception pyarrow raises for a cut payload is an OSError (the reader maps it)."""
+    batch = pa.record_batch({"x": np.arange(100.0)})
+    data = batch.serialize().to_pybytes()
+    with pytest.raises(OSError, match="Expected to be able to read"):
+        pa.ipc.read_record_batch(pa.py_buffer(data[: len(data) // 2]), batch.schema)
