@@ -253,7 +253,7 @@ def test_the_point_gyro_pipeline_stops_on_a_units_mistake(
     assert result.returncode == 1, result.stdout + result.stderr
     assert "Traceback" not in result.stderr
     assert "stage 'compass'" in result.stderr
-    assert "compass rejected all 9 stations, so its stations table would have no rows: 1× " in (
+    assert "compass rejected all 9 stations, so its stations table would have no rows: " in (
         result.stderr
     )
     assert f"{HINT} (they look like {unit})" in result.stderr
