@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 import click
-import yaml
 from pydantic import ValidationError
 
 from pipeline.atomic import atomic_path, atomic_write_bytes
@@ -30,6 +29,7 @@ from pipeline.runner import RunInputError, sha256_file
 from pipeline.spec import load_spec
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
+from pipeline.yamlsource import load_value
 
 FIELDS = tuple(WellMetadata.model_fields)
 
@@ -593,9 +593,9 @@ def _options(items: tuple[str, ...]) -> dict[str, object]:
         if not sep or not key.strip():
             raise click.BadParameter(f"--option {item!r}: expected KEY=VALUE")
         try:
-            values[key.strip()] = yaml.safe_load(value)
-        except yaml.YAMLError as exc:
-            raise click.BadParameter(f"--option {item!r}: value is not valid YAML: {exc}") from None
+            values[key.strip()] = load_value(value, f"--option {item}")
+        except SpecError as exc:
+            raise click.BadParameter("; ".join(map(str, exc.problems))) from None
     return values
 
 

@@ -151,7 +151,7 @@ def _params(
     except ValidationError as exc:
         problems += [
             Problem(p.location, f"stage {stage.id!r} ({stage.uses}): {p.message}")
-            for p in validation_problems(exc, ("stages", pos, "with"), source)
+            for p in validation_problems(exc, ("stages", pos, "with"), source, definition.params)
         ]
         return None
     for name, info in fields.items():

@@ -138,7 +138,11 @@ def parse_spec(text: str, file: str, overrides: list[str] | None = None) -> Load
         spec = PipelineSpec.model_validate(raw)
     except ValidationError as exc:
         reported = {p.location for p in problems}
-        problems += [p for p in validation_problems(exc, (), source) if p.location not in reported]
+        problems += [
+            p
+            for p in validation_problems(exc, (), source, PipelineSpec)
+            if p.location not in reported
+        ]
         return _salvaged(raw, source, problems, exc)
     return LoadedSpec(spec, source, raw, problems)
 

@@ -12,13 +12,14 @@ alias (or node), before anything is expanded.
 
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from pipeline.errors import Location, Problem, SpecError
+from pipeline.errors import Location, Problem, SpecError, did_you_mean
 
 PathKey = tuple[str | int, ...]
 M = TypeVar("M", bound=BaseModel)
@@ -117,19 +118,28 @@ def validate_located(
         return model.model_validate(raw)
     except ValidationError as exc:
         reported = {p.location for p in problems}
-        problems += [p for p in validation_problems(exc, (), source) if p.location not in reported]
+        problems += [
+            p for p in validation_problems(exc, (), source, model) if p.location not in reported
+        ]
         raise SpecError(problems) from None
 
 
-def validation_problems(exc: ValidationError, prefix: PathKey, source: SourceMap) -> list[Problem]:
-    """One problem per pydantic error, located at the YAML node it concerns."""
+def validation_problems(
+    exc: ValidationError,
+    prefix: PathKey,
+    source: SourceMap,
+    model: type[BaseModel] | None = None,
+) -> list[Problem]:
+    """One problem per pydantic error, located at the YAML node it concerns; an unknown
+    field of ``model`` (or of a model nested in it) gets a did-you-mean."""
     out = []
     for err in exc.errors():
         loc = tuple(p for p in err["loc"] if isinstance(p, str | int))
         path = prefix + loc
         where = ".".join(str(p) for p in loc) or "value"
         if err["type"] == "extra_forbidden":
-            message = f"unknown field {where!r}"
+            known = _field_names(model, loc[:-1]) if model is not None else ()
+            message = f"unknown field {where!r}{did_you_mean(str(loc[-1]), known)}"
             out.append(Problem(source.locate(path, key=True), message))
             continue
         if err["type"] == "missing":
@@ -140,6 +150,33 @@ def validation_problems(exc: ValidationError, prefix: PathKey, source: SourceMap
             message = f"{where}: {err['msg']}{shown}"
         out.append(Problem(source.locate(path), message))
     return out
+
+
+def _field_names(model: type[BaseModel], loc: PathKey) -> tuple[str, ...]:
+    """The field names of the model at ``loc`` inside ``model`` (list items and unions of
+    models followed), or none where ``loc`` leaves the models."""
+    current: Any = model
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(current, "model_fields", {})
+        if part not in fields:
+            return ()
+        current = _model_in(fields[part].annotation)
+        if current is None:
+            return ()
+    return tuple(getattr(current, "model_fields", {}))
+
+
+def _model_in(annotation: Any) -> Any:
+    """The pydantic model an annotation holds (directly, in a list/dict/union), or None."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
 
 
 def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[Problem]) -> Any:
@@ -157,10 +194,14 @@ def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[P
     if isinstance(node, yaml.MappingNode):
         out: dict[str, Any] = {}
         for key_node, value_node in node.value:
-            key = _scalar(key_node)
             loc = Location(
                 source.file, key_node.start_mark.line + 1, key_node.start_mark.column + 1
             )
+            try:
+                key = _scalar(key_node)
+            except yaml.YAMLError:
+                problems.append(Problem(loc, f"YAML tag {key_node.tag!r} is not allowed"))
+                continue
             if not isinstance(key, str | int | float | bool) or key is None:
                 problems.append(Problem(loc, "mapping keys must be plain scalars"))
                 continue
@@ -173,7 +214,11 @@ def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[P
         return out
     if isinstance(node, yaml.SequenceNode):
         return [_to_data(n, (*path, i), source, problems) for i, n in enumerate(node.value)]
-    return _scalar(node)
+    try:
+        return _scalar(node)
+    except yaml.YAMLError:  # a tag the safe loader does not know (!!python/…)
+        problems.append(Problem(source.locate(path), f"YAML tag {node.tag!r} is not allowed"))
+        return None
 
 
 _CONSTRUCTOR = yaml.SafeLoader("")

@@ -89,3 +89,41 @@ def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "a table of survey stations; not raw sensor samples" in result.stderr
     assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
+
+
+def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(SURVEY), "--set", "trajectory.vs_azimth=10"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert (
+        "--set trajectory.vs_azimth=10: stage 'trajectory' (minimum_curvature): unknown field "
+        "'vs_azimth'; did you mean 'vs_azimuth'?"
+    ) in result.stderr
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nstagez: []\nstages:\n  - id: r\n    uzes: read_stations\n")
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(bad)], capture_output=True, text=True, timeout=60
+    )
+    assert f"{bad}:5:5: unknown field 'stages.0.uzes'; did you mean 'uses'?" in result.stderr
+    assert f"{bad}:2:1: unknown field 'stagez'; did you mean 'stages'?" in result.stderr
+
+
+def test_an_option_value_is_limited_yaml(tmp_path: Path) -> None:
+    option = ["--option", "delimiter=!!python/name:os.system"]
+    result = subprocess.run(
+        [*gyropipe(), "convert", str(SAMPLE), "--out", str(tmp_path / "o.csv"), *option],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert (
+        "error: --option delimiter=!!python/name:os.system: YAML tag "
+        "'tag:yaml.org,2002:python/name:os.system' is not allowed"
+    ) in result.stderr
+    assert "Traceback" not in result.stderr

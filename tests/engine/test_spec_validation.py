@@ -76,7 +76,10 @@ def test_empty_and_non_mapping_files(write_yaml, registry):
 def test_missing_and_unknown_top_level_fields(write_yaml, registry):
     path = write_yaml("name: demo\nstagez: []\n")
     found = problems(path, registry)
-    assert found == ["1:1: missing required field 'stages'", "2:1: unknown field 'stagez'"]
+    assert found == [
+        "1:1: missing required field 'stages'",
+        "2:1: unknown field 'stagez'; did you mean 'stages'?",
+    ]
 
 
 def test_duplicate_yaml_key(write_yaml, registry):
