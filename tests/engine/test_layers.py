@@ -356,3 +356,16 @@ def test_checker_passes_a_clean_package(tmp_path: Path) -> None:
 )
 def test_layer_of(module: str, rank: int | None) -> None:
     assert layer_of(module, LAYERS, PACKAGE) == rank
+
+
+MAX_LINES = 700
+
+
+def test_no_module_is_longer_than_700_lines() -> None:
+    """Small modules whose names say what they hold: a module over the limit is split."""
+    long = {
+        str(path.relative_to(ROOT)): n
+        for path in (ROOT / "src" / PACKAGE).rglob("*.py")
+        if (n := len(path.read_text().splitlines())) > MAX_LINES
+    }
+    assert not long, long
