@@ -20,6 +20,7 @@ from report_support import (
     figure_regions,
     ink,
     inspect,
+    marks,
     pdf_pages,
     run,
     run_ok,
@@ -121,6 +122,44 @@ def test_pdf_report_pages_and_plots(survey_run: Path, tmp_path: Path):
     assert last == list(range(1, len(pages) + 1))
 
 
+def test_failed_check_highlights_the_row_and_is_explained(tmp_path: Path, browser: Any):
+    """A station that fails a QC check (DLS above a 2 °/30 m limit) has its whole listing row
+    highlighted, is named in the summary and its check is explained in the QC section; the
+    stations that pass are not highlighted at all (#18 item 7)."""
+    out = tmp_path / "out"
+    run_ok(
+        "run",
+        "pipelines/survey.yaml",
+        "--input",
+        SAMPLE,
+        "--out",
+        str(out),
+        "--set",
+        "dls_check.params={limit: 2.0}",
+        "--set",
+        "report.formats=[html]",
+    )
+    checks = pq.read_table(out / "dls_check.results.parquet").to_pylist()
+    failed = [not r["passed"] for r in checks]
+    assert 0 < sum(failed) < len(failed)
+    page = inspect(browser, out / "report.html")
+    rows = marks(browser, out / "report.html")["listing"]
+    assert [r.row for r in rows] == failed
+    assert not any(any(r.cells) for r in rows)
+    assert [r[-1] for r in page.tables["listing"]] == [
+        "dls_limit failed" if f else "ok" for f in failed
+    ]
+    assert page.tables["flags"] == [
+        [
+            "dls_limit failed",
+            "failed check",
+            str(sum(failed)),
+            "The dogleg severity exceeds the limit set for the survey.",
+        ]
+    ]
+    assert f"QC: {sum(failed)} of {len(failed)} stations failed a check (MD " in page.text
+
+
 class _Tables(HTMLParser):
     """Cell texts of every table in an HTML file, by table class."""
 
@@ -197,7 +236,8 @@ def test_empty_trajectory_fails_the_run_naming_the_stage(
     with pytest.raises(StageError, match=r"stage 'report'.*no stations") as caught:
         run_plan(build_plan(load_spec(path), registry), registry, inputs={}, out_dir=tmp_path / "o")
     assert isinstance(caught.value.__cause__, GyropipeError)
-    assert list((tmp_path / "o").iterdir()) == []
+    out = tmp_path / "o"  # nothing published: no directory, or an empty one
+    assert not out.exists() or list(out.iterdir()) == []
 
 
 def test_bad_report_filename_is_rejected_before_running(tmp_path: Path):
