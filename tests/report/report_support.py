@@ -3,6 +3,7 @@ headless Chromium (Debian's, driven by Playwright), the PDF rasterised by pdftop
 
 from __future__ import annotations
 
+import base64
 import re
 import shutil
 import subprocess
@@ -195,3 +196,97 @@ def figure_regions(pages: list[PdfPage]) -> dict[int, np.ndarray]:
             if text == "Figure" and re.fullmatch(r"\d+\.", number) and x0 < 60:
                 found[int(number[:-1])] = page.region(60, max(y0 - 150, 40), 535, y0 - 6)
     return found
+
+
+MARKS = """() => {
+  const out = {};
+  document.querySelectorAll('table').forEach((t, k) => {
+    const key = t.classList[0] + (out[t.classList[0]] ? '-' + k : '');
+    out[key] = Array.from(t.tBodies[0].rows).map(r => ({
+      row: r.classList.contains('marked'),
+      cells: Array.from(r.cells).map(c => c.classList.contains('flag')),
+      colours: Array.from(r.cells).map(c => getComputedStyle(c).backgroundColor),
+    }));
+  });
+  return out;
+}"""
+
+
+@dataclass
+class RowMarks:
+    row: bool
+    """the whole row is highlighted (the station failed a QC check)"""
+    cells: list[bool]
+    """per cell: highlighted on its own (a value a processing flag applies to)"""
+    colours: list[str]
+    """per cell: the background colour Chromium computed"""
+
+
+def marks(browser: Any, html: Path) -> dict[str, list[RowMarks]]:
+    """Per table (keyed as in :class:`PageReport`), what is highlighted in each row."""
+    page = browser.new_page()
+    page.goto(html.resolve().as_uri(), wait_until="load")
+    found = page.evaluate(MARKS)
+    page.close()
+    return {k: [RowMarks(r["row"], r["cells"], r["colours"]) for r in v] for k, v in found.items()}
+
+
+def figure_svg(html: Path, key: str) -> str:
+    """The SVG source of figure ``key`` of a report written with ``image_format: svg``."""
+    source = html.read_text(encoding="utf-8")
+    found = re.search(
+        rf'<figure id="fig-{re.escape(key)}".*?src="data:image/svg\+xml;base64,([^"]+)"', source
+    )
+    assert found, f"figure {key} is not an SVG"
+    return base64.b64decode(found[1]).decode("utf-8")
+
+
+BOXES = """selectors => selectors.map(s => Array.from(document.querySelectorAll(s))
+  .map(e => { const b = e.getBoundingClientRect();
+              return {x0: b.left, y0: b.top, x1: b.right, y1: b.bottom}; }))"""
+
+
+def svg_boxes(browser: Any, svg: str, selectors: list[str]) -> list[list[dict[str, float]]]:
+    """Per CSS selector, the screen boxes of the SVG elements it matches, as Chromium lays
+    the SVG out."""
+    page = browser.new_page()
+    page.set_content(svg)
+    found: list[list[dict[str, float]]] = page.evaluate(BOXES, selectors)
+    page.close()
+    return found
+
+
+def overlap(a: dict[str, float], b: dict[str, float]) -> bool:
+    """True if two boxes share area."""
+    return a["x0"] < b["x1"] and b["x0"] < a["x1"] and a["y0"] < b["y1"] and b["y0"] < a["y1"]
+
+
+def svg_texts(browser: Any, svg: str, selector: str) -> list[str]:
+    """Text content of the SVG elements matching ``selector``."""
+    page = browser.new_page()
+    page.set_content(svg)
+    found: list[str] = page.evaluate(
+        "s => Array.from(document.querySelectorAll(s)).map(e => e.textContent)", selector
+    )
+    page.close()
+    return found
+
+
+FLAGGED_RGB = (252, 235, 192)
+"""Background of a highlighted cell (the CSS and the PDF use the same colour)."""
+
+
+def flagged_share(pixels: np.ndarray) -> float:
+    """Share of pixels of a highlighted cell's background colour."""
+    distance = np.abs(pixels.astype(int) - np.array(FLAGGED_RGB)).max(axis=2)
+    return float((distance <= 10).mean())
+
+
+def line_words(page: PdfPage, first: str) -> list[tuple[str, float, float, float, float]]:
+    """The words on the PDF line that starts with the word ``first`` (a table row that
+    starts with it in its first column, left of 80 pt)."""
+    start = next(w for w in page.words if w[0] == first and w[1] < 80)
+    return sorted(
+        (w for w in page.words if abs(w[2] - start[2]) < 1.0 and w[1] >= start[1] - 1),
+        key=lambda w: w[1],
+    )

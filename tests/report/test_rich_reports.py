@@ -4,6 +4,7 @@ and flags, error ellipses (point-gyro.yaml), drift correction and in/out-run QC
 
 from __future__ import annotations
 
+import re
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -15,14 +16,27 @@ from report_support import (
     assert_self_contained,
     colour,
     figure_regions,
+    figure_svg,
+    flagged_share,
     ink,
     inspect,
+    line_words,
+    marks,
     pdf_pages,
     run_ok,
+    svg_texts,
 )
 
-from pipeline.continuous.tables import FLAG_NEAR_VERTICAL, describe_flags
+from pipeline.continuous.tables import (
+    FLAG_AFTER_VERTICAL,
+    FLAG_AZIMUTH_UNDEFINED,
+    FLAG_LARGE_MISALIGNMENT,
+    FLAG_NEAR_VERTICAL,
+    FLAG_NO_CLOSURE,
+    describe_flags,
+)
 from pipeline.earth.frames import OMEGA_EARTH
+from pipeline.reports.flags import COMPASS, CONTINUOUS
 from pipeline.sim.sensors import measure, tool_preset
 from pipeline.tables import RawSamples
 from tests_support import ROOT
@@ -58,6 +72,8 @@ def point_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         str(work / "sim" / "samples.parquet"),
         "--out",
         str(out),
+        "--set",
+        "report.image_format=svg",
     )
     return out
 
@@ -74,10 +90,16 @@ def test_point_gyro_report_has_qc_sigma_and_ellipses(point_run: Path, browser: A
     listing = page.tables["listing"]
     stations = pq.read_table(point_run / "compass.stations.parquet")
     assert len(listing) == stations.num_rows
-    column = header.index("σ AZI")
-    assert [number(r[column]) for r in listing] == pytest.approx(
-        stations.column("sigma_azi").to_numpy(), abs=5e-4
-    )
+    for name, sigma in (("σ INC", "sigma_inc"), ("σ AZI", "sigma_azi")):
+        # two significant digits however small (σ INC is ~4e−5°: not 0.000)
+        column = header.index(name)
+        cells = [r[column] for r in listing]
+        assert all(re.fullmatch(r"\d\.\de−\d|0\.0*[1-9]\d|[1-9]\.\d|[1-9]\d", c) for c in cells), (
+            cells
+        )
+        assert [number(c) for c in cells] == pytest.approx(
+            stations.column(sigma).to_numpy(), rel=0.05
+        )
     trajectory = pq.read_table(point_run / "uncertainty.trajectory.parquet")
     column = header.index("Semi-major")
     assert [number(r[column]) for r in listing] == pytest.approx(
@@ -87,7 +109,7 @@ def test_point_gyro_report_has_qc_sigma_and_ellipses(point_run: Path, browser: A
     for row, flag in zip(listing, flags, strict=True):
         assert (row[-1] == "ok") == (not flag and True)
         for word in filter(None, (flag or "").split(",")):
-            assert word in row[-1]
+            assert COMPASS[word].label in row[-1]
     assert "WGS84 normal gravity" in page.text and "GYRO-NS" in page.text
 
     qc = pq.read_table(point_run / "validity.qc.parquet").to_pylist()
@@ -104,6 +126,30 @@ def test_point_gyro_pdf_draws_every_figure(point_run: Path, tmp_path: Path):
     assert sorted(regions) == list(range(1, 7))  # plan, section, 3-D, profiles, ellipses, QC
     for k, region in regions.items():
         assert ink(region) > 0.02 and colour(region) > 0.002, k
+
+
+def test_qc_chart_axes_fit_their_data(point_run: Path, browser: Any):
+    """rest_gyro's values (~12 °/h) against a ±100 °/h band: its axis is scaled to the values
+    and the legend gives the band; earth_rate_fit's band is not much wider than its values
+    and is drawn in full (#18 item 8)."""
+    qc = [r for r in pq.read_table(point_run / "validity.qc.parquet").to_pylist() if r["passed"]]
+    svg = figure_svg(point_run / "report.html", "qc-0")
+
+    def ticks(panel: str) -> list[float]:
+        return [number(t) for t in svg_texts(browser, svg, f'#{panel} g[id^="ytick_"] text')]
+
+    def legend(panel: str) -> list[str]:
+        return svg_texts(browser, svg, f'#{panel} g[id^="legend_"] text')
+
+    rest = [r["measured"] - r["reference"] for r in qc if r["check"] == "rest_gyro"]
+    limit = max(r["tolerance"] for r in qc if r["check"] == "rest_gyro")
+    assert limit == 100 and 5 < max(rest) < limit / 5
+    shown = ticks("qc-rest_gyro")
+    assert max(rest) <= max(shown) + 2.5 and max(shown) < limit / 4  # ~0…14, not ±100
+    assert legend("qc-rest_gyro") == ["tolerance ±100 deg/h (beyond the axis)"]
+
+    fit = min(r["tolerance"] for r in qc if r["check"] == "earth_rate_fit")
+    assert max(ticks("qc-earth_rate_fit")) >= fit * 0.8 and legend("qc-earth_rate_fit") == []
 
 
 def test_free_gyro_report_shows_drift_and_in_out_qc(browser: Any, tmp_path: Path):
@@ -216,12 +262,21 @@ survey: {mode: continuous, start_md: 350, end_md: 800, speed: 2.0}
 """
 
 
-def test_continuous_report_names_the_integration_flags(browser: Any, tmp_path: Path):
-    (tmp_path / "plan.yaml").write_text(CONTINUOUS_PLAN)
-    run_ok("simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim"))
-    out = tmp_path / "out"
-    samples = str(tmp_path / "sim" / "samples.parquet")
+@pytest.fixture(scope="module")
+def continuous_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """continuous-gyro.yaml on a simulated run that starts near vertical (so it is integrated
+    from the end stop alone: no closure) and ends 0.2 m past the last 10 m station."""
+    work = tmp_path_factory.mktemp("continuous")
+    (work / "plan.yaml").write_text(CONTINUOUS_PLAN)
+    run_ok("simulate", str(work / "plan.yaml"), "--out", str(work / "sim"))
+    out = work / "out"
+    samples = str(work / "sim" / "samples.parquet")
     run_ok("run", "pipelines/continuous-gyro.yaml", "--input", samples, "--out", str(out))
+    return out
+
+
+def test_continuous_report_names_the_integration_flags(continuous_run: Path, browser: Any):
+    out = continuous_run
     page = inspect(browser, out / "report.html")
     assert_self_contained(page, out / "report.html")
     assert "GYRO-NS-CT" in page.text
@@ -240,3 +295,130 @@ def test_continuous_report_names_the_integration_flags(browser: Any, tmp_path: P
     assert [number(r[column]) for r in listing] == pytest.approx(
         trajectory.column("ellipse_major_conf").to_numpy(), abs=5e-3
     )
+
+
+def test_short_last_course_is_not_the_maximum_dls(continuous_run: Path, browser: Any, tmp_path):
+    """The last course ends 0.2 m after the previous station: its DLS spike is marked in
+    the listing, left out of the summary's maximum and counted there in words (#18 item 4)."""
+    trajectory = pq.read_table(continuous_run / "uncertainty.trajectory.parquet")
+    md, dls = trajectory.column("md").to_numpy(), trajectory.column("dls").to_numpy()
+    course = np.diff(md)
+    assert course[-1] < 1.0 and (course[:-1] > 9.99).all()
+    assert dls[-1] > 5 * dls[:-1].max()  # the spike the old summary headlined
+    worst = int(np.argmax(dls[:-1]))
+    expected = (
+        f"Maximum DLS {dls[worst]:.2f} °/30 m at {md[worst]:.2f} m MD "
+        "(courses shorter than 10 m not counted: 1)"
+    )
+    page = inspect(browser, continuous_run / "report.html")
+    assert expected in " ".join(page.text.split())
+    column = page.headers["listing"].index("DLS")
+    rows = marks(browser, continuous_run / "report.html")["listing"]
+    assert [r.cells[column] for r in rows] == [False] * (len(rows) - 1) + [True]
+    assert "DLS over courses shorter than 10 m (left out of the maximum DLS)" in page.text
+
+    pages = pdf_pages(continuous_run / "report.pdf", tmp_path)
+    words = " ".join(w[0] for p in pages for w in p.words)
+    assert expected.removeprefix("Maximum DLS ") in words  # labels and values drawn apart
+    last = f"{md[-1]:.2f}"
+    page_of_last = next(p for p in pages if any(w[0] == last and w[1] < 80 for w in p.words))
+    line = line_words(page_of_last, last)
+    cell = next(w for w in line if w[0] == f"{dls[-1]:.2f}")
+    assert (
+        flagged_share(page_of_last.region(cell[1] - 1, cell[2] - 1, cell[3] + 1, cell[4] + 1)) > 0.3
+    )
+    first = line[0]  # the MD cell of the same row is not highlighted
+    assert (
+        flagged_share(page_of_last.region(first[1] - 1, first[2] - 1, first[3] + 1, first[4] + 1))
+        < 0.05
+    )
+
+
+def test_min_course_length_zero_counts_every_course(continuous_run: Path, tmp_path: Path):
+    out = tmp_path / "out"
+    samples = continuous_run.parent / "sim" / "samples.parquet"
+    run_ok(
+        "run",
+        "pipelines/continuous-gyro.yaml",
+        "--input",
+        str(samples),
+        "--out",
+        str(out),
+        "--set",
+        "report.min_course_length=0",
+        "--set",
+        "report.formats=[html]",
+    )
+    trajectory = pq.read_table(out / "uncertainty.trajectory.parquet")
+    md, dls = trajectory.column("md").to_numpy(), trajectory.column("dls").to_numpy()
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert f"<dd>{dls[-1]:.2f} °/30 m at {md[-1]:.2f} m MD</dd>" in html
+    assert "not counted" not in html
+
+
+def test_sigma_azimuth_near_vertical_is_undefined_and_said_why(continuous_run: Path, browser: Any):
+    """σ AZI is infinite at the near-vertical stations: the cell says 'undefined' and a
+    note says why, once (#18 item 5)."""
+    stations = pq.read_table(continuous_run / "continuous.stations.parquet")
+    sigma = stations.column("sigma_azi").to_numpy()
+    assert np.isinf(sigma).any() and np.isfinite(sigma).any()
+    page = inspect(browser, continuous_run / "report.html")
+    column = page.headers["listing"].index("σ AZI")
+    cells = [r[column] for r in page.tables["listing"]]
+    assert [c == "undefined" for c in cells] == list(np.isinf(sigma))
+    assert "∞" not in page.text
+    why = "σ AZI undefined: near vertical the inclination does not define an azimuth"
+    assert page.text.count(why) == 1
+    assert all(
+        number(c) == pytest.approx(v, rel=0.05)
+        for c, v in zip(cells, sigma, strict=True)
+        if np.isfinite(v)
+    )
+
+
+def test_each_flag_is_explained_once_and_marks_its_cells(
+    continuous_run: Path, browser: Any, tmp_path: Path
+):
+    """Every flag in the listing has one sentence in the QC section; a processing flag
+    highlights the QC cell and the values it applies to, never a whole row; no internal
+    names in the text (#18 item 7)."""
+    html = continuous_run / "report.html"
+    page = inspect(browser, html)
+    stations = pq.read_table(continuous_run / "continuous.stations.parquet")
+    bits = stations.column("flags").to_pylist()
+    present = [flag for bit, flag in CONTINUOUS.items() if any(b & bit for b in bits)]
+    assert CONTINUOUS[FLAG_NO_CLOSURE] in present and all(b & FLAG_NO_CLOSURE for b in bits)
+    explained = page.tables["flags"]
+    assert [r[0] for r in explained] == [f.label for f in present]
+    for row, flag in zip(explained, present, strict=True):
+        assert row[1] == "processing flag"
+        assert int(row[2]) == sum(
+            1 for b in bits if b & next(k for k, v in CONTINUOUS.items() if v == flag)
+        )
+        assert row[3].lower() == flag.meaning.lower()
+        assert page.text.count(flag.meaning[1:]) == 1  # once, in the QC section
+    closure = next(r for r in explained if r[0] == "no closure")
+    assert closure[3].startswith("The run was integrated from one stop only")
+    assert "no station failed a check" in page.text and "seed" not in page.text.lower()
+
+    header = page.headers["listing"]
+    rows = marks(browser, html)["listing"]
+    qc, azi, sigma_azi = header.index("QC"), header.index("AZI"), header.index("σ AZI")
+    assert not any(r.row for r in rows)  # nobody failed QC: no row turns colour
+    for r, b in zip(rows, bits, strict=True):
+        assert r.cells[qc]
+        assert r.cells[azi] == bool(b & AZIMUTH_FLAGS)
+        assert r.cells[sigma_azi] == bool(b & (FLAG_NEAR_VERTICAL | FLAG_AZIMUTH_UNDEFINED))
+        assert not all(r.cells)
+        assert len(set(r.colours)) == 2  # highlighted cells one colour, the others another
+
+    pages = pdf_pages(continuous_run / "report.pdf", tmp_path)
+    words = " ".join(w[0] for p in pages for w in p.words)
+    assert "Flags in the listing" in words
+    assert "The run was integrated from one stop only" in words
+
+
+AZIMUTH_FLAGS = (
+    FLAG_NEAR_VERTICAL | FLAG_AFTER_VERTICAL | FLAG_LARGE_MISALIGNMENT | FLAG_AZIMUTH_UNDEFINED
+)
+"""Continuous-mode flags that qualify the azimuth."""

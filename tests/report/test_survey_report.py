@@ -20,6 +20,7 @@ from report_support import (
     figure_regions,
     ink,
     inspect,
+    marks,
     pdf_pages,
     run,
     run_ok,
@@ -119,6 +120,44 @@ def test_pdf_report_pages_and_plots(survey_run: Path, tmp_path: Path):
         int(m) for p in pages for m in re.findall(r"Page (\d+) of", " ".join(w[0] for w in p.words))
     ]
     assert last == list(range(1, len(pages) + 1))
+
+
+def test_failed_check_highlights_the_row_and_is_explained(tmp_path: Path, browser: Any):
+    """A station that fails a QC check (DLS above a 2 °/30 m limit) has its whole listing row
+    highlighted, is named in the summary and its check is explained in the QC section; the
+    stations that pass are not highlighted at all (#18 item 7)."""
+    out = tmp_path / "out"
+    run_ok(
+        "run",
+        "pipelines/survey.yaml",
+        "--input",
+        SAMPLE,
+        "--out",
+        str(out),
+        "--set",
+        "dls_check.params={limit: 2.0}",
+        "--set",
+        "report.formats=[html]",
+    )
+    checks = pq.read_table(out / "dls_check.results.parquet").to_pylist()
+    failed = [not r["passed"] for r in checks]
+    assert 0 < sum(failed) < len(failed)
+    page = inspect(browser, out / "report.html")
+    rows = marks(browser, out / "report.html")["listing"]
+    assert [r.row for r in rows] == failed
+    assert not any(any(r.cells) for r in rows)
+    assert [r[-1] for r in page.tables["listing"]] == [
+        "dls_limit failed" if f else "ok" for f in failed
+    ]
+    assert page.tables["flags"] == [
+        [
+            "dls_limit failed",
+            "failed check",
+            str(sum(failed)),
+            "The dogleg severity exceeds the limit set for the survey.",
+        ]
+    ]
+    assert f"QC: {sum(failed)} of {len(failed)} stations failed a check (MD " in page.text
 
 
 class _Tables(HTMLParser):

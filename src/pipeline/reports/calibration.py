@@ -1,6 +1,7 @@
-"""The drift calibration report (seed 000 method): per instrument the linearity verdict, the
-selected drift estimate with its σ beside the traditional two-reading estimate, the series
-table, every estimate, and a plot of the series."""
+"""The drift calibration report: per instrument the linearity verdict, the selected drift
+estimate with its σ beside the traditional two-reading estimate, the series table, every
+estimate, and a plot of the series. The method is cited by its paper
+(:data:`~pipeline.reports.literature.DRIFT_CALIBRATION`)."""
 
 from __future__ import annotations
 
@@ -26,19 +27,25 @@ from pipeline.reports.document import (
     Verdict,
     fmt,
     fmt_sig,
+    fmt_sigma,
     items,
 )
+from pipeline.reports.literature import DRIFT_CALIBRATION, Citations
 from pipeline.reports.sections import footer, method_items, provenance_section, tool_fields
 from pipeline.reports.survey import ReportInputError
 from pipeline.well import WellMetadata
 
-METHODS_NOTE = (
-    "adjacent: two neighbouring series (seed 000's formula); pair: two other series; mean: "
-    "average of the adjacent estimates; grouped: first half of the series against the second "
-    "half; fit: weighted straight line through all series means (minimum variance); "
-    "traditional: two single readings of one set azimuth about the control interval apart. "
-    "Gain: σ of the traditional method over the control interval divided by the estimate's σ."
-)
+
+def methods_note(cite: str) -> str:
+    """What each estimate of the drift is, ``cite`` the mark of the method's paper."""
+    return (
+        f"Estimates — adjacent: two neighbouring series (the formula of {cite}); pair: two "
+        "other series; mean: average of the adjacent estimates; grouped: first half of the "
+        "series against the second half; fit: weighted straight line through all series "
+        "means (minimum variance); traditional: two single readings of one set azimuth "
+        "about the control interval apart. Gain: σ of the traditional method over the "
+        "control interval divided by the estimate's σ."
+    )
 
 
 def calibration_document(
@@ -59,6 +66,10 @@ def calibration_document(
     if readings is not None and readings.num_rows == 0:
         readings = None  # wired but empty: the report as without readings
     instruments = list(dict.fromkeys(result.column("instrument").to_pylist()))
+    citations = Citations()
+    method = method_items(provenance, citations)
+    cite = citations.cite(DRIFT_CALIBRATION)
+    references = citations.fields()
     owner = _reading_owner(readings, instruments) if readings is not None else None
     sections = [
         Section(
@@ -84,7 +95,11 @@ def calibration_document(
         ),
         Section(
             "Method",
-            (Fields("Method", tuple(method_items(provenance))), Paragraph(METHODS_NOTE)),
+            (
+                Fields("Method", tuple(method)),
+                Paragraph(methods_note(cite)),
+                *([references] if references is not None else []),
+            ),
             key="method",
         ),
     ]
@@ -98,6 +113,7 @@ def calibration_document(
                 if readings is None or owner is None
                 else readings.filter(pa.array(owner == name)),
                 single=len(instruments) == 1,
+                cite=cite,
             )
         )
     sections.append(provenance_section(provenance))
@@ -147,7 +163,12 @@ def _verdict(row: dict[str, Any]) -> Verdict:
 
 
 def _instrument(
-    name: str, result: pa.Table, series: pa.Table, readings: pa.Table | None, single: bool
+    name: str,
+    result: pa.Table,
+    series: pa.Table,
+    readings: pa.Table | None,
+    single: bool,
+    cite: str,
 ) -> Section:
     rows = result.to_pylist()
     selected = next((r for r in rows if r["selected"]), rows[0])
@@ -169,8 +190,10 @@ def _instrument(
             ),
             (
                 "Gain over traditional",
-                f"{fmt(selected['gain'], 1)}× in σ "
-                f"(seed 000 claims √(n(n−1)/2) = {fmt(selected['gain_claimed'], 1)}×)",
+                f"{fmt(selected['gain'], 1)}× smaller σ than the traditional estimate (the "
+                f"method's paper {cite} predicts √(n(n−1)/2) = "
+                f"{fmt(selected['gain_claimed'], 1)}× for {_per_series(series)} readings per "
+                "series)",
             ),
         ]
     series_table = Table(
@@ -189,8 +212,8 @@ def _instrument(
                 str(r["readings"]),
                 fmt(r["mid_time"] / 60, 2),
                 fmt(r["mean_error"], 3),
-                fmt(r["sigma_mean"], 3),
-                fmt(r["residual_std"], 3),
+                fmt_sigma(r["sigma_mean"]),
+                fmt_sigma(r["residual_std"]),
             )
             for r in series.to_pylist()
         ),
@@ -215,9 +238,9 @@ def _instrument(
                 r["method"],
                 r["label"],
                 fmt(r["drift_deg_h"], 3),
-                fmt(r["sigma_deg_h"], 3),
+                fmt_sigma(r["sigma_deg_h"]),
                 fmt(r["drift_deg_min"], 4),
-                fmt(r["sigma_deg_min"], 4),
+                fmt_sigma(r["sigma_deg_min"]),
                 fmt(r["interval"] / 60, 1),
                 fmt(r["gain"], 1),
                 "selected" if r["selected"] else "",
@@ -238,11 +261,17 @@ def _instrument(
             "(squares) and the fitted drift drawn through the weighted centre of the means. "
             "Right: every estimate ± σ; vertical line: fitted rate.",
             partial(plots.calibration_series, data=_points(series, rows, readings)),
-            (6.9, 3.6),
+            (6.9, 4.8),
         ),
     ]
     title = "Result" if single else f"Instrument {name}"
     return Section(title, tuple(blocks), key=f"instrument-{name}")
+
+
+def _per_series(series: pa.Table) -> str:
+    """'n = 13' when every series has the same number of readings, else 'n'."""
+    counts = set(series.column("readings").to_pylist())
+    return f"n = {counts.pop()}" if len(counts) == 1 else "n"
 
 
 def _points(

@@ -5,13 +5,33 @@ two formats the same report."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
+from pipeline.reports.numbers import fmt, fmt_azimuth, fmt_sig, fmt_sigma
+
 if TYPE_CHECKING:
     from pipeline.reports.plots import Canvas
+
+__all__ = [
+    "Align",
+    "Block",
+    "Column",
+    "Document",
+    "Fields",
+    "Level",
+    "Paragraph",
+    "Plot",
+    "Section",
+    "Table",
+    "Verdict",
+    "fmt",
+    "fmt_azimuth",
+    "fmt_sig",
+    "fmt_sigma",
+    "items",
+]
 
 Level = Literal["ok", "warn", "fail", "info"]
 Align = Literal["left", "right"]
@@ -38,7 +58,8 @@ class Column:
 
 @dataclass(frozen=True)
 class Table:
-    """A table of preformatted cells. ``marked`` rows are highlighted (failed QC)."""
+    """A table of preformatted cells. ``marked`` rows are highlighted whole (a station that
+    failed QC); ``cells`` are highlighted one by one (a value a flag applies to)."""
 
     title: str
     columns: tuple[Column, ...]
@@ -47,6 +68,9 @@ class Table:
     """CSS class / identifier (``listing`` for the survey listing)"""
     note: str = ""
     marked: frozenset[int] = frozenset()
+    """indices of rows marked whole"""
+    cells: frozenset[tuple[int, int]] = frozenset()
+    """(row, column) indices of cells marked one by one"""
 
 
 @dataclass(frozen=True)
@@ -105,27 +129,6 @@ class Document:
     def plots(self) -> list[Plot]:
         """Every figure of the report, in order."""
         return [b for s in self.sections for b in s.blocks if isinstance(b, Plot)]
-
-
-def fmt(value: float | None, decimals: int = 2) -> str:
-    """A number with fixed decimals; blank for null, '—' for NaN."""
-    if value is None:
-        return ""
-    if math.isnan(value):
-        return "—"
-    if math.isinf(value):
-        return "∞" if value > 0 else "−∞"
-    text = f"{value:.{decimals}f}"
-    return text.replace("-", "−") if text.lstrip("-").strip("0. ") else text.lstrip("-")
-
-
-def fmt_sig(value: float | None, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits (small σ, p-values)."""
-    if value is None:
-        return ""
-    if not math.isfinite(value):
-        return fmt(value)
-    return f"{value:.{digits}g}".replace("-", "−")
 
 
 def items(pairs: Sequence[tuple[str, str | None]]) -> tuple[tuple[str, str], ...]:

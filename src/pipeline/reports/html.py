@@ -59,6 +59,8 @@ th .unit { display: block; font-weight: normal; font-size: 10.5px; opacity: .85;
 td { padding: 2px 6px; border-bottom: 1px solid #eef1f4; }
 tbody tr:nth-child(even) td { background: var(--zebra); }
 tbody tr.marked td { background: #fbe3e0; }
+table tbody tr td.flag { background: #fcebc0; box-shadow: inset 3px 0 0 #d9a21b; }
+td { -webkit-print-color-adjust: exact; print-color-adjust: exact; }
 .r { text-align: right; white-space: nowrap; }
 .l { text-align: left; }
 .w { overflow-wrap: break-word; min-width: 11em; }
@@ -177,9 +179,15 @@ def _table(table: Table) -> str:
         for c in table.columns
     )
     classes = ["r" if c.align == "right" else ("l w" if c.wrap else "l") for c in table.columns]
+    flagged: dict[int, set[int]] = {}
+    for i, j in table.cells:
+        flagged.setdefault(i, set()).add(j)
     body = "\n".join(
         ('<tr class="marked">' if i in table.marked else "<tr>")
-        + "".join(f'<td class="{k}">{escape(v)}</td>' for k, v in zip(classes, row, strict=True))
+        + "".join(
+            f'<td class="{k}{" flag" if j in flagged.get(i, ()) else ""}">{escape(v)}</td>'
+            for j, (k, v) in enumerate(zip(classes, row, strict=True))
+        )
         + "</tr>"
         for i, row in enumerate(table.rows)
     )

@@ -40,10 +40,14 @@ KEEP_WHOLE = 20
 """Tables of at most this many rows are not split (they move to the next page)."""
 MIN_WRAP = 12
 """Characters a wrapped column keeps at least."""
+SHORT_HEADER = 6
+"""Headers of at most this many characters ('σ AZI') are not wrapped."""
 TAIL = 0.15
 """Space below a table, inches."""
 ZEBRA = "#f3f5f8"
 MARKED = "#fbe3e0"
+FLAGGED = "#fcebc0"
+FLAG_EDGE = "#d9a21b"
 UNIT_INK = "#d5dfeb"
 
 
@@ -77,6 +81,13 @@ class _Setting:
     def row_height(self, k: int) -> float:
         return len(self.rows[k]) * self.pitch + 0.035
 
+    def cell_span(self, j: int) -> tuple[float, float]:
+        """Left edge and width of column ``j``, inches from the table's left edge (half a
+        character of padding each side, within the gaps)."""
+        start = 1 + sum(self.widths[:j]) + sum(self.gaps[:j])
+        char = char_width(self.size)
+        return (start - 0.5) * char, (self.widths[j] + 1.0) * char
+
 
 def _setting(table: Table) -> _Setting:
     cols = table.columns
@@ -84,7 +95,9 @@ def _setting(table: Table) -> _Setting:
     natural = [
         max(
             max((len(c) for c in data[j]), default=0),
-            max((len(w) for w in col.header.split()), default=0),
+            len(col.header)
+            if len(col.header) <= SHORT_HEADER
+            else max((len(w) for w in col.header.split()), default=0),
             len(col.unit),
         )
         for j, col in enumerate(cols)
@@ -172,6 +185,9 @@ def place_table(flow: Flow, table: Table) -> None:
 
 def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: float) -> Draw:
     size, pitch, width = setting.size, setting.pitch, setting.width
+    flagged: dict[int, list[int]] = {}
+    for k, j in sorted(table.cells):
+        flagged.setdefault(k, []).append(j)
 
     def draw(fig: Figure, top: float) -> None:
         y = top
@@ -200,6 +216,10 @@ def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: flo
                 rect(fig, LEFT, y - h, width, h, MARKED)
             elif n % 2:
                 rect(fig, LEFT, y - h, width, h, ZEBRA)
+            for j in flagged.get(k, ()):
+                x, w = setting.cell_span(j)
+                rect(fig, LEFT + x, y - h, w, h, FLAGGED)
+                rect(fig, LEFT + x, y - h, 0.02, h, FLAG_EDGE)
             for i, line in enumerate(setting.rows[k]):
                 text(fig, LEFT, y - 0.02 - i * pitch, line, size, family=MONO)
             y -= h

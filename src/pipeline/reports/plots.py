@@ -20,7 +20,10 @@ from matplotlib.ticker import MaxNLocator
 from matplotlib.typing import RcKeyType
 from numpy.typing import NDArray
 
+from pipeline.reports.numbers import fmt_azimuth, fmt_sig
+
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 Canvas = Figure | SubFigure
 """What a plot function draws into: a whole figure (HTML) or a region of a page (PDF)."""
 
@@ -79,6 +82,7 @@ def axes_grid(
     hspace: float = 0.35,
     wspace: float = 0.6,
     sharex: bool = False,
+    width_ratios: Sequence[float] | None = None,
 ) -> list[Axes]:
     """A grid of axes with margins and gaps given in inches (so text never collides,
     whatever the figure size); returned row by row."""
@@ -93,6 +97,7 @@ def axes_grid(
         top=1 - top / height,
         hspace=hspace * nrows / max(height - top - bottom - hspace * (nrows - 1), 0.1),
         wspace=wspace * ncols / max(width - left - right - wspace * (ncols - 1), 0.1),
+        width_ratios=width_ratios,
     )
     axes: list[Axes] = []
     for i in range(nrows):
@@ -136,11 +141,11 @@ def plan_view(fig: Canvas, path: Path3) -> None:
     _plan_axes(ax, path)
     n_end, e_end = path.north[-1], path.east[-1]
     distance = float(np.hypot(n_end, e_end))
-    direction = float(np.degrees(np.arctan2(e_end, n_end)) % 360.0)
+    direction = float(np.degrees(np.arctan2(e_end, n_end)))
     ax.plot([0.0, e_end], [0.0, n_end], color=GREY, linestyle="--", linewidth=0.8)
     ax.plot(e_end, n_end, marker="v", color=ORANGE, markersize=6, linestyle="none", label="TD")
     ax.annotate(
-        f"TD  MD {path.md[-1]:.1f} m\nclosure {distance:.1f} m @ {direction:.2f}°",
+        f"TD  MD {path.md[-1]:.1f} m\nclosure {distance:.1f} m @ {fmt_azimuth(direction)}°",
         (e_end, n_end),
         xytext=(8, -4),
         textcoords="offset points",
@@ -159,7 +164,7 @@ def vertical_section(fig: Canvas, vs: FloatArray, path: Path3, azimuth: float | 
     ax.plot(vs[-1], path.tvd[-1], marker="v", color=ORANGE, markersize=6, linestyle="none")
     ax.set_aspect("equal", adjustable="datalim")
     ax.invert_yaxis()
-    plane = f" @ {azimuth:.2f}° {path.north_label}" if azimuth is not None else ""
+    plane = f" @ {fmt_azimuth(azimuth)}° {path.north_label}" if azimuth is not None else ""
     ax.set_xlabel(f"Vertical section (m){plane}")
     ax.set_ylabel("TVD (m)")
 
@@ -204,9 +209,11 @@ def profiles(
     dls: FloatArray,
     dls_unit: str,
     low_inclination: float = 3.0,
+    short: BoolArray | None = None,
+    short_label: str = "short courses",
 ) -> None:
     """Inclination, azimuth and dogleg severity against MD; azimuths of stations below
-    ``low_inclination`` (ill-defined) drawn hollow."""
+    ``low_inclination`` (ill-defined) drawn hollow, DLS over ``short`` courses grey."""
     ax_inc, ax_azi, ax_dls = axes_grid(fig, 3, 1, hspace=0.12, sharex=True, top=0.15)
     for md, i in zip(_pieces(path.md, path.offsets), _pieces(inc, path.offsets), strict=True):
         ax_inc.plot(md, i, color=BLUE, marker="o", markersize=2, markeredgewidth=0)
@@ -230,15 +237,28 @@ def profiles(
     ax_azi.set_yticks([0, 90, 180, 270, 360])
     ax_azi.set_ylabel(f"Azimuth (°, {path.north_label})")
     course = np.diff(path.md, prepend=path.md[0])
+    grey = np.zeros(len(dls), bool) if short is None else short
     ax_dls.bar(
-        path.md - course,
-        dls,
-        width=course,
+        (path.md - course)[~grey],
+        dls[~grey],
+        width=course[~grey],
         align="edge",
         color="#f0b27a",
         edgecolor=ORANGE,
         linewidth=0.5,
     )
+    if grey.any():  # a short course's bar would be a hairline: a hollow marker instead
+        ax_dls.plot(
+            path.md[grey],
+            dls[grey],
+            marker="o",
+            markersize=3.5,
+            linestyle="none",
+            markerfacecolor="none",
+            markeredgecolor=GREY,
+            label=f"{short_label} (not in the maximum)",
+        )
+        ax_dls.legend(loc="upper left")
     ax_dls.set_ylabel(f"DLS ({dls_unit})")
     ax_dls.set_xlabel("MD (m)")
     for ax in (ax_inc, ax_azi):
@@ -311,14 +331,47 @@ class QcSeries:
     skipped: int = 0
 
 
+BAND_WIDER = 5.0
+"""A QC chart's axis shows its values only (the legend gives the band) when the tolerance
+band is this many times wider than the values' range."""
+
+
+def _band_text(s: QcSeries) -> str:
+    """The tolerance band in words: '±100 °/h', '0 to 100 °/h' or 'up to ±0.7 °/h'."""
+    low, high = float(np.nanmin(s.low)), float(np.nanmax(s.high))
+    unit = f" {s.unit}" if s.unit else ""
+    constant = np.ptp(s.low) == 0 and np.ptp(s.high) == 0
+    if np.isclose(low, -high):
+        return f"{'' if constant else 'up to '}±{fmt_sig(high)}{unit}"
+    return f"{fmt_sig(low)} to {fmt_sig(high)}{unit}"
+
+
+def qc_view(s: QcSeries) -> tuple[float, float] | None:
+    """Y limits of a QC chart when its band is far wider than its values: the values and
+    the reference 0 with a margin (None: show band and values alike)."""
+    values = s.value[np.isfinite(s.value)]
+    bands = np.concatenate([s.low, s.high])
+    bands = bands[np.isfinite(bands)]
+    if not len(values) or not len(bands):
+        return None
+    lo, hi = min(float(values.min()), 0.0), max(float(values.max()), 0.0)
+    if hi - lo <= 0 or float(np.ptp(np.append(bands, [lo, hi]))) <= BAND_WIDER * (hi - lo):
+        return None
+    margin = 0.12 * (hi - lo)
+    return lo - margin, hi + margin
+
+
 def qc_charts(fig: Canvas, series: Sequence[QcSeries], x_label: str = "MD (m)") -> None:
-    """One panel per check: values with the tolerance band shaded, failures in red."""
+    """One panel per check: values with the tolerance band shaded, failures in red; where
+    the band is far wider than the values (:func:`qc_view`) the axis is scaled to the
+    values and the legend says what the band is."""
     ncols = 1 if len(series) == 1 else 2
     nrows = -(-len(series) // ncols)
     axes = axes_grid(fig, nrows, ncols, hspace=0.55, top=0.3, wspace=0.75)
     for ax, s in zip(axes, series, strict=False):
+        ax.set_gid(f"qc-{s.name}".replace(" ", "-").replace("/", "-"))  # the panel in an SVG
         order = np.argsort(s.x, kind="stable")
-        ax.fill_between(
+        band = ax.fill_between(
             s.x[order], s.low[order], s.high[order], color=BAND, step="mid", linewidth=0
         )
         ax.plot(s.x[order], s.high[order], color=TEAL, linewidth=0.7, drawstyle="steps-mid")
@@ -327,6 +380,11 @@ def qc_charts(fig: Canvas, series: Sequence[QcSeries], x_label: str = "MD (m)") 
         ax.plot(s.x[ok], s.value[ok], marker="o", markersize=2.4, linestyle="none", color=BLUE)
         if (~ok).any():
             ax.plot(s.x[~ok], s.value[~ok], marker="x", markersize=4.5, linestyle="none", color=RED)
+        view = qc_view(s)
+        if view is not None:
+            ax.set_ylim(*view)
+            band.set_label(f"tolerance {_band_text(s)} (beyond the axis)")
+            ax.legend(handles=[band], loc="best")
         failed = int((~ok).sum())
         tail = f" — {failed} failed" if failed else ""
         ax.set_title(f"{s.name}{tail}", color=RED if failed else NAVY)
@@ -385,6 +443,10 @@ def allan_deviation(
         ax.legend(loc="upper right")
 
 
+SERIES_CAP = 3.5
+"""Half-width of the caps of the series-mean error bars, points."""
+
+
 @dataclass(frozen=True)
 class SeriesPoints:
     """Calibration data of one instrument: readings (optional), series means and the
@@ -405,7 +467,9 @@ class SeriesPoints:
 def calibration_series(fig: Canvas, data: SeriesPoints) -> None:
     """Azimuth error against time with the series means (±2σ) and the fitted drift line;
     beside it every drift estimate with its ±σ."""
-    ax_t, ax_est = axes_grid(fig, 1, 2, wspace=1.9, left=0.8, right=0.15)
+    ax_t, ax_est = axes_grid(
+        fig, 1, 2, wspace=1.05, left=0.75, right=0.15, width_ratios=(1.55, 1.0)
+    )
     ids = list(data.series)
     if data.reading_time_min is not None and data.reading_error is not None:
         assert data.reading_series is not None
@@ -420,25 +484,34 @@ def calibration_series(fig: Canvas, data: SeriesPoints) -> None:
                 alpha=0.55,
                 color=SERIES_COLOURS[k % len(SERIES_COLOURS)],
             )
-    ax_t.errorbar(
+    means = ax_t.errorbar(
         data.mid_time_min,
         data.mean_error,
         yerr=2 * data.sigma_mean,
         fmt="s",
         color=NAVY,
-        markersize=4.5,
-        capsize=3,
+        markersize=5,
+        capsize=SERIES_CAP,
         label="series mean ± 2σ",
+        zorder=3,
     )
-    for k, sid in enumerate(ids):
+    _, caps, bars = means.lines  # ids in an SVG: what the labels must keep clear of
+    for k, artist in enumerate((*caps, *bars)):
+        artist.set_gid(f"series-bar-{k}")
+    for k, sid in enumerate(ids):  # right of the bar, clear of its caps
         ax_t.annotate(
             f"S{sid}",
             (data.mid_time_min[k], data.mean_error[k]),
-            xytext=(0, 9),
+            xytext=(SERIES_CAP + 4, 0),
             textcoords="offset points",
-            ha="center",
-            fontsize=6.5,
+            ha="left",
+            va="center",
+            fontsize=7.5,
+            fontweight="bold",
             color=NAVY,
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none"},
+            zorder=4,
+            gid=f"series-label-{sid}",
         )
     if data.fit_rate_h is not None:
         weights = 1.0 / np.maximum(data.sigma_mean, 1e-12) ** 2

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
-from pipeline.continuous.tables import describe_flags
-from pipeline.reports.document import fmt_sig
+from pipeline.reports.document import Column, Table, fmt_sig
+from pipeline.reports.flags import Flag, compass_flag, continuous_flags, failed_check
 from pipeline.reports.plots import FloatArray, QcSeries
 
 MD_MATCH = 1e-3
@@ -143,31 +143,38 @@ def summary_rows(series: list[QcSeries]) -> list[tuple[str, ...]]:
     return rows
 
 
-def _flag_text(flags: str | int | None) -> str:
-    """A station's flags as text: strings as they are, continuous-mode bit flags by name."""
+def _station_flags(flags: str | int | None) -> list[Flag]:
+    """A station's own flags: continuous-mode bit flags, or gyrocompassing flags (comma
+    separated names)."""
     if isinstance(flags, int):
-        return describe_flags(flags)
-    return flags or ""
+        return continuous_flags(flags)
+    return [compass_flag(name) for name in (flags or "").split(",") if name]
 
 
-def station_flags(md: FloatArray, src: QcSources) -> list[str]:
-    """A QC flag per trajectory station: 'ok', or what was flagged at that MD (station
-    verdicts, failed checks, in/out differences, compassing warnings)."""
-    found: dict[int, list[str]] = defaultdict(list)
+def station_flags(md: FloatArray, src: QcSources) -> list[list[Flag]]:
+    """The flags of each trajectory station (empty: nothing flagged): failed checks (station
+    verdicts, survey checks, in/out differences) and processing flags of the stations."""
+    found: dict[int, list[Flag]] = defaultdict(list)
 
-    def at(mds: FloatArray, labels: list[str]) -> None:
+    def at(mds: FloatArray, flags: list[list[Flag]]) -> None:
         index = np.clip(np.searchsorted(md, mds), 0, len(md) - 1)
-        for value, i, label in zip(mds, index, labels, strict=True):
+        for value, i, station in zip(mds, index, flags, strict=True):
             near = [j for j in (i - 1, i) if 0 <= j < len(md) and abs(md[j] - value) <= MD_MATCH]
-            if label and near and label not in found[near[0]]:
-                found[near[0]].append(label)
+            if not near:
+                continue
+            for flag in station:
+                if flag not in found[near[0]]:
+                    found[near[0]].append(flag)
 
     if src.summary is not None:
         status = src.summary.column("status").to_pylist()
         failed = src.summary.column("failed_checks").to_pylist()
         at(
             _floats(src.summary, "md"),
-            [f"{s}: {f}" if s != "ok" else "" for s, f in zip(status, failed, strict=True)],
+            [
+                [failed_check(c) for c in f.split(",") if c] if s != "ok" else []
+                for s, f in zip(status, failed, strict=True)
+            ],
         )
     if src.checks is not None and "md" in src.checks.column_names:
         passed = src.checks.column("passed").to_pylist()
@@ -176,16 +183,53 @@ def station_flags(md: FloatArray, src: QcSources) -> list[str]:
         keep = ~np.isnan(md_checks)
         at(
             md_checks[keep],
-            [n if not p else "" for n, p, k in zip(names, passed, keep, strict=True) if k],
+            [
+                [] if p else [failed_check(n)]
+                for n, p, k in zip(names, passed, keep, strict=True)
+                if k
+            ],
         )
     if src.inout is not None:
         at(
             _floats(src.inout, "md"),
-            ["" if p else "in/out" for p in src.inout.column("passed").to_pylist()],
+            [[] if p else [failed_check("in/out")] for p in src.inout.column("passed").to_pylist()],
         )
     if src.stations is not None and "flags" in src.stations.column_names:
         at(
             _floats(src.stations, "md"),
-            [_flag_text(f) for f in src.stations.column("flags").to_pylist()],
+            [_station_flags(f) for f in src.stations.column("flags").to_pylist()],
         )
-    return ["; ".join(found[i]) if found.get(i) else "ok" for i in range(len(md))]
+    return [found.get(i, []) for i in range(len(md))]
+
+
+def flag_table(flags: list[list[Flag]]) -> Table | None:
+    """Every flag the listing shows, explained once: failed checks first, then processing
+    flags, each with the number of stations it is on (None: nothing flagged)."""
+    counts: dict[Flag, int] = {}
+    for station in flags:
+        for flag in station:
+            counts[flag] = counts.get(flag, 0) + 1
+    if not counts:
+        return None
+    order = sorted(counts, key=lambda f: not f.failed)  # stable: first seen first
+    return Table(
+        "Flags in the listing",
+        (
+            Column("Flag", align="left"),
+            Column("Kind", align="left"),
+            Column("Stations"),
+            Column("Meaning", align="left", wrap=True),
+        ),
+        tuple(
+            (
+                f.label,
+                "failed check" if f.failed else "processing flag",
+                str(counts[f]),
+                f.meaning[:1].upper() + f.meaning[1:],
+            )
+            for f in order
+        ),
+        kind="flags",
+        note="A failed check highlights the station's row in the listing; a processing flag "
+        "highlights its QC cell and the values it applies to.",
+    )

@@ -4,7 +4,7 @@ statements read from the run's stages, and the provenance section."""
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import pyarrow as pa
@@ -20,6 +20,13 @@ from pipeline.reports.document import (
     Table,
     fmt,
     items,
+)
+from pipeline.reports.literature import (
+    DATA_VALIDITY,
+    DRIFT_CALIBRATION,
+    ERROR_MODEL,
+    MULTI_POSITION,
+    Citations,
 )
 from pipeline.well import WellMetadata
 
@@ -103,53 +110,83 @@ def _param(stage: StageSetup, name: str, default: Any = "?") -> Any:
     return stage.params.get(name, default)
 
 
-def _describe(stage: StageSetup) -> tuple[str, str] | None:
-    """What a known processing stage says about the method, as (label, statement)."""
+AZIMUTH_METHODS = {
+    "ml": "maximum-likelihood azimuth",
+    "auto": "azimuth by the better-conditioned closed form",
+    "sine": "azimuth from the right-side Earth rate",
+    "atan2": "azimuth from the high- and right-side Earth rates",
+}
+DRIFT_SOURCES = {
+    "tie_in": "the misclosure at the tie-in station",
+    "calibration": "the instrument's drift calibration",
+    "given": "a given rate",
+    "auto": "the best available source",
+}
+
+
+def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] | None:
+    """What a known processing stage says about the method, as (label, statement), its
+    published method cited through ``cite``."""
     match stage.uses:
         case "minimum_curvature":
             return "Survey calculation", "minimum curvature"
         case "survey_method":
             return "Survey calculation", str(_param(stage, "method")).replace("_", " ")
         case "compass":
+            method = str(_param(stage, "azimuth_method"))
             return (
                 "Gyrocompassing",
-                f"multi-position least squares, azimuth solver {_param(stage, 'azimuth_method')}, "
-                f"gyro toolface below {_param(stage, 'vertical_below')}° inclination",
+                f"multi-position least squares {cite(MULTI_POSITION)}, "
+                f"{AZIMUTH_METHODS.get(method, method)}, gyro toolface below "
+                f"{_param(stage, 'vertical_below')}° inclination",
             )
         case "integrate_continuous":
             return (
                 "Continuous survey",
-                "azimuth rate integrated between compassing stops, closed on the end stop, "
-                f"stations every {_param(stage, 'spacing')} m",
+                "azimuth rate integrated from a compassing stop and closed on the other "
+                "stop where both give an azimuth (the QC section says where not), stations "
+                f"every {_param(stage, 'spacing')} m",
             )
         case "position_uncertainty":
             confidence = float(_param(stage, "confidence", 0.0)) * 100
             return (
                 "Position uncertainty",
-                f"ISCWSA {_param(stage, 'model')} error model (SPE 67616 propagation), "
-                f"ellipses at {confidence:g} %",
+                f"ISCWSA {_param(stage, 'model')} error model propagated as in "
+                f"{cite(ERROR_MODEL)}, ellipses at {confidence:g} %",
             )
         case "correct_drift":
-            return "Drift correction", f"A − ω·(t − t₀), rate from {_param(stage, 'source')}"
+            source = str(_param(stage, "source"))
+            return (
+                "Drift correction",
+                f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}",
+            )
         case "calibrate_drift":
             return (
                 "Drift calibration",
-                f"series means (seed 000), estimate used: {_param(stage, 'use')}, "
-                f"linearity test at α = {_param(stage, 'alpha')}",
+                f"drift from the means of the calibration series {cite(DRIFT_CALIBRATION)}, "
+                f"estimate used: {_param(stage, 'use')}, linearity test at "
+                f"α = {_param(stage, 'alpha')}",
             )
         case "north_reference":
             return "North reference conversion", f"to {_param(stage, 'target')} north"
         case "validity_checks" | "window_checks":
-            return "Validity checks", "sensor triads at rest against the site's Earth references"
+            return (
+                "Validity checks",
+                f"sensor triads at rest against the site's Earth references {cite(DATA_VALIDITY)}",
+            )
     return None
 
 
-def method_items(provenance: Provenance) -> list[tuple[str, str]]:
-    """Method statements of the run's known stages (first stage of each kind)."""
+def method_items(provenance: Provenance, citations: Citations) -> list[tuple[str, str]]:
+    """Method statements of the run's known stages (first stage of each kind), their
+    methods' papers cited in ``citations``."""
     found: dict[str, str] = {}
     for stage in provenance.stages:
-        described = _describe(stage)
-        if described and described[0] not in found:
+        probe = _describe(stage, lambda work: "")  # cite only what is printed
+        if probe is None or probe[0] in found:
+            continue
+        described = _describe(stage, citations.cite)
+        if described is not None:
             found[described[0]] = described[1]
     return list(found.items())
 

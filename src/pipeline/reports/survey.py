@@ -10,7 +10,6 @@ from functools import partial
 
 import numpy as np
 import pyarrow as pa
-from scipy import stats
 
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
@@ -26,10 +25,23 @@ from pipeline.reports.document import (
     Table,
     Verdict,
     fmt,
+    fmt_azimuth,
     fmt_sig,
+    fmt_sigma,
     items,
 )
-from pipeline.reports.qc import QcSources, all_series, station_flags, summary_rows
+from pipeline.reports.flags import Flag
+from pipeline.reports.listing import (
+    ELLIPSE_COLUMNS,
+    MIN_COURSE,
+    Course,
+    col,
+    confidence,
+    listing,
+    short_courses,
+)
+from pipeline.reports.literature import Citations
+from pipeline.reports.qc import QcSources, all_series, flag_table, station_flags, summary_rows
 from pipeline.reports.sections import (
     footer,
     method_items,
@@ -42,8 +54,6 @@ from pipeline.reports.sections import (
 )
 from pipeline.survey.stations import survey_offsets
 from pipeline.well import WellMetadata
-
-ELLIPSE_COLUMNS = ("ellipse_major_conf", "ellipse_minor_conf", "ellipse_azimuth", "vertical_conf")
 
 
 class ReportInputError(GyropipeError):
@@ -69,11 +79,6 @@ class SurveyTables:
         return QcSources(self.qc, self.qc_summary, self.checks, self.inout, self.stations)
 
 
-def _col(table: pa.Table, name: str) -> plots.FloatArray:
-    values: plots.FloatArray = table.column(name).to_numpy(zero_copy_only=False).astype(float)
-    return values
-
-
 def section_azimuth(
     north: plots.FloatArray, east: plots.FloatArray, vs: plots.FloatArray
 ) -> float | None:
@@ -89,22 +94,29 @@ def section_azimuth(
 
 
 def survey_document(
-    tables: SurveyTables, well: WellMetadata, provenance: Provenance, title: str
+    tables: SurveyTables,
+    well: WellMetadata,
+    provenance: Provenance,
+    title: str,
+    min_course: float = MIN_COURSE,
 ) -> Document:
-    """The survey report of one well."""
+    """The survey report of one well; DLS over courses shorter than ``min_course`` m is
+    left out of the summary's maximum and marked in the listing."""
     traj = tables.trajectory
     if traj.num_rows == 0:
         raise ReportInputError(
             "the trajectory table has no rows (the stage that produced it gave none): "
             "no stations to report"
         )
-    md, tvd = _col(traj, "md"), _col(traj, "tvd")
-    north, east, vs = _col(traj, "north"), _col(traj, "east"), _col(traj, "vertical_section")
+    md, tvd = col(traj, "md"), col(traj, "tvd")
+    north, east, vs = col(traj, "north"), col(traj, "east"), col(traj, "vertical_section")
     ref = north_label(traj, "azi")
     path = plots.Path3(md, north, east, tvd, tuple(int(o) for o in survey_offsets(traj)), ref)
     vs_azimuth = section_azimuth(north, east, vs)
     src = tables.qc_sources()
     flags = station_flags(md, src) if src.any() or _has(tables.stations, "flags") else None
+    short = short_courses(md, path.offsets, min_course)
+    course = Course(short, min_course)
 
     sections = [
         Section(
@@ -119,16 +131,21 @@ def survey_document(
             ),
             key="well",
         ),
-        _summary(tables, path, vs_azimuth, flags),
+        _summary(tables, path, vs_azimuth, flags, course),
         _method(tables, path, vs_azimuth, provenance),
-        Section("Survey listing", (_listing(tables, vs_azimuth, flags),), key="listing"),
-        _trajectory_plots(traj, path, vs, vs_azimuth),
+        Section(
+            "Survey listing",
+            (listing(traj, tables.stations, vs_azimuth, flags, course),),
+            key="listing",
+        ),
+        _trajectory_plots(traj, path, vs, vs_azimuth, course),
     ]
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(traj, path))
     groups = all_series(src)
-    if groups:
-        sections.append(_qc(groups))
+    explained = flag_table(flags or [])
+    if groups or explained is not None:
+        sections.append(_qc(groups, explained))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
         calibration = tables.calibration if _rows(tables.calibration) else None
@@ -152,62 +169,85 @@ def _has(table: pa.Table | None, column: str) -> bool:
     return table is not None and column in table.column_names
 
 
-def _confidence(traj: pa.Table) -> str:
-    """The probability content of the *_conf ellipses, from their ratio to the 1σ ones."""
-    if "ellipse_major" not in traj.column_names:
-        return "confidence level"
-    major, conf = _col(traj, "ellipse_major"), _col(traj, "ellipse_major_conf")
-    ok = major > 0
-    if not ok.any():
-        return "confidence level"
-    k = float(np.median(conf[ok] / major[ok]))
-    return f"{100 * stats.chi2.cdf(k * k, 2):.3g} %"
+def _max_dls(traj: pa.Table, path: plots.Path3, course: Course) -> str:
+    """Largest DLS over the courses at least ``min_course`` long, saying how many were
+    left out."""
+    dls = col(traj, "dls")
+    counted = ~course.short
+    if not counted.any():
+        counted = np.ones_like(counted)
+        note = f" (every course shorter than {course.min_course:g} m)"
+    elif course.short.any():
+        note = f" ({course.words} not counted: {int(course.short.sum())})"
+    else:
+        note = ""
+    i = int(np.flatnonzero(counted)[np.argmax(dls[counted])])
+    return f"{fmt(dls[i])} {unit_label(traj, 'dls')} at {fmt(path.md[i])} m MD{note}"
+
+
+def _qc_verdict(flags: list[list[Flag]], md: plots.FloatArray) -> Verdict:
+    """The summary's QC line: stations that failed a check (listed by MD), and how many
+    carry each processing flag."""
+    n = len(flags)
+    failed = [i for i, f in enumerate(flags) if any(x.failed for x in f)]
+    counts: dict[str, int] = {}
+    for station in flags:
+        for label in dict.fromkeys(x.label for x in station if not x.failed):
+            counts[label] = counts.get(label, 0) + 1
+    caveats = sum(1 for f in flags if any(not x.failed for x in f))
+    flagged = (
+        f"{caveats} of {n} stations carry processing flags "
+        f"({', '.join(f'{label}: {count}' for label, count in counts.items())}), marked in "
+        "the listing and explained in the QC section"
+    )
+    if failed:
+        listed = ", ".join(f"{fmt(md[i])} m" for i in failed[:8]) + (
+            " …" if len(failed) > 8 else ""
+        )
+        text = (
+            f"QC: {len(failed)} of {n} stations failed a check (MD {listed}); their rows are "
+            "highlighted in the listing and the checks explained in the QC section"
+        )
+        return Verdict("warn", f"{text}; {flagged}." if caveats else f"{text}.")
+    if caveats:
+        return Verdict("info", f"QC: no station failed a check; {flagged}.")
+    return Verdict("ok", f"QC: all {n} stations passed.")
 
 
 def _summary(
-    tables: SurveyTables, path: plots.Path3, vs_azimuth: float | None, flags: list[str] | None
+    tables: SurveyTables,
+    path: plots.Path3,
+    vs_azimuth: float | None,
+    flags: list[list[Flag]] | None,
+    course: Course,
 ) -> Section:
     traj = tables.trajectory
-    inc, dls = _col(traj, "inc"), _col(traj, "dls")
-    i_inc, i_dls = int(np.argmax(inc)), int(np.argmax(dls))
+    inc = col(traj, "inc")
+    i_inc = int(np.argmax(inc))
     distance = float(np.hypot(path.north[-1], path.east[-1]))
-    direction = float(np.degrees(np.arctan2(path.east[-1], path.north[-1])) % 360.0)
+    direction = float(np.degrees(np.arctan2(path.east[-1], path.north[-1])))
     results = [
         ("Total depth (MD)", f"{fmt(path.md[-1])} m"),
         ("TVD at TD", f"{fmt(path.tvd[-1])} m"),
         ("North / East at TD", f"{fmt(path.north[-1])} m / {fmt(path.east[-1])} m"),
-        ("Closure at TD", f"{fmt(distance)} m @ {fmt(direction)}° {path.north_label}"),
+        ("Closure at TD", f"{fmt(distance)} m @ {fmt_azimuth(direction)}° {path.north_label}"),
         ("Maximum inclination", f"{fmt(inc[i_inc])}° at {fmt(path.md[i_inc])} m MD"),
-        (
-            "Maximum DLS",
-            f"{fmt(dls[i_dls])} {unit_label(traj, 'dls')} at {fmt(path.md[i_dls])} m MD",
-        ),
+        ("Maximum DLS", _max_dls(traj, path, course)),
     ]
     if vs_azimuth is not None:
-        results.append(("Vertical section at TD", f"{fmt(_col(traj, 'vertical_section')[-1])} m"))
+        results.append(("Vertical section at TD", f"{fmt(col(traj, 'vertical_section')[-1])} m"))
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         results.append(
             (
-                f"Ellipse at TD ({_confidence(traj)})",
-                f"{fmt(_col(traj, 'ellipse_major_conf')[-1])} × "
-                f"{fmt(_col(traj, 'ellipse_minor_conf')[-1])} m, vertical ± "
-                f"{fmt(_col(traj, 'vertical_conf')[-1])} m",
+                f"Ellipse at TD ({confidence(traj)})",
+                f"{fmt(col(traj, 'ellipse_major_conf')[-1])} × "
+                f"{fmt(col(traj, 'ellipse_minor_conf')[-1])} m, vertical ± "
+                f"{fmt(col(traj, 'vertical_conf')[-1])} m",
             )
         )
     blocks: list[Block] = [Fields("Results", tuple(results))]
     if flags is not None:
-        bad = [(m, f) for m, f in zip(path.md, flags, strict=True) if f != "ok"]
-        if not bad:
-            blocks.append(Verdict("ok", f"QC: all {len(flags)} stations passed."))
-        else:
-            listed = ", ".join(f"{fmt(m)} m" for m, _ in bad[:8]) + (" …" if len(bad) > 8 else "")
-            blocks.append(
-                Verdict(
-                    "warn",
-                    f"QC: {len(bad)} of {len(flags)} stations flagged (MD {listed}); "
-                    "see the listing's QC column and the QC section.",
-                )
-            )
+        blocks.append(_qc_verdict(flags, path.md))
     return Section("Summary", tuple(blocks), key="summary")
 
 
@@ -215,8 +255,11 @@ def _method(
     tables: SurveyTables, path: plots.Path3, vs_azimuth: float | None, provenance: Provenance
 ) -> Section:
     traj = tables.trajectory
+    citations = Citations()
     plane = (
-        f"{fmt(vs_azimuth)}° {path.north_label}" if vs_azimuth is not None else "n/a (no offset)"
+        f"{fmt_azimuth(vs_azimuth)}° {path.north_label}"
+        if vs_azimuth is not None
+        else "n/a (no offset)"
     )
     survey = [
         ("Azimuth reference", path.north_label),
@@ -227,85 +270,26 @@ def _method(
             f"E {fmt(path.east[0])} m",
         ),
         ("Dogleg severity unit", unit_label(traj, "dls")),
-        *method_items(provenance),
+        *method_items(provenance, citations),
     ]
     blocks: list[Block] = [Fields("Method", items(survey))]
     refs = references(tables.qc)
     if refs:
         blocks.append(Fields("Reference models", tuple(refs)))
+    cited = citations.fields()
+    if cited is not None:
+        blocks.append(cited)
     return Section("Method and reference models", tuple(blocks), key="method")
 
 
-def _listing(tables: SurveyTables, vs_azimuth: float | None, flags: list[str] | None) -> Table:
-    traj = tables.trajectory
-    ref = north_label(traj, "azi").replace(" north", "")
-    dls_unit = unit_label(traj, "dls")
-    vs_unit = f"m @ {vs_azimuth:.1f}°" if vs_azimuth is not None else "m"
-    spec: list[tuple[Column, list[str]]] = []
-
-    def add(column: Column, values: list[str]) -> None:
-        spec.append((column, values))
-
-    def num(name: str, decimals: int = 2) -> list[str]:
-        return [fmt(v, decimals) for v in _col(traj, name)]
-
-    if "survey" in traj.column_names and len(set(traj.column("survey").to_pylist())) > 1:
-        add(Column("Survey", align="left"), [str(s) for s in traj.column("survey").to_pylist()])
-    add(Column("MD", "m"), num("md"))
-    add(Column("INC", "°"), num("inc"))
-    add(Column("AZI", f"° {ref}"), num("azi"))
-    add(Column("TVD", "m"), num("tvd"))
-    add(Column("North", "m"), num("north"))
-    add(Column("East", "m"), num("east"))
-    add(Column("DLS", dls_unit), num("dls"))
-    add(Column("VS", vs_unit), num("vertical_section"))
-    sigmas = _station_sigmas(tables)
-    for header, values in sigmas:
-        add(Column(header, "°"), values)
-    if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
-        conf = _confidence(traj)
-        add(Column("Semi-major", f"m, {conf}"), num("ellipse_major_conf"))
-        add(Column("Semi-minor", f"m, {conf}"), num("ellipse_minor_conf"))
-        add(Column("Major az", f"° {ref}"), num("ellipse_azimuth", 1))
-        add(Column("Vertical", f"± m, {conf}"), num("vertical_conf"))
-    if flags is not None:
-        add(Column("QC", align="left", wrap=True), flags)
-    marked = frozenset(i for i, f in enumerate(flags or []) if f != "ok")
-    rows = tuple(zip(*(values for _, values in spec), strict=True))
-    return Table(
-        "",
-        tuple(c for c, _ in spec),
-        rows,
-        kind="listing",
-        note=f"Azimuths and ellipse directions relative to {north_label(traj, 'azi')}; positions "
-        "from the wellhead, TVD below the depth reference. Highlighted rows carry a QC flag.",
-        marked=marked,
-    )
-
-
-def _station_sigmas(tables: SurveyTables) -> list[tuple[str, list[str]]]:
-    """σ INC / σ AZI of the solved stations, matched to the trajectory by MD."""
-    st = tables.stations
-    if st is None:
-        return []
-    md = _col(tables.trajectory, "md")
-    st_md = _col(st, "md")
-    index = np.clip(np.searchsorted(st_md, md), 0, max(len(st_md) - 1, 0))
-    found = np.abs(st_md[index] - md) <= 1e-3 if len(st_md) else np.zeros(len(md), bool)
-    out = []
-    for name, header in (("sigma_inc", "σ INC"), ("sigma_azi", "σ AZI")):
-        if name in st.column_names:
-            values = _col(st, name)[index]
-            out.append(
-                (header, [fmt(v, 3) if ok else "" for v, ok in zip(values, found, strict=True)])
-            )
-    return out
-
-
 def _trajectory_plots(
-    traj: pa.Table, path: plots.Path3, vs: plots.FloatArray, vs_azimuth: float | None
+    traj: pa.Table,
+    path: plots.Path3,
+    vs: plots.FloatArray,
+    vs_azimuth: float | None,
+    course: Course,
 ) -> Section:
-    inc, azi, dls = _col(traj, "inc"), _col(traj, "azi"), _col(traj, "dls")
+    inc, azi, dls = col(traj, "inc"), col(traj, "azi"), col(traj, "dls")
     return Section(
         "Trajectory",
         (
@@ -337,7 +321,8 @@ def _trajectory_plots(
             Plot(
                 "profiles",
                 "Inclination, azimuth and dogleg severity against MD",
-                "Azimuths drawn hollow where the inclination is too small to define them.",
+                "Azimuths drawn hollow where the inclination is too small to define them"
+                + (f"; DLS over {course.words} as grey rings." if course.short.any() else "."),
                 partial(
                     plots.profiles,
                     path=path,
@@ -345,6 +330,8 @@ def _trajectory_plots(
                     azi=azi,
                     dls=dls,
                     dls_unit=unit_label(traj, "dls"),
+                    short=course.short,
+                    short_label=course.words,
                 ),
                 (6.9, 4.5),
             ),
@@ -354,13 +341,13 @@ def _trajectory_plots(
 
 
 def _uncertainty(traj: pa.Table, path: plots.Path3) -> Section:
-    conf = _confidence(traj)
+    conf = confidence(traj)
     ell = plots.Ellipses(
         md=path.md,
-        major=_col(traj, "ellipse_major_conf"),
-        minor=_col(traj, "ellipse_minor_conf"),
-        azimuth=_col(traj, "ellipse_azimuth"),
-        vertical=_col(traj, "vertical_conf"),
+        major=col(traj, "ellipse_major_conf"),
+        minor=col(traj, "ellipse_minor_conf"),
+        azimuth=col(traj, "ellipse_azimuth"),
+        vertical=col(traj, "vertical_conf"),
         confidence=conf,
     )
     return Section(
@@ -379,8 +366,8 @@ def _uncertainty(traj: pa.Table, path: plots.Path3) -> Section:
     )
 
 
-def _qc(groups: list[tuple[str, list[plots.QcSeries]]]) -> Section:
-    blocks: list[Block] = []
+def _qc(groups: list[tuple[str, list[plots.QcSeries]]], explained: Table | None) -> Section:
+    blocks: list[Block] = [explained] if explained is not None else []
     columns = (
         Column("Check", align="left"),
         Column("Unit", align="left"),
@@ -406,8 +393,9 @@ def _qc(groups: list[tuple[str, list[plots.QcSeries]]]) -> Section:
             Plot(
                 f"qc-{k}",
                 title,
-                "Shaded: tolerance band; crosses: failed rows. Values "
-                "against MD (rows without MD are not drawn).",
+                "Shaded: tolerance band; crosses: failed rows. Values against MD (rows without "
+                "MD are not drawn). Where the band is far wider than the values, the axis "
+                "shows the values and the legend gives the band.",
                 partial(plots.qc_charts, series=series),
                 (6.9, min(height, 8.5)),
             )
@@ -430,7 +418,7 @@ def _drift(tables: SurveyTables) -> Section:
                 r["instrument"],
                 r["method"],
                 fmt(r["drift_deg_h"], 3),
-                fmt(r["sigma_deg_h"], 3),
+                fmt_sigma(r["sigma_deg_h"]),
                 r["verdict"],
             )
             for r in chosen.to_pylist()
@@ -451,8 +439,8 @@ def _drift(tables: SurveyTables) -> Section:
         )
     drift = tables.drift
     if drift is not None:
-        time_h = _col(drift, "time") / 3600.0
-        correction = _col(drift, "correction")
+        time_h = col(drift, "time") / 3600.0
+        correction = col(drift, "correction")
         outbound = np.array([r == "out" for r in drift.column("run").to_pylist()])
         span = float(np.ptp(time_h))
         rate = (
@@ -476,9 +464,9 @@ def _drift(tables: SurveyTables) -> Section:
                     plots.drift_correction,
                     time_h=time_h,
                     correction=correction,
-                    md=_col(drift, "md"),
-                    azi_raw=_col(drift, "azi_raw"),
-                    azi=_col(drift, "azi"),
+                    md=col(drift, "md"),
+                    azi_raw=col(drift, "azi_raw"),
+                    azi=col(drift, "azi"),
                     outbound=outbound,
                     north_label=north_label(drift, "azi"),
                 ),
@@ -494,14 +482,14 @@ def _allan(allan: pa.Table, noise: pa.Table | None) -> Section:
         for a in ("gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
         if a in allan.column_names and allan.column(a).null_count < allan.num_rows
     ]
-    curves = {a: _col(allan, a) for a in axes}
+    curves = {a: col(allan, a) for a in axes}
     units = {a: unit_label(allan, a) for a in axes}
     blocks: list[Block] = [
         Plot(
             "allan",
             "Allan deviation",
             "Overlapping Allan deviation of the static record at octave averaging times.",
-            partial(plots.allan_deviation, tau=_col(allan, "tau"), curves=curves, units=units),
+            partial(plots.allan_deviation, tau=col(allan, "tau"), curves=curves, units=units),
             (6.9, 3.4),
         )
     ]

@@ -50,6 +50,13 @@ class ReportParams(BaseModel):
         "auto", description="figures in the HTML: PNG, SVG, or per figure the smaller (auto)"
     )
     dpi: int = Field(110, ge=50, le=300, description="resolution of PNG figures in the HTML")
+    min_course_length: float = Field(
+        10.0,
+        ge=0,
+        description="survey report, m: dogleg severity over a course shorter than this (e.g. "
+        "the last course to an end stop) is left out of the summary's maximum DLS and marked "
+        "in the listing; 0 counts every course",
+    )
 
 
 def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
@@ -71,7 +78,11 @@ def survey_report(
     from pipeline.reports.survey import SurveyTables, survey_document
 
     doc = survey_document(
-        SurveyTables(**inputs), ctx.well, ctx.provenance, params.title or "Gyro survey report"
+        SurveyTables(**inputs),
+        ctx.well,
+        ctx.provenance,
+        params.title or "Gyro survey report",
+        min_course=params.min_course_length,
     )
     _write(doc, params, ctx)
     return {}

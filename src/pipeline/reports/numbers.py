@@ -1,0 +1,70 @@
+"""How numbers are printed in a report: fixed decimals, significant digits, uncertainties
+and azimuths. Shared by the document content and the figures."""
+
+from __future__ import annotations
+
+import math
+
+UNDEFINED = "undefined"
+"""What an uncertainty prints as when it does not exist (infinite or NaN)."""
+SIGMA_DIGITS = 2
+"""Significant digits of a printed σ."""
+SIGMA_FIXED_BELOW = -4
+"""A σ whose decimal exponent is at least this prints in fixed notation (0.00012), a
+smaller one in scientific notation (4.0e−5)."""
+
+
+def _minus(text: str) -> str:
+    return text.replace("-", "−")
+
+
+def fmt(value: float | None, decimals: int = 2) -> str:
+    """A number with fixed decimals; blank for null, '—' for NaN."""
+    if value is None:
+        return ""
+    if math.isnan(value):
+        return "—"
+    if math.isinf(value):
+        return "∞" if value > 0 else "−∞"
+    text = f"{value:.{decimals}f}"
+    return _minus(text) if text.lstrip("-").strip("0. ") else text.lstrip("-")
+
+
+def fmt_sig(value: float | None, digits: int = 3) -> str:
+    """A number with ``digits`` significant digits (small σ, p-values)."""
+    if value is None:
+        return ""
+    if not math.isfinite(value):
+        return fmt(value)
+    return _minus(f"{value:.{digits}g}")
+
+
+def fmt_sigma(value: float | None) -> str:
+    """A standard deviation with :data:`SIGMA_DIGITS` significant digits: fixed notation
+    down to 1e−4 (``0.031``, ``1.2``, ``0.00012``), scientific below (``4.0e−5``); zero as
+    ``0``; :data:`UNDEFINED` where it is infinite or NaN (no finite σ exists)."""
+    if value is None:
+        return ""
+    if not math.isfinite(value):
+        return UNDEFINED
+    if value == 0:
+        return "0"
+    mantissa, exponent = f"{value:.{SIGMA_DIGITS - 1}e}".split("e")
+    power = int(exponent)
+    if power < SIGMA_FIXED_BELOW:
+        return _minus(f"{mantissa}e{power}")
+    return _minus(f"{value:.{max(SIGMA_DIGITS - 1 - power, 0)}f}")
+
+
+def azimuth_value(value: float, decimals: int) -> float:
+    """``value`` (deg) in [0, 360) as printed with ``decimals``: a value that rounds to
+    360 (or a −1e−13 that wraps to it) is 0."""
+    wrapped = value % 360.0
+    return 0.0 if round(wrapped, decimals) >= 360.0 else wrapped
+
+
+def fmt_azimuth(value: float | None, decimals: int = 2) -> str:
+    """An azimuth (deg) in [0, 360) with fixed decimals: never '360.00', never '−0.00'."""
+    if value is None or not math.isfinite(value):
+        return fmt(value, decimals)
+    return fmt(azimuth_value(value, decimals), decimals)

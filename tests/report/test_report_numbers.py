@@ -1,0 +1,81 @@
+"""How reports print σ and azimuths: the rules, and a report of a well drilled due north
+(azimuth 359.999°, vertical section at 359.9999°) written through ``gp.report``, where no
+azimuth may print as 360 (issue #18, items 5 and 8)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pytest
+from report_support import figure_svg, inspect, pdf_pages, svg_texts
+
+import pipeline as gp
+from pipeline.reports.numbers import fmt_azimuth, fmt_sigma
+
+
+@pytest.mark.parametrize(
+    ("sigma", "text"),
+    [
+        (4.2e-5, "4.2e−5"),
+        (0.00012, "0.00012"),
+        (0.0306, "0.031"),
+        (0.0996, "0.10"),
+        (1.187, "1.2"),
+        (17.265, "17"),
+        (123.4, "123"),
+        (0.0, "0"),
+        (float("inf"), "undefined"),
+        (float("nan"), "undefined"),
+        (None, ""),
+    ],
+)
+def test_sigma_has_two_significant_digits(sigma: float | None, text: str):
+    assert fmt_sigma(sigma) == text
+
+
+@pytest.mark.parametrize(
+    ("azimuth", "decimals", "text"),
+    [
+        (-1e-13, 2, "0.00"),
+        (359.996, 2, "0.00"),
+        (359.994, 2, "359.99"),
+        (359.96, 1, "0.0"),
+        (360.0, 2, "0.00"),
+        (725.5, 1, "5.5"),
+        (-0.004, 2, "0.00"),
+        (-0.006, 2, "359.99"),
+        (37.0, 2, "37.00"),
+    ],
+)
+def test_azimuth_that_rounds_to_360_prints_as_0(azimuth: float, decimals: int, text: str):
+    assert fmt_azimuth(azimuth, decimals) == text
+
+
+def test_due_north_well_prints_no_azimuth_of_360(browser: Any, tmp_path: Path):
+    md = np.arange(0.0, 1001.0, 100.0)
+    stations = pd.DataFrame(
+        {"md": md, "inc": np.linspace(0.0, 20.0, md.size), "azi": np.full(md.size, 359.999)}
+    )
+    well = {"north_reference": "true", "latitude": 61.25, "well": "due-north"}
+    trajectory = gp.minimum_curvature(stations, well=well, vs_azimuth=359.9999)
+    html, pdf = gp.report(trajectory, tmp_path / "report", well=well, image_format="svg")
+
+    page = inspect(browser, html)
+    text = " ".join(page.text.split())
+    assert "Vertical section azimuth 0.00° true north" in text
+    assert re.search(r"Closure at TD [\d.]+ m @ 0\.00° true north", text)
+    header = page.headers["listing"]
+    assert page.units["listing"][header.index("VS")] == "m @ 0.0°"
+    azimuths = [r[header.index("AZI")] for r in page.tables["listing"]]
+    assert azimuths == ["0.00"] * md.size
+    for key in ("plan", "section"):
+        labels = " ".join(svg_texts(browser, figure_svg(html, key), "text"))
+        assert "@ 0.00°" in labels and "360.0" not in labels
+    assert not re.search(r"360\.0", text)
+
+    words = " ".join(w[0] for p in pdf_pages(pdf, tmp_path) for w in p.words)
+    assert "0.00° true north" in words and not re.search(r"360\.0", words)
