@@ -7,6 +7,7 @@ import shutil
 import sys
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import pyarrow as pa
 from hypothesis import strategies as st
@@ -50,6 +51,45 @@ def plugin_io(plugin: ModuleType) -> tuple[ReaderDef, WriterDef]:
     (reader,) = readers
     (writer,) = writers
     return reader, writer
+
+
+def export_tolerance(unit: str, values: Any) -> Any:
+    """How far an export may put ``values`` of ``unit`` (a unit in
+    :data:`pipeline.io.precision.DECIMALS`): half a step of its decimals, plus the
+    float's own rounding."""
+    import numpy as np
+
+    from pipeline.io.precision import DECIMALS
+
+    with np.errstate(over="ignore"):
+        return 0.5 * 10.0 ** -DECIMALS[unit] + 2 * np.spacing(np.abs(values))
+
+
+def assert_exported(back: pa.Table, written: pa.Table, names: list[str] | None = None) -> None:
+    """Columns ``names`` (default: all) of ``written`` as an export reads them back: a float
+    column of a unit in :data:`pipeline.io.precision.DECIMALS` within half a step of that
+    unit's decimals (plus the float's own rounding), nulls and NaN where they were; any
+    other column exactly."""
+    import numpy as np
+
+    from pipeline.contracts import UNIT_KEY
+    from pipeline.io.precision import DECIMALS
+
+    for name in names or written.column_names:
+        field = written.schema.field(name)
+        got, want = back.column(name), written.column(name)
+        unit = (field.metadata or {}).get(UNIT_KEY, b"").decode()
+        if unit not in DECIMALS or not pa.types.is_floating(field.type):
+            assert got.equals(want), name
+            continue
+        assert got.is_null().equals(want.is_null()), name
+        a = got.to_numpy(zero_copy_only=False).astype(np.float64)
+        b = want.to_numpy(zero_copy_only=False).astype(np.float64)
+        assert np.array_equal(np.isnan(a), np.isnan(b)), name
+        finite = np.isfinite(b)
+        tolerance = export_tolerance(unit, b[finite])
+        assert np.all(np.abs(a[finite] - b[finite]) <= tolerance), (name, unit)
+        assert np.array_equal(a[~finite], b[~finite], equal_nan=True), name
 
 
 def mutate_bytes(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:

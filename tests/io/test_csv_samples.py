@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.csv as pacsv
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -18,12 +19,13 @@ from pipeline.contracts import UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.io import csv_rows
+from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
-from tests_support import line_ops, mutate_lines, plugin_io
+from tests_support import assert_exported, line_ops, mutate_lines, plugin_io
 
 READER, WRITER = plugin_io(csv_plugin)
 G = 9.80665
@@ -235,24 +237,52 @@ def test_simulator_samples_round_trip(tmp_path: Path, tool: dict[str, Any]) -> N
     for field in samples.schema:
         got = back.schema.field(field.name)
         assert (got.type, got.metadata) == (field.type, field.metadata), field.name
-        assert back.column(field.name).equals(samples.column(field.name)), field.name
+    assert_exported(back, samples)
     RawSamples.validate_table(back)
 
 
-def test_float_round_trip_is_exact(tmp_path: Path) -> None:
+def test_floats_are_written_to_their_units_step(tmp_path: Path) -> None:
+    """Each float is written rounded to its unit's step (DECIMALS), whatever its magnitude:
+    read back, it is within half a step of the value and a whole number of steps, and its
+    cell shows no more decimals."""
     rng = np.random.default_rng(3)
     values = {
         name: rng.normal(0, 1e3, 500) * 10.0 ** rng.integers(-300, 300, 500)
         for name in ("gyro_x", "acc_x", "acc_y", "acc_z")
     }
-    table = RawSamples.compiled().make_table({"time": np.arange(500.0)} | values)
-    path = tmp_path / "exact.csv"
+    table = RawSamples.compiled().make_table({"time": np.arange(500.0) / 3} | values)
+    path = tmp_path / "rounded.csv"
     WRITER.write(table, path, WellMetadata())
     back, _ = read(path)
-    for name in values:
+    assert_exported(back, table)
+    cells = [line.split(",") for line in path.read_text().splitlines()[2:]]
+    header = path.read_text().splitlines()[1].split(",")
+    for name in ["time", *values]:
+        unit = table.schema.field(name).metadata[UNIT_KEY].decode()
+        decimals = DECIMALS[unit]
+        assert all(round(v, decimals) == v for v in back.column(name).to_pylist()), name
+        at = next(i for i, h in enumerate(header) if h.startswith(f"{name}["))
+        for row in cells:
+            number, _, exponent = row[at].partition("e")
+            assert len(number.partition(".")[2]) - int(exponent or 0) <= decimals, row[at]
+
+
+def test_unlisted_unit_floats_round_trip_exactly(tmp_path: Path) -> None:
+    """A float column whose unit has no DECIMALS entry (or no unit) is written in shortest
+    round-trip form: read back bit for bit, whatever its magnitude."""
+    rng = np.random.default_rng(4)
+    values = rng.normal(0, 1e3, 500) * 10.0 ** rng.integers(-300, 300, 500)
+    assert "ft" not in DECIMALS
+    schema = pa.schema(
+        [pa.field("ratio", pa.float64()), pa.field("x", pa.float64(), metadata={UNIT_KEY: b"ft"})]
+    )
+    table = pa.table({"ratio": values, "x": values[::-1]}, schema=schema)
+    path = tmp_path / "exact.csv"
+    WRITER.write(table, path, WellMetadata())
+    back = pacsv.read_csv(path, pacsv.ReadOptions(skip_rows=1))
+    for name, written in zip(("ratio", "x[ft]"), table.columns, strict=True):
         assert np.array_equal(
-            back.column(name).to_numpy().view(np.int64),
-            table.column(name).to_numpy().view(np.int64),
+            back.column(name).to_numpy().view(np.int64), written.to_numpy().view(np.int64)
         ), name
 
 

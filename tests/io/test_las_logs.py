@@ -29,10 +29,11 @@ from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.io import las as las_plugin
 from pipeline.io.las_header import DESCRIPTION_KEY, utf16_codec
 from pipeline.io.las_log import TEXT_NULL
+from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.tables import LogTable
 from pipeline.well import WellMetadata
-from tests_support import ROOT, gyropipe, mutate_bytes, plugin_io
+from tests_support import ROOT, assert_exported, gyropipe, mutate_bytes, plugin_io
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
@@ -393,6 +394,31 @@ def test_written_log_reads_back_in_lasio_and_gyropipe(tmp_path: Path, name: str)
     back, again, _ = read_log(path)
     assert_same_table(back.drop_columns(SOURCE_LINE), table.drop_columns(SOURCE_LINE))
     assert again.well == well.well
+
+
+def test_written_curves_of_unlisted_units_read_back_exactly(tmp_path: Path) -> None:
+    """Curves whose unit has no DECIMALS entry (gAPI, none) keep every bit, whatever the
+    magnitude; a curve in m is written at its unit's decimals."""
+    rng = np.random.default_rng(5)
+    wide = rng.normal(0, 1e3, 200) * 10.0 ** rng.integers(-300, 300, 200)
+    assert "gAPI" not in DECIMALS
+    schema = pa.schema(
+        [
+            pa.field("DEPT", pa.float64(), metadata={UNIT_KEY: b"m"}),
+            pa.field("GR", pa.float64(), metadata={UNIT_KEY: b"gAPI"}),
+            pa.field("RATIO", pa.float64()),
+        ]
+    )
+    depth = np.arange(200) * 0.1 + 1000.00004
+    table = pa.table({"DEPT": depth, "GR": wide, "RATIO": wide[::-1]}, schema=schema)
+    path = tmp_path / "wide.las"
+    WRITER.write(table, path, WellMetadata())
+    back, _, _ = read_log(path)
+    for name in ("GR", "RATIO"):
+        written = table.column(name).to_numpy().view(np.int64)
+        assert np.array_equal(back.column(name).to_numpy().view(np.int64), written), name
+    assert_exported(back, table, ["DEPT"])
+    assert values(back, "DEPT")[:2] == [1000.0, 1000.1]
 
 
 def test_written_log_keeps_repeated_mnemonics_and_descriptions(tmp_path: Path) -> None:

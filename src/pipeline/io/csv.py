@@ -50,7 +50,8 @@ invalid UTF-8, NUL bytes, a quote left open.
 
 Writing puts ``# gyropipe <well>``, ``# north_reference=<ref>``, ``# well.<field>=<value>``
 and, for a trajectory, ``# survey_method=…`` and ``# vs_azimuth=… deg`` lines above a
-``name[unit]`` header; the reader reads stations and samples back exactly (of several
+``name[unit]`` header, floats at their unit's decimals (:mod:`pipeline.io.precision`); the
+reader reads stations and samples back to within half a step of those decimals (of several
 columns that look like one, the one whose unit fits: ``dogleg[deg]`` is no DLS).
 """
 
@@ -84,6 +85,7 @@ from pipeline.io.csv_header import (
 from pipeline.io.csv_options import CsvOptions
 from pipeline.io.csv_rows import data_rows, load, newlines, parse, split_head
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
@@ -274,7 +276,7 @@ def sniff(path: Path) -> Claim:
 
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
-    then the values (floats in shortest round-trip form)."""
+    then the values (floats at their unit's precision, :mod:`pipeline.io.precision`)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -300,7 +302,7 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
     with path.open("wb") as fh:
         fh.write(("\n".join(comments) + "\n" + head.getvalue()).encode())
-        pacsv.write_csv(table, fh, pacsv.WriteOptions(include_header=False))
+        pacsv.write_csv(for_export(table), fh, pacsv.WriteOptions(include_header=False))
 
 
 def _header_cell(field: pa.Field) -> str:

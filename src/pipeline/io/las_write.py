@@ -9,7 +9,8 @@ METHOD and VSAZ (the survey calculation method and vertical-section azimuth a tr
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
 ``description`` metadata, a log's own, else the canonical column's); ``~Other``;
-``~ASCII`` with each number in shortest round-trip form. The first (index) column is ``md``
+``~ASCII`` with each float at its unit's decimals (:mod:`pipeline.io.precision`; others in
+shortest round-trip form). The first (index) column is ``md``
 for a stations-like table (md, inc and azi present), else ``time`` (raw samples dwell at one
 depth: only their time increases), else ``md``, else the first numeric column (a log's
 index). NULL is -999.25, or the first of -9999.25, -99999.25… that no value equals; NaN is
@@ -37,6 +38,7 @@ import pyarrow.csv as pacsv
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las_header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.precision import for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -52,7 +54,9 @@ _UNIT = re.compile(r"[^\s:]*")
 
 
 def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
-    """Write ``table`` as LAS 2.0 (see the module docstring)."""
+    """Write ``table`` as LAS 2.0 (see the module docstring); floats at their unit's
+    precision (:mod:`pipeline.io.precision`)."""
+    table = for_export(table)
     written = [f for f in table.schema if f.name != SOURCE_LINE and _writable_type(f)]
     numeric = [f for f in written if not pa.types.is_string(f.type)]
     if not numeric:

@@ -1,0 +1,57 @@
+"""The precision exports write each column at: decimals fit for its unit, so a file holds
+``914.4`` and ``30``, not ``914.4000000000001`` and ``29.999999847691296``.
+
+Every step is finer than any survey measurement resolves (0.1 mm, 0.000001°, 1 µs,
+0.1 ng…), so a value read back differs from the computed one by at most half a step of
+its unit (``0.5 * 10**-DECIMALS[unit]``, plus the float's own rounding); columns whose unit
+is not listed (and integer or text columns) keep their full, shortest round-trip, precision.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.contracts import UNIT_KEY
+
+DECIMALS: dict[str, int] = {
+    "m": 4,  # 0.1 mm
+    "m2": 8,  # (0.1 mm)², the length step squared: small covariances keep their digits
+    "deg": 6,  # 0.0036″
+    "deg/30m": 4,
+    "deg/h": 6,
+    "deg/h2": 6,
+    "deg/min": 8,  # finer than deg/h's step (1e-6 °/h ≈ 1.7e-8 °/min)
+    "m/s2": 9,  # ≈ 0.1 ng
+    "nT": 3,
+    "s": 6,  # 1 µs
+}
+"""Canonical unit → decimals written."""
+
+_EXACT = 2.0**52
+"""From this magnitude on, a float64 is a whole number: rounding leaves it as it is."""
+
+
+def for_export(table: pa.Table) -> pa.Table:
+    """``table`` with every float column of a listed unit rounded to its decimals (half to
+    even; −0 written as 0; NaN, ±inf and nulls as they are)."""
+    columns = []
+    for field, column in zip(table.schema, table.columns, strict=True):
+        unit = (field.metadata or {}).get(UNIT_KEY, b"").decode()
+        decimals = DECIMALS.get(unit)
+        if decimals is not None and pa.types.is_floating(field.type):
+            column = _rounded(column.combine_chunks(), decimals)
+        columns.append(column)
+    return pa.Table.from_arrays(columns, schema=table.schema)
+
+
+def _rounded(array: pa.Array, decimals: int) -> pa.Array:
+    """``array`` rounded to ``decimals``. numpy scales, rounds and divides back, so a value
+    is the float nearest its decimal text (pyarrow's round keeps ``914.4000000000001``)."""
+    values = array.to_numpy(zero_copy_only=False)
+    wide = values.astype(np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        rounded = np.where(np.abs(wide) < _EXACT, np.round(wide, decimals), wide) + 0.0
+    rounded = rounded.astype(values.dtype)
+    mask = array.is_null().to_numpy(zero_copy_only=False) if array.null_count else None
+    return pa.array(rounded, type=array.type, mask=mask)
