@@ -198,7 +198,8 @@ def _scalar(node: yaml.Node, file: str, problems: list[Problem]) -> Any:
         return node
     try:
         return _CONSTRUCTOR.construct_object(node, deep=True)
-    except (yaml.constructor.ConstructorError, ValueError, OverflowError) as exc:
+    except (yaml.constructor.ConstructorError, ValueError, LookupError, OverflowError) as exc:
+        # LookupError: !!bool maybe (PyYAML looks the word up in its table of booleans)
         problems.append(Problem(_location(file, node.start_mark), _unbuilt(node, exc)))
         return None
     finally:  # the shared constructor must keep no node (nor a half-built one) between calls

@@ -317,8 +317,9 @@ def test_a_control_character_is_located(tmp_path: Path):
         ("    description: !custom x", 18, "YAML tag '!custom' is not allowed"),
         ("    description: !!int abc", 18, "'abc' is not a valid YAML int: invalid literal"),
         ("    description: 2026-13-45", 18, "'2026-13-45' is not a valid YAML timestamp"),
+        ("    description: !!bool maybe", 18, "'maybe' is not a valid YAML bool: 'maybe'"),
     ],
-    ids=["merge-key", "python-tag", "custom-tag", "bad-int", "bad-date"],
+    ids=["merge-key", "python-tag", "custom-tag", "bad-int", "bad-date", "bad-bool"],
 )
 def test_a_scalar_yaml_cannot_build_is_a_located_problem(
     tmp_path: Path, registry, line: str, column: int, message: str
