@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from pipeline.convert import convert_file, read_any
-from pipeline.errors import InputFileError, WrongKindError
+from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.plugins import load_registry
 from pipeline.tables import RawSamples, Stations
 from pipeline.well import WellMetadata
@@ -250,3 +250,22 @@ def test_a_table_of_another_kind_is_the_wrong_kind(tmp_path: Path) -> None:
         convert_file(load_registry(), log, tmp_path / "o.csv", kind="stations")
     table, _ = convert_file(load_registry(), log, tmp_path / "o.csv")
     assert table.column_names == ["DEPT", "GR"]
+
+
+def test_a_table_the_output_format_cannot_hold_names_the_files(tmp_path: Path) -> None:
+    """Fuzz finding: a LAS log with no curve (or a null in its index) reads as a log, but
+    the LAS writer cannot write it; the error (exit 2) named neither file."""
+    src = tmp_path / "bare.las"
+    src.write_text("~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n WELL. W-1 :\n")
+    out = tmp_path / "o.las"
+    with (
+        pytest.warns(InputFileWarning, match="no ~A"),
+        pytest.raises(ValueError, match="no numeric column to write") as info,
+    ):
+        convert_file(load_registry(), src, out, kind="log")
+    assert str(info.value).startswith(f"{src}: the log read cannot be written to o.las")
+    assert not out.exists()
+    result = cli(str(src), str(out), "--kind", "log")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert errors == [f"error: {info.value}"], result.stderr
