@@ -303,6 +303,8 @@ def test_dates(tmp_path: Path, value: str, expected: dt.date) -> None:
         ("2024-02-30", "day is out of range"),
         ("31-Foo-2024", "'Foo' is not a month"),
         ("2024 05 01 extra", "not a date"),
+        ("2026-11-99999999999999999999999999999", "too large to convert"),  # fuzz: OverflowError
+        ("99999999999999999999 May 2024", "too large to convert"),
     ],
 )
 def test_invalid_dates(tmp_path: Path, value: str, message: str) -> None:
