@@ -172,8 +172,14 @@ def convert(
     merged = header.merged(well) if well is not None else header
     if SOURCE_LINE in table.column_names:  # line numbers of the source mean nothing in the copy
         table = table.drop_columns([SOURCE_LINE])
-    with atomic_path(target) as tmp:
-        writer.write(attach(table, merged), tmp, merged)
+    try:
+        with atomic_path(target) as tmp:
+            writer.write(attach(table, merged), tmp, merged)
+    except ValueError as exc:  # a table the format cannot hold: say which file, and where to
+        raise ValueError(
+            f"{source}: the {read_as} read cannot be written to {target.name} "
+            f"(writer {writer.name!r}): {exc}"
+        ) from exc
     return Converted(table, target, read_as)
 
 

@@ -18,11 +18,14 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from pipeline.contracts import TableContract
 from pipeline.errors import (
+    ContractViolation,
     GyropipeError,
+    InputFileError,
     PluginError,
     ReaderChoiceError,
     ReaderError,
     ReaderOptionsError,
+    WrongKindError,
 )
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
@@ -364,13 +367,15 @@ class Registry:
         parsed = reader_options(chosen, options or {}, well)
         owner = self.readers[chosen.name][1]
         try:
-            return chosen.read(path, kind, parsed)
+            table, found = chosen.read(path, kind, parsed)
         except GyropipeError as exc:
             if self._builtin(owner):
                 raise
             raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
         except Exception as exc:  # a reader's bug is reported against the reader
             raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
+        check_read(path, kind, chosen, table)
+        return table, found
 
     def check_reader_options(self, kind: str, reader: str, options: Mapping[str, Any]) -> None:
         """Raise the :class:`ValidationError` of ``options`` for the reader called ``reader``
@@ -405,6 +410,33 @@ class Registry:
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
+
+
+def check_read(path: Path, kind: str, reader: ReaderDef, table: pa.Table) -> None:
+    """Raise an :class:`InputFileError` unless the table ``reader`` read from ``path`` meets
+    the contract of ``kind`` (a :class:`WrongKindError` if it lacks a column the kind
+    requires: a file of another kind): what a reader lets through (MD or time out of order, an
+    inclination past 180°, a Parquet or MCAP column in another unit) is the file's fault,
+    named with the line of its first bad row (when the table records lines) and every
+    rule broken, on one line."""
+    contract = reader.kinds[kind]
+    missing = [
+        c.name
+        for c in contract.compiled().columns
+        if c.required and c.name not in table.column_names
+    ]
+    if missing:  # a reader of any kind of table (Parquet) found another kind's
+        raise WrongKindError(
+            path, f"not {kind}: no column {', '.join(map(repr, missing))} (reader {reader.name!r})"
+        )
+    try:
+        contract.validate_table(table)
+    except ContractViolation as exc:
+        lines = [n for failure in exc.failures for n in failure.lines]
+        rules = "; ".join(map(str, exc.failures))
+        raise InputFileError(
+            path, f"not valid as {kind} (reader {reader.name!r}): {rules}", min(lines, default=0)
+        ) from None
 
 
 def reader_options(

@@ -7,7 +7,9 @@ node came from, so pydantic errors and later checks can point at ``file:line:col
 Aliases are followed (an alias is a copy of its anchor's node), but a document whose aliases
 expand it beyond :data:`MAX_NODES` nodes (a "billion laughs" document), an alias inside the
 node it refers to, and nesting deeper than :data:`MAX_DEPTH` are refused, located at the
-alias (or node), before anything is expanded.
+alias (or node), before anything is expanded. A scalar no safe constructor builds (a tag
+such as ``!!python/name:…`` or ``!custom``, a merge key ``<<``, ``!!int abc``, a date-like
+``2026-13-45``) is a located problem, not an exception.
 """
 
 from __future__ import annotations
@@ -194,13 +196,12 @@ def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[P
     if isinstance(node, yaml.MappingNode):
         out: dict[str, Any] = {}
         for key_node, value_node in node.value:
+            found = len(problems)
+            key = _scalar(key_node, source.file, problems)
             loc = Location(
                 source.file, key_node.start_mark.line + 1, key_node.start_mark.column + 1
             )
-            try:
-                key = _scalar(key_node)
-            except yaml.YAMLError:
-                problems.append(Problem(loc, f"YAML tag {key_node.tag!r} is not allowed"))
+            if len(problems) > found:  # a key that cannot be read (a merge key '<<')
                 continue
             if not isinstance(key, str | int | float | bool) or key is None:
                 problems.append(Problem(loc, "mapping keys must be plain scalars"))
@@ -214,11 +215,7 @@ def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[P
         return out
     if isinstance(node, yaml.SequenceNode):
         return [_to_data(n, (*path, i), source, problems) for i, n in enumerate(node.value)]
-    try:
-        return _scalar(node)
-    except yaml.YAMLError:  # a tag the safe loader does not know (!!python/…)
-        problems.append(Problem(source.locate(path), f"YAML tag {node.tag!r} is not allowed"))
-        return None
+    return _scalar(node, source.file, problems)
 
 
 _CONSTRUCTOR = yaml.SafeLoader("")
@@ -228,12 +225,34 @@ _STANDARD_TAGS: dict[type, str] = {
 }
 
 
-def _scalar(node: yaml.Node) -> Any:
+def _scalar(node: yaml.Node, file: str, problems: list[Problem]) -> Any:
+    """The value of a scalar node (a collection node as it is: a key the caller rejects).
+    A scalar no safe constructor builds (an unknown or unsafe tag, a merge key ``<<``, a
+    tagged value of the wrong form such as ``!!int abc``) is a located problem and None."""
     if isinstance(node, _Alias):
         node = node.value
-    if isinstance(node, yaml.ScalarNode):
+    if not isinstance(node, yaml.ScalarNode):
+        return node
+    try:
         return _CONSTRUCTOR.construct_object(node, deep=True)
-    return node  # a collection used as a key: rejected by the caller
+    except (yaml.constructor.ConstructorError, ValueError, LookupError, OverflowError) as exc:
+        # LookupError: !!bool maybe (PyYAML looks the word up in its table of booleans)
+        problems.append(Problem(_location(file, node.start_mark), _unbuilt(node, exc)))
+        return None
+    finally:  # the shared constructor must keep no node (nor a half-built one) between calls
+        _CONSTRUCTOR.constructed_objects.pop(node, None)
+        _CONSTRUCTOR.recursive_objects.pop(node, None)
+        _CONSTRUCTOR.deep_construct = False
+
+
+def _unbuilt(node: yaml.ScalarNode, exc: Exception) -> str:
+    """Why a scalar node has no value, in words."""
+    if node.tag == "tag:yaml.org,2002:merge":
+        return "YAML merge keys ('<<') are not supported: write the keys out"
+    if isinstance(exc, yaml.constructor.ConstructorError):
+        return f"YAML tag {node.tag!r} is not allowed in a pipeline"
+    short = node.tag.rsplit(":", 1)[-1]
+    return f"{node.value!r} is not a valid YAML {short}: {exc}"
 
 
 # ------------------------------------------------------------------ aliases and limits

@@ -300,3 +300,55 @@ def test_a_control_character_is_located(tmp_path: Path):
         f"{path}:3:10: malformed YAML: character U+0001 is not allowed "
         "(special characters are not allowed)"
     ]
+
+
+# ------------------------------------------------------- scalars no safe constructor builds
+
+
+@pytest.mark.parametrize(
+    ("line", "column", "message"),
+    [
+        (
+            "    with: {<<: *v, vs_azimuth: 1}",
+            12,
+            "YAML merge keys ('<<') are not supported: write the keys out",
+        ),
+        ("    description: !!python/name:os.system", 18, "YAML tag 'tag:yaml.org,2002:python"),
+        ("    description: !custom x", 18, "YAML tag '!custom' is not allowed"),
+        ("    description: !!int abc", 18, "'abc' is not a valid YAML int: invalid literal"),
+        ("    description: 2026-13-45", 18, "'2026-13-45' is not a valid YAML timestamp"),
+        ("    description: !!bool maybe", 18, "'maybe' is not a valid YAML bool: 'maybe'"),
+    ],
+    ids=["merge-key", "python-tag", "custom-tag", "bad-int", "bad-date", "bad-bool"],
+)
+def test_a_scalar_yaml_cannot_build_is_a_located_problem(
+    tmp_path: Path, registry, line: str, column: int, message: str
+):
+    """Fuzz findings: these were ConstructorError/ValueError tracebacks out of the YAML
+    loader (a merge key ``<<``, a tag on a scalar, a tagged or date-like value of the wrong
+    form), in pipelines, simulation plans and CSV profiles alike."""
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\nwell: {latitude: &v 50.0}\ninputs: {s: {}}\nstages:\n"
+        "  - id: read\n    uses: read_stations\n    with: {input: s}\n"
+        f"  - id: traj\n    uses: minimum_curvature\n    inputs: {{stations: read.stations}}\n"
+        f"{line}\n"
+    )
+    with pytest.raises(SpecError) as info:
+        build_plan(load_spec(path), registry)
+    found = [str(p) for p in info.value.problems]
+    assert found[0].startswith(f"{path}:12:{column}: {message}"), found
+
+
+def test_a_bad_date_and_a_merge_key_in_a_simulation_plan_are_located(tmp_path: Path):
+    path = tmp_path / "plan.yaml"
+    path.write_text(
+        "name: p\nsite: {latitude: 61.0, longitude: 73.0, date: 2026-13-45}\n"
+        "well: {sections: [{kind: vertical, length: 10}]}\ntool: &t {preset: ideal}\n"
+        "survey: {<<: *t, mode: point, every: 5}\n"
+    )
+    with pytest.raises(SpecError) as info:
+        load_simulation(path)
+    found = [str(p) for p in info.value.problems]
+    assert f"{path}:2:47: '2026-13-45' is not a valid YAML timestamp" in found[0]
+    assert any(p.startswith(f"{path}:5:10: YAML merge keys") for p in found), found

@@ -7,12 +7,15 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
 from pipeline.convert import convert_file, read_any
+from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.plugins import load_registry
 from pipeline.tables import RawSamples, Stations
+from pipeline.well import WellMetadata
 from tests_support import ROOT, gyropipe
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
@@ -124,3 +127,145 @@ def test_an_overflowing_number_is_refused_like_nan(tmp_path: Path, cell: str, sh
     src.write_text("MD[m],INC[deg],Azimuth True[deg]\n0,0,0\n100,1,nan\n200,2,3\n")
     nan = cli(str(src), str(out), "--kind", "stations")
     assert nan.returncode == 1 and f"{src}:3 (column 'Azimuth True[deg]')" in nan.stderr
+
+
+# ------------------------------------------- a table breaking its kind's contract (fuzz)
+
+
+def _stations(inc: list[float]) -> pa.Table:
+    return Stations.compiled().make_table(
+        {"md": [0.0, 30.0, 60.0][: len(inc)], "inc": inc, "azi": [0.0, 10.0, 20.0][: len(inc)]},
+        north_reference="true",
+    )
+
+
+def _samples() -> pa.Table:
+    n = 5
+    return RawSamples.compiled().make_table(
+        {
+            "time": [i * 0.01 for i in range(n)],
+            "gyro_x": [1.0] * n,
+            "acc_x": [0.0] * n,
+            "acc_y": [0.0] * n,
+            "acc_z": [9.81] * n,
+        }
+    )
+
+
+def _written(tmp_path: Path, writer: str, table: pa.Table, name: str) -> Path:
+    path = tmp_path / name
+    load_registry().writers[writer][0].write(table, path, WellMetadata(north_reference="true"))
+    return path
+
+
+def _with_unit(table: pa.Table, column: str, unit: str) -> pa.Table:
+    i = table.column_names.index(column)
+    field = table.schema.field(i)
+    return table.set_column(
+        i, field.with_metadata({**field.metadata, b"unit": unit.encode()}), table.column(i)
+    )
+
+
+def _md_out_of_order(tmp_path: Path) -> tuple[Path, str]:
+    path = tmp_path / "st.csv"
+    path.write_text("MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n60,1,10\n30,2,20\n")
+    return path, ":4: not valid as stations (reader 'csv'): column 'md': monotonic"
+
+
+def _inc_huge(tmp_path: Path) -> tuple[Path, str]:
+    path = tmp_path / "st.csv"
+    path.write_text("MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n30,1e308,10\n")
+    return (
+        path,
+        ":3: not valid as stations (reader 'csv'): column 'inc': range: expected values <= 180",
+    )
+
+
+def _witsml_radians(tmp_path: Path) -> tuple[Path, str]:
+    path = _written(tmp_path, "witsml", _stations([0.0, 2.0, 10.0]), "st.xml")
+    text = path.read_text()
+    assert text.count('<incl uom="dega">') == 3
+    text = text.replace('<incl uom="dega">', '<incl uom="rad">')
+    path.write_text(text)
+    line = next(n for n, t in enumerate(text.splitlines(), 1) if '"rad">10.0<' in t)
+    station = next(
+        n for n in range(line, 0, -1) if "<trajectoryStation" in text.splitlines()[n - 1]
+    )
+    return path, f":{station}: not valid as stations (reader 'witsml'): column 'inc': range"
+
+
+def _parquet_unit(tmp_path: Path) -> tuple[Path, str]:
+    path = tmp_path / "st.parquet"
+    pq.write_table(_with_unit(_stations([0.0, 1.0, 2.0]), "inc", "mg"), path)
+    return path, "not valid as stations (reader 'parquet'): column 'inc': unit: expected unit 'deg'"
+
+
+def _mcap_unit(tmp_path: Path) -> tuple[Path, str]:
+    path = _written(tmp_path, "mcap", _with_unit(_samples(), "acc_z", ""), "s.mcap")
+    return path, "not valid as samples (reader 'mcap'): column 'acc_z': unit"
+
+
+def _las_time_back(tmp_path: Path) -> tuple[Path, str]:
+    path = _written(tmp_path, "las", _samples(), "s.las")
+    lines = path.read_text().splitlines(keepends=True)
+    first = next(i for i, line in enumerate(lines) if line.startswith("~A")) + 1
+    lines[first + 2], lines[first + 3] = lines[first + 3], lines[first + 2]
+    path.write_text("".join(lines))
+    return path, f":{first + 4}: not valid as samples (reader 'las'): column 'time': monotonic"
+
+
+@pytest.mark.parametrize(
+    "make",
+    [_md_out_of_order, _inc_huge, _witsml_radians, _parquet_unit, _mcap_unit, _las_time_back],
+    ids=[
+        "csv-md-order",
+        "csv-inc-1e308",
+        "witsml-radians",
+        "parquet-unit",
+        "mcap-unit",
+        "las-time",
+    ],
+)
+def test_a_table_breaking_its_contract_is_refused_when_read(tmp_path: Path, make) -> None:
+    """Fuzz findings: readers let these through and ``gyropipe convert`` (and ``gp.read``,
+    and a plan's stations file) took them: the engine checks every table read against its
+    kind's contract, a failure located at the file and the line of its first bad row."""
+    path, expected = make(tmp_path)
+    out = tmp_path / "out.parquet"
+    with pytest.raises(InputFileError) as info:
+        convert_file(load_registry(), path, out)
+    text = str(info.value)
+    assert text.startswith(f"{path}{expected}" if expected[0] == ":" else f"{path}: {expected}")
+    assert "\n" not in text
+    assert not out.exists()
+
+
+def test_a_table_of_another_kind_is_the_wrong_kind(tmp_path: Path) -> None:
+    """A Parquet log asked for as stations was returned without md, inc, azi (and written)."""
+    log = tmp_path / "log.parquet"
+    pq.write_table(pa.table({"DEPT": [1.0, 2.0], "GR": [50.0, 60.0]}), log)
+    with pytest.raises(
+        WrongKindError, match=r"not stations: no column 'md', 'inc', 'azi'.*--kind log"
+    ):
+        convert_file(load_registry(), log, tmp_path / "o.csv", kind="stations")
+    table, _ = convert_file(load_registry(), log, tmp_path / "o.csv")
+    assert table.column_names == ["DEPT", "GR"]
+
+
+def test_a_table_the_output_format_cannot_hold_names_the_files(tmp_path: Path) -> None:
+    """Fuzz finding: a LAS log with no curve (or a null in its index) reads as a log, but
+    the LAS writer cannot write it; the error (exit 2) named neither file."""
+    src = tmp_path / "bare.las"
+    src.write_text("~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n WELL. W-1 :\n")
+    out = tmp_path / "o.las"
+    with (
+        pytest.warns(InputFileWarning, match="no ~A"),
+        pytest.raises(ValueError, match="no numeric column to write") as info,
+    ):
+        convert_file(load_registry(), src, out, kind="log")
+    assert str(info.value).startswith(f"{src}: the log read cannot be written to o.las")
+    assert not out.exists()
+    result = cli(str(src), str(out), "--kind", "log")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert errors == [f"error: {info.value}"], result.stderr

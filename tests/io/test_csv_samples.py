@@ -366,10 +366,40 @@ def test_bad_cell(tmp_path: Path, row: str, col: str, message: str) -> None:
     assert message in str(err)
 
 
-def test_missing_md_value(tmp_path: Path) -> None:
+def test_an_empty_cell_is_null_where_the_contract_allows_it(tmp_path: Path) -> None:
+    """md may be null (no odometer reading); a required column's empty cell is an error."""
     text = "time[s],md[m],wx[deg/h],gx[g],gy[g],gz[g]\n0,1,1,0,0,1\n1,,1,0,0,1\n"
-    err = failure(put(tmp_path, text))
-    assert (err.line, err.column) == (3, "md[m]")
+    table, _ = read(put(tmp_path, text))
+    assert table.column("md").to_pylist() == [1.0, None]
+    err = failure(put(tmp_path, text.replace("1,,1,0,0,1", "1,2,1,0,,1")))
+    assert (err.line, err.column) == (3, "gy[g]")
+
+
+@pytest.mark.parametrize("column", ["md", "frame_angle", "gyro_y", "mag_x", "station"])
+def test_nulls_the_writer_writes_read_back(tmp_path: Path, column: str) -> None:
+    """Fuzz finding: a samples table with a null frame_angle (valid: MCAP and Parquet carry
+    it) was written as an empty cell that the reader refused, so ``gyropipe convert``'s CSV
+    of it could not be read back."""
+    n = 4
+    data: dict[str, list[Any]] = {
+        "time": [0.0, 0.01, 0.02, 0.03],
+        "md": [1.0] * n,
+        "frame_angle": [0.0] * n,
+        "gyro_x": [1.0] * n,
+        "gyro_y": [2.0] * n,
+        "acc_x": [0.0] * n,
+        "acc_y": [0.0] * n,
+        "acc_z": [9.8] * n,
+        "mag_x": [1.0] * n,
+        "station": [0] * n,
+    }
+    data[column][2] = None
+    table = RawSamples.compiled().make_table(data)
+    RawSamples.validate_table(table)
+    path = tmp_path / "nulls.csv"
+    WRITER.write(table, path, WellMetadata())
+    back, _ = read(path)
+    assert back.drop_columns("source_line").equals(table)
 
 
 def test_bad_integer(tmp_path: Path) -> None:

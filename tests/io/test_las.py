@@ -303,6 +303,8 @@ def test_dates(tmp_path: Path, value: str, expected: dt.date) -> None:
         ("2024-02-30", "day is out of range"),
         ("31-Foo-2024", "'Foo' is not a month"),
         ("2024 05 01 extra", "not a date"),
+        ("2026-11-99999999999999999999999999999", "too large to convert"),  # fuzz: OverflowError
+        ("99999999999999999999 May 2024", "too large to convert"),
     ],
 )
 def test_invalid_dates(tmp_path: Path, value: str, message: str) -> None:
@@ -1362,3 +1364,22 @@ def test_fuzz_mutations_raise_typed_errors_or_read_what_lasio_reads(
         assert any(
             c.shape == ours.shape and np.array_equal(c, ours, equal_nan=True) for c in curves
         ), f"{name}: {ours} is none of lasio's curves"
+
+
+@pytest.mark.parametrize(
+    ("well", "null", "mnemonic"),
+    [
+        (" STRT.M 0 :\n STOP.M 200 :\n STEP.M 1e309 :\n", "-999.25", "STEP"),
+        (" STRT.M -1e999 :\n", "-999.25", "STRT"),
+        ("", "1e400", "NULL"),
+    ],
+)
+def test_a_header_number_past_the_float_range_is_located(
+    tmp_path: Path, well: str, null: str, mnemonic: str
+) -> None:
+    """Fuzz finding: STEP 1e309 (read as inf) ended in an OverflowError out of the range
+    check (a ReaderError naming no file); such a number is refused at its header line."""
+    text = las(well=well, null=null)
+    err = failure(put(tmp_path, text))
+    line = next(n for n, t in enumerate(text.splitlines(), 1) if t.startswith(f" {mnemonic}."))
+    assert err.line == line and f"{mnemonic} " in str(err) and "too large for a number" in str(err)

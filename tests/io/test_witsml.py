@@ -437,6 +437,18 @@ def test_sniff_recognises_witsml_only(tmp_path: Path):
     assert not READER.sniff(tmp_path / "missing.xml")
 
 
+@pytest.mark.parametrize("encoding", ["UTF--180", "utf-32", "base64", "idna"])
+def test_an_unusable_declared_encoding_is_located(tmp_path: Path, encoding: str):
+    """Fuzz finding (a number replaced in the XML declaration): expat's LookupError or
+    ValueError on the encoding escaped the reader as a traceback."""
+    text = document()
+    assert text.startswith('<?xml version="1.0" encoding="UTF-8"?>')
+    path = put(tmp_path, text.replace('encoding="UTF-8"', f'encoding="{encoding}"', 1))
+    with pytest.raises(InputFileError, match="unusable encoding in the XML declaration") as caught:
+        READER.read(path, "stations", READER.options(default_north_reference="true"))
+    assert caught.value.path == str(path) and caught.value.line == 1
+
+
 VALID = document().encode()
 
 

@@ -8,9 +8,10 @@ Kinds read (``read(path, kind, options)``):
   the file (a wellpath report; empty cells of these are null), and ``source_line``;
 * ``samples`` → :class:`~pipeline.tables.RawSamples`: time (s) and the gyro (deg/h),
   accelerometer (m/s²) and optional magnetometer (nT) triads, optional md (m),
-  frame_angle (deg), station and position (integers, empty cells null), and
-  ``source_line``; converted to the canonical conventions with
-  :func:`~pipeline.io.conventions.to_canonical` and the option ``conventions``.
+  frame_angle (deg), station and position (integers), and ``source_line``; empty cells of
+  the columns the contract lets be null are null (the writer writes a null so); converted
+  to the canonical conventions with :func:`~pipeline.io.conventions.to_canonical` and the
+  option ``conventions``.
 
 ``source_line`` is each row's 1-based file line, so later contract errors can cite it.
 Values are not range-checked here (the engine checks the contract).
@@ -141,7 +142,9 @@ def _unit_of(name: str) -> str:
 STATION_EXTRAS = ("tvd", "north", "east", "dls")
 LAYOUTS = {
     "stations": Layout(Stations, extras=STATION_EXTRAS, blanks=frozenset(STATION_EXTRAS)),
-    "samples": Layout(RawSamples, blanks=frozenset({"station", "position"})),
+    "samples": Layout(
+        RawSamples, blanks=frozenset(c.name for c in RawSamples.compiled().columns if c.nullable)
+    ),
     "readings": Layout(
         PositionReadings,
         blanks=frozenset(c.name for c in PositionReadings.compiled().columns if not c.required),

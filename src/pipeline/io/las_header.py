@@ -17,6 +17,7 @@ sections read as items.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -283,8 +284,15 @@ def _version(path: Path, items: list[Item]) -> tuple[float, bool, str]:
 
 
 def header_number(path: Path, item: Item) -> float:
+    """The item's value as a number; a value past the float range (``1e309``, read as ±inf)
+    is refused like a word."""
     if re.fullmatch(NUMBER, item.value):
-        return float(item.value)
+        value = float(item.value)
+        if math.isfinite(value):
+            return value
+        raise InputFileError(
+            path, f"{item.mnemonic} {item.value!r} is too large for a number", line=item.line
+        )
     raise InputFileError(path, f"{item.mnemonic} {item.value!r} is not a number", line=item.line)
 
 

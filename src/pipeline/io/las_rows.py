@@ -504,4 +504,6 @@ def _half_unit(text: str) -> float:
         exponent = Decimal(text).as_tuple().exponent
     except InvalidOperation:
         return 0.0
-    return 0.5 * 10.0**exponent if isinstance(exponent, int) else 0.0
+    if not isinstance(exponent, int):
+        return 0.0
+    return 0.5 * 10.0 ** min(exponent, 308)  # past 1e308 a number is ±inf: refused before

@@ -187,7 +187,7 @@ def _date(path: Path, item: Item) -> dt.date:
     )
     try:
         return _parse_date(text)
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:  # OverflowError: a day past C long
         raise InputFileError(
             path, f"DATE {item.value!r}: {exc}; write it as YYYY-MM-DD", line=item.line
         ) from None

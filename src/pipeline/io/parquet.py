@@ -11,13 +11,14 @@ from typing import Any
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+from pydantic import ValidationError
 
 from pipeline.contracts import TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
-from pipeline.well import WellMetadata, well_of
+from pipeline.well import WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
 KINDS: dict[str, type[TableContract]] = {
@@ -51,8 +52,9 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
         table = pq.read_table(path)
-    except (OSError, pa.ArrowException) as exc:
-        raise InputFileError(path, f"not a readable Parquet file: {exc}") from exc
+    except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
+        reason = " ".join(str(exc).split())
+        raise InputFileError(path, f"not a readable Parquet file: {reason}") from exc
     contract = KINDS.get(kind)  # the drift-table reader reads its own kinds through here
     missing = _missing(contract, table) if contract is not None else []
     if missing:
@@ -64,7 +66,23 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
                 f"(needs {', '.join(missing)})",
                 found=others[0],
             )
-    return table, well_of(table) or WellMetadata()
+    return table, _well(path, table)
+
+
+def _well(path: Path, table: pa.Table) -> WellMetadata:
+    """The well metadata stored in the table's schema (none: empty); metadata that is not
+    a JSON object of well fields is the file's fault."""
+    try:
+        return well_of(table) or WellMetadata()
+    except ValidationError as exc:
+        problems = "; ".join(
+            f"{'.'.join(map(str, e['loc'])) or 'value'}: {e['msg']}" for e in exc.errors()
+        )
+    except ValueError as exc:  # not UTF-8, not JSON
+        problems = f"not JSON text: {exc}"
+    raise InputFileError(
+        path, f"well metadata ({WELL_KEY.decode()!r} in the schema metadata): {problems}"
+    )
 
 
 def _missing(contract: type[TableContract], table: pa.Table) -> list[str]:

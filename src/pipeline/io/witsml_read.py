@@ -140,6 +140,11 @@ def parse(path: Path) -> Node:
         ) from None
     except _Refused as exc:
         raise InputFileError(path, str(exc), line=parser.CurrentLineNumber) from None
+    except (LookupError, ValueError) as exc:  # UnicodeError is a ValueError
+        # the encoding the XML declaration names is unknown, not text, or multi-byte
+        raise InputFileError(
+            path, f"unusable encoding in the XML declaration: {exc}", line=parser.CurrentLineNumber
+        ) from None
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc}") from None
     return roots[0]

@@ -1,0 +1,76 @@
+"""The Parquet reader on broken files (fuzz findings): one-line located errors, never a
+reader crash."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.errors import InputFileError
+from pipeline.io import parquet as parquet_plugin
+from pipeline.plugins import load_registry
+from pipeline.tables import Stations
+from pipeline.well import WELL_KEY, WellMetadata, attach
+from tests_support import plugin_io
+
+READER, WRITER = plugin_io(parquet_plugin)
+
+
+def stations(tmp_path: Path, well: bytes | None = None) -> Path:
+    table = Stations.compiled().make_table(
+        {"md": [0.0, 30.0], "inc": [0.0, 1.0], "azi": [0.0, 10.0]}, north_reference="true"
+    )
+    table = attach(table, WellMetadata(well="P-1"))
+    if well is not None:
+        table = table.replace_schema_metadata({**table.schema.metadata, WELL_KEY: well})
+    path = tmp_path / "st.parquet"
+    pq.write_table(table, path)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("stored", "reason"),
+    [
+        (b'{"latitude": NaN}', "latitude: Input should be a finite number"),
+        (b"[]", "value: Input should be a valid dictionary"),
+        (b'{"bogus": 1}', "bogus: Extra inputs are not permitted"),
+        (b"{", "not JSON text: Expecting property name"),
+        (b"\x9d\x87.\xbe", "not JSON text: 'utf-8' codec can't decode byte 0x9d"),
+    ],
+)
+def test_unreadable_well_metadata_is_the_files_fault(tmp_path: Path, stored: bytes, reason: str):
+    """These were a ReaderError wrapping a pydantic ValidationError, a JSONDecodeError or a
+    UnicodeDecodeError, naming neither the file nor the metadata."""
+    path = stations(tmp_path, stored)
+    with pytest.raises(InputFileError) as caught:
+        load_registry().read(path, "stations")
+    text = str(caught.value)
+    assert text.startswith(
+        f"{path}: well metadata ('gyropipe.well' in the schema metadata): {reason}"
+    ), text
+    assert "\n" not in text
+
+
+def test_a_readable_file_keeps_its_well(tmp_path: Path):
+    table, well = load_registry().read(stations(tmp_path), "stations")
+    assert well == WellMetadata(well="P-1") and table.num_rows == 2
+
+
+def test_an_unreadable_file_is_one_line(tmp_path: Path):
+    """pyarrow's message ends in a newline: the error was printed over two lines."""
+    data = bytearray(stations(tmp_path).read_bytes())
+    data[-12:-8] = b"\xff\xff\xff\x7f"  # the footer's metadata length
+    path = tmp_path / "broken.parquet"
+    path.write_bytes(bytes(data))
+    with pytest.raises(InputFileError, match="not a readable Parquet file") as caught:
+        READER.read(path, "stations", None)
+    assert "\n" not in str(caught.value) and str(caught.value).startswith(f"{path}: ")
+
+
+def test_writer_round_trip(tmp_path: Path):
+    table = pa.table({"md": pa.array([1.0])})
+    WRITER.write(table, tmp_path / "t.parquet", WellMetadata())
+    assert pq.read_table(tmp_path / "t.parquet").equals(table)
