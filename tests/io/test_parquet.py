@@ -74,3 +74,18 @@ def test_writer_round_trip(tmp_path: Path):
     table = pa.table({"md": pa.array([1.0])})
     WRITER.write(table, tmp_path / "t.parquet", WellMetadata())
     assert pq.read_table(tmp_path / "t.parquet").equals(table)
+
+
+def test_a_column_name_that_is_not_text_is_located(tmp_path: Path):
+    """Fuzz finding: a flipped byte in a column name of the footer read, then failed with a
+    UnicodeDecodeError when the names were asked for (a ReaderError naming no file)."""
+    path = tmp_path / "names.parquet"
+    pq.write_table(pa.table({"md": [0.0, 1.0], "zzq": [1.0, 2.0]}), path)
+    data = path.read_bytes()
+    assert data.count(b"zzq") == 2  # the Parquet schema and the footer's column chunk
+    path.write_bytes(data.replace(b"zzq", b"\xe8zq"))
+    with pytest.raises(InputFileError) as caught:
+        load_registry().read(path, "stations")
+    assert str(caught.value) == (
+        f"{path}: column 2: its name is not UTF-8 text (invalid continuation byte)"
+    )

@@ -55,6 +55,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         reason = " ".join(str(exc).split())
         raise InputFileError(path, f"not a readable Parquet file: {reason}") from exc
+    _check_names(path, table.schema)
     contract = KINDS.get(kind)  # the drift-table reader reads its own kinds through here
     missing = _missing(contract, table) if contract is not None else []
     if missing:
@@ -67,6 +68,17 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
                 found=others[0],
             )
     return table, _well(path, table)
+
+
+def _check_names(path: Path, schema: pa.Schema) -> None:
+    """Every column name is text (pyarrow decodes a name only when it is asked for it)."""
+    for i in range(len(schema)):
+        try:
+            schema.field(i).name  # noqa: B018  (decoding is the check)
+        except UnicodeDecodeError as exc:
+            raise InputFileError(
+                path, f"column {i + 1}: its name is not UTF-8 text ({exc.reason})"
+            ) from None
 
 
 def _well(path: Path, table: pa.Table) -> WellMetadata:
