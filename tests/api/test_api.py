@@ -135,7 +135,10 @@ def test_point_survey_end_to_end(
     assert inclined.sum() >= 3 and np.abs(z[inclined]).max() < 4
 
     uncertain = arrow(gp.position_uncertainty(trajectory))
-    assert "sigma_h_major" in uncertain.column_names or uncertain.num_columns > got.num_columns
+    for name in ("cov_nn", "cov_ee", "cov_vv", "ellipse_major_conf", "ellipse_minor_conf"):
+        values = uncertain.column(name).to_numpy()
+        assert np.isfinite(values).all() and values[-1] > 0, name
+    assert uncertain.schema.field("cov_nn").metadata[b"unit"] == b"m2"
     points = arrow(gp.interpolate(trajectory, md=[100.0, 150.0]))
     assert points.column("md").to_pylist() == [100.0, 150.0]
     crossings = arrow(gp.interpolate(trajectory, tvd=120.0))
