@@ -24,8 +24,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
-import re
 import sys
 import tempfile
 import warnings
@@ -41,9 +39,9 @@ from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import GyropipeError
 from pipeline.io.las import read_las
 from pipeline.io.las_header import utf16_codec
-from pipeline.io.las_log import TEXT_NULL
 
-TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from tests_support import comparable_cell
 
 _UTF16 = (
     "UTF-16 text: lasio decodes it as 8-bit text and finds no section (or garbage); gyropipe "
@@ -121,23 +119,6 @@ def gyropipe_curves(path: Path) -> tuple[list[str], list[str], list[pa.Array], l
     return [f.name for f in fields], units, columns, [str(w.message) for w in caught]
 
 
-def _cell(value: Any, null: float | None = None) -> float | str | None:
-    """A cell in comparable form: None (null), a float or stripped text (a text cell that
-    is the NULL value is null)."""
-    if value is None:
-        return None
-    if isinstance(value, float | np.floating):
-        return None if math.isnan(value) else float(value)
-    text = str(value).strip()
-    if not text or TEXT_NULLS.fullmatch(text):
-        return None
-    try:
-        number = float(text)
-    except ValueError:
-        return text
-    return None if math.isnan(number) or number == null else number
-
-
 def compare(
     ours: tuple[list[str], list[str], list[pa.Array], list[str]],
     theirs: Lasio,
@@ -159,8 +140,8 @@ def compare(
                 at = int(np.flatnonzero(~np.isclose(column.to_numpy(), data, equal_nan=True))[0])
                 return f"{name}: row {at}: {column[at].as_py()!r} vs lasio's {data[at]!r}", notes
             continue
-        mine = [_cell(v) for v in column.to_pylist()]
-        lasios = [_cell(v, null) for v in data.tolist()]
+        mine = [comparable_cell(v) for v in column.to_pylist()]
+        lasios = [comparable_cell(v, null) for v in data.tolist()]
         if mine != lasios:
             at = next(i for i, (a, b) in enumerate(zip(mine, lasios, strict=True)) if a != b)
             return f"{name}: row {at}: {mine[at]!r} vs lasio's {lasios[at]!r}", notes

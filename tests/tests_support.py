@@ -2,19 +2,24 @@
 
 from __future__ import annotations
 
+import math
 import os
+import re
 import shutil
 import sys
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import numpy as np
 import pyarrow as pa
 from hypothesis import strategies as st
 
+from pipeline.io.las_log import TEXT_NULL
 from pipeline.registry import ReaderDef, WriterDef
 
 ROOT = Path(__file__).resolve().parents[1]
+TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
 
 
 def gyropipe() -> list[str]:
@@ -57,8 +62,6 @@ def export_tolerance(unit: str, values: Any) -> Any:
     """How far an export may put ``values`` of ``unit`` (a unit in
     :data:`pipeline.io.precision.DECIMALS`): half a step of its decimals, plus the
     float's own rounding."""
-    import numpy as np
-
     from pipeline.io.precision import DECIMALS
 
     with np.errstate(over="ignore"):
@@ -70,8 +73,6 @@ def assert_exported(back: pa.Table, written: pa.Table, names: list[str] | None =
     column of a unit in :data:`pipeline.io.precision.DECIMALS` within half a step of that
     unit's decimals (plus the float's own rounding), nulls and NaN where they were; any
     other column exactly."""
-    import numpy as np
-
     from pipeline.contracts import UNIT_KEY
     from pipeline.io.precision import DECIMALS
 
@@ -149,3 +150,21 @@ def line_ops() -> st.SearchStrategy[tuple[str, int, int]]:
         st.integers(0, 10_000),
         st.integers(0, 10_000),
     )
+
+
+def comparable_cell(value: Any, null: float | None = None) -> float | str | None:
+    """A LAS cell of gyropipe or lasio in comparable form: None (null), a float or stripped
+    text. lasio keeps a curve holding a text null as text, with its numbers as text, the
+    NULL value (``null``) among them."""
+    if value is None:
+        return None
+    if isinstance(value, float | np.floating):
+        return None if math.isnan(value) else float(value)
+    text = str(value).strip()
+    if not text or TEXT_NULLS.fullmatch(text):
+        return None
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    return None if math.isnan(number) or number == null else number

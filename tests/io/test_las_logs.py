@@ -28,19 +28,24 @@ from pipeline.convert import read_kind
 from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.io import las as las_plugin
 from pipeline.io.las_header import DESCRIPTION_KEY, utf16_codec
-from pipeline.io.las_log import TEXT_NULL
 from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.tables import LogTable
 from pipeline.well import WellMetadata
-from tests_support import ROOT, assert_exported, gyropipe, mutate_bytes, plugin_io
+from tests_support import (
+    ROOT,
+    assert_exported,
+    comparable_cell,
+    gyropipe,
+    mutate_bytes,
+    plugin_io,
+)
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
 READER, WRITER = plugin_io(las_plugin)
 DATA = ROOT / "tests" / "data" / "las"
 LASIO = DATA / "lasio"
-TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
 
 SAME_AS_LASIO = [
     "1.2/sample.las",
@@ -81,32 +86,14 @@ def unit(table: pa.Table, name: str) -> str | None:
     return raw.decode() if raw else None
 
 
-def _cell(value: Any, null: float | None = None) -> float | str | None:
-    """A cell of either reader in comparable form: None (null), a float or stripped text
-    (lasio keeps a curve holding a text null as text, with its numbers as text, the NULL
-    value among them)."""
-    if value is None:
-        return None
-    if isinstance(value, float | np.floating):
-        return None if math.isnan(value) else float(value)
-    text = str(value).strip()
-    if not text or TEXT_NULLS.fullmatch(text):
-        return None
-    try:
-        number = float(text)
-    except ValueError:
-        return text
-    return None if math.isnan(number) or number == null else number
-
-
 def assert_same_table(table: pa.Table, expected: pa.Table) -> None:
     """Same columns, types, units and values (NaN equal to NaN)."""
     assert table.column_names == expected.column_names
     for name in expected.column_names:
         assert table.schema.field(name).type == expected.schema.field(name).type, name
         assert unit(table, name) == unit(expected, name), name
-        assert [_cell(v) for v in values(table, name)] == [
-            _cell(v) for v in values(expected, name)
+        assert [comparable_cell(v) for v in values(table, name)] == [
+            comparable_cell(v) for v in values(expected, name)
         ], name
 
 
@@ -118,8 +105,8 @@ def assert_same_as_lasio(table: pa.Table, path: Path) -> None:
     assert names == [c.mnemonic for c in las.curves]
     assert [unit(table, n) or "" for n in names] == [c.unit for c in las.curves]
     for name, curve in zip(names, las.curves, strict=True):
-        ours = [_cell(v) for v in values(table, name)]
-        assert ours == [_cell(v, null) for v in curve.data.tolist()], name
+        ours = [comparable_cell(v) for v in values(table, name)]
+        assert ours == [comparable_cell(v, null) for v in curve.data.tolist()], name
 
 
 # ----------------------------------------------------------------------- peer: lasio
