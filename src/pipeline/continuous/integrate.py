@@ -12,7 +12,10 @@ frame x axis (the gyro) is kept near the high side by the servo. Per sample:
   component ``r = −Ω cos φ sin A + İ`` (current A estimate) the high-side component is
   ``h = (y − r sin δ)/cos δ``, and ``Ȧ = (Ω cos φ cos A cos I + Ω sin φ sin I − h)/sin I``;
 * ``A(t)`` is integrated with the trapezoid rule (Heun predictor–corrector, as Ȧ depends on
-  A) from the start stop's azimuth.
+  A) from the start stop's azimuth. The recursion is solved for every sample at once, by
+  Newton's method on the whole series (Ȧ depends on A only through the Earth rate, so two to
+  four iterations reach the step-by-step result to 1e-12 rad); a later pass starts from the
+  previous pass's azimuths.
 
 Closure ("continuous-gyro drift"): the integrated azimuth at the end stop minus the end
 stop's compassed azimuth is the misclosure; it is distributed linearly in time over the run
