@@ -4,7 +4,10 @@
 implementation (commit ``generated_by``: the Heun step loop, and dense station rows in the
 inclination-noise budget) for short simulated runs whose specs it carries: single-axis
 forward, two-axis forward, and single-axis integrated back from the end stop across a held
-near-vertical section. The stage must reproduce them within 1e-9°. The two vectorised
+near-vertical section (series every ``series_every`` samples, all stations). The stage must
+reproduce them within 1e-9°. Should the simulator's samples change, regenerate the file by
+running ``integrate_continuous`` of commit ``generated_by`` (a detached git worktree on
+PYTHONPATH) on each case's spec with the file's options, compassed as here. The two vectorised
 solvers are also checked against the plain per-sample definitions written out here.
 """
 
