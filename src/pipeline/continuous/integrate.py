@@ -249,7 +249,7 @@ def _integrate(
     held = vertical | misaligned
     held[0] = held[-1] = False  # the stops themselves: tool at rest
     usable = ~held & ~vertical  # a stop at rest is not held, but Ȧ is still singular there
-    # Ȧ = c + e·cos A + s·sin A with h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ
+    # Ȧ = const + by_cos·cos A + by_sin·sin A, from h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ
     sin_u, cos_u = np.where(usable, sin_i, 1.0), np.where(usable, cos_d, 1.0)
     const = np.where(usable, (os_ * sin_i - (y - inc_rate * sin_d) / cos_u) / sin_u, 0.0)
     by_cos = np.where(usable, oc * cos_i / sin_u, 0.0)
