@@ -12,7 +12,10 @@ frame x axis (the gyro) is kept near the high side by the servo. Per sample:
   component ``r = −Ω cos φ sin A + İ`` (current A estimate) the high-side component is
   ``h = (y − r sin δ)/cos δ``, and ``Ȧ = (Ω cos φ cos A cos I + Ω sin φ sin I − h)/sin I``;
 * ``A(t)`` is integrated with the trapezoid rule (Heun predictor–corrector, as Ȧ depends on
-  A) from the start stop's azimuth.
+  A) from the start stop's azimuth. The recursion is solved for every sample at once, by
+  Newton's method on the whole series (Ȧ depends on A only through the Earth rate, so two to
+  four iterations reach the step-by-step result to 1e-12 rad); a later pass starts from the
+  previous pass's azimuths.
 
 Closure ("continuous-gyro drift"): the integrated azimuth at the end stop minus the end
 stop's compassed azimuth is the misclosure; it is distributed linearly in time over the run
@@ -40,6 +43,8 @@ samples (:mod:`pipeline.continuous.stations`).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 import pyarrow as pa
@@ -132,6 +137,10 @@ def _apsidal_run(
         np.sin(np.radians(start["inc"])) < vertical_stop
         and np.sin(np.radians(finish["inc"])) >= vertical_stop
     )
+    # a run starting near vertical is tied to the inclined end stop and integrated back in time
+    order = slice(None, None, -1) if backward else slice(None)
+    tie = float(np.radians((finish if backward else start)["azi"]))
+    guess: FloatArray | None = None  # the previous pass's azimuth, in integration order
     for _ in range(options.passes):
         inc, tf = _inclination_toolface(gx, gy, gz, odometer, inc_rate, azi_rate)
         if y_right is None:  # single axis: h from the gyro at misalignment δ = ψ, and İ
@@ -143,24 +152,19 @@ def _apsidal_run(
             )
         else:  # two axes: h and r by the toolface; İ from r after the first pass (below)
             (high, right), delta = apsidal_components(y, y_right, tf), np.zeros(t.size)
-        if backward:  # tie to the inclined end stop and integrate back in time
-            rev = slice(None, None, -1)
-            azi, flags, held = _integrate(
-                t[rev],
-                high[rev],
-                inc[rev],
-                inc_rate[rev],
-                delta[rev],
-                float(np.radians(finish["azi"])),
-                oc,
-                os_,
-                options,
-            )
-            azi, flags, held = azi[rev], flags[rev], held[rev]
-        else:
-            azi, flags, held = _integrate(
-                t, high, inc, inc_rate, delta, float(np.radians(start["azi"])), oc, os_, options
-            )
+        guess, flags, held = _integrate(
+            t[order],
+            high[order],
+            inc[order],
+            inc_rate[order],
+            delta[order],
+            tie,
+            oc,
+            os_,
+            options,
+            guess,
+        )
+        azi, flags, held = guess[order], flags[order], held[order]
         azi_rate = np.gradient(azi, t)
         if y_right is not None:  # İ = r + Ω cos φ sin A, measured, not differentiated
             inc_rate = right + oc * np.sin(azi)
@@ -227,8 +231,14 @@ def _integrate(
     oc: float,
     os_: float,
     options: ContinuousOptions,
+    guess: FloatArray | None = None,
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:
-    """Heun (trapezoid) integration of Ȧ from the high-side gyro component; flags."""
+    """Heun (trapezoid) integration of Ȧ from the high-side gyro component; flags.
+
+    Each step maps ``A_k`` to ``A_{k+1} = A_k + Δt/2·(Ȧ_k(A_k) + Ȧ_{k+1}(A_k + Δt·Ȧ_k(A_k)))``.
+    The recursion is solved for all samples at once by Newton's method on the whole series
+    (:func:`_heun_series`), from ``guess`` (rad: e.g. a previous pass's azimuth; default the
+    start azimuth throughout)."""
     sin_i, cos_i = np.sin(inc), np.cos(inc)
     sin_d, cos_d = np.sin(tf), np.cos(tf)
     flags = np.zeros(t.size, dtype=np.int64)
@@ -239,23 +249,81 @@ def _integrate(
     held = vertical | misaligned
     held[0] = held[-1] = False  # the stops themselves: tool at rest
     usable = ~held & ~vertical  # a stop at rest is not held, but Ȧ is still singular there
+    # Ȧ = const + by_cos·cos A + by_sin·sin A, from h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ
+    sin_u, cos_u = np.where(usable, sin_i, 1.0), np.where(usable, cos_d, 1.0)
+    const = np.where(usable, (os_ * sin_i - (y - inc_rate * sin_d) / cos_u) / sin_u, 0.0)
+    by_cos = np.where(usable, oc * cos_i / sin_u, 0.0)
+    by_sin = np.where(usable, -oc * sin_d / cos_u / sin_u, 0.0)
 
-    def rate(k: int, a: float) -> float:
-        if not usable[k]:
-            return 0.0
-        r = -oc * np.sin(a) + inc_rate[k]
-        h = (y[k] - r * sin_d[k]) / cos_d[k]
-        return float((oc * np.cos(a) * cos_i[k] + os_ * sin_i[k] - h) / sin_i[k])
+    def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
+        """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
+        sin_a, cos_a = np.sin(a), np.cos(a)
+        return (
+            const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
+            by_sin[k] * cos_a - by_cos[k] * sin_a,
+        )
 
-    azi = np.empty(t.size)
-    azi[0] = azi0
-    a = float(azi[0])
-    f = rate(0, a)
-    for k in range(t.size - 1):
-        step = t[k + 1] - t[k]
-        predicted = a + step * f
-        f_next = rate(k + 1, predicted)
-        a = a + step / 2 * (f + f_next)
-        f = rate(k + 1, a)
-        azi[k + 1] = a
-    return azi, flags, held
+    start = np.full(t.size, azi0) if guess is None else guess.copy()
+    start[0] = azi0
+    feedback = np.hypot(by_cos, by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
+    return _heun_series(np.diff(t), rate, feedback, start), flags, held
+
+
+RateFunction = Callable[[FloatArray, slice], tuple[FloatArray, FloatArray]]
+"""Ȧ and ∂Ȧ/∂A of a slice of the samples at given azimuths."""
+
+_NEWTON_TOLERANCE = 1e-12
+"""rad: bound of the error left in a converged series."""
+_NEWTON_ITERATIONS = 40
+_SCAN_SPAN = 16.0
+"""Largest ∑|ln gain| over one cumulative-product segment of :func:`_affine_recursion`."""
+
+
+def _heun_series(
+    step: FloatArray, rate: RateFunction, feedback: FloatArray, azi: FloatArray
+) -> FloatArray:
+    """The Heun recursion's azimuths (rad) from ``azi[0]`` over steps ``step`` (s), solved
+    as one system by Newton's method from the first guess ``azi`` (overwritten): each
+    iteration evaluates every step's residual and the step's derivative at once and solves
+    the linearised recursion ``δ_{k+1} = g_k δ_k + res_k`` by cumulative products.
+
+    Ȧ depends on A only through the Earth-rate terms, so few iterations are needed:
+    with ``feedback`` a bound of |∂Ȧ/∂A| and |∂²Ȧ/∂A²| per sample (1/s) and ``L`` its
+    integral over the run, an iteration leaves an error of at most ``L·e^L·δ²`` after a
+    correction of at most δ (quadratic convergence); it stops when that is below
+    ``_NEWTON_TOLERANCE``."""
+    half = step / 2
+    reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
+    growth = reach * float(np.exp(min(reach, 700.0)))
+    for _ in range(_NEWTON_ITERATIONS):
+        f, df = rate(azi, slice(None))
+        predicted = azi[:-1] + step * f[:-1]
+        f_next, df_next = rate(predicted, slice(1, None))
+        residual = azi[:-1] + half * (f[:-1] + f_next) - azi[1:]
+        gain = 1.0 + half * (df[:-1] + df_next * (1.0 + step * df[:-1]))
+        correction = _affine_recursion(gain, residual)
+        azi[1:] += correction
+        largest = float(np.max(np.abs(correction)))
+        if not growth * largest**2 > _NEWTON_TOLERANCE:  # (NaN input propagates)
+            return azi
+    raise ContinuousError(
+        f"the azimuth integration did not converge in {_NEWTON_ITERATIONS} Newton iterations "
+        f"(last correction {largest:.3g} rad)"
+    )
+
+
+def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
+    """``x_1 … x_n`` of ``x_{k+1} = gain_k·x_k + forcing_k`` from ``x_0 = 0``: within a
+    segment ``x = P·(x_start + cumsum(forcing/P))`` with P the running product of the gains,
+    segments cut where the gains' log-variation reaches ``_SCAN_SPAN`` (P stays in range)."""
+    with np.errstate(divide="ignore"):
+        variation = np.cumsum(np.nan_to_num(np.abs(np.log(np.abs(gain))), nan=0.0))
+    cuts = np.searchsorted(variation, np.arange(_SCAN_SPAN, variation[-1], _SCAN_SPAN))
+    out = np.empty_like(forcing)
+    carry = 0.0
+    for lo, hi in zip([0, *cuts], [*cuts, gain.size], strict=True):
+        if hi > lo:
+            product = np.cumprod(gain[lo:hi])
+            out[lo:hi] = product * (carry + np.cumsum(forcing[lo:hi] / product))
+            carry = float(out[hi - 1])
+    return out

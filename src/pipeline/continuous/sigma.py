@@ -343,24 +343,49 @@ def _inclination_noise_variance(
     A station row p (over samples) integrates the rate error and applies the closure; the
     rate error is ``∂Ȧ/∂I·δI + ∂Ȧ/∂İ·D₁δI`` and ``δI = n_acc/g − sin I·D₂ n_odo/g``, so the
     row seen by the white noises is ``q = p·∂Ȧ/∂I + D₁ᵀ(p·∂Ȧ/∂İ)`` (accelerometer) and
-    ``D₂ᵀ(q·sin I)`` (odometer). Stations are taken in blocks of at most ``cells`` matrix
-    cells, which bounds the transient memory (≈ 8 arrays of 8 bytes per cell)."""
+    ``D₂ᵀ(q·sin I)`` (odometer). The row is ``p = g·Δs/Φ`` with g one constant before the
+    station's sample (``Φ_k − w Φ_T``) and another from it on (``−w Φ_T``): away from the
+    station (farther than the two filters' half-widths) q and the odometer row are those
+    constants times the station-free rows ``Q`` and ``D₂ᵀ(Q·sin I)``, whose squares are
+    summed by prefix sums; near it they are evaluated exactly. Stations are taken in blocks
+    of at most ``cells`` cells of that neighbourhood."""
     d1 = _derivative_kernel(noise.inc_rate_points, 2, 1, noise.dt)[::-1]  # transposed
     d2 = _derivative_kernel(noise.odometer_points, 3, 2, noise.dt)[::-1]
+    n = elapsed.size
     index = np.searchsorted(elapsed, st_elapsed, side="left")
     phi_t = float(transition[-1])
+    before = np.interp(st_elapsed, elapsed, transition) - w * phi_t  # g before the station
+    after = -w * phi_t  # g from the station on
+    q_free = step * d_inc + oaconvolve(step * d_inc_rate, d1, mode="same")
+    odo_free = oaconvolve(q_free * sin_i, d2, mode="same")
+    sum_q = np.concatenate([[0.0], np.cumsum(q_free**2)])
+    sum_odo = np.concatenate([[0.0], np.cumsum(odo_free**2)])
+    spread = d1.size // 2 + d2.size // 2
+    near = spread + 1  # half-width where the rows differ from the station-free ones
+    reach = near + spread  # half-width of the samples the neighbourhood depends on
+    offsets = np.arange(-reach, reach + 1)
+    inner = np.abs(offsets) <= near
+    pad = np.zeros(reach)
+    padded = [np.concatenate([pad, x, pad]) for x in (step, d_inc, d_inc_rate, sin_i)]
     out = np.empty(st_elapsed.size)
-    block = max(1, cells // elapsed.size)
+    block = max(1, cells // offsets.size)
     for lo in range(0, st_elapsed.size, block):
-        hi = min(lo + block, st_elapsed.size)
-        before = np.arange(elapsed.size)[None, :] < index[lo:hi, None]
-        phi_k = np.interp(st_elapsed[lo:hi], elapsed, transition)
-        rows = (phi_k[:, None] * before - (w[lo:hi] * phi_t)[:, None]) * step[None, :]
-        q = rows * d_inc + oaconvolve(rows * d_inc_rate, d1[None, :], mode="same", axes=1)
-        odo = oaconvolve(q * sin_i, d2[None, :], mode="same", axes=1)
-        out[lo:hi] = (noise.accel / noise.gravity) ** 2 * np.einsum("ij,ij->i", q, q) + (
-            noise.odometer / noise.gravity
-        ) ** 2 * np.einsum("ij,ij->i", odo, odo)
+        sl = slice(lo, min(lo + block, st_elapsed.size))
+        columns = index[sl, None] + offsets[None, :]  # sample index; padded: + reach
+        step_n, d_inc_n, d_rate_n, sin_n = (x[columns + reach] for x in padded)
+        p = step_n * np.where(offsets < 0, before[sl, None], after[sl, None])
+        q = p * d_inc_n + oaconvolve(p * d_rate_n, d1[None, :], mode="same", axes=1)
+        odo = oaconvolve(q * sin_n, d2[None, :], mode="same", axes=1)
+        inside = inner & (columns >= 0) & (columns < n)
+        first = np.clip(index[sl] - near, 0, n)  # first sample of the neighbourhood
+        last = np.clip(index[sl] + near + 1, 0, n)  # one past its last
+        far_q = before[sl] ** 2 * sum_q[first] + after[sl] ** 2 * (sum_q[n] - sum_q[last])
+        far_odo = before[sl] ** 2 * sum_odo[first] + after[sl] ** 2 * (sum_odo[n] - sum_odo[last])
+        out[sl] = (noise.accel / noise.gravity) ** 2 * (
+            far_q + np.sum(np.where(inside, q, 0.0) ** 2, axis=1)
+        ) + (noise.odometer / noise.gravity) ** 2 * (
+            far_odo + np.sum(np.where(inside, odo, 0.0) ** 2, axis=1)
+        )
     return out
 
 
