@@ -74,8 +74,8 @@ def run_bounds(station: FloatArray) -> tuple[int, int, int, int]:
 
 
 def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
-    """Azimuth, inclination, their σ, MD and high-side toolface (deg, m) of the compassed
-    stop ``station``."""
+    """Azimuth, inclination, their σ, MD, high-side and gyro toolface (deg, m) of the
+    compassed stop ``station``."""
     ids = np.asarray(stops.column("station").to_numpy(zero_copy_only=False))
     rows = np.flatnonzero(ids == station)
     if rows.size == 0:
@@ -85,7 +85,15 @@ def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
     row = int(rows[0])
     return {
         n: float(float_column(stops, n)[row])
-        for n in ("azi", "inc", "sigma_azi", "sigma_inc", "md", "highside_toolface")
+        for n in (
+            "azi",
+            "inc",
+            "sigma_azi",
+            "sigma_inc",
+            "md",
+            "highside_toolface",
+            "gyro_toolface",
+        )
     }
 
 
