@@ -78,6 +78,9 @@ def test_biased_accelerometers_at_vertical_are_undefined_and_a_small_tilt_is_not
     vertical = st["md"].to_numpy() <= 60.0
     assert all("azimuth_undefined" in f for f in st["flags"][vertical])
     assert np.isnan(st["azi"][vertical]).all()
+    # the bias's apparent tilt has no direction: it does not walk the well off north
+    traj = gp.minimum_curvature(st)
+    assert (traj["north"][vertical] == 0.0).all() and (traj["east"][vertical] == 0.0).all()
     tilted = {
         **plan({"preset": "mems-vrg"}),
         "well": {

@@ -4,8 +4,8 @@ Frame: NED — north, east, true vertical depth (down positive). Inclination I i
 vertical, azimuth A clockwise from north, so the tool axis is t = (sin I cos A, sin I sin A, cos I).
 Angles are in radians and lengths in metres; the stage layer converts.
 
-An undefined azimuth (NaN, a vertical station) takes the other end's azimuth in each step
-(:func:`_step_azimuths`).
+An undefined azimuth (NaN, a vertical station) takes the other end's azimuth in each step;
+a step with both ends undefined goes straight down (:func:`_step_azimuths`).
 
 Per step (station 1 → 2):
 
@@ -143,7 +143,7 @@ def _steps(
     """Write the (3, k) displacements, doglegs and DLS of the k steps between k + 1 stations."""
     sin_i, cos_i = np.sin(inc), np.cos(inc)
     filled = _step_azimuths(azi)
-    a1, a2 = filled if filled is not None else (azi[:-1], azi[1:])
+    a1, a2, both = filled if filled is not None else (azi[:-1], azi[1:], None)
     hav = np.sin(0.5 * (a2 - a1))
     hav *= hav
     hav *= sin_i[:-1]
@@ -164,25 +164,31 @@ def _steps(
     else:
         steps[0] = sin_i[:-1] * np.cos(a1) + sin_i[1:] * np.cos(a2)
         steps[1] = sin_i[:-1] * np.sin(a1) + sin_i[1:] * np.sin(a2)
+        steps[:2, both] = 0.0
     np.add(cos_i[:-1], cos_i[1:], out=steps[2])
     dmd *= 0.5
     dmd *= _ratio_factor(dogleg)
     steps *= dmd
 
 
-def _step_azimuths(azi: FloatArray) -> tuple[FloatArray, FloatArray] | None:
-    """Azimuths at the start and end of each step. An undefined (NaN) azimuth — a vertical
-    station, where the azimuth does not move the position — takes the other end's, the usual
-    practice for a step leaving or reaching vertical; where both are undefined any azimuth
-    does (0: with both ends vertical the step is straight down). None when every azimuth
-    is defined."""
+def _step_azimuths(
+    azi: FloatArray,
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]] | None:
+    """Azimuths at the start and end of each step, and the steps with both undefined. An
+    undefined (NaN) azimuth — a vertical station, where the azimuth does not move the
+    position — takes the other end's, the usual practice for a step leaving or reaching
+    vertical. Where both are undefined the step has no horizontal direction: its azimuth is
+    taken as 0 (for the dogleg) and its horizontal displacement as zero, the mean over an
+    unknown direction (exact at I = 0; an inclination that only noise or an accelerometer
+    bias gives does not walk the well off north). None when every azimuth is defined."""
     undefined = np.isnan(azi)
     if not undefined.any():
         return None
     a1, a2 = azi[:-1], azi[1:]
+    both = undefined[:-1] & undefined[1:]
     a1 = np.where(undefined[:-1], a2, a1)
     a2 = np.where(undefined[1:], a1, a2)
-    return np.nan_to_num(a1, nan=0.0), np.nan_to_num(a2, nan=0.0)
+    return np.nan_to_num(a1, nan=0.0), np.nan_to_num(a2, nan=0.0), both
 
 
 def _ratio_factor(beta: FloatArray) -> FloatArray:
