@@ -115,6 +115,10 @@ def test_minimum_curvature_and_uncertainty_take_any_azimuth_at_vertical():
     assert (
         np.isnan(traj["azi"][:3]).all() and np.isfinite(traj[["north", "east", "tvd"]]).all().all()
     )
+    # interpolation on the same arcs: straight down, then leaving vertical towards 37°
+    points = gp.interpolate(traj, md=[15.0, 45.0, 75.0])
+    assert points["north"][:2].tolist() == [0.0, 0.0] and np.isnan(points["azi"][:2]).all()
+    assert abs(points["azi"].iloc[2] - 37.0) < 2.0 and points["north"].iloc[2] > 0.0
     cov = gp.position_uncertainty(traj)
     assert np.isfinite(cov[["cov_nn", "cov_ee", "cov_vv", "ellipse_major"]]).all().all()
     assert (cov["cov_nn"].iloc[1:] > 0).all()

@@ -5,7 +5,7 @@ vertical, azimuth A clockwise from north, so the tool axis is t = (sin I cos A, 
 Angles are in radians and lengths in metres; the stage layer converts.
 
 An undefined azimuth (NaN, a vertical station) takes the other end's azimuth in each step;
-a step with both ends undefined goes straight down (:func:`_step_azimuths`).
+a step with both ends undefined goes straight down (:func:`step_azimuths`).
 
 Per step (station 1 → 2):
 
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["MinCurveResult", "closure", "minimum_curvature", "vertical_section"]
+__all__ = ["MinCurveResult", "closure", "minimum_curvature", "step_azimuths", "vertical_section"]
 
 FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
@@ -142,7 +142,7 @@ def _steps(
 ) -> None:
     """Write the (3, k) displacements, doglegs and DLS of the k steps between k + 1 stations."""
     sin_i, cos_i = np.sin(inc), np.cos(inc)
-    filled = _step_azimuths(azi)
+    filled = step_azimuths(azi)
     a1, a2, both = filled if filled is not None else (azi[:-1], azi[1:], None)
     hav = np.sin(0.5 * (a2 - a1))
     hav *= hav
@@ -171,7 +171,7 @@ def _steps(
     steps *= dmd
 
 
-def _step_azimuths(
+def step_azimuths(
     azi: FloatArray,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]] | None:
     """Azimuths at the start and end of each step, and the steps with both undefined. An
