@@ -139,6 +139,9 @@ def test_minimum_curvature_leaving_vertical_follows_the_arc_of_the_next_azimuth(
     assert traj["tvd"].iloc[2] == pytest.approx(100.0 + radius * np.sin(np.radians(10.0)), abs=1e-9)
     assert traj["north"].iloc[1] == 0.0 and traj["tvd"].iloc[1] == 100.0
     assert np.isnan(traj["azi"].iloc[0])
+    for method in ("tangential", "balanced_tangential", "average_angle", "radius_of_curvature"):
+        other = gp.survey_method(frame, method=method)
+        assert other["north"].iloc[1] == 0.0 and np.isfinite(other["north"].iloc[2]), method
 
 
 def test_point_gyro_pipeline_writes_and_reads_back_undefined_azimuths(tmp_path: Path):
