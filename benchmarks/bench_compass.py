@@ -13,8 +13,9 @@ from __future__ import annotations
 import sys
 import timeit
 
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.gyrocompass.solve import CompassOptions, compass
+from pipeline.gyrocompass.solve import compass
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 

@@ -463,11 +463,15 @@ def budget(plan_file: str, out_file: str | None) -> None:
         spec = load_simulation(plan_file, read_stations=_stations_reader())
         table = error_budget(spec)
     click.echo(f"{spec.name}: tool {spec.tool.preset}, latitude {spec.site.latitude}°")
-    click.echo(f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'acc':>7}")
+    click.echo(
+        f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'g-sens':>7} "
+        f"{'acc':>7}"
+    )
     for row in table.to_pylist():
         click.echo(
-            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.3f} "
-            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_accel']:7.3f}"
+            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
+            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
+            f"{row['sigma_azi_accel']:7.3f}"
         )
     if out_file:
         registry = load_registry()

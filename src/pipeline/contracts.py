@@ -37,6 +37,9 @@ NORTH_KEY = b"north_reference"
 NORTH_REFERENCES = ("true", "grid", "magnetic")
 Monotonic = Literal["increasing", "strict"]
 EXAMPLES = 5
+VERTICAL_TOLERANCE = 1.0
+"""deg: a column declared ``undefined_at_vertical`` may hold NaN (an azimuth no inclination
+defines) only on rows whose ``inc`` is within this of 0° or 180°."""
 
 _ARROW_TYPES: dict[type, pa.DataType] = {
     float: pa.float64(),
@@ -57,6 +60,7 @@ def column(
     monotonic: Monotonic | None = None,
     north_reference: bool = False,
     finite: bool = True,
+    undefined_at_vertical: bool = False,
     default: Any = ...,
 ) -> Any:
     """Declare a contract column.
@@ -65,9 +69,14 @@ def column(
     dimensionless or text columns). ``monotonic`` is ``"increasing"`` (non-decreasing) or
     ``"strict"`` (strictly increasing), within each group when the contract sets
     ``group_by``. ``north_reference`` requires the field to state its north reference.
-    ``finite`` forbids NaN and ±inf in float columns. A ``default`` makes the column optional.
+    ``finite`` forbids NaN and ±inf in float columns; ``undefined_at_vertical`` allows NaN
+    (an azimuth that is undefined) on rows whose ``inc`` column is within
+    :data:`VERTICAL_TOLERANCE` of vertical, and nowhere else. A ``default`` makes the column
+    optional.
     """
     extra: dict[str, Any] = {"x-unit": unit, "x-finite": finite}
+    if undefined_at_vertical:
+        extra["x-undefined-at-vertical"] = True
     if monotonic:
         extra["x-monotonic"] = monotonic
     if north_reference:
@@ -118,6 +127,7 @@ class ColumnSpec:
     lt: float | None
     monotonic: Monotonic | None
     north_reference: bool
+    undefined_at_vertical: bool = False
 
     def field(self, north_reference: str | None = None) -> pa.Field:
         meta: dict[bytes, bytes] = {}
@@ -143,6 +153,7 @@ class CompiledContract:
     def make_table(self, data: dict[str, Any], *, north_reference: str | None = None) -> pa.Table:
         """Build a table of this contract from column arrays, attaching units.
 
+        Nulls of an ``undefined_at_vertical`` column (a file's empty azimuth) become NaN.
         Columns of ``data`` not in the contract are kept (without unit metadata unless they
         are already Arrow arrays whose field carries it).
         """
@@ -160,6 +171,8 @@ class CompiledContract:
                     if not isinstance(values, pa.Array | pa.ChunkedArray)
                     else values.cast(spec.type)
                 )
+                if spec.undefined_at_vertical and arr.null_count:  # a file's null: undefined
+                    arr = arr.fill_null(float("nan"))
                 fields.append(spec.field(north_reference))
             arrays.append(arr)
         return pa.Table.from_arrays(arrays, schema=pa.schema(fields))
@@ -218,17 +231,36 @@ def _check_column(
         mask = pc.is_null(col).to_numpy(zero_copy_only=False)
         failures.append(_failure(spec.name, "not null", "no missing values", mask, col))
     if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
-        failures.extend(_check_numbers(spec, col, groups))
+        failures.extend(_check_numbers(spec, col, groups, _undefined_at_vertical(spec, table)))
     return failures
 
 
+def _undefined_at_vertical(spec: ColumnSpec, table: pa.Table) -> np.ndarray | None:
+    """Rows where ``spec``'s column may be NaN: the column allows it, the value is NaN and
+    the row's inclination is within :data:`VERTICAL_TOLERANCE` of vertical (else None)."""
+    if not spec.undefined_at_vertical or "inc" not in table.column_names:
+        return None
+    values = table.column(spec.name).to_numpy(zero_copy_only=False).astype(float)
+    inc = table.column("inc").to_numpy(zero_copy_only=False).astype(float)
+    with np.errstate(invalid="ignore"):
+        vertical = np.minimum(np.abs(inc), np.abs(180.0 - inc)) <= VERTICAL_TOLERANCE
+    allowed = np.isnan(values) & vertical
+    return allowed if allowed.any() else None
+
+
 def _check_numbers(
-    spec: ColumnSpec, col: pa.ChunkedArray, groups: pa.ChunkedArray | None
+    spec: ColumnSpec,
+    col: pa.ChunkedArray,
+    groups: pa.ChunkedArray | None,
+    undefined: np.ndarray | None = None,
 ) -> list[RuleFailure]:
+    """Finite, range and monotonic rules; rows in ``undefined`` (allowed NaN) are skipped."""
     values = col.to_numpy() if col.null_count == 0 else col.to_numpy(zero_copy_only=False)
     if len(values) == 0:
         return []
     valid = ~pc.is_null(col).to_numpy(zero_copy_only=False) if col.null_count else None
+    if undefined is not None:
+        valid = ~undefined if valid is None else valid & ~undefined
     failures: list[RuleFailure] = []
     is_float = values.dtype.kind == "f"
     if valid is not None:
@@ -242,7 +274,13 @@ def _check_numbers(
     lo, hi = checked.min(), checked.max()
     if is_float and spec.finite and not (np.isfinite(lo) and np.isfinite(hi)):
         bad = ~np.isfinite(values) if valid is None else (~np.isfinite(values) & valid)
-        failures.append(_failure(spec.name, "finite", "finite numbers (no NaN/inf)", bad, col))
+        expected = (
+            f"finite numbers (NaN, undefined, only where inc is within {VERTICAL_TOLERANCE:g}° "
+            "of vertical)"
+            if spec.undefined_at_vertical
+            else "finite numbers (no NaN/inf)"
+        )
+        failures.append(_failure(spec.name, "finite", expected, bad, col))
     bounds = (  # (bound, symbol, test of a bad value, extreme that shows any bad value)
         (spec.ge, ">=", np.less, lo),
         (spec.le, "<=", np.greater, hi),
@@ -330,6 +368,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                 finite=bool(extra.get("x-finite", True)),
                 monotonic=cast(Monotonic | None, monotonic),
                 north_reference="x-north-reference" in extra,
+                undefined_at_vertical=bool(extra.get("x-undefined-at-vertical", False)),
                 **bounds,
             )
         )

@@ -31,7 +31,10 @@ class Stations(TableContract):
     )
     inc: float = column(unit="deg", ge=0, le=180, description="inclination from vertical")
     azi: float = column(
-        unit="deg", north_reference=True, description="azimuth, clockwise from north"
+        unit="deg",
+        north_reference=True,
+        undefined_at_vertical=True,
+        description="azimuth, clockwise from north (NaN: undefined, only at vertical)",
     )
 
 
@@ -44,7 +47,8 @@ class Trajectory(Stations):
         ge=0,
         lt=360,
         north_reference=True,
-        description="azimuth in [0, 360), clockwise from north",
+        undefined_at_vertical=True,
+        description="azimuth in [0, 360), clockwise from north (NaN: undefined, only at vertical)",
     )
     tvd: float = column(unit="m", description="true vertical depth below the depth reference")
     north: float = column(unit="m", description="northing from the wellhead")
@@ -173,7 +177,13 @@ class ErrorBudget(TableContract):
     sigma_inc: float = column(unit="deg", ge=0, description="inclination σ")
     sigma_azi: float = column(unit="deg", ge=0, finite=False, description="azimuth σ (total)")
     sigma_azi_gyro: float = column(
-        unit="deg", ge=0, finite=False, description="azimuth σ from the gyro"
+        unit="deg", ge=0, finite=False, description="azimuth σ from the gyro noise"
+    )
+    sigma_azi_g: float = column(
+        unit="deg",
+        ge=0,
+        finite=False,
+        description="azimuth σ from the gyro's g-dependent bias (not removed by compassing)",
     )
     sigma_azi_accel: float = column(
         unit="deg", ge=0, finite=False, description="azimuth σ from the accelerometers"
@@ -230,13 +240,22 @@ class CompassStations(Stations):
 
     station: int = column(unit=None, ge=0, description="station index")
     azi: float = column(
-        unit="deg", ge=0, lt=360, north_reference=True, description="azimuth, true north"
+        unit="deg",
+        ge=0,
+        lt=360,
+        north_reference=True,
+        undefined_at_vertical=True,
+        description="azimuth, true north (NaN where flagged azimuth_undefined: at vertical)",
     )
     gyro_toolface: float = column(
         unit="deg", ge=0, lt=360, description="north-referenced (gyro) toolface"
     )
     highside_toolface: float = column(
-        unit="deg", ge=0, lt=360, description="gravity (high-side) toolface"
+        unit="deg",
+        ge=0,
+        lt=360,
+        undefined_at_vertical=True,
+        description="gravity (high-side) toolface (NaN where flagged azimuth_undefined)",
     )
     sigma_inc: float = column(unit="deg", ge=0, description="predicted σ of inc")
     sigma_azi: float = column(unit="deg", ge=0, finite=False, description="predicted σ of azi")
@@ -251,7 +270,9 @@ class CompassStations(Stations):
     solver: str = column(unit=None, description="ml, sine, atan2 or toolface")
     mode: str = column(unit=None, description="inclined or near-vertical")
     flags: str = column(
-        unit=None, description="comma-separated warnings (inconsistent, frame_mismatch, …)"
+        unit=None,
+        description="comma-separated warnings (inconsistent, frame_mismatch, poor_azimuth, "
+        "azimuth_from_toolface, azimuth_undefined, bias_not_removed)",
     )
     time: float = column(unit="s", description="mid-time of the station")
 

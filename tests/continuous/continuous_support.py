@@ -7,8 +7,9 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.continuous import ContinuousResult
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import CompassOptions, compass
+from pipeline.gyrocompass.solve import compass
 from pipeline.sim.simulate import Simulation
 from pipeline.sim.spec import SimulationSpec
 from pipeline.survey.mincurve import minimum_curvature

@@ -28,7 +28,7 @@ from pipeline.continuous import (
     ContinuousOptions,
     integrate_continuous,
 )
-from pipeline.gyrocompass.solve import CompassOptions
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.stages.survey import MinCurveParams, min_curve

@@ -12,9 +12,9 @@ import pyarrow as pa
 import pytest
 from scipy.spatial.transform import Rotation
 
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.gyrocompass.solve import (
-    CompassOptions,
     compass,
     fit_positions,
     five_position_closed_form,

@@ -12,7 +12,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.gyrocompass.solve import CompassOptions, compass
+from pipeline.gyrocompass.options import CompassOptions
+from pipeline.gyrocompass.solve import compass
 from pipeline.tables import PositionReadings
 from tests_support import ROOT, gyropipe
 

@@ -22,15 +22,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from pipeline.gyrocompass.azimuth import model
+from pipeline.gyrocompass.earth_rate import HINT, EarthRate, earth_rate_check
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import (
-    HINT,
-    CompassOptions,
-    EarthRate,
-    compass,
-    earth_rate_check,
-)
+from pipeline.gyrocompass.solve import compass
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from tests_support import ROOT, gyropipe

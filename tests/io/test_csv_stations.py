@@ -417,8 +417,8 @@ def test_corrupt_last_row_is_not_a_footer(tmp_path: Path, last: str) -> None:
 
 
 def test_empty_cell(tmp_path: Path) -> None:
-    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n100,1, \n"))
-    assert (err.line, err.column) == (3, "AZI TN[deg]")
+    err = failure(put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n100, ,45\n"))
+    assert (err.line, err.column) == (3, "INC[deg]")
     assert "got an empty cell" in str(err)
 
 

@@ -74,8 +74,10 @@ def run_bounds(station: FloatArray) -> tuple[int, int, int, int]:
 
 
 def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
-    """Azimuth, inclination, their σ, MD and high-side toolface (deg, m) of the compassed
-    stop ``station``."""
+    """Azimuth, inclination, their σ, MD, high-side and gyro toolface and its σ (deg, m) of
+    the compassed stop ``station``. A stop whose azimuth is undefined (vertical) keeps NaN
+    and takes the gyro toolface's σ as its azimuth σ: a run is tied there through that
+    toolface (A + ψ at I = 0)."""
     ids = np.asarray(stops.column("station").to_numpy(zero_copy_only=False))
     rows = np.flatnonzero(ids == station)
     if rows.size == 0:
@@ -83,10 +85,22 @@ def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
             f"stop {station} is not among the compassed stops (rejected by compassing?)"
         )
     row = int(rows[0])
-    return {
+    stop = {
         n: float(float_column(stops, n)[row])
-        for n in ("azi", "inc", "sigma_azi", "sigma_inc", "md", "highside_toolface")
+        for n in (
+            "azi",
+            "inc",
+            "sigma_azi",
+            "sigma_inc",
+            "md",
+            "highside_toolface",
+            "gyro_toolface",
+            "sigma_toolface",
+        )
     }
+    if np.isnan(stop["azi"]):  # vertical: tied through the gyro toolface, and its σ
+        stop["sigma_azi"] = stop["sigma_toolface"]
+    return stop
 
 
 def odometer_points(window: float, dt: float) -> int:

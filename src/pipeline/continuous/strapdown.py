@@ -217,7 +217,7 @@ def _tie(
         dwell = np.flatnonzero((station == stop_id) & ~np.isnan(position))
         if dwell.size:
             dwell = dwell[position[dwell] == position[dwell[0]]]
-            c = body_to_ned(*np.radians([stop["azi"], stop["inc"], stop["highside_toolface"]]))
+            c = body_to_ned(*np.radians(_stop_attitude(stop)))
             return int(dwell[dwell.size // 2]), c
     if np.sin(np.radians(stop["inc"])) < np.sin(np.radians(options.vertical_below)):
         raise ContinuousError(
@@ -228,3 +228,12 @@ def _tie(
     g = np.array([float_column(samples, f"acc_{a}")[boundary] for a in "xyz"])
     inc, toolface = inclination_toolface(g)
     return boundary, body_to_ned(np.radians(stop["azi"]), inc, toolface)
+
+
+def _stop_attitude(stop: dict[str, float]) -> tuple[float, float, float]:
+    """Azimuth, inclination and high-side toolface (deg) of a compassed stop. Where its
+    azimuth is undefined (vertical: NaN) only their sum, the gyro toolface, is known, and
+    at I ≈ 0 it alone fixes the attitude: A = Φ, ψ = 0."""
+    if np.isnan(stop["azi"]):
+        return stop["gyro_toolface"], stop["inc"], 0.0
+    return stop["azi"], stop["inc"], stop["highside_toolface"]

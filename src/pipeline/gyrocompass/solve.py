@@ -16,85 +16,50 @@ Per station (DOMAIN.md §5), from the frame positions k:
    the north-referenced (gyro) toolface Φ = atan2(−n_y, n_x).
 3. Residuals against each position's σ give a χ² consistency test (tool moved, frame
    slipped); the frame-angle sensor is checked against the accelerometer toolfaces.
-4. The Earth rate the fit found must be the Earth's (DOMAIN.md §3, :func:`earth_rate_check`):
-   the horizontal component Ω cos φ and, when the axial gyro joins the fit, the vertical
-   Ω sin φ, within ``earth_rate_tolerance`` (relative) and 4 σ of the fitted value. A
-   station outside is rejected, never solved: gyro rates in the wrong unit (rad/s or deg/s
-   read as °/h), a dead or mis-scaled gyro or a wrong latitude would otherwise give a
-   confident, wrong azimuth (a rad/s record compasses to ≈ 180°, σ 1e-5°). A units mistake
-   is the whole record's: a transverse gyro pointing near the Earth's axis (I ≈ 90° − φ,
-   A ≈ 180°) truly sees almost no Earth rate and cannot tell, so when most stations fail
-   the check, or any fails by a ratio only a rate unit explains (:data:`RATE_UNITS`), the
-   rest are rejected with them.
+4. The Earth rate the fit found must be the Earth's (:mod:`pipeline.gyrocompass.earth_rate`);
+   a station outside is rejected, never solved, and when most stations fail, or any fails by
+   a ratio only a rate unit explains, the record's units are wrong and every station is.
+5. σ holds the measured noise and the tool errors the frame positions cannot remove
+   (:mod:`pipeline.gyrocompass.systematic`): the gyro's g-dependent bias, the accelerometers'
+   bias, misalignment and scale factor.
+6. Near vertical the azimuth is the gyro toolface less the gravity toolface, A = Φ − ψ. Where
+   the measured horizontal gravity is not ``tilt_detection`` times its σ (noise, the
+   accelerometer resolution ``acc_resolution`` and errors) above zero, ψ — and so the
+   azimuth — is undefined: NaN, flagged ``azimuth_undefined``, σ NaN; the gyro toolface
+   stands.
 Rates in °/h, accelerations in m/s², angles in radians internally, degrees in outputs.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field
 from scipy.stats import chi2
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
-from pipeline.gyrocompass.azimuth import Method, solve_azimuth
+from pipeline.gyrocompass.azimuth import solve_azimuth
+from pipeline.gyrocompass.earth_rate import (
+    EarthRate,
+    EarthRateReject,
+    StationReject,
+    earth_rate_check,
+    earth_rate_reason,
+    failure_hint,
+)
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
+from pipeline.gyrocompass.systematic import (
+    ToolErrors,
+    accelerometer_sigma,
+    g_dependent_variance,
+)
 from pipeline.tables import CompassRejects, CompassStations
 
-
-class CompassOptions(BaseModel):
-    """Compassing parameters (angles deg, rates °/h)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-    latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="site latitude, deg (default: the well metadata's)"
-    )
-    gyro_axes: Literal["auto", "x", "xy", "xyz"] = Field(
-        "auto", description="gyro axes to use (auto: every gyro column present)"
-    )
-    azimuth_method: Method = Field("ml", description="ml, auto (sine/atan2), sine or atan2")
-    vertical_below: float = Field(
-        3.0, gt=0, lt=45, description="inclination below which the near-vertical mode is used"
-    )
-    trend: bool = Field(True, description="fit a linear gyro trend (needs enough positions)")
-    gyro_sigma: float | None = Field(
-        None,
-        gt=0,
-        description="σ of one position's mean gyro reading when the readings "
-        "carry no std/n columns",
-    )
-    acc_sigma: float | None = Field(
-        None, gt=0, description="σ of one position's mean acceleration, m/s², likewise"
-    )
-    noise_floor: float = Field(
-        0.0, ge=0, description="added in quadrature to each position's gyro σ (bias instability)"
-    )
-    consistency: float = Field(
-        1e-3, gt=0, lt=1, description="χ² tail probability below which a station is flagged"
-    )
-    frame_tolerance: float = Field(
-        2.0, gt=0, description="largest disagreement of frame angle and accelerometer toolface"
-    )
-    max_sigma_azi: float = Field(5.0, gt=0, description="σ_azi above which a station is flagged")
-    z_bias_sigma: float | None = Field(
-        None,
-        gt=0,
-        description="σ of the axial gyro's bias, °/h: when given, a three-axis "
-        "tool's z gyro joins the azimuth fit (its bias is not removed by turning the frame)",
-    )
-    earth_rate_tolerance: float = Field(
-        0.2,
-        gt=0,
-        lt=1,
-        description="largest relative departure of the fitted horizontal Earth rate from "
-        "Ω cos φ (and, when the z gyro joins the fit, of the vertical one from Ω sin φ), "
-        "beyond 4 σ of the fit, before a station is rejected (rates in the wrong unit, a "
-        "dead or mis-scaled gyro, a wrong latitude)",
-    )
+MICRO_G = STANDARD_GRAVITY * 1e-6
+"""1 µg in m/s²."""
 
 
 @dataclass
@@ -135,86 +100,6 @@ class _Row:
     mode: str = ""
 
 
-EARTH_RATE_SIGMAS = 4.0
-"""Multiples of the fitted Earth rate's σ added (in quadrature) to the relative tolerance."""
-RATE_UNITS = {
-    "rad/s": np.radians(1.0) / 3600.0,
-    "deg/s": 1.0 / 3600.0,
-    "mrad/s": np.radians(1.0) / 3.6,
-}
-"""What 1 °/h reads as in other rate units: the ratio of fitted to expected Earth rate that a
-record in that unit, taken for °/h, shows (a factor 17 or more apart from each other)."""
-LOOKS_LIKE = 2.0
-"""A ratio within this factor of a unit's (:data:`RATE_UNITS`) names the unit in the hint."""
-
-
-@dataclass(frozen=True)
-class EarthRate:
-    """One component of the Earth rate a station's gyro fit found, against the Earth's."""
-
-    component: str
-    """``horizontal`` or ``vertical``"""
-    fitted: float
-    """°/h"""
-    expected: float
-    """°/h (the vertical is positive up: Ω sin φ)"""
-    limit: float
-    """largest allowed |fitted − expected|, °/h"""
-
-    @property
-    def ok(self) -> bool:
-        return bool(abs(self.fitted - self.expected) <= self.limit)
-
-    @property
-    def ratio(self) -> float:
-        return self.fitted / self.expected if self.expected else float("nan")
-
-    def describe(self, latitude: float) -> str:
-        """``fitted horizontal Earth rate 0.000035 °/h is 0.0000048× the expected 7.24 °/h
-        at 61.25° N``."""
-        where = f"{abs(latitude):.2f}° {'N' if latitude >= 0 else 'S'}"
-        times = f" is {_figures(self.ratio)}×" if self.expected else ","
-        return (
-            f"fitted {self.component} Earth rate {_figures(self.fitted)} °/h{times} the "
-            f"expected {self.expected:.2f} °/h at {where}"
-        )
-
-    def looks_like(self) -> str:
-        """The rate unit whose factor the ratio matches within :data:`LOOKS_LIKE`
-        (``they look like rad/s``; the inverse for °/h converted as if in that unit), or ''."""
-        if not self.expected or not self.ratio > 0:
-            return ""
-        for unit, factor in RATE_UNITS.items():
-            if abs(np.log(self.ratio / factor)) <= np.log(LOOKS_LIKE):
-                return f"they look like {unit}"
-            if abs(np.log(self.ratio * factor)) <= np.log(LOOKS_LIKE):
-                return f"they look like °/h converted as if they were {unit}"
-        return ""
-
-
-HINT = "are the gyro rates in °/h?"
-
-
-def _figures(value: float) -> str:
-    """Two significant figures without an exponent (``0.000035``, ``7.2``, ``1800``)."""
-    if not np.isfinite(value) or value == 0:
-        return f"{value:g}"
-    return str(np.format_float_positional(value, precision=2, fractional=False, trim="-"))
-
-
-def _hint(checks: list[EarthRate]) -> str:
-    """The question to ask, and the unit the failed checks' ratios point to if any."""
-    looks = next((c.looks_like() for c in checks if not c.ok and c.looks_like()), "")
-    return f"{HINT} ({looks})" if looks else HINT
-
-
-def _earth_rate_reason(checks: list[EarthRate], latitude: float, hint: str = "") -> str:
-    """Why a station's Earth rate is implausible: each failed component, then the hint
-    (default: the question, with the unit its own ratios point to)."""
-    text = "; ".join(c.describe(latitude) for c in checks if not c.ok)
-    return f"{text}: {hint or _hint(checks)}"
-
-
 @dataclass
 class _Pending:
     """An inclined station waiting for the (vectorised) azimuth solve."""
@@ -233,6 +118,7 @@ def compass(
     solved stations (CompassStations) and the stations that could not be solved, with why
     (CompassRejects) — never a silently wrong azimuth."""
     axes = _axes(readings, options.gyro_axes)
+    tool = options.tool_errors()
     lat = np.radians(latitude)
     rows: list[_Row] = []
     pending: list[_Pending] = []
@@ -241,7 +127,7 @@ def compass(
     good: list[tuple[_Station, _Row | _Pending, list[EarthRate]]] = []
     for st in _stations(readings, axes, options):
         try:
-            solved, checks = _solve(st, lat, options)
+            solved, checks = _solve(st, lat, options, tool)
         except StationReject as exc:
             if isinstance(exc, EarthRateReject):
                 implausible[len(rejected)] = exc.checks
@@ -254,10 +140,10 @@ def compass(
         # the record's gyro rates are implausible (most stations, or a ratio that only a rate
         # unit explains): the stations that seem right are luck — a transverse gyro near
         # I ≈ 90° − φ cannot tell — and the unit the ratios point to is every station's
-        hint = _hint([c for checks in implausible.values() for c in checks])
+        hint = failure_hint([c for checks in implausible.values() for c in checks])
         for i, checks in implausible.items():
             station, md, _ = rejected[i]
-            rejected[i] = (station, md, _earth_rate_reason(checks, latitude, hint))
+            rejected[i] = (station, md, earth_rate_reason(checks, latitude, hint))
         most = f"the Earth rate is implausible at {len(implausible)} of {checked} stations"
         for st, _, checks in good:
             here = f"{checks[0].describe(latitude)}, but " if checks else ""
@@ -292,75 +178,11 @@ def compass(
     return _table(rows, options), CompassRejects.compiled().make_table(rejects)
 
 
-class StationReject(Exception):
-    """A station that cannot be solved, and why."""
-
-
-class EarthRateReject(StationReject):
-    """A station whose fitted Earth rate is not the Earth's (:func:`earth_rate_check`)."""
-
-    def __init__(self, message: str, checks: list[EarthRate]) -> None:
-        self.checks = checks
-        super().__init__(message)
-
-
-def earth_rate_check(
-    obs: FloatArray,
-    cov: FloatArray,
-    inclination: float,
-    latitude: float,
-    tolerance: float,
-    *,
-    near_vertical: bool = False,
-) -> list[EarthRate]:
-    """The Earth rate a station's fit found, against the Earth's (DOMAIN.md §3), per
-    component; latitude and inclination in radians, rates in °/h.
-
-    ``obs`` with covariance ``cov``: inclined, the high-side and right-side components
-    (h, r) or, when the axial gyro joins the fit, (h, r, z); near vertical, the transverse
-    components (u, v) of the tilt-corrected fit, Ω cos φ times north's. The horizontal
-    component, against k = Ω cos φ, is
-
-    - near vertical: √(u² + v²) (low by at most 1 − cos I);
-    - from (h, r, z), free of any assumption: √((h cos I + z sin I)² + r²), and the
-      vertical h sin I − z cos I against Ω sin φ;
-    - from (h, r) alone: √(((h − Ω sin φ sin I)/cos I)² + r²), the vertical share taken
-      from the latitude (the azimuth solver does the same); nothing near horizontal, where
-      cos I → 0 leaves it undetermined.
-
-    Each component may depart from its expected value by
-    ``√((tolerance·expected)² + (4σ)²)``, σ propagated from ``cov`` (first order).
-    """
-    k = OMEGA_DEG_H * np.cos(latitude)
-    up = OMEGA_DEG_H * np.sin(latitude)
-    ci, si = np.cos(inclination), np.sin(inclination)
-    parts: list[tuple[str, float, FloatArray, float]] = []
-    if near_vertical:
-        value = float(np.hypot(obs[0], obs[1]))
-        parts.append(("horizontal", value, obs[:2] / (value or 1.0), k))
-    elif len(obs) == 3:
-        h, r, z = obs
-        along = h * ci + z * si
-        value = float(np.hypot(along, r))
-        grad = np.array([along * ci, r, along * si]) / (value or 1.0)
-        parts.append(("horizontal", value, grad, k))
-        parts.append(("vertical", float(h * si - z * ci), np.array([si, 0.0, -ci]), up))
-    elif abs(ci) > 1e-6:
-        h, r = obs[:2]
-        along = (h - up * si) / ci
-        value = float(np.hypot(along, r))
-        parts.append(("horizontal", value, np.array([along / ci, r]) / (value or 1.0), k))
-    checks = []
-    for component, value, grad, expected in parts:
-        sigma = float(np.sqrt(grad @ cov[: len(grad), : len(grad)] @ grad))
-        limit = float(np.hypot(tolerance * abs(expected), EARTH_RATE_SIGMAS * sigma))
-        checks.append(EarthRate(component, value, float(expected), limit))
-    return checks
-
-
 def _table(rows: list[_Row], options: CompassOptions) -> pa.Table:
     """CompassStations from solved rows: angles in degrees, the poor-azimuth flag added."""
     for row in rows:
+        if "azimuth_undefined" in row.flags:
+            continue
         if not np.isfinite(row.sigma_azi) or np.degrees(row.sigma_azi) > options.max_sigma_azi:
             row.flags.append("poor_azimuth")
     columns: dict[str, object] = {
@@ -416,7 +238,9 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
         _sigmas(readings, gyro_names, options.gyro_sigma, "gyro"), options.noise_floor
     )
     acc = np.stack([readings.column(n).to_numpy() for n in acc_names], axis=-1)
-    acc_sigma = _sigmas(readings, acc_names, options.acc_sigma, "acc")
+    acc_sigma = np.hypot(
+        _sigmas(readings, acc_names, options.acc_sigma, "acc"), options.acc_resolution * MICRO_G
+    )
     station = readings.column("station").to_numpy()
     frame = _column(readings, "frame_angle")
     t = readings.column("t").to_numpy()
@@ -439,12 +263,13 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
 
 
 def _solve(
-    st: _Station, lat: float, options: CompassOptions
+    st: _Station, lat: float, options: CompassOptions, tool: ToolErrors
 ) -> tuple[_Row | _Pending, list[EarthRate]]:
     """One station, solved (or pending the azimuth solve), and its Earth-rate checks; a
     :class:`StationReject` when it cannot be solved."""
     flags: list[str] = []
-    inc, sigma_inc, psi, sigma_psi = _inclination(st)
+    tilt = _inclination(st, tool, options.tilt_detection)
+    inc, psi = tilt.inc, tilt.psi
     near_vertical = min(inc, np.pi - inc) < np.radians(options.vertical_below)
     if st.frame is not None:
         offset = _wrap(psi - st.frame)
@@ -470,7 +295,7 @@ def _solve(
         md=st.md,
         inc=inc,
         highside_toolface=float(psi[0]),
-        sigma_inc=sigma_inc,
+        sigma_inc=tilt.sigma_inc,
         bias=fit.bias,
         trend=fit.trend * 3600.0,
         residual_rms=fit.rms,
@@ -479,24 +304,31 @@ def _solve(
         time=float(st.t.mean()),
         flags=flags,
     )
+    # the g-dependent gyro bias turns with the frame like the Earth rate: not removed
+    uv_cov = fit.cov[:2, :2] + g_dependent_variance(tool, inc) * np.eye(2)
     if not near_vertical:
-        obs, cov = fit.uv, fit.cov[:2, :2]
+        obs, cov = fit.uv, uv_cov
         if options.z_bias_sigma is not None and st.gyro.shape[1] == 3:
             var_z = 1.0 / np.sum(1.0 / st.gyro_sigma[:, 2] ** 2) + options.z_bias_sigma**2
             obs = np.append(obs, np.average(st.gyro[:, 2], weights=st.gyro_sigma[:, 2] ** -2))
             cov = np.pad(cov, (0, 1))
             cov[2, 2] = var_z
         checks = _plausible(obs, cov, inc, lat, options)
-        return _Pending(row, obs, cov, float(psi[0]), sigma_psi), checks
-    checks = _plausible(fit.uv, fit.cov[:2, :2], inc, lat, options, near_vertical=True)
+        return _Pending(row, obs, cov, float(psi[0]), tilt.sigma_psi), checks
+    checks = _plausible(fit.uv, uv_cov, inc, lat, options, near_vertical=True)
     # (u, v) = k (n_x, n_y) of north in the reference (frame angle 0, or the high side)
     jac = np.array([fit.uv[1], -fit.uv[0]]) / (fit.uv @ fit.uv)
-    row.sigma_toolface = float(np.sqrt(jac @ fit.cov[:2, :2] @ jac))
+    row.sigma_toolface = float(np.sqrt(jac @ uv_cov @ jac))
     row.gyro_toolface = float(np.arctan2(-fit.uv[1], fit.uv[0]) + alpha[0])
-    d = row.gyro_toolface - psi[0]  # (cos I cos A, −sin A) ∝ (cos d, −sin d)
-    row.azi = float(np.arctan2(np.sin(d), np.cos(d) / np.cos(inc)))
-    row.sigma_azi = float(np.hypot(row.sigma_toolface, sigma_psi))
     row.solver, row.mode = "toolface", "near-vertical"
+    if not tilt.defined:  # no horizontal gravity to tell the high side: no azimuth
+        row.highside_toolface = float("nan")
+        flags.append("azimuth_undefined")
+        return row, checks
+    # A = Φ − ψ at the first position, ψ − α (frame to high side) averaged over the positions
+    d = row.gyro_toolface - alpha[0] - _circmean(psi - alpha)
+    row.azi = float(np.arctan2(np.sin(d), np.cos(d) / np.cos(inc)))  # (cos I cos A, −sin A)
+    row.sigma_azi = float(np.hypot(row.sigma_toolface, tilt.sigma_psi))
     flags.append("azimuth_from_toolface")  # A = Φ − ψ: as good as the accelerometer ψ
     return row, checks
 
@@ -514,7 +346,7 @@ def _plausible(
     tol = options.earth_rate_tolerance
     checks = earth_rate_check(obs, cov, inc, lat, tol, near_vertical=near_vertical)
     if not all(c.ok for c in checks):
-        raise EarthRateReject(_earth_rate_reason(checks, float(np.degrees(lat))), checks)
+        raise EarthRateReject(earth_rate_reason(checks, float(np.degrees(lat))), checks)
     return checks
 
 
@@ -529,8 +361,23 @@ def _finish(p: _Pending, azimuth: float, sigma_gyro: float, method: str, lat: fl
     return row
 
 
-def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
-    """Inclination (rad) and its σ; per-position toolface ψ_k (rad) and σ of ψ."""
+@dataclass(frozen=True)
+class _Tilt:
+    """What the accelerometers give at one station (angles rad)."""
+
+    inc: float
+    sigma_inc: float
+    psi: FloatArray
+    """gravity toolface ψ_k of each position"""
+    sigma_psi: float
+    """σ of the mean frame-to-high-side offset: noise, resolution and accelerometer errors"""
+    defined: bool
+    """whether the measured horizontal gravity exceeds ``tilt_detection`` times its σ"""
+
+
+def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
+    """Inclination and gravity toolfaces with their σ (noise and the tool's accelerometer
+    errors, :mod:`pipeline.gyrocompass.systematic`)."""
     g = np.linalg.norm(st.acc, axis=1)
     transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
     if np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY):
@@ -540,19 +387,29 @@ def _inclination(st: _Station) -> tuple[float, float, FloatArray, float]:
         )
     inc_k = np.arctan2(transverse, st.acc[:, 2])
     psi = np.arctan2(st.acc[:, 1], -st.acc[:, 0])
+    cos_p, sin_p, cos_i, sin_i = np.cos(psi), np.sin(psi), np.cos(inc_k), np.sin(inc_k)
     # σ of I_k: in-plane transverse part (cos I) and axial part (sin I) of the accel noise
     sx, sy, sz = st.acc_sigma.T
-    in_plane = np.hypot(np.cos(psi) * sx, np.sin(psi) * sy)
-    var_k = (np.cos(inc_k) * in_plane) ** 2 + (np.sin(inc_k) * sz) ** 2
+    in_plane = np.hypot(cos_p * sx, sin_p * sy)
+    var_k = (cos_i * in_plane) ** 2 + (sin_i * sz) ** 2
     var_k = np.maximum(var_k / g**2, 1e-30)
     weight = 1.0 / var_k
     inc = float(np.sum(weight * inc_k) / weight.sum())
-    sigma_inc = float(np.sqrt(1.0 / weight.sum()))
-    across = np.hypot(np.sin(psi) * sx, np.cos(psi) * sy)
-    sigma_psi = float(np.sqrt(np.mean((across / np.maximum(transverse, 1e-12)) ** 2) / len(psi)))
     if not np.isfinite(inc) or len(inc_k) == 0:
         raise StationReject("accelerometer readings give no inclination")
-    return inc, sigma_inc, psi, sigma_psi
+    grad_inc = np.stack([-cos_p * cos_i, sin_p * cos_i, -sin_i], axis=-1) / g[:, None]
+    sigma_inc = float(
+        np.hypot(np.sqrt(1.0 / weight.sum()), accelerometer_sigma(grad_inc, st.acc, weight, tool))
+    )
+    if np.any(transverse <= 0):  # exactly vertical: no horizontal gravity at all
+        return _Tilt(inc, sigma_inc, psi, float("inf"), False)
+    across = np.hypot(sin_p * sx, cos_p * sy) / transverse
+    grad_psi = np.stack([sin_p, cos_p, np.zeros_like(psi)], axis=-1) / transverse[:, None]
+    noise = float(np.sqrt(np.sum(across**2)) / len(psi))
+    sigma_psi = float(
+        np.hypot(noise, accelerometer_sigma(grad_psi, st.acc, np.ones_like(psi), tool))
+    )
+    return _Tilt(inc, sigma_inc, psi, sigma_psi, bool(sigma_psi * detection < 1.0))
 
 
 @dataclass(frozen=True)

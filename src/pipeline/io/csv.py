@@ -141,7 +141,8 @@ def _unit_of(name: str) -> str:
 
 STATION_EXTRAS = ("tvd", "north", "east", "dls")
 LAYOUTS = {
-    "stations": Layout(Stations, extras=STATION_EXTRAS, blanks=frozenset(STATION_EXTRAS)),
+    # an empty azimuth is undefined (NaN), allowed by the contract only at vertical
+    "stations": Layout(Stations, extras=STATION_EXTRAS, blanks=frozenset({*STATION_EXTRAS, "azi"})),
     "samples": Layout(
         RawSamples, blanks=frozenset(c.name for c in RawSamples.compiled().columns if c.nullable)
     ),
@@ -279,7 +280,8 @@ def sniff(path: Path) -> Claim:
 
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
-    then the values (floats at their unit's precision, :mod:`pipeline.io.precision`)."""
+    then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN as
+    an empty cell)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -305,7 +307,18 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
     with path.open("wb") as fh:
         fh.write(("\n".join(comments) + "\n" + head.getvalue()).encode())
-        pacsv.write_csv(for_export(table), fh, pacsv.WriteOptions(include_header=False))
+        pacsv.write_csv(
+            _nan_as_null(for_export(table)), fh, pacsv.WriteOptions(include_header=False)
+        )
+
+
+def _nan_as_null(table: pa.Table) -> pa.Table:
+    """NaN (an undefined value) written as CSV's null, the empty cell."""
+    columns = [
+        pc.if_else(pc.is_nan(column), None, column) if pa.types.is_floating(column.type) else column
+        for column in table.columns
+    ]
+    return pa.Table.from_arrays(columns, schema=table.schema)
 
 
 def _header_cell(field: pa.Field) -> str:

@@ -57,7 +57,10 @@ class Station(_Model):
 
     md: float = Field(description="measured depth, m")
     inc: float = Field(description="inclination, deg")
-    azi: float = Field(description="azimuth, deg, in the document's north reference")
+    azi: float | None = Field(
+        description="azimuth, deg, in the document's north reference (null: undefined, the "
+        "station is vertical)"
+    )
     tvd: float = Field(description="true vertical depth, m")
     north: float = Field(description="northing from the wellhead, m")
     east: float = Field(description="easting from the wellhead, m")
@@ -208,12 +211,17 @@ def _surveys(trajectory: pa.Table) -> list[Survey]:
                 station_count=hi - lo,
                 md_start=float(cols["md"][lo]),
                 md_end=float(cols["md"][hi - 1]),
-                final=Station(**{name: float(v[hi - 1]) for name, v in cols.items()}),
+                final=Station(**{name: _defined(v[hi - 1]) for name, v in cols.items()}),
                 max_dls=MaxDls(dls=float(dls[worst]), md=float(cols["md"][worst])),
                 uncertainty_at_td=_uncertainty(trajectory, hi - 1),
             )
         )
     return found
+
+
+def _defined(value: float) -> float | None:
+    """A value, None where it is undefined (NaN: the azimuth of a vertical station)."""
+    return None if np.isnan(value) else float(value)
 
 
 def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:

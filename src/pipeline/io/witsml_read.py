@@ -19,7 +19,7 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from pipeline.contracts import SOURCE_LINE
+from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.sniffing import file_head
@@ -260,13 +260,24 @@ def _station(path: Path, node: Node) -> dict[str, Any]:
     for column, element, quantity, required in STATION_MEASURES:
         child = node.get(element)
         if child is None:
-            if required:
+            if column == "azi" and _vertical(row.get("inc")):
+                row[column] = float("nan")  # undefined at vertical, as the writer leaves it
+            elif required:
+                where = " (it may be left out only at vertical)" if column == "azi" else ""
                 raise InputFileError(
-                    path, f"trajectoryStation has no <{element}>", line=node.line, column=element
+                    path,
+                    f"trajectoryStation has no <{element}>{where}",
+                    line=node.line,
+                    column=element,
                 )
             continue
         row[column] = _measure(path, child, quantity)
     return row
+
+
+def _vertical(inc: float | None) -> bool:
+    """Whether an inclination (deg) is vertical enough to leave the azimuth undefined."""
+    return inc is not None and min(abs(inc), abs(180.0 - inc)) <= VERTICAL_TOLERANCE
 
 
 def _measure(path: Path, node: Node, quantity: str) -> float:

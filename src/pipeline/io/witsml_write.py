@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.contracts import NORTH_KEY, UNIT_KEY, VERTICAL_TOLERANCE
 from pipeline.errors import EmptyTableError
 from pipeline.io.witsml_terms import (
     AZI_REF,
@@ -147,7 +147,13 @@ def _station_values(table: pa.Table) -> dict[str, np.ndarray]:
         array = table.column(column).to_numpy(zero_copy_only=False)
         values[column] = np.asarray(array, dtype=np.float64)
     for column in REQUIRED:
-        bad = np.flatnonzero(~np.isfinite(values[column]))
+        bad = ~np.isfinite(values[column])
+        if column == "azi":  # undefined at vertical: the station is written without <azi>
+            inc = values["inc"]
+            bad &= ~(
+                np.isnan(values[column]) & (np.minimum(inc, 180.0 - inc) <= VERTICAL_TOLERANCE)
+            )
+        bad = np.flatnonzero(bad)
         if bad.size:
             raise ValueError(f"column {column!r} row {int(bad[0])}: missing or not finite")
     return values

@@ -29,7 +29,8 @@ from numpy.typing import NDArray
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import Site
-from pipeline.gyrocompass.solve import StationReject, fit_positions
+from pipeline.gyrocompass.earth_rate import StationReject
+from pipeline.gyrocompass.solve import fit_positions
 from pipeline.qc.faults import Equation, Finding, isolate
 from pipeline.qc.options import CHECKS, DEFAULTS, QcOptions, QcStop
 from pipeline.qc.reference import EarthReference, earth_reference

@@ -81,6 +81,14 @@ COMPASS: dict[str, Flag] = {
         "such inclinations it hardly moves the position.",
         (AZI,),
     ),
+    "azimuth_undefined": Flag(
+        "azimuth undefined",
+        "the hole was vertical within what the accelerometers can resolve, so no horizontal "
+        "direction of the tool axis exists and no azimuth is given; at such inclinations the "
+        "azimuth does not move the position, and the trajectory takes the next surveyed "
+        "azimuth.",
+        (AZI, SIGMA_AZI),
+    ),
     "poor_azimuth": Flag(
         "poor azimuth",
         "the azimuth's σ is above the acceptance limit or undefined; do not rely on this "

@@ -64,7 +64,10 @@ def azimuth_value(value: float, decimals: int) -> float:
 
 
 def fmt_azimuth(value: float | None, decimals: int = 2) -> str:
-    """An azimuth (deg) in [0, 360) with fixed decimals: never '360.00', never '−0.00'."""
+    """An azimuth (deg) in [0, 360) with fixed decimals: never '360.00', never '−0.00';
+    :data:`UNDEFINED` for NaN (no azimuth exists: vertical)."""
+    if value is not None and math.isnan(value):
+        return UNDEFINED
     if value is None or not math.isfinite(value):
         return fmt(value, decimals)
     return fmt(azimuth_value(value, decimals), decimals)

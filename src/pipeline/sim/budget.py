@@ -6,10 +6,16 @@ Per station, for the frame positions and dwell of the plan:
   instability taken as an independent per-position error (conservative: the trend term
   absorbs its slow part), propagated through the (h, r, bias, trend) least squares and the
   maximum-likelihood azimuth; reported for the least favourable starting toolface;
-- accelerometers: white noise averaged over the whole stop, and the axial bias (transverse
-  biases cancel over opposite frame positions) → σ_I; its leak into the azimuth through
+- gyro g-dependent bias: turning with the frame like the Earth rate, compassing cannot remove
+  it — σ ``g_sensitivity · sin I`` °/h on h and r (:mod:`pipeline.gyrocompass.systematic`),
+  ≈ sin I · K / (Ω cos φ) in azimuth;
+- accelerometers: white noise averaged over the whole stop, and the bias, misalignment and
+  scale factor propagated through the inclination estimator at the plan's frame positions
+  (least favourable starting toolface) → σ_I; its leak into the azimuth through
   ∂A/∂I = −sin A (cos A tan I − tan φ).
-Gyro biases and linear drift are removed by the multi-position scheme and do not appear.
+Gyro biases and linear drift are removed by the multi-position scheme and do not appear. The
+tool's error magnitudes are its 1σ values as :func:`pipeline.sim.sensors.compass_errors`
+takes them — the same the compass stage uses for a simulated tool.
 """
 
 from __future__ import annotations
@@ -17,9 +23,11 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
+from pipeline.earth.frames import FloatArray
 from pipeline.gyrocompass.azimuth import cramer_rao
 from pipeline.gyrocompass.precision import hr_covariance
-from pipeline.sim.sensors import per_axis
+from pipeline.gyrocompass.systematic import ToolErrors, accelerometer_sigma
+from pipeline.sim.sensors import compass_errors, per_axis
 from pipeline.sim.simulate import station_mds
 from pipeline.sim.spec import PointSurvey, SimulationSpec
 from pipeline.tables import ErrorBudget
@@ -50,13 +58,24 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
 
     stop = len(theta) * survey.dwell
     accel_noise = per_axis(tool.accelerometer.noise_density) / (60.0 * np.sqrt(stop))
-    accel_bias_z = abs(per_axis(tool.accelerometer.bias)[2])
-    sigma_inc = np.hypot(accel_noise[:2].mean() / g, accel_bias_z * np.sin(state.inc) / g)
+    errors = compass_errors(tool)
+    accel_errors = np.array([_accel_sigma(i, theta, g, errors) for i in state.inc])
+    sigma_inc = np.hypot(accel_noise[:2].mean() / g, accel_errors)
 
-    sigma_gyro = np.max(
-        [cramer_rao(state.azi, state.inc, lat, np.broadcast_to(c, (len(mds), 2, 2))) for c in covs],
-        axis=0,
+    g_var = (errors.g_sensitivity * np.sin(state.inc)) ** 2
+    g_cov = g_var[:, None, None] * np.eye(2)
+    n = len(mds)
+    sigma_gyro, sigma_fit = (
+        np.max(
+            [
+                cramer_rao(state.azi, state.inc, lat, np.broadcast_to(c, (n, 2, 2)) + extra)
+                for c in covs
+            ],
+            axis=0,
+        )
+        for extra in (np.zeros((n, 2, 2)), g_cov)
     )
+    sigma_g = cramer_rao(state.azi, state.inc, lat, g_cov + 1e-30 * np.eye(2))
     leak = np.abs(np.sin(state.azi) * (np.cos(state.azi) * np.tan(state.inc) - np.tan(lat)))
     sigma_accel = leak * sigma_inc
     return ErrorBudget.compiled().make_table(
@@ -65,9 +84,35 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
             "inc": np.degrees(state.inc),
             "azi": np.degrees(state.azi) % 360.0,
             "sigma_inc": np.degrees(sigma_inc),
-            "sigma_azi": np.degrees(np.hypot(sigma_gyro, sigma_accel)),
+            "sigma_azi": np.degrees(np.hypot(sigma_fit, sigma_accel)),
             "sigma_azi_gyro": np.degrees(sigma_gyro),
+            "sigma_azi_g": np.degrees(sigma_g),
             "sigma_azi_accel": np.degrees(sigma_accel),
         },
         north_reference="true",
     )
+
+
+def _accel_sigma(inc: float, theta: FloatArray, g: float, errors: ToolErrors) -> float:
+    """σ of the inclination (rad) from the accelerometer errors compassing leaves, at the
+    frame angles ``theta`` (rad), for the least favourable starting toolface."""
+    worst = 0.0
+    for offset in OFFSETS:
+        psi = theta + offset
+        acc = g * np.stack(
+            [-np.sin(inc) * np.cos(psi), np.sin(inc) * np.sin(psi), np.full_like(psi, np.cos(inc))],
+            axis=-1,
+        )
+        grad = (
+            np.stack(
+                [
+                    -np.cos(psi) * np.cos(inc),
+                    np.sin(psi) * np.cos(inc),
+                    -np.full_like(psi, np.sin(inc)),
+                ],
+                axis=-1,
+            )
+            / g
+        )
+        worst = max(worst, accelerometer_sigma(grad, acc, np.ones_like(psi), errors))
+    return worst

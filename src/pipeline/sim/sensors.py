@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from pipeline.earth.gravity import STANDARD_GRAVITY
+from pipeline.gyrocompass.systematic import ToolErrors
 
 FloatArray = NDArray[np.float64]
 Vec3 = tuple[float, float, float]
@@ -272,6 +273,26 @@ def _g_dependent(errors: TriadErrors, specific_force: ArrayLike | None, n: int) 
         raise ValueError(f"specific_force must have shape ({n}, 3) like ideal, got {force.shape}")
     bias: FloatArray = (force / STANDARD_GRAVITY) @ k.T
     return bias
+
+
+def compass_errors(tool: ToolModel) -> ToolErrors:
+    """1σ magnitudes of the tool's errors that compassing cannot remove
+    (:mod:`pipeline.gyrocompass.systematic`), as the RMS over its axes: the g-sensitivity
+    of its transverse gyros (row norm of K's transverse columns, (°/h)/g), the accelerometer
+    bias (m/s²), misalignment (off-diagonal terms, mrad) and scale factor (ppm)."""
+    k = np.asarray(tool.gyro.g_sensitivity)[[i for i, a in enumerate("xy") if a in tool.gyro_axes]]
+    acc = tool.accelerometer
+    misalignment = np.asarray(acc.misalignment)[~np.eye(3, dtype=bool)]
+    return ToolErrors(
+        g_sensitivity=_rms(np.linalg.norm(k[:, :2], axis=1)) if k.size else 0.0,
+        acc_bias=_rms(acc.bias),
+        acc_misalignment=_rms(misalignment),
+        acc_scale_factor=_rms(acc.scale_factor),
+    )
+
+
+def _rms(values: ArrayLike) -> float:
+    return float(np.sqrt(np.mean(np.square(values))))
 
 
 def _deep_merge(base: dict[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:

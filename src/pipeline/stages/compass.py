@@ -9,11 +9,18 @@ import pyarrow as pa
 
 from pipeline.earth.site import resolve_site
 from pipeline.errors import GyropipeError
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import CompassOptions, compass
+from pipeline.gyrocompass.solve import compass
+from pipeline.gyrocompass.systematic import GYRO_NS, ToolErrors
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
+from pipeline.sim.sensors import PRESETS, compass_errors
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
+from pipeline.well import WellMetadata
+
+SIMULATED = "simulated "
+"""How the simulator names its tool in the well's tool_type (``simulated dtg-xy``)."""
 
 
 def readings_stage(
@@ -39,10 +46,22 @@ def compass_stage(
             "rejects": CompassRejects.compiled().schema().empty_table(),
         }
     site = resolve_site(ctx.well, stage="compass", latitude=params.latitude)
-    stations, rejects = compass(readings, site.latitude, params)
+    stations, rejects = compass(
+        readings, site.latitude, params.with_defaults(tool_errors(ctx.well))
+    )
     if stations.num_rows == 0:
         raise AllRejectedError(rejects)
     return {"stations": stations, "rejects": rejects}
+
+
+def tool_errors(well: WellMetadata | None) -> ToolErrors:
+    """The error magnitudes of the well's survey tool that compassing cannot remove: those
+    of the tool model its ``tool_type`` names (a simulator preset, ``simulated dtg-xy`` or
+    ``dtg-xy``; overrides of the plan are not known here: set the stage parameters), else
+    the ISCWSA GYRO-NS magnitudes."""
+    name = (well.tool_type or "") if well is not None else ""
+    name = name.removeprefix(SIMULATED).strip()
+    return compass_errors(PRESETS[name]) if name in PRESETS else GYRO_NS
 
 
 class AllRejectedError(GyropipeError):

@@ -41,7 +41,8 @@ class PathPoints(Stations):
         ge=0,
         lt=360,
         north_reference=True,
-        description="azimuth in [0, 360), clockwise from north",
+        undefined_at_vertical=True,
+        description="azimuth in [0, 360), clockwise from north (NaN: undefined, vertical)",
     )
     tvd: float = column(unit="m", description="true vertical depth below the depth reference")
     north: float = column(unit="m", description="northing from the wellhead")

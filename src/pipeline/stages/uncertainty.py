@@ -17,7 +17,7 @@ from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.survey.north import convert_azimuth
-from pipeline.survey.stations import north_reference_of, survey_offsets
+from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
 from pipeline.uncertainty.gyro import GYRO_PRESETS, GyroTool, gyro_covariance
@@ -157,7 +157,8 @@ def position_uncertainty(
     cov = np.zeros((md.size, 3, 3))
     offsets = survey_offsets(table)
     for lo, hi in itertools.pairwise(offsets):
-        survey = Survey.of(md[lo:hi], inc[lo:hi], azi[lo:hi], tvd[lo:hi])
+        # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
+        survey = Survey.of(md[lo:hi], inc[lo:hi], defined_azimuths(azi[lo:hi]), tvd[lo:hi])
         cov[lo:hi] = covariance(survey).sum(axis=0)
     ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
     k2 = horizontal_scale(params.confidence)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.survey.mincurve import FloatArray, IndexArray, minimum_curvature
+from pipeline.survey.mincurve import FloatArray, IndexArray, minimum_curvature, step_azimuths
 
 __all__ = ["Interpolated", "interpolate_md", "interpolate_tvd"]
 
@@ -73,8 +73,16 @@ class _Path:
             self.md, self.inc, self.azi, tie_north=tie[0], tie_east=tie[1], tie_tvd=tie[2]
         )
         self.r = np.stack([mc.north, mc.east, mc.tvd])  # (3, n)
-        si = np.sin(self.inc)
-        self.t = np.stack([si * np.cos(self.azi), si * np.sin(self.azi), np.cos(self.inc)])
+        # tool axes at the start and end of each step, an undefined azimuth (vertical) filled
+        # as minimum curvature fills it (a step with both ends undefined goes straight down)
+        filled = step_azimuths(self.azi)
+        a1, a2, both = filled if filled is not None else (self.azi[:-1], self.azi[1:], None)
+        si, ci = np.sin(self.inc), np.cos(self.inc)
+        self.t1 = np.stack([si[:-1] * np.cos(a1), si[:-1] * np.sin(a1), ci[:-1]])
+        self.t2 = np.stack([si[1:] * np.cos(a2), si[1:] * np.sin(a2), ci[1:]])
+        if both is not None:
+            self.t1[:2, both] = 0.0
+            self.t2[:2, both] = 0.0
         self.beta = mc.dogleg[1:]
         self.length = np.diff(self.md)
 
@@ -90,7 +98,7 @@ class _Path:
         half = _sinc(0.5 * f * b)
         c1 = self.length[k] * (0.5 * f * (2.0 - f)) * _sinc(0.5 * (2.0 - f) * b) * half / sb
         c2 = self.length[k] * (0.5 * f * f) * half * half / sb
-        out: FloatArray = self.r[:, k] + c1 * self.t[:, k] + c2 * self.t[:, k + 1]
+        out: FloatArray = self.r[:, k] + c1 * self.t1[:, k] + c2 * self.t2[:, k]
         return out
 
     def tangent(self, k: IndexArray, f: FloatArray) -> FloatArray:
@@ -98,7 +106,7 @@ class _Path:
         b = self.beta[k]
         w1 = (1.0 - f) * _sinc((1.0 - f) * b)
         w2 = f * _sinc(f * b)
-        t = (w1 * self.t[:, k] + w2 * self.t[:, k + 1]) / _sinc(b)
+        t = (w1 * self.t1[:, k] + w2 * self.t2[:, k]) / _sinc(b)
         out: FloatArray = t / np.linalg.norm(t, axis=0)
         return out
 
@@ -179,7 +187,7 @@ def interpolate_tvd(
     n_steps = path.length.size
     steps = np.arange(n_steps, dtype=np.intp)
     # split points where the vertical tangent component changes sign
-    tz1, tz2 = path.t[2, :-1], path.t[2, 1:]
+    tz1, tz2 = path.t1[2], path.t2[2]
     turns = np.flatnonzero(tz1 * tz2 < 0.0).astype(np.intp)
     f_turn = _bisect(lambda k, f: path.tangent(k, f)[2], turns, np.zeros(turns.size), 1.0)
     piece_k = np.concatenate([steps, turns])

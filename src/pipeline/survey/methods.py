@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Literal, TypeAlias, get_args
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from pipeline.survey.mincurve import (
     FloatArray,
@@ -36,6 +36,7 @@ from pipeline.survey.mincurve import (
     _stations,
     _ties,
     minimum_curvature,
+    step_azimuths,
 )
 
 __all__ = [
@@ -81,11 +82,12 @@ def _sinc(x: FloatArray) -> FloatArray:
 
 
 def _step_displacements(
-    method: Method, md: FloatArray, inc: FloatArray, azi: FloatArray
+    method: Method, md: FloatArray, inc: FloatArray, a1: FloatArray, a2: FloatArray
 ) -> FloatArray:
-    """(3, n − 1) displacements of the steps between consecutive stations."""
+    """(3, n − 1) displacements of the steps between consecutive stations, from the
+    azimuths at the start and end of each step (:func:`step_azimuths`)."""
     length = np.diff(md)
-    i1, i2, a1, a2 = inc[:-1], inc[1:], azi[:-1], azi[1:]
+    i1, i2 = inc[:-1], inc[1:]
     if method == "tangential":
         si = np.sin(i2)
         tangential: FloatArray = length * np.stack([si * np.cos(a2), si * np.sin(a2), np.cos(i2)])
@@ -115,9 +117,10 @@ def _step_displacements(
     return np.stack([horizontal * np.cos(a_mean), horizontal * np.sin(a_mean), vertical])
 
 
-def dogleg(inc: FloatArray, azi: FloatArray) -> FloatArray:
-    """(n − 1) doglegs (rad) between consecutive tool axes (haversine form, stable when small)."""
-    hav = np.sin(0.5 * (azi[1:] - azi[:-1])) ** 2 * np.sin(inc[:-1]) * np.sin(inc[1:])
+def dogleg(inc: FloatArray, a1: FloatArray, a2: FloatArray) -> FloatArray:
+    """(n − 1) doglegs (rad) between consecutive tool axes, from the azimuths at the start
+    and end of each step (haversine form, stable when small)."""
+    hav = np.sin(0.5 * (a2 - a1)) ** 2 * np.sin(inc[:-1]) * np.sin(inc[1:])
     hav += np.sin(0.5 * (inc[1:] - inc[:-1])) ** 2
     out: FloatArray = 2.0 * np.arcsin(np.sqrt(np.clip(hav, 0.0, 1.0)))
     return out
@@ -160,12 +163,14 @@ def survey_positions(
     n = md_a.size
     bounds = _bounds(offsets, n)
     ties = _ties(bounds.size - 1, tie_north=tie_north, tie_east=tie_east, tie_tvd=tie_tvd)
+    a1, a2, both = _filled(azi_a)
     steps = np.empty((3, n))
-    steps[:, 1:] = _step_displacements(method, md_a, inc_a, azi_a)
+    steps[:, 1:] = _step_displacements(method, md_a, inc_a, a1, a2)
+    steps[:2, 1:][:, both] = 0.0  # both ends vertical: straight down
     first = bounds[:-1]
     steps[:, first] = ties
     dl = np.zeros(n)
-    dl[1:] = dogleg(inc_a, azi_a)
+    dl[1:] = dogleg(inc_a, a1, a2)
     dl[first] = 0.0
     dls = _per_md(dl, md_a, first)
     north, east, tvd = _cumsum_per_survey(steps, bounds)
@@ -183,10 +188,21 @@ def build_turn_rates(
     d_inc = np.zeros(md_a.size)
     d_azi = np.zeros(md_a.size)
     d_inc[1:] = np.diff(inc_a)
-    d_azi[1:] = wrap_pi(np.diff(azi_a))
+    a1, a2, _ = _filled(azi_a)
+    d_azi[1:] = wrap_pi(a2 - a1)  # no turn into or out of an undefined (vertical) azimuth
     build = _per_md(d_inc, md_a, first) * _DEG_PER_30M
     turn = _per_md(d_azi, md_a, first) * _DEG_PER_30M
     return build, turn
+
+
+def _filled(azi: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Each step's start and end azimuths with undefined ones filled as minimum curvature
+    fills them (:func:`pipeline.survey.mincurve.step_azimuths`), and the steps with both
+    ends undefined."""
+    filled = step_azimuths(azi)
+    if filled is None:
+        return azi[:-1], azi[1:], np.zeros(max(azi.size - 1, 0), dtype=bool)
+    return filled
 
 
 def _per_md(change: FloatArray, md: FloatArray, first: IndexArray) -> FloatArray:

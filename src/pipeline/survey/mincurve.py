@@ -4,6 +4,9 @@ Frame: NED — north, east, true vertical depth (down positive). Inclination I i
 vertical, azimuth A clockwise from north, so the tool axis is t = (sin I cos A, sin I sin A, cos I).
 Angles are in radians and lengths in metres; the stage layer converts.
 
+An undefined azimuth (NaN, a vertical station) takes the other end's azimuth in each step;
+a step with both ends undefined goes straight down (:func:`step_azimuths`).
+
 Per step (station 1 → 2):
 
     β   = 2·asin(√(sin²((I2−I1)/2) + sin I1 sin I2 sin²((A2−A1)/2)))      dogleg
@@ -19,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["MinCurveResult", "closure", "minimum_curvature", "vertical_section"]
+__all__ = ["MinCurveResult", "closure", "minimum_curvature", "step_azimuths", "vertical_section"]
 
 FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
@@ -139,9 +142,9 @@ def _steps(
 ) -> None:
     """Write the (3, k) displacements, doglegs and DLS of the k steps between k + 1 stations."""
     sin_i, cos_i = np.sin(inc), np.cos(inc)
-    sin_a, cos_a = np.sin(azi), np.cos(azi)
-
-    hav = np.sin(0.5 * (azi[1:] - azi[:-1]))
+    filled = step_azimuths(azi)
+    a1, a2, both = filled if filled is not None else (azi[:-1], azi[1:], None)
+    hav = np.sin(0.5 * (a2 - a1))
     hav *= hav
     hav *= sin_i[:-1]
     hav *= sin_i[1:]
@@ -152,14 +155,40 @@ def _steps(
     dmd = md[1:] - md[:-1]
     np.divide(dogleg, dmd, out=dls, where=dmd != 0.0)
 
-    t_north = np.multiply(sin_i, cos_a, out=cos_a)
-    t_east = np.multiply(sin_i, sin_a, out=sin_a)
-    np.add(t_north[:-1], t_north[1:], out=steps[0])
-    np.add(t_east[:-1], t_east[1:], out=steps[1])
+    if filled is None:  # every azimuth defined: one sin/cos per station
+        sin_a, cos_a = np.sin(azi), np.cos(azi)
+        t_north = np.multiply(sin_i, cos_a, out=cos_a)
+        t_east = np.multiply(sin_i, sin_a, out=sin_a)
+        np.add(t_north[:-1], t_north[1:], out=steps[0])
+        np.add(t_east[:-1], t_east[1:], out=steps[1])
+    else:
+        steps[0] = sin_i[:-1] * np.cos(a1) + sin_i[1:] * np.cos(a2)
+        steps[1] = sin_i[:-1] * np.sin(a1) + sin_i[1:] * np.sin(a2)
+        steps[:2, both] = 0.0
     np.add(cos_i[:-1], cos_i[1:], out=steps[2])
     dmd *= 0.5
     dmd *= _ratio_factor(dogleg)
     steps *= dmd
+
+
+def step_azimuths(
+    azi: FloatArray,
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]] | None:
+    """Azimuths at the start and end of each step, and the steps with both undefined. An
+    undefined (NaN) azimuth — a vertical station, where the azimuth does not move the
+    position — takes the other end's, the usual practice for a step leaving or reaching
+    vertical. Where both are undefined the step has no horizontal direction: its azimuth is
+    taken as 0 (for the dogleg) and its horizontal displacement as zero, the mean over an
+    unknown direction (exact at I = 0; an inclination that only noise or an accelerometer
+    bias gives does not walk the well off north). None when every azimuth is defined."""
+    undefined = np.isnan(azi)
+    if not undefined.any():
+        return None
+    a1, a2 = azi[:-1], azi[1:]
+    both = undefined[:-1] & undefined[1:]
+    a1 = np.where(undefined[:-1], a2, a1)
+    a2 = np.where(undefined[1:], a1, a2)
+    return np.nan_to_num(a1, nan=0.0), np.nan_to_num(a2, nan=0.0), both
 
 
 def _ratio_factor(beta: FloatArray) -> FloatArray:

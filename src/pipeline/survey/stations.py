@@ -36,3 +36,22 @@ def station_angles(stations: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarr
     azi = np.mod(stations.column("azi").to_numpy().astype(np.float64), 360.0)
     azi[azi >= 360.0] = 0.0  # mod of a tiny negative number rounds up to 360
     return md, inc, azi
+
+
+def defined_azimuths(azi: np.ndarray) -> np.ndarray:
+    """Azimuths (any angle unit) with each undefined one (NaN, a vertical station) taken as
+    the next defined station's — the direction the hole leaves vertical in — else the
+    previous one's, else 0. At inclination 0 the azimuth moves nothing, so this only names
+    a direction where a formula needs one (an error model's weights); one survey's array."""
+    azi = np.asarray(azi, dtype=np.float64)
+    undefined = np.isnan(azi)
+    if not undefined.any():
+        return azi
+    if undefined.all():
+        return np.zeros_like(azi)
+    index = np.arange(azi.size)
+    defined = index[~undefined]
+    after = np.minimum(np.searchsorted(defined, index), defined.size - 1)
+    before = np.maximum(np.searchsorted(defined, index, side="right") - 1, 0)
+    take = np.where(defined[after] >= index, defined[after], defined[before])
+    return np.where(undefined, azi[take], azi)

@@ -1,0 +1,80 @@
+"""Tool errors that turning the frame does not remove, and their share of a station's σ.
+
+Multi-position compassing removes each gyro's constant bias and linear drift, but not:
+
+- the **g-dependent gyro bias** from the transverse specific force. It turns with the frame
+  exactly as the horizontal Earth rate does, so it adds to the fitted high-side and
+  right-side components: 1σ ``g_sensitivity · sin I`` (°/h) on each (with g-sensitivity K
+  in (°/h)/g, K·g sin I is the bias of a transverse gyro in a hole of inclination I). The
+  azimuth error follows as ≈ sin I · K / (Ω cos φ) (SPE 90408, the GXY-G terms). The axial
+  specific force g cos I is the same at every position: its share is a constant bias, fitted.
+- **accelerometer bias, misalignment and scale factor**: the same at every frame position
+  of a station, so they partly cancel between opposite positions (transverse terms) and
+  partly do not (the axial bias moves the inclination by −b_z sin I / g). They are
+  propagated to first order through the estimator itself: for a quantity
+  ``Σ_k w_k f(a_k) / Σ_k w_k`` of the per-position accelerations a_k (inclination, gravity
+  toolface), an error common to the positions ``δa_k = b + G a_k`` (bias b, gain error G:
+  misalignment off the diagonal, scale factor on it) moves it by
+  ``Σ_k w_k ∇f(a_k) · (b + G a_k) / Σ_k w_k``, each term of b and G independent with the
+  tool's 1σ magnitude.
+
+Units: g-sensitivity (°/h)/g, bias m/s², misalignment mrad, scale factor ppm — those of the
+simulator's tool models (:mod:`pipeline.sim.sensors`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.earth.frames import FloatArray
+
+
+@dataclass(frozen=True)
+class ToolErrors:
+    """1σ magnitudes of the tool errors compassing cannot remove."""
+
+    g_sensitivity: float
+    """(°/h)/g: g-dependent bias of a transverse gyro per g of transverse specific force"""
+    acc_bias: float
+    """m/s², per accelerometer axis"""
+    acc_misalignment: float
+    """mrad, per off-diagonal term of the accelerometer triad"""
+    acc_scale_factor: float
+    """ppm, per accelerometer axis"""
+
+
+GYRO_NS = ToolErrors(
+    g_sensitivity=0.2,
+    acc_bias=0.0017,
+    acc_misalignment=float(np.radians(0.0095) * 1e3),
+    acc_scale_factor=111.0,
+)
+"""A tool whose errors are not declared: the ISCWSA/OWSG GYRO-NS magnitudes (Rev 5; Torkildsen
+et al., SPE 90408): GXY-G1 0.2 (°/h)/g, AXYZ-ZB 0.0017 m/s², AXYZ-MIS 0.0095°, AXYZ-SF
+1.11e-4."""
+
+
+def g_dependent_variance(errors: ToolErrors, inclination: float) -> float:
+    """Variance, (°/h)², the g-dependent gyro bias adds to each transverse Earth-rate
+    component at inclination (rad)."""
+    return float((errors.g_sensitivity * np.sin(inclination)) ** 2)
+
+
+def accelerometer_sigma(
+    gradient: FloatArray, acc: FloatArray, weights: FloatArray, errors: ToolErrors
+) -> float:
+    """1σ of ``Σ_k w_k f(a_k) / Σ_k w_k`` from the accelerometer errors common to the
+    positions (module docstring): ``gradient`` (n, 3) = ∇f at each position's acceleration
+    ``acc`` (n, 3, m/s²), in f's unit per m/s²; ``weights`` (n,)."""
+    w = weights / weights.sum()
+    d_bias = w @ gradient
+    d_gain = np.einsum("k,ki,kj->ij", w, gradient, acc)
+    off = ~np.eye(3, dtype=bool)
+    var = (
+        errors.acc_bias**2 * float(d_bias @ d_bias)
+        + (errors.acc_misalignment * 1e-3) ** 2 * float(np.sum(d_gain[off] ** 2))
+        + (errors.acc_scale_factor * 1e-6) ** 2 * float(np.sum(np.diag(d_gain) ** 2))
+    )
+    return float(np.sqrt(var))
