@@ -31,7 +31,9 @@ import sys
 import tempfile
 import time
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import nullcontext
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -64,16 +66,21 @@ from pipeline.spec import parse_spec
 from pipeline.stages.simulation import simulation_tables, well_of_simulation
 from pipeline.uncertainty.gyro import GYRO_PRESETS
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/ is not a package
+from error_budget_sets import (
+    ACC_BIAS_3SIGMA,
+    ERROR_SETS,
+    GYRO_BIAS_3SIGMA,
+    ErrorSet,
+)
+
 Floats = NDArray[np.float64]
 
 ROOT = Path(__file__).resolve().parents[1]
-PLAN = ROOT / "examples" / "plans" / "west-siberia-700m.yaml"
 PIPELINE = ROOT / "pipelines" / "continuous-gyro.yaml"
 BEGIN = "<!-- BEGIN numbers: written by benchmarks/study_error_budget.py -->"
 END = "<!-- END numbers -->"
 
-GYRO_BIAS_3SIGMA = 0.1  # deg/h, seed 004's constant gyro error (3σ)
-ACC_BIAS_3SIGMA = 4.4e-4  # g, seed 004's constant accelerometer error (3σ)
 CONFIDENCE = 0.95
 CONTINUOUS_MODEL = "GYRO-NS-CT"  # used when the uncertainty stage is appended and it exists
 READS = ("integrate_continuous", "position_uncertainty")  # stages whose outputs the study reads
@@ -112,10 +119,10 @@ class Draw:
     acc_bias: tuple[float, float, float]
 
     @classmethod
-    def of(cls, seed: int, run: int) -> Draw:
+    def of(cls, seed: int, run: int, errors: ErrorSet) -> Draw:
         rng = np.random.default_rng([seed, run])
-        gx, gy, gz = rng.normal(0.0, GYRO_BIAS_3SIGMA / 3.0, 3)
-        ax, ay, az = rng.normal(0.0, ACC_BIAS_3SIGMA / 3.0 * STANDARD_GRAVITY, 3)
+        gx, gy, gz = rng.normal(0.0, errors.gyro_bias_3sigma / 3.0, 3)
+        ax, ay, az = rng.normal(0.0, errors.acc_bias_3sigma / 3.0 * STANDARD_GRAVITY, 3)
         return cls((float(gx), float(gy), float(gz)), (float(ax), float(ay), float(az)))
 
 
@@ -137,14 +144,25 @@ def tool_overrides(spec: SimulationSpec, draw: Draw, group: str) -> dict[str, An
     return out
 
 
-def pipeline_plan(pipeline: Path, registry: Registry) -> tuple[Plan, str]:
+def pipeline_plan(
+    pipeline: Path, registry: Registry, stage_params: dict[str, dict[str, Any]]
+) -> tuple[Plan, str]:
     """The public pipeline cut to the stages the study reads and their upstream (exports and
     reports are sinks that cannot change the numbers, and a PDF report costs seconds per run),
-    with a ``position_uncertainty`` stage appended on its trajectory if it has none; returns
-    the plan and a note saying which."""
+    with a ``position_uncertainty`` stage appended on its trajectory if it has none and the
+    error set's ``stage_params`` (by stage kind) set; returns the plan and a note saying
+    which."""
     raw = yaml.safe_load(pipeline.read_text(encoding="utf-8"))
     stages: list[dict[str, Any]] = raw["stages"]
     note = f"`{rel(pipeline)}`"
+    for stage in stages:
+        changed = stage_params.get(stage.get("uses", ""), {})
+        if changed:
+            stage["with"] = {**(stage.get("with") or {}), **changed}
+            shown = {k: v for k, v in changed.items() if not k.startswith(("gyro_", "acc_", "odo"))}
+            note += f" with {stage['id']}: {shown or ''}".rstrip(": ")
+            if len(shown) < len(changed):
+                note += " and the tool's error magnitudes for its predicted σ"
     if not any(stage.get("uses") == "position_uncertainty" for stage in stages):
         model = CONTINUOUS_MODEL if CONTINUOUS_MODEL in GYRO_PRESETS else "GYRO-NS"
         mc = [stage for stage in stages if stage.get("uses") == "minimum_curvature"]
@@ -334,25 +352,50 @@ def simulate_ensemble(
     label: str,
     group: str,
     runs: int,
-    args: argparse.Namespace,
-    plan: Plan,
-    registry: Registry,
+    seed: int,
+    error_set: ErrorSet,
+    pipeline: Path,
     grid: Floats,
     work: Path,
+    jobs: int = 1,
 ) -> Ensemble:
-    base = load_simulation(args.plan)
+    """``runs`` runs of one error set (and breakdown ``group``), in ``jobs`` processes; the
+    results do not depend on ``jobs`` (each run has its own draws and seed)."""
+    base = load_simulation(error_set.plan)
     ensemble = Ensemble(label, grid)
     started = time.perf_counter()
+    tasks = []
     for k in range(runs):
-        draw = Draw.of(args.seed, k)
+        draw = Draw.of(seed, k, error_set)
         tool = ToolChoice(preset=base.tool.preset, overrides=tool_overrides(base, draw, group))
-        spec = base.model_copy(update={"tool": tool, "seed": args.seed * 100_000 + k})
-        errors, misclosure = run_once(spec, plan, registry, work)
-        ensemble.add(errors, misclosure)
-        if (k + 1) % 10 == 0 or k + 1 == runs:
-            rate = (time.perf_counter() - started) / (k + 1)
-            print(f"  {label}: {k + 1}/{runs} runs ({rate:.1f} s/run)", flush=True)
+        spec = base.model_copy(update={"tool": tool, "seed": seed * 100_000 + k})
+        tasks.append((spec, pipeline, error_set.stage_params, work / f"run-{k % max(jobs, 1)}"))
+    with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
+        done = pool.map(processed_run, tasks) if pool is not None else map(processed_run, tasks)
+        for k, (errors, misclosure) in enumerate(done):
+            ensemble.add(errors, misclosure)
+            if (k + 1) % 10 == 0 or k + 1 == runs:
+                rate = (time.perf_counter() - started) / (k + 1)
+                print(f"  {label}: {k + 1}/{runs} runs ({rate:.1f} s/run)", flush=True)
     return ensemble
+
+
+_PLANS: dict[str, tuple[Plan, Registry]] = {}
+"""Per process: the study's pipeline plan of each (pipeline, stage parameters)."""
+
+
+def processed_run(
+    task: tuple[SimulationSpec, Path, dict[str, Any], Path],
+) -> tuple[RunErrors, float]:
+    """One run (:func:`run_once`) with this process's plan of the pipeline."""
+    spec, pipeline, stage_params, work = task
+    key = f"{pipeline}|{sorted(stage_params.items())}"
+    if key not in _PLANS:
+        registry = load_registry()
+        _PLANS[key] = (pipeline_plan(pipeline, registry, stage_params)[0], registry)
+    plan, registry = _PLANS[key]
+    work.mkdir(parents=True, exist_ok=True)
+    return run_once(spec, plan, registry, work)
 
 
 def stop_sanity(latitude: float) -> dict[str, float]:
@@ -365,6 +408,56 @@ def stop_sanity(latitude: float) -> dict[str, float]:
         "inc_3s": np.degrees(ACC_BIAS_3SIGMA),
         "inc_1s": np.degrees(ACC_BIAS_3SIGMA / 3),
     }
+
+
+def drift_expectation(spec: SimulationSpec, errors: ErrorSet, md_to: float) -> dict[str, float]:
+    """1σ errors at ``md_to`` of a run integrated from its start stop with no closure, from
+    the two constant errors alone (the paper's Eq. 20, constant speed, start stop exact):
+    the gyro bias σ_b integrated as ΔȦ = −b/sin I, and the accelerometer bias σ_a across the
+    apsidal plane, whose toolface error b/(g sin I) times İ gives ΔA = σ_a (cot I₀ − cot I).
+    Azimuth in deg, lateral position in m, the integral ∫dt/sin I in h."""
+    survey = spec.survey
+    start = getattr(survey, "start_md", None) or spec.path().start_md
+    md = np.linspace(start, md_to, 4001)
+    inc = spec.path().evaluate(md).inc
+    hours = np.concatenate(
+        [[0.0], np.cumsum(np.diff(md) * 0.5 * (1 / np.sin(inc[1:]) + 1 / np.sin(inc[:-1])))]
+    )
+    hours /= getattr(survey, "speed", 1.0) * 3600.0
+    gyro = np.radians(errors.gyro_bias_3sigma / 3.0) * hours  # rad
+    acc = errors.acc_bias_3sigma / 3.0 * (1 / np.tan(inc[0]) - 1 / np.tan(inc))  # rad
+
+    def lateral(azi: Floats) -> float:
+        f = azi * np.sin(inc)
+        return float(np.sum(np.diff(md) * 0.5 * (f[1:] + f[:-1])))
+
+    out = {
+        "hours": float(hours[-1]),
+        "azi_gyro": float(np.degrees(gyro[-1])),
+        "azi_acc": float(np.degrees(acc[-1])),
+        "lat_gyro": lateral(gyro),
+        "lat_acc": lateral(acc),
+    }
+    out["azi"] = float(np.hypot(out["azi_gyro"], out["azi_acc"]))
+    out["lat"] = float(np.hypot(out["lat_gyro"], out["lat_acc"]))
+    return out
+
+
+def expectation_text(res: SetResult) -> str:
+    """The analytic expectation of an error set a paper reports, beside its bound."""
+    bound = res.errors.bound
+    assert bound is not None
+    md = min(bound.md, float(res.ens.grid[-1]))
+    x = drift_expectation(res.spec, res.errors, md)
+    return (
+        f"Analytic expectation at {md:g} m (constant errors only, no closure, 1σ): the gyro "
+        f"bias ({res.errors.gyro_bias_3sigma / 3:.3f} °/h) integrated over ∫dt/sin I = "
+        f"{x['hours']:.3f} h gives {x['azi_gyro']:.3f}° and {x['lat_gyro']:.2f} m; the "
+        f"accelerometer bias ({res.errors.acc_bias_3sigma / 3:.2e} g) across the apsidal plane, "
+        f"(cot I₀ − cot I)·b/g, gives {x['azi_acc']:.3f}° and {x['lat_acc']:.2f} m; together "
+        f"{x['azi']:.3f}° and {x['lat']:.2f} m, 3σ {3 * x['azi']:.2f}° and {3 * x['lat']:.2f} m. "
+        f"The paper reports at most {bound.azimuth:g}° and {bound.horizontal:g} m ({bound.source})."
+    )
 
 
 # ---------------------------------------------------------------- figures
@@ -552,17 +645,18 @@ def breakdown_rows(ens: Ensemble, groups: Sequence[Ensemble]) -> list[list[str]]
     return rows
 
 
-def numbers_section(
-    ens: Ensemble, groups: Sequence[Ensemble], meta: dict[str, str], sanity: dict[str, float]
-) -> str:
-    """The doc's numbers, between the markers."""
+def set_section(res: SetResult) -> str:
+    """The doc's numbers of one error set."""
+    ens, groups, meta, sanity = res.ens, res.groups, res.meta, res.sanity
     a = ens.arrays()
     misc = np.array(ens.misclosure)
     e_td = a["horiz"][:, -1]
     spread = np.sqrt(np.mean(np.sum((e_td - np.mean(e_td, axis=0)) ** 2, axis=1)))
     angle_header = ["MD, m", "mean", "RMS", "95th pct", "predicted σ", "inside 1.96σ"]
+    closed = res.errors.stage_params.get("integrate_continuous", {}).get("closure", True)
     out = [
-        BEGIN,
+        "",
+        f"### Error set `{res.errors.name}`: {res.errors.title}",
         "",
         f"Runs: {len(ens.azi_err)} (seed {meta['seed']}), plan `{meta['plan']}`, pipeline "
         f"{meta['pipeline']}. Predicted σ_A and σ_I: {meta['sigma_model']}. Predicted position "
@@ -573,7 +667,8 @@ def numbers_section(
         f"(3σ, 0.1 °/h) or {sanity['azi_1s']:.2f}° (1σ); the accelerometer bias gives "
         f"≈ {sanity['inc_3s']:.3f}° (3σ) / {sanity['inc_1s']:.4f}° (1σ) of inclination.",
         "",
-        f"End-stop misclosure of the integrated azimuth (removed linearly in time): mean "
+        f"End-stop misclosure of the integrated azimuth "
+        f"({'removed linearly in time' if closed else 'not removed: no closure'}): mean "
         f"{np.nanmean(misc):+.2f}°, RMS {rms(misc[np.isfinite(misc)]):.2f}°.",
         "",
         "**Azimuth error** (deg, estimate − truth; predicted σ: mean over runs of the "
@@ -624,8 +719,70 @@ def numbers_section(
                 breakdown_rows(ens, groups),
             ),
         ]
-    out += ["", END]
+    if res.errors.bound is not None:
+        out += ["", expectation_text(res)]
     return "\n".join(out)
+
+
+def comparison_section(results: Sequence[SetResult]) -> str:
+    """Side by side at the paper's depth: RMS, largest over runs and 3σ of each error set,
+    and the bound the paper reports."""
+    bound = next((r.errors.bound for r in results if r.errors.bound is not None), None)
+    target = bound.md if bound is not None else float(results[0].ens.grid[-1])
+    rows = []
+    for res in results:
+        a = res.ens.arrays()
+        i = int(np.argmin(np.abs(res.ens.grid - target)))
+        azi, inc, e = a["azi"][:, i], a["inc"][:, i], a["horiz"][:, i]
+        dist = np.hypot(e[:, 0], e[:, 1])
+        major = (
+            np.sqrt(np.linalg.eigvalsh(np.atleast_2d(np.cov(e.T)))[-1]) if len(e) > 2 else np.nan
+        )
+        rows.append(
+            [
+                f"`{res.errors.name}` ({len(azi)} runs, {res.ens.grid[i]:.0f} m)",
+                f"{rms(azi):.3f}",
+                f"{np.max(np.abs(azi)):.3f}",
+                f"{3 * rms(azi):.3f}",
+                f"{rms(dist):.2f}",
+                f"{np.max(dist):.2f}",
+                f"{3 * major:.2f}",
+                f"{rms(inc):.4f}",
+                f"{np.max(np.abs(inc)):.4f}",
+            ]
+        )
+    if bound is not None:
+        rows.append(
+            [
+                "paper (reported bound)",
+                *("", f"≤ {bound.azimuth:g}", ""),
+                *("", f"≤ {bound.horizontal:g}", ""),
+                *("", ""),
+            ]
+        )
+    header = (
+        "error set",
+        "azimuth RMS, °",
+        "azimuth max, °",
+        "azimuth 3σ, °",
+        "horiz. RMS, m",
+        "horiz. max, m",
+        "horiz. 3σ (major axis), m",
+        "incl. RMS, °",
+        "incl. max, °",
+    )
+    return "\n".join(
+        [
+            "",
+            f"### Side by side at {target:g} m",
+            "",
+            "**Error sets compared** (estimate − truth at the station nearest "
+            f"{target:g} m; max: largest |error| over the runs; 3σ: three times the RMS, and for "
+            "the horizontal error three times the σ of the sample covariance's major axis):",
+            "",
+            *table(header, rows),
+        ]
+    )
 
 
 def write_doc(doc: Path, section: str) -> None:
@@ -652,6 +809,49 @@ def sigma_model_note() -> str:
     )
 
 
+@dataclass
+class SetResult:
+    """One error set's ensembles and what the doc says about them."""
+
+    errors: ErrorSet
+    spec: SimulationSpec
+    ens: Ensemble
+    groups: list[Ensemble]
+    meta: dict[str, str]
+    sanity: dict[str, float]
+
+
+def run_set(
+    errors: ErrorSet, args: argparse.Namespace, registry: Registry, work: Path
+) -> SetResult:
+    """Simulate and process one error set's runs (and its breakdown, if it has one)."""
+    plan, pipeline_note = pipeline_plan(args.pipeline, registry, errors.stage_params)
+    spec = load_simulation(errors.plan)
+    survey = spec.survey
+    start = getattr(survey, "start_md", None) or spec.path().start_md
+    end = getattr(survey, "end_md", None)
+    if end is None:
+        sys.exit(f"{errors.plan}: the study needs a continuous survey with an end_md")
+    grid = np.append(np.arange(start, end, GRID_STEP), end)
+    unc = stage_using(plan, "position_uncertainty")
+    params = unc.params.model_dump()
+    meta = {
+        "seed": str(args.seed),
+        "plan": rel(errors.plan),
+        "pipeline": pipeline_note,
+        "latitude": f"{spec.site.latitude:g}",
+        "sigma_model": sigma_model_note(),
+        "cov_model": f"stage `{unc.id}` (`position_uncertainty`), model {params.get('model')}, "
+        f"basis {params.get('basis')}",
+    }
+    print(f"{errors.name} ({spec.name}): {args.runs} runs, pipeline {pipeline_note}")
+    common = (args.seed, errors, args.pipeline, grid, work, args.jobs)
+    ens = simulate_ensemble(ALL, ALL, args.runs, *common)
+    breakdown = GROUPS if errors.breakdown and args.breakdown_runs else ()
+    groups = [simulate_ensemble(g, g, args.breakdown_runs, *common) for g in breakdown]
+    return SetResult(errors, spec, ens, groups, meta, stop_sanity(spec.site.latitude))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=100, help="Monte Carlo runs (all terms)")
@@ -661,54 +861,56 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=30,
         help="runs per error-term group for the breakdown (0: none; at most --runs)",
     )
+    parser.add_argument(
+        "--sets",
+        default=",".join(ERROR_SETS),
+        help=f"comma-separated error sets (error_budget_sets.py): {', '.join(ERROR_SETS)}",
+    )
     parser.add_argument("--out", type=Path, default=ROOT / "docs", help="docs directory")
-    parser.add_argument("--plan", type=Path, default=PLAN, help="simulation plan")
+    parser.add_argument(
+        "--plan", type=Path, default=None, help="simulation plan replacing every set's own"
+    )
     parser.add_argument("--pipeline", type=Path, default=PIPELINE, help="pipeline YAML")
     parser.add_argument("--seed", type=int, default=1, help="base seed of the draws")
     parser.add_argument("--work", type=Path, default=None, help="keep work files here")
+    parser.add_argument("--jobs", type=int, default=1, help="processes running the runs")
     args = parser.parse_args(argv)
     if args.runs < 1 or not 0 <= args.breakdown_runs <= args.runs:
         parser.error("need --runs ≥ 1 and 0 ≤ --breakdown-runs ≤ --runs")
+    names = [n.strip() for n in args.sets.split(",") if n.strip()]
+    unknown = [n for n in names if n not in ERROR_SETS]
+    if unknown or not names:
+        parser.error(f"unknown error set(s) {unknown}; known: {', '.join(ERROR_SETS)}")
+    chosen = [ERROR_SETS[n] for n in names]
+    if args.plan is not None:
+        chosen = [replace(e, plan=args.plan) for e in chosen]
 
     registry = load_registry()
-    plan, pipeline_note = pipeline_plan(args.pipeline, registry)
-    spec = load_simulation(args.plan)
-    survey = spec.survey
-    start = getattr(survey, "start_md", None) or spec.path().start_md
-    end = getattr(survey, "end_md", None)
-    if end is None:
-        sys.exit(f"{args.plan}: the study needs a continuous survey with an end_md")
-    grid = np.append(np.arange(start, end, GRID_STEP), end)
-    unc = stage_using(plan, "position_uncertainty")
-    params = unc.params.model_dump()
-    meta = {
-        "seed": str(args.seed),
-        "plan": rel(args.plan),
-        "pipeline": pipeline_note,
-        "latitude": f"{spec.site.latitude:g}",
-        "sigma_model": sigma_model_note(),
-        "cov_model": f"stage `{unc.id}` (`position_uncertainty`), model {params.get('model')}, "
-        f"basis {params.get('basis')}",
-    }
-    sanity = stop_sanity(spec.site.latitude)
-
     with tempfile.TemporaryDirectory(prefix="error-budget-") as tmp:
         work = args.work or Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
-        print(f"{spec.name}: {args.runs} runs, pipeline {pipeline_note}")
-        main_ens = simulate_ensemble(ALL, ALL, args.runs, args, plan, registry, grid, work)
-        groups = [
-            simulate_ensemble(g, g, args.breakdown_runs, args, plan, registry, grid, work)
-            for g in (GROUPS if args.breakdown_runs else ())
-        ]
+        results = [run_set(errors, args, registry, work) for errors in chosen]
 
     figures = args.out / "figures"
-    figure_azimuth(main_ens, sanity, figures / "error-budget-azimuth.png")
-    figure_horizontal(main_ens, figures / "error-budget-horizontal.png")
-    figure_td_scatter(main_ens, figures / "error-budget-td-scatter.png")
-    if groups:
-        figure_breakdown(main_ens, groups, figures / "error-budget-breakdown.png")
-    section = numbers_section(main_ens, groups, meta, sanity)
+    for res in results:
+        prefix = (
+            "error-budget" if res.errors.name == "realistic" else f"error-budget-{res.errors.name}"
+        )
+        figure_azimuth(res.ens, res.sanity, figures / f"{prefix}-azimuth.png")
+        figure_horizontal(res.ens, figures / f"{prefix}-horizontal.png")
+        if res.errors.name == "realistic":
+            figure_td_scatter(res.ens, figures / f"{prefix}-td-scatter.png")
+        if res.groups:
+            figure_breakdown(res.ens, res.groups, figures / f"{prefix}-breakdown.png")
+    section = "\n".join(
+        [
+            BEGIN,
+            *(set_section(res) for res in results),
+            *([comparison_section(results)] if len(results) > 1 or results[0].errors.bound else []),
+            "",
+            END,
+        ]
+    )
     write_doc(args.out / "error-budget.md", section)
     print(section)
     return 0

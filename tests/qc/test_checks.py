@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import datetime as dt
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
+from qc_support import MAGNETIC, SITE, TRIM, point_run, random_well
 from scipy.stats import binom
 from scipy.stats import t as student_t
 
@@ -19,19 +19,13 @@ from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import ModelValidityError
 from pipeline.earth.site import Site, resolve_site
 from pipeline.errors import MissingSiteError
-from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings import position_readings
 from pipeline.qc.engine import drop_stations, station_checks
 from pipeline.qc.options import QcInputError, QcOptions, QcStop, Tolerance
 from pipeline.qc.tables import QcResults, QcSummary
-from pipeline.sim.simulate import simulate
-from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata
-from tests_support import read_stations
 
 OMEGA_DEG_H = np.degrees(OMEGA_EARTH) * 3600
-MAGNETIC = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
-SITE = {"latitude": 61.25, "longitude": 73.4, "date": "2026-11-21", "magnetic": MAGNETIC}
-TRIM = ReadingOptions(trim_start=0.5, min_dwell=1.0)
 WHITE = {  # white noise only: per-position means have σ = std/√n exactly
     "sample_rate": 50,
     "gyro": {"noise_density": 0.003},
@@ -41,52 +35,6 @@ WHITE = {  # white noise only: per-position means have σ = std/√n exactly
 GYRO_ACC = ("earth_rate", "gravity", "latitude", "horizontal_rate", "rate_along_gravity")
 SIGMA_ONLY = QcOptions(**{name: Tolerance(sigma=3) for name in GYRO_ACC})
 """3σ and no floors: the false-alarm rate of white noise is 0.27 % per reading."""
-
-
-def random_well(path: Path, n: int, seed: int, inc: tuple[float, float] = (5, 120)) -> Path:
-    """Stations 30 m apart at random attitudes (after a vertical first station)."""
-    rng = np.random.default_rng(seed)
-    rows = zip(rng.uniform(*inc, n), rng.uniform(0, 360, n), strict=True)
-    path.write_text(
-        "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n"
-        + "\n".join(f"{30 * (i + 1)},{a:.4f},{b:.4f}" for i, (a, b) in enumerate(rows))
-        + "\n"
-    )
-    return path
-
-
-def point_run(
-    well: Path,
-    tool: dict[str, Any],
-    *,
-    positions=(0, 90, 180, 270, 0),
-    seed: int = 1,
-    site: dict[str, Any] | None = None,
-    dwell: float = 2.0,
-):
-    """Simulate a point survey of the ideal tool with ``tool`` overrides; return the
-    simulation, its position readings and the site."""
-    spec = SimulationSpec.model_validate(
-        {
-            "name": "qc",
-            "seed": seed,
-            "site": site or SITE,
-            "well": {"stations": str(well)},
-            "tool": {"preset": "ideal", "overrides": tool},
-            "survey": {
-                "mode": "point",
-                "every": 30,
-                "dwell": dwell,
-                "move_time": 1.0,
-                "settle_time": 0.5,
-                "speed": 30.0,
-                "positions": list(positions),
-            },
-        }
-    )
-    spec.well.load(read_stations)
-    sim = simulate(spec)
-    return sim, position_readings(sim.samples, TRIM), spec.site
 
 
 def failure_rates(qc: pa.Table) -> dict[str, tuple[int, int]]:

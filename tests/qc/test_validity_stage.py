@@ -4,6 +4,7 @@ named, the station still reaches compassing unless its policy drops it."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 from pathlib import Path
 
@@ -71,3 +72,43 @@ def test_biased_gyro_is_caught_and_named(tmp_path: Path):
     assert len(named) >= 0.9 * len(flagged), [row["diagnosis"] for row in flagged]
     stations = pq.read_table(out / "compass.stations.parquet")
     assert stations.num_rows == len(summary)  # flag policy: stations are kept, marked
+
+
+def test_a_magnetometer_bias_is_named_on_the_terminal_in_the_summary_and_the_report(
+    tmp_path: Path,
+):
+    """An 800 nT bias on magnetometer x of an otherwise ideal tool: the CLI prints the suspect
+    and the estimate, the summary names it, the report's QC section shows the diagnosis."""
+    plan = PLAN.replace("preset: nav-grade", "preset: ideal")
+    (tmp_path / "plan.yaml").write_text(
+        plan.format(
+            overrides="{gyro: {noise_density: 0.003}, accelerometer: {noise_density: 0.01}, "
+            "magnetometer: {bias: [800.0, 0.0, 0.0], noise_density: 2.0}}"
+        )
+    )
+    sim = tmp_path / "sim"
+    subprocess.run(
+        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim)],
+        check=True,
+        capture_output=True,
+    )
+    out = tmp_path / "out"
+    pipeline = str(ROOT / "pipelines" / "point-gyro.yaml")
+    result = subprocess.run(
+        [*gyropipe(), "run", pipeline, "--input", str(sim / "samples.parquet"), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    printed = re.search(
+        r"suspect mag x at (\d+) stations: mag x: bias ≈ \+(\d+\.\d) ± ", result.stdout
+    )
+    assert printed, result.stdout
+    summary = pq.read_table(out / "validity.summary.parquet").to_pylist()
+    failed = [row for row in summary if "magnetic" in row["failed_checks"]]
+    assert int(printed.group(1)) == len(failed) >= 3
+    assert {row["suspect"] for row in failed} == {"mag x"}
+    assert abs(float(printed.group(2)) - 800.0) < 5.0
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "Diagnosis of failed validity checks" in html and "mag x: bias ≈ +" in html

@@ -261,6 +261,27 @@ def test_presets_validate_and_are_named_by_their_key() -> None:
     assert PRESETS["ideal"].gyro_axes == "xyz"
 
 
+def test_paper_preset_holds_only_the_papers_error_set() -> None:
+    """mems-vrg-paper: gyro constant error (1σ-sized, 0.1 °/h 3σ), accelerometer constant
+    error (4.4e-4 g 3σ) and accelerometer noise of 10 arc-min per 100 Hz sample; nothing
+    else. The noise is checked on measured samples of a tool at rest."""
+    tool = PRESETS["mems-vrg-paper"]
+    assert tool.gyro_axes == "x" and tool.sample_rate == 100.0
+    assert tool.gyro.model_dump(exclude={"bias"}) == GyroErrors().model_dump(exclude={"bias"})
+    assert np.allclose(np.abs(tool.gyro.bias), 0.1 / 3, rtol=0.01)
+    acc = tool.accelerometer
+    assert acc.model_dump(exclude={"bias", "noise_density"}) == AccelerometerErrors().model_dump(
+        exclude={"bias", "noise_density"}
+    )
+    assert np.allclose(np.abs(acc.bias), 4.4e-4 / 3 * STANDARD_GRAVITY, rtol=0.01)
+    assert tool.odometer.scale_factor == 0.0 and tool.odometer.noise == 0.0
+    n = 20_000
+    still = np.tile([0.0, 0.0, STANDARD_GRAVITY], (n, 1))
+    measured = measure(still, acc, np.arange(n) / 100.0, rng()) - np.asarray(acc.bias)
+    tilt = np.degrees(np.arctan2(measured[:, 0], measured[:, 2])) * 60.0  # arc-min
+    assert abs(np.std(tilt) - 10.0) < 0.15
+
+
 def test_tool_preset_deep_merges_overrides() -> None:
     tool = tool_preset("mems-vrg", gyro={"bias": (1, 2, 3)}, sample_rate=50)
     base = PRESETS["mems-vrg"]

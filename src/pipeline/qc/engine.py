@@ -32,6 +32,7 @@ from pipeline.earth.site import Site
 from pipeline.gyrocompass.earth_rate import StationReject
 from pipeline.gyrocompass.solve import fit_positions
 from pipeline.qc.faults import Equation, Finding, isolate
+from pipeline.qc.magnetic import diagnose_magnetic
 from pipeline.qc.options import CHECKS, DEFAULTS, QcOptions, QcStop
 from pipeline.qc.reference import EarthReference, earth_reference
 from pipeline.qc.sensors import Sensors, float_column, readings_sensors
@@ -290,6 +291,14 @@ def station_checks(
         if r.check == "earth_rate_fit":
             for s in r.keys.station[r.failed]:
                 findings.setdefault(int(s), Finding("undetermined", FIT_UNDETERMINED))
+    magnetic = diagnose_magnetic(rows, station, sensors, earth, options.isolation_margin)
+    for s, found in magnetic.items():
+        other = findings.get(s)
+        findings[s] = (
+            Finding(f"{other.suspect}, {found.suspect}", f"{other.diagnosis}; {found.diagnosis}")
+            if other is not None
+            else found
+        )
     qc = results_table(rows)
     summary = _summary(rows, station, md, findings, options)
     raise_on_stop(qc, options, summary)

@@ -3,6 +3,10 @@ magnetic anomaly intervals found along depth."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import pyarrow as pa
+
 from pipeline.contracts import TableContract, column
 
 STATUSES = ("ok", "flag", "drop", "stop")
@@ -33,7 +37,8 @@ class QcResults(TableContract):
     passed: bool | None = column(unit=None, description="within tolerance (null: not evaluated)")
     suspect: str = column(
         unit=None,
-        description="suspected sensor ('gyro y', 'acc x', …), 'undetermined' when the data "
+        description="suspected sensor ('gyro y', 'acc x', 'mag z', …), 'interference' when an "
+        "external magnetic field explains a magnetic check, 'undetermined' when the data "
         "cannot tell, '' when not failed or not a sensor check",
     )
     detail: str = column(unit=None, description="what failed, by how much, and the diagnosis")
@@ -46,8 +51,35 @@ class QcSummary(TableContract):
     md: float = column(unit="m", description="measured depth of the station")
     status: str = column(unit=None, description="ok, flag, drop (exclude downstream) or stop")
     failed_checks: str = column(unit=None, description="comma-separated names of failed checks")
-    suspect: str = column(unit=None, description="suspected sensor, 'undetermined' or ''")
+    suspect: str = column(
+        unit=None,
+        description="suspected sensor ('gyro y', 'acc x', 'mag z', …), 'interference' (an "
+        "external magnetic field), 'undetermined' or ''",
+    )
     diagnosis: str = column(unit=None, description="fault isolation result, e.g. bias estimate")
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """One diagnosis of a QcSummary and the stations (MD, m) it was made at."""
+
+    suspect: str
+    diagnosis: str
+    md: tuple[float, ...]
+
+
+def diagnoses(summary: pa.Table) -> list[Diagnosis]:
+    """The distinct (suspect, diagnosis) of a QcSummary's failed stations, in station order."""
+    found: dict[tuple[str, str], list[float]] = {}
+    for row in summary.select(["md", "status", "suspect", "diagnosis"]).to_pylist():
+        if row["status"] != "ok" and (row["suspect"] or row["diagnosis"]):
+            found.setdefault((row["suspect"], row["diagnosis"]), []).append(row["md"])
+    return [Diagnosis(s, d, tuple(md)) for (s, d), md in found.items()]
+
+
+def is_summary(table: pa.Table) -> bool:
+    """Whether ``table`` has the columns of a QcSummary."""
+    return set(QcSummary.compiled().schema().names) <= set(table.column_names)
 
 
 class MagneticAnomalies(TableContract):

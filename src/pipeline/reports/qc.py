@@ -15,8 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
+from pipeline.qc.tables import diagnoses
 from pipeline.reports.document import Column, Table, fmt_sig
 from pipeline.reports.flags import Flag, compass_flag, continuous_flags, failed_check
+from pipeline.reports.numbers import fmt
 from pipeline.reports.plots import FloatArray, QcSeries
 
 MD_MATCH = 1e-3
@@ -232,4 +234,33 @@ def flag_table(flags: list[list[Flag]]) -> Table | None:
         kind="flags",
         note="A failed check highlights the station's row in the listing; a processing flag "
         "highlights its QC cell and the values it applies to.",
+    )
+
+
+def diagnosis_table(summary: pa.Table | None) -> Table | None:
+    """The validity checks' diagnoses of the failed stations: suspected sensor (or
+    interference), where, and the estimate (None: nothing diagnosed)."""
+    found = diagnoses(summary) if summary is not None else []
+    if not found:
+        return None
+    return Table(
+        "Diagnosis of failed validity checks",
+        (
+            Column("Suspect", align="left"),
+            Column("Stations"),
+            Column("MD, m", align="left"),
+            Column("Diagnosis", align="left", wrap=True),
+        ),
+        tuple(
+            (
+                d.suspect or "—",
+                str(len(d.md)),
+                f"{fmt(min(d.md))} – {fmt(max(d.md))}" if len(d.md) > 1 else fmt(d.md[0]),
+                d.diagnosis,
+            )
+            for d in found
+        ),
+        kind="qc",
+        note="The sensor a failure points to, from fitting one fault at a time to the "
+        "readings at rest; 'undetermined' where the data cannot tell.",
     )

@@ -41,7 +41,14 @@ from pipeline.reports.listing import (
     short_courses,
 )
 from pipeline.reports.literature import Citations
-from pipeline.reports.qc import QcSources, all_series, flag_table, station_flags, summary_rows
+from pipeline.reports.qc import (
+    QcSources,
+    all_series,
+    diagnosis_table,
+    flag_table,
+    station_flags,
+    summary_rows,
+)
 from pipeline.reports.sections import (
     footer,
     method_items,
@@ -144,8 +151,9 @@ def survey_document(
         sections.append(_uncertainty(traj, path))
     groups = all_series(src)
     explained = flag_table(flags or [])
-    if groups or explained is not None:
-        sections.append(_qc(groups, explained))
+    diagnosed = diagnosis_table(src.summary)
+    if groups or explained is not None or diagnosed is not None:
+        sections.append(_qc(groups, explained, diagnosed))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
         calibration = tables.calibration if _rows(tables.calibration) else None
@@ -366,8 +374,12 @@ def _uncertainty(traj: pa.Table, path: plots.Path3) -> Section:
     )
 
 
-def _qc(groups: list[tuple[str, list[plots.QcSeries]]], explained: Table | None) -> Section:
-    blocks: list[Block] = [explained] if explained is not None else []
+def _qc(
+    groups: list[tuple[str, list[plots.QcSeries]]],
+    explained: Table | None,
+    diagnosed: Table | None,
+) -> Section:
+    blocks: list[Block] = [t for t in (explained, diagnosed) if t is not None]
     columns = (
         Column("Check", align="left"),
         Column("Unit", align="left"),

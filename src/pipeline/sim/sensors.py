@@ -324,6 +324,10 @@ _WIRELINE = OdometerErrors(scale_factor=500.0, noise=0.05)
 """Cable depth counter: 0.05 % stretch/wheel scale (about ISCWSA wireline depth scale,
 ~5e-4), 5 cm per-sample jitter."""
 
+PAPER_ACC_NOISE_DENSITY = STANDARD_GRAVITY * float(np.sin(np.radians(10.0 / 60.0))) * 60.0 * 0.1
+"""(m/s)/√h whose per-sample σ at 100 Hz (dt = 0.01 s, σ = N / (60 √dt)) is g·sin(10′) =
+0.0285 m/s²: the accelerometer noise of 10 arc-min (1σ) of Binder & Khazov (2023)."""
+
 PRESETS: dict[str, ToolModel] = {
     "mems-vrg": ToolModel(
         name="mems-vrg",
@@ -352,6 +356,23 @@ PRESETS: dict[str, ToolModel] = {
             correlation_time=300.0,
         ),
         odometer=_WIRELINE,
+    ),
+    "mems-vrg-paper": ToolModel(
+        name="mems-vrg-paper",
+        description="The error set of the continuous-mode simulation in Binder & Khazov "
+        "(2023), 'Versatile gyroinclinometer based on a single axis angular rate sensor', "
+        "and nothing else: single-axis gyro constant error 0.1 deg/h (3σ), accelerometer "
+        "constant error 4.4e-4 g (3σ), accelerometer noise 10 arc-min (1σ, taken per 100 Hz "
+        "sample: 0.0285 m/s²); no gyro noise, instability, trend, scale, misalignment or "
+        "g-sensitivity, an exact odometer. The biases here are one realisation of 1σ size; "
+        "benchmarks/study_error_budget.py draws them per run.",
+        gyro_axes="x",
+        gyro=GyroErrors(bias=(0.0333, -0.0333, 0.0333)),
+        accelerometer=AccelerometerErrors(
+            bias=(1.44e-3, -1.44e-3, 1.44e-3),
+            noise_density=PAPER_ACC_NOISE_DENSITY,
+        ),
+        odometer=OdometerErrors(),
     ),
     "nav-grade": ToolModel(
         name="nav-grade",
