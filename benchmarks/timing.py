@@ -1,8 +1,9 @@
 """Timing helpers of the reader benchmarks: interleaved repetitions, medians, machine load.
 
-Every candidate runs once per round, rounds repeat, and each candidate's median wall and
-CPU time (this process's, all threads) is reported, so that a change of load during the run
-weighs on every candidate alike. ``uptime`` is printed before and after.
+Every candidate runs once per round, rounds repeat (each round starting one candidate later,
+so that none always follows the same one), and each candidate's median wall and CPU time
+(this process's, all threads) is reported, so that a change of load during the run weighs on
+every candidate alike. ``uptime`` is printed before and after.
 """
 
 from __future__ import annotations
@@ -41,15 +42,18 @@ def uptime() -> str:
 
 
 def interleaved(candidates: dict[str, Callable[[], Any]], rounds: int) -> dict[str, Timing]:
-    """Run every candidate once per round, ``rounds`` times."""
+    """Run every candidate once per round, ``rounds`` times, the order rotated each round;
+    only the last round's results are kept (earlier ones are freed before the next run)."""
     timings = {name: Timing() for name in candidates}
-    for _ in range(rounds):
-        for name, run in candidates.items():
+    names = list(candidates)
+    for round_ in range(rounds):
+        shift = round_ % len(names)
+        for name in names[shift:] + names[:shift]:
             cpu, wall = time.process_time(), time.perf_counter()
-            result = run()
+            result = candidates[name]()
             timings[name].wall.append(time.perf_counter() - wall)
             timings[name].cpu.append(time.process_time() - cpu)
-            timings[name].result = result
+            timings[name].result = result if round_ == rounds - 1 else None
             del result
     return timings
 

@@ -108,7 +108,7 @@ def _delimited(text: Text, begin: int, end: int, n: int) -> tuple[Bytes, int] | 
     separates the values of a line (``n`` in a good one), one block at a time (copied, then
     rewritten while in the cache); and the line count. None for a lone CR line end."""
     source = np.frombuffer(text, np.uint8, count=end - begin, offset=begin)
-    out = np.empty(source.size + 1, np.uint8)
+    out = np.frombuffer(pa.allocate_buffer(source.size + 1), np.uint8)  # pooled: reused
     read = write = rows = 0
     layout: tuple[int, NDArray[np.intp]] | None = None
     while read < source.size:
@@ -118,7 +118,8 @@ def _delimited(text: Text, begin: int, end: int, n: int) -> tuple[Bytes, int] | 
         block[: source.size - read] = source[read:stop]
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
         width = text.find(b"\n", begin + read, begin + stop) + 1 - begin - read
-        separators = _fixed_width(block, width if width > 0 else block.size, n, layout)
+        width = width if width > 0 else block.size  # the last line, without its LF
+        separators = _fixed_width(block, width, n, layout)
         if separators is None and (block < SPACE).sum() != (block == NEWLINE).sum():
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
