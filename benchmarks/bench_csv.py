@@ -28,7 +28,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from pipeline.io.arrow_text import use_threads
+from pipeline.io import arrow_text
 from pipeline.io.csv import read
 from timing import interleaved, table, uptime
 
@@ -111,9 +111,17 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=1_000_000)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument(
+        "--threads",
+        choices=["auto", "on", "off"],
+        default="auto",
+        help="pyarrow threads in our reader: auto (only when a core is idle), on or off",
+    )
     args = parser.parse_args()
+    if args.threads != "auto":
+        arrow_text.use_threads = lambda: args.threads == "on"  # type: ignore[assignment]
     print(f"before: {uptime()}")
-    print(f"our reader's pyarrow threads: {'yes' if use_threads() else 'no (no idle core)'}")
+    print(f"our reader's pyarrow threads: {'yes' if arrow_text.use_threads() else 'no'}")
     worst, summary = 0.0, []
     with tempfile.TemporaryDirectory() as tmp:
         for layout in ("plain", "titled"):

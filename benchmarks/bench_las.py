@@ -32,7 +32,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from pipeline.io.arrow_text import read_options, use_threads
+from pipeline.io import arrow_text
+from pipeline.io.arrow_text import read_options
 from pipeline.io.las import read_las
 from pipeline.io.las_options import LasOptions
 from timing import interleaved, table, uptime
@@ -102,10 +103,18 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=1_000_000)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument(
+        "--threads",
+        choices=["auto", "on", "off"],
+        default="auto",
+        help="pyarrow threads in our reader: auto (only when a core is idle), on or off",
+    )
     args = parser.parse_args()
+    if args.threads != "auto":
+        arrow_text.use_threads = lambda: args.threads == "on"  # type: ignore[assignment]
     options = LasOptions()
     print(f"before: {uptime()}")
-    print(f"pyarrow threads (ours and the floor): {'yes' if use_threads() else 'no'}")
+    print(f"pyarrow threads (ours and the floor): {'yes' if arrow_text.use_threads() else 'no'}")
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.las"
         write_file(path, args.rows)
