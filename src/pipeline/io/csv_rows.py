@@ -50,6 +50,19 @@ _BLANKS = (ord(" "), ord("\t"))
 
 Data = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
+Marks = dict[bytes, list[int]]
+"""Offsets of the blocks of :data:`SCAN` bytes of a mapped file that hold each byte."""
+MARKED = (b'"', b"#", b",")
+"""Bytes whose blocks are noted while a mapped file is checked: quotes, comment marks and
+commas (decimal commas) are then looked for only there."""
+
+
+@dataclass(frozen=True)
+class Mapped:
+    """A file mapped into memory, and the blocks holding each of :data:`MARKED`."""
+
+    data: mmap.mmap
+    marks: Marks
 
 
 @dataclass(frozen=True)
@@ -60,6 +73,8 @@ class Text:
     data: Data
     head: list[str]
     starts: list[int]
+    marks: Marks | None = None
+    """the blocks holding each :data:`MARKED` byte, when the file is mapped"""
 
 
 @dataclass(frozen=True)
@@ -73,6 +88,11 @@ class Rows:
     end: int
     first_line: int
     lines: NDArray[np.int64] | None = None
+    marks: Marks | None = None
+
+    def holds(self, byte: bytes) -> bool:
+        """Whether the rows hold ``byte``."""
+        return holds(self.data, self.marks, byte, self.start, self.end)
 
     def buffer(self) -> pa.Buffer:
         """The rows' bytes, without a copy."""
@@ -113,11 +133,12 @@ def load(path: Path, head_lines: int) -> Text:
             first = fh.read(BLOCK)
             _check_text(path, first, complete=len(first) < BLOCK)
             data: Data = first
-            if len(first) == BLOCK:
-                mapped = _mapped(fh)
-                if mapped is None:
-                    fh.seek(0)
-                data = fh.read() if mapped is None else mapped
+            mapped = _mapped(fh) if len(first) == BLOCK else None
+            if mapped is not None:
+                data = mapped.data
+            elif len(first) == BLOCK:
+                fh.seek(0)
+                data = fh.read()
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
     if isinstance(data, bytes):
@@ -125,39 +146,51 @@ def load(path: Path, head_lines: int) -> Text:
         if not data or data.isspace():
             raise InputFileError(path, "the file is empty")
     head, starts = split_head(data, head_lines)
-    return Text(data, head, starts)
+    return Text(data, head, starts, None if mapped is None else mapped.marks)
 
 
-def _mapped(fh: BinaryIO) -> mmap.mmap | None:
+def _mapped(fh: BinaryIO) -> Mapped | None:
     """The file mapped into memory when it is UTF-8 text with LF line ends, no NUL byte,
     no byte-order mark and some text besides white space; else None (then the file is read
-    and checked as bytes, which locates a problem on its line)."""
-    mapped = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
-    if mapped[:3] == BOM or mapped.find(b"\r") >= 0:
+    and checked as bytes, which locates a problem on its line). One pass, a block of
+    :data:`SCAN` bytes at a time, which also notes the blocks holding :data:`MARKED` bytes."""
+    try:
+        mapped = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    except (OSError, ValueError):  # not a regular file
         return None
     decoder = codecs.getincrementaldecoder("utf-8")()
+    marks: Marks = {byte: [] for byte in MARKED}
     blank = True
-    for chunk in _chunks(mapped):
-        if chunk.min() == 0:
+    for at in range(0, len(mapped), SCAN):
+        chunk = mapped[at : at + SCAN]
+        if b"\0" in chunk or b"\r" in chunk or (at == 0 and chunk.startswith(BOM)):
             return None
-        if chunk.max() >= 0x80:  # text beyond ASCII: checked as UTF-8
+        if not chunk.isascii():  # checked as UTF-8
             try:
-                decoder.decode(chunk.tobytes())
+                decoder.decode(chunk)
             except UnicodeDecodeError:
                 return None
-        blank = blank and not chunk.tobytes().strip()
+        for byte, found in marks.items():
+            if byte in chunk:
+                found.append(at)
+        blank = blank and not chunk.strip()
     try:
         decoder.decode(b"", final=True)
     except UnicodeDecodeError:
         return None
-    return None if blank else mapped
+    return None if blank else Mapped(mapped, marks)
 
 
-def _chunks(data: mmap.mmap) -> Iterator[NDArray[np.uint8]]:
-    """``data`` as arrays of :data:`SCAN` bytes (views, not copies)."""
-    whole = np.frombuffer(data, np.uint8)
-    for at in range(0, whole.size, SCAN):
-        yield whole[at : at + SCAN]
+def holds(data: Data, marks: Marks | None, byte: bytes, start: int, end: int) -> bool:
+    """Whether ``data[start:end]`` holds ``byte`` (one of :data:`MARKED` when ``marks``,
+    then only the blocks noted to hold it are searched)."""
+    if marks is None:
+        return data.find(byte, start, end) >= 0
+    return any(
+        data.find(byte, max(start, at), min(end, at + SCAN)) >= 0
+        for at in marks[byte]
+        if at < end and at + SCAN > start
+    )
 
 
 def _check_text(path: Path, data: bytes, *, complete: bool) -> bytes:
@@ -216,9 +249,9 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
-    rows = Rows(data, start, end, first_line)
+    rows = Rows(data, start, end, first_line, marks=text.marks)
     # A comment line could parse as a row (a commented-out row); blank lines cannot.
-    return _without_skipped(rows) if data.find(b"#", start, end) >= 0 else rows
+    return _without_skipped(rows) if rows.holds(b"#") else rows
 
 
 def _line_end(data: Data, start: int, end: int) -> int:
@@ -295,7 +328,7 @@ def parse(
     """
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
-    comma = rows.data.find(b",", rows.start, rows.end) >= 0
+    comma = rows.holds(b",")
     guess = decimal or ("," if header.delimiter != "," and comma else ".")
     typed = _typed(rows, header, names, wanted, types, blanks, guess)
     if typed is None and (kept := _without_skipped(rows)) is not rows:
@@ -331,7 +364,7 @@ def _typed(
     for when the rows hold one); None when that does not give exactly the rows' values
     (then :func:`_strings` finds out why). A blank line is an invalid row here, so it
     cannot go unnoticed."""
-    quoted = rows.data.find(b'"', rows.start, rows.end) >= 0
+    quoted = rows.holds(b'"')
     try:
         table = pacsv.read_csv(
             pa.BufferReader(rows.buffer()),
