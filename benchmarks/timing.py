@@ -1,13 +1,15 @@
 """Timing helpers of the reader benchmarks: interleaved repetitions, medians, machine load.
 
-Every candidate runs once per round, rounds repeat (each round starting one candidate later,
-so that none always follows the same one), and each candidate's median wall and CPU time
+Every candidate runs once per round, rounds repeat (each in its own shuffled order, seeded,
+so that no candidate always follows the same one: one that runs right after another can pay
+for its memory), and each candidate's median wall and CPU time
 (this process's, all threads) is reported, so that a change of load during the run weighs on
 every candidate alike. ``uptime`` is printed before and after.
 """
 
 from __future__ import annotations
 
+import random
 import statistics
 import subprocess
 import time
@@ -42,13 +44,13 @@ def uptime() -> str:
 
 
 def interleaved(candidates: dict[str, Callable[[], Any]], rounds: int) -> dict[str, Timing]:
-    """Run every candidate once per round, ``rounds`` times, the order rotated each round;
+    """Run every candidate once per round, ``rounds`` times, in a shuffled order each round;
     only the last round's results are kept (earlier ones are freed before the next run)."""
     timings = {name: Timing() for name in candidates}
     names = list(candidates)
+    order = random.Random(19)
     for round_ in range(rounds):
-        shift = round_ % len(names)
-        for name in names[shift:] + names[:shift]:
+        for name in order.sample(names, len(names)):
             cpu, wall = time.process_time(), time.perf_counter()
             result = candidates[name]()
             timings[name].wall.append(time.perf_counter() - wall)
