@@ -22,7 +22,7 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, WrongKindError
 from pipeline.io import las as las_plugin
-from pipeline.io import las_header, las_rows
+from pipeline.io import las_fast, las_header, las_rows
 from pipeline.io.las_options import LasOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
@@ -1041,7 +1041,7 @@ def _both_paths(path: Path) -> tuple[dict[int, np.ndarray] | None, las_rows.Data
     source = las_header.load(path)
     header = las_header.parse_header(path, source.header)
     wanted = list(range(len(header.curves)))
-    fast = las_rows._fast_values(source.raw, source.start, len(header.curves), wanted)
+    fast = las_fast.fast_values(source.raw, source.start, len(header.curves), wanted)
     lines = las_header.split_lines(source.raw[source.start :].decode())
     slow = las_rows._slow_values(path, header, lines, source.title_line, wanted)
     return (fast[0] if fast else None), slow
@@ -1086,7 +1086,7 @@ def test_fast_path_equals_careful_path_and_lasio(tmp_path: Path, section: tuple[
 )
 def test_fast_path_declines_what_it_cannot_prove(data: bytes) -> None:
     head = b"~Curve\n D.M : d\n~A\n"
-    assert las_rows._fast_values(head + data, len(head), 3, [0, 1, 2]) is None
+    assert las_fast.fast_values(head + data, len(head), 3, [0, 1, 2]) is None
 
 
 # ------------------------------------------------------------------------- writer

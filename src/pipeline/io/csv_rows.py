@@ -1,21 +1,25 @@
 """Bytes, lines and data rows of a CSV file (see :mod:`pipeline.io.csv` for the layout).
 
-The start of the file is checked to be text (:func:`load`), then the file is read once as
-bytes. Only its first lines (where the title block and the header row are) are decoded to
-text; the data rows stay bytes and are handed to ``pyarrow.csv``, which parses them with
-the declared column types on all cores. A file that does not parse
-that way (a bad cell, a wrong cell count, decimal commas to detect) is parsed again as
-strings on one thread, which locates every problem on its file line.
+The start of the file is checked to be text (:func:`load`). A larger file is then mapped
+into memory, not copied, and checked block by block (vectorised: no NUL byte, UTF-8);
+one with a byte-order mark, CR line ends or a problem to locate is read as bytes instead.
+Only its first lines (where the title block and the header row are) are decoded to text;
+the data rows stay bytes and are handed to ``pyarrow.csv``, which parses them with the
+declared column types in one pass (on one thread unless a core is idle, see
+:mod:`pipeline.io.arrow_text`). A file that does not parse that way (a bad cell, a wrong
+cell count, decimal commas to detect) is parsed again as strings on one thread, which
+locates every problem on its file line.
 """
 
 from __future__ import annotations
 
 import codecs
+import mmap
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import pyarrow as pa
@@ -24,12 +28,16 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError
+from pipeline.io.arrow_text import read_options
 from pipeline.io.csv_header import Cell, Header, cells_of
 
 SHOWN = 5
 """Bad cells quoted in one error message."""
 BLOCK = 64 * 1024
 """Bytes of a file checked (text, not binary) before the whole file is read."""
+SCAN = 256 * 1024
+"""Bytes of a mapped file checked at a time (in the processor's cache)."""
+BOM = b"\xef\xbb\xbf"
 
 _NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
 _NUMBER = {
@@ -40,14 +48,33 @@ _INTEGER = r"^-?[0-9]{1,18}$"
 _BLANKS = (ord(" "), ord("\t"))
 
 
+Data = bytes | mmap.mmap
+"""A file's bytes, read or mapped."""
+Marks = dict[bytes, list[int]]
+"""Offsets of the blocks of :data:`SCAN` bytes of a mapped file that hold each byte."""
+MARKED = (b'"', b"#", b",")
+"""Bytes whose blocks are noted while a mapped file is checked: quotes, comment marks and
+commas (decimal commas) are then looked for only there."""
+
+
+@dataclass(frozen=True)
+class Mapped:
+    """A file mapped into memory, and the blocks holding each of :data:`MARKED`."""
+
+    data: mmap.mmap
+    marks: Marks
+
+
 @dataclass(frozen=True)
 class Text:
     """A readable CSV file: its bytes with LF line ends, its first lines decoded and the
     byte offset where each of those lines starts."""
 
-    data: bytes
+    data: Data
     head: list[str]
     starts: list[int]
+    marks: Marks | None = None
+    """the blocks holding each :data:`MARKED` byte, when the file is mapped"""
 
 
 @dataclass(frozen=True)
@@ -56,11 +83,16 @@ class Rows:
     Row 0 is file line ``first_line`` (1-based); ``lines`` holds each row's file line when
     skipped lines lay between them (else rows are consecutive lines)."""
 
-    data: bytes
+    data: Data
     start: int
     end: int
     first_line: int
     lines: NDArray[np.int64] | None = None
+    marks: Marks | None = None
+
+    def holds(self, byte: bytes) -> bool:
+        """Whether the rows hold ``byte``."""
+        return holds(self.data, self.marks, byte, self.start, self.end)
 
     def buffer(self) -> pa.Buffer:
         """The rows' bytes, without a copy."""
@@ -70,7 +102,10 @@ class Rows:
         """Number of rows (lines)."""
         if self.lines is not None:
             return len(self.lines)
-        return self.data.count(b"\n", self.start, self.end) + 1
+        if isinstance(self.data, bytes):
+            return self.data.count(b"\n", self.start, self.end) + 1
+        block = np.frombuffer(self.data, np.uint8, count=self.end - self.start, offset=self.start)
+        return int(np.count_nonzero(block == ord("\n"))) + 1
 
     def source_lines(self, count: int) -> NDArray[np.int64]:
         """File line of each of the first ``count`` rows."""
@@ -90,30 +125,78 @@ def load(path: Path, head_lines: int) -> Text:
     """Read ``path``: UTF-8 (optional BOM), any line ends; the first ``head_lines`` lines
     decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line.
 
-    The first :data:`BLOCK` bytes are checked before the rest is read: a binary file (a
-    NUL byte, bytes that are not UTF-8) is refused without reading it all."""
+    The first :data:`BLOCK` bytes are checked before the rest is looked at: a binary file
+    (a NUL byte, bytes that are not UTF-8) is refused without reading it all. The rest is
+    mapped (:func:`_mapped`) or, failing that, read and checked as a whole."""
     try:
         with path.open("rb") as fh:
             first = fh.read(BLOCK)
             _check_text(path, first, complete=len(first) < BLOCK)
-            if len(first) < BLOCK:
-                data = first
-            else:
+            data: Data = first
+            mapped = _mapped(fh) if len(first) == BLOCK else None
+            if mapped is not None:
+                data = mapped.data
+            elif len(first) == BLOCK:
                 fh.seek(0)
                 data = fh.read()
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
-    data = _check_text(path, data, complete=True)
-    if not data or data.isspace():
-        raise InputFileError(path, "the file is empty")
+    if isinstance(data, bytes):
+        data = _check_text(path, data, complete=True)
+        if not data or data.isspace():
+            raise InputFileError(path, "the file is empty")
     head, starts = split_head(data, head_lines)
-    return Text(data, head, starts)
+    return Text(data, head, starts, None if mapped is None else mapped.marks)
+
+
+def _mapped(fh: BinaryIO) -> Mapped | None:
+    """The file mapped into memory when it is UTF-8 text with LF line ends, no NUL byte,
+    no byte-order mark and some text besides white space; else None (then the file is read
+    and checked as bytes, which locates a problem on its line). One pass, a block of
+    :data:`SCAN` bytes at a time, which also notes the blocks holding :data:`MARKED` bytes."""
+    try:
+        mapped = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    except (OSError, ValueError):  # not a regular file
+        return None
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    marks: Marks = {byte: [] for byte in MARKED}
+    blank = True
+    for at in range(0, len(mapped), SCAN):
+        chunk = mapped[at : at + SCAN]
+        if b"\0" in chunk or b"\r" in chunk or (at == 0 and chunk.startswith(BOM)):
+            return None
+        if not chunk.isascii():  # checked as UTF-8
+            try:
+                decoder.decode(chunk)
+            except UnicodeDecodeError:
+                return None
+        for byte, found in marks.items():
+            if byte in chunk:
+                found.append(at)
+        blank = blank and not chunk.strip()
+    try:
+        decoder.decode(b"", final=True)
+    except UnicodeDecodeError:
+        return None
+    return None if blank else Mapped(mapped, marks)
+
+
+def holds(data: Data, marks: Marks | None, byte: bytes, start: int, end: int) -> bool:
+    """Whether ``data[start:end]`` holds ``byte`` (one of :data:`MARKED` when ``marks``,
+    then only the blocks noted to hold it are searched)."""
+    if marks is None:
+        return data.find(byte, start, end) >= 0
+    return any(
+        data.find(byte, max(start, at), min(end, at + SCAN)) >= 0
+        for at in marks[byte]
+        if at < end and at + SCAN > start
+    )
 
 
 def _check_text(path: Path, data: bytes, *, complete: bool) -> bytes:
     """``data`` (the whole file, or its start unless ``complete``) without BOM and with LF
     line ends; a NUL byte or invalid UTF-8 raises, naming its line."""
-    data = newlines(data.removeprefix(b"\xef\xbb\xbf"))
+    data = newlines(data.removeprefix(BOM))
     nul = data.find(b"\0")
     if nul >= 0:
         line = data.count(b"\n", 0, nul) + 1
@@ -132,7 +215,7 @@ def newlines(data: bytes) -> bytes:
     return data.replace(b"\r\n", b"\n").replace(b"\r", b"\n") if b"\r" in data else data
 
 
-def split_head(data: bytes, limit: int) -> tuple[list[str], list[int]]:
+def split_head(data: Data, limit: int) -> tuple[list[str], list[int]]:
     """The first ``limit`` lines of LF-separated ``data`` as text, and their byte offsets."""
     starts = [0]
     while len(starts) < limit:
@@ -166,17 +249,17 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
-    rows = Rows(data, start, end, first_line)
+    rows = Rows(data, start, end, first_line, marks=text.marks)
     # A comment line could parse as a row (a commented-out row); blank lines cannot.
-    return _without_skipped(rows) if data.find(b"#", start, end) >= 0 else rows
+    return _without_skipped(rows) if rows.holds(b"#") else rows
 
 
-def _line_end(data: bytes, start: int, end: int) -> int:
+def _line_end(data: Data, start: int, end: int) -> int:
     nl = data.find(b"\n", start, end)
     return end if nl < 0 else nl
 
 
-def _lines_backwards(data: bytes, start: int) -> Iterator[tuple[int, int]]:
+def _lines_backwards(data: Data, start: int) -> Iterator[tuple[int, int]]:
     """``(start, end)`` byte offsets of the lines of ``data[start:]``, last line first."""
     end = len(data)
     while True:
@@ -245,7 +328,7 @@ def parse(
     """
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
-    comma = rows.data.find(b",", rows.start, rows.end) >= 0
+    comma = rows.holds(b",")
     guess = decimal or ("," if header.delimiter != "," and comma else ".")
     typed = _typed(rows, header, names, wanted, types, blanks, guess)
     if typed is None and (kept := _without_skipped(rows)) is not rows:
@@ -277,14 +360,21 @@ def _typed(
     blanks: frozenset[str],
     decimal: str,
 ) -> dict[str, Any] | None:
-    """The columns parsed by pyarrow with their types, on all cores; None when that does
-    not give exactly the rows' values (then :func:`_strings` finds out why). A blank line
-    is an invalid row here, so it cannot go unnoticed."""
+    """The columns parsed by pyarrow with their types (in one pass; quotes only looked
+    for when the rows hold one); None when that does not give exactly the rows' values
+    (then :func:`_strings` finds out why). A blank line is an invalid row here, so it
+    cannot go unnoticed."""
+    quoted = rows.holds(b'"')
     try:
         table = pacsv.read_csv(
             pa.BufferReader(rows.buffer()),
-            read_options=pacsv.ReadOptions(column_names=names),
-            parse_options=pacsv.ParseOptions(delimiter=header.delimiter, ignore_empty_lines=False),
+            read_options=read_options(names),
+            parse_options=pacsv.ParseOptions(
+                delimiter=header.delimiter,
+                quote_char='"' if quoted else False,
+                double_quote=quoted,
+                ignore_empty_lines=False,
+            ),
             convert_options=pacsv.ConvertOptions(
                 column_types={wanted[n]: types[n] for n in wanted},
                 include_columns=list(wanted.values()),
@@ -296,7 +386,6 @@ def _typed(
         )
     except pa.ArrowException:
         return None
-    quoted = rows.data.find(b'"', rows.start, rows.end) >= 0
     if quoted and table.num_rows != rows.count():  # a quoted cell spans lines
         return None
     columns = {name: table.column(col) for name, col in wanted.items()}

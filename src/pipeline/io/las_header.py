@@ -18,6 +18,7 @@ sections read as items.
 from __future__ import annotations
 
 import math
+import mmap
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -95,7 +96,8 @@ class Source:
     header: list[str]
     title_line: int
     """1-based line of the data section title (0: there is none)"""
-    raw: bytes
+    raw: bytes | mmap.mmap
+    """the file's bytes, mapped into memory when they need no transcoding (:func:`load`)"""
     start: int
 
 
@@ -103,8 +105,12 @@ class Source:
 
 
 def load(path: Path) -> Source:
-    """The file's header lines (decoded) and data bytes (UTF-16 transcoded to UTF-8)."""
+    """The file's header lines (decoded) and data bytes (UTF-16 transcoded to UTF-8). A
+    large file that needs no transcoding is mapped into memory, not copied."""
     try:
+        mapped = _mapped(path)
+        if mapped is not None:
+            return _split(path, mapped)
         raw = path.read_bytes()
     except OSError as exc:
         raise InputFileError(path, f"cannot read the file: {exc.strerror or exc}") from None
@@ -117,9 +123,26 @@ def load(path: Path) -> Source:
     head = raw[:SNIFF_BYTES]
     if head.count(b"\r") != head.count(b"\r\n"):  # old Mac line ends: lone CRs
         raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    return _split(path, raw)
+
+
+def _mapped(path: Path) -> mmap.mmap | None:
+    """The file mapped into memory when it is larger than :data:`SNIFF_BYTES` and its head
+    has text but neither a byte-order mark, UTF-16 nor lone CR line ends; else None."""
+    with path.open("rb") as fh:
+        head = fh.read(SNIFF_BYTES)
+        if len(head) < SNIFF_BYTES or head.startswith(BOM) or utf16_codec(head) is not None:
+            return None
+        if head.isspace() or head.count(b"\r") != head.count(b"\r\n"):
+            return None
+        return mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+
+
+def _split(path: Path, raw: bytes | mmap.mmap) -> Source:
+    """``raw`` split at its data section title."""
     title = _DATA_TITLE.search(raw)
     if title is None:
-        lines = split_lines(decode(path, raw, 1))
+        lines = split_lines(decode(path, raw[:], 1))
         if not any(line.lstrip().startswith("~") for line in lines):
             raise InputFileError(
                 path, "not a LAS file: no section title (~Version, ~Well, ~Curve, ~A)"

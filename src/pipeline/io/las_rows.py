@@ -1,7 +1,7 @@
 """The ``~A`` data rows of a LAS file: the values of the curves read, with the file line of
 each row, their nulls, and the index checked against STRT/STOP/STEP.
 
-:func:`_fast_values` (numpy + ``pyarrow.csv``; ≥ 10× faster than ``lasio.read``, see
+:func:`~pipeline.io.las_fast.fast_values` (numpy + ``pyarrow.csv``; see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
 careful path, reads the rest (wrapped files, comment or blank lines, lone CR line ends,
 text in unread curves, LAS 3 delimiters, quoted text) and locates every error by line. Both
@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
-import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.io.las_fast import fast_values
 from pipeline.io.las_header import (
     NUMBER,
     Header,
@@ -49,10 +49,6 @@ Lines = NDArray[np.int64]
 Mask = NDArray[np.bool_]
 Bytes = NDArray[np.uint8]
 
-_FAST_BYTES = b"0123456789.eE+- \t\r\n"
-"""Bytes the fast path reads; any other sends the data section to the careful path."""
-_TAB_TO_SPACE = bytes.maketrans(b"\t", b" ")
-
 
 @dataclass(frozen=True)
 class Data:
@@ -70,90 +66,12 @@ def read_data(path: Path, source: Source, header: Header, wanted: list[int]) -> 
     else the careful path."""
     first = source.title_line + 1
     if header.version < 3 and not header.wrapped and header.delimiter == "SPACE":
-        fast = _fast_values(source.raw, source.start, len(header.curves), wanted)
+        fast = fast_values(source.raw, source.start, len(header.curves), wanted)
         if fast is not None:
             values, rows = fast
             return Data(values, np.arange(first, first + rows, dtype=np.int64))
     text = decode(path, source.raw[source.start :], first)
     return _slow_values(path, header, split_lines(text), source.title_line, wanted)
-
-
-def _fast_values(
-    raw: bytes, start: int, n: int, wanted: list[int]
-) -> tuple[dict[int, Floats], int] | None:
-    """The fast path: values of the ``wanted`` of ``n`` curves in ``raw[start:]`` and the
-    row count, or None when it cannot prove it reads them as the careful path would.
-
-    It reads blocks of numbers, spaces, tabs and LF or CRLF line ends: tabs become spaces,
-    CRs go, a vectorised pass (:func:`_pack_spaces`) leaves one space between values and
-    none at line ends, and ``pyarrow.csv`` parses the rows (one-space delimiter, float64
-    correctly rounded as by Python's ``float``; the first curve is always read, so a blank
-    line is an empty value). A parse error (a blank line, a wrong value count, a token like
-    ``1-2``), a row count other than the line count or a non-finite value (``1e999``)
-    hands the block to the careful path, which reports it.
-    """
-    if len(raw.translate(None, _FAST_BYTES)) != len(raw[:start].translate(None, _FAST_BYTES)):
-        return None  # a byte other than _FAST_BYTES in the data
-    crs = raw.find(b"\r", start) >= 0
-    if crs and raw.count(b"\r", start) != raw.count(b"\r\n", start):
-        return None  # lone CRs
-    if crs or raw.find(b"\t", start) >= 0:
-        raw, start = raw[start:].translate(_TAB_TO_SPACE, b"\r"), 0
-    packed = _pack_spaces(np.frombuffer(raw, np.uint8, offset=start))
-    if packed.size == 0:
-        return {i: np.empty(0) for i in wanted}, 0
-    names = [f"c{i}" for i in range(n)]
-    read = [names[i] for i in wanted]
-    try:
-        table = pacsv.read_csv(
-            pa.BufferReader(pa.py_buffer(packed)),
-            read_options=pacsv.ReadOptions(column_names=names),
-            parse_options=pacsv.ParseOptions(
-                delimiter=" ", quote_char=False, ignore_empty_lines=False
-            ),
-            convert_options=pacsv.ConvertOptions(
-                column_types=dict.fromkeys(read, pa.float64()),
-                include_columns=read,
-                null_values=[],
-                strings_can_be_null=False,
-                check_utf8=False,
-            ),
-        )
-    except pa.ArrowInvalid:
-        return None
-    rows = int(np.count_nonzero(packed == 10)) + 1
-    values = {i: table.column(names[i]).to_numpy() for i in wanted}
-    if table.num_rows != rows or not all(np.isfinite(v).all() for v in values.values()):
-        return None
-    return values, rows
-
-
-def _pack_spaces(a: Bytes) -> Bytes:
-    """Bytes of space-separated lines with each run of spaces made one space and none at
-    the start or end of a line or of the block."""
-    keep = np.empty(a.size, dtype=bool)
-    np.greater(a[:-1], 32, out=keep[1:])  # a space after a value
-    keep[:1] = False
-    keep |= a != 32
-    packed = a[keep]
-    if packed.size > 1:
-        before_end = packed[1:] == 10
-        before_end &= packed[:-1] == 32
-        if before_end.any():  # a space ending a line
-            keep = np.ones(packed.size, dtype=bool)
-            keep[:-1] = ~before_end
-            packed = packed[keep]
-    content: Bytes = packed[: _content_end(packed)]
-    return content
-
-
-def _content_end(a: Bytes) -> int:
-    """Index after the last byte that is neither a space nor a line end."""
-    for tail in (a[-4096:], a):
-        found = np.flatnonzero(tail > 32)
-        if found.size:
-            return a.size - tail.size + int(found[-1]) + 1
-    return 0
 
 
 def _slow_values(
@@ -185,7 +103,7 @@ def read_all(path: Path, source: Source, header: Header) -> Data | Cells:
     numbers), else the text of every cell (:func:`read_cells`)."""
     n = len(header.curves)
     if n and header.version < 3 and not header.wrapped and header.delimiter == "SPACE":
-        fast = _fast_values(source.raw, source.start, n, list(range(n)))
+        fast = fast_values(source.raw, source.start, n, list(range(n)))
         if fast is not None:
             values, rows = fast
             first = source.title_line + 1

@@ -1,0 +1,131 @@
+"""The LAS fast path (``pipeline.io.las_fast``) against the careful path and against
+Python's own ``float`` of each cell, on data sections laid out as writers lay them out:
+fixed-width columns (the block rewrite keeps their bytes), ragged ones (packed), both in
+one file, CRLF and tabs, and blocks small enough that a section spans many of them."""
+
+from __future__ import annotations
+
+import mmap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from pipeline.errors import InputFileError
+from pipeline.io import las_fast, las_header, las_rows
+from pipeline.io.las import read_las
+
+_number = st.one_of(
+    st.floats(-1e5, 1e5, allow_nan=False).map(lambda v: round(v, 4)),
+    st.integers(-(10**6), 10**6).map(float),
+    st.floats(allow_nan=False, allow_infinity=False, width=32).map(float),
+)
+_formats = st.sampled_from(["{:12.4f}", "{:>14.6e}", "{:>16}", "{:11.2f}"])
+
+
+def _cell(fmt: str, value: float) -> str:
+    text = fmt.format(value) if "{:>16}" not in fmt else f"{value!r:>16}"
+    return text if len(text.strip()) < len(text) else " " + text  # a blank between values
+
+
+@st.composite
+def sections(draw: st.DrawFn) -> tuple[list[str], int]:
+    """Data lines of n curves: runs of fixed-width lines (one format each), some ragged
+    lines, and their n."""
+    n = draw(st.integers(1, 6))
+    lines: list[str] = []
+    for _ in range(draw(st.integers(1, 4))):
+        rows = draw(st.lists(st.lists(_number, min_size=n, max_size=n), min_size=1, max_size=30))
+        if draw(st.booleans()):
+            fmt = draw(_formats)
+            lines += ["".join(_cell(fmt, v) for v in row) for row in rows]
+        else:
+            gap = draw(st.sampled_from([" ", "  ", "\t", " \t "]))
+            lines += [gap.join(repr(v) for v in row) for row in rows]
+    return lines, n
+
+
+def _file(tmp_path: Path, lines: list[str], n: int, end: str = "\n") -> Path:
+    curves = "".join(f" C{i}.M : curve {i}\n" for i in range(n))
+    head = f"~Version\n VERS. 2.0 : v\n WRAP. NO : w\n~Well\n NULL. -1e300 : null\n~Curve\n{curves}"
+    path = tmp_path / "log.las"
+    path.write_bytes((head + "~A\n" + end.join(lines) + end).encode())
+    return path
+
+
+def _paths(path: Path) -> tuple[tuple[dict[int, np.ndarray], int] | None, las_rows.Data]:
+    source = las_header.load(path)
+    header = las_header.parse_header(path, source.header)
+    wanted = list(range(len(header.curves)))
+    fast = las_fast.fast_values(source.raw, source.start, len(header.curves), wanted)
+    lines = las_header.split_lines(source.raw[source.start :].decode())
+    return fast, las_rows._slow_values(path, header, lines, source.title_line, wanted)
+
+
+@settings(
+    max_examples=80,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(section=sections(), block=st.sampled_from([64, 200, 1 << 20]), crlf=st.booleans())
+def test_fast_path_equals_careful_path_and_float(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    section: tuple[list[str], int],
+    block: int,
+    crlf: bool,
+) -> None:
+    lines, n = section
+    monkeypatch.setattr(las_fast, "BLOCK", block)  # many blocks: layouts change between them
+    path = _file(tmp_path, lines, n, "\r\n" if crlf else "\n")
+    fast, slow = _paths(path)
+    assert fast is not None  # every such layout is read by the fast path
+    values, rows = fast
+    assert rows == len(lines) == len(slow.lines)
+    expected = np.array([[float(cell) for cell in line.split()] for line in lines])
+    for i in range(n):
+        assert np.array_equal(values[i].view(np.int64), slow.values[i].view(np.int64))
+        assert np.array_equal(values[i].view(np.int64), expected[:, i].view(np.int64))
+
+
+@pytest.mark.parametrize(
+    ("bad", "line"),
+    [
+        ("     1.0000      2.0000     3.00x0", 4),  # text in a fixed-width cell
+        ("     1.0000      2.0000           ", 4),  # a missing value in a fixed-width row
+        ("     1.0000  2.0000  3.0000  4.0000", 4),  # one value too many
+        ("     1.0000      2.0000     1e999 ", 4),  # out of the float range
+    ],
+)
+def test_a_bad_row_among_fixed_width_blocks_is_located(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, bad: str, line: int
+) -> None:
+    monkeypatch.setattr(las_fast, "BLOCK", 64)
+    good = [f"{i:11.4f}{2 * i:12.4f}{3 * i:11.4f}" for i in range(8)]
+    lines = [*good[:3], bad, *good[3:]]
+    path = _file(tmp_path, lines, 3)
+    first = path.read_text().splitlines().index("~A") + 2
+    source = las_header.load(path)
+    assert las_fast.fast_values(source.raw, source.start, 3, [0, 1, 2]) is None
+    header = las_header.parse_header(path, source.header)
+    with pytest.raises(InputFileError) as info:
+        las_rows.read_data(path, source, header, [0, 1, 2])
+    assert info.value.line == first + line - 1
+
+
+def test_a_large_mapped_file_reads_as_a_small_read_one(tmp_path: Path) -> None:
+    """A file past the sniffing size is mapped, not read; its values and lines are those
+    of the same rows in a file small enough to be read."""
+    rows = [f"{i * 0.5:10.2f}{1000 + i * 0.01:12.4f}{(-1) ** i * i / 7:14.6f}" for i in range(6000)]
+    big, small = tmp_path / "big", tmp_path / "small"
+    big.mkdir()
+    small.mkdir()
+    table, _ = read_las(_file(big, rows, 3), "log", None)
+    assert isinstance(las_header.load(big / "log.las").raw, mmap.mmap)
+    part, _ = read_las(_file(small, rows[:50], 3), "log", None)
+    assert table.num_rows == 6000
+    assert table.slice(0, 50).equals(part)
+    assert table.column("C2").to_pylist()[5999] == float(rows[5999][22:])
