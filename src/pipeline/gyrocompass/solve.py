@@ -37,11 +37,11 @@ from typing import Literal
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.stats import chi2
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
 from pipeline.gyrocompass.azimuth import Method, solve_azimuth
+from pipeline.gyrocompass.consistency import chi2_sf
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.tables import CompassRejects, CompassStations
 
@@ -463,7 +463,7 @@ def _solve(
     else:
         terms = 2 if options.trend else 1
     fit = fit_positions(alpha, st.t, gyro, st.gyro_sigma, terms)
-    if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
+    if fit.dof > 0 and chi2_sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
     row = _Row(
         station=st.station,

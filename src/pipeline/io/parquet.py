@@ -51,7 +51,8 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     A table of another kind than ``kind`` (its required columns missing, another kind's all
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
-        table = pq.read_table(path)
+        with pq.ParquetFile(path) as file:  # one file: no dataset layer (nor pandas)
+            table = file.read()
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         reason = " ".join(str(exc).split())
         raise InputFileError(path, f"not a readable Parquet file: {reason}") from exc
