@@ -98,4 +98,4 @@ class Figures:
 
 
 def _quantise(image: Image.Image) -> Image.Image:
-    return image.quantize(256, dither=Image.Dither.NONE)
+    return image.quantize(256, method=Image.Quantize.MAXCOVERAGE, dither=Image.Dither.NONE)

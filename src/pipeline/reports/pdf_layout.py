@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
 from matplotlib.patches import Rectangle
 
+from pipeline.reports.pdf_fonts import lean_font
 from pipeline.reports.plots import INK
 
 PAGE_W, PAGE_H = 8.27, 11.69
@@ -29,7 +30,8 @@ Draw = Callable[[Figure, float], None]
 
 @cache
 def font(size: float, bold: bool = False, family: str = SANS) -> FontProperties:
-    return FontProperties(family=family, size=size, weight="bold" if bold else "normal")
+    """``family`` at ``size`` points (:func:`~.pdf_fonts.lean_font`: quick to embed)."""
+    return FontProperties(fname=lean_font(family, bold), size=size)
 
 
 MEASURE_DPI = 720.0
