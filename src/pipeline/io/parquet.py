@@ -51,8 +51,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     A table of another kind than ``kind`` (its required columns missing, another kind's all
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
-        with pq.ParquetFile(path) as file:  # one file: no dataset layer (nor pandas)
-            table = file.read()
+        table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         reason = " ".join(str(exc).split())
         raise InputFileError(path, f"not a readable Parquet file: {reason}") from exc
