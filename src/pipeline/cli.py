@@ -2,6 +2,9 @@
 
 Exit codes: 0 success; 1 the run failed (bad input data, a stage raised, a contract was
 broken); 2 the pipeline, its configuration or the command line is invalid.
+
+Only click and the standard library are imported here: each command imports what it uses
+(numpy, pyarrow, pydantic, the plugins) when it runs, so ``gyropipe --help`` stays fast.
 """
 
 from __future__ import annotations
@@ -18,25 +21,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 import click
-from pydantic import ValidationError
 
-from pipeline.atomic import atomic_path, atomic_write_bytes
 from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError, did_you_mean
-from pipeline.graph import Plan, build_plan
-from pipeline.plugins import load_registry
-from pipeline.registry import Registry
-from pipeline.runner import RunInputError, sha256_file
-from pipeline.spec import load_spec
 from pipeline.version import __version__
-from pipeline.well import WellMetadata
-from pipeline.yamlsource import load_value
-
-FIELDS = tuple(WellMetadata.model_fields)
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
     from pipeline.batch.ledger import Ledger
+    from pipeline.graph import Plan
+    from pipeline.registry import Registry
+    from pipeline.well import WellMetadata
 
 EXIT_FAILED = 1
 EXIT_CONFIG = 2
@@ -58,6 +53,8 @@ disable_option = click.option(
 
 
 def _registry(disabled: tuple[str, ...]) -> Registry:
+    from pipeline.plugins import load_registry
+
     registry = load_registry(disabled)
     for problem in registry.problems:
         click.echo(f"warning: {problem}", err=True)
@@ -65,6 +62,9 @@ def _registry(disabled: tuple[str, ...]) -> Registry:
 
 
 def _plan(pipeline_file: str, overrides: tuple[str, ...], registry: Registry) -> Plan:
+    from pipeline.graph import build_plan
+    from pipeline.spec import load_spec
+
     try:
         return build_plan(load_spec(pipeline_file, list(overrides)), registry)
     except SpecError as exc:
@@ -123,6 +123,7 @@ def run(
 ) -> None:
     """Run a pipeline on one well's input files."""
     from pipeline.api.run import execute
+    from pipeline.runner import RunInputError
 
     registry = _registry(disabled)
     plan = _plan(pipeline_file, overrides, registry)
@@ -294,6 +295,13 @@ def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
 
 
+def _registry_quiet(disabled: tuple[str, ...]) -> Registry:
+    """The plugins, their problems left to the caller to show."""
+    from pipeline.plugins import load_registry
+
+    return load_registry(disabled)
+
+
 def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:
     from pipeline.batch.jobs import BatchConfigError
     from pipeline.batch.ledger import Ledger
@@ -372,7 +380,7 @@ def history(well_id: str, out_dir: str, ledger_file: str | None, as_json: bool) 
 @disable_option
 def plugins(disabled: tuple[str, ...]) -> None:
     """List plugins, their versions and what each provides."""
-    registry = load_registry(disabled)
+    registry = _registry_quiet(disabled)
     for info in registry.plugins.values():
         kind = "built-in" if info.builtin else "third-party"
         status = f"FAILED: {info.error}" if info.error else ", ".join(info.provides) or "nothing"
@@ -400,7 +408,7 @@ def schemas(out_dir: str, docs_dir: str, check: bool) -> None:
     the tables page (docs/tables.md)."""
     from pipeline import schemas as schema_files
 
-    registry = load_registry()
+    registry = _registry_quiet(())
     if check:
         stale = schema_files.stale(registry, Path(out_dir), Path(docs_dir))
         for path in stale:
@@ -425,6 +433,8 @@ def schemas(out_dir: str, docs_dir: str, check: bool) -> None:
 )
 def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -> None:
     """Simulate a gyro survey: raw sensor samples, truth and stations."""
+    from pipeline.atomic import atomic_path, atomic_write_bytes
+    from pipeline.runner import sha256_file
     from pipeline.sim.spec import load_simulation
     from pipeline.stages.simulation import simulation_tables, well_of_simulation
 
@@ -473,6 +483,7 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
 )
 def budget(plan_file: str, out_file: str | None) -> None:
     """Predict the 1σ inclination and azimuth error at each station of a point survey."""
+    from pipeline.atomic import atomic_path
     from pipeline.sim.budget import error_budget
     from pipeline.sim.spec import load_simulation
     from pipeline.stages.simulation import well_of_simulation
@@ -492,7 +503,7 @@ def budget(plan_file: str, out_file: str | None) -> None:
             f"{row['sigma_azi_accel']:7.3f}"
         )
     if out_file:
-        registry = load_registry()
+        registry = _registry_quiet(())
         ext = Path(out_file).suffix.lstrip(".")
         writers = [w for w, _ in registry.writers.values() if w.extension == ext]
         if not writers:
@@ -609,6 +620,8 @@ def _names(names: list[str], shown: int = 8) -> str:
 
 
 def _options(items: tuple[str, ...]) -> dict[str, object]:
+    from pipeline.yamlsource import load_value
+
     values: dict[str, object] = {}
     for item in items:
         key, sep, value = item.partition("=")
@@ -663,6 +676,11 @@ def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
 
 
 def _well_overrides(items: tuple[str, ...]) -> WellMetadata:
+    from pydantic import ValidationError
+
+    from pipeline.well import WellMetadata
+
+    fields = tuple(WellMetadata.model_fields)
     values: dict[str, str | None] = {}
     given: dict[str, str] = {}
     for item in items:
@@ -679,7 +697,7 @@ def _well_overrides(items: tuple[str, ...]) -> WellMetadata:
             field = str(err["loc"][0]) if err["loc"] else ""
             where = f"--well {given.get(field, field)}"
             if err["type"] == "extra_forbidden":
-                problems.append(f"{where}: unknown field {field!r}{did_you_mean(field, FIELDS)}")
+                problems.append(f"{where}: unknown field {field!r}{did_you_mean(field, fields)}")
             else:
                 problems.append(f"{where}: {err['msg'][0].lower()}{err['msg'][1:]}")
         raise click.BadParameter("; ".join(problems)) from None

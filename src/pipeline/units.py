@@ -13,6 +13,8 @@ to float once: ``ft`` → ``m`` is exactly ``0.3048``.
 
 from __future__ import annotations
 
+import importlib
+import sys
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cache
@@ -151,7 +153,7 @@ def _quantity(name: str) -> Quantity:
 @cache
 def _table() -> dict[str, tuple[str, float]]:
     """Each spelling → (its quantity, factor to that quantity's canonical unit)."""
-    import pint
+    pint = _import_pint()
 
     ureg: Any = pint.UnitRegistry(non_int_type=Fraction)  # exact arithmetic, one rounding
     canonical = {name: ureg.Quantity(ALIASES[_key(q.canonical)]) for name, q in QUANTITIES.items()}
@@ -166,3 +168,15 @@ def _table() -> dict[str, tuple[str, float]]:
         else:
             raise AssertionError(f"unit alias {spelling!r} measures none of {list(QUANTITIES)}")
     return table
+
+
+def _import_pint() -> Any:
+    """pint, kept from importing dask: pint probes for dask at import and loads it (half a
+    second) whenever it is installed; gyropipe never hands pint a dask array."""
+    if "pint" in sys.modules or "dask" in sys.modules:
+        return importlib.import_module("pint")
+    sys.modules["dask"] = None  # type: ignore[assignment]  # find_spec("dask") → None
+    try:
+        return importlib.import_module("pint")
+    finally:
+        del sys.modules["dask"]

@@ -1,8 +1,4 @@
-"""gyropipe's version, from the installed distribution's metadata."""
+"""gyropipe's version: the one place it is written (``pyproject.toml`` reads it from here),
+so that importing it costs nothing (no ``importlib.metadata``)."""
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("gyropipe")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0.0.0+unknown"
+__version__ = "0.1.0"

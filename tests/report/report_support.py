@@ -176,6 +176,27 @@ def pdf_pages(pdf: Path, tmp: Path) -> list[PdfPage]:
     ]
 
 
+def pdf_images(pdf: Path) -> list[tuple[int, int]]:
+    """(width, height) in pixels of every image ``pdf`` embeds, in order (pdfimages)."""
+    if shutil.which("pdfimages") is None:
+        pytest.skip("pdfimages not found: apt-get install poppler-utils")
+    listing = subprocess.run(
+        ["pdfimages", "-list", str(pdf)], check=True, capture_output=True, text=True
+    ).stdout
+    rows = [line.split() for line in listing.splitlines()[2:] if line.strip()]
+    return [(int(r[3]), int(r[4])) for r in rows if r[2] == "image"]
+
+
+def html_figure_sizes(html: Path) -> list[tuple[int, int]]:
+    """(width, height) in CSS pixels of every figure of a report's HTML, in order."""
+    return [
+        (int(w), int(h))
+        for w, h in re.findall(
+            r'<figure[^>]*><img[^>]* width="(\d+)" height="(\d+)"', html.read_text()
+        )
+    ]
+
+
 def ink(pixels: np.ndarray) -> float:
     """Share of pixels that are not (near) white."""
     return float((pixels.min(axis=2) < 235).mean())

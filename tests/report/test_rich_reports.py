@@ -18,10 +18,12 @@ from report_support import (
     figure_regions,
     figure_svg,
     flagged_share,
+    html_figure_sizes,
     ink,
     inspect,
     line_words,
     marks,
+    pdf_images,
     pdf_pages,
     run_ok,
     svg_texts,
@@ -123,11 +125,21 @@ def test_point_gyro_report_has_qc_sigma_and_ellipses(point_run: Path, browser: A
 
 
 def test_point_gyro_pdf_draws_every_figure(point_run: Path, tmp_path: Path):
+    """Every figure is on its page, and it is the figure of the HTML: one image each, drawn
+    once at 200 dpi (the HTML's PNG is the same raster scaled), of the same proportions.
+    (At the 50 dpi the pages are rasterised at here, the image's thin coloured lines blend
+    with white: the share of coloured pixels is lower than a vector drawing's.)"""
     pages = pdf_pages(point_run / "report.pdf", tmp_path)
     regions = figure_regions(pages)
     assert sorted(regions) == list(range(1, 7))  # plan, section, 3-D, profiles, ellipses, QC
     for k, region in regions.items():
-        assert ink(region) > 0.02 and colour(region) > 0.002, k
+        assert ink(region) > 0.02 and colour(region) > 0.001, k
+    images = pdf_images(point_run / "report.pdf")
+    figures = html_figure_sizes(point_run / "report.html")
+    assert len(images) == len(figures) == 6
+    for (w, h), (css_w, css_h) in zip(images, figures, strict=True):
+        assert w == pytest.approx(css_w / 96 * 200, abs=2)  # inches × 200 dpi
+        assert h / w == pytest.approx(css_h / css_w, abs=3e-3)
 
 
 def test_qc_chart_axes_fit_their_data(point_run: Path, browser: Any):

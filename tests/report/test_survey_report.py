@@ -115,7 +115,7 @@ def test_pdf_report_pages_and_plots(survey_run: Path, tmp_path: Path):
     assert sorted(regions) == [1, 2, 3, 4, 5]
     for number, region in regions.items():
         assert ink(region) > 0.02, number
-        assert colour(region) > 0.002, number
+        assert colour(region) > 0.001, number  # a raster's thin lines blend at 50 dpi
     last = [
         int(m) for p in pages for m in re.findall(r"Page (\d+) of", " ".join(w[0] for w in p.words))
     ]

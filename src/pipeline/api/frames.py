@@ -20,11 +20,11 @@ the column — never silently used.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Mapping
-from typing import Any, TypeAlias
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeGuard
 
 import numpy as np
-import pandas as pd
 import pyarrow as pa
 import pyarrow.compute as pc
 
@@ -32,6 +32,9 @@ from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata, attach, well_of
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 TableLike: TypeAlias = "pd.DataFrame | pa.Table"
 """A table the API takes: a pandas DataFrame or an Arrow table."""
@@ -53,9 +56,15 @@ def well_metadata(*wells: WellLike) -> WellMetadata:
     return merged
 
 
+def is_frame(data: object) -> TypeGuard[pd.DataFrame]:
+    """True if ``data`` is a pandas DataFrame (pandas is imported only by who makes one)."""
+    pandas = sys.modules.get("pandas")
+    return pandas is not None and isinstance(data, pandas.DataFrame)
+
+
 def well_of_data(data: TableLike) -> WellMetadata:
     """The well metadata a table carries (none: empty)."""
-    if isinstance(data, pd.DataFrame):
+    if is_frame(data):
         return well_metadata(data.attrs.get("well"))
     return well_of(data) or WellMetadata()
 
@@ -70,7 +79,7 @@ def to_table(
     """``data`` as an Arrow table in canonical units: the columns of ``contract`` converted
     from their declared units; azimuths without a north reference take the well's. ``what``
     names the table in errors (e.g. ``compass input 'readings'``)."""
-    if isinstance(data, pd.DataFrame):
+    if is_frame(data):
         table = _from_frame(data)
         north = data.attrs.get("north_reference")
     elif isinstance(data, pa.Table):
@@ -109,10 +118,14 @@ def to_table(
 def to_frame(table: pa.Table) -> pd.DataFrame:
     """``table`` as a DataFrame whose ``attrs`` hold the units, the north reference (when the
     table has one) and the well metadata."""
-    frame: pd.DataFrame = table.to_pandas(types_mapper=_NULLABLE.get)
+    import pandas as pd
+
+    nullable = {pa.int64(): pd.Int64Dtype(), pa.int32(): pd.Int32Dtype()}
+    nullable_float = {pa.float64(): pd.Float64Dtype(), pa.float32(): pd.Float32Dtype()}
+    frame: pd.DataFrame = table.to_pandas(types_mapper=nullable.get)
     for name, column in zip(table.column_names, table.columns, strict=True):
         if pa.types.is_floating(column.type) and column.null_count:  # null is not NaN
-            frame[name] = column.to_pandas(types_mapper=_NULLABLE_FLOAT.get)
+            frame[name] = column.to_pandas(types_mapper=nullable_float.get)
     frame.attrs["units"] = {
         f.name: f.metadata[UNIT_KEY].decode() for f in table.schema if _has(f, UNIT_KEY)
     }
@@ -125,10 +138,6 @@ def to_frame(table: pa.Table) -> pd.DataFrame:
     if well is not None:
         frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
     return frame
-
-
-_NULLABLE = {pa.int64(): pd.Int64Dtype(), pa.int32(): pd.Int32Dtype()}
-_NULLABLE_FLOAT = {pa.float64(): pd.Float64Dtype(), pa.float32(): pd.Float32Dtype()}
 
 
 def _from_frame(data: pd.DataFrame) -> pa.Table:
@@ -160,7 +169,7 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
 
 def like(template: TableLike, table: pa.Table) -> TableLike:
     """``table`` as the kind of table ``template`` is (DataFrame or Arrow)."""
-    return to_frame(table) if isinstance(template, pd.DataFrame) else table
+    return to_frame(table) if is_frame(template) else table
 
 
 def _factor(declared: str, canonical: str, field: pa.Field, what: str) -> float:

@@ -7,9 +7,8 @@ import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeAlias
+from typing import TYPE_CHECKING, Any, TypeAlias
 
-import pandas as pd
 import pyarrow as pa
 
 from pipeline.api import stages
@@ -21,6 +20,9 @@ from pipeline.registry import Registry
 from pipeline.runner import RunInputError, Source, run_plan
 from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 InputLike: TypeAlias = "str | Path | TableLike"
 """A pipeline input: a file, or a table already in memory."""

@@ -31,11 +31,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-import allantools
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.optimize import minimize_scalar, nnls
 
 from pipeline.drift.calibration import FloatArray
 from pipeline.drift.tables import AllanResult, DwellRecommendation, NoiseParameters
@@ -124,6 +122,8 @@ class NoiseFit:
 
 def allan_deviation(values: FloatArray, rate: float) -> AllanCurve:
     """Overlapping Allan deviation of uniformly sampled ``values`` at ``rate`` Hz."""
+    import allantools  # imported on use: it loads scipy.stats and scipy.signal (seconds)
+
     tau, adev, _, clusters = allantools.oadev(
         np.asarray(values, dtype=float), rate=rate, data_type="freq", taus="octave"
     )
@@ -152,6 +152,7 @@ def fit_noise(curve: AllanCurve, bias_model: BiasModel = "flicker") -> NoiseFit:
         raise ValueError(f"{len(curve.tau)} averaging times are too few to fit noise terms")
     avar = curve.adev**2
     edf = np.maximum(curve.samples * curve.tau[0] / curve.tau, 1.0)  # ~ independent clusters
+    from scipy.optimize import nnls  # imported on use: slow to import
 
     def solve(middle: FloatArray) -> tuple[FloatArray, float]:
         basis = np.stack([1.0 / curve.tau, middle, curve.tau / 3.0], axis=1)
@@ -185,6 +186,8 @@ def _fit_gauss_markov(
     curve: AllanCurve, solve: Callable[[FloatArray], tuple[FloatArray, float]]
 ) -> NoiseFit:
     """Best correlation time on a log grid over the curve's τ range, then refined."""
+    from scipy.optimize import minimize_scalar  # imported on use: slow to import
+
     lo, hi = np.log(curve.tau[0]), np.log(curve.tau[-1] / 2.0)
 
     def misfit(log_t: float) -> float:

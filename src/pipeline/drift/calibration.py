@@ -52,7 +52,6 @@ import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
-from scipy import stats
 
 from pipeline.drift.tables import CalibrationResult, CalibrationSeries
 
@@ -283,6 +282,8 @@ def _linearity(means: SeriesMeans, options: CalibrationOptions) -> Linearity:
     dof = len(means.ids) - 2
     if dof < 1:
         return Linearity(float("nan"), 0, float("nan"), UNTESTED)
+    from scipy import stats  # imported on use: scipy.stats takes a second to import
+
     design = np.stack([np.ones_like(means.mid_time), means.mid_time - means.mid_time[0]], axis=1)
     resid = means.mean - design @ (_gls_operator(means) @ means.mean)
     chi2 = float(resid @ np.linalg.solve(means.cov, resid))

@@ -38,7 +38,6 @@ from typing import Literal
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.optimize import brentq
 
 from pipeline.contracts import NORTH_KEY
 from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
@@ -229,6 +228,8 @@ def _reading_sigma(
     corrected: FloatArray, mix: FloatArray, tau: FloatArray, rate_sigma: float, pairs: np.ndarray
 ) -> float:
     """Robust σ_r from the in/out differences (module docstring)."""
+    from scipy.optimize import brentq  # imported on use: slow to import
+
     diff = wrap(corrected[pairs[:, 0]] - corrected[pairs[:, 1]]) ** 2
     gain = np.sum((mix[pairs[:, 0]] - mix[pairs[:, 1]]) ** 2, axis=1)
     known = rate_sigma**2 * (tau[pairs[:, 0]] - tau[pairs[:, 1]]) ** 2

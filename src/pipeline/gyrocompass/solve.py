@@ -36,11 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
-from scipy.stats import chi2
-
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
 from pipeline.gyrocompass.azimuth import solve_azimuth
+from pipeline.gyrocompass.consistency import chi2_sf
 from pipeline.gyrocompass.earth_rate import (
     EarthRate,
     EarthRateReject,
@@ -288,7 +287,7 @@ def _solve(
     else:
         terms = 2 if options.trend else 1
     fit = fit_positions(alpha, st.t, gyro, st.gyro_sigma, terms)
-    if fit.dof > 0 and chi2.sf(fit.chi2, fit.dof) < options.consistency:
+    if fit.dof > 0 and chi2_sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
     row = _Row(
         station=st.station,

@@ -18,7 +18,7 @@ from pipeline.reports.document import (
     Table,
     Verdict,
 )
-from pipeline.reports.images import ImageFormat, encode
+from pipeline.reports.images import Figures
 
 CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
 
@@ -88,12 +88,12 @@ footer { margin-top: 28px; border-top: 1px solid var(--rule); padding-top: 6px;
 """
 
 
-def render_html(doc: Document, image_format: ImageFormat = "auto", dpi: int = 110) -> str:
-    """The report as one HTML page that needs nothing but itself."""
+def render_html(doc: Document, drawn: Figures | None = None) -> str:
+    """The report as one HTML page that needs nothing but itself (figures from ``drawn``,
+    shared with the PDF; default: PNG at 110 dpi)."""
+    drawn = drawn or Figures()
     figures = iter(range(1, len(doc.plots()) + 1))
-    sections = "\n".join(
-        _section(s, i, figures, image_format, dpi) for i, s in enumerate(doc.sections, 1)
-    )
+    sections = "\n".join(_section(s, i, figures, drawn) for i, s in enumerate(doc.sections, 1))
     toc = " ".join(
         f'<a href="#{_anchor(s, i)}">{i}. {escape(s.title)}</a>'
         for i, s in enumerate(doc.sections, 1)
@@ -131,9 +131,7 @@ def _anchor(section: Section, number: int) -> str:
     return section.key or f"section-{number}"
 
 
-def _section(
-    section: Section, number: int, figures: Iterator[int], image_format: ImageFormat, dpi: int
-) -> str:
+def _section(section: Section, number: int, figures: Iterator[int], drawn: Figures) -> str:
     parts = [
         f'<section id="{_anchor(section, number)}">',
         f"<h2>{number}. {escape(section.title)}</h2>",
@@ -146,14 +144,14 @@ def _section(
         if fields:
             parts.append(f'<div class="fields-group">{"".join(fields)}</div>')
             fields = []
-        parts.append(_block(block, figures, image_format, dpi))
+        parts.append(_block(block, figures, drawn))
     if fields:
         parts.append(f'<div class="fields-group">{"".join(fields)}</div>')
     parts.append("</section>")
     return "\n".join(parts)
 
 
-def _block(block: Block, figures: Iterator[int], image_format: ImageFormat, dpi: int) -> str:
+def _block(block: Block, figures: Iterator[int], drawn: Figures) -> str:
     if isinstance(block, Table):
         return _table(block)
     if isinstance(block, Verdict):
@@ -161,7 +159,7 @@ def _block(block: Block, figures: Iterator[int], image_format: ImageFormat, dpi:
     if isinstance(block, Paragraph):
         return f'<p class="note">{escape(block.text)}</p>'
     if isinstance(block, Plot):
-        return _figure(block, next(figures), image_format, dpi)
+        return _figure(block, next(figures), drawn)
     raise TypeError(f"not a report block: {block!r}")
 
 
@@ -200,8 +198,8 @@ def _table(table: Table) -> str:
     )
 
 
-def _figure(plot: Plot, number: int, image_format: ImageFormat, dpi: int) -> str:
-    image = encode(plot, image_format, dpi)
+def _figure(plot: Plot, number: int, drawn: Figures) -> str:
+    image = drawn.encode(plot)
     data = base64.b64encode(image.data).decode("ascii")
     return (
         f'<figure id="fig-{escape(plot.key)}" class="plot">'

@@ -1,4 +1,9 @@
-"""Figures of a report rendered to self-contained image bytes (PNG or SVG) for the HTML."""
+"""Figures of a report, each drawn once and shared by the HTML and the PDF.
+
+A plot is drawn into one matplotlib figure and rasterised once at :data:`PRINT_DPI`
+(palette-quantised): that raster is the PDF's figure, and the HTML's PNG is the same raster
+scaled to the page's ``dpi``. ``svg`` asks for the same figure saved as SVG for the HTML.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import matplotlib
+import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
@@ -15,7 +21,10 @@ from pipeline.reports.document import Plot
 from pipeline.reports.plots import STYLE
 
 ImageFormat = Literal["auto", "png", "svg"]
+"""Figures in the HTML: ``png`` (``auto``, the default, is PNG too) or ``svg``."""
 CSS_DPI = 96
+PRINT_DPI = 200
+"""Resolution of the raster every figure is drawn to once (the PDF's figures), dots/inch."""
 
 
 @dataclass(frozen=True)
@@ -28,33 +37,65 @@ class Encoded:
     height: int
 
 
-def encode(plot: Plot, image_format: ImageFormat = "auto", dpi: int = 110) -> Encoded:
-    """``plot`` as PNG (``dpi``, palette-quantised) or SVG; ``auto`` keeps the smaller."""
-    width, height = round(plot.size[0] * CSS_DPI), round(plot.size[1] * CSS_DPI)
-    formats = ("png", "svg") if image_format == "auto" else (image_format,)
-    candidates = [
-        Encoded(f"image/{'svg+xml' if f == 'svg' else f}", _save(plot, f, dpi), width, height)
-        for f in formats
-    ]
-    return min(candidates, key=lambda image: len(image.data))
+@dataclass
+class _Drawn:
+    figure: Figure
+    raster: Image.Image | None = None
 
 
-def _save(plot: Plot, image_format: str, dpi: int) -> bytes:
-    out = io.BytesIO()
-    with matplotlib.rc_context(STYLE):
-        fig = Figure(figsize=plot.size, dpi=dpi)
-        FigureCanvasAgg(fig)
-        plot.draw(fig)
-        fig.savefig(out, format=image_format, dpi=dpi, metadata=_no_date(image_format))
-    if image_format != "png":
+class Figures:
+    """The figures of one report, each drawn on first use and kept for every later one:
+    :meth:`raster` for the PDF, :meth:`encode` for the HTML (``dpi`` for its PNGs)."""
+
+    def __init__(self, image_format: ImageFormat = "auto", dpi: int = 110) -> None:
+        self.image_format = image_format
+        self.dpi = dpi
+        self.raster_dpi = max(PRINT_DPI, dpi)
+        self._drawn: dict[int, tuple[Plot, _Drawn]] = {}
+
+    def _figure(self, plot: Plot) -> _Drawn:
+        found = self._drawn.get(id(plot))
+        if found is None:
+            with matplotlib.rc_context(STYLE):
+                fig = Figure(figsize=plot.size, dpi=self.raster_dpi)
+                FigureCanvasAgg(fig)
+                plot.draw(fig)
+            found = (plot, _Drawn(fig))
+            self._drawn[id(plot)] = found  # the plot is kept, so its id stays its own
+        return found[1]
+
+    def raster(self, plot: Plot) -> Image.Image:
+        """``plot`` at :attr:`raster_dpi`, quantised to at most 256 colours (mode ``P``)."""
+        drawn = self._figure(plot)
+        if drawn.raster is None:
+            with matplotlib.rc_context(STYLE):
+                canvas = drawn.figure.canvas
+                canvas.draw()
+                rgba = np.asarray(canvas.buffer_rgba())  # type: ignore[attr-defined]
+            drawn.raster = _quantise(Image.fromarray(rgba).convert("RGB"))
+        return drawn.raster
+
+    def encode(self, plot: Plot) -> Encoded:
+        """``plot`` for the HTML: PNG at :attr:`dpi` (from the shared raster) or SVG."""
+        width, height = round(plot.size[0] * CSS_DPI), round(plot.size[1] * CSS_DPI)
+        if self.image_format == "svg":
+            return Encoded("image/svg+xml", self._svg(plot), width, height)
+        image = self.raster(plot)
+        if self.dpi != self.raster_dpi:
+            size = (round(plot.size[0] * self.dpi), round(plot.size[1] * self.dpi))
+            image = _quantise(image.convert("RGB").resize(size, Image.Resampling.LANCZOS))
+        out = io.BytesIO()
+        image.save(out, format="PNG", optimize=True)
+        return Encoded("image/png", out.getvalue(), width, height)
+
+    def _svg(self, plot: Plot) -> bytes:
+        out = io.BytesIO()
+        with matplotlib.rc_context(STYLE):
+            self._figure(plot).figure.savefig(
+                out, format="svg", dpi=self.dpi, metadata={"Date": None}
+            )
         return out.getvalue()
-    out.seek(0)
-    image = Image.open(out).convert("RGB").quantize(256, dither=Image.Dither.NONE)
-    small = io.BytesIO()
-    image.save(small, format="PNG", optimize=True)
-    return small.getvalue()
 
 
-def _no_date(image_format: str) -> dict[str, str | None]:
-    """Metadata that keeps the bytes reproducible (no creation date)."""
-    return {"Date": None} if image_format == "svg" else {}
+def _quantise(image: Image.Image) -> Image.Image:
+    return image.quantize(256, method=Image.Quantize.MAXCOVERAGE, dither=Image.Dither.NONE)

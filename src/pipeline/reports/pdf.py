@@ -1,6 +1,7 @@
 """A :class:`~pipeline.reports.document.Document` as an A4 PDF, laid out with matplotlib
-alone: text is vector text, figures are drawn by the same plot functions as the HTML into a
-region of the page, tables continue over pages (:mod:`.pdf_table`)."""
+alone: text is vector text, figures are the rasters the HTML's figures come from
+(:class:`~pipeline.reports.images.Figures`, each drawn once) placed in a region of the page,
+tables continue over pages (:mod:`.pdf_table`)."""
 
 from __future__ import annotations
 
@@ -8,8 +9,13 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib
+import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
+from matplotlib.transforms import Affine2D
+from PIL import Image
 
 from pipeline.reports.document import (
     Block,
@@ -21,6 +27,7 @@ from pipeline.reports.document import (
     Table,
     Verdict,
 )
+from pipeline.reports.images import Figures
 from pipeline.reports.pdf_layout import (
     BOTTOM,
     LEFT,
@@ -51,11 +58,17 @@ LINE = 0.15
 """Line pitch of 7.5 pt body text, inches."""
 
 
-def render_pdf(doc: Document, path: Path) -> None:
-    """Write ``doc`` to ``path`` as an A4 PDF (no creation date: same content, same bytes)."""
+Numbered = Iterator[tuple[int, Image.Image]]
+"""The report's figures in order: (figure number, raster)."""
+
+
+def render_pdf(doc: Document, path: Path, drawn: Figures | None = None) -> None:
+    """Write ``doc`` to ``path`` as an A4 PDF (no creation date: same content, same bytes);
+    figures from ``drawn`` (shared with the HTML)."""
+    drawn = drawn or Figures()
     flow = Flow()
     flow.place(1.35, lambda fig, top: _title_block(fig, top, doc))
-    numbers = iter(range(1, len(doc.plots()) + 1))
+    numbers = ((n, drawn.raster(p)) for n, p in enumerate(doc.plots(), 1))
     for index, section in enumerate(doc.sections, 1):
         _section(flow, section, index, numbers)
     total = len(flow.pages)
@@ -96,7 +109,7 @@ def _page_frame(fig: Figure, doc: Document, number: int, total: int) -> None:
     text(fig, LEFT + WIDTH, foot + 0.1, f"Page {number} of {total}", 6.5, color=MUTED, ha="right")
 
 
-def _section(flow: Flow, section: Section, number: int, figures: Iterator[int]) -> None:
+def _section(flow: Flow, section: Section, number: int, figures: Numbered) -> None:
     heading = f"{number}. {section.title}"
 
     def draw_heading(fig: Figure, top: float) -> None:
@@ -146,7 +159,7 @@ def _plot_height(plot: Plot) -> float:
     return plot.size[1] * min(WIDTH, plot.size[0]) / plot.size[0]
 
 
-def _block(flow: Flow, block: Block, figures: Iterator[int]) -> None:
+def _block(flow: Flow, block: Block, figures: Numbered) -> None:
     if isinstance(block, Table):
         place_table(flow, block)
     elif isinstance(block, Verdict):
@@ -158,7 +171,7 @@ def _block(flow: Flow, block: Block, figures: Iterator[int]) -> None:
             lambda fig, top: lines(fig, LEFT, top, rows, 7.5, LINE, color=MUTED),
         )
     elif isinstance(block, Plot):
-        _plot(flow, block, next(figures))
+        _plot(flow, block, *next(figures))
     else:
         raise TypeError(f"not a report block: {block!r}")
 
@@ -199,8 +212,9 @@ def _verdict(flow: Flow, block: Verdict) -> None:
     flow.place(height + 0.12, draw)
 
 
-def _plot(flow: Flow, plot: Plot, number: int) -> None:
-    """The figure scaled to the text width, its numbered title and caption below."""
+def _plot(flow: Flow, plot: Plot, number: int, raster: Image.Image) -> None:
+    """The figure (its raster) scaled to the text width, its numbered title and caption
+    below."""
     width = min(WIDTH, plot.size[0])
     height = _plot_height(plot)
     heading = wrap(f"Figure {number}. {plot.title}.", WIDTH, 7.5, bold=True)
@@ -208,18 +222,25 @@ def _plot(flow: Flow, plot: Plot, number: int) -> None:
     x0 = LEFT + (WIDTH - width) / 2
 
     def draw(fig: Figure, top: float) -> None:
-        # a subfigure spans grid cells by their ratios: the middle cell is the plot's box
-        grid = fig.add_gridspec(
-            3,
-            3,
-            width_ratios=[x0, width, PAGE_W - x0 - width],
-            height_ratios=[PAGE_H - top, height, top - height],
-            wspace=0,
-            hspace=0,
-        )
-        plot.draw(fig.add_subfigure(grid[1, 1]))
+        fig.add_artist(_Raster(raster, x0, top - height, width, height))
         below = top - height - 0.06
         lines(fig, LEFT, below, heading, 7.5, LINE, bold=True)
         lines(fig, LEFT, below - LINE * len(heading), caption, 7.5, LINE, color=MUTED)
 
     flow.place(height + LINE * (len(heading) + len(caption)) + 0.25, draw)
+
+
+class _Raster(Artist):
+    """An image placed as it is (no resampling) in a box of the page, inches from its
+    bottom-left corner."""
+
+    def __init__(self, image: Image.Image, x: float, y: float, w: float, h: float) -> None:
+        super().__init__()
+        self.pixels = np.asarray(image.convert("RGB"))[::-1]  # the PDF writer flips rows
+        self.box = (x, y, w, h)
+
+    def draw(self, renderer: RendererBase) -> None:
+        x, y, w, h = (v * 72.0 for v in self.box)  # points: the page's dpi is 72
+        gc = renderer.new_gc()
+        renderer.draw_image(gc, x, y, self.pixels, Affine2D().scale(w, h))  # unit square → box
+        gc.restore()

@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
 from matplotlib.patches import Rectangle
 
+from pipeline.reports.pdf_fonts import lean_font
 from pipeline.reports.plots import INK
 
 PAGE_W, PAGE_H = 8.27, 11.69
@@ -29,7 +30,8 @@ Draw = Callable[[Figure, float], None]
 
 @cache
 def font(size: float, bold: bool = False, family: str = SANS) -> FontProperties:
-    return FontProperties(family=family, size=size, weight="bold" if bold else "normal")
+    """``family`` at ``size`` points (:func:`~.pdf_fonts.lean_font`: quick to embed)."""
+    return FontProperties(fname=lean_font(family, bold), size=size)
 
 
 MEASURE_DPI = 720.0
@@ -41,18 +43,14 @@ def renderer() -> RendererAgg:
     return RendererAgg(10, 10, MEASURE_DPI)  # type: ignore[no-untyped-call]
 
 
+@cache
 def text_width(text: str, size: float, bold: bool = False) -> float:
-    """Width of ``text`` in inches at ``size`` points."""
+    """Width of ``text`` in inches at ``size`` points (measured once per text, size, weight)."""
     if not text:
         return 0.0
     measure = renderer().get_text_width_height_descent
     width, _, _ = measure(text, font(size, bold), False)  # type: ignore[no-untyped-call]
     return float(width) / MEASURE_DPI
-
-
-@cache
-def _word_width(word: str, size: float, bold: bool) -> float:
-    return text_width(word, size, bold)
 
 
 def _fits(line: str, estimate: float, width: float, size: float, bold: bool) -> bool:
@@ -69,12 +67,12 @@ def wrap(text: str, width: float, size: float, bold: bool = False) -> list[str]:
     """Greedy word wrap of ``text`` into lines no wider than ``width`` inches (a word
     longer than a line is cut)."""
     lines: list[str] = []
-    space = _word_width("a a", size, bold) - 2 * _word_width("a", size, bold)
+    space = text_width("a a", size, bold) - 2 * text_width("a", size, bold)
     for paragraph in text.split("\n"):
         line, used = "", 0.0
         for word in paragraph.split(" "):
             trial = f"{line} {word}" if line else word
-            estimate = used + (space if line else 0.0) + _word_width(word, size, bold)
+            estimate = used + (space if line else 0.0) + text_width(word, size, bold)
             if _fits(trial, estimate, width, size, bold):
                 line, used = trial, estimate
                 continue
@@ -84,7 +82,7 @@ def wrap(text: str, width: float, size: float, bold: bool = False) -> list[str]:
                 cut = max(1, int(len(word) * width / text_width(word, size, bold)) - 1)
                 lines.append(word[:cut])
                 word = word[cut:]
-            line, used = word, _word_width(word, size, bold)
+            line, used = word, text_width(word, size, bold)
         lines.append(line)
     return lines
 

@@ -6,12 +6,8 @@ from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
-from pipeline.continuous import (
-    ContinuousOptions,
-    ContinuousSeries,
-    ContinuousStations,
-    integrate_continuous,
-)
+from pipeline.continuous.options import ContinuousOptions
+from pipeline.continuous.tables import ContinuousSeries, ContinuousStations
 from pipeline.earth.site import resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
@@ -27,6 +23,8 @@ def continuous_stage(
         raise EmptyTableError("samples", "a continuous run needs samples")
     if inputs["stops"].num_rows == 0:
         raise EmptyTableError("stops", "the run starts and closes on compassed stops")
+    from pipeline.continuous.integrate import integrate_continuous  # on use: loads scipy.signal
+
     site = resolve_site(ctx.well, stage="integrate_continuous", latitude=params.latitude)
     result = integrate_continuous(inputs["samples"], inputs["stops"], site.latitude, params)
     misclosure = f"{result.misclosure:.6g}".encode()

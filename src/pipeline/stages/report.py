@@ -47,7 +47,9 @@ class ReportParams(BaseModel):
         ["html", "pdf"], min_length=1, description="files to write"
     )
     image_format: Literal["auto", "png", "svg"] = Field(
-        "auto", description="figures in the HTML: PNG, SVG, or per figure the smaller (auto)"
+        "auto",
+        description="figures in the HTML: PNG (auto is PNG too: the raster the PDF's "
+        "figure is, drawn once) or SVG",
     )
     dpi: int = Field(110, ge=50, le=300, description="resolution of PNG figures in the HTML")
     min_course_length: float = Field(
@@ -61,14 +63,16 @@ class ReportParams(BaseModel):
 
 def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
     from pipeline.reports.html import render_html
+    from pipeline.reports.images import Figures
     from pipeline.reports.pdf import render_pdf
 
     name = params.filename or ctx.stage_id
+    drawn = Figures(params.image_format, params.dpi)  # each figure drawn once, for both
     if "html" in params.formats:
-        html = render_html(doc, params.image_format, params.dpi)
+        html = render_html(doc, drawn)
         ctx.output_path(f"{name}.html").write_text(html, encoding="utf-8")
     if "pdf" in params.formats:
-        render_pdf(doc, ctx.output_path(f"{name}.pdf"))
+        render_pdf(doc, ctx.output_path(f"{name}.pdf"), drawn)
 
 
 def survey_report(
