@@ -4,11 +4,13 @@
 implementation (commit ``generated_by``: the Heun step loop, and dense station rows in the
 inclination-noise budget) for short simulated runs whose specs it carries: single-axis
 forward, two-axis forward, and single-axis integrated back from the end stop across a held
-near-vertical section (series every ``series_every`` samples, all stations). The stage must
-reproduce them within 1e-9°. Should the simulator's samples change, regenerate the file by
-running ``integrate_continuous`` of commit ``generated_by`` (a detached git worktree on
-PYTHONPATH) on each case's spec with the file's options, compassed as here. The two vectorised
-solvers are also checked against the plain per-sample definitions written out here.
+near-vertical section (series every ``series_every`` samples, all stations), given the
+compassed stops stored beside it (``stops-<case>.parquet``), so that a change in compassing
+does not touch this comparison. The stage must reproduce them within 1e-9°. Should the
+simulator's samples change, regenerate the file by running ``integrate_continuous`` of commit
+``generated_by`` (a detached git worktree on PYTHONPATH) on each case's spec and stored stops
+with the file's options. The two vectorised solvers are also checked against the plain
+per-sample definitions written out here.
 """
 
 from __future__ import annotations
@@ -20,8 +22,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
-from continuous_support import LAT, compassed
+from continuous_support import LAT
 from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs
 
@@ -50,7 +53,7 @@ def test_stage_reproduces_the_previous_implementation(case: str) -> None:
     expected = ref["cases"][case]
     sim = simulate(SimulationSpec.model_validate(expected["spec"]))
     assert sim.samples.num_rows == expected["samples"], "the simulator changed: regenerate"
-    _, stops, _ = compassed(sim.samples)
+    stops = pq.read_table(REFERENCE.parent / f"stops-{case.replace('_', '-')}.parquet")
     result = integrate_continuous(sim.samples, stops, LAT, ContinuousOptions(**ref["options"]))
     times = result.series.column("time").to_numpy()[:: ref["series_every"]]
     np.testing.assert_array_equal(times, expected["series"]["time"])
