@@ -123,6 +123,7 @@ def run(
 ) -> None:
     """Run a pipeline on one well's input files."""
     from pipeline.api.run import execute
+    from pipeline.qc.tables import diagnosis_lines
     from pipeline.runner import RunInputError
 
     registry = _registry(disabled)
@@ -145,26 +146,11 @@ def run(
         rows = ", ".join(f"{p}={n}" for p, n in stage["rows_out"].items()) or "-"
         click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
     for name, table in result.tables.items():
-        for line in _diagnosis_lines(name, table):
+        for line in diagnosis_lines(name, table):
             click.echo(line)
     for path in result.outputs:
         click.echo(f"wrote {path}")
     click.echo(f"ok: {Path(out_dir) / 'run.json'}")
-
-
-def _diagnosis_lines(name: str, table: pa.Table) -> list[str]:
-    """A validity summary's verdict for the terminal: failed stations and each diagnosis."""
-    from pipeline.qc.tables import diagnoses, is_summary
-
-    if not is_summary(table):
-        return []
-    failed = sum(s != "ok" for s in table.column("status").to_pylist())
-    if not failed:
-        return []
-    lines = [f"{name}: {failed} of {table.num_rows} stations failed a validity check"]
-    for d in diagnoses(table):
-        lines.append(f"  suspect {d.suspect or '—'} at {len(d.md)} stations: {d.diagnosis}")
-    return lines
 
 
 @main.command()

@@ -92,11 +92,5 @@ def test_survey_run_imports_no_plotting_and_no_cluster(survey_modules: set[str])
     assert "pipeline.survey.mincurve" in survey_modules  # the run did run
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="pipeline/continuous/__init__ imports .integrate (scipy.signal → scipy.stats) "
-    "whenever a continuous submodule is imported, as the plugin does to register; that package "
-    "is #19 target 3's to change (a lazy __init__ halves a run's start-up)",
-)
 def test_survey_run_imports_no_scipy_stats(survey_modules: set[str]):
     assert not loaded(survey_modules, "scipy.stats")

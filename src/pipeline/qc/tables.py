@@ -97,3 +97,17 @@ class MagneticAnomalies(TableContract):
         unit="deg", finite=False, description="largest |measured − reference| dip"
     )
     windows: int = column(unit=None, ge=1, description="failed windows merged")
+
+
+def diagnosis_lines(name: str, table: pa.Table) -> list[str]:
+    """A validity summary's verdict for the terminal: failed stations and each diagnosis
+    (no lines for a table that is not a validity summary, or one without failures)."""
+    if not is_summary(table):
+        return []
+    failed = sum(s != "ok" for s in table.column("status").to_pylist())
+    if not failed:
+        return []
+    lines = [f"{name}: {failed} of {table.num_rows} stations failed a validity check"]
+    for d in diagnoses(table):
+        lines.append(f"  suspect {d.suspect or '—'} at {len(d.md)} stations: {d.diagnosis}")
+    return lines
