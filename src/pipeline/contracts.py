@@ -175,7 +175,7 @@ class CompiledContract:
                 continue
             failures.extend(_check_column(spec, table, groups))
         if failures:
-            source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
+            source = _text((table.schema.metadata or {}).get(SOURCE_KEY, b""))
             if SOURCE_LINE in table.column_names:
                 lines = table.column(SOURCE_LINE)
                 failures = [
@@ -207,10 +207,10 @@ def _check_column(
                 spec.name,
                 "unit",
                 f"unit {spec.unit!r} in field metadata, got "
-                + (repr(got.decode()) if got is not None else "none"),
+                + (repr(_text(got)) if got is not None else "none"),
             )
         )
-    if spec.north_reference and meta.get(NORTH_KEY, b"").decode() not in NORTH_REFERENCES:
+    if spec.north_reference and _text(meta.get(NORTH_KEY, b"")) not in NORTH_REFERENCES:
         failures.append(
             RuleFailure(spec.name, "north reference", f"one of {', '.join(NORTH_REFERENCES)}")
         )
@@ -278,6 +278,12 @@ def _failure(
     rows = np.flatnonzero(bad)
     examples = tuple((int(i), col[int(i)].as_py()) for i in rows[:EXAMPLES])
     return RuleFailure(name, rule, expected, bad_rows=len(rows), examples=examples)
+
+
+def _text(raw: bytes) -> str:
+    """Metadata bytes as text, bytes that are not UTF-8 as U+FFFD: a file's garbled unit or
+    north reference is a rule broken, not a decoding error."""
+    return raw.decode("utf-8", errors="replace")
 
 
 def _same_type(actual: pa.DataType, expected: pa.DataType) -> bool:
