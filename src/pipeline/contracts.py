@@ -55,6 +55,7 @@ def column(
     gt: float | None = None,
     lt: float | None = None,
     monotonic: Monotonic | None = None,
+    min_step: float | None = None,
     north_reference: bool = False,
     finite: bool = True,
     default: Any = ...,
@@ -64,12 +65,16 @@ def column(
     ``unit`` is the canonical unit string stored in the Arrow field metadata (``None`` for
     dimensionless or text columns). ``monotonic`` is ``"increasing"`` (non-decreasing) or
     ``"strict"`` (strictly increasing), within each group when the contract sets
-    ``group_by``. ``north_reference`` requires the field to state its north reference.
+    ``group_by``; ``min_step`` (with ``"strict"``) is the smallest step allowed between
+    consecutive values (in ``unit``). ``north_reference`` requires the field to state its
+    north reference.
     ``finite`` forbids NaN and ±inf in float columns. A ``default`` makes the column optional.
     """
     extra: dict[str, Any] = {"x-unit": unit, "x-finite": finite}
     if monotonic:
         extra["x-monotonic"] = monotonic
+    if min_step is not None:
+        extra["x-min-step"] = min_step
     if north_reference:
         extra["x-north-reference"] = list(NORTH_REFERENCES)
     return Field(
@@ -118,6 +123,7 @@ class ColumnSpec:
     lt: float | None
     monotonic: Monotonic | None
     north_reference: bool
+    min_step: float | None = None
 
     def field(self, north_reference: str | None = None) -> pa.Field:
         meta: dict[bytes, bytes] = {}
@@ -258,6 +264,9 @@ def _check_numbers(
     if spec.monotonic and len(values) > 1:
         compare = np.less_equal if spec.monotonic == "strict" else np.less
         bad_step = compare(values[1:], values[:-1])
+        if spec.min_step is not None:  # a step past the float range is inf: no warning
+            with np.errstate(over="ignore", invalid="ignore"):
+                bad_step |= values[1:] - values[:-1] < spec.min_step
         if bad_step.any():
             rows = np.flatnonzero(bad_step) + 1
             if groups is not None:  # a step into a new group is no violation
@@ -268,6 +277,8 @@ def _check_numbers(
                 bad[rows] = True
                 what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
                 scope = " within each group" if groups is not None else ""
+                if spec.min_step is not None:
+                    scope += f", by at least {spec.min_step:g} {spec.unit or ''}".rstrip()
                 failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
     return failures
 
@@ -324,6 +335,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                     bounds[key] = float(getattr(meta, key))
         unit = extra.get("x-unit")
         monotonic = extra.get("x-monotonic")
+        min_step = extra.get("x-min-step")
         if monotonic not in (None, "increasing", "strict"):
             raise TypeError(f"column {name!r}: monotonic must be 'increasing' or 'strict'")
         specs.append(
@@ -336,6 +348,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                 finite=bool(extra.get("x-finite", True)),
                 monotonic=cast(Monotonic | None, monotonic),
                 north_reference="x-north-reference" in extra,
+                min_step=float(min_step) if isinstance(min_step, int | float) else None,
                 **bounds,
             )
         )

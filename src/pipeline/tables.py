@@ -17,6 +17,12 @@ class AnyTable(TableContract):
     """Any table (writers and generic stages)."""
 
 
+MIN_COURSE_M = 1e-4
+"""Shortest course between two stations of a survey, m: MDs are recorded to a centimetre
+or a millimetre, so stations a tenth of a millimetre apart are one station repeated; over a
+course of a few ulp (4.9e-324 m) the dogleg severity would be infinite."""
+
+
 class Stations(TableContract):
     """Survey stations, one row per station, in increasing MD (per survey when ``survey``
     is present: several surveys may share one table, each a contiguous block of rows)."""
@@ -27,7 +33,10 @@ class Stations(TableContract):
         unit=None, description="survey id when a table holds several surveys", default=None
     )
     md: float = column(
-        unit="m", monotonic="strict", description="measured depth from the depth reference"
+        unit="m",
+        monotonic="strict",
+        min_step=MIN_COURSE_M,
+        description="measured depth from the depth reference",
     )
     inc: float = column(unit="deg", ge=0, le=180, description="inclination from vertical")
     azi: float = column(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pyarrow as pa
@@ -10,7 +11,7 @@ import pytest
 
 from pipeline.contracts import TableContract, column
 from pipeline.errors import ContractViolation, RuleFailure
-from pipeline.tables import Stations, Trajectory
+from pipeline.tables import MIN_COURSE_M, Stations, Trajectory
 
 
 class Sample(TableContract):
@@ -189,3 +190,30 @@ def test_unsupported_column_type_is_refused():
 
     with pytest.raises(TypeError, match="not one of"):
         Bad.compiled()
+
+
+def test_stations_closer_than_the_shortest_course_are_refused():
+    """Fuzz finding: MD 0 then 4.9e-324 m made minimum curvature's DLS infinite (and NumPy
+    warn of an overflow); a course shorter than MIN_COURSE_M is a repeated station. Steps
+    past the float range (-1e308 → 1e308) are long courses, checked without a warning."""
+    assert MIN_COURSE_M == 1e-4
+
+    def stations(md: list[float]) -> pa.Table:
+        n = len(md)
+        data = {"md": md, "inc": [0.0] * n, "azi": [0.0] * n}
+        return Stations.compiled().make_table(data, north_reference="true")
+
+    for md in ([0.0, 5e-324, 30.0], [100.0, 100.00009, 130.0]):
+        with pytest.raises(ContractViolation) as info:
+            Stations.validate_table(stations(md))
+        (failure,) = info.value.failures
+        assert (failure.column, failure.rule, failure.examples) == (
+            "md",
+            "monotonic",
+            ((1, md[1]),),
+        )
+        assert failure.expected == "strictly increasing values, by at least 0.0001 m"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Stations.validate_table(stations([100.0, 100.001, 130.0]))
+        Stations.validate_table(stations([-1e308, 1e308]))
