@@ -212,10 +212,9 @@ class StationsWell(Strict):
 def _well_kind(value: Any) -> str:
     """The kind of well a plan gives: a stations file if it names one, else sections (its
     problems are then reported against that kind alone)."""
-    given = (
-        value if isinstance(value, dict) else vars(value) if isinstance(value, BaseModel) else {}
-    )
-    return "stations file" if "stations" in given else "plan"
+    if isinstance(value, BaseModel):  # an already validated well (model_copy, tests)
+        return "stations file" if isinstance(value, StationsWell) else "plan"
+    return "stations file" if isinstance(value, dict) and "stations" in value else "plan"
 
 
 class SimulationSpec(Strict):
