@@ -92,5 +92,5 @@ def test_a_course_of_a_few_ulp_is_refused_at_its_line_through_the_cli(tmp_path: 
     assert "Warning" not in result.stderr and "Traceback" not in result.stderr, result.stderr
     assert (
         f"{stations}:3: not valid as stations (reader 'csv'): column 'md': monotonic: expected "
-        "strictly increasing values, by at least 0.0001 m; 1 bad row(s), first: row 1 (line 3)"
+        "strictly increasing values, by at least 0.0005 m; 1 bad row(s), first: row 1 (line 3)"
     ) in result.stderr
