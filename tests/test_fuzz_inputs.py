@@ -93,6 +93,8 @@ def test_fuzzed_inputs_are_refused_located_or_accepted_valid(
     done = outcomes[kind]
     bad = [o for o in done if o.label in NOT_ALLOWED]
     assert not bad, shown(bad)
+    warned = [f"{o.kind} #{o.index}: {o.warnings}" for o in done if o.warnings]
+    assert not warned, warned  # NumPy's overflow warnings and the like: printed on stderr
     labels = Counter(o.label for o in done)
     assert labels[REFUSED], f"no {kind} input was refused: {labels}"
 

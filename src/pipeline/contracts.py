@@ -58,6 +58,7 @@ def column(
     gt: float | None = None,
     lt: float | None = None,
     monotonic: Monotonic | None = None,
+    min_step: float | None = None,
     north_reference: bool = False,
     finite: bool = True,
     undefined_at_vertical: bool = False,
@@ -68,7 +69,9 @@ def column(
     ``unit`` is the canonical unit string stored in the Arrow field metadata (``None`` for
     dimensionless or text columns). ``monotonic`` is ``"increasing"`` (non-decreasing) or
     ``"strict"`` (strictly increasing), within each group when the contract sets
-    ``group_by``. ``north_reference`` requires the field to state its north reference.
+    ``group_by``; ``min_step`` (with ``"strict"``) is the smallest step allowed between
+    consecutive values (in ``unit``). ``north_reference`` requires the field to state its
+    north reference.
     ``finite`` forbids NaN and ±inf in float columns; ``undefined_at_vertical`` allows NaN
     (an azimuth that is undefined) on rows whose ``inc`` column is within
     :data:`VERTICAL_TOLERANCE` of vertical, and nowhere else. A ``default`` makes the column
@@ -79,6 +82,8 @@ def column(
         extra["x-undefined-at-vertical"] = True
     if monotonic:
         extra["x-monotonic"] = monotonic
+    if min_step is not None:
+        extra["x-min-step"] = min_step
     if north_reference:
         extra["x-north-reference"] = list(NORTH_REFERENCES)
     return Field(
@@ -128,6 +133,7 @@ class ColumnSpec:
     monotonic: Monotonic | None
     north_reference: bool
     undefined_at_vertical: bool = False
+    min_step: float | None = None
 
     def field(self, north_reference: str | None = None) -> pa.Field:
         meta: dict[bytes, bytes] = {}
@@ -188,7 +194,7 @@ class CompiledContract:
                 continue
             failures.extend(_check_column(spec, table, groups))
         if failures:
-            source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
+            source = _text((table.schema.metadata or {}).get(SOURCE_KEY, b""))
             if SOURCE_LINE in table.column_names:
                 lines = table.column(SOURCE_LINE)
                 failures = [
@@ -220,10 +226,10 @@ def _check_column(
                 spec.name,
                 "unit",
                 f"unit {spec.unit!r} in field metadata, got "
-                + (repr(got.decode()) if got is not None else "none"),
+                + (repr(_text(got)) if got is not None else "none"),
             )
         )
-    if spec.north_reference and meta.get(NORTH_KEY, b"").decode() not in NORTH_REFERENCES:
+    if spec.north_reference and _text(meta.get(NORTH_KEY, b"")) not in NORTH_REFERENCES:
         failures.append(
             RuleFailure(spec.name, "north reference", f"one of {', '.join(NORTH_REFERENCES)}")
         )
@@ -296,6 +302,9 @@ def _check_numbers(
     if spec.monotonic and len(values) > 1:
         compare = np.less_equal if spec.monotonic == "strict" else np.less
         bad_step = compare(values[1:], values[:-1])
+        if spec.min_step is not None:  # a step past the float range is inf: no warning
+            with np.errstate(over="ignore", invalid="ignore"):
+                bad_step |= values[1:] - values[:-1] < spec.min_step
         if bad_step.any():
             rows = np.flatnonzero(bad_step) + 1
             if groups is not None:  # a step into a new group is no violation
@@ -306,6 +315,8 @@ def _check_numbers(
                 bad[rows] = True
                 what = "strictly increasing" if spec.monotonic == "strict" else "non-decreasing"
                 scope = " within each group" if groups is not None else ""
+                if spec.min_step is not None:
+                    scope += f", by at least {spec.min_step:g} {spec.unit or ''}".rstrip()
                 failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
     return failures
 
@@ -316,6 +327,12 @@ def _failure(
     rows = np.flatnonzero(bad)
     examples = tuple((int(i), col[int(i)].as_py()) for i in rows[:EXAMPLES])
     return RuleFailure(name, rule, expected, bad_rows=len(rows), examples=examples)
+
+
+def _text(raw: bytes) -> str:
+    """Metadata bytes as text, bytes that are not UTF-8 as U+FFFD: a file's garbled unit or
+    north reference is a rule broken, not a decoding error."""
+    return raw.decode("utf-8", errors="replace")
 
 
 def _same_type(actual: pa.DataType, expected: pa.DataType) -> bool:
@@ -356,6 +373,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                     bounds[key] = float(getattr(meta, key))
         unit = extra.get("x-unit")
         monotonic = extra.get("x-monotonic")
+        min_step = extra.get("x-min-step")
         if monotonic not in (None, "increasing", "strict"):
             raise TypeError(f"column {name!r}: monotonic must be 'increasing' or 'strict'")
         specs.append(
@@ -369,6 +387,7 @@ def _compile(model: type[TableContract]) -> CompiledContract:
                 monotonic=cast(Monotonic | None, monotonic),
                 north_reference="x-north-reference" in extra,
                 undefined_at_vertical=bool(extra.get("x-undefined-at-vertical", False)),
+                min_step=float(min_step) if isinstance(min_step, int | float) else None,
                 **bounds,
             )
         )

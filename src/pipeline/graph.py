@@ -10,7 +10,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import TableContract
-from pipeline.errors import Problem, SpecError, did_you_mean
+from pipeline.errors import Location, Problem, SpecError, did_you_mean
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PipelineSpec, StageSpec
 from pipeline.yamlsource import PathKey, SourceMap, validation_problems
@@ -99,7 +99,9 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
                 params[stage.id] = model
             wiring[stage.id] = wired
 
-    order = _order(wiring, {k: at(i) for k, i in index.items()}, source, problems)
+    positions = {k: at(i) for k, i in index.items()}
+    _check_output_names(spec, params, defs, positions, registry, source, problems)
+    order = _order(wiring, positions, source, problems)
     if problems:
         raise SpecError(problems)
     planned = []
@@ -270,6 +272,48 @@ def _check_persist(
                     source.locate(("stages", pos, "persist", j)),
                     f"stage {stage.id!r} has no output port {port!r} to persist "
                     f"(outputs: {', '.join(definition.outputs) or 'none'})",
+                )
+            )
+
+
+def _check_output_names(
+    spec: PipelineSpec,
+    params: dict[str, BaseModel],
+    defs: dict[str, tuple[StageDef, str]],
+    positions: dict[str, int],
+    registry: Registry,
+    source: SourceMap,
+    problems: list[Problem],
+) -> None:
+    """Two stages writing one file name (equal up to case: one file on a case-insensitive
+    file system), given or by default, or a stage's file named as a persisted table: a
+    problem at the later stage's ``filename`` (or its id), naming the other stage."""
+    ext = registry.writers.get(spec.defaults.persist_format, (None, ""))[0]
+    written: dict[str, tuple[str, str, Location]] = {}  # casefolded name → name, stage, where
+    for stage in sorted(spec.stages, key=lambda st: positions.get(st.id, -1)):
+        if positions.get(stage.id) is None:
+            continue
+        pos, model = positions[stage.id], params.get(stage.id)
+        given = "filename" in stage.with_ or "filename" in spec.defaults.with_
+        where = source.locate(
+            ("stages", pos, "with", "filename") if given else ("stages", pos, "id")
+        )
+        names_of = getattr(model, "output_names", None)
+        names = list(names_of(stage.id, registry)) if callable(names_of) else []
+        outputs = tuple(defs[stage.id][0].outputs) if stage.id in defs else ()
+        persist = outputs if stage.persist is True else stage.persist or ()
+        if ext is not None:
+            names += [f"{stage.id}.{port}.{ext.extension}" for port in persist]
+        for name in names:
+            other = written.setdefault(name.casefold(), (name, stage.id, where))
+            if other[1] == stage.id:
+                continue
+            same = "" if other[0] == name else f" ({other[0]!r} up to case)"
+            problems.append(
+                Problem(
+                    where,
+                    f"stage {stage.id!r} writes {name!r}, as stage {other[1]!r} does{same} "
+                    f"({other[2]}): give one of them another filename",
                 )
             )
 

@@ -100,6 +100,8 @@ def _rules(c: ColumnSpec) -> str:
     ]
     if c.monotonic:
         rules.append("strictly increasing" if c.monotonic == "strict" else "non-decreasing")
+    if c.min_step is not None:
+        rules.append(f"steps ≥ {c.min_step:g} {c.unit or ''}".rstrip())
     if c.north_reference:
         rules.append("north reference stated")
     if c.finite and pa.types.is_floating(c.type):

@@ -17,6 +17,19 @@ class AnyTable(TableContract):
     """Any table (writers and generic stages)."""
 
 
+MIN_COURSE_M = 5e-4
+"""Shortest course between two stations of a survey, m: MDs are recorded to a centimetre
+or a millimetre, so stations half a millimetre apart are one station repeated (over a
+course of a few ulp, 4.9e-324 m, the dogleg severity would be infinite), and five steps of
+the 0.1 mm an export writes keep every course of a copy positive."""
+MIN_TIME_STEP_S = 5e-6
+"""Shortest step between two samples' or two dwells' times, s: five steps of the 1 µs an
+export writes (faster than any survey tool samples), so a copy's times still increase."""
+MIN_DURATION_S = 1e-6
+"""Shortest averaging time of a reading, s: the 1 µs an export writes, so a copy's
+durations stay positive."""
+
+
 class Stations(TableContract):
     """Survey stations, one row per station, in increasing MD (per survey when ``survey``
     is present: several surveys may share one table, each a contiguous block of rows)."""
@@ -27,7 +40,10 @@ class Stations(TableContract):
         unit=None, description="survey id when a table holds several surveys", default=None
     )
     md: float = column(
-        unit="m", monotonic="strict", description="measured depth from the depth reference"
+        unit="m",
+        monotonic="strict",
+        min_step=MIN_COURSE_M,
+        description="measured depth from the depth reference",
     )
     inc: float = column(unit="deg", ge=0, le=180, description="inclination from vertical")
     azi: float = column(
@@ -94,7 +110,9 @@ class RawSamples(TableContract):
     accelerometers in m/s² with the gravity sign convention (a tool at rest reads
     C_n^b·(0, 0, g)), magnetometers in nT. Axes a tool lacks are absent."""
 
-    time: float = column(unit="s", monotonic="strict", description="time since the start")
+    time: float = column(
+        unit="s", monotonic="strict", min_step=MIN_TIME_STEP_S, description="time since the start"
+    )
     md: float | None = column(
         unit="m", description="measured depth from the odometer (absent: no depth)", default=None
     )
@@ -125,7 +143,9 @@ class RawSamples(TableContract):
 class SimTruth(TableContract):
     """What the simulator's tool truly did at each sample (azimuths true north)."""
 
-    time: float = column(unit="s", monotonic="strict", description="time since the start")
+    time: float = column(
+        unit="s", monotonic="strict", min_step=MIN_TIME_STEP_S, description="time since the start"
+    )
     md: float = column(unit="m", description="true measured depth")
     inc: float = column(unit="deg", ge=0, le=180, description="inclination")
     azi: float = column(unit="deg", ge=0, lt=360, north_reference=True, description="azimuth")
@@ -198,7 +218,9 @@ class PositionReadings(TableContract):
     station: int = column(unit=None, ge=0, description="station index")
     md: float = column(unit="m", description="measured depth of the station")
     position: int = column(unit=None, ge=0, description="frame position index within the station")
-    t: float = column(unit="s", monotonic="strict", description="mid-time of the dwell")
+    t: float = column(
+        unit="s", monotonic="strict", min_step=MIN_TIME_STEP_S, description="mid-time of the dwell"
+    )
     frame_angle: float | None = column(
         unit="deg",
         ge=0,
@@ -231,7 +253,9 @@ class PositionReadings(TableContract):
         unit=ACCEL_UNIT, ge=0, description="std of acc_z", default=None
     )
     n: int | None = column(unit=None, ge=1, description="samples averaged", default=None)
-    duration: float | None = column(unit="s", gt=0, description="averaging time", default=None)
+    duration: float | None = column(
+        unit="s", ge=MIN_DURATION_S, description="averaging time", default=None
+    )
 
 
 class CompassStations(Stations):

@@ -137,10 +137,12 @@ def validation_problems(
     out = []
     for err in exc.errors():
         loc = tuple(p for p in err["loc"] if isinstance(p, str | int))
+        loc = _data_path(loc, prefix, source, missing=err["type"] == "missing")
         path = prefix + loc
         where = ".".join(str(p) for p in loc) or "value"
         if err["type"] == "extra_forbidden":
             known = _field_names(model, loc[:-1]) if model is not None else ()
+            known = tuple(k for k in known if k != loc[-1])  # another member of a union's
             message = f"unknown field {where!r}{did_you_mean(str(loc[-1]), known)}"
             out.append(Problem(source.locate(path, key=True), message))
             continue
@@ -152,6 +154,18 @@ def validation_problems(
             message = f"{where}: {err['msg']}{shown}"
         out.append(Problem(source.locate(path), message))
     return out
+
+
+def _data_path(loc: PathKey, prefix: PathKey, source: SourceMap, *, missing: bool) -> PathKey:
+    """``loc`` without the labels pydantic puts between the keys of the data (a union
+    member's tag, ``function-after[…]``): every part must be a node of the document, but
+    the last one of a ``missing`` field."""
+    kept: list[str | int] = []
+    for i, part in enumerate(loc):
+        path = (*prefix, *kept, part)
+        if (missing and i == len(loc) - 1) or path in source.values or path in source.keys:
+            kept.append(part)
+    return tuple(kept) if kept else loc  # no node of the document: as pydantic says
 
 
 def _field_names(model: type[BaseModel], loc: PathKey) -> tuple[str, ...]:

@@ -134,6 +134,11 @@ def test_manifest_maps_wells_to_files_and_header_overrides(tmp_path: Path, surve
         ("well_id,stations,latitude\nW,a.csv,north\n", "wells.csv:2: well 'W': latitude"),
         ("well_id,stations\nW,a.csv,extra\n", "wells.csv:2: 3 cells, the header has 2"),
         ("well_id,stations\n", "no wells listed"),
+        (  # fuzz: a ValueError out of Path.resolve
+            "well_id,stations\nW,a\x00.csv\n",
+            "wells.csv:2: column 'stations': a NUL byte in 'a\\x00.csv'",
+        ),
+        ("well_id,stations,tool_serial\nW,a.csv,S\x00\n", "wells.csv:2: column 'tool_serial'"),
     ],
 )
 def test_bad_manifest_is_a_configuration_error(

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
@@ -10,7 +13,8 @@ import pytest
 
 from pipeline.contracts import TableContract, column
 from pipeline.errors import ContractViolation, RuleFailure
-from pipeline.tables import Stations, Trajectory
+from pipeline.tables import MIN_COURSE_M, RawSamples, Stations, Trajectory
+from tests_support import ROOT, gyropipe
 
 
 class Sample(TableContract):
@@ -189,3 +193,60 @@ def test_unsupported_column_type_is_refused():
 
     with pytest.raises(TypeError, match="not one of"):
         Bad.compiled()
+
+
+def test_stations_closer_than_the_shortest_course_are_refused():
+    """Fuzz finding: MD 0 then 4.9e-324 m made minimum curvature's DLS infinite (and NumPy
+    warn of an overflow); a course shorter than MIN_COURSE_M is a repeated station. Steps
+    past the float range (-1e308 → 1e308) are long courses, checked without a warning."""
+    assert MIN_COURSE_M == 5e-4
+
+    def stations(md: list[float]) -> pa.Table:
+        n = len(md)
+        data = {"md": md, "inc": [0.0] * n, "azi": [0.0] * n}
+        return Stations.compiled().make_table(data, north_reference="true")
+
+    for md in ([0.0, 5e-324, 30.0], [100.0, 100.00009, 130.0]):
+        with pytest.raises(ContractViolation) as info:
+            Stations.validate_table(stations(md))
+        (failure,) = info.value.failures
+        assert (failure.column, failure.rule, failure.examples) == (
+            "md",
+            "monotonic",
+            ((1, md[1]),),
+        )
+        assert failure.expected == "strictly increasing values, by at least 0.0005 m"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Stations.validate_table(stations([100.0, 100.001, 130.0]))
+        Stations.validate_table(stations([-1e308, 1e308]))
+
+
+def test_times_and_durations_a_copy_cannot_hold_are_refused(tmp_path: Path):
+    """Fuzz finding (long run): a reading's duration of 4.9e-324 s was accepted, but its CSV
+    copy (1 µs steps) held 0.0 and could not be read back; so could two sample times a few
+    ulp apart. Durations are at least 1 µs, time steps at least 5 µs."""
+    lines = (ROOT / "examples/readings-j-well.csv").read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("station,"))
+    lines[header + 2] = lines[header + 2].rsplit(",", 1)[0] + ",4.9e-324"
+    path = tmp_path / "readings.csv"
+    path.write_text("\n".join(lines[: header + 5]) + "\n")
+    result = subprocess.run(
+        [*gyropipe(), "convert", str(path), str(tmp_path / "copy.csv"), "--kind", "readings"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.splitlines() == [
+        f"error: {path}:{header + 3}: not valid as readings (reader 'csv'): column 'duration': "
+        f"range: expected values >= 1e-06; 1 bad row(s), first: row 1 (line {header + 3}): "
+        "5e-324"
+    ]
+    samples = RawSamples.compiled().make_table(
+        {"time": [0.0, 5e-324, 1.0]} | {c: [0.0] * 3 for c in ("gyro_x", "acc_x", "acc_y", "acc_z")}
+    )
+    with pytest.raises(ContractViolation) as info:
+        RawSamples.validate_table(samples)
+    (failure,) = info.value.failures
+    assert failure.expected == "strictly increasing values, by at least 5e-06 s"

@@ -90,3 +90,62 @@ def test_plain_names_are_accepted(name: str):
 def test_refused_names_say_why(name: str, why: str):
     with pytest.raises(ValueError, match=why):
         check_output_filename(name)
+
+
+DUPLICATES = """\
+name: dup
+inputs: {stations: {}}
+stages:
+  - id: read
+    uses: read_stations
+    with: {input: stations}
+  - id: traj
+    uses: minimum_curvature
+    inputs: {stations: read.stations}
+    persist: true
+  - id: out
+    uses: write
+    inputs: {table: traj.trajectory}
+    with: {writer: csv}
+  - id: again
+    uses: write
+    inputs: {table: traj.trajectory}
+    with:
+      writer: csv
+      filename: OUT.csv
+  - id: p
+    uses: write
+    inputs: {table: traj.trajectory}
+    with: {writer: parquet, filename: traj.trajectory.parquet}
+  - id: out_report
+    uses: report
+    inputs: {trajectory: traj.trajectory}
+  - id: page
+    uses: write
+    inputs: {table: traj.trajectory}
+    with: {writer: csv, filename: out_report.pdf}
+"""
+
+
+def test_two_stages_writing_one_file_are_refused_at_validate_time(tmp_path: Path):
+    """Two stages writing one file name — a default ('out.csv' of stage 'out'), equal up to
+    case, a persisted table's, a report's — failed only at run time, in the second stage."""
+    path = tmp_path / "dup.yaml"
+    path.write_text(DUPLICATES)
+    result = subprocess.run(
+        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.splitlines()[1:] == [
+        f"  {path}:20:17: stage 'again' writes 'OUT.csv', as stage 'out' does ('out.csv' up to "
+        f"case) ({path}:11:9): give one of them another filename",
+        f"  {path}:24:39: stage 'p' writes 'traj.trajectory.parquet', as stage 'traj' does "
+        f"({path}:7:9): give one of them another filename",
+        f"  {path}:31:35: stage 'page' writes 'out_report.pdf', as stage 'out_report' does "
+        f"({path}:25:9): give one of them another filename",
+    ]
+
+
+def test_every_bundled_pipeline_writes_distinct_files(registry):
+    for path in sorted((ROOT / "pipelines").glob("*.yaml")):
+        build_plan(load_spec(path), registry)

@@ -560,3 +560,26 @@ def test_fuzz_mutations_raise_located_errors_or_read_a_log(
     for f in table.schema:
         assert f.type in (pa.float64(), pa.string(), pa.int64()), f
     LogTable.validate_table(table)
+
+
+def test_index_steps_past_the_float_range_warn_located_without_an_overflow(tmp_path: Path):
+    """Fuzz finding: an index from -1e308 to 1e308 steps by more than the float range; NumPy
+    printed 'overflow encountered in subtract' (reader and writer) beside the STEP warning.
+    The step is now reported at its line and the copy is written irregular (STEP 0)."""
+    src = tmp_path / "far.las"
+    src.write_text(
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M -1e308 :\n STOP.M 1e308 :\n"
+        " STEP.M 1e308 :\n NULL. -999.25 :\n WELL. A-12 :\n~Curve\n DEPT.M : depth\n"
+        " GR.GAPI : gamma\n~A\n-1e308 45\n1e308 50\n"
+    )
+    out = tmp_path / "far-copy.las"
+    result = cli(str(src), str(out), "--kind", "log")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.splitlines() == [
+        f"warning: {src}:15: STEP is 1e+308 but the index steps by more than the float range "
+        "from line 14 to this line: a row may be missing or repeated (STEP 0 means irregular "
+        "steps); the data are kept"
+    ]
+    assert re.search(r"^ STEP +\.M +0 +:", out.read_text(), re.M)
+    table, _, _ = read_log(out)
+    assert values(table, "DEPT") == [-1e308, 1e308]

@@ -4,7 +4,9 @@ message's index, log time and topic. Test files are made with the mcap writer.""
 
 from __future__ import annotations
 
+import json
 import subprocess
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -13,7 +15,16 @@ import pyarrow as pa
 import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
-from test_mcap import UNITS, flat_messages, gyropipe_file, imu_values, read, write_json, write_ros
+from test_mcap import (
+    UNITS,
+    WRITER,
+    flat_messages,
+    gyropipe_file,
+    imu_values,
+    read,
+    write_json,
+    write_ros,
+)
 
 from pipeline.errors import InputFileError
 from pipeline.io.mcap_arrow import (
@@ -24,15 +35,23 @@ from pipeline.io.mcap_arrow import (
     SAMPLES_TOPIC,
     start_writer,
 )
+from pipeline.plugins import load_registry
 from pipeline.tables import RawSamples
+from pipeline.well import WellMetadata
 from tests_support import gyropipe
 
 Mutate = Callable[[int, str, bytes], bytes]
 
 
-def samples_file(path: Path, cut: Callable[[bytes], bytes], rows: int = 30_000) -> None:
+def samples_file(
+    path: Path,
+    cut: Callable[[bytes], bytes],
+    rows: int = 30_000,
+    schema_bytes: Callable[[bytes], bytes] = bytes,
+) -> None:
     """gyropipe's own layout, 10,000-row batches logged at 0, 100, 200 s…, the payload of
-    message 1 passed through ``cut`` (the writer computes the CRCs of what it is given)."""
+    message 1 passed through ``cut`` and the serialized Arrow schema of the schema record
+    through ``schema_bytes`` (the writer computes the CRCs of what it is given)."""
     rng = np.random.default_rng(1)
     columns = {"time": np.arange(rows) * 0.01}
     columns |= {c: rng.normal(size=rows) for c in ("gyro_x", "acc_x", "acc_y", "acc_z")}
@@ -41,7 +60,7 @@ def samples_file(path: Path, cut: Callable[[bytes], bytes], rows: int = 30_000) 
         writer = start_writer(fh)
         schema = table.schema.with_metadata({MARKERS_KEY: b"[]"})
         schema_id = writer.register_schema(
-            SAMPLES_SCHEMA, ARROW_SCHEMA_ENCODING, schema.serialize()
+            SAMPLES_SCHEMA, ARROW_SCHEMA_ENCODING, schema_bytes(schema.serialize().to_pybytes())
         )
         channel = writer.register_channel(SAMPLES_TOPIC, ARROW_MESSAGE_ENCODING, schema_id)
         for i, batch in enumerate(table.to_batches(max_chunksize=10_000)):
@@ -185,3 +204,101 @@ def test_an_arrow_table_with_a_cut_payload_is_refused_by_the_arrow_reader():
     data = batch.serialize().to_pybytes()
     with pytest.raises(OSError, match="Expected to be able to read"):
         pa.ipc.read_record_batch(pa.py_buffer(data[: len(data) // 2]), batch.schema)
+
+
+SCHEMA_RECORD = "topic /gyropipe/samples, schema record 1 ('gyropipe.samples')"
+
+
+@pytest.mark.parametrize(
+    ("schema_bytes", "problem"),
+    [
+        (  # was OSError out of pyarrow, a traceback
+            lambda d: d[:4] + b"\0" + d[5:],
+            "unreadable Arrow schema: Invalid flatbuffers message.",
+        ),
+        (  # was a UnicodeDecodeError when the names were asked for (a ReaderError, no place)
+            lambda d: d.replace(b"gyro_x", b"gyro\xffx"),
+            "column 2 of the Arrow schema: its name is not UTF-8 text (invalid start byte)",
+        ),
+    ],
+    ids=["flatbuffer", "column-name"],
+)
+def test_a_corrupt_arrow_schema_record_is_located(
+    tmp_path: Path, schema_bytes: Callable[[bytes], bytes], problem: str
+):
+    """Fuzz findings: the schema record changed, the file's CRCs intact."""
+    path = tmp_path / "schema.mcap"
+    samples_file(path, bytes, rows=100, schema_bytes=schema_bytes)
+    with pytest.raises(InputFileError) as info:
+        load_registry().read(path, "samples")
+    assert str(info.value) == f"{path}: {SCHEMA_RECORD}: {problem}"
+
+
+def test_unit_metadata_that_is_not_text_is_a_contract_violation_through_convert(
+    tmp_path: Path,
+):
+    """Fuzz finding: the contract check decoded the unit of the embedded Arrow schema and
+    ended in a UnicodeDecodeError (a traceback out of ``gyropipe convert``)."""
+    path = tmp_path / "unit.mcap"
+    samples_file(path, bytes, rows=100, schema_bytes=lambda d: d.replace(b"m/s2", b"m/s\xb2", 1))
+    out = tmp_path / "out.csv"
+    result = subprocess.run(
+        [*gyropipe(), "convert", str(path), str(out), "--kind", "samples"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr, result.stderr
+    assert result.stderr.splitlines() == [
+        f"error: {path}: not valid as samples (reader 'mcap'): column 'acc_z': unit: expected "
+        "unit 'm/s2' in field metadata, got 'm/s\ufffd'"
+    ]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "problem"),
+    [
+        ("row", 2**64, f"event row {2**64} is not a sample index (an integer from 0)"),
+        ("time", 10**400, "event time 1000"),
+        ("time", float("inf"), "event time inf is not a finite number of seconds"),
+        ("station", 2**70, f"event station {2**70} is not an int64 or null"),
+    ],
+    ids=["row", "time-int", "time-inf", "station"],
+)
+def test_a_marker_event_number_past_int64_or_float64_is_located(
+    tmp_path: Path, key: str, value: float, problem: str
+):
+    """Fuzz finding: a marker event's row, time or station past int64/float64 (CRCs intact)
+    was an OverflowError building the marker columns."""
+    own, _ = gyropipe_file(tmp_path, rows=4000)
+    marked = tmp_path / "marked.mcap"
+
+    def change(i: int, topic: str, data: bytes) -> bytes:
+        if (i, topic) != (1, "/gyropipe/markers"):
+            return data
+        return json.dumps(json.loads(data) | {key: value}).encode()
+
+    rewritten(own, marked, change)
+    with pytest.raises(InputFileError) as info:
+        load_registry().read(marked, "samples")
+    text = str(info.value)
+    assert text.startswith(f"{marked}: message 1 (log time "), text
+    assert "topic /gyropipe/markers;" in text and problem in text, text
+
+
+def test_a_time_past_the_log_time_range_is_written_without_a_warning(tmp_path: Path):
+    """Fuzz finding: a sample time of 1e300 s made NumPy warn of an overflow (and failed
+    converting it to a log time); the log time is clamped, the exact time is in the batch."""
+    table = RawSamples.compiled().make_table(
+        {c: [0.0, 1.0] for c in ("gyro_x", "acc_x", "acc_y", "acc_z")} | {"time": [1e300, 2e300]}
+    )
+    path = tmp_path / "far.mcap"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        WRITER.write(table, path, WellMetadata())
+        back, _ = read(path)
+    assert back.column("time").to_pylist() == [1e300, 2e300]
+    with path.open("rb") as fh:
+        stamps = [m.log_time for _, _, m in make_reader(fh).iter_messages()]
+    assert stamps == [2**64 - 1]  # one batch, logged at its first sample: clamped

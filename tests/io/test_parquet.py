@@ -89,3 +89,34 @@ def test_a_column_name_that_is_not_text_is_located(tmp_path: Path):
     assert str(caught.value) == (
         f"{path}: column 2: its name is not UTF-8 text (invalid continuation byte)"
     )
+
+
+@pytest.mark.parametrize(
+    ("metadata", "problem"),
+    [
+        (
+            {b"unit": b"de\xb0", b"north_reference": b"true"},
+            "unit: expected unit 'deg' in field metadata, got 'de\ufffd'",
+        ),
+        (
+            {b"unit": b"deg", b"north_reference": b"tr\xffe"},
+            "north reference: expected one of true, grid, magnetic",
+        ),
+    ],
+    ids=["unit", "north-reference"],
+)
+def test_field_metadata_that_is_not_text_is_a_contract_violation(
+    tmp_path: Path, metadata: dict[bytes, bytes], problem: str
+):
+    """Fuzz finding: the contract check decoded a column's unit or north reference and
+    ended in a UnicodeDecodeError (a traceback out of ``gyropipe convert``)."""
+    path = stations(tmp_path)
+    table = pq.read_table(path)
+    i = table.schema.get_field_index("azi")
+    table = table.set_column(i, table.schema.field(i).with_metadata(metadata), table.column(i))
+    pq.write_table(table, path)
+    with pytest.raises(InputFileError) as caught:
+        load_registry().read(path, "stations")
+    assert str(caught.value) == (
+        f"{path}: not valid as stations (reader 'parquet'): column 'azi': {problem}"
+    )

@@ -138,7 +138,7 @@ def test_pipeline_starts_from_a_simulation(tmp_path: Path):
 @pytest.mark.parametrize(
     ("edit", "fragment"),
     [
-        ("survey: {mode: point, every: 30, dwell: -5}", "survey.point.dwell"),
+        ("survey: {mode: point, every: 30, dwell: -5}", "survey.dwell"),
         ("tool: {preset: no-such-tool}", "unknown tool preset 'no-such-tool'"),
         ("tool: {preset: mems-vrg, overrides: {gyro: {bais: [1, 2, 3]}}}", "bais"),
         ("survey: {mode: sideways}", "survey"),
@@ -264,5 +264,68 @@ def test_well_from_a_stations_file(tmp_path: Path):
     np.testing.assert_allclose(stations.column("azi").to_numpy()[1:], [40, 45, 47], atol=1e-9)
     (tmp_path / "grid.csv").write_text("MD (m),Inc (deg),Azimuth Grid (deg)\n0,0,0\n30,2,40\n")
     grid = write(tmp_path, plan.read_text().replace("st.csv", "grid.csv"), "grid.yaml")
-    with pytest.raises(ValueError, match="true-north"):
-        load_simulation(grid, read_stations=read_stations).path()
+    with pytest.raises(SpecError) as info:  # at the plan's stations: line
+        load_simulation(grid, read_stations=read_stations)
+    assert str(info.value.problems[0]) == (
+        f"{grid}:7:13: well.stations: {tmp_path / 'grid.csv'}: the simulator needs "
+        "true-north azimuths"
+    )
+
+
+def test_a_denormal_dls_is_refused_at_its_line(tmp_path: Path):
+    """Fuzz finding: dls 5e-324 made the arc infinite (NumPy warned of a division by zero)
+    and was reported against the well as a whole, with the other kind of well's fields."""
+    plan = write(tmp_path, SMALL.replace("dls: 6.0", "dls: 5.0e-324"))
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2 and "Warning" not in result.stderr, result.stderr
+    assert result.stderr.splitlines()[1:] == [
+        f"  {plan}:9:26: well.sections.1.dls: Input should be greater than or equal to 0.001 "
+        "(got 5e-324)"
+    ]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("row", "problem"),
+    [
+        ("60,abc,45", "st.csv:4 (column 'Inc (deg)'): expected a number, got 'abc'"),
+        (
+            "60,179.99,225",
+            "st.csv:4: station 2 turns 179.990 deg from the previous station: a reversal "
+            "has no unique circular arc",
+        ),
+    ],
+    ids=["cell", "reversal"],
+)
+def test_stations_file_problems_name_the_plan_line_and_the_file_line(
+    tmp_path: Path, row: str, problem: str
+):
+    """A stations file's problem was reported at the stations file alone (or, for a
+    reversal, by station index through ``path()``); now at the plan's ``stations:`` line
+    too, through ``gyropipe simulate``."""
+    (tmp_path / "st.csv").write_text(
+        f"MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n30,0,0\n{row}\n90,1,45\n"
+    )
+    plan = write(
+        tmp_path,
+        SMALL.replace(
+            "  sections:\n    - {kind: vertical, length: 30}\n"
+            "    - {kind: build, dls: 6.0, inc: 20, azi: 37}\n",
+            "  stations: st.csv\n",
+        ),
+    )
+    result = subprocess.run(
+        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 2 and lines[1].startswith(f"  {plan}:7:13: well.stations: "), lines
+    assert f"well.stations: {tmp_path}/{problem}" in lines[1], lines

@@ -3,6 +3,7 @@ reference conversion — wired as a user would."""
 
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,7 @@ from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe
 
 PIPELINE = """
 name: stations
@@ -72,3 +73,24 @@ def test_station_stages_in_a_pipeline(tmp_path: Path):
     # balanced tangential differs from minimum curvature only by the ratio factor (small DLS)
     diff = np.abs(balanced.column("north").to_numpy() - mc.column("north").to_numpy()).max()
     assert 0 < diff < 1.0
+
+
+def test_a_course_of_a_few_ulp_is_refused_at_its_line_through_the_cli(tmp_path: Path) -> None:
+    """Fuzz finding: stations at MD 0 and 4.9e-324 m gave an infinite DLS (NumPy warned of an
+    overflow, then the trajectory broke its contract); now the stations file is refused at
+    the line of the repeated station, before any stage computes with it."""
+    stations = tmp_path / "ulp.csv"
+    stations.write_text("MD [m],INC [deg],Azimuth True [deg]\n0,0,0\n4.9e-324,1,0\n30,2,0\n")
+    pipeline, out = ROOT / "pipelines/survey.yaml", tmp_path / "out"
+    result = subprocess.run(
+        [*gyropipe(), "run", str(pipeline), "--input", str(stations), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1, result.stderr
+    assert "Warning" not in result.stderr and "Traceback" not in result.stderr, result.stderr
+    assert (
+        f"{stations}:3: not valid as stations (reader 'csv'): column 'md': monotonic: expected "
+        "strictly increasing values, by at least 0.0005 m; 1 bad row(s), first: row 1 (line 3)"
+    ) in result.stderr

@@ -76,6 +76,7 @@ def jobs_from_manifest(
                 f"{manifest}:{line}: {len(cells)} cells, the header has {len(columns)}"
             )
         values = dict(zip(columns, (c.strip() for c in cells), strict=True))
+        _check_text(values, f"{manifest}:{line}")
         well_id = _well_id(values.pop(WELL_ID_COLUMN), f"{manifest}:{line}")
         if (same := seen.get(well_id.casefold())) is not None:
             first, first_line = same
@@ -160,6 +161,13 @@ def _check_header(
         raise BatchConfigError(
             f"{manifest}:{line}: unknown column(s) {', '.join(unknown)} (columns: {allowed})"
         )
+
+
+def _check_text(values: Mapping[str, str], where: str) -> None:
+    """Refuse a cell holding a NUL byte (no file name, id or header field can hold one)."""
+    for column, cell in values.items():
+        if "\x00" in cell:
+            raise BatchConfigError(f"{where}: column {column!r}: a NUL byte in {cell!r}")
 
 
 def _well_id(text: str, where: str) -> str:

@@ -382,7 +382,7 @@ def check_range(
     for mnemonic, row, what in (("STRT", 0, "first"), ("STOP", -1, "last")):
         if mnemonic in declared:
             value, tolerance, line = declared[mnemonic]
-            if abs(index[row] - value) > tolerance + 1e-12 * abs(value):
+            if abs(float(index[row]) - value) > tolerance + 1e-12 * abs(value):
                 raise InputFileError(
                     path,
                     f"{mnemonic} is {value:g} but the {what} index value ({curve.mnemonic}) "
@@ -392,13 +392,15 @@ def check_range(
                 )
     step, tolerance, _ = declared.get("STEP", (0.0, 0.0, 0))
     if step != 0 and index.size > 1:
-        steps = np.diff(index)
-        bad = np.flatnonzero(np.abs(steps - step) > max(tolerance, 0.01 * abs(step)))
+        with np.errstate(over="ignore", invalid="ignore"):  # a step past the float range
+            steps = np.diff(index)  # is ±inf, unequal to any STEP: reported
+            bad = np.flatnonzero(np.abs(steps - step) > max(tolerance, 0.01 * abs(step)))
         if bad.size:
             k = int(bad[0])
+            by = f"{steps[k]:g}" if np.isfinite(steps[k]) else "more than the float range"
             raise InputFileError(
                 path,
-                f"STEP is {step:g} but the index steps by {steps[k]:g} from line {lines[k]} to "
+                f"STEP is {step:g} but the index steps by {by} from line {lines[k]} to "
                 "this line: a row may be missing or repeated (STEP 0 means irregular steps)",
                 line=int(lines[k + 1]),
             )

@@ -201,7 +201,8 @@ def _header_text(
 ) -> str:
     """~Version, ~Well, ~Curve and ~Other sections and the ~ASCII title."""
     values = index.to_numpy(zero_copy_only=False)
-    steps = np.diff(values)
+    with np.errstate(over="ignore", invalid="ignore"):  # a step past the float range: inf
+        steps = np.diff(values)
     regular = (
         steps.size > 0 and steps[0] != 0 and np.isfinite(steps[0]) and np.all(steps == steps[0])
     )

@@ -31,6 +31,8 @@ naming the writers that take them, and so are dictionary-encoded columns.
 from __future__ import annotations
 
 import json
+import math
+import sys
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -166,7 +168,10 @@ def _checked_times(table: pa.Table) -> np.ndarray:
 
 def _ns(seconds: float) -> int:
     """A log time in ns (clamped to MCAP's unsigned range; the batch keeps the exact time)."""
-    return min(max(round(seconds * 1e9), 0), _MAX_NS)
+    seconds = float(seconds)  # a Python float: no overflow warning from NumPy
+    if seconds >= _MAX_NS / 1e9:
+        return _MAX_NS
+    return max(round(seconds * 1e9), 0)
 
 
 def _events(table: pa.Table, markers: list[str], times: np.ndarray) -> list[dict[str, Any]]:
@@ -264,10 +269,20 @@ def arrow_schema(file: McapFile, channel: Channel) -> pa.Schema:
         raise file.fail(
             f"{where}: schema encoding {schema.encoding!r}, not {ARROW_SCHEMA_ENCODING}"
         )
+    where += f", schema record {schema.id} ({schema.name!r})"
     try:
         found: pa.Schema = pa.ipc.read_schema(pa.py_buffer(schema.data))
-    except (pa.ArrowException, ValueError) as exc:
-        raise file.fail(f"{where}: unreadable Arrow schema: {exc}") from None
+    except (pa.ArrowException, ValueError, OSError) as exc:  # OSError: a corrupt flatbuffer
+        reason = " ".join(str(exc).split())
+        raise file.fail(f"{where}: unreadable Arrow schema: {reason}") from None
+    for i in range(len(found)):
+        try:
+            found.field(i).name  # noqa: B018  (pyarrow decodes a name when asked: the check)
+        except UnicodeDecodeError as exc:
+            raise file.fail(
+                f"{where}: column {i + 1} of the Arrow schema: its name is not UTF-8 text "
+                f"({exc.reason})"
+            ) from None
     return found
 
 
@@ -357,14 +372,30 @@ def _marker_events(file: McapFile, markers: list[str]) -> tuple[list[dict[str, A
             event = events[index] if events is not None else json.loads(data)
         except (ValueError, IndexError) as exc:
             raise file.fail(f"{located}: not one JSON event: {exc}") from None
-        if (
-            not isinstance(event, dict)
-            or event.keys() != expected
-            or type(event["row"]) is not int
-            or type(event["time"]) not in (float, int)
-            or not all(event[m] is None or type(event[m]) is int for m in markers)
-        ):
+        if not isinstance(event, dict) or event.keys() != expected:
             raise file.fail(f"{located}: expected an event {sorted(expected)}")
+        problem = _event_problem(event, markers)
+        if problem:
+            raise file.fail(f"{located}: {problem}")
     if events is None or len(events) != len(payloads) or not events:
         raise file.fail(f"{MARKERS_TOPIC}: expected one JSON event per message, from row 0")
     return list(events), messages
+
+
+_INT64 = range(-(2**63), 2**63)
+
+
+def _event_problem(event: dict[str, Any], markers: list[str]) -> str | None:
+    """Why a marker event's values are unusable (None if they are usable): the row a
+    non-negative int64, the time a finite number (s), each marker an int64 or null."""
+    row, time = event["row"], event["time"]
+    if type(row) is not int or not 0 <= row < 2**63:
+        return f"event row {row!r} is not a sample index (an integer from 0)"
+    finite = type(time) is float and math.isfinite(time)
+    if not (finite or (type(time) is int and abs(time) <= sys.float_info.max)):
+        return f"event time {time!r} is not a finite number of seconds"
+    for name in markers:
+        value = event[name]
+        if value is not None and (type(value) is not int or value not in _INT64):
+            return f"event {name} {value!r} is not an int64 or null"
+    return None

@@ -36,7 +36,7 @@ from pipeline.earth.frames import tool_axis
 from pipeline.survey.mincurve import REVERSAL_MARGIN, minimum_curvature
 from pipeline.tables import DLS_COURSE_M, DLS_UNIT, Stations
 
-__all__ = ["PathState", "Section", "WellPath", "WellPlan", "build_path"]
+__all__ = ["PathState", "Section", "StationProblem", "WellPath", "WellPlan", "build_path"]
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +52,19 @@ LENGTH_TOL = 1e-9
 #: Course length (m) of a dogleg severity in DLS_UNIT.
 
 _TWO_PI = 2.0 * np.pi
+
+
+class StationProblem(ValueError):
+    """A station the well path cannot be built through; ``station`` is its 0-based index."""
+
+    def __init__(self, station: int, message: str) -> None:
+        super().__init__(message)
+        self.station = station
+
+
+MIN_DLS = 1e-3
+"""Smallest dogleg severity of a plan's arc, deg/30m: a radius of curvature of 1,700 km (a
+45° build would be 1,350 km long); a smaller one is a hold. 5e-324 made the arc infinite."""
 
 
 class Section(BaseModel):
@@ -70,7 +83,11 @@ class Section(BaseModel):
     kind: Literal["vertical", "hold", "build", "drop", "turn", "curve"]
     length: float | None = Field(None, gt=0, description="section length along MD, m")
     to_md: float | None = Field(None, description="MD at the end of the section, m")
-    dls: float | None = Field(None, gt=0, description=f"dogleg severity of the arc, {DLS_UNIT}")
+    dls: float | None = Field(
+        None,
+        ge=MIN_DLS,
+        description=f"dogleg severity of the arc, {DLS_UNIT} (at least {MIN_DLS:g})",
+    )
     inc: float | None = Field(None, ge=0, le=180, description="target inclination, deg")
     azi: float | None = Field(None, description="target azimuth, deg clockwise from north")
 
@@ -165,14 +182,24 @@ class WellPath:
             )
         for name, values in (("md", md_a), ("inc", inc_d), ("azi", azi_d)):
             if not np.isfinite(values).all():
-                raise ValueError(f"{name}: station {_first(~np.isfinite(values))} is not finite")
+                k = _first(~np.isfinite(values))
+                raise StationProblem(k, f"{name}: station {k} is not finite")
         if (np.diff(md_a) <= 0).any():
             k = _first(np.diff(md_a) <= 0) + 1
-            raise ValueError(f"md: must increase strictly; station {k} is at {md_a[k]} m")
+            raise StationProblem(k, f"md: must increase strictly; station {k} is at {md_a[k]} m")
         if ((inc_d < 0) | (inc_d > 180)).any():
             k = _first((inc_d < 0) | (inc_d > 180))
-            raise ValueError(f"inc: station {k} is {inc_d[k]} deg, outside [0, 180]")
+            raise StationProblem(k, f"inc: station {k} is {inc_d[k]} deg, outside [0, 180]")
         inc_r, azi_r = np.radians(inc_d), np.radians(azi_d)
+        t = tool_axis(azi_r, inc_r)
+        beta = _dogleg(t[:-1], t[1:])
+        if (beta > np.pi - REVERSAL_MARGIN).any():
+            k = _first(beta > np.pi - REVERSAL_MARGIN) + 1
+            raise StationProblem(
+                k,
+                f"station {k} turns {np.degrees(beta[k - 1]):.3f} deg from the previous "
+                "station: a reversal has no unique circular arc",
+            )
         track = minimum_curvature(
             md_a,
             inc_r,
@@ -182,13 +209,12 @@ class WellPath:
             tie_tvd=md_a[0] if start_tvd is None else start_tvd,
         )
         r = np.stack([track.north, track.east, track.tvd], axis=-1)
-        t = tool_axis(azi_r, inc_r)
         return cls(
             md0=md_a[:-1],
             md1=md_a[1:],
             t0=t[:-1],
             t1=t[1:],
-            beta=_dogleg(t[:-1], t[1:]),
+            beta=beta,
             r0=r[:-1],
             vertical_azi=_wrap(azi_r[:-1]),
         )

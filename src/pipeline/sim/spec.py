@@ -11,12 +11,22 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PrivateAttr,
+    Tag,
+    field_validator,
+    model_validator,
+)
 
+from pipeline.contracts import SOURCE_LINE
 from pipeline.earth.site import Site
-from pipeline.errors import Location, Problem, SpecError
+from pipeline.errors import GyropipeError, Location, Problem, SpecError
 from pipeline.gyrocompass.positions import DEFAULT_POSITIONS
-from pipeline.sim.plan import WellPath, WellPlan, build_path
+from pipeline.sim.plan import StationProblem, WellPath, WellPlan, build_path
 from pipeline.sim.sensors import PRESETS, ToolModel, tool_preset
 from pipeline.yamlsource import load_mapping, validate_located
 
@@ -157,9 +167,28 @@ class StationsWell(Strict):
     start_tvd: float | None = Field(None, description="TVD of the first station, m (default MD)")
     _table: pa.Table | None = PrivateAttr(None)
 
-    def load(self, read: ReadStations) -> None:
-        """Read the stations file (``read(path, reader name)``, the engine's reader choice)."""
-        self._table = read(self.stations, self.reader)
+    def load(self, read: ReadStations, where: Location | None = None) -> None:
+        """Read the stations file (``read(path, reader name)``, the engine's reader choice)
+        and check a path runs through its stations. With ``where`` (the plan's ``stations:``
+        entry) a problem is a :class:`SpecError` there, giving the stations file's own
+        location (its line, or the station's row)."""
+        try:
+            self._table = read(self.stations, self.reader)
+            self.path()
+        except (GyropipeError, ValueError) as exc:
+            if where is None:
+                raise
+            inner = str(exc) if isinstance(exc, GyropipeError) else self._located(exc)
+            raise SpecError([Problem(where, f"well.stations: {inner}")]) from None
+
+    def _located(self, exc: ValueError) -> str:
+        """A path problem, at the station's line of the stations file (or its row)."""
+        table = self._table
+        if not isinstance(exc, StationProblem) or table is None:
+            return f"{self.stations}: {exc}" if str(self.stations) not in str(exc) else str(exc)
+        if SOURCE_LINE in table.column_names:
+            return f"{self.stations}:{table.column(SOURCE_LINE)[exc.station].as_py()}: {exc}"
+        return f"{self.stations}: row {exc.station + 1}: {exc}"
 
     def path(self) -> WellPath:
         table = self._table
@@ -180,13 +209,24 @@ class StationsWell(Strict):
         )
 
 
+def _well_kind(value: Any) -> str:
+    """The kind of well a plan gives: a stations file if it names one, else sections (its
+    problems are then reported against that kind alone)."""
+    if isinstance(value, BaseModel):  # an already validated well (model_copy, tests)
+        return "stations file" if isinstance(value, StationsWell) else "plan"
+    return "stations file" if isinstance(value, dict) and "stations" in value else "plan"
+
+
 class SimulationSpec(Strict):
     """A whole simulation: where, which well, which tool, which survey, which seed."""
 
     name: str = Field(description="simulation name")
     seed: int = Field(0, description="random seed: same seed, same output")
     site: Site
-    well: WellPlan | StationsWell = Field(description="a plan of sections or a stations file")
+    well: Annotated[
+        Annotated[WellPlan, Tag("plan")] | Annotated[StationsWell, Tag("stations file")],
+        Discriminator(_well_kind),
+    ] = Field(description="a plan of sections or a stations file")
     tool: ToolChoice
     survey: Survey
 
@@ -222,5 +262,5 @@ def load_simulation(
     if problems:
         raise SpecError(problems)
     if isinstance(spec.well, StationsWell) and read_stations is not None:
-        spec.well.load(read_stations)
+        spec.well.load(read_stations, source.locate(("well", "stations")))
     return spec

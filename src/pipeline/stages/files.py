@@ -105,6 +105,10 @@ class WriteParams(BaseModel):
         """Where the stage writes: ``filename``, or ``<stage id>.<extension>``."""
         return ctx.output_path(self.filename or f"{ctx.stage_id}.{extension}")
 
+    def output_names(self, stage_id: str, registry: Registry) -> list[str]:
+        """The file the stage writes (checked by the planner against the other stages')."""
+        return [self.filename or f"{stage_id}.{registry.writers[self.writer][0].extension}"]
+
 
 def read_stage(
     kind: str,

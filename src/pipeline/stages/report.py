@@ -27,7 +27,7 @@ from pipeline.drift.tables import (
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.tables import QcResults, QcSummary
-from pipeline.registry import StageContext, StageDef
+from pipeline.registry import Registry, StageContext, StageDef
 from pipeline.tables import CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
@@ -59,6 +59,10 @@ class ReportParams(BaseModel):
         "the last course to an end stop) is left out of the summary's maximum DLS and marked "
         "in the listing; 0 counts every course",
     )
+
+    def output_names(self, stage_id: str, registry: Registry) -> list[str]:
+        """The files the stage writes (checked by the planner against the other stages')."""
+        return [f"{self.filename or stage_id}.{fmt}" for fmt in self.formats]
 
 
 def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:

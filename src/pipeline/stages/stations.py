@@ -36,6 +36,9 @@ class MethodTrajectory(Trajectory):
 class PathPoints(Stations):
     """Points interpolated on the minimum-curvature path (positions NED from the wellhead)."""
 
+    md: float = column(  # points, not stations: no course between them, any MD step
+        unit="m", monotonic="strict", description="measured depth from the depth reference"
+    )
     azi: float = column(
         unit="deg",
         ge=0,
