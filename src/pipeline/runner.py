@@ -18,8 +18,9 @@ import shutil
 import tempfile
 import time
 import uuid
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, TypeAlias, TypeVar
 
@@ -37,9 +38,11 @@ from pipeline.registry import (
     StageSetup,
     WriterDef,
 )
+from pipeline.streams import Port, TableStream, as_stream, as_table
 from pipeline.version import __version__
-from pipeline.well import WellMetadata, attach, well_of
+from pipeline.well import WellMetadata, attach, attached, well_of
 
+T = TypeVar("T")
 MANIFEST = "run.json"
 STAGING_PREFIX = ".gyropipe-staging-"
 
@@ -61,6 +64,26 @@ class StageRecord:
     status: str = "pending"
 
 
+class Tables(Mapping[tuple[str, str], pa.Table]):
+    """Every stage output of a run by (stage id, port), as whole tables: a streamed output
+    is read into a table only when it is looked up (then kept)."""
+
+    def __init__(self, ports: Mapping[tuple[str, str], Port]) -> None:
+        self._ports = dict(ports)
+
+    def __getitem__(self, key: tuple[str, str]) -> pa.Table:
+        value = self._ports[key]
+        if isinstance(value, TableStream):
+            value = self._ports[key] = _settled(value.read_all)
+        return value
+
+    def __iter__(self) -> Iterator[tuple[str, str]]:
+        return iter(self._ports)
+
+    def __len__(self) -> int:
+        return len(self._ports)
+
+
 @dataclass
 class RunResult:
     """The outcome of a successful run: every stage output table by (stage id, port), the
@@ -68,9 +91,26 @@ class RunResult:
 
     out_dir: Path | None
     manifest: dict[str, Any]
-    tables: dict[tuple[str, str], pa.Table]
+    tables: Mapping[tuple[str, str], pa.Table]
     well: WellMetadata
     outputs: list[Path]
+
+
+class _Upstream(Exception):
+    """Carries the error of a stream's producer (or of its contract check) through the
+    stages consuming the stream, so that it is reported as the producer's."""
+
+    def __init__(self, error: BaseException) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+def _settled(call: Callable[[], T]) -> T:
+    """``call()``, an upstream stream's error raised as itself."""
+    try:
+        return call()
+    except _Upstream as exc:
+        raise exc.error from exc.error.__cause__
 
 
 Source: TypeAlias = "Path | pa.Table"
@@ -110,6 +150,23 @@ class _Context:
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
+    def read_input_stream(
+        self,
+        name: str,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[TableStream, WellMetadata]:
+        given = self.inputs[name]
+        if isinstance(given, pa.Table):
+            return TableStream.from_table(given), well_of(given) or WellMetadata()
+        stream, header = self.registry.read_stream(
+            given, kind, reader=reader, options=options, well=self.well
+        )
+        meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
+        return stream.replace_schema_metadata(meta), header
+
     def output_path(self, filename: str) -> Path:
         path = self.staging / filename
         if path.parent != self.staging or path in self.staged:
@@ -132,9 +189,6 @@ class _Context:
 
     def check(self, name: str) -> CheckDef:
         return _lookup(self.registry.checks, name, "check")
-
-
-T = TypeVar("T")
 
 
 def _lookup(table: Mapping[str, tuple[T, str]], name: str, kind: str) -> T:
@@ -172,38 +226,43 @@ def run_plan(
     overrides = well or WellMetadata()
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
-    staged: list[Path] = []
-    tables: dict[tuple[str, str], pa.Table] = {}
     records: list[StageRecord] = []
     provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
     with _staging(out_dir) as staging:
+        staged: list[Path] = []
+        ports: dict[tuple[str, str], Port] = {}
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
             if out_dir is None and not st.definition.outputs:
                 record.status = "skipped"  # it only writes files
                 continue
-            ins = {port: tables[src] for port, src in st.wiring.items()}
-            record.rows_in = {p: t.num_rows for p, t in ins.items()}
-            _check_ports(plan, st, ins, "input")
+            ins = _stage_inputs(plan, st, ports, record)
             ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
             t0 = time.perf_counter()
-            outs = _call(st, ins, ctx, registry)
+            outs = _settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
-            _check_ports(plan, st, outs, "output")
-            record.rows_out = {p: t.num_rows for p, t in outs.items()}
-            for port, table in outs.items():
-                header = well_of(table)
+            tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
+            _check_ports(plan, st, tables, "output")
+            record.rows_out = {p: t.num_rows for p, t in tables.items()}
+            for port, value in outs.items():
+                header = well_of(value.schema)
                 if header is not None:
                     from_files = from_files.merged(header)
-                tables[(st.id, port)] = table
+                if isinstance(value, TableStream):
+                    value = _produced(plan, st, port, value, registry, record)
+                ports[(st.id, port)] = value
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"
         if out_dir is None:
+            result = Tables(ports)
+            _settled(lambda: [result[key] for key in result])  # the API returns tables
             manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
-            return RunResult(None, manifest, tables, current, [])
-        written = staged + _persist(plan, registry, tables, current, staging)
+            return RunResult(None, manifest, result, current, [])
+        persisted = _settled(lambda: _persist(plan, registry, ports, current, staging))
+        _settled(lambda: _drain(plan, ports, records))
+        written = staged + persisted
         clashes = {p.name for p in written if written.count(p) > 1} | (
             {MANIFEST} & {p.name for p in written}
         )
@@ -218,7 +277,100 @@ def run_plan(
         )
         atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
         replace_dir(staging, out_dir)
-    return RunResult(out_dir, manifest, tables, current, final)
+    return RunResult(out_dir, manifest, Tables(ports), current, final)
+
+
+def _stage_inputs(
+    plan: Plan, st: PlannedStage, ports: dict[tuple[str, str], Port], record: StageRecord
+) -> dict[str, Port]:
+    """The stage's inputs by port: a stream on a streamed input port (a table cut into
+    slices; checked per batch as it passes unless its producer checked the same contract),
+    a table on any other (a stream read whole once, and kept for the next consumer)."""
+    ins: dict[str, Port] = {}
+    for port, src in st.wiring.items():
+        value = ports[src]
+        if port not in st.definition.streamed_inputs:
+            if isinstance(value, TableStream):
+                value = ports[src] = _settled(value.read_all)
+            ins[port] = value
+            continue
+        stream = as_stream(value)
+        if not _checked_upstream(plan, st, port):
+            stream = _checked(plan, st, port, stream, "input")
+        ins[port] = _counted(stream, record.rows_in, port)
+    tables = {p: t for p, t in ins.items() if isinstance(t, pa.Table)}
+    record.rows_in = {p: t.num_rows for p, t in tables.items()}
+    _check_ports(plan, st, tables, "input")
+    return ins
+
+
+def _checked(
+    plan: Plan, st: PlannedStage, port: str, stream: TableStream, direction: str
+) -> TableStream:
+    """``stream`` checked batch by batch against the port's contract, a violation located
+    at the port and carried to whoever consumes the stream."""
+    contracts = st.definition.inputs if direction == "input" else st.definition.outputs
+    checked = contracts[port].validate_stream(stream)
+
+    def located() -> Iterator[pa.RecordBatch]:
+        try:
+            yield from checked
+        except ContractViolation as exc:
+            where = exc.located(
+                pipeline=plan.spec.name, stage=st.id, port=port, direction=direction
+            )
+            raise _Upstream(where) from None
+
+    return TableStream(stream.schema, located)
+
+
+def _produced(
+    plan: Plan,
+    st: PlannedStage,
+    port: str,
+    stream: TableStream,
+    registry: Registry,
+    record: StageRecord,
+) -> TableStream:
+    """A stage's streamed output as its consumers get it: a failure while it is computed
+    is the producing stage's :class:`StageError`; its batches are checked against the
+    output contract, and counted (``rows_out``)."""
+    plugin = registry.plugin_label(st.plugin)
+
+    def attributed() -> Iterator[pa.RecordBatch]:
+        try:
+            yield from stream
+        except _Upstream:
+            raise
+        except Exception as exc:  # any failure inside a stage is reported as that stage's
+            raise _Upstream(StageError(st.id, st.uses, plugin, exc)) from exc
+
+    checked = _checked(plan, st, port, TableStream(stream.schema, attributed), "output")
+    return _counted(checked, record.rows_out, port)
+
+
+def _counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream:
+    """``stream`` setting ``rows[port]`` to the rows of each pass that runs to its end."""
+
+    def counting() -> Iterator[pa.RecordBatch]:
+        n = 0
+        for batch in stream:
+            n += batch.num_rows
+            yield batch
+        rows[port] = n
+
+    return TableStream(stream.schema, counting)
+
+
+def _drain(plan: Plan, ports: Mapping[tuple[str, str], Port], records: list[StageRecord]) -> None:
+    """Run one pass of every streamed output that nothing consumed to its end, so that its
+    errors are raised and its rows counted as a table's would be."""
+    for st, record in zip(plan.stages, records, strict=True):
+        for port in st.definition.outputs:
+            value = ports.get((st.id, port))
+            if isinstance(value, TableStream) and port not in record.rows_out:
+                for _ in value:
+                    pass
 
 
 @contextlib.contextmanager
@@ -289,20 +441,31 @@ def run_stage(
     files (if any) into ``out_dir``. Returns its output tables and the files written."""
     _check_contracts("", stage, inputs, "input")
     ctx = _Context(stage.id, well, registry, {}, out_dir, [], provenance)
-    outputs = _call(stage, dict(inputs), ctx, registry)
+    given: dict[str, Port] = {
+        port: TableStream.from_table(table) if port in stage.definition.streamed_inputs else table
+        for port, table in inputs.items()
+    }
+    outs = _call(stage, given, ctx, registry)
+    outputs = {port: _settled(partial(as_table, value)) for port, value in outs.items()}
     _check_contracts("", stage, outputs, "output")
     return outputs, ctx.staged
 
 
 def _call(
-    st: PlannedStage, ins: dict[str, pa.Table], ctx: _Context, registry: Registry
-) -> dict[str, pa.Table]:
+    st: PlannedStage, ins: dict[str, Port], ctx: _Context, registry: Registry
+) -> dict[str, Port]:
     plugin = registry.plugin_label(st.plugin)
     try:
         outs = st.definition.func(ins, st.params, ctx)
+    except _Upstream:
+        raise
     except Exception as exc:  # any failure inside a stage is reported as that stage's
         raise StageError(st.id, st.uses, plugin, exc) from exc
-    if not isinstance(outs, Mapping) or not all(isinstance(t, pa.Table) for t in outs.values()):
+    streamed = st.definition.streamed_outputs
+    if not isinstance(outs, Mapping) or not all(
+        isinstance(t, pa.Table) or (isinstance(t, TableStream) and p in streamed)
+        for p, t in outs.items()
+    ):
         raise StageError(
             st.id, st.uses, plugin, TypeError("must return a mapping of port name → pyarrow.Table")
         )
@@ -365,7 +528,7 @@ def _check_inputs(plan: Plan, given: Mapping[str, Source]) -> dict[str, Source]:
 def _persist(
     plan: Plan,
     registry: Registry,
-    tables: dict[tuple[str, str], pa.Table],
+    ports: Mapping[tuple[str, str], Port],
     well: WellMetadata,
     staging: Path,
 ) -> list[Path]:
@@ -374,9 +537,18 @@ def _persist(
     for st in plan.stages:
         for port in st.persist:
             path = staging / f"{st.id}.{port}.{writer.extension}"
-            writer.write(attach(tables[(st.id, port)], well), path, well)
+            write_port(writer, ports[(st.id, port)], path, well)
             paths.append(path)
     return paths
+
+
+def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -> None:
+    """Write a port's table or stream with ``well`` attached: a stream batch by batch when
+    the writer can (``write_stream``), else concatenated."""
+    if isinstance(value, TableStream) and writer.write_stream is not None:
+        writer.write_stream(value.replace_schema_metadata(attached(value.schema, well)), path, well)
+    else:
+        writer.write(attach(as_table(value), well), path, well)
 
 
 def _provenance(
