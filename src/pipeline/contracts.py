@@ -234,8 +234,8 @@ class BatchChecker:
             ]
             raise ContractViolation(exc.contract, failures, source=exc.source) from None
         self.offset += batch.num_rows
-        if batch.num_rows:
-            self.last = pa.Table.from_batches([batch.slice(batch.num_rows - 1)])
+        if batch.num_rows:  # a copy: a slice would keep the whole batch alive
+            self.last = pa.Table.from_batches([batch.take([batch.num_rows - 1])])
 
 
 def _check_column(

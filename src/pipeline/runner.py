@@ -18,7 +18,7 @@ import shutil
 import tempfile
 import time
 import uuid
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -30,6 +30,7 @@ from pipeline.atomic import atomic_write_bytes, fsync_file, replace_dir
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import ContractViolation, GyropipeError, StageError
 from pipeline.graph import Plan, PlannedStage
+from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
 from pipeline.registry import (
     CheckDef,
     InputFile,
@@ -40,7 +41,7 @@ from pipeline.registry import (
 )
 from pipeline.streams import Port, TableStream, as_stream, as_table
 from pipeline.version import __version__
-from pipeline.well import WellMetadata, attach, attached, well_of
+from pipeline.well import WellMetadata, well_of
 
 T = TypeVar("T")
 MANIFEST = "run.json"
@@ -64,26 +65,6 @@ class StageRecord:
     status: str = "pending"
 
 
-class Tables(Mapping[tuple[str, str], pa.Table]):
-    """Every stage output of a run by (stage id, port), as whole tables: a streamed output
-    is read into a table only when it is looked up (then kept)."""
-
-    def __init__(self, ports: Mapping[tuple[str, str], Port]) -> None:
-        self._ports = dict(ports)
-
-    def __getitem__(self, key: tuple[str, str]) -> pa.Table:
-        value = self._ports[key]
-        if isinstance(value, TableStream):
-            value = self._ports[key] = _settled(value.read_all)
-        return value
-
-    def __iter__(self) -> Iterator[tuple[str, str]]:
-        return iter(self._ports)
-
-    def __len__(self) -> int:
-        return len(self._ports)
-
-
 @dataclass
 class RunResult:
     """The outcome of a successful run: every stage output table by (stage id, port), the
@@ -94,23 +75,6 @@ class RunResult:
     tables: Mapping[tuple[str, str], pa.Table]
     well: WellMetadata
     outputs: list[Path]
-
-
-class _Upstream(Exception):
-    """Carries the error of a stream's producer (or of its contract check) through the
-    stages consuming the stream, so that it is reported as the producer's."""
-
-    def __init__(self, error: BaseException) -> None:
-        super().__init__(str(error))
-        self.error = error
-
-
-def _settled(call: Callable[[], T]) -> T:
-    """``call()``, an upstream stream's error raised as itself."""
-    try:
-        return call()
-    except _Upstream as exc:
-        raise exc.error from exc.error.__cause__
 
 
 Source: TypeAlias = "Path | pa.Table"
@@ -241,11 +205,11 @@ def run_plan(
             ins = _stage_inputs(plan, st, ports, record)
             ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
             t0 = time.perf_counter()
-            outs = _settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
+            outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
             tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
             _check_ports(plan, st, tables, "output")
-            record.rows_out = {p: t.num_rows for p, t in tables.items()}
+            record.rows_out.update({p: t.num_rows for p, t in tables.items()})
             for port, value in outs.items():
                 header = well_of(value.schema)
                 if header is not None:
@@ -257,11 +221,11 @@ def run_plan(
             record.status = "ok"
         if out_dir is None:
             result = Tables(ports)
-            _settled(lambda: [result[key] for key in result])  # the API returns tables
+            settled(lambda: [result[key] for key in result])  # the API returns tables
             manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
             return RunResult(None, manifest, result, current, [])
-        persisted = _settled(lambda: _persist(plan, registry, ports, current, staging))
-        _settled(lambda: _drain(plan, ports, records))
+        persisted = settled(lambda: _persist(plan, registry, ports, current, staging))
+        settled(lambda: _drain(plan, ports, records))
         written = staged + persisted
         clashes = {p.name for p in written if written.count(p) > 1} | (
             {MANIFEST} & {p.name for p in written}
@@ -291,15 +255,15 @@ def _stage_inputs(
         value = ports[src]
         if port not in st.definition.streamed_inputs:
             if isinstance(value, TableStream):
-                value = ports[src] = _settled(value.read_all)
+                value = ports[src] = settled(value.read_all)
             ins[port] = value
             continue
         stream = as_stream(value)
         if not _checked_upstream(plan, st, port):
             stream = _checked(plan, st, port, stream, "input")
-        ins[port] = _counted(stream, record.rows_in, port)
+        ins[port] = counted(stream, record.rows_in, port)
     tables = {p: t for p, t in ins.items() if isinstance(t, pa.Table)}
-    record.rows_in = {p: t.num_rows for p, t in tables.items()}
+    record.rows_in.update({p: t.num_rows for p, t in tables.items()})
     _check_ports(plan, st, tables, "input")
     return ins
 
@@ -319,7 +283,7 @@ def _checked(
             where = exc.located(
                 pipeline=plan.spec.name, stage=st.id, port=port, direction=direction
             )
-            raise _Upstream(where) from None
+            raise UpstreamError(where) from None
 
     return TableStream(stream.schema, located)
 
@@ -340,26 +304,15 @@ def _produced(
     def attributed() -> Iterator[pa.RecordBatch]:
         try:
             yield from stream
-        except _Upstream:
+        except UpstreamError:
             raise
         except Exception as exc:  # any failure inside a stage is reported as that stage's
-            raise _Upstream(StageError(st.id, st.uses, plugin, exc)) from exc
+            error = StageError(st.id, st.uses, plugin, exc)
+            error.__cause__ = exc
+            raise UpstreamError(error) from exc
 
     checked = _checked(plan, st, port, TableStream(stream.schema, attributed), "output")
-    return _counted(checked, record.rows_out, port)
-
-
-def _counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream:
-    """``stream`` setting ``rows[port]`` to the rows of each pass that runs to its end."""
-
-    def counting() -> Iterator[pa.RecordBatch]:
-        n = 0
-        for batch in stream:
-            n += batch.num_rows
-            yield batch
-        rows[port] = n
-
-    return TableStream(stream.schema, counting)
+    return counted(checked, record.rows_out, port)
 
 
 def _drain(plan: Plan, ports: Mapping[tuple[str, str], Port], records: list[StageRecord]) -> None:
@@ -446,7 +399,7 @@ def run_stage(
         for port, table in inputs.items()
     }
     outs = _call(stage, given, ctx, registry)
-    outputs = {port: _settled(partial(as_table, value)) for port, value in outs.items()}
+    outputs = {port: settled(partial(as_table, value)) for port, value in outs.items()}
     _check_contracts("", stage, outputs, "output")
     return outputs, ctx.staged
 
@@ -457,7 +410,7 @@ def _call(
     plugin = registry.plugin_label(st.plugin)
     try:
         outs = st.definition.func(ins, st.params, ctx)
-    except _Upstream:
+    except UpstreamError:
         raise
     except Exception as exc:  # any failure inside a stage is reported as that stage's
         raise StageError(st.id, st.uses, plugin, exc) from exc
@@ -540,15 +493,6 @@ def _persist(
             write_port(writer, ports[(st.id, port)], path, well)
             paths.append(path)
     return paths
-
-
-def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -> None:
-    """Write a port's table or stream with ``well`` attached: a stream batch by batch when
-    the writer can (``write_stream``), else concatenated."""
-    if isinstance(value, TableStream) and writer.write_stream is not None:
-        writer.write_stream(value.replace_schema_metadata(attached(value.schema, well)), path, well)
-    else:
-        writer.write(attach(as_table(value), well), path, well)
 
 
 def _provenance(

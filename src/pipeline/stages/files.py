@@ -27,6 +27,7 @@ from pipeline.contracts import TableContract
 from pipeline.errors import WrongKindError
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
+from pipeline.ports import write_port
 from pipeline.registry import (
     Registry,
     StageContext,
@@ -34,7 +35,6 @@ from pipeline.registry import (
     pipeline_input,
     registered,
 )
-from pipeline.runner import write_port
 from pipeline.streams import Port, TableStream
 from pipeline.tables import AnyTable, PositionReadings, RawSamples, Stations
 from pipeline.well import attach, attached
