@@ -24,6 +24,8 @@ from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
 from pipeline.well import WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
+READ_BUFFER = 1 << 20
+"""Bytes read from the file at a time when streaming."""
 KINDS: dict[str, type[TableContract]] = {
     "stations": Stations,
     "samples": RawSamples,
@@ -63,7 +65,8 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
 
 def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
     """:func:`read` as a stream: the schema and well metadata from the file's footer, the
-    rows a row group at a time (batches of at most :data:`BATCH_ROWS` rows) on each pass."""
+    rows in batches of at most :data:`BATCH_ROWS` rows, row group after row group, the
+    column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole)."""
     try:
         schema = pq.read_schema(path)
     except (OSError, pa.ArrowException) as exc:
@@ -71,9 +74,9 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     _check_kind(path, kind, schema)
 
     def batches() -> Iterator[pa.RecordBatch]:
-        try:
-            with pq.ParquetFile(path) as file:
-                yield from file.iter_batches(batch_size=BATCH_ROWS)
+        try:  # buffered reads, not the whole row group at once (they hold ~1 M rows)
+            with pq.ParquetFile(path, pre_buffer=False, buffer_size=READ_BUFFER) as file:
+                yield from file.iter_batches(batch_size=BATCH_ROWS, use_threads=False)
         except (OSError, pa.ArrowException) as exc:
             raise _unreadable(path, exc) from exc
 
