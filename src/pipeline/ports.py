@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from typing import TypeVar
+from typing import Generic, TypeVar
 
 import pyarrow as pa
 
@@ -15,22 +15,28 @@ from pipeline.streams import Port, TableStream, as_table
 from pipeline.well import WellMetadata, attach, attached
 
 T = TypeVar("T")
+K = TypeVar("K")
+K2 = TypeVar("K2")
 
 
-class Tables(Mapping[tuple[str, str], pa.Table]):
-    """Every stage output of a run by (stage id, port), as whole tables: a streamed output
-    is read into a table only when it is looked up (then kept)."""
+class Tables(Mapping[K, pa.Table], Generic[K]):
+    """Every stage output of a run (by (stage id, port), or another key), as whole tables: a
+    streamed output is read into a table only when it is looked up (then kept)."""
 
-    def __init__(self, ports: Mapping[tuple[str, str], Port]) -> None:
+    def __init__(self, ports: Mapping[K, Port]) -> None:
         self._ports = dict(ports)
 
-    def __getitem__(self, key: tuple[str, str]) -> pa.Table:
+    def keyed(self, key: Callable[[K], K2]) -> Tables[K2]:
+        """The same outputs under other keys (nothing is read)."""
+        return Tables({key(k): v for k, v in self._ports.items()})
+
+    def __getitem__(self, key: K) -> pa.Table:
         value = self._ports[key]
         if isinstance(value, TableStream):
             value = self._ports[key] = settled(value.read_all)
         return value
 
-    def __iter__(self) -> Iterator[tuple[str, str]]:
+    def __iter__(self) -> Iterator[K]:
         return iter(self._ports)
 
     def __len__(self) -> int:

@@ -72,7 +72,7 @@ class RunResult:
 
     out_dir: Path | None
     manifest: dict[str, Any]
-    tables: Mapping[tuple[str, str], pa.Table]
+    tables: Tables[tuple[str, str]]
     well: WellMetadata
     outputs: list[Path]
 
