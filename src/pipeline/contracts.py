@@ -208,23 +208,30 @@ class CompiledContract:
 
 class BatchChecker:
     """Checks one pass of a stream, batch by batch, as :meth:`CompiledContract.validate`
-    checks a whole table: each batch is checked with the last row of the batch before it
-    prepended (that row passed already), so order (``monotonic``, within groups) is checked
-    across batch boundaries too; rows named in a failure count from the start of the stream
-    (file lines, when the batches carry ``source_line``, are the rows' own)."""
+    checks a whole table: each batch alone (zero-copy), then the step from the last row of
+    the batch before to its first row (both passed), so order (``monotonic``, within groups)
+    is checked across batch boundaries too. The first batch that breaks a rule raises,
+    naming its failures; rows count from the start of the stream (file lines, when the
+    batches carry ``source_line``, are the rows' own)."""
 
     def __init__(self, contract: CompiledContract) -> None:
         self.contract = contract
         self.offset = 0
         """rows checked so far"""
         self.last: pa.Table | None = None
+        self.ordered = any(c.monotonic for c in contract.columns)
 
     def check(self, batch: pa.RecordBatch) -> None:
         """Raise :class:`ContractViolation` if ``batch`` (the next one) breaks the contract."""
         table = pa.Table.from_batches([batch])
-        shift = self.offset
-        if self.last is not None:
-            table, shift = pa.concat_tables([self.last, table]), shift - 1
+        self._validate(table, self.offset)
+        if self.last is not None and self.ordered and batch.num_rows:
+            self._validate(pa.concat_tables([self.last, table.slice(0, 1)]), self.offset - 1)
+        self.offset += batch.num_rows
+        if batch.num_rows:  # a copy: a slice would keep the whole batch alive
+            self.last = pa.Table.from_batches([batch.take([batch.num_rows - 1])])
+
+    def _validate(self, table: pa.Table, shift: int) -> None:
         try:
             self.contract.validate(table)
         except ContractViolation as exc:
@@ -233,9 +240,6 @@ class BatchChecker:
                 for f in exc.failures
             ]
             raise ContractViolation(exc.contract, failures, source=exc.source) from None
-        self.offset += batch.num_rows
-        if batch.num_rows:  # a copy: a slice would keep the whole batch alive
-            self.last = pa.Table.from_batches([batch.take([batch.num_rows - 1])])
 
 
 def _check_column(
