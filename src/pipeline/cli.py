@@ -123,7 +123,7 @@ def run(
 ) -> None:
     """Run a pipeline on one well's input files."""
     from pipeline.api.run import execute
-    from pipeline.qc.tables import diagnosis_lines
+    from pipeline.qc.tables import QcSummary, diagnosis_lines
     from pipeline.runner import RunInputError
 
     registry = _registry(disabled)
@@ -145,9 +145,13 @@ def run(
     for stage in result.manifest["stages"]:
         rows = ", ".join(f"{p}={n}" for p, n in stage["rows_out"].items()) or "-"
         click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
-    for name, table in result.tables.items():
-        for line in diagnosis_lines(name, table):
-            click.echo(line)
+    for stage in plan.stages:  # validity summaries only: other outputs are not read back
+        for port, contract in stage.definition.outputs.items():
+            if contract is QcSummary:
+                for line in diagnosis_lines(
+                    f"{stage.id}.{port}", result.tables[f"{stage.id}.{port}"]
+                ):
+                    click.echo(line)
     for path in result.outputs:
         click.echo(f"wrote {path}")
     click.echo(f"ok: {Path(out_dir) / 'run.json'}")

@@ -17,6 +17,7 @@ field's metadata under ``unit`` and are checked; azimuth columns also carry
 from __future__ import annotations
 
 import types
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from functools import cache
 from typing import Any, ClassVar, Literal, Union, cast, get_args, get_origin
@@ -27,6 +28,7 @@ import pyarrow.compute as pc
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.errors import ContractViolation, RuleFailure
+from pipeline.streams import TableStream
 
 UNIT_KEY = b"unit"
 SOURCE_KEY = b"gyropipe.source"
@@ -114,6 +116,19 @@ class TableContract(BaseModel):
     def validate_table(cls, table: pa.Table) -> None:
         """Raise :class:`ContractViolation` listing every rule the table breaks."""
         cls.compiled().validate(table)
+
+    @classmethod
+    def validate_stream(cls, stream: TableStream) -> TableStream:
+        """``stream`` with every batch of every pass checked as it passes
+        (:class:`BatchChecker`): a violation is raised when its batch is reached."""
+
+        def checked() -> Iterator[pa.RecordBatch]:
+            checker = BatchChecker(cls.compiled())
+            for batch in stream:
+                checker.check(batch)
+                yield batch
+
+        return TableStream(stream.schema, checked)
 
 
 @dataclass(frozen=True)
@@ -208,6 +223,42 @@ class CompiledContract:
             return None
         keys: pa.ChunkedArray = table.column(self.group_by)
         return keys
+
+
+class BatchChecker:
+    """Checks one pass of a stream, batch by batch, as :meth:`CompiledContract.validate`
+    checks a whole table: each batch alone (zero-copy), then the step from the last row of
+    the batch before to its first row (both passed), so order (``monotonic``, within groups)
+    is checked across batch boundaries too. The first batch that breaks a rule raises,
+    naming its failures; rows count from the start of the stream (file lines, when the
+    batches carry ``source_line``, are the rows' own)."""
+
+    def __init__(self, contract: CompiledContract) -> None:
+        self.contract = contract
+        self.offset = 0
+        """rows checked so far"""
+        self.last: pa.Table | None = None
+        self.ordered = any(c.monotonic for c in contract.columns)
+
+    def check(self, batch: pa.RecordBatch) -> None:
+        """Raise :class:`ContractViolation` if ``batch`` (the next one) breaks the contract."""
+        table = pa.Table.from_batches([batch])
+        self._validate(table, self.offset)
+        if self.last is not None and self.ordered and batch.num_rows:
+            self._validate(pa.concat_tables([self.last, table.slice(0, 1)]), self.offset - 1)
+        self.offset += batch.num_rows
+        if batch.num_rows:  # a copy: a slice would keep the whole batch alive
+            self.last = pa.Table.from_batches([batch.take([batch.num_rows - 1])])
+
+    def _validate(self, table: pa.Table, shift: int) -> None:
+        try:
+            self.contract.validate(table)
+        except ContractViolation as exc:
+            failures = [
+                replace(f, examples=tuple((i + shift, v) for i, v in f.examples))
+                for f in exc.failures
+            ]
+            raise ContractViolation(exc.contract, failures, source=exc.source) from None
 
 
 def _check_column(

@@ -25,7 +25,10 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
     """Register stage types: call ``register(StageDef(...))`` for each.
 
     A stage's name is what a pipeline's ``uses:`` refers to; it must be unique across
-    plugins (lower-case, digits, ``_`` and ``.``; prefix with your plugin name).
+    plugins (lower-case, digits, ``_`` and ``.``; prefix with your plugin name). Ports named
+    in ``StageDef.streamed_inputs`` / ``streamed_outputs`` carry a
+    :class:`~pipeline.streams.TableStream` (record batches, checked batch by batch) instead
+    of a whole table; every other port a whole table (docs/architecture.md, "Streamed ports").
     """
 
 

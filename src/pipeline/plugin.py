@@ -35,7 +35,9 @@ What is here:
 - registering: :data:`hookimpl` and the records :class:`StageDef`, :class:`ReaderDef`
   (its ``sniff`` returns a :class:`Claim`), :class:`WriterDef`, :class:`CheckDef`; params
   helpers :class:`NoParams`, :func:`pipeline_input`, :func:`registered`; what a stage is
-  given, :class:`StageContext` and :class:`Provenance`;
+  given, :class:`StageContext` and :class:`Provenance`; :class:`TableStream`, what a
+  streamed port carries (a schema and record batches: ``StageDef.streamed_inputs`` /
+  ``streamed_outputs``, ``ReaderDef.stream``, ``WriterDef.write_stream``);
 - tables: :class:`TableContract` and :func:`column`, the standard contracts
   (:class:`Stations`, :class:`RawSamples`, :class:`PositionReadings`, :class:`Trajectory`,
   :class:`CheckResults`, :class:`AnyTable`…) and the metadata keys :data:`SOURCE_LINE`,
@@ -80,6 +82,7 @@ from pipeline.registry import (
     pipeline_input,
     registered,
 )
+from pipeline.streams import TableStream
 from pipeline.tables import (
     AnyTable,
     CheckResults,
@@ -132,6 +135,7 @@ __all__ = [
     "StageDef",
     "Stations",
     "TableContract",
+    "TableStream",
     "Trajectory",
     "UnitError",
     "WellMetadata",

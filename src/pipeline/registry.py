@@ -8,7 +8,7 @@ from __future__ import annotations
 import datetime as dt
 import enum
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -16,7 +16,7 @@ from typing import Any, Protocol
 import pyarrow as pa
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, ValidationInfo
 
-from pipeline.contracts import TableContract
+from pipeline.contracts import BatchChecker, TableContract
 from pipeline.errors import (
     ContractViolation,
     GyropipeError,
@@ -27,6 +27,7 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
+from pipeline.streams import Port, TableStream
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
 NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
@@ -133,6 +134,18 @@ class StageContext(Protocol):
         carries: read from its file by :meth:`read_file`, or the table the caller gave."""
         ...
 
+    def read_input_stream(
+        self,
+        name: str,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[TableStream, WellMetadata]:
+        """:meth:`read_input` as a stream of record batches (:meth:`Registry.read_stream`):
+        the file is read a batch at a time; a table the caller gave is cut into slices."""
+        ...
+
     def output_path(self, filename: str) -> Path:
         """Where a writer stage writes ``filename``; published atomically when the run ends."""
         ...
@@ -154,7 +167,7 @@ class StageContext(Protocol):
     def check(self, name: str) -> CheckDef: ...
 
 
-StageFunc = Callable[[Mapping[str, pa.Table], Any, StageContext], Mapping[str, pa.Table]]
+StageFunc = Callable[[Mapping[str, Any], Any, StageContext], Mapping[str, Port]]
 
 
 @dataclass(frozen=True)
@@ -164,6 +177,15 @@ class StageDef:
     ``func(inputs, params, ctx)`` receives the input tables by port name, an instance of
     ``params`` and a :class:`StageContext`; it returns the output tables by port name.
     Ports in ``optional_inputs`` may be left unwired (they are then absent from ``inputs``).
+
+    Streamed ports: an input port named in ``streamed_inputs`` receives a
+    :class:`~pipeline.streams.TableStream` (a schema and record batches, each pass read
+    afresh) whatever its upstream produced — a whole table is cut into slices; every other
+    input port receives a whole ``pyarrow.Table`` — a stream is concatenated for it. An
+    output port named in ``streamed_outputs`` may return a ``TableStream`` (or a table). The
+    engine checks a stream's batches against the port's contract as they pass (rows in
+    errors count from the start of the stream) and writes a streamed output that is
+    persisted, or given to the ``write`` stage, batch by batch.
     """
 
     name: str
@@ -173,6 +195,8 @@ class StageDef:
     outputs: Mapping[str, type[TableContract]] = field(default_factory=dict)
     params: type[BaseModel] = NoParams
     optional_inputs: frozenset[str] = frozenset()
+    streamed_inputs: frozenset[str] = frozenset()
+    streamed_outputs: frozenset[str] = frozenset()
 
 
 class Claim(enum.IntEnum):
@@ -198,7 +222,12 @@ class ReaderDef:
     well metadata found in the file; ``options`` is an instance of the ``options`` model.
     ``sniff(path)`` says how sure the reader is that the file is its own (:class:`Claim`);
     it must not raise. ``recognises`` says in a few words what it claims (for
-    ``gyropipe plugins``; default: the first line of ``sniff``'s docstring)."""
+    ``gyropipe plugins``; default: the first line of ``sniff``'s docstring).
+
+    ``stream(path, kind, options)``, when given, reads the same table as a
+    :class:`~pipeline.streams.TableStream` (schema known up front, the file read a batch at a
+    time on each pass) and the well metadata; a reader without it is read whole and the
+    engine cuts the table into slices (:meth:`Registry.read_stream`)."""
 
     name: str
     description: str
@@ -207,6 +236,7 @@ class ReaderDef:
     sniff: Callable[[Path], Claim | bool]
     options: type[BaseModel] = NoParams
     recognises: str = ""
+    stream: Callable[[Path, str, Any], tuple[TableStream, WellMetadata]] | None = None
 
     def claim(self, path: Path) -> Claim:
         """:meth:`sniff` as a :class:`Claim`; a sniff that raises claims nothing."""
@@ -227,12 +257,15 @@ class ReaderDef:
 @dataclass(frozen=True)
 class WriterDef:
     """A table writer: ``write(table, path, well)`` writes one file (the caller makes it
-    atomic)."""
+    atomic); ``write_stream(stream, path, well)``, when given, writes a
+    :class:`~pipeline.streams.TableStream` batch by batch (else the stream is concatenated
+    and given to ``write``)."""
 
     name: str
     description: str
     extension: str
     write: Callable[[pa.Table, Path, WellMetadata], None]
+    write_stream: Callable[[TableStream, Path, WellMetadata], None] | None = None
     write_tables: (
         Callable[[Mapping[str, pa.Table], Path, WellMetadata, Provenance], None] | None
     ) = None
@@ -365,17 +398,60 @@ class Registry:
         """
         chosen = self.reader_for(path, kind, reader)
         parsed = reader_options(chosen, options or {}, well)
-        owner = self.readers[chosen.name][1]
+        table, found = self._reading(chosen, lambda: chosen.read(path, kind, parsed))
+        check_read(path, kind, chosen, table)
+        return table, found
+
+    def read_stream(
+        self,
+        path: Path,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+        well: WellMetadata | None = None,
+    ) -> tuple[TableStream, WellMetadata]:
+        """:meth:`read` as a stream: the reader's ``stream`` when it has one, else its table
+        cut into slices. The schema is checked for the kind's columns at once, each batch
+        against the kind's contract as it passes (the same errors as :meth:`read`, rows
+        counted from the start of the file's table); a reader's failure while streaming is
+        reported as :meth:`read` reports it."""
+        chosen = self.reader_for(path, kind, reader)
+        parsed = reader_options(chosen, options or {}, well)
+        if chosen.stream is None:
+            table, found = self.read(path, kind, reader=chosen.name, options=options, well=well)
+            return TableStream.from_table(table), found
+        opener = chosen.stream
+        stream, found = self._reading(chosen, lambda: opener(path, kind, parsed))
+        check_columns(path, kind, chosen, stream.schema.names)
+        contract = chosen.kinds[kind].compiled()
+
+        def checked() -> Iterator[pa.RecordBatch]:
+            checker = BatchChecker(contract)
+            batches = iter(stream)
+            while True:
+                batch = self._reading(chosen, lambda: next(batches, None))
+                if batch is None:
+                    return
+                try:
+                    checker.check(batch)
+                except ContractViolation as exc:
+                    raise read_violation(path, kind, chosen, exc) from None
+                yield batch
+
+        return TableStream(stream.schema, checked), found
+
+    def _reading(self, reader: ReaderDef, call: Callable[[], Any]) -> Any:
+        """``call()``, a reader's failure reported as :meth:`read` says."""
+        owner = self.readers[reader.name][1]
         try:
-            table, found = chosen.read(path, kind, parsed)
+            return call()
         except GyropipeError as exc:
             if self._builtin(owner):
                 raise
-            raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
+            raise ReaderError(reader.name, self.plugin_label(owner), exc) from exc
         except Exception as exc:  # a reader's bug is reported against the reader
-            raise ReaderError(chosen.name, self.plugin_label(owner), exc) from exc
-        check_read(path, kind, chosen, table)
-        return table, found
+            raise ReaderError(reader.name, self.plugin_label(owner), exc) from exc
 
     def check_reader_options(self, kind: str, reader: str, options: Mapping[str, Any]) -> None:
         """Raise the :class:`ValidationError` of ``options`` for the reader called ``reader``
@@ -419,24 +495,34 @@ def check_read(path: Path, kind: str, reader: ReaderDef, table: pa.Table) -> Non
     inclination past 180°, a Parquet or MCAP column in another unit) is the file's fault,
     named with the line of its first bad row (when the table records lines) and every
     rule broken, on one line."""
-    contract = reader.kinds[kind]
-    missing = [
-        c.name
-        for c in contract.compiled().columns
-        if c.required and c.name not in table.column_names
-    ]
+    check_columns(path, kind, reader, table.column_names)
+    try:
+        reader.kinds[kind].validate_table(table)
+    except ContractViolation as exc:
+        raise read_violation(path, kind, reader, exc) from None
+
+
+def check_columns(path: Path, kind: str, reader: ReaderDef, names: list[str]) -> None:
+    """A :class:`WrongKindError` unless the columns ``names`` read from ``path`` include
+    every column the kind requires (else it is a file of another kind)."""
+    columns = reader.kinds[kind].compiled().columns
+    missing = [c.name for c in columns if c.required and c.name not in names]
     if missing:  # a reader of any kind of table (Parquet) found another kind's
         raise WrongKindError(
             path, f"not {kind}: no column {', '.join(map(repr, missing))} (reader {reader.name!r})"
         )
-    try:
-        contract.validate_table(table)
-    except ContractViolation as exc:
-        lines = [n for failure in exc.failures for n in failure.lines]
-        rules = "; ".join(map(str, exc.failures))
-        raise InputFileError(
-            path, f"not valid as {kind} (reader {reader.name!r}): {rules}", min(lines, default=0)
-        ) from None
+
+
+def read_violation(
+    path: Path, kind: str, reader: ReaderDef, exc: ContractViolation
+) -> InputFileError:
+    """What a table read from ``path`` breaking the kind's contract is: the file's fault,
+    at the line of its first bad row (when the table records lines), every rule on one line."""
+    lines = [n for failure in exc.failures for n in failure.lines]
+    rules = "; ".join(map(str, exc.failures))
+    return InputFileError(
+        path, f"not valid as {kind} (reader {reader.name!r}): {rules}", min(lines, default=0)
+    )
 
 
 def reader_options(
@@ -483,17 +569,26 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
         models.append(("params", item.params, BaseModel))
         models += [(f"input {p}", c, TableContract) for p, c in item.inputs.items()]
         models += [(f"output {p}", c, TableContract) for p, c in item.outputs.items()]
-        unknown = set(item.optional_inputs) - set(item.inputs)
-        if unknown:
-            raise ValueError(f"stage {name!r}: optional inputs {sorted(unknown)} are not inputs")
+        for what, ports, declared in (
+            ("optional inputs", item.optional_inputs, item.inputs),
+            ("streamed inputs", item.streamed_inputs, item.inputs),
+            ("streamed outputs", item.streamed_outputs, item.outputs),
+        ):
+            unknown = set(ports) - set(declared)
+            if unknown:
+                kind_of = "inputs" if declared is item.inputs else "outputs"
+                raise ValueError(f"stage {name!r}: {what} {sorted(unknown)} are not {kind_of}")
     elif isinstance(item, ReaderDef):
         models.append(("options", item.options, BaseModel))
         models += [(f"kind {k}", c, TableContract) for k, c in item.kinds.items()]
+        if item.stream is not None and not callable(item.stream):
+            raise TypeError(f"reader {name!r}: stream is not callable")
     elif isinstance(item, CheckDef):
         models += [("params", item.params, BaseModel), ("contract", item.contract, TableContract)]
     elif isinstance(item, WriterDef):
-        if item.write_tables is not None and not callable(item.write_tables):
-            raise TypeError(f"writer {name!r}: write_tables is not callable")
+        for attr in ("write_tables", "write_stream"):
+            if getattr(item, attr) is not None and not callable(getattr(item, attr)):
+                raise TypeError(f"writer {name!r}: {attr} is not callable")
         if item.schema is not None:
             models.append(("schema", item.schema, BaseModel))
     for what, model, base in models:

@@ -20,6 +20,7 @@ import time
 import uuid
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, TypeAlias, TypeVar
 
@@ -29,6 +30,7 @@ from pipeline.atomic import atomic_write_bytes, fsync_file, replace_dir
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import ContractViolation, GyropipeError, StageError
 from pipeline.graph import Plan, PlannedStage
+from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
 from pipeline.registry import (
     CheckDef,
     InputFile,
@@ -37,9 +39,11 @@ from pipeline.registry import (
     StageSetup,
     WriterDef,
 )
+from pipeline.streams import Port, TableStream, as_stream, as_table
 from pipeline.version import __version__
-from pipeline.well import WellMetadata, attach, well_of
+from pipeline.well import WellMetadata, well_of
 
+T = TypeVar("T")
 MANIFEST = "run.json"
 STAGING_PREFIX = ".gyropipe-staging-"
 
@@ -68,7 +72,7 @@ class RunResult:
 
     out_dir: Path | None
     manifest: dict[str, Any]
-    tables: dict[tuple[str, str], pa.Table]
+    tables: Tables[tuple[str, str]]
     well: WellMetadata
     outputs: list[Path]
 
@@ -110,6 +114,23 @@ class _Context:
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
+    def read_input_stream(
+        self,
+        name: str,
+        kind: str,
+        *,
+        reader: str = "auto",
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[TableStream, WellMetadata]:
+        given = self.inputs[name]
+        if isinstance(given, pa.Table):
+            return TableStream.from_table(given), well_of(given) or WellMetadata()
+        stream, header = self.registry.read_stream(
+            given, kind, reader=reader, options=options, well=self.well
+        )
+        meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
+        return stream.replace_schema_metadata(meta), header
+
     def output_path(self, filename: str) -> Path:
         path = self.staging / filename
         if path.parent != self.staging or path in self.staged:
@@ -132,9 +153,6 @@ class _Context:
 
     def check(self, name: str) -> CheckDef:
         return _lookup(self.registry.checks, name, "check")
-
-
-T = TypeVar("T")
 
 
 def _lookup(table: Mapping[str, tuple[T, str]], name: str, kind: str) -> T:
@@ -172,38 +190,43 @@ def run_plan(
     overrides = well or WellMetadata()
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
-    staged: list[Path] = []
-    tables: dict[tuple[str, str], pa.Table] = {}
     records: list[StageRecord] = []
     provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
     with _staging(out_dir) as staging:
+        staged: list[Path] = []
+        ports: dict[tuple[str, str], Port] = {}
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
             if out_dir is None and not st.definition.outputs:
                 record.status = "skipped"  # it only writes files
                 continue
-            ins = {port: tables[src] for port, src in st.wiring.items()}
-            record.rows_in = {p: t.num_rows for p, t in ins.items()}
-            _check_ports(plan, st, ins, "input")
+            ins = _stage_inputs(plan, st, ports, record)
             ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
             t0 = time.perf_counter()
-            outs = _call(st, ins, ctx, registry)
+            outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
-            _check_ports(plan, st, outs, "output")
-            record.rows_out = {p: t.num_rows for p, t in outs.items()}
-            for port, table in outs.items():
-                header = well_of(table)
+            tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
+            _check_ports(plan, st, tables, "output")
+            record.rows_out.update({p: t.num_rows for p, t in tables.items()})
+            for port, value in outs.items():
+                header = well_of(value.schema)
                 if header is not None:
                     from_files = from_files.merged(header)
-                tables[(st.id, port)] = table
+                if isinstance(value, TableStream):
+                    value = _produced(plan, st, port, value, registry, record)
+                ports[(st.id, port)] = value
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"
         if out_dir is None:
+            result = Tables(ports)
+            settled(lambda: [result[key] for key in result])  # the API returns tables
             manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
-            return RunResult(None, manifest, tables, current, [])
-        written = staged + _persist(plan, registry, tables, current, staging)
+            return RunResult(None, manifest, result, current, [])
+        persisted = settled(lambda: _persist(plan, registry, ports, current, staging))
+        settled(lambda: _drain(plan, ports, records))
+        written = staged + persisted
         clashes = {p.name for p in written if written.count(p) > 1} | (
             {MANIFEST} & {p.name for p in written}
         )
@@ -218,7 +241,89 @@ def run_plan(
         )
         atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
         replace_dir(staging, out_dir)
-    return RunResult(out_dir, manifest, tables, current, final)
+    return RunResult(out_dir, manifest, Tables(ports), current, final)
+
+
+def _stage_inputs(
+    plan: Plan, st: PlannedStage, ports: dict[tuple[str, str], Port], record: StageRecord
+) -> dict[str, Port]:
+    """The stage's inputs by port: a stream on a streamed input port (a table cut into
+    slices; checked per batch as it passes unless its producer checked the same contract),
+    a table on any other (a stream read whole once, and kept for the next consumer)."""
+    ins: dict[str, Port] = {}
+    for port, src in st.wiring.items():
+        value = ports[src]
+        if port not in st.definition.streamed_inputs:
+            if isinstance(value, TableStream):
+                value = ports[src] = settled(value.read_all)
+            ins[port] = value
+            continue
+        stream = as_stream(value)
+        if not _checked_upstream(plan, st, port):
+            stream = _checked(plan, st, port, stream, "input")
+        ins[port] = counted(stream, record.rows_in, port)
+    tables = {p: t for p, t in ins.items() if isinstance(t, pa.Table)}
+    record.rows_in.update({p: t.num_rows for p, t in tables.items()})
+    _check_ports(plan, st, tables, "input")
+    return ins
+
+
+def _checked(
+    plan: Plan, st: PlannedStage, port: str, stream: TableStream, direction: str
+) -> TableStream:
+    """``stream`` checked batch by batch against the port's contract, a violation located
+    at the port and carried to whoever consumes the stream."""
+    contracts = st.definition.inputs if direction == "input" else st.definition.outputs
+    checked = contracts[port].validate_stream(stream)
+
+    def located() -> Iterator[pa.RecordBatch]:
+        try:
+            yield from checked
+        except ContractViolation as exc:
+            where = exc.located(
+                pipeline=plan.spec.name, stage=st.id, port=port, direction=direction
+            )
+            raise UpstreamError(where) from None
+
+    return TableStream(stream.schema, located)
+
+
+def _produced(
+    plan: Plan,
+    st: PlannedStage,
+    port: str,
+    stream: TableStream,
+    registry: Registry,
+    record: StageRecord,
+) -> TableStream:
+    """A stage's streamed output as its consumers get it: a failure while it is computed
+    is the producing stage's :class:`StageError`; its batches are checked against the
+    output contract, and counted (``rows_out``)."""
+    plugin = registry.plugin_label(st.plugin)
+
+    def attributed() -> Iterator[pa.RecordBatch]:
+        try:
+            yield from stream
+        except UpstreamError:
+            raise
+        except Exception as exc:  # any failure inside a stage is reported as that stage's
+            error = StageError(st.id, st.uses, plugin, exc)
+            error.__cause__ = exc
+            raise UpstreamError(error) from exc
+
+    checked = _checked(plan, st, port, TableStream(stream.schema, attributed), "output")
+    return counted(checked, record.rows_out, port)
+
+
+def _drain(plan: Plan, ports: Mapping[tuple[str, str], Port], records: list[StageRecord]) -> None:
+    """Run one pass of every streamed output that nothing consumed to its end, so that its
+    errors are raised and its rows counted as a table's would be."""
+    for st, record in zip(plan.stages, records, strict=True):
+        for port in st.definition.outputs:
+            value = ports.get((st.id, port))
+            if isinstance(value, TableStream) and port not in record.rows_out:
+                for _ in value:
+                    pass
 
 
 @contextlib.contextmanager
@@ -289,20 +394,31 @@ def run_stage(
     files (if any) into ``out_dir``. Returns its output tables and the files written."""
     _check_contracts("", stage, inputs, "input")
     ctx = _Context(stage.id, well, registry, {}, out_dir, [], provenance)
-    outputs = _call(stage, dict(inputs), ctx, registry)
+    given: dict[str, Port] = {
+        port: TableStream.from_table(table) if port in stage.definition.streamed_inputs else table
+        for port, table in inputs.items()
+    }
+    outs = _call(stage, given, ctx, registry)
+    outputs = {port: settled(partial(as_table, value)) for port, value in outs.items()}
     _check_contracts("", stage, outputs, "output")
     return outputs, ctx.staged
 
 
 def _call(
-    st: PlannedStage, ins: dict[str, pa.Table], ctx: _Context, registry: Registry
-) -> dict[str, pa.Table]:
+    st: PlannedStage, ins: dict[str, Port], ctx: _Context, registry: Registry
+) -> dict[str, Port]:
     plugin = registry.plugin_label(st.plugin)
     try:
         outs = st.definition.func(ins, st.params, ctx)
+    except UpstreamError:
+        raise
     except Exception as exc:  # any failure inside a stage is reported as that stage's
         raise StageError(st.id, st.uses, plugin, exc) from exc
-    if not isinstance(outs, Mapping) or not all(isinstance(t, pa.Table) for t in outs.values()):
+    streamed = st.definition.streamed_outputs
+    if not isinstance(outs, Mapping) or not all(
+        isinstance(t, pa.Table) or (isinstance(t, TableStream) and p in streamed)
+        for p, t in outs.items()
+    ):
         raise StageError(
             st.id, st.uses, plugin, TypeError("must return a mapping of port name → pyarrow.Table")
         )
@@ -365,7 +481,7 @@ def _check_inputs(plan: Plan, given: Mapping[str, Source]) -> dict[str, Source]:
 def _persist(
     plan: Plan,
     registry: Registry,
-    tables: dict[tuple[str, str], pa.Table],
+    ports: Mapping[tuple[str, str], Port],
     well: WellMetadata,
     staging: Path,
 ) -> list[Path]:
@@ -374,7 +490,7 @@ def _persist(
     for st in plan.stages:
         for port in st.persist:
             path = staging / f"{st.id}.{port}.{writer.extension}"
-            writer.write(attach(tables[(st.id, port)], well), path, well)
+            write_port(writer, ports[(st.id, port)], path, well)
             paths.append(path)
     return paths
 

@@ -104,14 +104,20 @@ class WellMetadata(BaseModel):
 
 def attach(table: pa.Table, well: WellMetadata) -> pa.Table:
     """The table with ``well`` stored in its schema metadata."""
-    meta = dict(table.schema.metadata or {})
+    return table.replace_schema_metadata(attached(table.schema, well))
+
+
+def attached(schema: pa.Schema, well: WellMetadata) -> dict[bytes, bytes]:
+    """The schema metadata of ``schema`` with ``well`` stored in it."""
+    meta = dict(schema.metadata or {})
     meta[WELL_KEY] = well.model_dump_json(exclude_unset=True).encode()
-    return table.replace_schema_metadata(meta)
+    return meta
 
 
-def well_of(table: pa.Table) -> WellMetadata | None:
-    """The well metadata stored in a table's schema, if any."""
-    raw = (table.schema.metadata or {}).get(WELL_KEY)
+def well_of(table: pa.Table | pa.Schema) -> WellMetadata | None:
+    """The well metadata stored in a table's schema (or a schema), if any."""
+    schema = table if isinstance(table, pa.Schema) else table.schema
+    raw = (schema.metadata or {}).get(WELL_KEY)
     if raw is None:
         return None
     return WellMetadata.model_validate(json.loads(raw))

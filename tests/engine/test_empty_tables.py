@@ -22,6 +22,7 @@ from pipeline.plugins import load_registry
 from pipeline.registry import CheckDef, Provenance, Registry, StageDef, WriterDef
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
+from pipeline.streams import Port, TableStream, as_table
 from pipeline.tables import CompassRejects, PositionReadings, RawSamples, Stations, Trajectory
 from pipeline.well import WellMetadata
 from tests_support import gyropipe
@@ -106,7 +107,7 @@ def given(stage: str, port: str, params: dict[str, Any], contract: type[TableCon
 
 
 def assert_empty_handled(
-    definition: StageDef, inputs: Mapping[str, pa.Table], params: dict[str, Any], out: Path
+    definition: StageDef, inputs: Mapping[str, Port], params: dict[str, Any], out: Path
 ) -> None:
     model = definition.params.model_validate(params, context={"registry": REGISTRY})
     try:
@@ -120,7 +121,7 @@ def assert_empty_handled(
         return
     assert set(outputs) == set(definition.outputs)
     for port, table in outputs.items():
-        definition.outputs[port].validate_table(table)
+        definition.outputs[port].validate_table(as_table(table))
 
 
 @pytest.mark.parametrize(("stage", "params"), cases())
@@ -131,13 +132,22 @@ def test_every_stage_handles_empty_inputs(tmp_path: Path, stage: str, params: di
         if not ports:
             continue
         inputs = {port: given(stage, port, params, c) for port, c in ports.items()}
-        assert_empty_handled(definition, inputs, params, tmp_path)
+        assert_empty_handled(definition, as_ports(definition, inputs), params, tmp_path)
+
+
+def as_ports(definition: StageDef, tables: Mapping[str, pa.Table]) -> dict[str, Port]:
+    """The tables as the engine gives them: a stream on each streamed input port."""
+    return {
+        port: TableStream.from_table(t) if port in definition.streamed_inputs else t
+        for port, t in tables.items()
+    }
 
 
 def run_stage(name: str, inputs: Mapping[str, pa.Table], **params: Any) -> Mapping[str, pa.Table]:
     definition = REGISTRY.stages[name][0]
     model = definition.params.model_validate(params, context={"registry": REGISTRY})
-    return definition.func(inputs, model, Context(Path("/nonexistent")))
+    outputs = definition.func(as_ports(definition, inputs), model, Context(Path("/nonexistent")))
+    return {port: as_table(value) for port, value in outputs.items()}
 
 
 def test_reports_take_empty_optional_tables(tmp_path: Path):

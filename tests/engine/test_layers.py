@@ -70,6 +70,8 @@ LAYERS: dict[str, int] = {
     "pipeline.filenames": 2,
     "pipeline.units": 2,
     "pipeline.convert": 2,
+    "pipeline.streams": 2,
+    "pipeline.ports": 2,
     # 1 — foundation
     "pipeline.well": 1,
     "pipeline.errors": 1,

@@ -46,6 +46,7 @@ GUIDE = ROOT / "docs" / "vendor-adapter.md"
 
 HOME = {
     "hookimpl": "pipeline.hookspecs",
+    "TableStream": "pipeline.streams",
     **dict.fromkeys(
         [
             "StageDef",

@@ -33,7 +33,8 @@ class RunResult:
     """A finished pipeline run."""
 
     tables: Mapping[str, pa.Table]
-    """every stage output as an Arrow table, by ``"stage.port"``"""
+    """every stage output as an Arrow table, by ``"stage.port"`` (a streamed output, such as
+    raw samples, is read whole when it is looked up)"""
     well: WellMetadata
     """the well metadata at the end of the run (pipeline, files, overrides merged)"""
     manifest: dict[str, Any]
@@ -94,7 +95,7 @@ def execute(
         plan, registry, inputs=sources, out_dir=Path(out) if out is not None else None, well=well
     )
     return RunResult(
-        tables={f"{stage}.{port}": table for (stage, port), table in result.tables.items()},
+        tables=result.tables.keyed(lambda key: f"{key[0]}.{key[1]}"),
         well=result.well,
         manifest=result.manifest,
         out=result.out_dir,

@@ -95,32 +95,42 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     rate = _sample_rate(time)
     md = _optional(samples, "md")
     if md is None:
-        raise ValueError("samples have no md column: position readings need the station MD")
+        raise ValueError(NO_MD)
     angle = _optional(samples, "frame_angle")
-    k_start = round(options.trim_start * rate)
-    k_end = round(options.trim_end * rate)
-    need = max(2, int(np.ceil(options.min_dwell * rate - 1e-6)))  # samples; slack for rounding
+    k_start, k_end, need, window = counts(options, rate)
     markers = _markers(samples)
     if markers is not None:
         starts, ends, station, position = markers
-        _check_lengths(ends - starts - k_start - k_end, need, time[starts], station, position)
+        check_lengths(ends - starts - k_start - k_end, need, time[starts], station, position)
     else:
         if angle is None:
-            raise ValueError(
-                "samples have neither station/position markers nor a frame_angle column: "
-                "cannot tell the frame positions apart"
-            )
-        window = max(1, round(options.md_smoothing * rate))
-        smooth_md = _moving_average(md, window)
+            raise ValueError(NO_ANGLE)
+        smooth_md = moving_average(md, window)
         starts, ends = _detect_dwells(
             (np.unwrap(angle, period=360.0), smooth_md),
             (options.angle_tolerance, options.md_tolerance),
             k_start + need + k_end,
         )
         station, position = _number_stations(smooth_md, starts, options.station_gap)
-    return _reduce(
-        samples, time, rate, md, angle, starts + k_start, ends - k_end, station, position
+    signals = {name: v for name in SIGNALS if (v := _optional(samples, name)) is not None}
+    return reduce_readings(
+        signals, time, rate, md, angle, starts + k_start, ends - k_end, station, position
     )
+
+
+NO_MD = "samples have no md column: position readings need the station MD"
+NO_ANGLE = (
+    "samples have neither station/position markers nor a frame_angle column: "
+    "cannot tell the frame positions apart"
+)
+
+
+def counts(options: ReadingOptions, rate: float) -> tuple[int, int, int, int]:
+    """Samples trimmed at a dwell's start and end, the fewest averaged (``min_dwell``, at
+    least 2) and the MD smoothing window, at ``rate`` (Hz)."""
+    need = max(2, int(np.ceil(options.min_dwell * rate - 1e-6)))  # slack for rounding
+    window = max(1, round(options.md_smoothing * rate))
+    return round(options.trim_start * rate), round(options.trim_end * rate), need, window
 
 
 def _optional(samples: pa.Table, name: str) -> FloatArray | None:
@@ -142,18 +152,26 @@ def _optional(samples: pa.Table, name: str) -> FloatArray | None:
 def _sample_rate(time: FloatArray) -> float:
     """Sample rate (Hz) of uniformly spaced times (s); ValueError otherwise."""
     if time.size < 2:
-        raise ValueError(f"need at least 2 samples to know the sample rate, got {time.size}")
+        raise ValueError(too_few(time.size))
     dt = float(time[-1] - time[0]) / (time.size - 1)
     steps = np.diff(time)
     off = np.abs(steps - dt) > UNIFORM_RTOL * dt
     if off.any():
         i = int(np.argmax(off))
-        raise ValueError(
-            f"time is not uniformly sampled: mean step {dt:g} s, but the step at "
-            f"t = {time[i]:g} s is {steps[i]:g} s ({int(off.sum())} such steps; "
-            "samples dropped or doubled?)"
-        )
+        raise ValueError(not_uniform(dt, float(time[i]), float(steps[i]), int(off.sum())))
     return 1.0 / dt
+
+
+def too_few(n: int) -> str:
+    return f"need at least 2 samples to know the sample rate, got {n}"
+
+
+def not_uniform(dt: float, t: float, step: float, count: int) -> str:
+    """The message of non-uniform time: mean step ``dt``, the first step off (at ``t``, s)."""
+    return (
+        f"time is not uniformly sampled: mean step {dt:g} s, but the step at "
+        f"t = {t:g} s is {step:g} s ({count} such steps; samples dropped or doubled?)"
+    )
 
 
 def _markers(samples: pa.Table) -> tuple[IndexArray, IndexArray, IndexArray, IndexArray] | None:
@@ -196,7 +214,7 @@ def _markers(samples: pa.Table) -> tuple[IndexArray, IndexArray, IndexArray, Ind
     return starts, ends, keys[:, 0], keys[:, 1]
 
 
-def _check_lengths(
+def check_lengths(
     n: IndexArray, need: int, t0: FloatArray, station: IndexArray, position: IndexArray
 ) -> None:
     """ValueError naming every marked position with fewer than ``need`` samples left."""
@@ -212,7 +230,7 @@ def _check_lengths(
         )
 
 
-def _moving_average(values: FloatArray, window: int) -> FloatArray:
+def moving_average(values: FloatArray, window: int) -> FloatArray:
     """Centred moving average over ``window`` samples (edges: nearest value repeated)."""
     if window == 1:
         return values
@@ -228,19 +246,7 @@ def _detect_dwells(
     """(start, end) sample indices of dwells: each starts at the first sample from which
     every signal stays within its tolerance of its value there for ``length`` samples, and
     ends where :func:`_leave` says (module docstring)."""
-    from scipy.ndimage import maximum_filter1d, minimum_filter1d
-
-    size = signals[0].size
-    count = size - length + 1
-    if count <= 0:
-        return np.empty(0, np.intp), np.empty(0, np.intp)
-    steady = np.ones(count, dtype=bool)
-    lo = length // 2  # the centred filters' window at lo + s spans samples s … s + length − 1
-    for x, tol in zip(signals, tolerances, strict=True):
-        first = x[:count]
-        steady &= maximum_filter1d(x, length)[lo : lo + count] - first <= tol
-        steady &= first - minimum_filter1d(x, length)[lo : lo + count] <= tol
-    candidates = np.flatnonzero(steady)
+    candidates = steady_starts(signals, tolerances, length)
     starts: list[int] = []
     ends: list[int] = []
     i = 0
@@ -251,6 +257,25 @@ def _detect_dwells(
         ends.append(end)
         i = int(np.searchsorted(candidates, end))
     return np.asarray(starts, dtype=np.intp), np.asarray(ends, dtype=np.intp)
+
+
+def steady_starts(
+    signals: tuple[FloatArray, ...], tolerances: tuple[float, ...], length: int
+) -> IndexArray:
+    """Samples ``s`` from which every signal stays within its tolerance of its value at ``s``
+    for ``length`` samples (``s + length`` ≤ the signals' length)."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    count = signals[0].size - length + 1
+    if count <= 0:
+        return np.empty(0, np.intp)
+    steady = np.ones(count, dtype=bool)
+    lo = length // 2  # the centred filters' window at lo + s spans samples s … s + length − 1
+    for x, tol in zip(signals, tolerances, strict=True):
+        first = x[:count]
+        steady &= maximum_filter1d(x, length)[lo : lo + count] - first <= tol
+        steady &= first - minimum_filter1d(x, length)[lo : lo + count] <= tol
+    return np.flatnonzero(steady)
 
 
 def _leave(
@@ -291,8 +316,8 @@ def _number_stations(
     return station, position
 
 
-def _reduce(
-    samples: pa.Table,
+def reduce_readings(
+    signals: dict[str, FloatArray],
     time: FloatArray,
     rate: float,
     md: FloatArray,
@@ -302,7 +327,8 @@ def _reduce(
     station: IndexArray,
     position: IndexArray,
 ) -> pa.Table:
-    """PositionReadings from the samples [a, b) of each reading."""
+    """PositionReadings from the samples [a, b) of each reading (``signals``: the sensor
+    columns of :data:`SIGNALS` the samples have)."""
     if a.size == 0:
         raise ValueError(
             "no frame positions found: no dwell long enough for min_dwell after trimming"
@@ -321,10 +347,8 @@ def _reduce(
     if angle is not None:
         columns["frame_angle"] = _circular_mean(angle[index], offsets)
     stds: dict[str, FloatArray] = {}
-    for name in SIGNALS:
-        values = _optional(samples, name)
-        if values is not None:
-            columns[name], stds[f"{name}_std"] = _mean_std(values[index], offsets, n)
+    for name, values in signals.items():
+        columns[name], stds[f"{name}_std"] = _mean_std(values[index], offsets, n)
     columns |= stds
     columns["n"] = n
     columns["duration"] = n / rate

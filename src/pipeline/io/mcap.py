@@ -17,6 +17,10 @@ column units in metadata records, uncompressed chunks with CRCs
   :mod:`pipeline.io.mcap_sources`), converted to canonical units and conventions and
   joined on the base channel's times.
 
+**Stream** (:func:`stream_samples`): the same table as record batches, one per message of
+gyropipe's channel — zero-copy views of the mapped file, so a streamed port never copies
+the samples onto the heap; the other channels are decoded whole first.
+
 Well metadata comes from the ``gyropipe.well`` metadata record. Every CRC the file carries
 is checked first (:mod:`pipeline.io.mcap_records`); every problem raises
 :class:`~pipeline.errors.InputFileError` naming the file and the record or message.
@@ -45,6 +49,7 @@ from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
 from pipeline.io.mcap_records import MAGIC, McapFile, scan
 from pipeline.io.mcap_tables import write_tables
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.streams import TableStream
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
 
@@ -73,6 +78,12 @@ def read_samples(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table,
     else:
         table = _read_sources(file, selected, options)
     return table, well
+
+
+def stream_samples(path: Path, kind: str, options: McapOptions) -> tuple[TableStream, WellMetadata]:
+    """:func:`read_samples` as a stream of its record batches (module docstring)."""
+    table, well = read_samples(path, kind, options)
+    return TableStream(table.schema, lambda: iter(table.to_batches())), well
 
 
 def _selected(file: McapFile, options: McapOptions) -> list[Channel]:
@@ -134,6 +145,7 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
             read=read_samples,
             sniff=sniff,
             options=McapOptions,
+            stream=stream_samples,
         )
     )
 

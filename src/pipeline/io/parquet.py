@@ -1,11 +1,13 @@
 """Built-in plugin: Parquet reader (tables gyropipe wrote) and writer.
 
 Parquet keeps the Arrow schema, so units, north references and well metadata round-trip.
+Both stream: the reader reads a row group at a time (:func:`stream`), the writer writes a
+row group per batch (:func:`write_stream`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -17,10 +19,13 @@ from pipeline.contracts import TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
 from pipeline.well import WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
+READ_BUFFER = 1 << 20
+"""Bytes read from the file at a time when streaming."""
 KINDS: dict[str, type[TableContract]] = {
     "stations": Stations,
     "samples": RawSamples,
@@ -53,13 +58,44 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     try:
         table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
-        reason = " ".join(str(exc).split())
-        raise InputFileError(path, f"not a readable Parquet file: {reason}") from exc
-    _check_names(path, table.schema)
+        raise _unreadable(path, exc) from exc
+    _check_kind(path, kind, table.schema)
+    return table, _well(path, table.schema)
+
+
+def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
+    """:func:`read` as a stream: the schema and well metadata from the file's footer, the
+    rows in batches of at most :data:`BATCH_ROWS` rows, row group after row group, the
+    column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole)."""
+    try:
+        schema = pq.read_schema(path)
+    except (OSError, pa.ArrowException) as exc:
+        raise _unreadable(path, exc) from exc
+    _check_kind(path, kind, schema)
+
+    def batches() -> Iterator[pa.RecordBatch]:
+        try:  # buffered reads, not the whole row group at once (they hold ~1 M rows)
+            with pq.ParquetFile(path, pre_buffer=False, buffer_size=READ_BUFFER) as file:
+                yield from file.iter_batches(batch_size=BATCH_ROWS, use_threads=False)
+        except (OSError, pa.ArrowException) as exc:
+            raise _unreadable(path, exc) from exc
+
+    return TableStream.of_batches(schema, batches), _well(path, schema)
+
+
+def _unreadable(path: Path, exc: Exception) -> InputFileError:
+    reason = " ".join(str(exc).split())  # Arrow's messages may span lines
+    return InputFileError(path, f"not a readable Parquet file: {reason}")
+
+
+def _check_kind(path: Path, kind: str, schema: pa.Schema) -> None:
+    """Column names are text; a table of another survey kind than ``kind`` (its required
+    columns missing, another kind's all there) is a :class:`WrongKindError` naming it."""
+    _check_names(path, schema)
     contract = KINDS.get(kind)  # the drift-table reader reads its own kinds through here
-    missing = _missing(contract, table) if contract is not None else []
+    missing = _missing(contract, schema) if contract is not None else []
     if missing:
-        others = [k for k in KIND_WORDS if k != kind and not _missing(KINDS[k], table)]
+        others = [k for k in KIND_WORDS if k != kind and not _missing(KINDS[k], schema)]
         if others:
             raise WrongKindError(
                 path,
@@ -67,7 +103,6 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
                 f"(needs {', '.join(missing)})",
                 found=others[0],
             )
-    return table, _well(path, table)
 
 
 def _check_names(path: Path, schema: pa.Schema) -> None:
@@ -81,11 +116,11 @@ def _check_names(path: Path, schema: pa.Schema) -> None:
             ) from None
 
 
-def _well(path: Path, table: pa.Table) -> WellMetadata:
+def _well(path: Path, schema: pa.Schema) -> WellMetadata:
     """The well metadata stored in the table's schema (none: empty); metadata that is not
     a JSON object of well fields is the file's fault."""
     try:
-        return well_of(table) or WellMetadata()
+        return well_of(schema) or WellMetadata()
     except ValidationError as exc:
         problems = "; ".join(
             f"{'.'.join(map(str, e['loc'])) or 'value'}: {e['msg']}" for e in exc.errors()
@@ -97,15 +132,23 @@ def _well(path: Path, table: pa.Table) -> WellMetadata:
     )
 
 
-def _missing(contract: type[TableContract], table: pa.Table) -> list[str]:
-    """Required columns of ``contract`` that ``table`` lacks."""
+def _missing(contract: type[TableContract], schema: pa.Schema) -> list[str]:
+    """Required columns of ``contract`` that ``schema`` lacks."""
     columns = contract.compiled().columns
-    return [c.name for c in columns if c.required and c.name not in table.column_names]
+    return [c.name for c in columns if c.required and c.name not in schema.names]
 
 
 def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` (schema and field metadata included) as Parquet."""
     pq.write_table(table, path)
+
+
+def write_stream(stream: TableStream, path: Path, well: WellMetadata) -> None:
+    """Write one pass of ``stream`` as Parquet, a row group per batch (the schema, with its
+    field and schema metadata, as :func:`write` keeps it)."""
+    with pq.ParquetWriter(path, stream.schema) as writer:
+        for batch in stream:
+            writer.write_batch(batch)
 
 
 @hookimpl
@@ -117,6 +160,7 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
             kinds=KINDS,
             read=read,
             sniff=sniff,
+            stream=stream,
         )
     )
 
@@ -129,5 +173,6 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
             description="Apache Parquet (keeps units and well metadata)",
             extension="parquet",
             write=write,
+            write_stream=write_stream,
         )
     )

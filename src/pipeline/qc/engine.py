@@ -49,6 +49,7 @@ from pipeline.qc.vector_checks import (
     propagate,
     vector_checks,
 )
+from pipeline.streams import TableStream
 from pipeline.tables import PositionReadings
 
 FIT_UNDETERMINED = (
@@ -264,7 +265,7 @@ def station_checks(
     site: Site,
     options: QcOptions = DEFAULTS,
     *,
-    samples: pa.Table | None = None,
+    samples: pa.Table | TableStream | None = None,
 ) -> tuple[pa.Table, pa.Table]:
     """Check every reading of a point survey (PositionReadings) at ``site``. With the raw
     ``samples`` the readings came from, magnetometers are averaged from them and checked.

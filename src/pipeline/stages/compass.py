@@ -10,12 +10,14 @@ import pyarrow as pa
 from pipeline.earth.site import resolve_site
 from pipeline.errors import GyropipeError
 from pipeline.gyrocompass.options import CompassOptions
-from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings import ReadingOptions
+from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.gyrocompass.solve import compass
 from pipeline.gyrocompass.systematic import GYRO_NS, ToolErrors
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.sim.sensors import PRESETS, compass_errors
+from pipeline.streams import TableStream
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
 from pipeline.well import WellMetadata
 
@@ -24,13 +26,11 @@ SIMULATED = "simulated "
 
 
 def readings_stage(
-    inputs: Mapping[str, pa.Table], params: ReadingOptions, ctx: StageContext
+    inputs: Mapping[str, TableStream], params: ReadingOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Average each station's frame positions (transients trimmed); no samples, no readings."""
-    samples = inputs["samples"]
-    if samples.num_rows == 0:
-        return {"readings": PositionReadings.compiled().schema().empty_table()}
-    return {"readings": position_readings(samples, params)}
+    """Average each station's frame positions (transients trimmed) from the streamed
+    samples, a station at a time; no samples, no readings."""
+    return {"readings": stream_position_readings(inputs["samples"], params)}
 
 
 def compass_stage(
@@ -92,6 +92,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             inputs={"samples": RawSamples},
             outputs={"readings": PositionReadings},
             params=ReadingOptions,
+            streamed_inputs=frozenset({"samples"}),
         )
     )
     register(

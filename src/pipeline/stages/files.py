@@ -27,6 +27,7 @@ from pipeline.contracts import TableContract
 from pipeline.errors import WrongKindError
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
+from pipeline.ports import write_port
 from pipeline.registry import (
     Registry,
     StageContext,
@@ -34,8 +35,9 @@ from pipeline.registry import (
     pipeline_input,
     registered,
 )
+from pipeline.streams import Port, TableStream
 from pipeline.tables import AnyTable, PositionReadings, RawSamples, Stations
-from pipeline.well import attach
+from pipeline.well import attach, attached
 
 TAKEN_BY = {
     "samples": "raw samples are read by read_samples, as in pipelines/point-gyro.yaml and "
@@ -111,30 +113,40 @@ class WriteParams(BaseModel):
 
 
 def read_stage(
-    kind: str,
-) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, pa.Table]]:
-    """Stage function reading the pipeline input into a table of ``kind``."""
+    kind: str, *, streamed: bool = False
+) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, Port]]:
+    """Stage function reading the pipeline input into a table of ``kind`` (``streamed``: a
+    stream of record batches, :meth:`StageContext.read_input_stream`)."""
 
     def read(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
-    ) -> dict[str, pa.Table]:
+    ) -> dict[str, Port]:
+        reading = ctx.read_input_stream if streamed else ctx.read_input
         try:
-            table, header = ctx.read_input(
+            value, header = reading(
                 params.input, kind, reader=params.reader, options=params.options
             )
         except WrongKindError as exc:
             hint = f"; {TAKEN_BY[exc.found]}" if exc.found in TAKEN_BY else ""
             raise WrongKindError(exc.path, exc.reason + hint, exc.line, found=exc.found) from None
-        return {kind: attach(table, header)}
+        if isinstance(value, TableStream):
+            return {kind: value.replace_schema_metadata(attached(value.schema, header))}
+        return {kind: attach(value, header)}
 
     return read
 
 
 def read_stage_def(
-    name: str, kind: str, contract: type[TableContract], description: str, default_input: str
+    name: str,
+    kind: str,
+    contract: type[TableContract],
+    description: str,
+    default_input: str,
+    *,
+    streamed: bool = False,
 ) -> StageDef:
     """A stage reading the pipeline input ``default_input`` (unless told another) into a
-    table of ``kind`` on the output port ``kind``."""
+    table of ``kind`` on the output port ``kind`` (``streamed``: a streamed port)."""
     params = create_model(
         f"{kind.title().replace('_', '')}ReadParams",
         __base__=ReadParams,
@@ -144,20 +156,20 @@ def read_stage_def(
     params.reads = kind
     return StageDef(
         name=name,
-        func=read_stage(kind),
+        func=read_stage(kind, streamed=streamed),
         description=description,
         outputs={kind: contract},
         params=params,
+        streamed_outputs=frozenset({kind} if streamed else ()),
     )
 
 
-def write(
-    inputs: Mapping[str, pa.Table], params: WriteParams, ctx: StageContext
-) -> dict[str, pa.Table]:
-    """Write the input table through the chosen writer (published when the run succeeds)."""
+def write(inputs: Mapping[str, Port], params: WriteParams, ctx: StageContext) -> dict[str, Port]:
+    """Write the input table through the chosen writer (published when the run succeeds):
+    batch by batch when the writer writes streams."""
     writer = ctx.writer(params.writer)
     path = params.output_path(ctx, writer.extension)
-    writer.write(attach(inputs["table"], ctx.well), path, ctx.well)
+    write_port(writer, inputs["table"], path, ctx.well)
     return {}
 
 
@@ -184,7 +196,9 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "from a pipeline input.",
         ),
     ):
-        register(read_stage_def(name, kind, contract, description, kind))
+        register(
+            read_stage_def(name, kind, contract, description, kind, streamed=kind == "samples")
+        )
     register(
         StageDef(
             name="write",
@@ -192,5 +206,6 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             description="Write a table to a file in the output directory with a named writer.",
             inputs={"table": AnyTable},
             params=WriteParams,
+            streamed_inputs=frozenset({"table"}),
         )
     )

@@ -22,16 +22,18 @@ from pipeline.qc.options import QcOptions
 from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
 from pipeline.qc.windows import anomaly_intervals, window_checks
 from pipeline.registry import StageContext, StageDef
+from pipeline.streams import Port, as_table
 from pipeline.tables import PositionReadings, RawSamples
 
 REFERENCES_KEY = b"gyropipe.references"
 
 
 def station_stage(
-    inputs: Mapping[str, pa.Table], params: QcOptions, ctx: StageContext
+    inputs: Mapping[str, Port], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Check every station × frame position; the readings of dropped stations are removed."""
-    readings, samples = inputs["readings"], inputs.get("samples")
+    """Check every station × frame position; the readings of dropped stations are removed.
+    The raw samples (magnetometers) stream through in one pass."""
+    readings, samples = as_table(inputs["readings"]), inputs.get("samples")
     site = resolve_site(ctx.well, stage="validity_checks", param=None, field=_has_field(samples))
     qc, summary = station_checks(readings, site, params, samples=samples)
     qc = with_references(qc, site, params, field=_has_field(samples))
@@ -80,7 +82,7 @@ def _model_label(options: QcOptions) -> str:
     return f"{model.name} ({model.version})"
 
 
-def _has_field(samples: pa.Table | None) -> bool:
+def _has_field(samples: Port | None) -> bool:
     """True if the samples carry magnetometer data (then the geomagnetic model is needed)."""
     return samples is not None and "mag_x" in samples.column_names
 
@@ -96,6 +98,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "readings on without the stations whose checks say drop.",
             inputs={"readings": PositionReadings, "samples": RawSamples},
             optional_inputs=frozenset({"samples"}),
+            streamed_inputs=frozenset({"samples"}),
             outputs={"qc": QcResults, "summary": QcSummary, "readings": PositionReadings},
             params=QcOptions,
         )

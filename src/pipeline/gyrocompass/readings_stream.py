@@ -1,0 +1,389 @@
+"""Position readings from a stream of raw-sample record batches, in bounded memory.
+
+The same readings as :func:`~pipeline.gyrocompass.readings.position_readings` on the whole
+table (same dwells, stations and numbers: each station is reduced by the same function on
+the same samples), from two passes over the stream:
+
+1. the time column and the null counts: sample rate and uniformity exactly as the whole
+   table gives them (so the trims and windows are the same), and which columns have data;
+2. the dwells, found as the whole-table path finds them, a station's averaged samples kept
+   until the station ends, then reduced.
+
+What stays in memory is the current station's averaged samples, the samples since the last
+dwell (or the current dwell) and one batch, whatever the survey's length.
+
+Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a moving
+average) and the unwrapped frame angle are recomputed over the buffer, and only samples
+whose smoothing window lies inside it are used, so the dwells are those of the whole table
+except where a smoothed MD or angle lies within rounding (≈1e-15 of its value) of a
+tolerance. Marked positions are exact. A station marked again after another station (the
+whole-table path merges both into one MD median) is a ``ValueError`` here.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import Counter
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.contracts import BatchChecker
+from pipeline.gyrocompass.readings import (
+    DEFAULTS,
+    NO_ANGLE,
+    NO_MD,
+    SIGNALS,
+    UNIFORM_RTOL,
+    FloatArray,
+    ReadingOptions,
+    check_lengths,
+    counts,
+    moving_average,
+    not_uniform,
+    reduce_readings,
+    steady_starts,
+    too_few,
+)
+from pipeline.streams import TableStream
+from pipeline.tables import PositionReadings, RawSamples
+
+MARKERS = ("station", "position")
+
+
+@dataclass
+class _Scan:
+    """What the first pass finds: rows, time span, smallest and largest step, null counts."""
+
+    rows: int = 0
+    first: float = np.nan
+    last: float = np.nan
+    low: float = np.inf
+    high: float = -np.inf
+    nulls: dict[str, int] = field(default_factory=dict)
+
+    def add(self, batch: pa.RecordBatch) -> None:
+        time = batch.column("time").to_numpy()
+        if time.size == 0:
+            return
+        if self.rows:
+            time = np.concatenate([[self.last], time])
+        else:
+            self.first = float(time[0])
+        if time.size > 1:
+            steps = np.diff(time)
+            self.low, self.high = min(self.low, steps.min()), max(self.high, steps.max())
+        self.last = float(time[-1])
+        self.rows += batch.num_rows
+        for name in self.nulls:
+            self.nulls[name] += batch.column(name).null_count
+
+    def data(self, name: str) -> bool:
+        """Whether the column has any value (raises when it is only partly filled, as
+        :func:`~pipeline.gyrocompass.readings._optional` does)."""
+        if name not in self.nulls or self.nulls[name] == self.rows:
+            return False
+        if self.nulls[name] and name not in MARKERS:
+            raise ValueError(
+                f"column {name!r} has {self.nulls[name]} missing values of {self.rows}: "
+                "position readings need it complete or absent"
+            )
+        return True
+
+
+def stream_position_readings(samples: TableStream, options: ReadingOptions = DEFAULTS) -> pa.Table:
+    """:func:`~pipeline.gyrocompass.readings.position_readings` of a stream of
+    :class:`RawSamples` batches (each checked against the contract), in bounded memory
+    (module docstring). No samples give no readings (an empty table)."""
+    wanted = ("md", "frame_angle", *MARKERS, *SIGNALS)
+    scan = _Scan(nulls={n: 0 for n in wanted if n in samples.schema.names})
+    checker = BatchChecker(RawSamples.compiled())
+    for batch in samples:
+        checker.check(batch)
+        scan.add(batch)
+    if scan.rows == 0:
+        return PositionReadings.compiled().schema().empty_table()
+    rate = _rate(samples, scan)
+    if not scan.data("md"):
+        raise ValueError(NO_MD)
+    angle = scan.data("frame_angle")
+    marked = [m for m in MARKERS if scan.data(m)]
+    if len(marked) == 1:
+        lack = "position" if marked == ["station"] else "station"
+        raise ValueError(
+            f"samples have {marked[0]} markers but no {lack} markers: give both or neither"
+        )
+    if not marked and not angle:
+        raise ValueError(NO_ANGLE)
+    columns = ["time", "md", *(["frame_angle"] if angle else []), *_signals(scan)]
+    reducer = _Stations(columns, rate)
+    if marked:
+        return _Marked(options, rate, reducer).run(samples)
+    return _Detected(options, rate, reducer).run(samples)
+
+
+def _signals(scan: _Scan) -> list[str]:
+    return [name for name in SIGNALS if scan.data(name)]
+
+
+def _rate(samples: TableStream, scan: _Scan) -> float:
+    """The sample rate (Hz) as :func:`~pipeline.gyrocompass.readings._sample_rate` gives it
+    for the whole column; a non-uniform step is found by one more pass over the times."""
+    if scan.rows < 2:
+        raise ValueError(too_few(scan.rows))
+    dt = float(scan.last - scan.first) / (scan.rows - 1)
+    tol = UNIFORM_RTOL * dt
+    if abs(scan.high - dt) <= tol and abs(scan.low - dt) <= tol:
+        return 1.0 / dt
+    first: tuple[float, float] | None = None
+    count, previous = 0, np.empty(0)
+    for batch in samples:
+        time = np.concatenate([previous, batch.column("time").to_numpy()])
+        steps = np.diff(time)
+        off = np.abs(steps - dt) > tol
+        if first is None and off.any():
+            i = int(np.argmax(off))
+            first = (float(time[i]), float(steps[i]))
+        count += int(off.sum())
+        previous = time[-1:]
+    assert first is not None  # the extreme steps said there is one
+    raise ValueError(not_uniform(dt, *first, count))
+
+
+class _Stations:
+    """Averaged samples of the current station, reduced to readings when it ends."""
+
+    def __init__(self, columns: list[str], rate: float) -> None:
+        self.columns, self.rate = columns, rate
+        self.pieces: list[dict[str, FloatArray]] = []
+        self.positions: list[int] = []
+        self.station = -1
+        self.done: list[pa.Table] = []
+
+    def add(self, station: int, position: int, values: dict[str, FloatArray]) -> None:
+        """One reading's averaged samples (copies of the columns)."""
+        if station != self.station:
+            self.close()
+            self.station = station
+        self.pieces.append({k: np.array(v) for k, v in values.items()})
+        self.positions.append(position)
+
+    def close(self) -> None:
+        """Reduce the current station's readings (as the whole-table path reduces them)."""
+        if not self.pieces:
+            return
+        n = np.array([len(p["time"]) for p in self.pieces], dtype=np.intp)
+        a = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.intp)
+        data = {k: np.concatenate([p[k] for p in self.pieces]) for k in self.columns}
+        signals = {k: data[k] for k in SIGNALS if k in data}
+        station = np.full(n.size, self.station, dtype=np.intp)
+        position = np.array(self.positions, dtype=np.intp)
+        self.done.append(
+            reduce_readings(
+                signals,
+                data["time"],
+                self.rate,
+                data["md"],
+                data.get("frame_angle"),
+                a,
+                a + n,
+                station,
+                position,
+            )
+        )
+        self.pieces, self.positions = [], []
+
+    def table(self) -> pa.Table:
+        self.close()
+        if not self.done:  # the whole-table path's message
+            none = np.empty(0, np.intp)
+            reduce_readings({}, np.empty(0), self.rate, np.empty(0), None, *[none] * 4)
+        return pa.concat_tables(self.done).combine_chunks()
+
+
+def _arrays(batch: pa.RecordBatch, names: Iterable[str]) -> dict[str, FloatArray]:
+    return {n: batch.column(n).to_numpy(zero_copy_only=False) for n in names}
+
+
+class _Marked:
+    """Runs of equal (station, position) markers: each run of marked samples a reading."""
+
+    def __init__(self, options: ReadingOptions, rate: float, stations: _Stations) -> None:
+        self.k_start, self.k_end, self.need, _ = counts(options, rate)
+        self.stations = stations
+        self.current: dict[str, FloatArray] = {}
+        self.key = (-1, -1)
+        self.runs: list[tuple[int, int, float, int]] = []
+        """every marked run: station, position, first time, samples left after trimming"""
+        self.closed: set[int] = set()
+        self.orphans = 0
+
+    def run(self, samples: TableStream) -> pa.Table:
+        """Readings of the marked runs; then the whole-table path's checks of the markers
+        (orphans, a position marked twice, positions too short), in its order."""
+        for batch in samples:
+            station, position = (
+                batch.column(m).fill_null(-1).to_numpy().astype(np.int64) for m in MARKERS
+            )
+            self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
+            values = _arrays(batch, self.stations.columns)
+            change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1]))
+            cuts = [0, *(change + 1).tolist(), batch.num_rows]
+            for a, b in itertools.pairwise(cuts):
+                key = (int(station[a]), int(position[a]))
+                if key != self.key:
+                    self.end_run()
+                    self.key = key
+                if key[0] < 0 or key[1] < 0:
+                    continue  # unmarked samples are not kept
+                part = {k: v[a:b] for k, v in values.items()}
+                self.current = (
+                    {k: np.concatenate([self.current[k], part[k]]) for k in part}
+                    if self.current
+                    else part
+                )
+        self.end_run()
+        if self.orphans:
+            raise ValueError(f"{self.orphans} samples have a position marker but no station marker")
+        seen = Counter((s, p) for s, p, _, _ in self.runs)
+        repeated = sorted(k for k, times in seen.items() if times > 1)
+        if repeated:
+            raise ValueError(
+                "markers label a (station, position) in separate runs of samples: "
+                + "; ".join(
+                    f"station {s} position {p} at t = "
+                    + ", ".join(f"{t:g}" for s2, p2, t, _ in self.runs if (s2, p2) == (s, p))
+                    + " s"
+                    for s, p in repeated
+                )
+            )
+        if self.runs:
+            station, position, t0, left = (np.array(c) for c in zip(*self.runs, strict=True))
+            check_lengths(left, self.need, t0, station, position)
+        return self.stations.table()
+
+    def end_run(self) -> None:
+        station, position = self.key
+        run, self.current = self.current, {}
+        if station < 0 or position < 0 or not run:
+            return
+        left = len(run["time"]) - self.k_start - self.k_end
+        self.runs.append((station, position, float(run["time"][0]), left))
+        if left < self.need:
+            return
+        if station != self.stations.station and station in self.closed:
+            raise ValueError(
+                f"station {station} is marked again at t = {run['time'][0]:g} s after other "
+                "stations: a streamed survey needs each station's samples together"
+            )
+        if station != self.stations.station and self.stations.station >= 0:
+            self.closed.add(self.stations.station)
+        end = len(run["time"]) - self.k_end
+        self.stations.add(station, position, {k: v[self.k_start : end] for k, v in run.items()})
+
+
+class _Detected:
+    """Dwells found as :func:`~pipeline.gyrocompass.readings._detect_dwells` finds them, on a
+    buffer that slides along the stream."""
+
+    def __init__(self, options: ReadingOptions, rate: float, stations: _Stations) -> None:
+        self.k_start, self.k_end, need, self.window = counts(options, rate)
+        self.length = self.k_start + need + self.k_end
+        self.tolerances = (options.angle_tolerance, options.md_tolerance)
+        self.gap = options.station_gap
+        self.stations = stations
+        self.buffer: dict[str, FloatArray] = {}
+        self.base = 0
+        """sample number of the buffer's first sample"""
+        self.resume = 0
+        """the next dwell starts here or later (sample number)"""
+        self.open: int | None = None
+        """start of a dwell whose end is not yet in the buffer"""
+        self.stop = np.nan
+        """smoothed MD at the previous dwell's start"""
+        self.span = (-np.inf, np.inf)
+        """highest and lowest smoothed MD from the previous dwell's start to ``resume``"""
+        self.station = self.position = -1
+
+    def run(self, samples: TableStream) -> pa.Table:
+        for batch in samples:
+            fresh = _arrays(batch, self.stations.columns)
+            self.buffer = (
+                {k: np.concatenate([self.buffer[k], fresh[k]]) for k in fresh}
+                if self.buffer
+                else fresh
+            )
+            self.step(final=False)
+        self.step(final=True)
+        return self.stations.table()
+
+    def step(self, *, final: bool) -> None:
+        """Find every dwell the buffer settles, then drop the samples no longer needed."""
+        if not self.buffer:
+            return
+        size = len(self.buffer["time"])
+        angle = np.unwrap(self.buffer["frame_angle"], period=360.0)
+        smooth = moving_average(self.buffer["md"], self.window)
+        signals = (angle, smooth)
+        limit = size if final else size - self.window  # smoothing settled below this
+        while True:
+            if self.open is None:
+                start = self.start(signals, smooth, limit, final)
+                if start is None:
+                    break
+                self.open = start
+            end = self.end(signals, self.open - self.base, limit, final)
+            if end is None:
+                break
+            self.dwell(self.open - self.base, end, smooth)
+            self.open, self.resume = None, self.base + end
+        keep = max((self.open if self.open is not None else self.resume) - self.window, self.base)
+        self.buffer = {k: v[keep - self.base :] for k, v in self.buffer.items()}
+        self.base = keep
+
+    def start(
+        self, signals: tuple[FloatArray, ...], smooth: FloatArray, limit: int, final: bool
+    ) -> int | None:
+        """The next dwell's start (sample number), its station and position numbered; None
+        when the buffer does not settle it yet (the search resumes farther on)."""
+        r = self.resume - self.base
+        window = tuple(x[r:limit] for x in signals)
+        found = steady_starts(window, self.tolerances, self.length)
+        if found.size == 0:
+            until = limit if final else max(r, limit - self.length + 1)
+            self._fold(smooth[r:until])
+            self.resume = self.base + until
+            return None
+        s = r + int(found[0])
+        self._fold(smooth[r:s])
+        stop = float(smooth[s])
+        high, low = self.span[0] - self.stop, self.stop - self.span[1]
+        if self.station < 0 or abs(stop - self.stop) > self.gap or max(high, low) > self.gap:
+            self.station, self.position = self.station + 1, 0
+        else:
+            self.position += 1
+        self.stop, self.span = stop, (-np.inf, np.inf)
+        self.resume = self.base + s
+        return self.base + s
+
+    def end(self, signals: tuple[FloatArray, ...], s: int, limit: int, final: bool) -> int | None:
+        """Where the dwell from buffer index ``s`` ends (buffer index); None if not yet."""
+        begin = s + self.length
+        out = np.zeros(max(limit - begin, 0), dtype=bool)
+        for x, tol in zip(signals, self.tolerances, strict=True):
+            level = float(np.median(x[s:begin]))
+            out |= np.abs(x[begin:limit] - level) > tol
+        if out.any():
+            return begin + int(np.argmax(out))
+        return limit if final else None
+
+    def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
+        self._fold(smooth[s:e])
+        a, b = s + self.k_start, e - self.k_end
+        self.stations.add(self.station, self.position, {k: v[a:b] for k, v in self.buffer.items()})
+
+    def _fold(self, values: FloatArray) -> None:
+        if values.size:
+            self.span = (max(self.span[0], values.max()), min(self.span[1], values.min()))

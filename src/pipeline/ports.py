@@ -1,0 +1,82 @@
+"""How the runner moves streamed ports (:class:`~pipeline.streams.TableStream`) between
+stages: the run's outputs as tables on demand, a stream's error carried to where it is
+reported, rows counted as they pass, and a port written batch by batch."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
+from typing import Generic, TypeVar
+
+import pyarrow as pa
+
+from pipeline.registry import WriterDef
+from pipeline.streams import Port, TableStream, as_table
+from pipeline.well import WellMetadata, attach, attached
+
+T = TypeVar("T")
+K = TypeVar("K")
+K2 = TypeVar("K2")
+
+
+class Tables(Mapping[K, pa.Table], Generic[K]):
+    """Every stage output of a run (by (stage id, port), or another key), as whole tables: a
+    streamed output is read into a table only when it is looked up (then kept)."""
+
+    def __init__(self, ports: Mapping[K, Port]) -> None:
+        self._ports = dict(ports)
+
+    def keyed(self, key: Callable[[K], K2]) -> Tables[K2]:
+        """The same outputs under other keys (nothing is read)."""
+        return Tables({key(k): v for k, v in self._ports.items()})
+
+    def __getitem__(self, key: K) -> pa.Table:
+        value = self._ports[key]
+        if isinstance(value, TableStream):
+            value = self._ports[key] = settled(value.read_all)
+        return value
+
+    def __iter__(self) -> Iterator[K]:
+        return iter(self._ports)
+
+    def __len__(self) -> int:
+        return len(self._ports)
+
+
+class UpstreamError(Exception):
+    """Carries the error of a stream's producer (or of its contract check) through the
+    stages consuming the stream, so that it is reported as the producer's."""
+
+    def __init__(self, error: BaseException) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+def settled(call: Callable[[], T]) -> T:
+    """``call()``, an upstream stream's error raised as itself."""
+    try:
+        return call()
+    except UpstreamError as exc:
+        raise exc.error from exc.error.__cause__
+
+
+def counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream:
+    """``stream`` setting ``rows[port]`` to the rows of each pass that runs to its end."""
+
+    def counting() -> Iterator[pa.RecordBatch]:
+        n = 0
+        for batch in stream:
+            n += batch.num_rows
+            yield batch
+        rows[port] = n
+
+    return TableStream(stream.schema, counting)
+
+
+def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -> None:
+    """Write a port's table or stream with ``well`` attached: a stream batch by batch when
+    the writer can (``write_stream``), else concatenated."""
+    if isinstance(value, TableStream) and writer.write_stream is not None:
+        writer.write_stream(value.replace_schema_metadata(attached(value.schema, well)), path, well)
+    else:
+        writer.write(attach(as_table(value), well), path, well)

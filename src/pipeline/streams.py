@@ -1,0 +1,84 @@
+"""Streamed tables: a schema known up front and record batches produced on demand.
+
+A :class:`TableStream` is what a *streamed* port of a stage carries instead of a whole
+``pyarrow.Table`` (``StageDef.streamed_inputs`` / ``streamed_outputs``): its ``schema``
+(fields, units, schema metadata) is fixed before any row is read, and every pass over it
+(``for batch in stream``) produces its record batches afresh, one at a time, from its source —
+a file read again, or an upstream stream recomputed. So a stream can feed several consumers
+without ever being held whole; memory is bounded by a few batches, not by the survey.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import TypeAlias
+
+import pyarrow as pa
+
+BATCH_ROWS = 65_536
+"""Rows per batch when a whole table is cut into a stream (the generic fallback)."""
+
+
+@dataclass(frozen=True)
+class TableStream:
+    """Record batches of ``schema``; each iteration is a new pass over the source.
+
+    ``passes()`` returns a fresh iterator of record batches every time it is called; every
+    batch has the stream's column names and types (its schema metadata is the stream's).
+    """
+
+    schema: pa.Schema
+    passes: Callable[[], Iterator[pa.RecordBatch]]
+
+    def __iter__(self) -> Iterator[pa.RecordBatch]:
+        return self.passes()
+
+    @property
+    def column_names(self) -> list[str]:
+        return list(self.schema.names)
+
+    @classmethod
+    def from_table(cls, table: pa.Table, rows: int = BATCH_ROWS) -> TableStream:
+        """A stream of slices of ``table`` (zero-copy), ``rows`` at a time."""
+
+        def slices() -> Iterator[pa.RecordBatch]:
+            for start in range(0, table.num_rows, rows):
+                yield from table.slice(start, rows).combine_chunks().to_batches()
+
+        return cls(table.schema, slices)
+
+    @classmethod
+    def of_batches(
+        cls, schema: pa.Schema, passes: Callable[[], Iterator[pa.RecordBatch]]
+    ) -> TableStream:
+        """A stream whose batches are relabelled with ``schema`` (its metadata, its field
+        metadata such as units) as they pass; names and types must already match."""
+
+        def relabelled() -> Iterator[pa.RecordBatch]:
+            for batch in passes():
+                yield pa.RecordBatch.from_arrays(batch.columns, schema=schema)
+
+        return cls(schema, relabelled)
+
+    def replace_schema_metadata(self, metadata: dict[bytes, bytes] | None) -> TableStream:
+        """The same stream with other schema metadata (on every batch too)."""
+        return TableStream.of_batches(self.schema.with_metadata(metadata or {}), self.passes)
+
+    def read_all(self) -> pa.Table:
+        """One pass concatenated into a table (for a consumer that needs it whole)."""
+        return pa.Table.from_batches(list(self), schema=self.schema)
+
+
+Port: TypeAlias = "pa.Table | TableStream"
+"""What a port carries: a whole table, or a stream of record batches (a streamed port)."""
+
+
+def as_stream(value: Port) -> TableStream:
+    """``value`` as a stream: a table is cut into slices of :data:`BATCH_ROWS` rows."""
+    return value if isinstance(value, TableStream) else TableStream.from_table(value)
+
+
+def as_table(value: Port) -> pa.Table:
+    """``value`` as a whole table: a stream is read in one pass and concatenated."""
+    return value.read_all() if isinstance(value, TableStream) else value

@@ -1,0 +1,266 @@
+"""Streamed ports end to end: a long point survey flows from a reader through position
+averaging and validity checks to Parquet files without its samples ever being held whole
+(a reader counts its record batches alive), with the whole-table results; contracts are
+checked batch by batch and errors name the row counted from the start of the stream."""
+
+from __future__ import annotations
+
+import textwrap
+import weakref
+from collections.abc import Callable, Iterator, Mapping
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from pipeline.errors import ContractViolation, InputFileError, StageError
+from pipeline.graph import build_plan
+from pipeline.gyrocompass.readings import position_readings
+from pipeline.io import parquet
+from pipeline.plugins import load_registry
+from pipeline.registry import PluginInfo, ReaderDef, Registry, StageContext, StageDef
+from pipeline.runner import run_plan
+from pipeline.sim.simulate import simulate
+from pipeline.sim.spec import SimulationSpec
+from pipeline.spec import load_spec
+from pipeline.streams import TableStream
+from pipeline.tables import RawSamples
+from pipeline.well import WellMetadata
+
+SITE = {
+    "latitude": 61.25,
+    "longitude": 73.4,
+    "elevation": 120.0,
+    "date": "2026-11-21",
+    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
+}
+ROWS = 1000
+"""Rows per batch of the counting reader: a long survey is many batches."""
+
+
+@cache
+def survey() -> pa.Table:
+    """A point survey of 47 stations × 4 positions at 50 Hz with magnetometers (≈ 50 k
+    samples)."""
+    spec = SimulationSpec.model_validate(
+        {
+            "name": "long",
+            "seed": 3,
+            "site": SITE,
+            "well": {
+                "sections": [
+                    {"kind": "vertical", "length": 20},
+                    {"kind": "curve", "dls": 3.0, "inc": 50, "azi": 120},
+                    {"kind": "hold", "length": 170},
+                ]
+            },
+            "tool": {"preset": "ideal", "overrides": {"sample_rate": 50}},
+            "survey": {
+                "mode": "point",
+                "every": 15.0,
+                "positions": [0, 90, 180, 270],
+                "dwell": 6.0,
+                "move_time": 1.0,
+                "settle_time": 0.5,
+                "speed": 5.0,
+            },
+        }
+    )
+    return simulate(spec).samples
+
+
+class Alive:
+    """Counts the record batches a reader made that are still alive: a batch is alive while
+    any array it was built on is (Arrow buffers keep their NumPy arrays alive)."""
+
+    def __init__(self) -> None:
+        self.now = self.peak = self.made = 0
+
+    def track(self, batch: pa.RecordBatch) -> pa.RecordBatch:
+        """A fresh copy of ``batch`` whose columns are tracked NumPy arrays."""
+        arrays = [np.array(c.to_numpy(zero_copy_only=False)) for c in batch.columns]
+        live = [len(arrays)]
+
+        def gone() -> None:
+            live[0] -= 1
+            if live[0] == 0:
+                self.now -= 1
+
+        for array in arrays:
+            weakref.finalize(array, gone)
+        self.now += 1
+        self.made += 1
+        self.peak = max(self.peak, self.now)
+        columns = [
+            pa.array(a, mask=None if c.null_count == 0 else pc_is_null(c))
+            for a, c in zip(arrays, batch.columns, strict=True)
+        ]
+        return pa.RecordBatch.from_arrays(columns, schema=batch.schema)
+
+
+def pc_is_null(column: pa.Array) -> np.ndarray:
+    return np.asarray(column.is_null().to_numpy(zero_copy_only=False))
+
+
+def counting_reader(alive: Alive, *, streams: bool = True) -> ReaderDef:
+    """The Parquet reader, its stream cut into batches of :data:`ROWS` rows made from
+    tracked arrays (or, ``streams=False``, a reader that reads whole tables only)."""
+
+    def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
+        schema = pq.read_schema(path)
+
+        def batches() -> Iterator[pa.RecordBatch]:
+            with pq.ParquetFile(path) as file:
+                for batch in file.iter_batches(batch_size=ROWS):
+                    yield alive.track(batch)
+
+        return TableStream(schema, batches), WellMetadata()
+
+    return ReaderDef(
+        name="counting",
+        description="Parquet, batches counted",
+        kinds={"samples": RawSamples},
+        read=parquet.read,
+        sniff=lambda path: False,
+        stream=stream if streams else None,
+    )
+
+
+def registry_with(*items: ReaderDef | StageDef) -> Registry:
+    registry = load_registry()
+    info = PluginInfo("counting", "1.0", builtin=False)
+    registry.plugins[info.name] = info
+    for item in items:
+        registry.add(item, info, type(item))
+    assert not registry.problems
+    return registry
+
+
+PIPELINE = """
+name: streamed
+version: "1"
+well: {latitude: 61.25, longitude: 73.4, elevation: 120.0, survey_date: "2026-11-21"}
+inputs: {samples: {description: raw samples}}
+stages:
+  - id: read
+    uses: read_samples
+    with: {reader: counting}
+    persist: [samples]
+  - id: readings
+    uses: position_readings
+    inputs: {samples: read.samples}
+    persist: [readings]
+  - id: validity
+    uses: validity_checks
+    inputs: {readings: readings.readings, samples: read.samples}
+  - id: copy
+    uses: write
+    inputs: {table: read.samples}
+    with: {writer: parquet, filename: copy.parquet}
+"""
+
+
+def run(tmp_path: Path, registry: Registry, text: str, samples: Path) -> Any:
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(textwrap.dedent(text))
+    plan = build_plan(load_spec(path), registry)
+    return run_plan(plan, registry, inputs={"samples": samples}, out_dir=tmp_path / "out")
+
+
+def test_a_long_survey_streams_through_with_few_batches_alive(tmp_path: Path) -> None:
+    samples = survey()
+    source = tmp_path / "samples.parquet"
+    pq.write_table(samples, source)
+    alive = Alive()
+    result = run(tmp_path, registry_with(counting_reader(alive)), PIPELINE, source)
+    passes = alive.made / -(-samples.num_rows // ROWS)
+    assert alive.made > 100 and passes == int(passes)  # whole passes over ≈ 50 batches
+    assert alive.peak <= 3, f"{alive.peak} of {alive.made} batches alive at once"
+    out = tmp_path / "out"
+    readings = pq.read_table(out / "readings.readings.parquet")
+    assert readings.num_rows > 100
+    whole = position_readings(samples)
+    assert readings.select(whole.column_names).equals(whole)
+    for name in ("read.samples.parquet", "copy.parquet"):
+        written = pq.ParquetFile(out / name)
+        assert written.metadata.num_row_groups > 40  # written batch by batch
+        assert written.read().select(samples.column_names).equals(samples)
+    stages = {s["id"]: s for s in result.manifest["stages"]}
+    assert stages["read"]["rows_out"] == {"samples": samples.num_rows}
+    assert stages["readings"]["rows_in"] == {"samples": samples.num_rows}
+    assert alive.now == 0
+
+
+def test_a_reader_that_cannot_stream_is_cut_into_slices(tmp_path: Path) -> None:
+    samples = survey()
+    source = tmp_path / "samples.parquet"
+    pq.write_table(samples, source)
+    registry = registry_with(counting_reader(Alive(), streams=False))
+    run(tmp_path, registry, PIPELINE, source)
+    readings = pq.read_table(tmp_path / "out" / "readings.readings.parquet")
+    whole = position_readings(samples)
+    assert readings.select(whole.column_names).equals(whole)
+
+
+def test_a_bad_row_in_a_late_batch_names_its_row_from_the_start(tmp_path: Path) -> None:
+    samples = survey()
+    time = samples.column("time").to_numpy().copy()
+    time[3 * ROWS] = time[3 * ROWS - 1]  # the first row of the fourth batch
+    bad = samples.set_column(0, samples.schema.field("time"), pa.array(time))
+    source = tmp_path / "bad.parquet"
+    pq.write_table(bad, source)
+    with pytest.raises(StageError) as info:
+        run(tmp_path, registry_with(counting_reader(Alive())), PIPELINE, source)
+    cause = info.value.__cause__
+    assert isinstance(cause, InputFileError)
+    assert f"row {3 * ROWS}: {float(time[3 * ROWS])!r}" in str(cause) and "'time'" in str(cause)
+    assert "stage 'read'" in str(info.value)
+    assert not (tmp_path / "out").exists()
+
+
+def doubling(
+    inputs: Mapping[str, TableStream], params: Any, ctx: StageContext
+) -> dict[str, TableStream]:
+    """A streamed stage: each batch's gyro_x doubled, NaN from sample 2500 on."""
+    samples = inputs["samples"]
+
+    def batches() -> Iterator[pa.RecordBatch]:
+        done = 0
+        for batch in samples:
+            gyro = batch.column("gyro_x").to_numpy() * 2
+            gyro[max(2500 - done, 0) :] = np.nan
+            i = batch.schema.get_field_index("gyro_x")
+            yield batch.set_column(i, batch.schema.field(i), pa.array(gyro))
+            done += batch.num_rows
+
+    return {"samples": TableStream(samples.schema, batches)}
+
+
+DOUBLING: Callable[..., Any] = doubling
+
+
+def test_a_streamed_output_is_checked_batch_by_batch_at_its_stage(tmp_path: Path) -> None:
+    stage = StageDef(
+        name="counting.doubling",
+        func=DOUBLING,
+        description="doubles gyro_x",
+        inputs={"samples": RawSamples},
+        outputs={"samples": RawSamples},
+        streamed_inputs=frozenset({"samples"}),
+        streamed_outputs=frozenset({"samples"}),
+    )
+    source = tmp_path / "samples.parquet"
+    pq.write_table(survey(), source)
+    text = PIPELINE.split("  - id: readings")[0] + (
+        "  - id: double\n    uses: counting.doubling\n    inputs: {samples: read.samples}\n"
+        "  - id: readings\n    uses: position_readings\n    inputs: {samples: double.samples}\n"
+    )
+    with pytest.raises(ContractViolation) as info:
+        run(tmp_path, registry_with(counting_reader(Alive()), stage), text, source)
+    message = str(info.value)
+    assert "stage 'double' output port 'samples'" in message
+    assert "'gyro_x': finite" in message and "row 2500: nan" in message

@@ -1,0 +1,112 @@
+"""Position readings from a stream of record batches equal the whole-table readings: the
+same rows, bit for bit, whatever the batch boundaries (inside a dwell, inside the trimmed
+start, one sample long), for marked and detected dwells; and the same errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from test_readings import profile, run, synthetic
+
+from pipeline.errors import ContractViolation
+from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings_stream import stream_position_readings
+from pipeline.streams import TableStream
+
+BATCHES = [1, 7, 250, 801, 4096, 1 << 20]
+"""Rows per batch: a sample at a time, odd sizes that cut dwells and trims anywhere, one
+batch for the whole survey."""
+
+
+def both(samples: pa.Table, options: ReadingOptions, rows: int) -> tuple[pa.Table, pa.Table]:
+    whole = position_readings(samples, options)
+    streamed = stream_position_readings(TableStream.from_table(samples, rows), options)
+    return whole, streamed
+
+
+@pytest.mark.parametrize("rows", BATCHES[1:])
+def test_marked_positions_stream_to_the_whole_table_readings(rows: int) -> None:
+    sim = run("noisy", dwell=10.0, move_time=0.1, settle_time=0.0)
+    whole, streamed = both(sim.samples, ReadingOptions(), rows)
+    assert whole.num_rows == 15
+    assert streamed.equals(whole)
+
+
+@pytest.mark.parametrize("rows", BATCHES[1:])
+def test_detected_dwells_stream_to_the_whole_table_readings(rows: int) -> None:
+    sim = run("noisy", dwell=10.0, move_time=0.1, settle_time=0.0)
+    noise = np.random.default_rng(1).normal(0, 0.05, sim.samples.num_rows)
+    md = sim.samples.column("md").to_numpy() + noise
+    samples = sim.samples.set_column(1, sim.samples.schema.field("md"), pa.array(md))
+    samples = samples.drop_columns(["station", "position"])
+    whole, streamed = both(samples, ReadingOptions(), rows)
+    assert whole.num_rows == 15
+    assert streamed.equals(whole)
+
+
+@pytest.mark.parametrize("rows", BATCHES)
+def test_stations_numbered_by_detection_stream_alike(rows: int) -> None:
+    md, angle = profile(
+        [
+            (0, 100, 10), (10, 100, 10), (11, 100, 100), (21, 100, 100),  # station 0
+            (31, 110, 100), (41, 110, 100), (42, 110, 10), (52, 110, 10),  # travel, station 1
+            (55, 107, 10), (58, 110, 10), (68, 110, 10),  # pulled up 3 m and back: station 2
+            (69, 110.3, 10), (79, 110.3, 10),  # crept 0.3 m (< station_gap): same station
+        ]
+    )  # fmt: skip
+    for smoothing in (0.0, 1.0, 3.0):
+        options = ReadingOptions(md_smoothing=smoothing)
+        whole, streamed = both(synthetic(md, angle), options, rows)
+        assert whole.num_rows == 6
+        assert streamed.equals(whole), smoothing
+
+
+def test_a_batch_boundary_inside_a_stationary_position() -> None:
+    sim = run()
+    station = sim.samples.column("station").to_numpy(zero_copy_only=False)
+    position = sim.samples.column("position").to_numpy(zero_copy_only=False)
+    inside = np.flatnonzero((station == 1) & (position == 2))
+    cut = int(inside[len(inside) // 2])  # the middle of station 1, position 2
+    batches = [sim.samples.slice(0, cut), sim.samples.slice(cut, 1), sim.samples.slice(cut + 1)]
+    stream = TableStream(
+        sim.samples.schema, lambda: (b for t in batches for b in t.combine_chunks().to_batches())
+    )
+    assert stream_position_readings(stream).equals(position_readings(sim.samples))
+
+
+def test_errors_are_the_whole_table_errors() -> None:
+    samples = run().samples
+    keep = np.ones(samples.num_rows, dtype=bool)
+    keep[[1234, 5000]] = False  # dropped samples
+    unmarked = samples.drop_columns(["station", "position"])
+    cases = [
+        (samples.drop_columns(["station"]), ReadingOptions(), "position markers but no station"),
+        (samples.drop_columns(["md"]), ReadingOptions(), "no md column"),
+        (unmarked.drop_columns(["frame_angle"]), ReadingOptions(), "neither station/position"),
+        (unmarked, ReadingOptions(min_dwell=60), "no frame positions found"),
+        (samples, ReadingOptions(trim_start=4.0), "too short after trimming"),
+        (samples.slice(0, 1), ReadingOptions(), "at least 2 samples"),
+        (samples.filter(pa.array(keep)), ReadingOptions(), r"t = 12\.33 s is 0\.02 s \(2 such"),
+    ]
+    for table, options, message in cases:
+        with pytest.raises(ValueError, match=message) as whole:
+            position_readings(table, options)
+        with pytest.raises(ValueError, match=message) as streamed:
+            stream_position_readings(TableStream.from_table(table, 333), options)
+        assert str(streamed.value) == str(whole.value)
+
+
+def test_each_batch_is_checked_against_the_contract_with_its_row() -> None:
+    samples = run().samples
+    time = samples.column("time").to_numpy().copy()
+    time[1000] = time[999]  # time must increase strictly: row 1000 breaks it
+    bad = samples.set_column(0, samples.schema.field("time"), pa.array(time))
+    with pytest.raises(ContractViolation, match=r"'time': monotonic.*row 1000"):
+        stream_position_readings(TableStream.from_table(bad, 1000))  # at a batch boundary
+
+
+def test_no_samples_give_no_readings() -> None:
+    empty = run().samples.slice(0, 0)
+    readings = stream_position_readings(TableStream.from_table(empty))
+    assert readings.num_rows == 0
