@@ -49,7 +49,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pipeline.contracts import UNIT_KEY, TableContract
+from pipeline.contracts import UNIT_KEY, VERTICAL_TOLERANCE, TableContract
 from pipeline.convert import convert, read_kind
 from pipeline.errors import (
     ContractViolation,
@@ -1155,9 +1155,14 @@ def check_table(table: pa.Table, kind: str) -> tuple[str, str] | None:
         if spec.finite and spec.name in table.column_names:
             col = table.column(spec.name)
             if pa.types.is_floating(col.type):
-                values = col.drop_null().to_numpy()
-                if not np.isfinite(values).all():
-                    return NONFINITE, f"{kind}: column {spec.name!r}: {values[:5]}…"
+                values = col.fill_null(0.0).to_numpy()
+                finite = np.isfinite(values)
+                if spec.undefined_at_vertical:  # an azimuth no inclination defines: NaN
+                    inc = table.column("inc").fill_null(90.0).to_numpy()
+                    vertical = np.minimum(np.abs(inc), np.abs(180.0 - inc)) <= VERTICAL_TOLERANCE
+                    finite |= np.isnan(values) & vertical
+                if not finite.all():
+                    return NONFINITE, f"{kind}: column {spec.name!r}: {values[~finite][:5]}…"
     try:
         contract.validate_table(table)
     except ContractViolation as exc:

@@ -17,12 +17,15 @@ from fuzz_support import (
     BAD,
     KIND_NAMES,
     MULTILINE,
+    NONFINITE,
     REFUSED,
     UNLOCATED,
     Context,
     Fuzzer,
     Outcome,
+    check_table,
 )
+from pipeline.tables import Stations
 from tests_support import gyropipe
 
 SEED = 20261121
@@ -119,3 +122,20 @@ def test_refused_inputs_through_the_cli(spot: list[Spot]) -> None:
         assert lines and lines[0].startswith("error:"), where
         assert all(line.startswith("  ") for line in lines[1:]), where
         assert path.name in stderr, where
+
+
+def test_an_undefined_azimuth_is_non_finite_only_off_vertical() -> None:
+    """The harness's own statement of the rule: NaN azimuth within 1° of vertical is an
+    undefined azimuth; anywhere else it is a non-finite output."""
+    stations = Stations.compiled()
+    vertical = stations.make_table(
+        {"md": [0.0, 30.0], "inc": [0.5, 10.0], "azi": [float("nan"), 40.0]},
+        north_reference="true",
+    )
+    inclined = stations.make_table(
+        {"md": [0.0, 30.0], "inc": [5.0, 10.0], "azi": [float("nan"), 40.0]},
+        north_reference="true",
+    )
+    assert check_table(vertical, "stations") is None
+    outcome = check_table(inclined, "stations")
+    assert outcome is not None and outcome[0] == NONFINITE
