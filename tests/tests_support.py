@@ -6,6 +6,7 @@ import math
 import os
 import re
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -168,3 +169,25 @@ def comparable_cell(value: Any, null: float | None = None) -> float | str | None
     except ValueError:
         return text
     return None if math.isnan(number) or number == null else number
+
+
+def simulate_and_run(tmp_path: Path, plan_text: str, pipeline: str = "point-gyro.yaml") -> Path:
+    """``gyropipe simulate`` the plan (YAML text) into ``tmp_path/sim``, then ``gyropipe run``
+    the shipped ``pipeline`` on its samples into ``tmp_path/out``; return the run's directory
+    (the run must succeed)."""
+    (tmp_path / "plan.yaml").write_text(plan_text)
+    subprocess.run(
+        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
+        check=True,
+        capture_output=True,
+    )
+    out = tmp_path / "out"
+    pipeline_file, samples = ROOT / "pipelines" / pipeline, tmp_path / "sim" / "samples.parquet"
+    result = subprocess.run(
+        [*gyropipe(), "run", str(pipeline_file), "--input", str(samples), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    return out

@@ -7,7 +7,6 @@ stations, noise-free and noisy."""
 from __future__ import annotations
 
 import re
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +18,7 @@ import yaml
 
 import pipeline as gp
 from pipeline.errors import InputFileError
-from tests_support import ROOT, gyropipe
+from tests_support import simulate_and_run
 
 SITE = {
     "latitude": 61.25,
@@ -145,28 +144,7 @@ def test_minimum_curvature_leaving_vertical_follows_the_arc_of_the_next_azimuth(
 
 
 def test_point_gyro_pipeline_writes_and_reads_back_undefined_azimuths(tmp_path: Path):
-    (tmp_path / "plan.yaml").write_text(yaml.safe_dump(plan(NOISE_FREE)))
-    subprocess.run(
-        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
-        check=True,
-        capture_output=True,
-    )
-    out = tmp_path / "out"
-    done = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            str(ROOT / "pipelines" / "point-gyro.yaml"),
-            "--input",
-            str(tmp_path / "sim" / "samples.parquet"),
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert done.returncode == 0, done.stderr
+    out = simulate_and_run(tmp_path, yaml.safe_dump(plan(NOISE_FREE)))
     stations = pq.read_table(out / "compass.stations.parquet")
     undefined = np.isnan(stations.column("azi").to_numpy())
     assert undefined.tolist() == [True] * 3 + [False] * (stations.num_rows - 3)

@@ -13,6 +13,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
+from qc_support import random_well
 
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.qc.engine import ISOLATED, station_checks
@@ -30,17 +31,6 @@ NOISE = {
     "gyro": {"noise_density": 0.003},
     "accelerometer": {"noise_density": 0.01},
 }
-
-
-def random_well(path: Path, n: int, seed: int, inc: tuple[float, float]) -> Path:
-    rng = np.random.default_rng(seed)
-    rows = zip(rng.uniform(*inc, n), rng.uniform(0, 360, n), strict=True)
-    path.write_text(
-        "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n"
-        + "\n".join(f"{30 * (i + 1)},{a:.4f},{b:.4f}" for i, (a, b) in enumerate(rows))
-        + "\n"
-    )
-    return path
 
 
 def run(

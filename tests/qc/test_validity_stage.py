@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, simulate_and_run
 
 PLAN = """
 name: qc-run
@@ -27,29 +27,7 @@ survey: {{mode: point, every: 30, dwell: 20, move_time: 2}}
 
 
 def run(tmp_path: Path, overrides: str) -> Path:
-    (tmp_path / "plan.yaml").write_text(PLAN.format(overrides=overrides))
-    subprocess.run(
-        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
-        check=True,
-        capture_output=True,
-    )
-    out = tmp_path / "out"
-    result = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            str(ROOT / "pipelines" / "point-gyro.yaml"),
-            "--input",
-            str(tmp_path / "sim" / "samples.parquet"),
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert result.returncode == 0, result.stderr
-    return out
+    return simulate_and_run(tmp_path, PLAN.format(overrides=overrides))
 
 
 def test_clean_survey_passes(tmp_path: Path):
