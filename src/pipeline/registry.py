@@ -397,7 +397,12 @@ class Registry:
         reader and its plugin; built-in readers' located errors pass unchanged.
         """
         chosen = self.reader_for(path, kind, reader)
-        parsed = reader_options(chosen, options or {}, well)
+        return self._read_whole(chosen, path, kind, reader_options(chosen, options or {}, well))
+
+    def _read_whole(
+        self, chosen: ReaderDef, path: Path, kind: str, parsed: BaseModel
+    ) -> tuple[pa.Table, WellMetadata]:
+        """``chosen``'s table of ``path`` (options parsed), checked against the kind."""
         table, found = self._reading(chosen, lambda: chosen.read(path, kind, parsed))
         check_read(path, kind, chosen, table)
         return table, found
@@ -418,8 +423,8 @@ class Registry:
         reported as :meth:`read` reports it."""
         chosen = self.reader_for(path, kind, reader)
         parsed = reader_options(chosen, options or {}, well)
-        if chosen.stream is None:
-            table, found = self.read(path, kind, reader=chosen.name, options=options, well=well)
+        if chosen.stream is None:  # the reader and its options are resolved once
+            table, found = self._read_whole(chosen, path, kind, parsed)
             return TableStream.from_table(table), found
         opener = chosen.stream
         stream, found = self._reading(chosen, lambda: opener(path, kind, parsed))
