@@ -30,7 +30,7 @@ def compassed(
 
 def azimuth_error(result: ContinuousResult, sim: Simulation) -> tuple[np.ndarray, np.ndarray]:
     """Integrated minus true azimuth (deg, wrapped to ±180) and the flags, per series sample."""
-    series = result.series
+    series = result.series.read_all()
     truth_t = sim.truth.column("time").to_numpy()
     t = series.column("time").to_numpy()
     rows = np.searchsorted(truth_t, t)

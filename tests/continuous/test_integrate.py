@@ -97,7 +97,7 @@ def test_constant_gyro_bias_drifts_linearly_and_closure_removes_it() -> None:
     raw = integrate(bias, closure=False)
     clean = integrate(bias, closure=True)
     err_raw = usable_azimuth_error(raw, sim)
-    t = raw.series.column("time").to_numpy()
+    t = raw.series.read_all().column("time").to_numpy()
     t = t - t[0]
     slope, offset = np.polyfit(t, err_raw, 1)
     linear = slope * t + offset
@@ -138,7 +138,7 @@ def test_run_starting_near_vertical_is_tied_to_the_end_stop() -> None:
         sim.samples, stops, LAT, ContinuousOptions(spacing=5.0, odometer_window=0.07)
     )
     assert np.isnan(result.misclosure)
-    flags = result.series.column("flags").to_numpy()
+    flags = result.series.read_all().column("flags").to_numpy()
     assert np.all(flags & FLAG_NO_CLOSURE)
     err = usable_azimuth_error(result, sim)
     assert np.abs(err).max() < 0.01

@@ -148,7 +148,7 @@ def test_three_axis_round_trip_through_vertical(well: str, start_md: float, serv
     spec, sim, stops = simulated(well, "xyz", start_md, servo, rate=100.0)
     result = integrate_continuous(sim.samples, stops, LAT, OPTIONS)
     err, flags = azimuth_error(result, sim)
-    truth_inc = result.series.column("inc").to_numpy()
+    truth_inc = result.series.read_all().column("inc").to_numpy()
     near = truth_inc < OPTIONS.vertical_below
     assert near.sum() > 1000  # the run really spends time near vertical
     np.testing.assert_array_equal(flags, np.where(near, FLAG_AZIMUTH_UNDEFINED, 0))
@@ -196,7 +196,7 @@ def test_constant_gyro_bias_is_removed_by_the_closure(
     )
     closed = integrate_continuous(sim.samples, stops, LAT, OPTIONS)
     err_raw, _ = azimuth_error(raw, sim)
-    t = raw.series.column("time").to_numpy()
+    t = raw.series.read_all().column("time").to_numpy()
     linear = np.polyval(np.polyfit(t, err_raw, 1), t)
     assert np.abs(err_raw).max() > 0.1
     assert np.abs(err_raw - linear).max() < 0.1 * np.abs(err_raw).max()
@@ -216,7 +216,7 @@ def test_dispatch_by_gyro_columns_and_option() -> None:
         result = integrate_continuous(table, stops, LAT, options)
         err, flags = azimuth_error(result, sim)
         assert np.all(flags == 0) and np.abs(err).max() < 0.01  # every method is exact
-        return np.stack([result.series.column(n).to_numpy() for n in ("inc", "azi")])
+        return np.stack([result.series.read_all().column(n).to_numpy() for n in ("inc", "azi")])
 
     # an explicit choice uses only those axes; auto takes every gyro column present
     chosen = {axes: series(samples, axes) for axes in ("x", "xy", "xyz")}

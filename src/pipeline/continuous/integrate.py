@@ -49,7 +49,6 @@ from collections.abc import Callable
 import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
-from scipy.signal import savgol_filter
 
 from pipeline.continuous.multiaxis import apsidal_components, resolve_gyro_axes
 from pipeline.continuous.options import ContinuousOptions
@@ -59,164 +58,224 @@ from pipeline.continuous.run import (
     Odometer,
     RunStops,
     compassed_stop,
-    float_column,
     odometer_fit,
     run_bounds,
     wrap_angle,
 )
-from pipeline.continuous.sigma import InclinationNoise, RunGeometry
+from pipeline.continuous.series import StoredRun
+from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
+from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
 from pipeline.continuous.strapdown import strapdown_run
-from pipeline.continuous.tables import (
-    FLAG_AFTER_VERTICAL,
-    FLAG_LARGE_MISALIGNMENT,
-    FLAG_NEAR_VERTICAL,
-    FLAG_NO_CLOSURE,
-)
+from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray
+from pipeline.errors import EmptyTableError
+from pipeline.streams import Port, as_stream
 
 __all__ = ["integrate_continuous"]
 
+_COLUMNS = ("time", "md", "station", "position", "acc_x", "acc_y", "acc_z")
+
 
 def integrate_continuous(
-    samples: pa.Table, stops: pa.Table, latitude: float, options: ContinuousOptions
+    samples: Port,
+    stops: pa.Table,
+    latitude: float,
+    options: ContinuousOptions,
+    rows: int = CHUNK_ROWS,
 ) -> ContinuousResult:
     """Integrate the azimuth of the moving run between its two compassed stops (x and xy
-    tools here; xyz: :mod:`pipeline.continuous.strapdown`)."""
-    axes = resolve_gyro_axes(samples.column_names, options.gyro_axes)
-    if "md" not in samples.column_names:
+    tools here; xyz: :mod:`pipeline.continuous.strapdown`). The samples (a table or a stream
+    of record batches) are read once into a disk-backed store and integrated ``rows`` at a
+    time; the full-rate series comes back as a stream read from that store."""
+    stream = as_stream(samples)
+    axes = resolve_gyro_axes(stream.column_names, options.gyro_axes)
+    if "md" not in stream.column_names:
         raise ContinuousError("continuous integration needs the odometer MD column")
-    if "station" not in samples.column_names:
+    if "station" not in stream.column_names:
         raise ContinuousError("continuous integration needs the station markers of the stops")
-    begin, end, first_id, last_id = run_bounds(float_column(samples, "station"))
+    store = ColumnStore()
+    gyros = [f"gyro_{a}" for a in axes]
+    names = [n for n in (*_COLUMNS, *gyros) if n in stream.column_names]
+    if store.add_batches(stream, names) == 0:
+        raise EmptyTableError("samples", "a continuous run needs samples")
+    begin, end, first_id, last_id = run_bounds(store, rows)
     ends = compassed_stop(stops, first_id), compassed_stop(stops, last_id)
-    odometer = odometer_fit(samples, begin, end, options.odometer_window)
+    odometer = odometer_fit(store, begin, end, options.odometer_window, rows)
     if axes != "xyz":
-        sl = slice(begin, end + 1)  # stop sample, moving samples, stop sample
-        return _apsidal_run(samples, axes == "xy", sl, odometer, ends, latitude, options)
-    sd = strapdown_run(samples, ends, (begin, end), latitude, options)
-    run = RunGeometry(  # azimuth errors to first order as a two-axis tool's (δ = 0)
-        time=odometer.time,
-        inc=sd.inc,
-        azi=sd.azi,
-        misalignment=np.zeros(odometer.time.size),
-        usable=sd.flags == 0,
-        latitude=latitude,
-        closure=options.closure,
-        # I carries the stops' accelerometer bias, no per-sample noise (gyro-driven)
-        inc_noise=InclinationNoise(
-            dt=odometer.dt, accel=0.0, odometer=0.0, odometer_points=None, inc_rate_points=None
-        ),
+        run = _apsidal_run(odometer, axes == "xy", ends, latitude, options)
+    else:
+        run = _strapdown(odometer, ends, end, latitude, options)
+    return run_result(run, ends, options)
+
+
+def _strapdown(
+    odometer: Odometer, ends: RunStops, end: int, latitude: float, options: ContinuousOptions
+) -> StoredRun:
+    """A three-axis run: the strapdown attitude over the samples read whole (its running
+    product of rotations is not chunked), its angles stored like a single-axis run's."""
+    store, begin = odometer.store, odometer.begin
+    names = [n for n in (*_COLUMNS, "gyro_x", "gyro_y", "gyro_z") if n in store]
+    table = pa.table({n: store.floats(n, 0, store.rows(n)) for n in names})
+    sd = strapdown_run(table, ends, (begin, end), latitude, options)
+    for name, values in (("inc", sd.inc), ("azi", sd.azi), ("toolface", sd.toolface)):
+        store.write(name, 0, values)
+    store.write("misalignment", 0, np.zeros(odometer.size))
+    store.write("flags", 0, sd.flags)
+    store.write("held", 0, np.zeros(odometer.size, dtype=np.int8))
+    # I carries the stops' accelerometer bias, no per-sample noise (gyro-driven)
+    noise = InclinationNoise(
+        dt=odometer.dt, accel=0.0, odometer=0.0, odometer_points=None, inc_rate_points=None
     )
-    return run_result(odometer, sd.toolface, sd.flags, ends, options, run, sd.misclosure)
+    # azimuth errors to first order as a two-axis tool's (δ = 0)
+    return StoredRun(odometer, latitude, options.closure, False, noise, "azi", sd.misclosure)
 
 
 def _apsidal_run(
-    samples: pa.Table,
-    two_axis: bool,
-    sl: slice,
     odometer: Odometer,
+    two_axis: bool,
     ends: RunStops,
     latitude: float,
     options: ContinuousOptions,
-) -> ContinuousResult:
-    """Ȧ from the high-side rate of a single-axis (x) or two-axis (xy) tool over the samples
-    ``sl``, closed on the end stop or integrated back from it."""
+) -> StoredRun:
+    """Ȧ from the high-side rate of a single-axis (x) or two-axis (xy) tool over the run,
+    closed on the end stop or integrated back from it, a chunk of ``odometer.rows`` samples
+    at a time: each pass reads the previous pass's azimuth and İ from the store (with the
+    overlap its filters need) and integrates from the azimuth the chunk before ended on."""
+    store, size, dt = odometer.store, odometer.size, odometer.dt
     start, finish = ends
-    t, dt = odometer.time, odometer.dt
-    gx, gy, gz = (float_column(samples, f"acc_{a}")[sl] for a in "xyz")
-    y = float_column(samples, "gyro_x")[sl] * DEG_H
-    y_right = float_column(samples, "gyro_y")[sl] * DEG_H if two_axis else None
     window = max(5, round(options.inc_rate_window / dt) | 1)
+    smooth = size > window
     phi = np.radians(latitude)
     oc, os_ = OMEGA_EARTH * np.cos(phi), OMEGA_EARTH * np.sin(phi)
-    azi_rate = np.zeros(t.size)
-    inc_rate = np.zeros(t.size)
     vertical_stop = np.sin(np.radians(options.vertical_below))
     backward = bool(
         np.sin(np.radians(start["inc"])) < vertical_stop
         and np.sin(np.radians(finish["inc"])) >= vertical_stop
     )
     # a run starting near vertical is tied to the inclined end stop and integrated back in time
-    order = slice(None, None, -1) if backward else slice(None)
     tie = float(np.radians((finish if backward else start)["azi"]))
-    guess: FloatArray | None = None  # the previous pass's azimuth, in integration order
-    for _ in range(options.passes):
-        inc, tf = _inclination_toolface(gx, gy, gz, odometer, inc_rate, azi_rate)
-        if y_right is None:  # single axis: h from the gyro at misalignment δ = ψ, and İ
-            high, delta = y, tf
-            inc_rate = (
-                savgol_filter(inc, window, 2, deriv=1, delta=dt)
-                if t.size > window
-                else np.gradient(inc, t)
+    for n in range(options.passes):
+        previous = None if n == 0 else str((n - 1) % 2)
+        carry = tie  # azimuth of the sample integrated last
+        for a, b in chunks(0, size, odometer.rows, reverse=backward):
+            # the chunk, and the sample integrated before it (first chunk: none)
+            sa, sb = (a, min(b + 1, size)) if backward else (max(a - 1, 0), b)
+            lo, hi = savgol_span(0, size, sa, sb, window) if smooth else (sa - 1, sb + 1)
+            lo, hi = max(lo, 0), min(hi, size)
+            t = odometer.time(lo, hi)
+            inc, tf = _pass_angles(odometer, lo, hi, previous, t)
+            y = store.floats("gyro_x", odometer.begin + lo, odometer.begin + hi) * DEG_H
+            seg = slice(sa - lo, sb - lo)
+            if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
+                high, delta = y, tf
+                inc_rate = (
+                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
+                    if smooth
+                    else np.gradient(inc, t)[seg]
+                )
+            else:  # two axes: h and r by the toolface; İ from r after the first pass (below)
+                y_right = store.floats("gyro_y", odometer.begin + lo, odometer.begin + hi) * DEG_H
+                (high, right), delta = apsidal_components(y, y_right, tf), np.zeros(hi - lo)
+                inc_rate = _previous(store, "inc_rate", previous, sa, sb)
+            order = slice(None, None, -1) if backward else slice(None)
+            guess = None if previous is None else store.floats(f"azi{previous}", sa, sb)[order]
+            index = np.arange(sa, sb)
+            azi, flags, held = (
+                x[order]
+                for x in _integrate(
+                    t[seg][order],
+                    high[seg][order],
+                    inc[seg][order],
+                    inc_rate[order],
+                    delta[seg][order],
+                    carry,
+                    oc,
+                    os_,
+                    options,
+                    guess,
+                    rest=((index == 0) | (index == size - 1))[order],
+                    # each chunk's share of the run's error bound: the chunks' errors add up
+                    tolerance=_NEWTON_TOLERANCE * (sb - sa) / size,
+                )
             )
-        else:  # two axes: h and r by the toolface; İ from r after the first pass (below)
-            (high, right), delta = apsidal_components(y, y_right, tf), np.zeros(t.size)
-        guess, flags, held = _integrate(
-            t[order],
-            high[order],
-            inc[order],
-            inc_rate[order],
-            delta[order],
-            tie,
-            oc,
-            os_,
-            options,
-            guess,
-        )
-        azi, flags, held = guess[order], flags[order], held[order]
-        azi_rate = np.gradient(azi, t)
-        if y_right is not None:  # İ = r + Ω cos φ sin A, measured, not differentiated
-            inc_rate = right + oc * np.sin(azi)
-    weight = (t - t[0]) / (t[-1] - t[0])
+            own = slice(a - sa, b - sa)  # the chunk's samples within the segment
+            carry = float(azi[own][0] if backward else azi[own][-1])
+            store.write(f"azi{n % 2}", a, azi[own])
+            if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
+                inc_rate = right[seg] + oc * np.sin(azi)
+            store.write(f"inc_rate{n % 2}", a, inc_rate[own])
+            if n == options.passes - 1:
+                for name, values in (
+                    ("inc", inc[seg]),
+                    ("toolface", tf[seg]),
+                    ("misalignment", delta[seg]),
+                    ("flags", flags),
+                    ("held", held.astype(np.int8)),
+                ):
+                    store.write(name, a, values[own])
+    azi_column = f"azi{(options.passes - 1) % 2}"
     if backward:  # one usable tie only: no closure, and the start stop's azimuth is not used
         misclosure = float("nan")
     else:
-        misclosure = float(wrap_angle(azi[-1] - np.radians(finish["azi"])))
-        if options.closure:
-            azi = azi - misclosure * weight
-    after = (np.cumsum(held[::-1]) > 0)[::-1] if backward else np.cumsum(held) > 0
-    if backward:
-        flags |= FLAG_NO_CLOSURE
-    flags[after & ~held] |= FLAG_AFTER_VERTICAL
-    run = RunGeometry(
-        time=t,
-        inc=inc,
-        azi=azi,
-        misalignment=delta,
-        usable=(flags & (FLAG_NEAR_VERTICAL | FLAG_LARGE_MISALIGNMENT)) == 0,
-        latitude=latitude,
-        closure=options.closure,
-        backward=backward,
-        inc_noise=InclinationNoise(
-            dt=dt,
-            accel=options.acc_noise / (60.0 * np.sqrt(dt)),  # (m/s)/√h → per sample
-            odometer=options.odometer_noise,
-            odometer_points=odometer.points,
-            inc_rate_points=window if t.size > window else None,
-        ),
+        last = store.floats(azi_column, size - 1, size)
+        misclosure = float(wrap_angle(last[0] - np.radians(finish["azi"])))
+    noise = InclinationNoise(
+        dt=dt,
+        accel=options.acc_noise / (60.0 * np.sqrt(dt)),  # (m/s)/√h → per sample
+        odometer=options.odometer_noise,
+        odometer_points=odometer.points,
+        inc_rate_points=window if smooth else None,
     )
-    return run_result(odometer, tf, flags, ends, options, run, misclosure)
+    shift = misclosure if options.closure and not backward else 0.0
+    return StoredRun(
+        odometer, latitude, options.closure, backward, noise, azi_column, misclosure, shift
+    )
+
+
+def _previous(store: ColumnStore, name: str, previous: str | None, lo: int, hi: int) -> FloatArray:
+    """Column ``name`` of the previous pass at run samples ``lo``…``hi − 1`` (zeros before
+    the first pass)."""
+    return np.zeros(hi - lo) if previous is None else store.floats(f"{name}{previous}", lo, hi)
+
+
+def _pass_angles(
+    odometer: Odometer, lo: int, hi: int, previous: str | None, t: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Inclination and toolface (rad) at run samples ``lo``…``hi − 1`` with the tool's
+    acceleration removed, from the previous pass's İ and Ȧ (zero before the first)."""
+    store, begin = odometer.store, odometer.begin
+    gx, gy, gz = (store.floats(f"acc_{a}", begin + lo, begin + hi) for a in "xyz")
+    inc_rate = _previous(store, "inc_rate", previous, lo, hi)
+    if previous is None:
+        azi_rate = np.zeros(hi - lo)
+    else:  # the gradient at the range's ends needs one sample beyond it
+        wlo, whi = max(lo - 1, 0), min(hi + 1, odometer.size)
+        wide = np.gradient(store.floats(f"azi{previous}", wlo, whi), odometer.time(wlo, whi))
+        azi_rate = wide[lo - wlo : lo - wlo + hi - lo]
+    speed, accel = odometer.column("speed", lo, hi), odometer.column("accel", lo, hi)
+    return _inclination_toolface(gx, gy, gz, speed, accel, inc_rate, azi_rate)
 
 
 def _inclination_toolface(
     gx: FloatArray,
     gy: FloatArray,
     gz: FloatArray,
-    odometer: Odometer,
+    speed: FloatArray,
+    accel: FloatArray,
     inc_rate: FloatArray,
     azi_rate: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
     """Inclination and gravity toolface of frame x (rad) from the accelerometers (m/s²) with
-    the tool's acceleration removed: along the axis the odometer's, across it
-    v·(İ·hs + sin I·Ȧ·rs) from the current İ and Ȧ (rad/s)."""
+    the tool's acceleration removed: along the axis the odometer's ``accel`` (m/s²), across
+    it v·(İ·hs + sin I·Ȧ·rs) from the ``speed`` (m/s) and the current İ and Ȧ (rad/s)."""
     tf = np.arctan2(gy, -gx)
-    inc = np.arctan2(np.hypot(gx, gy), gz + odometer.accel)
-    cross_h = odometer.speed * inc_rate
-    cross_r = odometer.speed * np.sin(inc) * azi_rate
+    inc = np.arctan2(np.hypot(gx, gy), gz + accel)
+    cross_h = speed * inc_rate
+    cross_r = speed * np.sin(inc) * azi_rate
     cx = gx + cross_h * np.cos(tf) + cross_r * np.sin(tf)
     cy = gy - cross_h * np.sin(tf) + cross_r * np.cos(tf)
-    inc_out: FloatArray = np.arctan2(np.hypot(cx, cy), gz + odometer.accel)
+    inc_out: FloatArray = np.arctan2(np.hypot(cx, cy), gz + accel)
     tf_out: FloatArray = np.arctan2(cy, -cx)
     return inc_out, tf_out
 
@@ -232,13 +291,17 @@ def _integrate(
     os_: float,
     options: ContinuousOptions,
     guess: FloatArray | None = None,
+    *,
+    rest: NDArray[np.bool_],
+    tolerance: float = 1e-12,
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:
     """Heun (trapezoid) integration of Ȧ from the high-side gyro component; flags.
 
     Each step maps ``A_k`` to ``A_{k+1} = A_k + Δt/2·(Ȧ_k(A_k) + Ȧ_{k+1}(A_k + Δt·Ȧ_k(A_k)))``.
     The recursion is solved for all samples at once by Newton's method on the whole series
     (:func:`_heun_series`), from ``guess`` (rad: e.g. a previous pass's azimuth; default the
-    start azimuth throughout)."""
+    start azimuth throughout); ``rest``: the samples on a stop, never held; ``tolerance``
+    (rad): the error bound left in the series."""
     sin_i, cos_i = np.sin(inc), np.cos(inc)
     sin_d, cos_d = np.sin(tf), np.cos(tf)
     flags = np.zeros(t.size, dtype=np.int64)
@@ -247,7 +310,7 @@ def _integrate(
     misaligned = np.abs(cos_d) < np.cos(np.radians(options.max_misalignment))
     flags[misaligned & ~vertical] |= FLAG_LARGE_MISALIGNMENT
     held = vertical | misaligned
-    held[0] = held[-1] = False  # the stops themselves: tool at rest
+    held[rest] = False  # the stops themselves: tool at rest
     usable = ~held & ~vertical  # a stop at rest is not held, but Ȧ is still singular there
     # Ȧ = const + by_cos·cos A + by_sin·sin A, from h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ
     sin_u, cos_u = np.where(usable, sin_i, 1.0), np.where(usable, cos_d, 1.0)
@@ -266,7 +329,7 @@ def _integrate(
     start = np.full(t.size, azi0) if guess is None else guess.copy()
     start[0] = azi0
     feedback = np.hypot(by_cos, by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
-    return _heun_series(np.diff(t), rate, feedback, start), flags, held
+    return _heun_series(np.diff(t), rate, feedback, start, tolerance), flags, held
 
 
 RateFunction = Callable[[FloatArray, slice], tuple[FloatArray, FloatArray]]
@@ -280,7 +343,11 @@ _SCAN_SPAN = 16.0
 
 
 def _heun_series(
-    step: FloatArray, rate: RateFunction, feedback: FloatArray, azi: FloatArray
+    step: FloatArray,
+    rate: RateFunction,
+    feedback: FloatArray,
+    azi: FloatArray,
+    tolerance: float = _NEWTON_TOLERANCE,
 ) -> FloatArray:
     """The Heun recursion's azimuths (rad) from ``azi[0]`` over steps ``step`` (s), solved
     as one system by Newton's method from the first guess ``azi`` (overwritten): each
@@ -291,7 +358,7 @@ def _heun_series(
     with ``feedback`` a bound of |∂Ȧ/∂A| and |∂²Ȧ/∂A²| per sample (1/s) and ``L`` its
     integral over the run, an iteration leaves an error of at most ``L·e^L·δ²`` after a
     correction of at most δ (quadratic convergence); it stops when that is below
-    ``_NEWTON_TOLERANCE``."""
+    ``tolerance`` (rad)."""
     half = step / 2
     reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
     growth = reach * float(np.exp(min(reach, 700.0)))
@@ -304,7 +371,7 @@ def _heun_series(
         correction = _affine_recursion(gain, residual)
         azi[1:] += correction
         largest = float(np.max(np.abs(correction)))
-        if not growth * largest**2 > _NEWTON_TOLERANCE:  # (NaN input propagates)
+        if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
     raise ContinuousError(
         f"the azimuth integration did not converge in {_NEWTON_ITERATIONS} Newton iterations "

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
-from scipy.signal import savgol_filter
 
+from pipeline.continuous.store import ColumnStore, chunks, median_step, savgol_range, savgol_span
 from pipeline.earth.frames import FloatArray
 from pipeline.errors import GyropipeError
 
@@ -54,23 +54,31 @@ def wrap_angle(angle: FloatArray | float) -> FloatArray:
     return wrapped
 
 
-def run_bounds(station: FloatArray) -> tuple[int, int, int, int]:
+def run_bounds(store: ColumnStore, rows: int) -> tuple[int, int, int, int]:
     """Indices (last start-stop sample, first end-stop sample) and their station ids, from the
-    samples' station markers (NaN while moving)."""
-    moving = np.isnan(station)
-    stopped = np.flatnonzero(~moving)
-    if stopped.size == 0:
+    samples' station markers (column ``station`` of ``store``: NaN while moving), read
+    ``rows`` at a time."""
+    total = store.rows("station")
+
+    def first(start: int, moving: bool) -> int | None:
+        for a, b in chunks(start, total, rows):
+            found = np.flatnonzero(np.isnan(store.floats("station", a, b)) == moving)
+            if found.size:
+                return a + int(found[0])
+        return None
+
+    first_stop = first(0, False)
+    if first_stop is None:
         raise ContinuousError("no compassing stop in the samples (station markers all null)")
-    first_stop = int(stopped[0])
-    after = np.flatnonzero(moving[first_stop:])
-    if after.size == 0:
+    leaves = first(first_stop, True)
+    if leaves is None:
         raise ContinuousError("the samples never leave the first stop")
-    begin = first_stop + int(after[0]) - 1  # last sample of the start stop
-    rest = np.flatnonzero(~moving[begin + 1 :])
-    if rest.size == 0:
+    begin = leaves - 1  # last sample of the start stop
+    end = first(begin + 1, False)  # first sample of the end stop
+    if end is None:
         raise ContinuousError("no compassing stop after the moving run")
-    end = begin + 1 + int(rest[0])  # first sample of the end stop
-    return begin, end, int(station[begin]), int(station[end])
+    ids = store.floats("station", begin, begin + 1), store.floats("station", end, end + 1)
+    return begin, end, int(ids[0][0]), int(ids[1][0])
 
 
 def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
@@ -111,49 +119,66 @@ def odometer_points(window: float, dt: float) -> int:
 
 @dataclass(frozen=True)
 class Odometer:
-    """The odometer over the run, from the start stop's last sample to the end stop's first."""
+    """The odometer over the run, from the start stop's last sample (store row ``begin``) to
+    the end stop's first: columns ``odometer_md`` (MD of the fit, m; the reading without a
+    fit), ``odometer_speed`` (m/s) and ``odometer_accel`` (along-hole acceleration, m/s²) of
+    ``store``, run sample 0 at row 0; the time and the MD read at rows ``begin``… of the raw
+    columns ``time`` (s) and ``md`` (m)."""
 
-    time: FloatArray
-    """s"""
-    reading: FloatArray
-    """MD read by the odometer, m"""
-    md: FloatArray
-    """MD of the fit, m (the reading without a fit)"""
-    speed: FloatArray
-    """m/s"""
-    accel: FloatArray
-    """along-hole acceleration, m/s²"""
+    store: ColumnStore
+    begin: int
+    size: int
+    """samples of the run"""
+    dt: float
+    """sample interval (median), s"""
     points: int | None
     """samples of the cubic fit (None: too few samples, finite differences of the reading)"""
+    rows: int
+    """rows per chunk"""
 
-    @property
-    def dt(self) -> float:
-        """Sample interval (median), s."""
-        return float(np.median(np.diff(self.time)))
+    def time(self, lo: int, hi: int) -> FloatArray:
+        """Times of run samples ``lo``…``hi − 1``, s."""
+        return self.store.floats("time", self.begin + max(lo, 0), self.begin + min(hi, self.size))
+
+    def reading(self, lo: int, hi: int) -> FloatArray:
+        """MD read by the odometer at run samples ``lo``…``hi − 1``, m."""
+        return self.store.floats("md", self.begin + max(lo, 0), self.begin + min(hi, self.size))
+
+    def column(self, name: str, lo: int, hi: int) -> FloatArray:
+        """``md``, ``speed`` or ``accel`` of the fit at run samples ``lo``…``hi − 1``."""
+        return self.store.floats(f"odometer_{name}", lo, hi)
 
 
-def odometer_fit(samples: pa.Table, begin: int, end: int, window: float) -> Odometer:
+def odometer_fit(store: ColumnStore, begin: int, end: int, window: float, rows: int) -> Odometer:
     """MD, speed and acceleration of the run ``begin``..``end`` (sample indices: the start
     stop's last sample, the end stop's first) from a local cubic fit (Savitzky–Golay) over
-    ``window`` s of the odometer. Its noise is white per sample: never differentiate raw
-    samples. The fit spans the stops' samples (at rest) too, so the speed ramps are not at
-    its edges."""
-    t = float_column(samples, "time")[begin : end + 1]
-    reading = float_column(samples, "md")[begin : end + 1]
-    dt = float(np.median(np.diff(t)))
+    ``window`` s of the odometer, written to ``store`` ``rows`` at a time. Its noise is white
+    per sample: never differentiate raw samples. The fit spans the stops' samples (at rest)
+    too, so the speed ramps are not at its edges."""
+    size = end + 1 - begin
+    dt = median_step(store, "time", begin, end + 1, rows)
     points = odometer_points(window, dt)
-    lo, hi = max(begin - points, 0), min(end + 1 + points, samples.num_rows)
-    if hi - lo <= points:
-        md, speed = reading, np.gradient(reading, t)
-        accel, points_used = np.gradient(speed, t), None
-    else:
-        wide = float_column(samples, "md")[lo:hi]
-        inner = slice(begin - lo, end + 1 - lo)
-        md, speed, accel = (
-            savgol_filter(wide, points, 3, deriv=d, delta=dt)[inner] for d in (0, 1, 2)
-        )
-        points_used = points
-    # the first and last samples are the stops', at rest: the fit, which cannot follow the
-    # start of a speed ramp, would give them the ramp's acceleration
-    speed[[0, -1]] = accel[[0, -1]] = 0.0
-    return Odometer(t, reading, md, speed, accel, points_used)
+    lo, hi = max(begin - points, 0), min(end + 1 + points, store.rows("md"))
+    fitted = hi - lo > points
+    if not fitted:  # too few samples for the fit: finite differences of the reading
+        t, md = store.floats("time", begin, end + 1), store.floats("md", begin, end + 1)
+        speed = np.gradient(md, t)
+        whole = {"md": md, "speed": speed, "accel": np.gradient(speed, t)}
+    for a, b in chunks(begin, end + 1, rows):
+        if fitted:
+            wlo, whi = savgol_span(lo, hi, a, b, points)
+            wide = store.floats("md", wlo, whi)
+            fit = {
+                name: savgol_range(wide, wlo, a, b, points, 3, d, dt)
+                for d, name in enumerate(("md", "speed", "accel"))
+            }
+        else:
+            fit = {name: values[a - begin : b - begin] for name, values in whole.items()}
+        # the first and last samples are the stops', at rest: the fit, which cannot follow
+        # the start of a speed ramp, would give them the ramp's acceleration
+        for index in (begin, end):
+            if a <= index < b:
+                fit["speed"][index - a] = fit["accel"][index - a] = 0.0
+        for name, values in fit.items():
+            store.write(f"odometer_{name}", a - begin, values)
+    return Odometer(store, begin, size, dt, points if fitted else None, rows)

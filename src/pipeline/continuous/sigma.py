@@ -50,13 +50,15 @@ Units: times s, angles rad, rates rad/s unless a name says otherwise.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import oaconvolve, savgol_coeffs
 
 from pipeline.continuous.run import DEG_H
+from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
+from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
@@ -66,6 +68,7 @@ __all__ = [
     "GyroNoise",
     "InclinationNoise",
     "RunGeometry",
+    "RunView",
     "azimuth_budget",
     "inclination_sigma",
 ]
@@ -99,34 +102,6 @@ class GyroNoise:
 
 
 @dataclass(frozen=True)
-class InclinationNoise:
-    """Per-sample noise of the inclination the integration uses."""
-
-    dt: float
-    """sample interval, s"""
-    accel: float
-    """accelerometer white noise per sample, m/s²"""
-    odometer: float
-    """odometer white noise per sample, m"""
-    odometer_points: int | None
-    """samples of the cubic fit differentiating the odometer (None: finite differences)"""
-    inc_rate_points: int | None
-    """samples of the quadratic fit giving İ (None: finite differences)"""
-    gravity: float = STANDARD_GRAVITY
-    """m/s²"""
-
-
-def _derivative_kernel(points: int | None, order: int, deriv: int, dt: float) -> FloatArray:
-    """Convolution kernel of the Savitzky–Golay derivative (or, for None, of np.gradient)."""
-    if points is None:
-        first = np.array([1.0, 0.0, -1.0]) / (2.0 * dt)
-        kernel: FloatArray = first if deriv == 1 else np.convolve(first, first)
-        return kernel
-    out: FloatArray = savgol_coeffs(points, order, deriv=deriv, delta=dt)
-    return out
-
-
-@dataclass(frozen=True)
 class RunGeometry:
     """The integrated run, full rate, from the start-stop sample to the end-stop sample."""
 
@@ -149,6 +124,28 @@ class RunGeometry:
     inc_noise: InclinationNoise | None = None
     """per-sample inclination noise (None: not modelled)"""
 
+    @property
+    def size(self) -> int:
+        """Samples of the run."""
+        return int(self.time.size)
+
+    @property
+    def rows(self) -> int:
+        """Samples the budget reads at a time: all."""
+        return max(self.size, 1)
+
+    def slice(self, lo: int, hi: int) -> RunGeometry:
+        """Samples ``lo``…``hi − 1`` of the run."""
+        part = slice(lo, hi)
+        return replace(
+            self,
+            time=self.time[part],
+            inc=self.inc[part],
+            azi=self.azi[part],
+            misalignment=self.misalignment[part],
+            usable=self.usable[part],
+        )
+
 
 @dataclass(frozen=True)
 class AzimuthBudget:
@@ -164,12 +161,6 @@ class AzimuthBudget:
         """1σ azimuth error per station, rad."""
         out: FloatArray = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
         return out
-
-
-def _cumulative(y: FloatArray, t: FloatArray) -> FloatArray:
-    """Running trapezoid integral of y over t, starting at 0."""
-    out: FloatArray = np.concatenate([[0.0], np.cumsum(np.diff(t) * (y[1:] + y[:-1]) / 2)])
-    return out
 
 
 @dataclass(frozen=True)
@@ -189,8 +180,35 @@ class AccelErrors:
         return float(np.hypot(self.bias / self.gravity, self.misalignment))
 
 
+class RunView(Protocol):
+    """The integrated run read by sample range (time order): a :class:`RunGeometry`, or a run
+    kept on disk (:class:`pipeline.continuous.series.StoredRun`)."""
+
+    @property
+    def size(self) -> int: ...
+
+    @property
+    def rows(self) -> int:
+        """samples a pass reads at a time"""
+        ...
+
+    @property
+    def latitude(self) -> float: ...
+
+    @property
+    def closure(self) -> bool: ...
+
+    @property
+    def backward(self) -> bool: ...
+
+    @property
+    def inc_noise(self) -> InclinationNoise | None: ...
+
+    def slice(self, lo: int, hi: int) -> RunGeometry: ...
+
+
 def azimuth_budget(
-    run: RunGeometry,
+    run: RunView,
     station_time: FloatArray,
     sigma_start: float,
     sigma_end: float,
@@ -203,22 +221,92 @@ def azimuth_budget(
     bias the inclination (through ∂Ȧ/∂I) and the toolface δ of the gyro: ``h`` then takes
     ``−r·δψ`` with ``r = −Ω cos φ sin A + İ``, so ``∂Ȧ/∂ψ = (r − h tan δ)/sin I`` — large while
     the inclination changes (its integral is ``δψ·ΔI/sin I``). A right-side bias b gives
-    ``δψ = b/(g sin I)``, a tilt m of the triad about x gives ``m·cot I``, about z ``m``."""
+    ``δψ = b/(g sin I)``, a tilt m of the triad about x gives ``m·cot I``, about z ``m``.
+
+    The run is read ``run.rows`` samples at a time (:class:`_Integrals`)."""
     acc = accel or AccelErrors()
-    t = np.asarray(run.time, dtype=np.float64)
     st = np.asarray(station_time, dtype=np.float64)
     closure = run.closure and not run.backward
+    t_first, t_last = (
+        float(run.slice(0, 1).time[0]),
+        float(run.slice(run.size - 1, run.size).time[0]),
+    )
+    if run.backward:  # integrate from the end stop back in time: elapsed time from the tie
+        st_elapsed, tie_sigma = t_last - st, sigma_end
+    else:
+        st_elapsed, tie_sigma = st - t_first, sigma_start
+    duration = t_last - t_first
+    st_elapsed = np.clip(st_elapsed, 0.0, duration)
+    n_cells = _MIN_CELLS
+    if gyro.bias_instability > 0:
+        n_cells = max(n_cells, int(np.ceil(8 * duration / gyro.correlation_time)))
+    edges = np.unique(
+        np.concatenate([np.linspace(0.0, duration, min(n_cells, _MAX_CELLS) + 1), st_elapsed])
+    )
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    sums = _Integrals(run, edges, st_elapsed, (t_first, t_last))
+    cells = sums.cells
+
+    phi_k, phi_t = sums.phi_k, sums.phi_t
+    w = st_elapsed / duration if closure and duration > 0 else np.zeros_like(st_elapsed)
+    before = edges[1:][None, :] <= st_elapsed[:, None] * (1 + 1e-12) + 1e-12
+    a = phi_k[:, None] * before - (w * phi_t)[:, None]  # (stations, cells)
+
+    parts: dict[str, FloatArray] = {}
+    cov = np.zeros((st.size, st.size))
+
+    def add(name: str, part: FloatArray) -> None:
+        nonlocal cov
+        cov = cov + part
+        parts[name] = np.diag(part).copy()
+
+    def rank_one(name: str, sigma: float, column: FloatArray) -> None:
+        add(name, np.outer(sigma * column, sigma * column))
+
+    rank_one("tie_stop", tie_sigma, phi_k - w * phi_t)
+    if closure:
+        rank_one("end_stop", sigma_end, w)
+    arw = gyro.arw * np.pi / 180.0 / 60.0  # deg/√h → rad/√s
+    add("arw", arw**2 * (a * cells["gain_squared"]) @ a.T)
+    rank_one("bias", gyro.bias * DEG_H, a @ cells["gain"])
+    rank_one("bias_trend", gyro.bias_trend * DEG_H / 3600.0, a @ cells["gain_elapsed"])
+    rank_one("gyro_scale_factor", gyro.scale_factor * 1e-6, a @ cells["gain_rate_x"])
+    g_dep = gyro.g_sensitivity * DEG_H
+    rank_one("gyro_g_high_side", g_dep, a @ cells["gain_sin"])
+    rank_one("gyro_g_axial", g_dep, a @ cells["gain_cos"])
+    mis = gyro.misalignment * 1e-3
+    rank_one("gyro_misalignment_y", mis, a @ cells["gain_rate_y"])
+    rank_one("gyro_misalignment_z", mis, a @ cells["gain_rate_z"])
+    m = a * cells["gain"]
+    if gyro.bias_instability > 0:
+        lag = np.abs(mid[:, None] - mid[None, :])
+        kernel = np.exp(-lag / gyro.correlation_time)
+        add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * m @ kernel @ m.T)
+    if gyro.rate_random_walk > 0:
+        q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
+        add("rate_random_walk", q**2 * m @ np.minimum(mid[:, None], mid[None, :]) @ m.T)
+    rank_one("acc_inclination", acc.inclination, a @ cells["d_inc"])
+    rank_one("acc_bias_toolface", acc.bias / acc.gravity, a @ cells["tf_bias"])
+    rank_one("acc_tilt_toolface", acc.misalignment, a @ cells["tf_tilt"])
+    rank_one("acc_twist_toolface", acc.misalignment, a @ cells["tf_twist"])
+    if sums.noise is not None:
+        noise = sums.noise.variance(phi_k - w * phi_t, -w * phi_t)
+        add("inclination_noise", np.diag(noise))
+    return AzimuthBudget(covariance=cov, parts=parts)
+
+
+def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatArray]:
+    """Rate sensitivities per sample (time order) of a run's samples; the gradients at the
+    ends are one-sided (read one sample beyond a range to have them central)."""
+    t = run.time
     sin_i, cos_i = np.sin(run.inc), np.cos(run.inc)
     sin_a, cos_a = np.sin(run.azi), np.cos(run.azi)
     tan_d = np.tan(run.misalignment)
-    phi = np.radians(run.latitude)
-    oc, os_ = OMEGA_EARTH * np.cos(phi), OMEGA_EARTH * np.sin(phi)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
     azi_rate = np.gradient(np.unwrap(run.azi), t)
     r = -oc * sin_a + np.gradient(run.inc, t)
     h = oc * cos_a * cos_i + os_ * sin_i - azi_rate * sin_i
-    # rate sensitivities per sample, in time order
     sens = {
         "gain": 1.0 / (safe_sin * np.cos(run.misalignment)),  # |∂Ȧ/∂y|
         "feedback": -oc * (sin_a * cos_i + cos_a * tan_d) / safe_sin,  # ∂Ȧ/∂A
@@ -235,95 +323,147 @@ def azimuth_budget(
         "sin": np.abs(sin_i),
         "cot": cos_i / safe_sin,
     }
-    sens = {k: np.where(ok, v, 0.0) if k != "sin" else v for k, v in sens.items()}
-    if run.backward:  # integrate from the end stop back in time: elapsed time from the tie
-        elapsed = t[-1] - t[::-1]
-        st_elapsed = t[-1] - st
+    return {k: np.where(ok, v, 0.0) if k != "sin" else v for k, v in sens.items()}
+
+
+class _Integrals:
+    """What the budget needs from the full-rate run, read ``run.rows`` samples at a time in
+    integration order (time order, or back in time from the end stop): the integrals of each
+    error's rate over the cells between ``edges`` (elapsed s), Φ at the stations and at the
+    end, and the inclination-noise sums. Each running integral carries its last value from
+    one chunk to the next, so the numbers are those of the whole series."""
+
+    def __init__(
+        self,
+        run: RunView,
+        edges: FloatArray,
+        st_elapsed: FloatArray,
+        ends: tuple[float, float],
+    ) -> None:
+        self.run, self.ends, self.size = run, ends, run.size
+        phi = np.radians(run.latitude)
+        self.oc, self.os_ = OMEGA_EARTH * np.cos(phi), OMEGA_EARTH * np.sin(phi)
+        self.noise = (
+            None
+            if run.inc_noise is None
+            else NoiseSums(run.inc_noise, self.size, self._station_index(st_elapsed))
+        )
+        halo = 2 + (0 if self.noise is None else self.noise.halo)
+        at_edges = Interpolation(edges, len(_INTEGRANDS))
+        at_stations = Interpolation(st_elapsed, 1)
+        feedback_carry, carries = 0.0, np.zeros(len(_INTEGRANDS))
+        for lo, hi in chunks(0, self.size, run.rows):
+            v0, v1 = max(lo - halo, 0), min(hi + halo, self.size)
+            elapsed, sens = self._ordered(v0, v1)
+            # Φ over [v0, v1) from its running integral at v0 (kept from the chunk before)
+            log_phi = np.concatenate(
+                [
+                    [feedback_carry],
+                    carried_cumsum(_trapezoids(sens["feedback"], elapsed), feedback_carry),
+                ]
+            )
+            transition = np.exp(log_phi)
+            next_start = max(hi - halo, 0)
+            if next_start >= v0:
+                feedback_carry = float(log_phi[next_start - v0])
+            own = slice(lo - v0, hi - v0)
+            before = slice(max(lo - 1, 0) - v0, hi - v0)  # the chunk and the sample before it
+            y = self._integrands(sens, elapsed, transition)
+            for k, integrand in enumerate(y):
+                values = integrand[before]
+                traps = _trapezoids(values, elapsed[before])
+                running = carried_cumsum(traps, float(carries[k]))
+                if lo == 0:
+                    running = np.concatenate([[0.0], running])
+                y[k] = running[-(hi - lo) :]
+                carries[k] = running[-1]
+            at_edges.feed(elapsed[own], *y)
+            at_stations.feed(elapsed[own], transition[own])
+            if hi == self.size:
+                self.phi_t = float(transition[own][-1])
+            if self.noise is not None:
+                step = np.gradient(elapsed) / transition
+                self.noise.add(lo, hi, v0, step, sens["d_inc"], sens["d_inc_rate"], sens["sin"])
+        self.cells = dict(zip(_INTEGRANDS, np.diff(at_edges.result(), axis=1), strict=True))
+        self.phi_k = at_stations.result()[0]
+
+    def _station_index(self, st_elapsed: FloatArray) -> NDArray[np.int64]:
+        """Each station's sample: the first whose elapsed time is at or after the station's."""
+        index = np.zeros(st_elapsed.size, dtype=np.int64)
+        for lo, hi in chunks(0, self.size, self.run.rows):
+            index += np.searchsorted(self._elapsed(lo, hi), st_elapsed, side="left")
+        return index
+
+    def _original(self, lo: int, hi: int) -> tuple[int, int]:
+        """Samples (time order) of integration-order samples ``[lo, hi)``."""
+        return (self.size - hi, self.size - lo) if self.run.backward else (lo, hi)
+
+    def _elapsed(self, lo: int, hi: int) -> FloatArray:
+        a, b = self._original(lo, hi)
+        t = self.run.slice(a, b).time
+        out: FloatArray = self.ends[1] - t[::-1] if self.run.backward else t - self.ends[0]
+        return out
+
+    def _ordered(self, lo: int, hi: int) -> tuple[FloatArray, dict[str, FloatArray]]:
+        """Elapsed time and sensitivities of integration-order samples ``[lo, hi)``: read
+        with one sample more on each side, so that their gradients are the whole series'."""
+        a, b = self._original(lo, hi)
+        wa, wb = max(a - 1, 0), min(b + 1, self.size)
+        part = self.run.slice(wa, wb)
+        sens = {k: v[a - wa : b - wa] for k, v in _sensitivities(part, self.oc, self.os_).items()}
+        t = part.time[a - wa : b - wa]
+        if not self.run.backward:
+            return t - self.ends[0], sens
         sens = {k: v[::-1] for k, v in sens.items()}
         sens["feedback"] = -sens["feedback"]  # d/dτ = −d/dt
         sens["d_inc_rate"] = -sens["d_inc_rate"]
-        tie_sigma = sigma_end
-    else:
-        elapsed = t - t[0]
-        st_elapsed = st - t[0]
-        tie_sigma = sigma_start
-    duration = float(elapsed[-1])
-    st_elapsed = np.clip(st_elapsed, 0.0, duration)
-    transition = np.exp(_cumulative(sens["feedback"], elapsed))  # Φ
-    n_cells = _MIN_CELLS
-    if gyro.bias_instability > 0:
-        n_cells = max(n_cells, int(np.ceil(8 * duration / gyro.correlation_time)))
-    edges = np.unique(
-        np.concatenate([np.linspace(0.0, duration, min(n_cells, _MAX_CELLS) + 1), st_elapsed])
-    )
-    mid = 0.5 * (edges[1:] + edges[:-1])
+        return self.ends[1] - t[::-1], sens
 
-    def cells(y: FloatArray) -> FloatArray:
-        """∫ y/Φ ds over each cell."""
-        out: FloatArray = np.diff(np.interp(edges, elapsed, _cumulative(y / transition, elapsed)))
-        return out
+    @staticmethod
+    def _integrands(
+        sens: dict[str, FloatArray], elapsed: FloatArray, transition: FloatArray
+    ) -> list[FloatArray]:
+        """Each error's rate divided by Φ (:data:`_INTEGRANDS`; the ARW's is (gain/Φ)²)."""
+        gain, d_tf = sens["gain"], sens["d_tf"]
+        safe = np.where(sens["sin"] > 0, sens["sin"], 1.0)
+        rates = {
+            "gain": gain,
+            "gain_elapsed": gain * elapsed,
+            "gain_rate_x": gain * sens["rate_x"],
+            "gain_sin": gain * sens["sin"],
+            "gain_cos": gain * sens["sin"] * sens["cot"],
+            "gain_rate_y": gain * sens["rate_y"],
+            "gain_rate_z": gain * sens["rate_z"],
+            "d_inc": sens["d_inc"],
+            "tf_bias": d_tf / safe,
+            "tf_tilt": d_tf * sens["cot"],
+            "tf_twist": d_tf,
+        }
+        out = [rates[name] / transition for name in _INTEGRANDS[:-1]]
+        return [*out, (gain / transition) ** 2]
 
-    phi_k = np.interp(st_elapsed, elapsed, transition)
-    phi_t = float(transition[-1])
-    w = st_elapsed / duration if closure and duration > 0 else np.zeros_like(st_elapsed)
-    before = edges[1:][None, :] <= st_elapsed[:, None] * (1 + 1e-12) + 1e-12
-    a = phi_k[:, None] * before - (w * phi_t)[:, None]  # (stations, cells)
 
-    parts: dict[str, FloatArray] = {}
-    cov = np.zeros((st.size, st.size))
+_INTEGRANDS = (
+    "gain",
+    "gain_elapsed",
+    "gain_rate_x",
+    "gain_sin",
+    "gain_cos",
+    "gain_rate_y",
+    "gain_rate_z",
+    "d_inc",
+    "tf_bias",
+    "tf_tilt",
+    "tf_twist",
+    "gain_squared",
+)
+"""Rates integrated over the cells (divided by Φ; the last, the ARW's, is (gain/Φ)²)."""
 
-    def add(name: str, part: FloatArray) -> None:
-        nonlocal cov
-        cov = cov + part
-        parts[name] = np.diag(part).copy()
 
-    def rank_one(name: str, sigma: float, column: FloatArray) -> None:
-        add(name, np.outer(sigma * column, sigma * column))
-
-    gain = sens["gain"]
-    rank_one("tie_stop", tie_sigma, phi_k - w * phi_t)
-    if closure:
-        rank_one("end_stop", sigma_end, w)
-    arw = gyro.arw * np.pi / 180.0 / 60.0  # deg/√h → rad/√s
-    s2 = np.diff(np.interp(edges, elapsed, _cumulative((gain / transition) ** 2, elapsed)))
-    add("arw", arw**2 * (a * s2) @ a.T)
-    rank_one("bias", gyro.bias * DEG_H, a @ cells(gain))
-    rank_one("bias_trend", gyro.bias_trend * DEG_H / 3600.0, a @ cells(gain * elapsed))
-    rank_one("gyro_scale_factor", gyro.scale_factor * 1e-6, a @ cells(gain * sens["rate_x"]))
-    g_dep = gyro.g_sensitivity * DEG_H
-    rank_one("gyro_g_high_side", g_dep, a @ cells(gain * sens["sin"]))
-    rank_one("gyro_g_axial", g_dep, a @ cells(gain * sens["sin"] * sens["cot"]))
-    mis = gyro.misalignment * 1e-3
-    rank_one("gyro_misalignment_y", mis, a @ cells(gain * sens["rate_y"]))
-    rank_one("gyro_misalignment_z", mis, a @ cells(gain * sens["rate_z"]))
-    m = a * cells(gain)
-    if gyro.bias_instability > 0:
-        lag = np.abs(mid[:, None] - mid[None, :])
-        kernel = np.exp(-lag / gyro.correlation_time)
-        add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * m @ kernel @ m.T)
-    if gyro.rate_random_walk > 0:
-        q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
-        add("rate_random_walk", q**2 * m @ np.minimum(mid[:, None], mid[None, :]) @ m.T)
-    rank_one("acc_inclination", acc.inclination, a @ cells(sens["d_inc"]))
-    d_tf = sens["d_tf"]
-    safe = np.where(sens["sin"] > 0, sens["sin"], 1.0)
-    rank_one("acc_bias_toolface", acc.bias / acc.gravity, a @ cells(d_tf / safe))
-    rank_one("acc_tilt_toolface", acc.misalignment, a @ cells(d_tf * sens["cot"]))
-    rank_one("acc_twist_toolface", acc.misalignment, a @ cells(d_tf))
-    if run.inc_noise is not None:
-        noise = _inclination_noise_variance(
-            run.inc_noise,
-            elapsed,
-            st_elapsed,
-            np.gradient(elapsed) / transition,
-            transition,
-            w,
-            sens["d_inc"],
-            sens["d_inc_rate"],
-            sens["sin"],
-        )
-        add("inclination_noise", np.diag(noise))
-    return AzimuthBudget(covariance=cov, parts=parts)
+def _trapezoids(y: FloatArray, t: FloatArray) -> FloatArray:
+    """Trapezoid areas of y between consecutive samples of t."""
+    out: FloatArray = np.diff(t) * (y[1:] + y[:-1]) / 2
+    return out
 
 
 def _inclination_noise_variance(
@@ -338,61 +478,20 @@ def _inclination_noise_variance(
     sin_i: FloatArray,
     cells: int = 500_000,
 ) -> FloatArray:
-    """Variance at each station of the azimuth error the inclination's sample noise makes.
-
-    A station row p (over samples) integrates the rate error and applies the closure; the
-    rate error is ``∂Ȧ/∂I·δI + ∂Ȧ/∂İ·D₁δI`` and ``δI = n_acc/g − sin I·D₂ n_odo/g``, so the
-    row seen by the white noises is ``q = p·∂Ȧ/∂I + D₁ᵀ(p·∂Ȧ/∂İ)`` (accelerometer) and
-    ``D₂ᵀ(q·sin I)`` (odometer). The row is ``p = g·Δs/Φ`` with g one constant before the
-    station's sample (``Φ_k − w Φ_T``) and another from it on (``−w Φ_T``): away from the
-    station (farther than the two filters' half-widths) q and the odometer row are those
-    constants times the station-free rows ``Q`` and ``D₂ᵀ(Q·sin I)``, whose squares are
-    summed by prefix sums; near it they are evaluated exactly. Stations are taken in blocks
-    of at most ``cells`` cells of that neighbourhood."""
-    d1 = _derivative_kernel(noise.inc_rate_points, 2, 1, noise.dt)[::-1]  # transposed
-    d2 = _derivative_kernel(noise.odometer_points, 3, 2, noise.dt)[::-1]
-    n = elapsed.size
+    """Variance at each station of the azimuth error the inclination's sample noise makes
+    (:mod:`pipeline.continuous.sigma_noise`), from whole per-sample arrays in integration
+    order: ``step`` is the sample step divided by Φ (s), ``transition`` Φ."""
     index = np.searchsorted(elapsed, st_elapsed, side="left")
+    sums = NoiseSums(noise, elapsed.size, index, cells)
+    sums.add(0, elapsed.size, 0, step, d_inc, d_inc_rate, sin_i)
     phi_t = float(transition[-1])
-    before = np.interp(st_elapsed, elapsed, transition) - w * phi_t  # g before the station
-    after = -w * phi_t  # g from the station on
-    q_free = step * d_inc + oaconvolve(step * d_inc_rate, d1, mode="same")
-    odo_free = oaconvolve(q_free * sin_i, d2, mode="same")
-    sum_q = np.concatenate([[0.0], np.cumsum(q_free**2)])
-    sum_odo = np.concatenate([[0.0], np.cumsum(odo_free**2)])
-    spread = d1.size // 2 + d2.size // 2
-    near = spread + 1  # half-width where the rows differ from the station-free ones
-    reach = near + spread  # half-width of the samples the neighbourhood depends on
-    offsets = np.arange(-reach, reach + 1)
-    inner = np.abs(offsets) <= near
-    pad = np.zeros(reach)
-    padded = [np.concatenate([pad, x, pad]) for x in (step, d_inc, d_inc_rate, sin_i)]
-    out = np.empty(st_elapsed.size)
-    block = max(1, cells // offsets.size)
-    for lo in range(0, st_elapsed.size, block):
-        sl = slice(lo, min(lo + block, st_elapsed.size))
-        columns = index[sl, None] + offsets[None, :]  # sample index; padded: + reach
-        step_n, d_inc_n, d_rate_n, sin_n = (x[columns + reach] for x in padded)
-        p = step_n * np.where(offsets < 0, before[sl, None], after[sl, None])
-        q = p * d_inc_n + oaconvolve(p * d_rate_n, d1[None, :], mode="same", axes=1)
-        odo = oaconvolve(q * sin_n, d2[None, :], mode="same", axes=1)
-        inside = inner & (columns >= 0) & (columns < n)
-        first = np.clip(index[sl] - near, 0, n)  # first sample of the neighbourhood
-        last = np.clip(index[sl] + near + 1, 0, n)  # one past its last
-        far_q = before[sl] ** 2 * sum_q[first] + after[sl] ** 2 * (sum_q[n] - sum_q[last])
-        far_odo = before[sl] ** 2 * sum_odo[first] + after[sl] ** 2 * (sum_odo[n] - sum_odo[last])
-        out[sl] = (noise.accel / noise.gravity) ** 2 * (
-            far_q + np.sum(np.where(inside, q, 0.0) ** 2, axis=1)
-        ) + (noise.odometer / noise.gravity) ** 2 * (
-            far_odo + np.sum(np.where(inside, odo, 0.0) ** 2, axis=1)
-        )
-    return out
+    return sums.variance(np.interp(st_elapsed, elapsed, transition) - w * phi_t, -w * phi_t)
 
 
 def inclination_sigma(inc: FloatArray, noise: InclinationNoise, accel: AccelErrors) -> FloatArray:
     """1σ inclination error (rad) of single samples at inclination ``inc`` (rad): sample noise
     and the accelerometers' constant errors."""
-    kernel = _derivative_kernel(noise.odometer_points, 3, 2, noise.dt)
+    kernel = derivative_kernel(noise.odometer_points, 3, 2, noise.dt)
     odometer = noise.odometer * float(np.linalg.norm(kernel))
     var = (noise.accel**2 + (np.sin(inc) * odometer) ** 2) / noise.gravity**2
     out: FloatArray = np.sqrt(var + accel.inclination**2)

@@ -12,20 +12,21 @@ from numpy.typing import NDArray
 
 from pipeline.continuous.options import ContinuousOptions
 from pipeline.continuous.run import ContinuousError, Odometer, RunStops
+from pipeline.continuous.series import StoredRun, series_stream
 from pipeline.continuous.sigma import (
     AccelErrors,
     GyroNoise,
-    RunGeometry,
     azimuth_budget,
     inclination_sigma,
 )
+from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
 from pipeline.continuous.tables import (
     FLAG_AZIMUTH_UNDEFINED,
     FLAG_NEAR_VERTICAL,
-    ContinuousSeries,
     ContinuousStations,
 )
 from pipeline.earth.frames import FloatArray
+from pipeline.streams import TableStream
 
 __all__ = ["ContinuousResult", "run_result", "station_times"]
 
@@ -36,41 +37,21 @@ _MERGE = 0.01
 @dataclass(frozen=True)
 class ContinuousResult:
     """An integrated run: its stations (ContinuousStations) and full-rate series
-    (ContinuousSeries)."""
+    (ContinuousSeries, a stream read from the run's store)."""
 
     stations: pa.Table
-    series: pa.Table
+    series: TableStream
     misclosure: float
     """Integrated minus end-stop azimuth before correction, deg."""
 
 
-def run_result(
-    odometer: Odometer,
-    toolface: FloatArray,
-    flags: NDArray[np.int64],
-    stops: RunStops,
-    options: ContinuousOptions,
-    run: RunGeometry,
-    misclosure: float,
-) -> ContinuousResult:
-    """The full-rate series and the resampled stations of an integrated run: toolface and
-    misclosure rad, the compassed (start, end) stops (deg)."""
-    t = odometer.time
-    inc_deg = np.degrees(run.inc)
-    azi_deg = np.degrees(run.azi) % 360.0
-    series = ContinuousSeries.compiled().make_table(
-        {
-            "time": t,
-            "md": odometer.reading,
-            "inc": inc_deg,
-            "azi": np.where(azi_deg < 360.0, azi_deg, 0.0),
-            "toolface": np.degrees(toolface),
-            "flags": flags,
-        },
-        north_reference="true",
+def run_result(run: StoredRun, stops: RunStops, options: ContinuousOptions) -> ContinuousResult:
+    """The full-rate series and the resampled stations of an integrated run (the compassed
+    (start, end) stops, deg)."""
+    stations = _resample(run, stops, options)
+    return ContinuousResult(
+        stations=stations, series=series_stream(run), misclosure=np.degrees(run.misclosure)
     )
-    stations = _resample(odometer, flags, stops, options, run)
-    return ContinuousResult(stations=stations, series=series, misclosure=np.degrees(misclosure))
 
 
 def station_times(
@@ -86,43 +67,47 @@ def station_times(
     positive noise (MDs biased deep). The fit rises while the tool moves but wiggles by its
     own noise where the tool is nearly at rest (ends of the speed ramps); the mean of its
     running maximum and its backward running minimum rises everywhere and, unlike either
-    alone, is biased neither up nor down there."""
+    alone, is biased neither up nor down there. Read a chunk at a time: the running maximum
+    forward, the running minimum backward, then the crossings forward."""
     if not last > first:
         raise ContinuousError(
             f"the end stop's MD ({last:.3f} m) is not deeper than the start stop's "
             f"({first:.3f} m): continuous runs are integrated down the hole"
         )
-    t, fit = odometer.time, odometer.md
-    track = (np.maximum.accumulate(fit) + np.minimum.accumulate(fit[::-1])[::-1]) / 2
-    rising = np.concatenate([[True], np.diff(track) > 0])
+    store, size, rows = odometer.store, odometer.size, odometer.rows
+    top = -np.inf
+    for a, b in chunks(0, size, rows):
+        running = np.maximum.accumulate(np.concatenate([[top], odometer.column("md", a, b)]))
+        store.write("track", a, running[1:])
+        top = float(running[-1])
+    bottom = np.inf
+    for a, b in chunks(0, size, rows, reverse=True):
+        fit = odometer.column("md", a, b)[::-1]
+        running = np.minimum.accumulate(np.concatenate([[bottom], fit]))[1:][::-1]
+        store.write("track", a, (store.floats("track", a, b) + running) / 2)
+        bottom = float(running[0])
     grid = np.arange(first, last, spacing)
     if last - grid[-1] > _MERGE * spacing:
         grid = np.append(grid, last)
     else:
         grid[-1] = last
-    times = np.interp(grid, track[rising], t[rising])
-    times[0], times[-1] = t[0], t[-1]
+    crossing = Interpolation(grid, 1)
+    previous = -np.inf
+    for a, b in chunks(0, size, rows):
+        track = store.floats("track", a, b)
+        rising = np.diff(np.concatenate([[previous], track])) > 0
+        crossing.feed(track[rising], odometer.time(a, b)[rising])
+        previous = float(track[-1])
+    times = crossing.result()[0]
+    times[0], times[-1] = odometer.time(0, 1)[0], odometer.time(size - 1, size)[0]
     return grid, times
 
 
-def _resample(
-    odometer: Odometer,
-    flags: NDArray[np.int64],
-    stops: RunStops,
-    options: ContinuousOptions,
-    run: RunGeometry,
-) -> pa.Table:
+def _resample(run: StoredRun, stops: RunStops, options: ContinuousOptions) -> pa.Table:
     """Stations every ``spacing`` m of odometer MD from the start stop, plus the end stop."""
     start, finish = stops
-    t = odometer.time
-    grid, times = station_times(odometer, start["md"], finish["md"], options.spacing)
-
-    def at(x: FloatArray) -> FloatArray:
-        values: FloatArray = np.interp(times, t, x)
-        return values
-
-    # flags of a station: those of the first sample at or after it
-    station_flags = flags[np.clip(np.searchsorted(t, times), 0, t.size - 1)]
+    grid, times = station_times(run.odometer, start["md"], finish["md"], options.spacing)
+    inc, azi, station_flags = _at_stations(run, times)
     noise = GyroNoise(
         arw=options.gyro_arw,
         bias=options.gyro_bias,
@@ -139,13 +124,11 @@ def _resample(
     budget = azimuth_budget(run, times, *sigma_ends, noise, accel)
     undefined = station_flags & (FLAG_NEAR_VERTICAL | FLAG_AZIMUTH_UNDEFINED)
     sigma_azi = np.where(undefined, np.inf, np.degrees(budget.sigma))
-    assert run.inc_noise is not None
-    inc = at(run.inc)
     sigma_inc = inclination_sigma(inc, run.inc_noise, accel)
     # the end stations are the stops, at rest: no acceleration removed from their inclination
     ends = [0, -1]
     sigma_inc[ends] = inclination_sigma(inc[ends], replace(run.inc_noise, odometer=0.0), accel)
-    azi_deg = np.degrees(at(np.unwrap(run.azi))) % 360.0
+    azi_deg = np.degrees(azi) % 360.0
     return ContinuousStations.compiled().make_table(
         {
             "md": grid,
@@ -158,3 +141,33 @@ def _resample(
         },
         north_reference="true",
     )
+
+
+def _at_stations(
+    run: StoredRun, times: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """Inclination and unwrapped azimuth (rad) interpolated at the station ``times`` (s,
+    increasing), and each station's flags: those of the first sample at or after it."""
+    held = run.held_span()
+    values = Interpolation(times, 2)
+    flags = np.zeros(times.size, dtype=np.int64)
+    done = 0
+    raw = correction = 0.0
+    for a, b in chunks(0, run.size, run.rows):
+        part = run.read(a, b, held)
+        t, azi = part.time, part.azi
+        # np.unwrap of the whole series: each step's correction summed in sequence
+        step = np.diff(np.concatenate([[raw if a else azi[0]], azi]))
+        fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
+        fix[(fix == -np.pi) & (step > 0)] = np.pi
+        fix = fix - step
+        fix[np.abs(step) < np.pi] = 0.0
+        corrections = carried_cumsum(fix, correction)
+        values.feed(t, part.inc, azi + corrections)
+        raw, correction = float(azi[-1]), float(corrections[-1])
+        here = int(np.searchsorted(times, t[-1], side="right"))
+        flags[done:here] = part.flags[np.searchsorted(t, times[done:here], side="left")]
+        done = here
+    flags[done:] = part.flags[-1]
+    inc, azi = values.result()
+    return inc, azi, flags

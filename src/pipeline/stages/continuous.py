@@ -4,29 +4,29 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
-import pyarrow as pa
-
 from pipeline.continuous.options import ContinuousOptions
 from pipeline.continuous.tables import ContinuousSeries, ContinuousStations
 from pipeline.earth.site import resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
+from pipeline.streams import Port, as_table
 from pipeline.tables import CompassStations, RawSamples
 
 
 def continuous_stage(
-    inputs: Mapping[str, pa.Table], params: ContinuousOptions, ctx: StageContext
-) -> dict[str, pa.Table]:
-    """Integrate the azimuth of the moving run; close it on the end stop."""
-    if inputs["samples"].num_rows == 0:
-        raise EmptyTableError("samples", "a continuous run needs samples")
-    if inputs["stops"].num_rows == 0:
+    inputs: Mapping[str, Port], params: ContinuousOptions, ctx: StageContext
+) -> dict[str, Port]:
+    """Integrate the azimuth of the moving run; close it on the end stop. The samples stream
+    in (read once into a disk-backed store), the full-rate series streams out."""
+    if as_table(inputs["stops"]).num_rows == 0:
         raise EmptyTableError("stops", "the run starts and closes on compassed stops")
     from pipeline.continuous.integrate import integrate_continuous  # on use: loads scipy.signal
 
     site = resolve_site(ctx.well, stage="integrate_continuous", latitude=params.latitude)
-    result = integrate_continuous(inputs["samples"], inputs["stops"], site.latitude, params)
+    result = integrate_continuous(
+        inputs["samples"], as_table(inputs["stops"]), site.latitude, params
+    )
     misclosure = f"{result.misclosure:.6g}".encode()
     stations = result.stations.replace_schema_metadata(
         {**(result.stations.schema.metadata or {}), b"misclosure_deg": misclosure}
@@ -47,5 +47,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             inputs={"samples": RawSamples, "stops": CompassStations},
             outputs={"stations": ContinuousStations, "series": ContinuousSeries},
             params=ContinuousOptions,
+            streamed_inputs=frozenset({"samples"}),
+            streamed_outputs=frozenset({"series"}),
         )
     )

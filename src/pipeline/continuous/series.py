@@ -1,0 +1,158 @@
+"""The integrated run kept on disk (:class:`StoredRun`), read back by sample range with the
+closure and the run-wide flags applied, and its full-rate series as a stream of record
+batches (:func:`series_stream`).
+
+Units: times s, angles rad (the series' table: degrees).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+from numpy.typing import NDArray
+
+from pipeline.continuous.run import Odometer
+from pipeline.continuous.sigma import RunGeometry
+from pipeline.continuous.sigma_noise import InclinationNoise
+from pipeline.continuous.store import chunks
+from pipeline.continuous.tables import (
+    FLAG_AFTER_VERTICAL,
+    FLAG_AZIMUTH_UNDEFINED,
+    FLAG_LARGE_MISALIGNMENT,
+    FLAG_NEAR_VERTICAL,
+    FLAG_NO_CLOSURE,
+    ContinuousSeries,
+)
+from pipeline.earth.frames import FloatArray
+from pipeline.streams import TableStream
+
+__all__ = ["RunPart", "StoredRun", "series_stream"]
+
+_NOT_INTEGRATED = FLAG_NEAR_VERTICAL | FLAG_LARGE_MISALIGNMENT | FLAG_AZIMUTH_UNDEFINED
+
+
+@dataclass(frozen=True)
+class RunPart:
+    """Samples of an integrated run: time s, odometer MD m, angles rad, flags ``FLAG_*``."""
+
+    time: FloatArray
+    md: FloatArray
+    inc: FloatArray
+    azi: FloatArray
+    """closed azimuth"""
+    toolface: FloatArray
+    misalignment: FloatArray
+    """gyro axis from the high side δ"""
+    flags: NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class StoredRun:
+    """An integrated run in the odometer's store, run sample 0 at row 0 of the columns
+    ``inc``, ``toolface``, ``misalignment`` (δ), ``flags``, ``held`` and the azimuth column
+    ``azi_column`` (before closure), all rad."""
+
+    odometer: Odometer
+    latitude: float
+    """deg"""
+    closure: bool
+    """the budget removes the misclosure on the end stop"""
+    backward: bool
+    """integrated back in time from the end stop (no closure)"""
+    inc_noise: InclinationNoise
+    azi_column: str
+    misclosure: float
+    """integrated minus end-stop azimuth before correction, rad (NaN: no closure)"""
+    shift: float = 0.0
+    """misclosure removed linearly in time as the azimuth is read, rad"""
+
+    @property
+    def size(self) -> int:
+        return self.odometer.size
+
+    @property
+    def rows(self) -> int:
+        return self.odometer.rows
+
+    def held_span(self) -> tuple[int, int] | None:
+        """First and last sample whose azimuth was held (None: none)."""
+        first = last = -1
+        for a, b in chunks(0, self.size, self.rows):
+            held = np.flatnonzero(self.odometer.store.read("held", a, b))
+            if held.size:
+                first = a + int(held[0]) if first < 0 else first
+                last = a + int(held[-1])
+        return None if first < 0 else (first, last)
+
+    def read(self, lo: int, hi: int, held: tuple[int, int] | None) -> RunPart:
+        """Time (s), odometer MD (m), inc, closed azimuth, toolface, δ (rad) and flags of run
+        samples ``lo``…``hi − 1``; ``held``: :meth:`held_span`."""
+        store, t = self.odometer.store, self.odometer.time(lo, hi)
+        azi = store.floats(self.azi_column, lo, hi)
+        if self.shift:
+            t0 = float(self.odometer.time(0, 1)[0])
+            t_end = float(self.odometer.time(self.size - 1, self.size)[0])
+            azi = azi - self.shift * ((t - t0) / (t_end - t0))
+        flags = store.ints("flags", lo, hi)
+        if self.backward:
+            flags |= FLAG_NO_CLOSURE
+        if held is not None:  # integrated after a held section (back in time: before it)
+            index = np.arange(lo, hi)
+            after = index <= held[1] if self.backward else index >= held[0]
+            flags[after & (store.ints("held", lo, hi) == 0)] |= FLAG_AFTER_VERTICAL
+        return RunPart(
+            time=t,
+            md=self.odometer.reading(lo, hi),
+            inc=store.floats("inc", lo, hi),
+            azi=azi,
+            toolface=store.floats("toolface", lo, hi),
+            misalignment=store.floats("misalignment", lo, hi),
+            flags=flags,
+        )
+
+    def slice(self, lo: int, hi: int) -> RunGeometry:
+        """Samples ``lo``…``hi − 1`` as the budget reads them (flags without the run-wide
+        ones, which do not change what is integrated)."""
+        part = self.read(lo, hi, None)
+        return RunGeometry(
+            time=part.time,
+            inc=part.inc,
+            azi=part.azi,
+            misalignment=part.misalignment,
+            usable=(part.flags & _NOT_INTEGRATED) == 0,
+            latitude=self.latitude,
+            closure=self.closure,
+            backward=self.backward,
+            inc_noise=self.inc_noise,
+        )
+
+
+def series_stream(run: StoredRun) -> TableStream:
+    """The full-rate series (:class:`ContinuousSeries`, degrees) read from the store a chunk
+    at a time on every pass."""
+    contract = ContinuousSeries.compiled()
+    empty = {f.name: pa.array([], type=f.type) for f in contract.schema()}
+    schema = contract.make_table(empty, north_reference="true").schema
+    held = run.held_span()
+
+    def batches() -> Iterator[pa.RecordBatch]:
+        for a, b in chunks(0, run.size, run.rows):
+            part = run.read(a, b, held)
+            azi_deg = np.degrees(part.azi) % 360.0
+            table = contract.make_table(
+                {
+                    "time": part.time,
+                    "md": part.md,
+                    "inc": np.degrees(part.inc),
+                    "azi": np.where(azi_deg < 360.0, azi_deg, 0.0),
+                    "toolface": np.degrees(part.toolface),
+                    "flags": part.flags,
+                },
+                north_reference="true",
+            )
+            yield from table.to_batches()
+
+    return TableStream(schema, batches)

@@ -1,0 +1,230 @@
+"""Full-rate columns of a continuous run kept on disk, read and written by row range, and the
+helpers that let the integration work chunk by chunk with carried state.
+
+A survey of any length goes through :mod:`pipeline.continuous` a chunk of rows at a time:
+the raw columns it needs are written once to a :class:`ColumnStore` (one file per column in
+a temporary directory, read with ``pread``, so the operating system's page cache holds
+them, not the process), and each pass of the integration reads the rows of one chunk plus
+the few rows of overlap its filters need, and writes its per-sample results back. Memory is
+a few chunks whatever the survey's length. Chunking does not change the numbers: filters
+read their whole window (:func:`savgol_range`), running sums carry the last value
+(:func:`carried_cumsum`) and interpolations at given points see the same two samples
+(:class:`Interpolation`) as over the whole series.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import weakref
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+from numpy.typing import NDArray
+from scipy.signal import savgol_filter
+
+from pipeline.earth.frames import FloatArray
+
+__all__ = [
+    "CHUNK_ROWS",
+    "ColumnStore",
+    "Interpolation",
+    "carried_cumsum",
+    "chunks",
+    "median_step",
+    "savgol_range",
+    "savgol_span",
+]
+
+CHUNK_ROWS = 65_536
+"""Rows a pass of the integration handles at a time."""
+
+
+@dataclass
+class _Column:
+    fd: int
+    dtype: np.dtype[np.generic]
+    rows: int
+
+
+class ColumnStore:
+    """Columns of numbers on disk (a temporary directory removed with the store)."""
+
+    def __init__(self) -> None:
+        self.directory = tempfile.mkdtemp(prefix="gyropipe-continuous-")
+        self._columns: dict[str, _Column] = {}
+        self._finalizer = weakref.finalize(self, _remove, self.directory, self._columns)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._columns
+
+    def rows(self, name: str) -> int:
+        """Rows written to column ``name``."""
+        return self._columns[name].rows
+
+    def write(self, name: str, start: int, values: NDArray[np.generic]) -> None:
+        """Write ``values`` at rows ``start``… of column ``name`` (created with their type)."""
+        column = self._columns.get(name)
+        if column is None:
+            path = os.path.join(self.directory, f"{len(self._columns)}.bin")
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o600)
+            column = self._columns[name] = _Column(fd, values.dtype, 0)
+        data = np.ascontiguousarray(values, dtype=column.dtype)
+        os.pwrite(column.fd, data.tobytes(), start * column.dtype.itemsize)
+        column.rows = max(column.rows, start + data.size)
+
+    def append(self, name: str, values: NDArray[np.generic]) -> None:
+        """Write ``values`` after the rows of column ``name`` (created if new)."""
+        self.write(name, self._columns[name].rows if name in self._columns else 0, values)
+
+    def read(self, name: str, lo: int, hi: int) -> NDArray[np.generic]:
+        """Rows ``lo``…``hi − 1`` of column ``name`` (a fresh array of its type)."""
+        column = self._columns[name]
+        lo, hi = max(lo, 0), min(hi, column.rows)
+        size = column.dtype.itemsize
+        data = os.pread(column.fd, max(hi - lo, 0) * size, lo * size)
+        return np.frombuffer(data, dtype=column.dtype).copy()
+
+    def floats(self, name: str, lo: int, hi: int) -> FloatArray:
+        """:meth:`read` as float64."""
+        out: FloatArray = self.read(name, lo, hi).astype(np.float64, copy=False)
+        return out
+
+    def ints(self, name: str, lo: int, hi: int) -> NDArray[np.int64]:
+        """:meth:`read` as int64."""
+        out: NDArray[np.int64] = self.read(name, lo, hi).astype(np.int64, copy=False)
+        return out
+
+    def add_batches(self, batches: Iterable[pa.RecordBatch], names: Iterable[str]) -> int:
+        """Append the columns ``names`` of every batch as float64 (nulls NaN); rows added."""
+        wanted = list(names)
+        added = 0
+        for batch in batches:
+            for name in wanted:
+                array = batch.column(batch.schema.get_field_index(name))
+                values = np.asarray(array.to_numpy(zero_copy_only=False), dtype=np.float64)
+                self.append(name, values)
+            added += batch.num_rows
+        return added
+
+    def close(self) -> None:
+        """Remove the files now (also done when the store is garbage collected)."""
+        self._finalizer()
+
+
+def _remove(directory: str, columns: dict[str, _Column]) -> None:
+    for column in columns.values():
+        os.close(column.fd)
+    columns.clear()
+    shutil.rmtree(directory, ignore_errors=True)
+
+
+def chunks(lo: int, hi: int, rows: int, *, reverse: bool = False) -> Iterator[tuple[int, int]]:
+    """Consecutive ranges ``[a, b)`` of at most ``rows`` rows covering ``[lo, hi)`` (from the
+    end backward if ``reverse``)."""
+    starts = range(lo, hi, rows)
+    for a in reversed(starts) if reverse else starts:
+        yield a, min(a + rows, hi)
+
+
+def carried_cumsum(values: FloatArray, carry: float) -> FloatArray:
+    """``carry + v₀, carry + v₀ + v₁, …`` summed in sequence (as one cumulative sum of the
+    whole series would, so the chunks give the same numbers)."""
+    out: FloatArray = np.cumsum(np.concatenate([[carry], values]))[1:]
+    return out
+
+
+def savgol_span(lo: int, hi: int, a: int, b: int, points: int) -> tuple[int, int]:
+    """Rows of the series ``[lo, hi)`` that a Savitzky–Golay filter of ``points`` samples
+    (mode ``interp``) needs to give its values at rows ``[a, b)`` as over the whole series:
+    the half window on each side, and the series' own edge windows where they are near."""
+    half = points // 2
+    wlo = max(lo, min(a - half, hi - points))
+    whi = min(hi, max(b + half, lo + points))
+    return wlo, whi
+
+
+def savgol_range(
+    values: FloatArray, wlo: int, a: int, b: int, points: int, order: int, deriv: int, dt: float
+) -> FloatArray:
+    """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
+    ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
+    inside the series each value is the same dot product with the same samples, and the edge
+    polynomial is fitted to the same first or last ``points`` samples."""
+    out: FloatArray = savgol_filter(values, points, order, deriv=deriv, delta=dt)[a - wlo : b - wlo]
+    return out
+
+
+class Interpolation:
+    """``np.interp(x, xp, f)`` for points ``x`` known up front while ``xp`` (increasing) and
+    the values ``f`` (one row per quantity) come in consecutive chunks: each point is
+    interpolated between the same two samples as over the whole series."""
+
+    def __init__(self, x: FloatArray, quantities: int) -> None:
+        self._order = np.argsort(x, kind="stable")
+        self._x = np.asarray(x, dtype=np.float64)[self._order]
+        self._out = np.full((quantities, self._x.size), np.nan)
+        self._next = 0
+        self._last: tuple[float, FloatArray] | None = None
+
+    def feed(self, xp: FloatArray, *values: FloatArray) -> None:
+        """The next chunk of samples: ``xp`` and one array per quantity."""
+        if xp.size == 0:
+            return
+        f = np.stack(values)
+        if self._last is not None:
+            xp = np.concatenate([[self._last[0]], xp])
+            f = np.concatenate([self._last[1][:, None], f], axis=1)
+        stop = int(np.searchsorted(self._x, xp[-1], side="right"))
+        here = slice(self._next, stop)
+        for row in range(f.shape[0]):
+            self._out[row, here] = np.interp(self._x[here], xp, f[row])
+        self._next = stop
+        self._last = (float(xp[-1]), f[:, -1].copy())
+
+    def result(self) -> FloatArray:
+        """Rows of interpolated values (quantity, point) in the points' given order; points
+        past the last sample take its values."""
+        if self._last is not None:
+            self._out[:, self._next :] = self._last[1][:, None]
+        out: FloatArray = np.empty_like(self._out)
+        out[:, self._order] = self._out
+        return out
+
+
+def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> float:
+    """Median of the steps ``x[k+1] − x[k]`` of column ``name`` over rows ``[lo, hi)``, exactly
+    as ``np.median(np.diff(x))``: a histogram pass finds the bins holding the middle steps,
+    a second pass collects the steps in them."""
+    count = hi - lo - 1
+    if count < 1:
+        return float("nan")
+
+    def steps() -> Iterator[FloatArray]:
+        for a, b in chunks(lo, hi - 1, rows):
+            yield np.diff(store.floats(name, a, b + 1))
+
+    low = min(float(s.min()) for s in steps())
+    high = max(float(s.max()) for s in steps())
+    if not low < high:
+        return low
+    edges = np.linspace(low, high, 4097)
+    hist = np.zeros(edges.size - 1, dtype=np.int64)
+    for s in steps():
+        hist += np.histogram(s, bins=edges)[0]
+    ranks = ((count - 1) // 2, count // 2)
+    below = np.concatenate([[0], np.cumsum(hist)])
+    bins = sorted({int(np.searchsorted(below, r, side="right")) - 1 for r in ranks})
+    picked: dict[float, int] = {}
+    for s in steps():
+        where = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, hist.size - 1)
+        for value, n in zip(*np.unique(s[np.isin(where, bins)], return_counts=True), strict=True):
+            picked[float(value)] = picked.get(float(value), 0) + int(n)
+    keys = sorted(picked)
+    cumulative = np.cumsum([picked[k] for k in keys])
+    base = int(below[bins[0]])
+    middle = [keys[int(np.searchsorted(cumulative, r - base, side="right"))] for r in ranks]
+    return (middle[0] + middle[1]) / 2
