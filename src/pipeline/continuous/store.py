@@ -99,16 +99,16 @@ class ColumnStore:
         return out
 
     def add_batches(self, batches: Iterable[pa.RecordBatch], names: Iterable[str]) -> int:
-        """Append the columns ``names`` of every batch as float64 (nulls NaN); rows added."""
+        """Append the columns ``names`` of every batch as float64 (nulls NaN); rows added.
+        Nothing of a batch is kept once it is written."""
         wanted = list(names)
-        added = 0
-        for batch in batches:
-            for name in wanted:
-                array = batch.column(batch.schema.get_field_index(name))
-                values = np.asarray(array.to_numpy(zero_copy_only=False), dtype=np.float64)
-                self.append(name, values)
-            added += batch.num_rows
-        return added
+        return sum(self._add_batch(batch, wanted) for batch in batches)
+
+    def _add_batch(self, batch: pa.RecordBatch, names: list[str]) -> int:
+        for name in names:
+            array = batch.column(batch.schema.get_field_index(name))
+            self.append(name, np.asarray(array.to_numpy(zero_copy_only=False), np.float64))
+        return int(batch.num_rows)
 
     def close(self) -> None:
         """Remove the files now (also done when the store is garbage collected)."""
