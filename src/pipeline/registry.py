@@ -266,11 +266,12 @@ class WriterDef:
     extension: str
     write: Callable[[pa.Table, Path, WellMetadata], None]
     write_stream: Callable[[TableStream, Path, WellMetadata], None] | None = None
-    write_tables: (
-        Callable[[Mapping[str, pa.Table], Path, WellMetadata, Provenance], None] | None
-    ) = None
+    write_tables: Callable[[Mapping[str, Any], Path, WellMetadata, Provenance], None] | None = None
     """Writers whose file holds several tables of a run (the ``export`` stage): the tables by
     role (``trajectory``, ``qc``…), the path, the well and the run's provenance."""
+    tables_streamed: bool = False
+    """``write_tables`` takes a :class:`~pipeline.streams.TableStream` for a table too (the
+    export stage then passes the full-rate series as it streams, not concatenated)."""
     schema: type[BaseModel] | None = None
     """Writers of JSON documents: the model of the document (``gyropipe schemas`` publishes
     its JSON Schema)."""

@@ -161,6 +161,7 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
             extension="mcap",
             write=write_samples,
             write_tables=write_tables,
+            tables_streamed=True,
         )
     )
 

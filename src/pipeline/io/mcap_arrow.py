@@ -33,6 +33,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -121,33 +122,42 @@ def add_arrow_channel(
     writer: Writer,
     topic: str,
     schema_name: str,
-    data: pa.Table,
+    data: pa.Table | Iterable[pa.RecordBatch],
     schema: pa.Schema,
-    times: np.ndarray | None,
+    times: np.ndarray | bool | None,
 ) -> None:
     """A channel ``topic`` whose schema record is ``schema`` (the whole Arrow IPC schema),
-    with ``data`` as record batches of up to :data:`BATCH_ROWS` rows; each message's log time
-    is ``times`` (s) at its first row, or 0."""
+    with ``data`` (a table, or record batches as they come) as record batches of up to
+    :data:`BATCH_ROWS` rows; each message's log time is ``times`` (s) at its first row —
+    ``True``: the batch's own ``time`` column — or 0."""
     schema_id = writer.register_schema(schema_name, ARROW_SCHEMA_ENCODING, schema.serialize())
     channel = writer.register_channel(topic, ARROW_MESSAGE_ENCODING, schema_id)
-    row = 0
-    for sequence, batch in enumerate(data.to_batches(max_chunksize=BATCH_ROWS)):
-        if batch.num_rows:
-            stamp = _ns(times[row]) if times is not None else 0
+    batches = data.to_batches() if isinstance(data, pa.Table) else data
+    row = sequence = 0
+    for whole in batches:
+        for batch in pa.Table.from_batches([whole]).to_batches(max_chunksize=BATCH_ROWS):
+            if not batch.num_rows:
+                continue
+            if times is True:
+                stamp = _ns(float(batch.column("time")[0].as_py()))
+            else:
+                stamp = _ns(times[row]) if isinstance(times, np.ndarray) else 0
             writer.add_message(channel, stamp, batch.serialize().to_pybytes(), stamp, sequence)
             row += batch.num_rows
+            sequence += 1
 
 
-def check_encodable(table: pa.Table) -> None:
+def check_encodable(table: pa.Table | pa.Schema) -> None:
     """Refuse columns the batched layout does not hold (dictionary-encoded ones)."""
-    for f in table.schema:
+    for f in table if isinstance(table, pa.Schema) else table.schema:
         if pa.types.is_dictionary(f.type):
             raise ValueError(f"column {f.name!r} is dictionary-encoded: decode it first")
 
 
-def units_of(table: pa.Table) -> dict[str, str]:
+def units_of(table: pa.Table | pa.Schema) -> dict[str, str]:
     """Column → unit (``""`` when unitless), for tools without Arrow."""
-    return {f.name: (f.metadata or {}).get(UNIT_KEY, b"").decode() for f in table.schema}
+    schema = table if isinstance(table, pa.Schema) else table.schema
+    return {f.name: (f.metadata or {}).get(UNIT_KEY, b"").decode() for f in schema}
 
 
 def _checked_times(table: pa.Table) -> np.ndarray:

@@ -36,6 +36,7 @@ from pipeline.io.mcap_arrow import (
 )
 from pipeline.io.mcap_records import scan
 from pipeline.registry import Provenance
+from pipeline.streams import Port
 from pipeline.well import WellMetadata
 
 TOPIC_PREFIX = "/gyropipe/"
@@ -43,21 +44,27 @@ RUN_RECORD = "gyropipe.run"
 
 
 def write_tables(
-    tables: Mapping[str, pa.Table], path: Path, well: WellMetadata, provenance: Provenance
+    tables: Mapping[str, Port], path: Path, well: WellMetadata, provenance: Provenance
 ) -> None:
-    """Write each table on the topic ``/gyropipe/<role>`` of one MCAP file."""
+    """Write each table on the topic ``/gyropipe/<role>`` of one MCAP file; a stream (the
+    full-rate series) is written batch by batch as it is read."""
     for table in tables.values():
-        check_encodable(table)
+        check_encodable(table.schema)
     path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
     with path.open("wb") as fh:
         writer = start_writer(fh)
         for role, table in tables.items():
             add_arrow_channel(
-                writer, TOPIC_PREFIX + role, f"gyropipe.{role}", table, table.schema, _times(table)
+                writer,
+                TOPIC_PREFIX + role,
+                f"gyropipe.{role}",
+                table if isinstance(table, pa.Table) else iter(table),
+                table.schema,
+                _times(table),
             )
         writer.add_metadata(WELL_RECORD, well_strings(well))
         for role, table in tables.items():
-            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(table))
+            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(table.schema))
         writer.add_metadata(
             RUN_RECORD,
             {
@@ -70,13 +77,20 @@ def write_tables(
         writer.finish()  # type: ignore[no-untyped-call]
 
 
-def _times(table: pa.Table) -> np.ndarray | None:
-    """The ``time`` column (s) when it can stamp messages: float64, complete, finite."""
+def _times(table: Port) -> np.ndarray | bool | None:
+    """The ``time`` column (s) when it can stamp messages: float64, complete, finite (for a
+    stream, checked in a pass of its own; then ``True``: each batch stamps its messages)."""
     if "time" not in table.column_names or table.schema.field("time").type != pa.float64():
         return None
-    column = table.column("time")
-    times: np.ndarray = column.to_numpy(zero_copy_only=False)
-    return times if column.null_count == 0 and np.isfinite(times).all() else None
+    if isinstance(table, pa.Table):
+        column = table.column("time")
+        times: np.ndarray = column.to_numpy(zero_copy_only=False)
+        return times if column.null_count == 0 and np.isfinite(times).all() else None
+    for batch in table:
+        column = batch.column(batch.schema.get_field_index("time"))
+        if column.null_count or not np.isfinite(column.to_numpy(zero_copy_only=False)).all():
+            return None
+    return True
 
 
 def read_tables(path: Path) -> tuple[dict[str, pa.Table], WellMetadata]:

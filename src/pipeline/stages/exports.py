@@ -17,8 +17,9 @@ from pipeline.contracts import TableContract, column
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, registered
 from pipeline.stages.files import WriteParams
+from pipeline.streams import Port, TableStream, as_table
 from pipeline.tables import AnyTable, Stations, Trajectory
-from pipeline.well import attach
+from pipeline.well import attach, attached
 
 
 class QcTable(TableContract):
@@ -50,16 +51,25 @@ class ExportParams(WriteParams):
 
 
 def export(
-    inputs: Mapping[str, pa.Table], params: ExportParams, ctx: StageContext
+    inputs: Mapping[str, Port], params: ExportParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Write the wired tables into one file (published when the run succeeds)."""
+    """Write the wired tables into one file (published when the run succeeds). The series
+    streams into a writer that takes streams (``WriterDef.tables_streamed``), else it is
+    concatenated."""
     writer = ctx.writer(params.writer)
     if writer.write_tables is None:
         raise ValueError(f"writer {params.writer!r} writes one table: use the write stage for it")
     if not inputs:
         raise ValueError(f"wire at least one of the ports {', '.join(PORTS)}")
     path = params.output_path(ctx, writer.extension)
-    tables = {port: attach(table, ctx.well) for port, table in inputs.items()}
+    tables = {
+        port: (
+            value.replace_schema_metadata(attached(value.schema, ctx.well))
+            if isinstance(value, TableStream) and writer.tables_streamed
+            else attach(as_table(value), ctx.well)
+        )
+        for port, value in inputs.items()
+    }
     writer.write_tables(tables, path, ctx.well, ctx.provenance)
     return {}
 
@@ -75,5 +85,6 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             inputs=PORTS,
             params=ExportParams,
             optional_inputs=frozenset(PORTS),
+            streamed_inputs=frozenset({"series"}),
         )
     )
