@@ -125,7 +125,9 @@ def run(
     from pipeline.api.run import execute
     from pipeline.qc.tables import QcSummary, diagnosis_lines
     from pipeline.runner import RunInputError
+    from pipeline.streams import use_returning_memory_pool
 
+    use_returning_memory_pool()
     registry = _registry(disabled)
     plan = _plan(pipeline_file, overrides, registry)
     try:
@@ -234,6 +236,9 @@ def batch(
     from pipeline.batch.progress import reporter
     from pipeline.batch.run import BatchOptions, run_batch
     from pipeline.batch.summary import table_text
+    from pipeline.streams import use_returning_memory_pool
+
+    use_returning_memory_pool()
 
     def config_error(message: str) -> NoReturn:
         click.echo(f"error: {message}", err=True)

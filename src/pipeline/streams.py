@@ -10,6 +10,7 @@ without ever being held whole; memory is bounded by a few batches, not by the su
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeAlias
@@ -82,3 +83,17 @@ def as_stream(value: Port) -> TableStream:
 def as_table(value: Port) -> pa.Table:
     """``value`` as a whole table: a stream is read in one pass and concatenated."""
     return value.read_all() if isinstance(value, TableStream) else value
+
+
+def use_returning_memory_pool() -> None:
+    """Make Arrow allocate from jemalloc (else the system allocator), which give freed memory
+    back to the operating system, unless ``ARROW_DEFAULT_MEMORY_POOL`` chooses. mimalloc,
+    pyarrow's default on Linux, keeps the pages of batches already streamed past, so a
+    process's peak grew with the survey it streamed (benchmarks/bench_memory.py)."""
+    if os.environ.get("ARROW_DEFAULT_MEMORY_POOL"):
+        return
+    try:
+        pool = pa.jemalloc_memory_pool()
+    except NotImplementedError:
+        pool = pa.system_memory_pool()
+    pa.set_memory_pool(pool)

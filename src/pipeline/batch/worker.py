@@ -29,6 +29,7 @@ from pipeline.plugins import load_registry
 from pipeline.registry import Registry
 from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
 from pipeline.spec import load_spec
+from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
 from .publish import staging_dir, write_marker
@@ -97,8 +98,10 @@ def worker_init(ref: PipelineRef, batch_pid: int) -> None:
 
     BLAS and OpenMP run single-threaded here, as in Dask's workers: the wells are the
     parallelism, and a worker's BLAS threads spinning on the cores the other workers use
-    cost 2 workers on 2 cores 18 % of their time (benchmarks/bench_batch.py)."""
+    cost 2 workers on 2 cores 18 % of their time (benchmarks/bench_batch.py). Arrow's
+    allocator gives freed memory back (:func:`~pipeline.streams.use_returning_memory_pool`)."""
     threadpool_limits(limits=1)
+    use_returning_memory_pool()
     threading.Thread(target=_exit_with, args=(batch_pid,), daemon=True).start()
     try:
         _plan(ref)

@@ -50,6 +50,7 @@ Units: times s, angles rad, rates rad/s unless a name says otherwise.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
@@ -279,12 +280,12 @@ def azimuth_budget(
     rank_one("gyro_misalignment_z", mis, a @ cells["gain_rate_z"])
     m = a * cells["gain"]
     if gyro.bias_instability > 0:
-        lag = np.abs(mid[:, None] - mid[None, :])
-        kernel = np.exp(-lag / gyro.correlation_time)
-        add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * m @ kernel @ m.T)
+        tau = gyro.correlation_time
+        markov = _quadratic(m, mid, lambda x, y: np.exp(-np.abs(x - y) / tau))
+        add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * markov)
     if gyro.rate_random_walk > 0:
         q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
-        add("rate_random_walk", q**2 * m @ np.minimum(mid[:, None], mid[None, :]) @ m.T)
+        add("rate_random_walk", q**2 * _quadratic(m, mid, np.minimum))
     rank_one("acc_inclination", acc.inclination, a @ cells["d_inc"])
     rank_one("acc_bias_toolface", acc.bias / acc.gravity, a @ cells["tf_bias"])
     rank_one("acc_tilt_toolface", acc.misalignment, a @ cells["tf_tilt"])
@@ -293,6 +294,21 @@ def azimuth_budget(
         noise = sums.noise.variance(phi_k - w * phi_t, -w * phi_t)
         add("inclination_noise", np.diag(noise))
     return AzimuthBudget(covariance=cov, parts=parts)
+
+
+def _quadratic(
+    m: FloatArray, mid: FloatArray, kernel: Callable[[FloatArray, FloatArray], FloatArray]
+) -> FloatArray:
+    """``m @ K @ m.T`` with ``K[i, j] = kernel(mid[i], mid[j])`` built a block of rows at a
+    time (K of a day-long run has millions of cells)."""
+    out = np.zeros((m.shape[0], m.shape[0]))
+    for lo in range(0, mid.size, _KERNEL_ROWS):
+        rows = slice(lo, lo + _KERNEL_ROWS)
+        out += m[:, rows] @ (kernel(mid[rows, None], mid[None, :]) @ m.T)
+    return out
+
+
+_KERNEL_ROWS = 256
 
 
 def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatArray]:

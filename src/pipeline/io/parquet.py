@@ -139,8 +139,10 @@ def _missing(contract: type[TableContract], schema: pa.Schema) -> list[str]:
 
 
 def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
-    """Write ``table`` (schema and field metadata included) as Parquet."""
-    pq.write_table(table, path)
+    """Write ``table`` (schema and field metadata included) as Parquet, in row groups of
+    :data:`~pipeline.streams.BATCH_ROWS` rows: a streamed read decodes a row group at a
+    time, so its memory is bounded by the row group, not by the survey."""
+    pq.write_table(table, path, row_group_size=BATCH_ROWS)
 
 
 def write_stream(stream: TableStream, path: Path, well: WellMetadata) -> None:
