@@ -16,8 +16,10 @@ from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.gravity import normal_gravity
 from pipeline.errors import ContractViolation
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
+from pipeline.streams import TableStream
 from pipeline.tables import PositionReadings, RawSamples
 
 FS = 100.0
@@ -270,6 +272,37 @@ def test_a_position_marked_in_two_runs_is_an_error() -> None:
     )
     with pytest.raises(ValueError, match=r"separate runs.*station 0 position 0 at t = 1, \d"):
         position_readings(relabelled)
+
+
+@pytest.mark.parametrize("rows", [None, 777])
+def test_a_station_marked_again_after_others_is_refused_whole_or_streamed(
+    rows: int | None,
+) -> None:
+    """Station 2's positions relabelled as station 0's positions 100…: station 0 is visited
+    again after station 1. Its readings are not merged into the first visit (another depth,
+    another time) on the whole table or on a stream cut anywhere."""
+    samples = run().samples
+    station, position = (samples.column(n) for n in ("station", "position"))
+    later = pc.equal(station, 2)
+    relabelled = samples.set_column(
+        samples.column_names.index("station"),
+        samples.schema.field("station"),
+        pc.if_else(later, 0, station),
+    ).set_column(
+        samples.column_names.index("position"),
+        samples.schema.field("position"),
+        pc.if_else(later, pc.add(position, 100), position),
+    )
+    t = samples.column("time").to_numpy()
+    marked = station.to_numpy(zero_copy_only=False)
+    at = ~np.isnan(position.to_numpy(zero_copy_only=False).astype(float))  # and a position
+    visits = [t[np.flatnonzero((marked == s) & at)[0]] for s in (0, 2)]
+    expected = rf"station 0 at t = {visits[0]:g}, {visits[1]:g} s.*as a station of its own"
+    with pytest.raises(ValueError, match=expected):
+        if rows is None:
+            position_readings(relabelled)
+        else:
+            stream_position_readings(TableStream.from_table(relabelled, rows))
 
 
 def test_marker_and_column_problems_are_errors() -> None:

@@ -88,8 +88,9 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     frame angle (deg, [0, 360)), the mean and sample standard deviation (ddof = 1) of every
     gyro (°/h) and accelerometer (m/s²) axis, the number of samples and their duration
     (n / sample rate, s). Raises ``ValueError`` naming the problem: no markers and no frame
-    angle, a marked position repeated or too short after trimming, non-uniform time, no
-    positions found."""
+    angle, a marked position repeated or too short after trimming, a station marked again
+    after other stations (:func:`remarked_stations`), non-uniform time, no positions
+    found."""
     RawSamples.validate_table(samples)
     time = samples.column("time").to_numpy()
     rate = _sample_rate(time)
@@ -211,7 +212,37 @@ def _markers(samples: pa.Table) -> tuple[IndexArray, IndexArray, IndexArray, Ind
             "markers label a (station, position) in separate runs of samples: "
             + "; ".join(repeated)
         )
+    problem = remarked_stations(keys[:, 0], samples.column("time").to_numpy()[starts])
+    if problem:
+        raise ValueError(problem)
     return starts, ends, keys[:, 0], keys[:, 1]
+
+
+def remarked_stations(station: IndexArray, t0: FloatArray) -> str | None:
+    """The problem of stations marked again after other stations, from the station and the
+    first time (s) of every marked run in order; None if each station's runs are together.
+
+    A gyrocompass station's positions are read in one visit, at one depth: the runs of a
+    station that comes back after others (a repeated shot numbered as the first) are not
+    merged into it but refused, and the later visit is to be numbered as a station of its
+    own."""
+    if station.size == 0:
+        return None
+    first = np.concatenate([[0], np.flatnonzero(np.diff(station) != 0) + 1])
+    visits = station[first]
+    ids, count = np.unique(visits, return_counts=True)
+    again = ids[count > 1]
+    if again.size == 0:
+        return None
+    listed = "; ".join(
+        f"station {s} at t = " + ", ".join(f"{t:g}" for t in t0[first[visits == s]]) + " s"
+        for s in again
+    )
+    return (
+        f"stations marked again after other stations (visits start): {listed}. A station's "
+        "positions are read in one visit at one depth: number a later visit as a station "
+        "of its own"
+    )
 
 
 def check_lengths(

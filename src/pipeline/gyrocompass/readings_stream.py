@@ -16,8 +16,8 @@ Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a mov
 average) and the unwrapped frame angle are recomputed over the buffer, and only samples
 whose smoothing window lies inside it are used, so the dwells are those of the whole table
 except where a smoothed MD or angle lies within rounding (≈1e-15 of its value) of a
-tolerance. Marked positions are exact. A station marked again after another station (the
-whole-table path merges both into one MD median) is a ``ValueError`` here.
+tolerance. Marked positions are exact. A station marked again after another station is a
+``ValueError``, as on the whole table (:func:`~pipeline.gyrocompass.readings.remarked_stations`).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from pipeline.gyrocompass.readings import (
     moving_average,
     not_uniform,
     reduce_readings,
+    remarked_stations,
     steady_starts,
     too_few,
 )
@@ -217,7 +218,6 @@ class _Marked:
         self.key = (-1, -1)
         self.runs: list[tuple[int, int, float, int]] = []
         """every marked run: station, position, first time, samples left after trimming"""
-        self.closed: set[int] = set()
         self.orphans = 0
 
     def run(self, samples: TableStream) -> pa.Table:
@@ -261,6 +261,9 @@ class _Marked:
             )
         if self.runs:
             station, position, t0, left = (np.array(c) for c in zip(*self.runs, strict=True))
+            problem = remarked_stations(station, t0)
+            if problem:
+                raise ValueError(problem)
             check_lengths(left, self.need, t0, station, position)
         return self.stations.table()
 
@@ -273,13 +276,6 @@ class _Marked:
         self.runs.append((station, position, float(run["time"][0]), left))
         if left < self.need:
             return
-        if station != self.stations.station and station in self.closed:
-            raise ValueError(
-                f"station {station} is marked again at t = {run['time'][0]:g} s after other "
-                "stations: a streamed survey needs each station's samples together"
-            )
-        if station != self.stations.station and self.stations.station >= 0:
-            self.closed.add(self.stations.station)
         end = len(run["time"]) - self.k_end
         self.stations.add(station, position, {k: v[self.k_start : end] for k, v in run.items()})
 
