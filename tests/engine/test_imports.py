@@ -94,3 +94,22 @@ def test_survey_run_imports_no_plotting_and_no_cluster(survey_modules: set[str])
 
 def test_survey_run_imports_no_scipy_stats(survey_modules: set[str]):
     assert not loaded(survey_modules, "scipy.stats")
+
+
+def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
+    """The continuous pipeline without its report stage (issue #20's floor: interpreter and
+    the libraries of its stages) loads no matplotlib, no report modules, no dask."""
+    sim = tmp_path / "sim"
+    plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
+    plan["survey"].update(start_md=600, end_md=640)
+    (tmp_path / "plan.yaml").write_text(yaml.safe_dump(plan))
+    modules_of(tmp_path, "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim))
+    spec = yaml.safe_load((ROOT / "pipelines" / "continuous-gyro.yaml").read_text())
+    spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
+    pipeline = tmp_path / "continuous.yaml"
+    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
+    samples = str(sim / "samples.parquet")
+    modules = modules_of(tmp_path, "run", str(pipeline), "--input", samples, "--out", "out")
+    for package in ("matplotlib", "dask", "pipeline.reports", "allantools"):
+        assert not loaded(modules, package), package
+    assert "pipeline.continuous.integrate" in modules  # the run did integrate

@@ -298,11 +298,13 @@ def test_a_station_marked_again_after_others_is_refused_whole_or_streamed(
     at = ~np.isnan(position.to_numpy(zero_copy_only=False).astype(float))  # and a position
     visits = [t[np.flatnonzero((marked == s) & at)[0]] for s in (0, 2)]
     expected = rf"station 0 at t = {visits[0]:g}, {visits[1]:g} s.*as a station of its own"
+    read = (
+        (lambda: position_readings(relabelled))
+        if rows is None
+        else (lambda: stream_position_readings(TableStream.from_table(relabelled, rows)))
+    )
     with pytest.raises(ValueError, match=expected):
-        if rows is None:
-            position_readings(relabelled)
-        else:
-            stream_position_readings(TableStream.from_table(relabelled, rows))
+        read()
 
 
 def test_marker_and_column_problems_are_errors() -> None:
