@@ -98,7 +98,8 @@ def test_survey_run_imports_no_scipy_stats(survey_modules: set[str]):
 
 def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     """The continuous pipeline without its report stage (issue #20's floor: interpreter and
-    the libraries of its stages) loads no matplotlib, no report modules, no dask."""
+    the libraries of its stages) loads no matplotlib, no report modules, no dask, and no
+    SciPy (its filters are NumPy's: pipeline.continuous.filters)."""
     sim = tmp_path / "sim"
     plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
     plan["survey"].update(start_md=600, end_md=640)
@@ -110,6 +111,6 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
     samples = str(sim / "samples.parquet")
     modules = modules_of(tmp_path, "run", str(pipeline), "--input", samples, "--out", "out")
-    for package in ("matplotlib", "dask", "pipeline.reports", "allantools"):
+    for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "scipy"):
         assert not loaded(modules, package), package
     assert "pipeline.continuous.integrate" in modules  # the run did integrate

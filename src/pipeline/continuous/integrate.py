@@ -66,7 +66,6 @@ from pipeline.continuous.series import StoredRun
 from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
 from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
-from pipeline.continuous.strapdown import strapdown_run
 from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray
 from pipeline.errors import EmptyTableError
@@ -114,6 +113,8 @@ def _strapdown(
 ) -> StoredRun:
     """A three-axis run: the strapdown attitude over the samples read whole (its running
     product of rotations is not chunked), its angles stored like a single-axis run's."""
+    from pipeline.continuous.strapdown import strapdown_run  # on use: loads scipy.spatial
+
     store, begin = odometer.store, odometer.begin
     names = [n for n in (*_COLUMNS, "gyro_x", "gyro_y", "gyro_z") if n in store]
     table = pa.table({n: store.floats(n, 0, store.rows(n)) for n in names})

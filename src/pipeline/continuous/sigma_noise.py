@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import oaconvolve, savgol_coeffs
 
+from pipeline.continuous.filters import convolve_same, savgol_coeffs
 from pipeline.continuous.store import carried_cumsum
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
@@ -52,8 +52,7 @@ def derivative_kernel(points: int | None, order: int, deriv: int, dt: float) -> 
         first = np.array([1.0, 0.0, -1.0]) / (2.0 * dt)
         kernel: FloatArray = first if deriv == 1 else np.convolve(first, first)
         return kernel
-    out: FloatArray = savgol_coeffs(points, order, deriv=deriv, delta=dt)
-    return out
+    return savgol_coeffs(points, order, deriv, dt)
 
 
 class NoiseSums:
@@ -99,8 +98,8 @@ class NoiseSums:
         """The samples ``[lo, hi)`` (integration order), from per-sample arrays given over
         ``[start, start + len)`` ⊇ ``[lo − halo, hi + halo)`` ∩ the run: the step divided by Φ
         (s), ∂Ȧ/∂I, ∂Ȧ/∂İ and sin I."""
-        q_free = step * d_inc + oaconvolve(step * d_inc_rate, self.d1, mode="same")
-        odo_free = oaconvolve(q_free * sin_i, self.d2, mode="same")
+        q_free = step * d_inc + convolve_same(step * d_inc_rate, self.d1)
+        odo_free = convolve_same(q_free * sin_i, self.d2)
         own = slice(lo - start, hi - start)
         for row, free in enumerate((q_free, odo_free)):
             running = carried_cumsum(free[own] ** 2, float(self.carry[row]))
@@ -120,8 +119,8 @@ class NoiseSums:
             rows = []
             for mask in (before_mask, ~before_mask):
                 p = step_n * mask
-                q = p * d_inc_n + oaconvolve(p * d_rate_n, self.d1[None, :], mode="same", axes=1)
-                odo = oaconvolve(q * sin_n, self.d2[None, :], mode="same", axes=1)
+                q = p * d_inc_n + convolve_same(p * d_rate_n, self.d1)
+                odo = convolve_same(q * sin_n, self.d2)
                 rows.append((np.where(inside, q, 0.0), np.where(inside, odo, 0.0)))
             (qb, ob), (qa, oa) = rows
             self.quadratic[which] = np.stack(

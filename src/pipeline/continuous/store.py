@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
-from scipy.signal import savgol_filter
 
+from pipeline.continuous.filters import savgol_filter
 from pipeline.earth.frames import FloatArray
 
 __all__ = [

@@ -21,7 +21,7 @@ def continuous_stage(
     in (read once into a disk-backed store), the full-rate series streams out."""
     if as_table(inputs["stops"]).num_rows == 0:
         raise EmptyTableError("stops", "the run starts and closes on compassed stops")
-    from pipeline.continuous.integrate import integrate_continuous  # on use: loads scipy.signal
+    from pipeline.continuous.integrate import integrate_continuous  # on use: numerical code
 
     site = resolve_site(ctx.well, stage="integrate_continuous", latitude=params.latitude)
     result = integrate_continuous(

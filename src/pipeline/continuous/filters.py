@@ -1,0 +1,71 @@
+"""Savitzky–Golay filters and short convolutions in NumPy alone.
+
+The same filters as SciPy's ``scipy.signal.savgol_coeffs`` / ``savgol_filter`` (mode
+``interp``) and ``oaconvolve(mode="same")`` for odd kernels, written here so that a
+continuous run does not import ``scipy.signal`` (with it most of SciPy: ≈ 80 MiB of the
+process's memory floor, issue #20). The kernels are short (a few hundred samples), so the
+convolutions are direct.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pipeline.earth.frames import FloatArray
+
+__all__ = ["convolve_same", "savgol_coeffs", "savgol_filter"]
+
+
+def savgol_coeffs(points: int, order: int, deriv: int = 0, delta: float = 1.0) -> FloatArray:
+    """Convolution kernel (odd ``points``) of the ``deriv``-th derivative of the local
+    least-squares polynomial of degree ``order`` at the window's centre, sample interval
+    ``delta``."""
+    half = points // 2
+    x = np.arange(-half, points - half, dtype=np.float64)[::-1]  # reversed: a convolution
+    design = x ** np.arange(order + 1)[:, None]
+    target = np.zeros(order + 1)
+    target[deriv] = math.factorial(deriv) / delta**deriv
+    coeffs = np.linalg.lstsq(design, target, rcond=None)[0]
+    return np.asarray(coeffs, dtype=np.float64)
+
+
+def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
+    """``values`` (1-D, or rows of a 2-D array) convolved with the odd-length ``kernel``,
+    centred, zero beyond the ends: ``out[i] = Σ_j kernel[j]·values[i + h − j]``."""
+    if values.ndim == 1:
+        out: FloatArray = np.convolve(values, kernel, mode="full")[
+            kernel.size // 2 : kernel.size // 2 + values.size
+        ]
+        return out
+    n, half = values.shape[-1], kernel.size // 2
+    rows: FloatArray = np.zeros_like(values)
+    for j, weight in enumerate(kernel):
+        shift = half - j  # out[i] takes values[i + shift]
+        lo, hi = max(0, -shift), min(n, n - shift)
+        if hi > lo:
+            rows[:, lo:hi] += weight * values[:, lo + shift : hi + shift]
+    return rows
+
+
+def savgol_filter(
+    values: FloatArray, points: int, order: int, deriv: int = 0, delta: float = 1.0
+) -> FloatArray:
+    """The Savitzky–Golay fit (its ``deriv``-th derivative) at every sample: the kernel of
+    :func:`savgol_coeffs` inside, and within half a window of either end the polynomial
+    fitted to the first or last ``points`` samples (SciPy's mode ``interp``)."""
+    if values.size < points:
+        raise ValueError(f"{values.size} samples: the filter needs at least {points}")
+    out = convolve_same(values, savgol_coeffs(points, order, deriv, delta))
+    half = points // 2
+    position = np.arange(points, dtype=np.float64)
+    for window, where in ((slice(0, points), slice(0, half)), (slice(-points, None), None)):
+        poly = np.asarray(np.polyfit(position, values[window], order), dtype=np.float64)
+        if deriv:
+            poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)
+        if where is None:  # the last half window
+            out[values.size - half :] = np.polyval(poly, position[points - half :]) / delta**deriv
+        else:
+            out[where] = np.polyval(poly, position[:half]) / delta**deriv
+    return out
