@@ -10,7 +10,9 @@ without ever being held whole; memory is bounded by a few batches, not by the su
 
 from __future__ import annotations
 
+import ctypes
 import os
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeAlias
@@ -86,14 +88,21 @@ def as_table(value: Port) -> pa.Table:
 
 
 def use_returning_memory_pool() -> None:
-    """Make Arrow allocate from jemalloc (else the system allocator), which give freed memory
-    back to the operating system, unless ``ARROW_DEFAULT_MEMORY_POOL`` chooses. mimalloc,
-    pyarrow's default on Linux, keeps the pages of batches already streamed past, so a
-    process's peak grew with the survey it streamed (benchmarks/bench_memory.py)."""
-    if os.environ.get("ARROW_DEFAULT_MEMORY_POOL"):
-        return
-    try:
-        pool = pa.jemalloc_memory_pool()
-    except NotImplementedError:
-        pool = pa.system_memory_pool()
-    pa.set_memory_pool(pool)
+    """Allocate so that freed memory goes back to the operating system at once: Arrow from
+    the system allocator (unless ``ARROW_DEFAULT_MEMORY_POOL`` chooses) — mimalloc, pyarrow's
+    default on Linux, and jemalloc keep the pages of batches already streamed past — and
+    glibc's ``malloc`` with a fixed mmap threshold (128 KiB: its default moves up to the
+    largest block freed, after which blocks of a batch's size stay in the heap). Without both
+    a process's peak grew with the survey it streamed (benchmarks/bench_memory.py)."""
+    if not os.environ.get("ARROW_DEFAULT_MEMORY_POOL"):
+        pa.set_memory_pool(pa.system_memory_pool())
+    if sys.platform == "linux" and not os.environ.get("MALLOC_MMAP_THRESHOLD_"):
+        try:
+            libc = ctypes.CDLL("libc.so.6")
+        except OSError:  # not glibc
+            return
+        libc.mallopt(_M_MMAP_THRESHOLD, 128 * 1024)
+
+
+_M_MMAP_THRESHOLD = -3
+"""glibc's ``mallopt`` parameter number (malloc.h)."""
