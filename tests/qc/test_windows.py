@@ -18,6 +18,7 @@ from pipeline.qc.tables import MagneticAnomalies, QcResults
 from pipeline.qc.windows import anomaly_intervals, stationary, window_checks
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
+from pipeline.streams import TableStream
 
 SITE = {
     "latitude": 61.25,
@@ -88,6 +89,18 @@ def test_stationary_windows_are_the_true_stops(continuous):
     truth = truly_still(point, start, end)
     assert not np.any(still & ~truth)
     assert np.mean(still[truth]) >= 0.95 and still.sum() >= 100
+
+
+@pytest.mark.parametrize("rows", [97, 4099])
+def test_streamed_windows_give_the_whole_table_rows(continuous, rows):
+    """Batches of 97 samples (shorter than a window) or 4099 cut the windows anywhere; the
+    rows are those of the table in one batch, with the window's magnetometer checks too."""
+    sim, site = continuous
+    whole = window_checks(TableStream.from_table(sim.samples, sim.samples.num_rows), site)
+    streamed = window_checks(TableStream.from_table(sim.samples, rows), site)
+    assert whole.num_rows > 1000
+    assert set(whole.column("check").to_pylist()) >= {"magnetic_field", "motion_rate"}
+    assert streamed.equals(whole)
 
 
 def test_clean_continuous_data_passes(continuous):

@@ -33,13 +33,14 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from numpy.lib.stride_tricks import sliding_window_view
 
+from pipeline.contracts import BatchChecker
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import MagneticReference, Site
 from pipeline.qc.engine import isolate_rows, raise_on_stop, results_table
 from pipeline.qc.options import DEFAULTS, QcInputError, QcOptions
-from pipeline.qc.reference import earth_reference
+from pipeline.qc.reference import EarthReference, earth_reference
 from pipeline.qc.sensors import Sensors, gyro_axes, has_data
-from pipeline.qc.tables import MagneticAnomalies
+from pipeline.qc.tables import MagneticAnomalies, QcResults
 from pipeline.qc.vector_checks import (
     VECTOR_CHECKS,
     BoolArray,
@@ -50,6 +51,7 @@ from pipeline.qc.vector_checks import (
     limit_rows,
     vector_checks,
 )
+from pipeline.streams import Port, TableStream, as_stream
 from pipeline.tables import RawSamples
 
 DEG_S = 3600.0
@@ -57,25 +59,38 @@ DEG_S = 3600.0
 
 
 class _Windows:
-    """Sliding windows over the samples: per-window statistics of sample columns."""
+    """Sliding windows over the samples: per-window statistics of sample columns. The
+    windows' ``length`` and ``step`` (samples) come from the whole survey's sample count and
+    time span; ``starts`` are the first samples (regularly spaced) of the windows at hand."""
 
-    def __init__(self, time: FloatArray, options: QcOptions) -> None:
-        n = len(time)
-        if n < 2 or time[-1] <= time[0]:
+    def __init__(self, length: int, step: int, starts: IntArray) -> None:
+        self.length, self.step, self.starts = length, step, starts
+
+    @classmethod
+    def of(cls, n: int, first: float, last: float, options: QcOptions) -> _Windows:
+        """Every window of ``n`` samples from time ``first`` to ``last`` (s)."""
+        if n < 2 or last <= first:
             raise QcInputError(f"need at least 2 samples spanning some time, got {n}")
-        rate = (n - 1) / (time[-1] - time[0])
-        self.length = max(2, round(options.window * rate))
-        if n < self.length:
+        rate = (n - 1) / (last - first)
+        length = max(2, round(options.window * rate))
+        if n < length:
             raise QcInputError(
-                f"{n} samples ({time[-1] - time[0]:g} s) are shorter than one window "
+                f"{n} samples ({last - first:g} s) are shorter than one window "
                 f"({options.window:g} s): lower the window option"
             )
-        self.step = max(1, round(options.step * rate))
-        self.starts = np.arange(0, n - self.length + 1, self.step)
+        step = max(1, round(options.step * rate))
+        return cls(length, step, np.arange(0, n - length + 1, step))
+
+    def shifted(self, base: int, stop: int) -> _Windows:
+        """The windows lying within samples ``base``…``stop − 1``, counted from ``base``."""
+        inside = self.starts[(self.starts >= base) & (self.starts + self.length <= stop)]
+        return _Windows(self.length, self.step, inside - base)
 
     def view(self, x: FloatArray) -> FloatArray:
         """(W, L) view of a per-sample column."""
-        out: FloatArray = sliding_window_view(x, self.length)[:: self.step]
+        first = int(self.starts[0]) if self.starts.size else 0
+        windows = sliding_window_view(x, self.length)[first :: self.step]
+        out: FloatArray = windows[: self.starts.size]
         return out
 
     def mean_std(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -134,6 +149,36 @@ class _Samples:
             gyro_axes(samples),
         )
 
+    def rows(self, lo: int, hi: int) -> _Samples:
+        """Samples ``lo``…``hi − 1``."""
+        part = slice(lo, hi)
+        return _Samples(
+            self.time[part],
+            self.gyro[part],
+            self.acc[part],
+            None if self.mag is None else self.mag[part],
+            None if self.md is None else self.md[part],
+            self.gyro_axes,
+        )
+
+    @staticmethod
+    def join(first: _Samples | None, then: _Samples) -> _Samples:
+        """``first``'s samples followed by ``then``'s."""
+        if first is None:
+            return then
+        mag = (
+            None if then.mag is None or first.mag is None else np.concatenate([first.mag, then.mag])
+        )
+        md = None if then.md is None or first.md is None else np.concatenate([first.md, then.md])
+        return _Samples(
+            np.concatenate([first.time, then.time]),
+            np.concatenate([first.gyro, then.gyro]),
+            np.concatenate([first.acc, then.acc]),
+            mag,
+            md,
+            then.gyro_axes,
+        )
+
 
 @dataclass(frozen=True)
 class _Motion:
@@ -170,7 +215,8 @@ def stationary(
     """Window start and end times (s) and whether each window is stationary (module
     docstring)."""
     data = _Samples.read(samples)
-    motion = _Motion.of(data, _Windows(data.time, options), options)
+    win = _Windows.of(len(data.time), data.time[0], data.time[-1], options)
+    motion = _Motion.of(data, win, options)
     return motion.start, motion.end, motion.still
 
 
@@ -186,20 +232,46 @@ def _md_motion(win: _Windows, time: FloatArray, md: FloatArray) -> tuple[FloatAr
     return coef[:, 1], 2 * coef[:, 2]
 
 
-def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) -> pa.Table:
-    """Check continuous raw samples (RawSamples) window by window (module docstring).
-    Returns QcResults rows with window times (station and position null, md the window's
-    median MD). Raises :class:`~pipeline.qc.options.QcStop` when a check with policy
-    ``stop`` fails, :class:`~pipeline.qc.options.QcInputError` for data shorter than a
-    window."""
-    data = _Samples.read(samples)
-    win = _Windows(data.time, options)
+def window_checks(samples: Port, site: Site, options: QcOptions = DEFAULTS) -> pa.Table:
+    """Check continuous raw samples (RawSamples, a table or a stream of record batches)
+    window by window (module docstring), a batch of windows at a time: the samples of the
+    windows not yet checked are kept, never the survey (each window's numbers are those of
+    the whole table). Returns QcResults rows with window times (station and position null,
+    md the window's median MD); no samples give no rows. Raises
+    :class:`~pipeline.qc.options.QcStop` when a check with policy ``stop`` fails,
+    :class:`~pipeline.qc.options.QcInputError` for data shorter than a window."""
+    stream = as_stream(samples)
+    scan = _Scan.of(stream)
+    if scan.rows == 0:
+        return QcResults.compiled().schema().empty_table()
+    win = _Windows.of(scan.rows, scan.first, scan.last, options)
+    earth = earth_reference(site, magnetic=scan.magnetic, model=options.magnetic_model)
+    found: dict[str, list[Rows]] = {"rest": [], "motion": [], "magnetic": []}
+    kept: _Samples | None = None
+    base = 0  # sample number of kept's first sample
+    for batch in stream:
+        kept = _Samples.join(kept, scan.samples(batch))
+        stop = base + len(kept.time)
+        part = win.shifted(base, stop)
+        if part.starts.size:
+            for name, rows in _check_windows(kept, part, earth, options).items():
+                found[name] += rows
+            following = int(part.starts[-1]) + base + win.step
+            keep = min(following, stop) - base
+            kept, base = kept.rows(keep, len(kept.time)), base + keep
+    qc = results_table([*found["rest"], *found["motion"], *found["magnetic"]])
+    raise_on_stop(qc, options)
+    return qc
+
+
+def _check_windows(
+    data: _Samples, win: _Windows, earth: EarthReference, options: QcOptions
+) -> dict[str, list[Rows]]:
+    """The rows of the windows ``win`` of ``data``: checks at rest, motion bounds, magnetic."""
     motion = _Motion.of(data, win, options)
     count = len(motion.start)
     md = np.full(count, np.nan) if data.md is None else np.median(win.view(data.md), axis=1)
     keys = Keys(np.full(count, -1), np.full(count, -1), md, motion.start, motion.end)
-    earth = earth_reference(site, magnetic=data.mag is not None, model=options.magnetic_model)
-
     rest = np.flatnonzero(motion.still)
     root_n = np.sqrt(win.length)
     (gyro_mean, gyro_std), (acc_mean, acc_std) = motion.gyro, motion.acc
@@ -214,15 +286,80 @@ def window_checks(samples: pa.Table, site: Site, options: QcOptions = DEFAULTS) 
     )
     rows = vector_checks(sensors, earth, options, keys.take(rest))
     isolate_rows(rows, np.arange(len(rest)), sensors, earth, options)
-    rows += _motion_bounds(data, win, earth.gravity, options, keys, np.flatnonzero(~motion.still))
+    moving = np.flatnonzero(~motion.still)
+    found = {
+        "rest": rows,
+        "motion": _motion_bounds(data, win, earth.gravity, options, keys, moving),
+        "magnetic": [],
+    }
     if data.mag is not None and earth.magnetic is not None:
         steady = (
             motion.still if motion.accel is None else np.abs(motion.accel) <= options.steady_accel
         )
-        rows += _magnetic(win, data.mag, data.acc, earth.magnetic, options, keys, steady)
-    qc = results_table(rows)
-    raise_on_stop(qc, options)
-    return qc
+        found["magnetic"] = _magnetic(
+            win, data.mag, data.acc, earth.magnetic, options, keys, steady
+        )
+    return found
+
+
+@dataclass
+class _Scan:
+    """A first pass over the samples (each batch checked against RawSamples): rows, time
+    span and which columns have data; then each batch's columns as :class:`_Samples`."""
+
+    rows: int
+    first: float
+    last: float
+    present: set[str]
+    gyro_axes: str
+
+    @classmethod
+    def of(cls, stream: TableStream) -> _Scan:
+        checker = BatchChecker(RawSamples.compiled())
+        names = [n for n in stream.column_names if n == "md" or n[:-1] in _TRIADS]
+        nulls = dict.fromkeys(names, 0)
+        rows, first, last = 0, np.nan, np.nan
+        for batch in stream:
+            checker.check(batch)
+            if batch.num_rows:
+                time = batch.column(batch.schema.get_field_index("time"))
+                first = float(time[0].as_py()) if rows == 0 else first
+                last = float(time[-1].as_py())
+            rows += batch.num_rows
+            for name in names:
+                nulls[name] += batch.column(batch.schema.get_field_index(name)).null_count
+        present = {n for n in names if nulls[n] < rows}
+        if "md" in present and nulls["md"]:
+            raise QcInputError(f"column 'md' has {nulls['md']} missing values: give all or none")
+        axes = "".join(a for a in "xyz" if f"gyro_{a}" in present)
+        return cls(rows, first, last, present, axes)
+
+    @property
+    def magnetic(self) -> bool:
+        return all(f"mag_{a}" in self.present for a in "xyz")
+
+    def samples(self, batch: pa.RecordBatch) -> _Samples:
+        def column(name: str) -> FloatArray:
+            values = batch.column(batch.schema.get_field_index(name))
+            out: FloatArray = values.to_numpy(zero_copy_only=False).astype(float)
+            return out
+
+        def triad(prefix: str) -> FloatArray:
+            nan = np.full(batch.num_rows, np.nan)
+            names = [f"{prefix}_{a}" for a in "xyz"]
+            return np.stack([column(n) if n in self.present else nan for n in names], axis=-1)
+
+        return _Samples(
+            column("time"),
+            triad("gyro"),
+            triad("acc"),
+            triad("mag") if self.magnetic else None,
+            column("md") if "md" in self.present else None,
+            self.gyro_axes,
+        )
+
+
+_TRIADS = ("gyro_", "acc_", "mag_")
 
 
 def _motion_bounds(

@@ -41,20 +41,16 @@ def station_stage(
 
 
 def window_stage(
-    inputs: Mapping[str, pa.Table], params: QcOptions, ctx: StageContext
+    inputs: Mapping[str, Port], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Check continuous samples on sliding windows; list magnetic anomaly intervals (none of
-    no samples)."""
+    """Check continuous samples on sliding windows, streamed a batch of windows at a time;
+    list magnetic anomaly intervals (none of no samples)."""
     samples = inputs["samples"]
-    if samples.num_rows == 0:
-        return {
-            "qc": QcResults.compiled().schema().empty_table(),
-            "anomalies": MagneticAnomalies.compiled().schema().empty_table(),
-        }
     site = resolve_site(ctx.well, stage="window_checks", param=None, field=_has_field(samples))
-    qc = with_references(
-        window_checks(samples, site, params), site, params, field=_has_field(samples)
-    )
+    qc = window_checks(samples, site, params)
+    if qc.num_rows == 0:  # no samples
+        return {"qc": qc, "anomalies": MagneticAnomalies.compiled().schema().empty_table()}
+    qc = with_references(qc, site, params, field=_has_field(samples))
     return {"qc": qc, "anomalies": anomaly_intervals(qc)}
 
 
@@ -112,5 +108,6 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             inputs={"samples": RawSamples},
             outputs={"qc": QcResults, "anomalies": MagneticAnomalies},
             params=QcOptions,
+            streamed_inputs=frozenset({"samples"}),
         )
     )
