@@ -77,6 +77,10 @@ class StoredRun:
     def rows(self) -> int:
         return self.odometer.rows
 
+    def times(self, lo: int, hi: int) -> FloatArray:
+        """Times of run samples ``lo``…``hi − 1``, s."""
+        return self.odometer.time(lo, hi)
+
     def held_span(self) -> tuple[int, int] | None:
         """First and last sample whose azimuth was held (None: none)."""
         first = last = -1

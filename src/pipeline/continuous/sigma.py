@@ -135,6 +135,10 @@ class RunGeometry:
         """Samples the budget reads at a time: all."""
         return max(self.size, 1)
 
+    def times(self, lo: int, hi: int) -> FloatArray:
+        """Times of samples ``lo``…``hi − 1``, s."""
+        return self.time[lo:hi]
+
     def slice(self, lo: int, hi: int) -> RunGeometry:
         """Samples ``lo``…``hi − 1`` of the run."""
         part = slice(lo, hi)
@@ -206,6 +210,10 @@ class RunView(Protocol):
     def inc_noise(self) -> InclinationNoise | None: ...
 
     def slice(self, lo: int, hi: int) -> RunGeometry: ...
+
+    def times(self, lo: int, hi: int) -> FloatArray:
+        """Times of samples ``lo``…``hi − 1``, s."""
+        ...
 
 
 def azimuth_budget(
@@ -416,7 +424,7 @@ class _Integrals:
 
     def _elapsed(self, lo: int, hi: int) -> FloatArray:
         a, b = self._original(lo, hi)
-        t = self.run.slice(a, b).time
+        t = self.run.times(a, b)
         out: FloatArray = self.ends[1] - t[::-1] if self.run.backward else t - self.ends[0]
         return out
 
