@@ -1,12 +1,22 @@
 """Continuous (moving) gyro surveys: azimuth integration between two compassing stops.
 
 Modules, each importing only those above it: ``tables`` (output contracts, flag bits),
-``options``, ``run`` (run bounds, stops, odometer fit), ``sigma`` (predicted errors),
-``stations`` (series and resampled stations), ``multiaxis`` and ``strapdown`` (two- and
-three-axis tools), ``integrate`` (single-axis integration and the dispatch by tool).
+``options``, ``filters`` (Savitzky–Golay and convolutions in NumPy), ``store`` (the run's
+columns on disk, chunks and carried state), ``run`` (run bounds, stops, odometer fit),
+``sigma_noise`` and ``sigma`` (predicted errors), ``series`` (the stored run read back, the
+full-rate series stream), ``stations`` (resampled stations), ``multiaxis`` and
+``strapdown`` (two- and three-axis tools), ``integrate`` (single-axis integration and the
+dispatch by tool).
+
+Any survey length in bounded memory (issue #20): the samples (a table or a stream of record
+batches) are written once to a disk-backed store, and every pass — odometer fit, the
+integration's passes, station extraction, the σ budget — reads a chunk of rows plus the
+overlap its filters need, carrying running sums, the last azimuth and the Newton solver's
+first guess from chunk to chunk; the results equal those of the whole series in one chunk
+(tests/continuous/test_chunks.py). A three-axis (strapdown) run still reads its span whole.
 
 The names below load their module on first use, so that importing a submodule (as the
-stage plugin does to register) does not load the integration and SciPy's signal package.
+stage plugin does to register) does not load the integration.
 """
 
 from __future__ import annotations

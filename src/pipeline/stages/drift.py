@@ -151,7 +151,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="allan",
             func=allan_stage,
             description="Allan deviations of a static record, IEEE 952 noise terms per axis and "
-            "the compassing dwell per frame position for a target azimuth σ.",
+            "the compassing dwell per frame position for a target azimuth σ (the record is "
+            "taken whole: the overlapping deviation at every averaging time needs it).",
             inputs={"samples": RawSamples},
             outputs={"allan": AllanResult, "noise": NoiseParameters, "dwell": DwellRecommendation},
             params=AllanOptions,
