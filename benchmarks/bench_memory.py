@@ -102,7 +102,7 @@ def simulate_continuous(data: Path, scale: int) -> Path:
     plan["name"] = f"memory-continuous-x{scale}"
     plan["survey"]["start_md"] = 600
     plan["survey"]["end_md"] = 600 + 300 * scale
-    plan["well"]["sections"][-1] = {"kind": "hold", "to_md": 600 + 300 * scale + 100}
+    plan["well"]["sections"][-1] = {"kind": "hold", "to_md": max(2500, 700 + 300 * scale)}
     path = data / f"continuous-x{scale}.yaml"
     path.write_text(yaml.safe_dump(plan))
     command = [*GYROPIPE, "simulate", str(path), "--out", str(target.parent)]
