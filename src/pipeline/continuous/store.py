@@ -51,12 +51,13 @@ class _Column:
 
 
 class ColumnStore:
-    """Columns of numbers on disk (a temporary directory removed with the store)."""
+    """Columns of numbers on disk (a temporary directory, removed when the store is garbage
+    collected: when the last stream reading it is dropped)."""
 
     def __init__(self) -> None:
         self.directory = tempfile.mkdtemp(prefix="gyropipe-continuous-")
         self._columns: dict[str, _Column] = {}
-        self._finalizer = weakref.finalize(self, _remove, self.directory, self._columns)
+        weakref.finalize(self, _remove, self.directory, self._columns)
 
     def __contains__(self, name: str) -> bool:
         return name in self._columns
@@ -109,10 +110,6 @@ class ColumnStore:
             array = batch.column(batch.schema.get_field_index(name))
             self.append(name, np.asarray(array.to_numpy(zero_copy_only=False), np.float64))
         return int(batch.num_rows)
-
-    def close(self) -> None:
-        """Remove the files now (also done when the store is garbage collected)."""
-        self._finalizer()
 
 
 def _remove(directory: str, columns: dict[str, _Column]) -> None:
