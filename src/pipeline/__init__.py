@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     )
     from pipeline.api.plots import plot_plan, plot_section
     from pipeline.api.run import RunResult, run
+    from pipeline.api.runs import acceptance_gates, definitive_survey
     from pipeline.errors import GyropipeError
     from pipeline.well import WellMetadata
 
@@ -69,6 +70,7 @@ _HOMES = {
     ),
     "pipeline.api.plots": ("plot_plan", "plot_section"),
     "pipeline.api.run": ("RunResult", "run"),
+    "pipeline.api.runs": ("acceptance_gates", "definitive_survey"),
     "pipeline.errors": ("GyropipeError",),
     "pipeline.well": ("WellMetadata",),
 }
@@ -81,9 +83,11 @@ __all__ = [
     "Tables",
     "WellMetadata",
     "__version__",
+    "acceptance_gates",
     "calibrate_drift",
     "compass",
     "correct_drift",
+    "definitive_survey",
     "integrate_continuous",
     "interpolate",
     "minimum_curvature",

@@ -39,6 +39,8 @@ BUILTIN_PLUGINS = {
     "builtin.continuous": "pipeline.stages.continuous",
     "builtin.stations": "pipeline.stages.stations",
     "builtin.uncertainty": "pipeline.stages.uncertainty",
+    "builtin.definitive": "pipeline.stages.definitive",
+    "builtin.gates": "pipeline.stages.gates",
     "builtin.report": "pipeline.stages.report",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",

@@ -160,29 +160,35 @@ def position_uncertainty(
         # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
         survey = Survey.of(md[lo:hi], inc[lo:hi], defined_azimuths(azi[lo:hi]), tvd[lo:hi])
         cov[lo:hi] = covariance(survey).sum(axis=0)
-    ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
-    k2 = horizontal_scale(params.confidence)
-    k1 = vertical_scale(params.confidence)
     columns: dict[str, object] = {name: table.column(name) for name in table.column_names}
-    columns.update(
-        cov_nn=cov[:, 0, 0],
-        cov_ne=cov[:, 0, 1],
-        cov_nv=cov[:, 0, 2],
-        cov_ee=cov[:, 1, 1],
-        cov_ev=cov[:, 1, 2],
-        cov_vv=cov[:, 2, 2],
-        ellipse_major=ell.semi_major,
-        ellipse_minor=ell.semi_minor,
-        ellipse_azimuth=np.degrees(ell.azimuth) % 180.0,
-        sigma_v=ell.sigma_v,
-        ellipse_major_conf=k2 * ell.semi_major,
-        ellipse_minor_conf=k2 * ell.semi_minor,
-        vertical_conf=k1 * ell.sigma_v,
-    )
+    columns.update(covariance_columns(cov, params.confidence))
     out = PositionUncertainty.compiled().make_table(
         columns, north_reference=north_reference_of(table, "azi")
     )
     return {"trajectory": out.replace_schema_metadata(table.schema.metadata)}
+
+
+def covariance_columns(cov: np.ndarray, confidence: float) -> dict[str, np.ndarray]:
+    """The :class:`PositionUncertainty` columns of NEV covariances (n, 3, 3) (m²): the six
+    covariance entries, the 1σ ellipse, vertical σ and their sizes at ``confidence``."""
+    ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
+    k2 = horizontal_scale(confidence)
+    k1 = vertical_scale(confidence)
+    return {
+        "cov_nn": cov[:, 0, 0],
+        "cov_ne": cov[:, 0, 1],
+        "cov_nv": cov[:, 0, 2],
+        "cov_ee": cov[:, 1, 1],
+        "cov_ev": cov[:, 1, 2],
+        "cov_vv": cov[:, 2, 2],
+        "ellipse_major": ell.semi_major,
+        "ellipse_minor": ell.semi_minor,
+        "ellipse_azimuth": np.degrees(ell.azimuth) % 180.0,
+        "sigma_v": ell.sigma_v,
+        "ellipse_major_conf": k2 * ell.semi_major,
+        "ellipse_minor_conf": k2 * ell.semi_minor,
+        "vertical_conf": k1 * ell.sigma_v,
+    }
 
 
 Covariance = Callable[[Survey], np.ndarray]
@@ -234,7 +240,7 @@ def _mwd(
     """The per-term covariance of one survey under the MWD model of ``params``, and the
     azimuths referred to true north (grid via the well's convergence, magnetic via the
     reference declination)."""
-    magnetic = params.magnetic or _wellhead_field(well)
+    magnetic = params.magnetic or wellhead_field(well)
     azi_true, _ = convert_azimuth(
         azi_deg,
         north,
@@ -253,7 +259,7 @@ def _mwd(
     return covariance, azi_true
 
 
-def _wellhead_field(well: WellMetadata) -> MagneticReference:
+def wellhead_field(well: WellMetadata) -> MagneticReference:
     """WMM2025 at the wellhead on the survey date (elevation above sea level as height)."""
     site = resolve_site(well, stage="position_uncertainty", param="magnetic", field=True)
     assert site.date is not None
