@@ -167,7 +167,7 @@ def _rebuild(
     )
     tie += (1 - f) * g_nev[:, i] + f * g_nev[:, i + 1]
     mwd = _positions(*_perturbed(MWD_MD, m_state.inc, m_state.azi, m_dia), tie) + m_nev
-    return np.concatenate([gyro, mwd[:, MWD_MD > GYRO_MD[-1]]], axis=1)
+    return np.concatenate([gyro, mwd[:, GYRO_MD[-1] < MWD_MD]], axis=1)
 
 
 def _errors(seed: int) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
@@ -191,7 +191,7 @@ def _errors(seed: int) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray,
 def test_definitive_covariance_matches_monte_carlo() -> None:
     survey = _predicted()
     assert survey.column("run").to_pylist() == ["gyro"] * GYRO_MD.size + ["mwd"] * int(
-        (MWD_MD > GYRO_MD[-1]).sum()
+        (GYRO_MD[-1] < MWD_MD).sum()
     )
     predicted = _cov(survey)
     g_err, m_err = _errors(seed=20261126)
