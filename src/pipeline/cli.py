@@ -123,6 +123,7 @@ def run(
 ) -> None:
     """Run a pipeline on one well's input files."""
     from pipeline.api.run import execute
+    from pipeline.qc.gates import acceptance_lines
     from pipeline.qc.tables import QcSummary, diagnosis_lines
     from pipeline.runner import RunInputError
 
@@ -152,6 +153,8 @@ def run(
                     f"{stage.id}.{port}", result.tables[f"{stage.id}.{port}"]
                 ):
                     click.echo(line)
+    for line in acceptance_lines(result.manifest):
+        click.echo(line)
     for path in result.outputs:
         click.echo(f"wrote {path}")
     click.echo(f"ok: {Path(out_dir) / 'run.json'}")

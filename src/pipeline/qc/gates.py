@@ -19,6 +19,9 @@ Angles in degrees, depths in metres.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
@@ -26,7 +29,13 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.qc.tables import RunComparison
 from pipeline.tables import AcceptanceGates
 
-__all__ = ["GateOptions", "acceptance_gates", "compare_runs", "pair_stations"]
+__all__ = [
+    "GateOptions",
+    "acceptance_gates",
+    "acceptance_lines",
+    "compare_runs",
+    "pair_stations",
+]
 
 PASS, FAIL, NOT_EVALUATED = "pass", "fail", "not evaluated"
 
@@ -161,3 +170,19 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
     return AcceptanceGates.compiled().make_table(
         {name: [r[k] for r in rows] for k, name in enumerate(names)}
     )
+
+
+def acceptance_lines(manifest: Mapping[str, Any]) -> list[str]:
+    """What the command line prints of a run's acceptance gates (``run.json``'s
+    ``acceptance``): the verdict, then one line per gate."""
+    acceptance = manifest.get("acceptance")
+    if not acceptance:
+        return []
+    lines = [f"acceptance: {acceptance['status'].upper()}"]
+    for g in acceptance["gates"]:
+        value = "—" if g["value"] is None else f"{g['value']:.4g}"
+        lines.append(
+            f"  {g['stage']}.{g['gate']:<12} {g['status']:<14} {value} (limit {g['limit']:g} "
+            f"{g['unit']})"
+        )
+    return lines

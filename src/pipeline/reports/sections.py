@@ -154,6 +154,24 @@ def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] 
                 f"ISCWSA {_param(stage, 'model')} error model propagated as in "
                 f"{cite(ERROR_MODEL)}, ellipses at {confidence:g} %",
             )
+        case "definitive_survey":
+            confidence = float(_param(stage, "confidence", 0.0)) * 100
+            return (
+                "Definitive survey",
+                "runs tied at their first station to the survey above; each run's error "
+                f"model propagated as in {cite(ERROR_MODEL)} with its systematic errors "
+                "correlated within the run, the tie point's uncertainty carried below it, "
+                f"ellipses at {confidence:g} %",
+            )
+        case "acceptance_gates":
+            return (
+                "Acceptance",
+                f"in-run against out-run: inclination within {_param(stage, 'inc_tolerance')}°, "
+                f"azimuth within {_param(stage, 'azi_tolerance')}° at inclination ≥ "
+                f"{_param(stage, 'low_inclination')}° and {_param(stage, 'azi_tolerance_low')}° "
+                f"below, depth within {_param(stage, 'depth_tolerance')} m, at least "
+                f"{_param(stage, 'min_stations')} stations",
+            )
         case "correct_drift":
             source = str(_param(stage, "source"))
             return (

@@ -41,11 +41,14 @@ from pipeline.reports.listing import (
     short_courses,
 )
 from pipeline.reports.literature import Citations
+from pipeline.reports.program import program_section
 from pipeline.reports.qc import (
     QcSources,
     all_series,
     diagnosis_table,
     flag_table,
+    gates_table,
+    gates_verdict,
     station_flags,
     summary_rows,
 )
@@ -81,9 +84,19 @@ class SurveyTables:
     calibration: pa.Table | None = None
     allan: pa.Table | None = None
     noise: pa.Table | None = None
+    comparison: pa.Table | None = None
+    gates: pa.Table | None = None
 
     def qc_sources(self) -> QcSources:
-        return QcSources(self.qc, self.qc_summary, self.checks, self.inout, self.stations)
+        return QcSources(
+            self.qc,
+            self.qc_summary,
+            self.checks,
+            self.inout,
+            self.stations,
+            self.comparison,
+            self.gates,
+        )
 
 
 def section_azimuth(
@@ -147,13 +160,16 @@ def survey_document(
         ),
         _trajectory_plots(traj, path, vs, vs_azimuth, course),
     ]
+    program = program_section(traj)
+    if program is not None:
+        sections.insert(3, program)
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(traj, path))
     groups = all_series(src)
     explained = flag_table(flags or [])
     diagnosed = diagnosis_table(src.summary)
-    if groups or explained is not None or diagnosed is not None:
-        sections.append(_qc(groups, explained, diagnosed))
+    if groups or explained is not None or diagnosed is not None or src.gates is not None:
+        sections.append(_qc(groups, explained, diagnosed, src.gates))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
         calibration = tables.calibration if _rows(tables.calibration) else None
@@ -256,6 +272,8 @@ def _summary(
     blocks: list[Block] = [Fields("Results", tuple(results))]
     if flags is not None:
         blocks.append(_qc_verdict(flags, path.md))
+    if tables.gates is not None:
+        blocks.append(gates_verdict(tables.gates))
     return Section("Summary", tuple(blocks), key="summary")
 
 
@@ -378,8 +396,12 @@ def _qc(
     groups: list[tuple[str, list[plots.QcSeries]]],
     explained: Table | None,
     diagnosed: Table | None,
+    gates: pa.Table | None = None,
 ) -> Section:
-    blocks: list[Block] = [t for t in (explained, diagnosed) if t is not None]
+    blocks: list[Block] = []
+    if gates is not None:
+        blocks += [gates_verdict(gates), gates_table(gates)]
+    blocks += [t for t in (explained, diagnosed) if t is not None]
     columns = (
         Column("Check", align="left"),
         Column("Unit", align="left"),

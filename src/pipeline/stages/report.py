@@ -26,9 +26,9 @@ from pipeline.drift.tables import (
 )
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
-from pipeline.qc.tables import QcResults, QcSummary
+from pipeline.qc.tables import QcResults, QcSummary, RunComparison
 from pipeline.registry import Registry, StageContext, StageDef
-from pipeline.tables import CheckResults, Stations, Trajectory
+from pipeline.tables import AcceptanceGates, CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
     from pipeline.reports.document import Document
@@ -125,6 +125,8 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "calibration": CalibrationResult,
     "allan": AllanResult,
     "noise": NoiseParameters,
+    "comparison": RunComparison,
+    "gates": AcceptanceGates,
 }
 
 
