@@ -133,6 +133,12 @@ class DefinitiveParams(BaseModel):
         "run starting deeper), upper (the run above keeps it) or lower (the run below takes "
         "over from its first station)",
     )
+    min_length: float = Field(
+        1.0,
+        ge=0,
+        description="shortest stretch a run takes over, m: a shorter one (e.g. an out-run "
+        "starting a few millimetres above the in-run) stays with the neighbouring run",
+    )
     north_reference: NorthReference | None = Field(
         None, description="azimuths of the survey (default: the first run's)"
     )
@@ -201,7 +207,7 @@ def definitive_survey(
     stations = [
         RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
     ]
-    sections = plan_sections(stations, params.overlap)
+    sections = plan_sections(stations, params.overlap, params.min_length)
     latitude = None
     if any(r.spec.model in GYRO_PRESETS for r in runs):
         latitude = resolve_site(

@@ -111,14 +111,57 @@ def _segments(runs: Sequence[RunStations], rule: OverlapRule) -> list[tuple[int,
     return segments
 
 
-def plan_sections(runs: Sequence[RunStations], rule: OverlapRule = "priority") -> list[Section]:
-    """The sections of the definitive survey of ``runs`` under ``rule``.
+def _absorb_slivers(
+    runs: Sequence[RunStations], segments: list[tuple[int, float, float]], min_length: float
+) -> list[tuple[int, float, float]]:
+    """Segments shorter than ``min_length`` given to a neighbour whose run covers them, or,
+    at the top and bottom of the survey, left out (an out-run starting a millimetre above
+    the in-run does not make a section of its own)."""
+    cover = [r.coverage() for r in runs]
+    out = list(segments)
+    k = 0
+    while len(out) > 1 and k < len(out):
+        _, top, bottom = out[k]
+        if bottom - top >= min_length:
+            k += 1
+            continue
+        for j in (k - 1, k + 1):
+            if 0 <= j < len(out):
+                lo, hi = cover[out[j][0]]
+                if lo <= top and hi >= bottom:
+                    nr, ntop, nbottom = out[j]
+                    out[j] = (nr, min(ntop, top), max(nbottom, bottom))
+                    del out[k]
+                    break
+        else:
+            k += 1
+            continue
+        merged: list[tuple[int, float, float]] = []
+        for seg in out:
+            if merged and merged[-1][0] == seg[0]:
+                merged[-1] = (seg[0], merged[-1][1], seg[2])
+            else:
+                merged.append(seg)
+        out, k = merged, 0
+    while len(out) > 1 and out[0][2] - out[0][1] < min_length:
+        del out[0]  # the survey starts where the run below starts
+    while len(out) > 1 and out[-1][2] - out[-1][1] < min_length:
+        del out[-1]
+    return out
+
+
+def plan_sections(
+    runs: Sequence[RunStations], rule: OverlapRule = "priority", min_length: float = 1.0
+) -> list[Section]:
+    """The sections of the definitive survey of ``runs`` under ``rule``; a stretch shorter
+    than ``min_length`` (m) a run wins goes to a neighbouring section whose run covers it
+    (at the survey's ends, where none does, it is left out).
 
     Raises:
         SurveyGapError: a depth no run covers, or a run that cannot be tied to the one above.
     """
     segments: list[tuple[int, float, float]] = []
-    for r, top, bottom in _segments(runs, rule):
+    for r, top, bottom in _absorb_slivers(runs, _segments(runs, rule), min_length):
         md = runs[r].md
         if segments and not np.any((md > top) & (md <= bottom)):
             continue  # no station of the run below its top: its neighbours take the stretch
