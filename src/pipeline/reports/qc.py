@@ -120,7 +120,20 @@ def inout_series(inout: pa.Table) -> list[QcSeries]:
     for quantity, name in (("inc", "in/out inclination"), ("azi", "in/out azimuth")):
         diff = _floats(inout, f"{quantity}_diff")
         tol = _floats(inout, f"{quantity}_tolerance")
-        out.append(QcSeries(name, "°", md, diff, -tol, tol, np.abs(diff) <= tol, "in − out"))
+        ok = ~np.isnan(diff)  # an azimuth at vertical is not compared
+        out.append(
+            QcSeries(
+                name,
+                "°",
+                md[ok],
+                diff[ok],
+                -tol[ok],
+                tol[ok],
+                np.abs(diff[ok]) <= tol[ok],
+                "in − out",
+                skipped=int((~ok).sum()),
+            )
+        )
     return out
 
 
