@@ -122,7 +122,7 @@ stages:
     uses: correct_drift
     inputs: {readings: read.free_gyro}
   - id: gates
-    uses: acceptance_gates
+    uses: free_gyro_gates
     inputs: {inout: drift.qc}
 """
 

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from pipeline.contracts import SOURCE_KEY, TableContract, column
 from pipeline.earth.site import MagneticReference, resolve_site
+from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef
 from pipeline.stages.uncertainty import (
@@ -271,8 +272,10 @@ def _read(
     well: WellMetadata,
 ) -> _Run:
     """A run's stations as arrays, azimuths in the survey's reference and in true north."""
+    if table.num_rows == 0:
+        raise EmptyTableError(f"{port} stations", "a run needs at least two stations")
     if table.num_rows < 2:
-        raise ValueError(f"{port}: a run needs at least two stations; got {table.num_rows}")
+        raise ValueError(f"{port}: a run needs at least two stations; got one")
     if len(survey_offsets(table)) > 2:
         raise ValueError(f"{port}: the table holds several surveys; give one run per port")
     md, inc, azi = station_angles(table)
