@@ -1,32 +1,38 @@
 """The definitive survey's position covariance against a Monte Carlo over a two-tool well.
 
 The forward model: the simulator's well path (:mod:`pipeline.sim.plan`) gives the true
-stations of a gyro run in the top hole (GYRO-NS, every 60 m to 600 m) and an MWD run below
-(ISCWSA MWD Rev 5, every 90 m from 570 m, tied to the gyro between two of its stations).
+stations of an upper run (every 60 m to 600 m) and a lower run (every 90 m from 570 m,
+tied to the upper run between two of its stations): a GYRO-NS gyro above ISCWSA MWD Rev 5,
+and two MWD Rev 5 runs (DEC-U raised to 1.5° so that its well-by-well correlation shows).
 The raw-sensor simulator makes no MWD run and its sensor errors are not the ISCWSA terms,
 so each run's measurement errors are drawn from its own model's terms with their
 correlations — random: a draw per station; systematic: a draw per run; global (DSTG): one
-draw shared by both runs — and the survey is rebuilt the way a definitive survey is made:
-the gyro by minimum curvature from the surface, the MWD tied at its tie station to the
-perturbed gyro path at the gyro's depth of that point, then by minimum curvature. The
-sample covariance of every listed station must match the stage's prediction.
+draw shared by both runs; well-by-well (DEC-U, DBH-U): one per well or one per run, as
+the stage is told — and the survey is rebuilt the way a definitive survey is made: the
+upper run by minimum curvature from the surface, the lower one tied at its tie station to
+the perturbed upper path at the upper run's depth of that point, then by minimum
+curvature. The sample covariance of every listed station must match the stage's prediction.
 
 Tolerance: for Gaussian positions the sample covariance Ŝ_ij of N draws has standard error
-√((C_ii·C_jj + C_ij²)/N); with N = 4000 every entry of every station (20 stations × 6) must
-lie within 5 standard errors (a 5σ excursion of any of 108 correlated entries has a chance
-below 1e-4). The errors are linearised in the prediction and not in the forward model: at
-these magnitudes (the gyro's random azimuth error reaches 3° at 45° inclination and 61° N)
-that difference is second order — it shows as a mean error (the TVD shortened by the
-bent path) of up to 0.12σ, checked below 0.25σ, and leaves the covariance inside the
-sampling error.
+√((C_ii·C_jj + C_ij²)/N); with N = 4000 every entry of every station but the fixed surface
+one (18 × 6) must lie within 5 standard errors (a 5σ excursion of any of 108 correlated
+entries has a chance below 1e-4; the largest seen: 2.9). The test has power: the lower
+run's covariance without the error carried from above is > 20 standard errors off, and
+with the other well-by-well rule > 8 (seen: 25 and 16). The errors are linearised in the
+prediction and not in the forward model: at these magnitudes (the gyro's random azimuth
+error reaches 3° at 45° inclination and 61° N) that difference is second order — it shows
+as a mean error (the TVD shortened by the bent path) of up to 0.12σ, checked below 0.25σ,
+and leaves the covariance inside the sampling error.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import pytest
 from numpy.typing import NDArray
 
 import pipeline as gp
@@ -51,18 +57,26 @@ PLAN = WellPlan(
 GYRO_MD = np.arange(0.0, 601.0, 60.0)
 MWD_MD = np.arange(570.0, 1300.0, 90.0)
 TIE_MD = 570.0  # the MWD's tie station: between the gyro's 540 m and 600 m stations
+MWD_TOOL = {"dec_u": 1.5}  # deg: a poor declination (well-by-well) shows its correlation
 
 
 def _stations(md: FloatArray) -> pa.Table:
     return build_path(PLAN).stations(md)
 
 
-def _predicted(**params: Any) -> pa.Table:
+def _terms(model: str) -> list[Term]:
+    if model in GYRO_PRESETS:
+        return gyro_terms(GYRO_PRESETS[model], LAT)
+    return mwd_terms(replace(MWD_PRESETS[model], **MWD_TOOL), FIELD)
+
+
+def _predicted(top: str, bottom: str, **params: Any) -> pa.Table:
+    tool = {m: MWD_TOOL if m in MWD_PRESETS else {} for m in (top, bottom)}
     result = gp.definitive_survey(
-        {"gyro": _stations(GYRO_MD), "mwd": _stations(MWD_MD)},
+        {"upper": _stations(GYRO_MD), "lower": _stations(MWD_MD)},
         run_options={
-            "gyro": {"model": "GYRO-NS", "priority": 1},
-            "mwd": {"model": "ISCWSA-MWD-REV5", "priority": 0},
+            "upper": {"model": top, "priority": 1, "tool": tool[top]},
+            "lower": {"model": bottom, "priority": 0, "tool": tool[bottom]},
         },
         latitude=LAT,
         magnetic=FIELD.model_dump(),
@@ -88,19 +102,24 @@ def _cov(table: pa.Table) -> FloatArray:
 
 
 def _draws(
-    terms: list[Term], survey: Survey, rng: np.random.Generator, shared: dict[str, FloatArray]
+    terms: list[Term],
+    survey: Survey,
+    rng: np.random.Generator,
+    shared: dict[str, FloatArray],
+    well_by_well: str,
 ) -> tuple[FloatArray, FloatArray]:
     """Per sample: (MD, I, α) errors (N, n, 3) of the measurement terms and the NEV offsets
-    (N, n, 3) the position-defined terms add to each station and every one below."""
+    (N, n, 3) the position-defined terms add to each station and every one below. A global
+    term draws once for both runs; a well-by-well term too when ``shared``."""
     n = survey.size
     dia = np.zeros((N_MC, n, 3))
     nev = np.zeros((N_MC, n, 3))
     for t in terms:
         if t.mode == "random":
             eps = rng.standard_normal((N_MC, n, 1))
-        elif t.mode == "global":
+        elif t.mode == "global" or (t.mode == "well_by_well" and well_by_well == "shared"):
             eps = shared.setdefault(t.name, rng.standard_normal((N_MC, 1, 1)))
-        else:  # systematic, well_by_well: one run of each tool, so one draw per run
+        else:  # systematic (or well_by_well per run): one draw per run
             eps = rng.standard_normal((N_MC, 1, 1))
         effect = eps * (t.sigma * t.weight(survey))[None]
         if t.frame == "dia":
@@ -170,31 +189,40 @@ def _rebuild(
     return np.concatenate([gyro, mwd[:, GYRO_MD[-1] < MWD_MD]], axis=1)
 
 
-def _errors(seed: int) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
+def _errors(
+    seed: int, top: str, bottom: str, well_by_well: str
+) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
     """Each run's measurement errors over N samples, drawn from its model's terms at its
     true stations (the global term shared by both runs)."""
     path = build_path(PLAN)
     rng = np.random.default_rng(seed)
     shared: dict[str, FloatArray] = {}
     out = []
-    for md, terms in (
-        (GYRO_MD, gyro_terms(GYRO_PRESETS["GYRO-NS"], LAT)),
-        (MWD_MD, mwd_terms(MWD_PRESETS["ISCWSA-MWD-REV5"], FIELD)),
-    ):
+    for md, model in ((GYRO_MD, top), (MWD_MD, bottom)):
         state = path.evaluate(md)
-        out.append(
-            _draws(terms, Survey.of(md, state.inc, state.azi, state.position[:, 2]), rng, shared)
-        )
+        survey = Survey.of(md, state.inc, state.azi, state.position[:, 2])
+        out.append(_draws(_terms(model), survey, rng, shared, well_by_well))
     return out[0], out[1]
 
 
-def test_definitive_covariance_matches_monte_carlo() -> None:
-    survey = _predicted()
-    assert survey.column("run").to_pylist() == ["gyro"] * GYRO_MD.size + ["mwd"] * int(
+@pytest.mark.parametrize(
+    ("top", "bottom", "well_by_well"),
+    [
+        ("GYRO-NS", "ISCWSA-MWD-REV5", "shared"),
+        ("ISCWSA-MWD-REV5", "ISCWSA-MWD-REV5", "shared"),  # DEC-U, DBH-U: one draw per well
+        ("ISCWSA-MWD-REV5", "ISCWSA-MWD-REV5", "per_run"),  # … or one per run
+    ],
+)
+def test_definitive_covariance_matches_monte_carlo(
+    top: str, bottom: str, well_by_well: str
+) -> None:
+    survey = _predicted(top, bottom, well_by_well=well_by_well)
+    assert survey.column("run").to_pylist() == ["upper"] * GYRO_MD.size + ["lower"] * int(
         (GYRO_MD[-1] < MWD_MD).sum()
     )
+    assert survey.column("tool_model").to_pylist()[0] == top
     predicted = _cov(survey)
-    g_err, m_err = _errors(seed=20261126)
+    g_err, m_err = _errors(20261126, top, bottom, well_by_well)
     zero = tuple(np.zeros((1, *e.shape[1:])) for e in (*g_err, *m_err))
     nominal = _rebuild(zero[:2], zero[2:])[0]
     for k, name in enumerate(("north", "east", "tvd")):
@@ -215,8 +243,8 @@ def test_definitive_covariance_matches_monte_carlo() -> None:
     # is many standard errors away from the Monte Carlo
     mwd = slice(GYRO_MD.size, None)
     alone = gp.definitive_survey(
-        {"mwd": _stations(MWD_MD[MWD_MD >= TIE_MD])},
-        run_options={"mwd": {"model": "ISCWSA-MWD-REV5"}},
+        {"lower": _stations(MWD_MD[MWD_MD >= TIE_MD])},
+        run_options={"lower": {"model": bottom, "tool": MWD_TOOL}},
         magnetic=FIELD.model_dump(),
         basis="min_curve",
         surface_tie=False,
@@ -226,3 +254,7 @@ def test_definitive_covariance_matches_monte_carlo() -> None:
     wrong = _cov(alone)[1:]
     z_wrong = (sample[mwd] - wrong) / se[mwd]
     assert np.abs(z_wrong).max() > 20.0, np.abs(z_wrong).max()
+    if top == bottom:  # two MWD runs: the well-by-well terms' correlation is seen
+        other = "per_run" if well_by_well == "shared" else "shared"
+        z_other = (sample - _cov(_predicted(top, bottom, well_by_well=other)))[1:] / se[1:]
+        assert np.abs(z_other).max() > 8.0, np.abs(z_other).max()
