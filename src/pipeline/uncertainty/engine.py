@@ -10,6 +10,7 @@ model found so.
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -22,10 +23,12 @@ from pipeline.uncertainty.toolmodel import ToolModel, read_tool_model
 
 __all__ = [
     "MODELS_DIR",
+    "configure",
     "covariance",
     "find_model",
     "model_files",
     "term_covariances",
+    "term_for",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -150,3 +153,39 @@ def covariance(
         1
     ].sum(axis=0)
     return total
+
+
+#: Field names of the earlier tool dataclasses that name a parameter of the model file.
+PARAMETER_ALIASES = {"xcl_tortuosity": "tortuosity"}
+
+
+def configure(model: str | Path | ToolModel, overrides: Mapping[str, float]) -> ToolModel:
+    """A model with ``overrides``: term magnitudes (by term name, or a field name such as
+    ``gxy_gd``, :func:`term_for`) and parameters (by name), each in the unit its file gives
+    it. An unknown key is a ``KeyError`` naming the model's terms."""
+    tool = find_model(model)
+    magnitudes: dict[str, float] = {}
+    params: dict[str, float] = {}
+    for key, value in overrides.items():
+        param = PARAMETER_ALIASES.get(key, key)
+        if param in tool.parameters:
+            params[param] = value
+        else:
+            magnitudes[term_for(tool, key)] = value
+    return tool.with_magnitudes(magnitudes).with_parameters(params)
+
+
+def term_for(model: ToolModel, key: str) -> str:
+    """The term a magnitude key names: a term name, or a field name (``gxy_b1``: lower
+    case, ``_`` for ``-``; the term's trailing R/S mode letter may be left out)."""
+    names = [t.name for t in model.terms]
+    if key in names:
+        return key
+    wanted = key.upper().replace("_", "-")
+    for name in names:
+        if name == wanted or (name[:-1] == wanted and name[-1] in "RS"):
+            return name
+    raise KeyError(
+        f"{model.name} has no term or parameter {key!r} (terms: {', '.join(names)}; "
+        f"parameters: {', '.join(model.parameters) or 'none'})"
+    )
