@@ -38,39 +38,53 @@ MODELS_DIR = Path(__file__).parent / "models"
 
 @functools.cache
 def _shipped() -> dict[str, Path]:
-    """Shipped model files by the model name each declares (upper case)."""
-    out: dict[str, Path] = {}
-    for path in sorted(MODELS_DIR.glob("*.yaml")):
-        out[_declared_name(path)] = path
-    return out
+    """Shipped model files by the model name each declares."""
+    return {_declared_name(path): path for path in sorted(MODELS_DIR.glob("*.yaml"))}
 
 
 def _declared_name(path: Path) -> str:
-    """The ``name:`` a model file declares (upper case), read without resolving ``extends``."""
+    """The ``name:`` a model file declares, read without resolving ``extends``."""
     import yaml
 
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    return str(data["name"]).upper()
+    return str(data["name"])
 
 
 @functools.cache
 def _plugin_files() -> dict[str, Path]:
-    """Model files registered by plugins, by name (upper case); loaded on first need."""
+    """Model files registered by plugins, by name; loaded on first need."""
     from pipeline.plugins import load_registry
 
     registry = load_registry()
-    return {name.upper(): d.path for name, (d, _) in registry.tool_models.items()}
+    return {name: Path(d.path) for name, (d, _) in registry.tool_models.items()}
 
 
 def model_files(*, plugins: bool = True) -> dict[str, Path]:
     """Every model found by name: shipped files, then plugins' (a shipped name wins)."""
-    found = dict(_plugin_files()) if plugins else {}
-    found.update(_shipped())
+    shipped = _shipped()
+    taken = {name.upper() for name in shipped}
+    found = dict(shipped)
+    if plugins:
+        found.update((n, p) for n, p in _plugin_files().items() if n.upper() not in taken)
     return found
 
 
-@functools.cache
+def _named(files: dict[str, Path], key: str) -> Path | None:
+    """The file of the model called ``key`` (case-insensitive), if any."""
+    return next((p for n, p in files.items() if n.upper() == key.upper()), None)
+
+
 def _read(path: Path) -> ToolModel:
+    """The model of a file, read once per version of it (path, size and mtime)."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return read_tool_model(path, base=_base)  # reports the file as unreadable
+    return _read_version(path, stat.st_size, stat.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _read_version(path: Path, size: int, mtime_ns: int) -> ToolModel:
     return read_tool_model(path, base=_base)
 
 
@@ -88,22 +102,24 @@ def find_model(model: str | Path | ToolModel) -> ToolModel:
     ones; a bad file a :class:`~pipeline.errors.ToolModelError`."""
     if isinstance(model, ToolModel):
         return model
-    key = str(model).upper()
-    shipped = _shipped()
-    if key in shipped:
-        return _read(shipped[key])
+    key = str(model)
+    shipped = _named(_shipped(), key)
+    if shipped is not None:
+        return _read(shipped)
     path = Path(model)
     if path.suffix.lower() in (".yaml", ".yml") or path.is_file():
         if not path.is_file():
             raise ToolModelError([Problem(Location(str(path)), "no such tool-model file")])
         return _read(path.resolve())
-    plugins = _plugin_files()
-    if key in plugins:
-        return _read(plugins[key])
-    known = sorted({**plugins, **shipped})
+    plugin = _named(_plugin_files(), key)
+    if plugin is not None:
+        return _read(plugin.resolve())
+    known = sorted(model_files(), key=str.upper)
+    close = did_you_mean(key.upper(), [k.upper() for k in known])
+    for name in known:  # say the names as their files write them
+        close = close.replace(f"'{name.upper()}'", f"'{name}'")
     raise KeyError(
-        f"unknown tool model {str(model)!r}{did_you_mean(key, known)} "
-        f"(known: {', '.join(known)}; or give a .yaml file)"
+        f"unknown tool model {key!r}{close} (known: {', '.join(known)}; or give a .yaml file)"
     )
 
 

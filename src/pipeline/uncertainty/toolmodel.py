@@ -290,8 +290,8 @@ def parse_tool_model(
 ) -> ToolModel:
     """The model of a tool-model file's ``text`` (``file`` names it in errors).
     ``base(name, where)`` resolves the model an ``extends:`` names."""
-    raw, source, problems = load_mapping(text, file, "a tool model file must be a mapping")
     try:
+        raw, source, problems = load_mapping(text, file, "a tool model file must be a mapping")
         spec = validate_located(_File, raw, source, problems)
     except SpecError as exc:
         raise ToolModelError(exc.problems) from None
@@ -330,7 +330,7 @@ def _build(
             problems.append(Problem(source.locate(("remove", i)), f"no term {name!r} to remove"))
     terms = [t for t in terms if t.name not in spec.remove]
     for name, value in spec.magnitudes.items():
-        where = source.locate(("magnitudes", name))
+        where = source.locate(("magnitudes", name), key=True)
         if name not in {t.name for t in terms}:
             problems.append(Problem(where, f"no term {name!r} to set the magnitude of"))
         elif not (math.isfinite(value) and value >= 0):
