@@ -13,14 +13,20 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from numpy.typing import NDArray
 
 import pipeline as gp
 import pipeline.uncertainty as pu
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import ParameterError, ToolModelError
+from pipeline.registry import StageSetup
+from pipeline.reports.literature import Citations
+from pipeline.reports.sections import _describe
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations
+from pipeline.uncertainty.engine import SurveyValueError
 from pipeline.uncertainty.formula import Formula, FormulaError
 from pipeline.uncertainty.terms import stack
 from tests_support import ROOT, gyropipe
@@ -312,3 +318,86 @@ def test_gyropipe_models_lists_and_checks(tmp_path: Path) -> None:
     assert checked.returncode == 2
     assert f"{bad}:9:11: unknown unit 'furlong'" in checked.stderr
     assert "Traceback" not in checked.stderr
+
+
+def test_the_report_names_the_model_and_cites_its_papers(tmp_path: Path) -> None:
+    """The report's method statement gives the model's title from its file and cites the
+    published model (SPE 67616; SPE 90408 too for a gyro model), never a file path; a
+    model without a title is named (not given the title of the model it extends)."""
+    citations = Citations()
+    for model, title, gyro in (
+        ("GYRO-MWD", "OWSG gyro MWD (GYRO-MWD, A019Gb)", True),
+        ("iscwsa-mwd-rev4", "ISCWSA MWD (fixed rig), Rev 4", False),
+        (str(_vendor_file(tmp_path)), "VENDOR-1", True),
+    ):
+        stage = StageSetup(
+            "u", "position_uncertainty", "builtin", {"model": model, "confidence": 0.95}
+        )
+        described = _describe(stage, citations.cite)
+        assert described is not None
+        text = described[1]
+        assert text.startswith(f"{title} error model propagated as in [1]")
+        assert ("with the gyro terms of [2]" in text) is gyro
+        assert str(tmp_path) not in text
+    assert "SPE 67616" in citations.works[0] and "SPE 90408" in citations.works[1]
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.data())
+def test_a_mutated_model_file_is_read_or_refused_with_a_located_error(
+    tmp_path: Path, data: st.DataObject
+) -> None:
+    """Any edit of a valid file (a character dropped, replaced or inserted) either reads or
+    is a ToolModelError naming the file; nothing else escapes."""
+    text = (pu.MODELS_DIR / "gyro-ns-ct.yaml").read_text()
+    at = data.draw(st.integers(0, len(text) - 1))
+    edit = data.draw(st.sampled_from(["drop", "replace", "insert"]))
+    char = data.draw(st.sampled_from([*":-[]{}#'!&*|> 0aZ.,()/", '"', "\\", "\n", "\t"]))
+    mutated = {
+        "drop": text[:at] + text[at + 1 :],
+        "replace": text[:at] + char + text[at + 1 :],
+        "insert": text[:at] + char + text[at:],
+    }[edit]
+    path = tmp_path / f"m{at}{edit}.yaml"
+    path.write_text(mutated)
+    try:
+        model = pu.find_model(path)
+    except ToolModelError as exc:
+        problems = exc.problems
+    else:
+        assert model.terms
+        return
+    # located in the file, or in the model it extends (an edited `extends:` name)
+    assert all(str(p.location).startswith(str(path)) or "GYRO" in p.message for p in problems)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    text=st.text(
+        alphabet=st.sampled_from(list("inc+-*/()%<>=.,0123456789 abcdefghijklmnopqrstuvwxyz_[]'")),
+        max_size=40,
+    )
+)
+def test_formula_parse_refuses_or_evaluates(text: str) -> None:
+    """Any text parses into a formula that evaluates over the station arrays, or is a
+    FormulaError."""
+    try:
+        f = Formula.parse(text, frozenset({"inc", "azi"}))
+    except FormulaError:
+        return
+    f.evaluate({"inc": np.array([0.0, 0.5]), "azi": np.array([1.0, 2.0])})
+
+
+def test_a_non_finite_station_is_refused_by_name() -> None:
+    s = _survey()
+    azi = s.azi.copy()
+    azi[3] = np.nan
+    with pytest.raises(SurveyValueError, match=r"survey azi is not finite at station\(s\) \[3\]"):
+        pu.covariance(pu.Survey.of(s.md, s.inc, azi, s.tvd), "GYRO-NS", pu.ModelSite(latitude=LAT))
+
+
+def test_a_parameter_may_not_shadow_a_quantity(tmp_path: Path) -> None:
+    text = _error(tmp_path, GOOD.replace("terms:", "parameters:\n  md: {value: 1}\nterms:"))
+    assert "vendor.yaml:5:3: parameter name 'md' must be an identifier" in text

@@ -16,13 +16,14 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.errors import Location, Problem, ToolModelError, did_you_mean
+from pipeline.errors import GyropipeError, Location, Problem, ToolModelError, did_you_mean
 from pipeline.uncertainty.quantities import MissingSiteQuantity, ModelSite, Quantities
 from pipeline.uncertainty.terms import Survey, term_covariance
 from pipeline.uncertainty.toolmodel import ToolModel, read_tool_model
 
 __all__ = [
     "MODELS_DIR",
+    "SurveyValueError",
     "configure",
     "covariance",
     "find_model",
@@ -34,6 +35,10 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 MODELS_DIR = Path(__file__).parent / "models"
 """The tool-model files shipped with gyropipe."""
+
+
+class SurveyValueError(GyropipeError, ValueError):
+    """A survey given to an error model has a non-finite MD, inclination, azimuth or TVD."""
 
 
 @functools.cache
@@ -137,6 +142,18 @@ def term_covariances(
     in :func:`pipeline.uncertainty.model.station_jacobians` (the ISCWSA conventions by
     default)."""
     tool = find_model(model)
+    for label, values in (
+        ("md", survey.md),
+        ("inc", survey.inc),
+        ("azi", survey.azi),
+        ("tvd", survey.tvd),
+    ):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise SurveyValueError(
+                f"survey {label} is not finite at station(s) {bad[:5].tolist()}: an error model "
+                "needs every station's MD, inclination, azimuth (true) and TVD"
+            )
     where = site or ModelSite()
     missing = sorted(
         need

@@ -315,6 +315,15 @@ def _build(
     units = dict(parent.units) if parent else {}
     for name, p in spec.parameters.items():
         where = source.locate(("parameters", name))
+        if not name.isidentifier() or name in SURVEY_NAMES | SITE_NAMES:
+            problems.append(
+                Problem(
+                    source.locate(("parameters", name), key=True),
+                    f"parameter name {name!r} must be an identifier and not a survey or site "
+                    "quantity's name",
+                )
+            )
+            continue
         if p.unit not in UNITS:
             problems.append(_unit_problem(source.locate(("parameters", name, "unit")), p.unit))
             continue
@@ -363,7 +372,7 @@ def _build(
         terms=tuple(terms),
         parameters=params,
         units=units,
-        title=spec.title or (parent.title if parent else ""),
+        title=spec.title,  # not the parent's: a changed model is another tool
         source=spec.source or (parent.source if parent else ""),
         revision=spec.revision,
         file=source.file,
