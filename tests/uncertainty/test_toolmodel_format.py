@@ -401,3 +401,21 @@ def test_a_non_finite_station_is_refused_by_name() -> None:
 def test_a_parameter_may_not_shadow_a_quantity(tmp_path: Path) -> None:
     text = _error(tmp_path, GOOD.replace("terms:", "parameters:\n  md: {value: 1}\nterms:"))
     assert "vendor.yaml:5:3: parameter name 'md' must be an identifier" in text
+
+
+def test_a_model_extends_a_file_beside_it(tmp_path: Path) -> None:
+    """``extends:`` a relative path reads the file next to the extending one, whatever the
+    working directory; a cycle of files is refused, located."""
+    _vendor_file(tmp_path)
+    (tmp_path / "sub").mkdir()
+    child = tmp_path / "sub" / "child.yaml"
+    child.write_text(
+        "format: gyropipe-tool-model/1\nname: CHILD\nextends: ../vendor.yaml\n"
+        "magnitudes: {EXTRA: 0.2}\n"
+    )
+    model = pu.find_model(child)
+    assert model.term("EXTRA").magnitude == 0.2 and model.term("GXY-RN").magnitude == 0.4
+    loop = tmp_path / "loop.yaml"
+    loop.write_text("format: gyropipe-tool-model/1\nname: LOOP\nextends: loop.yaml\n")
+    with pytest.raises(ToolModelError, match=r"loop\.yaml:3:10: .*extends itself"):
+        pu.find_model(loop)

@@ -79,13 +79,21 @@ def _named(files: dict[str, Path], key: str) -> Path | None:
     return next((p for n, p in files.items() if n.upper() == key.upper()), None)
 
 
+_READING: list[Path] = []
+"""Files being read (outermost first): a file met again extends itself."""
+
+
 def _read(path: Path) -> ToolModel:
     """The model of a file, read once per version of it (path, size and mtime)."""
     try:
         stat = path.stat()
     except OSError:
         return read_tool_model(path, base=_base)  # reports the file as unreadable
-    return _read_version(path, stat.st_size, stat.st_mtime_ns)
+    _READING.append(path)
+    try:
+        return _read_version(path, stat.st_size, stat.st_mtime_ns)
+    finally:
+        _READING.pop()
 
 
 @functools.lru_cache(maxsize=256)
@@ -94,7 +102,15 @@ def _read_version(path: Path, size: int, mtime_ns: int) -> ToolModel:
 
 
 def _base(name: str, where: Location) -> ToolModel:
-    """The model an ``extends:`` names, found as :func:`find_model` finds one."""
+    """The model an ``extends:`` names, found as :func:`find_model` finds one (a relative
+    file path is relative to the extending file)."""
+    path = Path(name)
+    if path.suffix.lower() in (".yaml", ".yml") and not path.is_absolute():
+        path = Path(where.file).parent / path
+        name = str(path)
+    if path.suffix.lower() in (".yaml", ".yml") and path.resolve() in _READING:
+        chain = " → ".join(p.name for p in _READING)
+        raise ToolModelError([Problem(where, f"{name} extends itself ({chain} → {path.name})")])
     try:
         return find_model(name)
     except KeyError as exc:

@@ -158,7 +158,8 @@ class GyroTool:
 
 
 GYRO_PRESETS: dict[str, GyroTool] = {
-    name: GyroTool(model=name) for name in ("GYRO-NS", "GYRO-NS-noXCL", "GYRO-NS-CT", "GYRO-MWD")
+    name: GyroTool(model=name, continuous=name == "GYRO-NS-CT")
+    for name in ("GYRO-NS", "GYRO-NS-noXCL", "GYRO-NS-CT", "GYRO-MWD")
 }
 """Named gyro tool models (OWSG short names; each a model file)."""
 
