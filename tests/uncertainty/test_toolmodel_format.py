@@ -246,7 +246,15 @@ def test_a_missing_site_quantity_is_named() -> None:
 
 
 def test_formula_refuses_code() -> None:
-    for text in ("__import__('os')", "(lambda: 1)()", "[1][0]", "inc if inc else {}", "'a'"):
+    for text in (
+        "__import__('os')",
+        "(lambda: 1)()",
+        "[1][0]",
+        "inc if inc else {}",
+        "'a'",
+        "arctan2(inc)",
+        "sin(*inc)",
+    ):
         with pytest.raises(FormulaError):
             Formula.parse(text, frozenset({"inc"}))
     f = Formula.parse("where(inc > 0.5, 1, 2) + (3 if inc < 0.2 else 4) - pi", frozenset({"inc"}))

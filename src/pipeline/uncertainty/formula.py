@@ -63,6 +63,9 @@ FUNCTIONS: dict[str, Callable[..., Value]] = {
 ``prev(x)`` (the previous station's value, station 0 its own), ``wrap(a)`` (angle to
 (−π, π]) and ``cumsum(x)`` (running sum down the stations)."""
 
+ARITY: dict[str, int] = {"arctan2": 2, "maximum": 2, "minimum": 2, "clip": 3, "where": 3}
+"""Arguments each function takes (1 unless listed)."""
+
 CONSTANTS: dict[str, float] = {"pi": float(np.pi)}
 """Names every formula knows besides its quantities."""
 
@@ -161,9 +164,11 @@ def _check(node: ast.AST, names: set[str]) -> None:
         case ast.Name(id=name):
             names.add(name)
             return
-        case ast.Call(func=ast.Name(id=fn), keywords=[]):
+        case ast.Call(func=ast.Name(id=fn), args=args, keywords=[]):
             if fn not in FUNCTIONS:
                 raise FormulaError(f"unknown function {fn!r}; known: {sorted(FUNCTIONS)}", col)
+            if len(args) != ARITY.get(fn, 1):
+                raise FormulaError(f"{fn}() takes {ARITY.get(fn, 1)} argument(s)", col)
             return
         case ast.Call():
             raise FormulaError(
