@@ -12,6 +12,7 @@ passed to :func:`eval`. Evaluation is element-wise over station arrays (numpy br
 from __future__ import annotations
 
 import ast
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -121,7 +122,9 @@ class Formula:
         if len(source) > MAX_LENGTH:
             raise FormulaError(f"formula longer than {MAX_LENGTH} characters")
         try:
-            tree = ast.parse(source, mode="eval")
+            with warnings.catch_warnings():  # e.g. "invalid decimal literal" in `1if x else y`
+                warnings.simplefilter("ignore")
+                tree = ast.parse(source, mode="eval")
         except SyntaxError as exc:
             raise FormulaError(f"not a formula: {exc.msg}", exc.offset or 0) from None
         names: set[str] = set()
