@@ -15,7 +15,14 @@ import pipeline as gp
 from pipeline.earth.site import MagneticReference
 from pipeline.sim.plan import Section, WellPlan, build_path
 from pipeline.survey.definitive import RunStations, SurveyGapError, plan_sections, roles
-from pipeline.uncertainty import GYRO_PRESETS, MWD_PRESETS, Survey, gyro_terms, mwd_terms
+from pipeline.uncertainty import (
+    GYRO_PRESETS,
+    MWD_PRESETS,
+    Survey,
+    find_model,
+    gyro_terms,
+    mwd_terms,
+)
 from pipeline.uncertainty.model import propagate_nev
 from pipeline.uncertainty.sections import term_effects
 from pipeline.uncertainty.terms import term_covariance
@@ -118,12 +125,19 @@ def _stations(md: np.ndarray) -> pa.Table:
     return build_path(plan).stations(md)
 
 
-@pytest.mark.parametrize("model", ["GYRO-NS", "ISCWSA-MWD-REV5"])
+@pytest.mark.parametrize(
+    "model", ["GYRO-NS", "GYRO-NS-CT", "GYRO-MWD", "ISCWSA-MWD-REV4", "ISCWSA-MWD-REV5"]
+)
 def test_one_run_is_the_position_uncertainty_of_its_survey(model: str) -> None:
     """With one run there is nothing to carry: the stage's covariance is the
-    position-uncertainty stage's (term_covariance summed), surface tie-on included."""
+    position-uncertainty stage's (term_covariance summed), surface tie-on included, for
+    every tool model file."""
     stations = _stations(GYRO)
-    params: dict[str, Any] = {"magnetic": FIELD} if model in MWD_PRESETS else {"latitude": 61.25}
+    needs = find_model(model).needs
+    params: dict[str, Any] = {
+        **({"magnetic": FIELD} if "magnetic" in needs else {}),
+        **({"latitude": 61.25} if "latitude" in needs else {}),
+    }
     survey = gp.definitive_survey(
         {"run": stations}, run_options={"run": {"model": model}}, **params
     ).survey
@@ -214,7 +228,7 @@ def test_a_gap_fails_the_run_naming_the_runs(tmp_path: Any) -> None:
                 }
             },
         )
-    with pytest.raises(gp.GyropipeError, match="unknown model 'GYRO-XX'"):
+    with pytest.raises(gp.GyropipeError, match=r"unknown (tool )?model.*'GYRO-XX'"):
         gp.definitive_survey(
             {"a": _stations(GYRO)}, run_options={"a": {"model": "GYRO-XX"}}, latitude=61.0
         )

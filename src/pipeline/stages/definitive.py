@@ -36,8 +36,8 @@ from pipeline.survey.stations import (
     survey_offsets,
 )
 from pipeline.tables import DLS_COURSE_M, Stations
-from pipeline.uncertainty.gyro import GYRO_PRESETS, gyro_terms
-from pipeline.uncertainty.mwd import MWD_PRESETS, mwd_terms
+from pipeline.uncertainty.engine import configure
+from pipeline.uncertainty.quantities import ModelSite, Quantities
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
 from pipeline.uncertainty.terms import Survey, Term
 from pipeline.well import NorthReference, WellMetadata
@@ -98,11 +98,12 @@ class RunSpec(BaseModel):
     name: str | None = Field(None, description="run id in the provenance (default: the port)")
     model: str = Field(
         "GYRO-NS",
-        description=f"the run's error model and tool preset: {sorted(GYRO_PRESETS)} or "
-        f"{sorted(MWD_PRESETS)}",
+        description="the run's error model: a tool model's name (`gyropipe models`) or the "
+        "path of a tool-model file, as the position_uncertainty stage's",
     )
     tool: dict[str, float] = Field(
-        default_factory=dict, description="tool magnitudes overriding the preset's (sheet units)"
+        default_factory=dict,
+        description="term magnitudes and parameters overriding the model file's (its units)",
     )
     priority: int = Field(0, description="in an overlap the higher priority wins")
     md_from: float | None = Field(None, description="use the run from this MD, m")
@@ -209,11 +210,14 @@ def definitive_survey(
         RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
     ]
     sections = plan_sections(stations, params.overlap, params.min_length)
-    latitude = None
-    if any(r.spec.model in GYRO_PRESETS for r in runs):
-        latitude = resolve_site(
-            ctx.well, stage="definitive_survey", latitude=params.latitude
-        ).latitude
+    site = ModelSite(magnetic=magnetic)
+    if any("latitude" in configure(r.spec.model, r.spec.tool).needs for r in runs):
+        site = replace(
+            site,
+            latitude=resolve_site(
+                ctx.well, stage="definitive_survey", latitude=params.latitude
+            ).latitude,
+        )
     parts: list[dict[str, Any]] = []
     carried = Carried()
     tie = (params.tie_north, params.tie_east, params.tie_tvd)
@@ -229,7 +233,7 @@ def definitive_survey(
         survey = Survey.of(md, inc, azi_true, pos.tvd)
         nxt = sections[s + 1].tie_md if s + 1 < len(sections) else None
         cov, carried_next = section_covariance(
-            Section(run.name, survey, _terms(run.spec, latitude, magnetic)),
+            Section(run.name, survey, _terms(run.spec, site)),
             carried,
             basis=params.basis,
             surface_tie=params.surface_tie and s == 0,
@@ -295,22 +299,18 @@ def _magnetic(
     params: DefinitiveParams, well: WellMetadata, tables: list[pa.Table], ports: list[str]
 ) -> MagneticReference | None:
     """The geomagnetic reference when an MWD model or a magnetic azimuth needs it."""
-    needed = any(s.model in MWD_PRESETS for s in params.runs.values()) or any(
-        "magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables
-    )
+    needed = any(
+        "magnetic" in configure(s.model, s.tool).needs for s in params.runs.values()
+    ) or any("magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables)
     if params.magnetic is not None or not needed:
         return params.magnetic
     return wellhead_field(well)
 
 
-def _terms(spec: RunSpec, latitude: float | None, magnetic: MagneticReference | None) -> list[Term]:
-    """The error terms of a run's model with its tool overrides."""
-    overrides: dict[str, Any] = dict(spec.tool)
-    if spec.model in MWD_PRESETS:
-        assert magnetic is not None
-        return mwd_terms(replace(MWD_PRESETS[spec.model], **overrides), magnetic)
-    assert latitude is not None
-    return gyro_terms(replace(GYRO_PRESETS[spec.model], **overrides), latitude)
+def _terms(spec: RunSpec, site: ModelSite) -> list[Term]:
+    """The error terms of a run's model with its tool overrides, at the site."""
+    tool = configure(spec.model, spec.tool)
+    return tool.terms_for(lambda s: Quantities(s, site, tool.parameters, tool.name))
 
 
 def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: str) -> pa.Table:
