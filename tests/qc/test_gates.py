@@ -81,6 +81,29 @@ def test_pairing_takes_the_nearest_station_once_within_the_window() -> None:
     assert pair_stations(np.array([1.0]), np.array([]), 5.0).shape == (0, 2)
 
 
+def test_pairing_equals_the_greedy_over_every_pair() -> None:
+    """The windowed search pairs as a greedy over the whole distance matrix does."""
+
+    def every_pair(a: np.ndarray, b: np.ndarray, window: float) -> list[list[int]]:
+        dist = np.abs(a[:, None] - b[None, :])
+        i, o = np.nonzero(dist <= window)
+        used_a: set[int] = set()
+        used_b: set[int] = set()
+        pairs = []
+        for k in np.argsort(dist[i, o], kind="stable"):
+            if i[k] not in used_a and o[k] not in used_b:
+                used_a.add(int(i[k]))
+                used_b.add(int(o[k]))
+                pairs.append([int(i[k]), int(o[k])])
+        return sorted(pairs)
+
+    rng = np.random.default_rng(5)
+    for _ in range(100):
+        a = np.sort(rng.uniform(0, 100, rng.integers(0, 25)))
+        b = np.sort(rng.uniform(0, 100, rng.integers(0, 25)))
+        assert pair_stations(a, b, 5.0).tolist() == every_pair(a, b, 5.0)
+
+
 def test_pipeline_gates_and_definitive_survey(runs: dict[str, pd.DataFrame]) -> None:
     """pipelines/inout-gyro.yaml from Python (the command line and run.json on disk:
     tests/report/test_definitive_reports.py): the gates, their record for run.json, and the

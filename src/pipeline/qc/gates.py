@@ -57,20 +57,27 @@ class GateOptions(BaseModel):
 
 def pair_stations(md_in: np.ndarray, md_out: np.ndarray, window: float) -> np.ndarray:
     """(k, 2) row indices of in-run and out-run stations paired by nearest MD, closest pairs
-    first, each station in one pair at most, |ΔMD| ≤ ``window``; sorted by in-run row."""
-    if not md_in.size or not md_out.size:
-        return np.zeros((0, 2), dtype=np.intp)
-    dist = np.abs(md_in[:, None] - md_out[None, :])
-    i, o = np.nonzero(dist <= window)
-    order = np.argsort(dist[i, o], kind="stable")
-    used_in, used_out, pairs = set(), set(), []
-    for k in order:
-        if i[k] not in used_in and o[k] not in used_out:
-            used_in.add(i[k])
-            used_out.add(o[k])
-            pairs.append((i[k], o[k]))
-    out = np.array(sorted(pairs), dtype=np.intp).reshape(-1, 2)
-    return out
+    first, each station in one pair at most, |ΔMD| ≤ ``window``; sorted by in-run row. Only
+    the pairs within the window are considered (a few per station), so long runs pair in
+    O(n log n)."""
+    order = np.argsort(md_out, kind="stable")
+    sorted_out = md_out[order]
+    lo = np.searchsorted(sorted_out, md_in - window, side="left")
+    hi = np.searchsorted(sorted_out, md_in + window, side="right")
+    count = np.maximum(hi - lo, 0)
+    i = np.repeat(np.arange(md_in.size), count)
+    start = np.repeat(lo - np.cumsum(count) + count, count)
+    o = order[start + np.arange(i.size)]
+    dist = np.abs(md_in[i] - md_out[o])
+    used_in = np.zeros(md_in.size, dtype=bool)
+    used_out = np.zeros(md_out.size, dtype=bool)
+    pairs = []
+    for k in np.argsort(dist, kind="stable"):
+        a, b = i[k], o[k]
+        if not used_in[a] and not used_out[b]:
+            used_in[a] = used_out[b] = True
+            pairs.append((a, b))
+    return np.array(sorted(pairs), dtype=np.intp).reshape(-1, 2)
 
 
 def compare_runs(inrun: pa.Table, outrun: pa.Table, options: GateOptions) -> pa.Table:
