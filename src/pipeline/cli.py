@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import signal
 import sys
@@ -487,10 +488,15 @@ def budget(plan_file: str, out_file: str | None) -> None:
         f"{'acc':>7}"
     )
     for row in table.to_pylist():
-        click.echo(
-            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
+        azimuth = (
             f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
             f"{row['sigma_azi_accel']:7.3f}"
+            if math.isfinite(row["sigma_azi"])
+            else "  azimuth undefined (vertical within the accelerometers' resolution)"
+        )
+        click.echo(
+            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
+            + azimuth
         )
     if out_file:
         registry = _registry_quiet(())
