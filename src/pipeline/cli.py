@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 
+from pipeline.cli_models import models
 from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError, did_you_mean
 from pipeline.version import __version__
 
@@ -77,6 +78,9 @@ def _plan(pipeline_file: str, overrides: tuple[str, ...], registry: Registry) ->
 @click.version_option(__version__, prog_name="gyropipe")
 def main() -> None:
     """gyropipe: gyro-survey processing pipelines."""
+
+
+main.add_command(models)
 
 
 @main.command()

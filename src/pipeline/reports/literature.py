@@ -32,6 +32,12 @@ ERROR_MODEL = (
     "SPE Drilling & Completion, 2000, vol. 15, no. 4, pp. 221–233 (SPE 67616)."
 )
 """Propagation of survey tool errors into position uncertainty (the ISCWSA model)."""
+GYRO_ERROR_MODEL = (
+    "Torkildsen T., Håvardstein S. T., Weston J. L., Ekseth R. Prediction of wellbore position "
+    "accuracy when surveyed with gyroscopic tools. SPE Annual Technical Conference and "
+    "Exhibition, Houston, 26–29 September 2004 (SPE 90408)."
+)
+"""The ISCWSA error model of gyroscopic survey tools."""
 
 
 class Citations:
