@@ -102,6 +102,27 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     )
 
 
+def budget_lines(table: pa.Table) -> list[str]:
+    """The budget as text: a header and one line per station (degrees); a station without an
+    azimuth says so in words."""
+    lines = [
+        f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'g-sens':>7} "
+        f"{'acc':>7}"
+    ]
+    for row in table.to_pylist():
+        azimuth = (
+            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
+            f"{row['sigma_azi_accel']:7.3f}"
+            if np.isfinite(row["sigma_azi"])
+            else "  azimuth undefined (vertical within the accelerometers' resolution)"
+        )
+        lines.append(
+            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
+            + azimuth
+        )
+    return lines
+
+
 def _accel_sigma(inc: float, theta: FloatArray, g: float, errors: ToolErrors) -> float:
     """σ of the inclination (rad) from the accelerometer errors compassing leaves, at the
     frame angles ``theta`` (rad), for the least favourable starting toolface."""
