@@ -6,7 +6,28 @@ The offset wells' stations travel as one :class:`~pipeline.tables.Stations` tabl
 
 from __future__ import annotations
 
+import json
+from typing import Any
+
+import pyarrow as pa
+
 from pipeline.contracts import TableContract, column
+
+RULE_KEY = b"gyropipe.clearance_rule"
+"""Schema metadata of a clearance table: the rule's parameters and each well's tool model
+and hole diameter (JSON), for the report to state."""
+
+
+def with_rule(table: pa.Table, rule: dict[str, Any]) -> pa.Table:
+    """``table`` with the rule's parameters in its schema metadata."""
+    meta = {**(table.schema.metadata or {}), RULE_KEY: json.dumps(rule).encode()}
+    return table.replace_schema_metadata(meta)
+
+
+def rule_of(table: pa.Table) -> dict[str, Any]:
+    """The rule's parameters a clearance table carries ({} when none)."""
+    raw = (table.schema.metadata or {}).get(RULE_KEY)
+    return dict(json.loads(raw)) if raw else {}
 
 
 class OffsetWells(TableContract):

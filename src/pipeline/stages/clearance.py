@@ -15,7 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pipeline.clearance.models import MODELS, ModelSite, is_magnetic, well_covariance
 from pipeline.clearance.rule import RuleLimits, SeparationRule
 from pipeline.clearance.scan import Well, scan
-from pipeline.clearance.tables import Clearance, OffsetWells
+from pipeline.clearance.tables import Clearance, OffsetWells, with_rule
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import EmptyTableError, InputFileError
 from pipeline.hookspecs import hookimpl
@@ -275,7 +275,13 @@ def clearance(
             "toolface": result.toolface,
         }
     )
-    return {"clearance": table}
+    rule = {
+        **params.model_dump(mode="json", exclude={"latitude", "magnetic"}),
+        "wells": {
+            w["offset"]: {"model": w["model"], "hole_diameter": w["hole_diameter"]} for w in listed
+        },
+    }
+    return {"clearance": with_rule(table, rule)}
 
 
 @hookimpl
