@@ -11,7 +11,7 @@ import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
 
-from pipeline.clearance.tables import rule_of
+from pipeline.anticollision.tables import rule_of
 from pipeline.reports import plots
 from pipeline.reports.document import Block, Column, Fields, Plot, Section, Table, Verdict, fmt
 from pipeline.reports.listing import col

@@ -12,10 +12,10 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from pipeline.clearance.models import MODELS, ModelSite, is_magnetic, well_covariance
-from pipeline.clearance.rule import RuleLimits, SeparationRule
-from pipeline.clearance.scan import Well, scan
-from pipeline.clearance.tables import Clearance, OffsetWells, with_rule
+from pipeline.anticollision.models import MODELS, ModelSite, is_magnetic, well_covariance
+from pipeline.anticollision.rule import RuleLimits, SeparationRule
+from pipeline.anticollision.scan import Well, scan
+from pipeline.anticollision.tables import Clearance, OffsetWells, with_rule
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import EmptyTableError, InputFileError
 from pipeline.hookspecs import hookimpl

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Literal
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
-from pipeline.clearance.tables import Clearance
+from pipeline.anticollision.tables import Clearance
 from pipeline.contracts import TableContract
 from pipeline.drift.tables import (
     AllanResult,

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.clearance.geometry import closest_points
-from pipeline.clearance.rule import RuleLimits, SeparationRule, levels, separation
+from pipeline.anticollision.geometry import closest_points
+from pipeline.anticollision.rule import RuleLimits, SeparationRule, levels, separation
 from pipeline.survey.interpolate import MinCurvePath
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.stations import defined_azimuths
