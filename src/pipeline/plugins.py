@@ -22,6 +22,7 @@ from pipeline.registry import (
     ReaderDef,
     Registry,
     StageDef,
+    ToolModelDef,
     WriterDef,
 )
 from pipeline.version import __version__
@@ -57,6 +58,7 @@ HOOKS: tuple[tuple[str, type], ...] = (
     ("gyropipe_register_readers", ReaderDef),
     ("gyropipe_register_writers", WriterDef),
     ("gyropipe_register_checks", CheckDef),
+    ("gyropipe_register_tool_models", ToolModelDef),
 )
 
 
