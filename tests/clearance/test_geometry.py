@@ -38,13 +38,13 @@ def brute_force(path: MinCurvePath, point: np.ndarray) -> float:
     return float(best)
 
 
-@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("seed", range(3))
 def test_closest_point_is_the_least_distance_on_the_path(seed: int):
     rng = np.random.default_rng(seed)
     md, inc, azi = random_well(rng, 25)
     path = MinCurvePath(md, inc, azi, (0.0, 0.0, 0.0))
-    centre = path.r.T[rng.integers(0, md.size, 12)]
-    points = centre + rng.normal(0.0, 60.0, (12, 3))
+    centre = path.r.T[rng.integers(0, md.size, 8)]
+    points = centre + rng.normal(0.0, 60.0, (8, 3))
     found = closest_points(path, points)
     for k, point in enumerate(points):
         expected = brute_force(path, point)

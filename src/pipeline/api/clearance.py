@@ -8,9 +8,9 @@ from typing import Any
 
 import pyarrow as pa
 
+from pipeline.anticollision.tables import OffsetWells
 from pipeline.api import stages
 from pipeline.api.frames import TableLike, WellLike, like, to_table, well_metadata, well_of_data
-from pipeline.anticollision.tables import OffsetWells
 from pipeline.errors import ParameterError
 from pipeline.stages.clearance import offset_tables
 from pipeline.tables import Stations

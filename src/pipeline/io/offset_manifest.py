@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import csv
 import re
-from collections.abc import Collection
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -81,9 +81,9 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
     return found
 
 
-def read_offset_manifest(path: Path, models: Collection[str]) -> list[OffsetEntry]:
-    """The offset wells a manifest lists (module docstring); ``models``: the tool models a
-    well may name."""
+def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[OffsetEntry]:
+    """The offset wells a manifest lists (module docstring); ``resolve`` gives the canonical
+    name of a tool model (ValueError: unknown)."""
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
@@ -111,10 +111,10 @@ def read_offset_manifest(path: Path, models: Collection[str]) -> list[OffsetEntr
                 path, f"well {well_id!r} already listed on line {seen[well_id]}", line
             )
         seen[well_id] = line
-        if model not in models:
-            raise InputFileError(
-                path, f"unknown tool model {model!r}; expected one of {', '.join(models)}", line
-            )
+        try:
+            model = resolve(model)
+        except ValueError as exc:
+            raise InputFileError(path, str(exc), line, "model") from None
         lengths: dict[str, float | None] = {}
         for name in LENGTHS:
             raw = cell.get(name, "")

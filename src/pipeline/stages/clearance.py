@@ -12,7 +12,12 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from pipeline.anticollision.models import MODELS, ModelSite, is_magnetic, well_covariance
+from pipeline.anticollision.models import (
+    ModelSite,
+    needs,
+    resolve_model,
+    well_covariance,
+)
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
 from pipeline.anticollision.scan import Well, scan
 from pipeline.anticollision.tables import Clearance, OffsetWells, with_rule
@@ -34,7 +39,10 @@ class ClearanceParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     reference_model: str = Field(
-        "GYRO-NS", description=f"tool model of the reference survey, one of {list(MODELS)}"
+        "GYRO-NS",
+        description="tool model of the reference survey: a gyro or MWD preset (GYRO-NS, "
+        "GYRO-NS-CT, ISCWSA-MWD-REV5, ISCWSA-MWD-REV5.11) or a tool-model file's name "
+        "(ISCWSA-MWD-REV4)",
     )
     reference_hole_diameter: float = Field(
         gt=0, description="hole or casing diameter of the reference well, m"
@@ -55,10 +63,7 @@ class ClearanceParams(BaseModel):
 
     @model_validator(mode="after")
     def _consistent(self) -> ClearanceParams:
-        if self.reference_model not in MODELS:
-            raise ValueError(
-                f"unknown reference_model {self.reference_model!r}; expected one of {MODELS}"
-            )
+        self.reference_model = resolve_model(self.reference_model)
         if self.caution < self.stop:
             raise ValueError(f"caution ({self.caution}) must not be below stop ({self.stop})")
         return self
@@ -92,7 +97,7 @@ def offset_tables(
     file's own header, else ``well``, gives the corrections)."""
     from pipeline.io.offset_manifest import read_offset_manifest
 
-    entries = read_offset_manifest(manifest, MODELS)
+    entries = read_offset_manifest(manifest, resolve_model)
     tables = []
     north: str | None = None
     for entry in entries:
@@ -144,10 +149,11 @@ def _site(params: ClearanceParams, well: WellMetadata, models: set[str]) -> Mode
     from pipeline.earth.site import resolve_site
 
     latitude = None
-    if any(not is_magnetic(m) for m in models):
+    wanted = frozenset().union(*(needs(m) for m in models))
+    if "latitude" in wanted:
         latitude = resolve_site(well, stage=STAGE, latitude=params.latitude).latitude
     magnetic = params.magnetic
-    if magnetic is None and any(is_magnetic(m) for m in models):
+    if magnetic is None and "magnetic" in wanted:
         from pipeline.earth.geomagnetic import reference_field
 
         site = resolve_site(well, stage=STAGE, param="magnetic", field=True)
@@ -226,10 +232,9 @@ def clearance(
         if table.num_rows == 0:
             raise EmptyTableError(name, "no wells to scan")
     listed = wells.to_pylist()
+    for w in listed:
+        w["model"] = resolve_model(w["model"])
     models = {params.reference_model, *(w["model"] for w in listed)}
-    unknown = sorted(models - set(MODELS))
-    if unknown:
-        raise ValueError(f"unknown tool model(s) {unknown}; expected one of {list(MODELS)}")
     site = _site(params, ctx.well, models)
     frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic)
     ref = _well(
