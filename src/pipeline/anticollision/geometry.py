@@ -9,11 +9,12 @@ with the larger q_a sin θ − q_b cos θ. A near-straight step (β below ``STRA
 the segment: the projection of Q on t1 clamped to [0, L]. The point found is then placed on
 the arc exactly (:class:`~pipeline.survey.interpolate.MinCurvePath`).
 
-Which steps to try. The path is sampled so that no two consecutive samples are more than h
-apart along it (h = the median course; stations are samples). If step j holds the closest
-point q (distance d*), one of its samples lies within h/2 of q, so within d* + h/2 ≤ d₁ + h/2
-of Q, d₁ the distance to the nearest sample. Every step owning a sample in that ball is
-tried, so the minimum over the whole path is found, not only next to the nearest station.
+Which steps to try. Each step is cut into pieces no longer than h (h = the median course)
+and each piece stands for its mid-point. If a piece holds the closest point q (distance d*),
+its mid-point lies within h/2 of q along the path, so within d* + h/2 ≤ d₁ + h/2 of Q, d₁ the
+distance to the nearest mid-point (a point of the path, so d* ≤ d₁). Every step owning a
+mid-point in that ball is tried, so the minimum over the whole path is found, not only next
+to the nearest station.
 
 Frame: NEV (north, east, vertical down), metres; MD in metres.
 """
@@ -52,21 +53,15 @@ class Closest:
     """its fraction of that step's course, in [0, 1]"""
 
 
-def _samples(path: MinCurvePath) -> tuple[FloatArray, IndexArray, IndexArray, float]:
-    """Sample positions (m, 3) no more than h apart along the path, the first and last step
-    each belongs to (a station belongs to the steps either side of it) and h."""
-    n_steps = path.length.size
+def _pieces(path: MinCurvePath) -> tuple[FloatArray, IndexArray, float]:
+    """Mid-points (m, 3) of pieces of the path no longer than h (each step cut into
+    ⌈L/h⌉ equal pieces), the step each piece belongs to, and h."""
     h = float(np.median(path.length))
-    extra = np.maximum(np.ceil(path.length / h).astype(np.intp) - 1, 0)
-    k = np.repeat(np.arange(n_steps, dtype=np.intp), extra)
-    ends = np.cumsum(extra)
-    within = np.arange(k.size) - np.repeat(ends - extra, extra) + 1
-    f = within / (extra[k] + 1.0)
-    stations = np.arange(n_steps + 1, dtype=np.intp)
-    points = np.concatenate([path.r.T, path.position(k, f).T])
-    first = np.concatenate([np.maximum(stations - 1, 0), k])
-    last = np.concatenate([np.minimum(stations, n_steps - 1), k])
-    return points, first, last, h
+    count = np.maximum(np.ceil(path.length / h - 1e-9).astype(np.intp), 1)
+    step = np.repeat(np.arange(path.length.size, dtype=np.intp), count)
+    first = np.repeat(np.cumsum(count) - count, count)
+    f = (np.arange(step.size) - first + 0.5) / count[step]
+    return path.position(step, f).T, step, h
 
 
 def _on_arc(path: MinCurvePath, q: FloatArray, k: IndexArray) -> FloatArray:
@@ -102,23 +97,21 @@ def closest_points(path: MinCurvePath, points: FloatArray) -> Closest:
     from scipy.spatial import cKDTree
 
     q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    samples, first, last, h = _samples(path)
-    tree = cKDTree(samples)
+    mids, step, h = _pieces(path)
+    tree = cKDTree(mids)
     nearest, _ = tree.query(q)
     balls = tree.query_ball_point(q, nearest + 0.5 * h + 1e-9 * (1.0 + nearest))
     counts = np.fromiter(map(len, balls), dtype=np.intp, count=q.shape[0])
     found = np.fromiter(itertools.chain.from_iterable(balls), dtype=np.intp, count=counts.sum())
-    who = np.repeat(np.arange(q.shape[0], dtype=np.intp), counts)
-    pair_q = np.concatenate([who, who])
-    pair_k = np.concatenate([first[found], last[found]])
-    keys = np.unique(pair_q * path.length.size + pair_k)
-    pair_q, pair_k = keys // path.length.size, keys % path.length.size
+    pair_q = np.repeat(np.arange(q.shape[0], dtype=np.intp), counts)
+    pair_k = step[found]
     f = _on_arc(path, q[pair_q], pair_k)
     where = path.position(pair_k, f).T
     dist = np.linalg.norm(where - q[pair_q], axis=1)
-    order = np.lexsort((dist, pair_q))
-    starts = np.searchsorted(pair_q[order], np.arange(q.shape[0]))
-    best = order[starts]
+    starts = np.cumsum(counts) - counts  # every point has a candidate: its nearest piece
+    least = np.repeat(np.minimum.reduceat(dist, starts), counts)
+    hits = np.flatnonzero(dist == least)
+    best = hits[np.searchsorted(pair_q[hits], np.arange(q.shape[0]))]
     k, fb = pair_k[best], f[best]
     md = path.md[k] + fb * path.length[k]
     return Closest(md=md, position=where[best], step=k, fraction=fb)
