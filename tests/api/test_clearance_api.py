@@ -103,3 +103,35 @@ def test_gyro_model_without_a_latitude_names_what_is_missing():
         )
     assert isinstance(caught.value.__cause__, MissingSiteError)
     assert "needs the site latitude" in str(caught.value)
+
+
+def test_grid_north_with_convergence_gives_the_true_north_answer():
+    """The same pad described in true north and in grid north (convergence 2°: azimuths and
+    slot coordinates turned by −2°): every separation factor is the same."""
+    gamma = 2.0
+    offsets = {k: gp.read(EXAMPLE / "offsets" / f"offset-0{k}.csv") for k in (3, 5)}
+    slots = {3: (0.0, 10.0), 5: (-50.0, -500.0)}
+
+    def run(north: str, turn: float) -> np.ndarray:
+        c, s = np.cos(np.radians(turn)), np.sin(np.radians(turn))
+        ref = gp.read(REFERENCE)
+        frames = {}
+        for name, frame in [("reference", ref), *offsets.items()]:
+            frame = frame.copy()
+            frame["azi"] = (frame.azi - turn) % 360.0
+            frame.attrs = {"north_reference": north}
+            frames[name] = frame
+        reference = frames.pop("reference")
+        return gp.clearance(
+            reference,
+            {f"W{k}": f for k, f in frames.items()},
+            offset_model="ISCWSA-MWD-REV4",
+            offset_hole_diameter=0.6096,
+            offset_position={
+                f"W{k}": (n * c + e * s, -n * s + e * c) for k, (n, e) in slots.items()
+            },
+            well={"latitude": 60.0, "grid_convergence": turn if north == "grid" else 0.0},
+            **RULE,
+        ).sf.to_numpy()
+
+    assert run("grid", gamma) == pytest.approx(run("true", 0.0), rel=1e-9)
