@@ -10,9 +10,18 @@ import pyarrow as pa
 
 from pipeline.anticollision.tables import OffsetWells
 from pipeline.api import stages
-from pipeline.api.frames import TableLike, WellLike, like, to_table, well_metadata, well_of_data
+from pipeline.api.frames import (
+    TableLike,
+    WellLike,
+    like,
+    to_frame,
+    to_table,
+    well_metadata,
+    well_of_data,
+)
 from pipeline.errors import ParameterError
 from pipeline.stages.clearance import offset_tables
+from pipeline.survey.stations import north_reference_of
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata
 
@@ -47,11 +56,11 @@ def clearance(
     """
     reg = stages.registry()
     given = well_metadata(well)
+    ref: TableLike
     if isinstance(reference, str | Path):
-        table, header = reg.read(Path(reference), "stations", well=given)
-        ref: TableLike = pa.Table.from_arrays(table.columns, schema=table.schema)
+        ref, header = reg.read(Path(reference), "stations", well=given)
         ref_well = header.merged(given)
-        template: TableLike = _frame_of(ref)
+        template: TableLike = to_frame(ref)
     else:
         ref, ref_well, template = reference, well_of_data(reference).merged(given), reference
     if isinstance(offsets, str | Path):
@@ -65,12 +74,6 @@ def clearance(
     inputs = {"reference": ref, "offsets": stations, "wells": wells}
     outs, _, _ = stages.call("clearance", inputs, params, well=ref_well)
     return like(template, outs["clearance"])
-
-
-def _frame_of(table: pa.Table) -> TableLike:
-    from pipeline.api.frames import to_frame
-
-    return to_frame(table)
 
 
 def _each(value: Any, name: str, what: str) -> Any:
@@ -103,13 +106,12 @@ def _offsets(
         else:
             own = well.merged(well_of_data(data))
             tables[name] = to_table(data, Stations, what=f"offset well {name!r}", well=own)
-    norths = {t.schema.field("azi").metadata[b"north_reference"] for t in tables.values()}
+    norths = {north_reference_of(t, "azi") for t in tables.values()}
     if len(norths) > 1:
         raise ParameterError(
             "clearance: the offset wells' azimuths name different north references; give "
             "them in one (or use a manifest, which converts them)"
         )
-    first = next(iter(tables.values()))
     stations = pa.concat_tables(
         [
             pa.table(
@@ -125,7 +127,7 @@ def _offsets(
     )
     stations = Stations.compiled().make_table(
         {c: stations.column(c) for c in stations.column_names},
-        north_reference=first.schema.field("azi").metadata[b"north_reference"].decode(),
+        north_reference=norths.pop(),
     )
     rows = []
     for name in tables:
