@@ -4,6 +4,7 @@ separation factors, and the report's clearance section in headless Chromium and 
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -85,6 +86,9 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     shown = marks(browser, html)["clearance"]
     assert [k for k, m in enumerate(shown) if m.row] == stops
     text = page.text
+    for k in range(1, 7):  # each offset survey named with its file's hash
+        data = (EXAMPLE / "offsets" / f"offset-0{k}.csv").read_bytes()
+        assert f"offset-0{k}.csv · sha256 {hashlib.sha256(data).hexdigest()}" in text
     assert "Clearance: stop — minimum separation factor" in text
     assert "SPE-187073" in text and "SPE 67616" in text
     for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):

@@ -44,6 +44,7 @@ class OffsetWells(TableContract):
         default=None,
     )
     source: str | None = column(unit=None, description="the stations file", default=None)
+    sha256: str | None = column(unit=None, description="SHA-256 of the stations file", default=None)
 
 
 class Clearance(TableContract):

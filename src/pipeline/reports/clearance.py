@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -138,9 +139,15 @@ def clearance_section(table: pa.Table, citations: Citations) -> Section:
         )
     reach = max(4.0 * float(np.nanmin(col(table, "distance")) or 1.0), 10.0)
     reach = min(reach, float(np.nanmax(col(table, "distance"))))
+    files = tuple(
+        (name, f"{Path(w['source']).name} · sha256 {w['sha256']}")
+        for name, w in wells.items()
+        if "source" in w and "sha256" in w
+    )
     blocks: list[Block] = [
         verdict,
         Fields("Rule and models", tuple(fields)),
+        *([Fields("Offset well surveys", files)] if files else []),
         Table(
             "Minimum separation factor per offset well",
             (

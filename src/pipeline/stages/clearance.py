@@ -25,6 +25,7 @@ from pipeline.earth.site import MagneticReference
 from pipeline.errors import EmptyTableError, InputFileError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, pipeline_input
+from pipeline.runner import sha256_file
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import north_reference_of, survey_offsets
@@ -139,6 +140,7 @@ def offset_tables(
             "east": [e.east for e in entries],
             "tvd": [e.tvd for e in entries],
             "source": [str(e.file) for e in entries],
+            "sha256": [sha256_file(e.file) for e in entries],
         }
     )
     return wells, stations
@@ -283,7 +285,10 @@ def clearance(
     rule = {
         **params.model_dump(mode="json", exclude={"latitude", "magnetic"}),
         "wells": {
-            w["offset"]: {"model": w["model"], "hole_diameter": w["hole_diameter"]} for w in listed
+            w["offset"]: {
+                k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)
+            }
+            for w in listed
         },
     }
     return {"clearance": with_rule(table, rule)}
