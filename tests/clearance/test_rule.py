@@ -72,12 +72,14 @@ def test_levels_at_the_limits():
         ((0.0, 30.0, 0.0), 90.0),  # east of a well heading north: its right
         ((0.0, 0.0, 30.0), 180.0),  # below
         ((0.0, -30.0, 0.0), 270.0),  # west: left
+        ((0.0, -1e-15, -30.0), 0.0),  # a hair left of the high side: 0°, not 360°
     ],
 )
 def test_travelling_cylinder_angle(tie: tuple[float, float, float], toolface: float):
     ref = straight_well("ref", (0.0, 0.0, 0.0), 90.0, 0.0, sigma=1.0)
     off = straight_well("off", tie, 90.0, 0.0, sigma=1.0)
     got = scan(ref, [off]).toolface
+    assert ((got >= 0.0) & (got < 360.0)).all()
     assert np.abs((got - toolface + 180.0) % 360.0 - 180.0).max() < 1e-9
 
 

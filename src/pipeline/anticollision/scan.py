@@ -23,6 +23,7 @@ from pipeline.anticollision.geometry import closest_points
 from pipeline.anticollision.rule import RuleLimits, SeparationRule, levels, separation
 from pipeline.survey.interpolate import MinCurvePath
 from pipeline.survey.mincurve import minimum_curvature
+from pipeline.survey.north import wrap_360
 from pipeline.survey.stations import defined_azimuths
 
 __all__ = ["ClearanceScan", "Well", "scan"]
@@ -124,5 +125,5 @@ def scan(
         sigma_s=sep.sigma_s,
         sf=sep.sf,
         level=levels(sep.sf, limits or RuleLimits()),
-        toolface=np.mod(toolface, 360.0),
+        toolface=wrap_360(toolface),
     )
