@@ -40,6 +40,7 @@ BUILTIN_PLUGINS = {
     "builtin.continuous": "pipeline.stages.continuous",
     "builtin.stations": "pipeline.stages.stations",
     "builtin.uncertainty": "pipeline.stages.uncertainty",
+    "builtin.clearance": "pipeline.stages.clearance",
     "builtin.report": "pipeline.stages.report",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
