@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
+    from pipeline.api.clearance import clearance
     from pipeline.api.frames import TableLike, to_frame, to_table
     from pipeline.api.functions import (
         Tables,
@@ -49,6 +50,7 @@ if TYPE_CHECKING:
     from pipeline.well import WellMetadata
 
 _HOMES = {
+    "pipeline.api.clearance": ("clearance",),
     "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
     "pipeline.api.functions": (
         "Tables",
@@ -85,6 +87,7 @@ __all__ = [
     "__version__",
     "acceptance_gates",
     "calibrate_drift",
+    "clearance",
     "compass",
     "correct_drift",
     "definitive_survey",

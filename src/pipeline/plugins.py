@@ -42,6 +42,7 @@ BUILTIN_PLUGINS = {
     "builtin.uncertainty": "pipeline.stages.uncertainty",
     "builtin.definitive": "pipeline.stages.definitive",
     "builtin.gates": "pipeline.stages.gates",
+    "builtin.clearance": "pipeline.stages.clearance",
     "builtin.report": "pipeline.stages.report",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",

@@ -53,6 +53,7 @@ LAYERS: dict[str, int] = {
     "pipeline.earth": 3,
     "pipeline.survey": 3,
     "pipeline.uncertainty": 3,
+    "pipeline.anticollision": 3,
     "pipeline.gyrocompass": 3,
     "pipeline.continuous": 3,
     "pipeline.drift": 3,

@@ -38,6 +38,12 @@ GYRO_ERROR_MODEL = (
     "Exhibition, Houston, 26–29 September 2004 (SPE 90408)."
 )
 """The ISCWSA error model of gyroscopic survey tools."""
+SEPARATION_RULE = (
+    "Sawaryn S. J., Wilson H., Bang J., Nyrnes E., Sentance A., Poedjono B., Lowdon R., "
+    "Mitchell I., Codling J., Clark P. J., Allen W. T. Well-collision-avoidance separation "
+    "rule. SPE Drilling & Completion, 2019, vol. 34, no. 1, pp. 1–15 (SPE-187073-PA)."
+)
+"""The ISCWSA separation factor between a reference and an offset well."""
 
 
 class Citations:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Literal
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.anticollision.tables import Clearance
 from pipeline.contracts import TableContract
 from pipeline.drift.tables import (
     AllanResult,
@@ -127,6 +128,7 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "noise": NoiseParameters,
     "comparison": RunComparison,
     "gates": AcceptanceGates,
+    "clearance": Clearance,
 }
 
 
