@@ -30,6 +30,7 @@ from pipeline.reports.document import (
     fmt_sigma,
     items,
 )
+from pipeline.reports.envelope import FullRate
 from pipeline.reports.flags import Flag
 from pipeline.reports.listing import (
     ELLIPSE_COLUMNS,
@@ -81,6 +82,8 @@ class SurveyTables:
     calibration: pa.Table | None = None
     allan: pa.Table | None = None
     noise: pa.Table | None = None
+    series: FullRate | None = None
+    """a full-rate series already reduced to its envelope (bounded, whatever its length)"""
 
     def qc_sources(self) -> QcSources:
         return QcSources(self.qc, self.qc_summary, self.checks, self.inout, self.stations)
@@ -145,7 +148,7 @@ def survey_document(
             (listing(traj, tables.stations, vs_azimuth, flags, course),),
             key="listing",
         ),
-        _trajectory_plots(traj, path, vs, vs_azimuth, course),
+        _trajectory_plots(traj, path, vs, vs_azimuth, course, tables.series),
     ]
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(traj, path))
@@ -296,8 +299,21 @@ def _trajectory_plots(
     vs: plots.FloatArray,
     vs_azimuth: float | None,
     course: Course,
+    series: FullRate | None,
 ) -> Section:
     inc, azi, dls = col(traj, "inc"), col(traj, "azi"), col(traj, "dls")
+    full: tuple[Plot, ...] = ()
+    if series is not None and series.samples:
+        full = (
+            Plot(
+                "fullrate",
+                "Inclination and azimuth of every sample against MD",
+                f"Grey: the {series.samples:,} samples of the run (each pixel column drawn "
+                "from its lowest to its highest value); dots: the stations.",
+                partial(plots.full_rate, series=series, path=path, inc=inc, azi=azi),
+                (6.9, 4.0),
+            ),
+        )
     return Section(
         "Trajectory",
         (
@@ -343,6 +359,7 @@ def _trajectory_plots(
                 ),
                 (6.9, 4.5),
             ),
+            *full,
         ),
         key="trajectory",
     )
