@@ -135,7 +135,7 @@ class TableContract(BaseModel):
                 yield batch
             proven = True
 
-        return TableStream(stream.schema, checked)
+        return TableStream(stream.schema, checked, stream.holds | {cls})
 
 
 @dataclass(frozen=True)

@@ -449,7 +449,7 @@ class Registry:
                     raise read_violation(path, kind, chosen, exc) from None
                 yield batch
 
-        return TableStream(stream.schema, checked), found
+        return TableStream(stream.schema, checked, frozenset({chosen.kinds[kind]})), found
 
     def _reading(self, reader: ReaderDef, call: Callable[[], Any]) -> Any:
         """``call()``, a reader's failure reported as :meth:`read` says."""
