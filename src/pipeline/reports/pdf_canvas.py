@@ -156,7 +156,7 @@ def _text_string(value: str) -> str:
 
 def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[int, _Embedded]:
     data, ids, widths, text = font.subset(chars)
-    base = f"{font.tag(chars)}+{font.name.replace(' ', '')}"
+    base = f"{font.tag(font.subset_chars(chars))}+{font.name.replace(' ', '')}"
     file = w.stream(f"/Length1 {len(data)}", data)
     scale = 1000.0 / font.upem
     descriptor = w.put(

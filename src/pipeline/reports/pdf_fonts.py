@@ -3,10 +3,14 @@ own tables and embedded as subsets.
 
 Widths come from the fonts' advance widths and ``kern`` pairs (the glyph positions a PDF
 viewer uses), in font units, so measuring text costs a dictionary look-up per character.
-Each font used is embedded as a TrueType subset of the glyphs the pages use (fontTools),
-written as a ``Type0`` font with ``Identity-H`` encoding and a ``ToUnicode`` map (text can be
-searched and copied). The subset is made from a lean copy without the OpenType layout
-tables (GSUB, GPOS, GDEF), which a PDF viewer never reads and which make subsetting slow.
+Each font used is embedded as a TrueType subset (fontTools), written as a ``Type0`` font
+with ``Identity-H`` encoding and a ``ToUnicode`` map (text can be searched and copied). A
+report whose characters all lie in :data:`REPERTOIRE` (Latin-1, Greek and the symbols
+gyropipe prints) embeds that repertoire's subset, made once per font and kept in
+matplotlib's cache directory, so most reports subset nothing (fontTools' subsetter is not
+even imported); other text gets a subset of exactly its characters. Subsets are made from a
+lean copy without the OpenType layout tables (GSUB, GPOS, GDEF), which a PDF viewer never
+reads and which make subsetting slow.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import io
 import itertools
+import json
 import logging
 import os
 from dataclasses import dataclass
@@ -21,13 +26,19 @@ from functools import cache
 from pathlib import Path
 
 import matplotlib
-from fontTools import subset  # type: ignore[import-untyped]
 from fontTools.ttLib import TTFont  # type: ignore[import-untyped]
 from matplotlib.font_manager import FontProperties, findfont
 
 LAYOUT_TABLES = ("GSUB", "GPOS", "GDEF")
 DROPPED = ("FFTM", "MATH", "kern", *LAYOUT_TABLES)
 """Tables the embedded subset leaves out (kerning is in the glyph positions already)."""
+REPERTOIRE = frozenset(
+    [chr(c) for c in (*range(0x20, 0x7F), *range(0xA0, 0x100), *range(0x391, 0x3CA))]
+    + list("–—‘’“”•…‰′″−×÷±≤≥≠≈∞√∑∆∂∫∇∝→←↔↑↓·µ⁰¹²³⁴⁵⁶⁷⁸⁹⁻₀₁₂₃ĪİėĊ")
+)
+"""Characters of the cached subset every report can share (Latin-1, Greek, symbols)."""
+Subset = tuple[bytes, dict[str, int], list[int], dict[int, str]]
+"""font file bytes, glyph name → glyph id, advance of each glyph (1/1000 em), id → text"""
 
 
 @cache
@@ -77,6 +88,7 @@ class PdfFont:
         )
         self._glyf = tt["glyf"]
         self._top: dict[str, int] = {}
+        self._shared: Subset | None = None
 
     def glyph(self, char: str) -> str:
         """Glyph name of ``char`` (``.notdef`` if the font has none)."""
@@ -105,9 +117,56 @@ class PdfFont:
             best = max(best, self._top[name])
         return best
 
-    def subset(self, chars: set[str]) -> tuple[bytes, dict[str, int], list[int], dict[int, str]]:
-        """The subset holding ``chars``: font file bytes, glyph name → glyph id in the
-        subset, advance of each subset glyph (1/1000 em), glyph id → its character."""
+    def subset(self, chars: set[str]) -> Subset:
+        """The subset to embed for ``chars``: the cached :data:`REPERTOIRE` subset when it
+        holds them all, else a subset of exactly ``chars``."""
+        if chars <= REPERTOIRE:
+            return self._repertoire()
+        return self._make_subset(chars)
+
+    def subset_chars(self, chars: set[str]) -> set[str]:
+        """The characters the subset embedded for ``chars`` holds (names it: :meth:`tag`)."""
+        return set(REPERTOIRE) if chars <= REPERTOIRE else chars
+
+    def _repertoire(self) -> Subset:
+        if self._shared is None:
+            self._shared = self._load_repertoire()
+        return self._shared
+
+    def _load_repertoire(self) -> Subset:
+        stem = Path(self.path).stem
+        cached = (
+            Path(matplotlib.get_cachedir())
+            / "gyropipe-fonts"
+            / f"{stem}-{self.tag(set(REPERTOIRE))}"
+        )
+        font_file, index = cached.with_suffix(".ttf"), cached.with_suffix(".json")
+        try:
+            meta = json.loads(index.read_text())
+            return (
+                font_file.read_bytes(),
+                meta["ids"],
+                meta["widths"],
+                {int(k): v for k, v in meta["text"].items()},
+            )
+        except (OSError, ValueError, KeyError):
+            pass
+        made = self._make_subset(set(REPERTOIRE))
+        try:
+            for path, data in (
+                (font_file, made[0]),
+                (index, json.dumps({"ids": made[1], "widths": made[2], "text": made[3]}).encode()),
+            ):
+                partial = path.with_suffix(f".{os.getpid()}.tmp")
+                partial.write_bytes(data)
+                partial.replace(path)  # atomic: parallel batch workers may write it at once
+        except OSError:
+            pass
+        return made
+
+    def _make_subset(self, chars: set[str]) -> Subset:
+        from fontTools import subset  # type: ignore[import-untyped]
+
         options = subset.Options()
         options.drop_tables += list(DROPPED)
         options.notdef_outline = True
