@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.anticollision.tables import Clearance
 from pipeline.continuous.tables import ContinuousSeries
 from pipeline.contracts import TableContract
 from pipeline.drift.tables import (
@@ -135,6 +136,7 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "calibration": CalibrationResult,
     "allan": AllanResult,
     "noise": NoiseParameters,
+    "clearance": Clearance,
     "series": ContinuousSeries,
 }
 
