@@ -30,7 +30,7 @@ from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.registry import Registry, StageContext, StageDef
-from pipeline.streams import TableStream
+from pipeline.streams import Port, as_stream
 from pipeline.tables import CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
@@ -92,8 +92,9 @@ def survey_report(
     from pipeline.reports.survey import SurveyTables, survey_document
 
     tables = dict(inputs)
-    stream: TableStream | None = tables.pop("series", None)
-    if stream is not None:
+    series: Port | None = tables.pop("series", None)  # a stream from the engine
+    if series is not None:
+        stream = as_stream(series)
         north = north_label(stream.schema.empty_table(), "azi")
         tables["series"] = full_rate(stream, north)
     doc = survey_document(
