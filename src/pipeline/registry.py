@@ -435,8 +435,9 @@ class Registry:
         """:meth:`read` as a stream: the reader's ``stream`` when it has one, else its table
         cut into slices. The schema is checked for the kind's columns at once, each batch
         against the kind's contract as it passes (the same errors as :meth:`read`, rows
-        counted from the start of the file's table); a reader's failure while streaming is
-        reported as :meth:`read` reports it."""
+        counted from the start of the file's table; a pass after one checked to its end is
+        not checked again); a reader's failure while streaming is reported as :meth:`read`
+        reports it."""
         chosen = self.reader_for(path, kind, reader)
         parsed = reader_options(chosen, options or {}, well)
         if chosen.stream is None:  # the reader and its options are resolved once
@@ -446,21 +447,25 @@ class Registry:
         stream, found = self._reading(chosen, lambda: opener(path, kind, parsed))
         check_columns(path, kind, chosen, stream.schema.names)
         contract = chosen.kinds[kind].compiled()
+        proven = False  # a pass checked to its end: the file's batches hold the contract
 
         def checked() -> Iterator[pa.RecordBatch]:
-            checker = BatchChecker(contract)
+            nonlocal proven
+            checker = None if proven else BatchChecker(contract)
             batches = iter(stream)
             while True:
                 batch = self._reading(chosen, lambda: next(batches, None))
                 if batch is None:
+                    proven = True
                     return
                 try:
-                    checker.check(batch)
+                    if checker is not None:
+                        checker.check(batch)
                 except ContractViolation as exc:
                     raise read_violation(path, kind, chosen, exc) from None
                 yield batch
 
-        return TableStream(stream.schema, checked), found
+        return TableStream(stream.schema, checked, frozenset({chosen.kinds[kind]})), found
 
     def _reading(self, reader: ReaderDef, call: Callable[[], Any]) -> Any:
         """``call()``, a reader's failure reported as :meth:`read` says."""

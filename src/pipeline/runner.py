@@ -290,7 +290,7 @@ def _checked(
             )
             raise UpstreamError(where) from None
 
-    return TableStream(stream.schema, located)
+    return TableStream(stream.schema, located, checked.holds)
 
 
 def _produced(
@@ -316,7 +316,8 @@ def _produced(
             error.__cause__ = exc
             raise UpstreamError(error) from exc
 
-    checked = _checked(plan, st, port, TableStream(stream.schema, attributed), "output")
+    attributed_stream = TableStream(stream.schema, attributed, stream.holds)
+    checked = _checked(plan, st, port, attributed_stream, "output")
     return counted(checked, record.rows_out, port)
 
 

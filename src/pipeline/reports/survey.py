@@ -31,6 +31,7 @@ from pipeline.reports.document import (
     fmt_sigma,
     items,
 )
+from pipeline.reports.envelope import FullRate
 from pipeline.reports.flags import Flag
 from pipeline.reports.listing import (
     ELLIPSE_COLUMNS,
@@ -88,6 +89,8 @@ class SurveyTables:
     comparison: pa.Table | None = None
     gates: pa.Table | None = None
     clearance: pa.Table | None = None
+    series: FullRate | None = None
+    """a full-rate series already reduced to its envelope (bounded, whatever its length)"""
 
     def qc_sources(self) -> QcSources:
         return QcSources(
@@ -162,7 +165,7 @@ def survey_document(
             (listing(traj, tables.stations, vs_azimuth, flags, course),),
             key="listing",
         ),
-        _trajectory_plots(traj, path, vs, vs_azimuth, course),
+        _trajectory_plots(traj, path, vs, vs_azimuth, course, tables.series),
     ]
     program = program_section(traj)
     if program is not None:
@@ -323,8 +326,21 @@ def _trajectory_plots(
     vs: plots.FloatArray,
     vs_azimuth: float | None,
     course: Course,
+    series: FullRate | None,
 ) -> Section:
     inc, azi, dls = col(traj, "inc"), col(traj, "azi"), col(traj, "dls")
+    full: tuple[Plot, ...] = ()
+    if series is not None and series.samples:
+        full = (
+            Plot(
+                "fullrate",
+                "Inclination and azimuth of every sample against MD",
+                f"Grey: the {series.samples:,} samples of the run (each pixel column drawn "
+                "from its lowest to its highest value); dots: the stations.",
+                partial(plots.full_rate, series=series, path=path, inc=inc, azi=azi),
+                (6.9, 4.0),
+            ),
+        )
     return Section(
         "Trajectory",
         (
@@ -370,6 +386,7 @@ def _trajectory_plots(
                 ),
                 (6.9, 4.5),
             ),
+            *full,
         ),
         key="trajectory",
     )
