@@ -6,7 +6,8 @@ Simulates ``examples/plans/j-well.yaml`` (point survey, 842k samples) and
 ``src/`` and ``pipelines/`` (``git archive``, no worktree) and runs each pipeline as a fresh
 process, old and new interleaved ``--runs`` times (each its own interpreter: start-up and
 imports count, as they do for a user). Prints the machine's load before and after, the
-median wall time of each and their ratio (target: new ≥ 3× faster), and where a well's wall
+median wall time of each and their ratio (target: new ≥ 3× faster) with the CPU time
+(user + system) beside it (less sensitive to a shared machine's load), and where a well's wall
 time goes: start-up and imports (process wall minus the runner's) and each stage's share
 (the runner records every stage's wall time in ``run.json``).
 
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -52,15 +54,19 @@ def extract(rev: str, into: Path) -> Path:
     return into
 
 
-def gyropipe(tree: Path, *args: str) -> float:
-    """Wall time of ``gyropipe ARGS`` run from ``tree``'s sources, seconds."""
+def gyropipe(tree: Path, *args: str) -> tuple[float, float]:
+    """Wall and CPU time (user + system, the child's) of ``gyropipe ARGS`` run from
+    ``tree``'s sources, seconds."""
     env = {**os.environ, "PYTHONPATH": str(tree / "src")}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
     done = subprocess.run([sys.executable, "-c", MAIN, *args], env=env, capture_output=True)
     wall = time.perf_counter() - started
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
         raise SystemExit(f"gyropipe {' '.join(args)} ({tree}) failed:\n{done.stderr.decode()}")
-    return wall
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu
 
 
 def shares(out: Path, wall: float) -> list[tuple[str, float]]:
@@ -89,12 +95,13 @@ def main() -> int:
         old = extract(args.old, Path(tmp) / "old")
         trees = {"old": old, "new": ROOT}
         results: dict[tuple[str, str], list[float]] = {}
+        cpus: dict[tuple[str, str], list[float]] = {}
         last: dict[tuple[str, str], list[tuple[str, float]]] = {}
         for _ in range(args.runs):
             for pipeline, plan in CASES.items():
                 for label, tree in trees.items():
                     out = Path(tmp) / f"{label}-{pipeline}"
-                    wall = gyropipe(
+                    wall, cpu = gyropipe(
                         tree,
                         "run",
                         str(tree / "pipelines" / f"{pipeline}.yaml"),
@@ -104,15 +111,18 @@ def main() -> int:
                         str(out),
                     )
                     results.setdefault((label, pipeline), []).append(wall)
+                    cpus.setdefault((label, pipeline), []).append(cpu)
                     last[(label, pipeline)] = shares(out, wall)
     print(f"at end: {load()}\n")
     print(f"old = {args.old}, new = this tree; median of {args.runs} interleaved runs")
     for pipeline in CASES:
         t_old = statistics.median(results[("old", pipeline)])
         t_new = statistics.median(results[("new", pipeline)])
+        c_old = statistics.median(cpus[("old", pipeline)])
+        c_new = statistics.median(cpus[("new", pipeline)])
         print(
-            f"{pipeline:16} old {t_old:6.2f} s  new {t_new:6.2f} s  → {t_old / t_new:.2f}× "
-            "(target ≥ 3×)"
+            f"{pipeline:16} wall: old {t_old:6.2f} s  new {t_new:6.2f} s  → {t_old / t_new:.2f}× "
+            f"(target ≥ 3×);  CPU: old {c_old:6.2f} s  new {c_new:6.2f} s  → {c_old / c_new:.2f}×"
         )
     for pipeline in CASES:
         print(f"\n{pipeline}: share of a well's wall time (last run)")

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
+    from pipeline.api.clearance import clearance
     from pipeline.api.frames import TableLike, to_frame, to_table
     from pipeline.api.functions import (
         Tables,
@@ -44,10 +45,12 @@ if TYPE_CHECKING:
     )
     from pipeline.api.plots import plot_plan, plot_section
     from pipeline.api.run import RunResult, run
+    from pipeline.api.runs import acceptance_gates, definitive_survey
     from pipeline.errors import GyropipeError
     from pipeline.well import WellMetadata
 
 _HOMES = {
+    "pipeline.api.clearance": ("clearance",),
     "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
     "pipeline.api.functions": (
         "Tables",
@@ -69,6 +72,7 @@ _HOMES = {
     ),
     "pipeline.api.plots": ("plot_plan", "plot_section"),
     "pipeline.api.run": ("RunResult", "run"),
+    "pipeline.api.runs": ("acceptance_gates", "definitive_survey"),
     "pipeline.errors": ("GyropipeError",),
     "pipeline.well": ("WellMetadata",),
 }
@@ -81,9 +85,12 @@ __all__ = [
     "Tables",
     "WellMetadata",
     "__version__",
+    "acceptance_gates",
     "calibrate_drift",
+    "clearance",
     "compass",
     "correct_drift",
+    "definitive_survey",
     "integrate_continuous",
     "interpolate",
     "minimum_curvature",

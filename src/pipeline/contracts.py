@@ -119,16 +119,23 @@ class TableContract(BaseModel):
 
     @classmethod
     def validate_stream(cls, stream: TableStream) -> TableStream:
-        """``stream`` with every batch of every pass checked as it passes
-        (:class:`BatchChecker`): a violation is raised when its batch is reached."""
+        """``stream`` with its batches checked as they pass (:class:`BatchChecker`): a
+        violation is raised when its batch is reached. Once a pass has been checked to its
+        end, later passes (the same source read again) are not checked again."""
+        proven = False
 
         def checked() -> Iterator[pa.RecordBatch]:
+            nonlocal proven
+            if proven:
+                yield from stream
+                return
             checker = BatchChecker(cls.compiled())
             for batch in stream:
                 checker.check(batch)
                 yield batch
+            proven = True
 
-        return TableStream(stream.schema, checked)
+        return TableStream(stream.schema, checked, stream.holds | {cls})
 
 
 @dataclass(frozen=True)

@@ -70,7 +70,7 @@ def counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream
             yield batch
         rows[port] = n
 
-    return TableStream(stream.schema, counting)
+    return TableStream(stream.schema, counting, stream.holds)
 
 
 def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -> None:

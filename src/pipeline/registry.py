@@ -289,6 +289,20 @@ class CheckDef:
 
 
 @dataclass(frozen=True)
+class ToolModelDef:
+    """A tool-model (error model) file a plugin ships: ``path`` is its YAML file in the
+    format of ``docs/tool-models.md``; ``name`` is the model's name (as the file's ``name:``
+    declares it; letters, digits, ``.``, ``-`` and ``_``), by which stages select it."""
+
+    name: str
+    path: Path
+    description: str = ""
+
+
+TOOL_MODEL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
+
+
+@dataclass(frozen=True)
 class PluginInfo:
     """A loaded (or failed) plugin."""
 
@@ -299,12 +313,13 @@ class PluginInfo:
     error: str | None = None
 
 
-Registration = StageDef | ReaderDef | WriterDef | CheckDef
+Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef
 KIND_OF: dict[type, str] = {
     StageDef: "stage",
     ReaderDef: "reader",
     WriterDef: "writer",
     CheckDef: "check",
+    ToolModelDef: "tool_model",
 }
 
 
@@ -316,6 +331,7 @@ class Registry:
     readers: dict[str, tuple[ReaderDef, str]] = field(default_factory=dict)
     writers: dict[str, tuple[WriterDef, str]] = field(default_factory=dict)
     checks: dict[str, tuple[CheckDef, str]] = field(default_factory=dict)
+    tool_models: dict[str, tuple[ToolModelDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
 
@@ -420,8 +436,9 @@ class Registry:
         """:meth:`read` as a stream: the reader's ``stream`` when it has one, else its table
         cut into slices. The schema is checked for the kind's columns at once, each batch
         against the kind's contract as it passes (the same errors as :meth:`read`, rows
-        counted from the start of the file's table); a reader's failure while streaming is
-        reported as :meth:`read` reports it."""
+        counted from the start of the file's table; a pass after one checked to its end is
+        not checked again); a reader's failure while streaming is reported as :meth:`read`
+        reports it."""
         chosen = self.reader_for(path, kind, reader)
         parsed = reader_options(chosen, options or {}, well)
         if chosen.stream is None:  # the reader and its options are resolved once
@@ -431,21 +448,25 @@ class Registry:
         stream, found = self._reading(chosen, lambda: opener(path, kind, parsed))
         check_columns(path, kind, chosen, stream.schema.names)
         contract = chosen.kinds[kind].compiled()
+        proven = False  # a pass checked to its end: the file's batches hold the contract
 
         def checked() -> Iterator[pa.RecordBatch]:
-            checker = BatchChecker(contract)
+            nonlocal proven
+            checker = None if proven else BatchChecker(contract)
             batches = iter(stream)
             while True:
                 batch = self._reading(chosen, lambda: next(batches, None))
                 if batch is None:
+                    proven = True
                     return
                 try:
-                    checker.check(batch)
+                    if checker is not None:
+                        checker.check(batch)
                 except ContractViolation as exc:
                     raise read_violation(path, kind, chosen, exc) from None
                 yield batch
 
-        return TableStream(stream.schema, checked), found
+        return TableStream(stream.schema, checked, frozenset({chosen.kinds[kind]})), found
 
     def _reading(self, reader: ReaderDef, call: Callable[[], Any]) -> Any:
         """``call()``, a reader's failure reported as :meth:`read` says."""
@@ -488,7 +509,7 @@ class Registry:
         """``kind:name`` of everything ``plugin`` registered."""
         return [
             f"{kind}:{name}"
-            for kind in ("stage", "reader", "writer", "check")
+            for kind in ("stage", "reader", "writer", "check", "tool_model")
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
@@ -557,6 +578,14 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
     if not isinstance(item, expected):
         raise TypeError(f"registered a {type(item).__name__} where a {expected.__name__} is needed")
     name = getattr(item, "name", None)
+    if isinstance(item, ToolModelDef):
+        if not isinstance(name, str) or not TOOL_MODEL_NAME.match(name):
+            raise ValueError(
+                f"tool model name {name!r} is invalid: use letters, digits, '.', '-' and '_'"
+            )
+        if not Path(item.path).is_file():
+            raise ValueError(f"tool model {name!r}: no file {str(item.path)!r}")
+        return kind, name
     if not isinstance(name, str) or not NAME.match(name):
         raise ValueError(
             f"{kind} name {name!r} is invalid: use lower-case letters, digits, '_' and '.'"

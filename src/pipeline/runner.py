@@ -13,6 +13,7 @@ import dataclasses
 import datetime as dt
 import hashlib
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -40,6 +41,7 @@ from pipeline.registry import (
     WriterDef,
 )
 from pipeline.streams import Port, TableStream, as_stream, as_table
+from pipeline.tables import AcceptanceGates
 from pipeline.version import __version__
 from pipeline.well import WellMetadata, well_of
 
@@ -63,6 +65,8 @@ class StageRecord:
     rows_in: dict[str, int] = field(default_factory=dict)
     rows_out: dict[str, int] = field(default_factory=dict)
     status: str = "pending"
+    acceptance: list[dict[str, Any]] = field(default_factory=list)
+    """the rows of its :class:`~pipeline.tables.AcceptanceGates` outputs"""
 
 
 @dataclass
@@ -210,6 +214,7 @@ def run_plan(
             tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
             _check_ports(plan, st, tables, "output")
             record.rows_out.update({p: t.num_rows for p, t in tables.items()})
+            record.acceptance = _acceptance(st, tables)
             for port, value in outs.items():
                 header = well_of(value.schema)
                 if header is not None:
@@ -285,7 +290,7 @@ def _checked(
             )
             raise UpstreamError(where) from None
 
-    return TableStream(stream.schema, located)
+    return TableStream(stream.schema, located, checked.holds)
 
 
 def _produced(
@@ -311,7 +316,8 @@ def _produced(
             error.__cause__ = exc
             raise UpstreamError(error) from exc
 
-    checked = _checked(plan, st, port, TableStream(stream.schema, attributed), "output")
+    attributed_stream = TableStream(stream.schema, attributed, stream.holds)
+    checked = _checked(plan, st, port, attributed_stream, "output")
     return counted(checked, record.rows_out, port)
 
 
@@ -523,8 +529,10 @@ def _manifest(
     outputs: list[tuple[Path, Path]],
     wall: float,
 ) -> dict[str, Any]:
-    """``run.json``; ``outputs`` are (file written, its published path) pairs."""
-    return {
+    """``run.json``; ``outputs`` are (file written, its published path) pairs; with the gates
+    of every acceptance-gates table the run produced (``acceptance``: overall ``pass`` unless
+    a gate failed)."""
+    manifest: dict[str, Any] = {
         "status": "ok",
         "gyropipe": provenance.gyropipe,
         "pipeline": {
@@ -555,6 +563,25 @@ def _manifest(
             for written, final in outputs
         ],
     }
+    gates = [gate for r in records for gate in r.acceptance]
+    if gates:
+        failed = any(g["status"] == "fail" for g in gates)
+        manifest["acceptance"] = {"status": "fail" if failed else "pass", "gates": gates}
+    return manifest
+
+
+def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[str, Any]]:
+    """The gates of a stage's :class:`AcceptanceGates` outputs, as ``run.json`` records them
+    (a value that is not a number, a gate not evaluated, as null)."""
+    rows = []
+    for port, table in tables.items():
+        if issubclass(st.definition.outputs[port], AcceptanceGates):
+            names = [c.name for c in AcceptanceGates.compiled().columns]
+            for row in table.select(names).to_pylist():
+                value = row["value"]
+                row["value"] = value if value is not None and math.isfinite(value) else None
+                rows.append({"stage": st.id, "port": port, **row})
+    return rows
 
 
 def _file_entry(path: Path) -> dict[str, Any]:

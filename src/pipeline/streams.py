@@ -15,7 +15,7 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TypeAlias
+from typing import Any, TypeAlias
 
 import pyarrow as pa
 
@@ -33,6 +33,9 @@ class TableStream:
 
     schema: pa.Schema
     passes: Callable[[], Iterator[pa.RecordBatch]]
+    holds: frozenset[Any] = frozenset()
+    """table contracts (classes) every batch of every pass is known to satisfy: a wrapper
+    that checks one of them again can pass the stream through unchecked"""
 
     def __iter__(self) -> Iterator[pa.RecordBatch]:
         return self.passes()
@@ -65,8 +68,10 @@ class TableStream:
         return cls(schema, relabelled)
 
     def replace_schema_metadata(self, metadata: dict[bytes, bytes] | None) -> TableStream:
-        """The same stream with other schema metadata (on every batch too)."""
-        return TableStream.of_batches(self.schema.with_metadata(metadata or {}), self.passes)
+        """The same stream with other schema metadata (on every batch too); the columns and
+        their metadata are unchanged, so it holds the same contracts."""
+        relabelled = TableStream.of_batches(self.schema.with_metadata(metadata or {}), self.passes)
+        return TableStream(relabelled.schema, relabelled.passes, self.holds)
 
     def read_all(self) -> pa.Table:
         """One pass concatenated into a table (for a consumer that needs it whole)."""

@@ -100,6 +100,19 @@ class CheckResults(TableContract):
     passed: bool = column(unit=None, description="value within tolerance")
 
 
+class AcceptanceGates(TableContract):
+    """Acceptance gates of a survey (e.g. in-run against out-run): one row per gate, its
+    worst value against its limit (both in ``unit``) and its status (``pass``, ``fail`` or
+    ``not evaluated``). ``run.json`` records every such table a run produces."""
+
+    gate: str = column(unit=None, description="gate name")
+    value: float = column(unit=None, finite=False, description="worst value (NaN: none)")
+    limit: float = column(unit=None, description="limit of the gate (in `unit`)")
+    unit: str = column(unit=None, description="unit of value and limit")
+    status: str = column(unit=None, description="pass, fail or not evaluated")
+    description: str = column(unit=None, description="what the gate compares")
+
+
 RATE_UNIT = "deg/h"
 ACCEL_UNIT = "m/s2"
 FIELD_UNIT = "nT"

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+import subprocess
 from pathlib import Path
 
 import pytest
+from batch_support import make_wells, runs, spawn
 from threadpoolctl import threadpool_info
 
 from pipeline.batch.executors import DaskExecutor, LocalExecutor
@@ -41,3 +43,33 @@ def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc():
     (worker,) = environ.values()
     assert "MALLOC_TRIM_THRESHOLD_" not in worker
     assert worker["OPENBLAS_NUM_THREADS"] == "1"
+
+
+def test_a_pool_worker_process_runs_many_wells(tmp_path: Path, survey: Path):
+    """Workers import gyropipe once and take well after well: eight wells on two workers
+    are recorded in the ledger by at most two worker processes, neither of them the batch
+    process (so one of them ran at least four)."""
+    make_wells(tmp_path / "in", [f"w{k}" for k in range(8)])
+    out = tmp_path / "out"
+    batch = spawn(
+        "batch",
+        survey,
+        "--inputs",
+        tmp_path / "in" / "*.csv",
+        "--out",
+        out,
+        "--workers",
+        "2",
+        stderr=tmp_path / "stderr.log",
+    )
+    try:
+        batch.communicate(timeout=240)
+    except subprocess.TimeoutExpired:
+        batch.kill()
+        raise
+    assert batch.returncode == 0, (tmp_path / "stderr.log").read_text()
+    rows = runs(out / "ledger.sqlite")
+    assert [r["status"] for r in rows] == ["done"] * 8
+    pids = [int(str(r["worker"]).rsplit(":", 1)[1]) for r in rows]
+    assert 1 <= len(set(pids)) <= 2 and batch.pid not in pids
+    assert max(pids.count(pid) for pid in pids) >= 4

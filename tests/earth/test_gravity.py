@@ -80,3 +80,12 @@ def test_gravity_at_61n_is_not_one_g() -> None:
     """ENGINEERING.md: at 61.25° N normal gravity is ≈ 1.0014 g₀ (assuming 1 g is a 1.4 mg
     bias)."""
     assert float(normal_gravity(61.25)) / STANDARD_GRAVITY == pytest.approx(1.0014, abs=5e-5)
+
+
+def test_equal_to_boule_on_and_above_the_ellipsoid() -> None:
+    """The closed form is boule's (an independent implementation of Li and Götze 2001):
+    equal to 1e-11 m/s² from pole to pole and from the ellipsoid to 9 km."""
+    boule = pytest.importorskip("boule")
+    lat, h = np.meshgrid(np.linspace(-90.0, 90.0, 181), [0.0, 0.5, 54.3, 1500.0, 9000.0])
+    expected = boule.WGS84.normal_gravity((None, lat, h), si_units=True)
+    np.testing.assert_allclose(normal_gravity(lat, h), expected, rtol=0, atol=1e-11)

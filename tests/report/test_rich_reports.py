@@ -436,3 +436,16 @@ AZIMUTH_FLAGS = (
     FLAG_NEAR_VERTICAL | FLAG_AFTER_VERTICAL | FLAG_LARGE_MISALIGNMENT | FLAG_AZIMUTH_UNDEFINED
 )
 """Continuous-mode flags that qualify the azimuth."""
+
+
+def test_continuous_report_draws_every_sample_from_the_streamed_series(
+    continuous_run: Path, browser: Any
+):
+    """The report's `series` port is streamed: the full-rate series is reduced batch by
+    batch and drawn as one figure whose caption counts every sample of the run."""
+    series = pq.read_table(continuous_run / "continuous.series.parquet")
+    page = inspect(browser, continuous_run / "report.html")
+    assert "fig-fullrate" in page.figures
+    assert f"the {series.num_rows:,} samples of the run" in page.text
+    shown = next(i for i in page.images if i["figure"] == "fig-fullrate")
+    assert shown["decoded"] and shown["width"] > 500

@@ -111,3 +111,25 @@ def diagnosis_lines(name: str, table: pa.Table) -> list[str]:
     for d in diagnoses(table):
         lines.append(f"  suspect {d.suspect or '—'} at {len(d.md)} stations: {d.diagnosis}")
     return lines
+
+
+class RunComparison(TableContract):
+    """An in-run compared with an out-run of one tool: one row per pair of stations (the
+    out-run station nearest in MD); a row passes when inclination, azimuth and depth agree
+    within their tolerances."""
+
+    station: int = column(unit=None, ge=0, description="row of the in-run station")
+    md: float = column(unit="m", description="in-run measured depth")
+    md_out: float = column(unit="m", description="out-run measured depth")
+    md_diff: float = column(unit="m", description="in − out measured depth")
+    inc_in: float = column(unit="deg", description="in-run inclination")
+    inc_out: float = column(unit="deg", description="out-run inclination")
+    inc_diff: float = column(unit="deg", description="in − out inclination")
+    azi_in: float = column(unit="deg", finite=False, description="in-run azimuth (NaN: vertical)")
+    azi_out: float = column(unit="deg", finite=False, description="out-run azimuth (NaN: vertical)")
+    azi_diff: float = column(
+        unit="deg", finite=False, description="in − out azimuth, wrapped to ±180° (NaN: vertical)"
+    )
+    inc_tolerance: float = column(unit="deg", ge=0, description="allowed |inc_diff|")
+    azi_tolerance: float = column(unit="deg", ge=0, description="allowed |azi_diff|")
+    passed: bool = column(unit=None, description="inclination, azimuth and depth within tolerance")

@@ -1,20 +1,13 @@
-"""A :class:`~pipeline.reports.document.Document` as an A4 PDF, laid out with matplotlib
-alone: text is vector text, figures are the rasters the HTML's figures come from
-(:class:`~pipeline.reports.images.Figures`, each drawn once) placed in a region of the page,
-tables continue over pages (:mod:`.pdf_table`)."""
+"""A :class:`~pipeline.reports.document.Document` as an A4 PDF, laid out here and written
+directly (:mod:`.pdf_canvas`): text is vector text in embedded fonts, figures are the rasters
+the HTML's figures come from (:class:`~pipeline.reports.images.Figures`, each drawn once)
+placed in a region of the page, tables continue over pages (:mod:`.pdf_table`)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
 
-import matplotlib
-import numpy as np
-from matplotlib.artist import Artist
-from matplotlib.backend_bases import RendererBase
-from matplotlib.backends.backend_pdf import PdfPages
-from matplotlib.figure import Figure
-from matplotlib.transforms import Affine2D
 from PIL import Image
 
 from pipeline.reports.document import (
@@ -28,6 +21,7 @@ from pipeline.reports.document import (
     Verdict,
 )
 from pipeline.reports.images import Figures
+from pipeline.reports.pdf_canvas import Page, write_pdf
 from pipeline.reports.pdf_layout import (
     BOTTOM,
     LEFT,
@@ -44,7 +38,7 @@ from pipeline.reports.pdf_layout import (
     wrap,
 )
 from pipeline.reports.pdf_table import place_table
-from pipeline.reports.plots import GREY, NAVY, STYLE
+from pipeline.reports.plots import GREY, NAVY
 
 LEVEL_COLOURS = {
     "ok": ("#23867a", "#e6f4f1"),
@@ -67,54 +61,50 @@ def render_pdf(doc: Document, path: Path, drawn: Figures | None = None) -> None:
     figures from ``drawn`` (shared with the HTML)."""
     drawn = drawn or Figures()
     flow = Flow()
-    flow.place(1.35, lambda fig, top: _title_block(fig, top, doc))
+    flow.place(1.35, lambda page, top: _title_block(page, top, doc))
     numbers = ((n, drawn.raster(p)) for n, p in enumerate(doc.plots(), 1))
     for index, section in enumerate(doc.sections, 1):
         _section(flow, section, index, numbers)
     total = len(flow.pages)
-    metadata = {
-        "Title": f"{doc.title} — {doc.subject}",
-        "Creator": "gyropipe",
-        "CreationDate": None,
-    }
-    with matplotlib.rc_context(STYLE), PdfPages(path, metadata=metadata) as pdf:
-        for number, pieces in enumerate(flow.pages, 1):
-            fig = Figure(figsize=(PAGE_W, PAGE_H))
-            _page_frame(fig, doc, number, total)
-            for draw, top in pieces:
-                draw(fig, top)
-            pdf.savefig(fig)
+    pages = []
+    for number, pieces in enumerate(flow.pages, 1):
+        page = Page(PAGE_W, PAGE_H)
+        _page_frame(page, doc, number, total)
+        for draw, top in pieces:
+            draw(page, top)
+        pages.append(page)
+    write_pdf(pages, path, f"{doc.title} — {doc.subject}", "gyropipe")
 
 
-def _title_block(fig: Figure, top: float, doc: Document) -> None:
-    rect(fig, LEFT, top - 0.06, WIDTH, 0.06, NAVY)
-    text(fig, LEFT, top - 0.16, "GYROPIPE", 7.5, bold=True, color=NAVY)
-    text(fig, LEFT, top - 0.34, doc.title, 19, bold=True, color=NAVY)
-    text(fig, LEFT, top - 0.74, doc.subject, 14, bold=True)
-    text(fig, LEFT, top - 1.02, doc.subtitle, 8.5, color=MUTED)
-    text(fig, LEFT + WIDTH, top - 0.16, doc.issued, 7.5, color=MUTED, ha="right")
+def _title_block(page: Page, top: float, doc: Document) -> None:
+    rect(page, LEFT, top - 0.06, WIDTH, 0.06, NAVY)
+    text(page, LEFT, top - 0.16, "GYROPIPE", 7.5, bold=True, color=NAVY)
+    text(page, LEFT, top - 0.34, doc.title, 19, bold=True, color=NAVY)
+    text(page, LEFT, top - 0.74, doc.subject, 14, bold=True)
+    text(page, LEFT, top - 1.02, doc.subtitle, 8.5, color=MUTED)
+    text(page, LEFT + WIDTH, top - 0.16, doc.issued, 7.5, color=MUTED, ha="right")
 
 
-def _page_frame(fig: Figure, doc: Document, number: int, total: int) -> None:
+def _page_frame(page: Page, doc: Document, number: int, total: int) -> None:
     """Running header (after the first page) and footer with the page number."""
     if number > 1:
         top = PAGE_H - TOP + 0.38
-        text(fig, LEFT, top, doc.title, 7.5, bold=True, color=NAVY, va="baseline")
-        text(fig, LEFT + WIDTH, top, doc.subject, 7.5, color=MUTED, ha="right", va="baseline")
-        rect(fig, LEFT, top - 0.09, WIDTH, 0.012, NAVY)
+        text(page, LEFT, top, doc.title, 7.5, bold=True, color=NAVY, va="baseline")
+        text(page, LEFT + WIDTH, top, doc.subject, 7.5, color=MUTED, ha="right", va="baseline")
+        rect(page, LEFT, top - 0.09, WIDTH, 0.012, NAVY)
     foot = BOTTOM - 0.38
-    rect(fig, LEFT, foot + 0.16, WIDTH, 0.006, GREY)
+    rect(page, LEFT, foot + 0.16, WIDTH, 0.006, GREY)
     for k, line in enumerate(wrap(doc.footer, WIDTH - 1.0, 6.5)[:2]):
-        text(fig, LEFT, foot + 0.1 - 0.12 * k, line, 6.5, color=MUTED)
-    text(fig, LEFT + WIDTH, foot + 0.1, f"Page {number} of {total}", 6.5, color=MUTED, ha="right")
+        text(page, LEFT, foot + 0.1 - 0.12 * k, line, 6.5, color=MUTED)
+    text(page, LEFT + WIDTH, foot + 0.1, f"Page {number} of {total}", 6.5, color=MUTED, ha="right")
 
 
 def _section(flow: Flow, section: Section, number: int, figures: Numbered) -> None:
     heading = f"{number}. {section.title}"
 
-    def draw_heading(fig: Figure, top: float) -> None:
-        text(fig, LEFT, top - 0.12, heading, 11.5, bold=True, color=NAVY)
-        rect(fig, LEFT, top - 0.36, WIDTH, 0.018, NAVY)
+    def draw_heading(page: Page, top: float) -> None:
+        text(page, LEFT, top - 0.12, heading, 11.5, bold=True, color=NAVY)
+        rect(page, LEFT, top - 0.36, WIDTH, 0.018, NAVY)
 
     keep = _first_height(section.blocks[0]) if section.blocks else 0.0
     flow.place(0.5, draw_heading, keep=min(keep, PAGE_H - TOP - BOTTOM - 0.5))
@@ -168,7 +158,7 @@ def _block(flow: Flow, block: Block, figures: Numbered) -> None:
         rows = wrap(block.text, WIDTH, 7.5)
         flow.place(
             LINE * len(rows) + 0.1,
-            lambda fig, top: lines(fig, LEFT, top, rows, 7.5, LINE, color=MUTED),
+            lambda page, top: lines(page, LEFT, top, rows, 7.5, LINE, color=MUTED),
         )
     elif isinstance(block, Plot):
         _plot(flow, block, *next(figures))
@@ -186,14 +176,14 @@ def _fields_row(flow: Flow, group: list[Fields]) -> None:
         laid.append((block, label_w, values))
     height = max(0.3 + LINE * sum(len(v) for v in values) for _, _, values in laid) + 0.12
 
-    def draw(fig: Figure, top: float) -> None:
+    def draw(page: Page, top: float) -> None:
         for col, (block, label_w, values) in enumerate(laid):
             x = LEFT + col * (width + FIELD_GAP)
-            text(fig, x, top, block.title, 8.5, bold=True, color=NAVY)
+            text(page, x, top, block.title, 8.5, bold=True, color=NAVY)
             y = top - 0.26
             for (label, _), value in zip(block.items, values, strict=True):
-                text(fig, x, y, label, 7.5, color=MUTED)
-                lines(fig, x + label_w, y, value, 7.5, LINE, bold=True)
+                text(page, x, y, label, 7.5, color=MUTED)
+                lines(page, x + label_w, y, value, 7.5, LINE, bold=True)
                 y -= LINE * len(value)
 
     flow.place(height, draw)
@@ -204,10 +194,10 @@ def _verdict(flow: Flow, block: Verdict) -> None:
     rows = wrap(block.text, WIDTH - 0.35, 8.5, bold=True)
     height = 0.16 * len(rows) + 0.14
 
-    def draw(fig: Figure, top: float) -> None:
-        rect(fig, LEFT, top - height, WIDTH, height, fill)
-        rect(fig, LEFT, top - height, 0.06, height, edge)
-        lines(fig, LEFT + 0.17, top - 0.07, rows, 8.5, 0.16, bold=True)
+    def draw(page: Page, top: float) -> None:
+        rect(page, LEFT, top - height, WIDTH, height, fill)
+        rect(page, LEFT, top - height, 0.06, height, edge)
+        lines(page, LEFT + 0.17, top - 0.07, rows, 8.5, 0.16, bold=True)
 
     flow.place(height + 0.12, draw)
 
@@ -221,26 +211,10 @@ def _plot(flow: Flow, plot: Plot, number: int, raster: Image.Image) -> None:
     caption = wrap(plot.caption, WIDTH, 7.5)
     x0 = LEFT + (WIDTH - width) / 2
 
-    def draw(fig: Figure, top: float) -> None:
-        fig.add_artist(_Raster(raster, x0, top - height, width, height))
+    def draw(page: Page, top: float) -> None:
+        page.image(raster, x0, top - height, width, height)
         below = top - height - 0.06
-        lines(fig, LEFT, below, heading, 7.5, LINE, bold=True)
-        lines(fig, LEFT, below - LINE * len(heading), caption, 7.5, LINE, color=MUTED)
+        lines(page, LEFT, below, heading, 7.5, LINE, bold=True)
+        lines(page, LEFT, below - LINE * len(heading), caption, 7.5, LINE, color=MUTED)
 
     flow.place(height + LINE * (len(heading) + len(caption)) + 0.25, draw)
-
-
-class _Raster(Artist):
-    """An image placed as it is (no resampling) in a box of the page, inches from its
-    bottom-left corner."""
-
-    def __init__(self, image: Image.Image, x: float, y: float, w: float, h: float) -> None:
-        super().__init__()
-        self.pixels = np.asarray(image.convert("RGB"))[::-1]  # the PDF writer flips rows
-        self.box = (x, y, w, h)
-
-    def draw(self, renderer: RendererBase) -> None:
-        x, y, w, h = (v * 72.0 for v in self.box)  # points: the page's dpi is 72
-        gc = renderer.new_gc()
-        renderer.draw_image(gc, x, y, self.pixels, Affine2D().scale(w, h))  # unit square → box
-        gc.restore()

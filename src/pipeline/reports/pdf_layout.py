@@ -8,49 +8,26 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 
-from matplotlib.backends.backend_agg import RendererAgg
-from matplotlib.figure import Figure
-from matplotlib.font_manager import FontProperties
-from matplotlib.patches import Rectangle
-
-from pipeline.reports.pdf_fonts import lean_font
+from pipeline.reports.pdf_canvas import MONO, PT, SANS, Page
+from pipeline.reports.pdf_fonts import pdf_font
 from pipeline.reports.plots import INK
+
+__all__ = ["MONO", "SANS", "Page"]
 
 PAGE_W, PAGE_H = 8.27, 11.69
 LEFT, RIGHT = 0.7, 0.7
 TOP, BOTTOM = 0.85, 0.8
 WIDTH = PAGE_W - LEFT - RIGHT
 MUTED = "#616e7c"
-SANS = "DejaVu Sans"
-MONO = "DejaVu Sans Mono"
 
-Draw = Callable[[Figure, float], None]
+Draw = Callable[[Page, float], None]
 """Draws one piece onto a page with its top at the given height (inches)."""
 
 
 @cache
-def font(size: float, bold: bool = False, family: str = SANS) -> FontProperties:
-    """``family`` at ``size`` points (:func:`~.pdf_fonts.lean_font`: quick to embed)."""
-    return FontProperties(fname=lean_font(family, bold), size=size)
-
-
-MEASURE_DPI = 720.0
-"""Text is measured at this resolution, where hinting no longer rounds the advances."""
-
-
-@cache
-def renderer() -> RendererAgg:
-    return RendererAgg(10, 10, MEASURE_DPI)  # type: ignore[no-untyped-call]
-
-
-@cache
-def text_width(text: str, size: float, bold: bool = False) -> float:
-    """Width of ``text`` in inches at ``size`` points (measured once per text, size, weight)."""
-    if not text:
-        return 0.0
-    measure = renderer().get_text_width_height_descent
-    width, _, _ = measure(text, font(size, bold), False)  # type: ignore[no-untyped-call]
-    return float(width) / MEASURE_DPI
+def text_width(text: str, size: float, bold: bool = False, family: str = SANS) -> float:
+    """Width of ``text`` in inches at ``size`` points (the font's advances and kerning)."""
+    return pdf_font(family, bold).width(text, size) / PT
 
 
 def _fits(line: str, estimate: float, width: float, size: float, bold: bool) -> bool:
@@ -88,7 +65,7 @@ def wrap(text: str, width: float, size: float, bold: bool = False) -> list[str]:
 
 
 def text(
-    fig: Figure,
+    page: Page,
     x: float,
     y: float,
     content: str,
@@ -100,22 +77,12 @@ def text(
     ha: str = "left",
     va: str = "top",
 ) -> None:
-    """Text at (x, y) inches (never parsed as mathtext)."""
-    fig.text(
-        x,
-        y,
-        content,
-        fontproperties=font(size, bold, family),
-        transform=fig.dpi_scale_trans,
-        parse_math=False,
-        color=color,
-        ha=ha,
-        va=va,
-    )
+    """Text at (x, y) inches: ``ha`` left/right/center, ``va`` top/baseline."""
+    page.text(x, y, content, size, bold=bold, family=family, colour=color, ha=ha, va=va)
 
 
 def lines(
-    fig: Figure,
+    page: Page,
     x: float,
     top: float,
     rows: Sequence[str],
@@ -127,14 +94,12 @@ def lines(
 ) -> None:
     """Lines of text ``step`` inches apart, the first with its top at ``top``."""
     for k, row in enumerate(rows):
-        text(fig, x, top - k * step, row, size, bold=bold, color=color)
+        text(page, x, top - k * step, row, size, bold=bold, color=color)
 
 
-def rect(fig: Figure, x: float, y: float, w: float, h: float, colour: str) -> None:
+def rect(page: Page, x: float, y: float, w: float, h: float, colour: str) -> None:
     """A filled rectangle with its bottom-left corner at (x, y) inches."""
-    fig.patches.append(
-        Rectangle((x, y), w, h, transform=fig.dpi_scale_trans, facecolor=colour, linewidth=0)
-    )
+    page.rect(x, y, w, h, colour)
 
 
 @dataclass

@@ -9,22 +9,19 @@ import textwrap
 from dataclasses import dataclass
 from functools import cache
 
-from matplotlib.figure import Figure
-
 from pipeline.reports.document import Table
 from pipeline.reports.pdf_layout import (
     LEFT,
-    MEASURE_DPI,
     MONO,
     MUTED,
     WIDTH,
     Draw,
     Flow,
-    font,
+    Page,
     lines,
     rect,
-    renderer,
     text,
+    text_width,
     wrap,
 )
 from pipeline.reports.plots import NAVY
@@ -54,10 +51,7 @@ UNIT_INK = "#d5dfeb"
 @cache
 def char_width(size: float) -> float:
     """Advance of one character of the monospaced font, inches."""
-    sample = "0" * 20
-    measure = renderer().get_text_width_height_descent
-    width, _, _ = measure(sample, font(size, family=MONO), False)  # type: ignore[no-untyped-call]
-    return float(width) / len(sample) / MEASURE_DPI
+    return text_width("0", size, family=MONO)
 
 
 @dataclass(frozen=True)
@@ -179,7 +173,7 @@ def place_table(flow: Flow, table: Table) -> None:
         note = wrap(table.note, WIDTH, 7)
         flow.place(
             0.13 * len(note) + 0.12,
-            lambda fig, top: lines(fig, LEFT, top, note, 7, 0.13, color=MUTED),
+            lambda page, top: lines(page, LEFT, top, note, 7, 0.13, color=MUTED),
         )
 
 
@@ -189,19 +183,19 @@ def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: flo
     for k, j in sorted(table.cells):
         flagged.setdefault(k, []).append(j)
 
-    def draw(fig: Figure, top: float) -> None:
+    def draw(page: Page, top: float) -> None:
         y = top
         if table.title:
-            text(fig, LEFT, y, title, 8.5, bold=True, color=NAVY)
+            text(page, LEFT, y, title, 8.5, bold=True, color=NAVY)
             y -= 0.26
-        rect(fig, LEFT, y - head_h, width, head_h, NAVY)
+        rect(page, LEFT, y - head_h, width, head_h, NAVY)
         for i, line in enumerate(setting.header):
             text(
-                fig, LEFT, y - 0.035 - i * pitch, line, size, bold=True, family=MONO, color="white"
+                page, LEFT, y - 0.035 - i * pitch, line, size, bold=True, family=MONO, color="white"
             )
         if setting.unit:
             text(
-                fig,
+                page,
                 LEFT,
                 y - 0.035 - len(setting.header) * pitch,
                 setting.unit,
@@ -213,16 +207,16 @@ def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: flo
         for n, k in enumerate(rows):
             h = setting.row_height(k)
             if k in table.marked:
-                rect(fig, LEFT, y - h, width, h, MARKED)
+                rect(page, LEFT, y - h, width, h, MARKED)
             elif n % 2:
-                rect(fig, LEFT, y - h, width, h, ZEBRA)
+                rect(page, LEFT, y - h, width, h, ZEBRA)
             for j in flagged.get(k, ()):
                 x, w = setting.cell_span(j)
-                rect(fig, LEFT + x, y - h, w, h, FLAGGED)
-                rect(fig, LEFT + x, y - h, 0.02, h, FLAG_EDGE)
+                rect(page, LEFT + x, y - h, w, h, FLAGGED)
+                rect(page, LEFT + x, y - h, 0.02, h, FLAG_EDGE)
             for i, line in enumerate(setting.rows[k]):
-                text(fig, LEFT, y - 0.02 - i * pitch, line, size, family=MONO)
+                text(page, LEFT, y - 0.02 - i * pitch, line, size, family=MONO)
             y -= h
-        rect(fig, LEFT, y - 0.006, width, 0.006, NAVY)
+        rect(page, LEFT, y - 0.006, width, 0.006, NAVY)
 
     return draw

@@ -20,6 +20,7 @@ from matplotlib.ticker import MaxNLocator
 from matplotlib.typing import RcKeyType
 from numpy.typing import NDArray
 
+from pipeline.reports.envelope import FullRate
 from pipeline.reports.numbers import fmt_azimuth, fmt_sig
 
 FloatArray = NDArray[np.float64]
@@ -550,3 +551,25 @@ def calibration_series(fig: Canvas, data: SeriesPoints) -> None:
     ax_est.set_yticks(y, labels, fontsize=6.5)
     ax_est.set_xlabel("Drift rate ± σ (°/h)")
     ax_est.grid(False, axis="y")
+
+
+def full_rate(fig: Canvas, series: FullRate, path: Path3, inc: FloatArray, azi: FloatArray) -> None:
+    """Inclination and azimuth of every sample against MD (their per-column envelope,
+    :mod:`.envelope`), the stations on top as dots (on the azimuth panel only when both
+    have one north reference)."""
+    ax_inc, ax_azi = axes_grid(fig, 2, 1, hspace=0.12, sharex=True, top=0.15)
+    same_north = series.north == path.north_label
+    for ax, (x, y), at, colour in (
+        (ax_inc, series.inc, inc, BLUE),
+        (ax_azi, series.azi, azi if same_north else None, TEAL),
+    ):
+        ax.plot(x, y, color=GREY, linewidth=0.6, label=f"samples ({series.samples:,})")
+        if at is not None:
+            ax.plot(
+                path.md, at, "o", color=colour, markersize=2.4, linestyle="none", label="stations"
+            )
+    ax_inc.set_ylabel("Inclination (°)")
+    ax_inc.legend(loc="upper left")
+    ax_inc.tick_params(labelbottom=False)
+    ax_azi.set_ylabel(f"Azimuth (°, {series.north})")
+    ax_azi.set_xlabel("MD (m)")

@@ -3,8 +3,10 @@ bands, per-check summary rows, and a QC flag per survey station.
 
 Sources: the validity checks' :class:`~pipeline.qc.tables.QcResults` (|measured −
 reference| ≤ tolerance) and :class:`~pipeline.qc.tables.QcSummary`, generic
-:class:`~pipeline.tables.CheckResults` (value ≤ limit) and free-gyro
-:class:`~pipeline.drift.tables.InOutQc` (in − out within tolerance).
+:class:`~pipeline.tables.CheckResults` (value ≤ limit), free-gyro
+:class:`~pipeline.drift.tables.InOutQc` and two runs'
+:class:`~pipeline.qc.tables.RunComparison` (in − out within tolerance), and the acceptance
+gates of a survey (:class:`~pipeline.tables.AcceptanceGates`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.qc.tables import diagnoses
-from pipeline.reports.document import Column, Table, fmt_sig
+from pipeline.reports.document import Column, Table, Verdict, fmt_sig
 from pipeline.reports.flags import Flag, compass_flag, continuous_flags, failed_check
 from pipeline.reports.numbers import fmt
 from pipeline.reports.plots import FloatArray, QcSeries
@@ -34,9 +36,18 @@ class QcSources:
     checks: pa.Table | None = None
     inout: pa.Table | None = None
     stations: pa.Table | None = None
+    comparison: pa.Table | None = None
+    gates: pa.Table | None = None
 
     def any(self) -> bool:
-        return any(t is not None for t in (self.qc, self.summary, self.checks, self.inout))
+        return any(
+            t is not None
+            for t in (self.qc, self.summary, self.checks, self.inout, self.comparison, self.gates)
+        )
+
+    def compared(self) -> list[pa.Table]:
+        """The in-run/out-run comparisons present (free-gyro QC, two runs compared)."""
+        return [t for t in (self.inout, self.comparison) if t is not None and t.num_rows]
 
 
 def _floats(table: pa.Table, name: str) -> FloatArray:
@@ -109,7 +120,20 @@ def inout_series(inout: pa.Table) -> list[QcSeries]:
     for quantity, name in (("inc", "in/out inclination"), ("azi", "in/out azimuth")):
         diff = _floats(inout, f"{quantity}_diff")
         tol = _floats(inout, f"{quantity}_tolerance")
-        out.append(QcSeries(name, "°", md, diff, -tol, tol, np.abs(diff) <= tol, "in − out"))
+        ok = ~np.isnan(diff)  # an azimuth at vertical is not compared
+        out.append(
+            QcSeries(
+                name,
+                "°",
+                md[ok],
+                diff[ok],
+                -tol[ok],
+                tol[ok],
+                np.abs(diff[ok]) <= tol[ok],
+                "in − out",
+                skipped=int((~ok).sum()),
+            )
+        )
     return out
 
 
@@ -120,8 +144,8 @@ def all_series(src: QcSources) -> list[tuple[str, list[QcSeries]]]:
         groups.append(("Validity checks", validity_series(src.qc)))
     if src.checks is not None:
         groups.append(("Survey checks", check_series(src.checks)))
-    if src.inout is not None:
-        groups.append(("In-run / out-run comparison", inout_series(src.inout)))
+    for table in src.compared():
+        groups.append(("In-run / out-run comparison", inout_series(table)))
     return [(title, series) for title, series in groups if series]
 
 
@@ -191,10 +215,10 @@ def station_flags(md: FloatArray, src: QcSources) -> list[list[Flag]]:
                 if k
             ],
         )
-    if src.inout is not None:
+    for table in src.compared():
         at(
-            _floats(src.inout, "md"),
-            [[] if p else [failed_check("in/out")] for p in src.inout.column("passed").to_pylist()],
+            _floats(table, "md"),
+            [[] if p else [failed_check("in/out")] for p in table.column("passed").to_pylist()],
         )
     if src.stations is not None and "flags" in src.stations.column_names:
         at(
@@ -264,3 +288,53 @@ def diagnosis_table(summary: pa.Table | None) -> Table | None:
         note="The sensor a failure points to, from fitting one fault at a time to the "
         "readings at rest; 'undetermined' where the data cannot tell.",
     )
+
+
+GATE_LABELS = {
+    "stations": "Stations compared, in-run and out-run",
+    "inclination": "Inclination, in-run − out-run",
+    "azimuth": "Azimuth, in-run − out-run",
+    "azimuth_low": "Azimuth at low inclination, in-run − out-run",
+    "depth": "Depth, in-run − out-run",
+}
+"""Client-facing names of the built-in acceptance gates (others show their own name)."""
+
+
+def gates_table(gates: pa.Table) -> Table:
+    """The acceptance gates, one row each, failed rows marked: the worst value against the
+    limit and the result."""
+    rows = []
+    for g in gates.to_pylist():
+        value = g["value"]
+        shown = "—" if value is None or not np.isfinite(value) else fmt_sig(value, 3)
+        label = GATE_LABELS.get(g["gate"], g["gate"])
+        rows.append(
+            (label, g["description"], shown, fmt_sig(g["limit"], 3), g["unit"], g["status"].upper())
+        )
+    return Table(
+        "Acceptance gates",
+        (
+            Column("Gate", align="left"),
+            Column("Criterion", align="left", wrap=True),
+            Column("Worst value"),
+            Column("Limit"),
+            Column("Unit", align="left"),
+            Column("Result", align="left"),
+        ),
+        tuple(rows),
+        kind="gates",
+        marked=frozenset(i for i, r in enumerate(rows) if r[5] == "FAIL"),
+        note="Each gate compares the worst station (or the number of stations compared) with "
+        "the client's limit; a gate with nothing to compare is not evaluated.",
+    )
+
+
+def gates_verdict(gates: pa.Table) -> Verdict:
+    """One line: the survey accepted, or which gates failed."""
+    rows = gates.to_pylist()
+    failed = [GATE_LABELS.get(g["gate"], g["gate"]) for g in rows if g["status"] == "fail"]
+    if failed:
+        return Verdict("fail", f"Acceptance: FAILED — {'; '.join(failed)}.")
+    skipped = sum(1 for g in rows if g["status"] not in ("pass", "fail"))
+    note = f" ({skipped} not evaluated)" if skipped else ""
+    return Verdict("ok", f"Acceptance: PASSED — all {len(rows) - skipped} gates{note}.")

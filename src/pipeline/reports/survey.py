@@ -14,6 +14,7 @@ import pyarrow as pa
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
 from pipeline.reports import plots
+from pipeline.reports.clearance import clearance_section
 from pipeline.reports.document import (
     Block,
     Column,
@@ -30,6 +31,7 @@ from pipeline.reports.document import (
     fmt_sigma,
     items,
 )
+from pipeline.reports.envelope import FullRate
 from pipeline.reports.flags import Flag
 from pipeline.reports.listing import (
     ELLIPSE_COLUMNS,
@@ -41,11 +43,14 @@ from pipeline.reports.listing import (
     short_courses,
 )
 from pipeline.reports.literature import Citations
+from pipeline.reports.program import program_section
 from pipeline.reports.qc import (
     QcSources,
     all_series,
     diagnosis_table,
     flag_table,
+    gates_table,
+    gates_verdict,
     station_flags,
     summary_rows,
 )
@@ -81,9 +86,22 @@ class SurveyTables:
     calibration: pa.Table | None = None
     allan: pa.Table | None = None
     noise: pa.Table | None = None
+    comparison: pa.Table | None = None
+    gates: pa.Table | None = None
+    clearance: pa.Table | None = None
+    series: FullRate | None = None
+    """a full-rate series already reduced to its envelope (bounded, whatever its length)"""
 
     def qc_sources(self) -> QcSources:
-        return QcSources(self.qc, self.qc_summary, self.checks, self.inout, self.stations)
+        return QcSources(
+            self.qc,
+            self.qc_summary,
+            self.checks,
+            self.inout,
+            self.stations,
+            self.comparison,
+            self.gates,
+        )
 
 
 def section_azimuth(
@@ -124,6 +142,8 @@ def survey_document(
     flags = station_flags(md, src) if src.any() or _has(tables.stations, "flags") else None
     short = short_courses(md, path.offsets, min_course)
     course = Course(short, min_course)
+    citations = Citations()
+    clearance = clearance_section(tables.clearance, citations) if _rows(tables.clearance) else None
 
     sections = [
         Section(
@@ -139,27 +159,32 @@ def survey_document(
             key="well",
         ),
         _summary(tables, path, vs_azimuth, flags, course),
-        _method(tables, path, vs_azimuth, provenance),
+        _method(tables, path, vs_azimuth, provenance, citations),
         Section(
             "Survey listing",
             (listing(traj, tables.stations, vs_azimuth, flags, course),),
             key="listing",
         ),
-        _trajectory_plots(traj, path, vs, vs_azimuth, course),
+        _trajectory_plots(traj, path, vs, vs_azimuth, course, tables.series),
     ]
+    program = program_section(traj)
+    if program is not None:
+        sections.insert(3, program)
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(traj, path))
     groups = all_series(src)
     explained = flag_table(flags or [])
     diagnosed = diagnosis_table(src.summary)
-    if groups or explained is not None or diagnosed is not None:
-        sections.append(_qc(groups, explained, diagnosed))
+    if groups or explained is not None or diagnosed is not None or src.gates is not None:
+        sections.append(_qc(groups, explained, diagnosed, src.gates))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
         calibration = tables.calibration if _rows(tables.calibration) else None
         sections.append(_drift(dataclasses.replace(tables, drift=drift, calibration=calibration)))
     if tables.allan is not None and _rows(tables.allan):
         sections.append(_allan(tables.allan, tables.noise))
+    if clearance is not None:
+        sections.append(clearance)
     sections.append(provenance_section(provenance))
     subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
     return Document(
@@ -256,14 +281,19 @@ def _summary(
     blocks: list[Block] = [Fields("Results", tuple(results))]
     if flags is not None:
         blocks.append(_qc_verdict(flags, path.md))
+    if tables.gates is not None:
+        blocks.append(gates_verdict(tables.gates))
     return Section("Summary", tuple(blocks), key="summary")
 
 
 def _method(
-    tables: SurveyTables, path: plots.Path3, vs_azimuth: float | None, provenance: Provenance
+    tables: SurveyTables,
+    path: plots.Path3,
+    vs_azimuth: float | None,
+    provenance: Provenance,
+    citations: Citations,
 ) -> Section:
     traj = tables.trajectory
-    citations = Citations()
     plane = (
         f"{fmt_azimuth(vs_azimuth)}° {path.north_label}"
         if vs_azimuth is not None
@@ -296,8 +326,21 @@ def _trajectory_plots(
     vs: plots.FloatArray,
     vs_azimuth: float | None,
     course: Course,
+    series: FullRate | None,
 ) -> Section:
     inc, azi, dls = col(traj, "inc"), col(traj, "azi"), col(traj, "dls")
+    full: tuple[Plot, ...] = ()
+    if series is not None and series.samples:
+        full = (
+            Plot(
+                "fullrate",
+                "Inclination and azimuth of every sample against MD",
+                f"Grey: the {series.samples:,} samples of the run (each pixel column drawn "
+                "from its lowest to its highest value); dots: the stations.",
+                partial(plots.full_rate, series=series, path=path, inc=inc, azi=azi),
+                (6.9, 4.0),
+            ),
+        )
     return Section(
         "Trajectory",
         (
@@ -343,6 +386,7 @@ def _trajectory_plots(
                 ),
                 (6.9, 4.5),
             ),
+            *full,
         ),
         key="trajectory",
     )
@@ -378,8 +422,12 @@ def _qc(
     groups: list[tuple[str, list[plots.QcSeries]]],
     explained: Table | None,
     diagnosed: Table | None,
+    gates: pa.Table | None = None,
 ) -> Section:
-    blocks: list[Block] = [t for t in (explained, diagnosed) if t is not None]
+    blocks: list[Block] = []
+    if gates is not None:
+        blocks += [gates_verdict(gates), gates_table(gates)]
+    blocks += [t for t in (explained, diagnosed) if t is not None]
     columns = (
         Column("Check", align="left"),
         Column("Unit", align="left"),

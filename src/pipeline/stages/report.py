@@ -9,11 +9,13 @@ plugins stays fast for every other command.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.anticollision.tables import Clearance
+from pipeline.continuous.tables import ContinuousSeries
 from pipeline.contracts import TableContract
 from pipeline.drift.tables import (
     AllanResult,
@@ -26,9 +28,10 @@ from pipeline.drift.tables import (
 )
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
-from pipeline.qc.tables import QcResults, QcSummary
+from pipeline.qc.tables import QcResults, QcSummary, RunComparison
 from pipeline.registry import Registry, StageContext, StageDef
-from pipeline.tables import CheckResults, Stations, Trajectory
+from pipeline.streams import Port, as_stream
+from pipeline.tables import AcceptanceGates, CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
     from pipeline.reports.document import Document
@@ -80,13 +83,22 @@ def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
 
 
 def survey_report(
-    inputs: Mapping[str, pa.Table], params: ReportParams, ctx: StageContext
+    inputs: Mapping[str, Any], params: ReportParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Trajectory (and whatever QC, drift and noise tables are wired) → survey report."""
+    """Trajectory (and whatever QC, drift and noise tables are wired) → survey report; a
+    full-rate ``series`` streams in and is reduced batch by batch to its drawing envelope."""
+    from pipeline.reports.envelope import full_rate
+    from pipeline.reports.sections import north_label
     from pipeline.reports.survey import SurveyTables, survey_document
 
+    tables = dict(inputs)
+    series: Port | None = tables.pop("series", None)  # a stream from the engine
+    if series is not None:
+        stream = as_stream(series)
+        north = north_label(stream.schema.empty_table(), "azi")
+        tables["series"] = full_rate(stream, north)
     doc = survey_document(
-        SurveyTables(**inputs),
+        SurveyTables(**tables),
         ctx.well,
         ctx.provenance,
         params.title or "Gyro survey report",
@@ -125,6 +137,10 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "calibration": CalibrationResult,
     "allan": AllanResult,
     "noise": NoiseParameters,
+    "comparison": RunComparison,
+    "gates": AcceptanceGates,
+    "clearance": Clearance,
+    "series": ContinuousSeries,
 }
 
 
@@ -135,9 +151,11 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="report",
             func=survey_report,
             description="Survey report (HTML and PDF): header, method and reference models, "
-            "listing, trajectory plots, ellipses, QC charts, drift and Allan plots, provenance.",
+            "listing, trajectory plots, the full-rate series (streamed, drawn from its "
+            "envelope), ellipses, QC charts, drift and Allan plots, provenance.",
             inputs=SURVEY_INPUTS,
             optional_inputs=frozenset(SURVEY_INPUTS) - {"trajectory"},
+            streamed_inputs=frozenset({"series"}),
             params=ReportParams,
         )
     )

@@ -3,17 +3,18 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
 
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, pipeline_input
-from pipeline.sim.freegyro import simulate_free_gyro
-from pipeline.sim.simulate import simulate
-from pipeline.sim.spec import FreeGyroSurvey, SimulationSpec, load_simulation
 from pipeline.tables import FreeGyroReadings, RawSamples, SimTruth, Stations
 from pipeline.well import WellMetadata, attach
+
+if TYPE_CHECKING:  # the simulator is imported when a simulation stage runs, not to register
+    from pipeline.sim.spec import SimulationSpec
 
 
 class SimulateParams(BaseModel):
@@ -39,6 +40,10 @@ def well_of_simulation(spec: SimulationSpec) -> WellMetadata:
 
 def simulation_tables(spec: SimulationSpec) -> dict[str, pa.Table]:
     """All tables of a simulation by name, with the well metadata attached."""
+    from pipeline.sim.freegyro import simulate_free_gyro
+    from pipeline.sim.simulate import simulate
+    from pipeline.sim.spec import FreeGyroSurvey
+
     well = well_of_simulation(spec)
     if isinstance(spec.survey, FreeGyroSurvey):
         return {"readings": attach(simulate_free_gyro(spec), well)}
@@ -54,6 +59,8 @@ def simulation_tables(spec: SimulationSpec) -> dict[str, pa.Table]:
 
 
 def _load(params: SimulateParams, ctx: StageContext) -> SimulationSpec:
+    from pipeline.sim.spec import load_simulation
+
     return load_simulation(
         ctx.input_path(params.plan),
         seed=params.seed,
@@ -65,6 +72,8 @@ def run_simulation(
     inputs: Mapping[str, pa.Table], params: SimulateParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Point or continuous survey: raw samples, truth and true stations."""
+    from pipeline.sim.spec import FreeGyroSurvey
+
     spec = _load(params, ctx)
     if isinstance(spec.survey, FreeGyroSurvey):
         raise ValueError("this plan is a free_gyro survey: use the simulate_free_gyro stage")
@@ -75,6 +84,8 @@ def run_free_gyro(
     inputs: Mapping[str, pa.Table], params: SimulateParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Free-gyro survey: drifting azimuth readings."""
+    from pipeline.sim.spec import FreeGyroSurvey
+
     spec = _load(params, ctx)
     if not isinstance(spec.survey, FreeGyroSurvey):
         raise ValueError(f"this plan is a {spec.survey.mode} survey: use the simulate stage")

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping
-from importlib.metadata import version
 
 import pyarrow as pa
 
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import field_model
+from pipeline.earth.gravity import METHOD as GRAVITY_METHOD
 from pipeline.earth.site import Site, resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.engine import drop_stations, station_checks
@@ -59,8 +59,7 @@ def with_references(qc: pa.Table, site: Site, options: QcOptions, *, field: bool
     (``gyropipe.references``, JSON): Earth rate, normal gravity, geomagnetic model."""
     references = {
         "earth_rate": f"WGS84 Ω = {OMEGA_EARTH} rad/s",
-        "gravity": f"WGS84 normal gravity (boule {version('boule')}), "
-        f"{site.gravity:.6f} m/s² at the wellhead",
+        "gravity": f"{GRAVITY_METHOD}, {site.gravity:.6f} m/s² at the wellhead",
         "geomagnetic": (
             "given by the site"
             if site.magnetic is not None

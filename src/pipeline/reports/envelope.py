@@ -1,0 +1,132 @@
+"""Full-rate series reduced for drawing: the per-column minimum and maximum envelope.
+
+A line through N samples drawn into a figure a few thousand pixels wide shows, in each
+column of pixels, a vertical stroke from the column's lowest to its highest value. Keeping,
+for each of :data:`COLUMNS` equal bins of x, the samples at the bin's minimum and maximum
+(in their x order) draws the same strokes with at most ``2 × COLUMNS`` points, whatever N.
+
+:class:`Envelope` is built batch by batch (a streamed port's record batches) in bounded
+memory: the x range need not be known in advance — bins start narrow at the first batch
+and are merged pairwise (their minima and maxima are exact) whenever the data outgrow them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+COLUMNS = 2048
+"""Bins of an envelope: at least the pixel columns of a report figure's axes (7 in at
+200 dpi is 1,400 pixels); so a drawn line has at most 4,096 points."""
+
+
+class Envelope:
+    """Per-bin minimum and maximum of y over equal bins of x, with the x of each."""
+
+    def __init__(self, columns: int = COLUMNS) -> None:
+        self.columns = columns
+        self.origin = 0.0
+        self.width = 0.0
+        """bin width in x units (0: no sample yet)"""
+        self.low = np.full(columns, np.inf)
+        self.high = np.full(columns, -np.inf)
+        self.x_low = np.zeros(columns)
+        self.x_high = np.zeros(columns)
+        self.samples = 0
+        """finite samples added"""
+
+    def add(self, x: FloatArray, y: FloatArray) -> None:
+        """Fold the samples (x, y) in; non-finite ones are left out."""
+        keep = np.isfinite(x) & np.isfinite(y)
+        x, y = np.asarray(x, float)[keep], np.asarray(y, float)[keep]
+        if not len(x):
+            return
+        lo, hi = float(x.min()), float(x.max())
+        if self.width == 0.0:
+            self.origin = lo
+            self.width = max(hi - lo, abs(lo) * 1e-9, 1e-9) / (self.columns - 1)
+        self._cover(lo, hi)
+        index = np.minimum(((x - self.origin) / self.width).astype(np.int64), self.columns - 1)
+        order = np.argsort(index, kind="stable")  # linear when x already runs in order
+        index, x, y = index[order], x[order], y[order]
+        starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
+        counts = np.diff(np.r_[starts, len(index)])
+        bins = index[starts]
+        for values, best, beats, at in (
+            (np.minimum.reduceat(y, starts), self.low, np.less, self.x_low),
+            (np.maximum.reduceat(y, starts), self.high, np.greater, self.x_high),
+        ):
+            hits = np.flatnonzero(y == np.repeat(values, counts))
+            first = hits[np.searchsorted(hits, starts)]  # each bin's first sample at it
+            better = beats(values, best[bins])
+            best[bins[better]] = values[better]
+            at[bins[better]] = x[first[better]]
+        self.samples += len(x)
+
+    def _cover(self, lo: float, hi: float) -> None:
+        """Widen the bins (merging 2^k at a time, keeping their edges) and move the origin
+        back by whole bins until [lo, hi] is inside."""
+        shift, factor = 0, 1
+        while True:
+            if lo < self.origin:
+                shift = int(np.ceil((self.origin - lo) / self.width))
+            origin = self.origin - shift * self.width
+            if (hi - origin) / (self.width * factor) < self.columns:
+                break
+            factor *= 2
+        if shift == 0 and factor == 1:
+            return
+        old = np.arange(self.columns)
+        target = (old + shift) // factor
+        filled = np.isfinite(self.low) & (target < self.columns)
+        low, high = np.full(self.columns, np.inf), np.full(self.columns, -np.inf)
+        x_low, x_high = np.zeros(self.columns), np.zeros(self.columns)
+        for k in np.flatnonzero(filled):  # at most COLUMNS bins, once per widening
+            t = target[k]
+            if self.low[k] < low[t]:
+                low[t], x_low[t] = self.low[k], self.x_low[k]
+            if self.high[k] > high[t]:
+                high[t], x_high[t] = self.high[k], self.x_high[k]
+        self.low, self.high, self.x_low, self.x_high = low, high, x_low, x_high
+        self.origin, self.width = origin, self.width * factor
+
+    def points(self) -> tuple[FloatArray, FloatArray]:
+        """The line to draw: each bin's minimum and maximum sample, in x order (one point
+        where they are the same sample)."""
+        used = np.flatnonzero(np.isfinite(self.low))
+        x = np.column_stack([self.x_low[used], self.x_high[used]])
+        y = np.column_stack([self.low[used], self.high[used]])
+        swap = x[:, 1] < x[:, 0]
+        x[swap], y[swap] = x[swap][:, ::-1], y[swap][:, ::-1]
+        single = (x[:, 0] == x[:, 1]) & (y[:, 0] == y[:, 1])
+        keep = np.column_stack([np.ones(len(used), bool), ~single]).ravel()
+        return x.ravel()[keep], y.ravel()[keep]
+
+
+@dataclass(frozen=True)
+class FullRate:
+    """A full-rate series reduced to its drawing envelope: (MD m, value deg) points of
+    inclination and azimuth, the samples they stand for and the azimuth's north."""
+
+    inc: tuple[FloatArray, FloatArray]
+    azi: tuple[FloatArray, FloatArray]
+    samples: int
+    north: str
+    """e.g. 'true north'"""
+
+
+def full_rate(batches: Iterable[pa.RecordBatch], north: str) -> FullRate:
+    """Envelopes of ``inc`` and ``azi`` (deg) against ``md`` (m) of record batches, one
+    batch at a time (a streamed port is never held whole)."""
+    inc, azi = Envelope(), Envelope()
+    for batch in batches:
+        md = batch.column("md").to_numpy(zero_copy_only=False)
+        inc.add(md, batch.column("inc").to_numpy(zero_copy_only=False))
+        azi.add(md, batch.column("azi").to_numpy(zero_copy_only=False))
+    return FullRate(inc.points(), azi.points(), inc.samples, north)

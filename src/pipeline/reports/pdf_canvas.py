@@ -1,0 +1,277 @@
+"""Pages of the PDF report as drawing operations — text, filled rectangles and images placed
+in inches from the page's bottom-left corner — and the PDF file they make, written directly
+(PDF 1.4: one content stream per page, fonts embedded as subsets by :mod:`.pdf_fonts`,
+figures as palette images). The same pages give the same bytes (no creation date)."""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+from matplotlib.colors import to_rgb
+from PIL import Image
+
+from pipeline.reports.pdf_fonts import PdfFont, pdf_font
+
+PT = 72.0
+"""Points per inch."""
+SANS = "DejaVu Sans"
+MONO = "DejaVu Sans Mono"
+
+
+@cache
+def _rgb(colour: str) -> str:
+    return " ".join(_num(c) for c in to_rgb(colour))
+
+
+def _num(value: float) -> str:
+    """A PDF number: three decimals at most, no trailing zeros."""
+    out = f"{value:.3f}".rstrip("0").rstrip(".")
+    return "0" if out in ("-0", "") else out
+
+
+@dataclass(frozen=True)
+class _Text:
+    font: tuple[str, bool]
+    size: float
+    x: float
+    y: float
+    """baseline origin, points"""
+    content: str
+    colour: str
+
+
+@dataclass(frozen=True)
+class _Rect:
+    x: float
+    y: float
+    w: float
+    h: float
+    colour: str
+
+
+@dataclass(frozen=True)
+class _Image:
+    image: Image.Image
+    x: float
+    y: float
+    w: float
+    h: float
+
+
+@dataclass
+class Page:
+    """One page: what is drawn on it, in order (later over earlier)."""
+
+    width: float
+    height: float
+    """inches"""
+    ops: list[_Text | _Rect | _Image] = field(default_factory=list)
+
+    def text(
+        self,
+        x: float,
+        y: float,
+        content: str,
+        size: float,
+        *,
+        bold: bool = False,
+        family: str = SANS,
+        colour: str = "black",
+        ha: str = "left",
+        va: str = "top",
+    ) -> None:
+        """``content`` at ``size`` points; (x, y) inches is its left, right or centre
+        (``ha``) and its top or baseline (``va``: the top is that of its tallest glyph or
+        of 'l', whichever is higher)."""
+        if not content:
+            return
+        font = pdf_font(family, bold)
+        x_pt, y_pt = x * PT, y * PT
+        if ha != "left":
+            x_pt -= font.width(content, size) / (2.0 if ha == "center" else 1.0)
+        if va == "top":
+            y_pt -= font.top(content) * size / font.upem
+        self.ops.append(_Text((family, bold), size, x_pt, y_pt, content, colour))
+
+    def rect(self, x: float, y: float, w: float, h: float, colour: str) -> None:
+        """A filled rectangle with its bottom-left corner at (x, y), inches."""
+        self.ops.append(_Rect(x * PT, y * PT, w * PT, h * PT, colour))
+
+    def image(self, image: Image.Image, x: float, y: float, w: float, h: float) -> None:
+        """``image`` stretched over the box with its bottom-left corner at (x, y), inches."""
+        self.ops.append(_Image(image, x * PT, y * PT, w * PT, h * PT))
+
+
+@dataclass
+class _Embedded:
+    """A font as embedded in one file: resource name, subset glyph ids, units per em."""
+
+    name: str
+    ids: dict[str, int]
+    font: PdfFont
+
+
+class _Writer:
+    def __init__(self) -> None:
+        self.objects: list[bytes] = []
+
+    def reserve(self) -> int:
+        self.objects.append(b"")
+        return len(self.objects)
+
+    def put(self, body: str | bytes, number: int | None = None) -> int:
+        number = number or self.reserve()
+        self.objects[number - 1] = body.encode("latin-1") if isinstance(body, str) else body
+        return number
+
+    def stream(self, entries: str, data: bytes, compress: bool = True) -> int:
+        if compress:
+            data, entries = zlib.compress(data, 6), f"{entries} /Filter /FlateDecode"
+        head = f"<< {entries} /Length {len(data)} >>\nstream\n".encode("latin-1")
+        return self.put(head + data + b"\nendstream")
+
+    def bytes(self, root: int, info: int) -> bytes:
+        out = bytearray(b"%PDF-1.4\n%\xe2\xe3\xcf\xd3\n")
+        offsets = []
+        for number, body in enumerate(self.objects, 1):
+            offsets.append(len(out))
+            out += f"{number} 0 obj\n".encode() + body + b"\nendobj\n"
+        xref = len(out)
+        out += f"xref\n0 {len(self.objects) + 1}\n0000000000 65535 f \n".encode()
+        out += b"".join(f"{o:010d} 00000 n \n".encode() for o in offsets)
+        out += (
+            f"trailer\n<< /Size {len(self.objects) + 1} /Root {root} 0 R /Info {info} 0 R >>\n"
+            f"startxref\n{xref}\n%%EOF\n"
+        ).encode()
+        return bytes(out)
+
+
+def _text_string(value: str) -> str:
+    """A PDF text string (UTF-16BE with its byte-order mark), hex."""
+    return "<FEFF" + value.encode("utf-16-be").hex().upper() + ">"
+
+
+def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[int, _Embedded]:
+    data, ids, widths, text = font.subset(chars)
+    base = f"{font.tag(font.subset_chars(chars))}+{font.name.replace(' ', '')}"
+    file = w.stream(f"/Length1 {len(data)}", data)
+    scale = 1000.0 / font.upem
+    descriptor = w.put(
+        f"<< /Type /FontDescriptor /FontName /{base} /Flags 32 /FontBBox "
+        f"[{' '.join(str(round(v * scale)) for v in font.bbox)}] /ItalicAngle 0 "
+        f"/Ascent {round(font.ascent * scale)} /Descent {round(font.descent * scale)} "
+        f"/CapHeight {round(font.cap_height * scale)} /StemV 80 /FontFile2 {file} 0 R >>"
+    )
+    cid = w.put(
+        f"<< /Type /Font /Subtype /CIDFontType2 /BaseFont /{base} /CIDSystemInfo << "
+        f"/Registry (Adobe) /Ordering (Identity) /Supplement 0 >> /FontDescriptor "
+        f"{descriptor} 0 R /W [0 [{' '.join(map(str, widths))}]] /CIDToGIDMap /Identity >>"
+    )
+    pairs = sorted(text.items())
+    chunks = [pairs[k : k + 100] for k in range(0, len(pairs), 100)]
+    cmap = (
+        "/CIDInit /ProcSet findresource begin 12 dict begin begincmap /CIDSystemInfo << "
+        "/Registry (Adobe) /Ordering (UCS) /Supplement 0 >> def /CMapName /Adobe-Identity-UCS "
+        "def /CMapType 2 def 1 begincodespacerange <0000> <FFFF> endcodespacerange\n"
+        + "".join(
+            f"{len(chunk)} beginbfchar\n"
+            + "".join(f"<{g:04X}> <{c.encode('utf-16-be').hex().upper()}>\n" for g, c in chunk)
+            + "endbfchar\n"
+            for chunk in chunks
+        )
+        + "endcmap CMapName currentdict /CMap defineresource pop end end"
+    )
+    unicode = w.stream("", cmap.encode("ascii"))
+    number = w.put(
+        f"<< /Type /Font /Subtype /Type0 /BaseFont /{base} /Encoding /Identity-H "
+        f"/DescendantFonts [{cid} 0 R] /ToUnicode {unicode} 0 R >>"
+    )
+    return number, _Embedded(name, ids, font)
+
+
+def _show(op: _Text, embedded: _Embedded) -> str:
+    """The text operators of ``op``: glyph runs split where kerning moves a glyph."""
+    glyphs, kerns, _ = embedded.font.layout(op.content)
+    parts: list[str] = []
+    run = ""
+    for glyph, kern in zip(glyphs, kerns, strict=True):
+        if kern and run:
+            parts.append(f"<{run}> {_num(-kern * 1000 / embedded.font.upem)}")
+            run = ""
+        run += f"{embedded.ids.get(glyph, 0):04X}"
+    parts.append(f"<{run}>")
+    return (
+        f"BT /{embedded.name} {_num(op.size)} Tf {_rgb(op.colour)} rg 1 0 0 1 {_num(op.x)} "
+        f"{_num(op.y)} Tm [{' '.join(parts)}] TJ ET"
+    )
+
+
+def _image(w: _Writer, image: Image.Image) -> int:
+    """An image XObject: palette images keep their palette (``Indexed``), others are RGB."""
+    if image.mode == "P":
+        palette = bytes(image.getpalette() or [])
+        colours = f"[/Indexed /DeviceRGB {len(palette) // 3 - 1} <{palette.hex()}>]"
+        data = image.tobytes()
+    else:
+        colours, data = "/DeviceRGB", image.convert("RGB").tobytes()
+    return w.stream(
+        f"/Type /XObject /Subtype /Image /Width {image.width} /Height {image.height} "
+        f"/ColorSpace {colours} /BitsPerComponent 8",
+        data,
+    )
+
+
+def write_pdf(pages: list[Page], path: Path, title: str, creator: str) -> None:
+    """Write ``pages`` to ``path`` as one PDF with ``title`` and ``creator`` in its
+    document information."""
+    w = _Writer()
+    root, tree = w.reserve(), w.reserve()
+    chars: dict[tuple[str, bool], set[str]] = {}
+    for page in pages:
+        for op in page.ops:
+            if isinstance(op, _Text):
+                chars.setdefault(op.font, set()).update(op.content)
+    fonts: dict[tuple[str, bool], _Embedded] = {}
+    font_refs = []
+    for k, (key, used) in enumerate(sorted(chars.items())):
+        number, fonts[key] = _embed_font(w, pdf_font(*key), used, f"F{k + 1}")
+        font_refs.append(f"/F{k + 1} {number} 0 R")
+    images: dict[int, tuple[str, int]] = {}
+    kids = []
+    for page in pages:
+        content: list[str] = []
+        used_images: dict[str, int] = {}
+        for op in page.ops:
+            if isinstance(op, _Text):
+                content.append(_show(op, fonts[op.font]))
+            elif isinstance(op, _Rect):
+                content.append(
+                    f"{_rgb(op.colour)} rg {_num(op.x)} {_num(op.y)} {_num(op.w)} {_num(op.h)} re f"
+                )
+            else:
+                if id(op.image) not in images:
+                    images[id(op.image)] = (f"Im{len(images) + 1}", _image(w, op.image))
+                name, number = images[id(op.image)]
+                used_images[name] = number
+                content.append(
+                    f"q {_num(op.w)} 0 0 {_num(op.h)} {_num(op.x)} {_num(op.y)} cm /{name} Do Q"
+                )
+        stream = w.stream("", "\n".join(content).encode("latin-1"))
+        xobjects = " ".join(f"/{n} {r} 0 R" for n, r in used_images.items())
+        kids.append(
+            w.put(
+                f"<< /Type /Page /Parent {tree} 0 R /MediaBox [0 0 {_num(page.width * PT)} "
+                f"{_num(page.height * PT)}] /Resources << /Font << {' '.join(font_refs)} >> "
+                f"/XObject << {xobjects} >> >> /Contents {stream} 0 R >>"
+            )
+        )
+    w.put(
+        f"<< /Type /Pages /Kids [{' '.join(f'{k} 0 R' for k in kids)}] /Count {len(kids)} >>",
+        tree,
+    )
+    w.put(f"<< /Type /Catalog /Pages {tree} 0 R >>", root)
+    info = w.put(f"<< /Title {_text_string(title)} /Creator {_text_string(creator)} >>")
+    path.write_bytes(w.bytes(root, info))

@@ -1,0 +1,400 @@
+"""Built-in plugin: the ``definitive_survey`` stage — one survey of a well from several runs
+or tools (gyro in the top hole, MWD below; in-run and out-run), with per-station provenance
+and the position covariance carried across the sections (:mod:`pipeline.survey.definitive`
+chooses the stations, :mod:`pipeline.uncertainty.sections` carries the covariance)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+import pyarrow as pa
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from pipeline.contracts import SOURCE_KEY, TableContract, column
+from pipeline.earth.site import MagneticReference, resolve_site
+from pipeline.errors import EmptyTableError
+from pipeline.hookspecs import hookimpl
+from pipeline.registry import StageContext, StageDef
+from pipeline.stages.uncertainty import (
+    PositionUncertainty,
+    UncertaintyParams,
+    covariance_columns,
+    wellhead_field,
+)
+from pipeline.survey.definitive import OverlapRule, RunStations, plan_sections, roles
+from pipeline.survey.definitive import Section as PlannedSection
+from pipeline.survey.interpolate import interpolate_md
+from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
+from pipeline.survey.north import convert_azimuth
+from pipeline.survey.stations import (
+    defined_azimuths,
+    north_reference_of,
+    station_angles,
+    survey_offsets,
+)
+from pipeline.tables import DLS_COURSE_M, Stations
+from pipeline.uncertainty.engine import configure
+from pipeline.uncertainty.quantities import ModelSite, Quantities
+from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
+from pipeline.uncertainty.terms import Survey, Term
+from pipeline.well import NorthReference, WellMetadata
+
+MAX_RUNS = 6
+RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
+
+
+class DefinitiveSurvey(PositionUncertainty):
+    """A definitive survey: the stations chosen from several runs, their positions (each
+    section tied to the one above), NEV covariance carried across sections, and where every
+    station comes from."""
+
+    run: str = column(unit=None, description="run the station comes from")
+    tool_model: str = column(unit=None, description="error model of the run's tool")
+    source: str = column(unit=None, description="file the run was read from ('' if none)")
+    section: int = column(unit=None, ge=0, description="section index, top down")
+
+
+class SurveyOverlap(TableContract):
+    """Stations of the runs that the definitive survey does not list, kept for QC, beside
+    the definitive survey at the same MD (NaN outside it)."""
+
+    run: str = column(unit=None, description="run the station comes from")
+    role: str = column(
+        unit=None,
+        description="tie (a lower run's tie station), overlap (inside another run's section) "
+        "or excluded (outside its run's depth range)",
+    )
+    md: float = column(unit="m", description="measured depth")
+    inc: float = column(unit="deg", ge=0, le=180, description="the run's inclination")
+    azi: float = column(
+        unit="deg",
+        north_reference=True,
+        undefined_at_vertical=True,
+        description="the run's azimuth, in the definitive survey's north reference",
+    )
+    definitive_inc: float = column(
+        unit="deg", finite=False, description="the definitive survey's inclination at md"
+    )
+    definitive_azi: float = column(
+        unit="deg",
+        finite=False,
+        north_reference=True,
+        description="the definitive survey's azimuth at md",
+    )
+    inc_diff: float = column(unit="deg", finite=False, description="inc − definitive_inc")
+    azi_diff: float = column(
+        unit="deg", finite=False, description="azi − definitive_azi, wrapped to ±180°"
+    )
+    source: str = column(unit=None, description="file the run was read from ('' if none)")
+
+
+class RunSpec(BaseModel):
+    """One run of a definitive survey (lengths m)."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str | None = Field(None, description="run id in the provenance (default: the port)")
+    model: str = Field(
+        "GYRO-NS",
+        description="the run's error model: a tool model's name (`gyropipe models`) or the "
+        "path of a tool-model file, as the position_uncertainty stage's",
+    )
+    tool: dict[str, float] = Field(
+        default_factory=dict,
+        description="term magnitudes and parameters overriding the model file's (its units)",
+    )
+    priority: int = Field(0, description="in an overlap the higher priority wins")
+    md_from: float | None = Field(None, description="use the run from this MD, m")
+    md_to: float | None = Field(None, description="use the run down to this MD, m")
+
+    @model_validator(mode="after")
+    def _valid(self) -> RunSpec:
+        try:  # the model exists and has the tool fields
+            UncertaintyParams(model=self.model, tool=self.tool)
+        except ValidationError as exc:
+            raise ValueError(exc.errors()[0]["msg"].removeprefix("Value error, ")) from None
+        if self.md_from is not None and self.md_to is not None and self.md_to <= self.md_from:
+            raise ValueError(f"md_to {self.md_to} must be below md_from {self.md_from}")
+        return self
+
+
+class DefinitiveParams(BaseModel):
+    """Parameters of the definitive-survey stage (lengths m, angles deg)."""
+
+    model_config = ConfigDict(extra="forbid")
+    runs: dict[str, RunSpec] = Field(
+        default_factory=dict,
+        description=f"per input port ({', '.join(RUN_PORTS)}): run id, error model, priority "
+        "and depth range; a wired port without an entry takes the defaults",
+    )
+    overlap: OverlapRule = Field(
+        "priority",
+        description="who wins a depth several runs cover: priority (higher wins; equal: the "
+        "run starting deeper), upper (the run above keeps it) or lower (the run below takes "
+        "over from its first station)",
+    )
+    min_length: float = Field(
+        1.0,
+        ge=0,
+        description="shortest stretch a run takes over, m: a shorter one (e.g. an out-run "
+        "starting a few millimetres above the in-run) stays with the neighbouring run",
+    )
+    north_reference: NorthReference | None = Field(
+        None, description="azimuths of the survey (default: the first run's)"
+    )
+    latitude: float | None = Field(
+        None, ge=-89.9, le=89.9, description="latitude, deg (gyro models); default: the well's"
+    )
+    magnetic: MagneticReference | None = Field(
+        None, description="geomagnetic reference (MWD models, magnetic azimuths); default WMM"
+    )
+    basis: Literal["balanced_tangent", "min_curve"] = Field(
+        "balanced_tangent", description="leg Jacobian of the error propagation"
+    )
+    surface_tie: bool = Field(
+        True, description="ISCWSA surface tie-on allowance at the first station of the well"
+    )
+    well_by_well: WellByWell = Field(
+        "shared",
+        description="well-by-well terms shared by every run of the well (ISCWSA) or "
+        "correlated within each run only (per_run)",
+    )
+    confidence: float = Field(0.95, gt=0, lt=1, description="probability of the *_conf columns")
+    vs_azimuth: float = Field(0.0, description="vertical-section azimuth, deg")
+    tie_north: float = Field(0.0, description="northing of the first station, m")
+    tie_east: float = Field(0.0, description="easting of the first station, m")
+    tie_tvd: float | None = Field(None, description="TVD of the first station, m (default MD)")
+
+    @model_validator(mode="after")
+    def _ports(self) -> DefinitiveParams:
+        unknown = sorted(set(self.runs) - set(RUN_PORTS))
+        if unknown:
+            raise ValueError(f"runs: unknown ports {unknown}; expected some of {list(RUN_PORTS)}")
+        return self
+
+
+@dataclass(frozen=True)
+class _Run:
+    port: str
+    spec: RunSpec
+    md: np.ndarray
+    inc: np.ndarray
+    azi: np.ndarray  #: deg, in the survey's north reference
+    azi_true: np.ndarray  #: deg, true north (the error models')
+    source: str
+
+    @property
+    def name(self) -> str:
+        return self.spec.name or self.port
+
+
+def definitive_survey(
+    inputs: Mapping[str, pa.Table], params: DefinitiveParams, ctx: StageContext
+) -> dict[str, pa.Table]:
+    """Runs on ports run1…run6 → the definitive survey and the stations it does not list."""
+    missing = sorted(set(params.runs) - set(inputs))
+    if missing:
+        raise ValueError(f"runs {missing} are configured but their ports are not wired")
+    ports = [p for p in RUN_PORTS if p in inputs]
+    north = params.north_reference or north_reference_of(inputs[ports[0]], "azi")
+    magnetic = _magnetic(params, ctx.well, [inputs[p] for p in ports], ports)
+    runs = [
+        _read(p, inputs[p], params.runs.get(p, RunSpec()), north, magnetic, ctx.well) for p in ports
+    ]
+    names = [r.name for r in runs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"run names must differ; got {names}")
+    stations = [
+        RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
+    ]
+    sections = plan_sections(stations, params.overlap, params.min_length)
+    site = ModelSite(magnetic=magnetic)
+    if any("latitude" in configure(r.spec.model, r.spec.tool).needs for r in runs):
+        site = replace(
+            site,
+            latitude=resolve_site(
+                ctx.well, stage="definitive_survey", latitude=params.latitude
+            ).latitude,
+        )
+    parts: list[dict[str, Any]] = []
+    carried = Carried()
+    tie = (params.tie_north, params.tie_east, params.tie_tvd)
+    for s, sec in enumerate(sections):
+        run = runs[sec.run]
+        rows = slice(sec.first, sec.last + 1)
+        md, inc = run.md[rows], np.radians(run.inc[rows])
+        azi, azi_true = (np.radians(defined_azimuths(a[rows])) for a in (run.azi, run.azi_true))
+        origin = (tie[0], tie[1], md[0] if tie[2] is None else tie[2])
+        pos = minimum_curvature(
+            md, inc, azi, tie_north=origin[0], tie_east=origin[1], tie_tvd=origin[2]
+        )
+        survey = Survey.of(md, inc, azi_true, pos.tvd)
+        nxt = sections[s + 1].tie_md if s + 1 < len(sections) else None
+        cov, carried_next = section_covariance(
+            Section(run.name, survey, _terms(run.spec, site)),
+            carried,
+            basis=params.basis,
+            surface_tie=params.surface_tie and s == 0,
+            well_by_well=params.well_by_well,
+            tie_next=nxt,
+        )
+        keep = sec.listed - sec.first
+        parts.append(
+            {
+                "md": md[keep],
+                "inc": run.inc[sec.listed],
+                "azi": run.azi[sec.listed],
+                "north": pos.north[keep],
+                "east": pos.east[keep],
+                "tvd": pos.tvd[keep],
+                "cov": cov[keep],
+                "run": [run.name] * keep.size,
+                "tool_model": [run.spec.model] * keep.size,
+                "source": [run.source] * keep.size,
+                "section": np.full(keep.size, s),
+            }
+        )
+        if nxt is not None and carried_next is not None:
+            at = interpolate_md(md, inc, azi, nxt, tie=(pos.north[0], pos.east[0], pos.tvd[0]))
+            tie = (float(at.north[0]), float(at.east[0]), float(at.tvd[0]))
+            carried = carried_next
+    survey_table = _survey_table(parts, params, north)
+    return {
+        "survey": survey_table,
+        "overlap": _overlap(runs, stations, sections, survey_table, north),
+    }
+
+
+def _read(
+    port: str,
+    table: pa.Table,
+    spec: RunSpec,
+    north: str,
+    magnetic: MagneticReference | None,
+    well: WellMetadata,
+) -> _Run:
+    """A run's stations as arrays, azimuths in the survey's reference and in true north."""
+    if table.num_rows == 0:
+        raise EmptyTableError(f"{port} stations", "a run needs at least two stations")
+    if table.num_rows < 2:
+        raise ValueError(f"{port}: a run needs at least two stations; got one")
+    if len(survey_offsets(table)) > 2:
+        raise ValueError(f"{port}: the table holds several surveys; give one run per port")
+    md, inc, azi = station_angles(table)
+    own = north_reference_of(table, "azi")
+    declination = None if magnetic is None else magnetic.declination
+    kw = {"convergence_deg": well.grid_convergence, "declination_deg": declination}
+    try:
+        azi_out, _ = convert_azimuth(azi, own, north, **kw)  # type: ignore[arg-type]
+        azi_true, _ = convert_azimuth(azi, own, "true", **kw)
+    except ValueError as exc:
+        raise ValueError(f"{port}: {exc}") from None
+    source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
+    return _Run(port, spec, md, inc, np.where(np.isnan(azi), np.nan, azi_out), azi_true, source)
+
+
+def _magnetic(
+    params: DefinitiveParams, well: WellMetadata, tables: list[pa.Table], ports: list[str]
+) -> MagneticReference | None:
+    """The geomagnetic reference when an MWD model or a magnetic azimuth needs it."""
+    needed = any(
+        "magnetic" in configure(s.model, s.tool).needs for s in params.runs.values()
+    ) or any("magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables)
+    if params.magnetic is not None or not needed:
+        return params.magnetic
+    return wellhead_field(well)
+
+
+def _terms(spec: RunSpec, site: ModelSite) -> list[Term]:
+    """The error terms of a run's model with its tool overrides, at the site."""
+    tool = configure(spec.model, spec.tool)
+    return tool.terms_for(lambda s: Quantities(s, site, tool.parameters, tool.name))
+
+
+def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: str) -> pa.Table:
+    """The listed stations of every section, in MD order, as a :class:`DefinitiveSurvey`."""
+    joined = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0]}
+    cov = joined.pop("cov")
+    md, inc, azi = joined["md"], joined["inc"], joined["azi"]
+    steps = minimum_curvature(md, np.radians(inc), np.radians(azi))
+    distance, direction = closure(joined["north"], joined["east"])
+    columns: dict[str, object] = {
+        **joined,
+        "dogleg": np.degrees(steps.dogleg),
+        "dls": np.degrees(steps.dls) * DLS_COURSE_M,
+        "vertical_section": vertical_section(
+            joined["north"], joined["east"], np.radians(params.vs_azimuth)
+        ),
+        "closure_distance": distance,
+        "closure_direction": np.degrees(direction) % 360.0,
+        **covariance_columns(cov, params.confidence),
+    }
+    return DefinitiveSurvey.compiled().make_table(columns, north_reference=north)
+
+
+def _overlap(
+    runs: list[_Run],
+    stations: list[RunStations],
+    sections: list[PlannedSection],
+    survey: pa.Table,
+    north: str,
+) -> pa.Table:
+    """Every station not listed, beside the definitive survey interpolated at its MD."""
+    md_d = survey.column("md").to_numpy()
+    inc_d = np.radians(survey.column("inc").to_numpy())
+    azi_d = np.radians(defined_azimuths(survey.column("azi").to_numpy()))
+    cols: dict[str, list[Any]] = {k: [] for k in ("run", "role", "md", "inc", "azi", "source")}
+    for run, role in zip(runs, roles(stations, sections), strict=True):
+        for k, r in enumerate(role):
+            if r != "listed":
+                for name, value in (
+                    ("run", run.name),
+                    ("role", r),
+                    ("md", run.md[k]),
+                    ("inc", run.inc[k]),
+                    ("azi", run.azi[k]),
+                    ("source", run.source),
+                ):
+                    cols[name].append(value)
+    md = np.asarray(cols["md"], dtype=float)
+    inside = (md >= md_d[0]) & (md <= md_d[-1])
+    d_inc = np.full(md.size, np.nan)
+    d_azi = np.full(md.size, np.nan)
+    if inside.any() and md_d.size >= 2:
+        at = interpolate_md(md_d, inc_d, azi_d, md[inside])
+        d_inc[inside] = np.degrees(at.inc)
+        d_azi[inside] = np.degrees(at.azi)
+    inc = np.asarray(cols["inc"], dtype=float)
+    azi = np.asarray(cols["azi"], dtype=float)
+    return SurveyOverlap.compiled().make_table(
+        {
+            **cols,
+            "md": md,
+            "inc": inc,
+            "azi": azi,
+            "definitive_inc": d_inc,
+            "definitive_azi": d_azi,
+            "inc_diff": inc - d_inc,
+            "azi_diff": (azi - d_azi + 180.0) % 360.0 - 180.0,
+        },
+        north_reference=north,
+    )
+
+
+@hookimpl
+def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
+    register(
+        StageDef(
+            name="definitive_survey",
+            func=definitive_survey,
+            description="One survey of a well from several runs or tools: depth ranges and "
+            "priorities, tie-ins, overlap rules, provenance per station, and the position "
+            "covariance carried across sections (each run's systematic errors its own).",
+            inputs={port: Stations for port in RUN_PORTS},
+            optional_inputs=frozenset(RUN_PORTS[1:]),
+            outputs={"survey": DefinitiveSurvey, "overlap": SurveyOverlap},
+            params=DefinitiveParams,
+        )
+    )

@@ -1,0 +1,164 @@
+"""Acceptance gates of a gyro survey, in-run against out-run, on simulated runs
+(:func:`inout_support.simulated_runs`: an agreeing pair, and an out-run with a g-sensitive
+gyro whose azimuths err beyond the 1° gate)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import pipeline as gp
+from inout_support import simulated_runs
+from pipeline.qc.gates import pair_stations
+from tests_support import ROOT
+
+
+@pytest.fixture(scope="module")
+def runs() -> dict[str, pd.DataFrame]:
+    return simulated_runs()
+
+
+def _status(gates: Any) -> dict[str, str]:
+    return dict(zip(gates["gate"], gates["status"], strict=True))
+
+
+def test_agreeing_runs_pass_every_gate(runs: dict[str, pd.DataFrame]) -> None:
+    result = gp.acceptance_gates(runs["in"], runs["out"])
+    assert _status(result.gates) == dict.fromkeys(
+        ("stations", "inclination", "azimuth", "azimuth_low", "depth"), "pass"
+    )
+    comparison = result.comparison
+    assert len(comparison) == len(runs["in"]) == 16  # every station paired
+    assert comparison["passed"].all()
+    assert comparison.attrs["units"]["azi_diff"] == "deg"
+
+
+def test_an_out_run_with_an_azimuth_error_fails_the_azimuth_gate(
+    runs: dict[str, pd.DataFrame],
+) -> None:
+    result = gp.acceptance_gates(runs["in"], runs["bad"])
+    status = _status(result.gates)
+    assert status["azimuth"] == "fail"
+    assert {k: v for k, v in status.items() if k != "azimuth"} == dict.fromkeys(
+        ("stations", "inclination", "azimuth_low", "depth"), "pass"
+    )
+    comparison = result.comparison
+    failed = comparison[~comparison["passed"]]
+    assert len(failed) and (failed[["inc_in", "inc_out"]].mean(axis=1) >= 10.0).all()
+    assert (failed["azi_diff"].abs() > 1.0).all()
+    # the error follows the g-sensitive bias: it grows with the inclination (sin I)
+    inclined = comparison[comparison["inc_in"] > 5.0]
+    rho = np.corrcoef(np.sin(np.radians(inclined["inc_in"])), inclined["azi_diff"].abs())[0, 1]
+    assert rho > 0.5, rho
+    row = result.gates.set_index("gate").loc["azimuth"]
+    assert row["value"] == pytest.approx(failed["azi_diff"].abs().max())
+    assert row["limit"] == 1.0 and row["unit"] == "deg"
+
+
+def test_client_criteria_are_parameters(runs: dict[str, pd.DataFrame]) -> None:
+    lenient = gp.acceptance_gates(runs["in"], runs["bad"], azi_tolerance=3.0)
+    assert _status(lenient.gates)["azimuth"] == "pass"
+    few = gp.acceptance_gates(runs["in"].iloc[:8], runs["out"].iloc[:8])
+    assert _status(few.gates)["stations"] == "fail"
+    assert few.gates.set_index("gate").loc["stations", "value"] == 8
+    deeper = runs["out"].assign(md=runs["out"]["md"] + 0.8)  # out-run depths 0.8 m deeper
+    assert _status(gp.acceptance_gates(runs["in"], deeper).gates)["depth"] == "fail"
+    tolerant = gp.acceptance_gates(runs["in"], deeper, depth_tolerance=1.0)
+    assert _status(tolerant.gates)["depth"] == "pass"
+    with pytest.raises(gp.GyropipeError, match="inc_tolerance"):
+        gp.acceptance_gates(runs["in"], runs["out"], inc_tolerance=-1.0)
+
+
+def test_pairing_takes_the_nearest_station_once_within_the_window() -> None:
+    pairs = pair_stations(
+        np.array([0.0, 30.0, 60.0, 90.0]), np.array([29.0, 31.5, 61.0, 200.0]), 5.0
+    )
+    assert pairs.tolist() == [[1, 0], [2, 2]]  # 31.5 loses 30 to 29; 200 is too far
+    assert pair_stations(np.array([1.0]), np.array([]), 5.0).shape == (0, 2)
+
+
+def test_pairing_equals_the_greedy_over_every_pair() -> None:
+    """The windowed search pairs as a greedy over the whole distance matrix does."""
+
+    def every_pair(a: np.ndarray, b: np.ndarray, window: float) -> list[list[int]]:
+        dist = np.abs(a[:, None] - b[None, :])
+        i, o = np.nonzero(dist <= window)
+        used_a: set[int] = set()
+        used_b: set[int] = set()
+        pairs = []
+        for k in np.argsort(dist[i, o], kind="stable"):
+            if i[k] not in used_a and o[k] not in used_b:
+                used_a.add(int(i[k]))
+                used_b.add(int(o[k]))
+                pairs.append([int(i[k]), int(o[k])])
+        return sorted(pairs)
+
+    rng = np.random.default_rng(5)
+    for _ in range(100):
+        a = np.sort(rng.uniform(0, 100, rng.integers(0, 25)))
+        b = np.sort(rng.uniform(0, 100, rng.integers(0, 25)))
+        assert pair_stations(a, b, 5.0).tolist() == every_pair(a, b, 5.0)
+
+
+def test_pipeline_gates_and_definitive_survey(runs: dict[str, pd.DataFrame]) -> None:
+    """pipelines/inout-gyro.yaml from Python (the command line and run.json on disk:
+    tests/report/test_definitive_reports.py): the gates, their record for run.json, and the
+    definitive survey keeping the in-run with the out-run's stations beside it."""
+    pipeline = ROOT / "pipelines" / "inout-gyro.yaml"
+    result = gp.run(pipeline, {"inrun": runs["in"], "outrun": runs["bad"]})
+    acceptance = result.manifest["acceptance"]
+    assert acceptance["status"] == "fail"
+    by_gate = {g["gate"]: g for g in acceptance["gates"]}
+    assert set(by_gate) == {"stations", "inclination", "azimuth", "azimuth_low", "depth"}
+    assert by_gate["azimuth"]["status"] == "fail" and by_gate["azimuth"]["limit"] == 1.0
+    assert by_gate["inclination"]["status"] == "pass" and by_gate["azimuth"]["stage"] == "gates"
+    gates = result.frame("gates.gates").set_index("gate")
+    assert gates.loc["azimuth", "value"] == pytest.approx(by_gate["azimuth"]["value"])
+    survey = result.frame("definitive.survey")
+    overlap = result.frame("definitive.overlap")
+    assert (survey["run"] == "in-run").all() and len(survey) == len(runs["in"])
+    assert (overlap["run"] == "out-run").all() and (overlap["role"] == "overlap").all()
+    # the out-run beside the definitive (in-run) survey: the same azimuth disagreement
+    assert overlap["azi_diff"].abs().max() == pytest.approx(by_gate["azimuth"]["value"], abs=0.05)
+
+    lenient = gp.run(
+        pipeline, {"inrun": runs["in"], "outrun": runs["bad"]}, set={"gates.azi_tolerance": 3.0}
+    )
+    assert lenient.manifest["acceptance"]["status"] == "pass"
+    agreeing = gp.run(pipeline, {"inrun": runs["in"], "outrun": runs["out"]})
+    assert agreeing.manifest["acceptance"]["status"] == "pass"
+
+
+FREE_GYRO_PIPELINE = """
+name: free-gyro-gates
+version: "1.0"
+inputs:
+  readings: {description: free-gyro readings}
+well: {north_reference: "true"}
+stages:
+  - {id: read, uses: read_free_gyro}
+  - id: drift
+    uses: correct_drift
+    inputs: {readings: read.free_gyro}
+  - id: gates
+    uses: free_gyro_gates
+    inputs: {inout: drift.qc}
+"""
+
+
+def test_free_gyro_in_out_qc_is_gated(tmp_path: Path) -> None:
+    """A free gyro's drift-corrected in/out QC through the same gates (its readings carry
+    no separate out-run depths: the depth gate is not evaluated)."""
+    readings = gp.simulate(ROOT / "examples" / "plans" / "j-well-free-gyro.yaml").readings
+    (tmp_path / "p.yaml").write_text(FREE_GYRO_PIPELINE)
+    result = gp.run(tmp_path / "p.yaml", {"readings": readings})
+    gates = result.frame("gates.gates").set_index("gate")
+    assert gates.loc["depth", "status"] == "not evaluated" and np.isnan(gates.loc["depth", "value"])
+    qc = result.frame("drift.qc")
+    assert gates.loc["stations", "value"] == len(qc)
+    assert gates.loc["inclination", "value"] == pytest.approx(qc["inc_diff"].abs().max())
+    assert result.manifest["acceptance"]["gates"][-1]["value"] is None  # NaN → null in JSON

@@ -1,0 +1,234 @@
+"""The definitive survey: which run each depth comes from (priorities, overlap rules, depth
+ranges, ties, gaps), positions tied section to section, provenance, and the covariance of
+one run equal to the position-uncertainty stage's. The covariance across sections against
+a Monte Carlo: tests/uncertainty/test_definitive_covariance.py."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+import pipeline as gp
+from pipeline.earth.site import MagneticReference
+from pipeline.sim.plan import Section, WellPlan, build_path
+from pipeline.survey.definitive import RunStations, SurveyGapError, plan_sections, roles
+from pipeline.uncertainty import (
+    GYRO_PRESETS,
+    MWD_PRESETS,
+    Survey,
+    find_model,
+    gyro_terms,
+    mwd_terms,
+)
+from pipeline.uncertainty.model import propagate_nev
+from pipeline.uncertainty.sections import term_effects
+from pipeline.uncertainty.terms import term_covariance
+from tests_support import ROOT
+
+GYRO = np.arange(0.0, 601.0, 30.0)  # 0 … 600
+MWD = np.arange(570.0, 1200.0, 45.0)  # 570, 615, … 1155
+FIELD = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
+EXAMPLES = ROOT / "examples" / "definitive"
+
+
+def _runs(**kw: Any) -> list[RunStations]:
+    a = {k[2:]: v for k, v in kw.items() if k.startswith("a_")}
+    b = {k[2:]: v for k, v in kw.items() if k.startswith("b_")}
+    return [RunStations("A", GYRO, **a), RunStations("B", MWD, **b)]
+
+
+def _listed(runs: list[RunStations], sections: list[Any]) -> list[tuple[str, float]]:
+    return [(runs[s.run].name, float(runs[s.run].md[i])) for s in sections for i in s.listed]
+
+
+def test_priority_keeps_the_higher_run_and_ties_the_other_below_it() -> None:
+    runs = _runs(a_priority=1)
+    sections = plan_sections(runs)
+    listed = _listed(runs, sections)
+    assert [md for _, md in listed] == sorted(md for _, md in listed)  # one MD order
+    assert [md for name, md in listed if name == "A"] == GYRO.tolist()
+    assert [md for name, md in listed if name == "B"] == MWD[MWD > 600].tolist()
+    # the MWD's tie station: its last station on the gyro's depths (570 m, between two
+    # gyro stations), and the gyro's propagation survey reaches past it
+    assert sections[1].tie_md == 570.0 and sections[1].first == 0
+    assert GYRO[sections[0].last] >= 570.0
+    assert roles(runs, sections)[1][:1] == ["tie"]
+
+
+@pytest.mark.parametrize(
+    ("kw", "switch"),
+    [
+        ({"a_priority": 0, "b_priority": 1}, 570.0),  # the MWD wins its whole range
+        ({"rule": "lower"}, 570.0),  # the run starting deeper takes over at its start
+        ({"rule": "upper", "b_priority": 5}, 600.0),  # the run above keeps its range
+        ({"a_md_to": 580.0, "a_priority": 1}, 580.0),  # the gyro's range ends at 580 m
+    ],
+)
+def test_overlap_rules_and_depth_ranges(kw: dict[str, Any], switch: float) -> None:
+    rule = kw.pop("rule", "priority")
+    runs = _runs(**kw)
+    sections = plan_sections(runs, rule)
+    listed = _listed(runs, sections)
+    assert max(md for name, md in listed if name == "A") <= switch
+    assert min(md for name, md in listed if name == "B") >= switch
+    assert [md for _, md in listed] == sorted({md for _, md in listed})
+
+
+def test_a_gap_between_runs_is_an_error_naming_them() -> None:
+    with pytest.raises(SurveyGapError, match=r"no run covers 450 – 570 m MD.*A.*B"):
+        plan_sections(_runs(a_md_to=450.0))
+
+
+def test_a_run_inside_another_resumes_the_outer_run_tied_below_it() -> None:
+    outer = RunStations("outer", np.arange(0.0, 1201.0, 30.0))
+    inner = RunStations("inner", np.arange(400.0, 701.0, 20.0), priority=1)
+    sections = plan_sections([outer, inner])
+    assert [s.run for s in sections] == [0, 1, 0]
+    assert sections[1].tie_md == 400.0 and sections[2].tie_md == 690.0  # last outer ≤ 700
+
+
+def test_slivers_stay_with_the_neighbour() -> None:
+    """An out-run starting 2 mm above the in-run and ending 1 cm below it adds no section."""
+    inrun = RunStations("in", np.arange(0.0, 901.0, 60.0), priority=1)
+    outrun = RunStations("out", np.arange(0.0, 901.0, 60.0) + np.r_[-0.002, np.zeros(14), 0.01])
+    assert [s.run for s in plan_sections([inrun, outrun])] == [0]
+    assert [s.run for s in plan_sections([inrun, outrun], min_length=0.0)] == [1, 0, 1]
+
+
+@pytest.mark.parametrize("model", ["GYRO-NS", "ISCWSA-MWD-REV5"])
+def test_term_effects_are_what_term_covariance_propagates(model: str) -> None:
+    md = np.arange(0.0, 901.0, 30.0)
+    inc = np.radians(np.clip((md - 200) / 10, 0, 50))
+    azi = np.radians(40 + md / 50)
+    survey = Survey.of(md, inc, azi, md * np.cos(inc))
+    terms = (
+        gyro_terms(GYRO_PRESETS[model], 61.25)
+        if model in GYRO_PRESETS
+        else mwd_terms(MWD_PRESETS[model], MagneticReference(**FIELD))
+    )
+    full, star = term_effects(survey, terms, basis="balanced_tangent", surface_tie=True)
+    cov = propagate_nev(full, star, [t.mode for t in terms])
+    np.testing.assert_allclose(cov, term_covariance(survey, terms)[1], rtol=0, atol=1e-12)
+
+
+def _stations(md: np.ndarray) -> pa.Table:
+    plan = WellPlan(
+        sections=[
+            Section(kind="vertical", length=200),
+            Section(kind="build", dls=3.0, inc=40, azi=75),
+            Section(kind="hold", to_md=1300),
+        ]
+    )
+    return build_path(plan).stations(md)
+
+
+@pytest.mark.parametrize(
+    "model", ["GYRO-NS", "GYRO-NS-CT", "GYRO-MWD", "ISCWSA-MWD-REV4", "ISCWSA-MWD-REV5"]
+)
+def test_one_run_is_the_position_uncertainty_of_its_survey(model: str) -> None:
+    """With one run there is nothing to carry: the stage's covariance is the
+    position-uncertainty stage's (term_covariance summed), surface tie-on included, for
+    every tool model file."""
+    stations = _stations(GYRO)
+    needs = find_model(model).needs
+    params: dict[str, Any] = {
+        **({"magnetic": FIELD} if "magnetic" in needs else {}),
+        **({"latitude": 61.25} if "latitude" in needs else {}),
+    }
+    survey = gp.definitive_survey(
+        {"run": stations}, run_options={"run": {"model": model}}, **params
+    ).survey
+    single = gp.position_uncertainty(gp.minimum_curvature(stations), model=model, **params)
+    assert isinstance(survey, pa.Table) and isinstance(single, pa.Table)
+    for name in (
+        "north",
+        "east",
+        "tvd",
+        "dls",
+        "cov_nn",
+        "cov_ne",
+        "cov_ev",
+        "cov_vv",
+        "ellipse_major",
+    ):
+        np.testing.assert_allclose(
+            survey.column(name).to_numpy(), single.column(name).to_numpy(), rtol=1e-12, atol=1e-12
+        )
+    assert set(survey.column("run").to_pylist()) == {"run"}
+    assert set(survey.column("tool_model").to_pylist()) == {model}
+
+
+def test_example_pipeline_ties_the_mwd_to_the_gyro() -> None:
+    """pipelines/definitive.yaml on the example runs: the gyro section is the gyro's own
+    minimum-curvature trajectory; the MWD section is the MWD's, started at its tie station
+    placed on the gyro's path (interpolated at the tie MD); provenance and units go with
+    every station."""
+    gyro = gp.read(EXAMPLES / "gyro-run.csv")
+    mwd = gp.read(EXAMPLES / "mwd-run.csv")
+    result = gp.run(
+        ROOT / "pipelines" / "definitive.yaml",
+        {"gyro": EXAMPLES / "gyro-run.csv", "mwd": EXAMPLES / "mwd-run.csv"},
+    )
+    survey = result.frame("definitive.survey")
+    overlap = result.frame("definitive.overlap")
+    tie = overlap[overlap["role"] == "tie"]
+    assert len(tie) == 1 and tie["run"].iloc[0] == "MWD-1"
+    tie_md = float(tie["md"].iloc[0])
+    upper = survey[survey["run"] == "GYRO-1"]
+    lower = survey[survey["run"] == "MWD-1"]
+    assert upper["md"].max() < lower["md"].min() and len(upper) + len(lower) == len(survey)
+
+    gyro_traj = gp.minimum_curvature(gyro)
+    np.testing.assert_allclose(
+        upper[["north", "east", "tvd"]],
+        gyro_traj.iloc[: len(upper)][["north", "east", "tvd"]],
+        atol=1e-9,
+    )
+    at = gp.interpolate(gyro_traj, md=[tie_md])
+    from_tie = mwd[mwd["md"] >= tie_md]
+    mwd_traj = gp.minimum_curvature(
+        from_tie,
+        tie_north=float(at["north"].iloc[0]),
+        tie_east=float(at["east"].iloc[0]),
+        tie_tvd=float(at["tvd"].iloc[0]),
+    )
+    below = mwd_traj[mwd_traj["md"].isin(lower["md"])]
+    np.testing.assert_allclose(
+        lower[["north", "east", "tvd"]], below[["north", "east", "tvd"]], atol=1e-9
+    )
+
+    assert set(lower["tool_model"]) == {"ISCWSA-MWD-REV5"} and set(upper["tool_model"]) == {
+        "GYRO-NS"
+    }
+    assert {str(p).rsplit("/", 1)[-1] for p in survey["source"]} == {"gyro-run.csv", "mwd-run.csv"}
+    assert list(survey["section"].unique()) == [0, 1]
+    units = survey.attrs["units"]
+    assert units["md"] == "m" and units["cov_nn"] == "m2" and units["ellipse_major"] == "m"
+    assert survey.attrs["north_reference"] == "true"
+    # the uncertainty grows down the well, and the MWD below carries the gyro's at the tie
+    sigma = np.sqrt(survey["cov_nn"] + survey["cov_ee"])
+    assert sigma.iloc[len(upper)] > np.sqrt(upper["cov_nn"] + upper["cov_ee"]).iloc[len(upper) // 2]
+
+
+def test_a_gap_fails_the_run_naming_the_runs(tmp_path: Any) -> None:
+    with pytest.raises(
+        gp.GyropipeError,
+        match=r"no run covers .* m MD \(runs ending above: GYRO-1; starting below: MWD-1\)",
+    ):
+        gp.run(
+            ROOT / "pipelines" / "definitive.yaml",
+            {"gyro": EXAMPLES / "gyro-run.csv", "mwd": EXAMPLES / "mwd-run.csv"},
+            set={
+                "definitive.runs": {
+                    "run1": {"name": "GYRO-1", "md_to": 500.0, "priority": 1},
+                    "run2": {"name": "MWD-1", "model": "ISCWSA-MWD-REV5"},
+                }
+            },
+        )
+    with pytest.raises(gp.GyropipeError, match=r"unknown (tool )?model.*'GYRO-XX'"):
+        gp.definitive_survey(
+            {"a": _stations(GYRO)}, run_options={"a": {"model": "GYRO-XX"}}, latitude=61.0
+        )
