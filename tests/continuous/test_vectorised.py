@@ -30,7 +30,7 @@ from scipy.signal import savgol_coeffs
 
 from pipeline.continuous import ContinuousOptions, integrate_continuous
 from pipeline.continuous.integrate import _heun_series
-from pipeline.continuous.sigma import InclinationNoise, _inclination_noise_variance
+from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 
@@ -156,6 +156,29 @@ def _dense_variance(
             + (noise.odometer / noise.gravity) ** 2 * odo @ odo
         )
     return np.array(out)
+
+
+def _inclination_noise_variance(
+    noise: InclinationNoise,
+    elapsed: NDArray[np.float64],
+    st_elapsed: NDArray[np.float64],
+    step: NDArray[np.float64],
+    transition: NDArray[np.float64],
+    w: NDArray[np.float64],
+    d_inc: NDArray[np.float64],
+    d_inc_rate: NDArray[np.float64],
+    sin_i: NDArray[np.float64],
+    cells: int = 500_000,
+) -> NDArray[np.float64]:
+    """Variance at each station of the azimuth error the inclination's sample noise makes, by
+    the stage's running sums (:class:`NoiseSums`) added in one block over whole per-sample
+    arrays in integration order: ``step`` is the sample step divided by Φ (s), ``transition``
+    Φ."""
+    index = np.searchsorted(elapsed, st_elapsed, side="left")
+    sums = NoiseSums(noise, elapsed.size, index, cells)
+    sums.add(0, elapsed.size, 0, step, d_inc, d_inc_rate, sin_i)
+    phi_t = float(transition[-1])
+    return sums.variance(np.interp(st_elapsed, elapsed, transition) - w * phi_t, -w * phi_t)
 
 
 @pytest.mark.parametrize("points", [(31, 61), (None, None)])

@@ -490,28 +490,6 @@ def _trapezoids(y: FloatArray, t: FloatArray) -> FloatArray:
     return out
 
 
-def _inclination_noise_variance(
-    noise: InclinationNoise,
-    elapsed: FloatArray,
-    st_elapsed: FloatArray,
-    step: FloatArray,
-    transition: FloatArray,
-    w: FloatArray,
-    d_inc: FloatArray,
-    d_inc_rate: FloatArray,
-    sin_i: FloatArray,
-    cells: int = 500_000,
-) -> FloatArray:
-    """Variance at each station of the azimuth error the inclination's sample noise makes
-    (:mod:`pipeline.continuous.sigma_noise`), from whole per-sample arrays in integration
-    order: ``step`` is the sample step divided by Φ (s), ``transition`` Φ."""
-    index = np.searchsorted(elapsed, st_elapsed, side="left")
-    sums = NoiseSums(noise, elapsed.size, index, cells)
-    sums.add(0, elapsed.size, 0, step, d_inc, d_inc_rate, sin_i)
-    phi_t = float(transition[-1])
-    return sums.variance(np.interp(st_elapsed, elapsed, transition) - w * phi_t, -w * phi_t)
-
-
 def inclination_sigma(inc: FloatArray, noise: InclinationNoise, accel: AccelErrors) -> FloatArray:
     """1σ inclination error (rad) of single samples at inclination ``inc`` (rad): sample noise
     and the accelerometers' constant errors."""
