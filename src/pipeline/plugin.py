@@ -86,6 +86,7 @@ from pipeline.registry import (
 )
 from pipeline.streams import TableStream
 from pipeline.tables import (
+    AcceptanceGates,
     AnyTable,
     CheckResults,
     CompassRejects,
@@ -107,6 +108,7 @@ __all__ = [
     "NORTH_KEY",
     "SOURCE_LINE",
     "UNIT_KEY",
+    "AcceptanceGates",
     "AnyTable",
     "CheckDef",
     "CheckResults",

@@ -80,6 +80,7 @@ HOME = {
             "CompassRejects",
             "SimTruth",
             "LogTable",
+            "AcceptanceGates",
         ],
         "pipeline.tables",
     ),
