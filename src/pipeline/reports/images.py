@@ -39,68 +39,79 @@ class Encoded:
     height: int
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Drawn:
-    figure: Figure
-    rgb: Image.Image | None = None
-    raster: Image.Image | None = None
+    raster: Image.Image
+    html: Encoded | None
 
 
 class Figures:
-    """The figures of one report, each drawn on first use and kept for every later one:
-    :meth:`raster` for the PDF, :meth:`encode` for the HTML (``dpi`` for its PNGs)."""
+    """The figures of one report, each drawn on first use and kept, as images, for every
+    later one: :meth:`raster` for the PDF, :meth:`encode` for the HTML (``dpi`` for its PNGs;
+    ``html=False`` when no HTML is written). A figure's matplotlib drawing and full-colour
+    pixels are released as soon as its images are made: a report holds compressed images,
+    not canvases."""
 
-    def __init__(self, image_format: ImageFormat = "auto", dpi: int = 110) -> None:
+    def __init__(self, image_format: ImageFormat = "auto", dpi: int = 110, *, html: bool = True):
         self.image_format = image_format
         self.dpi = dpi
+        self.html = html
         self.raster_dpi = max(PRINT_DPI, dpi)
         self._drawn: dict[int, tuple[Plot, _Drawn]] = {}
 
-    def _figure(self, plot: Plot) -> _Drawn:
+    def _images(self, plot: Plot) -> _Drawn:
         found = self._drawn.get(id(plot))
         if found is None:
-            with matplotlib.rc_context(STYLE):
-                fig = Figure(figsize=plot.size, dpi=self.raster_dpi)
-                FigureCanvasAgg(fig)
-                plot.draw(fig)
-            found = (plot, _Drawn(fig))
+            found = (plot, self._draw(plot))
             self._drawn[id(plot)] = found  # the plot is kept, so its id stays its own
         return found[1]
 
+    def _draw(self, plot: Plot) -> _Drawn:
+        with matplotlib.rc_context(STYLE):
+            fig = Figure(figsize=plot.size, dpi=self.raster_dpi)
+            FigureCanvasAgg(fig)
+            plot.draw(fig)
+            fig.canvas.draw()
+            rgba = np.asarray(fig.canvas.buffer_rgba())  # type: ignore[attr-defined]
+            rgb = Image.fromarray(rgba).convert("RGB")
+            raster = _quantise(rgb)
+            html = None
+            if self.html:
+                html = (
+                    self._svg(fig, plot)
+                    if self.image_format == "svg"
+                    else self._png(rgb, raster, plot)
+                )
+        return _Drawn(raster, html)
+
     def raster(self, plot: Plot) -> Image.Image:
         """``plot`` at :attr:`raster_dpi`, quantised to at most 256 colours (mode ``P``)."""
-        drawn = self._figure(plot)
-        if drawn.raster is None:
-            with matplotlib.rc_context(STYLE):
-                canvas = drawn.figure.canvas
-                canvas.draw()
-                rgba = np.asarray(canvas.buffer_rgba())  # type: ignore[attr-defined]
-            drawn.rgb = Image.fromarray(rgba).convert("RGB")
-            drawn.raster = _quantise(drawn.rgb)
-        return drawn.raster
+        return self._images(plot).raster
 
     def encode(self, plot: Plot) -> Encoded:
         """``plot`` for the HTML: PNG at :attr:`dpi` (from the shared raster) or SVG."""
-        width, height = round(plot.size[0] * CSS_DPI), round(plot.size[1] * CSS_DPI)
-        if self.image_format == "svg":
-            return Encoded("image/svg+xml", self._svg(plot), width, height)
-        image = self.raster(plot)
+        html = self._images(plot).html
+        if html is None:
+            raise ValueError("these figures were drawn without their HTML images (html=False)")
+        return html
+
+    def _png(self, rgb: Image.Image, raster: Image.Image, plot: Plot) -> Encoded:
+        image = raster
         if self.dpi != self.raster_dpi:
-            rgb = self._figure(plot).rgb
-            assert rgb is not None  # drawn by raster()
             size = (round(plot.size[0] * self.dpi), round(plot.size[1] * self.dpi))
             image = _quantise(rgb.resize(size, Image.Resampling.LANCZOS, reducing_gap=2.0))
         out = io.BytesIO()
         image.save(out, format="PNG")
-        return Encoded("image/png", out.getvalue(), width, height)
+        return Encoded("image/png", out.getvalue(), *_css_size(plot))
 
-    def _svg(self, plot: Plot) -> bytes:
+    def _svg(self, fig: Figure, plot: Plot) -> Encoded:
         out = io.BytesIO()
-        with matplotlib.rc_context(STYLE):
-            self._figure(plot).figure.savefig(
-                out, format="svg", dpi=self.dpi, metadata={"Date": None}
-            )
-        return out.getvalue()
+        fig.savefig(out, format="svg", dpi=self.dpi, metadata={"Date": None})
+        return Encoded("image/svg+xml", out.getvalue(), *_css_size(plot))
+
+
+def _css_size(plot: Plot) -> tuple[int, int]:
+    return round(plot.size[0] * CSS_DPI), round(plot.size[1] * CSS_DPI)
 
 
 def _quantise(image: Image.Image) -> Image.Image:

@@ -59,7 +59,7 @@ Numbered = Iterator[tuple[int, Image.Image]]
 def render_pdf(doc: Document, path: Path, drawn: Figures | None = None) -> None:
     """Write ``doc`` to ``path`` as an A4 PDF (no creation date: same content, same bytes);
     figures from ``drawn`` (shared with the HTML)."""
-    drawn = drawn or Figures()
+    drawn = drawn or Figures(html=False)
     flow = Flow()
     flow.place(1.35, lambda page, top: _title_block(page, top, doc))
     numbers = ((n, drawn.raster(p)) for n, p in enumerate(doc.plots(), 1))

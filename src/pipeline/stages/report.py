@@ -74,7 +74,7 @@ def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
     from pipeline.reports.pdf import render_pdf
 
     name = params.filename or ctx.stage_id
-    drawn = Figures(params.image_format, params.dpi)  # each figure drawn once, for both
+    drawn = Figures(params.image_format, params.dpi, html="html" in params.formats)
     if "html" in params.formats:
         html = render_html(doc, drawn)
         ctx.output_path(f"{name}.html").write_text(html, encoding="utf-8")
