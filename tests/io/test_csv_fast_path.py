@@ -74,11 +74,11 @@ def _locating_path(path: Path) -> dict[str, np.ndarray]:
     header = find_header(path, text.head, CsvOptions(), layout.required)
     chosen = {name: header.found[name][0] for name in NAMES}
     rows = csv_rows.data_rows(path, text, header, [chosen[n].index for n in layout.required])
+    decimal = "." if header.delimiter == "," else csv_rows.decimal_of(path, rows, header, chosen)
     rows = csv_rows._without_skipped(rows)
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
     strings = csv_rows._strings(path, rows, header, names, wanted)
-    decimal = csv_rows._detect_decimal(header.delimiter, strings.values())
     types = layout.types()
     return {
         name: csv_rows._converted(

@@ -16,7 +16,7 @@ from __future__ import annotations
 import codecs
 import mmap
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -249,9 +249,7 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
-    rows = Rows(data, start, end, first_line, marks=text.marks)
-    # A comment line could parse as a row (a commented-out row); blank lines cannot.
-    return _without_skipped(rows) if rows.holds(b"#") else rows
+    return Rows(data, start, end, first_line, marks=text.marks)
 
 
 def _line_end(data: Data, start: int, end: int) -> int:
@@ -277,17 +275,20 @@ def _skipped(line: bytes) -> bool:
 
 def _without_skipped(rows: Rows) -> Rows:
     """``rows`` without blank and comment lines (vectorised: files can be large); ``rows``
-    itself when it has none."""
+    itself when it has none (no rows, ``lines`` empty, when it has nothing else)."""
     block = np.frombuffer(rows.data, np.uint8, count=rows.end - rows.start, offset=rows.start)
+    padded = np.append(block, np.uint8(ord("\n")))  # the last line's end: walks stop there
     starts = np.concatenate(([0], np.flatnonzero(block == ord("\n")) + 1))
     first = starts.copy()  # first byte of each line that is not a space or tab
-    pending = np.flatnonzero(np.isin(block[first], _BLANKS))
-    while len(pending):  # the last line has text, so no walk leaves the block
+    pending = np.flatnonzero(np.isin(padded[first], _BLANKS))
+    while len(pending):
         first[pending] += 1
-        pending = pending[np.isin(block[first[pending]], _BLANKS)]
-    keep = ~np.isin(block[first], (ord("\n"), ord("#")))
+        pending = pending[np.isin(padded[first[pending]], _BLANKS)]
+    keep = ~np.isin(padded[first], (ord("\n"), ord("#")))
     if keep.all():
         return rows
+    if not keep.any():  # every line skipped (a block of a stream)
+        return Rows(b"", 0, 0, rows.first_line, np.empty(0, np.int64))
     lengths = np.diff(np.append(starts, len(block) + 1))  # each line with its newline
     kept = block[np.repeat(keep, lengths)[: len(block)]].tobytes()
     lines = rows.source_lines(len(keep))[keep]
@@ -307,7 +308,28 @@ def _is_footer(cells: list[str], width: int, required: list[int]) -> bool:
 # ------------------------------------------------------------------------- parsing
 
 
-def parse(
+ROWS_BLOCK = 4 << 20
+"""Bytes of whole data lines parsed at a time (one block, one batch of a stream)."""
+
+
+def _block_end(rows: Rows, start: int) -> int:
+    """End of the block of whole lines starting at ``start`` (at a line end, or the rows')."""
+    stop = rows.data.find(b"\n", min(start + ROWS_BLOCK, rows.end), rows.end)
+    return rows.end if stop < 0 else stop
+
+
+def _blocks(rows: Rows) -> Iterator[Rows]:
+    """``rows`` in blocks of whole lines of about :data:`ROWS_BLOCK` bytes, each numbered
+    from its first line (counted)."""
+    start, line = rows.start, rows.first_line
+    while start < rows.end:
+        stop = _block_end(rows, start)
+        block = Rows(rows.data, start, stop, line, marks=rows.marks)
+        yield block
+        start, line = stop + 1, line + block.count()
+
+
+def parse_blocks(
     path: Path,
     rows: Rows,
     header: Header,
@@ -315,29 +337,85 @@ def parse(
     types: dict[str, pa.DataType],
     blanks: frozenset[str],
     decimal: str | None,
-    detect_from: list[str],
+) -> Iterator[tuple[dict[str, Any], Rows]]:
+    """:func:`parse` a block of about :data:`ROWS_BLOCK` bytes of whole lines at a time:
+    each block's columns and the rows they came from (file lines right across blocks), so
+    the file is never parsed whole. ``decimal`` None: ',' is tried first when the delimiter
+    is not ',' and the rows hold one; at the first block that does not parse so, the mark
+    is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
+    are parsed again with it (an error if one held a decimal comma)."""
+    mark = decimal or ("," if header.delimiter != "," and rows.holds(b",") else ".")
+    numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
+    start, line = rows.start, rows.first_line
+
+    def resolve() -> str:
+        nonlocal decimal, mark
+        decimal = mark = decimal_of(path, rows, header, numbers)
+        if mark == "." and start > rows.start:  # the blocks before must read so too
+            before = Rows(rows.data, rows.start, start - 1, rows.first_line, marks=rows.marks)
+            for _ in parse_blocks(path, before, header, chosen, types, blanks, mark):
+                pass
+        return mark
+
+    while start < rows.end:
+        stop = _block_end(rows, start)
+        block = Rows(rows.data, start, stop, line, marks=rows.marks)
+        # A comment line could parse as a row (a commented-out row); blank lines cannot.
+        kept = _without_skipped(block) if block.holds(b"#") else block
+        count = None
+        if kept.lines is None or len(kept.lines):
+            guessed = resolve if decimal is None and mark == "," else None
+            values, used = parse(path, kept, header, chosen, types, blanks, mark, guessed)
+            if used is block:  # every line a row
+                count = len(next(iter(values.values())))
+            yield values, used
+        start, line = stop + 1, line + (block.count() if count is None else count)
+
+
+def decimal_of(path: Path, rows: Rows, header: Header, numbers: dict[str, Cell]) -> str:
+    """',' when the ``numbers`` columns' values hold ',' but never '.' (read as strings, a
+    block at a time), else '.'."""
+    names = [f"c{i}" for i in range(len(header.cells))]
+    wanted = {name: names[cell.index] for name, cell in numbers.items()}
+    comma = dot = False
+    for block in _blocks(rows):
+        kept = _without_skipped(block)
+        if kept.lines is not None and not len(kept.lines):
+            continue
+        found = _decimal_marks(_strings(path, kept, header, names, wanted).values())
+        comma, dot = comma or found[0], dot or found[1]
+    return "," if comma and not dot else "."
+
+
+def parse(
+    path: Path,
+    rows: Rows,
+    header: Header,
+    chosen: dict[str, Cell],
+    types: dict[str, pa.DataType],
+    blanks: frozenset[str],
+    decimal: str,
+    guessed: Callable[[], str] | None = None,
 ) -> tuple[dict[str, Any], Rows]:
     """Columns ``chosen`` of the rows as arrays of ``types`` (float64, int64 or string), and
     the rows they came from (blank and comment lines left out).
 
-    Floats must be finite decimal numbers, integers integers; an empty cell is null in the
-    ``blanks`` columns, an error elsewhere. Strings are trimmed, empty ones null. ``decimal``
-    None means ',' when the delimiter is not ',' and no value of the ``detect_from`` columns
-    holds a '.' but some hold a ','. Any bad cell or row raises :class:`InputFileError`
-    naming its line and column.
+    Floats must be finite decimal numbers with the ``decimal`` mark, integers integers; an
+    empty cell is null in the ``blanks`` columns, an error elsewhere. Strings are trimmed,
+    empty ones null. When ``decimal`` was a guess, ``guessed`` gives the right mark if the
+    rows do not parse with it. Any bad cell or row raises :class:`InputFileError` naming
+    its line and column.
     """
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
-    comma = rows.holds(b",")
-    guess = decimal or ("," if header.delimiter != "," and comma else ".")
-    typed = _typed(rows, header, names, wanted, types, blanks, guess)
+    typed = _typed(rows, header, names, wanted, types, blanks, decimal)
     if typed is None and (kept := _without_skipped(rows)) is not rows:
         rows = kept
-        typed = _typed(rows, header, names, wanted, types, blanks, guess)
+        typed = _typed(rows, header, names, wanted, types, blanks, decimal)
     if typed is None:
         strings = _strings(path, rows, header, names, wanted)
-        if decimal is None:
-            decimal = _detect_decimal(header.delimiter, [strings[n] for n in detect_from])
+        if guessed is not None:
+            decimal = guessed()
         typed = {
             name: _converted(
                 path, strings[name], types[name], name in blanks, decimal, rows, chosen[name].text
@@ -443,14 +521,12 @@ def _strings(
     return {name: table.column(col).combine_chunks() for name, col in wanted.items()}
 
 
-def _detect_decimal(delimiter: str, columns: Iterable[pa.Array]) -> str:
-    """',' when the delimiter is not ',' and the values use ',' but never '.'; else '.'."""
-    if delimiter == ",":
-        return "."
+def _decimal_marks(columns: Iterable[pa.Array]) -> tuple[bool, bool]:
+    """Whether some value holds a ',', and whether some holds a '.'."""
     cols = list(columns)
     comma = any(pc.any(pc.match_substring(c, ",")).as_py() for c in cols)
     dot = any(pc.any(pc.match_substring(c, ".")).as_py() for c in cols)
-    return "," if comma and not dot else "."
+    return comma, dot
 
 
 def _converted(
