@@ -28,7 +28,7 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError
-from pipeline.io.arrow_text import read_options
+from pipeline.io.arrow_text import read_options, release
 from pipeline.io.csv_header import Cell, Header, cells_of
 
 SHOWN = 5
@@ -174,6 +174,7 @@ def _mapped(fh: BinaryIO) -> Mapped | None:
             if byte in chunk:
                 found.append(at)
         blank = blank and not chunk.strip()
+        release(mapped, at, at + SCAN)  # checked: its pages leave until parsed
     try:
         decoder.decode(b"", final=True)
     except UnicodeDecodeError:
@@ -368,6 +369,7 @@ def parse_blocks(
             values, used = parse(path, kept, header, chosen, types, blanks, mark, guessed)
             if used is block:  # every line a row
                 count = len(next(iter(values.values())))
+            release(rows.data, start, stop)
             yield values, used
         start, line = stop + 1, line + (block.count() if count is None else count)
 

@@ -31,7 +31,7 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.io.arrow_text import read_options
+from pipeline.io.arrow_text import read_options, release
 
 Floats = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
@@ -156,6 +156,7 @@ def _delimited(
         block[: source.size - read] = source[read:stop]
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
         width = text.find(b"\n", begin + read, begin + stop) + 1 - begin - read
+        release(text, begin + read, begin + min(stop, source.size))
         width = width if width > 0 else block.size  # the last line, without its LF
         separators = _fixed_width(block, width, n, layout)
         if separators is None and (block < SPACE).sum() != (block == NEWLINE).sum():
