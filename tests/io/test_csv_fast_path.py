@@ -153,3 +153,14 @@ def test_a_binary_byte_deep_in_a_large_file_is_located(
         read(path, "samples", None)
     assert message in str(info.value)
     assert info.value.line == data.count(b"\n", 0, at) + 1
+
+
+def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path) -> None:
+    """A mapped file whose later lines end with CRLF (checked block by block as they are
+    parsed, not before) reads as the same file with LF line ends."""
+    path, lines = _large(tmp_path)
+    plain, _ = read(path, "samples", None)
+    path.write_text("\n".join(lines[:2000]) + "\n" + "\r\n".join(lines[2000:]))
+    assert isinstance(csv_rows.load(path, HEADER_SEARCH_LINES).data, mmap.mmap)
+    mixed, _ = read(path, "samples", None)
+    assert mixed.equals(plain)

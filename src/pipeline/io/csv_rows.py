@@ -4,9 +4,11 @@ The start of the file is checked to be text (:func:`load`). A larger file is the
 into memory, not copied, and checked block by block (vectorised: no NUL byte, UTF-8);
 one with a byte-order mark, CR line ends or a problem to locate is read as bytes instead.
 Only its first lines (where the title block and the header row are) are decoded to text;
-the data rows stay bytes and are handed to ``pyarrow.csv``, which parses them with the
-declared column types in one pass (on one thread unless a core is idle, see
-:mod:`pipeline.io.arrow_text`). A file that does not parse that way (a bad cell, a wrong
+the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
+:data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
+batches; the pages of the mapped file let go once read), which parses them with the
+declared column types (on one thread unless a core is idle, see
+:mod:`pipeline.io.arrow_text`). A block that does not parse that way (a bad cell, a wrong
 cell count, decimal commas to detect) is parsed again as strings on one thread, which
 locates every problem on its file line.
 """
@@ -35,8 +37,8 @@ SHOWN = 5
 """Bad cells quoted in one error message."""
 BLOCK = 64 * 1024
 """Bytes of a file checked (text, not binary) before the whole file is read."""
-SCAN = 256 * 1024
-"""Bytes of a mapped file checked at a time (in the processor's cache)."""
+SCAN = 4 << 20
+"""Bytes of a mapped file searched at a time when looking for one byte in all its rows."""
 BOM = b"\xef\xbb\xbf"
 
 _NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
@@ -50,19 +52,6 @@ _BLANKS = (ord(" "), ord("\t"))
 
 Data = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
-Marks = dict[bytes, list[int]]
-"""Offsets of the blocks of :data:`SCAN` bytes of a mapped file that hold each byte."""
-MARKED = (b'"', b"#", b",")
-"""Bytes whose blocks are noted while a mapped file is checked: quotes, comment marks and
-commas (decimal commas) are then looked for only there."""
-
-
-@dataclass(frozen=True)
-class Mapped:
-    """A file mapped into memory, and the blocks holding each of :data:`MARKED`."""
-
-    data: mmap.mmap
-    marks: Marks
 
 
 @dataclass(frozen=True)
@@ -73,8 +62,6 @@ class Text:
     data: Data
     head: list[str]
     starts: list[int]
-    marks: Marks | None = None
-    """the blocks holding each :data:`MARKED` byte, when the file is mapped"""
 
 
 @dataclass(frozen=True)
@@ -88,11 +75,20 @@ class Rows:
     end: int
     first_line: int
     lines: NDArray[np.int64] | None = None
-    marks: Marks | None = None
 
     def holds(self, byte: bytes) -> bool:
         """Whether the rows hold ``byte``."""
-        return holds(self.data, self.marks, byte, self.start, self.end)
+        return self.data.find(byte, self.start, self.end) >= 0
+
+    def anywhere(self, byte: bytes) -> bool:
+        """:meth:`holds` for all the rows of a file: a mapped file is searched a block at
+        a time, its pages let go once searched."""
+        for at in range(self.start, self.end, SCAN):
+            found = self.data.find(byte, at, min(at + SCAN, self.end))
+            release(self.data, at, min(at + SCAN, self.end))
+            if found >= 0:
+                return True
+        return False
 
     def buffer(self) -> pa.Buffer:
         """The rows' bytes, without a copy."""
@@ -126,16 +122,18 @@ def load(path: Path, head_lines: int) -> Text:
     decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line.
 
     The first :data:`BLOCK` bytes are checked before the rest is looked at: a binary file
-    (a NUL byte, bytes that are not UTF-8) is refused without reading it all. The rest is
-    mapped (:func:`_mapped`) or, failing that, read and checked as a whole."""
+    (a NUL byte, bytes that are not UTF-8) is refused without reading it all. A larger file
+    whose start has LF line ends, no byte-order mark and some text is then mapped into
+    memory, not copied: its lines past the head are checked a block at a time as they are
+    parsed (:func:`checked`). Any other is read and checked as a whole."""
     try:
         with path.open("rb") as fh:
             first = fh.read(BLOCK)
             _check_text(path, first, complete=len(first) < BLOCK)
             data: Data = first
-            mapped = _mapped(fh) if len(first) == BLOCK else None
+            mapped = _mapped(fh) if len(first) == BLOCK and _mappable(first) else None
             if mapped is not None:
-                data = mapped.data
+                data = mapped
             elif len(first) == BLOCK:
                 fh.seek(0)
                 data = fh.read()
@@ -146,52 +144,52 @@ def load(path: Path, head_lines: int) -> Text:
         if not data or data.isspace():
             raise InputFileError(path, "the file is empty")
     head, starts = split_head(data, head_lines)
-    return Text(data, head, starts, None if mapped is None else mapped.marks)
+    if isinstance(data, mmap.mmap):  # the head past the first block is checked too
+        end = data.find(b"\n", starts[-1])
+        _check_text(path, data[: len(data) if end < 0 else end], complete=True)
+    return Text(data, head, starts)
 
 
-def _mapped(fh: BinaryIO) -> Mapped | None:
-    """The file mapped into memory when it is UTF-8 text with LF line ends, no NUL byte,
-    no byte-order mark and some text besides white space; else None (then the file is read
-    and checked as bytes, which locates a problem on its line). One pass, a block of
-    :data:`SCAN` bytes at a time, which also notes the blocks holding :data:`MARKED` bytes."""
+def _mappable(first: bytes) -> bool:
+    """Whether a file starting with ``first`` is mapped: LF line ends, no byte-order mark,
+    some text besides white space."""
+    return b"\r" not in first and not first.startswith(BOM) and not first.isspace()
+
+
+def _mapped(fh: BinaryIO) -> mmap.mmap | None:
+    """The file mapped into memory (read-only); None if it cannot be (not a regular file)."""
     try:
-        mapped = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
-    except (OSError, ValueError):  # not a regular file
+        return mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    except (OSError, ValueError):
         return None
-    decoder = codecs.getincrementaldecoder("utf-8")()
-    marks: Marks = {byte: [] for byte in MARKED}
-    blank = True
-    for at in range(0, len(mapped), SCAN):
-        chunk = mapped[at : at + SCAN]
-        if b"\0" in chunk or b"\r" in chunk or (at == 0 and chunk.startswith(BOM)):
-            return None
-        if not chunk.isascii():  # checked as UTF-8
-            try:
-                decoder.decode(chunk)
-            except UnicodeDecodeError:
-                return None
-        for byte, found in marks.items():
-            if byte in chunk:
-                found.append(at)
-        blank = blank and not chunk.strip()
-        release(mapped, at, at + SCAN)  # checked: its pages leave until parsed
-    try:
-        decoder.decode(b"", final=True)
-    except UnicodeDecodeError:
-        return None
-    return None if blank else Mapped(mapped, marks)
 
 
-def holds(data: Data, marks: Marks | None, byte: bytes, start: int, end: int) -> bool:
-    """Whether ``data[start:end]`` holds ``byte`` (one of :data:`MARKED` when ``marks``,
-    then only the blocks noted to hold it are searched)."""
-    if marks is None:
-        return data.find(byte, start, end) >= 0
-    return any(
-        data.find(byte, max(start, at), min(end, at + SCAN)) >= 0
-        for at in marks[byte]
-        if at < end and at + SCAN > start
-    )
+def checked(path: Path, block: Rows) -> Rows:
+    """A block of the rows of a mapped file checked as text (no NUL byte, UTF-8: an error
+    names the line), its CR line ends made LF (then a copy); any other block as it is."""
+    data = block.data
+    if not isinstance(data, mmap.mmap):
+        return block
+    nul = data.find(b"\0", block.start, block.end)
+    if nul >= 0:
+        line = block.first_line + _line_ends(data, block.start, nul)
+        raise InputFileError(path, "NUL byte: this is not a text CSV file", line=line)
+    view = np.frombuffer(data, np.uint8, count=block.end - block.start, offset=block.start)
+    if view.size and int(view.max()) >= 0x80:  # not ASCII: checked as UTF-8
+        try:
+            data[block.start : block.end].decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = block.first_line + _line_ends(data, block.start, block.start + exc.start)
+            raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=line) from None
+    if data.find(b"\r", block.start, block.end) >= 0:
+        text = newlines(data[block.start : block.end])
+        return Rows(text, 0, len(text), block.first_line)
+    return block
+
+
+def _line_ends(data: Data, start: int, end: int) -> int:
+    """Line ends in ``data[start:end]``."""
+    return int(np.count_nonzero(np.frombuffer(data, np.uint8, end - start, start) == 10))
 
 
 def _check_text(path: Path, data: bytes, *, complete: bool) -> bytes:
@@ -241,7 +239,11 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
         line = data[line_start:line_end]
         if _skipped(line):
             continue
-        cells = cells_of(line.decode("utf-8"), header.delimiter)
+        try:
+            cells = cells_of(line.decode("utf-8"), header.delimiter)
+        except UnicodeDecodeError as exc:  # a mapped file's lines are checked when parsed
+            where = _line_ends(data, 0, line_start) + 1
+            raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=where) from None
         if not _is_footer(cells, len(header.cells), required):
             end = line_end
             break
@@ -250,7 +252,7 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
-    return Rows(data, start, end, first_line, marks=text.marks)
+    return Rows(data, start, end, first_line)
 
 
 def _line_end(data: Data, start: int, end: int) -> int:
@@ -325,7 +327,7 @@ def _blocks(rows: Rows) -> Iterator[Rows]:
     start, line = rows.start, rows.first_line
     while start < rows.end:
         stop = _block_end(rows, start)
-        block = Rows(rows.data, start, stop, line, marks=rows.marks)
+        block = Rows(rows.data, start, stop, line)
         yield block
         start, line = stop + 1, line + block.count()
 
@@ -345,7 +347,7 @@ def parse_blocks(
     is not ',' and the rows hold one; at the first block that does not parse so, the mark
     is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
     are parsed again with it (an error if one held a decimal comma)."""
-    mark = decimal or ("," if header.delimiter != "," and rows.holds(b",") else ".")
+    mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
     numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
     start, line = rows.start, rows.first_line
 
@@ -353,14 +355,14 @@ def parse_blocks(
         nonlocal decimal, mark
         decimal = mark = decimal_of(path, rows, header, numbers)
         if mark == "." and start > rows.start:  # the blocks before must read so too
-            before = Rows(rows.data, rows.start, start - 1, rows.first_line, marks=rows.marks)
+            before = Rows(rows.data, rows.start, start - 1, rows.first_line)
             for _ in parse_blocks(path, before, header, chosen, types, blanks, mark):
                 pass
         return mark
 
     while start < rows.end:
         stop = _block_end(rows, start)
-        block = Rows(rows.data, start, stop, line, marks=rows.marks)
+        block = checked(path, Rows(rows.data, start, stop, line))
         # A comment line could parse as a row (a commented-out row); blank lines cannot.
         kept = _without_skipped(block) if block.holds(b"#") else block
         count = None

@@ -1,11 +1,13 @@
 """The ``~A`` data rows of a LAS file: the values of the curves read, with the file line of
 each row, their nulls, and the index checked against STRT/STOP/STEP.
 
-:func:`~pipeline.io.las_fast.fast_values` (numpy + ``pyarrow.csv``; see
+The rows come a block at a time (:func:`data_blocks`, for a stream):
+:func:`~pipeline.io.las_fast.fast_blocks` (numpy + ``pyarrow.csv``; see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
-careful path, reads the rest (wrapped files, comment or blank lines, lone CR line ends,
-text in unread curves, LAS 3 delimiters, quoted text) and locates every error by line. Both
-give every number correctly rounded, so values equal lasio's. For a log
+careful path, reads the blocks it declines, or the whole section when it cannot apply
+(wrapped files, comment or blank lines, lone CR line ends, text in unread curves, LAS 3
+delimiters, quoted text) and locates every error by line. Both give every number correctly
+rounded, so values equal lasio's. For a log
 (:mod:`pipeline.io.las_log`), :func:`read_all` reads every curve by the fast path, else
 :func:`read_cells` gives the text of every cell. ``NULL`` items and the option
 ``null_values`` become nulls (compared as numbers: ``-999.2500`` is ``-999.25``). A row
@@ -80,17 +82,6 @@ def data_blocks(path: Path, source: Source, header: Header, wanted: list[int]) -
     yield _slow_values(path, header, split_lines(text), source.title_line, wanted)
 
 
-def read_data(path: Path, source: Source, header: Header, wanted: list[int]) -> Data:
-    """:func:`data_blocks` whole."""
-    blocks = list(data_blocks(path, source, header, wanted))
-    if len(blocks) == 1:
-        return blocks[0]
-    return Data(
-        {i: np.concatenate([b.values[i] for b in blocks] or [np.empty(0)]) for i in wanted},
-        np.concatenate([b.lines for b in blocks] or [np.empty(0, np.int64)]),
-    )
-
-
 def _slow_values(
     path: Path,
     header: Header,
@@ -137,7 +128,7 @@ def read_all(path: Path, source: Source, header: Header) -> Data | Cells:
 
 
 def read_cells(path: Path, source: Source, header: Header) -> Cells:
-    """The text of every cell of the data section, for a log: rows as :func:`read_data`
+    """The text of every cell of the data section, for a log: rows as :func:`data_blocks`
     reads them, except that a short row whose fixed-width values ran together is split as
     lasio splits it (``7.330-19508.961``: 7.330 and -19508.961; ``7.020101130.188``: two
     values whose border cannot be known, read as empty cells with a warning). Without a
