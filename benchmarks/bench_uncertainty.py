@@ -1,12 +1,13 @@
-"""Benchmark the GYRO-NS, GYRO-NS-CT and ISCWSA MWD Rev 5.11 position-uncertainty
-propagation against welleng.
+"""Benchmark the GYRO-NS, GYRO-NS-CT, GYRO-MWD and ISCWSA MWD Rev 4 and Rev 5.11
+position-uncertainty propagation (tool-model files) against welleng.
 
 Run from the repository root: ``python benchmarks/bench_uncertainty.py [--repeat N]``.
 For each model and surveys of several lengths it prints the best-of-N time of ours (minimum
 curvature + per-term covariance) and of welleng (``Survey(..., error_model=MODEL)``, which
 also integrates the survey), the speed-up, and the largest total-covariance difference
 relative to welleng's largest element, with both in the ISCWSA convention (balanced tangent,
-Rev 5 surface tie-on). Exits with status 1 if the relative difference exceeds 1e-4.
+Rev 5 surface tie-on). Exits with status 1 if the relative difference exceeds 1e-4 (Rev 4: 5e-3, see
+:data:`TOLERANCES`).
 The MWD runs use the ISCWSA test well #1 field (50,000 nT, dip 72°, declination −4°).
 """
 
@@ -32,10 +33,15 @@ Floats = NDArray[np.float64]
 LATITUDE = 60.0
 FIELD = MagneticReference(total_field=50000.0, dip=72.0, declination=-4.0)
 TOLERANCE = 1e-4
+#: welleng's Rev 4 leaves out the ISCWSA surface tie-on's doubled first leg (the ISCWSA
+#: clearance set has it): up to 0.5 % of the near-surface covariance.
+TOLERANCES = {"ISCWSA-MWD-REV4": 5e-3}
 #: Our model name → welleng's.
 MODELS = {
     "GYRO-NS": "GYRO-NS",
     "GYRO-NS-CT": "GYRO-NS-CT",
+    "GYRO-MWD": "GYRO-MWD",
+    "ISCWSA-MWD-REV4": "ISCWSA MWD Rev4",
     "ISCWSA-MWD-REV5.11": "ISCWSA MWD Rev5.11",
 }
 
@@ -87,6 +93,7 @@ def best(func: Callable[..., object], repeat: int) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--models", nargs="*", default=list(MODELS), help="models to run")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     print(
@@ -94,12 +101,12 @@ def main(argv: list[str] | None = None) -> int:
         f"{'max rel diff':>12}"
     )
     worst = 0.0
-    for model in MODELS:
+    for model in args.models:
         for n in (100, 1000, 5000):
             md, inc, azi = profile(n)
             a, b = ours(model, md, inc, azi), welleng(model, md, inc, azi)
             rel = float(np.abs(a - b).max() / np.abs(b).max())
-            worst = max(worst, rel)
+            worst = max(worst, rel / TOLERANCES.get(model, TOLERANCE) * TOLERANCE)
             args_ = (model, md, inc, azi)
             t_ours = best(lambda a_=args_: ours(*a_), args.repeat)
             t_weng = best(lambda a_=args_: welleng(*a_), args.repeat)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
+    from pipeline.api.clearance import clearance
     from pipeline.api.frames import TableLike, to_frame, to_table
     from pipeline.api.functions import (
         Tables,
@@ -48,6 +49,7 @@ if TYPE_CHECKING:
     from pipeline.well import WellMetadata
 
 _HOMES = {
+    "pipeline.api.clearance": ("clearance",),
     "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
     "pipeline.api.functions": (
         "Tables",
@@ -82,6 +84,7 @@ __all__ = [
     "WellMetadata",
     "__version__",
     "calibrate_drift",
+    "clearance",
     "compass",
     "correct_drift",
     "integrate_continuous",

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 
+from pipeline.cli_models import models
 from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError, did_you_mean
 from pipeline.version import __version__
 
@@ -76,6 +77,9 @@ def _plan(pipeline_file: str, overrides: tuple[str, ...], registry: Registry) ->
 @click.version_option(__version__, prog_name="gyropipe")
 def main() -> None:
     """gyropipe: gyro-survey processing pipelines."""
+
+
+main.add_command(models)
 
 
 @main.command()
@@ -474,7 +478,7 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
 def budget(plan_file: str, out_file: str | None) -> None:
     """Predict the 1σ inclination and azimuth error at each station of a point survey."""
     from pipeline.atomic import atomic_path
-    from pipeline.sim.budget import error_budget
+    from pipeline.sim.budget import budget_lines, error_budget
     from pipeline.sim.spec import load_simulation
     from pipeline.stages.simulation import well_of_simulation
 
@@ -482,16 +486,7 @@ def budget(plan_file: str, out_file: str | None) -> None:
         spec = load_simulation(plan_file, read_stations=_stations_reader())
         table = error_budget(spec)
     click.echo(f"{spec.name}: tool {spec.tool.preset}, latitude {spec.site.latitude}°")
-    click.echo(
-        f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'g-sens':>7} "
-        f"{'acc':>7}"
-    )
-    for row in table.to_pylist():
-        click.echo(
-            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
-            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
-            f"{row['sigma_azi_accel']:7.3f}"
-        )
+    click.echo("\n".join(budget_lines(table)))
     if out_file:
         registry = _registry_quiet(())
         ext = Path(out_file).suffix.lstrip(".")

@@ -255,3 +255,13 @@ class PluginError(GyropipeError):
         self.plugin = plugin
         self.version = version
         super().__init__(f"plugin {plugin} {version}: {message}")
+
+
+class ToolModelError(GyropipeError, ValueError):
+    """A tool-model (error model) file is invalid, or a term of it cannot be evaluated;
+    carries every problem found, each located at its file, line and column."""
+
+    def __init__(self, problems: list[Problem]) -> None:
+        self.problems = problems
+        lines = "\n".join(f"  {p}" for p in problems)
+        super().__init__(f"invalid tool model ({len(problems)} problem(s)):\n{lines}")

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pluggy
 
-from pipeline.registry import CheckDef, ReaderDef, StageDef, WriterDef
+from pipeline.registry import CheckDef, ReaderDef, StageDef, ToolModelDef, WriterDef
 
 PROJECT = "gyropipe"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -51,3 +51,11 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
 @hookspec
 def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
     """Register QC checks: call ``register(CheckDef(...))`` for each."""
+
+
+@hookspec
+def gyropipe_register_tool_models(register: Callable[[ToolModelDef], None]) -> None:
+    """Register tool-model (error model) files: call ``register(ToolModelDef(name, path))``
+    for each YAML file (format: ``docs/tool-models.md``). The position-uncertainty stage,
+    ``gyropipe models`` and ``pipeline.uncertainty.find_model`` then know the model by
+    name; a shipped model of the same name wins."""

@@ -33,7 +33,8 @@ A reader plugin, whole (entry point ``foo = "foo_gyro.plugin"`` in the group ``g
 What is here:
 
 - registering: :data:`hookimpl` and the records :class:`StageDef`, :class:`ReaderDef`
-  (its ``sniff`` returns a :class:`Claim`), :class:`WriterDef`, :class:`CheckDef`; params
+  (its ``sniff`` returns a :class:`Claim`), :class:`WriterDef`, :class:`CheckDef`,
+  :class:`ToolModelDef` (an error-model file, ``docs/tool-models.md``); params
   helpers :class:`NoParams`, :func:`pipeline_input`, :func:`registered`; what a stage is
   given, :class:`StageContext` and :class:`Provenance`; :class:`TableStream`, what a
   streamed port carries (a schema and record batches: ``StageDef.streamed_inputs`` /
@@ -78,6 +79,7 @@ from pipeline.registry import (
     ReaderDef,
     StageContext,
     StageDef,
+    ToolModelDef,
     WriterDef,
     pipeline_input,
     registered,
@@ -136,6 +138,7 @@ __all__ = [
     "Stations",
     "TableContract",
     "TableStream",
+    "ToolModelDef",
     "Trajectory",
     "UnitError",
     "WellMetadata",

@@ -22,6 +22,7 @@ from pipeline.registry import (
     ReaderDef,
     Registry,
     StageDef,
+    ToolModelDef,
     WriterDef,
 )
 from pipeline.version import __version__
@@ -39,6 +40,7 @@ BUILTIN_PLUGINS = {
     "builtin.continuous": "pipeline.stages.continuous",
     "builtin.stations": "pipeline.stages.stations",
     "builtin.uncertainty": "pipeline.stages.uncertainty",
+    "builtin.clearance": "pipeline.stages.clearance",
     "builtin.report": "pipeline.stages.report",
     "builtin.las": "pipeline.io.las",
     "builtin.mcap": "pipeline.io.mcap",
@@ -56,6 +58,7 @@ HOOKS: tuple[tuple[str, type], ...] = (
     ("gyropipe_register_readers", ReaderDef),
     ("gyropipe_register_writers", WriterDef),
     ("gyropipe_register_checks", CheckDef),
+    ("gyropipe_register_tool_models", ToolModelDef),
 )
 
 

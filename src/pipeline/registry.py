@@ -288,6 +288,20 @@ class CheckDef:
 
 
 @dataclass(frozen=True)
+class ToolModelDef:
+    """A tool-model (error model) file a plugin ships: ``path`` is its YAML file in the
+    format of ``docs/tool-models.md``; ``name`` is the model's name (as the file's ``name:``
+    declares it; letters, digits, ``.``, ``-`` and ``_``), by which stages select it."""
+
+    name: str
+    path: Path
+    description: str = ""
+
+
+TOOL_MODEL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
+
+
+@dataclass(frozen=True)
 class PluginInfo:
     """A loaded (or failed) plugin."""
 
@@ -298,12 +312,13 @@ class PluginInfo:
     error: str | None = None
 
 
-Registration = StageDef | ReaderDef | WriterDef | CheckDef
+Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef
 KIND_OF: dict[type, str] = {
     StageDef: "stage",
     ReaderDef: "reader",
     WriterDef: "writer",
     CheckDef: "check",
+    ToolModelDef: "tool_model",
 }
 
 
@@ -315,6 +330,7 @@ class Registry:
     readers: dict[str, tuple[ReaderDef, str]] = field(default_factory=dict)
     writers: dict[str, tuple[WriterDef, str]] = field(default_factory=dict)
     checks: dict[str, tuple[CheckDef, str]] = field(default_factory=dict)
+    tool_models: dict[str, tuple[ToolModelDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
 
@@ -487,7 +503,7 @@ class Registry:
         """``kind:name`` of everything ``plugin`` registered."""
         return [
             f"{kind}:{name}"
-            for kind in ("stage", "reader", "writer", "check")
+            for kind in ("stage", "reader", "writer", "check", "tool_model")
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
@@ -556,6 +572,14 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
     if not isinstance(item, expected):
         raise TypeError(f"registered a {type(item).__name__} where a {expected.__name__} is needed")
     name = getattr(item, "name", None)
+    if isinstance(item, ToolModelDef):
+        if not isinstance(name, str) or not TOOL_MODEL_NAME.match(name):
+            raise ValueError(
+                f"tool model name {name!r} is invalid: use letters, digits, '.', '-' and '_'"
+            )
+        if not Path(item.path).is_file():
+            raise ValueError(f"tool model {name!r}: no file {str(item.path)!r}")
+        return kind, name
     if not isinstance(name, str) or not NAME.match(name):
         raise ValueError(
             f"{kind} name {name!r} is invalid: use lower-case letters, digits, '_' and '.'"

@@ -35,6 +35,9 @@ ALIASES: dict[str, str] = {
     "foot": "foot",
     "usft": "survey_foot",  # US survey foot, 1200/3937 m
     "us-ft": "survey_foot",
+    "in": "inch",  # hole and casing sizes
+    "inch": "inch",
+    "inches": "inch",
     # angle
     "deg": "degree",
     "dega": "degree",

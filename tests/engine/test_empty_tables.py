@@ -47,6 +47,7 @@ PARAMS: dict[str, list[dict[str, Any]]] = {  # required params, and variants wor
     "interpolate_tvd": [{"tvd": [100.0]}],
     "north_reference": [{"target": "grid", "convergence": 1.0, "declination": 2.0}],
     "correct_drift": [{}, {"source": "given", "drift_rate": 1.0}],
+    "clearance": [{"reference_hole_diameter": 0.3}],
 }
 ANY_TABLE: dict[tuple[str, str], type[TableContract]] = {
     ("export", "readings"): PositionReadings,

@@ -39,6 +39,7 @@ LAYERS: dict[str, int] = {
     # and the plugin authors' API (``pipeline.plugin``)
     "pipeline": 6,
     "pipeline.cli": 6,
+    "pipeline.cli_models": 6,
     "pipeline.api": 6,
     "pipeline.plugin": 6,
     # 5 — orchestration: many wells, built-in stages, reports
@@ -52,6 +53,7 @@ LAYERS: dict[str, int] = {
     "pipeline.earth": 3,
     "pipeline.survey": 3,
     "pipeline.uncertainty": 3,
+    "pipeline.anticollision": 3,
     "pipeline.gyrocompass": 3,
     "pipeline.continuous": 3,
     "pipeline.drift": 3,

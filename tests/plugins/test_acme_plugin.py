@@ -144,12 +144,33 @@ def test_plugins_command_lists_acme(site: Path):
     out = run_cli(site, "plugins")
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
-    assert "acme 0.1.0 (third-party): reader:acme, reader:acme_survey, writer:acme" in lines
+    assert (
+        "acme 0.1.0 (third-party): reader:acme, reader:acme_survey, writer:acme, "
+        "tool_model:ACME-GYRO-V2" in lines
+    )
     assert (
         "  acme_survey (acme 0.1.0) reads stations: By content: the first line is the title "
         "``ACME SURVEY REPORT``." in lines
     )
     assert not [line for line in lines if line.startswith("problem:") and "acme" in line]
+
+
+def test_vendor_tool_model_is_found_by_name(site: Path):
+    """The plugin's model file (GYRO-NS extended by a formula term) is listed and selected
+    by name like a shipped one."""
+    out = run_cli(site, "models")
+    assert out.returncode == 0, out.stderr
+    assert any(
+        line.startswith("ACME-GYRO-V2 ") and "acme-gyro-v2.yaml" in line
+        for line in out.stdout.splitlines()
+    )
+    shown = run_cli(site, "models", "acme-gyro-v2", "--json")
+    assert shown.returncode == 0, shown.stderr
+    doc = json.loads(shown.stdout)
+    terms = {t["name"]: t for t in doc["terms"]}
+    assert terms["ACME-THERM"]["weight"] == "formula"
+    assert terms["GXY-RN"]["magnitude"] == 0.25 and terms["GXY-G4"]["magnitude"] == 0.6
+    assert doc["needs"] == ["latitude"]
 
 
 def test_pipeline_reads_acme_file_back_to_the_simulated_samples(

@@ -53,6 +53,7 @@ HOME = {
             "ReaderDef",
             "WriterDef",
             "CheckDef",
+            "ToolModelDef",
             "Claim",
             "NoParams",
             "pipeline_input",

@@ -240,7 +240,27 @@ def test_error_budget_of_the_j_well():
         error_budget(longer).column("sigma_azi_gyro").to_numpy()
         / error_budget(base).column("sigma_azi_gyro").to_numpy()
     )
-    np.testing.assert_allclose(ratio, 0.5, rtol=1e-9)
+    defined = inc > 0.0  # the vertical top hole has no azimuth (NaN in both)
+    assert np.all(np.isnan(ratio[~defined]))
+    np.testing.assert_allclose(ratio[defined], 0.5, rtol=1e-9)
+
+
+def test_error_budget_declares_the_azimuth_undefined_at_vertical(tmp_path: Path):
+    """At 0° the compass stage gives no azimuth (horizontal gravity within its σ): the budget
+    predicts none either — NaN in the table, said in words on the command line."""
+    budget = error_budget(load_simulation(PLANS / "j-well.yaml"))
+    inc = budget.column("inc").to_numpy()
+    for name in ("sigma_azi", "sigma_azi_gyro", "sigma_azi_g", "sigma_azi_accel"):
+        sigma = budget.column(name).to_numpy()
+        assert np.all(np.isnan(sigma[inc == 0.0])), name
+        assert np.all(np.isfinite(sigma[inc > 1.0])), name
+    done = subprocess.run(
+        [*gyropipe(), "budget", str(PLANS / "vertical.yaml")], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    rows = done.stdout.splitlines()[2:]
+    assert rows and all("azimuth undefined" in row for row in rows)
+    assert "nan" not in done.stdout
 
 
 def test_well_from_a_stations_file(tmp_path: Path):

@@ -152,11 +152,11 @@ def test_monte_carlo_matches_propagated_covariance() -> None:
 # ---------------------------------------------------------------- agreement with welleng
 
 
-@pytest.mark.parametrize("model", ["GYRO-NS", "GYRO-NS-CT"])
+@pytest.mark.parametrize("model", ["GYRO-NS", "GYRO-NS-CT", "GYRO-MWD"])
 def test_agreement_with_welleng(model: str) -> None:
-    """welleng's GYRO-NS and GYRO-NS-CT (OWSG A021Gc: the stationary terms as the sheet has
-    them, GXY-GD and GXY-GRW accumulating above the 15° static end inclination), term by term
-    and in total."""
+    """welleng's GYRO-NS, GYRO-NS-CT (OWSG A021Gc: the stationary terms as the sheet has
+    them, GXY-GD and GXY-GRW accumulating above the 15° static end inclination) and GYRO-MWD
+    (OWSG A019Gb), term by term and in total."""
     we = pytest.importorskip("welleng")
     md = np.arange(0.0, 3001.0, 30.0)
     inc_deg, azi_deg = _profile(md)

@@ -32,6 +32,18 @@ ERROR_MODEL = (
     "SPE Drilling & Completion, 2000, vol. 15, no. 4, pp. 221–233 (SPE 67616)."
 )
 """Propagation of survey tool errors into position uncertainty (the ISCWSA model)."""
+GYRO_ERROR_MODEL = (
+    "Torkildsen T., Håvardstein S. T., Weston J. L., Ekseth R. Prediction of wellbore position "
+    "accuracy when surveyed with gyroscopic tools. SPE Annual Technical Conference and "
+    "Exhibition, Houston, 26–29 September 2004 (SPE 90408)."
+)
+"""The ISCWSA error model of gyroscopic survey tools."""
+SEPARATION_RULE = (
+    "Sawaryn S. J., Wilson H., Bang J., Nyrnes E., Sentance A., Poedjono B., Lowdon R., "
+    "Mitchell I., Codling J., Clark P. J., Allen W. T. Well-collision-avoidance separation "
+    "rule. SPE Drilling & Completion, 2019, vol. 34, no. 1, pp. 1–15 (SPE-187073-PA)."
+)
+"""The ISCWSA separation factor between a reference and an offset well."""
 
 
 class Citations:

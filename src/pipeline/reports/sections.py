@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance, StageSetup
 from pipeline.reports.document import (
     Block,
@@ -25,9 +27,11 @@ from pipeline.reports.literature import (
     DATA_VALIDITY,
     DRIFT_CALIBRATION,
     ERROR_MODEL,
+    GYRO_ERROR_MODEL,
     MULTI_POSITION,
     Citations,
 )
+from pipeline.uncertainty.engine import find_model
 from pipeline.well import WellMetadata
 
 NORTH_NAMES = {"true": "true north", "grid": "grid north", "magnetic": "magnetic north"}
@@ -110,6 +114,16 @@ def _param(stage: StageSetup, name: str, default: Any = "?") -> Any:
     return stage.params.get(name, default)
 
 
+def _error_model(model: str) -> tuple[str, bool]:
+    """The title a tool model's file gives it (the name if the file cannot be found now) and
+    whether it is a gyro model (it reads the latitude)."""
+    try:
+        tool = find_model(model)
+    except (KeyError, GyropipeError):
+        return Path(model).name, False
+    return tool.title or tool.name, "latitude" in tool.needs
+
+
 AZIMUTH_METHODS = {
     "ml": "maximum-likelihood azimuth",
     "auto": "azimuth by the better-conditioned closed form",
@@ -149,11 +163,10 @@ def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] 
             )
         case "position_uncertainty":
             confidence = float(_param(stage, "confidence", 0.0)) * 100
-            return (
-                "Position uncertainty",
-                f"ISCWSA {_param(stage, 'model')} error model propagated as in "
-                f"{cite(ERROR_MODEL)}, ellipses at {confidence:g} %",
-            )
+            title, gyro = _error_model(str(_param(stage, "model", "GYRO-NS")))
+            method = f"{title} error model propagated as in {cite(ERROR_MODEL)}"
+            also = f" with the gyro terms of {cite(GYRO_ERROR_MODEL)}" if gyro else ""
+            return "Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %"
         case "correct_drift":
             source = str(_param(stage, "source"))
             return (

@@ -14,6 +14,7 @@ import pyarrow as pa
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
 from pipeline.reports import plots
+from pipeline.reports.clearance import clearance_section
 from pipeline.reports.document import (
     Block,
     Column,
@@ -81,6 +82,7 @@ class SurveyTables:
     calibration: pa.Table | None = None
     allan: pa.Table | None = None
     noise: pa.Table | None = None
+    clearance: pa.Table | None = None
 
     def qc_sources(self) -> QcSources:
         return QcSources(self.qc, self.qc_summary, self.checks, self.inout, self.stations)
@@ -124,6 +126,8 @@ def survey_document(
     flags = station_flags(md, src) if src.any() or _has(tables.stations, "flags") else None
     short = short_courses(md, path.offsets, min_course)
     course = Course(short, min_course)
+    citations = Citations()
+    clearance = clearance_section(tables.clearance, citations) if _rows(tables.clearance) else None
 
     sections = [
         Section(
@@ -139,7 +143,7 @@ def survey_document(
             key="well",
         ),
         _summary(tables, path, vs_azimuth, flags, course),
-        _method(tables, path, vs_azimuth, provenance),
+        _method(tables, path, vs_azimuth, provenance, citations),
         Section(
             "Survey listing",
             (listing(traj, tables.stations, vs_azimuth, flags, course),),
@@ -160,6 +164,8 @@ def survey_document(
         sections.append(_drift(dataclasses.replace(tables, drift=drift, calibration=calibration)))
     if tables.allan is not None and _rows(tables.allan):
         sections.append(_allan(tables.allan, tables.noise))
+    if clearance is not None:
+        sections.append(clearance)
     sections.append(provenance_section(provenance))
     subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
     return Document(
@@ -260,10 +266,13 @@ def _summary(
 
 
 def _method(
-    tables: SurveyTables, path: plots.Path3, vs_azimuth: float | None, provenance: Provenance
+    tables: SurveyTables,
+    path: plots.Path3,
+    vs_azimuth: float | None,
+    provenance: Provenance,
+    citations: Citations,
 ) -> Section:
     traj = tables.trajectory
-    citations = Citations()
     plane = (
         f"{fmt_azimuth(vs_azimuth)}° {path.north_label}"
         if vs_azimuth is not None

@@ -13,7 +13,10 @@ Per station, for the frame positions and dwell of the plan:
   scale factor propagated through the inclination estimator at the plan's frame positions
   (least favourable starting toolface) → σ_I; its leak into the azimuth through
   ∂A/∂I = −sin A (cos A tan I − tan φ).
-Gyro biases and linear drift are removed by the multi-position scheme and do not appear. The
+Gyro biases and linear drift are removed by the multi-position scheme and do not appear. Where
+the planned horizontal gravity is not ``tilt_detection`` times its σ (σ_I and the accelerometer
+resolution, the compass stage's defaults) above zero the azimuth is undefined, as the compass
+stage will declare it: the azimuth σ columns are NaN there. The
 tool's error magnitudes are its 1σ values as :func:`pipeline.sim.sensors.compass_errors`
 takes them — the same the compass stage uses for a simulated tool.
 """
@@ -25,6 +28,7 @@ import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
 from pipeline.gyrocompass.azimuth import cramer_rao
+from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import hr_covariance
 from pipeline.gyrocompass.systematic import ToolErrors, accelerometer_sigma
 from pipeline.sim.sensors import compass_errors, per_axis
@@ -78,6 +82,11 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     sigma_g = cramer_rao(state.azi, state.inc, lat, g_cov + 1e-30 * np.eye(2))
     leak = np.abs(np.sin(state.azi) * (np.cos(state.azi) * np.tan(state.inc) - np.tan(lat)))
     sigma_accel = leak * sigma_inc
+    defaults = CompassOptions()
+    sigma_tilt = np.hypot(sigma_inc, defaults.acc_resolution * 1e-6)
+    undefined = np.abs(np.sin(state.inc)) <= defaults.tilt_detection * sigma_tilt
+    for sigma in (sigma_fit, sigma_gyro, sigma_g, sigma_accel):
+        sigma[undefined] = np.nan
     return ErrorBudget.compiled().make_table(
         {
             "md": mds,
@@ -91,6 +100,27 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
         },
         north_reference="true",
     )
+
+
+def budget_lines(table: pa.Table) -> list[str]:
+    """The budget as text: a header and one line per station (degrees); a station without an
+    azimuth says so in words."""
+    lines = [
+        f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'g-sens':>7} "
+        f"{'acc':>7}"
+    ]
+    for row in table.to_pylist():
+        azimuth = (
+            f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
+            f"{row['sigma_azi_accel']:7.3f}"
+            if np.isfinite(row["sigma_azi"])
+            else "  azimuth undefined (vertical within the accelerometers' resolution)"
+        )
+        lines.append(
+            f"{row['md']:9.1f} {row['inc']:7.2f} {row['azi']:7.2f} {row['sigma_inc']:7.4f} "
+            + azimuth
+        )
+    return lines
 
 
 def _accel_sigma(inc: float, theta: FloatArray, g: float, errors: ToolErrors) -> float:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Literal
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.anticollision.tables import Clearance
 from pipeline.contracts import TableContract
 from pipeline.drift.tables import (
     AllanResult,
@@ -125,6 +126,7 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "calibration": CalibrationResult,
     "allan": AllanResult,
     "noise": NoiseParameters,
+    "clearance": Clearance,
 }
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Mapping
-from dataclasses import fields, replace
-from typing import Any, Literal
+from dataclasses import replace
+from typing import Literal
 
 import numpy as np
 import pyarrow as pa
@@ -20,9 +20,11 @@ from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
-from pipeline.uncertainty.gyro import GYRO_PRESETS, GyroTool, gyro_covariance
-from pipeline.uncertainty.mwd import MWD_PRESETS, MwdTool, mwd_covariance
+from pipeline.uncertainty.engine import configure, covariance
+from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
+from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import WellMetadata
 
 AREA = "m2"
@@ -65,10 +67,10 @@ class UncertaintyParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     model: str = Field(
         "GYRO-NS",
-        description=f"error model and tool preset, one of {sorted(GYRO_PRESETS)} "
-        "(GYRO-NS-CT: continuous mode, drift and random walk along the hole) or of "
-        f"{sorted(MWD_PRESETS)} (magnetic MWD: ISCWSA MWD Rev 5 as in its example workbook, "
-        "or Rev 5.11 with DEC-OH 0.21°)",
+        description="error model: the name of a tool model (`gyropipe models` lists them: "
+        "ISCWSA-MWD-REV4, ISCWSA-MWD-REV5, ISCWSA-MWD-REV5.11, GYRO-NS, GYRO-NS-noXCL, "
+        "GYRO-NS-CT, GYRO-MWD and those plugins add) or the path of a tool-model file "
+        "(.yaml, docs/tool-models.md)",
     )
     confidence: float = Field(
         0.95, gt=0, lt=1, description="probability content of the *_conf ellipse columns"
@@ -103,40 +105,36 @@ class UncertaintyParams(BaseModel):
     init_sigma_azi: float | None = Field(
         None,
         ge=0,
-        description="GYRO-NS-CT: measured 1σ azimuth of the stop the continuous run starts "
-        "from (the compass stage's sigma_azi), deg; replaces the stationary gyro terms and "
-        "starts the continuous section at the first station",
+        description="continuous models (GYRO-NS-CT): measured 1σ azimuth of the stop the "
+        "continuous run starts from (the compass stage's sigma_azi), deg; replaces the "
+        "stationary gyro terms and starts the continuous section at the first station",
     )
     tool: dict[str, float] = Field(
         default_factory=dict,
-        description="tool magnitudes overriding the preset's, by term field, in the model "
-        "sheet's units (e.g. gxy_gd deg/h, gxy_grw deg/√h, running_speed m/h, axyz_zb m/s²; "
-        "MWD: abz m/s², mbz nT, dec_u deg, dbh_u deg·nT, amil nT; dsfs, drfr m)",
+        description="term magnitudes and model parameters overriding the model file's, by "
+        "term name (GXY-GD, AMIL) or field name (gxy_gd, amil), in the file's units (e.g. "
+        "GXY-GD deg/h, GXY-GRW deg/√h, running_speed m/h, AXYZ-ZB m/s², ABZ m/s², MBZ nT, "
+        "DEC-U deg, DBH-U deg·nT, AMIL nT, DSFS -, DRFR m)",
     )
 
     @model_validator(mode="after")
     def _model_and_fields(self) -> UncertaintyParams:
-        if self.model not in GYRO_PRESETS and self.model not in MWD_PRESETS:
-            known = sorted(GYRO_PRESETS) + sorted(MWD_PRESETS)
-            raise ValueError(f"unknown model {self.model!r}; expected one of {known}")
-        mwd = self.model in MWD_PRESETS
-        tool_type = MwdTool if mwd else GyroTool
-        names = {f.name for f in fields(tool_type) if f.type == "float"}
-        unknown = sorted(set(self.tool) - names)
-        if unknown:
-            raise ValueError(
-                f"unknown tool fields {unknown} for {self.model}; expected some of {sorted(names)}"
-            )
-        if mwd:
-            gyro_only = [
-                name
-                for name in ("latitude", "measured_sigma_azi", "init_sigma_azi")
-                if getattr(self, name) is not None
-            ]
-            if gyro_only:
-                raise ValueError(f"{gyro_only} apply to gyro models, not {self.model!r}")
-        elif self.magnetic is not None:
+        try:
+            tool = configure(self.model, self.tool)
+        except KeyError as exc:  # an unknown model, term or parameter
+            what = "unknown tool fields" if self.tool else "unknown model"
+            raise ValueError(f"{what}: {exc.args[0]}") from None
+        gyro_only = [
+            name
+            for name in ("latitude", "measured_sigma_azi", "init_sigma_azi")
+            if getattr(self, name) is not None
+        ]
+        if gyro_only and "latitude" not in tool.needs:
+            raise ValueError(f"{gyro_only} apply to gyro models, not {self.model!r}")
+        if self.magnetic is not None and "magnetic" not in tool.needs:
             raise ValueError(f"magnetic applies to MWD models, not {self.model!r}")
+        if self.init_sigma_azi is not None and "static_end_inc" not in tool.parameters:
+            raise ValueError(f"init_sigma_azi applies to continuous models, not {self.model!r}")
         return self
 
 
@@ -146,10 +144,24 @@ def position_uncertainty(
     """Trajectory → trajectory with NEV covariance and error ellipses per station."""
     table = inputs["trajectory"]
     azi_deg = table.column("azi").to_numpy()
-    if params.model in MWD_PRESETS:
-        covariance, azi_deg = _mwd(params, ctx.well, azi_deg, north_reference_of(table, "azi"))
-    else:
-        covariance = _gyro(params, ctx.well, _start_stop_sigma(inputs.get("stops"), table))
+    tool = configure(params.model, params.tool)
+    site = ModelSite()
+    if "magnetic" in tool.needs:
+        magnetic = params.magnetic or _wellhead_field(ctx.well)
+        site = replace(site, magnetic=magnetic)
+        azi_deg, _ = convert_azimuth(
+            azi_deg,
+            north_reference_of(table, "azi"),
+            "true",
+            convergence_deg=ctx.well.grid_convergence,
+            declination_deg=magnetic.declination,
+        )
+    if "latitude" in tool.needs:
+        latitude = resolve_site(
+            ctx.well, stage="position_uncertainty", latitude=params.latitude
+        ).latitude
+        site = replace(site, latitude=latitude)
+        tool = _measured(tool, params, latitude, _start_stop_sigma(inputs.get("stops"), table))
     md = table.column("md").to_numpy()
     inc = np.radians(table.column("inc").to_numpy())
     azi = np.radians(azi_deg)
@@ -159,7 +171,9 @@ def position_uncertainty(
     for lo, hi in itertools.pairwise(offsets):
         # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
         survey = Survey.of(md[lo:hi], inc[lo:hi], defined_azimuths(azi[lo:hi]), tvd[lo:hi])
-        cov[lo:hi] = covariance(survey).sum(axis=0)
+        cov[lo:hi] = covariance(
+            survey, tool, site, basis=params.basis, surface_tie=params.surface_tie
+        )
     ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
     k2 = horizontal_scale(params.confidence)
     k1 = vertical_scale(params.confidence)
@@ -185,9 +199,6 @@ def position_uncertainty(
     return {"trajectory": out.replace_schema_metadata(table.schema.metadata)}
 
 
-Covariance = Callable[[Survey], np.ndarray]
-
-
 def _start_stop_sigma(stops: pa.Table | None, trajectory: pa.Table) -> tuple[float, float] | None:
     """Azimuth σ and inclination (deg) of the compassed stop nearest the trajectory's first
     MD (the tie of a continuous run); None without stops."""
@@ -199,58 +210,26 @@ def _start_stop_sigma(stops: pa.Table | None, trajectory: pa.Table) -> tuple[flo
     return float(stops.column("sigma_azi")[row].as_py()), float(stops.column("inc")[row].as_py())
 
 
-def _gyro(
-    params: UncertaintyParams, well: WellMetadata, start_stop: tuple[float, float] | None
-) -> Covariance:
-    """The per-term covariance of one survey under the gyro model of ``params``. A
-    continuous model starts from ``params.init_sigma_azi``, or else from the wired start
-    stop's σ when that stop is inclined at least the model's ``static_end_inc`` (a
-    near-vertical stop's azimuth does not initialise the run: the model's stationary terms
-    and its inclination gate apply, as without stops)."""
-    latitude = resolve_site(well, stage="position_uncertainty", latitude=params.latitude).latitude
-    overrides: dict[str, Any] = dict(params.tool)
-    tool = replace(GYRO_PRESETS[params.model], **overrides)
-    if params.init_sigma_azi is not None and not tool.continuous:
-        raise ValueError(f"init_sigma_azi applies to continuous models, not {params.model!r}")
-    init_sigma = params.init_sigma_azi
-    if init_sigma is None and start_stop is not None and start_stop[1] >= tool.static_end_inc:
-        init_sigma = start_stop[0]
-    if init_sigma is not None and tool.continuous:
-        tool = replace(tool, init_sigma_azi=init_sigma)
+def _measured(
+    tool: ToolModel,
+    params: UncertaintyParams,
+    latitude: float,
+    start_stop: tuple[float, float] | None,
+) -> ToolModel:
+    """A gyro model with what the survey measured: the compassing scatter (GXY-RN) and, for a
+    continuous model, the initial azimuth σ from ``params.init_sigma_azi`` or else from the
+    wired start stop's σ when that stop is inclined at least the model's static end
+    inclination (a near-vertical stop's azimuth does not initialise the run: the model's
+    stationary terms and its inclination gate apply, as without stops)."""
     if params.measured_sigma_azi is not None:
-        tool = tool.with_measured_noise(params.measured_sigma_azi, latitude)
-
-    def covariance(survey: Survey) -> np.ndarray:
-        return gyro_covariance(
-            survey, latitude, tool, basis=params.basis, surface_tie=params.surface_tie
-        )[1]
-
-    return covariance
-
-
-def _mwd(
-    params: UncertaintyParams, well: WellMetadata, azi_deg: np.ndarray, north: str
-) -> tuple[Covariance, np.ndarray]:
-    """The per-term covariance of one survey under the MWD model of ``params``, and the
-    azimuths referred to true north (grid via the well's convergence, magnetic via the
-    reference declination)."""
-    magnetic = params.magnetic or _wellhead_field(well)
-    azi_true, _ = convert_azimuth(
-        azi_deg,
-        north,
-        "true",
-        convergence_deg=well.grid_convergence,
-        declination_deg=magnetic.declination,
-    )
-    overrides: dict[str, Any] = dict(params.tool)
-    tool = replace(MWD_PRESETS[params.model], **overrides)
-
-    def covariance(survey: Survey) -> np.ndarray:
-        return mwd_covariance(
-            survey, magnetic, tool, basis=params.basis, surface_tie=params.surface_tie
-        )[1]
-
-    return covariance, azi_true
+        tool = with_measured_noise(tool, params.measured_sigma_azi, latitude)
+    init_sigma = params.init_sigma_azi
+    gate = tool.parameters.get("static_end_inc")
+    if gate is None:
+        return tool
+    if init_sigma is None and start_stop is not None and np.radians(start_stop[1]) >= gate:
+        init_sigma = start_stop[0]
+    return tool if init_sigma is None else with_initial_azimuth(tool, init_sigma)
 
 
 def _wellhead_field(well: WellMetadata) -> MagneticReference:
@@ -266,8 +245,9 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
         StageDef(
             name="position_uncertainty",
             func=position_uncertainty,
-            description="Propagate the ISCWSA gyro (GYRO-NS, GYRO-NS-CT) or MWD (Rev 5) error "
-            "models into NEV covariance and error ellipses per station.",
+            description="Propagate an ISCWSA/OWSG error model (a tool-model file: MWD Rev 4 "
+            "and Rev 5, GYRO-NS, GYRO-NS-CT, GYRO-MWD or a vendor's) into NEV covariance and "
+            "error ellipses per station.",
             inputs={"trajectory": Trajectory, "stops": CompassStations},
             optional_inputs=frozenset({"stops"}),
             outputs={"trajectory": PositionUncertainty},

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 
 from pipeline.survey.mincurve import FloatArray, IndexArray, minimum_curvature, step_azimuths
 
-__all__ = ["Interpolated", "interpolate_md", "interpolate_tvd"]
+__all__ = ["Interpolated", "MinCurvePath", "interpolate_md", "interpolate_tvd"]
 
 _StepFunc = Callable[[IndexArray, FloatArray], FloatArray]
 
@@ -47,8 +47,9 @@ class Interpolated:
     target: IndexArray
 
 
-class _Path:
-    """One survey's stations, positions and tool axes."""
+class MinCurvePath:
+    """One survey's stations, positions ``r`` (3, n), tool axes at the ends of each step
+    ``t1``, ``t2`` (3, n − 1), doglegs ``beta`` and course lengths ``length`` (rad, m)."""
 
     def __init__(
         self,
@@ -151,7 +152,7 @@ def interpolate_md(
     Raises:
         ValueError: malformed stations or an MD outside [md[0], md[-1]].
     """
-    path = _Path(md, inc, azi, tie)
+    path = MinCurvePath(md, inc, azi, tie)
     s = np.atleast_1d(np.asarray(at_md, dtype=np.float64))
     if s.ndim != 1:
         raise ValueError(f"at_md must be a scalar or 1-D; got shape {s.shape}")
@@ -180,7 +181,7 @@ def interpolate_tvd(
     reported once (pieces are half-open, the survey's last piece closed); a horizontal piece
     lying at exactly a target TVD reports its start.
     """
-    path = _Path(md, inc, azi, tie)
+    path = MinCurvePath(md, inc, azi, tie)
     targets = np.atleast_1d(np.asarray(at_tvd, dtype=np.float64))
     if targets.ndim != 1:
         raise ValueError(f"at_tvd must be a scalar or 1-D; got shape {targets.shape}")

@@ -1,283 +1,189 @@
-"""OWSG / ISCWSA gyro error terms: GYRO-NS (stationary) and GYRO-NS-CT (stationary and
-continuous), ISCWSA Rev 5; SPE 90408.
+"""The ISCWSA gyro error models (SPE 90408; OWSG GYRO-NS, GYRO-NS-CT, GYRO-MWD) through their
+tool-model files, and the two changes a measured survey makes to them.
 
-Each term is a 1σ magnitude and a weight function giving ∂(MD, I, α)/∂ε per station, where
-α = A·sin I is the horizontal azimuth tilt (see :mod:`pipeline.uncertainty.model`); an
-azimuth weight ∂A/∂ε of the published model therefore appears here multiplied by sin I.
-The extended-course-length terms XCLA/XCLH are the OWSG gyro sheets' measurement-error
-form (an azimuth and an inclination weight); the ISCWSA MWD workbook defines them in
-position instead (:mod:`pipeline.uncertainty.mwd`). Gyro rate terms divide by the
-horizontal Earth rate Ω cos φ (the gyrocompass azimuth error of a bias b is b/(Ω cos φ)).
-Units: magnitudes as published (deg, deg/h, m, m/s², 1/m) and converted to SI by
-:func:`gyro_terms`.
+The models are data (``models/gyro-*.yaml``, read by :mod:`pipeline.uncertainty.engine`); the
+weighting functions are in :mod:`pipeline.uncertainty.weightfns` (gyro rate terms divide by
+the horizontal Earth rate Ω cos φ: the gyrocompass azimuth error of a bias b is b/(Ω cos φ);
+the continuous drift and random walk of GYRO-NS-CT accumulate along the hole at the running
+speed above the static end inclination, SPE 90408 Table 7).
 
-Continuous mode (GYRO-NS-CT, SPE 90408 Table 7). Above the static-gyro end inclination the
-tool runs continuously and its xy gyro drift and random walk accumulate along the hole at
-the running speed c (m/h): the azimuth error is ``v·h_i`` with
+- :func:`with_initial_azimuth`: when the initial azimuth error of a continuous run is
+  measured (its compassed stop's σ), that one systematic azimuth error replaces the
+  stationary gyro terms (SPE 90408's initialisation error carried through the continuous
+  section) and the continuous section starts at the first station.
+- :func:`with_measured_noise`: GXY-RN set from a measured compassing azimuth scatter.
 
-    drift (GXY-GD)        h_i = h_{i−1} + ΔMD_i / (c·sin Ī_i)         (h in hours)
-    random walk (GXY-GRW) h_i = √(h_{i−1}² + ΔMD_i / (c·sin² Ī_i))     (h in √hours)
-
-Ī_i the mean inclination of the leg, h reset to 0 at a station at or below the end
-inclination; both propagate systematically. The stationary terms are evaluated at every
-station as the OWSG sheet (and welleng) do. When the initial azimuth error of the continuous
-run is measured (its compassed stop's σ), ``init_sigma_azi`` replaces the stationary gyro
-terms by that one systematic azimuth error (SPE 90408's initialisation error carried through
-the continuous section) and the continuous section starts at the first station.
+:class:`GyroTool` and :func:`gyro_terms`/:func:`gyro_covariance` keep the earlier Python API:
+a tool is a model name plus magnitudes (in the sheet's units) and parameters that override
+the file's.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.uncertainty.model import Propagation
-from pipeline.uncertainty.terms import (
-    STANDARD_G,
-    XCL_TORTUOSITY,
-    Survey,
-    Term,
-    depth_terms,
-    misalignment_terms,
-    previous,
-    stack,
-    term_covariance,
-)
+from pipeline.errors import Location
+from pipeline.uncertainty.engine import configure, find_model, term_covariances
+from pipeline.uncertainty.quantities import EARTH_RATE_RAD_H, ModelSite, Quantities
+from pipeline.uncertainty.terms import STANDARD_G, Survey, Term
+from pipeline.uncertainty.toolmodel import ToolModel, ToolTerm
+from pipeline.uncertainty.weightfns import WEIGHT_FUNCTIONS
 
 __all__ = [
     "EARTH_RATE_RAD_H",
     "GYRO_PRESETS",
+    "STATIONARY_GYRO_CODES",
     "GyroTool",
     "gyro_covariance",
     "gyro_terms",
+    "with_initial_azimuth",
+    "with_measured_noise",
 ]
 
 FloatArray = NDArray[np.float64]
 
-EARTH_RATE_RAD_H = 7.292115e-5 * 3600.0
-"""Earth rotation rate, rad/h (WGS84)."""
-_DEG = np.pi / 180.0
+STATIONARY_GYRO_CODES = frozenset({"GXY-B1", "GXY-B2", "GXY-G1", "GXY-G4", "GXY-RN"})
+"""Weighting functions of a stationary gyrocompass's xy gyro terms."""
+
+
+def with_initial_azimuth(model: ToolModel, sigma_deg: float) -> ToolModel:
+    """``model`` with its stationary gyro terms replaced by one systematic azimuth error
+    ``AZ-INIT`` of ``sigma_deg`` (deg, 1σ) and its continuous section (if any) starting at
+    the first station."""
+    init = ToolTerm(
+        "AZ-INIT",
+        ("azi",),
+        "systematic",
+        float(sigma_deg),
+        "deg",
+        WEIGHT_FUNCTIONS["AZ"],
+        Location(model.file),
+        "measured initial azimuth",
+    )
+    stationary = [k for k, t in enumerate(model.terms) if t.code in STATIONARY_GYRO_CODES]
+    at = stationary[0] if stationary else len(model.terms)  # in the place of the first
+    kept = [t for k, t in enumerate(model.terms) if k < at and k not in stationary]
+    kept += [init] + [t for k, t in enumerate(model.terms) if k >= at and k not in stationary]
+    params = dict(model.parameters)
+    if "static_end_inc" in params:
+        params["static_end_inc"] = -np.inf
+    return replace(model, terms=tuple(kept), parameters=params)
+
+
+def with_measured_noise(model: ToolModel, sigma_azi_deg: float, latitude_deg: float) -> ToolModel:
+    """``model`` whose GXY-RN reproduces a measured 1σ compassing azimuth scatter at I = 0:
+    σ_A = f·RN/(Ω cos φ) (f the noise reduction), so RN = σ_A·Ω cos φ/f (deg/h)."""
+    rate_deg_h = np.degrees(EARTH_RATE_RAD_H) * np.cos(np.radians(latitude_deg))
+    f = model.parameters.get("noise_reduction", 1.0)
+    rn = np.radians(sigma_azi_deg) * rate_deg_h / f
+    term = model.term("GXY-RN")
+    return replace(
+        model,
+        terms=tuple(
+            replace(t, magnitude=float(rn), unit="deg/h") if t is term else t for t in model.terms
+        ),
+    )
 
 
 @dataclass(frozen=True)
 class GyroTool:
-    """1σ magnitudes of the GYRO-NS terms, in the units of the OWSG sheet.
+    """A gyro tool model: a model file (``model``; default GYRO-NS, GYRO-NS-CT when
+    ``continuous``) with magnitudes (the sheet's units: deg, deg/h, deg/h/g, deg/√h, m/s², m,
+    -) and parameters overriding the file's where given (None keeps the file's).
 
-    Defaults are the OWSG GYRO-NS (A020Gb, Rev 5) values.
-    """
+    ``gxy_b1``/``gxy_b2`` set GXY-B1R/B2R (GXY-B1S/B2S in a continuous model);
+    ``init_sigma_azi`` applies :func:`with_initial_azimuth`; ``include_xcl=False`` drops
+    XCLA/XCLH."""
 
-    drfr: float = 0.35  # m, random depth reference
-    dsfs: float = 5.6e-4  # -, depth scale factor
-    dstg: float = 2.5e-7  # 1/m, depth stretch (global)
-    sage: float = 0.2  # deg, sag (enhanced)
-    xym1: float = 0.1  # deg, xy misalignment 1
-    xym2: float = 0.1  # deg, xy misalignment 2
-    xym3e: float = 0.3  # deg, xy misalignment 3 (random, enhanced)
-    xym4e: float = 0.3  # deg, xy misalignment 4 (random, enhanced)
-    axyz_mis: float = 0.0095  # deg, accelerometer misalignment
-    axyz_sf: float = 1.11e-4  # -, accelerometer scale factor
-    axyz_zb: float = 0.0017  # m/s², accelerometer bias
-    gxy_b1: float = 0.15  # deg/h, xy gyro bias 1 (random between stations)
-    gxy_b2: float = 0.15  # deg/h, xy gyro bias 2
-    gxy_g1: float = 0.2  # deg/h/g, g-dependent 1
-    gxy_g4: float = 0.6  # deg/h/g, g-dependent 4
-    gxy_rn: float = 0.4  # deg/h, random noise
-    noise_reduction: float = 1.0  # -, noise reduction factor of GXY-RN
-    xcla: float = 0.167  # -, extended course length (azimuth)
-    xclh: float = 0.167  # -, extended course length (inclination)
-    xcl_tortuosity: float = XCL_TORTUOSITY  # rad/m
+    model: str | None = None
+    continuous: bool = False
     include_xcl: bool = True
-    continuous: bool = False  # GYRO-NS-CT: biases systematic, no G1, GD and GRW terms
-    gxy_gd: float = 0.5  # deg/h, continuous xy gyro drift (GYRO-NS-CT)
-    gxy_grw: float = 0.25  # deg/√h, continuous xy gyro random walk (GYRO-NS-CT)
-    running_speed: float = 2743.2  # m/h, continuous running speed (GYRO-NS-CT)
-    static_end_inc: float = 15.0  # deg, continuous above it (GYRO-NS-CT); < 0: from station 0
-    init_sigma_azi: float | None = None  # deg, measured initial azimuth σ (GYRO-NS-CT)
-    extra: dict[str, float] = field(default_factory=dict)
+    init_sigma_azi: float | None = None  # deg, measured initial azimuth σ (continuous)
+    drfr: float | None = None  # m
+    dsfs: float | None = None  # -
+    dstg: float | None = None  # 1/m
+    sage: float | None = None  # deg
+    xym1: float | None = None  # deg
+    xym2: float | None = None  # deg
+    xym3e: float | None = None  # deg
+    xym4e: float | None = None  # deg
+    axyz_mis: float | None = None  # deg
+    axyz_sf: float | None = None  # -
+    axyz_zb: float | None = None  # m/s²
+    gxy_b1: float | None = None  # deg/h
+    gxy_b2: float | None = None  # deg/h
+    gxy_g1: float | None = None  # deg/h/g
+    gxy_g4: float | None = None  # deg/h/g
+    gxy_rn: float | None = None  # deg/h
+    gxy_gd: float | None = None  # deg/h (continuous)
+    gxy_grw: float | None = None  # deg/√h (continuous)
+    xcla: float | None = None  # -
+    xclh: float | None = None  # -
+    noise_reduction: float | None = None  # -
+    running_speed: float | None = None  # m/h (continuous)
+    static_end_inc: float | None = None  # deg (continuous); < 0: from station 0
+    xcl_tortuosity: float | None = None  # rad/m
+    extra: dict[str, float] = field(default_factory=dict)  # more magnitudes, by term name
 
     def with_measured_noise(self, sigma_azi_deg: float, latitude_deg: float) -> GyroTool:
-        """A copy whose GXY-RN reproduces a measured 1σ compassing azimuth scatter at
-        I = 0: σ_A = f·RN/(Ω cos φ) (f the noise reduction), so RN = σ_A·Ω cos φ/f (deg/h)."""
-        rate_deg_h = np.degrees(EARTH_RATE_RAD_H) * np.cos(np.radians(latitude_deg))
-        rn = np.radians(sigma_azi_deg) * rate_deg_h / self.noise_reduction
-        return replace(self, gxy_rn=float(rn))
+        """A copy whose GXY-RN reproduces a measured compassing azimuth scatter
+        (:func:`with_measured_noise`)."""
+        rn = with_measured_noise(self.tool_model(), sigma_azi_deg, latitude_deg).term("GXY-RN")
+        return replace(self, gxy_rn=rn.magnitude)
+
+    def tool_model(self) -> ToolModel:
+        """The model file with this tool's changes."""
+        model = configure(
+            self.model or ("GYRO-NS-CT" if self.continuous else "GYRO-NS"), self._overrides()
+        )
+        if not self.include_xcl:
+            xcl = tuple(t for t in model.terms if not t.name.startswith("XCL"))
+            model = replace(model, terms=xcl)
+        if self.init_sigma_azi is not None:
+            model = with_initial_azimuth(model, self.init_sigma_azi)
+        return model
+
+    def _overrides(self) -> dict[str, float]:
+        skip = {"model", "continuous", "include_xcl", "init_sigma_azi", "extra"}
+        out = {
+            f.name: float(getattr(self, f.name))
+            for f in fields(self)
+            if f.name not in skip and getattr(self, f.name) is not None
+        }
+        out.update(self.extra)
+        return out
 
 
 GYRO_PRESETS: dict[str, GyroTool] = {
-    "GYRO-NS": GyroTool(),
-    "GYRO-NS-noXCL": GyroTool(include_xcl=False),
-    # OWSG GYRO-NS-CT (A021Gc, Rev 5): sag 0.08°, noise reduction 0.4082
-    "GYRO-NS-CT": GyroTool(continuous=True, sage=0.08, noise_reduction=0.4082),
+    name: GyroTool(model=name, continuous=name == "GYRO-NS-CT")
+    for name in ("GYRO-NS", "GYRO-NS-noXCL", "GYRO-NS-CT", "GYRO-MWD")
 }
-"""Named tool presets (OWSG short names)."""
+"""Named gyro tool models (OWSG short names; each a model file)."""
 
 
-def _running(s: Survey, speed: float, gate: float, power: int) -> FloatArray:
-    """Continuous drift (power 1: hours) or random-walk (power 2: √hours) coefficient h_i at
-    each station: accumulated over legs ending above ``gate`` (rad), reset at or below it."""
-    mean_sin = np.abs(np.sin(0.5 * (s.inc + previous(s.inc))))
-    active = s.inc > gate
-    active[0] = False
-    step = np.zeros_like(s.md)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        step[active] = (s.md - previous(s.md))[active] / (speed * mean_sin[active] ** power)
-    total = np.cumsum(step)
-    base = np.maximum.accumulate(np.where(active, 0.0, total))
-    h = total - base
-    out: FloatArray = h if power == 1 else np.sqrt(h)
-    return out
-
-
-def _stationary_gyro_terms(tool: GyroTool, horiz: float) -> list[Term]:
-    """The xy gyro terms of a stationary gyrocompass (random biases in GYRO-NS, systematic
-    in GYRO-NS-CT, whose sheet has no G1)."""
-    dps = _DEG
-    bias_mode: Propagation = "systematic" if tool.continuous else "random"
-    suffix = "S" if tool.continuous else "R"
-
-    terms = [
-        Term(
-            f"GXY-B1{suffix}",
-            bias_mode,
-            tool.gxy_b1 * dps,
-            lambda s: stack(0.0, 0.0, np.sin(s.azi) * np.tan(s.inc) / horiz, s.size),
-        ),
-        Term(
-            f"GXY-B2{suffix}",
-            bias_mode,
-            tool.gxy_b2 * dps,
-            lambda s: stack(0.0, 0.0, np.cos(s.azi) * np.sin(s.inc) / horiz, s.size),
-        ),
-        Term(
-            "GXY-G1",
-            "systematic",
-            tool.gxy_g1 * dps,
-            lambda s: stack(0.0, 0.0, np.cos(s.azi) * np.sin(s.inc) ** 2 / horiz, s.size),
-        ),
-        Term(
-            "GXY-G4",
-            "systematic",
-            tool.gxy_g4 * dps,
-            lambda s: stack(
-                0.0, 0.0, np.sin(s.azi) * np.tan(s.inc) * np.sin(s.inc) / horiz, s.size
-            ),
-        ),
-        Term(
-            "GXY-RN",
-            "random",
-            tool.gxy_rn * dps,
-            lambda s: stack(
-                0.0,
-                0.0,
-                tool.noise_reduction
-                * np.sqrt(np.clip(1.0 - (np.cos(s.azi) * np.sin(s.inc)) ** 2, 0.0, None))
-                * np.tan(s.inc)
-                / horiz,
-                s.size,
-            ),
-        ),
-    ]
-    return [t for t in terms if not (tool.continuous and t.name == "GXY-G1")]
-
-
-def gyro_terms(tool: GyroTool, latitude_deg: float, *, g: float = STANDARD_G) -> list[Term]:
-    """The GYRO-NS terms of ``tool`` at a latitude, magnitudes in SI (m, rad, rad/h…)."""
-    horiz = EARTH_RATE_RAD_H * np.cos(np.radians(latitude_deg))
-    dps = _DEG  # deg/h → rad/h: the rate terms are b/(Ω cos φ) in rad
-    tort = tool.xcl_tortuosity
-
-    terms = depth_terms(tool.drfr, tool.dsfs, tool.dstg) + misalignment_terms(
-        tool.sage, tool.xym1, tool.xym2, tool.xym3e, tool.xym4e
-    )
-    if tool.include_xcl:
-        terms += [
-            Term(
-                "XCLA",
-                "random",
-                tool.xcla,
-                lambda s: stack(
-                    0.0,
-                    0.0,
-                    np.maximum(
-                        np.sin(s.inc) * np.sin(np.abs(s.azi - previous(s.azi))),
-                        tort * (s.md - previous(s.md)),
-                    ),
-                    s.size,
-                ),
-            ),
-            Term(
-                "XCLH",
-                "random",
-                tool.xclh,
-                lambda s: stack(
-                    0.0,
-                    np.maximum(np.abs(s.inc - previous(s.inc)), tort * (s.md - previous(s.md))),
-                    0.0,
-                    s.size,
-                ),
-            ),
-        ]
-    terms += [
-        Term(
-            "AXYZ-MIS", "systematic", tool.axyz_mis * _DEG, lambda s: stack(0.0, 1.0, 0.0, s.size)
-        ),
-        Term(
-            "AXYZ-SF",
-            "systematic",
-            tool.axyz_sf,
-            lambda s: stack(0.0, 1.3 * np.sin(s.inc) * np.cos(s.inc), 0.0, s.size),
-        ),
-        Term(
-            "AXYZ-ZB",
-            "systematic",
-            tool.axyz_zb,
-            lambda s: stack(0.0, np.sin(s.inc) / g, 0.0, s.size),
-        ),
-    ]
-    init = tool.init_sigma_azi
-    if init is None:
-        terms += _stationary_gyro_terms(tool, horiz)
-    else:  # the measured initial azimuth error, carried through the run
-        terms.append(
-            Term(
-                "AZ-INIT",
-                "systematic",
-                init * _DEG,
-                lambda s: stack(0.0, 0.0, np.sin(s.inc), s.size),
-            )
-        )
-    if tool.continuous:
-        gate = -np.inf if init is not None else np.radians(tool.static_end_inc)
-        speed = tool.running_speed
-        terms += [
-            Term(
-                "GXY-GD",
-                "systematic",
-                tool.gxy_gd * dps,
-                lambda s: stack(0.0, 0.0, _running(s, speed, gate, 1) * np.sin(s.inc), s.size),
-            ),
-            Term(
-                "GXY-GRW",
-                "systematic",
-                tool.gxy_grw * dps,
-                lambda s: stack(0.0, 0.0, _running(s, speed, gate, 2) * np.sin(s.inc), s.size),
-            ),
-        ]
-    return terms
+def gyro_terms(
+    tool: GyroTool | str | ToolModel, latitude_deg: float, *, g: float = STANDARD_G
+) -> list[Term]:
+    """The terms of a gyro model at a latitude, magnitudes in SI (m, rad, rad/h…)."""
+    model = tool.tool_model() if isinstance(tool, GyroTool) else find_model(tool)
+    site = ModelSite(latitude=latitude_deg, g=g)
+    return model.terms_for(lambda s: Quantities(s, site, model.parameters, model.name))
 
 
 def gyro_covariance(
     survey: Survey,
     latitude_deg: float,
-    tool: GyroTool | str = "GYRO-NS",
+    tool: GyroTool | str | ToolModel = "GYRO-NS",
     *,
     basis: str = "balanced_tangent",
     surface_tie: bool = True,
     g: float = STANDARD_G,
 ) -> tuple[list[str], FloatArray]:
     """Per-term NEV covariance (m, n, 3, 3) of a survey and the term names."""
-    tool_ = GYRO_PRESETS[tool] if isinstance(tool, str) else tool
-    terms = gyro_terms(tool_, latitude_deg, g=g)
-    return term_covariance(survey, terms, basis=basis, surface_tie=surface_tie)
+    model = tool.tool_model() if isinstance(tool, GyroTool) else find_model(tool)
+    return term_covariances(
+        survey, model, ModelSite(latitude=latitude_deg, g=g), basis=basis, surface_tie=surface_tie
+    )

@@ -8,9 +8,9 @@ multiplied by sin I. Course-length terms defined directly in position (``frame="
 ISCWSA MWD workbook's XCLA/XCLH) give the NEV error (m per unit ε) each station's own course
 adds; it acts on that station and every one below it alike (e_k = e*_k).
 
-The terms every ISCWSA tool model shares — depth (DRFR, DSFS, DSTG), sag and xy
-misalignments (SAGE, XYM1–XYM4E) — are built here; gyro and magnetic tool terms live in
-:mod:`pipeline.uncertainty.gyro` and :mod:`pipeline.uncertainty.mwd`.
+Tool models build their terms from model files (:mod:`pipeline.uncertainty.toolmodel`,
+weighting functions in :mod:`pipeline.uncertainty.weightfns`); a caller may also build
+:class:`Term` objects directly and propagate them with :func:`term_covariance`.
 """
 
 from __future__ import annotations
@@ -32,13 +32,13 @@ from pipeline.uncertainty.model import (
 
 __all__ = [
     "STANDARD_G",
-    "XCL_TORTUOSITY",
     "Frame",
     "Survey",
     "Term",
     "Weight",
-    "depth_terms",
-    "misalignment_terms",
+    "misalignment_factor",
+    "previous",
+    "stack",
     "term_covariance",
 ]
 
@@ -47,9 +47,6 @@ Frame = Literal["dia", "nev"]
 
 STANDARD_G = 9.80665
 """Standard gravity (m/s²), the ISCWSA models' G."""
-XCL_TORTUOSITY = 0.000572614583987641
-"""ISCWSA/OWSG default XCL tortuosity (rad/m): 1°/100 ft."""
-_DEG = np.pi / 180.0
 
 
 @dataclass(frozen=True)
@@ -109,49 +106,6 @@ def misalignment_factor(s: Survey) -> FloatArray:
     pos = dmd > 0
     f[pos] = np.maximum(1.0, np.sqrt(10.0 / dmd[pos]))
     return f
-
-
-def depth_terms(drfr: float, dsfs: float, dstg: float) -> list[Term]:
-    """DRFR (random reference, m), DSFS (systematic scale, -) and DSTG (global stretch, 1/m:
-    weight MD·TVD)."""
-    return [
-        Term("DRFR", "random", drfr, lambda s: stack(1.0, 0.0, 0.0, s.size)),
-        Term("DSFS", "systematic", dsfs, lambda s: stack(s.md, 0.0, 0.0, s.size)),
-        Term("DSTG", "global", dstg, lambda s: stack(s.md * s.tvd, 0.0, 0.0, s.size)),
-    ]
-
-
-def misalignment_terms(
-    sage: float, xym1: float, xym2: float, xym3e: float, xym4e: float
-) -> list[Term]:
-    """SAGE (sag, enhanced) and the xy misalignments XYM1, XYM2 (systematic), XYM3E, XYM4E
-    (random, damped on short courses); magnitudes in degrees. Azimuths are true."""
-
-    def xym3e_w(s: Survey) -> FloatArray:
-        c = np.abs(np.cos(s.inc)) * misalignment_factor(s)
-        return stack(0.0, c * np.cos(s.azi), -c * np.sin(s.azi), s.size)
-
-    def xym4e_w(s: Survey) -> FloatArray:
-        c = np.abs(np.cos(s.inc)) * misalignment_factor(s)
-        return stack(0.0, c * np.sin(s.azi), c * np.cos(s.azi), s.size)
-
-    return [
-        Term(
-            "SAGE",
-            "systematic",
-            sage * _DEG,
-            lambda s: stack(0.0, np.abs(np.sin(s.inc)) ** 0.25, 0.0, s.size),
-        ),
-        Term(
-            "XYM1",
-            "systematic",
-            xym1 * _DEG,
-            lambda s: stack(0.0, np.abs(np.sin(s.inc)), 0.0, s.size),
-        ),
-        Term("XYM2", "systematic", xym2 * _DEG, lambda s: stack(0.0, 0.0, -np.sin(s.inc), s.size)),
-        Term("XYM3E", "random", xym3e * _DEG, xym3e_w),
-        Term("XYM4E", "random", xym4e * _DEG, xym4e_w),
-    ]
 
 
 def term_covariance(

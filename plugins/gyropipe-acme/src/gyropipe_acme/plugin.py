@@ -1,7 +1,7 @@
 """The gyropipe plugin ``acme`` (entry point ``acme = "gyropipe_acme.plugin"`` in the group
 ``gyropipe``): a reader and a writer of Acme GyroLog ``.agl`` raw-sample files and a reader of
-Acme survey reports (``.txt`` stations). Like any plugin, it imports gyropipe only from
-:mod:`pipeline.plugin`."""
+Acme survey reports (``.txt`` stations), and the Acme tool (error) model ``ACME-GYRO-V2``, a
+model file. Like any plugin, it imports gyropipe only from :mod:`pipeline.plugin`."""
 
 from __future__ import annotations
 
@@ -12,7 +12,17 @@ from typing import Any
 import pyarrow as pa
 
 from gyropipe_acme import gyrolog, survey_report
-from pipeline.plugin import RawSamples, ReaderDef, Stations, WellMetadata, WriterDef, hookimpl
+from pipeline.plugin import (
+    RawSamples,
+    ReaderDef,
+    Stations,
+    ToolModelDef,
+    WellMetadata,
+    WriterDef,
+    hookimpl,
+)
+
+MODELS = Path(__file__).parent / "models"
 
 
 def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
@@ -52,5 +62,16 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
             description="Acme GyroLog v2 raw samples, in Acme's units and axes",
             extension="agl",
             write=gyrolog.write_samples,
+        )
+    )
+
+
+@hookimpl
+def gyropipe_register_tool_models(register: Callable[[ToolModelDef], None]) -> None:
+    register(
+        ToolModelDef(
+            name="ACME-GYRO-V2",
+            path=MODELS / "acme-gyro-v2.yaml",
+            description="Acme GyroLog v2: OWSG GYRO-NS with Acme's gyro noise and thermal term",
         )
     )

@@ -1,0 +1,1 @@
+"""Anti-collision: closest approach between wells and the ISCWSA separation factor."""

@@ -1,0 +1,82 @@
+"""Contracts of the clearance tables: the offset wells of a scan and its results.
+
+The offset wells' stations travel as one :class:`~pipeline.tables.Stations` table whose
+``survey`` column names each well (its ``well_id``).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import pyarrow as pa
+
+from pipeline.contracts import TableContract, column
+
+RULE_KEY = b"gyropipe.clearance_rule"
+"""Schema metadata of a clearance table: the rule's parameters and each well's tool model
+and hole diameter (JSON), for the report to state."""
+
+
+def with_rule(table: pa.Table, rule: dict[str, Any]) -> pa.Table:
+    """``table`` with the rule's parameters in its schema metadata."""
+    meta = {**(table.schema.metadata or {}), RULE_KEY: json.dumps(rule).encode()}
+    return table.replace_schema_metadata(meta)
+
+
+def rule_of(table: pa.Table) -> dict[str, Any]:
+    """The rule's parameters a clearance table carries ({} when none)."""
+    raw = (table.schema.metadata or {}).get(RULE_KEY)
+    return dict(json.loads(raw)) if raw else {}
+
+
+class OffsetWells(TableContract):
+    """One row per offset well: its tool model, hole size and where its first station is."""
+
+    offset: str = column(unit=None, description="offset well id (the stations' survey id)")
+    model: str = column(unit=None, description="tool model of its survey")
+    hole_diameter: float = column(unit="m", gt=0, description="hole or casing diameter")
+    north: float = column(unit="m", description="first station's north from the reference wellhead")
+    east: float = column(unit="m", description="first station's east from the reference wellhead")
+    tvd: float | None = column(
+        unit="m",
+        description="first station's TVD below the reference's depth datum (null: its MD)",
+        default=None,
+    )
+    source: str | None = column(unit=None, description="the stations file", default=None)
+    sha256: str | None = column(unit=None, description="SHA-256 of the stations file", default=None)
+
+
+class Clearance(TableContract):
+    """Per offset well (a contiguous block) and reference station: the closest point of the
+    offset well, the centre-to-centre distance, the combined σ along it and the ISCWSA
+    separation factor with its level."""
+
+    group_by = "offset"
+
+    offset: str = column(unit=None, description="offset well id")
+    md: float = column(unit="m", monotonic="strict", description="reference station MD")
+    offset_md: float = column(unit="m", description="MD of the closest point on the offset well")
+    distance: float = column(unit="m", ge=0, description="centre-to-centre distance")
+    sigma_s: float = column(
+        unit="m",
+        ge=0,
+        finite=False,
+        description="1σ of both wells' position errors along the centre-to-centre line "
+        "(NaN where the centres coincide)",
+    )
+    sf: float = column(
+        unit=None,
+        finite=False,
+        description="ISCWSA separation factor (negative: the holes and margin overlap; NaN "
+        "where the centres coincide)",
+    )
+    level: str = column(unit=None, description="pass, warn or fail by the separation rule")
+    toolface: float = column(
+        unit="deg",
+        ge=0,
+        lt=360,
+        finite=False,
+        description="direction of the offset in the plane normal to the reference, clockwise "
+        "from its high side (travelling cylinder; NaN where the centres coincide)",
+    )

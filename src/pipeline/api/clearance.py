@@ -1,0 +1,159 @@
+"""``gp.clearance``: anti-collision scan of a reference well against offset wells."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+
+from pipeline.anticollision.tables import OffsetWells
+from pipeline.api import stages
+from pipeline.api.frames import (
+    TableLike,
+    WellLike,
+    like,
+    to_frame,
+    to_table,
+    well_metadata,
+    well_of_data,
+)
+from pipeline.errors import ParameterError
+from pipeline.stages.clearance import offset_tables
+from pipeline.survey.stations import north_reference_of
+from pipeline.tables import Stations
+from pipeline.well import WellMetadata
+
+OffsetsLike = str | Path | Mapping[str, "TableLike | str | Path"] | Sequence[TableLike]
+"""Offset wells: a manifest file, a mapping of well id → stations (table or file), or a
+sequence of stations tables named by their well metadata."""
+
+
+def clearance(
+    reference: TableLike | str | Path,
+    offsets: OffsetsLike,
+    *,
+    offset_model: str | Mapping[str, str] = "ISCWSA-MWD-REV5.11",
+    offset_hole_diameter: float | Mapping[str, float] | None = None,
+    offset_position: Mapping[str, Sequence[float]] | None = None,
+    well: WellLike = None,
+    **params: Any,
+) -> TableLike:
+    """ISCWSA separation factor of every reference station against each offset well: per
+    offset well and reference MD, the closest point's ``offset_md``, ``distance``
+    (centre-to-centre, m), ``sigma_s`` (m), ``sf`` and its ``level`` (pass/warn/fail), and
+    the travelling-cylinder ``toolface`` (deg from the reference's high side).
+
+    ``reference``: its stations (table or file). ``offsets``: a manifest CSV (well id, file,
+    tool model, hole diameter, first-station position; see docs/clearance.md), or stations
+    by well id, or stations tables named by their well metadata; then ``offset_model``,
+    ``offset_hole_diameter`` (m) and ``offset_position`` ((north, east[, tvd]) m from the
+    reference wellhead, default (0, 0) and TVD = first MD) give each well's, as one value or
+    by well id. ``params``: the stage's (``reference_model``, ``reference_hole_diameter`` m,
+    ``k``, ``sigma_pa`` m, ``surface_margin`` m, ``stop``, ``caution``, ``latitude``,
+    ``magnetic``). Returns the kind of table ``reference`` is (a DataFrame for a file).
+    """
+    reg = stages.registry()
+    given = well_metadata(well)
+    ref: TableLike
+    if isinstance(reference, str | Path):
+        ref, header = reg.read(Path(reference), "stations", well=given)
+        ref_well = header.merged(given)
+        template: TableLike = to_frame(ref)
+    else:
+        ref, ref_well, template = reference, well_of_data(reference).merged(given), reference
+    if isinstance(offsets, str | Path):
+        wells, stations = offset_tables(
+            Path(offsets), lambda p: reg.read(p, "stations", well=ref_well), ref_well
+        )
+    else:
+        wells, stations = _offsets(
+            offsets, offset_model, offset_hole_diameter, offset_position, ref_well
+        )
+    inputs = {"reference": ref, "offsets": stations, "wells": wells}
+    outs, _, _ = stages.call("clearance", inputs, params, well=ref_well)
+    return like(template, outs["clearance"])
+
+
+def _each(value: Any, name: str, what: str) -> Any:
+    """``value`` for well ``name``: the value itself, or its entry in a mapping."""
+    if isinstance(value, Mapping):
+        if name not in value:
+            raise ParameterError(f"clearance: no {what} for offset well {name!r}")
+        return value[name]
+    return value
+
+
+def _offsets(
+    offsets: Mapping[str, TableLike | str | Path] | Sequence[TableLike],
+    model: str | Mapping[str, str],
+    diameter: float | Mapping[str, float] | None,
+    position: Mapping[str, Sequence[float]] | None,
+    well: WellMetadata,
+) -> tuple[pa.Table, pa.Table]:
+    """The wells and stations tables of offsets given one by one."""
+    if diameter is None:
+        raise ParameterError("clearance: give offset_hole_diameter (m) or a manifest")
+    named = offsets if isinstance(offsets, Mapping) else _named(offsets)
+    if not named:
+        raise ParameterError("clearance: no offset wells given")
+    reg = stages.registry()
+    tables: dict[str, pa.Table] = {}
+    for name, data in named.items():
+        if isinstance(data, str | Path):
+            tables[name] = reg.read(Path(data), "stations", well=well)[0]
+        else:
+            own = well.merged(well_of_data(data))
+            tables[name] = to_table(data, Stations, what=f"offset well {name!r}", well=own)
+    norths = {north_reference_of(t, "azi") for t in tables.values()}
+    if len(norths) > 1:
+        raise ParameterError(
+            "clearance: the offset wells' azimuths name different north references; give "
+            "them in one (or use a manifest, which converts them)"
+        )
+    stations = pa.concat_tables(
+        [
+            pa.table(
+                {
+                    "survey": [name] * t.num_rows,
+                    "md": t.column("md"),
+                    "inc": t.column("inc"),
+                    "azi": t.column("azi"),
+                }
+            )
+            for name, t in tables.items()
+        ]
+    )
+    stations = Stations.compiled().make_table(
+        {c: stations.column(c) for c in stations.column_names},
+        north_reference=norths.pop(),
+    )
+    rows = []
+    for name in tables:
+        at = list(_each(position, name, "offset_position") if position is not None else (0, 0))
+        if len(at) not in (2, 3):
+            raise ParameterError(f"clearance: offset_position of {name!r}: (north, east[, tvd])")
+        rows.append(
+            {
+                "offset": name,
+                "model": _each(model, name, "offset_model"),
+                "hole_diameter": float(_each(diameter, name, "offset_hole_diameter")),
+                "north": float(at[0]),
+                "east": float(at[1]),
+                "tvd": float(at[2]) if len(at) == 3 else None,
+            }
+        )
+    wells = OffsetWells.compiled().make_table({k: [r[k] for r in rows] for k in rows[0]})
+    return wells, stations
+
+
+def _named(offsets: Sequence[TableLike]) -> dict[str, TableLike]:
+    """Stations tables by their well metadata's name (``offset-<k>`` without one)."""
+    out: dict[str, TableLike] = {}
+    for k, data in enumerate(offsets, 1):
+        name = well_of_data(data).well or f"offset-{k}"
+        if name in out:
+            raise ParameterError(f"clearance: two offset wells are named {name!r}")
+        out[name] = data
+    return out

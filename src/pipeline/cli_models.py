@@ -1,0 +1,77 @@
+"""``gyropipe models``: list the tool (error) models, or show and check one model or file."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from pipeline.errors import GyropipeError
+
+EXIT_CONFIG = 2
+
+
+@click.command()
+@click.argument("model", required=False, metavar="[NAME|FILE.yaml]")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+def models(model: str | None, as_json: bool) -> None:
+    """List the tool models (shipped and from plugins), or show one model's terms — a model
+    file given by path is read and checked (exit 2 and the file:line of each problem if it
+    is invalid)."""
+    from pipeline.uncertainty.engine import find_model, model_files
+    from pipeline.uncertainty.toolmodel import describe
+
+    try:
+        if model is None:
+            found = [find_model(path) for path in model_files().values()]
+            listing = [describe(m) for m in sorted(found, key=lambda m: m.name.upper())]
+            if as_json:
+                click.echo(json.dumps(listing, indent=2))
+                return
+            for item in listing:
+                needs = _needs(item["needs"])
+                click.echo(
+                    f"{item['name']:<20} {item['title']} — {len(item['terms'])} terms; "
+                    f"needs the site's {needs} ({item['file']})"
+                )
+            return
+        tool = find_model(model)
+    except (GyropipeError, KeyError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) else exc
+        click.echo(f"error: {message}", err=True)
+        sys.exit(EXIT_CONFIG)
+    if as_json:
+        doc = describe(tool)
+        doc["terms"] = [
+            {
+                "name": t.name,
+                "acts_on": list(t.acts_on),
+                "mode": t.mode,
+                "magnitude": t.magnitude,
+                "unit": t.unit,
+                "sigma_si": t.sigma,
+                "weight": t.code,
+            }
+            for t in tool.terms
+        ]
+        doc["parameters"] = dict(tool.parameters)
+        click.echo(json.dumps(doc, indent=2))
+        return
+    click.echo(f"{tool.name}: {tool.title}")
+    if tool.source:
+        click.echo(f"  {tool.source}")
+    click.echo(f"  file: {tool.file}; needs the site's {_needs(sorted(tool.needs))}")
+    for name, value in tool.parameters.items():
+        click.echo(f"  parameter {name} = {value:g} (SI; file unit {tool.units.get(name, '-')})")
+    click.echo(f"  {'term':<10} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
+    for t in tool.terms:
+        click.echo(
+            f"  {t.name:<10} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
+            f"{t.unit:<12} {t.code}"
+        )
+
+
+def _needs(needs: list[str]) -> str:
+    words = {"latitude": "latitude", "magnetic": "geomagnetic field"}
+    return " and ".join(words.get(n, n) for n in needs) or "nothing"

@@ -1,0 +1,150 @@
+"""The manifest of offset wells for a clearance scan: a CSV file, one well per line.
+
+Columns (header row first; lines starting with ``#`` are comments; a length column names its
+unit in the header, ``hole_diameter (in)``, ``north [m]``):
+
+- ``well_id`` — the offset well's name in the results (unique);
+- ``file`` — its stations file (MD, inclination, azimuth), relative to the manifest's folder;
+- ``model`` — its tool model (e.g. ``ISCWSA-MWD-REV5``, ``GYRO-NS``);
+- ``hole_diameter`` — hole or casing diameter (a length);
+- ``north``, ``east`` — its first station's position relative to the reference well's
+  wellhead, in the north of the reference's azimuths (lengths; default 0);
+- ``tvd`` — its first station's TVD below the reference's depth datum (a length; default:
+  the first station's MD).
+
+Every problem is an :class:`~pipeline.errors.InputFileError` naming the file and line.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from pipeline.errors import InputFileError, UnitError
+from pipeline.units import conversion_factor
+
+__all__ = ["LENGTHS", "OffsetEntry", "read_offset_manifest"]
+
+LENGTHS = ("hole_diameter", "north", "east", "tvd")
+"""The length columns, each with its unit in the header."""
+_TEXT = ("well_id", "file", "model")
+_HEADER = re.compile(r"^\s*([A-Za-z_]+)\s*(?:[\(\[]\s*([^\)\]]*?)\s*[\)\]])?\s*$")
+
+
+@dataclass(frozen=True)
+class OffsetEntry:
+    """One offset well of a manifest; lengths in metres (``tvd`` None: the first MD)."""
+
+    well_id: str
+    file: Path
+    model: str
+    hole_diameter: float
+    north: float
+    east: float
+    tvd: float | None
+    line: int
+
+
+def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, float]]:
+    """Column name → (index, factor to m) of a header row."""
+    found: dict[str, tuple[int, float]] = {}
+    for index, cell in enumerate(cells):
+        match = _HEADER.match(cell)
+        name = match.group(1).lower() if match else cell.strip()
+        if name not in (*_TEXT, *LENGTHS):
+            raise InputFileError(
+                path,
+                f"unknown column {cell.strip()!r}; expected {', '.join((*_TEXT, *LENGTHS))}",
+                line,
+            )
+        if name in found:
+            raise InputFileError(path, f"column {name!r} appears twice", line)
+        unit = match.group(2) if match else None
+        if name in LENGTHS:
+            if not unit:
+                raise InputFileError(
+                    path, f"column {name!r} needs its unit in the header, e.g. '{name} (m)'", line
+                )
+            try:
+                factor = conversion_factor(unit, "length")
+            except UnitError as exc:
+                raise InputFileError(path, f"column {name!r}: {exc}", line) from None
+        else:
+            factor = 1.0
+        found[name] = (index, factor)
+    missing = [c for c in (*_TEXT, "hole_diameter") if c not in found]
+    if missing:
+        raise InputFileError(path, f"missing column(s) {', '.join(missing)}", line)
+    return found
+
+
+def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[OffsetEntry]:
+    """The offset wells a manifest lists (module docstring); ``resolve`` gives the canonical
+    name of a tool model (ValueError: unknown)."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(path, f"cannot read the manifest: {exc}") from None
+    rows = [
+        (number, cells)
+        for number, cells in enumerate(csv.reader(text.splitlines()), 1)
+        if cells and any(c.strip() for c in cells) and not cells[0].lstrip().startswith("#")
+    ]
+    if not rows:
+        raise InputFileError(path, "empty manifest (expected a header row)")
+    header_line, header = rows[0]
+    columns = _columns(path, header_line, header)
+    entries: list[OffsetEntry] = []
+    seen: dict[str, int] = {}
+    for line, cells in rows[1:]:
+        if len(cells) != len(header):
+            raise InputFileError(path, f"{len(cells)} cells, the header has {len(header)}", line)
+        cell = {name: cells[i].strip() for name, (i, _) in columns.items()}
+        well_id, model = cell["well_id"], cell["model"]
+        if not well_id or not cell["file"]:
+            raise InputFileError(path, "well_id and file must not be empty", line)
+        if well_id in seen:
+            raise InputFileError(
+                path, f"well {well_id!r} already listed on line {seen[well_id]}", line
+            )
+        seen[well_id] = line
+        try:
+            model = resolve(model)
+        except ValueError as exc:
+            raise InputFileError(path, str(exc), line, "model") from None
+        lengths: dict[str, float | None] = {}
+        for name in LENGTHS:
+            raw = cell.get(name, "")
+            if not raw:
+                lengths[name] = None
+                continue
+            try:
+                value = float(raw) * columns[name][1]
+            except ValueError:
+                raise InputFileError(path, f"{name}: not a number: {raw!r}", line, name) from None
+            if value != value or abs(value) == float("inf"):
+                raise InputFileError(path, f"{name}: not a finite number: {raw!r}", line, name)
+            lengths[name] = value
+        diameter = lengths["hole_diameter"]
+        if diameter is None or diameter <= 0:
+            raise InputFileError(
+                path, "hole_diameter must be given and positive", line, "hole_diameter"
+            )
+        entries.append(
+            OffsetEntry(
+                well_id=well_id,
+                file=(path.parent / cell["file"]).resolve(),
+                model=model,
+                hole_diameter=diameter,
+                north=lengths["north"] or 0.0,
+                east=lengths["east"] or 0.0,
+                tvd=lengths["tvd"],
+                line=line,
+            )
+        )
+    if not entries:
+        raise InputFileError(path, "no offset wells listed below the header")
+    return entries

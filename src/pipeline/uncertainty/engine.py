@@ -1,0 +1,240 @@
+"""One engine for every tool model: find a model (by name, file or object) and evaluate it
+into NEV position covariance.
+
+Models are found, by name (case-insensitive), among the files shipped in
+``pipeline/uncertainty/models/`` and those plugins register
+(``gyropipe_register_tool_models``), or read from a file path. A file may ``extend`` any
+model found so.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pipeline.errors import GyropipeError, Location, Problem, ToolModelError, did_you_mean
+from pipeline.uncertainty.quantities import MissingSiteQuantity, ModelSite, Quantities
+from pipeline.uncertainty.terms import Survey, term_covariance
+from pipeline.uncertainty.toolmodel import ToolModel, read_tool_model
+
+__all__ = [
+    "MODELS_DIR",
+    "SurveyValueError",
+    "configure",
+    "covariance",
+    "find_model",
+    "model_files",
+    "term_covariances",
+    "term_for",
+]
+
+FloatArray = NDArray[np.float64]
+MODELS_DIR = Path(__file__).parent / "models"
+"""The tool-model files shipped with gyropipe."""
+
+
+class SurveyValueError(GyropipeError, ValueError):
+    """A survey given to an error model has a non-finite MD, inclination, azimuth or TVD."""
+
+
+@functools.cache
+def _shipped() -> dict[str, Path]:
+    """Shipped model files by the model name each declares."""
+    return {_declared_name(path): path for path in sorted(MODELS_DIR.glob("*.yaml"))}
+
+
+def _declared_name(path: Path) -> str:
+    """The ``name:`` a model file declares, read without resolving ``extends``."""
+    import yaml
+
+    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    return str(data["name"])
+
+
+@functools.cache
+def _plugin_files() -> dict[str, Path]:
+    """Model files registered by plugins, by name; loaded on first need."""
+    from pipeline.plugins import load_registry
+
+    registry = load_registry()
+    return {name: Path(d.path) for name, (d, _) in registry.tool_models.items()}
+
+
+def model_files(*, plugins: bool = True) -> dict[str, Path]:
+    """Every model found by name: shipped files, then plugins' (a shipped name wins)."""
+    shipped = _shipped()
+    taken = {name.upper() for name in shipped}
+    found = dict(shipped)
+    if plugins:
+        found.update((n, p) for n, p in _plugin_files().items() if n.upper() not in taken)
+    return found
+
+
+def _named(files: dict[str, Path], key: str) -> Path | None:
+    """The file of the model called ``key`` (case-insensitive), if any."""
+    return next((p for n, p in files.items() if n.upper() == key.upper()), None)
+
+
+_READING: list[Path] = []
+"""Files being read (outermost first): a file met again extends itself."""
+
+
+def _read(path: Path) -> ToolModel:
+    """The model of a file, read once per version of it (path, size and mtime)."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return read_tool_model(path, base=_base)  # reports the file as unreadable
+    _READING.append(path)
+    try:
+        return _read_version(path, stat.st_size, stat.st_mtime_ns)
+    finally:
+        _READING.pop()
+
+
+@functools.lru_cache(maxsize=256)
+def _read_version(path: Path, size: int, mtime_ns: int) -> ToolModel:
+    return read_tool_model(path, base=_base)
+
+
+def _base(name: str, where: Location) -> ToolModel:
+    """The model an ``extends:`` names, found as :func:`find_model` finds one (a relative
+    file path is relative to the extending file)."""
+    path = Path(name)
+    if path.suffix.lower() in (".yaml", ".yml") and not path.is_absolute():
+        path = Path(where.file).parent / path
+        name = str(path)
+    if path.suffix.lower() in (".yaml", ".yml") and path.resolve() in _READING:
+        chain = " → ".join(p.name for p in _READING)
+        raise ToolModelError([Problem(where, f"{name} extends itself ({chain} → {path.name})")])
+    try:
+        return find_model(name)
+    except KeyError as exc:
+        raise ToolModelError([Problem(where, str(exc.args[0]))]) from None
+
+
+def find_model(model: str | Path | ToolModel) -> ToolModel:
+    """A tool model by name (shipped or plugin-registered, case-insensitive), by file path
+    (``.yaml``/``.yml``), or as given. An unknown name is a ``KeyError`` listing the known
+    ones; a bad file a :class:`~pipeline.errors.ToolModelError`."""
+    if isinstance(model, ToolModel):
+        return model
+    key = str(model)
+    shipped = _named(_shipped(), key)
+    if shipped is not None:
+        return _read(shipped)
+    path = Path(model)
+    if path.suffix.lower() in (".yaml", ".yml") or path.is_file():
+        if not path.is_file():
+            raise ToolModelError([Problem(Location(str(path)), "no such tool-model file")])
+        return _read(path.resolve())
+    plugin = _named(_plugin_files(), key)
+    if plugin is not None:
+        return _read(plugin.resolve())
+    known = sorted(model_files(), key=str.upper)
+    close = did_you_mean(key.upper(), [k.upper() for k in known])
+    for name in known:  # say the names as their files write them
+        close = close.replace(f"'{name.upper()}'", f"'{name}'")
+    raise KeyError(
+        f"unknown tool model {key!r}{close} (known: {', '.join(known)}; or give a .yaml file)"
+    )
+
+
+def term_covariances(
+    survey: Survey,
+    model: str | Path | ToolModel,
+    site: ModelSite | None = None,
+    *,
+    basis: str = "balanced_tangent",
+    surface_tie: bool = True,
+) -> tuple[list[str], FloatArray]:
+    """Per-term NEV covariance (m, n, 3, 3) (m²) of a survey under a tool model, and the term
+    names. ``survey`` azimuths are true (rad); ``site`` gives what the model needs
+    (:attr:`ToolModel.needs`: latitude, geomagnetic field); ``basis`` and ``surface_tie`` as
+    in :func:`pipeline.uncertainty.model.station_jacobians` (the ISCWSA conventions by
+    default)."""
+    tool = find_model(model)
+    for label, values in (
+        ("md", survey.md),
+        ("inc", survey.inc),
+        ("azi", survey.azi),
+        ("tvd", survey.tvd),
+    ):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise SurveyValueError(
+                f"survey {label} is not finite at station(s) {bad[:5].tolist()}: an error model "
+                "needs every station's MD, inclination, azimuth (true) and TVD"
+            )
+    where = site or ModelSite()
+    missing = sorted(
+        need
+        for need, value in (("latitude", where.latitude), ("magnetic", where.magnetic))
+        if need in tool.needs and value is None
+    )
+    if missing:
+        raise MissingSiteQuantity(
+            f"tool model {tool.name} needs the site's {' and '.join(missing)}"
+        )
+    shared = Quantities(survey, where, tool.parameters, tool.name)  # derived ones cached
+
+    def q(s: Survey) -> Quantities:
+        return shared if s is survey else Quantities(s, where, tool.parameters, tool.name)
+
+    return term_covariance(survey, tool.terms_for(q), basis=basis, surface_tie=surface_tie)
+
+
+def covariance(
+    survey: Survey,
+    model: str | Path | ToolModel,
+    site: ModelSite | None = None,
+    *,
+    basis: str = "balanced_tangent",
+    surface_tie: bool = True,
+) -> FloatArray:
+    """Total NEV covariance (n, 3, 3) (m², north/east/vertical-down) of each station of a
+    survey under a tool model (see :func:`term_covariances`)."""
+    total: FloatArray = term_covariances(survey, model, site, basis=basis, surface_tie=surface_tie)[
+        1
+    ].sum(axis=0)
+    return total
+
+
+#: Field names of the earlier tool dataclasses that name a parameter of the model file.
+PARAMETER_ALIASES = {"xcl_tortuosity": "tortuosity"}
+
+
+def configure(model: str | Path | ToolModel, overrides: Mapping[str, float]) -> ToolModel:
+    """A model with ``overrides``: term magnitudes (by term name, or a field name such as
+    ``gxy_gd``, :func:`term_for`) and parameters (by name), each in the unit its file gives
+    it. An unknown key is a ``KeyError`` naming the model's terms."""
+    tool = find_model(model)
+    magnitudes: dict[str, float] = {}
+    params: dict[str, float] = {}
+    for key, value in overrides.items():
+        param = PARAMETER_ALIASES.get(key, key)
+        if param in tool.parameters:
+            params[param] = value
+        else:
+            magnitudes[term_for(tool, key)] = value
+    return tool.with_magnitudes(magnitudes).with_parameters(params)
+
+
+def term_for(model: ToolModel, key: str) -> str:
+    """The term a magnitude key names: a term name, or a field name (``gxy_b1``: lower
+    case, ``_`` for ``-``; the term's trailing R/S mode letter may be left out)."""
+    names = [t.name for t in model.terms]
+    if key in names:
+        return key
+    wanted = key.upper().replace("_", "-")
+    for name in names:
+        if name == wanted or (name[:-1] == wanted and name[-1] in "RS"):
+            return name
+    raise KeyError(
+        f"{model.name} has no term or parameter {key!r} (terms: {', '.join(names)}; "
+        f"parameters: {', '.join(model.parameters) or 'none'})"
+    )

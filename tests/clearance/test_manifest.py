@@ -1,0 +1,97 @@
+"""The offset-well manifest: what it reads (units in the header converted) and every bad
+manifest refused with its file and line, through the reader and through `gyropipe run`."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from pipeline.anticollision.models import resolve_model
+from pipeline.errors import InputFileError
+from pipeline.io.offset_manifest import read_offset_manifest
+from tests_support import ROOT, gyropipe
+
+HEADER = "well_id,file,model,hole_diameter (in),north (m),east (ft),tvd (m)"
+
+
+def manifest(tmp_path: Path, *lines: str, header: str = HEADER) -> Path:
+    path = tmp_path / "offsets.csv"
+    path.write_text("\n".join(["# offset wells", header, *lines]) + "\n", encoding="utf-8")
+    return path
+
+
+def test_reads_wells_with_units_converted(tmp_path: Path):
+    path = manifest(
+        tmp_path,
+        "A-1,a.csv,iscwsa-mwd-rev4,12.25,10,100,",
+        "A-2,sub/b.csv,GYRO-NS,8.5,-5,0,3.5",
+    )
+    first, second = read_offset_manifest(path, resolve_model)
+    assert (first.well_id, first.model, first.line) == ("A-1", "ISCWSA-MWD-REV4", 3)
+    assert first.file == (tmp_path / "a.csv").resolve()
+    assert first.hole_diameter == pytest.approx(12.25 * 0.0254)
+    assert (first.north, first.east, first.tvd) == (10.0, pytest.approx(30.48), None)
+    assert second.file == (tmp_path / "sub" / "b.csv").resolve()
+    assert (second.north, second.east, second.tvd) == (-5.0, 0.0, 3.5)
+
+
+@pytest.mark.parametrize(
+    ("header", "lines", "line", "words"),
+    [
+        (HEADER, ["A,a.csv,MWD-REV9,12,0,0,"], 3, "unknown tool model 'MWD-REV9'"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,0,0,", "A,b.csv,GYRO-NS,12,0,0,"], 4, "already listed"),
+        (HEADER, ["A,a.csv,GYRO-NS,twelve,0,0,"], 3, "hole_diameter: not a number"),
+        (HEADER, ["A,a.csv,GYRO-NS,,0,0,"], 3, "hole_diameter must be given"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,nan,0,"], 3, "north: not a finite number"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,0"], 3, "5 cells, the header has 7"),
+        (HEADER, ["A,,GYRO-NS,12,0,0,"], 3, "must not be empty"),
+        ("well_id,file,model,hole_diameter", ["A,a.csv,GYRO-NS,12"], 2, "needs its unit"),
+        ("well_id,file,model,hole_diameter (kg)", ["A,a.csv,GYRO-NS,12"], 2, "expected a length"),
+        ("well_id,file,model,hole (in)", ["A,a.csv,GYRO-NS,12"], 2, "unknown column 'hole (in)'"),
+        ("well_id,model,hole_diameter (in)", ["A,GYRO-NS,12"], 2, "missing column(s) file"),
+        (HEADER, [], 2, "no offset wells listed"),
+    ],
+)
+def test_bad_manifest_is_located(
+    tmp_path: Path, header: str, lines: list[str], line: int, words: str
+):
+    path = manifest(tmp_path, *lines, header=header)
+    with pytest.raises(InputFileError) as caught:
+        read_offset_manifest(path, resolve_model)
+    assert words in str(caught.value)
+    assert str(caught.value).startswith(f"{path}:") or not lines
+    if lines:
+        assert caught.value.line == line
+
+
+def test_missing_stations_file_fails_the_run_naming_manifest_and_line(tmp_path: Path):
+    shutil.copytree(ROOT / "examples" / "clearance" / "offsets", tmp_path / "offsets")
+    path = manifest(
+        tmp_path,
+        "offset-01,offsets/offset-01.csv,ISCWSA-MWD-REV4,24,0,100,",
+        "offset-02,offsets/no-such.csv,ISCWSA-MWD-REV4,24,100,0,",
+    )
+    result = subprocess.run(
+        [
+            *gyropipe(),
+            "run",
+            "pipelines/clearance.yaml",
+            "--input",
+            "reference=examples/clearance/reference.csv",
+            "--input",
+            f"offsets={path}",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
+    assert result.returncode != 0
+    assert f"{path}:4 (column 'file'): no stations file" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "out" / "run.json").exists()

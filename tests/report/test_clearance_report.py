@@ -1,0 +1,107 @@
+"""Clearance end to end through `gyropipe run pipelines/clearance.yaml` on the bundled ISCWSA
+example (reference and six offset wells from a manifest): the table against the set's
+separation factors, and the report's clearance section in headless Chromium and in the PDF."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from report_support import (
+    assert_self_contained,
+    colour,
+    figure_regions,
+    ink,
+    inspect,
+    marks,
+    pdf_pages,
+    run_ok,
+)
+
+from tests_support import ROOT
+
+sys.path.insert(0, str(ROOT / "tests" / "clearance"))
+from iscwsa_support import OFFSETS, expected_sf
+
+EXAMPLE = ROOT / "examples" / "clearance"
+NAMES = {f"offset-0{k}": OFFSETS[k - 1] for k in range(1, 7)}
+
+
+@pytest.fixture(scope="module")
+def clearance_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("clearance") / "out"
+    run_ok(
+        "run",
+        "pipelines/clearance.yaml",
+        "--input",
+        "reference=examples/clearance/reference.csv",
+        "--input",
+        "offsets=examples/clearance/manifest.csv",
+        "--out",
+        str(out),
+    )
+    return out
+
+
+def test_cli_table_reproduces_the_iscwsa_set(clearance_run: Path):
+    table = pq.read_table(clearance_run / "clearance.clearance.parquet")
+    assert table.num_rows == 600
+    units = {f.name: (f.metadata or {}).get(b"unit", b"").decode() for f in table.schema}
+    assert units["md"] == units["offset_md"] == units["distance"] == units["sigma_s"] == "m"
+    assert units["toolface"] == "deg"
+    offsets = np.array(table.column("offset").to_pylist())
+    sf = table.column("sf").to_numpy()
+    for ours, theirs in NAMES.items():
+        assert np.abs(sf[offsets == ours] / expected_sf(theirs) - 1.0).max() < 0.005, ours
+    manifest = json.loads((clearance_run / "run.json").read_text())
+    assert set(manifest["inputs"]) == {"reference", "offsets"}
+    assert (clearance_run / "clearance.csv").is_file()
+
+
+def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
+    html = clearance_run / "report.html"
+    page = inspect(browser, html)
+    assert_self_contained(page, html)
+    assert {"fig-sf", "fig-cylinder"} <= set(page.figures)
+    table = pq.read_table(clearance_run / "clearance.clearance.parquet").to_pandas()
+    worst = table.loc[table.groupby("offset").sf.idxmin()].set_index("offset")
+    rows = page.tables["clearance"]
+    assert [r[0] for r in rows] == list(NAMES)
+    assert page.headers["clearance"][:4] == ["Offset well", "Tool model", "Hole", "Minimum SF"]
+    for row in rows:
+        best = worst.loc[row[0]]
+        assert row[1] == "ISCWSA-MWD-REV4"
+        assert float(row[2]) == pytest.approx(24 * 0.0254, abs=5e-5)
+        assert float(row[3]) == pytest.approx(best.sf, abs=0.005)
+        assert float(row[4]) == pytest.approx(best.md, abs=0.005)
+        assert row[-1] == {"pass": "pass", "warn": "caution", "fail": "stop"}[best.level]
+    stops = [k for k, r in enumerate(rows) if r[-1] == "stop"]
+    assert stops == [2, 3]  # offsets 03 and 04 come within SF 1
+    shown = marks(browser, html)["clearance"]
+    assert [k for k, m in enumerate(shown) if m.row] == stops
+    text = page.text
+    for k in range(1, 7):  # each offset survey named with its file's hash
+        data = (EXAMPLE / "offsets" / f"offset-0{k}.csv").read_bytes()
+        assert f"offset-0{k}.csv · sha256 {hashlib.sha256(data).hexdigest()}" in text
+    assert "Clearance: stop — minimum separation factor" in text
+    assert "SPE-187073" in text and "SPE 67616" in text
+    for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):
+        assert internal not in text.split("Provenance")[0], internal
+
+
+def test_clearance_figures_drawn_in_the_pdf(clearance_run: Path, tmp_path: Path):
+    pages = pdf_pages(clearance_run / "report.pdf", tmp_path)
+    words = " ".join(w[0] for p in pages for w in p.words)
+    assert "Travelling cylinder" in words and "Separation factor against MD" in words
+    regions = figure_regions(pages)
+    assert len(regions) >= 6
+    sf_chart, cylinder = sorted(regions)[-2:]
+    assert ink(regions[sf_chart]) > 0.02 and colour(regions[sf_chart]) > 0.001
+    # the band above the caption holds the cylinder's low side: sparse, but drawn
+    assert ink(regions[cylinder]) > 0.005 and colour(regions[cylinder]) > 0.0005
