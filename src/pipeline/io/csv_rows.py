@@ -1,8 +1,9 @@
 """Bytes, lines and data rows of a CSV file (see :mod:`pipeline.io.csv` for the layout).
 
 The start of the file is checked to be text (:func:`load`). A larger file is then mapped
-into memory, not copied, and checked block by block (vectorised: no NUL byte, UTF-8);
-one with a byte-order mark, CR line ends or a problem to locate is read as bytes instead.
+into memory, not copied, and each block of rows checked just before it is parsed
+(:func:`checked`: no NUL byte, UTF-8, CR line ends made LF); one whose start holds a
+byte-order mark or CR line ends is read and checked as bytes instead.
 Only its first lines (where the title block and the header row are) are decoded to text;
 the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
 :data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
