@@ -1,10 +1,15 @@
-"""A reader that counts the record batches it made that are still alive: proves that a
-streamed port never holds a survey whole (imported by test modules; tests/ is on sys.path)."""
+"""What the streamed-port tests share (imported by test modules; tests/ is on sys.path): a
+long simulated point survey, a reader that counts the record batches it made that are still
+alive (proves that a streamed port never holds a survey whole), a registry with test readers
+and stages added, and a pipeline run over a samples file (read → readings → validity →
+Parquet, the samples persisted and copied)."""
 
 from __future__ import annotations
 
+import textwrap
 import weakref
 from collections.abc import Iterator
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -12,15 +17,58 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from pipeline.graph import build_plan
 from pipeline.io import parquet
 from pipeline.plugins import load_registry
 from pipeline.registry import PluginInfo, ReaderDef, Registry, StageDef
+from pipeline.runner import run_plan
+from pipeline.sim.simulate import simulate
+from pipeline.sim.spec import SimulationSpec
+from pipeline.spec import load_spec
 from pipeline.streams import TableStream
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
 
+SITE = {
+    "latitude": 61.25,
+    "longitude": 73.4,
+    "elevation": 120.0,
+    "date": "2026-11-21",
+    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
+}
 ROWS = 1000
 """Rows per batch of the counting reader: a long survey is many batches."""
+
+
+@cache
+def survey() -> pa.Table:
+    """A point survey of 47 stations × 4 positions at 50 Hz with magnetometers (≈ 50 k
+    samples)."""
+    spec = SimulationSpec.model_validate(
+        {
+            "name": "long",
+            "seed": 3,
+            "site": SITE,
+            "well": {
+                "sections": [
+                    {"kind": "vertical", "length": 20},
+                    {"kind": "curve", "dls": 3.0, "inc": 50, "azi": 120},
+                    {"kind": "hold", "length": 170},
+                ]
+            },
+            "tool": {"preset": "ideal", "overrides": {"sample_rate": 50}},
+            "survey": {
+                "mode": "point",
+                "every": 15.0,
+                "positions": [0, 90, 180, 270],
+                "dwell": 6.0,
+                "move_time": 1.0,
+                "settle_time": 0.5,
+                "speed": 5.0,
+            },
+        }
+    )
+    return simulate(spec).samples
 
 
 class Alive:
@@ -91,3 +139,34 @@ def registry_with(*items: ReaderDef | StageDef) -> Registry:
         registry.add(item, info, type(item))
     assert not registry.problems
     return registry
+
+
+PIPELINE = """
+name: streamed
+version: "1"
+well: {latitude: 61.25, longitude: 73.4, elevation: 120.0, survey_date: "2026-11-21"}
+inputs: {samples: {description: raw samples}}
+stages:
+  - id: read
+    uses: read_samples
+    with: {reader: counting}
+    persist: [samples]
+  - id: readings
+    uses: position_readings
+    inputs: {samples: read.samples}
+    persist: [readings]
+  - id: validity
+    uses: validity_checks
+    inputs: {readings: readings.readings, samples: read.samples}
+  - id: copy
+    uses: write
+    inputs: {table: read.samples}
+    with: {writer: parquet, filename: copy.parquet}
+"""
+
+
+def run(tmp_path: Path, registry: Registry, text: str, samples: Path) -> Any:
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(textwrap.dedent(text))
+    plan = build_plan(load_spec(path), registry)
+    return run_plan(plan, registry, inputs={"samples": samples}, out_dir=tmp_path / "out")

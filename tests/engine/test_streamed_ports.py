@@ -5,9 +5,7 @@ checked batch by batch and errors name the row counted from the start of the str
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Callable, Iterator, Mapping
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -17,86 +15,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from pipeline.errors import ContractViolation, InputFileError, StageError
-from pipeline.graph import build_plan
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.registry import Registry, StageContext, StageDef
-from pipeline.runner import run_plan
-from pipeline.sim.simulate import simulate
-from pipeline.sim.spec import SimulationSpec
-from pipeline.spec import load_spec
+from pipeline.registry import StageContext, StageDef
 from pipeline.streams import TableStream
 from pipeline.tables import RawSamples
-from stream_support import ROWS, Alive, counting_reader, registry_with
-
-SITE = {
-    "latitude": 61.25,
-    "longitude": 73.4,
-    "elevation": 120.0,
-    "date": "2026-11-21",
-    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-}
-
-
-@cache
-def survey() -> pa.Table:
-    """A point survey of 47 stations × 4 positions at 50 Hz with magnetometers (≈ 50 k
-    samples)."""
-    spec = SimulationSpec.model_validate(
-        {
-            "name": "long",
-            "seed": 3,
-            "site": SITE,
-            "well": {
-                "sections": [
-                    {"kind": "vertical", "length": 20},
-                    {"kind": "curve", "dls": 3.0, "inc": 50, "azi": 120},
-                    {"kind": "hold", "length": 170},
-                ]
-            },
-            "tool": {"preset": "ideal", "overrides": {"sample_rate": 50}},
-            "survey": {
-                "mode": "point",
-                "every": 15.0,
-                "positions": [0, 90, 180, 270],
-                "dwell": 6.0,
-                "move_time": 1.0,
-                "settle_time": 0.5,
-                "speed": 5.0,
-            },
-        }
-    )
-    return simulate(spec).samples
-
-
-PIPELINE = """
-name: streamed
-version: "1"
-well: {latitude: 61.25, longitude: 73.4, elevation: 120.0, survey_date: "2026-11-21"}
-inputs: {samples: {description: raw samples}}
-stages:
-  - id: read
-    uses: read_samples
-    with: {reader: counting}
-    persist: [samples]
-  - id: readings
-    uses: position_readings
-    inputs: {samples: read.samples}
-    persist: [readings]
-  - id: validity
-    uses: validity_checks
-    inputs: {readings: readings.readings, samples: read.samples}
-  - id: copy
-    uses: write
-    inputs: {table: read.samples}
-    with: {writer: parquet, filename: copy.parquet}
-"""
-
-
-def run(tmp_path: Path, registry: Registry, text: str, samples: Path) -> Any:
-    path = tmp_path / "pipeline.yaml"
-    path.write_text(textwrap.dedent(text))
-    plan = build_plan(load_spec(path), registry)
-    return run_plan(plan, registry, inputs={"samples": samples}, out_dir=tmp_path / "out")
+from stream_support import PIPELINE, ROWS, Alive, counting_reader, registry_with, run, survey
 
 
 def test_a_long_survey_streams_through_with_few_batches_alive(tmp_path: Path) -> None:

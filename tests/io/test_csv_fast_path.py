@@ -74,11 +74,11 @@ def _locating_path(path: Path) -> dict[str, np.ndarray]:
     header = find_header(path, text.head, CsvOptions(), layout.required)
     chosen = {name: header.found[name][0] for name in NAMES}
     rows = csv_rows.data_rows(path, text, header, [chosen[n].index for n in layout.required])
+    decimal = "." if header.delimiter == "," else csv_rows.decimal_of(path, rows, header, chosen)
     rows = csv_rows._without_skipped(rows)
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
     strings = csv_rows._strings(path, rows, header, names, wanted)
-    decimal = csv_rows._detect_decimal(header.delimiter, strings.values())
     types = layout.types()
     return {
         name: csv_rows._converted(
@@ -153,3 +153,14 @@ def test_a_binary_byte_deep_in_a_large_file_is_located(
         read(path, "samples", None)
     assert message in str(info.value)
     assert info.value.line == data.count(b"\n", 0, at) + 1
+
+
+def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path) -> None:
+    """A mapped file whose later lines end with CRLF (checked block by block as they are
+    parsed, not before) reads as the same file with LF line ends."""
+    path, lines = _large(tmp_path)
+    plain, _ = read(path, "samples", None)
+    path.write_text("\n".join(lines[:2000]) + "\n" + "\r\n".join(lines[2000:]))
+    assert isinstance(csv_rows.load(path, HEADER_SEARCH_LINES).data, mmap.mmap)
+    mixed, _ = read(path, "samples", None)
+    assert mixed.equals(plain)

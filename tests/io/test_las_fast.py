@@ -112,7 +112,7 @@ def test_a_bad_row_among_fixed_width_blocks_is_located(
     assert las_fast.fast_values(source.raw, source.start, 3, [0, 1, 2]) is None
     header = las_header.parse_header(path, source.header)
     with pytest.raises(InputFileError) as info:
-        las_rows.read_data(path, source, header, [0, 1, 2])
+        list(las_rows.data_blocks(path, source, header, [0, 1, 2]))
     assert info.value.line == first + line - 1
 
 

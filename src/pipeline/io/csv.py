@@ -60,11 +60,12 @@ from __future__ import annotations
 
 import csv as stdcsv
 import io
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
@@ -84,16 +85,24 @@ from pipeline.io.csv_header import (
     read_title,
 )
 from pipeline.io.csv_options import CsvOptions
-from pipeline.io.csv_rows import data_rows, load, newlines, parse, split_head
+from pipeline.io.csv_rows import (
+    Rows,
+    data_rows,
+    load,
+    newlines,
+    parse_blocks,
+    split_head,
+)
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
+from pipeline.streams import TableStream
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.units import canonical_unit
 from pipeline.well import NorthReference, WellMetadata
 
-__all__ = ["LAYOUTS", "CsvOptions", "Layout", "read", "sniff", "write_csv"]
+__all__ = ["LAYOUTS", "CsvOptions", "Layout", "read", "sniff", "stream", "write_csv"]
 
 SNIFF_BYTES = 64 * 1024
 SNIFF_SUFFIXES = (".csv", ".txt", ".tsv")
@@ -159,6 +168,82 @@ LAYOUTS = {
 def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     """Read ``path`` as ``kind`` (``stations`` or ``samples``) in canonical units and
     conventions, with a ``source_line`` column; also the title block's well metadata."""
+    rows, well = _open(path, kind, options)
+    return pa.concat_tables(list(rows.tables()), promote_options="none"), well
+
+
+def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
+    """:func:`read` as a stream of record batches: a block of about
+    :data:`~pipeline.io.csv_rows.ROWS_BLOCK` bytes of data lines at a time, parsed and
+    checked as it passes (each pass reads the file again)."""
+    rows, well = _open(path, kind, options)
+    return TableStream.of_batches(rows.schema, rows.batches), well
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """A file's data rows and how to read them: their tables a block at a time."""
+
+    path: Path
+    layout: Layout
+    header: Header
+    chosen: dict[str, Cell]
+    factors: dict[str, float]
+    rows: Rows
+    decimal: str | None
+    """the decimal mark; None: found (:func:`~pipeline.io.csv_rows.parse_blocks`)"""
+    north: str | None
+    opts: CsvOptions
+
+    @property
+    def schema(self) -> pa.Schema:
+        """The tables' schema (that of a table without rows)."""
+        types = self._types()
+        empty = {name: pa.array([], types[name]) for name in self.chosen}
+        return self._table(empty, np.empty(0, np.int64)).schema
+
+    def tables(self) -> Iterator[pa.Table]:
+        """The table of each block of rows."""
+        blocks = parse_blocks(
+            self.path,
+            self.rows,
+            self.header,
+            self.chosen,
+            self._types(),
+            self.layout.blanks,
+            self.decimal,
+        )
+        for values, rows in blocks:
+            lines = rows.source_lines(len(values[self.layout.required[0]]))
+            yield self._table(values, lines)
+
+    def batches(self) -> Iterator[pa.RecordBatch]:
+        for table in self.tables():
+            yield from table.to_batches()
+
+    def _types(self) -> dict[str, pa.DataType]:
+        return {n: t for n, t in self.layout.types().items() if n in self.chosen}
+
+    def _table(self, values: dict[str, Any], lines: Any) -> pa.Table:
+        """The contract's table of parsed columns, in canonical units and conventions."""
+        data = {
+            name: pc.multiply(values[name], self.factors[name])
+            if self.factors.get(name, 1.0) != 1.0
+            else values[name]
+            for name in self.chosen
+        }
+        data[SOURCE_LINE] = pa.array(lines, pa.int64())
+        table = self.layout.table(data, self.north)
+        try:
+            return to_canonical(table, self.opts.conventions)
+        except ValueError as exc:
+            line = self.header.index + 1
+            raise InputFileError(self.path, f"option conventions: {exc}", line=line) from None
+
+
+def _open(path: Path, kind: str, options: Any) -> tuple[_Rows, WellMetadata]:
+    """The header found, the columns chosen with their units, the data rows delimited and
+    the decimal mark resolved; and the title block's well metadata."""
     layout = LAYOUTS.get(kind)
     if layout is None:
         raise ValueError(f"the csv reader reads kinds {', '.join(LAYOUTS)}, not {kind!r}")
@@ -187,22 +272,9 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
         if CURVES[name].quantity is not None
     }
     rows = data_rows(path, text, header, [chosen[n].index for n in layout.required])
-    types = {n: t for n, t in layout.types().items() if n in chosen}
-    values, rows = parse(
-        path, rows, header, chosen, types, layout.blanks, opts.decimal, list(layout.required)
-    )
-    data = {
-        name: pc.multiply(values[name], factors[name])
-        if factors.get(name, 1.0) != 1.0
-        else values[name]
-        for name in chosen
-    }
-    data[SOURCE_LINE] = pa.array(rows.source_lines(len(data[layout.required[0]])))
-    table = layout.table(data, north)
-    try:
-        return to_canonical(table, opts.conventions), well
-    except ValueError as exc:
-        raise InputFileError(path, f"option conventions: {exc}", line=header.index + 1) from None
+    found = _Rows(path, layout, header, chosen, factors, rows, opts.decimal, north, opts)
+    found.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
+    return found, well
 
 
 def _azimuth_reference(
@@ -344,6 +416,7 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
             read=read,
             sniff=sniff,
             options=CsvOptions,
+            stream=stream,
         )
     )
 

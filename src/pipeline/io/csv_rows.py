@@ -1,12 +1,15 @@
 """Bytes, lines and data rows of a CSV file (see :mod:`pipeline.io.csv` for the layout).
 
 The start of the file is checked to be text (:func:`load`). A larger file is then mapped
-into memory, not copied, and checked block by block (vectorised: no NUL byte, UTF-8);
-one with a byte-order mark, CR line ends or a problem to locate is read as bytes instead.
+into memory, not copied, and each block of rows checked just before it is parsed
+(:func:`checked`: no NUL byte, UTF-8, CR line ends made LF); one whose start holds a
+byte-order mark or CR line ends is read and checked as bytes instead.
 Only its first lines (where the title block and the header row are) are decoded to text;
-the data rows stay bytes and are handed to ``pyarrow.csv``, which parses them with the
-declared column types in one pass (on one thread unless a core is idle, see
-:mod:`pipeline.io.arrow_text`). A file that does not parse that way (a bad cell, a wrong
+the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
+:data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
+batches; the pages of the mapped file let go once read), which parses them with the
+declared column types (on one thread unless a core is idle, see
+:mod:`pipeline.io.arrow_text`). A block that does not parse that way (a bad cell, a wrong
 cell count, decimal commas to detect) is parsed again as strings on one thread, which
 locates every problem on its file line.
 """
@@ -16,7 +19,7 @@ from __future__ import annotations
 import codecs
 import mmap
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -28,15 +31,19 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError
-from pipeline.io.arrow_text import read_options
+from pipeline.io.arrow_text import read_options, release
 from pipeline.io.csv_header import Cell, Header, cells_of
 
 SHOWN = 5
 """Bad cells quoted in one error message."""
 BLOCK = 64 * 1024
 """Bytes of a file checked (text, not binary) before the whole file is read."""
-SCAN = 256 * 1024
-"""Bytes of a mapped file checked at a time (in the processor's cache)."""
+SCAN = 4 << 20
+"""Bytes of a mapped file searched at a time when looking for one byte in all its rows."""
+CHECK = 256 << 10
+"""Bytes of a block checked at a time (:func:`checked`: they stay in the cache)."""
+MARKED = (b"\0", b"\r", b"#", b'"')
+"""Bytes a block is checked for: NUL, CR (line ends), comment marks and quotes."""
 BOM = b"\xef\xbb\xbf"
 
 _NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
@@ -50,19 +57,6 @@ _BLANKS = (ord(" "), ord("\t"))
 
 Data = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
-Marks = dict[bytes, list[int]]
-"""Offsets of the blocks of :data:`SCAN` bytes of a mapped file that hold each byte."""
-MARKED = (b'"', b"#", b",")
-"""Bytes whose blocks are noted while a mapped file is checked: quotes, comment marks and
-commas (decimal commas) are then looked for only there."""
-
-
-@dataclass(frozen=True)
-class Mapped:
-    """A file mapped into memory, and the blocks holding each of :data:`MARKED`."""
-
-    data: mmap.mmap
-    marks: Marks
 
 
 @dataclass(frozen=True)
@@ -73,8 +67,6 @@ class Text:
     data: Data
     head: list[str]
     starts: list[int]
-    marks: Marks | None = None
-    """the blocks holding each :data:`MARKED` byte, when the file is mapped"""
 
 
 @dataclass(frozen=True)
@@ -88,11 +80,24 @@ class Rows:
     end: int
     first_line: int
     lines: NDArray[np.int64] | None = None
-    marks: Marks | None = None
+    marked: frozenset[bytes] | None = None
+    """which of :data:`MARKED` the rows hold, when known (:func:`checked`)"""
 
     def holds(self, byte: bytes) -> bool:
         """Whether the rows hold ``byte``."""
-        return holds(self.data, self.marks, byte, self.start, self.end)
+        if self.marked is not None and byte in MARKED:
+            return byte in self.marked
+        return self.data.find(byte, self.start, self.end) >= 0
+
+    def anywhere(self, byte: bytes) -> bool:
+        """:meth:`holds` for all the rows of a file: a mapped file is searched a block at
+        a time, its pages let go once searched."""
+        for at in range(self.start, self.end, SCAN):
+            found = self.data.find(byte, at, min(at + SCAN, self.end))
+            release(self.data, at, min(at + SCAN, self.end))
+            if found >= 0:
+                return True
+        return False
 
     def buffer(self) -> pa.Buffer:
         """The rows' bytes, without a copy."""
@@ -126,16 +131,18 @@ def load(path: Path, head_lines: int) -> Text:
     decoded. NUL bytes, invalid UTF-8 and blank files are errors naming the line.
 
     The first :data:`BLOCK` bytes are checked before the rest is looked at: a binary file
-    (a NUL byte, bytes that are not UTF-8) is refused without reading it all. The rest is
-    mapped (:func:`_mapped`) or, failing that, read and checked as a whole."""
+    (a NUL byte, bytes that are not UTF-8) is refused without reading it all. A larger file
+    whose start has LF line ends, no byte-order mark and some text is then mapped into
+    memory, not copied: its lines past the head are checked a block at a time as they are
+    parsed (:func:`checked`). Any other is read and checked as a whole."""
     try:
         with path.open("rb") as fh:
             first = fh.read(BLOCK)
             _check_text(path, first, complete=len(first) < BLOCK)
             data: Data = first
-            mapped = _mapped(fh) if len(first) == BLOCK else None
+            mapped = _mapped(fh) if len(first) == BLOCK and _mappable(first) else None
             if mapped is not None:
-                data = mapped.data
+                data = mapped
             elif len(first) == BLOCK:
                 fh.seek(0)
                 data = fh.read()
@@ -146,51 +153,58 @@ def load(path: Path, head_lines: int) -> Text:
         if not data or data.isspace():
             raise InputFileError(path, "the file is empty")
     head, starts = split_head(data, head_lines)
-    return Text(data, head, starts, None if mapped is None else mapped.marks)
+    if isinstance(data, mmap.mmap):  # the head past the first block is checked too
+        end = data.find(b"\n", starts[-1])
+        _check_text(path, data[: len(data) if end < 0 else end], complete=True)
+    return Text(data, head, starts)
 
 
-def _mapped(fh: BinaryIO) -> Mapped | None:
-    """The file mapped into memory when it is UTF-8 text with LF line ends, no NUL byte,
-    no byte-order mark and some text besides white space; else None (then the file is read
-    and checked as bytes, which locates a problem on its line). One pass, a block of
-    :data:`SCAN` bytes at a time, which also notes the blocks holding :data:`MARKED` bytes."""
+def _mappable(first: bytes) -> bool:
+    """Whether a file starting with ``first`` is mapped: LF line ends, no byte-order mark,
+    some text besides white space."""
+    return b"\r" not in first and not first.startswith(BOM) and not first.isspace()
+
+
+def _mapped(fh: BinaryIO) -> mmap.mmap | None:
+    """The file mapped into memory (read-only); None if it cannot be (not a regular file)."""
     try:
-        mapped = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
-    except (OSError, ValueError):  # not a regular file
+        return mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    except (OSError, ValueError):
         return None
-    decoder = codecs.getincrementaldecoder("utf-8")()
-    marks: Marks = {byte: [] for byte in MARKED}
-    blank = True
-    for at in range(0, len(mapped), SCAN):
-        chunk = mapped[at : at + SCAN]
-        if b"\0" in chunk or b"\r" in chunk or (at == 0 and chunk.startswith(BOM)):
-            return None
-        if not chunk.isascii():  # checked as UTF-8
-            try:
-                decoder.decode(chunk)
-            except UnicodeDecodeError:
-                return None
-        for byte, found in marks.items():
-            if byte in chunk:
-                found.append(at)
-        blank = blank and not chunk.strip()
-    try:
-        decoder.decode(b"", final=True)
-    except UnicodeDecodeError:
-        return None
-    return None if blank else Mapped(mapped, marks)
 
 
-def holds(data: Data, marks: Marks | None, byte: bytes, start: int, end: int) -> bool:
-    """Whether ``data[start:end]`` holds ``byte`` (one of :data:`MARKED` when ``marks``,
-    then only the blocks noted to hold it are searched)."""
-    if marks is None:
-        return data.find(byte, start, end) >= 0
-    return any(
-        data.find(byte, max(start, at), min(end, at + SCAN)) >= 0
-        for at in marks[byte]
-        if at < end and at + SCAN > start
-    )
+def checked(path: Path, block: Rows) -> Rows:
+    """A block of the rows of a mapped file checked as text (no NUL byte, UTF-8: an error
+    names the line), noting which of :data:`MARKED` it holds; its CR line ends made LF
+    (then a copy). One pass, :data:`CHECK` bytes at a time. Any other block as it is."""
+    data = block.data
+    if not isinstance(data, mmap.mmap):
+        return block
+    found: set[bytes] = set()
+    ascii_only = True
+    for at in range(block.start, block.end, CHECK):
+        stop = min(at + CHECK, block.end)
+        found.update(byte for byte in MARKED if data.find(byte, at, stop) >= 0)
+        ascii_only = ascii_only and int(np.frombuffer(data, np.uint8, stop - at, at).max()) < 0x80
+    if b"\0" in found:
+        nul = data.find(b"\0", block.start, block.end)
+        line = block.first_line + _line_ends(data, block.start, nul)
+        raise InputFileError(path, "NUL byte: this is not a text CSV file", line=line)
+    if not ascii_only:  # checked as UTF-8
+        try:
+            data[block.start : block.end].decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = block.first_line + _line_ends(data, block.start, block.start + exc.start)
+            raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=line) from None
+    if b"\r" in found:
+        text = newlines(data[block.start : block.end])
+        return Rows(text, 0, len(text), block.first_line)
+    return Rows(data, block.start, block.end, block.first_line, marked=frozenset(found))
+
+
+def _line_ends(data: Data, start: int, end: int) -> int:
+    """Line ends in ``data[start:end]``."""
+    return int(np.count_nonzero(np.frombuffer(data, np.uint8, end - start, start) == 10))
 
 
 def _check_text(path: Path, data: bytes, *, complete: bool) -> bytes:
@@ -240,7 +254,11 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
         line = data[line_start:line_end]
         if _skipped(line):
             continue
-        cells = cells_of(line.decode("utf-8"), header.delimiter)
+        try:
+            cells = cells_of(line.decode("utf-8"), header.delimiter)
+        except UnicodeDecodeError as exc:  # a mapped file's lines are checked when parsed
+            where = _line_ends(data, 0, line_start) + 1
+            raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=where) from None
         if not _is_footer(cells, len(header.cells), required):
             end = line_end
             break
@@ -249,9 +267,7 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
-    rows = Rows(data, start, end, first_line, marks=text.marks)
-    # A comment line could parse as a row (a commented-out row); blank lines cannot.
-    return _without_skipped(rows) if rows.holds(b"#") else rows
+    return Rows(data, start, end, first_line)
 
 
 def _line_end(data: Data, start: int, end: int) -> int:
@@ -277,17 +293,20 @@ def _skipped(line: bytes) -> bool:
 
 def _without_skipped(rows: Rows) -> Rows:
     """``rows`` without blank and comment lines (vectorised: files can be large); ``rows``
-    itself when it has none."""
+    itself when it has none (no rows, ``lines`` empty, when it has nothing else)."""
     block = np.frombuffer(rows.data, np.uint8, count=rows.end - rows.start, offset=rows.start)
+    padded = np.append(block, np.uint8(ord("\n")))  # the last line's end: walks stop there
     starts = np.concatenate(([0], np.flatnonzero(block == ord("\n")) + 1))
     first = starts.copy()  # first byte of each line that is not a space or tab
-    pending = np.flatnonzero(np.isin(block[first], _BLANKS))
-    while len(pending):  # the last line has text, so no walk leaves the block
+    pending = np.flatnonzero(np.isin(padded[first], _BLANKS))
+    while len(pending):
         first[pending] += 1
-        pending = pending[np.isin(block[first[pending]], _BLANKS)]
-    keep = ~np.isin(block[first], (ord("\n"), ord("#")))
+        pending = pending[np.isin(padded[first[pending]], _BLANKS)]
+    keep = ~np.isin(padded[first], (ord("\n"), ord("#")))
     if keep.all():
         return rows
+    if not keep.any():  # every line skipped (a block of a stream)
+        return Rows(b"", 0, 0, rows.first_line, np.empty(0, np.int64))
     lengths = np.diff(np.append(starts, len(block) + 1))  # each line with its newline
     kept = block[np.repeat(keep, lengths)[: len(block)]].tobytes()
     lines = rows.source_lines(len(keep))[keep]
@@ -307,7 +326,28 @@ def _is_footer(cells: list[str], width: int, required: list[int]) -> bool:
 # ------------------------------------------------------------------------- parsing
 
 
-def parse(
+ROWS_BLOCK = 16 << 20
+"""Bytes of whole data lines parsed at a time (one block, one batch of a stream)."""
+
+
+def _block_end(rows: Rows, start: int) -> int:
+    """End of the block of whole lines starting at ``start`` (at a line end, or the rows')."""
+    stop = rows.data.find(b"\n", min(start + ROWS_BLOCK, rows.end), rows.end)
+    return rows.end if stop < 0 else stop
+
+
+def _blocks(rows: Rows) -> Iterator[Rows]:
+    """``rows`` in blocks of whole lines of about :data:`ROWS_BLOCK` bytes, each numbered
+    from its first line (counted)."""
+    start, line = rows.start, rows.first_line
+    while start < rows.end:
+        stop = _block_end(rows, start)
+        block = Rows(rows.data, start, stop, line)
+        yield block
+        start, line = stop + 1, line + block.count()
+
+
+def parse_blocks(
     path: Path,
     rows: Rows,
     header: Header,
@@ -315,29 +355,86 @@ def parse(
     types: dict[str, pa.DataType],
     blanks: frozenset[str],
     decimal: str | None,
-    detect_from: list[str],
+) -> Iterator[tuple[dict[str, Any], Rows]]:
+    """:func:`parse` a block of about :data:`ROWS_BLOCK` bytes of whole lines at a time:
+    each block's columns and the rows they came from (file lines right across blocks), so
+    the file is never parsed whole. ``decimal`` None: ',' is tried first when the delimiter
+    is not ',' and the rows hold one; at the first block that does not parse so, the mark
+    is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
+    are parsed again with it (an error if one held a decimal comma)."""
+    mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
+    numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
+    start, line = rows.start, rows.first_line
+
+    def resolve() -> str:
+        nonlocal decimal, mark
+        decimal = mark = decimal_of(path, rows, header, numbers)
+        if mark == "." and start > rows.start:  # the blocks before must read so too
+            before = Rows(rows.data, rows.start, start - 1, rows.first_line)
+            for _ in parse_blocks(path, before, header, chosen, types, blanks, mark):
+                pass
+        return mark
+
+    while start < rows.end:
+        stop = _block_end(rows, start)
+        block = checked(path, Rows(rows.data, start, stop, line))
+        # A comment line could parse as a row (a commented-out row); blank lines cannot.
+        kept = _without_skipped(block) if block.holds(b"#") else block
+        count = None
+        if kept.lines is None or len(kept.lines):
+            guessed = resolve if decimal is None and mark == "," else None
+            values, used = parse(path, kept, header, chosen, types, blanks, mark, guessed)
+            if used is block:  # every line a row
+                count = len(next(iter(values.values())))
+            release(rows.data, start, stop)
+            yield values, used
+        start, line = stop + 1, line + (block.count() if count is None else count)
+
+
+def decimal_of(path: Path, rows: Rows, header: Header, numbers: dict[str, Cell]) -> str:
+    """',' when the ``numbers`` columns' values hold ',' but never '.' (read as strings, a
+    block at a time), else '.'."""
+    names = [f"c{i}" for i in range(len(header.cells))]
+    wanted = {name: names[cell.index] for name, cell in numbers.items()}
+    comma = dot = False
+    for block in _blocks(rows):
+        kept = _without_skipped(block)
+        if kept.lines is not None and not len(kept.lines):
+            continue
+        found = _decimal_marks(_strings(path, kept, header, names, wanted).values())
+        comma, dot = comma or found[0], dot or found[1]
+    return "," if comma and not dot else "."
+
+
+def parse(
+    path: Path,
+    rows: Rows,
+    header: Header,
+    chosen: dict[str, Cell],
+    types: dict[str, pa.DataType],
+    blanks: frozenset[str],
+    decimal: str,
+    guessed: Callable[[], str] | None = None,
 ) -> tuple[dict[str, Any], Rows]:
     """Columns ``chosen`` of the rows as arrays of ``types`` (float64, int64 or string), and
     the rows they came from (blank and comment lines left out).
 
-    Floats must be finite decimal numbers, integers integers; an empty cell is null in the
-    ``blanks`` columns, an error elsewhere. Strings are trimmed, empty ones null. ``decimal``
-    None means ',' when the delimiter is not ',' and no value of the ``detect_from`` columns
-    holds a '.' but some hold a ','. Any bad cell or row raises :class:`InputFileError`
-    naming its line and column.
+    Floats must be finite decimal numbers with the ``decimal`` mark, integers integers; an
+    empty cell is null in the ``blanks`` columns, an error elsewhere. Strings are trimmed,
+    empty ones null. When ``decimal`` was a guess, ``guessed`` gives the right mark if the
+    rows do not parse with it. Any bad cell or row raises :class:`InputFileError` naming
+    its line and column.
     """
     names = [f"c{i}" for i in range(len(header.cells))]
     wanted = {name: names[cell.index] for name, cell in chosen.items()}
-    comma = rows.holds(b",")
-    guess = decimal or ("," if header.delimiter != "," and comma else ".")
-    typed = _typed(rows, header, names, wanted, types, blanks, guess)
+    typed = _typed(rows, header, names, wanted, types, blanks, decimal)
     if typed is None and (kept := _without_skipped(rows)) is not rows:
         rows = kept
-        typed = _typed(rows, header, names, wanted, types, blanks, guess)
+        typed = _typed(rows, header, names, wanted, types, blanks, decimal)
     if typed is None:
         strings = _strings(path, rows, header, names, wanted)
-        if decimal is None:
-            decimal = _detect_decimal(header.delimiter, [strings[n] for n in detect_from])
+        if guessed is not None:
+            decimal = guessed()
         typed = {
             name: _converted(
                 path, strings[name], types[name], name in blanks, decimal, rows, chosen[name].text
@@ -443,14 +540,12 @@ def _strings(
     return {name: table.column(col).combine_chunks() for name, col in wanted.items()}
 
 
-def _detect_decimal(delimiter: str, columns: Iterable[pa.Array]) -> str:
-    """',' when the delimiter is not ',' and the values use ',' but never '.'; else '.'."""
-    if delimiter == ",":
-        return "."
+def _decimal_marks(columns: Iterable[pa.Array]) -> tuple[bool, bool]:
+    """Whether some value holds a ',', and whether some holds a '.'."""
     cols = list(columns)
     comma = any(pc.any(pc.match_substring(c, ",")).as_py() for c in cols)
     dot = any(pc.any(pc.match_substring(c, ".")).as_py() for c in cols)
-    return "," if comma and not dot else "."
+    return comma, dot
 
 
 def _converted(

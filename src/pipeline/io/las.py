@@ -12,7 +12,8 @@ writer is :mod:`pipeline.io.las_write`.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,14 +33,24 @@ from pipeline.io.las_curves import (
     make_table,
     one_north,
 )
-from pipeline.io.las_header import BOM, SNIFF_BYTES, load, parse_header, require_curves, text_head
+from pipeline.io.las_header import (
+    BOM,
+    SNIFF_BYTES,
+    Header,
+    Source,
+    load,
+    parse_header,
+    require_curves,
+    text_head,
+)
 from pipeline.io.las_log import read_log
 from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import check_index, check_range, null_values, read_data
+from pipeline.io.las_rows import Data, IndexRange, Mask, check_index, data_blocks, null_values
 from pipeline.io.las_well import well_metadata
 from pipeline.io.las_write import write_las
 from pipeline.io.sniffing import file_head
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.streams import TableStream
 from pipeline.tables import LogTable, RawSamples, Stations
 from pipeline.well import WellMetadata
 
@@ -51,6 +62,80 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
     when present), ``samples`` (time s, gyros deg/h, accelerometers m/s2, magnetometers
     nT, md m, frame_angle deg) or ``log`` (every curve as logged), plus ``source_line``
     (the file line of each row)."""
+    rows, well = _open(path, kind, options)
+    if isinstance(rows, pa.Table):
+        return rows, well
+    return pa.concat_tables(list(rows.tables()), promote_options="none"), well
+
+
+def stream_las(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
+    """:func:`read_las` as a stream of record batches, a block of rows (about
+    :data:`~pipeline.io.las_fast.BLOCK` bytes of the ``~A`` section) at a time, checked
+    as they pass (a log is read whole, then cut)."""
+    rows, well = _open(path, kind, options)
+    if isinstance(rows, pa.Table):
+        return TableStream.from_table(rows), well
+    return TableStream.of_batches(rows.schema, rows.batches), well
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """What a stations or samples read needs besides the rows: their table a block at a
+    time (:meth:`tables`)."""
+
+    path: Path
+    kind: str
+    source: Source
+    header: Header
+    chosen: dict[str, int]
+    factors: dict[str, float]
+    north: str | None
+    opts: LasOptions
+
+    @property
+    def schema(self) -> pa.Schema:
+        """The tables' schema (that of a table without rows)."""
+        empty = Data({i: np.empty(0) for i in self._wanted()}, np.empty(0, np.int64))
+        masks = {i: np.zeros(0, bool) for i in self._wanted()}
+        return self._table(empty, masks).schema
+
+    def tables(self) -> Iterator[pa.Table]:
+        """The table of each block of rows, checked (nulls in the index and the key
+        column, STRT/STOP/STEP), in canonical units."""
+        path, header, spec = self.path, self.header, KINDS[self.kind]
+        nulls = null_values(path, header, self.opts)
+        index = IndexRange(path, header, nulls)
+        for data in data_blocks(path, self.source, header, self._wanted()):
+            if data.lines.size == 0:
+                continue
+            masks = {i: np.isin(values, nulls) for i, values in data.values.items()}
+            check_index(path, header, data, masks, [0, self.chosen[spec.key]])
+            index.feed(data.values[0], data.lines)
+            yield self._table(data, masks)
+        index.finish()
+
+    def batches(self) -> Iterator[pa.RecordBatch]:
+        for table in self.tables():
+            yield from table.to_batches()
+
+    def _wanted(self) -> list[int]:
+        return sorted({0, *self.chosen.values()})
+
+    def _table(self, data: Data, masks: dict[int, Mask]) -> pa.Table:
+        spec = KINDS[self.kind]
+        cols = columns(self.path, spec, self.header, self.chosen, data, masks, self.factors)
+        table = make_table(spec, cols, self.north)
+        if self.kind != "samples":
+            return table
+        try:
+            return to_canonical(table, self.opts.conventions)
+        except ValueError as exc:
+            raise InputFileError(self.path, f"option conventions: {exc}") from None
+
+
+def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMetadata]:
+    """The header read and the curves chosen: a log's whole table, or what reads the rows
+    of stations or samples; and the well metadata."""
     if kind not in (*KINDS, "log"):
         raise ValueError(f"the las reader reads kinds {sorted((*KINDS, 'log'))}, not {kind!r}")
     opts = LasOptions.model_validate(options or {})
@@ -68,18 +153,9 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
     north, file_north = None, one_north(path, declared)
     if "azi" in chosen:
         north, file_north = azimuth_north(path, header.curves[chosen["azi"]], declared, opts)
-    data = read_data(path, source, header, sorted({0, *chosen.values()}))
-    nulls = null_values(path, header, opts)
-    masks = {i: np.isin(values, nulls) for i, values in data.values.items()}
-    check_index(path, header, data, masks, [0, chosen[spec.key]])
-    check_range(path, header, data.values[0], data.lines, nulls)
-    table = make_table(spec, columns(path, spec, header, chosen, data, masks, factors), north)
-    if kind == "samples":
-        try:
-            table = to_canonical(table, opts.conventions)
-        except ValueError as exc:
-            raise InputFileError(path, f"option conventions: {exc}") from None
-    return table, well_metadata(path, header, file_north)
+    rows = _Rows(path, kind, source, header, chosen, factors, north, opts)
+    rows.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
+    return rows, well_metadata(path, header, file_north)
 
 
 def sniff(path: Path) -> bool:
@@ -109,6 +185,7 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
             read=read_las,
             sniff=sniff,
             options=LasOptions,
+            stream=stream_las,
         )
     )
 

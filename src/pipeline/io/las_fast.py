@@ -1,10 +1,11 @@
 """The fast path of the LAS ``~A`` reader (:mod:`pipeline.io.las_rows`): plain blocks of
-numbers parsed by ``pyarrow.csv``, or None when it cannot prove it reads them as the
-careful path would (then the careful path reads them and locates any error).
+numbers parsed by ``pyarrow.csv`` block by block, up to the first block it cannot prove it
+reads as the careful path would (the careful path reads from there and locates any error).
 
-The data section is copied once, one block of lines (about :data:`BLOCK` bytes) at a time,
-and each block is rewritten while it is in the processor's cache (CRLF made LF and tabs
-spaces, if any) so that a comma separates the values of each line:
+The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into
+one reused buffer, and each block is rewritten there while it is in the processor's cache
+(CRLF made LF and tabs spaces, if any) so that a comma separates the values of each line,
+then parsed from it (the file's text is never copied whole):
 
 * a block of fixed-width lines (every line as long; columns that are a space on every line
   split it into one group of columns per curve, as LAS writers lay values out) keeps its
@@ -22,76 +23,107 @@ value (``1e999``) declines, so the careful path reports it with its line.
 from __future__ import annotations
 
 import mmap
+from collections.abc import Iterator
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.io.arrow_text import read_options
+from pipeline.io.arrow_text import read_options, release
 
 Floats = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Text = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
 
-BLOCK = 1 << 20
+BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
 _TAB_TO_SPACE = bytes.maketrans(b"\t", b" ")
 _BLANK = b" \t\r\n"
 
 
+@dataclass(frozen=True)
+class Block:
+    """The values of one block of rows (by curve position) and their count."""
+
+    values: dict[int, Floats]
+    rows: int
+
+
+@dataclass(frozen=True)
+class Declined:
+    """A block the fast path cannot prove it reads right: ``raw[start:end]``, whole lines,
+    for the careful path to read (and locate any error in)."""
+
+    start: int
+    end: int
+
+
+def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Block | Declined]:
+    """Values of the ``wanted`` of ``n`` curves in ``raw[start:]``, a block of rows at a
+    time; a :class:`Declined` block for the careful path where the fast path cannot read
+    one (every line of it, blank and comment lines too, is left to the careful path). Each
+    block is rewritten in one reused buffer and parsed from it, so the section's text is
+    never held whole."""
+    end = _content_end(raw, start)
+    if n == 0:
+        yield Declined(start, end)
+        return
+    names = [f"c{i}" for i in range(n)]
+    parse = pacsv.ParseOptions(
+        delimiter=",", quote_char=False, double_quote=False, ignore_empty_lines=False
+    )
+    convert = pacsv.ConvertOptions(
+        column_types=dict.fromkeys(names, pa.float64()),
+        null_values=[],
+        strings_can_be_null=False,
+        check_utf8=False,
+    )
+    for first, last, delimited in _delimited(raw, start, end, n):
+        if delimited is None:
+            yield Declined(first, last)
+            continue
+        data, rows = delimited
+        try:
+            table = pacsv.read_csv(
+                pa.BufferReader(pa.py_buffer(data)),
+                read_options=read_options(names),
+                parse_options=parse,
+                convert_options=convert,
+            )
+        except pa.ArrowInvalid:
+            yield Declined(first, last)
+            continue
+        values = {i: _floats(table.column(names[i])) for i in wanted}
+        if table.num_rows != rows or not all(np.isfinite(v).all() for v in values.values()):
+            yield Declined(first, last)
+            continue
+        yield Block(values, rows)
+
+
 def fast_values(
     raw: Text, start: int, n: int, wanted: list[int]
 ) -> tuple[dict[int, Floats], int] | None:
-    """Values of the ``wanted`` of ``n`` curves in ``raw[start:]`` and the row count, or
-    None when the careful path must read them."""
-    end = _content_end(raw, start)
-    if n == 0:
-        return None
-    if end == start:
-        return {i: np.empty(0) for i in wanted}, 0
-    delimited = _delimited(raw, start, end, n)
-    if delimited is None:
-        return None
-    data, rows = delimited
-    names = [f"c{i}" for i in range(n)]
-    try:
-        table = pacsv.read_csv(
-            pa.BufferReader(pa.py_buffer(data)),
-            read_options=read_options(names),
-            parse_options=pacsv.ParseOptions(
-                delimiter=",", quote_char=False, double_quote=False, ignore_empty_lines=False
-            ),
-            convert_options=pacsv.ConvertOptions(
-                column_types=dict.fromkeys(names, pa.float64()),
-                null_values=[],
-                strings_can_be_null=False,
-                check_utf8=False,
-            ),
-        )
-    except pa.ArrowInvalid:
-        return None
-    values = _columns(table, wanted, data)
-    if table.num_rows != rows or not all(np.isfinite(v).all() for v in values.values()):
-        return None
-    return values, rows
+    """:func:`fast_blocks` whole: the values and the row count, or None when the careful
+    path must read them."""
+    blocks = []
+    for block in fast_blocks(raw, start, n, wanted):
+        if isinstance(block, Declined):
+            return None
+        blocks.append(block)
+    if len(blocks) == 1:
+        return blocks[0].values, blocks[0].rows
+    values = {i: np.concatenate([b.values[i] for b in blocks] or [np.empty(0)]) for i in wanted}
+    return values, sum(b.rows for b in blocks)
 
 
-def _columns(table: pa.Table, wanted: list[int], spare: Bytes) -> dict[int, Floats]:
-    """The ``wanted`` columns as arrays, written into ``spare`` (the parsed text, no
-    longer needed: its memory is in use already) when it is large enough."""
-    shape = (len(wanted), table.num_rows)
-    if spare.size < 8 * shape[0] * shape[1] or spare.ctypes.data % 8:
-        return {i: table.column(i).to_numpy() for i in wanted}
-    store = spare[: 8 * shape[0] * shape[1]].view(np.float64).reshape(shape)
-    for values, i in zip(store, wanted, strict=True):
-        at = 0
-        for chunk in table.column(i).chunks:
-            values[at : at + len(chunk)] = chunk.to_numpy()
-            at += len(chunk)
-    return dict(zip(wanted, store, strict=True))
+def _floats(column: pa.ChunkedArray) -> Floats:
+    """A parsed column as one array (no copy when it is one chunk)."""
+    values: Floats = column.chunk(0).to_numpy() if column.num_chunks == 1 else column.to_numpy()
+    return values
 
 
 def _content_end(raw: Text, start: int) -> int:
@@ -103,43 +135,48 @@ def _content_end(raw: Text, start: int) -> int:
     return start
 
 
-def _delimited(text: Text, begin: int, end: int, n: int) -> tuple[Bytes, int] | None:
-    """The lines of ``text[begin:end]``, each ending with LF, rewritten so that one comma
-    separates the values of a line (``n`` in a good one), one block at a time (copied, then
-    rewritten while in the cache); and the line count. None for a lone CR line end."""
+def _delimited(
+    text: Text, begin: int, end: int, n: int
+) -> Iterator[tuple[int, int, tuple[Bytes, int] | None]]:
+    """The lines of ``text[begin:end]``, a block at a time: where it starts and ends in
+    ``text``, then its lines each ending with LF, rewritten so that one comma separates
+    the values of a line (``n`` in a good one), and its line count; or None for a lone CR
+    line end. Every block is copied into one reused buffer and rewritten there while in
+    the cache: a yielded block is valid until the next is asked for."""
     source = np.frombuffer(text, np.uint8, count=end - begin, offset=begin)
-    out = np.frombuffer(pa.allocate_buffer(source.size + 1), np.uint8)  # pooled: reused
-    read = write = rows = 0
+    out = np.empty(0, np.uint8)
+    read = 0
     layout: tuple[int, NDArray[np.intp]] | None = None
     while read < source.size:
         stop = text.find(b"\n", begin + read + BLOCK, end) + 1 - begin
         stop = source.size + 1 if stop <= 0 else stop
-        block = out[write : write + stop - read]
+        if out.size < stop - read:
+            out = np.empty(max(stop - read, 2 * BLOCK), np.uint8)
+        block = out[: stop - read]
         block[: source.size - read] = source[read:stop]
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
         width = text.find(b"\n", begin + read, begin + stop) + 1 - begin - read
+        release(text, begin + read, begin + min(stop, source.size))
         width = width if width > 0 else block.size  # the last line, without its LF
         separators = _fixed_width(block, width, n, layout)
         if separators is None and (block < SPACE).sum() != (block == NEWLINE).sum():
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
-                return None
-            block = out[write : write + spaced.size]
+                yield begin + read, begin + min(stop, source.size), None
+                read = stop
+                continue
+            block = out[: spaced.size]
             block[:] = spaced
             width = int(np.argmax(block == NEWLINE)) + 1
             separators = _fixed_width(block, width, n, layout)
         if separators is not None:
             layout = width, separators
             block.reshape(-1, width)[:, separators] = COMMA
-            rows += block.size // width
-            write += block.size
+            yield begin + read, begin + min(stop, source.size), (block, block.size // width)
         else:
-            rows += int(np.count_nonzero(block == NEWLINE))
-            packed = _packed(block)
-            out[write : write + packed.size] = packed
-            write += packed.size
+            rows = int(np.count_nonzero(block == NEWLINE))
+            yield begin + read, begin + min(stop, source.size), (_packed(block), rows)
         read = stop
-    return out[:write], rows
 
 
 def _spaced(lines: bytes) -> Bytes | None:

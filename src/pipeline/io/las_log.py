@@ -97,7 +97,9 @@ def _curve(header: Header, i: int) -> Item | None:
 
 def _floats(values: np.ndarray, nulls: list[float], index: bool) -> pa.Array:
     if not index and nulls:
-        values = np.where(np.isin(values, nulls), np.nan, values)
+        null = np.isin(values, nulls)
+        if null.any():
+            values = np.where(null, np.nan, values)
     return pa.array(values, pa.float64())
 
 

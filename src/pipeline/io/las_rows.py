@@ -1,11 +1,13 @@
 """The ``~A`` data rows of a LAS file: the values of the curves read, with the file line of
 each row, their nulls, and the index checked against STRT/STOP/STEP.
 
-:func:`~pipeline.io.las_fast.fast_values` (numpy + ``pyarrow.csv``; see
+The rows come a block at a time (:func:`data_blocks`, for a stream):
+:func:`~pipeline.io.las_fast.fast_blocks` (numpy + ``pyarrow.csv``; see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
-careful path, reads the rest (wrapped files, comment or blank lines, lone CR line ends,
-text in unread curves, LAS 3 delimiters, quoted text) and locates every error by line. Both
-give every number correctly rounded, so values equal lasio's. For a log
+careful path, reads the blocks it declines, or the whole section when it cannot apply
+(wrapped files, comment or blank lines, lone CR line ends, text in unread curves, LAS 3
+delimiters, quoted text) and locates every error by line. Both give every number correctly
+rounded, so values equal lasio's. For a log
 (:mod:`pipeline.io.las_log`), :func:`read_all` reads every curve by the fast path, else
 :func:`read_cells` gives the text of every cell. ``NULL`` items and the option
 ``null_values`` become nulls (compared as numbers: ``-999.2500`` is ``-999.25``). A row
@@ -30,7 +32,7 @@ import pyarrow.compute as pc
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError, UnitError, warn_input
-from pipeline.io.las_fast import fast_values
+from pipeline.io.las_fast import Declined, fast_blocks, fast_values
 from pipeline.io.las_header import (
     NUMBER,
     Header,
@@ -61,25 +63,39 @@ class Data:
 # ------------------------------------------------------------------------------ data
 
 
-def read_data(path: Path, source: Source, header: Header, wanted: list[int]) -> Data:
-    """Values of the ``wanted`` curves: the fast path when it can read the data section,
-    else the careful path."""
-    first = source.title_line + 1
+def data_blocks(path: Path, source: Source, header: Header, wanted: list[int]) -> Iterator[Data]:
+    """Values of the ``wanted`` curves a block of rows at a time: by the fast path, and by
+    the careful path the blocks it declines (any error located there)."""
+    line = source.title_line + 1
     if header.version < 3 and not header.wrapped and header.delimiter == "SPACE":
-        fast = fast_values(source.raw, source.start, len(header.curves), wanted)
-        if fast is not None:
-            values, rows = fast
-            return Data(values, np.arange(first, first + rows, dtype=np.int64))
-    text = decode(path, source.raw[source.start :], first)
-    return _slow_values(path, header, split_lines(text), source.title_line, wanted)
+        for block in fast_blocks(source.raw, source.start, len(header.curves), wanted):
+            if isinstance(block, Declined):
+                piece = source.raw[block.start : block.end]
+                lines = split_lines(decode(path, piece, line))
+                yield _slow_values(path, header, lines, source.title_line, wanted, first=line)
+                line += len(lines) - 1  # a block ends with its last line's LF
+            else:
+                yield Data(block.values, np.arange(line, line + block.rows, dtype=np.int64))
+                line += block.rows
+        return
+    text = decode(path, source.raw[source.start :], line)
+    yield _slow_values(path, header, split_lines(text), source.title_line, wanted)
 
 
 def _slow_values(
-    path: Path, header: Header, lines: list[str], title_line: int, wanted: list[int]
+    path: Path,
+    header: Header,
+    lines: list[str],
+    title_line: int,
+    wanted: list[int],
+    *,
+    first: int | None = None,
 ) -> Data:
     """The careful path: rows from lines (wrapped or not, any delimiter; comment and blank
-    lines skipped), every value checked as a number with its line."""
-    cells = _slow_cells(path, header, lines, title_line, wanted, len(header.curves))
+    lines skipped), every value checked as a number with its line. ``lines`` start on file
+    line ``first`` (default: the one after the title)."""
+    n = len(header.curves)
+    cells = _slow_cells(path, header, lines, title_line, wanted, n, first=first)
     return Data(
         {
             i: _numbers(path, column, cells.lines, header.curves[i].mnemonic)
@@ -112,7 +128,7 @@ def read_all(path: Path, source: Source, header: Header) -> Data | Cells:
 
 
 def read_cells(path: Path, source: Source, header: Header) -> Cells:
-    """The text of every cell of the data section, for a log: rows as :func:`read_data`
+    """The text of every cell of the data section, for a log: rows as :func:`data_blocks`
     reads them, except that a short row whose fixed-width values ran together is split as
     lasio splits it (``7.330-19508.961``: 7.330 and -19508.961; ``7.020101130.188``: two
     values whose border cannot be known, read as empty cells with a warning). Without a
@@ -132,10 +148,11 @@ def _slow_cells(
     n: int,
     *,
     repair: bool = False,
+    first: int | None = None,
 ) -> Cells:
     """Cells of the ``wanted`` curves (None: all) of rows of ``n`` values (0: as many as
-    the first row has)."""
-    numbered = _data_lines(path, header, lines, title_line)
+    the first row has); ``lines`` start on file line ``first`` (default: after the title)."""
+    numbered = _data_lines(path, header, lines, title_line, first)
     if n == 0:
         if header.wrapped:
             raise InputFileError(path, "wrapped data (WRAP YES) without a ~Curve section")
@@ -177,11 +194,12 @@ def _first_row_sets_count(
 
 
 def _data_lines(
-    path: Path, header: Header, lines: list[str], title_line: int
+    path: Path, header: Header, lines: list[str], title_line: int, first: int | None
 ) -> Iterator[tuple[int, list[str]]]:
-    """(file line, values) of each data line up to the end of the data section."""
+    """(file line, values) of each data line up to the end of the data section; ``lines``
+    start on file line ``first`` (None: the one after the title)."""
     split = _splitter(header)
-    for number, line in enumerate(lines, start=title_line + 1):
+    for number, line in enumerate(lines, start=first or title_line + 1):
         text = line.replace("\x1a", "").strip()  # ^Z: an old DOS end-of-file mark
         if not text or text.startswith("#"):
             continue
@@ -348,9 +366,7 @@ def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
 def check_index(
     path: Path, header: Header, data: Data, masks: dict[int, Mask], keys: list[int]
 ) -> None:
-    """Rows exist; the index (first curve) and the kind's key column have no nulls."""
-    if data.lines.size == 0:
-        raise InputFileError(path, "no data rows in the ~A section")
+    """The index (first curve) and the kind's key column have no nulls in these rows."""
     for i in keys:
         nulls = np.flatnonzero(masks[i])
         if nulls.size:
@@ -368,41 +384,78 @@ def check_index(
 def check_range(
     path: Path, header: Header, index: Floats, lines: Lines, nulls: list[float]
 ) -> None:
+    """The index (first curve, in its unit) agrees with STRT, STOP and STEP (see
+    :class:`IndexRange`)."""
+    checked = IndexRange(path, header, nulls)
+    checked.feed(index, lines)
+    checked.finish()
+
+
+class IndexRange:
     """The index (first curve, in its unit) agrees with STRT, STOP and STEP where they are
-    given and not null, within the rounding of their written digits (STEP: or 1 %)."""
-    curve = header.curves[0]
-    declared: dict[str, tuple[float, float, int]] = {}
-    for mnemonic in ("STRT", "STOP", "STEP"):
-        item = header.find(path, mnemonic)
-        ratio = _unit_ratio(item.unit, curve.unit) if item else None
-        if item is None or ratio is None or header_number(path, item) in nulls:
-            continue
-        value = header_number(path, item) * ratio
-        declared[mnemonic] = (value, _half_unit(item.value) * abs(ratio), item.line)
-    for mnemonic, row, what in (("STRT", 0, "first"), ("STOP", -1, "last")):
-        if mnemonic in declared:
-            value, tolerance, line = declared[mnemonic]
-            if abs(float(index[row]) - value) > tolerance + 1e-12 * abs(value):
-                raise InputFileError(
-                    path,
-                    f"{mnemonic} is {value:g} but the {what} index value ({curve.mnemonic}) "
-                    f"is {index[row]:g} on line {lines[row]}"
-                    + (": the file may be truncated" if row else ""),
-                    line=line if row == 0 else int(lines[row]),
-                )
-    step, tolerance, _ = declared.get("STEP", (0.0, 0.0, 0))
-    if step != 0 and index.size > 1:
+    given and not null, within the rounding of their written digits (STEP: or 1 %),
+    checked over the rows a block at a time (:meth:`feed`, then :meth:`finish`; errors in
+    the order STRT, STOP, STEP whatever block they are in). No rows is an error."""
+
+    def __init__(self, path: Path, header: Header, nulls: list[float]) -> None:
+        self.path, self.curve = path, header.curves[0]
+        self.declared: dict[str, tuple[float, float, int]] = {}
+        for mnemonic in ("STRT", "STOP", "STEP"):
+            item = header.find(path, mnemonic)
+            ratio = _unit_ratio(item.unit, self.curve.unit) if item else None
+            if item is None or ratio is None or header_number(path, item) in nulls:
+                continue
+            value = header_number(path, item) * ratio
+            self.declared[mnemonic] = (value, _half_unit(item.value) * abs(ratio), item.line)
+        self.last: tuple[float, int] | None = None
+        self.step_error: InputFileError | None = None
+
+    def feed(self, index: Floats, lines: Lines) -> None:
+        """The next rows' index values and file lines."""
+        if index.size == 0:
+            return
+        if self.last is None:
+            self._bound("STRT", float(index[0]), int(lines[0]))
+        else:
+            index = np.concatenate(([self.last[0]], index))
+            lines = np.concatenate(([self.last[1]], lines))
+        self.last = float(index[-1]), int(lines[-1])
+        step, tolerance, _ = self.declared.get("STEP", (0.0, 0.0, 0))
+        if step == 0 or index.size < 2 or self.step_error is not None:
+            return
         with np.errstate(over="ignore", invalid="ignore"):  # a step past the float range
             steps = np.diff(index)  # is ±inf, unequal to any STEP: reported
             bad = np.flatnonzero(np.abs(steps - step) > max(tolerance, 0.01 * abs(step)))
         if bad.size:
             k = int(bad[0])
             by = f"{steps[k]:g}" if np.isfinite(steps[k]) else "more than the float range"
-            raise InputFileError(
-                path,
+            self.step_error = InputFileError(
+                self.path,
                 f"STEP is {step:g} but the index steps by {by} from line {lines[k]} to "
                 "this line: a row may be missing or repeated (STEP 0 means irregular steps)",
                 line=int(lines[k + 1]),
+            )
+
+    def finish(self) -> None:
+        """After the last rows: STOP, then the first wrong step."""
+        if self.last is None:
+            raise InputFileError(self.path, "no data rows in the ~A section")
+        self._bound("STOP", *self.last)
+        if self.step_error is not None:
+            raise self.step_error
+
+    def _bound(self, mnemonic: str, value: float, line: int) -> None:
+        if mnemonic not in self.declared:
+            return
+        declared, tolerance, item_line = self.declared[mnemonic]
+        if abs(value - declared) > tolerance + 1e-12 * abs(declared):
+            first = mnemonic == "STRT"
+            raise InputFileError(
+                self.path,
+                f"{mnemonic} is {declared:g} but the {'first' if first else 'last'} index "
+                f"value ({self.curve.mnemonic}) is {value:g} on line {line}"
+                + ("" if first else ": the file may be truncated"),
+                line=item_line if first else line,
             )
 
 
