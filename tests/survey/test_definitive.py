@@ -24,8 +24,7 @@ from pipeline.uncertainty import (
     mwd_terms,
 )
 from pipeline.uncertainty.model import propagate_nev
-from pipeline.uncertainty.sections import term_effects
-from pipeline.uncertainty.terms import term_covariance
+from pipeline.uncertainty.terms import term_covariance, term_effects
 from tests_support import ROOT
 
 GYRO = np.arange(0.0, 601.0, 30.0)  # 0 … 600

@@ -40,10 +40,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.uncertainty.model import Basis, leg_effects, station_jacobians
-from pipeline.uncertainty.terms import Survey, Term
+from pipeline.uncertainty.model import Basis
+from pipeline.uncertainty.terms import Survey, Term, term_effects
 
-__all__ = ["Carried", "Section", "WellByWell", "section_covariance", "term_effects"]
+__all__ = ["Carried", "Section", "WellByWell", "section_covariance"]
 
 FloatArray = NDArray[np.float64]
 WellByWell = Literal["shared", "per_run"]
@@ -67,28 +67,6 @@ class Carried:
 
     vectors: dict[Key, FloatArray] = field(default_factory=dict)
     random: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
-
-
-def term_effects(
-    survey: Survey, terms: Sequence[Term], *, basis: Basis, surface_tie: bool
-) -> tuple[FloatArray, FloatArray]:
-    """Each term's NEV effect (m, n, 3) on the stations below each station (e_k) and on the
-    station itself (e*_k), as :func:`pipeline.uncertainty.terms.term_covariance` forms them
-    (``propagate_nev`` of these is its result)."""
-    n = survey.size
-    full = np.empty((len(terms), n, 3))
-    star = np.empty_like(full)
-    dia = np.array([t.frame == "dia" for t in terms], dtype=bool)
-    if dia.any():
-        jac = station_jacobians(
-            survey.md, survey.inc, survey.azi, basis=basis, surface_tie=surface_tie
-        )
-        e_dia = np.stack([t.sigma * t.weight(survey) for t in terms if t.frame == "dia"])
-        full[dia], star[dia] = leg_effects(e_dia, jac)
-    for k, t in enumerate(terms):
-        if t.frame != "dia":
-            full[k] = star[k] = t.sigma * t.weight(survey)
-    return full, star
 
 
 def _key(run: str, term: Term, well_by_well: WellByWell) -> Key | None:

@@ -40,6 +40,7 @@ __all__ = [
     "previous",
     "stack",
     "term_covariance",
+    "term_effects",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -108,6 +109,27 @@ def misalignment_factor(s: Survey) -> FloatArray:
     return f
 
 
+def term_effects(
+    survey: Survey, terms: Sequence[Term], *, basis: Basis, surface_tie: bool
+) -> tuple[FloatArray, FloatArray]:
+    """Each term's NEV effect (m, n, 3) on the stations below each station (e_k) and on the
+    station itself (e*_k), as :func:`term_covariance` propagates them (see
+    :mod:`pipeline.uncertainty.model`)."""
+    full = np.empty((len(terms), survey.size, 3))
+    star = np.empty_like(full)
+    dia = np.array([t.frame == "dia" for t in terms], dtype=bool)
+    if dia.any():
+        jac = station_jacobians(
+            survey.md, survey.inc, survey.azi, basis=basis, surface_tie=surface_tie
+        )
+        e_dia = np.stack([t.sigma * t.weight(survey) for t in terms if t.frame == "dia"])
+        full[dia], star[dia] = leg_effects(e_dia, jac)
+    for k, t in enumerate(terms):
+        if t.frame != "dia":
+            full[k] = star[k] = t.sigma * t.weight(survey)
+    return full, star
+
+
 def term_covariance(
     survey: Survey,
     terms: Sequence[Term],
@@ -122,18 +144,6 @@ def term_covariance(
     if basis not in ("min_curve", "balanced_tangent"):
         raise ValueError(f"unknown basis {basis!r}; expected 'min_curve' or 'balanced_tangent'")
     basis_: Basis = "min_curve" if basis == "min_curve" else "balanced_tangent"
-    n = survey.size
-    full = np.empty((len(terms), n, 3))
-    star = np.empty_like(full)
-    dia = np.array([t.frame == "dia" for t in terms], dtype=bool)
-    if dia.any():
-        jac = station_jacobians(
-            survey.md, survey.inc, survey.azi, basis=basis_, surface_tie=surface_tie
-        )
-        e_dia = np.stack([t.sigma * t.weight(survey) for t in terms if t.frame == "dia"])
-        full[dia], star[dia] = leg_effects(e_dia, jac)
-    for k, t in enumerate(terms):
-        if t.frame == "nev":
-            full[k] = star[k] = t.sigma * t.weight(survey)
+    full, star = term_effects(survey, terms, basis=basis_, surface_tie=surface_tie)
     cov = propagate_nev(full, star, [t.mode for t in terms])
     return [t.name for t in terms], cov
