@@ -267,6 +267,28 @@ def test_floats_are_written_to_their_units_step(tmp_path: Path) -> None:
             assert len(number.partition(".")[2]) - int(exponent or 0) <= decimals, row[at]
 
 
+def test_an_angle_just_below_a_full_turn_is_written_below_it(tmp_path: Path) -> None:
+    """Rounded to its 1e-6° step, 359.9999997° would be written 360, which the samples
+    contract refuses (frame angles are [0, 360)): it is written one step under, and the file
+    reads back."""
+    angles = np.array([0.0, 359.9999997, 359.9999994, 180.0000004])
+    table = RawSamples.compiled().make_table(
+        {
+            "time": np.arange(4.0),
+            "gyro_x": np.zeros(4),
+            "acc_x": np.zeros(4),
+            "acc_y": np.zeros(4),
+            "acc_z": np.full(4, G),
+            "frame_angle": angles,
+        }
+    )
+    path = tmp_path / "turn.csv"
+    WRITER.write(table, path, WellMetadata())
+    back, _ = read(path)
+    RawSamples.validate_table(back)
+    assert column(back, "frame_angle") == [0.0, 359.999999, 359.999999, 180.0]
+
+
 def test_unlisted_unit_floats_round_trip_exactly(tmp_path: Path) -> None:
     """A float column whose unit has no DECIMALS entry (or no unit) is written in shortest
     round-trip form: read back bit for bit, whatever its magnitude."""

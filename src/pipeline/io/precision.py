@@ -27,6 +27,9 @@ DECIMALS: dict[str, int] = {
     "s": 6,  # 1 µs
 }
 """Canonical unit → decimals written."""
+FULL_TURN = 360.0
+"""deg: an angle below it stays below it when rounded (azimuths, toolfaces and frame angles
+are [0, 360) by contract), so 359.9999997 is written 359.999999, not 360."""
 
 _EXACT = 2.0**52
 """From this magnitude on, a float64 is a whole number: rounding leaves it as it is."""
@@ -34,24 +37,30 @@ _EXACT = 2.0**52
 
 def for_export(table: pa.Table) -> pa.Table:
     """``table`` with every float column of a listed unit rounded to its decimals (half to
-    even; −0 written as 0; NaN, ±inf and nulls as they are)."""
+    even; −0 written as 0; NaN, ±inf and nulls as they are; an angle below 360° stays below
+    it, one step under, :data:`FULL_TURN`)."""
     columns = []
     for field, column in zip(table.schema, table.columns, strict=True):
         unit = (field.metadata or {}).get(UNIT_KEY, b"").decode()
         decimals = DECIMALS.get(unit)
         if decimals is not None and pa.types.is_floating(field.type):
-            column = _rounded(column.combine_chunks(), decimals)
+            below = FULL_TURN if unit == "deg" else None
+            column = _rounded(column.combine_chunks(), decimals, below)
         columns.append(column)
     return pa.Table.from_arrays(columns, schema=table.schema)
 
 
-def _rounded(array: pa.Array, decimals: int) -> pa.Array:
+def _rounded(array: pa.Array, decimals: int, below: float | None = None) -> pa.Array:
     """``array`` rounded to ``decimals``. numpy scales, rounds and divides back, so a value
-    is the float nearest its decimal text (pyarrow's round keeps ``914.4000000000001``)."""
+    is the float nearest its decimal text (pyarrow's round keeps ``914.4000000000001``). A
+    value under ``below`` that would round up to it is written one step under it."""
     values = array.to_numpy(zero_copy_only=False)
     wide = values.astype(np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
         rounded = np.where(np.abs(wide) < _EXACT, np.round(wide, decimals), wide) + 0.0
+        if below is not None:
+            under = np.round(below - 10.0**-decimals, decimals)
+            rounded = np.where((wide < below) & (rounded >= below), under, rounded)
     rounded = rounded.astype(values.dtype)
     mask = array.is_null().to_numpy(zero_copy_only=False) if array.null_count else None
     return pa.array(rounded, type=array.type, mask=mask)
