@@ -7,9 +7,9 @@ import json
 import shutil
 from pathlib import Path
 
-import matplotlib.figure
 import pytest
 
+from pipeline.reports.charts.model import Chart
 from tests_support import ROOT
 
 
@@ -42,7 +42,9 @@ def test_notebook_runs(examples: Path) -> None:
         exec(code, namespace)
         *_, last = source.strip().splitlines()
         if last.startswith("gp.plot_"):
-            assert isinstance(eval(last, namespace), matplotlib.figure.Figure)
+            chart = eval(last, namespace)
+            assert isinstance(chart, Chart)
+            assert chart._repr_svg_().startswith("<svg")  # what Jupyter shows
     assert sorted(p.name for p in (examples / "out").iterdir()) == [
         "samples.parquet",
         "short-j-well.html",

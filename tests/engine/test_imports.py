@@ -115,3 +115,24 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "scipy"):
         assert not loaded(modules, package), package
     assert "pipeline.continuous.integrate" in modules  # the run did integrate
+
+
+def test_run_with_its_report_imports_no_matplotlib(tmp_path: Path):
+    """The survey pipeline with its report stage: the report's figures are drawn by the
+    report package's own vector renderer, so neither matplotlib nor Pillow is loaded (and
+    the fonts are read from the package, fontTools' subsetter not even imported)."""
+    modules = modules_of(
+        tmp_path,
+        "run",
+        str(ROOT / "pipelines" / "survey.yaml"),
+        "--input",
+        str(ROOT / "examples" / "stations-j-well.csv"),
+        "--out",
+        "out",
+    )
+    assert (tmp_path / "out" / "report.html").is_file() and (
+        tmp_path / "out" / "report.pdf"
+    ).is_file()
+    assert "pipeline.reports.charts.svg" in modules and "pipeline.reports.charts.pdf" in modules
+    for package in ("matplotlib", "PIL", "fontTools.subset"):
+        assert not loaded(modules, package), package

@@ -1,9 +1,9 @@
 """Helpers of the report tests: runs through the `gyropipe` command, the HTML inspected in
-headless Chromium (Debian's, driven by Playwright), the PDF rasterised by pdftoppm."""
+headless Chromium (Debian's, driven by Playwright), the PDF rasterised by pdftoppm. A
+report's figures are inline SVG in the HTML and vector drawings in the PDF."""
 
 from __future__ import annotations
 
-import base64
 import re
 import shutil
 import subprocess
@@ -51,7 +51,8 @@ class PageReport:
 
     console_errors: list[str]
     requests: list[str]
-    images: list[dict[str, Any]]
+    svgs: list[dict[str, Any]]
+    """every inline SVG: its figure, size as laid out and shown (CSS px)"""
     tables: dict[str, list[list[str]]]
     headers: dict[str, list[str]]
     units: dict[str, list[str]]
@@ -60,8 +61,7 @@ class PageReport:
 
 
 INSPECT = """async () => {
-  const images = Array.from(document.images);
-  const decoded = await Promise.all(images.map(i => i.decode().then(() => true, () => false)));
+  const svgs = Array.from(document.querySelectorAll('svg'));
   const tables = {}, headers = {}, units = {};
   document.querySelectorAll('table').forEach((t, k) => {
     const key = t.classList[0] + (tables[t.classList[0]] ? '-' + k : '');
@@ -71,10 +71,10 @@ INSPECT = """async () => {
       c => c.querySelector('.unit') ? c.querySelector('.unit').textContent.trim() : '');
   });
   return {
-    images: images.map((i, k) => ({
-      figure: i.closest('figure') ? i.closest('figure').id : null,
-      width: i.naturalWidth, height: i.naturalHeight, decoded: decoded[k],
-      shown: i.getBoundingClientRect().width, src: i.getAttribute('src').slice(0, 22),
+    svgs: svgs.map(s => ({
+      figure: s.closest('figure') ? s.closest('figure').id : null,
+      width: s.width.baseVal.value, height: s.height.baseVal.value,
+      shown: s.getBoundingClientRect().width, texts: s.querySelectorAll('text').length,
     })),
     tables, headers, units,
     figures: Array.from(document.querySelectorAll('figure')).map(f => f.id),
@@ -116,7 +116,7 @@ def inspect(browser: Any, html: Path) -> PageReport:
     return PageReport(
         errors,
         [u for u in requests if not u.startswith("data:")],
-        found["images"],
+        found["svgs"],
         found["tables"],
         found["headers"],
         found["units"],
@@ -126,17 +126,19 @@ def inspect(browser: Any, html: Path) -> PageReport:
 
 
 def assert_self_contained(report: PageReport, html: Path) -> None:
-    """No console error, nothing fetched but the page, every image decoded and shown."""
+    """No console error, nothing fetched but the page, every figure an inline SVG that is
+    shown and has text (its axes' labels)."""
     assert report.console_errors == []
     assert report.requests == [html.resolve().as_uri()]
     source = html.read_text(encoding="utf-8")
     assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", source)
-    assert "<script" not in source and "url(" not in source
-    assert report.images, "no images"
-    for image in report.images:
-        assert image["decoded"], image
-        assert image["width"] > 100 and image["height"] > 100, image
-        assert image["shown"] > 100, image
+    assert "<script" not in source and "<img" not in source
+    assert not re.search(r"url\((?!#)", source)  # only an SVG's own clip paths
+    assert report.svgs, "no figures"
+    for svg in report.svgs:
+        assert svg["figure"], svg
+        assert svg["width"] > 100 and svg["height"] > 100, svg
+        assert svg["shown"] > 100 and svg["texts"] > 0, svg
 
 
 @dataclass
@@ -187,12 +189,12 @@ def pdf_images(pdf: Path) -> list[tuple[int, int]]:
     return [(int(r[3]), int(r[4])) for r in rows if r[2] == "image"]
 
 
-def html_figure_sizes(html: Path) -> list[tuple[int, int]]:
-    """(width, height) in CSS pixels of every figure of a report's HTML, in order."""
+def html_figure_sizes(html: Path) -> list[tuple[float, float]]:
+    """(width, height) in points of every figure of a report's HTML, in order."""
     return [
-        (int(w), int(h))
+        (float(w), float(h))
         for w, h in re.findall(
-            r'<figure[^>]*><img[^>]* width="(\d+)" height="(\d+)"', html.read_text()
+            r'<figure[^>]*><svg[^>]* width="([\d.]+)pt" height="([\d.]+)pt"', html.read_text()
         )
     ]
 
@@ -253,13 +255,11 @@ def marks(browser: Any, html: Path) -> dict[str, list[RowMarks]]:
 
 
 def figure_svg(html: Path, key: str) -> str:
-    """The SVG source of figure ``key`` of a report written with ``image_format: svg``."""
+    """The SVG source of figure ``key`` of a report (inline in its HTML)."""
     source = html.read_text(encoding="utf-8")
-    found = re.search(
-        rf'<figure id="fig-{re.escape(key)}".*?src="data:image/svg\+xml;base64,([^"]+)"', source
-    )
+    found = re.search(rf'<figure id="fig-{re.escape(key)}"[^>]*>(<svg.*?</svg>)', source, re.S)
     assert found, f"figure {key} is not an SVG"
-    return base64.b64decode(found[1]).decode("utf-8")
+    return found[1]
 
 
 BOXES = """selectors => selectors.map(s => Array.from(document.querySelectorAll(s))

@@ -62,7 +62,7 @@ def test_due_north_well_prints_no_azimuth_of_360(browser: Any, tmp_path: Path):
     )
     well = {"north_reference": "true", "latitude": 61.25, "well": "due-north"}
     trajectory = gp.minimum_curvature(stations, well=well, vs_azimuth=359.9999)
-    html, pdf = gp.report(trajectory, tmp_path / "report", well=well, image_format="svg")
+    html, pdf = gp.report(trajectory, tmp_path / "report", well=well)
 
     page = inspect(browser, html)
     text = " ".join(page.text.split())

@@ -1,5 +1,6 @@
 """Figures for notebooks: the report's plan view and vertical section of a trajectory, as
-matplotlib figures (drawn by the same code as the survey report)."""
+charts (drawn by the same code as the survey report). A chart shows itself in Jupyter (SVG)
+and ``chart.save('plan.svg')`` or ``chart.save('plan.pdf')`` writes it as vector graphics."""
 
 from __future__ import annotations
 
@@ -10,30 +11,23 @@ import numpy as np
 from pipeline.api.frames import TableLike, to_table
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
+    from pipeline.reports.charts.model import Chart
     from pipeline.reports.plots import Path3
 
 SIZE = (6.0, 5.0)
 """inches"""
 
 
-def plot_plan(trajectory: TableLike) -> Figure:
+def plot_plan(trajectory: TableLike) -> Chart:
     """Plan view (north vs east, m, from the wellhead) of a trajectory, with the closure."""
-    from matplotlib.figure import Figure
-
     from pipeline.reports.plots import plan_view
 
-    figure = Figure(figsize=SIZE)
-    plan_view(figure, _path(trajectory))
-    return figure
+    return plan_view(SIZE, _path(trajectory))
 
 
-def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Figure:
+def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Chart:
     """Vertical section (m along ``azimuth``, deg, default: the table's own vertical-section
     plane) against TVD (m, down)."""
-    from matplotlib.figure import Figure
-
     from pipeline.reports.plots import vertical_section
 
     table = to_table(trajectory, what="trajectory")
@@ -43,9 +37,7 @@ def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Figure:
     else:
         a = np.radians(azimuth)
         vs = path.north * np.cos(a) + path.east * np.sin(a)
-    figure = Figure(figsize=SIZE)
-    vertical_section(figure, vs, path, azimuth)
-    return figure
+    return vertical_section(SIZE, vs, path, azimuth)
 
 
 def _path(trajectory: TableLike) -> Path3:

@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -14,6 +13,8 @@ from numpy.typing import NDArray
 
 from pipeline.anticollision.tables import rule_of
 from pipeline.reports import plots
+from pipeline.reports.charts import ticks
+from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, Span, Text, grid
 from pipeline.reports.document import Block, Column, Fields, Plot, Section, Table, Verdict, fmt
 from pipeline.reports.listing import col
 from pipeline.reports.literature import ERROR_MODEL, SEPARATION_RULE, Citations
@@ -43,49 +44,95 @@ def _curves(table: pa.Table) -> list[OffsetCurve]:
     return out
 
 
-def sf_chart(fig: plots.Canvas, curves: list[OffsetCurve], stop: float, caution: float) -> None:
+def sf_chart(size: plots.Size, curves: list[OffsetCurve], stop: float, caution: float) -> Chart:
     """Separation factor against reference MD per offset well (log scale), the stop and
     caution limits shaded."""
-    (ax,) = plots.axes_grid(fig, right=1.6)
+    (box,) = grid(size, right=1.6)
     finite = np.concatenate([c.sf[np.isfinite(c.sf) & (c.sf > 0)] for c in curves])
     low = min(float(finite.min()) if finite.size else stop, stop) / 1.5
     high = max(float(finite.max()) if finite.size else caution, caution) * 1.5
-    ax.axhspan(low, stop, color="#f6d5d1", zorder=0, label=f"SF < {fmt(stop, 2)}: stop")
-    ax.axhspan(stop, caution, color="#fbe7c6", zorder=0, label=f"SF < {fmt(caution, 2)}: caution")
+    panel = Panel(
+        box,
+        Axis("Reference MD (m)"),
+        Axis("Separation factor", scale="log", limits=(low, high)),
+        legend="outside",
+    )
+    panel.add(
+        Span(low, stop, "#f6d5d1", label=f"SF < {fmt(stop, 2)}: stop"),
+        Span(stop, caution, "#fbe7c6", label=f"SF < {fmt(caution, 2)}: caution"),
+    )
     for k, c in enumerate(curves):
-        colour = plots.SERIES_COLOURS[k % len(plots.SERIES_COLOURS)]
-        ax.plot(c.md, np.where(c.sf > 0, c.sf, np.nan), color=colour, label=c.name)
-    ax.set_yscale("log")
-    ax.set_ylim(low, high)
-    ax.set_xlabel("Reference MD (m)")
-    ax.set_ylabel("Separation factor")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        sf = np.where(c.sf > 0, c.sf, np.nan)
+        panel.add(Line(c.md, sf, plots.series_colour(k), label=c.name))
+    return Chart(size, [panel])
 
 
-def travelling_cylinder(fig: plots.Canvas, curves: list[OffsetCurve], reach: float) -> None:
+QUARTERS = ((0.0, "high side"), (90.0, "right"), (180.0, "low side"), (270.0, "left"))
+"""Directions named on the travelling cylinder, degrees clockwise from the high side."""
+
+
+def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: float) -> Chart:
     """Closest approach of each offset well seen down the reference well: angle clockwise
-    from the high side (up), radius the centre-to-centre distance, points within ``reach``."""
-    ax: Any = fig.add_axes((0.1, 0.08, 0.62, 0.84), projection="polar")
-    ax.set_theta_zero_location("N")
-    ax.set_theta_direction(-1)
+    from the high side (up), radius the centre-to-centre distance, points within ``reach``;
+    drawn as a polar grid (circles at nice radii, spokes every 30°)."""
+    (box,) = grid(size, left=0.3, right=2.2, top=0.2, bottom=0.2)
+    edge = 1.25 * reach
+    panel = Panel(
+        box, Axis(limits=(-edge, edge)), Axis(limits=(-edge, edge)), frame=False, equal=True
+    )
+    turn = np.radians(np.linspace(0.0, 360.0, 145))
+    radii, step = ticks.linear_ticks(0.0, reach, 5)
+    for r in radii[1:]:
+        if r < reach * 0.999:
+            panel.add(Line(r * np.sin(turn), r * np.cos(turn), "#e1e6ec", 0.5))
+    panel.add(Line(reach * np.sin(turn), reach * np.cos(turn), "#9aa5b1", 0.8))
+    for angle in np.radians(np.arange(0.0, 360.0, 30.0)):
+        spoke = np.array([0.0, reach])
+        panel.add(Line(spoke * np.sin(angle), spoke * np.cos(angle), "#e1e6ec", 0.5))
+    for r in radii[1:]:
+        if r < reach * 0.999:
+            label = ticks.label(r, step)
+            panel.add(
+                Text(
+                    r * np.sin(np.radians(22.5)),
+                    r * np.cos(np.radians(22.5)),
+                    label,
+                    size=6.5,
+                    colour="#52606d",
+                    dx=2,
+                )
+            )
+    for degrees, name in QUARTERS:
+        a = np.radians(degrees)
+        panel.add(
+            Text(
+                reach * np.sin(a),
+                reach * np.cos(a),
+                name,
+                size=7,
+                colour="#52606d",
+                dx=8 * np.sin(a),
+                dy=8 * np.cos(a),
+                ha="center" if degrees % 180 == 0 else ("left" if degrees == 90 else "right"),
+                va="center" if degrees % 180 else ("bottom" if degrees == 0 else "top"),
+            )
+        )
     for k, c in enumerate(curves):
         near = c.distance <= reach
-        if not near.any():
-            continue
-        colour = plots.SERIES_COLOURS[k % len(plots.SERIES_COLOURS)]
-        ax.plot(
-            np.radians(c.toolface[near]),
-            c.distance[near],
-            color=colour,
-            marker="o",
-            markersize=2.2,
-            linestyle="none",
-            label=c.name,
-        )
-    ax.set_ylim(0.0, reach)
-    ax.set_xticks(np.radians([0, 90, 180, 270]), ["high side", "right", "low side", "left"])
-    ax.tick_params(labelsize=7)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.08, 1.0))
+        if near.any():
+            a = np.radians(c.toolface[near])
+            panel.add(
+                Line(
+                    c.distance[near] * np.sin(a),
+                    c.distance[near] * np.cos(a),
+                    plots.series_colour(k),
+                    0,
+                    marker=Marker("o", 2.6),
+                    label=c.name,
+                )
+            )
+    panel.legend = "outside"
+    return Chart(size, [panel])
 
 
 def clearance_section(table: pa.Table, citations: Citations) -> Section:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Literal
 from pipeline.reports.numbers import fmt, fmt_azimuth, fmt_sig, fmt_sigma
 
 if TYPE_CHECKING:
-    from pipeline.reports.plots import Canvas
+    from pipeline.reports.charts.model import Chart
 
 __all__ = [
     "Align",
@@ -90,13 +90,13 @@ class Paragraph:
 
 @dataclass(frozen=True)
 class Plot:
-    """A figure drawn by ``draw`` into a matplotlib figure or subfigure of ``size``
-    (width, height in inches; the PDF scales it to the text width)."""
+    """A figure: ``draw`` describes it as a chart of ``size`` (width, height in inches; the
+    PDF scales it to the text width)."""
 
     key: str
     title: str
     caption: str
-    draw: Callable[[Canvas], None]
+    draw: Callable[[tuple[float, float]], Chart]
     size: tuple[float, float] = (7.0, 4.2)
 
 

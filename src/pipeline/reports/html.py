@@ -1,10 +1,9 @@
 """A :class:`~pipeline.reports.document.Document` as one self-contained HTML file: CSS
-inline, figures as ``data:`` URIs, no script, and a Content-Security-Policy that forbids
-the page any network fetch."""
+inline, figures as inline SVG, no script, and a Content-Security-Policy that forbids the
+page any network fetch."""
 
 from __future__ import annotations
 
-import base64
 from collections.abc import Iterator
 from html import escape
 
@@ -18,9 +17,9 @@ from pipeline.reports.document import (
     Table,
     Verdict,
 )
-from pipeline.reports.images import Figures
+from pipeline.reports.figures import Figures
 
-CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
+CSP = "default-src 'none'; style-src 'unsafe-inline'"
 
 CSS = """
 :root { --ink:#1f2933; --muted:#616e7c; --navy:#1b365d; --rule:#d5dbe3; --zebra:#f5f7fa;
@@ -74,7 +73,7 @@ table.compact { width: auto; min-width: 50%; }
 .verdict.warn { border-color: var(--warn); background: #fdf4e3; }
 .verdict.fail { border-color: var(--fail); background: #fbe9e7; }
 figure { margin: 14px 0 18px; break-inside: avoid; }
-figure img { display: block; max-width: 100%; height: auto; margin: 0 auto; }
+figure svg { display: block; max-width: 100%; height: auto; margin: 0 auto; }
 figcaption { font-size: 11.5px; color: var(--muted); margin-top: 4px; }
 figcaption b { color: var(--ink); }
 footer { margin-top: 28px; border-top: 1px solid var(--rule); padding-top: 6px;
@@ -90,7 +89,7 @@ footer { margin-top: 28px; border-top: 1px solid var(--rule); padding-top: 6px;
 
 def render_html(doc: Document, drawn: Figures | None = None) -> str:
     """The report as one HTML page that needs nothing but itself (figures from ``drawn``,
-    shared with the PDF; default: PNG at 110 dpi)."""
+    shared with the PDF)."""
     drawn = drawn or Figures()
     figures = iter(range(1, len(doc.plots()) + 1))
     sections = "\n".join(_section(s, i, figures, drawn) for i, s in enumerate(doc.sections, 1))
@@ -199,12 +198,8 @@ def _table(table: Table) -> str:
 
 
 def _figure(plot: Plot, number: int, drawn: Figures) -> str:
-    image = drawn.encode(plot)
-    data = base64.b64encode(image.data).decode("ascii")
     return (
-        f'<figure id="fig-{escape(plot.key)}" class="plot">'
-        f'<img alt="{escape(plot.title)}" width="{image.width}" height="{image.height}" '
-        f'src="data:{image.mime};base64,{data}">'
+        f'<figure id="fig-{escape(plot.key)}" class="plot">{drawn.svg(plot)}'
         f"<figcaption><b>Figure {number}. {escape(plot.title)}.</b> {escape(plot.caption)}"
         "</figcaption></figure>"
     )

@@ -1,15 +1,15 @@
 """A :class:`~pipeline.reports.document.Document` as an A4 PDF, laid out here and written
-directly (:mod:`.pdf_canvas`): text is vector text in embedded fonts, figures are the rasters
-the HTML's figures come from (:class:`~pipeline.reports.images.Figures`, each drawn once)
-placed in a region of the page, tables continue over pages (:mod:`.pdf_table`)."""
+directly (:mod:`.pdf_canvas`): text is vector text in embedded fonts, figures are the vector
+drawings the HTML's figures are (:class:`~pipeline.reports.figures.Figures`, each laid out
+once) placed in a region of the page, tables continue over pages (:mod:`.pdf_table`)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
 
-from PIL import Image
-
+from pipeline.reports.charts import pdf as chart_pdf
+from pipeline.reports.charts.scene import Scene
 from pipeline.reports.document import (
     Block,
     Document,
@@ -20,7 +20,7 @@ from pipeline.reports.document import (
     Table,
     Verdict,
 )
-from pipeline.reports.images import Figures
+from pipeline.reports.figures import Figures
 from pipeline.reports.pdf_canvas import Page, write_pdf
 from pipeline.reports.pdf_layout import (
     BOTTOM,
@@ -52,17 +52,17 @@ LINE = 0.15
 """Line pitch of 7.5 pt body text, inches."""
 
 
-Numbered = Iterator[tuple[int, Image.Image]]
-"""The report's figures in order: (figure number, raster)."""
+Numbered = Iterator[tuple[int, Scene]]
+"""The report's figures in order: (figure number, laid-out chart)."""
 
 
 def render_pdf(doc: Document, path: Path, drawn: Figures | None = None) -> None:
     """Write ``doc`` to ``path`` as an A4 PDF (no creation date: same content, same bytes);
     figures from ``drawn`` (shared with the HTML)."""
-    drawn = drawn or Figures(html=False)
+    drawn = drawn or Figures()
     flow = Flow()
     flow.place(1.35, lambda page, top: _title_block(page, top, doc))
-    numbers = ((n, drawn.raster(p)) for n, p in enumerate(doc.plots(), 1))
+    numbers = ((n, drawn.scene(p)) for n, p in enumerate(doc.plots(), 1))
     for index, section in enumerate(doc.sections, 1):
         _section(flow, section, index, numbers)
     total = len(flow.pages)
@@ -202,9 +202,8 @@ def _verdict(flow: Flow, block: Verdict) -> None:
     flow.place(height + 0.12, draw)
 
 
-def _plot(flow: Flow, plot: Plot, number: int, raster: Image.Image) -> None:
-    """The figure (its raster) scaled to the text width, its numbered title and caption
-    below."""
+def _plot(flow: Flow, plot: Plot, number: int, scene: Scene) -> None:
+    """The figure scaled to the text width, its numbered title and caption below."""
     width = min(WIDTH, plot.size[0])
     height = _plot_height(plot)
     heading = wrap(f"Figure {number}. {plot.title}.", WIDTH, 7.5, bold=True)
@@ -212,7 +211,7 @@ def _plot(flow: Flow, plot: Plot, number: int, raster: Image.Image) -> None:
     x0 = LEFT + (WIDTH - width) / 2
 
     def draw(page: Page, top: float) -> None:
-        page.image(raster, x0, top - height, width, height)
+        chart_pdf.draw(page, scene, x0, top, width)
         below = top - height - 0.06
         lines(page, LEFT, below, heading, 7.5, LINE, bold=True)
         lines(page, LEFT, below - LINE * len(heading), caption, 7.5, LINE, color=MUTED)

@@ -1,7 +1,8 @@
-"""Pages of the PDF report as drawing operations — text, filled rectangles and images placed
-in inches from the page's bottom-left corner — and the PDF file they make, written directly
-(PDF 1.4: one content stream per page, fonts embedded as subsets by :mod:`.pdf_fonts`,
-figures as palette images). The same pages give the same bytes (no creation date)."""
+"""Pages of the PDF report as drawing operations — text and filled rectangles placed in
+inches from the page's bottom-left corner, and the vector figures' path operators
+(:mod:`.charts.pdf`) — and the PDF file they make, written directly (PDF 1.4: one content
+stream per page, fonts embedded as subsets by :mod:`.pdf_fonts`). The same pages give the
+same bytes (no creation date)."""
 
 from __future__ import annotations
 
@@ -10,9 +11,7 @@ from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 
-from matplotlib.colors import to_rgb
-from PIL import Image
-
+from pipeline.reports.charts.scene import rgb
 from pipeline.reports.pdf_fonts import PdfFont, pdf_font
 
 PT = 72.0
@@ -23,7 +22,17 @@ MONO = "DejaVu Sans Mono"
 
 @cache
 def _rgb(colour: str) -> str:
-    return " ".join(_num(c) for c in to_rgb(colour))
+    return " ".join(_num(c) for c in rgb(colour))
+
+
+def fill_colour(colour: str) -> str:
+    """The PDF operator setting the fill colour."""
+    return f"{_rgb(colour)} rg"
+
+
+def stroke_colour(colour: str) -> str:
+    """The PDF operator setting the stroke colour."""
+    return f"{_rgb(colour)} RG"
 
 
 def _num(value: float) -> str:
@@ -41,6 +50,8 @@ class _Text:
     """baseline origin, points"""
     content: str
     colour: str
+    angle: int = 0
+    """0, or 90: reading upwards"""
 
 
 @dataclass(frozen=True)
@@ -53,12 +64,10 @@ class _Rect:
 
 
 @dataclass(frozen=True)
-class _Image:
-    image: Image.Image
-    x: float
-    y: float
-    w: float
-    h: float
+class _Raw:
+    """Graphics operators as they are (paths, clipping), coordinates in points."""
+
+    content: str
 
 
 @dataclass
@@ -68,7 +77,7 @@ class Page:
     width: float
     height: float
     """inches"""
-    ops: list[_Text | _Rect | _Image] = field(default_factory=list)
+    ops: list[_Text | _Rect | _Raw] = field(default_factory=list)
 
     def text(
         self,
@@ -100,9 +109,25 @@ class Page:
         """A filled rectangle with its bottom-left corner at (x, y), inches."""
         self.ops.append(_Rect(x * PT, y * PT, w * PT, h * PT, colour))
 
-    def image(self, image: Image.Image, x: float, y: float, w: float, h: float) -> None:
-        """``image`` stretched over the box with its bottom-left corner at (x, y), inches."""
-        self.ops.append(_Image(image, x * PT, y * PT, w * PT, h * PT))
+    def glyphs(
+        self,
+        x: float,
+        y: float,
+        content: str,
+        size: float,
+        colour: str,
+        *,
+        bold: bool = False,
+        angle: int = 0,
+    ) -> None:
+        """``content`` in the sans font with its baseline origin at (x, y) points, reading
+        right (``angle`` 0) or up (90)."""
+        if content:
+            self.ops.append(_Text((SANS, bold), size, x, y, content, colour, angle))
+
+    def raw(self, content: str) -> None:
+        """Graphics operators drawn as they are (points from the page's bottom-left)."""
+        self.ops.append(_Raw(content))
 
 
 @dataclass
@@ -203,24 +228,10 @@ def _show(op: _Text, embedded: _Embedded) -> str:
             run = ""
         run += f"{embedded.ids.get(glyph, 0):04X}"
     parts.append(f"<{run}>")
+    matrix = "0 1 -1 0" if op.angle == 90 else "1 0 0 1"
     return (
-        f"BT /{embedded.name} {_num(op.size)} Tf {_rgb(op.colour)} rg 1 0 0 1 {_num(op.x)} "
+        f"BT /{embedded.name} {_num(op.size)} Tf {_rgb(op.colour)} rg {matrix} {_num(op.x)} "
         f"{_num(op.y)} Tm [{' '.join(parts)}] TJ ET"
-    )
-
-
-def _image(w: _Writer, image: Image.Image) -> int:
-    """An image XObject: palette images keep their palette (``Indexed``), others are RGB."""
-    if image.mode == "P":
-        palette = bytes(image.getpalette() or [])
-        colours = f"[/Indexed /DeviceRGB {len(palette) // 3 - 1} <{palette.hex()}>]"
-        data = image.tobytes()
-    else:
-        colours, data = "/DeviceRGB", image.convert("RGB").tobytes()
-    return w.stream(
-        f"/Type /XObject /Subtype /Image /Width {image.width} /Height {image.height} "
-        f"/ColorSpace {colours} /BitsPerComponent 8",
-        data,
     )
 
 
@@ -239,11 +250,9 @@ def write_pdf(pages: list[Page], path: Path, title: str, creator: str) -> None:
     for k, (key, used) in enumerate(sorted(chars.items())):
         number, fonts[key] = _embed_font(w, pdf_font(*key), used, f"F{k + 1}")
         font_refs.append(f"/F{k + 1} {number} 0 R")
-    images: dict[int, tuple[str, int]] = {}
     kids = []
     for page in pages:
         content: list[str] = []
-        used_images: dict[str, int] = {}
         for op in page.ops:
             if isinstance(op, _Text):
                 content.append(_show(op, fonts[op.font]))
@@ -252,20 +261,13 @@ def write_pdf(pages: list[Page], path: Path, title: str, creator: str) -> None:
                     f"{_rgb(op.colour)} rg {_num(op.x)} {_num(op.y)} {_num(op.w)} {_num(op.h)} re f"
                 )
             else:
-                if id(op.image) not in images:
-                    images[id(op.image)] = (f"Im{len(images) + 1}", _image(w, op.image))
-                name, number = images[id(op.image)]
-                used_images[name] = number
-                content.append(
-                    f"q {_num(op.w)} 0 0 {_num(op.h)} {_num(op.x)} {_num(op.y)} cm /{name} Do Q"
-                )
+                content.append(op.content)
         stream = w.stream("", "\n".join(content).encode("latin-1"))
-        xobjects = " ".join(f"/{n} {r} 0 R" for n, r in used_images.items())
         kids.append(
             w.put(
                 f"<< /Type /Page /Parent {tree} 0 R /MediaBox [0 0 {_num(page.width * PT)} "
                 f"{_num(page.height * PT)}] /Resources << /Font << {' '.join(font_refs)} >> "
-                f"/XObject << {xobjects} >> >> /Contents {stream} 0 R >>"
+                f">> /Contents {stream} 0 R >>"
             )
         )
     w.put(

@@ -3,14 +3,14 @@ own tables and embedded as subsets.
 
 Widths come from the fonts' advance widths and ``kern`` pairs (the glyph positions a PDF
 viewer uses), in font units, so measuring text costs a dictionary look-up per character.
-Each font used is embedded as a TrueType subset (fontTools), written as a ``Type0`` font
-with ``Identity-H`` encoding and a ``ToUnicode`` map (text can be searched and copied). A
-report whose characters all lie in :data:`REPERTOIRE` (Latin-1, Greek and the symbols
-gyropipe prints) embeds that repertoire's subset, made once per font and kept in
-matplotlib's cache directory, so most reports subset nothing (fontTools' subsetter is not
-even imported); other text gets a subset of exactly its characters. Subsets are made from a
-lean copy without the OpenType layout tables (GSUB, GPOS, GDEF), which a PDF viewer never
-reads and which make subsetting slow.
+The fonts ship with the package (:data:`FONTS`, DejaVu's licence beside them) as lean
+copies without the OpenType layout tables (GSUB, GPOS, GDEF), which a PDF viewer never
+reads and which make subsetting slow. Each font used is embedded as a TrueType subset
+(fontTools), written as a ``Type0`` font with ``Identity-H`` encoding and a ``ToUnicode``
+map (text can be searched and copied). A report whose characters all lie in
+:data:`REPERTOIRE` (Latin-1, Greek and the symbols gyropipe prints) embeds that
+repertoire's subset, shipped beside the fonts, so most reports subset nothing (fontTools'
+subsetter is not even imported); other text gets a subset of exactly its characters.
 """
 
 from __future__ import annotations
@@ -25,12 +25,17 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-import matplotlib
 from fontTools.ttLib import TTFont  # type: ignore[import-untyped]
-from matplotlib.font_manager import FontProperties, findfont
 
-LAYOUT_TABLES = ("GSUB", "GPOS", "GDEF")
-DROPPED = ("FFTM", "MATH", "kern", *LAYOUT_TABLES)
+FONTS = Path(__file__).parent / "fonts"
+"""The report's fonts (lean copies) and their repertoire subsets."""
+FILES = {
+    ("DejaVu Sans", False): "DejaVuSans.ttf",
+    ("DejaVu Sans", True): "DejaVuSans-Bold.ttf",
+    ("DejaVu Sans Mono", False): "DejaVuSansMono.ttf",
+    ("DejaVu Sans Mono", True): "DejaVuSansMono-Bold.ttf",
+}
+DROPPED = ("FFTM", "MATH", "kern", "GSUB", "GPOS", "GDEF")
 """Tables the embedded subset leaves out (kerning is in the glyph positions already)."""
 REPERTOIRE = frozenset(
     [chr(c) for c in (*range(0x20, 0x7F), *range(0xA0, 0x100), *range(0x391, 0x3CA))]
@@ -39,32 +44,6 @@ REPERTOIRE = frozenset(
 """Characters of the cached subset every report can share (Latin-1, Greek, symbols)."""
 Subset = tuple[bytes, dict[str, int], list[int], dict[int, str]]
 """font file bytes, glyph name → glyph id, advance of each glyph (1/1000 em), id → text"""
-
-
-@cache
-def lean_font(family: str, bold: bool) -> str:
-    """Path of ``family`` (bold or regular) without its layout tables, kept in matplotlib's
-    cache directory (written once per font version); the font itself if the copy cannot
-    be written."""
-    weight = "bold" if bold else "normal"
-    source = Path(findfont(FontProperties(family=family, weight=weight)))
-    stat = source.stat()
-    target = Path(matplotlib.get_cachedir()) / "gyropipe-fonts"
-    lean = target / f"{source.stem}-{stat.st_size}-{stat.st_mtime_ns}.ttf"
-    if lean.is_file():
-        return str(lean)
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        font = TTFont(source)
-        for tag in LAYOUT_TABLES:
-            if tag in font:
-                del font[tag]
-        partial = lean.with_suffix(f".{os.getpid()}.tmp")
-        font.save(partial)
-        partial.replace(lean)  # atomic: parallel batch workers may write it at once
-    except OSError:
-        return str(source)
-    return str(lean)
 
 
 @dataclass
@@ -134,12 +113,7 @@ class PdfFont:
         return self._shared
 
     def _load_repertoire(self) -> Subset:
-        stem = Path(self.path).stem
-        cached = (
-            Path(matplotlib.get_cachedir())
-            / "gyropipe-fonts"
-            / f"{stem}-{self.tag(set(REPERTOIRE))}"
-        )
+        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}"
         font_file, index = cached.with_suffix(".ttf"), cached.with_suffix(".json")
         try:
             meta = json.loads(index.read_text())
@@ -194,5 +168,5 @@ class PdfFont:
 
 @cache
 def pdf_font(family: str, bold: bool) -> PdfFont:
-    """The metrics of ``family``, bold or regular (its lean copy), loaded once."""
-    return PdfFont(lean_font(family, bold))
+    """The metrics of ``family``, bold or regular, loaded once."""
+    return PdfFont(str(FONTS / FILES[family, bold]))

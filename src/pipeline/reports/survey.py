@@ -64,6 +64,7 @@ from pipeline.reports.sections import (
     tool_fields,
     unit_label,
 )
+from pipeline.reports.view3d import view_3d
 from pipeline.survey.stations import survey_offsets
 from pipeline.well import WellMetadata
 
@@ -366,7 +367,7 @@ def _trajectory_plots(
                 "Well path (solid) and its projection on the plane "
                 "through the deepest station (dashed); square: wellhead, triangle: TD. East "
                 "and north at one scale, the vertical scaled to fit.",
-                partial(plots.view_3d, path=path),
+                partial(view_3d, path=path),
                 (6.9, 4.2),
             ),
             Plot(

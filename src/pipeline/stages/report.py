@@ -2,8 +2,8 @@
 one self-contained HTML file and an A4 PDF with the same content, written into the run's
 output directory (published atomically with the other outputs).
 
-The report modules (and matplotlib) are imported only when a report is made, so loading the
-plugins stays fast for every other command.
+The report modules are imported only when a report is made, so loading the plugins stays
+fast for every other command.
 """
 
 from __future__ import annotations
@@ -49,12 +49,6 @@ class ReportParams(BaseModel):
     formats: list[Literal["html", "pdf"]] = Field(
         ["html", "pdf"], min_length=1, description="files to write"
     )
-    image_format: Literal["auto", "png", "svg"] = Field(
-        "auto",
-        description="figures in the HTML: PNG (auto is PNG too: the raster the PDF's "
-        "figure is, drawn once) or SVG",
-    )
-    dpi: int = Field(110, ge=50, le=300, description="resolution of PNG figures in the HTML")
     min_course_length: float = Field(
         10.0,
         ge=0,
@@ -69,12 +63,12 @@ class ReportParams(BaseModel):
 
 
 def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
+    from pipeline.reports.figures import Figures
     from pipeline.reports.html import render_html
-    from pipeline.reports.images import Figures
     from pipeline.reports.pdf import render_pdf
 
     name = params.filename or ctx.stage_id
-    drawn = Figures(params.image_format, params.dpi, html="html" in params.formats)
+    drawn = Figures()
     if "html" in params.formats:
         html = render_html(doc, drawn)
         ctx.output_path(f"{name}.html").write_text(html, encoding="utf-8")

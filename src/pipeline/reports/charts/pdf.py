@@ -1,0 +1,145 @@
+"""A :class:`~.scene.Scene` drawn on a PDF page (:class:`~pipeline.reports.pdf_canvas.Page`)
+as path operators and text in the embedded fonts: the same primitives as the SVG, the
+scene's y-down points mapped onto the page and scaled."""
+
+from __future__ import annotations
+
+from pathlib import Path as FilePath
+
+import numpy as np
+
+from pipeline.reports.charts.scene import Group, Label, Marks, Path, Points, Scene, outline
+from pipeline.reports.pdf_canvas import PT, Page, fill_colour, stroke_colour, write_pdf
+
+KAPPA = 0.5523
+"""Bézier control distance of a quarter circle, in radii."""
+
+
+def _n(value: float) -> str:
+    out = f"{value:.2f}".rstrip("0").rstrip(".")
+    return "0" if out in ("-0", "") else out
+
+
+class _Placed:
+    """Scene points → page points: origin (ox, oy) the scene's top-left, scaled by ``s``."""
+
+    def __init__(self, ox: float, oy: float, s: float) -> None:
+        self.ox, self.oy, self.s = ox, oy, s
+
+    def xy(self, points: Points) -> Points:
+        return np.column_stack([self.ox + self.s * points[:, 0], self.oy - self.s * points[:, 1]])
+
+
+def _polyline(points: Points, closed: bool) -> str:
+    coords = [f"{_n(x)} {_n(y)}" for x, y in points]
+    return f"{coords[0]} m " + " ".join(f"{c} l" for c in coords[1:]) + (" h" if closed else "")
+
+
+def _stroke(p: Path, s: float) -> str:
+    assert p.stroke is not None
+    dash = " ".join(_n(d * s) for d in p.stroke.dash)
+    return f"{stroke_colour(p.stroke.colour)} {_n(p.stroke.width * s)} w [{dash}] 0 d"
+
+
+def _path(p: Path, at: _Placed) -> str:
+    body = " ".join(_polyline(at.xy(part), p.closed) for part in p.parts if len(part))
+    if not body:
+        return ""
+    style = []
+    if p.fill:
+        style.append(fill_colour(p.fill))
+    if p.stroke is not None:
+        style.append(_stroke(p, at.s))
+    paint = "B" if p.fill and p.stroke else "f" if p.fill else "S"
+    return f"{' '.join(style)} {body} {paint}"
+
+
+def _circle(x: float, y: float, r: float) -> str:
+    k = KAPPA * r
+    quarters = (
+        (x + r, y + k, x + k, y + r, x, y + r),
+        (x - k, y + r, x - r, y + k, x - r, y),
+        (x - r, y - k, x - k, y - r, x, y - r),
+        (x + k, y - r, x + r, y - k, x + r, y),
+    )
+    curves = " ".join(" ".join(_n(v) for v in q) + " c" for q in quarters)
+    return f"{_n(x + r)} {_n(y)} m {curves} h"
+
+
+def _marks(m: Marks, at: _Placed) -> str:
+    if not len(m.xy):
+        return ""
+    centres = at.xy(m.xy)
+    shape = outline(m.shape, m.size)
+    if shape is None:
+        r = (m.size / 2 if m.shape != "." else m.size / 4) * at.s
+        body = " ".join(_circle(x, y, r) for x, y in centres)
+        closed = True
+    else:
+        offsets, closed = shape
+        offsets = offsets * np.array([at.s, -at.s])
+        pieces = []
+        for x, y in centres:
+            moved = True
+            for dx, dy in offsets:
+                if np.isnan(dx):
+                    moved = True
+                    continue
+                pieces.append(f"{_n(x + dx)} {_n(y + dy)} {'m' if moved else 'l'}")
+                moved = False
+            if closed:
+                pieces.append("h")
+        body = " ".join(pieces)
+    if m.hollow or not closed:
+        return f"{stroke_colour(m.colour)} {_n(m.edge * at.s)} w [] 0 d {body} S"
+    return f"{fill_colour(m.colour)} {body} f"
+
+
+def _label(page: Page, t: Label, at: _Placed) -> None:
+    if t.box:
+        x0, y0, x1, y1 = t.extent()
+        ((bx, by),) = at.xy(np.array([[x0 - 1.5, y1 + 1]]))
+        page.raw(
+            f"{fill_colour('#ffffff')} {_n(bx)} {_n(by)} {_n((x1 - x0 + 3) * at.s)} "
+            f"{_n((y1 - y0 + 2) * at.s)} re f"
+        )
+    shift = {"start": 0.0, "middle": 0.5, "end": 1.0}[t.anchor] * t.width()
+    if t.angle == 90:
+        x, y = t.x, t.y + shift
+    else:
+        x, y = t.x - shift, t.y
+    ((px, py),) = at.xy(np.array([[x, y]]))
+    page.glyphs(px, py, t.text, t.size * at.s, t.colour, bold=t.bold, angle=t.angle)
+
+
+def _group(page: Page, g: Group, at: _Placed) -> None:
+    if g.clip is not None:
+        x, y, w, h = g.clip
+        ((cx, cy),) = at.xy(np.array([[x, y + h]]))
+        page.raw(f"q {_n(cx)} {_n(cy)} {_n(w * at.s)} {_n(h * at.s)} re W n")
+    for item in g.items:
+        if isinstance(item, Group):
+            _group(page, item, at)
+        elif isinstance(item, Label):
+            _label(page, item, at)
+        else:
+            ops = _path(item, at) if isinstance(item, Path) else _marks(item, at)
+            if ops:
+                page.raw(ops)
+    if g.clip is not None:
+        page.raw("Q")
+
+
+def draw(page: Page, scene: Scene, left: float, top: float, width: float) -> None:
+    """``scene`` on ``page`` with its top-left corner at (left, top) inches from the
+    page's bottom-left, scaled to ``width`` inches."""
+    page.raw("q 1 j 0 J")
+    _group(page, scene.root, _Placed(left * PT, top * PT, width * PT / scene.width))
+    page.raw("Q")
+
+
+def chart_pdf(scene: Scene, path: FilePath) -> None:
+    """``scene`` alone as a one-page PDF of its own size."""
+    page = Page(scene.width / PT, scene.height / PT)
+    draw(page, scene, 0.0, scene.height / PT, scene.width / PT)
+    write_pdf([page], path, path.stem, "gyropipe")

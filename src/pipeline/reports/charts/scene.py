@@ -1,0 +1,162 @@
+"""A laid-out chart: primitives in points from the top-left corner (y down) that the
+SVG and PDF writers serialise one to one. Text is measured with the PDF's own font
+metrics (:mod:`~pipeline.reports.pdf_fonts`), so labels sit alike in both."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pipeline.reports.pdf_fonts import pdf_font
+
+Points = NDArray[np.float64]
+"""(n, 2) x, y in points"""
+SANS = "DejaVu Sans"
+NAMED = {"white": "#ffffff", "black": "#000000"}
+BASELINE = {"baseline": 0.0, "top": 0.76, "center": 0.36, "bottom": -0.24}
+"""Where the baseline lies below an anchor at a text's top, centre or bottom, in ems."""
+
+
+@cache
+def rgb(colour: str) -> tuple[float, float, float]:
+    """``#rrggbb`` (or white, black) as red, green, blue in 0…1."""
+    code = NAMED.get(colour, colour)
+    if len(code) != 7 or code[0] != "#":
+        raise ValueError(f"not a chart colour: {colour!r} (use #rrggbb)")
+    return int(code[1:3], 16) / 255, int(code[3:5], 16) / 255, int(code[5:7], 16) / 255
+
+
+def faded(colour: str, alpha: float) -> str:
+    """``colour`` at ``alpha`` over white, as an opaque colour."""
+    if alpha >= 1.0:
+        return colour
+    mixed = (1 - alpha + alpha * c for c in rgb(colour))
+    return "#" + "".join(f"{round(255 * c):02x}" for c in mixed)
+
+
+@cache
+def text_width(text: str, size: float, bold: bool = False) -> float:
+    """Advance of ``text`` at ``size`` points in the report's sans font, points."""
+    return pdf_font(SANS, bold).width(text, size)
+
+
+@dataclass(frozen=True)
+class Stroke:
+    colour: str
+    width: float
+    dash: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class Path:
+    """Subpaths (each (n, 2) points) stroked and/or filled; ``closed`` closes each."""
+
+    parts: tuple[Points, ...]
+    stroke: Stroke | None = None
+    fill: str | None = None
+    closed: bool = False
+
+
+@dataclass(frozen=True)
+class Marks:
+    """The same marker at each of ``xy``: ``size`` pt across."""
+
+    xy: Points
+    shape: str
+    size: float
+    colour: str
+    hollow: bool = False
+    edge: float = 0.6
+
+
+@dataclass(frozen=True)
+class Label:
+    """Text with its baseline through (x, y) (before rotation), ``anchor`` its start,
+    middle or end; ``angle`` 90 reads upwards; ``box``: a white box behind it."""
+
+    x: float
+    y: float
+    text: str
+    size: float
+    colour: str
+    anchor: Literal["start", "middle", "end"] = "start"
+    bold: bool = False
+    angle: int = 0
+    box: bool = False
+
+    def width(self) -> float:
+        return text_width(self.text, self.size, self.bold)
+
+    def extent(self) -> tuple[float, float, float, float]:
+        """Unrotated box (x0, y0, x1, y1) of the text, points (y down)."""
+        w = self.width()
+        x0 = self.x - {"start": 0.0, "middle": w / 2, "end": w}[self.anchor]
+        return x0, self.y - 0.76 * self.size, x0 + w, self.y + 0.24 * self.size
+
+
+Item = Path | Marks | Label
+"""A primitive"""
+
+
+@dataclass
+class Group:
+    """Primitives (and groups) in drawing order, optionally named (``id`` in SVG) and
+    clipped to a rectangle (x, y, w, h points)."""
+
+    items: list[Item | Group] = field(default_factory=list)
+    id: str = ""
+    clip: tuple[float, float, float, float] | None = None
+
+    def add(self, *items: Item | Group) -> None:
+        self.items.extend(items)
+
+
+@dataclass
+class Scene:
+    """A chart laid out: its size (points) and everything on it."""
+
+    width: float
+    height: float
+    root: Group
+
+
+def anchored(
+    x: float,
+    y: float,
+    text: str,
+    size: float,
+    colour: str,
+    ha: str = "left",
+    va: str = "baseline",
+    *,
+    bold: bool = False,
+    angle: int = 0,
+    box: bool = False,
+) -> Label:
+    """A :class:`Label` placed by its horizontal (left/center/right) and vertical
+    (top/center/bottom/baseline) alignment; rotated text is aligned in its own frame."""
+    anchor = {"left": "start", "center": "middle", "right": "end"}[ha]
+    shift = BASELINE[va] * size
+    if angle == 90:
+        x, y = x + shift, y
+    else:
+        y = y + shift
+    return Label(x, y, text, size, colour, anchor, bold, angle, box)  # type: ignore[arg-type]
+
+
+def outline(shape: str, size: float) -> tuple[Points, bool] | None:
+    """A marker's outline about its centre (points, y down) and whether it is closed;
+    None for a circle (each writer draws its own)."""
+    h = size / 2
+    shapes = {
+        "s": (np.array([[-h, -h], [h, -h], [h, h], [-h, h]]) * 0.9, True),
+        "D": (np.array([[0, -h], [h, 0], [0, h], [-h, 0]]) * 1.2, True),
+        "v": (np.array([[-h, -0.6 * h], [h, -0.6 * h], [0, h]]) * 1.1, True),
+        "^": (np.array([[-h, 0.6 * h], [h, 0.6 * h], [0, -h]]) * 1.1, True),
+        "x": (np.array([[-h, -h], [h, h], [np.nan, np.nan], [-h, h], [h, -h]]) * 0.8, False),
+    }
+    return shapes.get(shape)

@@ -1,0 +1,133 @@
+"""The report's chart renderer: nice ticks, log decades, data placed where the axes say,
+well-formed SVG and a PDF poppler reads — checked on figures of known data."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.reports import plots
+from pipeline.reports.charts import ticks
+from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, grid
+
+SVG = "{http://www.w3.org/2000/svg}"
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "most", "expected"),
+    [
+        (0.0, 10.0, 5, ["0", "2", "4", "6", "8", "10"]),
+        (-0.013, 0.013, 6, ["−0.010", "−0.005", "0.000", "0.005", "0.010"]),
+        (-47.0, 1290.0, 9, ["0", "200", "400", "600", "800", "1000", "1200"]),
+        (0.3, 2.2, 5, ["0.5", "1.0", "1.5", "2.0"]),
+        (11.4, 12.6, 6, ["11.4", "11.6", "11.8", "12.0", "12.2", "12.4", "12.6"]),
+        (11.4, 12.6, 4, ["11.5", "12.0", "12.5"]),
+        (0.2, 1.3, 5, ["0.25", "0.50", "0.75", "1.00", "1.25"]),
+    ],
+)
+def test_linear_ticks_are_nice_numbers(lo: float, hi: float, most: int, expected: list[str]):
+    values, step = ticks.linear_ticks(lo, hi, most)
+    assert [ticks.label(v, step) for v in values] == expected
+
+
+def test_log_ticks_are_decades_and_their_labels_read_plainly():
+    major, minor = ticks.log_ticks(2e-6, 3e-2)
+    assert major == pytest.approx([1e-5, 1e-4, 1e-3, 1e-2])
+    assert [ticks.log_label(v) for v in major] == ["10⁻⁵", "10⁻⁴", "0.001", "0.01"]
+    assert minor[:3] == pytest.approx([2e-6, 3e-6, 4e-6])
+    major, _ = ticks.log_ticks(0.7, 3.0)  # less than a decade: 1 with 2 and 5 × it
+    assert major == pytest.approx([1.0, 2.0])
+
+
+def well() -> plots.Path3:
+    """A J-shaped path: 300 m vertical, then 40 stations heading 060°, positions in m."""
+    md = np.linspace(0.0, 1200.0, 41)
+    horizontal = np.clip(md - 300.0, 0.0, None) * 0.6
+    north, east = horizontal * np.cos(np.radians(60)), horizontal * np.sin(np.radians(60))
+    tvd = np.minimum(md, 300.0) + np.clip(md - 300.0, 0.0, None) * 0.8
+    return plots.Path3(md, north, east, tvd, (0, 41), "true north")
+
+
+def tick_map(root: ET.Element, prefix: str, axis: int) -> tuple[float, float]:
+    """(scale, offset) of the tick marks: point = scale × value + offset, fitted from each
+    tick group's mark position and its label."""
+    positions, values = [], []
+    for group in root.iter(f"{SVG}g"):
+        if not group.get("id", "").startswith(prefix):
+            continue
+        mark = group.find(f"{SVG}path")
+        label = group.find(f"{SVG}text")
+        assert mark is not None and label is not None and label.text
+        first = re.findall(r"-?[\d.]+", mark.get("d", ""))
+        positions.append(float(first[axis]))
+        values.append(float(label.text.replace("−", "-")))
+    assert len(values) >= 3
+    scale, offset = np.polyfit(values, positions, 1)
+    residual = np.abs(np.polyval((scale, offset), values) - positions).max()
+    assert residual < 0.1  # the ticks are evenly spaced: a linear axis
+    return float(scale), float(offset)
+
+
+def test_plan_view_puts_each_station_where_the_ticks_say(tmp_path: Path):
+    path = well()
+    svg = plots.plan_view((6.9, 4.0), path).svg()
+    root = ET.fromstring(svg)  # well-formed
+    assert root.get("width") == "496.8pt" and root.get("height") == "288pt"
+    sx, ox = tick_map(root, "xtick_", 0)
+    sy, oy = tick_map(root, "ytick_", 1)
+    assert sx == pytest.approx(-sy, rel=1e-3)  # equal scales, north up
+    stations = next(
+        p
+        for p in root.iter(f"{SVG}path")
+        if p.get("stroke") == plots.BLUE and "L" in p.get("d", "")
+    )
+    points = np.array(
+        [[float(v) for v in xy.split(",")] for xy in re.split(r"[ML ]+", stations.get("d", ""))[1:]]
+    )
+    expected = np.column_stack([sx * path.east + ox, sy * path.north + oy])
+    assert points == pytest.approx(expected, abs=0.11)  # written to 0.1 pt
+    texts = [t.text for t in root.iter(f"{SVG}text")]
+    assert "East (m)" in texts and "North (m, true north)" in texts
+    assert any(t and t.startswith("closure 540.0 m @ 60.00°") for t in texts)
+
+
+def test_log_axes_tick_at_decades():
+    tau = np.logspace(-1, 3, 20)
+    chart = plots.allan_deviation(
+        (6.9, 3.4),
+        tau,
+        {"gyro_x": 0.05 / np.sqrt(tau), "acc_x": 2e-4 / np.sqrt(tau)},
+        {"gyro_x": "deg/h", "acc_x": "m/s2"},
+    )
+    root = ET.fromstring(chart.svg())
+    labels = [
+        "".join(g.itertext()) for g in root.iter(f"{SVG}g") if g.get("id", "").startswith("xtick_")
+    ]
+    assert labels == ["0.1", "1", "10", "100", "1000"] * 2  # gyro and accelerometer panels
+
+
+def test_chart_saved_as_pdf_is_vector_and_readable(tmp_path: Path):
+    for tool in ("pdftotext", "pdfimages"):
+        if shutil.which(tool) is None:
+            pytest.skip(f"{tool} not found: apt-get install poppler-utils")
+    (box,) = grid((4.0, 3.0))
+    panel = Panel(box, Axis("Time (s)", limits=(0, 10)), Axis("Signal (V)", limits=(-1, 1)))
+    panel.add(Line(np.arange(11.0), np.sin(np.arange(11.0)), plots.BLUE, marker=Marker("o")))
+    pdf = Chart((4.0, 3.0), [panel]).save(tmp_path / "chart.pdf")
+    text = subprocess.run(
+        ["pdftotext", "-layout", str(pdf), "-"], check=True, capture_output=True, text=True
+    ).stdout
+    for word in ("Time (s)", "0.5", "−1.0", "10"):
+        assert word in text
+    images = subprocess.run(
+        ["pdfimages", "-list", str(pdf)], check=True, capture_output=True, text=True
+    ).stdout
+    assert len(images.strip().splitlines()) == 2  # the header only: nothing rasterised
+    with pytest.raises(ValueError, match=r"chart\.png: a chart is saved as \.svg or \.pdf"):
+        Chart((4.0, 3.0), [panel]).save(tmp_path / "chart.png")
