@@ -3,10 +3,10 @@
 Runs ``pipelines/point-gyro.yaml`` and ``pipelines/continuous-gyro.yaml`` once on the
 simulated wells of ``bench_well.py`` (same data directory), then, in a fresh interpreter,
 makes the report again from the tables the run persisted and times each part in CPU seconds
-(this process; ``time.process_time``) and wall: importing the report modules (matplotlib,
-fontTools), building the document, drawing every figure (matplotlib, Agg), the HTML (PNG
-encoding), and the PDF (layout and fonts). A second, warm pass shows what is left once the
-imports are paid (a batch worker's case). Prints the load before and after, and the
+(this process; ``time.process_time``) and wall: importing the report modules, building the
+document, laying out every figure (the report's own vector charts), the HTML (inline SVG),
+and the PDF (layout, fonts, path operators). A second, warm pass shows what is left once
+the imports are paid (a batch worker's case). Prints the load before and after, and the
 report's share of the well's own CPU time.
 
     python benchmarks/bench_report.py [--data DIR]
@@ -48,13 +48,13 @@ def timed(name, call):
     return result
 
 def imports():
-    import pipeline.reports.survey, pipeline.reports.html, pipeline.reports.images
+    import pipeline.reports.survey, pipeline.reports.html, pipeline.reports.figures
     import pipeline.reports.pdf
 
-timed("import report modules (matplotlib, fontTools)", imports)
+timed("import report modules", imports)
 from pipeline.reports.envelope import full_rate
+from pipeline.reports.figures import Figures
 from pipeline.reports.html import render_html
-from pipeline.reports.images import Figures
 from pipeline.reports.pdf import render_pdf
 from pipeline.reports.survey import SurveyTables, survey_document
 
@@ -69,9 +69,9 @@ for label in ("cold", "warm"):
                                "Gyro survey report")
     doc = timed(f"{label}: document (incl. series envelope)", document)
     figures = Figures()
-    timed(f"{label}: draw figures (Agg)", lambda: [figures.raster(p) for p in doc.plots()])
-    timed(f"{label}: HTML (PNG encoding)", lambda: render_html(doc, figures))
-    timed(f"{label}: PDF (layout, fonts, images)",
+    timed(f"{label}: lay out figures (vector)", lambda: [figures.scene(p) for p in doc.plots()])
+    timed(f"{label}: HTML (inline SVG)", lambda: render_html(doc, figures))
+    timed(f"{label}: PDF (layout, fonts, paths)",
           lambda: render_pdf(doc, out / f"bench-{label}.pdf", figures))
 print(json.dumps(times))
 """

@@ -75,7 +75,8 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
     """Closest approach of each offset well seen down the reference well: angle clockwise
     from the high side (up), radius the centre-to-centre distance, points within ``reach``;
     drawn as a polar grid (circles at nice radii, spokes every 30°)."""
-    (box,) = grid(size, left=0.3, right=2.2, top=0.2, bottom=0.2)
+    side = size[1] - 0.4  # a square panel: the legend right beside the circle
+    (box,) = grid(size, left=0.3, right=size[0] - 0.3 - side, top=0.2, bottom=0.2)
     edge = 1.25 * reach
     panel = Panel(
         box, Axis(limits=(-edge, edge)), Axis(limits=(-edge, edge)), frame=False, equal=True
@@ -91,7 +92,7 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
         panel.add(Line(spoke * np.sin(angle), spoke * np.cos(angle), "#e1e6ec", 0.5))
     for r in radii[1:]:
         if r < reach * 0.999:
-            label = ticks.label(r, step)
+            label = f"{ticks.label(r, step)} m"
             panel.add(
                 Text(
                     r * np.sin(np.radians(22.5)),

@@ -24,8 +24,10 @@ import os
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from fontTools.ttLib import TTFont  # type: ignore[import-untyped]
+if TYPE_CHECKING:
+    from fontTools.ttLib import TTFont  # type: ignore[import-untyped]
 
 FONTS = Path(__file__).parent / "fonts"
 """The report's fonts (lean copies) and their repertoire subsets."""
@@ -48,30 +50,46 @@ Subset = tuple[bytes, dict[str, int], list[int], dict[int, str]]
 
 @dataclass
 class PdfFont:
-    """One TrueType font: its metrics for layout, and subsets of it to embed."""
+    """One TrueType font: its metrics for layout, and subsets of it to embed. The metrics of
+    the :data:`REPERTOIRE` are read from the index shipped beside its subset (no font
+    table is parsed); the whole font is read only when text leaves the repertoire."""
 
     path: str
 
     def __post_init__(self) -> None:
-        tt = TTFont(self.path, lazy=True)
-        self.name: str = tt["name"].getDebugName(6) or Path(self.path).stem
-        self.upem: int = tt["head"].unitsPerEm
-        self.bbox = (tt["head"].xMin, tt["head"].yMin, tt["head"].xMax, tt["head"].yMax)
-        self.ascent: int = tt["hhea"].ascent
-        self.descent: int = tt["hhea"].descent
-        self.cap_height: int = getattr(tt["OS/2"], "sCapHeight", self.ascent)
-        self._cmap: dict[int, str] = tt.getBestCmap()
-        self._advance: dict[str, int] = {n: m[0] for n, m in tt["hmtx"].metrics.items()}
-        self._kern: dict[tuple[str, str], int] = (
-            dict(tt["kern"].kernTables[0].kernTable) if "kern" in tt else {}
-        )
-        self._glyf = tt["glyf"]
-        self._top: dict[str, int] = {}
-        self._shared: Subset | None = None
+        meta = _index(self.path)["metrics"]
+        self.name: str = meta["name"]
+        self.upem: int = meta["upem"]
+        self.bbox: tuple[int, int, int, int] = tuple(meta["bbox"])
+        self.ascent: int = meta["ascent"]
+        self.descent: int = meta["descent"]
+        self.cap_height: int = meta["cap_height"]
+        self._cmap: dict[int, str] = {ord(c): g for c, g in meta["cmap"].items()}
+        self._advance: dict[str, int] = meta["advance"]
+        self._kern: dict[tuple[str, str], int] = {(a, b): v for a, b, v in meta["kern"]}
+        self._top: dict[str, int] = meta["top"]
+        self._font: TTFont | None = None
+        """the whole font, once text outside the repertoire needs it"""
+
+    def _whole(self) -> TTFont:
+        """The font's own tables: every glyph's cmap entry, advance, kerning and top."""
+        if self._font is None:
+            from fontTools.ttLib import TTFont
+
+            tt = self._font = TTFont(self.path, lazy=True)
+            self._cmap = tt.getBestCmap()
+            self._advance = {n: m[0] for n, m in tt["hmtx"].metrics.items()}
+            if "kern" in tt:
+                self._kern = dict(tt["kern"].kernTables[0].kernTable)
+        return self._font
 
     def glyph(self, char: str) -> str:
         """Glyph name of ``char`` (``.notdef`` if the font has none)."""
-        return self._cmap.get(ord(char), ".notdef")
+        found = self._cmap.get(ord(char))
+        if found is None and self._font is None:
+            self._whole()
+            found = self._cmap.get(ord(char))
+        return found or ".notdef"
 
     def layout(self, text: str) -> tuple[list[str], list[int], int]:
         """Glyph names of ``text``, the kerning before each (font units) and the total
@@ -91,8 +109,7 @@ class PdfFont:
         best = 0
         for name in {self.glyph(c) for c in text + "l"}:
             if name not in self._top:
-                outline = self._glyf[name]
-                self._top[name] = int(getattr(outline, "yMax", 0) or 0)
+                self._top[name] = _glyph_top(self._whole(), name)
             best = max(best, self._top[name])
         return best
 
@@ -101,69 +118,109 @@ class PdfFont:
         holds them all, else a subset of exactly ``chars``."""
         if chars <= REPERTOIRE:
             return self._repertoire()
-        return self._make_subset(chars)
+        return _make_subset(self.path, chars)
 
     def subset_chars(self, chars: set[str]) -> set[str]:
         """The characters the subset embedded for ``chars`` holds (names it: :meth:`tag`)."""
         return set(REPERTOIRE) if chars <= REPERTOIRE else chars
 
     def _repertoire(self) -> Subset:
-        if self._shared is None:
-            self._shared = self._load_repertoire()
-        return self._shared
-
-    def _load_repertoire(self) -> Subset:
-        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}"
-        font_file, index = cached.with_suffix(".ttf"), cached.with_suffix(".json")
+        meta = _index(self.path)
+        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
         try:
-            meta = json.loads(index.read_text())
-            return (
-                font_file.read_bytes(),
-                meta["ids"],
-                meta["widths"],
-                {int(k): v for k, v in meta["text"].items()},
-            )
-        except (OSError, ValueError, KeyError):
-            pass
-        made = self._make_subset(set(REPERTOIRE))
-        try:
-            for path, data in (
-                (font_file, made[0]),
-                (index, json.dumps({"ids": made[1], "widths": made[2], "text": made[3]}).encode()),
-            ):
-                partial = path.with_suffix(f".{os.getpid()}.tmp")
-                partial.write_bytes(data)
-                partial.replace(path)  # atomic: parallel batch workers may write it at once
+            data = cached.read_bytes()
         except OSError:
-            pass
-        return made
-
-    def _make_subset(self, chars: set[str]) -> Subset:
-        from fontTools import subset  # type: ignore[import-untyped]
-
-        options = subset.Options()
-        options.drop_tables += list(DROPPED)
-        options.notdef_outline = True
-        options.name_IDs = [1, 2, 4, 6]
-        options.glyph_names = True
-        font = TTFont(self.path, lazy=True)
-        subsetter = subset.Subsetter(options)
-        subsetter.populate(unicodes=sorted(ord(c) for c in chars))
-        logging.getLogger("fontTools.subset").setLevel(logging.ERROR)
-        subsetter.subset(font)
-        out = io.BytesIO()
-        font.save(out)
-        order = font.getGlyphOrder()
-        ids = {name: k for k, name in enumerate(order)}
-        widths = [round(font["hmtx"].metrics[n][0] * 1000 / self.upem) for n in order]
-        text = {ids[self.glyph(c)]: c for c in sorted(chars) if self.glyph(c) in ids}
-        return out.getvalue(), ids, widths, text
+            data = _make_subset(self.path, set(REPERTOIRE))[0]
+        return data, meta["ids"], meta["widths"], {int(k): v for k, v in meta["text"].items()}
 
     @staticmethod
     def tag(chars: set[str]) -> str:
         """Six capitals naming the subset of ``chars`` (the same characters, the same tag)."""
         digest = hashlib.sha256("".join(sorted(chars)).encode()).digest()
         return "".join(chr(65 + b % 26) for b in digest[:6])
+
+
+def _make_subset(path: str, chars: set[str]) -> Subset:
+    """A subset of the font at ``path`` holding exactly ``chars``."""
+    from fontTools import subset  # type: ignore[import-untyped]
+    from fontTools.ttLib import TTFont
+
+    options = subset.Options()
+    options.drop_tables += list(DROPPED)
+    options.notdef_outline = True
+    options.name_IDs = [1, 2, 4, 6]
+    options.glyph_names = True
+    font = TTFont(path, lazy=True)
+    subsetter = subset.Subsetter(options)
+    subsetter.populate(unicodes=sorted(ord(c) for c in chars))
+    logging.getLogger("fontTools.subset").setLevel(logging.ERROR)
+    upem = font["head"].unitsPerEm
+    subsetter.subset(font)
+    out = io.BytesIO()
+    font.save(out)
+    order = font.getGlyphOrder()
+    ids = {name: k for k, name in enumerate(order)}
+    widths = [round(font["hmtx"].metrics[n][0] * 1000 / upem) for n in order]
+    cmap = font.getBestCmap()
+    text = {ids[cmap[ord(c)]]: c for c in sorted(chars) if cmap.get(ord(c)) in ids}
+    return out.getvalue(), ids, widths, text
+
+
+def _glyph_top(font: TTFont, name: str) -> int:
+    """Highest point of glyph ``name`` above the baseline, font units."""
+    outline = font["glyf"][name]
+    return int(getattr(outline, "yMax", 0) or 0)
+
+
+def _metrics(path: str) -> dict[str, Any]:
+    """Layout metrics of the :data:`REPERTOIRE`'s glyphs, read from the font at ``path``."""
+    from fontTools.ttLib import TTFont
+
+    tt = TTFont(path, lazy=True)
+    cmap = tt.getBestCmap()
+    chars = {c: cmap[ord(c)] for c in sorted(REPERTOIRE) if ord(c) in cmap}
+    glyphs = {*chars.values(), ".notdef"}
+    advance = {n: m[0] for n, m in tt["hmtx"].metrics.items() if n in glyphs}
+    kern = tt["kern"].kernTables[0].kernTable if "kern" in tt else {}
+    head, hhea = tt["head"], tt["hhea"]
+    return {
+        "name": tt["name"].getDebugName(6) or Path(path).stem,
+        "upem": head.unitsPerEm,
+        "bbox": [head.xMin, head.yMin, head.xMax, head.yMax],
+        "ascent": hhea.ascent,
+        "descent": hhea.descent,
+        "cap_height": getattr(tt["OS/2"], "sCapHeight", hhea.ascent),
+        "cmap": chars,
+        "advance": advance,
+        "kern": sorted([a, b, v] for (a, b), v in kern.items() if a in glyphs and b in glyphs),
+        "top": {n: _glyph_top(tt, n) for n in sorted(glyphs)},
+    }
+
+
+@cache
+def _index(path: str) -> dict[str, Any]:
+    """What is shipped beside the repertoire's subset of the font at ``path``: the subset's
+    glyph ids, widths and text, and the repertoire's metrics; made (and written, if the
+    directory allows) when missing."""
+    stem = Path(path).stem
+    tag = PdfFont.tag(set(REPERTOIRE))
+    font_file, index = FONTS / f"{stem}-{tag}.ttf", FONTS / f"{stem}-{tag}.json"
+    try:
+        found: dict[str, Any] = json.loads(index.read_text())
+        if "metrics" in found:
+            return found
+    except (OSError, ValueError):
+        pass
+    data, ids, widths, text = _make_subset(path, set(REPERTOIRE))
+    made = {"ids": ids, "widths": widths, "text": text, "metrics": _metrics(path)}
+    try:
+        for target, content in ((font_file, data), (index, json.dumps(made).encode())):
+            partial = target.with_suffix(f".{os.getpid()}.tmp")
+            partial.write_bytes(content)
+            partial.replace(target)  # atomic: parallel batch workers may write it at once
+    except OSError:
+        pass
+    return made
 
 
 @cache

@@ -31,8 +31,9 @@ class _Placed:
 
 
 def _polyline(points: Points, closed: bool) -> str:
-    coords = [f"{_n(x)} {_n(y)}" for x, y in points]
-    return f"{coords[0]} m " + " ".join(f"{c} l" for c in coords[1:]) + (" h" if closed else "")
+    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
+    head = f"{xs[0]:.2f} {ys[0]:.2f} m "
+    return head + " ".join(map("{:.2f} {:.2f} l".format, xs[1:], ys[1:])) + (" h" if closed else "")
 
 
 def _stroke(p: Path, s: float) -> str:
@@ -54,16 +55,20 @@ def _path(p: Path, at: _Placed) -> str:
     return f"{' '.join(style)} {body} {paint}"
 
 
-def _circle(x: float, y: float, r: float) -> str:
+CIRCLE = (
+    "{0:.2f} {1:.2f} m {0:.2f} {2:.2f} {3:.2f} {4:.2f} {5:.2f} {4:.2f} c "
+    "{6:.2f} {4:.2f} {7:.2f} {2:.2f} {7:.2f} {1:.2f} c {7:.2f} {8:.2f} {6:.2f} {9:.2f} "
+    "{5:.2f} {9:.2f} c {3:.2f} {9:.2f} {0:.2f} {8:.2f} {0:.2f} {1:.2f} c h"
+)
+"""A circle of four Bézier quarters from x + r, y + r·κ, x + r·κ, x, y + r, x − r·κ, x − r,
+y − r·κ, y − r (arguments 0…9)."""
+
+
+def _circles(centres: Points, r: float) -> str:
     k = KAPPA * r
-    quarters = (
-        (x + r, y + k, x + k, y + r, x, y + r),
-        (x - k, y + r, x - r, y + k, x - r, y),
-        (x - r, y - k, x - k, y - r, x, y - r),
-        (x + k, y - r, x + r, y - k, x + r, y),
-    )
-    curves = " ".join(" ".join(_n(v) for v in q) + " c" for q in quarters)
-    return f"{_n(x + r)} {_n(y)} m {curves} h"
+    x, y = centres[:, 0], centres[:, 1]
+    columns = (x + r, y, y + k, x + k, y + r, x, x - k, x - r, y - k, y - r)
+    return " ".join(map(CIRCLE.format, *(c.tolist() for c in columns)))
 
 
 def _marks(m: Marks, at: _Placed) -> str:
@@ -73,7 +78,7 @@ def _marks(m: Marks, at: _Placed) -> str:
     shape = outline(m.shape, m.size)
     if shape is None:
         r = (m.size / 2 if m.shape != "." else m.size / 4) * at.s
-        body = " ".join(_circle(x, y, r) for x, y in centres)
+        body = _circles(centres, r)
         closed = True
     else:
         offsets, closed = shape

@@ -19,9 +19,9 @@ def _n(value: float) -> str:
 
 
 def _polyline(points: Points, closed: bool) -> str:
-    head = f"M{_n(points[0, 0])},{_n(points[0, 1])}"
-    rest = " ".join(f"{_n(x)},{_n(y)}" for x, y in points[1:])
-    return head + (f"L{rest}" if rest else "") + ("Z" if closed else "")
+    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
+    rest = " ".join(map("{:.1f},{:.1f}".format, xs[1:], ys[1:]))
+    return f"M{xs[0]:.1f},{ys[0]:.1f}" + (f"L{rest}" if rest else "") + ("Z" if closed else "")
 
 
 def _path(p: Path) -> str:
@@ -40,10 +40,9 @@ def _marks(m: Marks) -> str:
     shape = outline(m.shape, m.size)
     if shape is None:
         r = m.size / 2 if m.shape != "." else m.size / 4
+        arcs = f"a{r:.2f},{r:.2f} 0 1,0 {2 * r:.2f},0a{r:.2f},{r:.2f} 0 1,0 {-2 * r:.2f},0"
         d = "".join(
-            f"M{_n(x - r)},{_n(y)}a{r:.2f},{r:.2f} 0 1,0 {2 * r:.2f},0"
-            f"a{r:.2f},{r:.2f} 0 1,0 {-2 * r:.2f},0"
-            for x, y in m.xy
+            map(f"M{{:.1f}},{{:.1f}}{arcs}".format, (m.xy[:, 0] - r).tolist(), m.xy[:, 1].tolist())
         )
         closed = True
     else:
