@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.reports.charts.model import Chart
+from pipeline.reports.charts.drawing import Drawing
 from tests_support import ROOT
 
 
@@ -42,9 +42,9 @@ def test_notebook_runs(examples: Path) -> None:
         exec(code, namespace)
         *_, last = source.strip().splitlines()
         if last.startswith("gp.plot_"):
-            chart = eval(last, namespace)
-            assert isinstance(chart, Chart)
-            assert chart._repr_svg_().startswith("<svg")  # what Jupyter shows
+            drawing = eval(last, namespace)
+            assert isinstance(drawing, Drawing)
+            assert drawing._repr_svg_().startswith("<svg")  # what Jupyter shows
     assert sorted(p.name for p in (examples / "out").iterdir()) == [
         "samples.parquet",
         "short-j-well.html",

@@ -14,6 +14,7 @@ import pytest
 
 from pipeline.reports import plots
 from pipeline.reports.charts import ticks
+from pipeline.reports.charts.drawing import Drawing
 from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, grid
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -76,7 +77,7 @@ def tick_map(root: ET.Element, prefix: str, axis: int) -> tuple[float, float]:
 
 def test_plan_view_puts_each_station_where_the_ticks_say(tmp_path: Path):
     path = well()
-    svg = plots.plan_view((6.9, 4.0), path).svg()
+    svg = Drawing(plots.plan_view((6.9, 4.0), path)).svg()
     root = ET.fromstring(svg)  # well-formed
     assert root.get("width") == "496.8pt" and root.get("height") == "288pt"
     sx, ox = tick_map(root, "xtick_", 0)
@@ -105,7 +106,7 @@ def test_log_axes_tick_at_decades():
         {"gyro_x": 0.05 / np.sqrt(tau), "acc_x": 2e-4 / np.sqrt(tau)},
         {"gyro_x": "deg/h", "acc_x": "m/s2"},
     )
-    root = ET.fromstring(chart.svg())
+    root = ET.fromstring(Drawing(chart).svg())
     labels = [
         "".join(g.itertext()) for g in root.iter(f"{SVG}g") if g.get("id", "").startswith("xtick_")
     ]
@@ -119,7 +120,7 @@ def test_chart_saved_as_pdf_is_vector_and_readable(tmp_path: Path):
     (box,) = grid((4.0, 3.0))
     panel = Panel(box, Axis("Time (s)", limits=(0, 10)), Axis("Signal (V)", limits=(-1, 1)))
     panel.add(Line(np.arange(11.0), np.sin(np.arange(11.0)), plots.BLUE, marker=Marker("o")))
-    pdf = Chart((4.0, 3.0), [panel]).save(tmp_path / "chart.pdf")
+    pdf = Drawing(Chart((4.0, 3.0), [panel])).save(tmp_path / "chart.pdf")
     text = subprocess.run(
         ["pdftotext", "-layout", str(pdf), "-"], check=True, capture_output=True, text=True
     ).stdout
@@ -130,4 +131,4 @@ def test_chart_saved_as_pdf_is_vector_and_readable(tmp_path: Path):
     ).stdout
     assert len(images.strip().splitlines()) == 2  # the header only: nothing rasterised
     with pytest.raises(ValueError, match=r"chart\.png: a chart is saved as \.svg or \.pdf"):
-        Chart((4.0, 3.0), [panel]).save(tmp_path / "chart.png")
+        Drawing(Chart((4.0, 3.0), [panel])).save(tmp_path / "chart.png")

@@ -1,6 +1,6 @@
 """Figures for notebooks: the report's plan view and vertical section of a trajectory, as
-charts (drawn by the same code as the survey report). A chart shows itself in Jupyter (SVG)
-and ``chart.save('plan.svg')`` or ``chart.save('plan.pdf')`` writes it as vector graphics."""
+drawings of the survey report's own charts. A drawing shows itself in Jupyter (SVG) and
+``drawing.save('plan.svg')`` or ``drawing.save('plan.pdf')`` writes it as vector graphics."""
 
 from __future__ import annotations
 
@@ -11,23 +11,25 @@ import numpy as np
 from pipeline.api.frames import TableLike, to_table
 
 if TYPE_CHECKING:
-    from pipeline.reports.charts.model import Chart
+    from pipeline.reports.charts.drawing import Drawing
     from pipeline.reports.plots import Path3
 
 SIZE = (6.0, 5.0)
 """inches"""
 
 
-def plot_plan(trajectory: TableLike) -> Chart:
+def plot_plan(trajectory: TableLike) -> Drawing:
     """Plan view (north vs east, m, from the wellhead) of a trajectory, with the closure."""
+    from pipeline.reports.charts.drawing import Drawing
     from pipeline.reports.plots import plan_view
 
-    return plan_view(SIZE, _path(trajectory))
+    return Drawing(plan_view(SIZE, _path(trajectory)))
 
 
-def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Chart:
+def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Drawing:
     """Vertical section (m along ``azimuth``, deg, default: the table's own vertical-section
     plane) against TVD (m, down)."""
+    from pipeline.reports.charts.drawing import Drawing
     from pipeline.reports.plots import vertical_section
 
     table = to_table(trajectory, what="trajectory")
@@ -37,7 +39,7 @@ def plot_section(trajectory: TableLike, azimuth: float | None = None) -> Chart:
     else:
         a = np.radians(azimuth)
         vs = path.north * np.cos(a) + path.east * np.sin(a)
-    return vertical_section(SIZE, vs, path, azimuth)
+    return Drawing(vertical_section(SIZE, vs, path, azimuth))
 
 
 def _path(trajectory: TableLike) -> Path3:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -204,37 +203,11 @@ class Panel:
 
 @dataclass
 class Chart:
-    """A whole figure: ``size`` (width, height) inches and its panels. In a notebook it
-    shows itself (``_repr_svg_``); :meth:`save` writes it as SVG or PDF."""
+    """A whole figure: ``size`` (width, height) inches and its panels (drawn, shown and
+    saved by :class:`~.drawing.Drawing`)."""
 
     size: tuple[float, float]
     panels: list[Panel] = field(default_factory=list)
-
-    def svg(self, id_prefix: str = "") -> str:
-        """The chart as an SVG document (ids of clip paths prefixed with ``id_prefix``)."""
-        from pipeline.reports.charts.layout import lay_out
-        from pipeline.reports.charts.svg import to_svg
-
-        return to_svg(lay_out(self), id_prefix)
-
-    def _repr_svg_(self) -> str:
-        return self.svg()
-
-    def save(self, path: str | Path) -> Path:
-        """Write the chart to ``path``: ``.svg`` or ``.pdf`` (its size, vector)."""
-        from pipeline.reports.charts.layout import lay_out
-
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix == ".svg":
-            path.write_text(self.svg(), encoding="utf-8")
-        elif suffix == ".pdf":
-            from pipeline.reports.charts.pdf import chart_pdf
-
-            chart_pdf(lay_out(self), path)
-        else:
-            raise ValueError(f"{path}: a chart is saved as .svg or .pdf, not {suffix!r}")
-        return path
 
 
 def grid(
