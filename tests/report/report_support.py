@@ -134,6 +134,8 @@ def assert_self_contained(report: PageReport, html: Path) -> None:
     assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", source)
     assert "<script" not in source and "<img" not in source
     assert not re.search(r"url\((?!#)", source)  # only an SVG's own clip paths
+    ids = re.findall(r'\sid="([^"]+)"', source)
+    assert len(ids) == len(set(ids)), "ids repeat: figures share one page"
     assert report.svgs, "no figures"
     for svg in report.svgs:
         assert svg["figure"], svg

@@ -55,12 +55,12 @@ def well() -> plots.Path3:
     return plots.Path3(md, north, east, tvd, (0, 41), "true north")
 
 
-def tick_map(root: ET.Element, prefix: str, axis: int) -> tuple[float, float]:
+def tick_map(root: ET.Element, kind: str, axis: int) -> tuple[float, float]:
     """(scale, offset) of the tick marks: point = scale × value + offset, fitted from each
     tick group's mark position and its label."""
     positions, values = [], []
     for group in root.iter(f"{SVG}g"):
-        if not group.get("id", "").startswith(prefix):
+        if group.get("class") != kind:
             continue
         mark = group.find(f"{SVG}path")
         label = group.find(f"{SVG}text")
@@ -80,8 +80,8 @@ def test_plan_view_puts_each_station_where_the_ticks_say(tmp_path: Path):
     svg = Drawing(plots.plan_view((6.9, 4.0), path)).svg()
     root = ET.fromstring(svg)  # well-formed
     assert root.get("width") == "496.8pt" and root.get("height") == "288pt"
-    sx, ox = tick_map(root, "xtick_", 0)
-    sy, oy = tick_map(root, "ytick_", 1)
+    sx, ox = tick_map(root, "xtick", 0)
+    sy, oy = tick_map(root, "ytick", 1)
     assert sx == pytest.approx(-sy, rel=1e-3)  # equal scales, north up
     stations = next(
         p
@@ -107,9 +107,7 @@ def test_log_axes_tick_at_decades():
         {"gyro_x": "deg/h", "acc_x": "m/s2"},
     )
     root = ET.fromstring(Drawing(chart).svg())
-    labels = [
-        "".join(g.itertext()) for g in root.iter(f"{SVG}g") if g.get("id", "").startswith("xtick_")
-    ]
+    labels = ["".join(g.itertext()) for g in root.iter(f"{SVG}g") if g.get("class") == "xtick"]
     assert labels == ["0.1", "1", "10", "100", "1000"] * 2  # gyro and accelerometer panels
 
 

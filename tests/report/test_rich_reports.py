@@ -148,10 +148,10 @@ def test_qc_chart_axes_fit_their_data(point_run: Path, browser: Any):
     svg = figure_svg(point_run / "report.html", "qc-0")
 
     def ticks(panel: str) -> list[float]:
-        return [number(t) for t in svg_texts(browser, svg, f'#{panel} g[id^="ytick_"] text')]
+        return [number(t) for t in svg_texts(browser, svg, f"#{panel} g.ytick text")]
 
     def legend(panel: str) -> list[str]:
-        return svg_texts(browser, svg, f'#{panel} g[id^="legend_"] text')
+        return svg_texts(browser, svg, f"#{panel} g.legend text")
 
     rest = [r["measured"] - r["reference"] for r in qc if r["check"] == "rest_gyro"]
     limit = max(r["tolerance"] for r in qc if r["check"] == "rest_gyro")

@@ -22,8 +22,9 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 COLUMNS = 2048
-"""Bins of an envelope: at least the pixel columns of a report figure's axes (7 in at
-200 dpi is 1,400 pixels); so a drawn line has at most 4,096 points."""
+"""Bins of an envelope: at least the device pixels across a report figure's axes as it is
+shown or printed (6.5 in of vector line at 300 dpi is 1,950 dots); so a drawn line has at
+most 4,096 points."""
 
 
 class Envelope:

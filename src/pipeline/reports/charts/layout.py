@@ -347,7 +347,7 @@ def _axes(
     )
     tick = Stroke(EDGE.colour, 0.6)
     bottom = y0 + h + TICK_LENGTH + TICK_PAD
-    for k, (v, text) in enumerate(zip(xt, xl, strict=True)):
+    for v, text in zip(xt, xl, strict=True):
         if not _inside(v, sx):
             continue
         x = sx.at(v)
@@ -356,9 +356,9 @@ def _axes(
         ]
         if panel.x.tick_labels:
             items.append(anchored(x, bottom, text, panel.x.tick_size, TICK_COLOUR, "center", "top"))
-        over.add(Group(items, f"xtick_{k + 1}"))
+        over.add(Group(items, kind="xtick"))
     widest = 0.0
-    for k, (v, text) in enumerate(zip(yt, yl, strict=True)):
+    for v, text in zip(yt, yl, strict=True):
         if not _inside(v, sy):
             continue
         y = sy.at(v)
@@ -375,7 +375,7 @@ def _axes(
             )
             widest = max(widest, lab.width())
             items.append(lab)
-        over.add(Group(items, f"ytick_{k + 1}"))
+        over.add(Group(items, kind="ytick"))
     if panel.x.label:
         below = bottom + (TICK_SIZE if panel.x.tick_labels else 0) + LABEL_PAD
         over.add(

@@ -124,7 +124,7 @@ def legend(panel: Panel, data: Group, box: tuple[float, float, float, float]) ->
         left, top = corner(min(ORDER, key=covered))
     else:
         left, top = corner(str(panel.legend))
-    group = Group(id="legend_1")
+    group = Group(kind="legend")
     for k, a in enumerate(entries):
         y = top + pad + (k + 0.5) * pitch
         group.add(*_handle(a, left + pad, y, handle, fs))

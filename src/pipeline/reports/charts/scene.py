@@ -104,12 +104,14 @@ Item = Path | Marks | Label
 
 @dataclass
 class Group:
-    """Primitives (and groups) in drawing order, optionally named (``id`` in SVG) and
-    clipped to a rectangle (x, y, w, h points)."""
+    """Primitives (and groups) in drawing order, optionally named (``id`` in SVG: unique in
+    a report), of a ``kind`` (``class`` in SVG: x and y ticks, legends) and clipped to a
+    rectangle (x, y, w, h points)."""
 
     items: list[Item | Group] = field(default_factory=list)
     id: str = ""
     clip: tuple[float, float, float, float] | None = None
+    kind: str = ""
 
     def add(self, *items: Item | Group) -> None:
         self.items.extend(items)

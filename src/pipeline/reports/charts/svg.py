@@ -93,7 +93,7 @@ def _group(g: Group, prefix: str, clips: list[int]) -> str:
         else _label(i)
         for i in g.items
     )
-    attrs = f' id="{escape(g.id)}"' if g.id else ""
+    attrs = (f' id="{escape(g.id)}"' if g.id else "") + (f' class="{g.kind}"' if g.kind else "")
     if g.clip is not None:
         clips.append(len(clips))
         name = f"{prefix}clip{len(clips)}"
