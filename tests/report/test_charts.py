@@ -8,9 +8,11 @@ import shutil
 import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+from report_support import svg_boxes, svg_texts
 
 from pipeline.reports import plots
 from pipeline.reports.charts import ticks
@@ -130,3 +132,64 @@ def test_chart_saved_as_pdf_is_vector_and_readable(tmp_path: Path):
     assert len(images.strip().splitlines()) == 2  # the header only: nothing rasterised
     with pytest.raises(ValueError, match=r"chart\.png: a chart is saved as \.svg or \.pdf"):
         Drawing(Chart((4.0, 3.0), [panel])).save(tmp_path / "chart.png")
+
+
+@pytest.mark.parametrize("azimuth", [45.0, 225.0, 315.0])
+def test_plan_view_td_label_clears_the_path(azimuth: float, browser: Any):
+    """The TD label sits beside TD where no station is, inside the axes (its boxes as
+    Chromium lays the SVG out; the figure drawn 1:1, one CSS px = 0.75 pt)."""
+    md = np.linspace(0.0, 2000.0, 41)
+    reach = np.clip(md - 300.0, 0.0, None) * 0.7
+    a = np.radians(azimuth)
+    path = plots.Path3(
+        md,
+        reach * np.cos(a),
+        reach * np.sin(a),
+        np.minimum(md, 300.0) + reach,
+        (0, 41),
+        "grid north",
+    )
+    svg = Drawing(plots.plan_view((6.9, 4.0), path)).svg()
+    root = ET.fromstring(svg)
+    stations = next(
+        p
+        for p in root.iter(f"{SVG}path")
+        if p.get("stroke") == plots.BLUE and "L" in p.get("d", "")
+    )
+    points = (
+        np.array(
+            [
+                [float(v) for v in xy.split(",")]
+                for xy in re.split(r"[ML ]+", stations.get("d", ""))[1:]
+            ]
+        )
+        / 0.75
+    )
+    frame = next(
+        p for p in root.iter(f"{SVG}path") if p.get("stroke") == "#9aa5b1" and "Z" in p.get("d", "")
+    )
+    corners = (
+        np.array(
+            [
+                [float(v) for v in xy.split(",")]
+                for xy in re.split(r"[MLZ ]+", frame.get("d", ""))[1:-1]
+            ]
+        )
+        / 0.75
+    )
+    texts, (origin,) = svg_boxes(browser, svg, ["text", "svg"])
+    shift = np.array([origin["x0"], origin["y0"]])  # where the page put the SVG
+    points, corners = points + shift, corners + shift
+    contents = svg_texts(browser, svg, "text")
+    label = [b for b, t in zip(texts, contents, strict=True) if t.startswith(("TD ", "closure"))]
+    assert len(label) == 2
+    for box in label:
+        inside = (
+            (points[:, 0] >= box["x0"] - 2)
+            & (points[:, 0] <= box["x1"] + 2)
+            & (points[:, 1] >= box["y0"] - 2)
+            & (points[:, 1] <= box["y1"] + 2)
+        )
+        assert not inside.any(), (box, points[inside])
+        assert corners[:, 0].min() <= box["x0"] and box["x1"] <= corners[:, 0].max()
+        assert corners[:, 1].min() <= box["y0"] and box["y1"] <= corners[:, 1].max()

@@ -96,16 +96,16 @@ def plan_view(size: Size, path: Path3) -> Chart:
         Line(np.zeros(1), np.zeros(1), NAVY, 0, marker=Marker("s", 5), label="wellhead"),
         Line(np.array([0.0, e_end]), np.array([0.0, n_end]), GREY, 0.8, dash=(3, 2)),
         Line(np.array([e_end]), np.array([n_end]), ORANGE, 0, marker=Marker("v", 6), label="TD"),
-        Text(
+        Text(  # beside TD, clear of the path
             e_end,
             n_end,
             f"TD  MD {path.md[-1]:.1f} m\nclosure {distance:.1f} m @ {fmt_azimuth(direction)}°",
             dx=8,
-            dy=-4,
-            va="top",
+            dy=6,
+            clear=True,
         ),
     )
-    panel.legend = "upper left"
+    panel.legend = "best"
     return Chart(size, [panel])
 
 

@@ -4,6 +4,7 @@ as the reports are: small grey ticks, a light grid, bold navy titles on the left
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,9 @@ from pipeline.reports.charts.scene import (
     Scene,
     Stroke,
     anchored,
+    covered,
     faded,
+    points,
 )
 
 PT = 72.0
@@ -46,6 +49,8 @@ TICK_SIZE = 7.5
 TICK_LENGTH = 2.5
 TICK_PAD = 3.5
 LABEL_PAD = 4.0
+PAD = 3.0
+"""Points a ``clear`` text keeps from the drawn points (a marker's half-width)."""
 MARGIN = 0.05
 """Share of the data's range left free at each end of an axis whose limits are not set."""
 
@@ -313,6 +318,47 @@ def _text(a: Text, sx: Scale, sy: Scale) -> Group | Label:
     return Group(rows, a.id)
 
 
+CORNERS = ((1, -1), (1, 1), (-1, -1), (-1, 1), (1, 0), (-1, 0), (0, 1), (0, -1))
+"""Where a ``clear`` text may go, in this order: right below, right above, left below, left
+above, right, left, above, below."""
+SIDES = {1: ("left", "bottom"), 0: ("center", "center"), -1: ("right", "top")}
+"""Alignment of a text on each side of its point (horizontal for x, vertical for y)."""
+
+
+def _extent(item: Item | Group) -> tuple[float, float, float, float]:
+    """Box (x0, y0, x1, y1) of a text's lines, points."""
+    labels = item.items if isinstance(item, Group) else [item]
+    boxes = np.array([t.extent() for t in labels if isinstance(t, Label)])
+    return (*boxes[:, :2].min(axis=0), *boxes[:, 2:].max(axis=0))
+
+
+def _clear(
+    a: Text, sx: Scale, sy: Scale, drawn: Points, box: tuple[float, float, float, float]
+) -> Item | Group:
+    """``a`` in the place around its point that covers the fewest of the ``drawn`` points,
+    each place first moved into the panel if it sticks out (the first place on a tie)."""
+    x0, y0, w, h = box
+
+    def placed(right: int, up: int) -> Item | Group:
+        text = dataclasses.replace(
+            a,
+            dx=right * abs(a.dx),
+            dy=up * abs(a.dy),
+            ha=SIDES[right][0],  # type: ignore[arg-type]
+            va=SIDES[up][1],  # type: ignore[arg-type]
+        )
+        e = _extent(_text(text, sx, sy))
+        shift_x = max(0.0, x0 - e[0]) - max(0.0, e[2] - x0 - w)
+        shift_y = max(0.0, y0 - e[1]) - max(0.0, e[3] - y0 - h)
+        return _text(dataclasses.replace(text, dx=text.dx + shift_x, dy=text.dy - shift_y), sx, sy)
+
+    def cost(item: Item | Group) -> int:
+        e = _extent(item)
+        return covered(drawn, (e[0] - PAD, e[1] - PAD, e[2] + PAD, e[3] + PAD))
+
+    return min((placed(right, up) for right, up in CORNERS), key=cost)
+
+
 def _inside(v: float, s: Scale) -> bool:
     """True if ``v`` lies within the limits of ``s`` (to rounding)."""
     lo, hi = sorted((s.lo, s.hi))
@@ -408,17 +454,20 @@ def _panel(panel: Panel) -> Group:
         under, over = _axes(panel, sx, sy, box)
         group.add(under)
     data = Group(clip=box if panel.frame else None)
-    texts: list[Item | Group] = []
     for a in panel.artists:
-        if isinstance(a, Text):
-            texts.append(_text(a, sx, sy))
-        else:
+        if not isinstance(a, Text):
             data.add(*_artist(a, sx, sy, box))
+    drawn = points(data)
+    texts = [
+        (_clear(a, sx, sy, drawn, box) if a.clear else _text(a, sx, sy))
+        for a in panel.artists
+        if isinstance(a, Text)
+    ]
     group.add(data, over, *texts)
     if panel.title:
         group.add(anchored(box[0], box[1] - 5.5, panel.title, 8.5, panel.title_colour, bold=True))
     if panel.legend is not None:
-        found = legend(panel, data, box)
+        found = legend(panel, data, box, [_extent(t) for t in texts])
         if found is not None:
             group.add(found)
     return group

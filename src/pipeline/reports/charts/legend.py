@@ -4,6 +4,8 @@ the label), in a corner of the panel, the corner covering the fewest data points
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from pipeline.reports.charts.model import Band, Bars, ErrorBars, Line, Panel, Polygon, Span
@@ -14,7 +16,9 @@ from pipeline.reports.charts.scene import (
     Path,
     Stroke,
     anchored,
+    covered,
     faded,
+    points,
     text_width,
 )
 
@@ -30,18 +34,6 @@ ORDER = (
     "upper center",
 )
 """Where ``best`` looks, in this order (ties go to the first)."""
-
-
-def _points(group: Group) -> np.ndarray:
-    found: list[np.ndarray] = []
-    for item in group.items:
-        if isinstance(item, Group):
-            found.append(_points(item))
-        elif isinstance(item, Path):
-            found.extend(p for p in item.parts if not item.closed or len(p) > 4)
-        elif isinstance(item, Marks):
-            found.append(item.xy)
-    return np.concatenate(found) if found else np.zeros((0, 2))
 
 
 def _handle(a: object, x: float, y: float, length: float, size: float) -> list[Item]:
@@ -86,8 +78,19 @@ def _handle(a: object, x: float, y: float, length: float, size: float) -> list[I
     return []
 
 
-def legend(panel: Panel, data: Group, box: tuple[float, float, float, float]) -> Group | None:
-    """The legend of ``panel`` (None when nothing is labelled)."""
+def _meet(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """True if boxes (x0, y0, x1, y1) share area."""
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def legend(
+    panel: Panel,
+    data: Group,
+    box: tuple[float, float, float, float],
+    avoid: Sequence[tuple[float, float, float, float]] = (),
+) -> Group | None:
+    """The legend of ``panel`` (None when nothing is labelled); ``best`` keeps clear of the
+    drawn points and of the boxes ``avoid`` (x0, y0, x1, y1: the panel's text)."""
     entries = [a for a in panel.artists if getattr(a, "label", "") and not hasattr(a, "text")]
     if not entries:
         return None
@@ -109,19 +112,14 @@ def legend(panel: Panel, data: Group, box: tuple[float, float, float, float]) ->
     if panel.legend == "outside":
         left, top = x0 + w + gap, y0
     elif panel.legend == "best":
-        points = _points(data)
+        drawn = points(data)
 
-        def covered(loc: str) -> int:
+        def cost(loc: str) -> int:
             lx, ty = corner(loc)
-            inside = (
-                (points[:, 0] >= lx)
-                & (points[:, 0] <= lx + width)
-                & (points[:, 1] >= ty)
-                & (points[:, 1] <= ty + height)
-            )
-            return int(inside.sum())
+            area = (lx, ty, lx + width, ty + height)
+            return covered(drawn, area) + 1000 * sum(_meet(area, other) for other in avoid)
 
-        left, top = corner(min(ORDER, key=covered))
+        left, top = corner(min(ORDER, key=cost))
     else:
         left, top = corner(str(panel.legend))
     group = Group(kind="legend")

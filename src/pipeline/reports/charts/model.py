@@ -140,7 +140,9 @@ class ErrorBars:
 @dataclass(frozen=True)
 class Text:
     """Text at data point (x, y), moved by (dx, dy) pt (dy up); ``box``: on a white
-    background."""
+    background; ``clear``: in whichever corner around (x, y), |dx| and |dy| away, covers the
+    fewest drawn points within the panel (``ha``, ``va`` and the signs of dx, dy then
+    follow the corner)."""
 
     x: float
     y: float
@@ -153,6 +155,7 @@ class Text:
     va: Literal["top", "center", "bottom", "baseline"] = "baseline"
     bold: bool = False
     box: bool = False
+    clear: bool = False
     id: str = ""
 
 

@@ -92,10 +92,11 @@ class Label:
         return text_width(self.text, self.size, self.bold)
 
     def extent(self) -> tuple[float, float, float, float]:
-        """Unrotated box (x0, y0, x1, y1) of the text, points (y down)."""
+        """Unrotated box (x0, y0, x1, y1) of the text, points (y down): its advance across,
+        the font's ascent and descent (0.93 and 0.24 em) up and down."""
         w = self.width()
         x0 = self.x - {"start": 0.0, "middle": w / 2, "end": w}[self.anchor]
-        return x0, self.y - 0.76 * self.size, x0 + w, self.y + 0.24 * self.size
+        return x0, self.y - 0.93 * self.size, x0 + w, self.y + 0.24 * self.size
 
 
 Item = Path | Marks | Label
@@ -115,6 +116,27 @@ class Group:
 
     def add(self, *items: Item | Group) -> None:
         self.items.extend(items)
+
+
+def points(group: Group) -> Points:
+    """Every vertex and marker centre drawn in ``group`` (what a legend or label should not
+    cover); the outlines of filled areas are left out."""
+    found: list[Points] = [np.zeros((0, 2))]
+    for item in group.items:
+        if isinstance(item, Group):
+            found.append(points(item))
+        elif isinstance(item, Path):
+            found.extend(p for p in item.parts if not item.closed or len(p) > 4)
+        elif isinstance(item, Marks):
+            found.append(item.xy)
+    return np.concatenate(found)
+
+
+def covered(xy: Points, box: tuple[float, float, float, float]) -> int:
+    """How many of the points ``xy`` lie in ``box`` (x0, y0, x1, y1)."""
+    x0, y0, x1, y1 = box
+    inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    return int(inside.sum())
 
 
 @dataclass
