@@ -193,3 +193,32 @@ def test_plan_view_td_label_clears_the_path(azimuth: float, browser: Any):
         assert not inside.any(), (box, points[inside])
         assert corners[:, 0].min() <= box["x0"] and box["x1"] <= corners[:, 0].max()
         assert corners[:, 1].min() <= box["y0"] and box["y1"] <= corners[:, 1].max()
+
+
+def test_pdf_and_svg_place_the_labels_alike(tmp_path: Path):
+    """One layout, two writers: each x tick label is centred on the same point in the PDF
+    (words' boxes from pdftotext) as in the SVG (its middle-anchored x)."""
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext not found: apt-get install poppler-utils")
+    drawing = Drawing(plots.plan_view((6.9, 4.0), well()))
+    root = ET.fromstring(drawing.svg())
+    svg_x = {}
+    for group in root.iter(f"{SVG}g"):
+        label = group.find(f"{SVG}text")
+        if group.get("class") == "xtick" and label is not None and label.text:
+            svg_x[label.text] = float(label.get("x", "nan"))
+    bbox = subprocess.run(
+        ["pdftotext", "-bbox", str(drawing.save(tmp_path / "plan.pdf")), "-"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    words = re.findall(
+        r'<word xMin="([\d.]+)" yMin="[\d.]+" xMax="([\d.]+)"[^>]*>([^<]*)</word>', bbox
+    )
+    centres: dict[str, list[float]] = {}
+    for a, b, w in words:
+        centres.setdefault(w, []).append((float(a) + float(b)) / 2)
+    assert len(svg_x) >= 5
+    for text, x in svg_x.items():
+        assert min(abs(c - x) for c in centres[text]) < 0.5, (text, x, centres[text])
