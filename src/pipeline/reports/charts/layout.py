@@ -37,6 +37,7 @@ from pipeline.reports.charts.scene import (
     covered,
     faded,
     points,
+    text_width,
 )
 
 PT = 72.0
@@ -45,7 +46,6 @@ EDGE = Stroke("#9aa5b1", 0.6)
 GRID = Stroke("#e1e6ec", 0.5)
 MINOR_GRID = Stroke("#f0f3f6", 0.4)
 TICK_COLOUR = "#52606d"
-TICK_SIZE = 7.5
 TICK_LENGTH = 2.5
 TICK_PAD = 3.5
 LABEL_PAD = 4.0
@@ -172,15 +172,15 @@ def _ticks(
     if axis.scale == "log":
         major, minor = tk.log_ticks(lo, hi)
         return major, [tk.log_label(v) for v in major], minor
-    length = abs(scale.length)
-    most = int(np.clip(length / (3 * TICK_SIZE if horizontal else 2.2 * TICK_SIZE), 2, 9))
-    while True:
+    length, size = abs(scale.length), axis.tick_size
+    most = int(np.clip(length / (3 * size if horizontal else 2.2 * size), 2, 9))
+    while True:  # fewer ticks until the labels of a horizontal axis have room
         values, step = tk.linear_ticks(lo, hi, most)
         labels = [tk.label(v, step) for v in values]
         if not horizontal or most <= 2:
             return values, labels, []
-        widest = max(Label(0, 0, t, TICK_SIZE, INK).width() for t in labels)
-        if (widest + 2 * TICK_SIZE) * len(values) <= length:
+        widest = max(text_width(t, size) for t in labels)
+        if (widest + 2 * size) * len(values) <= length:
             return values, labels, []
         most -= 1
 
@@ -423,7 +423,7 @@ def _axes(
             items.append(lab)
         over.add(Group(items, kind="ytick"))
     if panel.x.label:
-        below = bottom + (TICK_SIZE if panel.x.tick_labels else 0) + LABEL_PAD
+        below = bottom + (panel.x.tick_size if panel.x.tick_labels else 0) + LABEL_PAD
         over.add(
             anchored(x0 + w / 2, below, panel.x.label, panel.x.label_size, INK, "center", "top")
         )
