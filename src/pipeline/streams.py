@@ -93,21 +93,34 @@ def as_table(value: Port) -> pa.Table:
 
 
 def use_returning_memory_pool() -> None:
-    """Allocate so that freed memory goes back to the operating system at once: Arrow from
-    the system allocator (unless ``ARROW_DEFAULT_MEMORY_POOL`` chooses) — mimalloc, pyarrow's
-    default on Linux, and jemalloc keep the pages of batches already streamed past — and
-    glibc's ``malloc`` with a fixed mmap threshold (128 KiB: its default moves up to the
-    largest block freed, after which blocks of a batch's size stay in the heap). Without both
-    a process's peak grew with the survey it streamed (benchmarks/bench_memory.py)."""
+    """Allocate so that freed memory goes back to the operating system: Arrow from jemalloc
+    (unless ``ARROW_DEFAULT_MEMORY_POOL`` chooses; the system allocator where pyarrow has no
+    jemalloc), and glibc's ``malloc`` with a fixed mmap threshold of :data:`MMAP_THRESHOLD`
+    (glibc's default moves up to the largest block freed, 32 MiB at most, after which arrays
+    of a survey's length stay in the heap and a process's peak grew with the survey it
+    streamed). jemalloc purges freed pages after its decay time and reuses them meanwhile:
+    it peaks lower than the system allocator, which maps and faults in every block of a
+    batch afresh (Parquet decoding took 2.5× as long), and than mimalloc, pyarrow's default
+    on Linux (benchmarks/bench_memory.py)."""
     if not os.environ.get("ARROW_DEFAULT_MEMORY_POOL"):
-        pa.set_memory_pool(pa.system_memory_pool())
+        try:
+            pool = pa.jemalloc_memory_pool()
+        except NotImplementedError:  # a pyarrow built without jemalloc
+            pool = pa.system_memory_pool()
+        pa.set_memory_pool(pool)
     if sys.platform == "linux" and not os.environ.get("MALLOC_MMAP_THRESHOLD_"):
         try:
             libc = ctypes.CDLL("libc.so.6")
         except OSError:  # not glibc
             return
-        libc.mallopt(_M_MMAP_THRESHOLD, 128 * 1024)
+        libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
 
 
+MMAP_THRESHOLD = 1 << 20
+"""bytes: NumPy arrays up to this size come from glibc's heap and are reused, larger ones are
+mapped and unmapped whole. Above a column of a batch or of a continuous-integration chunk
+(65,536 rows × 8 B = 512 KiB, plus a filter's overlap), which at 128 KiB were mapped and
+faulted in afresh for every temporary: a continuous well took 2.73 s CPU then, 2.00 s now,
+for peaks 20–30 MiB higher (benchmarks/bench_memory.py; still within the targets)."""
 _M_MMAP_THRESHOLD = -3
 """glibc's ``mallopt`` parameter number (malloc.h)."""

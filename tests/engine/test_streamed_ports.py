@@ -115,3 +115,49 @@ def test_a_streamed_output_is_checked_batch_by_batch_at_its_stage(tmp_path: Path
     message = str(info.value)
     assert "stage 'double' output port 'samples'" in message
     assert "'gyro_x': finite" in message and "row 2500: nan" in message
+
+
+def test_a_stream_holding_a_contract_is_not_checked_again() -> None:
+    """A stream already checked against a contract (``holds`` it) passes through that
+    contract's check as it is; one that does not hold it is checked, then holds it."""
+    samples = survey()
+    time = samples.column("time").to_numpy().copy()
+    time[7] = time[6]  # not strictly increasing
+    bad = TableStream.from_table(
+        samples.set_column(0, samples.schema.field("time"), pa.array(time))
+    )
+    checked = RawSamples.validate_stream(bad)
+    assert RawSamples in checked.holds
+    with pytest.raises(ContractViolation, match="'time'"):
+        list(checked)
+    assert RawSamples.validate_stream(checked) is checked
+
+
+def test_the_samples_a_stage_streams_hold_their_contract(tmp_path: Path) -> None:
+    """The read stage's samples reach a streamed stage holding RawSamples (checked once,
+    as they were read), so neither the runner nor the stage checks them again."""
+    seen: list[frozenset[Any]] = []
+
+    def recording(
+        inputs: Mapping[str, TableStream], params: Any, ctx: StageContext
+    ) -> dict[str, TableStream]:
+        seen.append(inputs["samples"].holds)
+        return {"samples": inputs["samples"]}
+
+    stage = StageDef(
+        name="counting.recording",
+        func=recording,
+        description="records what its input holds",
+        inputs={"samples": RawSamples},
+        outputs={"samples": RawSamples},
+        streamed_inputs=frozenset({"samples"}),
+        streamed_outputs=frozenset({"samples"}),
+    )
+    source = tmp_path / "samples.parquet"
+    pq.write_table(survey(), source)
+    text = PIPELINE.split("  - id: readings")[0] + (
+        "  - id: record\n    uses: counting.recording\n    inputs: {samples: read.samples}\n"
+        "    persist: [samples]\n"
+    )
+    run(tmp_path, registry_with(counting_reader(Alive()), stage), text, source)
+    assert seen and RawSamples in seen[0]

@@ -23,6 +23,7 @@ angles in degrees, times in seconds; the sample rate comes from the (uniform) ti
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import numpy as np
 import pyarrow as pa
@@ -366,24 +367,36 @@ def reduce_readings(
         )
     n = b - a
     offsets = np.concatenate([[0], np.cumsum(n)[:-1]])
-    index = np.arange(int(n.sum())) - np.repeat(offsets - a, n)  # samples used, reading by reading
+    used = _used_samples(a, offsets, n, time.size)
     groups, inverse = np.unique(station, return_inverse=True)
     label = inverse.ravel()  # station of each reading as 0 … groups − 1
     columns: dict[str, object] = {
         "station": station,
-        "md": _group_median(md[index], np.repeat(label, n), groups.size)[label],
+        "md": _group_median(used(md), np.repeat(label, n), groups.size)[label],
         "position": position,
         "t": (time[a] + time[b - 1]) / 2,
     }
     if angle is not None:
-        columns["frame_angle"] = _circular_mean(angle[index], offsets)
+        columns["frame_angle"] = _circular_mean(used(angle), offsets)
     stds: dict[str, FloatArray] = {}
     for name, values in signals.items():
-        columns[name], stds[f"{name}_std"] = _mean_std(values[index], offsets, n)
+        columns[name], stds[f"{name}_std"] = _mean_std(used(values), offsets, n)
     columns |= stds
     columns["n"] = n
     columns["duration"] = n / rate
     return PositionReadings.compiled().make_table(columns)
+
+
+def _used_samples(
+    a: IndexArray, offsets: IndexArray, n: IndexArray, size: int
+) -> Callable[[FloatArray], FloatArray]:
+    """The samples of the readings [a, b) of a column, reading after reading: the column
+    itself when the readings are all its samples in order (the streamed path hands over
+    each station so), else a gathered copy."""
+    if int(n.sum()) == size and np.array_equal(a, offsets):
+        return lambda column: column
+    index = np.arange(int(n.sum())) - np.repeat(offsets - a, n)
+    return lambda column: column[index]
 
 
 def _mean_std(x: FloatArray, offsets: IndexArray, n: IndexArray) -> tuple[FloatArray, FloatArray]:
@@ -393,7 +406,7 @@ def _mean_std(x: FloatArray, offsets: IndexArray, n: IndexArray) -> tuple[FloatA
     dev = x - np.repeat(first, n)
     shift = np.add.reduceat(dev, offsets) / n
     dev -= np.repeat(shift, n)
-    var = np.add.reduceat(dev * dev, offsets) / (n - 1)
+    var = np.add.reduceat(np.multiply(dev, dev, out=dev), offsets) / (n - 1)
     return first + shift, np.sqrt(var)
 
 

@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from pipeline.contracts import BatchChecker
 from pipeline.gyrocompass.readings import (
     DEFAULTS,
     NO_ANGLE,
@@ -96,13 +95,12 @@ class _Scan:
 
 def stream_position_readings(samples: TableStream, options: ReadingOptions = DEFAULTS) -> pa.Table:
     """:func:`~pipeline.gyrocompass.readings.position_readings` of a stream of
-    :class:`RawSamples` batches (each checked against the contract), in bounded memory
-    (module docstring). No samples give no readings (an empty table)."""
+    :class:`RawSamples` batches (each checked against the contract unless the stream holds it
+    already), in bounded memory (module docstring). No samples give no readings (an empty
+    table)."""
     wanted = ("md", "frame_angle", *MARKERS, *SIGNALS)
     scan = _Scan(nulls={n: 0 for n in wanted if n in samples.schema.names})
-    checker = BatchChecker(RawSamples.compiled())
-    for batch in samples:
-        checker.check(batch)
+    for batch in RawSamples.validate_stream(samples):
         scan.add(batch)
     if scan.rows == 0:
         return PositionReadings.compiled().schema().empty_table()

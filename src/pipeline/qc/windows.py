@@ -33,7 +33,6 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from numpy.lib.stride_tricks import sliding_window_view
 
-from pipeline.contracts import BatchChecker
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import MagneticReference, Site
 from pipeline.qc.engine import isolate_rows, raise_on_stop, results_table
@@ -304,8 +303,9 @@ def _check_windows(
 
 @dataclass
 class _Scan:
-    """A first pass over the samples (each batch checked against RawSamples): rows, time
-    span and which columns have data; then each batch's columns as :class:`_Samples`."""
+    """A first pass over the samples (checked against RawSamples unless the stream holds it
+    already): rows, time span and which columns have data; then each batch's columns as
+    :class:`_Samples`."""
 
     rows: int
     first: float
@@ -315,12 +315,10 @@ class _Scan:
 
     @classmethod
     def of(cls, stream: TableStream) -> _Scan:
-        checker = BatchChecker(RawSamples.compiled())
         names = [n for n in stream.column_names if n == "md" or n[:-1] in _TRIADS]
         nulls = dict.fromkeys(names, 0)
         rows, first, last = 0, np.nan, np.nan
-        for batch in stream:
-            checker.check(batch)
+        for batch in RawSamples.validate_stream(stream):
             if batch.num_rows:
                 time = batch.column(batch.schema.get_field_index("time"))
                 first = float(time[0].as_py()) if rows == 0 else first

@@ -48,10 +48,12 @@ def _shipped() -> dict[str, Path]:
 
 
 def _declared_name(path: Path) -> str:
-    """The ``name:`` a model file declares, read without resolving ``extends``."""
+    """The ``name:`` a shipped model file declares, read without resolving ``extends`` (by
+    libyaml's safe loader when PyYAML has it: these files are ours, no location needed)."""
     import yaml
 
-    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    data = yaml.load(path.read_text(encoding="utf-8"), Loader=loader)
     return str(data["name"])
 
 
