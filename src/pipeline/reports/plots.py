@@ -228,7 +228,9 @@ def error_ellipses(size: Size, ell: Ellipses, north_label: str, shown: int = 6) 
     )
     for k, i in enumerate(picks):
         east, north = ellipse(float(ell.major[i]), float(ell.minor[i]), float(ell.azimuth[i]))
-        p_shape.add(Polygon(east, north, series_colour(k), label=f"MD {ell.md[i]:.0f} m"))
+        p_shape.add(
+            Polygon(east, north, series_colour(k), label=f"MD {round(float(ell.md[i])) + 0} m")
+        )
     return Chart(size, [p_md, p_shape])
 
 

@@ -222,7 +222,7 @@ def _artist(
             xy = xy[np.isfinite(xy).all(axis=1)]
             m = a.marker
             out.append(Marks(xy, m.shape, m.size, colour, m.hollow, m.edge))
-        return [Group(out, a.id)] if a.id else out
+        return out
     if isinstance(a, Band):
         xs, lows = _steps(a.x, a.low) if a.step else (a.x, a.low)
         highs = _steps(a.x, a.high)[1] if a.step else a.high

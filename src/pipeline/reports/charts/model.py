@@ -56,7 +56,6 @@ class Line:
     step: bool = False
     label: str = ""
     alpha: float = 1.0
-    id: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "x", _array(self.x))
