@@ -2,22 +2,27 @@
 numbers parsed by ``pyarrow.csv`` block by block, up to the first block it cannot prove it
 reads as the careful path would (the careful path reads from there and locates any error).
 
-The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into
-one reused buffer, and each block is rewritten there while it is in the processor's cache
-(CRLF made LF and tabs spaces, if any) so that a comma separates the values of each line,
-then parsed from it (the file's text is never copied whole):
+The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into a
+reused buffer, and each block is rewritten there while it is in the processor's cache so
+that a comma separates the values of each line, then parsed from it in one chunk (the
+file's text is never copied whole):
 
-* a block of fixed-width lines (every line as long; columns that are a space on every line
-  split it into one group of columns per curve, as LAS writers lay values out) keeps its
-  bytes: the first blank column after each group becomes a comma, and ``pyarrow.csv``
-  trims the padding of each value;
-* any other block has each run of spaces made one comma and the spaces at line starts and
-  ends dropped (a vectorised pass).
+* a block of fixed-width lines (every line as long; columns blank on every line split it
+  into one group of columns per curve, as LAS writers lay values out) keeps its bytes: the
+  first column after each group, a space on every line, becomes a comma, and
+  ``pyarrow.csv`` trims the padding of each value (spaces and tabs; CRLF ends a line);
+* any other block has tabs made spaces and CRLF made LF, each run of spaces made one comma
+  and the spaces at line starts and ends dropped (a vectorised pass).
 
 Every value, read or not, is parsed as a float64 (correctly rounded, as Python's ``float``):
 a cell that is not exactly one number (a blank line, a wrong value count, a token like
-``1-2``, text) fails the parse, and a row count other than the line count or a non-finite
-value (``1e999``) declines, so the careful path reports it with its line.
+``1-2``, text, a control byte other than a tab) fails the parse, and a row count other
+than the line count (a lone CR) or a non-finite value (``1e999``) declines, so the careful
+path reports it with its line.
+
+When a core is idle (:func:`~pipeline.io.arrow_text.use_threads`), :data:`AHEAD` threads
+read (copy, rewrite, parse) the next blocks while the caller uses one, each with its own
+buffer: the parse of a block is serial, blocks are parsed in parallel.
 """
 
 from __future__ import annotations
@@ -33,7 +38,8 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.io.arrow_text import release, use_threads
+from pipeline.io import arrow_text
+from pipeline.io.arrow_text import release
 
 Floats = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
@@ -73,19 +79,19 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
     time; a :class:`Declined` block for the careful path where the fast path cannot read
     one (every line of it, blank and comment lines too, is left to the careful path). Each
     block is copied into a reused buffer, rewritten and parsed there, so the section's text
-    is never held whole. When a core is idle (:func:`~pipeline.io.arrow_text.use_threads`)
-    a second thread reads the next block while this one's is used (two buffers)."""
+    is never held whole; when a core is idle, blocks are read ahead by other threads."""
     end = _content_end(raw, start)
     if n == 0:
         yield Declined(start, end)
         return
     parser = _Parser(raw, n, wanted)
     spans = _spans(raw, start, end)
-    if not use_threads():
+    if end - start <= BLOCK or not arrow_text.use_threads():
         buffer = _buffer(0)
         layout: Layout | None = None
         for first, last in spans:
-            block, layout, buffer = parser.read(first, last, buffer, layout)
+            block, found, buffer = parser.read(first, last, buffer, layout)
+            layout = found or layout
             yield block
         return
     yield from _ahead(parser, spans)
