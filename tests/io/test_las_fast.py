@@ -199,3 +199,17 @@ def test_other_control_bytes_in_fixed_width_lines_go_to_the_careful_path(
         list(las_rows.data_blocks(path, source, header, [0, 1, 2]))
     first = path.read_text().splitlines().index("~A") + 2
     assert info.value.line == first + 7
+
+
+def test_values_near_the_float_limit_are_read_whatever_path_reads_them(tmp_path: Path) -> None:
+    """Finite values whose sum passes the float range (the fast path's finiteness test)
+    read as ``float`` reads each cell, and out-of-range cells are reported."""
+    lines = [f"{i:6d} {1.7e308:>24.16e} {-1.7e308:>24.16e}" for i in range(5)]
+    path = _file(tmp_path, lines, 3)
+    table, _ = read_las(path, "log", None)
+    assert table.column("C1").to_pylist() == [1.7e308] * 5
+    assert table.column("C2").to_pylist() == [-1.7e308] * 5
+    path = _file(tmp_path, [*lines, f"{5:6d} {'1.7e309':>24} {0.0:>24.16e}"], 3)
+    with pytest.raises(InputFileError, match="out of range") as info:
+        read_las(path, "log", None)
+    assert info.value.line == path.read_text().splitlines().index("~A") + 7

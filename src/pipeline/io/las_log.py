@@ -47,7 +47,7 @@ from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.las_header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
 from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import Cells, Data, IndexRange, null_values, read_all
+from pipeline.io.las_rows import Cells, Data, IndexRange, null_mask, null_values, read_all
 from pipeline.io.mnemonics import canonical_name
 from pipeline.units import conversion_factor
 
@@ -105,7 +105,7 @@ def _curve(header: Header, i: int) -> Item | None:
 
 def _floats(values: np.ndarray, nulls: list[float], index: bool) -> pa.Array:
     if not index and nulls:
-        null = np.isin(values, nulls)
+        null = null_mask(values, nulls)
         if null.any():
             values = np.where(null, np.nan, values)
     return pa.array(values, pa.float64())

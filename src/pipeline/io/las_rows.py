@@ -365,6 +365,14 @@ def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
     return [header_number(path, item) for item in items] + list(opts.null_values)
 
 
+def null_mask(values: Floats, nulls: list[float]) -> Mask:
+    """Where ``values`` equal any of ``nulls`` (a comparison each: a list is short)."""
+    mask = np.zeros(values.shape, dtype=bool)
+    for null in nulls:
+        mask |= values == null
+    return mask
+
+
 def check_index(
     path: Path, header: Header, data: Data, masks: dict[int, Mask], keys: list[int]
 ) -> None:
