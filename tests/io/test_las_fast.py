@@ -213,3 +213,25 @@ def test_values_near_the_float_limit_are_read_whatever_path_reads_them(tmp_path:
     with pytest.raises(InputFileError, match="out of range") as info:
         read_las(path, "log", None)
     assert info.value.line == path.read_text().splitlines().index("~A") + 7
+
+
+@pytest.mark.parametrize(
+    ("lines", "n"),
+    [
+        (["-1000.0", "0.0", "0.0"], 1),  # 8 + 4 + 4 bytes: two "lines" of 8
+        (["10.5  2.25", "1 1", "1  3.5"], 2),  # 11 + 4 + 7: a blank column between groups
+    ],
+)
+def test_lines_of_other_lengths_adding_up_to_whole_lines_are_read_fast(
+    tmp_path: Path, lines: list[str], n: int
+) -> None:
+    """A block whose bytes split into lines as long as its first although its lines
+    differ is not fixed-width: read by the fast path all the same (packed), as ``float``
+    reads each cell."""
+    path = _file(tmp_path, lines * 3, n)
+    fast, _ = _paths(path)
+    assert fast is not None
+    values, rows = fast
+    assert rows == len(lines) * 3
+    for i in range(n):
+        assert values[i].tolist() == [float(line.split()[i]) for line in lines * 3]

@@ -183,31 +183,43 @@ class _Parser:
         line ending with LF, rewritten there so that one comma separates the values of a
         line and parsed (``known``: the layout of a block before, tried first); with the
         block's layout (None unless fixed-width) and the buffer used."""
+        if buffer.size <= last - first:
+            buffer = _buffer(last - first + 1)
+        try:
+            block, layout = self._read(first, last, buffer, known)
+        finally:
+            release(self.text, first, last)
+        return block or Declined(first, last), layout, buffer
+
+    def _read(
+        self, first: int, last: int, buffer: Bytes, known: Layout | None
+    ) -> tuple[Block | None, Layout | None]:
         text, size = self.text, last - first
-        if buffer.size <= size:
-            buffer = _buffer(size + 1)
-        width = text.find(b"\n", first, last) + 1 - first  # before the pages go
+        width = text.find(b"\n", first, last) + 1 - first
         block = buffer[: size + (text[last - 1] != NEWLINE)]
         block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
-        release(text, first, last)
         width = width if width > 0 else block.size  # the last line, without its LF
         separators = _fixed_width(block, width, self.n, known)
         if separators is not None:
             block.reshape(-1, width)[:, separators] = COMMA
-            layout: Layout | None = width, separators
-            return self._parsed(block, block.size // width, first, last), layout, buffer
+            parsed = self._parsed(block, block.size // width)
+            if parsed is not None:
+                return parsed, (width, separators)
+            # lines of other lengths adding up to whole lines of the first's (or bad
+            # cells, which the packed block fails too): the bytes again, packed
+            block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
         if np.count_nonzero(block < SPACE) != np.count_nonzero(block == NEWLINE):
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
-                return Declined(first, last), None, buffer
+                return None, None
             block = spaced
         rows = int(np.count_nonzero(block == NEWLINE))
-        return self._parsed(_packed(block), rows, first, last), None, buffer
+        return self._parsed(_packed(block), rows), None
 
-    def _parsed(self, data: Bytes, rows: int, first: int, last: int) -> Block | Declined:
-        """The values of ``rows`` lines rewritten in ``data``, parsed in one chunk; or the
-        block declined."""
+    def _parsed(self, data: Bytes, rows: int) -> Block | None:
+        """The values of ``rows`` lines rewritten in ``data``, parsed in one chunk; or None
+        (declined)."""
         try:
             table = pacsv.read_csv(
                 pa.BufferReader(pa.py_buffer(data)),
@@ -218,14 +230,14 @@ class _Parser:
                 convert_options=self.convert,
             )
         except pa.ArrowInvalid:
-            return Declined(first, last)
+            return None
         if table.num_rows != rows:
-            return Declined(first, last)
+            return None
         values = {i: _floats(table.column(self.names[i])) for i in self.wanted}
         with np.errstate(over="ignore", invalid="ignore"):
             total = sum(float(v.sum()) for v in values.values())
         if not np.isfinite(total):
-            return Declined(first, last)  # a NaN or infinity (or a sum past the float range)
+            return None  # a NaN or infinity (or a sum past the float range)
         return Block(values, rows)
 
 
