@@ -201,11 +201,15 @@ def test_other_control_bytes_in_fixed_width_lines_go_to_the_careful_path(
     assert info.value.line == first + 7
 
 
-def test_values_near_the_float_limit_are_read_whatever_path_reads_them(tmp_path: Path) -> None:
-    """Finite values whose sum passes the float range (the fast path's finiteness test)
-    read as ``float`` reads each cell, and out-of-range cells are reported."""
+def test_values_whose_sum_passes_the_float_range_are_read_fast(tmp_path: Path) -> None:
+    """Finite values whose sum passes the float range (the fast path's first finiteness
+    test) are read by the fast path as ``float`` reads each cell; out-of-range cells are
+    reported with their line."""
     lines = [f"{i:6d} {1.7e308:>24.16e} {-1.7e308:>24.16e}" for i in range(5)]
     path = _file(tmp_path, lines, 3)
+    fast, _ = _paths(path)
+    assert fast is not None
+    assert fast[0][1].tolist() == [1.7e308] * 5
     table, _ = read_las(path, "log", None)
     assert table.column("C1").to_pylist() == [1.7e308] * 5
     assert table.column("C2").to_pylist() == [-1.7e308] * 5

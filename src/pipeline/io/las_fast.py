@@ -17,9 +17,9 @@ file's text is never copied whole):
 Every value, read or not, is parsed as a float64 (correctly rounded, as Python's ``float``):
 a cell that is not exactly one number (a blank line, a wrong value count, a token like
 ``1-2``, text, a control byte other than a tab) fails the parse, and a row count other
-than the line count (a lone CR) or a non-finite value (``1e999``; found by the sum of the
-block's values, so values whose sum passes the float range decline too and are read by the
-careful path) declines, so the careful path reports it with its line.
+than the line count (a lone CR) or a non-finite value (``1e999``; looked for value by value
+only when the sum of the block's values is not finite) declines, so the careful path
+reports it with its line.
 
 When a core is idle (:func:`~pipeline.io.arrow_text.use_threads`), :data:`AHEAD` threads
 read (copy, rewrite, parse) the next blocks while the caller uses one, each with its own
@@ -236,8 +236,8 @@ class _Parser:
         values = {i: _floats(table.column(self.names[i])) for i in self.wanted}
         with np.errstate(over="ignore", invalid="ignore"):
             total = sum(float(v.sum()) for v in values.values())
-        if not np.isfinite(total):
-            return None  # a NaN or infinity (or a sum past the float range)
+        if not np.isfinite(total) and not all(np.isfinite(v).all() for v in values.values()):
+            return None  # a NaN or infinity (a sum past the float range alone is not)
         return Block(values, rows)
 
 
