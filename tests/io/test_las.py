@@ -1041,10 +1041,12 @@ def _both_paths(path: Path) -> tuple[dict[int, np.ndarray] | None, las_rows.Data
     source = las_header.load(path)
     header = las_header.parse_header(path, source.header)
     wanted = list(range(len(header.curves)))
-    fast = las_fast.fast_values(source.raw, source.start, len(header.curves), wanted)
+    blocks = las_fast.fast_values(source.raw, source.start, len(header.curves), wanted)
     lines = las_header.split_lines(source.raw[source.start :].decode())
     slow = las_rows._slow_values(path, header, lines, source.title_line, wanted)
-    return (fast[0] if fast else None), slow
+    if blocks is None:
+        return None, slow
+    return {i: np.concatenate([b.values[i] for b in blocks] or [[]]) for i in wanted}, slow
 
 
 @settings(

@@ -45,7 +45,15 @@ from pipeline.io.las_header import (
 )
 from pipeline.io.las_log import read_log
 from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import Data, IndexRange, Mask, check_index, data_blocks, null_values
+from pipeline.io.las_rows import (
+    Data,
+    IndexRange,
+    Mask,
+    check_index,
+    data_blocks,
+    null_mask,
+    null_values,
+)
 from pipeline.io.las_well import well_metadata
 from pipeline.io.las_write import write_las
 from pipeline.io.sniffing import file_head
@@ -108,7 +116,7 @@ class _Rows:
         for data in data_blocks(path, self.source, header, self._wanted()):
             if data.lines.size == 0:
                 continue
-            masks = {i: np.isin(values, nulls) for i, values in data.values.items()}
+            masks = {i: null_mask(values, nulls) for i, values in data.values.items()}
             check_index(path, header, data, masks, [0, self.chosen[spec.key]])
             index.feed(data.values[0], data.lines)
             yield self._table(data, masks)

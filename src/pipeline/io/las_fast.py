@@ -2,28 +2,36 @@
 numbers parsed by ``pyarrow.csv`` block by block, up to the first block it cannot prove it
 reads as the careful path would (the careful path reads from there and locates any error).
 
-The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into
-one reused buffer, and each block is rewritten there while it is in the processor's cache
-(CRLF made LF and tabs spaces, if any) so that a comma separates the values of each line,
-then parsed from it (the file's text is never copied whole):
+The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into a
+reused buffer, and each block is rewritten there while it is in the processor's cache so
+that a comma separates the values of each line, then parsed from it in one chunk (the
+file's text is never copied whole):
 
-* a block of fixed-width lines (every line as long; columns that are a space on every line
-  split it into one group of columns per curve, as LAS writers lay values out) keeps its
-  bytes: the first blank column after each group becomes a comma, and ``pyarrow.csv``
-  trims the padding of each value;
-* any other block has each run of spaces made one comma and the spaces at line starts and
-  ends dropped (a vectorised pass).
+* a block of fixed-width lines (every line as long; columns blank on every line split it
+  into one group of columns per curve, as LAS writers lay values out) keeps its bytes: the
+  first column after each group, a space on every line, becomes a comma, and
+  ``pyarrow.csv`` trims the padding of each value (spaces and tabs; CRLF ends a line);
+* any other block has tabs made spaces and CRLF made LF, each run of spaces made one comma
+  and the spaces at line starts and ends dropped (a vectorised pass).
 
 Every value, read or not, is parsed as a float64 (correctly rounded, as Python's ``float``):
 a cell that is not exactly one number (a blank line, a wrong value count, a token like
-``1-2``, text) fails the parse, and a row count other than the line count or a non-finite
-value (``1e999``) declines, so the careful path reports it with its line.
+``1-2``, text, a control byte other than a tab) fails the parse, and a row count other
+than the line count (a lone CR) or a non-finite value (``1e999``; looked for value by value
+only when the sum of the block's values is not finite) declines, so the careful path
+reports it with its line.
+
+When a core is idle (:func:`~pipeline.io.arrow_text.use_threads`), :data:`AHEAD` threads
+read (copy, rewrite, parse) the next blocks while the caller uses one, each with its own
+buffer: the parse of a block is serial, blocks are parsed in parallel.
 """
 
 from __future__ import annotations
 
 import mmap
+from collections import deque
 from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,15 +39,20 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.io.arrow_text import read_options, release
+from pipeline.io import arrow_text
+from pipeline.io.arrow_text import release
 
 Floats = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Text = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
+Layout = tuple[int, NDArray[np.intp]]
+"""A fixed-width block's line width (with its LF) and separator columns."""
 
 BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
+AHEAD = 2
+"""Blocks read by other threads while one is used, when a core is idle."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
 _TAB_TO_SPACE = bytes.maketrans(b"\t", b" ")
 _BLANK = b" \t\r\n"
@@ -66,63 +79,60 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
     """Values of the ``wanted`` of ``n`` curves in ``raw[start:]``, a block of rows at a
     time; a :class:`Declined` block for the careful path where the fast path cannot read
     one (every line of it, blank and comment lines too, is left to the careful path). Each
-    block is rewritten in one reused buffer and parsed from it, so the section's text is
-    never held whole."""
+    block is copied into a reused buffer, rewritten and parsed there, so the section's text
+    is never held whole; when a core is idle, blocks are read ahead by other threads."""
     end = _content_end(raw, start)
     if n == 0:
         yield Declined(start, end)
         return
-    names = [f"c{i}" for i in range(n)]
-    parse = pacsv.ParseOptions(
-        delimiter=",", quote_char=False, double_quote=False, ignore_empty_lines=False
-    )
-    convert = pacsv.ConvertOptions(
-        column_types=dict.fromkeys(names, pa.float64()),
-        null_values=[],
-        strings_can_be_null=False,
-        check_utf8=False,
-    )
-    for first, last, delimited in _delimited(raw, start, end, n):
-        if delimited is None:
-            yield Declined(first, last)
-            continue
-        data, rows = delimited
-        try:
-            table = pacsv.read_csv(
-                pa.BufferReader(pa.py_buffer(data)),
-                read_options=read_options(names),
-                parse_options=parse,
-                convert_options=convert,
-            )
-        except pa.ArrowInvalid:
-            yield Declined(first, last)
-            continue
-        values = {i: _floats(table.column(names[i])) for i in wanted}
-        if table.num_rows != rows or not all(np.isfinite(v).all() for v in values.values()):
-            yield Declined(first, last)
-            continue
-        yield Block(values, rows)
+    parser = _Parser(raw, n, wanted)
+    spans = _spans(raw, start, end)
+    if end - start <= BLOCK or not arrow_text.use_threads():
+        buffer = _buffer(0)
+        layout: Layout | None = None
+        for first, last in spans:
+            block, found, buffer = parser.read(first, last, buffer, layout)
+            layout = found or layout
+            yield block
+        return
+    yield from _ahead(parser, spans)
 
 
-def fast_values(
-    raw: Text, start: int, n: int, wanted: list[int]
-) -> tuple[dict[int, Floats], int] | None:
-    """:func:`fast_blocks` whole: the values and the row count, or None when the careful
-    path must read them."""
+def _ahead(parser: _Parser, spans: Iterator[tuple[int, int]]) -> Iterator[Block | Declined]:
+    """:meth:`_Parser.read` of each span in order, :data:`AHEAD` blocks read by other
+    threads while this one's block is used (each read in flight has its own buffer)."""
+    with ThreadPoolExecutor(AHEAD, thread_name_prefix="las-block") as pool:
+        free: list[Bytes] = []
+        layout: Layout | None = None
+        pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
+        for first, last in spans:
+            done = None
+            if len(pending) == AHEAD:
+                done = pending.popleft().result()
+                layout = done[1] or layout
+                free.append(done[2])
+            buffer = free.pop() if free else _buffer(0)
+            pending.append(pool.submit(parser.read, first, last, buffer, layout))
+            if done is not None:
+                yield done[0]
+        while pending:
+            yield pending.popleft().result()[0]
+
+
+def fast_values(raw: Text, start: int, n: int, wanted: list[int]) -> list[Block] | None:
+    """:func:`fast_blocks` whole: every block of values, or None when the careful path
+    must read any."""
     blocks = []
     for block in fast_blocks(raw, start, n, wanted):
         if isinstance(block, Declined):
             return None
         blocks.append(block)
-    if len(blocks) == 1:
-        return blocks[0].values, blocks[0].rows
-    values = {i: np.concatenate([b.values[i] for b in blocks] or [np.empty(0)]) for i in wanted}
-    return values, sum(b.rows for b in blocks)
+    return blocks
 
 
 def _floats(column: pa.ChunkedArray) -> Floats:
-    """A parsed column as one array (no copy when it is one chunk)."""
-    values: Floats = column.chunk(0).to_numpy() if column.num_chunks == 1 else column.to_numpy()
+    """A parsed column (one chunk) as an array, without a copy."""
+    values: Floats = column.chunk(0).to_numpy()
     return values
 
 
@@ -135,48 +145,100 @@ def _content_end(raw: Text, start: int) -> int:
     return start
 
 
-def _delimited(
-    text: Text, begin: int, end: int, n: int
-) -> Iterator[tuple[int, int, tuple[Bytes, int] | None]]:
-    """The lines of ``text[begin:end]``, a block at a time: where it starts and ends in
-    ``text``, then its lines each ending with LF, rewritten so that one comma separates
-    the values of a line (``n`` in a good one), and its line count; or None for a lone CR
-    line end. Every block is copied into one reused buffer and rewritten there while in
-    the cache: a yielded block is valid until the next is asked for."""
-    source = np.frombuffer(text, np.uint8, count=end - begin, offset=begin)
-    out = np.empty(0, np.uint8)
-    read = 0
-    layout: tuple[int, NDArray[np.intp]] | None = None
-    while read < source.size:
-        stop = text.find(b"\n", begin + read + BLOCK, end) + 1 - begin
-        stop = source.size + 1 if stop <= 0 else stop
-        if out.size < stop - read:
-            out = np.empty(max(stop - read, 2 * BLOCK), np.uint8)
-        block = out[: stop - read]
-        block[: source.size - read] = source[read:stop]
+def _spans(text: Text, begin: int, end: int) -> Iterator[tuple[int, int]]:
+    """Where each block of ``text[begin:end]`` starts and ends: whole lines of about
+    :data:`BLOCK` bytes (the last line may lack its LF)."""
+    while begin < end:
+        stop = text.find(b"\n", begin + BLOCK, end) + 1
+        stop = end if stop <= 0 else stop
+        yield begin, stop
+        begin = stop
+
+
+def _buffer(size: int) -> Bytes:
+    """A buffer for blocks of ``size`` bytes (at least twice :data:`BLOCK`)."""
+    return np.empty(max(size, 2 * BLOCK), np.uint8)
+
+
+class _Parser:
+    """Reads blocks of ``text`` holding rows of ``n`` values: the ``wanted`` ones."""
+
+    def __init__(self, text: Text, n: int, wanted: list[int]) -> None:
+        self.text, self.n, self.wanted = text, n, wanted
+        self.names = [f"c{i}" for i in range(n)]
+        self.parse = pacsv.ParseOptions(
+            delimiter=",", quote_char=False, double_quote=False, ignore_empty_lines=False
+        )
+        self.convert = pacsv.ConvertOptions(
+            column_types=dict.fromkeys(self.names, pa.float64()),
+            null_values=[],
+            strings_can_be_null=False,
+            check_utf8=False,
+        )
+
+    def read(
+        self, first: int, last: int, buffer: Bytes, known: Layout | None
+    ) -> tuple[Block | Declined, Layout | None, Bytes]:
+        """The block ``text[first:last]`` copied into ``buffer`` (or a larger one), each
+        line ending with LF, rewritten there so that one comma separates the values of a
+        line and parsed (``known``: the layout of a block before, tried first); with the
+        block's layout (None unless fixed-width) and the buffer used."""
+        if buffer.size <= last - first:
+            buffer = _buffer(last - first + 1)
+        try:
+            block, layout = self._read(first, last, buffer, known)
+        finally:
+            release(self.text, first, last)
+        return block or Declined(first, last), layout, buffer
+
+    def _read(
+        self, first: int, last: int, buffer: Bytes, known: Layout | None
+    ) -> tuple[Block | None, Layout | None]:
+        text, size = self.text, last - first
+        width = text.find(b"\n", first, last) + 1 - first
+        block = buffer[: size + (text[last - 1] != NEWLINE)]
+        block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
-        width = text.find(b"\n", begin + read, begin + stop) + 1 - begin - read
-        release(text, begin + read, begin + min(stop, source.size))
         width = width if width > 0 else block.size  # the last line, without its LF
-        separators = _fixed_width(block, width, n, layout)
-        if separators is None and (block < SPACE).sum() != (block == NEWLINE).sum():
+        separators = _fixed_width(block, width, self.n, known)
+        if separators is not None:
+            block.reshape(-1, width)[:, separators] = COMMA
+            parsed = self._parsed(block, block.size // width)
+            if parsed is not None:
+                return parsed, (width, separators)
+            # lines of other lengths adding up to whole lines of the first's (or bad
+            # cells, which the packed block fails too): the bytes again, packed
+            block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
+        if np.count_nonzero(block < SPACE) != np.count_nonzero(block == NEWLINE):
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
-                yield begin + read, begin + min(stop, source.size), None
-                read = stop
-                continue
-            block = out[: spaced.size]
-            block[:] = spaced
-            width = int(np.argmax(block == NEWLINE)) + 1
-            separators = _fixed_width(block, width, n, layout)
-        if separators is not None:
-            layout = width, separators
-            block.reshape(-1, width)[:, separators] = COMMA
-            yield begin + read, begin + min(stop, source.size), (block, block.size // width)
-        else:
-            rows = int(np.count_nonzero(block == NEWLINE))
-            yield begin + read, begin + min(stop, source.size), (_packed(block), rows)
-        read = stop
+                return None, None
+            block = spaced
+        rows = int(np.count_nonzero(block == NEWLINE))
+        return self._parsed(_packed(block), rows), None
+
+    def _parsed(self, data: Bytes, rows: int) -> Block | None:
+        """The values of ``rows`` lines rewritten in ``data``, parsed in one chunk; or None
+        (declined)."""
+        try:
+            table = pacsv.read_csv(
+                pa.BufferReader(pa.py_buffer(data)),
+                read_options=pacsv.ReadOptions(
+                    column_names=self.names, use_threads=False, block_size=data.size + 1
+                ),
+                parse_options=self.parse,
+                convert_options=self.convert,
+            )
+        except pa.ArrowInvalid:
+            return None
+        if table.num_rows != rows:
+            return None
+        values = {i: _floats(table.column(self.names[i])) for i in self.wanted}
+        with np.errstate(over="ignore", invalid="ignore"):
+            total = sum(float(v.sum()) for v in values.values())
+        if not np.isfinite(total) and not all(np.isfinite(v).all() for v in values.values()):
+            return None  # a NaN or infinity (a sum past the float range alone is not)
+        return Block(values, rows)
 
 
 def _spaced(lines: bytes) -> Bytes | None:
@@ -186,26 +248,26 @@ def _spaced(lines: bytes) -> Bytes | None:
     return np.frombuffer(lines.translate(_TAB_TO_SPACE, b"\r"), np.uint8)
 
 
-def _fixed_width(
-    block: Bytes, width: int, n: int, known: tuple[int, NDArray[np.intp]] | None
-) -> NDArray[np.intp] | None:
+def _fixed_width(block: Bytes, width: int, n: int, known: Layout | None) -> NDArray[np.intp] | None:
     """The separator columns of a block of lines all ``width`` bytes long (with their LF):
-    the first always-blank column after each of the ``n`` groups of columns holding values
-    but the last (those of the ``known`` layout of the block before when they are blank
-    on every line); None when the lines differ in length, hold control bytes or have
-    another number of groups."""
+    the first column after each of the ``n`` groups of columns holding values but the last,
+    a space on every line (those of the ``known`` layout of a block before when they are);
+    None when the lines differ in length or have another number of groups. Tabs and CRs
+    count as blanks (``pyarrow.csv`` trims tabs around a value and ends a line at CRLF; a
+    lone CR makes a row too many, declined)."""
     if width < 2 or block.size % width:
         return None
     grid = block.reshape(-1, width)
-    if np.count_nonzero(block < SPACE) != len(grid) or not (grid[:, -1] == NEWLINE).all():
-        return None  # lines of other lengths, or a control byte in a line
+    if not (grid[:, -1] == NEWLINE).all():
+        return None  # lines of other lengths
     if known is not None and known[0] == width and (grid[:, known[1]] == SPACE).all():
         return known[1]
     filled = np.concatenate(([False], _column_max(grid[:, :-1]) > SPACE, [False]))
     edges = np.flatnonzero(filled[1:] != filled[:-1])  # where each group starts and ends
     if edges.size != 2 * n:
         return None
-    return edges[1:-2:2]
+    separators = edges[1:-2:2]
+    return separators if (grid[:, separators] == SPACE).all() else None
 
 
 def _column_max(grid: Bytes) -> Bytes:

@@ -47,7 +47,7 @@ from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.las_header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
 from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import Cells, Data, check_range, null_values, read_all
+from pipeline.io.las_rows import Cells, Data, IndexRange, null_mask, null_values, read_all
 from pipeline.io.mnemonics import canonical_name
 from pipeline.units import conversion_factor
 
@@ -70,25 +70,33 @@ def read_log(path: Path, source: Source, header: Header, opts: LasOptions) -> pa
     nulls = null_values(path, header, opts)
     if source.title_line == 0:
         warn_input(path, "no ~A (data) section: the log has no rows")
-        data: Data | Cells = Cells([[] for _ in header.curves], np.empty(0, dtype=np.int64))
+        data: list[Data] | Cells = Cells([[] for _ in header.curves], np.empty(0, np.int64))
     else:
         data = read_all(path, source, header)
-    if isinstance(data, Data):
-        arrays = [_floats(data.values[i], nulls, i == 0) for i in range(len(data.values))]
+    arrays: list[pa.Array | pa.ChunkedArray]
+    if isinstance(data, list):  # blocks of numbers
+        arrays = [
+            pa.chunked_array([_floats(d.values[i], nulls, i == 0) for d in data], pa.float64())
+            for i in range(len(header.curves))
+        ]
+        index = [(d.values[0], d.lines) for d in data]
+        lines: pa.Array | pa.ChunkedArray = pa.chunked_array([d.lines for d in data], pa.int64())
     else:
         arrays = [
             _typed(path, cells, data.lines, _curve(header, i), nulls, header, i == 0)
             for i, cells in enumerate(data.columns)
         ]
+        floating = arrays and data.lines.size and pa.types.is_floating(arrays[0].type)
+        index = [(arrays[0].to_numpy(zero_copy_only=False), data.lines)] if floating else []
+        lines = pa.array(data.lines, pa.int64())
     if not header.curves and arrays:
         warn_input(
             path,
             f"no ~Curve section: the {len(arrays)} columns are named UNKNOWN:1… (as lasio "
             "names them), with no units",
         )
-    if arrays and data.lines.size and pa.types.is_floating(arrays[0].type):
-        _check_range(path, header, arrays[0].to_numpy(zero_copy_only=False), data, nulls)
-    return _table(header, arrays, data.lines)
+    _check_range(path, header, index, nulls)
+    return _table(header, arrays, lines)
 
 
 def _curve(header: Header, i: int) -> Item | None:
@@ -97,7 +105,7 @@ def _curve(header: Header, i: int) -> Item | None:
 
 def _floats(values: np.ndarray, nulls: list[float], index: bool) -> pa.Array:
     if not index and nulls:
-        null = np.isin(values, nulls)
+        null = null_mask(values, nulls)
         if null.any():
             values = np.where(null, np.nan, values)
     return pa.array(values, pa.float64())
@@ -151,13 +159,17 @@ def _declared_text(curve: Item | None) -> bool:
 
 
 def _check_range(
-    path: Path, header: Header, index: np.ndarray, data: Data | Cells, nulls: list[float]
+    path: Path, header: Header, index: list[tuple[np.ndarray, np.ndarray]], nulls: list[float]
 ) -> None:
-    """STRT/STOP/STEP against the index: a contradiction is a warning, the data are kept."""
-    if not header.curves or np.isnan(index[[0, -1]]).any():
+    """STRT/STOP/STEP against the index (its values and file lines, a block at a time): a
+    contradiction is a warning, the data are kept."""
+    if not header.curves or not index or np.isnan([index[0][0][0], index[-1][0][-1]]).any():
         return
+    checked = IndexRange(path, header, nulls)
     try:
-        check_range(path, header, index, data.lines, nulls)
+        for values, lines in index:
+            checked.feed(values, lines)
+        checked.finish()
     except InputFileError as exc:
         warn_input(path, f"{exc.reason}; the data are kept", exc.line)
 
@@ -178,7 +190,9 @@ def column_names(header: Header, n: int) -> list[str]:
     return unique
 
 
-def _table(header: Header, arrays: list[pa.Array], lines: np.ndarray) -> pa.Table:
+def _table(
+    header: Header, arrays: list[pa.Array | pa.ChunkedArray], lines: pa.Array | pa.ChunkedArray
+) -> pa.Table:
     names = column_names(header, len(arrays))
     fields = []
     for i, (name, array) in enumerate(zip(names, arrays, strict=True)):
@@ -191,7 +205,7 @@ def _table(header: Header, arrays: list[pa.Array], lines: np.ndarray) -> pa.Tabl
             meta[DESCRIPTION_KEY] = descr.encode()
         fields.append(pa.field(name, array.type, metadata=meta or None))
     fields.append(pa.field(SOURCE_LINE, pa.int64()))
-    return pa.Table.from_arrays([*arrays, pa.array(lines, pa.int64())], schema=pa.schema(fields))
+    return pa.Table.from_arrays([*arrays, lines], schema=pa.schema(fields))
 
 
 # ------------------------------------------------------------------------- description

@@ -114,16 +114,18 @@ class Cells:
     lines: Lines
 
 
-def read_all(path: Path, source: Source, header: Header) -> Data | Cells:
-    """Every curve of a log: their values when the fast path reads them all (blocks of
-    numbers), else the text of every cell (:func:`read_cells`)."""
+def read_all(path: Path, source: Source, header: Header) -> list[Data] | Cells:
+    """Every curve of a log: their values a block of rows at a time when the fast path
+    reads them all (blocks of numbers), else the text of every cell (:func:`read_cells`)."""
     n = len(header.curves)
     if n and header.version < 3 and not header.wrapped and header.delimiter == "SPACE":
-        fast = fast_values(source.raw, source.start, n, list(range(n)))
-        if fast is not None:
-            values, rows = fast
-            first = source.title_line + 1
-            return Data(values, np.arange(first, first + rows, dtype=np.int64))
+        blocks = fast_values(source.raw, source.start, n, list(range(n)))
+        if blocks is not None:
+            line, data = source.title_line + 1, []
+            for block in blocks:
+                data.append(Data(block.values, np.arange(line, line + block.rows, dtype=np.int64)))
+                line += block.rows
+            return data
     return read_cells(path, source, header)
 
 
@@ -363,6 +365,14 @@ def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
     return [header_number(path, item) for item in items] + list(opts.null_values)
 
 
+def null_mask(values: Floats, nulls: list[float]) -> Mask:
+    """Where ``values`` equal any of ``nulls`` (a comparison each: a list is short)."""
+    mask = np.zeros(values.shape, dtype=bool)
+    for null in nulls:
+        mask |= values == null
+    return mask
+
+
 def check_index(
     path: Path, header: Header, data: Data, masks: dict[int, Mask], keys: list[int]
 ) -> None:
@@ -379,16 +389,6 @@ def check_index(
                 line=int(data.lines[nulls[0]]),
                 column=curve.mnemonic,
             )
-
-
-def check_range(
-    path: Path, header: Header, index: Floats, lines: Lines, nulls: list[float]
-) -> None:
-    """The index (first curve, in its unit) agrees with STRT, STOP and STEP (see
-    :class:`IndexRange`)."""
-    checked = IndexRange(path, header, nulls)
-    checked.feed(index, lines)
-    checked.finish()
 
 
 class IndexRange:
