@@ -4,12 +4,14 @@ told from this process's own (:func:`~pipeline.io.arrow_text.others_load`)."""
 
 from __future__ import annotations
 
+import os
 import random
 import threading
 import time
 
 import pytest
 
+from pipeline.io import arrow_text
 from pipeline.io.arrow_text import CpuTimes, cpu_times, in_order, others_load
 
 
@@ -90,3 +92,16 @@ def test_this_process_busy_shows_in_its_own_cpu_time() -> None:
     assert after is not None
     assert after.own - before.own >= 0.2
     assert after.machine - before.machine >= 0.15  # the machine saw it (10 ms ticks)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork on this system")
+def test_a_forked_process_does_not_compare_its_time_with_its_parents() -> None:
+    """A batch worker forked from a process that has looked: its own CPU time restarts
+    from zero, so it looks afresh."""
+    arrow_text.use_threads()
+    assert arrow_text._last or arrow_text.cpu_times() is None
+    pid = os.fork()
+    if pid == 0:  # the child: exit status 0 if it starts with no previous look
+        os._exit(0 if not arrow_text._last else 1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0

@@ -74,7 +74,10 @@ def others_load(before: CpuTimes, after: CpuTimes) -> float:
 
 
 _last: list[tuple[CpuTimes, bool]] = []
-"""The previous look and the decision it gave."""
+"""The previous look and the decision it gave (a forked process starts afresh: its own CPU
+time restarts from zero)."""
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_last.clear)
 
 
 def use_threads() -> bool:

@@ -8,10 +8,11 @@ Only its first lines (where the title block and the header row are) are decoded 
 the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
 :data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
 batches; the pages of the mapped file let go once read), which parses them with the
-declared column types (on one thread unless a core is idle, see
-:mod:`pipeline.io.arrow_text`). A block that does not parse that way (a bad cell, a wrong
-cell count, decimal commas to detect) is parsed again as strings on one thread, which
-locates every problem on its file line.
+declared column types, one thread per block; when cores are idle (see
+:mod:`pipeline.io.arrow_text`), blocks are checked and parsed on as many threads, a few
+ahead of the one handed on. A block that does not parse that way (a bad cell, a wrong
+cell count, decimal commas to detect) is parsed again as strings on one thread, in order
+(its first line then known), which locates every problem on its file line.
 """
 
 from __future__ import annotations
