@@ -179,3 +179,27 @@ def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path, blocks: 
     assert isinstance(csv_rows.load(path, HEADER_SEARCH_LINES).data, mmap.mmap)
     mixed, _ = read(path, "samples", None)
     assert mixed.equals(plain)
+
+
+def test_units_converted_in_every_block_equal_float_times_the_factor(
+    tmp_path: Path, blocks: str
+) -> None:
+    """Rates in deg/s and accelerations in g (converted in place once parsed) equal
+    Python's ``float`` of each cell times 3600 or 9.80665, in blocks parsed typed and in
+    blocks holding a comment line (parsed as strings, then converted)."""
+    rng = random.Random(5)
+    header = ("time [s]", *(f"gyro_{a} [deg/s]" for a in "xyz"), *(f"acc_{a} [g]" for a in "xyz"))
+    lines, cells = [",".join(header)], []
+    for row in range(3000):
+        if row % 700 == 3:
+            lines.append("# a note")
+        values = [f"{row * 0.01:.2f}", *(_cell(rng) for _ in NAMES[1:])]
+        cells.append(values)
+        lines.append(",".join(values))
+    path = tmp_path / "samples.csv"
+    path.write_text("\n".join(lines) + "\n")
+    table, _ = read(path, "samples", None)
+    factors = {"time": 1.0} | dict.fromkeys(NAMES[1:4], 3600.0) | dict.fromkeys(NAMES[4:], 9.80665)
+    for i, name in enumerate(NAMES):
+        expected = np.array([float(row[i]) * factors[name] for row in cells])
+        assert np.array_equal(table.column(name).to_numpy(), expected), name
