@@ -405,19 +405,26 @@ def parse_blocks(
                 pass
         return mark
 
-    def attempt(span: tuple[int, int]) -> tuple[str, dict[str, Any] | None]:
+    def scanned() -> Iterator[tuple[int, int, frozenset[bytes] | None]]:
+        """Each block's span and the markers it holds, None if it is not plain rows
+        (:data:`PLAIN_ONLY`, non-ASCII). Scanned here, on the thread that hands the
+        blocks on (the scan holds the GIL; the parses on the workers do not)."""
+        for start, stop in _spans(rows):
+            found, ascii_only = scan(rows.data, start, stop)
+            plain = ascii_only and not any(byte in found for byte in PLAIN_ONLY)
+            yield start, stop, found if plain else None
+
+    def attempt(span: tuple[int, int, frozenset[bytes] | None]) -> tuple[str, Any]:
         """The decimal mark used and the block's typed columns (any thread: no line is
-        known here), None if the block is not plain rows (:data:`PLAIN_ONLY`, non-ASCII)
-        or a cell does not parse."""
-        used = mark
-        found, ascii_only = scan(rows.data, *span)
-        if not ascii_only or any(byte in found for byte in PLAIN_ONLY):
+        known here), None if the block is not plain rows or a cell does not parse."""
+        used, (begin, end, found) = mark, span
+        if found is None:
             return used, None
-        block = Rows(rows.data, *span, rows.first_line, marked=found)  # lines not used
+        block = Rows(rows.data, begin, end, rows.first_line, marked=found)  # lines not used
         threads = single and workers > 1
         return used, _typed(block, header, names, wanted, types, blanks, used, threads=threads)
 
-    for (start, stop), (used, typed) in in_order(_spans(rows), attempt, 1 if single else workers):
+    for (start, stop, _), (used, typed) in in_order(scanned(), attempt, 1 if single else workers):
         block = Rows(rows.data, start, stop, line)
         count = None
         if typed is not None and used == mark:
