@@ -9,10 +9,11 @@ the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
 :data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
 batches; the pages of the mapped file let go once read), which parses them with the
 declared column types, one thread per block; when cores are idle (see
-:mod:`pipeline.io.arrow_text`), blocks are checked and parsed on as many threads, a few
-ahead of the one handed on. A block that does not parse that way (a bad cell, a wrong
-cell count, decimal commas to detect) is parsed again as strings on one thread, in order
-(its first line then known), which locates every problem on its file line.
+:mod:`pipeline.io.arrow_text`), blocks are parsed on as many threads, a few ahead of
+the one handed on (each scanned first on the thread that hands them on). A block that
+does not parse that way (a bad cell, a wrong cell count, decimal commas to detect) is
+parsed again as strings on one thread, in order (its first line then known), which
+locates every problem on its file line.
 """
 
 from __future__ import annotations
@@ -384,8 +385,8 @@ def parse_blocks(
     is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
     are parsed again with it (an error if one held a decimal comma).
 
-    When a core is idle (:func:`~pipeline.io.arrow_text.workers`), blocks are scanned and
-    parsed on that many threads, a few blocks ahead of the one handed on: a block's lines
+    When a core is idle (:func:`~pipeline.io.arrow_text.workers`), blocks are scanned here
+    and parsed on that many threads, a few blocks ahead of the one handed on: a block's lines
     are known only once the blocks before it are counted, so a block that is not plain
     ASCII rows of good cells is left to :func:`checked` and :func:`parse` in order."""
     mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
