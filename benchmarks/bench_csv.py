@@ -9,9 +9,10 @@ many lines) above a header of vendor names with units in brackets or parentheses
     .venv/bin/python benchmarks/bench_csv.py [--rows N] [--rounds R]
 
 Candidates run interleaved, R rounds; medians of wall and CPU time, each as peer / ours
-(above 1: ours is faster). Prints ``uptime`` before and after and whether our reader let
-pyarrow use threads (only when a core is idle). Targets: pandas / ours ≥ 1.2 on (a),
-≥ 1.0 on (b). Exits 1 if our values differ from pandas + units.
+(above 1: ours is faster). Prints ``uptime`` before and after and on how many threads our
+reader parsed in each of its reads (more than one only when a core is idle, or
+``--threads on``). Targets: pandas / ours ≥ 1.2 on (a), ≥ 1.0 on (b). Exits 1 if our
+values differ from pandas + units.
 """
 
 from __future__ import annotations
@@ -115,13 +116,21 @@ def main() -> int:
         "--threads",
         choices=["auto", "on", "off"],
         default="auto",
-        help="pyarrow threads in our reader: auto (only when a core is idle), on or off",
+        help="threads in our reader: auto (only when a core is idle), on or off",
     )
     args = parser.parse_args()
     if args.threads != "auto":
         arrow_text.use_threads = lambda: args.threads == "on"  # type: ignore[assignment]
+    threads: list[int] = []
+    decide = arrow_text.workers
+
+    def noted() -> int:
+        threads.append(decide())
+        return threads[-1]
+
+    arrow_text.workers = noted  # type: ignore[assignment]
     print(f"before: {uptime()}")
-    print(f"our reader's pyarrow threads: {'yes' if arrow_text.use_threads() else 'no'}")
+    print(f"a core idle at the start (our reader's threads): {arrow_text.use_threads()}")
     worst, summary = 0.0, []
     with tempfile.TemporaryDirectory() as tmp:
         for layout in ("plain", "titled"):
@@ -135,6 +144,8 @@ def main() -> int:
             )
             timings = interleaved(candidates(path, skip, layout), args.rounds)
             print(table(timings, "gyropipe csv (samples)"))
+            print(f"our reader's threads in each of its reads: {threads}")
+            threads.clear()
             got = timings["gyropipe csv (samples)"].result
             expected = timings["pandas.read_csv + units by hand"].result
             worst = max(worst, *(float(np.max(np.abs(got[n] - expected[n]))) for n in NAMES))

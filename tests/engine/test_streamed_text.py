@@ -17,7 +17,7 @@ import pytest
 
 from pipeline.errors import InputFileError
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.io import csv_rows, las_fast
+from pipeline.io import arrow_text, csv_rows, las_fast
 from pipeline.plugins import load_registry
 from pipeline.registry import ReaderDef
 from pipeline.streams import TableStream
@@ -96,10 +96,15 @@ def test_a_streamed_read_equals_the_read_in_one_block(
     assert load_registry().read(path, "samples")[0].equals(whole)  # the reader's own blocks
 
 
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize(
+    ("fmt", "threads"), [("csv", 1), ("csv", 3), ("las", 1)], ids=["csv", "csv-threads", "las"]
+)
 def test_a_bad_cell_in_a_late_block_is_located_on_its_line(
-    tmp_path: Path, small_blocks: None, fmt: str
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, small_blocks: None, fmt: str, threads: int
 ) -> None:
+    """Also when the CSV reader parses blocks on three threads ahead of the one handed on
+    (as when cores are idle): the bad cell's line is counted from the blocks before."""
+    monkeypatch.setattr(arrow_text, "workers", lambda: threads)
     path = write(tmp_path, fmt, notes=True)
     lines, _ = data_lines(path)
     bad = lines[len(lines) * 3 // 4]
@@ -176,6 +181,27 @@ def test_the_reader_holds_a_few_blocks_not_the_file(tmp_path: Path, small_blocks
             del batch
         assert rows == whole.num_rows
         assert peak < whole.nbytes / 20, (fmt, peak, whole.nbytes)
+
+
+def test_csv_blocks_parsed_on_threads_hold_a_few_blocks(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With blocks parsed on three threads, a few ahead of the one handed on, Arrow's memory
+    in use while the long survey streams stays a small part of the whole read's table:
+    blocks of 64 KiB, as each parse in progress holds pyarrow's working buffers (~130 KiB
+    whatever the block's size)."""
+    monkeypatch.setattr(csv_rows, "ROWS_BLOCK", 64 * 1024)
+    monkeypatch.setattr(arrow_text, "workers", lambda: 3)
+    path = write(tmp_path, "csv", rows=None)
+    whole = load_registry().read(path, "samples")[0]
+    stream, _ = load_registry().read_stream(path, "samples")
+    base, peak, batches = pa.total_allocated_bytes(), 0, []
+    for batch in stream:
+        peak = max(peak, pa.total_allocated_bytes() - base)
+        batches.append(batch.num_rows)
+        del batch
+    assert sum(batches) == whole.num_rows and len(batches) > 50
+    assert peak < whole.nbytes / 10, (peak, whole.nbytes)
 
 
 def tracked(fmt: str, alive: Alive) -> ReaderDef:

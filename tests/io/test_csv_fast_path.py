@@ -2,7 +2,8 @@
 ``pyarrow.csv`` in one pass) against Python's ``float`` of each cell and against its
 locating path (every cell parsed as a string, then checked and converted), on files small
 and large (past the first block, so mapped), with varied layouts; and problems deep in a
-large file located on their line."""
+large file located on their line. Large files are read in one block, and in small blocks
+parsed on one thread or on three threads a few blocks ahead (as when cores are idle)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 
 from pipeline.errors import InputFileError
-from pipeline.io import csv_rows
+from pipeline.io import arrow_text, csv_rows
 from pipeline.io.csv import LAYOUTS, read
 from pipeline.io.csv_header import HEADER_SEARCH_LINES, find_header
 from pipeline.io.csv_options import CsvOptions
@@ -30,6 +31,20 @@ LAYOUTS_TRIED = [  # delimiter, line end, byte-order mark, title lines, quotes, 
     (";", "\n", False, 0, False, "decimal comma"),
     (",", "\n", False, 2, False, "no final line end"),
 ]
+
+
+BLOCKS = ["one block", "small blocks, one thread", "small blocks, three threads"]
+
+
+@pytest.fixture(params=BLOCKS)
+def blocks(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """How the rows are parsed: in one block (the default size), or in blocks of 16 KiB (a
+    dozen in a large file) on one thread or on three."""
+    if request.param != BLOCKS[0]:
+        monkeypatch.setattr(csv_rows, "ROWS_BLOCK", 16 * 1024)
+        threads = 3 if request.param == BLOCKS[2] else 1
+        monkeypatch.setattr(arrow_text, "workers", lambda: threads)
+    return str(request.param)
 
 
 def _cell(rng: random.Random) -> str:
@@ -91,7 +106,7 @@ def _locating_path(path: Path) -> dict[str, np.ndarray]:
 @pytest.mark.parametrize("rows", [40, 2500])
 @pytest.mark.parametrize("layout", LAYOUTS_TRIED, ids=lambda layout: repr(layout[:2] + layout[5:]))
 def test_fast_path_equals_float_and_the_locating_path(
-    tmp_path: Path, rows: int, layout: tuple[str, str, bool, int, bool, str]
+    tmp_path: Path, rows: int, layout: tuple[str, str, bool, int, bool, str], blocks: str
 ) -> None:
     path = tmp_path / "samples.csv"
     cells, lines = _file(path, rows, layout, seed=rows + len(layout[5]))
@@ -125,7 +140,7 @@ def _large(tmp_path: Path) -> tuple[Path, list[str]]:
     ],
 )
 def test_a_bad_cell_deep_in_a_large_file_is_located(
-    tmp_path: Path, change: object, message: str
+    tmp_path: Path, change: object, message: str, blocks: str
 ) -> None:
     path, lines = _large(tmp_path)
     cells = lines[2400].split(",")
@@ -143,7 +158,7 @@ def test_a_bad_cell_deep_in_a_large_file_is_located(
     [(b"\0", "NUL byte"), (b"\xff", "not UTF-8 text"), (b"\xc3", "not UTF-8 text")],
 )
 def test_a_binary_byte_deep_in_a_large_file_is_located(
-    tmp_path: Path, bad: bytes, message: str
+    tmp_path: Path, bad: bytes, message: str, blocks: str
 ) -> None:
     path, lines = _large(tmp_path)
     data = "\n".join(lines).encode()
@@ -155,7 +170,7 @@ def test_a_binary_byte_deep_in_a_large_file_is_located(
     assert info.value.line == data.count(b"\n", 0, at) + 1
 
 
-def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path) -> None:
+def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path, blocks: str) -> None:
     """A mapped file whose later lines end with CRLF (checked block by block as they are
     parsed, not before) reads as the same file with LF line ends."""
     path, lines = _large(tmp_path)
@@ -164,3 +179,27 @@ def test_crlf_line_ends_past_the_first_block_read_as_lf(tmp_path: Path) -> None:
     assert isinstance(csv_rows.load(path, HEADER_SEARCH_LINES).data, mmap.mmap)
     mixed, _ = read(path, "samples", None)
     assert mixed.equals(plain)
+
+
+def test_units_converted_in_every_block_equal_float_times_the_factor(
+    tmp_path: Path, blocks: str
+) -> None:
+    """Rates in deg/s and accelerations in g (converted in place once parsed) equal
+    Python's ``float`` of each cell times 3600 or 9.80665, in blocks parsed typed and in
+    blocks holding a comment line (parsed as strings, then converted)."""
+    rng = random.Random(5)
+    header = ("time [s]", *(f"gyro_{a} [deg/s]" for a in "xyz"), *(f"acc_{a} [g]" for a in "xyz"))
+    lines, cells = [",".join(header)], []
+    for row in range(3000):
+        if row % 700 == 3:
+            lines.append("# a note")
+        values = [f"{row * 0.01:.2f}", *(_cell(rng) for _ in NAMES[1:])]
+        cells.append(values)
+        lines.append(",".join(values))
+    path = tmp_path / "samples.csv"
+    path.write_text("\n".join(lines) + "\n")
+    table, _ = read(path, "samples", None)
+    factors = {"time": 1.0} | dict.fromkeys(NAMES[1:4], 3600.0) | dict.fromkeys(NAMES[4:], 9.80665)
+    for i, name in enumerate(NAMES):
+        expected = np.array([float(row[i]) * factors[name] for row in cells])
+        assert np.array_equal(table.column(name).to_numpy(), expected), name

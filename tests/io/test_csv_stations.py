@@ -354,6 +354,15 @@ def test_explicit_columns_option(tmp_path: Path) -> None:
     assert column(table, "inc") == [1.0]
 
 
+def test_explicit_columns_naming_one_cell_twice_are_refused(tmp_path: Path) -> None:
+    """One header cell is one column: two names for it are an error of the option, at the
+    header line (was a KeyError from pyarrow)."""
+    text = "MD[m],INC[deg],AZI TN[deg]\n100,1,2\n"
+    err = failure(put(tmp_path, text), columns={"md": "MD", "tvd": "MD[m]"})
+    assert "option columns: md and tvd both name the header cell 'MD[m]'" in str(err)
+    assert (err.line, err.column) == (1, "MD[m]")
+
+
 def test_azimuth_column_chosen_by_north_reference(tmp_path: Path) -> None:
     path = put(tmp_path, "MD[m],INC[deg],AZI TN[deg],AZI GN[deg]\n1,2,3,4\n")
     table, _ = read(path, north_reference="grid")

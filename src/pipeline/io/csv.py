@@ -226,12 +226,7 @@ class _Rows:
 
     def _table(self, values: dict[str, Any], lines: Any) -> pa.Table:
         """The contract's table of parsed columns, in canonical units and conventions."""
-        data = {
-            name: pc.multiply(values[name], self.factors[name])
-            if self.factors.get(name, 1.0) != 1.0
-            else values[name]
-            for name in self.chosen
-        }
+        data = {name: _scaled(values[name], self.factors.get(name, 1.0)) for name in self.chosen}
         data[SOURCE_LINE] = pa.array(lines, pa.int64())
         table = self.layout.table(data, self.north)
         try:
@@ -239,6 +234,27 @@ class _Rows:
         except ValueError as exc:
             line = self.header.index + 1
             raise InputFileError(self.path, f"option conventions: {exc}", line=line) from None
+
+
+def _scaled(values: Any, factor: float) -> Any:
+    """``values`` × ``factor``. Floats just parsed (in buffers of their own: a header cell
+    is one column, each chunk its own buffer) are scaled in place, which spares a copy of
+    the column; any other values into a new array."""
+    if factor == 1.0:
+        return values
+    chunks = values.chunks if isinstance(values, pa.ChunkedArray) else [values]
+    buffers = [chunk.buffers()[1] for chunk in chunks]
+    own = all(b is not None and b.is_mutable for b in buffers)
+    if not (
+        pa.types.is_float64(values.type)
+        and own
+        and len({b.address for b in buffers}) == len(buffers)
+    ):
+        return pc.multiply(values, factor)
+    for chunk, buffer in zip(chunks, buffers, strict=True):
+        data = np.frombuffer(buffer, np.float64, len(chunk), chunk.offset * 8)
+        np.multiply(data, factor, out=data)
+    return values
 
 
 def _open(path: Path, kind: str, options: Any) -> tuple[_Rows, WellMetadata]:
@@ -263,6 +279,7 @@ def _open(path: Path, kind: str, options: Any) -> tuple[_Rows, WellMetadata]:
         for name in layout.columns
         if name in header.found
     }
+    _one_name_per_cell(path, header, chosen)
     north = None
     if "azi" in chosen:
         north = _azimuth_reference(path, header, chosen["azi"], declared, opts)
@@ -275,6 +292,22 @@ def _open(path: Path, kind: str, options: Any) -> tuple[_Rows, WellMetadata]:
     found = _Rows(path, layout, header, chosen, factors, rows, opts.decimal, north, opts)
     found.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
     return found, well
+
+
+def _one_name_per_cell(path: Path, header: Header, chosen: dict[str, Cell]) -> None:
+    """Refuse two columns read from one header cell (the option ``columns`` naming it
+    twice): a cell is one column."""
+    names: dict[int, str] = {}
+    for name, cell in chosen.items():
+        first = names.setdefault(cell.index, name)
+        if first != name:
+            raise InputFileError(
+                path,
+                f"option columns: {first} and {name} both name the header cell {cell.text!r}; "
+                "a cell is one column",
+                line=header.index + 1,
+                column=cell.text,
+            )
 
 
 def _azimuth_reference(

@@ -8,9 +8,11 @@ Only its first lines (where the title block and the header row are) are decoded 
 the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
 :data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
 batches; the pages of the mapped file let go once read), which parses them with the
-declared column types (on one thread unless a core is idle, see
-:mod:`pipeline.io.arrow_text`). A block that does not parse that way (a bad cell, a wrong
-cell count, decimal commas to detect) is parsed again as strings on one thread, which
+declared column types, one thread per block; when cores are idle (see
+:mod:`pipeline.io.arrow_text`), blocks are parsed on as many threads, a few ahead of
+the one handed on (each scanned first on the thread that hands them on). A block that
+does not parse that way (a bad cell, a wrong cell count, decimal commas to detect) is
+parsed again as strings on one thread, in order (its first line then known), which
 locates every problem on its file line.
 """
 
@@ -31,7 +33,8 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError
-from pipeline.io.arrow_text import read_options, release
+from pipeline.io import arrow_text
+from pipeline.io.arrow_text import in_order, read_options, release
 from pipeline.io.csv_header import Cell, Header, cells_of
 
 SHOWN = 5
@@ -173,19 +176,26 @@ def _mapped(fh: BinaryIO) -> mmap.mmap | None:
         return None
 
 
+def scan(data: Data, start: int, end: int) -> tuple[frozenset[bytes], bool]:
+    """Which of :data:`MARKED` ``data[start:end]`` holds, and whether it is all ASCII: one
+    pass, :data:`CHECK` bytes at a time (they stay in the cache)."""
+    found: set[bytes] = set()
+    ascii_only = True
+    for at in range(start, end, CHECK):
+        stop = min(at + CHECK, end)
+        found.update(byte for byte in MARKED if data.find(byte, at, stop) >= 0)
+        ascii_only = ascii_only and int(np.frombuffer(data, np.uint8, stop - at, at).max()) < 0x80
+    return frozenset(found), ascii_only
+
+
 def checked(path: Path, block: Rows) -> Rows:
     """A block of the rows of a mapped file checked as text (no NUL byte, UTF-8: an error
     names the line), noting which of :data:`MARKED` it holds; its CR line ends made LF
-    (then a copy). One pass, :data:`CHECK` bytes at a time. Any other block as it is."""
+    (then a copy). One pass (:func:`scan`). Any other block as it is."""
     data = block.data
     if not isinstance(data, mmap.mmap):
         return block
-    found: set[bytes] = set()
-    ascii_only = True
-    for at in range(block.start, block.end, CHECK):
-        stop = min(at + CHECK, block.end)
-        found.update(byte for byte in MARKED if data.find(byte, at, stop) >= 0)
-        ascii_only = ascii_only and int(np.frombuffer(data, np.uint8, stop - at, at).max()) < 0x80
+    found, ascii_only = scan(data, block.start, block.end)
     if b"\0" in found:
         nul = data.find(b"\0", block.start, block.end)
         line = block.first_line + _line_ends(data, block.start, nul)
@@ -199,7 +209,7 @@ def checked(path: Path, block: Rows) -> Rows:
     if b"\r" in found:
         text = newlines(data[block.start : block.end])
         return Rows(text, 0, len(text), block.first_line)
-    return Rows(data, block.start, block.end, block.first_line, marked=frozenset(found))
+    return Rows(data, block.start, block.end, block.first_line, marked=found)
 
 
 def _line_ends(data: Data, start: int, end: int) -> int:
@@ -336,15 +346,27 @@ def _block_end(rows: Rows, start: int) -> int:
     return rows.end if stop < 0 else stop
 
 
-def _blocks(rows: Rows) -> Iterator[Rows]:
-    """``rows`` in blocks of whole lines of about :data:`ROWS_BLOCK` bytes, each numbered
-    from its first line (counted)."""
-    start, line = rows.start, rows.first_line
+def _spans(rows: Rows) -> Iterator[tuple[int, int]]:
+    """``(start, end)`` of each block of whole lines of about :data:`ROWS_BLOCK` bytes."""
+    start = rows.start
     while start < rows.end:
         stop = _block_end(rows, start)
+        yield start, stop
+        start = stop + 1
+
+
+def _blocks(rows: Rows) -> Iterator[Rows]:
+    """``rows`` in blocks (:func:`_spans`), each numbered from its first line (counted)."""
+    line = rows.first_line
+    for start, stop in _spans(rows):
         block = Rows(rows.data, start, stop, line)
         yield block
-        start, line = stop + 1, line + block.count()
+        line += block.count()
+
+
+PLAIN_ONLY = (b"\0", b"\r", b"#")
+"""Bytes of a block parsed on a worker thread that leave it to :func:`parse` (which names
+lines): NUL, CR line ends, comment marks."""
 
 
 def parse_blocks(
@@ -361,9 +383,18 @@ def parse_blocks(
     the file is never parsed whole. ``decimal`` None: ',' is tried first when the delimiter
     is not ',' and the rows hold one; at the first block that does not parse so, the mark
     is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
-    are parsed again with it (an error if one held a decimal comma)."""
+    are parsed again with it (an error if one held a decimal comma).
+
+    When a core is idle (:func:`~pipeline.io.arrow_text.workers`), blocks are scanned here
+    and parsed on that many threads, a few blocks ahead of the one handed on: a block's lines
+    are known only once the blocks before it are counted, so a block that is not plain
+    ASCII rows of good cells is left to :func:`checked` and :func:`parse` in order."""
     mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
     numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
+    names = [f"c{i}" for i in range(len(header.cells))]
+    wanted = {name: names[cell.index] for name, cell in chosen.items()}
+    workers = arrow_text.workers()
+    single = _block_end(rows, rows.start) >= rows.end  # one block: pyarrow's threads
     start, line = rows.start, rows.first_line
 
     def resolve() -> str:
@@ -375,20 +406,44 @@ def parse_blocks(
                 pass
         return mark
 
-    while start < rows.end:
-        stop = _block_end(rows, start)
-        block = checked(path, Rows(rows.data, start, stop, line))
-        # A comment line could parse as a row (a commented-out row); blank lines cannot.
-        kept = _without_skipped(block) if block.holds(b"#") else block
+    def scanned() -> Iterator[tuple[int, int, frozenset[bytes] | None]]:
+        """Each block's span and the markers it holds, None if it is not plain rows
+        (:data:`PLAIN_ONLY`, non-ASCII). Scanned here, on the thread that hands the
+        blocks on (the scan holds the GIL; the parses on the workers do not)."""
+        for start, stop in _spans(rows):
+            found, ascii_only = scan(rows.data, start, stop)
+            plain = ascii_only and not any(byte in found for byte in PLAIN_ONLY)
+            yield start, stop, found if plain else None
+
+    def attempt(span: tuple[int, int, frozenset[bytes] | None]) -> tuple[str, Any]:
+        """The decimal mark used and the block's typed columns (any thread: no line is
+        known here), None if the block is not plain rows or a cell does not parse."""
+        used, (begin, end, found) = mark, span
+        if found is None:
+            return used, None
+        block = Rows(rows.data, begin, end, rows.first_line, marked=found)  # lines not used
+        threads = single and workers > 1
+        return used, _typed(block, header, names, wanted, types, blanks, used, threads=threads)
+
+    for (start, stop, _), (used, typed) in in_order(scanned(), attempt, 1 if single else workers):
+        block = Rows(rows.data, start, stop, line)
         count = None
-        if kept.lines is None or len(kept.lines):
-            guessed = resolve if decimal is None and mark == "," else None
-            values, used = parse(path, kept, header, chosen, types, blanks, mark, guessed)
-            if used is block:  # every line a row
-                count = len(next(iter(values.values())))
+        if typed is not None and used == mark:
+            count = len(next(iter(typed.values())))
             release(rows.data, start, stop)
-            yield values, used
-        start, line = stop + 1, line + (block.count() if count is None else count)
+            yield _finished(typed, types), block
+        else:
+            block = checked(path, block)
+            # A comment line could parse as a row (a commented-out row); blank lines cannot.
+            kept = _without_skipped(block) if block.holds(b"#") else block
+            if kept.lines is None or len(kept.lines):
+                guessed = resolve if decimal is None and mark == "," else None
+                values, used_rows = parse(path, kept, header, chosen, types, blanks, mark, guessed)
+                if used_rows is block:  # every line a row
+                    count = len(next(iter(values.values())))
+                release(rows.data, start, stop)
+                yield values, used_rows
+        line += block.count() if count is None else count
 
 
 def decimal_of(path: Path, rows: Rows, header: Header, numbers: dict[str, Cell]) -> str:
@@ -441,11 +496,15 @@ def parse(
             )
             for name in wanted
         }
-    columns = {
+    return _finished(typed, types), rows
+
+
+def _finished(typed: dict[str, Any], types: dict[str, pa.DataType]) -> dict[str, Any]:
+    """Parsed columns with their strings trimmed, empty ones null."""
+    return {
         name: _blank_to_null(values) if pa.types.is_string(types[name]) else values
         for name, values in typed.items()
     }
-    return columns, rows
 
 
 def _typed(
@@ -456,16 +515,18 @@ def _typed(
     types: dict[str, pa.DataType],
     blanks: frozenset[str],
     decimal: str,
+    *,
+    threads: bool = False,
 ) -> dict[str, Any] | None:
-    """The columns parsed by pyarrow with their types (in one pass; quotes only looked
-    for when the rows hold one); None when that does not give exactly the rows' values
-    (then :func:`_strings` finds out why). A blank line is an invalid row here, so it
-    cannot go unnoticed."""
+    """The columns parsed by pyarrow with their types (in one pass, on pyarrow's threads
+    if ``threads``; quotes only looked for when the rows hold one); None when that does
+    not give exactly the rows' values (then :func:`_strings` finds out why). A blank line
+    is an invalid row here, so it cannot go unnoticed."""
     quoted = rows.holds(b'"')
     try:
         table = pacsv.read_csv(
             pa.BufferReader(rows.buffer()),
-            read_options=read_options(names),
+            read_options=read_options(names, threads=threads),
             parse_options=pacsv.ParseOptions(
                 delimiter=header.delimiter,
                 quote_char='"' if quoted else False,
