@@ -8,7 +8,16 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from pipeline.reports.charts.scene import Group, Label, Marks, Path, Points, Scene, outline
+from pipeline.reports.charts.scene import (
+    Group,
+    Label,
+    Marks,
+    Path,
+    Points,
+    Scene,
+    outline,
+    outline_runs,
+)
 from pipeline.reports.pdf_canvas import PT, Page, fill_colour, stroke_colour, write_pdf
 
 KAPPA = 0.5523
@@ -82,19 +91,10 @@ def _marks(m: Marks, at: _Placed) -> str:
         closed = True
     else:
         offsets, closed = shape
-        offsets = offsets * np.array([at.s, -at.s])
-        pieces = []
-        for x, y in centres:
-            moved = True
-            for dx, dy in offsets:
-                if np.isnan(dx):
-                    moved = True
-                    continue
-                pieces.append(f"{_n(x + dx)} {_n(y + dy)} {'m' if moved else 'l'}")
-                moved = False
-            if closed:
-                pieces.append("h")
-        body = " ".join(pieces)
+        runs = outline_runs(centres, offsets * np.array([at.s, -at.s]), closed)
+        body = " ".join(
+            "h" if v is None else f"{_n(v[0])} {_n(v[1])} {'m' if v[2] else 'l'}" for v in runs
+        )
     if m.hollow or not closed:
         return f"{stroke_colour(m.colour)} {_n(m.edge * at.s)} w [] 0 d {body} S"
     return f"{fill_colour(m.colour)} {body} f"

@@ -4,6 +4,7 @@ metrics (:mod:`~pipeline.reports.pdf_fonts`), so labels sit alike in both."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache
 from typing import Literal
@@ -184,3 +185,21 @@ def outline(shape: str, size: float) -> tuple[Points, bool] | None:
         "x": (np.array([[-h, -h], [h, h], [np.nan, np.nan], [-h, h], [h, -h]]) * 0.8, False),
     }
     return shapes.get(shape)
+
+
+def outline_runs(
+    centres: Points, offsets: Points, closed: bool
+) -> Iterator[tuple[float, float, bool] | None]:
+    """Each marker's outline (``offsets`` about each of ``centres``, points) as vertices
+    (x, y, whether the pen moves there rather than draws), a NaN offset lifting the pen;
+    None after each closed outline (the writer closes the path there)."""
+    for x, y in centres:
+        moved = True
+        for dx, dy in offsets:
+            if np.isnan(dx):
+                moved = True
+                continue
+            yield x + dx, y + dy, moved
+            moved = False
+        if closed:
+            yield None

@@ -5,9 +5,16 @@ from __future__ import annotations
 
 from html import escape
 
-import numpy as np
-
-from pipeline.reports.charts.scene import Group, Label, Marks, Path, Points, Scene, outline
+from pipeline.reports.charts.scene import (
+    Group,
+    Label,
+    Marks,
+    Path,
+    Points,
+    Scene,
+    outline,
+    outline_runs,
+)
 
 FONT = "DejaVu Sans, Verdana, Arial, sans-serif"
 
@@ -47,18 +54,10 @@ def _marks(m: Marks) -> str:
         closed = True
     else:
         offsets, closed = shape
-        pieces = []
-        for x, y in m.xy:
-            moved = True
-            for dx, dy in offsets:
-                if np.isnan(dx):
-                    moved = True
-                    continue
-                pieces.append(f"{'M' if moved else 'L'}{_n(x + dx)},{_n(y + dy)}")
-                moved = False
-            if closed:
-                pieces.append("Z")
-        d = "".join(pieces)
+        runs = outline_runs(m.xy, offsets, closed)
+        d = "".join(
+            "Z" if v is None else f"{'M' if v[2] else 'L'}{_n(v[0])},{_n(v[1])}" for v in runs
+        )
     if m.hollow or not closed:
         return f'<path d="{d}" fill="none" stroke="{m.colour}" stroke-width="{m.edge:g}"/>'
     return f'<path d="{d}" fill="{m.colour}"/>'
