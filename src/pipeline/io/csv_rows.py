@@ -364,6 +364,13 @@ def _blocks(rows: Rows) -> Iterator[Rows]:
         line += block.count()
 
 
+def _column_names(header: Header, cells: dict[str, Cell]) -> tuple[list[str], dict[str, str]]:
+    """The names pyarrow gives the header's columns (c0, c1, …) and, per column of ``cells``,
+    the name of the one it is read from."""
+    names = [f"c{i}" for i in range(len(header.cells))]
+    return names, {name: names[cell.index] for name, cell in cells.items()}
+
+
 PLAIN_ONLY = (b"\0", b"\r", b"#")
 """Bytes of a block parsed on a worker thread that leave it to :func:`parse` (which names
 lines): NUL, CR line ends, comment marks."""
@@ -391,8 +398,7 @@ def parse_blocks(
     ASCII rows of good cells is left to :func:`checked` and :func:`parse` in order."""
     mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
     numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
-    names = [f"c{i}" for i in range(len(header.cells))]
-    wanted = {name: names[cell.index] for name, cell in chosen.items()}
+    names, wanted = _column_names(header, chosen)
     workers = arrow_text.workers()
     single = _block_end(rows, rows.start) >= rows.end  # one block: pyarrow's threads
     start, line = rows.start, rows.first_line
@@ -449,8 +455,7 @@ def parse_blocks(
 def decimal_of(path: Path, rows: Rows, header: Header, numbers: dict[str, Cell]) -> str:
     """',' when the ``numbers`` columns' values hold ',' but never '.' (read as strings, a
     block at a time), else '.'."""
-    names = [f"c{i}" for i in range(len(header.cells))]
-    wanted = {name: names[cell.index] for name, cell in numbers.items()}
+    names, wanted = _column_names(header, numbers)
     comma = dot = False
     for block in _blocks(rows):
         kept = _without_skipped(block)
@@ -480,8 +485,7 @@ def parse(
     rows do not parse with it. Any bad cell or row raises :class:`InputFileError` naming
     its line and column.
     """
-    names = [f"c{i}" for i in range(len(header.cells))]
-    wanted = {name: names[cell.index] for name, cell in chosen.items()}
+    names, wanted = _column_names(header, chosen)
     typed = _typed(rows, header, names, wanted, types, blanks, decimal)
     if typed is None and (kept := _without_skipped(rows)) is not rows:
         rows = kept
