@@ -126,6 +126,9 @@ def run(
     disabled: tuple[str, ...],
 ) -> None:
     """Run a pipeline on one well's input files."""
+    from pipeline.lazy_pandas import defer_pandas
+
+    defer_pandas()
     from pipeline.api.run import execute
     from pipeline.qc.gates import acceptance_lines
     from pipeline.qc.tables import QcSummary, diagnosis_lines
@@ -238,6 +241,9 @@ def batch(
 ) -> None:
     """Run a pipeline on many wells: one run per well into OUT/<well_id>/, recorded in a
     run ledger. Exit 0 all wells done or skipped, 1 some failed, 2 configuration error."""
+    from pipeline.lazy_pandas import defer_pandas
+
+    defer_pandas()
     from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
     from pipeline.batch.policy import Mode
     from pipeline.batch.progress import reporter

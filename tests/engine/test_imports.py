@@ -85,10 +85,9 @@ def survey_modules(tmp_path_factory: pytest.TempPathFactory) -> set[str]:
 
 
 def test_survey_run_imports_no_plotting_and_no_cluster(survey_modules: set[str]):
-    """No matplotlib (the report package loads it only to draw a report), no dask (pint
-    would load it), no report modules. (pandas is not asserted: pyarrow imports it on its
-    first array conversion whenever it is installed.)"""
-    for package in ("matplotlib", "dask", "pipeline.reports", "allantools"):
+    """No matplotlib, no dask (pint would load it), no report modules, and no pandas
+    (pyarrow would import it on its first array conversion: pipeline.lazy_pandas)."""
+    for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "pandas"):
         assert not loaded(survey_modules, package), package
     assert "pipeline.survey.mincurve" in survey_modules  # the run did run
 
@@ -100,7 +99,7 @@ def test_survey_run_imports_no_scipy_stats(survey_modules: set[str]):
 def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     """The continuous pipeline without its report stage (issue #20's floor: interpreter and
     the libraries of its stages) loads no matplotlib, no report modules, no dask, and no
-    SciPy (its filters are NumPy's: pipeline.continuous.filters)."""
+    SciPy (its filters are NumPy's: pipeline.continuous.filters), no pandas."""
     sim = tmp_path / "sim"
     plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
     plan["survey"].update(start_md=600, end_md=640)
@@ -112,7 +111,7 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
     samples = str(sim / "samples.parquet")
     modules = modules_of(tmp_path, "run", str(pipeline), "--input", samples, "--out", "out")
-    for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "scipy"):
+    for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "scipy", "pandas"):
         assert not loaded(modules, package), package
     assert "pipeline.continuous.integrate" in modules  # the run did integrate
 
@@ -120,7 +119,8 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
 def test_run_with_its_report_imports_no_matplotlib(tmp_path: Path):
     """The survey pipeline with its report stage: the report's figures are drawn by the
     report package's own vector renderer, so neither matplotlib nor Pillow is loaded (and
-    the fonts are read from the package, fontTools' subsetter not even imported)."""
+    the fonts are read from the package, fontTools' subsetter not even imported); the
+    report's tables need no pandas either."""
     modules = modules_of(
         tmp_path,
         "run",
@@ -134,5 +134,5 @@ def test_run_with_its_report_imports_no_matplotlib(tmp_path: Path):
         tmp_path / "out" / "report.pdf"
     ).is_file()
     assert "pipeline.reports.charts.svg" in modules and "pipeline.reports.charts.pdf" in modules
-    for package in ("matplotlib", "PIL", "fontTools.subset"):
+    for package in ("matplotlib", "PIL", "fontTools.subset", "pandas"):
         assert not loaded(modules, package), package

@@ -73,6 +73,7 @@ LAYERS: dict[str, int] = {
     "pipeline.units": 2,
     "pipeline.convert": 2,
     "pipeline.streams": 2,
+    "pipeline.lazy_pandas": 2,
     "pipeline.ports": 2,
     # 1 — foundation
     "pipeline.well": 1,

@@ -25,6 +25,7 @@ from pipeline.atomic import atomic_write_bytes, replace_dir
 from pipeline.drift.tables import CalibrationResult
 from pipeline.errors import GyropipeError
 from pipeline.graph import Plan, build_plan
+from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import load_registry
 from pipeline.registry import Registry
 from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
@@ -99,7 +100,9 @@ def worker_init(ref: PipelineRef, batch_pid: int) -> None:
     BLAS and OpenMP run single-threaded here, as in Dask's workers: the wells are the
     parallelism, and a worker's BLAS threads spinning on the cores the other workers use
     cost 2 workers on 2 cores 18 % of their time (benchmarks/bench_batch.py). Arrow's
-    allocator gives freed memory back (:func:`~pipeline.streams.use_returning_memory_pool`)."""
+    allocator gives freed memory back (:func:`~pipeline.streams.use_returning_memory_pool`);
+    pandas is loaded only if a stage imports it (:mod:`pipeline.lazy_pandas`)."""
+    defer_pandas()
     threadpool_limits(limits=1)
     use_returning_memory_pool()
     threading.Thread(target=_exit_with, args=(batch_pid,), daemon=True).start()
