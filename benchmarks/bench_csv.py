@@ -1,10 +1,12 @@
 """CSV reader speed against pandas' C engine, in one run: a 1M-row × 8-column raw-samples
 CSV read by gyropipe's reader (kind ``samples``: header recognition, units, canonical
 conventions, contract-typed table) and by ``pandas.read_csv(engine="c")``, plain and with
-the unit conversion a pandas user does by hand; ``pyarrow.csv.read_csv`` with its defaults
-for scale. Two files: (a) one ``#`` title line above a ``name [unit]`` header; (b) a title
-block of ``key: value`` lines (well metadata, read by ours; skipped by pandas, told how
-many lines) above a header of vendor names with units in brackets or parentheses.
+the unit conversion a pandas user does by hand; for scale, ``pyarrow.csv.read_csv`` with its
+defaults and told the columns are float64 without quotes (the parse our reader builds on), and
+``polars.read_csv`` (Rust, multi-threaded; the ``bench`` extra) typed the same way. Two
+files: (a) one ``#`` title line above a ``name [unit]`` header; (b) a title block of
+``key: value`` lines (well metadata, read by ours; skipped by pandas, told how many lines)
+above a header of vendor names with units in brackets or parentheses.
 
     .venv/bin/python benchmarks/bench_csv.py [--rows N] [--rounds R]
 
@@ -100,12 +102,31 @@ def candidates(path: Path, skip: int, layout: str) -> dict[str, Callable[[], Any
     def pyarrow_plain() -> pa.Table:
         return pacsv.read_csv(path, read_options=pacsv.ReadOptions(skip_rows=skip))
 
-    return {
+    def pyarrow_typed() -> pa.Table:
+        return pacsv.read_csv(
+            path,
+            read_options=pacsv.ReadOptions(skip_rows=skip),
+            parse_options=pacsv.ParseOptions(quote_char=False, double_quote=False),
+            convert_options=pacsv.ConvertOptions(column_types=dict.fromkeys(headers, pa.float64())),
+        )
+
+    found = {
         "gyropipe csv (samples)": ours,
         'pandas.read_csv(engine="c")': pandas_plain,
         "pandas.read_csv + units by hand": pandas_units,
         "pyarrow.csv.read_csv (defaults)": pyarrow_plain,
+        "pyarrow.csv.read_csv (float64, no quotes)": pyarrow_typed,
     }
+    try:
+        import polars as pl
+    except ImportError:  # the bench extra
+        return found
+
+    def polars_typed() -> pa.Table:
+        schema = dict.fromkeys(headers, pl.Float64)
+        return pl.read_csv(path, skip_rows=skip, schema=schema).to_arrow()
+
+    return found | {"polars.read_csv (float64) → Arrow": polars_typed}
 
 
 def main() -> int:
