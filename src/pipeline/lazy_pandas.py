@@ -50,19 +50,20 @@ class _HeldBack(importlib.abc.MetaPathFinder):
 
 
 class _Announce(importlib.abc.MetaPathFinder):
-    """Finds pandas with the finders after it, and once pandas' ``__init__`` has run has
-    pyarrow load its pandas integration (then leaves ``sys.meta_path``)."""
+    """Finds pandas with the other finders, and once pandas' ``__init__`` has run has
+    pyarrow load its pandas integration, then leaves ``sys.meta_path`` (stays for another
+    try if importing pandas failed)."""
 
     def find_spec(
         self, name: str, path: Sequence[str] | None, target: ModuleType | None = None
     ) -> importlib.machinery.ModuleSpec | None:
         if name != "pandas":
             return None
-        sys.meta_path.remove(self)
         for finder in sys.meta_path:
-            spec = finder.find_spec(name, path, target) if hasattr(finder, "find_spec") else None
-            if spec is not None:
-                break
+            if finder is not self and hasattr(finder, "find_spec"):
+                spec = finder.find_spec(name, path, target)
+                if spec is not None:
+                    break
         else:
             return None
         loader = spec.loader
@@ -71,6 +72,8 @@ class _Announce(importlib.abc.MetaPathFinder):
 
             def exec_module(module: ModuleType) -> None:
                 run(module)
+                if self in sys.meta_path:
+                    sys.meta_path.remove(self)
                 pa.lib._pandas_api.pd  # noqa: B018 -- pyarrow imports its pandas integration
 
             loader.exec_module = exec_module  # type: ignore[method-assign]
