@@ -441,6 +441,9 @@ def schemas(out_dir: str, docs_dir: str, check: bool) -> None:
 )
 def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -> None:
     """Simulate a gyro survey: raw sensor samples, truth and stations."""
+    from pipeline.lazy_pandas import defer_pandas
+
+    defer_pandas()
     from pipeline.atomic import atomic_path, atomic_write_bytes
     from pipeline.runner import sha256_file
     from pipeline.sim.spec import load_simulation
@@ -563,6 +566,9 @@ def convert(
 ) -> None:
     """Convert INPUT to the format of --out's extension (Parquet, CSV, LAS, MCAP): survey
     stations and samples in gyropipe's units and frames, a well log's curves as logged."""
+    from pipeline.lazy_pandas import defer_pandas
+
+    defer_pandas()
     from pipeline.convert import convert as convert_file
     from pipeline.errors import InputFileWarning
 

@@ -104,7 +104,8 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
     plan["survey"].update(start_md=600, end_md=640)
     (tmp_path / "plan.yaml").write_text(yaml.safe_dump(plan))
-    modules_of(tmp_path, "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim))
+    simulated = modules_of(tmp_path, "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim))
+    assert not loaded(simulated, "pandas") and "pipeline.sim.sensors" in simulated
     spec = yaml.safe_load((ROOT / "pipelines" / "continuous-gyro.yaml").read_text())
     spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
     pipeline = tmp_path / "continuous.yaml"
