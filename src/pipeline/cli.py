@@ -22,8 +22,9 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 
+from pipeline.cli_args import input_files, reader_options, well_overrides
 from pipeline.cli_models import models
-from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError, did_you_mean
+from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
@@ -32,7 +33,6 @@ if TYPE_CHECKING:
     from pipeline.batch.ledger import Ledger
     from pipeline.graph import Plan
     from pipeline.registry import Registry
-    from pipeline.well import WellMetadata
 
 EXIT_FAILED = 1
 EXIT_CONFIG = 2
@@ -139,8 +139,8 @@ def run(
     registry = _registry(disabled)
     plan = _plan(pipeline_file, overrides, registry)
     try:
-        files = _input_files(plan, inputs)
-        well = _well_overrides(well_items)
+        files = input_files(plan, inputs)
+        well = well_overrides(well_items)
     except (click.BadParameter, RunInputError) as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
@@ -265,7 +265,7 @@ def batch(
     plan = _plan(pipeline_file, overrides, registry)
     names = list(plan.spec.inputs)
     try:
-        defaults = _well_overrides(well_items)
+        defaults = well_overrides(well_items)
         jobs = (
             jobs_from_manifest(Path(manifest), names, defaults)
             if manifest is not None
@@ -584,8 +584,8 @@ def convert(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", InputFileWarning)
         try:
-            parsed = _options(options)
-            well = _well_overrides(well_items)
+            parsed = reader_options(options)
+            well = well_overrides(well_items)
             done = convert_file(
                 registry,
                 Path(input_file),
@@ -624,21 +624,6 @@ def _names(names: list[str], shown: int = 8) -> str:
     return ", ".join(names[:shown]) + more
 
 
-def _options(items: tuple[str, ...]) -> dict[str, object]:
-    from pipeline.yamlsource import load_value
-
-    values: dict[str, object] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise click.BadParameter(f"--option {item!r}: expected KEY=VALUE")
-        try:
-            values[key.strip()] = load_value(value, f"--option {item}")
-        except SpecError as exc:
-            raise click.BadParameter("; ".join(map(str, exc.problems))) from None
-    return values
-
-
 def _stations_reader(registry: Registry | None = None) -> Callable[[Path, str], pa.Table]:
     """Reads a simulation plan's stations file with the engine's reader choice (the plugins
     are loaded only if the plan has one)."""
@@ -660,49 +645,3 @@ def _plan_errors(plan_file: str) -> Iterator[None]:
     except (GyropipeError, ValueError) as exc:
         click.echo(f"error: {plan_file}: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
-
-
-def _input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
-    declared = list(plan.spec.inputs)
-    files: dict[str, Path] = {}
-    for item in items:
-        name, sep, file = item.partition("=")
-        if not sep:
-            if len(declared) != 1:
-                raise click.BadParameter(
-                    f"{item!r}: name the input (NAME=FILE); pipeline inputs: "
-                    f"{', '.join(declared) or 'none'}"
-                )
-            name, file = declared[0], item
-        if name in files:
-            raise click.BadParameter(f"input {name!r} given twice")
-        files[name] = Path(file)
-    return files
-
-
-def _well_overrides(items: tuple[str, ...]) -> WellMetadata:
-    from pydantic import ValidationError
-
-    from pipeline.well import WellMetadata
-
-    fields = tuple(WellMetadata.model_fields)
-    values: dict[str, str | None] = {}
-    given: dict[str, str] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise click.BadParameter(f"--well {item!r}: expected FIELD=VALUE")
-        values[key.strip()] = value.strip() or None  # pydantic converts text to the field type
-        given[key.strip()] = item
-    try:
-        return WellMetadata.model_validate(values)
-    except ValidationError as exc:
-        problems = []
-        for err in exc.errors():
-            field = str(err["loc"][0]) if err["loc"] else ""
-            where = f"--well {given.get(field, field)}"
-            if err["type"] == "extra_forbidden":
-                problems.append(f"{where}: unknown field {field!r}{did_you_mean(field, fields)}")
-            else:
-                problems.append(f"{where}: {err['msg'][0].lower()}{err['msg'][1:]}")
-        raise click.BadParameter("; ".join(problems)) from None

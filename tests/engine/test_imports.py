@@ -50,6 +50,7 @@ def test_help_imports_click_and_the_standard_library_only(tmp_path: Path):
     assert sorted(m for m in modules if loaded({m}, "pipeline")) == [
         "pipeline",
         "pipeline.cli",
+        "pipeline.cli_args",
         "pipeline.cli_models",
         "pipeline.errors",
         "pipeline.version",
