@@ -133,7 +133,8 @@ def assert_self_contained(report: PageReport, html: Path) -> None:
     source = html.read_text(encoding="utf-8")
     assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", source)
     assert "<script" not in source and "<img" not in source
-    assert not re.search(r"url\((?!#)", source)  # only an SVG's own clip paths
+    # only an SVG's own clip paths and the fonts inline
+    assert not re.search(r"url\((?!#|data:font/ttf;base64,)", source)
     ids = re.findall(r'\sid="([^"]+)"', source)
     assert len(ids) == len(set(ids)), "ids repeat: figures share one page"
     assert report.svgs, "no figures"

@@ -39,6 +39,37 @@ def test_linear_ticks_are_nice_numbers(lo: float, hi: float, most: int, expected
     assert [ticks.label(v, step) for v in values] == expected
 
 
+@pytest.mark.parametrize(
+    ("lo", "hi", "most", "expected", "note"),
+    [
+        # ordinary ranges: in full, as before
+        (0.0, 3000.0, 6, ["0", "500", "1000", "1500", "2000", "2500", "3000"], ""),
+        (0.0, 90.0, 6, ["0", "20", "40", "60", "80"], ""),
+        (-0.013, 0.013, 6, ["−0.010", "−0.005", "0.000", "0.005", "0.010"], ""),
+        (0.0, 12000.0, 6, ["0", "2000", "4000", "6000", "8000", "10000", "12000"], ""),
+        (2500.0, 2500.5, 5, ["2500.0", "2500.1", "2500.2", "2500.3", "2500.4", "2500.5"], ""),
+        # gyro drift in deg/s, residuals: a shared power of ten
+        (-5e-6, 8e-6, 6, ["−5.0", "−2.5", "0.0", "2.5", "5.0", "7.5"], "×10⁻⁶"),
+        (-3e-9, 4e-9, 6, ["−2", "0", "2", "4"], "×10⁻⁹"),
+        (0.0, 8e-4, 4, ["0", "2", "4", "6", "8"], "×10⁻⁴"),
+        # coordinates of 1e6 m
+        (6.1e6, 6.2e6, 5, ["6.10", "6.12", "6.14", "6.16", "6.18", "6.20"], "×10⁶"),
+        (0.0, 1.2e5, 6, ["0.0", "0.2", "0.4", "0.6", "0.8", "1.0", "1.2"], "×10⁵"),
+        # values differing only in far decimals: an offset
+        (10000.001, 10000.004, 3, ["0.001", "0.002", "0.003", "0.004"], "+10000"),
+        (-10000.004, -10000.001, 3, ["−0.004", "−0.003", "−0.002", "−0.001"], "−10000"),
+        (6123456.001, 6123456.004, 3, ["0.001", "0.002", "0.003", "0.004"], "+6123456"),
+        (10000.0001, 10000.0004, 4, ["1", "2", "3", "4"], "×10⁻⁴ +10000"),
+    ],
+)
+def test_linear_labels_of_huge_tiny_and_offset_ranges(
+    lo: float, hi: float, most: int, expected: list[str], note: str
+):
+    """tick value = label × 10ⁿ + offset, the note '×10ⁿ +offset' shown once."""
+    values, step = ticks.linear_ticks(lo, hi, most)
+    assert ticks.linear_labels(values, step) == (expected, note)
+
+
 def test_log_ticks_are_decades_and_their_labels_read_plainly():
     major, minor = ticks.log_ticks(2e-6, 3e-2)
     assert major == pytest.approx([1e-5, 1e-4, 1e-3, 1e-2])

@@ -1,6 +1,7 @@
 """A :class:`~pipeline.reports.document.Document` as one self-contained HTML file: CSS
-inline, figures as inline SVG, no script, and a Content-Security-Policy that forbids the
-page any network fetch."""
+inline, figures as inline SVG in the font their text was measured with (embedded:
+:mod:`~pipeline.reports.web_fonts`), no script, and a Content-Security-Policy that forbids
+the page any network fetch."""
 
 from __future__ import annotations
 
@@ -18,8 +19,9 @@ from pipeline.reports.document import (
     Verdict,
 )
 from pipeline.reports.figures import Figures
+from pipeline.reports.web_fonts import font_faces
 
-CSP = "default-src 'none'; style-src 'unsafe-inline'"
+CSP = "default-src 'none'; style-src 'unsafe-inline'; font-src data:"
 
 CSS = """
 :root { --ink:#1f2933; --muted:#616e7c; --navy:#1b365d; --rule:#d5dbe3; --zebra:#f5f7fa;
@@ -73,7 +75,8 @@ table.compact { width: auto; min-width: 50%; }
 .verdict.warn { border-color: var(--warn); background: #fdf4e3; }
 .verdict.fail { border-color: var(--fail); background: #fbe9e7; }
 figure { margin: 14px 0 18px; break-inside: avoid; }
-figure svg { display: block; max-width: 100%; height: auto; margin: 0 auto; }
+figure svg { display: block; max-width: 100%; height: auto; margin: 0 auto;
+  font-kerning: normal; font-variant-ligatures: none; }
 figcaption { font-size: 11.5px; color: var(--muted); margin-top: 4px; }
 figcaption b { color: var(--ink); }
 footer { margin-top: 28px; border-top: 1px solid var(--rule); padding-top: 6px;
@@ -104,7 +107,7 @@ def render_html(doc: Document, drawn: Figures | None = None) -> str:
 <meta http-equiv="Content-Security-Policy" content="{CSP}">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{escape(doc.title)} — {escape(doc.subject)}</title>
-<style>{CSS}</style>
+<style>{font_faces()}{CSS}</style>
 </head>
 <body>
 <main class="page">

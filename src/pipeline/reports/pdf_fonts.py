@@ -99,6 +99,11 @@ class PdfFont:
         kerns = [0, *kerns] if glyphs else []
         return glyphs, kerns, sum(self._advance[g] for g in glyphs) + sum(kerns)
 
+    def kerning(self) -> dict[tuple[str, str], int]:
+        """Kerning pairs measured with: (left, right glyph name) → adjustment, font units
+        (the repertoire's, or the whole font's once text outside it was measured)."""
+        return dict(self._kern)
+
     def width(self, text: str, size: float) -> float:
         """Advance of ``text`` at ``size`` points, in points."""
         return self.layout(text)[2] * size / self.upem

@@ -49,6 +49,8 @@ TICK_COLOUR = "#52606d"
 TICK_LENGTH = 2.5
 TICK_PAD = 3.5
 LABEL_PAD = 4.0
+TITLE_RISE = 5.5
+"""Points from a panel's top edge up to its title's baseline (and a y axis's ×10ⁿ note's)."""
 PAD = 3.0
 """Points a ``clear`` text keeps from the drawn points (a marker's half-width)."""
 MARGIN = 0.05
@@ -159,29 +161,30 @@ def scales(panel: Panel) -> tuple[Scale, Scale]:
 
 def _ticks(
     axis: Axis, scale: Scale, horizontal: bool
-) -> tuple[list[float], list[str], list[float]]:
-    """Major ticks, their labels and minor ticks (log axes) within the limits."""
+) -> tuple[list[float], list[str], list[float], str]:
+    """Major ticks, their labels, minor ticks (log axes) within the limits, and the note
+    shown once at the axis end ('×10ⁿ +offset' of labels shortened, else '')."""
     lo, hi = sorted((scale.lo, scale.hi))
     if axis.ticks is not None:
         values = list(axis.ticks)
         step = min(np.diff(values)) if len(values) > 1 else 1.0
-        labels = (
-            list(axis.labels) if axis.labels is not None else [tk.label(v, step) for v in values]
-        )
-        return values, labels, []
+        if axis.labels is not None:
+            return values, list(axis.labels), [], ""
+        labels, note = tk.linear_labels(values, step)
+        return values, labels, [], note
     if axis.scale == "log":
         major, minor = tk.log_ticks(lo, hi)
-        return major, [tk.log_label(v) for v in major], minor
+        return major, [tk.log_label(v) for v in major], minor, ""
     length, size = abs(scale.length), axis.tick_size
     most = int(np.clip(length / (3 * size if horizontal else 2.2 * size), 2, 9))
     while True:  # fewer ticks until the labels of a horizontal axis have room
         values, step = tk.linear_ticks(lo, hi, most)
-        labels = [tk.label(v, step) for v in values]
+        labels, note = tk.linear_labels(values, step)
         if not horizontal or most <= 2:
-            return values, labels, []
+            return values, labels, [], note
         widest = max(text_width(t, size) for t in labels)
         if (widest + 2 * size) * len(values) <= length:
-            return values, labels, []
+            return values, labels, [], note
         most -= 1
 
 
@@ -372,8 +375,8 @@ def _axes(
     """The grid (under the data) and the frame, ticks and labels (over it)."""
     x0, y0, w, h = box
     under, over = Group(), Group()
-    xt, xl, xminor = _ticks(panel.x, sx, True)
-    yt, yl, yminor = _ticks(panel.y, sy, False)
+    xt, xl, xminor, x_note = _ticks(panel.x, sx, True)
+    yt, yl, yminor, y_note = _ticks(panel.y, sy, False)
     for values, stroke, axis_on in ((xminor, MINOR_GRID, True), (xt, GRID, True)):
         parts = tuple(
             np.array([[sx.at(v), y0], [sx.at(v), y0 + h]]) for v in values if _inside(v, sx)
@@ -422,11 +425,20 @@ def _axes(
             widest = max(widest, lab.width())
             items.append(lab)
         over.add(Group(items, kind="ytick"))
+    below = bottom + (panel.x.tick_size if panel.x.tick_labels else 0) + LABEL_PAD
+    centre = x0 + w / 2
+    if x_note and panel.x.tick_labels:  # under the right end of the axis, the label left of it
+        note = anchored(x0 + w, below, x_note, panel.x.tick_size, TICK_COLOUR, "right", "top")
+        over.add(Group([note], kind="xnote"))
+        room = x0 + w - note.width() - LABEL_PAD
+        centre = max(min(centre, room - text_width(panel.x.label, panel.x.label_size) / 2), x0)
     if panel.x.label:
-        below = bottom + (panel.x.tick_size if panel.x.tick_labels else 0) + LABEL_PAD
-        over.add(
-            anchored(x0 + w / 2, below, panel.x.label, panel.x.label_size, INK, "center", "top")
-        )
+        size = panel.x.label_size
+        over.add(anchored(centre, below, panel.x.label, size, INK, "center", "top"))
+    if y_note and panel.y.tick_labels:  # over the tick labels, level with a title
+        right = x0 - TICK_LENGTH - TICK_PAD
+        note = anchored(right, y0 - TITLE_RISE, y_note, panel.y.tick_size, TICK_COLOUR, "right")
+        over.add(Group([note], kind="ynote"))
     if panel.y.label:
         left = x0 - TICK_LENGTH - TICK_PAD - widest - LABEL_PAD
         over.add(
@@ -465,7 +477,9 @@ def _panel(panel: Panel) -> Group:
     ]
     group.add(data, over, *texts)
     if panel.title:
-        group.add(anchored(box[0], box[1] - 5.5, panel.title, 8.5, panel.title_colour, bold=True))
+        group.add(
+            anchored(box[0], box[1] - TITLE_RISE, panel.title, 8.5, panel.title_colour, bold=True)
+        )
     if panel.legend is not None:
         found = legend(panel, data, box, [_extent(t) for t in texts])
         if found is not None:

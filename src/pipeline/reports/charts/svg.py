@@ -15,8 +15,11 @@ from pipeline.reports.charts.scene import (
     outline,
     outline_runs,
 )
+from pipeline.reports.web_fonts import FAMILY
 
-FONT = "DejaVu Sans, Verdana, Arial, sans-serif"
+FONT = f"{FAMILY}, DejaVu Sans, Verdana, Arial, sans-serif"
+"""The chart text's font: the one the HTML report embeds (:mod:`~pipeline.reports.web_fonts`),
+then an installed DejaVu Sans (a standalone SVG), then look-alikes."""
 
 
 def _n(value: float) -> str:
