@@ -185,6 +185,32 @@ def test_embedded_fonts_hold_every_character_the_charts_write(tiny_run: Path):
         assert sorted(c for c in needed if ord(c) not in cmap) == []
 
 
+def test_embedded_fonts_kern_as_the_whole_fonts_do(tiny_run: Path):
+    """The browser kerns only as the font's ``kern`` table says: each inline font holds
+    the whole shipped font's kerning pairs between the characters it maps (read from both
+    fonts by fontTools)."""
+    from fontTools.ttLib import TTFont
+
+    source = (tiny_run / "report.html").read_text(encoding="utf-8")
+    fonts = re.findall(r"url\(data:font/ttf;base64,([A-Za-z0-9+/=]+)\)", source)
+    for data, bold in zip(fonts, (False, True), strict=True):
+        inline = TTFont(io.BytesIO(base64.b64decode(data)))
+        whole = TTFont(pdf_font("DejaVu Sans", bold).path)
+        chars = {chr(c) for c in inline.getBestCmap()}
+
+        def pairs(font: Any, chars: set[str] = chars) -> dict[tuple[str, str], int]:
+            by_glyph = {g: c for c, g in ((chr(k), g) for k, g in font.getBestCmap().items())}
+            table = font["kern"].kernTables[0].kernTable
+            return {
+                (by_glyph[a], by_glyph[b]): v
+                for (a, b), v in table.items()
+                if by_glyph.get(a) in chars and by_glyph.get(b) in chars
+            }
+
+        expected = pairs(whole)
+        assert len(expected) > 500 and pairs(inline) == expected
+
+
 def test_utm_coordinates_are_labelled_in_millions_clear_of_a_long_axis_label(browser: Any):
     """Eastings of 6.1e6 m in a narrow panel: ticks 6.100 … ×10⁶, the note under the axis's
     right end and the long axis label moved left of it, nothing overlapping."""

@@ -99,11 +99,6 @@ class PdfFont:
         kerns = [0, *kerns] if glyphs else []
         return glyphs, kerns, sum(self._advance[g] for g in glyphs) + sum(kerns)
 
-    def kerning(self) -> dict[tuple[str, str], int]:
-        """Kerning pairs measured with: (left, right glyph name) → adjustment, font units
-        (the repertoire's, or the whole font's once text outside it was measured)."""
-        return dict(self._kern)
-
     def width(self, text: str, size: float) -> float:
         """Advance of ``text`` at ``size`` points, in points."""
         return self.layout(text)[2] * size / self.upem
@@ -138,6 +133,18 @@ class PdfFont:
             data = _make_subset(self.path, set(REPERTOIRE))[0]
         return data, meta["ids"], meta["widths"], {int(k): v for k, v in meta["text"].items()}
 
+    def kerned_repertoire(self) -> bytes:
+        """The :data:`REPERTOIRE` subset with the font's ``kern`` table, for a browser (which
+        kerns only as the font says, where the PDF positions each glyph itself); shipped
+        beside the fonts, made when missing."""
+        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}-kern.ttf"
+        try:
+            return cached.read_bytes()
+        except OSError:
+            data = _make_subset(self.path, set(REPERTOIRE), kern=True)[0]
+            _store(cached, data)
+            return data
+
     @staticmethod
     def tag(chars: set[str]) -> str:
         """Six capitals naming the subset of ``chars`` (the same characters, the same tag)."""
@@ -145,13 +152,15 @@ class PdfFont:
         return "".join(chr(65 + b % 26) for b in digest[:6])
 
 
-def _make_subset(path: str, chars: set[str]) -> Subset:
-    """A subset of the font at ``path`` holding exactly ``chars``."""
+def _make_subset(path: str, chars: set[str], *, kern: bool = False) -> Subset:
+    """A subset of the font at ``path`` holding exactly ``chars`` (with its ``kern`` table
+    if ``kern``)."""
     from fontTools import subset  # type: ignore[import-untyped]
     from fontTools.ttLib import TTFont
 
     options = subset.Options()
-    options.drop_tables += list(DROPPED)
+    options.drop_tables += [t for t in DROPPED if not (kern and t == "kern")]
+    options.legacy_kern = kern
     options.notdef_outline = True
     options.name_IDs = [1, 2, 4, 6]
     options.glyph_names = True
@@ -218,14 +227,19 @@ def _index(path: str) -> dict[str, Any]:
         pass
     data, ids, widths, text = _make_subset(path, set(REPERTOIRE))
     made = {"ids": ids, "widths": widths, "text": text, "metrics": _metrics(path)}
-    try:
-        for target, content in ((font_file, data), (index, json.dumps(made).encode())):
-            partial = target.with_suffix(f".{os.getpid()}.tmp")
-            partial.write_bytes(content)
-            partial.replace(target)  # atomic: parallel batch workers may write it at once
-    except OSError:
-        pass
+    _store(font_file, data)
+    _store(index, json.dumps(made).encode())
     return made
+
+
+def _store(target: Path, content: bytes) -> None:
+    """Write a made subset or index beside the fonts, if the directory allows."""
+    partial = target.with_suffix(f".{os.getpid()}.tmp")
+    try:
+        partial.write_bytes(content)
+        partial.replace(target)  # atomic: parallel batch workers may write it at once
+    except OSError:
+        partial.unlink(missing_ok=True)
 
 
 @cache
