@@ -3,6 +3,8 @@ well-formed SVG and a PDF poppler reads — checked on figures of known data."""
 
 from __future__ import annotations
 
+import base64
+import io
 import re
 import shutil
 import subprocess
@@ -163,6 +165,29 @@ def test_chart_saved_as_pdf_is_vector_and_readable(tmp_path: Path):
     assert len(images.strip().splitlines()) == 2  # the header only: nothing rasterised
     with pytest.raises(ValueError, match=r"chart\.png: a chart is saved as \.svg or \.pdf"):
         Drawing(Chart((4.0, 3.0), [panel])).save(tmp_path / "chart.png")
+
+
+def test_chart_saved_as_svg_carries_its_fonts(tmp_path: Path):
+    """A chart saved alone embeds the fonts its text was measured with (regular and bold,
+    TrueType, under the family the drawing names first); the notebook view does not."""
+    from fontTools.ttLib import TTFont  # type: ignore[import-untyped]
+
+    (box,) = grid((4.0, 3.0))
+    panel = Panel(box, Axis("Time (s)", limits=(0, 10)), Axis("Signal (V)", limits=(-1, 1)))
+    panel.add(Line(np.arange(11.0), np.cos(np.arange(11.0)), plots.BLUE))
+    drawing = Drawing(Chart((4.0, 3.0), [panel]))
+    saved = drawing.save(tmp_path / "chart.svg").read_text(encoding="utf-8")
+    root = ET.fromstring(saved)
+    (style,) = root.iter(f"{SVG}style")
+    faces = re.findall(r"font-family: ([\w-]+); font-weight: (\d+).*?base64,([^)]+)\)", style.text)
+    assert [(family, weight) for family, weight, _ in faces] == [
+        ("gyropipe-dejavu-sans", "400"),
+        ("gyropipe-dejavu-sans", "700"),
+    ]
+    for _, _, data in faces:
+        assert TTFont(io.BytesIO(base64.b64decode(data)))["name"].getDebugName(1) == "DejaVu Sans"
+    assert root.get("font-family", "").startswith("gyropipe-dejavu-sans,")
+    assert "<style>" not in drawing._repr_svg_()
 
 
 @pytest.mark.parametrize("azimuth", [45.0, 225.0, 315.0])

@@ -109,14 +109,16 @@ def _group(g: Group, prefix: str, clips: list[int]) -> str:
     return f"<g{attrs}>{body}</g>"
 
 
-def to_svg(scene: Scene, id_prefix: str = "", title: str = "") -> str:
+def to_svg(scene: Scene, id_prefix: str = "", title: str = "", style: str = "") -> str:
     """``scene`` as a standalone SVG element (clip-path ids start with ``id_prefix``, so
-    several SVGs can share one HTML page; ``title``: its accessible name)."""
+    several SVGs can share one HTML page; ``title``: its accessible name; ``style``: CSS
+    of its own, e.g. the embedded fonts of a file saved alone)."""
     w, h = _n(scene.width), _n(scene.height)
     named = f"<title>{escape(title, quote=False)}</title>" if title else ""
+    styled = f"<style>{style}</style>" if style else ""
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}pt" height="{h}pt" '
         f'viewBox="0 0 {w} {h}" font-family="{FONT}" stroke-linejoin="round" role="img">'
-        f'{named}<rect width="{w}" height="{h}" fill="#ffffff"/>'
+        f'{named}{styled}<rect width="{w}" height="{h}" fill="#ffffff"/>'
         f"{_group(scene.root, id_prefix, [])}</svg>"
     )
