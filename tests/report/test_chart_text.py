@@ -16,7 +16,15 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from report_support import figure_svg, overlap, pdf_pages, run_ok, svg_boxes, svg_texts
+from report_support import (
+    figure_svg,
+    inspect,
+    overlap,
+    pdf_pages,
+    run_ok,
+    svg_boxes,
+    svg_texts,
+)
 
 from pipeline.reports.charts.drawing import Drawing
 from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, grid
@@ -209,6 +217,32 @@ def test_embedded_fonts_kern_as_the_whole_fonts_do(tiny_run: Path):
 
         expected = pairs(whole)
         assert len(expected) > 500 and pairs(inline) == expected
+
+
+def test_tiny_drift_prints_down_to_its_sigma_not_as_zero(browser: Any, tiny_run: Path):
+    """A drift of a few 1e-6 °/h known to ≈ 1e-7 °/h: the summary, the estimates table and
+    the series table print it to the σ's last digit (was 0.000 ± 0.000), matching the
+    result tables; the figure's legend too."""
+    page = inspect(browser, tiny_run / "report.html")
+    result = pq.read_table(tiny_run / "drift.result.parquet").to_pylist()
+    fit = next(r for r in result if r["method"] == "fit")
+    shown = re.search(r"Drift \(fit\)\s+(−?[\d.]+) ± (\S+) °/h", page.text)
+    assert shown is not None, page.text
+    drift, sigma = value(shown.group(1)), value(shown.group(2))
+    assert drift != 0 and drift == pytest.approx(fit["drift_deg_h"], rel=0.05)
+    assert sigma == pytest.approx(fit["sigma_deg_h"], rel=0.05)
+    reading = re.search(r"Reading σ\s+(\S+)°", page.text)
+    assert reading is not None and value(reading.group(1)) == pytest.approx(
+        fit["reading_sigma"], rel=0.05
+    )
+    rows = {r[0]: r for r in page.tables["estimates"]}
+    assert value(rows["fit"][2]) == pytest.approx(fit["drift_deg_h"], rel=0.05)
+    series = pq.read_table(tiny_run / "drift.series.parquet").to_pylist()
+    means = [value(r[3]) for r in page.tables["series"]]
+    assert means == pytest.approx([s["mean_error"] for s in series], rel=0.05)
+    legend = svg_texts(browser, figure_svg(tiny_run / "report.html", "series"), "text")
+    (label,) = [t for t in legend if t.startswith("fitted drift")]
+    assert value(label.split()[2]) == pytest.approx(fit["drift_deg_h"], rel=0.05)
 
 
 def test_utm_coordinates_are_labelled_in_millions_clear_of_a_long_axis_label(browser: Any):

@@ -14,7 +14,7 @@ import pytest
 from report_support import figure_svg, inspect, pdf_pages, svg_texts
 
 import pipeline as gp
-from pipeline.reports.numbers import fmt_azimuth, fmt_sigma
+from pipeline.reports.numbers import fmt_azimuth, fmt_measured, fmt_sigma
 
 
 @pytest.mark.parametrize(
@@ -35,6 +35,26 @@ from pipeline.reports.numbers import fmt_azimuth, fmt_sigma
 )
 def test_sigma_has_two_significant_digits(sigma: float | None, text: str):
     assert fmt_sigma(sigma) == text
+
+
+@pytest.mark.parametrize(
+    ("value", "sigma", "decimals", "text"),
+    [
+        (0.5234, 0.021, 3, "0.523"),  # σ coarser than the decimals: the decimals
+        (1.2346, 0.31, 3, "1.235"),
+        (0.00412, 0.00021, 3, "0.00412"),  # σ 0.00021: down to its second digit
+        (4.1e-6, 2.0e-7, 3, "0.00000410"),
+        (-4.1e-6, 2.0e-7, 2, "−0.00000410"),
+        (0.0004, 0.03, 3, "0.000"),  # not known better than 0.03: zero at 3 decimals
+        (2.5, float("nan"), 2, "2.50"),  # σ undefined: the usual decimals
+        (2.5, 0.0, 2, "2.50"),
+        (None, 0.1, 2, ""),
+    ],
+)
+def test_a_measured_value_prints_down_to_its_sigma(
+    value: float | None, sigma: float, decimals: int, text: str
+):
+    assert fmt_measured(value, sigma, decimals) == text
 
 
 @pytest.mark.parametrize(

@@ -31,6 +31,7 @@ from pipeline.reports.document import (
     items,
 )
 from pipeline.reports.literature import DRIFT_CALIBRATION, Citations
+from pipeline.reports.numbers import fmt_measured
 from pipeline.reports.sections import footer, method_items, provenance_section, tool_fields
 from pipeline.reports.survey import ReportInputError
 from pipeline.well import WellMetadata
@@ -162,6 +163,13 @@ def _verdict(row: dict[str, Any]) -> Verdict:
     return Verdict(level, text)
 
 
+def _pm(row: dict[str, Any], per: str, decimals: int) -> str:
+    """'drift ± σ' of an estimate ``row``, per hour or per minute (``per``: h, min): σ with
+    two significant digits, the drift to at least ``decimals`` decimals and σ's last."""
+    drift, sigma = row[f"drift_deg_{per}"], row[f"sigma_deg_{per}"]
+    return f"{fmt_measured(drift, sigma, decimals)} ± {fmt_sigma(sigma)}"
+
+
 def _instrument(
     name: str,
     result: pa.Table,
@@ -176,17 +184,15 @@ def _instrument(
     summary = [
         (
             f"Drift ({selected['method']})",
-            f"{fmt(selected['drift_deg_h'], 3)} ± {fmt(selected['sigma_deg_h'], 3)} °/h  "
-            f"({fmt(selected['drift_deg_min'], 4)} ± {fmt(selected['sigma_deg_min'], 4)} °/min)",
+            f"{_pm(selected, 'h', 3)} °/h  ({_pm(selected, 'min', 4)} °/min)",
         ),
-        ("Reading σ", f"{fmt(selected['reading_sigma'], 2)}° (pattern and drift removed)"),
+        ("Reading σ", f"{fmt_sigma(selected['reading_sigma'])}° (pattern and drift removed)"),
     ]
     if traditional is not None:
         summary += [
             (
                 "Traditional estimate",
-                f"{fmt(traditional['drift_deg_h'], 3)} ± {fmt(traditional['sigma_deg_h'], 3)} °/h "
-                f"over {fmt(traditional['interval'] / 60, 1)} min",
+                f"{_pm(traditional, 'h', 3)} °/h over {fmt(traditional['interval'] / 60, 1)} min",
             ),
             (
                 "Gain over traditional",
@@ -211,7 +217,7 @@ def _instrument(
                 str(r["series"]),
                 str(r["readings"]),
                 fmt(r["mid_time"] / 60, 2),
-                fmt(r["mean_error"], 3),
+                fmt_measured(r["mean_error"], r["sigma_mean"], 3),
                 fmt_sigma(r["sigma_mean"]),
                 fmt_sigma(r["residual_std"]),
             )
@@ -237,9 +243,9 @@ def _instrument(
             (
                 r["method"],
                 r["label"],
-                fmt(r["drift_deg_h"], 3),
+                fmt_measured(r["drift_deg_h"], r["sigma_deg_h"], 3),
                 fmt_sigma(r["sigma_deg_h"]),
-                fmt(r["drift_deg_min"], 4),
+                fmt_measured(r["drift_deg_min"], r["sigma_deg_min"], 4),
                 fmt_sigma(r["sigma_deg_min"]),
                 fmt(r["interval"] / 60, 1),
                 fmt(r["gain"], 1),
@@ -292,6 +298,7 @@ def _points(
         mean_error=series.column("mean_error").to_numpy(),
         sigma_mean=series.column("sigma_mean").to_numpy(),
         fit_rate_h=float(fit["drift_deg_h"]) if fit else None,
+        fit_sigma_h=float(fit["sigma_deg_h"]) if fit else None,
         estimates=tuple(
             (
                 f"{r['method']} {r['label']}"

@@ -53,7 +53,25 @@ def fmt_sigma(value: float | None) -> str:
     power = int(exponent)
     if power < SIGMA_FIXED_BELOW:
         return _minus(f"{mantissa}e{power}")
-    return _minus(f"{value:.{max(SIGMA_DIGITS - 1 - power, 0)}f}")
+    return _minus(f"{value:.{sigma_decimals(value)}f}")
+
+
+def sigma_decimals(sigma: float) -> int:
+    """Decimals down to the last of :data:`SIGMA_DIGITS` significant digits of ``sigma``
+    (0 for a σ of 10 or more, or one that is zero or not finite)."""
+    if not math.isfinite(sigma) or sigma <= 0:
+        return 0
+    power = int(f"{sigma:.{SIGMA_DIGITS - 1}e}".split("e")[1])
+    return max(SIGMA_DIGITS - 1 - power, 0)
+
+
+def fmt_measured(value: float | None, sigma: float | None, decimals: int = 2) -> str:
+    """A measured value with at least ``decimals`` decimals, and more where its σ is finer
+    (down to the σ's last printed digit): a value smaller than the usual decimals but known
+    better than them never prints as 0.000 (4.1e−6 ± 2.0e−7 °/h prints 0.0000041)."""
+    if value is None or sigma is None or not math.isfinite(sigma):
+        return fmt(value, decimals)
+    return fmt(value, max(decimals, sigma_decimals(sigma)))
 
 
 def azimuth_value(value: float, decimals: int) -> float:

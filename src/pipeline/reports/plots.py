@@ -31,7 +31,7 @@ from pipeline.reports.charts.model import (
     grid,
 )
 from pipeline.reports.envelope import FullRate
-from pipeline.reports.numbers import fmt_azimuth, fmt_sig
+from pipeline.reports.numbers import fmt_azimuth, fmt_measured, fmt_sig
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -381,6 +381,7 @@ class SeriesPoints:
     mean_error: FloatArray
     sigma_mean: FloatArray
     fit_rate_h: float | None
+    fit_sigma_h: float | None
     estimates: tuple[tuple[str, float, float, bool], ...]
     """(label, drift °/h, σ °/h, selected)"""
 
@@ -445,7 +446,7 @@ def calibration_series(size: Size, data: SeriesPoints) -> Chart:
                 t_line,
                 m0 + data.fit_rate_h / 60.0 * (t_line - t0),
                 ORANGE,
-                label=f"fitted drift {data.fit_rate_h:.2f} °/h",
+                label=f"fitted drift {fmt_measured(data.fit_rate_h, data.fit_sigma_h)} °/h",
             )
         )
     labels = [f"{e[0]} (used)" if e[3] else e[0] for e in data.estimates]

@@ -43,6 +43,7 @@ from pipeline.reports.listing import (
     short_courses,
 )
 from pipeline.reports.literature import Citations
+from pipeline.reports.numbers import fmt_measured
 from pipeline.reports.program import program_section
 from pipeline.reports.qc import (
     QcSources,
@@ -478,7 +479,7 @@ def _drift(tables: SurveyTables) -> Section:
             (
                 r["instrument"],
                 r["method"],
-                fmt(r["drift_deg_h"], 3),
+                fmt_measured(r["drift_deg_h"], r["sigma_deg_h"], 3),
                 fmt_sigma(r["sigma_deg_h"]),
                 r["verdict"],
             )
