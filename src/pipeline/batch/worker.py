@@ -218,8 +218,10 @@ def _calibration(plan: Plan, result: RunResult) -> list[dict[str, Any]]:
     found = []
     for st in plan.stages:
         for port, contract in st.definition.outputs.items():
+            if contract is not CalibrationResult:
+                continue  # (looking another port up would read a streamed output whole)
             table = result.tables.get((st.id, port))
-            if contract is not CalibrationResult or table is None:
+            if table is None:
                 continue
             name = getattr(st.params, "input", None)
             rows = table.select(["instrument", "method", "drift_deg_h", "selected"]).to_pylist()
