@@ -8,8 +8,9 @@ anything imports pandas afterwards (a plugin, a notebook, pyarrow's own ``to_pan
 has pyarrow load its pandas integration at once, so pyarrow treats pandas objects exactly
 as it always does (tests/engine/test_lazy_pandas.py compares with a plain process).
 
-Relies on pyarrow's pandas shim (``pyarrow/pandas-shim.pxi``, pyarrow 14–26): a failed
-first import is remembered for the checks, and a later explicit use imports pandas again.
+Relies on pyarrow's pandas shim (``pyarrow/pandas-shim.pxi``, read in pyarrow 26): a
+failed first import is remembered for the checks, and a later explicit use imports pandas
+again. The tests compare with a plain process, so a pyarrow that changes this shows.
 """
 
 from __future__ import annotations
