@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import yaml
 from hypothesis import strategies as st
 
 from pipeline.io.las_log import TEXT_NULL
@@ -38,6 +39,16 @@ def pythonpath(*dirs: Path) -> dict[str, str]:
     them (a worktree's ``src``, so a subprocess runs the gyropipe under test)."""
     kept = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, dirs), *kept])}
+
+
+def without_report(name: str, directory: Path) -> Path:
+    """The shipped pipeline ``pipelines/NAME.yaml`` without its report stage, written to
+    ``directory`` (its processing stages only)."""
+    spec = yaml.safe_load((ROOT / "pipelines" / f"{name}.yaml").read_text())
+    spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
+    path = directory / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
 
 
 def read_stations(path: Path, reader: str) -> pa.Table:

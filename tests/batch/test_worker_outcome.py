@@ -15,7 +15,7 @@ from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
 from pipeline.streams import TableStream
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import ROOT, gyropipe, pythonpath, without_report
 
 
 def test_calibrations_are_found_without_reading_streamed_outputs(tmp_path: Path):
@@ -30,10 +30,7 @@ def test_calibrations_are_found_without_reading_streamed_outputs(tmp_path: Path)
         check=True,
         capture_output=True,
     )
-    spec = yaml.safe_load((ROOT / "pipelines" / "continuous-gyro.yaml").read_text())
-    spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
-    pipeline = tmp_path / "continuous.yaml"
-    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
+    pipeline = without_report("continuous-gyro", tmp_path)
     registry = load_registry()
     built = build_plan(load_spec(pipeline), registry)
     result = run_plan(

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests_support import ROOT, pythonpath
+from tests_support import ROOT, pythonpath, without_report
 
 SCRIPT = """
 import atexit, sys
@@ -78,10 +78,7 @@ def survey_modules(tmp_path_factory: pytest.TempPathFactory) -> set[str]:
         check=True,
         capture_output=True,
     )
-    spec = yaml.safe_load((ROOT / "pipelines" / "survey.yaml").read_text())
-    spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
-    pipeline = tmp / "survey.yaml"
-    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
+    pipeline = without_report("survey", tmp)
     return modules_of(tmp, "run", str(pipeline), "--input", str(stations), "--out", "out")
 
 
@@ -107,10 +104,7 @@ def test_continuous_run_without_report_imports_no_plotting(tmp_path: Path):
     (tmp_path / "plan.yaml").write_text(yaml.safe_dump(plan))
     simulated = modules_of(tmp_path, "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim))
     assert not loaded(simulated, "pandas") and "pipeline.sim.sensors" in simulated
-    spec = yaml.safe_load((ROOT / "pipelines" / "continuous-gyro.yaml").read_text())
-    spec["stages"] = [s for s in spec["stages"] if s["uses"] != "report"]
-    pipeline = tmp_path / "continuous.yaml"
-    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
+    pipeline = without_report("continuous-gyro", tmp_path)
     samples = str(sim / "samples.parquet")
     modules = modules_of(tmp_path, "run", str(pipeline), "--input", samples, "--out", "out")
     for package in ("matplotlib", "dask", "pipeline.reports", "allantools", "scipy", "pandas"):
