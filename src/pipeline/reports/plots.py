@@ -21,6 +21,7 @@ from pipeline.reports.charts.model import (
     Bars,
     Chart,
     ErrorBars,
+    LegendLoc,
     Line,
     Marker,
     Panel,
@@ -149,34 +150,25 @@ def profiles(
     )
     p_azi.add(Line(path.md[~low], azi[~low], TEAL, 0, marker=Marker("o", 2.6)))
     if low.any():
-        p_azi.add(
-            Line(
-                path.md[low],
-                azi[low],
-                GREY,
-                0,
-                marker=Marker("o", 2.6, hollow=True),
-                label=f"inclination < {low_inclination:g}° (azimuth ill-defined)",
-            )
-        )
-        p_azi.legend = "upper right"
+        label = f"inclination < {low_inclination:g}° (azimuth ill-defined)"
+        _set_apart(p_azi, path.md[low], azi[low], 2.6, label, "upper right")
     course = np.diff(path.md, prepend=path.md[0])
     grey = np.zeros(len(dls), bool) if short is None else short
     p_dls = Panel(boxes[2], Axis("MD (m)", limits=md), Axis(f"DLS ({dls_unit})"))
     p_dls.add(Bars((path.md - course)[~grey], course[~grey], dls[~grey], "#f0b27a", ORANGE))
     if grey.any():  # a short course's bar would be a hairline: a hollow marker instead
-        p_dls.add(
-            Line(
-                path.md[grey],
-                dls[grey],
-                GREY,
-                0,
-                marker=Marker("o", 3.5, hollow=True),
-                label=f"{short_label} (not in the maximum)",
-            )
-        )
-        p_dls.legend = "upper left"
+        label = f"{short_label} (not in the maximum)"
+        _set_apart(p_dls, path.md[grey], dls[grey], 3.5, label, "upper left")
     return Chart(size, [p_inc, p_azi, p_dls])
+
+
+def _set_apart(
+    panel: Panel, md: FloatArray, values: FloatArray, size: float, label: str, legend: LegendLoc
+) -> None:
+    """Stations set apart on a profile (``md`` in m): hollow grey markers ``size`` pt
+    across, named in the panel's legend at ``legend``."""
+    panel.add(Line(md, values, GREY, 0, marker=Marker("o", size, hollow=True), label=label))
+    panel.legend = legend
 
 
 @dataclass(frozen=True)
