@@ -35,7 +35,7 @@ import pyarrow.csv as pacsv
 from pipeline.io import arrow_text
 from pipeline.io.arrow_text import read_options
 from pipeline.io.las import read_las
-from pipeline.io.las_options import LasOptions
+from pipeline.io.las.options import LasOptions
 from timing import interleaved, table, uptime
 
 CURVES = [

@@ -31,7 +31,7 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 
 from pipeline.io.mcap import read_samples, write_samples
-from pipeline.io.mcap_options import McapOptions
+from pipeline.io.mcap.options import McapOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata

@@ -38,7 +38,7 @@ import pyarrow as pa
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import GyropipeError
 from pipeline.io.las import read_las
-from pipeline.io.las_header import utf16_codec
+from pipeline.io.las.header import utf16_codec
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from tests_support import comparable_cell

@@ -17,7 +17,7 @@ import pyarrow as pa
 import yaml
 from hypothesis import strategies as st
 
-from pipeline.io.las_log import TEXT_NULL
+from pipeline.io.las.log import TEXT_NULL
 from pipeline.registry import ReaderDef, WriterDef
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -13,7 +13,7 @@ import yaml
 
 from pipeline.errors import InputFileError, SpecError
 from pipeline.graph import build_plan
-from pipeline.io.csv_options import load_profile
+from pipeline.io.csv.options import load_profile
 from pipeline.sim.spec import load_simulation
 from pipeline.spec import load_spec
 from pipeline.yamlsource import MAX_NODES

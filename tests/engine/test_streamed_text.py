@@ -17,7 +17,9 @@ import pytest
 
 from pipeline.errors import InputFileError
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.io import arrow_text, csv_rows, las_fast
+from pipeline.io import arrow_text
+from pipeline.io.csv import rows as csv_rows
+from pipeline.io.las import fast as las_fast
 from pipeline.plugins import load_registry
 from pipeline.registry import ReaderDef
 from pipeline.streams import TableStream

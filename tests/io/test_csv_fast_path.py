@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from pipeline.errors import InputFileError
-from pipeline.io import arrow_text, csv_rows
+from pipeline.io import arrow_text
 from pipeline.io.csv import LAYOUTS, read
-from pipeline.io.csv_header import HEADER_SEARCH_LINES, find_header
-from pipeline.io.csv_options import CsvOptions
+from pipeline.io.csv import rows as csv_rows
+from pipeline.io.csv.header import HEADER_SEARCH_LINES, find_header
+from pipeline.io.csv.options import CsvOptions
 
 NAMES = ("time", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
 HEADER = ("time [s]", *(f"gyro_{a} [deg/h]" for a in "xyz"), *(f"acc_{a} [m/s2]" for a in "xyz"))

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from pipeline.errors import InputFileError, SpecError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.io.conventions import to_canonical
-from pipeline.io.csv_options import CsvOptions, load_profile
+from pipeline.io.csv.options import CsvOptions, load_profile
 from pipeline.io.mnemonics import CURVES
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec

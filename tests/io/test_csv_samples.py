@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from pipeline.contracts import UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
-from pipeline.io import csv_rows
+from pipeline.io.csv import rows as csv_rows
 from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.sim.simulate import simulate

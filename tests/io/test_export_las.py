@@ -15,7 +15,7 @@ import pyarrow as pa
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.csv import read as read_csv
 from pipeline.io.las import read_las
-from pipeline.io.las_write import write_las
+from pipeline.io.las.write import write_las
 from pipeline.runner import RunResult
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import Stations

@@ -15,8 +15,8 @@ from mcap.reader import make_reader
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError
-from pipeline.io.mcap_arrow import BATCH_ROWS, write_samples
-from pipeline.io.mcap_tables import read_tables, write_tables
+from pipeline.io.mcap.arrow import BATCH_ROWS, write_samples
+from pipeline.io.mcap.tables import read_tables, write_tables
 from pipeline.registry import Provenance
 from pipeline.runner import RunResult
 from pipeline.well import WellMetadata, attach

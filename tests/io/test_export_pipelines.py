@@ -16,7 +16,7 @@ from export_support import SAMPLE, without_reports
 from komle.bindings.v1411.write import witsml as wml
 
 from pipeline.graph import build_plan
-from pipeline.io.mcap_tables import read_tables
+from pipeline.io.mcap.tables import read_tables
 from pipeline.io.parquet import write as write_parquet
 from pipeline.plugins import load_registry
 from pipeline.runner import RunResult, run_plan

@@ -22,8 +22,10 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, WrongKindError
 from pipeline.io import las as las_plugin
-from pipeline.io import las_fast, las_header, las_rows
-from pipeline.io.las_options import LasOptions
+from pipeline.io.las import fast as las_fast
+from pipeline.io.las import header as las_header
+from pipeline.io.las import rows as las_rows
+from pipeline.io.las.options import LasOptions
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import LogTable, RawSamples, Stations

@@ -1,4 +1,4 @@
-"""The LAS fast path (``pipeline.io.las_fast``) against the careful path and against
+"""The LAS fast path (``pipeline.io.las.fast``) against the careful path and against
 Python's own ``float`` of each cell, on data sections laid out as writers lay them out:
 fixed-width columns (the block rewrite keeps their bytes), ragged ones (packed), both in
 one file, CRLF and tabs, and blocks small enough that a section spans many of them."""
@@ -14,8 +14,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pipeline.errors import InputFileError
-from pipeline.io import arrow_text, las_fast, las_header, las_rows
+from pipeline.io import arrow_text
+from pipeline.io.las import fast as las_fast
+from pipeline.io.las import header as las_header
 from pipeline.io.las import read_las
+from pipeline.io.las import rows as las_rows
 
 _number = st.one_of(
     st.floats(-1e5, 1e5, allow_nan=False).map(lambda v: round(v, 4)),

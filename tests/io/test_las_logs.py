@@ -27,7 +27,7 @@ from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.convert import read_kind
 from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.io import las as las_plugin
-from pipeline.io.las_header import DESCRIPTION_KEY, utf16_codec
+from pipeline.io.las.header import DESCRIPTION_KEY, utf16_codec
 from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.tables import LogTable

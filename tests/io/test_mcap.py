@@ -18,9 +18,10 @@ from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import mcap as plugin
-from pipeline.io import mcap_arrow, mcap_keyed
 from pipeline.io.conventions import Conventions
-from pipeline.io.mcap_options import McapOptions
+from pipeline.io.mcap import arrow as mcap_arrow
+from pipeline.io.mcap import keyed as mcap_keyed
+from pipeline.io.mcap.options import McapOptions
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec

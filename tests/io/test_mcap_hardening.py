@@ -27,7 +27,7 @@ from test_mcap import (
 )
 
 from pipeline.errors import InputFileError
-from pipeline.io.mcap_arrow import (
+from pipeline.io.mcap.arrow import (
     ARROW_MESSAGE_ENCODING,
     ARROW_SCHEMA_ENCODING,
     MARKERS_KEY,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from pipeline.gyrocompass.readings import position_readings
 from pipeline.gyrocompass.readings_stream import stream_position_readings
-from pipeline.io.mcap_arrow import BATCH_ROWS
+from pipeline.io.mcap.arrow import BATCH_ROWS
 from pipeline.plugins import load_registry
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec

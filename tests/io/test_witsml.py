@@ -22,7 +22,7 @@ from komle.bindings.v1411.write import witsml as wml
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError
 from pipeline.io import witsml as witsml_plugin
-from pipeline.io.witsml_terms import survey_tool
+from pipeline.io.witsml.terms import survey_tool
 from pipeline.runner import RunResult
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata, well_of

@@ -1,7 +1,7 @@
 """Foreign MCAP channels as raw samples: which channels are readable, ROS 2 decoding, and
 the join of several channels on one time base.
 
-Each channel becomes a :class:`~pipeline.io.mcap_keyed.Source`: its sample times (integer
+Each channel becomes a :class:`~pipeline.io.mcap.keyed.Source`: its sample times (integer
 ns from the message log time or a ROS header stamp, or seconds from a time key) and
 canonical columns in canonical units (°/h, m/s², nT, m, deg; station/position integers),
 converted to the canonical conventions with the option ``conventions``.
@@ -10,7 +10,7 @@ converted to the canonical conventions with the option ``conventions``.
 specific force per REP 145, so by default the accelerometers are negated to the gravity
 convention) and ``sensor_msgs/msg/MagneticField`` (tesla), ``ros2msg`` schemas decoded with
 mcap-ros2-support; time is ``header.stamp``, or the log time when every stamp is zero.
-JSON and protobuf: see :mod:`pipeline.io.mcap_keyed`.
+JSON and protobuf: see :mod:`pipeline.io.mcap.keyed`.
 
 **Join** (several channels): the base is the channel with gyro columns (else the one with
 the most samples); its times are the table's. With ``join: exact`` (default) another
@@ -32,11 +32,11 @@ import pyarrow as pa
 from mcap.records import Channel, Schema
 
 from pipeline.errors import InputFileError
-from pipeline.io import mcap_keyed as keyed
 from pipeline.io.conventions import Conventions, to_canonical
-from pipeline.io.mcap_keyed import Source
-from pipeline.io.mcap_options import McapOptions
-from pipeline.io.mcap_records import McapFile, Messages, iter_payloads, messages_of
+from pipeline.io.mcap import keyed
+from pipeline.io.mcap.keyed import Source
+from pipeline.io.mcap.options import McapOptions
+from pipeline.io.mcap.records import McapFile, Messages, iter_payloads, messages_of
 from pipeline.units import conversion_factor
 
 IMU = "sensor_msgs/msg/Imu"

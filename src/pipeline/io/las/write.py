@@ -36,7 +36,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
-from pipeline.io.las_header import DESCRIPTION_KEY
+from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.precision import for_export
 from pipeline.survey.calculation import calculation_of

@@ -22,7 +22,7 @@ File layout, in order:
   ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
   returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
-  :data:`~pipeline.io.csv_header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
+  :data:`~pipeline.io.csv.header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
   split by one of ``, ; tab |``, name every required column of the kind. Names are looked up
   in the ``aliases`` option, then in the one mnemonics table
   (:mod:`pipeline.io.mnemonics`), compared case- and punctuation-insensitively; the option
@@ -43,7 +43,7 @@ required column's value contains a dot. Units come from the header or the option
 an unknown unit is an :class:`~pipeline.errors.InputFileError` naming it. The azimuth north
 reference comes from the header, a ``north_reference`` title line or the option, which must
 agree. Options may come from a vendor profile (``profile: vendor.yaml``, see
-:mod:`pipeline.io.csv_options`).
+:mod:`pipeline.io.csv.options`).
 
 Every problem of the file (or profile) is an InputFileError naming the file, the line and,
 for a cell, its column: wrong cell counts, non-numeric or empty cells, unknown units,
@@ -74,7 +74,7 @@ from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import to_canonical
-from pipeline.io.csv_header import (
+from pipeline.io.csv.header import (
     HEADER_SEARCH_LINES,
     Cell,
     Header,
@@ -84,8 +84,8 @@ from pipeline.io.csv_header import (
     north_reference,
     read_title,
 )
-from pipeline.io.csv_options import CsvOptions
-from pipeline.io.csv_rows import (
+from pipeline.io.csv.options import CsvOptions
+from pipeline.io.csv.rows import (
     Rows,
     data_rows,
     load,
@@ -174,7 +174,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
 
 def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
     """:func:`read` as a stream of record batches: a block of about
-    :data:`~pipeline.io.csv_rows.ROWS_BLOCK` bytes of data lines at a time, parsed and
+    :data:`~pipeline.io.csv.rows.ROWS_BLOCK` bytes of data lines at a time, parsed and
     checked as it passes (each pass reads the file again)."""
     rows, well = _open(path, kind, options)
     return TableStream.of_batches(rows.schema, rows.batches), well
@@ -191,7 +191,7 @@ class _Rows:
     factors: dict[str, float]
     rows: Rows
     decimal: str | None
-    """the decimal mark; None: found (:func:`~pipeline.io.csv_rows.parse_blocks`)"""
+    """the decimal mark; None: found (:func:`~pipeline.io.csv.rows.parse_blocks`)"""
     north: str | None
     opts: CsvOptions
 

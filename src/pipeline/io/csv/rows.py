@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from pipeline.errors import InputFileError
 from pipeline.io import arrow_text
 from pipeline.io.arrow_text import in_order, read_options, release
-from pipeline.io.csv_header import Cell, Header, cells_of
+from pipeline.io.csv.header import Cell, Header, cells_of
 
 SHOWN = 5
 """Bad cells quoted in one error message."""

@@ -2,13 +2,13 @@
 each row, their nulls, and the index checked against STRT/STOP/STEP.
 
 The rows come a block at a time (:func:`data_blocks`, for a stream):
-:func:`~pipeline.io.las_fast.fast_blocks` (numpy + ``pyarrow.csv``; see
+:func:`~pipeline.io.las.fast.fast_blocks` (numpy + ``pyarrow.csv``; see
 ``benchmarks/bench_las.py``) reads plain blocks of numbers; :func:`_slow_values`, the
 careful path, reads the blocks it declines, or the whole section when it cannot apply
 (wrapped files, comment or blank lines, lone CR line ends, text in unread curves, LAS 3
 delimiters, quoted text) and locates every error by line. Both give every number correctly
 rounded, so values equal lasio's. For a log
-(:mod:`pipeline.io.las_log`), :func:`read_all` reads every curve by the fast path, else
+(:mod:`pipeline.io.las.log`), :func:`read_all` reads every curve by the fast path, else
 :func:`read_cells` gives the text of every cell. ``NULL`` items and the option
 ``null_values`` become nulls (compared as numbers: ``-999.2500`` is ``-999.25``). A row
 with too many or too few values, a cell that is not a finite number, a null index value and
@@ -32,8 +32,8 @@ import pyarrow.compute as pc
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError, UnitError, warn_input
-from pipeline.io.las_fast import Declined, fast_blocks, fast_values
-from pipeline.io.las_header import (
+from pipeline.io.las.fast import Declined, fast_blocks, fast_values
+from pipeline.io.las.header import (
     NUMBER,
     Header,
     Source,
@@ -43,7 +43,7 @@ from pipeline.io.las_header import (
     section_role,
     split_lines,
 )
-from pipeline.io.las_options import LasOptions
+from pipeline.io.las.options import LasOptions
 from pipeline.units import conversion_factor
 
 Floats = NDArray[np.float64]

@@ -48,8 +48,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from pipeline.hookspecs import hookimpl
-from pipeline.io.witsml_read import WitsmlOptions, read_witsml, sniff
-from pipeline.io.witsml_write import write_witsml
+from pipeline.io.witsml.read import WitsmlOptions, read_witsml, sniff
+from pipeline.io.witsml.write import write_witsml
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.tables import Stations
 

@@ -1,13 +1,13 @@
 """Built-in LAS plugin: a reader of LAS 1.2, 2.0 and 3.0 files as survey stations, raw
 sensor samples or any well log, and a LAS 2.0 writer of any table's numeric columns.
 
-The reader takes its options from :mod:`pipeline.io.las_options`, splits and decodes the
-file and reads its header items (:mod:`pipeline.io.las_header`). For ``stations`` and
+The reader takes its options from :mod:`pipeline.io.las.options`, splits and decodes the
+file and reads its header items (:mod:`pipeline.io.las.header`). For ``stations`` and
 ``samples`` it chooses the curve of each column of the kind with its unit and north
-reference (:mod:`pipeline.io.las_curves`) and reads the values of the ``~A`` rows
-(:mod:`pipeline.io.las_rows`), in canonical units; a ``log`` keeps every curve as logged
-(:mod:`pipeline.io.las_log`). The well metadata come from :mod:`pipeline.io.las_well`. The
-writer is :mod:`pipeline.io.las_write`.
+reference (:mod:`pipeline.io.las.curves`) and reads the values of the ``~A`` rows
+(:mod:`pipeline.io.las.rows`), in canonical units; a ``log`` keeps every curve as logged
+(:mod:`pipeline.io.las.log`). The well metadata come from :mod:`pipeline.io.las.well`. The
+writer is :mod:`pipeline.io.las.write`.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import pyarrow as pa
 from pipeline.errors import InputFileError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import to_canonical
-from pipeline.io.las_curves import (
+from pipeline.io.las.curves import (
     KINDS,
     azimuth_north,
     choose,
@@ -33,7 +33,7 @@ from pipeline.io.las_curves import (
     make_table,
     one_north,
 )
-from pipeline.io.las_header import (
+from pipeline.io.las.header import (
     BOM,
     SNIFF_BYTES,
     Header,
@@ -43,9 +43,9 @@ from pipeline.io.las_header import (
     require_curves,
     text_head,
 )
-from pipeline.io.las_log import read_log
-from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import (
+from pipeline.io.las.log import read_log
+from pipeline.io.las.options import LasOptions
+from pipeline.io.las.rows import (
     Data,
     IndexRange,
     Mask,
@@ -54,8 +54,8 @@ from pipeline.io.las_rows import (
     null_mask,
     null_values,
 )
-from pipeline.io.las_well import well_metadata
-from pipeline.io.las_write import write_las
+from pipeline.io.las.well import well_metadata
+from pipeline.io.las.write import write_las
 from pipeline.io.sniffing import file_head
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -78,7 +78,7 @@ def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadat
 
 def stream_las(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
     """:func:`read_las` as a stream of record batches, a block of rows (about
-    :data:`~pipeline.io.las_fast.BLOCK` bytes of the ``~A`` section) at a time, checked
+    :data:`~pipeline.io.las.fast.BLOCK` bytes of the ``~A`` section) at a time, checked
     as they pass (a log is read whole, then cut)."""
     rows, well = _open(path, kind, options)
     if isinstance(rows, pa.Table):

@@ -3,18 +3,18 @@
 **Writer** ``mcap``: gyropipe's own batched, columnar layout — Arrow IPC record batches on
 ``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
 column units in metadata records, uncompressed chunks with CRCs
-(:mod:`pipeline.io.mcap_arrow`). Time series only: other tables are refused. Through the
+(:mod:`pipeline.io.mcap.arrow`). Time series only: other tables are refused. Through the
 ``export`` stage it writes several processed tables, each on its own topic
-(:mod:`pipeline.io.mcap_tables`).
+(:mod:`pipeline.io.mcap.tables`).
 
 **Reader** ``mcap`` (kind ``samples``; files starting with the MCAP magic
-``\\x89MCAP0\\r\\n``; options: :mod:`pipeline.io.mcap_options`):
+``\\x89MCAP0\\r\\n``; options: :mod:`pipeline.io.mcap.options`):
 
 * gyropipe's channel → the table exactly as written (bit-for-bit values, nulls, units,
   schema metadata, markers), fast: columns are mapped from the file, not copied;
 * otherwise the readable channels — per-sample JSON, ROS 2 ``sensor_msgs`` Imu and
-  MagneticField, protobuf with its schema — decoded (:mod:`pipeline.io.mcap_keyed`,
-  :mod:`pipeline.io.mcap_sources`), converted to canonical units and conventions and
+  MagneticField, protobuf with its schema — decoded (:mod:`pipeline.io.mcap.keyed`,
+  :mod:`pipeline.io.mcap.sources`), converted to canonical units and conventions and
   joined on the base channel's times.
 
 **Stream** (:func:`stream_samples`): the same table as record batches, one per message of
@@ -22,7 +22,7 @@ gyropipe's channel — zero-copy views of the mapped file, so a streamed port ne
 the samples onto the heap; the other channels are decoded whole first.
 
 Well metadata comes from the ``gyropipe.well`` metadata record. Every CRC the file carries
-is checked first (:mod:`pipeline.io.mcap_records`); every problem raises
+is checked first (:mod:`pipeline.io.mcap.records`); every problem raises
 :class:`~pipeline.errors.InputFileError` naming the file and the record or message.
 """
 
@@ -35,8 +35,8 @@ import pyarrow as pa
 from mcap.records import Channel
 
 from pipeline.hookspecs import hookimpl
-from pipeline.io import mcap_sources as sources
-from pipeline.io.mcap_arrow import (
+from pipeline.io.mcap import sources
+from pipeline.io.mcap.arrow import (
     ARROW_MESSAGE_ENCODING,
     ARROW_SCHEMA_ENCODING,
     MARKERS_TOPIC,
@@ -45,9 +45,9 @@ from pipeline.io.mcap_arrow import (
     read_well,
     write_samples,
 )
-from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
-from pipeline.io.mcap_records import MAGIC, McapFile, scan
-from pipeline.io.mcap_tables import write_tables
+from pipeline.io.mcap.options import SAMPLE_COLUMNS, McapOptions
+from pipeline.io.mcap.records import MAGIC, McapFile, scan
+from pipeline.io.mcap.tables import write_tables
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import TableStream
 from pipeline.tables import RawSamples

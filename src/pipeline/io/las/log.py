@@ -28,7 +28,7 @@
 * **Rows** — a row with too few or too many values is an error naming its line: lasio
   reshapes the values into rows silently, shifting every value after the mistake. Values
   that ran together in fixed-width columns are split as lasio splits them (see
-  :func:`pipeline.io.las_rows.read_cells`). STRT, STOP and STEP that contradict the index
+  :func:`pipeline.io.las.rows.read_cells`). STRT, STOP and STEP that contradict the index
   are warnings naming their line (the data are kept: a log's header is often stale), as
   are well metadata items that cannot be read.
 """
@@ -45,9 +45,9 @@ import pyarrow.compute as pc
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, warn_input
-from pipeline.io.las_header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
-from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import Cells, Data, IndexRange, null_mask, null_values, read_all
+from pipeline.io.las.header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
+from pipeline.io.las.options import LasOptions
+from pipeline.io.las.rows import Cells, Data, IndexRange, null_mask, null_values, read_all
 from pipeline.io.mnemonics import canonical_name
 from pipeline.units import conversion_factor
 

@@ -25,7 +25,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError, warn_input
-from pipeline.io.las_header import NUMBER, Header, Item, header_number
+from pipeline.io.las.header import NUMBER, Header, Item, header_number
 from pipeline.units import conversion_factor
 from pipeline.well import NorthReference, WellMetadata
 

@@ -13,7 +13,7 @@ import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY, VERTICAL_TOLERANCE
 from pipeline.errors import EmptyTableError
-from pipeline.io.witsml_terms import (
+from pipeline.io.witsml.terms import (
     AZI_REF,
     CALC_ALGORITHM,
     EXTENSION_PREFIX,

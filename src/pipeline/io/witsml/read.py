@@ -23,7 +23,7 @@ from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.sniffing import file_head
-from pipeline.io.witsml_terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
+from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
 
 SNIFF_BYTES = 4096

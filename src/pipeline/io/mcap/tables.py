@@ -2,7 +2,7 @@
 
 Each table goes on its own topic ``/gyropipe/<role>`` (``trajectory``, ``stations``,
 ``readings``, ``series``, ``qc``, ``rejects``: the export stage's port names) in gyropipe's
-batched Arrow IPC encoding (:mod:`pipeline.io.mcap_arrow`): the channel's schema record is
+batched Arrow IPC encoding (:mod:`pipeline.io.mcap.arrow`): the channel's schema record is
 the table's whole Arrow schema — every unit, north reference and the schema metadata — and
 each message a record batch of up to 10,000 rows, logged at its first row's ``time`` (s) when
 the table has a complete float64 ``time`` column, else at 0. Metadata records:
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from pipeline.io.mcap_arrow import (
+from pipeline.io.mcap.arrow import (
     ARROW_MESSAGE_ENCODING,
     SAMPLES_TOPIC,
     UNITS_RECORD,
@@ -34,7 +34,7 @@ from pipeline.io.mcap_arrow import (
     units_of,
     well_strings,
 )
-from pipeline.io.mcap_records import scan
+from pipeline.io.mcap.records import scan
 from pipeline.registry import Provenance
 from pipeline.streams import Port
 from pipeline.well import WellMetadata

@@ -34,8 +34,8 @@ import pyarrow.json as pajson
 from mcap.records import Channel, Schema
 
 from pipeline.errors import UnitError
-from pipeline.io.mcap_options import SAMPLE_COLUMNS, McapOptions
-from pipeline.io.mcap_records import (
+from pipeline.io.mcap.options import SAMPLE_COLUMNS, McapOptions
+from pipeline.io.mcap.records import (
     MESSAGE_HEAD,
     McapFile,
     Messages,

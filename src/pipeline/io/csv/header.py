@@ -16,7 +16,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError
-from pipeline.io.csv_options import SHORTHANDS, CsvOptions
+from pipeline.io.csv.options import SHORTHANDS, CsvOptions
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata

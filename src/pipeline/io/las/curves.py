@@ -26,10 +26,10 @@ import pyarrow as pa
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY, TableContract
 from pipeline.errors import InputFileError, UnitError, WrongKindError
-from pipeline.io.las_header import Header, Item, mnemonics
-from pipeline.io.las_log import describe
-from pipeline.io.las_options import LasOptions
-from pipeline.io.las_rows import Data, Floats, Lines, Mask
+from pipeline.io.las.header import Header, Item, mnemonics
+from pipeline.io.las.log import describe
+from pipeline.io.las.options import LasOptions
+from pipeline.io.las.rows import Data, Floats, Lines, Mask
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of

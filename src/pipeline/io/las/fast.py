@@ -1,4 +1,4 @@
-"""The fast path of the LAS ``~A`` reader (:mod:`pipeline.io.las_rows`): plain blocks of
+"""The fast path of the LAS ``~A`` reader (:mod:`pipeline.io.las.rows`): plain blocks of
 numbers parsed by ``pyarrow.csv`` block by block, up to the first block it cannot prove it
 reads as the careful path would (the careful path reads from there and locates any error).
 

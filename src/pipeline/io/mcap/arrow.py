@@ -16,7 +16,7 @@
   ``gyropipe.units`` (column → unit, ``""`` when unitless) for tools without Arrow.
 * Chunks uncompressed, with CRCs, plus the data-section CRC. Integrity comes from these
   CRCs alone — a flipped bit inside a float of an Arrow batch is otherwise undetectable —
-  and the reader checks them (:mod:`pipeline.io.mcap_records`). Uncompressed for speed:
+  and the reader checks them (:mod:`pipeline.io.mcap.records`). Uncompressed for speed:
   zstd saves about a third on simulated mems-vrg samples (time, depth and frame angle are
   smooth; sensor noise is not) but decompresses at ~0.6 GB/s on a 2-core VM, slower than
   the reader needs, and it rules out mapping the batches straight from the file (the
@@ -44,7 +44,7 @@ from mcap.writer import CompressionType, Writer
 from pydantic import ValidationError
 
 from pipeline.contracts import UNIT_KEY
-from pipeline.io.mcap_records import (
+from pipeline.io.mcap.records import (
     McapFile,
     Messages,
     describe,
