@@ -181,18 +181,3 @@ def convert(
             f"(writer {writer.name!r}): {exc}"
         ) from exc
     return Converted(table, target, read_as)
-
-
-def convert_file(
-    registry: Registry,
-    source: Path,
-    target: Path,
-    *,
-    kind: str = "auto",
-    reader: str = "auto",
-    options: dict[str, Any] | None = None,
-    well: WellMetadata | None = None,
-) -> tuple[pa.Table, Path]:
-    """:func:`convert`, returning the table written and the target."""
-    done = convert(registry, source, target, kind=kind, reader=reader, options=options, well=well)
-    return done.table, done.target

@@ -11,7 +11,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.convert import convert_file, read_any
+from pipeline.convert import convert, read_any
 from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.plugins import load_registry
 from pipeline.tables import RawSamples, Stations
@@ -60,7 +60,7 @@ def test_stations_through_las(tmp_path: Path):
 def test_feet_are_converted_on_the_way(tmp_path: Path):
     src = tmp_path / "ft.csv"
     src.write_text("MD (ft),Inc (deg),Azimuth Grid (deg)\n0,0,0\n1000,2,45\n")
-    table, _ = convert_file(load_registry(), src, tmp_path / "m.parquet")
+    table = convert(load_registry(), src, tmp_path / "m.parquet").table
     np.testing.assert_allclose(table.column("md").to_numpy(), [0.0, 304.8])
     assert pq.read_table(tmp_path / "m.parquet").schema.field("md").metadata[b"unit"] == b"m"
 
@@ -233,7 +233,7 @@ def test_a_table_breaking_its_contract_is_refused_when_read(tmp_path: Path, make
     path, expected = make(tmp_path)
     out = tmp_path / "out.parquet"
     with pytest.raises(InputFileError) as info:
-        convert_file(load_registry(), path, out)
+        convert(load_registry(), path, out)
     text = str(info.value)
     assert text.startswith(f"{path}{expected}" if expected[0] == ":" else f"{path}: {expected}")
     assert "\n" not in text
@@ -247,8 +247,8 @@ def test_a_table_of_another_kind_is_the_wrong_kind(tmp_path: Path) -> None:
     with pytest.raises(
         WrongKindError, match=r"not stations: no column 'md', 'inc', 'azi'.*--kind log"
     ):
-        convert_file(load_registry(), log, tmp_path / "o.csv", kind="stations")
-    table, _ = convert_file(load_registry(), log, tmp_path / "o.csv")
+        convert(load_registry(), log, tmp_path / "o.csv", kind="stations")
+    table = convert(load_registry(), log, tmp_path / "o.csv").table
     assert table.column_names == ["DEPT", "GR"]
 
 
@@ -262,7 +262,7 @@ def test_a_table_the_output_format_cannot_hold_names_the_files(tmp_path: Path) -
         pytest.warns(InputFileWarning, match="no ~A"),
         pytest.raises(ValueError, match="no numeric column to write") as info,
     ):
-        convert_file(load_registry(), src, out, kind="log")
+        convert(load_registry(), src, out, kind="log")
     assert str(info.value).startswith(f"{src}: the log read cannot be written to o.las")
     assert not out.exists()
     result = cli(str(src), str(out), "--kind", "log")
