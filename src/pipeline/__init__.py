@@ -17,9 +17,9 @@ Names are loaded on first use, so ``import pipeline`` (and the command line) sta
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from pipeline.lazy import lazy_names
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
@@ -76,7 +76,6 @@ _HOMES = {
     "pipeline.errors": ("GyropipeError",),
     "pipeline.well": ("WellMetadata",),
 }
-_HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
 
 __all__ = [
     "GyropipeError",
@@ -111,14 +110,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _HOME_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module 'pipeline' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())

@@ -53,6 +53,7 @@ def test_help_imports_click_and_the_standard_library_only(tmp_path: Path):
         "pipeline.cli_args",
         "pipeline.cli_models",
         "pipeline.errors",
+        "pipeline.lazy",
         "pipeline.version",
     ]
     assert "click" in modules

@@ -81,6 +81,7 @@ LAYERS: dict[str, int] = {
     "pipeline.errors": 1,
     "pipeline.atomic": 1,
     "pipeline.version": 1,
+    "pipeline.lazy": 1,
 }
 """Module prefix → layer rank (higher imports lower). A prefix covers its submodules, except
 the bare package name, which is ``pipeline/__init__.py`` alone."""

@@ -21,8 +21,9 @@ stage plugin does to register) does not load the integration.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from pipeline.lazy import lazy_names
 
 if TYPE_CHECKING:
     from pipeline.continuous.integrate import integrate_continuous
@@ -39,23 +40,20 @@ if TYPE_CHECKING:
         ContinuousStations,
     )
 
-_HOME_OF = {
-    "integrate_continuous": "pipeline.continuous.integrate",
-    "ContinuousOptions": "pipeline.continuous.options",
-    "ContinuousError": "pipeline.continuous.run",
-    "ContinuousResult": "pipeline.continuous.stations",
-    **{
-        name: "pipeline.continuous.tables"
-        for name in (
-            "FLAG_AFTER_VERTICAL",
-            "FLAG_AZIMUTH_UNDEFINED",
-            "FLAG_LARGE_MISALIGNMENT",
-            "FLAG_NEAR_VERTICAL",
-            "FLAG_NO_CLOSURE",
-            "ContinuousSeries",
-            "ContinuousStations",
-        )
-    },
+_HOMES = {
+    "pipeline.continuous.integrate": ("integrate_continuous",),
+    "pipeline.continuous.options": ("ContinuousOptions",),
+    "pipeline.continuous.run": ("ContinuousError",),
+    "pipeline.continuous.stations": ("ContinuousResult",),
+    "pipeline.continuous.tables": (
+        "FLAG_AFTER_VERTICAL",
+        "FLAG_AZIMUTH_UNDEFINED",
+        "FLAG_LARGE_MISALIGNMENT",
+        "FLAG_NEAR_VERTICAL",
+        "FLAG_NO_CLOSURE",
+        "ContinuousSeries",
+        "ContinuousStations",
+    ),
 }
 
 __all__ = [
@@ -73,10 +71,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    module = _HOME_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module 'pipeline.continuous' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())
