@@ -59,9 +59,21 @@ HOME = {
             "pipeline_input",
             "registered",
             "StageContext",
-            "Provenance",
         ],
         "pipeline.registry",
+    ),
+    **dict.fromkeys(["Provenance", "StageSetup"], "pipeline.provenance"),
+    **dict.fromkeys(
+        [
+            "ReportDef",
+            "ReportContext",
+            "ReportSection",
+            "ReportTable",
+            "ReportFigure",
+            "ReportLine",
+            "MethodNote",
+        ],
+        "pipeline.reporting",
     ),
     **dict.fromkeys(
         ["TableContract", "column", "SOURCE_LINE", "UNIT_KEY", "NORTH_KEY"], "pipeline.contracts"
