@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import re
 import subprocess
-import textwrap
 from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,7 @@ from click.testing import CliRunner, Result
 from report_support import assert_self_contained, inspect
 
 from pipeline.cli import main
-from tests_support import ROOT
+from tests_support import ROOT, plugin_site
 
 TORTUOSITY = """
 from pipeline.plugin import (
@@ -103,14 +102,7 @@ PLUGINS = {"tortuosity": ("0.2.0", TORTUOSITY), "brokensection": ("0.0.1", BROKE
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A directory holding the plugin modules and their dist-info entry points."""
-    root = tmp_path_factory.mktemp("site")
-    for name, (version, source) in PLUGINS.items():
-        (root / f"{name}.py").write_text(textwrap.dedent(source))
-        info = root / f"{name}-{version}.dist-info"
-        info.mkdir()
-        (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
-        (info / "entry_points.txt").write_text(f"[gyropipe]\n{name} = {name}\n")
-    return root
+    return plugin_site(tmp_path_factory.mktemp("site"), PLUGINS)
 
 
 @pytest.fixture

@@ -110,13 +110,14 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
     )
 
 
-AZIMUTH_METHODS = {
-    "ml": "maximum-likelihood azimuth",
-    "auto": "azimuth by the better-conditioned closed form",
-    "sine": "azimuth from the right-side Earth rate",
-    "atan2": "azimuth from the high- and right-side Earth rates",
-}
-"""How the report words each ``azimuth_method``."""
+def azimuth_words(method: str) -> str:
+    """How the report words an ``azimuth_method``."""
+    return {
+        "ml": "maximum-likelihood azimuth",
+        "auto": "azimuth by the better-conditioned closed form",
+        "sine": "azimuth from the right-side Earth rate",
+        "atan2": "azimuth from the high- and right-side Earth rates",
+    }.get(method, method)
 
 
 def compass_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
@@ -124,12 +125,11 @@ def compass_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     where the gyro toolface takes over."""
     from pipeline.reports.literature import MULTI_POSITION
 
-    method = str(stage.params.get("azimuth_method", "?"))
     return MethodNote(
         "Gyrocompassing",
         f"multi-position least squares {ctx.cite(MULTI_POSITION)}, "
-        f"{AZIMUTH_METHODS.get(method, method)}, gyro toolface below "
-        f"{stage.params.get('vertical_below', '?')}° inclination",
+        f"{azimuth_words(str(stage.params.get('azimuth_method', '?')))}, gyro toolface "
+        f"below {stage.params.get('vertical_below', '?')}° inclination",
     )
 
 

@@ -162,6 +162,18 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
     )
 
 
+def calibration_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The drift calibration in the report: the paper, the estimate used, the test level."""
+    from pipeline.reports.literature import DRIFT_CALIBRATION
+
+    return MethodNote(
+        "Drift calibration",
+        f"drift from the means of the calibration series {ctx.cite(DRIFT_CALIBRATION)}, "
+        f"estimate used: {stage.params.get('use', '?')}, linearity test at "
+        f"α = {stage.params.get('alpha', '?')}",
+    )
+
+
 DRIFT_SOURCES = {
     "tie_in": "the misclosure at the tie-in station",
     "calibration": "the instrument's drift calibration",
@@ -176,18 +188,6 @@ def correction_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     source = str(stage.params.get("source", "?"))
     return MethodNote(
         "Drift correction", f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}"
-    )
-
-
-def calibration_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
-    """The drift calibration in the report: the paper, the estimate used, the test level."""
-    from pipeline.reports.literature import DRIFT_CALIBRATION
-
-    return MethodNote(
-        "Drift calibration",
-        f"drift from the means of the calibration series {ctx.cite(DRIFT_CALIBRATION)}, "
-        f"estimate used: {stage.params.get('use', '?')}, linearity test at "
-        f"α = {stage.params.get('alpha', '?')}",
     )
 
 

@@ -70,14 +70,14 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
 def gates_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     """The acceptance criteria in the report."""
     p = dict(stage.params)
-    return MethodNote(
-        "Acceptance",
+    criteria = (
         f"in-run against out-run: inclination within {p.get('inc_tolerance', '?')}°, "
         f"azimuth within {p.get('azi_tolerance', '?')}° at inclination ≥ "
         f"{p.get('low_inclination', '?')}° and {p.get('azi_tolerance_low', '?')}° below, "
         f"depth within {p.get('depth_tolerance', '?')} m, at least "
-        f"{p.get('min_stations', '?')} stations",
+        f"{p.get('min_stations', '?')} stations"
     )
+    return MethodNote("Acceptance", criteria)
 
 
 @hookimpl
