@@ -2,7 +2,8 @@
 adds a stage that states its method (cited by its paper) and a whole section (a paragraph,
 a table with units, a figure), and `gyropipe run` (in process) puts both in the HTML — parsed
 and in Chromium — and in the PDF (pdftotext). A plugin whose section raises fails the report
-with one line naming the plugin; one that registers an empty part is reported by name."""
+with one line naming the plugin; one that registers an empty part is reported by name; the
+calibration report takes plugin sections too."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
 
+import pyarrow.parquet as pq
 import pytest
 import yaml
 from click.testing import CliRunner, Result
@@ -76,10 +78,18 @@ def gyropipe_register_stages(register):
                       params=Params))
 
 
+def series_section(ctx):
+    if ctx.document != "calibration":
+        return None
+    return ReportSection("Series seen", paragraphs=(
+        f"{ctx.tables['series'].num_rows} calibration series reached this section.",))
+
+
 @hookimpl
 def gyropipe_register_report_parts(register):
     register(ReportDef("tortuosity.mark", method=method))
     register(ReportDef("tortuosity.section", section=section))
+    register(ReportDef("tortuosity.series", section=series_section))
 """
 
 BROKEN = """
@@ -267,5 +277,26 @@ def test_an_empty_part_is_a_problem_of_its_plugin(plugged: None) -> None:
     assert "brokensection 0.0.1 (third-party): report:brokensection.oops" in done.output
     assert (
         "tortuosity 0.2.0 (third-party): stage:tortuosity.mark, report:tortuosity.mark, "
-        "report:tortuosity.section"
+        "report:tortuosity.section, report:tortuosity.series"
     ) in done.output
+
+
+def test_a_plugin_section_in_the_calibration_report(plugged: None, tmp_path: Path) -> None:
+    """The calibration report takes plugin sections too: each part says for which document
+    it has one (the survey section above is not in it)."""
+    done = gyropipe(
+        "run",
+        "pipelines/calibration.yaml",
+        "--input",
+        "examples/calibration-ig50.csv",
+        "--out",
+        str(tmp_path / "run"),
+        "--disable-plugin",
+        "brokensection",
+    )
+    assert done.exit_code == 0, done.output
+    found = sections_of(tmp_path / "run" / "report.html")
+    assert list(found)[-2:] == ["part-tortuosity-series", "provenance"]
+    series = pq.read_table(tmp_path / "run" / "drift.series.parquet").num_rows
+    assert f"{series} calibration series reached this section." in found["part-tortuosity-series"]
+    assert "part-tortuosity-section" not in found
