@@ -8,6 +8,8 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
+from collections.abc import Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -39,6 +41,19 @@ def pythonpath(*dirs: Path) -> dict[str, str]:
     them (a worktree's ``src``, so a subprocess runs the gyropipe under test)."""
     kept = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, dirs), *kept])}
+
+
+def plugin_site(root: Path, plugins: Mapping[str, tuple[str, str]]) -> Path:
+    """``root`` made a directory of installed plugins: for each name → (version, module
+    source), the module and a dist-info declaring it an entry point of the group
+    ``gyropipe`` (put ``root`` on ``sys.path`` or ``PYTHONPATH`` to install them)."""
+    for name, (version, source) in plugins.items():
+        (root / f"{name}.py").write_text(textwrap.dedent(source))
+        info = root / f"{name}-{version}.dist-info"
+        info.mkdir()
+        (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
+        (info / "entry_points.txt").write_text(f"[gyropipe]\n{name} = {name}\n")
+    return root
 
 
 def without_report(name: str, directory: Path) -> Path:

@@ -14,6 +14,7 @@ from collections.abc import Callable
 import pluggy
 
 from pipeline.registry import CheckDef, ReaderDef, StageDef, ToolModelDef, WriterDef
+from pipeline.reporting import ReportDef
 
 PROJECT = "gyropipe"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -59,3 +60,15 @@ def gyropipe_register_tool_models(register: Callable[[ToolModelDef], None]) -> N
     for each YAML file (format: ``docs/tool-models.md``). The position-uncertainty stage,
     ``gyropipe models`` and ``pipeline.uncertainty.find_model`` then know the model by
     name; a shipped model of the same name wins."""
+
+
+@hookspec
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    """Register report parts: call ``register(ReportDef(...))`` for each.
+
+    A part named like a stage (``ReportDef("compass", …, method=…)``) states that stage's
+    method in the reports' Method table when a run uses it; a part with a ``section`` adds
+    a whole section (:class:`~pipeline.reporting.ReportSection`: paragraphs, tables with
+    units, a figure) to the survey and calibration reports, in HTML and PDF alike. Built-in
+    stages describe themselves through this hook too (``docs/vendor-adapter.md``, "Add to
+    the report"). A part that raises fails the report with one line naming its plugin."""

@@ -34,7 +34,11 @@ What is here:
 
 - registering: :data:`hookimpl` and the records :class:`StageDef`, :class:`ReaderDef`
   (its ``sniff`` returns a :class:`Claim`), :class:`WriterDef`, :class:`CheckDef`,
-  :class:`ToolModelDef` (an error-model file, ``docs/tool-models.md``); params
+  :class:`ToolModelDef` (an error-model file, ``docs/tool-models.md``), :class:`ReportDef`
+  (what a stage states in the report's Method table, a section a plugin adds: a
+  :class:`ReportSection` of paragraphs, :class:`ReportTable` tables and a
+  :class:`ReportFigure` of :class:`ReportLine` series; a :class:`MethodNote`; both given
+  a :class:`ReportContext`, and the method a run's :class:`StageSetup`); params
   helpers :class:`NoParams`, :func:`pipeline_input`, :func:`registered`; what a stage is
   given, :class:`StageContext` and :class:`Provenance`; :class:`TableStream`, what a
   streamed port carries (a schema and record batches: ``StageDef.streamed_inputs`` /
@@ -71,11 +75,11 @@ from pipeline.errors import (
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mnemonics import CURVES, Curve, canonical_name, register_alias
+from pipeline.provenance import Provenance, StageSetup
 from pipeline.registry import (
     CheckDef,
     Claim,
     NoParams,
-    Provenance,
     ReaderDef,
     StageContext,
     StageDef,
@@ -83,6 +87,15 @@ from pipeline.registry import (
     WriterDef,
     pipeline_input,
     registered,
+)
+from pipeline.reporting import (
+    MethodNote,
+    ReportContext,
+    ReportDef,
+    ReportFigure,
+    ReportLine,
+    ReportSection,
+    ReportTable,
 )
 from pipeline.streams import TableStream
 from pipeline.tables import (
@@ -124,6 +137,7 @@ __all__ = [
     "GyropipeError",
     "InputFileError",
     "LogTable",
+    "MethodNote",
     "MissingSiteError",
     "NoParams",
     "NorthReference",
@@ -134,9 +148,16 @@ __all__ = [
     "ReaderDef",
     "ReaderError",
     "ReaderOptionsError",
+    "ReportContext",
+    "ReportDef",
+    "ReportFigure",
+    "ReportLine",
+    "ReportSection",
+    "ReportTable",
     "SimTruth",
     "StageContext",
     "StageDef",
+    "StageSetup",
     "Stations",
     "TableContract",
     "TableStream",

@@ -25,6 +25,7 @@ from pipeline.registry import (
     ToolModelDef,
     WriterDef,
 )
+from pipeline.reporting import ReportDef
 from pipeline.version import __version__
 
 ENTRY_POINT_GROUP = "gyropipe"
@@ -61,6 +62,7 @@ HOOKS: tuple[tuple[str, type], ...] = (
     ("gyropipe_register_writers", WriterDef),
     ("gyropipe_register_checks", CheckDef),
     ("gyropipe_register_tool_models", ToolModelDef),
+    ("gyropipe_register_report_parts", ReportDef),
 )
 
 

@@ -1,15 +1,15 @@
-"""What plugins register: stages, readers, writers and checks, and the registry holding them.
+"""What plugins register: stages, readers, writers, checks, tool models and report parts, and
+the registry holding them.
 
 Every registration is tagged with the plugin that made it, so any later error can name it.
 """
 
 from __future__ import annotations
 
-import datetime as dt
 import enum
 import re
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -27,6 +27,10 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
+from pipeline.provenance import InputFile as InputFile
+from pipeline.provenance import Provenance as Provenance
+from pipeline.provenance import StageSetup as StageSetup
+from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
@@ -63,45 +67,6 @@ class NoParams(BaseModel):
     """Parameters of a stage that takes none."""
 
     model_config = ConfigDict(extra="forbid")
-
-
-@dataclass(frozen=True)
-class InputFile:
-    """A pipeline input file as the run received it."""
-
-    path: str
-    sha256: str
-    bytes: int
-
-
-@dataclass(frozen=True)
-class StageSetup:
-    """One stage of the running plan: what it uses, from which plugin, with which params."""
-
-    id: str
-    uses: str
-    plugin: str
-    """plugin name and version"""
-    params: Mapping[str, Any]
-    """validated params, JSON-compatible"""
-
-
-@dataclass(frozen=True)
-class Provenance:
-    """Where a run's results come from (what ``run.json`` records), known while it runs."""
-
-    pipeline: str
-    pipeline_version: str
-    pipeline_file: str
-    pipeline_sha256: str
-    gyropipe: str
-    plugins: Mapping[str, str]
-    """plugin name → version (plugins that loaded)"""
-    inputs: Mapping[str, InputFile]
-    started: dt.datetime
-    """UTC start of the run"""
-    stages: tuple[StageSetup, ...]
-    """every stage of the plan, in execution order"""
 
 
 class StageContext(Protocol):
@@ -165,6 +130,10 @@ class StageContext(Protocol):
     def writer(self, name: str) -> WriterDef: ...
 
     def check(self, name: str) -> CheckDef: ...
+
+    def report_parts(self) -> list[tuple[ReportDef, PluginInfo]]:
+        """What the loaded plugins add to reports (the report stages), each with its plugin."""
+        ...
 
 
 StageFunc = Callable[[Mapping[str, Any], Any, StageContext], Mapping[str, Port]]
@@ -313,13 +282,14 @@ class PluginInfo:
     error: str | None = None
 
 
-Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef
+Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef | ReportDef
 KIND_OF: dict[type, str] = {
     StageDef: "stage",
     ReaderDef: "reader",
     WriterDef: "writer",
     CheckDef: "check",
     ToolModelDef: "tool_model",
+    ReportDef: "report",
 }
 
 
@@ -332,6 +302,7 @@ class Registry:
     writers: dict[str, tuple[WriterDef, str]] = field(default_factory=dict)
     checks: dict[str, tuple[CheckDef, str]] = field(default_factory=dict)
     tool_models: dict[str, tuple[ToolModelDef, str]] = field(default_factory=dict)
+    reports: dict[str, tuple[ReportDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
 
@@ -354,6 +325,14 @@ class Registry:
             )
             return
         table[name] = (item, plugin.name)
+
+    def report_parts(self) -> list[tuple[ReportDef, PluginInfo]]:
+        """Every report part in registration order, with the plugin that registered it."""
+        unknown = PluginInfo("", "unknown", builtin=False)  # a registry built by hand
+        return [
+            (part, self.plugins.get(owner, replace(unknown, name=owner)))
+            for part, owner in self.reports.values()
+        ]
 
     def plugin_label(self, plugin: str) -> str:
         info = self.plugins.get(plugin)
@@ -509,7 +488,7 @@ class Registry:
         """``kind:name`` of everything ``plugin`` registered."""
         return [
             f"{kind}:{name}"
-            for kind in ("stage", "reader", "writer", "check", "tool_model")
+            for kind in KIND_OF.values()
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
@@ -590,6 +569,14 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
         raise ValueError(
             f"{kind} name {name!r} is invalid: use lower-case letters, digits, '_' and '.'"
         )
+    if isinstance(item, ReportDef):
+        given = [a for a in ("method", "section") if getattr(item, a) is not None]
+        if not given:
+            raise ValueError(f"report part {name!r}: give a method or a section (or both)")
+        for attr in given:
+            if not callable(getattr(item, attr)):
+                raise TypeError(f"report part {name!r}: {attr} is not callable")
+        return kind, name
     callables = {
         "stage": ("func",),
         "reader": ("read", "sniff"),

@@ -35,11 +35,13 @@ from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
 from pipeline.registry import (
     CheckDef,
     InputFile,
+    PluginInfo,
     Provenance,
     Registry,
     StageSetup,
     WriterDef,
 )
+from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream, as_stream, as_table
 from pipeline.tables import AcceptanceGates
 from pipeline.version import __version__
@@ -157,6 +159,9 @@ class _Context:
 
     def check(self, name: str) -> CheckDef:
         return _lookup(self.registry.checks, name, "check")
+
+    def report_parts(self) -> list[tuple[ReportDef, PluginInfo]]:
+        return self.registry.report_parts()
 
 
 def _lookup(table: Mapping[str, tuple[T, str]], name: str, kind: str) -> T:

@@ -19,7 +19,8 @@ from pipeline.contracts import TableContract
 from pipeline.errors import GyropipeError, StageError
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
-from pipeline.registry import CheckDef, Provenance, Registry, StageDef, WriterDef
+from pipeline.registry import CheckDef, PluginInfo, Provenance, Registry, StageDef, WriterDef
+from pipeline.reporting import ReportDef
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
 from pipeline.streams import Port, TableStream, as_table
@@ -83,6 +84,9 @@ class Context:
 
     def check(self, name: str) -> CheckDef:
         return REGISTRY.checks[name][0]
+
+    def report_parts(self) -> list[tuple[ReportDef, PluginInfo]]:
+        return REGISTRY.report_parts()
 
 
 def empty(contract: type[TableContract]) -> pa.Table:

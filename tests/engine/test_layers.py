@@ -64,6 +64,8 @@ LAYERS: dict[str, int] = {
     "pipeline.graph": 2,
     "pipeline.runner": 2,
     "pipeline.registry": 2,
+    "pipeline.provenance": 2,
+    "pipeline.reporting": 2,
     "pipeline.plugins": 2,
     "pipeline.hookspecs": 2,
     "pipeline.contracts": 2,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import ROOT, gyropipe, plugin_site, pythonpath
 
 PLUGINS = {
     # name: (version, module source)
@@ -78,14 +78,7 @@ PLUGINS = {
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A directory on PYTHONPATH holding plugin modules and their dist-info entry points."""
-    root = tmp_path_factory.mktemp("site")
-    for name, (version, source) in PLUGINS.items():
-        (root / f"{name}.py").write_text(textwrap.dedent(source))
-        info = root / f"{name}-{version}.dist-info"
-        info.mkdir()
-        (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
-        (info / "entry_points.txt").write_text(f"[gyropipe]\n{name} = {name}\n")
-    return root
+    return plugin_site(tmp_path_factory.mktemp("site"), PLUGINS)
 
 
 def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:

@@ -35,6 +35,7 @@ from pipeline.contracts import TableContract
 from pipeline.errors import ReaderChoiceError, ReaderError
 from pipeline.plugins import load_registry
 from pipeline.registry import CheckDef, PluginInfo, ReaderDef, Registry, StageDef, WriterDef
+from pipeline.reporting import ReportDef
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata
@@ -59,9 +60,21 @@ HOME = {
             "pipeline_input",
             "registered",
             "StageContext",
-            "Provenance",
         ],
         "pipeline.registry",
+    ),
+    **dict.fromkeys(["Provenance", "StageSetup"], "pipeline.provenance"),
+    **dict.fromkeys(
+        [
+            "ReportDef",
+            "ReportContext",
+            "ReportSection",
+            "ReportTable",
+            "ReportFigure",
+            "ReportLine",
+            "MethodNote",
+        ],
+        "pipeline.reporting",
     ),
     **dict.fromkeys(
         ["TableContract", "column", "SOURCE_LINE", "UNIT_KEY", "NORTH_KEY"], "pipeline.contracts"
@@ -272,7 +285,7 @@ def test_undefined_names_are_found() -> None:
 
 def registrations(module: types.ModuleType) -> dict[str, list[Any]]:
     found: dict[str, list[Any]] = {}
-    for hook in ("stages", "readers", "writers", "checks"):
+    for hook in ("stages", "readers", "writers", "checks", "report_parts"):
         impl = getattr(module, f"gyropipe_register_{hook}", None)
         if impl is not None:
             impl(register=found.setdefault(hook, []).append)
@@ -284,7 +297,13 @@ def with_plugin(module: types.ModuleType, name: str) -> Registry:
     registry = load_registry()
     info = PluginInfo(name, "0.1", builtin=False)
     registry.plugins[name] = info
-    kinds = {"stages": StageDef, "readers": ReaderDef, "writers": WriterDef, "checks": CheckDef}
+    kinds = {
+        "stages": StageDef,
+        "readers": ReaderDef,
+        "writers": WriterDef,
+        "checks": CheckDef,
+        "report_parts": ReportDef,
+    }
     for hook, items in registrations(module).items():
         for item in items:
             registry.add(item, info, kinds[hook])
@@ -323,6 +342,23 @@ def test_guide_registers_readers_and_a_writer(guide: types.ModuleType) -> None:
     assert [r.name for r in found["readers"]] == ["acme", "acme_survey"]
     assert [w.name for w in found["writers"]] == ["acme"]
     assert found["readers"][0].what_it_claims().startswith("By content: the file starts")
+
+
+def test_guide_report_section_counts_an_acme_runs_stations(guide: types.ModuleType) -> None:
+    """The guide's report part: a section in the survey report of an Acme run only."""
+    (part,) = registrations(guide)["report_parts"]
+    trajectory = pa.table({"inc": [0.0, 3.0, 12.0, 45.0, 91.0]})
+    acme = WellMetadata(tool_type="Acme GL-2", tool_serial="A-17")
+    ctx = types.SimpleNamespace(document="survey", tables={"trajectory": trajectory}, well=acme)
+    section = part.section(ctx)
+    assert section.title == "Acme tool"
+    assert section.paragraphs == ("Surveyed with Acme tool A-17.",)
+    (table,) = section.tables
+    assert table.columns == (("Inclination", "°"), ("Stations", ""))
+    assert table.rows == (("0 – 5", "2"), ("5 – 30", "1"), ("30 – 180", "2"))
+    assert part.section(types.SimpleNamespace(**{**vars(ctx), "document": "calibration"})) is None
+    other = types.SimpleNamespace(**{**vars(ctx), "well": WellMetadata(tool_type="Other")})
+    assert part.section(other) is None
 
 
 SPEC = {

@@ -5,6 +5,7 @@ stage and the API, and checked by ``gyropipe models``."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import subprocess
 import textwrap
@@ -19,16 +20,18 @@ from numpy.typing import NDArray
 
 import pipeline as gp
 import pipeline.uncertainty as pu
+from pipeline.api import stages
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import ParameterError, ToolModelError
-from pipeline.registry import StageSetup
+from pipeline.registry import Provenance, StageSetup
 from pipeline.reports.literature import Citations
-from pipeline.reports.sections import _describe
+from pipeline.reports.parts import Parts
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations
 from pipeline.uncertainty.engine import SurveyValueError
 from pipeline.uncertainty.formula import Formula, FormulaError
 from pipeline.uncertainty.terms import stack
+from pipeline.well import WellMetadata
 from tests_support import ROOT, gyropipe
 
 DATA = Path(__file__).parent / "data"
@@ -329,9 +332,10 @@ def test_gyropipe_models_lists_and_checks(tmp_path: Path) -> None:
 
 
 def test_the_report_names_the_model_and_cites_its_papers(tmp_path: Path) -> None:
-    """The report's method statement gives the model's title from its file and cites the
-    published model (SPE 67616; SPE 90408 too for a gyro model), never a file path; a
-    model without a title is named (not given the title of the model it extends)."""
+    """The report's method statement (the uncertainty stage's report part) gives the model's
+    title from its file and cites the published model (SPE 67616; SPE 90408 too for a gyro
+    model), never a file path; a model without a title is named (not given the title of the
+    model it extends)."""
     citations = Citations()
     for model, title, gyro in (
         ("GYRO-MWD", "OWSG gyro MWD (GYRO-MWD, A019Gb)", True),
@@ -341,9 +345,14 @@ def test_the_report_names_the_model_and_cites_its_papers(tmp_path: Path) -> None
         stage = StageSetup(
             "u", "position_uncertainty", "builtin", {"model": model, "confidence": 0.95}
         )
-        described = _describe(stage, citations.cite)
-        assert described is not None
-        text = described[1]
+        run = Provenance(
+            "p", "1", "p.yaml", "0" * 64, "0", {}, {}, dt.datetime.now(dt.UTC), (stage,)
+        )
+        parts = Parts(
+            stages.registry().report_parts(), "survey", {}, WellMetadata(), run, citations
+        )
+        ((label, text),) = parts.methods()
+        assert label == "Position uncertainty"
         assert text.startswith(f"{title} error model propagated as in [1]")
         assert ("with the gyro terms of [2]" in text) is gyro
         assert str(tmp_path) not in text

@@ -32,7 +32,8 @@ from pipeline.reports.document import (
 )
 from pipeline.reports.literature import DRIFT_CALIBRATION, Citations
 from pipeline.reports.numbers import fmt_measured
-from pipeline.reports.sections import footer, method_items, provenance_section, tool_fields
+from pipeline.reports.parts import Parts, Registered
+from pipeline.reports.sections import footer, provenance_section, tool_fields
 from pipeline.reports.survey import ReportInputError
 from pipeline.well import WellMetadata
 
@@ -56,20 +57,26 @@ def calibration_document(
     well: WellMetadata,
     provenance: Provenance,
     title: str,
+    registered: Registered,
 ) -> Document:
-    """The calibration report of every instrument in a calibrate_drift result."""
+    """The calibration report of every instrument in a calibrate_drift result, with what
+    the ``registered`` report parts state and add."""
     if result.num_rows == 0 or series.num_rows == 0:
         empty = "result" if result.num_rows == 0 else "series"
         raise ReportInputError(
             f"the calibration {empty} table has no rows (the stage that produced it gave "
             "none): nothing to report"
         )
+    given = {"result": result, "series": series, "readings": readings}
+    tables = {port: table for port, table in given.items() if table is not None}
     if readings is not None and readings.num_rows == 0:
         readings = None  # wired but empty: the report as without readings
     instruments = list(dict.fromkeys(result.column("instrument").to_pylist()))
     citations = Citations()
-    method = method_items(provenance, citations)
+    parts = Parts(registered, "calibration", tables, well, provenance, citations)
+    method = parts.methods()
     cite = citations.cite(DRIFT_CALIBRATION)
+    added = parts.sections()  # before the reference list: they may cite
     references = citations.fields()
     owner = _reading_owner(readings, instruments) if readings is not None else None
     sections = [
@@ -117,7 +124,7 @@ def calibration_document(
                 cite=cite,
             )
         )
-    sections.append(provenance_section(provenance))
+    sections += [*added, provenance_section(provenance)]
     return Document(
         title=title,
         subject=", ".join(instruments),

@@ -1,10 +1,11 @@
-"""Report parts shared by the survey and calibration reports: the well header, the method
-statements read from the run's stages, and the provenance section."""
+"""Report parts shared by the survey and calibration reports: the well header, the tool
+model's title, and the provenance section. (What each stage states about its method is its
+own: its report part, :mod:`pipeline.reports.parts`.)"""
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +13,7 @@ import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import GyropipeError
-from pipeline.registry import Provenance, StageSetup
+from pipeline.registry import Provenance
 from pipeline.reports.document import (
     Block,
     Column,
@@ -22,14 +23,6 @@ from pipeline.reports.document import (
     Table,
     fmt,
     items,
-)
-from pipeline.reports.literature import (
-    DATA_VALIDITY,
-    DRIFT_CALIBRATION,
-    ERROR_MODEL,
-    GYRO_ERROR_MODEL,
-    MULTI_POSITION,
-    Citations,
 )
 from pipeline.uncertainty.engine import find_model
 from pipeline.well import WellMetadata
@@ -110,11 +103,7 @@ def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[st
     )
 
 
-def _param(stage: StageSetup, name: str, default: Any = "?") -> Any:
-    return stage.params.get(name, default)
-
-
-def _error_model(model: str) -> tuple[str, bool]:
+def error_model(model: str) -> tuple[str, bool]:
     """The title a tool model's file gives it (the name if the file cannot be found now) and
     whether it is a gyro model (it reads the latitude)."""
     try:
@@ -122,104 +111,6 @@ def _error_model(model: str) -> tuple[str, bool]:
     except (KeyError, GyropipeError):
         return Path(model).name, False
     return tool.title or tool.name, "latitude" in tool.needs
-
-
-AZIMUTH_METHODS = {
-    "ml": "maximum-likelihood azimuth",
-    "auto": "azimuth by the better-conditioned closed form",
-    "sine": "azimuth from the right-side Earth rate",
-    "atan2": "azimuth from the high- and right-side Earth rates",
-}
-DRIFT_SOURCES = {
-    "tie_in": "the misclosure at the tie-in station",
-    "calibration": "the instrument's drift calibration",
-    "given": "a given rate",
-    "auto": "the best available source",
-}
-
-
-def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] | None:
-    """What a known processing stage says about the method, as (label, statement), its
-    published method cited through ``cite``."""
-    match stage.uses:
-        case "minimum_curvature":
-            return "Survey calculation", "minimum curvature"
-        case "survey_method":
-            return "Survey calculation", str(_param(stage, "method")).replace("_", " ")
-        case "compass":
-            method = str(_param(stage, "azimuth_method"))
-            return (
-                "Gyrocompassing",
-                f"multi-position least squares {cite(MULTI_POSITION)}, "
-                f"{AZIMUTH_METHODS.get(method, method)}, gyro toolface below "
-                f"{_param(stage, 'vertical_below')}° inclination",
-            )
-        case "integrate_continuous":
-            return (
-                "Continuous survey",
-                "azimuth rate integrated from a compassing stop and closed on the other "
-                "stop where both give an azimuth (the QC section says where not), stations "
-                f"every {_param(stage, 'spacing')} m",
-            )
-        case "position_uncertainty":
-            confidence = float(_param(stage, "confidence", 0.0)) * 100
-            title, gyro = _error_model(str(_param(stage, "model", "GYRO-NS")))
-            method = f"{title} error model propagated as in {cite(ERROR_MODEL)}"
-            also = f" with the gyro terms of {cite(GYRO_ERROR_MODEL)}" if gyro else ""
-            return "Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %"
-        case "definitive_survey":
-            confidence = float(_param(stage, "confidence", 0.0)) * 100
-            return (
-                "Definitive survey",
-                "runs tied at their first station to the survey above; each run's error "
-                f"model propagated as in {cite(ERROR_MODEL)} with its systematic errors "
-                "correlated within the run, the tie point's uncertainty carried below it, "
-                f"ellipses at {confidence:g} %",
-            )
-        case "acceptance_gates":
-            return (
-                "Acceptance",
-                f"in-run against out-run: inclination within {_param(stage, 'inc_tolerance')}°, "
-                f"azimuth within {_param(stage, 'azi_tolerance')}° at inclination ≥ "
-                f"{_param(stage, 'low_inclination')}° and {_param(stage, 'azi_tolerance_low')}° "
-                f"below, depth within {_param(stage, 'depth_tolerance')} m, at least "
-                f"{_param(stage, 'min_stations')} stations",
-            )
-        case "correct_drift":
-            source = str(_param(stage, "source"))
-            return (
-                "Drift correction",
-                f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}",
-            )
-        case "calibrate_drift":
-            return (
-                "Drift calibration",
-                f"drift from the means of the calibration series {cite(DRIFT_CALIBRATION)}, "
-                f"estimate used: {_param(stage, 'use')}, linearity test at "
-                f"α = {_param(stage, 'alpha')}",
-            )
-        case "north_reference":
-            return "North reference conversion", f"to {_param(stage, 'target')} north"
-        case "validity_checks" | "window_checks":
-            return (
-                "Validity checks",
-                f"sensor triads at rest against the site's Earth references {cite(DATA_VALIDITY)}",
-            )
-    return None
-
-
-def method_items(provenance: Provenance, citations: Citations) -> list[tuple[str, str]]:
-    """Method statements of the run's known stages (first stage of each kind), their
-    methods' papers cited in ``citations``."""
-    found: dict[str, str] = {}
-    for stage in provenance.stages:
-        probe = _describe(stage, lambda work: "")  # cite only what is printed
-        if probe is None or probe[0] in found:
-            continue
-        described = _describe(stage, citations.cite)
-        if described is not None:
-            found[described[0]] = described[1]
-    return list(found.items())
 
 
 def references(table: pa.Table | None) -> list[tuple[str, str]]:

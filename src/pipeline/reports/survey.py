@@ -44,6 +44,7 @@ from pipeline.reports.listing import (
 )
 from pipeline.reports.literature import Citations
 from pipeline.reports.numbers import fmt_measured
+from pipeline.reports.parts import Parts, Registered
 from pipeline.reports.program import program_section
 from pipeline.reports.qc import (
     QcSources,
@@ -57,7 +58,6 @@ from pipeline.reports.qc import (
 )
 from pipeline.reports.sections import (
     footer,
-    method_items,
     north_label,
     provenance_section,
     references,
@@ -125,10 +125,12 @@ def survey_document(
     well: WellMetadata,
     provenance: Provenance,
     title: str,
+    registered: Registered,
     min_course: float = MIN_COURSE,
 ) -> Document:
-    """The survey report of one well; DLS over courses shorter than ``min_course`` m is
-    left out of the summary's maximum and marked in the listing."""
+    """The survey report of one well, with what the ``registered`` report parts state and
+    add; DLS over courses shorter than ``min_course`` m is left out of the summary's maximum
+    and marked in the listing."""
     traj = tables.trajectory
     if traj.num_rows == 0:
         raise ReportInputError(
@@ -146,6 +148,10 @@ def survey_document(
     course = Course(short, min_course)
     citations = Citations()
     clearance = clearance_section(tables.clearance, citations) if _rows(tables.clearance) else None
+    given = {f.name: getattr(tables, f.name) for f in dataclasses.fields(tables)}
+    wired = {port: table for port, table in given.items() if isinstance(table, pa.Table)}
+    parts = Parts(registered, "survey", wired, well, provenance, citations)
+    added = parts.sections()  # before the method section's reference list: they may cite
 
     sections = [
         Section(
@@ -161,7 +167,7 @@ def survey_document(
             key="well",
         ),
         _summary(tables, path, vs_azimuth, flags, course),
-        _method(tables, path, vs_azimuth, provenance, citations),
+        _method(tables, path, vs_azimuth, parts),
         Section(
             "Survey listing",
             (listing(traj, tables.stations, vs_azimuth, flags, course),),
@@ -187,7 +193,7 @@ def survey_document(
         sections.append(_allan(tables.allan, tables.noise))
     if clearance is not None:
         sections.append(clearance)
-    sections.append(provenance_section(provenance))
+    sections += [*added, provenance_section(provenance)]
     subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
     return Document(
         title=title,
@@ -292,8 +298,7 @@ def _method(
     tables: SurveyTables,
     path: plots.Path3,
     vs_azimuth: float | None,
-    provenance: Provenance,
-    citations: Citations,
+    parts: Parts,
 ) -> Section:
     traj = tables.trajectory
     plane = (
@@ -310,13 +315,13 @@ def _method(
             f"E {fmt(path.east[0])} m",
         ),
         ("Dogleg severity unit", unit_label(traj, "dls")),
-        *method_items(provenance, citations),
+        *parts.methods(),
     ]
     blocks: list[Block] = [Fields("Method", items(survey))]
     refs = references(tables.qc)
     if refs:
         blocks.append(Fields("Reference models", tuple(refs)))
-    cited = citations.fields()
+    cited = parts.citations.fields()
     if cited is not None:
         blocks.append(cited)
     return Section("Method and reference models", tuple(blocks), key="method")

@@ -15,7 +15,9 @@ from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.gyrocompass.solve import compass
 from pipeline.gyrocompass.systematic import GYRO_NS, ToolErrors
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.sim.sensors import PRESETS, compass_errors
 from pipeline.streams import TableStream
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
@@ -106,3 +108,31 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=CompassOptions,
         )
     )
+
+
+def azimuth_words(method: str) -> str:
+    """How the report words an ``azimuth_method``."""
+    return {
+        "ml": "maximum-likelihood azimuth",
+        "auto": "azimuth by the better-conditioned closed form",
+        "sine": "azimuth from the right-side Earth rate",
+        "atan2": "azimuth from the high- and right-side Earth rates",
+    }.get(method, method)
+
+
+def compass_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """Gyrocompassing in the report: the multi-position paper, the azimuth solution and
+    where the gyro toolface takes over."""
+    from pipeline.reports.literature import MULTI_POSITION
+
+    return MethodNote(
+        "Gyrocompassing",
+        f"multi-position least squares {ctx.cite(MULTI_POSITION)}, "
+        f"{azimuth_words(str(stage.params.get('azimuth_method', '?')))}, gyro toolface "
+        f"below {stage.params.get('vertical_below', '?')}° inclination",
+    )
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("compass", method=compass_method))

@@ -9,7 +9,9 @@ from pipeline.continuous.tables import ContinuousSeries, ContinuousStations
 from pipeline.earth.site import resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.streams import Port, as_table
 from pipeline.tables import CompassStations, RawSamples
 
@@ -51,3 +53,18 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             streamed_outputs=frozenset({"series"}),
         )
     )
+
+
+def continuous_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The continuous survey in the report: integration between the stops, the spacing."""
+    return MethodNote(
+        "Continuous survey",
+        "azimuth rate integrated from a compassing stop and closed on the other stop where "
+        "both give an azimuth (the QC section says where not), stations every "
+        f"{stage.params.get('spacing', '?')} m",
+    )
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("integrate_continuous", method=continuous_method))

@@ -17,7 +17,9 @@ from pipeline.contracts import SOURCE_KEY, TableContract, column
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages.uncertainty import (
     PositionUncertainty,
     UncertaintyParams,
@@ -398,3 +400,22 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=DefinitiveParams,
         )
     )
+
+
+def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The definitive survey in the report: ties, per-run propagation, the confidence."""
+    from pipeline.reports.literature import ERROR_MODEL
+
+    confidence = float(stage.params.get("confidence", 0.0)) * 100
+    return MethodNote(
+        "Definitive survey",
+        "runs tied at their first station to the survey above; each run's error model "
+        f"propagated as in {ctx.cite(ERROR_MODEL)} with its systematic errors correlated "
+        "within the run, the tie point's uncertainty carried below it, ellipses at "
+        f"{confidence:g} %",
+    )
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("definitive_survey", method=definitive_method))

@@ -34,7 +34,9 @@ from pipeline.drift.tables import (
 from pipeline.earth.site import resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages.files import read_stage_def
 from pipeline.tables import FreeGyroReadings, RawSamples
 
@@ -158,3 +160,38 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=AllanOptions,
         )
     )
+
+
+def calibration_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The drift calibration in the report: the paper, the estimate used, the test level."""
+    from pipeline.reports.literature import DRIFT_CALIBRATION
+
+    return MethodNote(
+        "Drift calibration",
+        f"drift from the means of the calibration series {ctx.cite(DRIFT_CALIBRATION)}, "
+        f"estimate used: {stage.params.get('use', '?')}, linearity test at "
+        f"α = {stage.params.get('alpha', '?')}",
+    )
+
+
+DRIFT_SOURCES = {
+    "tie_in": "the misclosure at the tie-in station",
+    "calibration": "the instrument's drift calibration",
+    "given": "a given rate",
+    "auto": "the best available source",
+}
+"""How the report words each drift-rate ``source``."""
+
+
+def correction_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The drift correction in the report: the model and where its rate comes from."""
+    source = str(stage.params.get("source", "?"))
+    return MethodNote(
+        "Drift correction", f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}"
+    )
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("correct_drift", method=correction_method))
+    register(ReportDef("calibrate_drift", method=calibration_method))

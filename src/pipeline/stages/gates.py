@@ -9,9 +9,11 @@ import pyarrow as pa
 
 from pipeline.drift.tables import InOutQc
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.qc.gates import GateOptions, acceptance_gates, compare_runs
 from pipeline.qc.tables import RunComparison
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.stations import north_reference_of
 from pipeline.tables import AcceptanceGates, Stations
 
@@ -63,3 +65,21 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=GateOptions,
         )
     )
+
+
+def gates_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The acceptance criteria in the report."""
+    p = dict(stage.params)
+    criteria = (
+        f"in-run against out-run: inclination within {p.get('inc_tolerance', '?')}°, "
+        f"azimuth within {p.get('azi_tolerance', '?')}° at inclination ≥ "
+        f"{p.get('low_inclination', '?')}° and {p.get('azi_tolerance_low', '?')}° below, "
+        f"depth within {p.get('depth_tolerance', '?')} m, at least "
+        f"{p.get('min_stations', '?')} stations"
+    )
+    return MethodNote("Acceptance", criteria)
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("acceptance_gates", method=gates_method))

@@ -96,6 +96,7 @@ def survey_report(
         ctx.well,
         ctx.provenance,
         params.title or "Gyro survey report",
+        ctx.report_parts(),
         min_course=params.min_course_length,
     )
     _write(doc, params, ctx)
@@ -115,6 +116,7 @@ def calibration_report(
         ctx.well,
         ctx.provenance,
         params.title or "Gyro drift calibration report",
+        ctx.report_parts(),
     )
     _write(doc, params, ctx)
     return {}

@@ -13,7 +13,9 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pipeline.contracts import column
 from pipeline.earth.geomagnetic import ModelKey
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages.survey import MinCurveParams, trajectory_columns
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
@@ -333,3 +335,19 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=NorthReferenceParams,
         )
     )
+
+
+def calculation_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The survey calculation in the report: the method chosen, in words."""
+    return MethodNote("Survey calculation", str(stage.params.get("method", "?")).replace("_", " "))
+
+
+def north_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The north reference conversion in the report."""
+    return MethodNote("North reference conversion", f"to {stage.params.get('target', '?')} north")
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("survey_method", method=calculation_method))
+    register(ReportDef("north_reference", method=north_method))

@@ -9,7 +9,9 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import CheckDef, StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
@@ -142,3 +144,13 @@ def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
             params=DlsLimitParams,
         )
     )
+
+
+def mincurve_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The survey calculation in the report."""
+    return MethodNote("Survey calculation", "minimum curvature")
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("minimum_curvature", method=mincurve_method))

@@ -15,7 +15,9 @@ from pipeline.contracts import column
 from pipeline.earth.geomagnetic import reference_field
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
@@ -260,3 +262,20 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=UncertaintyParams,
         )
     )
+
+
+def uncertainty_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """Position uncertainty in the report: the error model by its title, the propagation
+    paper (and the gyro model's for a gyro tool), the confidence of the ellipses."""
+    from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL
+
+    confidence = float(stage.params.get("confidence", 0.0)) * 100
+    title, gyro = ctx.error_model(str(stage.params.get("model", "GYRO-NS")))
+    method = f"{title} error model propagated as in {ctx.cite(ERROR_MODEL)}"
+    also = f" with the gyro terms of {ctx.cite(GYRO_ERROR_MODEL)}" if gyro else ""
+    return MethodNote("Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %")
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("position_uncertainty", method=uncertainty_method))

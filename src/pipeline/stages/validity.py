@@ -17,11 +17,13 @@ from pipeline.earth.geomagnetic import field_model
 from pipeline.earth.gravity import METHOD as GRAVITY_METHOD
 from pipeline.earth.site import Site, resolve_site
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.qc.engine import drop_stations, station_checks
 from pipeline.qc.options import QcOptions
 from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
 from pipeline.qc.windows import anomaly_intervals, window_checks
 from pipeline.registry import StageContext, StageDef
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.streams import Port, as_table
 from pipeline.tables import PositionReadings, RawSamples
 
@@ -110,3 +112,19 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             streamed_inputs=frozenset({"samples"}),
         )
     )
+
+
+def validity_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
+    """The validity checks in the report: sensor triads against the site's references."""
+    from pipeline.reports.literature import DATA_VALIDITY
+
+    return MethodNote(
+        "Validity checks",
+        f"sensor triads at rest against the site's Earth references {ctx.cite(DATA_VALIDITY)}",
+    )
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("validity_checks", method=validity_method))
+    register(ReportDef("window_checks", method=validity_method))

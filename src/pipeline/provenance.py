@@ -1,0 +1,48 @@
+"""Where a run's results come from: its pipeline, software, input files and stages (what
+``run.json`` records), known to every stage while the run goes on."""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class InputFile:
+    """A pipeline input file as the run received it."""
+
+    path: str
+    sha256: str
+    bytes: int
+
+
+@dataclass(frozen=True)
+class StageSetup:
+    """One stage of the running plan: what it uses, from which plugin, with which params."""
+
+    id: str
+    uses: str
+    plugin: str
+    """plugin name and version"""
+    params: Mapping[str, Any]
+    """validated params, JSON-compatible"""
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a run's results come from (what ``run.json`` records), known while it runs."""
+
+    pipeline: str
+    pipeline_version: str
+    pipeline_file: str
+    pipeline_sha256: str
+    gyropipe: str
+    plugins: Mapping[str, str]
+    """plugin name → version (plugins that loaded)"""
+    inputs: Mapping[str, InputFile]
+    started: dt.datetime
+    """UTC start of the run"""
+    stages: tuple[StageSetup, ...]
+    """every stage of the plan, in execution order"""
