@@ -102,6 +102,9 @@ class Provenance:
     """UTC start of the run"""
     stages: tuple[StageSetup, ...]
     """every stage of the plan, in execution order"""
+    tool_models: Mapping[str, Path] = field(default_factory=dict)
+    """the tool-model files the run's plugins registered, by model name (what a stage's
+    ``model:`` may name besides the shipped models; :meth:`Registry.tool_model_files`)"""
 
 
 class StageContext(Protocol):
@@ -334,6 +337,12 @@ class Registry:
     tool_models: dict[str, tuple[ToolModelDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
+    disabled: frozenset[str] = frozenset()
+    """plugins left out by name (``--disable-plugin``): not loaded"""
+    load_disabled: Callable[[], Registry] | None = field(default=None, repr=False)
+    """loads the registry of the disabled plugins alone (set by the plugin manager; used
+    only to say which of them an unknown name belongs to)"""
+    _left_out: Registry | None = field(default=None, init=False, repr=False, compare=False)
 
     def add(self, item: object, plugin: PluginInfo, expected: type) -> None:
         """Validate and store one registration; a bad one becomes a problem of its plugin."""
@@ -354,6 +363,22 @@ class Registry:
             )
             return
         table[name] = (item, plugin.name)
+
+    def tool_model_files(self) -> dict[str, Path]:
+        """The tool-model files the plugins registered, by model name."""
+        return {name: Path(d.path) for name, (d, _) in self.tool_models.items()}
+
+    def disabled_provider(self, kind: str, name: str) -> str | None:
+        """The disabled plugin that registers the ``kind`` (``stage``, ``tool_model``…) called
+        ``name`` (tool models case-insensitively), if any. The disabled plugins are loaded
+        for this, once, only when it is asked (to explain a name that is unknown)."""
+        if not self.disabled or self.load_disabled is None:
+            return None
+        if self._left_out is None:
+            self._left_out = self.load_disabled()
+        table: dict[str, tuple[Any, str]] = getattr(self._left_out, kind + "s")
+        fold = str.upper if kind == "tool_model" else str
+        return next((owner for key, (_, owner) in table.items() if fold(key) == fold(name)), None)
 
     def plugin_label(self, plugin: str) -> str:
         info = self.plugins.get(plugin)

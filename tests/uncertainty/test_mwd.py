@@ -41,6 +41,8 @@ from pipeline.uncertainty.mwd import MwdTool, mwd_covariance, mwd_terms
 from pipeline.uncertainty.terms import Survey
 from pipeline.well import WellMetadata
 
+RUN = SimpleNamespace(tool_models={})
+"""The provenance a stage reads its run's tool models from (here: no plugin's)."""
 DATA = Path(__file__).parent / "data"
 WORKBOOK = DATA / "iscwsa-well-1-mwdrev5.json"
 HPT = DATA / "iscwsa-well-1-hpt-diagnostics.dat"
@@ -304,7 +306,7 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
 
 
 def _trajectory(md: Floats, inc: Floats, azi: Floats, north: str, well: WellMetadata) -> Any:
-    ctx: Any = SimpleNamespace(well=well)
+    ctx: Any = SimpleNamespace(well=well, provenance=RUN)
     stations: pa.Table = Stations.compiled().make_table(
         {"md": md, "inc": inc, "azi": azi}, north_reference=north
     )

@@ -341,7 +341,7 @@ def test_the_report_names_the_model_and_cites_its_papers(tmp_path: Path) -> None
         stage = StageSetup(
             "u", "position_uncertainty", "builtin", {"model": model, "confidence": 0.95}
         )
-        described = _describe(stage, citations.cite)
+        described = _describe(stage, citations.cite, pu.SHIPPED)
         assert described is not None
         text = described[1]
         assert text.startswith(f"{title} error model propagated as in [1]")

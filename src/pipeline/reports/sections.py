@@ -31,7 +31,7 @@ from pipeline.reports.literature import (
     MULTI_POSITION,
     Citations,
 )
-from pipeline.uncertainty.engine import find_model
+from pipeline.uncertainty.engine import ModelCatalogue, find_model
 from pipeline.well import WellMetadata
 
 NORTH_NAMES = {"true": "true north", "grid": "grid north", "magnetic": "magnetic north"}
@@ -114,11 +114,11 @@ def _param(stage: StageSetup, name: str, default: Any = "?") -> Any:
     return stage.params.get(name, default)
 
 
-def _error_model(model: str) -> tuple[str, bool]:
+def _error_model(model: str, catalogue: ModelCatalogue) -> tuple[str, bool]:
     """The title a tool model's file gives it (the name if the file cannot be found now) and
     whether it is a gyro model (it reads the latitude)."""
     try:
-        tool = find_model(model)
+        tool = find_model(model, catalogue)
     except (KeyError, GyropipeError):
         return Path(model).name, False
     return tool.title or tool.name, "latitude" in tool.needs
@@ -138,9 +138,11 @@ DRIFT_SOURCES = {
 }
 
 
-def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] | None:
+def _describe(
+    stage: StageSetup, cite: Callable[[str], str], catalogue: ModelCatalogue
+) -> tuple[str, str] | None:
     """What a known processing stage says about the method, as (label, statement), its
-    published method cited through ``cite``."""
+    published method cited through ``cite`` (tool models found in ``catalogue``)."""
     match stage.uses:
         case "minimum_curvature":
             return "Survey calculation", "minimum curvature"
@@ -163,7 +165,7 @@ def _describe(stage: StageSetup, cite: Callable[[str], str]) -> tuple[str, str] 
             )
         case "position_uncertainty":
             confidence = float(_param(stage, "confidence", 0.0)) * 100
-            title, gyro = _error_model(str(_param(stage, "model", "GYRO-NS")))
+            title, gyro = _error_model(str(_param(stage, "model")), catalogue)
             method = f"{title} error model propagated as in {cite(ERROR_MODEL)}"
             also = f" with the gyro terms of {cite(GYRO_ERROR_MODEL)}" if gyro else ""
             return "Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %"
@@ -212,11 +214,12 @@ def method_items(provenance: Provenance, citations: Citations) -> list[tuple[str
     """Method statements of the run's known stages (first stage of each kind), their
     methods' papers cited in ``citations``."""
     found: dict[str, str] = {}
+    catalogue = ModelCatalogue.of(provenance.tool_models)
     for stage in provenance.stages:
-        probe = _describe(stage, lambda work: "")  # cite only what is printed
+        probe = _describe(stage, lambda work: "", catalogue)  # cite only what is printed
         if probe is None or probe[0] in found:
             continue
-        described = _describe(stage, citations.cite)
+        described = _describe(stage, citations.cite, catalogue)
         if described is not None:
             found[described[0]] = described[1]
     return list(found.items())

@@ -3,9 +3,13 @@
 from pipeline.uncertainty.ellipse import Ellipses, ellipses, horizontal_scale, vertical_scale
 from pipeline.uncertainty.engine import (
     MODELS_DIR,
+    SHIPPED,
+    ModelCatalogue,
+    configure,
     covariance,
     find_model,
     model_files,
+    model_terms,
     term_covariances,
 )
 from pipeline.uncertainty.gyro import GYRO_PRESETS, GyroTool, gyro_covariance, gyro_terms
@@ -20,10 +24,12 @@ __all__ = [
     "GYRO_PRESETS",
     "MODELS_DIR",
     "MWD_PRESETS",
+    "SHIPPED",
     "WEIGHT_FUNCTIONS",
     "Ellipses",
     "GyroTool",
     "MissingSiteQuantity",
+    "ModelCatalogue",
     "ModelSite",
     "MwdTool",
     "StationJacobians",
@@ -31,6 +37,7 @@ __all__ = [
     "Term",
     "ToolModel",
     "ToolTerm",
+    "configure",
     "covariance",
     "ellipses",
     "find_model",
@@ -38,6 +45,7 @@ __all__ = [
     "gyro_terms",
     "horizontal_scale",
     "model_files",
+    "model_terms",
     "mwd_covariance",
     "mwd_terms",
     "parse_tool_model",
