@@ -36,8 +36,8 @@ from pipeline.stages.uncertainty import (
 )
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations
-from pipeline.uncertainty.engine import find_model
-from pipeline.uncertainty.mwd import MwdTool, mwd_covariance, mwd_terms
+from pipeline.uncertainty.engine import configure, find_model, model_terms, term_covariances
+from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 from pipeline.well import WellMetadata
 
@@ -94,8 +94,12 @@ def test_workbook_well_1_every_source_and_total() -> None:
     MD 1200, 2100, 5100 and 8000 m (864 cells), with the workbook's conventions (balanced
     tangent Jacobian, Rev 5 surface tie-on, DEC-OH 0.20°)."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(
-        survey, field, "ISCWSA-MWD-REV5", basis="balanced_tangent", surface_tie=True
+    names, cov = term_covariances(
+        survey,
+        "ISCWSA-MWD-REV5",
+        ModelSite(magnetic=field),
+        basis="balanced_tangent",
+        surface_tie=True,
     )
     assert [*names, "TOTAL"] == data["vd"]["source"][:36]
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
@@ -112,7 +116,9 @@ def test_workbook_well_1_with_exact_minimum_curvature() -> None:
     """The opt-in exact minimum-curvature Jacobian (instead of the standard's balanced
     tangent) stays within 0.46 % and 0.29 m² of the workbook at worst."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(survey, field, "ISCWSA-MWD-REV5", basis="min_curve")
+    names, cov = term_covariances(
+        survey, "ISCWSA-MWD-REV5", ModelSite(magnetic=field), basis="min_curve"
+    )
     ours, ref, _ = _workbook_cells(data, survey, names, cov)
     diff = np.abs(ours - ref)
     assert np.all(diff <= _issue_tolerance(ref))
@@ -125,8 +131,12 @@ def test_rev5_11_differs_from_the_workbook_only_in_dec_oh() -> None:
     """Rev 5.11 (DEC-OH 0.21°) against the Rev 5 workbook (0.20°): DEC-OH is (0.21/0.20)²
     = 1.1025 times the workbook's, every other source unchanged."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(
-        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
+    names, cov = term_covariances(
+        survey,
+        "ISCWSA-MWD-REV5.11",
+        ModelSite(magnetic=field),
+        basis="balanced_tangent",
+        surface_tie=True,
     )
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
     dec_oh = np.array([label.startswith("DEC-OH ") for label in labels])
@@ -155,8 +165,12 @@ def test_hpt_diagnostics_rev5_11() -> None:
     first station off vertical (1230 m: vertical-hole bias terms, XCLA rule) and in the
     second build (5130 m): every source and the total to its printed precision."""
     _, survey, field = _well_1()
-    names, cov = mwd_covariance(
-        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
+    names, cov = term_covariances(
+        survey,
+        "ISCWSA-MWD-REV5.11",
+        ModelSite(magnetic=field),
+        basis="balanced_tangent",
+        surface_tie=True,
     )
     rows = _hpt_rows()
     assert len(rows) == 2 * 36
@@ -247,7 +261,11 @@ def test_sensor_weights_match_the_tool_forward_model(name: str) -> None:
     measured = per_sigma * np.stack((d_inc, d_azi * np.sin(inc)), axis=-1)
 
     field = MagneticReference(total_field=B_TOTAL, dip=DIP_DEG, declination=0.0)
-    term = next(t for t in mwd_terms(MwdTool(), field, g=G) if t.name == name)
+    term = next(
+        t
+        for t in model_terms(find_model("ISCWSA-MWD-REV5.11"), ModelSite(magnetic=field, g=G))
+        if t.name == name
+    )
     weight = term.weight(Survey.of(np.arange(inc.size) * 30.0, inc, azi, np.zeros(inc.size)))
     assert np.all(weight[:, 0] == 0.0)  # sensor errors leave MD alone
     sign = np.sign(np.sum(measured * weight[:, 1:]))
@@ -289,7 +307,13 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
         ref = we.survey.Survey(
             md=md, inc=inc_deg, azi=azi_deg, header=header, error_model="ISCWSA MWD Rev5.11"
         ).err.errors.errors
-    names, cov = mwd_covariance(survey, field, basis="balanced_tangent", surface_tie=True)
+    names, cov = term_covariances(
+        survey,
+        "ISCWSA-MWD-REV5.11",
+        ModelSite(magnetic=field),
+        basis="balanced_tangent",
+        surface_tie=True,
+    )
     assert sorted(names) == sorted(ref)
     for k, name in enumerate(names):
         theirs = ref[name].cov_NEV
@@ -328,7 +352,9 @@ def test_stage_mwd_model_matches_library(north: str, to_true: float) -> None:
     PositionUncertainty.validate_table(out)
     i, a = np.radians(inc), np.radians(azi + to_true)
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    _, cov = mwd_covariance(survey, field, MwdTool(amil=300.0))
+    _, cov = term_covariances(
+        survey, configure("ISCWSA-MWD-REV5.11", {"amil": 300.0}), ModelSite(magnetic=field)
+    )
     total = cov.sum(axis=0)
     for name, (r, c) in COMPONENTS.items():
         np.testing.assert_allclose(out.column(f"cov_{name}").to_numpy(), total[:, r, c], rtol=1e-9)
@@ -347,7 +373,7 @@ def test_stage_mwd_field_from_wmm_at_the_wellhead() -> None:
     assert 59_000 < field.total_field < 60_500 and 77.5 < field.dip < 79.0  # ENGINEERING.md
     i, a = np.radians(inc), np.radians(np.full(md.size, 200.0))
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    total = mwd_covariance(survey, field, "ISCWSA-MWD-REV5")[1].sum(axis=0)
+    total = term_covariances(survey, "ISCWSA-MWD-REV5", ModelSite(magnetic=field))[1].sum(axis=0)
     np.testing.assert_allclose(out["trajectory"].column("cov_ee").to_numpy(), total[:, 1, 1])
 
 
