@@ -29,19 +29,14 @@ REFUSAL = (
 PIPELINE = """
 name: acme_uncertainty
 version: "1"
-inputs:
-  stations: {description: survey stations}
+inputs: {stations: {description: survey stations}}
 stages:
-  - id: read
-    uses: read_stations
-    with: {input: stations}
-  - id: trajectory
-    uses: minimum_curvature
-    inputs: {stations: read.stations}
+  - {id: read, uses: read_stations, with: {input: stations}}
+  - {id: trajectory, uses: minimum_curvature, inputs: {stations: read.stations}}
   - id: uncertainty
     uses: position_uncertainty
     inputs: {trajectory: trajectory.trajectory}
-    with: {model: ACME-GYRO-V2}
+    with: {model: ACME-GYRO-V2}     # the plugin's tool model
     persist: [trajectory]
 """
 

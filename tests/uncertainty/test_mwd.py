@@ -39,6 +39,7 @@ from pipeline.tables import Stations
 from pipeline.uncertainty.engine import configure, find_model, model_terms, term_covariances
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import WellMetadata
 
 RUN = SimpleNamespace(tool_models={})
@@ -89,18 +90,19 @@ def _workbook_cells(
     return np.asarray(ours), np.asarray(ref), labels
 
 
+def _mwd(
+    survey: Survey, field: MagneticReference, model: str | ToolModel, **options: Any
+) -> tuple[list[str], NDArray[np.float64]]:
+    """Per-term NEV covariance (m²) and term names of an MWD model at the site's field."""
+    return term_covariances(survey, model, ModelSite(magnetic=field), **options)
+
+
 def test_workbook_well_1_every_source_and_total() -> None:
     """Rev 5 example workbook: all 35 sources and the totals, six covariance elements, at
     MD 1200, 2100, 5100 and 8000 m (864 cells), with the workbook's conventions (balanced
     tangent Jacobian, Rev 5 surface tie-on, DEC-OH 0.20°)."""
     data, survey, field = _well_1()
-    names, cov = term_covariances(
-        survey,
-        "ISCWSA-MWD-REV5",
-        ModelSite(magnetic=field),
-        basis="balanced_tangent",
-        surface_tie=True,
-    )
+    names, cov = _mwd(survey, field, "ISCWSA-MWD-REV5", basis="balanced_tangent", surface_tie=True)
     assert [*names, "TOTAL"] == data["vd"]["source"][:36]
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
     assert ref.size == 864
@@ -116,9 +118,7 @@ def test_workbook_well_1_with_exact_minimum_curvature() -> None:
     """The opt-in exact minimum-curvature Jacobian (instead of the standard's balanced
     tangent) stays within 0.46 % and 0.29 m² of the workbook at worst."""
     data, survey, field = _well_1()
-    names, cov = term_covariances(
-        survey, "ISCWSA-MWD-REV5", ModelSite(magnetic=field), basis="min_curve"
-    )
+    names, cov = _mwd(survey, field, "ISCWSA-MWD-REV5", basis="min_curve")
     ours, ref, _ = _workbook_cells(data, survey, names, cov)
     diff = np.abs(ours - ref)
     assert np.all(diff <= _issue_tolerance(ref))
@@ -131,12 +131,8 @@ def test_rev5_11_differs_from_the_workbook_only_in_dec_oh() -> None:
     """Rev 5.11 (DEC-OH 0.21°) against the Rev 5 workbook (0.20°): DEC-OH is (0.21/0.20)²
     = 1.1025 times the workbook's, every other source unchanged."""
     data, survey, field = _well_1()
-    names, cov = term_covariances(
-        survey,
-        "ISCWSA-MWD-REV5.11",
-        ModelSite(magnetic=field),
-        basis="balanced_tangent",
-        surface_tie=True,
+    names, cov = _mwd(
+        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
     )
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
     dec_oh = np.array([label.startswith("DEC-OH ") for label in labels])
@@ -165,12 +161,8 @@ def test_hpt_diagnostics_rev5_11() -> None:
     first station off vertical (1230 m: vertical-hole bias terms, XCLA rule) and in the
     second build (5130 m): every source and the total to its printed precision."""
     _, survey, field = _well_1()
-    names, cov = term_covariances(
-        survey,
-        "ISCWSA-MWD-REV5.11",
-        ModelSite(magnetic=field),
-        basis="balanced_tangent",
-        surface_tie=True,
+    names, cov = _mwd(
+        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
     )
     rows = _hpt_rows()
     assert len(rows) == 2 * 36
@@ -307,12 +299,8 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
         ref = we.survey.Survey(
             md=md, inc=inc_deg, azi=azi_deg, header=header, error_model="ISCWSA MWD Rev5.11"
         ).err.errors.errors
-    names, cov = term_covariances(
-        survey,
-        "ISCWSA-MWD-REV5.11",
-        ModelSite(magnetic=field),
-        basis="balanced_tangent",
-        surface_tie=True,
+    names, cov = _mwd(
+        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
     )
     assert sorted(names) == sorted(ref)
     for k, name in enumerate(names):
@@ -352,9 +340,7 @@ def test_stage_mwd_model_matches_library(north: str, to_true: float) -> None:
     PositionUncertainty.validate_table(out)
     i, a = np.radians(inc), np.radians(azi + to_true)
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    _, cov = term_covariances(
-        survey, configure("ISCWSA-MWD-REV5.11", {"amil": 300.0}), ModelSite(magnetic=field)
-    )
+    _, cov = _mwd(survey, field, configure("ISCWSA-MWD-REV5.11", {"amil": 300.0}))
     total = cov.sum(axis=0)
     for name, (r, c) in COMPONENTS.items():
         np.testing.assert_allclose(out.column(f"cov_{name}").to_numpy(), total[:, r, c], rtol=1e-9)
@@ -373,7 +359,11 @@ def test_stage_mwd_field_from_wmm_at_the_wellhead() -> None:
     assert 59_000 < field.total_field < 60_500 and 77.5 < field.dip < 79.0  # ENGINEERING.md
     i, a = np.radians(inc), np.radians(np.full(md.size, 200.0))
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    total = term_covariances(survey, "ISCWSA-MWD-REV5", ModelSite(magnetic=field))[1].sum(axis=0)
+    total = _mwd(
+        survey,
+        field,
+        "ISCWSA-MWD-REV5",
+    )[1].sum(axis=0)
     np.testing.assert_allclose(out["trajectory"].column("cov_ee").to_numpy(), total[:, 1, 1])
 
 
