@@ -339,7 +339,7 @@ class Registry:
     problems: list[PluginError] = field(default_factory=list)
     disabled: frozenset[str] = frozenset()
     """plugins left out by name (``--disable-plugin``): not loaded"""
-    load_disabled: Callable[[], Registry] | None = field(default=None, repr=False)
+    load_disabled: Callable[[], Registry] | None = field(default=None, repr=False, compare=False)
     """loads the registry of the disabled plugins alone (set by the plugin manager; used
     only to say which of them an unknown name belongs to)"""
     _left_out: Registry | None = field(default=None, init=False, repr=False, compare=False)

@@ -1,8 +1,9 @@
 """``--disable-plugin`` is honoured everywhere, tested with the sample plugin gyropipe-acme
 (installed offline, ``conftest.py``): a pipeline naming the plugin's tool model is refused
 at validate time when the plugin is disabled, naming the model and the plugin; the listing
-of models leaves the plugin's out; a run with the plugin records it in ``run.json``; the
-Python API finds the plugin's model through the registry it loads."""
+of models leaves the plugin's out; a run with the plugin records it in ``run.json`` and its
+report names the model; the Python API finds the plugin's model through the registry it
+loads."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 from click.testing import Result
+from pydantic import ValidationError
 
 import pipeline as gp
 from pipeline.errors import SpecError
@@ -38,6 +40,7 @@ stages:
     inputs: {trajectory: trajectory.trajectory}
     with: {model: ACME-GYRO-V2}     # the plugin's tool model
     persist: [trajectory]
+  - {id: report, uses: report, inputs: {trajectory: uncertainty.trajectory}, with: {formats: [html]}}
 """
 
 
@@ -72,6 +75,9 @@ def test_run_with_the_plugin_disabled_is_refused_before_anything_runs(
     assert done.exit_code == 0, done.output
     manifest = json.loads((out_dir / "run.json").read_text())
     assert manifest["plugins"]["acme"] == "0.1.0"  # the plugin whose model the run used
+    # the report names the model by the title its file (the plugin's) gives it
+    html = (out_dir / "report.html").read_text()
+    assert "Acme GyroLog v2 (north-seeking gyro) error model propagated" in html
 
 
 def test_python_api_finds_the_plugin_model_and_honours_disable(
@@ -119,3 +125,28 @@ def test_a_disabled_plugin_registers_nothing_and_is_only_asked_what_it_provides(
     assert registry.disabled_provider("tool_model", "acme-gyro-v2") == "acme"
     assert registry.disabled_provider("reader", "acme_survey") == "acme"
     assert "acme" not in registry.plugins  # it explained; it was not added
+
+
+@pytest.mark.parametrize(
+    ("uses", "params"),
+    [
+        ("position_uncertainty", {"model": "ACME-GYRO-V2"}),
+        ("clearance", {"reference_model": "acme-gyro-v2", "reference_hole_diameter": 0.2}),
+        ("definitive_survey", {"runs": {"run1": {"model": "ACME-GYRO-V2"}}}),
+    ],
+)
+def test_every_stage_naming_a_tool_model_takes_it_from_the_run_s_registry(
+    acme: ModuleType, uses: str, params: dict[str, object]
+):
+    """Each stage's params, validated as the planner does (with the run's registry), accept
+    the plugin's model and refuse it, naming the plugin, when the plugin is disabled."""
+    from pipeline.plugins import load_registry
+
+    with_acme = load_registry()
+    definition = with_acme.stages[uses][0]
+    definition.params.model_validate(params, context={"registry": with_acme})
+    without = load_registry(["acme"])
+    with pytest.raises(ValidationError) as refused:
+        definition.params.model_validate(params, context={"registry": without})
+    name = "acme-gyro-v2" if uses == "clearance" else "ACME-GYRO-V2"
+    assert REFUSAL.replace("ACME-GYRO-V2", name) in str(refused.value)
