@@ -150,3 +150,13 @@ def test_every_stage_naming_a_tool_model_takes_it_from_the_run_s_registry(
         definition.params.model_validate(params, context={"registry": without})
     name = "acme-gyro-v2" if uses == "clearance" else "ACME-GYRO-V2"
     assert REFUSAL.replace("ACME-GYRO-V2", name) in str(refused.value)
+
+
+def test_a_stage_of_a_disabled_builtin_plugin_is_named_with_its_plugin(cli: Cli):
+    survey = ROOT / "pipelines" / "survey.yaml"
+    out = cli("validate", str(survey), "--disable-plugin", "builtin.survey")
+    assert out.exit_code == 2, out.output
+    assert (
+        "stage 'minimum_curvature' is provided by plugin builtin.survey, which is disabled "
+        "(--disable-plugin builtin.survey)"
+    ) in out.stderr

@@ -144,7 +144,7 @@ def find_model(model: str | Path | ToolModel, catalogue: ModelCatalogue = SHIPPE
     key = str(model)
     shipped = _named(_shipped(), key)
     if shipped is not None:
-        return _read(shipped, catalogue)
+        return _read(shipped, SHIPPED)  # shipped files extend shipped models only
     path = Path(model)
     if path.suffix.lower() in (".yaml", ".yml") or path.is_file():
         if not path.is_file():
