@@ -25,13 +25,15 @@ from numpy.typing import NDArray
 
 from pipeline.earth.site import MagneticReference
 from pipeline.survey.mincurve import minimum_curvature
-from pipeline.uncertainty.gyro import gyro_covariance
-from pipeline.uncertainty.mwd import mwd_covariance
+from pipeline.uncertainty.engine import find_model, term_covariances
+from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 
 Floats = NDArray[np.float64]
 LATITUDE = 60.0
 FIELD = MagneticReference(total_field=50000.0, dip=72.0, declination=-4.0)
+SITE = ModelSite(latitude=LATITUDE, magnetic=FIELD)
+"""What the gyro models (latitude) and the MWD models (field) need of the site."""
 TOLERANCE = 1e-4
 #: welleng's Rev 4 leaves out the ISCWSA surface tie-on's doubled first leg (the ISCWSA
 #: clearance set has it): up to 0.5 % of the near-surface covariance.
@@ -58,12 +60,9 @@ def profile(n: int) -> tuple[Floats, Floats, Floats]:
 def ours(model: str, md: Floats, inc: Floats, azi: Floats) -> Floats:
     i, a = np.radians(inc), np.radians(azi)
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    if model.startswith("ISCWSA-MWD"):
-        _, cov = mwd_covariance(survey, FIELD, model, basis="balanced_tangent", surface_tie=True)
-    else:
-        _, cov = gyro_covariance(
-            survey, LATITUDE, model, basis="balanced_tangent", surface_tie=True
-        )
+    _, cov = term_covariances(
+        survey, find_model(model), SITE, basis="balanced_tangent", surface_tie=True
+    )
     total: Floats = cov.sum(axis=0)
     return total
 

@@ -64,7 +64,7 @@ from pipeline.sim.sensors import (
 from pipeline.sim.spec import SimulationSpec, ToolChoice, load_simulation
 from pipeline.spec import parse_spec
 from pipeline.stages.simulation import simulation_tables, well_of_simulation
-from pipeline.uncertainty.gyro import GYRO_PRESETS
+from pipeline.uncertainty.engine import model_files
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/ is not a package
 from error_budget_sets import (
@@ -164,7 +164,7 @@ def pipeline_plan(
             if len(shown) < len(changed):
                 note += " and the tool's error magnitudes for its predicted σ"
     if not any(stage.get("uses") == "position_uncertainty" for stage in stages):
-        model = CONTINUOUS_MODEL if CONTINUOUS_MODEL in GYRO_PRESETS else "GYRO-NS"
+        model = CONTINUOUS_MODEL if CONTINUOUS_MODEL in model_files() else "GYRO-NS"
         mc = [stage for stage in stages if stage.get("uses") == "minimum_curvature"]
         if len(mc) != 1:
             sys.exit(f"{pipeline}: expected one minimum_curvature stage for the uncertainty")

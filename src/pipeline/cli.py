@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 
-from pipeline.cli_args import input_files, reader_options, well_overrides
+from pipeline.cli_args import disable_option, input_files, reader_options, well_overrides
 from pipeline.cli_models import models
 from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
 from pipeline.version import __version__
@@ -44,19 +44,12 @@ set_option = click.option(
     metavar="STAGE.PARAM=VALUE",
     help="Override a stage parameter (value parsed as YAML). Repeatable.",
 )
-disable_option = click.option(
-    "--disable-plugin",
-    "disabled",
-    multiple=True,
-    metavar="NAME",
-    help="Do not load the plugin NAME (built-in or third-party). Repeatable.",
-)
 
 
 def _registry(disabled: tuple[str, ...]) -> Registry:
-    from pipeline.plugins import load_registry
-
-    registry = load_registry(disabled)
+    """The registry of this process (:func:`~pipeline.plugins.shared_registry`), its
+    plugins' problems shown as warnings."""
+    registry = _registry_quiet(disabled)
     for problem in registry.problems:
         click.echo(f"warning: {problem}", err=True)
     return registry
@@ -305,9 +298,9 @@ def _interrupt(signum: int, frame: object) -> None:
 
 def _registry_quiet(disabled: tuple[str, ...]) -> Registry:
     """The plugins, their problems left to the caller to show."""
-    from pipeline.plugins import load_registry
+    from pipeline.plugins import shared_registry
 
-    return load_registry(disabled)
+    return shared_registry(disabled)
 
 
 def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:

@@ -1,6 +1,6 @@
 """The ``gyropipe`` command line's items: ``NAME=FILE`` inputs, ``--option KEY=VALUE``
 reader options and ``--well FIELD=VALUE`` header overrides, each refused with a
-``click.BadParameter`` that names the item."""
+``click.BadParameter`` that names the item, and ``--disable-plugin``."""
 
 from __future__ import annotations
 
@@ -14,6 +14,15 @@ from pipeline.errors import SpecError, did_you_mean
 if TYPE_CHECKING:
     from pipeline.graph import Plan
     from pipeline.well import WellMetadata
+
+disable_option = click.option(
+    "--disable-plugin",
+    "disabled",
+    multiple=True,
+    metavar="NAME",
+    help="Do not load the plugin NAME (built-in or third-party). Repeatable.",
+)
+"""``--disable-plugin NAME``: the plugins a command leaves out."""
 
 
 def reader_options(items: tuple[str, ...]) -> dict[str, object]:

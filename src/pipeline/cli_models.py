@@ -7,6 +7,7 @@ import sys
 
 import click
 
+from pipeline.cli_args import disable_option
 from pipeline.errors import GyropipeError
 
 EXIT_CONFIG = 2
@@ -15,16 +16,21 @@ EXIT_CONFIG = 2
 @click.command()
 @click.argument("model", required=False, metavar="[NAME|FILE.yaml]")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
-def models(model: str | None, as_json: bool) -> None:
-    """List the tool models (shipped and from plugins), or show one model's terms — a model
-    file given by path is read and checked (exit 2 and the file:line of each problem if it
-    is invalid)."""
-    from pipeline.uncertainty.engine import find_model, model_files
+@disable_option
+def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
+    """List the tool models (shipped and from the plugins not disabled), or show one model's
+    terms — a model file given by path is read and checked (exit 2 and the file:line of each
+    problem if it is invalid)."""
+    from pipeline.plugins import shared_registry
+    from pipeline.stages.toolmodels import disabled_message, of_registry
+    from pipeline.uncertainty.engine import find_model
     from pipeline.uncertainty.toolmodel import describe
 
+    registry = shared_registry(disabled)
+    catalogue = of_registry(registry)
     try:
         if model is None:
-            found = [find_model(path) for path in model_files().values()]
+            found = [find_model(path, catalogue) for path in catalogue.files().values()]
             listing = [describe(m) for m in sorted(found, key=lambda m: m.name.upper())]
             if as_json:
                 click.echo(json.dumps(listing, indent=2))
@@ -36,10 +42,10 @@ def models(model: str | None, as_json: bool) -> None:
                     f"needs the site's {needs} ({item['file']})"
                 )
             return
-        tool = find_model(model)
+        tool = find_model(model, catalogue)
     except (GyropipeError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) else exc
-        click.echo(f"error: {message}", err=True)
+        click.echo(f"error: {disabled_message(str(model), registry) or message}", err=True)
         sys.exit(EXIT_CONFIG)
     if as_json:
         doc = describe(tool)

@@ -130,6 +130,12 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
 
 
 def _unknown_stage(name: str, registry: Registry) -> str:
+    plugin = registry.disabled_provider("stage", name)
+    if plugin is not None:
+        return (
+            f"stage {name!r} is provided by plugin {plugin}, which is disabled "
+            f"(--disable-plugin {plugin})"
+        )
     known = sorted(registry.stages)
     hint = did_you_mean(name, known)
     return f"unknown stage {name!r}{hint} (registered: {', '.join(known) or 'none'})"

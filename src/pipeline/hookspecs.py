@@ -57,9 +57,9 @@ def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
 @hookspec
 def gyropipe_register_tool_models(register: Callable[[ToolModelDef], None]) -> None:
     """Register tool-model (error model) files: call ``register(ToolModelDef(name, path))``
-    for each YAML file (format: ``docs/tool-models.md``). The position-uncertainty stage,
-    ``gyropipe models`` and ``pipeline.uncertainty.find_model`` then know the model by
-    name; a shipped model of the same name wins."""
+    for each YAML file (format: ``docs/tool-models.md``). The stages that take a tool model,
+    ``gyropipe models`` and the Python API then know the model by name (the registry of the
+    run hands the files to the uncertainty code); a shipped model of the same name wins."""
 
 
 @hookspec

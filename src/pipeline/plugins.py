@@ -8,8 +8,9 @@ while every other plugin keeps working.
 
 from __future__ import annotations
 
+import functools
 import importlib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from importlib.metadata import entry_points
 
 import pluggy
@@ -67,8 +68,37 @@ HOOKS: tuple[tuple[str, type], ...] = (
 
 
 def load_registry(disabled: Iterable[str] = ()) -> Registry:
-    """Load all plugins except those named in ``disabled`` and collect their registrations."""
-    blocked = set(disabled)
+    """Load all plugins except those named in ``disabled`` (they are not imported) and
+    collect their registrations. A fresh registry each call: a process uses
+    :func:`shared_registry`."""
+    blocked = frozenset(disabled)
+    registry = _load(lambda name: name not in blocked)
+    registry.disabled = blocked
+    if blocked:
+        registry.load_disabled = lambda: _load(lambda name: name in blocked)
+    return registry
+
+
+def shared_registry(disabled: Iterable[str] = ()) -> Registry:
+    """The registry of this process for a set of disabled plugins, loaded on first need and
+    then reused (as xarray caches its engines): what the command line, the Python API and
+    batch workers hand to the runner. :func:`forget_shared_registries` drops them (tests
+    that change what is installed)."""
+    return _shared(frozenset(disabled))
+
+
+@functools.cache
+def _shared(disabled: frozenset[str]) -> Registry:
+    return load_registry(disabled)
+
+
+def forget_shared_registries() -> None:
+    """Load the plugins afresh on the next :func:`shared_registry` call."""
+    _shared.cache_clear()
+
+
+def _load(wanted: Callable[[str], bool]) -> Registry:
+    """The registry of the plugins whose name is ``wanted``."""
     registry = Registry()
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs)
@@ -76,7 +106,7 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
 
     for name, module_name in BUILTIN_PLUGINS.items():
         info = PluginInfo(name, __version__, builtin=True)
-        if name in blocked:
+        if not wanted(name):
             continue
         try:
             candidates.append((info, importlib.import_module(module_name)))
@@ -86,7 +116,7 @@ def load_registry(disabled: Iterable[str] = ()) -> Registry:
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         version = ep.dist.version if ep.dist is not None else "unknown"
         dist = f" ({ep.dist.name})" if ep.dist is not None else ""
-        if ep.name in blocked:
+        if not wanted(ep.name):
             continue
         try:
             obj = ep.load()

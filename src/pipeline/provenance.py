@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import datetime as dt
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 
@@ -46,3 +47,6 @@ class Provenance:
     """UTC start of the run"""
     stages: tuple[StageSetup, ...]
     """every stage of the plan, in execution order"""
+    tool_models: Mapping[str, Path] = field(default_factory=dict)
+    """the tool-model files the run's plugins registered, by model name (what a stage's
+    ``model:`` may name besides the shipped models; :meth:`Registry.tool_model_files`)"""

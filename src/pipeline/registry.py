@@ -305,6 +305,12 @@ class Registry:
     reports: dict[str, tuple[ReportDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
+    disabled: frozenset[str] = frozenset()
+    """plugins left out by name (``--disable-plugin``): not loaded"""
+    load_disabled: Callable[[], Registry] | None = field(default=None, repr=False, compare=False)
+    """loads the registry of the disabled plugins alone (set by the plugin manager; used
+    only to say which of them an unknown name belongs to)"""
+    _left_out: Registry | None = field(default=None, init=False, repr=False, compare=False)
 
     def add(self, item: object, plugin: PluginInfo, expected: type) -> None:
         """Validate and store one registration; a bad one becomes a problem of its plugin."""
@@ -333,6 +339,22 @@ class Registry:
             (part, self.plugins.get(owner, replace(unknown, name=owner)))
             for part, owner in self.reports.values()
         ]
+
+    def tool_model_files(self) -> dict[str, Path]:
+        """The tool-model files the plugins registered, by model name."""
+        return {name: Path(d.path) for name, (d, _) in self.tool_models.items()}
+
+    def disabled_provider(self, kind: str, name: str) -> str | None:
+        """The disabled plugin that registers the ``kind`` (``stage``, ``tool_model``…) called
+        ``name`` (tool models case-insensitively), if any. The disabled plugins are loaded
+        for this, once, only when it is asked (to explain a name that is unknown)."""
+        if not self.disabled or self.load_disabled is None:
+            return None
+        if self._left_out is None:
+            self._left_out = self.load_disabled()
+        table: dict[str, tuple[Any, str]] = getattr(self._left_out, kind + "s")
+        fold = str.upper if kind == "tool_model" else str
+        return next((owner for key, (_, owner) in table.items() if fold(key) == fold(name)), None)
 
     def plugin_label(self, plugin: str) -> str:
         info = self.plugins.get(plugin)

@@ -524,6 +524,7 @@ def _provenance(
             )
             for st in plan.stages
         ),
+        tool_models=registry.tool_model_files(),
     )
 
 

@@ -1,14 +1,19 @@
 """The layers of ``src/pipeline`` (docs/architecture.md), checked from the source.
 
 Every module is parsed with :mod:`ast` and every import it makes is collected: top-level,
-under ``if TYPE_CHECKING:``, inside functions (lazy imports), relative ones resolved. Two rules:
+under ``if TYPE_CHECKING:``, inside functions (lazy imports), relative ones resolved, and
+imports by name (``importlib.import_module("…")``, ``__import__("…")`` with the name written
+out). Three rules:
 
 - no import circle between modules;
 - no import from a lower layer to a higher one (:data:`LAYERS`); within a layer anything goes
-  but a circle.
+  but a circle;
+- the domain never reaches the plugin machinery (:data:`SEALED`): no import of it, however
+  made, and no string naming it (a name handed to ``importlib`` later) — what the domain
+  needs of plugins (tool models, readers) is handed to it by the registry of the run.
 
 Every module must have a layer, so a new module or package is given a home here. Plugins that
-:mod:`pipeline.plugins` loads by name (``importlib``) are not imports and are not seen.
+:mod:`pipeline.plugins` loads from a table of names are not imports and are not seen.
 """
 
 from __future__ import annotations
@@ -88,6 +93,16 @@ LAYERS: dict[str, int] = {
 """Module prefix → layer rank (higher imports lower). A prefix covers its submodules, except
 the bare package name, which is ``pipeline/__init__.py`` alone."""
 
+PLUGIN_MACHINERY = ("pipeline.plugins", "pipeline.registry", "pipeline.hookspecs")
+"""What loads plugins and holds their registrations."""
+SEALED: dict[str, tuple[str, ...]] = {
+    prefix: PLUGIN_MACHINERY for prefix, rank in LAYERS.items() if rank == 3
+}
+"""Module prefix → modules it may not import in any way nor name: the domain packages and
+the plugin machinery (one registry per run, passed explicitly: docs/architecture.md)."""
+BY_NAME = frozenset({"import_module", "__import__"})
+"""Functions that import a module by name (``importlib.import_module``, ``__import__``)."""
+
 
 @dataclass(frozen=True)
 class Import:
@@ -95,6 +110,8 @@ class Import:
     imported: str
     path: Path
     line: int
+    how: str = "import"
+    """``import``, ``by name`` (``import_module``/``__import__``) or ``named`` (a string)"""
 
 
 @dataclass(frozen=True)
@@ -130,7 +147,12 @@ def imports(src: Path, package: str) -> Iterator[Import]:
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
         for node in ast.walk(tree):
             targets: list[str] = []
-            if isinstance(node, ast.Import):
+            how = "import"
+            if isinstance(node, ast.Call) and _called(node.func) in BY_NAME:
+                first = node.args[0] if node.args else None
+                if isinstance(first, ast.Constant) and isinstance(first.value, str):
+                    targets, how = [first.value], "by name"
+            elif isinstance(node, ast.Import):
                 targets = [alias.name for alias in node.names]
             elif isinstance(node, ast.ImportFrom):
                 if node.level:
@@ -150,17 +172,38 @@ def imports(src: Path, package: str) -> Iterator[Import]:
                     continue
                 imported = module_of(target)
                 if imported is not None and imported != importer:
-                    yield Import(importer, imported, path, node.lineno)
+                    yield Import(importer, imported, path, node.lineno, how)
+
+
+def _called(func: ast.expr) -> str | None:
+    """The name of a called function (``f(…)``, ``module.f(…)``)."""
+    if isinstance(func, ast.Name):
+        return func.id
+    return func.attr if isinstance(func, ast.Attribute) else None
+
+
+def named(src: Path, package: str) -> Iterator[Import]:
+    """Every string constant of a module of ``package`` that is exactly the name of one of
+    its modules (``"pipeline.plugins"``): a module a later ``import_module(name)`` may load."""
+    known = modules(src, package)
+    for importer, (path, _) in known.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and node.value in known and node.value != importer:
+                yield Import(importer, str(node.value), path, node.lineno, "named")
+
+
+def prefixed(module: str, prefixes: tuple[str, ...], package: str) -> str | None:
+    """The longest of ``prefixes`` that covers ``module``: the module itself or a package
+    above it (the bare package name covers ``pipeline/__init__.py`` alone)."""
+    covering = [p for p in prefixes if module == p or (p != package and module.startswith(p + "."))]
+    return max(covering, key=len) if covering else None
 
 
 def layer_of(module: str, layers: Mapping[str, int], package: str) -> int | None:
     """The rank of the longest prefix of ``module`` in ``layers`` (None if it has none)."""
-    prefixes = [
-        prefix
-        for prefix in layers
-        if module == prefix or (prefix != package and module.startswith(prefix + "."))
-    ]
-    return layers[max(prefixes, key=len)] if prefixes else None
+    prefix = prefixed(module, tuple(layers), package)
+    return None if prefix is None else layers[prefix]
 
 
 def circles(edges: Mapping[str, set[str]]) -> list[tuple[set[str], list[str]]]:
@@ -220,9 +263,14 @@ def _cycle_through(start: str, component: set[str], edges: Mapping[str, set[str]
 
 
 def violations(
-    src: Path, package: str, layers: Mapping[str, int], names: Mapping[int, str] = LAYER_NAMES
+    src: Path,
+    package: str,
+    layers: Mapping[str, int],
+    names: Mapping[int, str] = LAYER_NAMES,
+    sealed: Mapping[str, tuple[str, ...]] | None = None,
 ) -> list[Violation]:
-    """Unassigned modules, circles and upward imports of ``package`` under ``src``."""
+    """Unassigned modules, circles, upward imports and reaches into what ``sealed`` (default
+    :data:`SEALED`) forbids, of ``package`` under ``src``."""
     found: list[Violation] = []
     root = src.parent
     for module, (path, _) in modules(src, package).items():
@@ -256,6 +304,7 @@ def violations(
                 ),
             )
         )
+    found += _reaches(src, package, SEALED if sealed is None else sealed)
     for (importer, imported), where in sorted(upward.items()):
         low = layer_of(importer, layers, package)
         high = layer_of(imported, layers, package)
@@ -269,6 +318,25 @@ def violations(
             )
         )
     return found
+
+
+def _reaches(src: Path, package: str, sealed: Mapping[str, tuple[str, ...]]) -> list[Violation]:
+    """Each import (of any kind) or naming of a module that ``sealed`` forbids its importer."""
+    found: dict[tuple[str, str], list[Import]] = {}
+    for imp in itertools.chain(imports(src, package), named(src, package)):
+        rule = prefixed(imp.importer, tuple(sealed), package)
+        if rule is not None and prefixed(imp.imported, sealed[rule], package) is not None:
+            found.setdefault((imp.importer, imp.imported), []).append(imp)
+    root = src.parent
+    return [
+        Violation(
+            f"sealed: {importer} -> {imported}",
+            ", ".join(f"{i.path.relative_to(root)}:{i.line} ({i.how})" for i in where)
+            + f": {importer} reaches {imported}; the domain never loads plugins — take what "
+            "you need (tool models, readers) as an argument from the registry of the run",
+        )
+        for (importer, imported), where in sorted(found.items())
+    ]
 
 
 def _layer_name(rank: int, names: Mapping[int, str]) -> str:
@@ -313,9 +381,10 @@ def test_checker_finds_circles_and_upward_imports(tmp_path: Path) -> None:
             # a circle through a relative import and a lazy one
             "toy/mid/a.py": "from .b import thing\n",
             "toy/mid/b.py": "def thing():\n    from toy.mid import a\n    return a\n",
-            # upward, hidden under TYPE_CHECKING
+            # upward, hidden under TYPE_CHECKING, and by name in a function
             "toy/low.py": (
-                "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from toy.top import x\n"
+                "import importlib\nfrom typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                "    from toy.top import x\ndef f():\n    return importlib.import_module('toy.top')\n"
             ),
             "toy/stray.py": "import toy.low\n",
         },
@@ -332,7 +401,7 @@ def test_checker_finds_circles_and_upward_imports(tmp_path: Path) -> None:
         "  toy.mid.b -> toy.mid.a at src/toy/mid/b.py:2",
     ]
     assert found["upward: toy.low -> toy.top"].startswith(
-        "src/toy/low.py:3: toy.low (layer 1) imports toy.top (layer 3)"
+        "src/toy/low.py:4, src/toy/low.py:6: toy.low (layer 1) imports toy.top (layer 3)"
     )
 
 
@@ -378,3 +447,54 @@ def test_no_module_is_longer_than_700_lines() -> None:
         if (n := len(path.read_text().splitlines())) > MAX_LINES
     }
     assert not long, long
+
+
+def test_checker_finds_a_domain_module_reaching_the_plugin_registry(tmp_path: Path) -> None:
+    """The real rules (:data:`LAYERS`, :data:`SEALED`) on a synthetic ``pipeline`` whose
+    domain module loads the registry inside a function — the hidden registry — and by name."""
+    src = _package(
+        tmp_path,
+        {
+            "pipeline/__init__.py": "",
+            "pipeline/registry.py": "class Registry: ...\n",
+            "pipeline/plugins.py": "from pipeline.registry import Registry\n"
+            "def load_registry() -> Registry: ...\n",
+            "pipeline/uncertainty/__init__.py": "",
+            "pipeline/uncertainty/engine.py": (
+                "def plugin_files():\n"
+                "    from pipeline.plugins import load_registry\n"
+                "    return load_registry().tool_models\n"
+            ),
+            "pipeline/uncertainty/lazy.py": (
+                "import importlib\n"
+                "def registry():\n"
+                '    return importlib.import_module("pipeline.plugins").load_registry()\n'
+                "def raw():\n"
+                '    return __import__("pipeline.registry")\n'
+            ),
+            "pipeline/uncertainty/spelled.py": (
+                'WHERE = "pipeline.plugins"  # handed to importlib later\n'
+            ),
+            "pipeline/survey/__init__.py": "",
+            "pipeline/survey/fine.py": "import importlib\nmath = importlib.import_module('math')\n",
+        },
+    )
+    found = {v.key: v.detail for v in violations(src, PACKAGE, LAYERS)}
+    assert set(found) == {
+        "sealed: pipeline.uncertainty.engine -> pipeline.plugins",
+        "sealed: pipeline.uncertainty.lazy -> pipeline.plugins",
+        "sealed: pipeline.uncertainty.lazy -> pipeline.registry",
+        "sealed: pipeline.uncertainty.spelled -> pipeline.plugins",
+    }
+    assert found["sealed: pipeline.uncertainty.engine -> pipeline.plugins"].startswith(
+        "src/pipeline/uncertainty/engine.py:2 (import): pipeline.uncertainty.engine reaches "
+        "pipeline.plugins; the domain never loads plugins"
+    )
+    assert (
+        "src/pipeline/uncertainty/lazy.py:3 (by name)"
+        in found["sealed: pipeline.uncertainty.lazy -> pipeline.plugins"]
+    )
+    assert (
+        "src/pipeline/uncertainty/spelled.py:1 (named)"
+        in found["sealed: pipeline.uncertainty.spelled -> pipeline.plugins"]
+    )

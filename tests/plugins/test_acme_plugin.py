@@ -1,17 +1,15 @@
-"""The example vendor adapter ``plugins/gyropipe-acme``, installed for real by pip into a
-target directory: found through its entry point, simulator samples written as Acme GyroLog
-(Acme's units and axes) come back through a pipeline equal to the simulator's, and a
-malformed file is reported by file and line."""
+"""The example vendor adapter ``plugins/gyropipe-acme``, installed (offline: its package and
+``.dist-info`` in a site directory, ``conftest.py``): found through its entry point,
+simulator samples written as Acme GyroLog (Acme's units and axes) come back through a
+pipeline equal to the simulator's, and a malformed file is reported by file and line. The
+command line runs in process."""
 
 from __future__ import annotations
 
 import datetime as dt
-import importlib
 import json
-import shutil
-import subprocess
-import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
@@ -19,13 +17,14 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from click.testing import Result
 
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.well import WellMetadata, well_of
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import ROOT
 
-PACKAGE = ROOT / "plugins" / "gyropipe-acme"
+Cli = Callable[..., Result]
 SPEC = {
     "name": "acme",
     "seed": 5,
@@ -75,53 +74,10 @@ stages:
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """gyropipe-acme installed by ``pip install --target`` (built from a copy of its source,
-    so no build files land in the repository); the directory goes on PYTHONPATH.
-
-    The build is isolated: pip fetches ``setuptools>=70.1`` from the configured index,
-    because the venv's own setuptools (ensurepip's 65.5, without ``wheel``) cannot build a
-    wheel, so ``--no-build-isolation`` fails. About 3 s.
-    """
-    root = tmp_path_factory.mktemp("acme")
-    source = root / "source"
-    shutil.copytree(
-        PACKAGE, source, ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__")
-    )
-    target = root / "site"
-    pip = [sys.executable, "-m", "pip", "install", "--no-deps", "--no-compile", "--quiet"]
-    result = subprocess.run(
-        [*pip, "--target", str(target), str(source)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert result.returncode == 0, result.stdout + result.stderr
-    return target
-
-
-@pytest.fixture
-def acme(site: Path, monkeypatch: pytest.MonkeyPatch) -> ModuleType:
-    """The installed package, imported from the target directory (on sys.path for this test
-    only, so other tests' registries never see the plugin)."""
-    monkeypatch.syspath_prepend(str(site))
-    module = importlib.import_module("gyropipe_acme")
-    assert Path(module.__file__ or "").is_relative_to(site)
-    return module
-
-
-@pytest.fixture(scope="module")
 def samples() -> pa.Table:
     """Raw samples of an ideal three-axis tool with magnetometers: three stations, each
     with five frame positions, about 5800 samples at 100 Hz."""
     return simulate(SimulationSpec.model_validate(SPEC)).samples
-
-
-def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = pythonpath(site)
-    return subprocess.run(
-        [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
-    )
 
 
 def vendor_columns(path: Path) -> dict[str, np.ndarray]:
@@ -140,9 +96,9 @@ def column(table: pa.Table, name: str) -> np.ndarray:
     return table.column(name).to_numpy(zero_copy_only=False)
 
 
-def test_plugins_command_lists_acme(site: Path):
-    out = run_cli(site, "plugins")
-    assert out.returncode == 0, out.stderr
+def test_plugins_command_lists_acme(acme: ModuleType, cli: Cli):
+    out = cli("plugins")
+    assert out.exit_code == 0, out.stderr
     lines = out.stdout.splitlines()
     assert (
         "acme 0.1.0 (third-party): reader:acme, reader:acme_survey, writer:acme, "
@@ -155,17 +111,17 @@ def test_plugins_command_lists_acme(site: Path):
     assert not [line for line in lines if line.startswith("problem:") and "acme" in line]
 
 
-def test_vendor_tool_model_is_found_by_name(site: Path):
+def test_vendor_tool_model_is_found_by_name(acme: ModuleType, cli: Cli):
     """The plugin's model file (GYRO-NS extended by a formula term) is listed and selected
     by name like a shipped one."""
-    out = run_cli(site, "models")
-    assert out.returncode == 0, out.stderr
+    out = cli("models")
+    assert out.exit_code == 0, out.stderr
     assert any(
         line.startswith("ACME-GYRO-V2 ") and "acme-gyro-v2.yaml" in line
         for line in out.stdout.splitlines()
     )
-    shown = run_cli(site, "models", "acme-gyro-v2", "--json")
-    assert shown.returncode == 0, shown.stderr
+    shown = cli("models", "acme-gyro-v2", "--json")
+    assert shown.exit_code == 0, shown.stderr
     doc = json.loads(shown.stdout)
     terms = {t["name"]: t for t in doc["terms"]}
     assert terms["ACME-THERM"]["weight"] == "formula"
@@ -174,7 +130,7 @@ def test_vendor_tool_model_is_found_by_name(site: Path):
 
 
 def test_pipeline_reads_acme_file_back_to_the_simulated_samples(
-    site: Path, acme: ModuleType, samples: pa.Table, tmp_path: Path
+    acme: ModuleType, cli: Cli, samples: pa.Table, tmp_path: Path
 ):
     agl = tmp_path / "run.agl"
     acme.write_samples(samples, agl, WELL)
@@ -205,8 +161,8 @@ def test_pipeline_reads_acme_file_back_to_the_simulated_samples(
     spec = tmp_path / "acme.yaml"
     spec.write_text(textwrap.dedent(PIPELINE))
     out_dir = tmp_path / "out"
-    result = run_cli(site, "run", str(spec), "--input", str(agl), "--out", str(out_dir))
-    assert result.returncode == 0, result.stderr
+    result = cli("run", str(spec), "--input", str(agl), "--out", str(out_dir))
+    assert result.exit_code == 0, result.stderr
     manifest = json.loads((out_dir / "run.json").read_text())
     assert manifest["plugins"]["acme"] == "0.1.0"
 
@@ -253,7 +209,7 @@ def test_pipeline_reads_acme_file_back_to_the_simulated_samples(
     ids=["header-value", "data-value", "short-row"],
 )
 def test_malformed_file_is_reported_by_file_and_line(
-    site: Path, acme: ModuleType, samples: pa.Table, tmp_path: Path, line, edit, message
+    acme: ModuleType, cli: Cli, samples: pa.Table, tmp_path: Path, line, edit, message
 ):
     agl = tmp_path / "bad.agl"
     acme.write_samples(samples.slice(0, 10), agl, WELL)
@@ -262,8 +218,8 @@ def test_malformed_file_is_reported_by_file_and_line(
     agl.write_text("\n".join(lines) + "\n")
     spec = tmp_path / "acme.yaml"
     spec.write_text(textwrap.dedent(PIPELINE))
-    result = run_cli(site, "run", str(spec), "--input", str(agl), "--out", str(tmp_path / "out"))
-    assert result.returncode == 1, result.stdout + result.stderr
+    result = cli("run", str(spec), "--input", str(agl), "--out", str(tmp_path / "out"))
+    assert result.exit_code == 1, result.output
     assert "Traceback" not in result.stderr
     assert f"{agl}:{line}" in result.stderr
     assert message in result.stderr
@@ -281,25 +237,23 @@ MD(ft) INC(deg) AZI(deg)
 """
 
 
-def test_vendor_txt_reader_wins_over_the_builtin_csv_reader(site: Path, tmp_path: Path):
+def test_vendor_txt_reader_wins_over_the_builtin_csv_reader(
+    acme: ModuleType, cli: Cli, tmp_path: Path
+):
     """A .txt file with MD/INC/AZI in its header: the built-in CSV reader claims it by its
-    name and fails on it; with the plugin installed its reader claims it by content and
-    reads it (feet → m, grid north as the file declares, the well name from the header)."""
+    name and fails on it (the plugin disabled); with the plugin its reader claims it by
+    content and reads it (feet → m, grid north as the file declares, the well name from the
+    header)."""
     report = tmp_path / "report.txt"
     report.write_text(REPORT)
     survey = ROOT / "pipelines" / "survey.yaml"
-    without = subprocess.run(
-        [*gyropipe(), "run", str(survey), "--input", str(report), "--out", str(tmp_path / "a")],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
-    assert without.returncode == 1
+    args = ("run", str(survey), "--input", str(report), "--out")
+    without = cli(*args, str(tmp_path / "a"), "--disable-plugin", "acme")
+    assert without.exit_code == 1
     assert "builtin.files" in without.stderr and "no header row with md, inc, azi" in without.stderr
     out = tmp_path / "b"
-    result = run_cli(site, "run", str(survey), "--input", str(report), "--out", str(out))
-    assert result.returncode == 0, result.stderr
+    result = cli(*args, str(out))
+    assert result.exit_code == 0, result.stderr
     table = pq.read_table(out / "trajectory.trajectory.parquet")
     assert column(table, "md").tolist() == [0.0, 30.48, 60.96]
     assert column(table, "inc").tolist() == [0.0, 2.5, 5.0]
@@ -307,12 +261,12 @@ def test_vendor_txt_reader_wins_over_the_builtin_csv_reader(site: Path, tmp_path
     assert well_of(table).well == "Acme-2"
 
 
-def test_a_failing_vendor_reader_is_named(site: Path, tmp_path: Path):
+def test_a_failing_vendor_reader_is_named(acme: ModuleType, cli: Cli, tmp_path: Path):
     report = tmp_path / "report.txt"
     report.write_text(REPORT.replace("100.0 2.5 47.5", "100.0 2.5"))
     survey = ROOT / "pipelines" / "survey.yaml"
-    result = run_cli(site, "run", str(survey), "--input", str(report), "--out", str(tmp_path / "o"))
-    assert result.returncode == 1
+    result = cli("run", str(survey), "--input", str(report), "--out", str(tmp_path / "o"))
+    assert result.exit_code == 1
     assert "Traceback" not in result.stderr
     assert "reader 'acme_survey' (plugin acme 0.1.0) failed: InputFileError:" in result.stderr
     assert f"{report}:6: expected three numbers, got '100.0 2.5'" in result.stderr

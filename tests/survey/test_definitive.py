@@ -15,14 +15,7 @@ import pipeline as gp
 from pipeline.earth.site import MagneticReference
 from pipeline.sim.plan import Section, WellPlan, build_path
 from pipeline.survey.definitive import RunStations, SurveyGapError, plan_sections, roles
-from pipeline.uncertainty import (
-    GYRO_PRESETS,
-    MWD_PRESETS,
-    Survey,
-    find_model,
-    gyro_terms,
-    mwd_terms,
-)
+from pipeline.uncertainty import ModelSite, Survey, find_model, model_terms
 from pipeline.uncertainty.model import propagate_nev
 from pipeline.uncertainty.terms import term_covariance, term_effects
 from tests_support import ROOT
@@ -103,11 +96,9 @@ def test_term_effects_are_what_term_covariance_propagates(model: str) -> None:
     inc = np.radians(np.clip((md - 200) / 10, 0, 50))
     azi = np.radians(40 + md / 50)
     survey = Survey.of(md, inc, azi, md * np.cos(inc))
-    terms = (
-        gyro_terms(GYRO_PRESETS[model], 61.25)
-        if model in GYRO_PRESETS
-        else mwd_terms(MWD_PRESETS[model], MagneticReference(**FIELD))
-    )
+    tool = find_model(model)
+    site = ModelSite(latitude=61.25, magnetic=MagneticReference(**FIELD))
+    terms = model_terms(tool, site)
     full, star = term_effects(survey, terms, basis="balanced_tangent", surface_tie=True)
     cov = propagate_nev(full, star, [t.mode for t in terms])
     np.testing.assert_allclose(cov, term_covariance(survey, terms)[1], rtol=0, atol=1e-12)

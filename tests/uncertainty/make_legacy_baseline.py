@@ -4,7 +4,9 @@ models became data files) gave for the test wells, so that the file-driven engin
 them (``test_toolmodel_files.py``).
 
 Kept for the record of how the snapshot was made; it is not run by the tests (running it
-against today's code would compare the engine with itself). Wells: ISCWSA test well #1 (the
+against today's code would compare the engine with itself), and it runs only at ``d175d07``:
+the ``GyroTool``/``gyro_covariance``/``mwd_covariance`` wrappers it calls were removed later
+(callers use :mod:`pipeline.uncertainty.engine`). Wells: ISCWSA test well #1 (the
 Rev 5 example workbook's survey; to MD 5100 m, the 60° hold, for the gyro models), a synthetic well that is vertical, builds through 90°
 to 95°, turns across north (azimuth 350° → 10°) and has a 0.5 m course, and (for a
 continuous run from a measured initial azimuth) a straight well at 30°.
@@ -21,11 +23,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pipeline.uncertainty.mwd import mwd_covariance
 
 from pipeline.earth.site import MagneticReference
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.uncertainty.gyro import GyroTool, gyro_covariance
-from pipeline.uncertainty.mwd import mwd_covariance
 from pipeline.uncertainty.terms import Survey
 
 DATA = Path(__file__).parent / "data"

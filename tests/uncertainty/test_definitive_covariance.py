@@ -27,7 +27,6 @@ and leaves the covariance inside the sampling error.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -40,7 +39,7 @@ from pipeline.earth.site import MagneticReference
 from pipeline.sim.plan import Section, WellPlan, build_path
 from pipeline.survey.interpolate import interpolate_md
 from pipeline.survey.mincurve import minimum_curvature
-from pipeline.uncertainty import GYRO_PRESETS, MWD_PRESETS, Survey, Term, gyro_terms, mwd_terms
+from pipeline.uncertainty import ModelSite, Survey, Term, configure, find_model, model_terms
 
 FloatArray = NDArray[np.float64]
 LAT = 61.25
@@ -64,14 +63,18 @@ def _stations(md: FloatArray) -> pa.Table:
     return build_path(PLAN).stations(md)
 
 
+def _magnetic(model: str) -> bool:
+    return "magnetic" in find_model(model).needs
+
+
 def _terms(model: str) -> list[Term]:
-    if model in GYRO_PRESETS:
-        return gyro_terms(GYRO_PRESETS[model], LAT)
-    return mwd_terms(replace(MWD_PRESETS[model], **MWD_TOOL), FIELD)
+    if _magnetic(model):
+        return model_terms(configure(model, MWD_TOOL), ModelSite(magnetic=FIELD))
+    return model_terms(find_model(model), ModelSite(latitude=LAT))
 
 
 def _predicted(top: str, bottom: str, **params: Any) -> pa.Table:
-    tool = {m: MWD_TOOL if m in MWD_PRESETS else {} for m in (top, bottom)}
+    tool = {m: MWD_TOOL if _magnetic(m) else {} for m in (top, bottom)}
     result = gp.definitive_survey(
         {"upper": _stations(GYRO_MD), "lower": _stations(MWD_MD)},
         run_options={

@@ -36,11 +36,14 @@ from pipeline.stages.uncertainty import (
 )
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations
-from pipeline.uncertainty.engine import find_model
-from pipeline.uncertainty.mwd import MwdTool, mwd_covariance, mwd_terms
+from pipeline.uncertainty.engine import configure, find_model, model_terms, term_covariances
+from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import WellMetadata
 
+RUN = SimpleNamespace(tool_models={})
+"""The provenance a stage reads its run's tool models from (here: no plugin's)."""
 DATA = Path(__file__).parent / "data"
 WORKBOOK = DATA / "iscwsa-well-1-mwdrev5.json"
 HPT = DATA / "iscwsa-well-1-hpt-diagnostics.dat"
@@ -87,14 +90,19 @@ def _workbook_cells(
     return np.asarray(ours), np.asarray(ref), labels
 
 
+def _mwd(
+    survey: Survey, field: MagneticReference, model: str | ToolModel, **options: Any
+) -> tuple[list[str], NDArray[np.float64]]:
+    """Per-term NEV covariance (m²) and term names of an MWD model at the site's field."""
+    return term_covariances(survey, model, ModelSite(magnetic=field), **options)
+
+
 def test_workbook_well_1_every_source_and_total() -> None:
     """Rev 5 example workbook: all 35 sources and the totals, six covariance elements, at
     MD 1200, 2100, 5100 and 8000 m (864 cells), with the workbook's conventions (balanced
     tangent Jacobian, Rev 5 surface tie-on, DEC-OH 0.20°)."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(
-        survey, field, "ISCWSA-MWD-REV5", basis="balanced_tangent", surface_tie=True
-    )
+    names, cov = _mwd(survey, field, "ISCWSA-MWD-REV5", basis="balanced_tangent", surface_tie=True)
     assert [*names, "TOTAL"] == data["vd"]["source"][:36]
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
     assert ref.size == 864
@@ -110,7 +118,7 @@ def test_workbook_well_1_with_exact_minimum_curvature() -> None:
     """The opt-in exact minimum-curvature Jacobian (instead of the standard's balanced
     tangent) stays within 0.46 % and 0.29 m² of the workbook at worst."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(survey, field, "ISCWSA-MWD-REV5", basis="min_curve")
+    names, cov = _mwd(survey, field, "ISCWSA-MWD-REV5", basis="min_curve")
     ours, ref, _ = _workbook_cells(data, survey, names, cov)
     diff = np.abs(ours - ref)
     assert np.all(diff <= _issue_tolerance(ref))
@@ -123,7 +131,7 @@ def test_rev5_11_differs_from_the_workbook_only_in_dec_oh() -> None:
     """Rev 5.11 (DEC-OH 0.21°) against the Rev 5 workbook (0.20°): DEC-OH is (0.21/0.20)²
     = 1.1025 times the workbook's, every other source unchanged."""
     data, survey, field = _well_1()
-    names, cov = mwd_covariance(
+    names, cov = _mwd(
         survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
     )
     ours, ref, labels = _workbook_cells(data, survey, names, cov)
@@ -153,7 +161,7 @@ def test_hpt_diagnostics_rev5_11() -> None:
     first station off vertical (1230 m: vertical-hole bias terms, XCLA rule) and in the
     second build (5130 m): every source and the total to its printed precision."""
     _, survey, field = _well_1()
-    names, cov = mwd_covariance(
+    names, cov = _mwd(
         survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
     )
     rows = _hpt_rows()
@@ -245,7 +253,11 @@ def test_sensor_weights_match_the_tool_forward_model(name: str) -> None:
     measured = per_sigma * np.stack((d_inc, d_azi * np.sin(inc)), axis=-1)
 
     field = MagneticReference(total_field=B_TOTAL, dip=DIP_DEG, declination=0.0)
-    term = next(t for t in mwd_terms(MwdTool(), field, g=G) if t.name == name)
+    term = next(
+        t
+        for t in model_terms(find_model("ISCWSA-MWD-REV5.11"), ModelSite(magnetic=field, g=G))
+        if t.name == name
+    )
     weight = term.weight(Survey.of(np.arange(inc.size) * 30.0, inc, azi, np.zeros(inc.size)))
     assert np.all(weight[:, 0] == 0.0)  # sensor errors leave MD alone
     sign = np.sign(np.sum(measured * weight[:, 1:]))
@@ -287,7 +299,9 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
         ref = we.survey.Survey(
             md=md, inc=inc_deg, azi=azi_deg, header=header, error_model="ISCWSA MWD Rev5.11"
         ).err.errors.errors
-    names, cov = mwd_covariance(survey, field, basis="balanced_tangent", surface_tie=True)
+    names, cov = _mwd(
+        survey, field, "ISCWSA-MWD-REV5.11", basis="balanced_tangent", surface_tie=True
+    )
     assert sorted(names) == sorted(ref)
     for k, name in enumerate(names):
         theirs = ref[name].cov_NEV
@@ -304,7 +318,7 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
 
 
 def _trajectory(md: Floats, inc: Floats, azi: Floats, north: str, well: WellMetadata) -> Any:
-    ctx: Any = SimpleNamespace(well=well)
+    ctx: Any = SimpleNamespace(well=well, provenance=RUN)
     stations: pa.Table = Stations.compiled().make_table(
         {"md": md, "inc": inc, "azi": azi}, north_reference=north
     )
@@ -326,7 +340,7 @@ def test_stage_mwd_model_matches_library(north: str, to_true: float) -> None:
     PositionUncertainty.validate_table(out)
     i, a = np.radians(inc), np.radians(azi + to_true)
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    _, cov = mwd_covariance(survey, field, MwdTool(amil=300.0))
+    _, cov = _mwd(survey, field, configure("ISCWSA-MWD-REV5.11", {"amil": 300.0}))
     total = cov.sum(axis=0)
     for name, (r, c) in COMPONENTS.items():
         np.testing.assert_allclose(out.column(f"cov_{name}").to_numpy(), total[:, r, c], rtol=1e-9)
@@ -345,7 +359,11 @@ def test_stage_mwd_field_from_wmm_at_the_wellhead() -> None:
     assert 59_000 < field.total_field < 60_500 and 77.5 < field.dip < 79.0  # ENGINEERING.md
     i, a = np.radians(inc), np.radians(np.full(md.size, 200.0))
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
-    total = mwd_covariance(survey, field, "ISCWSA-MWD-REV5")[1].sum(axis=0)
+    total = _mwd(
+        survey,
+        field,
+        "ISCWSA-MWD-REV5",
+    )[1].sum(axis=0)
     np.testing.assert_allclose(out["trajectory"].column("cov_ee").to_numpy(), total[:, 1, 1])
 
 

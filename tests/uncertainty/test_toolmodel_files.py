@@ -135,18 +135,3 @@ def test_model_files_reproduce_the_hand_coded_models(case: tuple[Any, ...]) -> N
     assert names == list(LEGACY[f"{key}|names"])
     _close(cov.sum(axis=0)[:, IU[0], IU[1]], LEGACY[f"{key}|total"])
     _close(cov[:, ::30][:, :, IU[0], IU[1]], LEGACY[f"{key}|terms"])
-
-
-def test_python_api_entry_points_read_the_files() -> None:
-    """``mwd_covariance``/``gyro_covariance`` with a tool dataclass give the snapshot too."""
-    w1, field = _well_1()
-    names, cov = pu.mwd_covariance(w1, field, pu.MwdTool(model="ISCWSA-MWD-REV5.11"))
-    _close(
-        cov.sum(axis=0)[:, IU[0], IU[1]],
-        LEGACY["well1|ISCWSA-MWD-REV5.11|balanced_tangent|1|total"],
-    )
-    tool = pu.GyroTool(continuous=True, init_sigma_azi=0.5)
-    names, cov = pu.gyro_covariance(SURVEYS["inclined"], LAT, tool)
-    key = "inclined|GYRO-NS-CT+init0.5|balanced_tangent|1"
-    assert names == list(LEGACY[f"{key}|names"])
-    _close(cov.sum(axis=0)[:, IU[0], IU[1]], LEGACY[f"{key}|total"])

@@ -21,19 +21,25 @@ from pipeline.stages.uncertainty import (
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations
 from pipeline.uncertainty import (
-    GyroTool,
+    ModelSite,
     Survey,
+    configure,
     ellipses,
-    gyro_covariance,
-    gyro_terms,
+    find_model,
     horizontal_scale,
+    model_terms,
     propagate,
     station_jacobians,
+    term_covariances,
     vertical_scale,
 )
+from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.well import WellMetadata
 
+RUN = SimpleNamespace(tool_models={})
+"""The provenance a stage reads its run's tool models from (here: no plugin's)."""
 LAT = 60.0
+SITE = ModelSite(latitude=LAT)
 
 
 def _profile(md: NDArray[np.float64], kickoff: float = 500.0) -> tuple[Any, Any]:
@@ -115,7 +121,7 @@ def test_monte_carlo_matches_propagated_covariance() -> None:
     inc_deg, azi_deg = _profile(md, kickoff=0.0)
     inc_deg = np.maximum(inc_deg, 5.0)  # keep A defined for the azimuth perturbation
     survey = _survey(md, inc_deg, azi_deg)
-    terms = gyro_terms(GyroTool(), LAT)
+    terms = model_terms(find_model("GYRO-NS"), SITE)
     e_dia = np.stack([t.sigma * t.weight(survey) for t in terms])
     modes = [t.mode for t in terms]
     cov = propagate(
@@ -170,7 +176,7 @@ def test_agreement_with_welleng(model: str) -> None:
             ref = we.survey.Survey(
                 md=md, inc=inc_deg, azi=azi_deg, header=header, error_model=model
             ).err.errors.errors
-        names, cov = gyro_covariance(survey, LAT, model, basis=basis, surface_tie=True)
+        names, cov = term_covariances(survey, model, SITE, basis=basis, surface_tie=True)
         if model == "GYRO-NS-CT":
             assert sorted(names) == sorted(ref)
             assert {"GXY-GD", "GXY-GRW", "GXY-B1S", "GXY-B2S"} <= set(names)
@@ -195,8 +201,8 @@ def test_continuous_drift_and_random_walk_coefficients() -> None:
     inc = np.where(md <= 90.0, 5.0, 40.0)
     inc[md == 300.0] = 10.0  # drops below the 15° gate: the accumulation restarts
     s = _survey(md, inc, np.full(md.size, 30.0))
-    tool = GyroTool(continuous=True, gxy_gd=1.0, gxy_grw=1.0, running_speed=1800.0)
-    terms = {t.name: t for t in gyro_terms(tool, LAT)}
+    tool = configure("GYRO-NS-CT", {"gxy_gd": 1.0, "gxy_grw": 1.0, "running_speed": 1800.0})
+    terms = {t.name: t for t in model_terms(tool, SITE)}
     gd = terms["GXY-GD"].weight(s)[:, 2] / np.sin(s.inc)
     grw = terms["GXY-GRW"].weight(s)[:, 2] / np.sin(s.inc)
     mean_sin = np.sin(np.radians((inc[1:] + inc[:-1]) / 2))
@@ -216,8 +222,8 @@ def test_measured_initial_error_replaces_the_stationary_gyro_terms() -> None:
     measured σ, drift and random walk from the first station."""
     md = np.arange(0.0, 301.0, 10.0)
     s = _survey(md, np.full(md.size, 30.0), np.full(md.size, 70.0))
-    tool = GyroTool(continuous=True, init_sigma_azi=2.0)
-    terms = {t.name: t for t in gyro_terms(tool, LAT)}
+    tool = with_initial_azimuth(find_model("GYRO-NS-CT"), 2.0)
+    terms = {t.name: t for t in model_terms(tool, SITE)}
     assert not any(n.startswith("GXY-B") or n in ("GXY-G4", "GXY-RN") for n in terms)
     init = terms["AZ-INIT"]
     assert init.mode == "systematic"
@@ -253,10 +259,10 @@ def test_ellipse_closed_forms() -> None:
 
 
 def test_measured_noise_sets_gxy_rn() -> None:
-    tool = GyroTool().with_measured_noise(sigma_azi_deg=0.5, latitude_deg=LAT)
+    tool = with_measured_noise(find_model("GYRO-NS"), sigma_azi_deg=0.5, latitude_deg=LAT)
     md = np.array([0.0, 30.0, 60.0])
     s = _survey(md, [20.0, 20.0, 20.0], [0.0, 0.0, 0.0])
-    rn = next(t for t in gyro_terms(tool, LAT) if t.name == "GXY-RN")
+    rn = next(t for t in model_terms(tool, SITE) if t.name == "GXY-RN")
     # A = 0: √(1 − sin²I)/cos I = 1, so the azimuth σ is the measured one at any I
     sigma_a = rn.sigma * rn.weight(s)[1, 2] / np.sin(s.inc[1])
     assert np.degrees(sigma_a) == pytest.approx(0.5)
@@ -274,11 +280,11 @@ def _stations(md: Any, inc: Any, azi: Any) -> pa.Table:
 def test_stage_outputs_contract_and_matches_library() -> None:
     md = np.arange(0.0, 1501.0, 30.0)
     inc, azi = _profile(md)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     out = position_uncertainty(traj, UncertaintyParams(confidence=0.95), ctx)["trajectory"]
     PositionUncertainty.validate_table(out)
-    _, cov = gyro_covariance(_survey(md, inc, azi), LAT)
+    _, cov = term_covariances(_survey(md, inc, azi), "GYRO-NS", SITE)
     total = cov.sum(axis=0)
     np.testing.assert_allclose(out.column("cov_nn").to_numpy(), total[:, 0, 0])
     np.testing.assert_allclose(out.column("cov_ev").to_numpy(), total[:, 1, 2])
@@ -289,21 +295,15 @@ def test_stage_outputs_contract_and_matches_library() -> None:
 def test_stage_gyro_ns_ct_with_tool_magnitudes() -> None:
     md = np.arange(0.0, 1501.0, 30.0)
     inc, azi = _profile(md, kickoff=0.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     params = UncertaintyParams(
         model="GYRO-NS-CT", init_sigma_azi=1.5, tool={"gxy_gd": 2.0, "running_speed": 3600.0}
     )
     out = position_uncertainty(traj, params, ctx)["trajectory"]
-    tool = GyroTool(
-        continuous=True,
-        sage=0.08,
-        noise_reduction=0.4082,
-        gxy_gd=2.0,
-        running_speed=3600.0,
-        init_sigma_azi=1.5,
-    )
-    _, cov = gyro_covariance(_survey(md, inc, azi), LAT, tool)
+    overrides = {"sage": 0.08, "noise_reduction": 0.4082, "gxy_gd": 2.0, "running_speed": 3600.0}
+    tool = with_initial_azimuth(configure("GYRO-NS-CT", overrides), 1.5)
+    _, cov = term_covariances(_survey(md, inc, azi), tool, SITE)
     np.testing.assert_allclose(out.column("cov_ee").to_numpy(), cov.sum(axis=0)[:, 1, 1])
     with pytest.raises(ValueError, match="unknown tool fields"):
         UncertaintyParams(model="GYRO-NS-CT", tool={"gxy_bogus": 1.0})
@@ -314,7 +314,7 @@ def test_stage_gyro_ns_ct_with_tool_magnitudes() -> None:
 def test_stage_ties_a_continuous_model_to_the_start_stops_sigma() -> None:
     md = np.arange(300.0, 1501.0, 30.0)
     inc, azi = _profile(md, kickoff=0.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     # the stop nearest the first station (300 m) is the run's tie
     stops = pa.table({"md": [1500.0, 300.2], "inc": [50.0, 30.0], "sigma_azi": [3.0, 0.7]})
@@ -354,7 +354,7 @@ def test_stage_ties_a_continuous_model_to_the_start_stops_sigma() -> None:
 
 def test_stage_needs_latitude() -> None:
     md = np.arange(0.0, 91.0, 30.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata())
+    ctx: Any = SimpleNamespace(well=WellMetadata(), provenance=RUN)
     traj = min_curve({"stations": _stations(md, [0, 1, 2, 3], [0, 0, 0, 0])}, MinCurveParams(), ctx)
     with pytest.raises(MissingSiteError, match="position_uncertainty stage's `latitude`"):
         position_uncertainty(traj, UncertaintyParams(), ctx)

@@ -20,6 +20,7 @@ from pipeline.api.frames import (
     well_of_data,
 )
 from pipeline.errors import ParameterError
+from pipeline.stages import toolmodels
 from pipeline.stages.clearance import offset_tables
 from pipeline.survey.stations import north_reference_of
 from pipeline.tables import Stations
@@ -65,7 +66,10 @@ def clearance(
         ref, ref_well, template = reference, well_of_data(reference).merged(given), reference
     if isinstance(offsets, str | Path):
         wells, stations = offset_tables(
-            Path(offsets), lambda p: reg.read(p, "stations", well=ref_well), ref_well
+            Path(offsets),
+            lambda p: reg.read(p, "stations", well=ref_well),
+            ref_well,
+            toolmodels.of_registry(reg),
         )
     else:
         wells, stations = _offsets(

@@ -165,8 +165,9 @@ def position_uncertainty(
     **params: Any,
 ) -> TableLike:
     """Position covariance (NEV, m²) and error ellipses of a trajectory by an ISCWSA error
-    model (``model``: ``GYRO-NS`` default, ``GYRO-NS-CT``, ``MWD-Rev5``…; ``confidence``;
-    ``latitude`` deg or the well's). ``stops``: compassed stops of a continuous survey."""
+    model (``model``: a tool model's name — shipped or an installed plugin's, as ``gyropipe
+    models`` lists them; default the stage's — or a model file; ``confidence``; ``latitude``
+    deg or the well's). ``stops``: compassed stops of a continuous survey."""
     inputs = {"trajectory": trajectory, "stops": stops}
     return _one("position_uncertainty", trajectory, inputs, params, well)
 

@@ -11,11 +11,10 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 
 import pyarrow as pa
 
-from pipeline.api import stages
 from pipeline.api.frames import TableLike, WellLike, to_frame, to_table, well_metadata
 from pipeline.contracts import TableContract
 from pipeline.graph import Plan, build_plan
-from pipeline.plugins import load_registry
+from pipeline.plugins import shared_registry
 from pipeline.registry import Registry
 from pipeline.runner import RunInputError, Source, run_plan
 from pipeline.spec import load_spec
@@ -72,7 +71,7 @@ def run(
     (inputs that do not fit it) or another :class:`~pipeline.errors.GyropipeError` (a run
     that failed: a malformed file, a broken contract, a stage that raised).
     """
-    registry = load_registry(disable) if disable else stages.registry()
+    registry = shared_registry(disable)
     overrides = [f"{key}={json.dumps(value)}" for key, value in (set or {}).items()]
     plan = build_plan(load_spec(pipeline, overrides), registry)
     return execute(plan, registry, inputs, well=well_metadata(well), out=out)

@@ -8,7 +8,6 @@ compute the same thing.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -18,17 +17,17 @@ from pydantic import ValidationError
 from pipeline.api.frames import TableLike, WellLike, to_table, well_metadata, well_of_data
 from pipeline.errors import ParameterError
 from pipeline.graph import PlannedStage
-from pipeline.plugins import load_registry
+from pipeline.plugins import shared_registry
 from pipeline.registry import Provenance, Registry, StageSetup
 from pipeline.runner import run_stage, start_time
 from pipeline.version import __version__
 from pipeline.well import WellMetadata, attach
 
 
-@cache
 def registry() -> Registry:
-    """The plugins installed (loaded once per process)."""
-    return load_registry()
+    """The plugins installed, loaded once per process
+    (:func:`~pipeline.plugins.shared_registry`)."""
+    return shared_registry()
 
 
 def call(
@@ -66,6 +65,7 @@ def call(
         inputs={},
         started=start_time(),
         stages=(StageSetup(uses, uses, reg.plugin_label(plugin), parsed.model_dump(mode="json")),),
+        tool_models=reg.tool_model_files(),
     )
     outs, files = run_stage(
         stage,

@@ -26,7 +26,7 @@ from pipeline.drift.tables import CalibrationResult
 from pipeline.errors import GyropipeError
 from pipeline.graph import Plan, build_plan
 from pipeline.lazy_pandas import defer_pandas
-from pipeline.plugins import load_registry
+from pipeline.plugins import shared_registry
 from pipeline.registry import Registry
 from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
 from pipeline.spec import load_spec
@@ -193,7 +193,7 @@ def _plan(ref: PipelineRef) -> tuple[Plan, Registry]:
     cached = _PLANS.get(key)
     if cached is not None and cached[0].digest == ref.sha256:
         return cached
-    registry = load_registry(ref.disabled)
+    registry = shared_registry(ref.disabled)
     plan = build_plan(load_spec(ref.file, list(ref.overrides)), registry)
     if plan.digest != ref.sha256:
         raise PipelineChanged(

@@ -30,6 +30,7 @@ from pipeline.reports.document import Block, Column, Paragraph, Plot, Section, T
 from pipeline.reports.literature import Citations
 from pipeline.reports.plots import series_colour
 from pipeline.reports.sections import error_model
+from pipeline.uncertainty.engine import ModelCatalogue
 from pipeline.well import WellMetadata
 
 T = TypeVar("T")
@@ -60,7 +61,7 @@ class Parts:
         return self.citations.cite(work)
 
     def error_model(self, name: str) -> tuple[str, bool]:
-        return error_model(name)
+        return error_model(name, ModelCatalogue.of(self.provenance.tool_models))
 
     def methods(self) -> list[tuple[str, str]]:
         """(label, statement) of the run's stages that state their method, the first stage

@@ -24,7 +24,7 @@ from pipeline.reports.document import (
     fmt,
     items,
 )
-from pipeline.uncertainty.engine import find_model
+from pipeline.uncertainty.engine import ModelCatalogue, find_model
 from pipeline.well import WellMetadata
 
 NORTH_NAMES = {"true": "true north", "grid": "grid north", "magnetic": "magnetic north"}
@@ -103,11 +103,11 @@ def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[st
     )
 
 
-def error_model(model: str) -> tuple[str, bool]:
+def error_model(model: str, catalogue: ModelCatalogue) -> tuple[str, bool]:
     """The title a tool model's file gives it (the name if the file cannot be found now) and
     whether it is a gyro model (it reads the latitude)."""
     try:
-        tool = find_model(model)
+        tool = find_model(model, catalogue)
     except (KeyError, GyropipeError):
         return Path(model).name, False
     return tool.title or tool.name, "latitude" in tool.needs

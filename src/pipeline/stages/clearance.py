@@ -3,6 +3,7 @@ and the ``clearance`` stage (ISCWSA separation factor of a reference well agains
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -10,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.anticollision.models import (
     ModelSite,
@@ -26,10 +27,12 @@ from pipeline.errors import EmptyTableError, InputFileError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, pipeline_input
 from pipeline.runner import sha256_file
+from pipeline.stages import toolmodels
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import Stations
+from pipeline.uncertainty.engine import ModelCatalogue
 from pipeline.well import WellMetadata
 
 STAGE = "clearance"
@@ -41,9 +44,8 @@ class ClearanceParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     reference_model: str = Field(
         "GYRO-NS",
-        description="tool model of the reference survey: a gyro or MWD preset (GYRO-NS, "
-        "GYRO-NS-CT, ISCWSA-MWD-REV5, ISCWSA-MWD-REV5.11) or a tool-model file's name "
-        "(ISCWSA-MWD-REV4)",
+        description="tool model of the reference survey: the name of a tool model "
+        "(`gyropipe models` lists the shipped ones and those plugins add)",
     )
     reference_hole_diameter: float = Field(
         gt=0, description="hole or casing diameter of the reference well, m"
@@ -63,8 +65,14 @@ class ClearanceParams(BaseModel):
     )
 
     @model_validator(mode="after")
-    def _consistent(self) -> ClearanceParams:
-        self.reference_model = resolve_model(self.reference_model)
+    def _consistent(self, info: ValidationInfo) -> ClearanceParams:
+        try:
+            self.reference_model = resolve_model(self.reference_model, toolmodels.validating(info))
+        except ValueError as exc:
+            raise ValueError(
+                toolmodels.disabled_message(self.reference_model, toolmodels.registry_of(info))
+                or exc
+            ) from None
         if self.caution < self.stop:
             raise ValueError(f"caution ({self.caution}) must not be below stop ({self.stop})")
         return self
@@ -86,19 +94,25 @@ def read_offsets(
     def read(path: Path) -> tuple[pa.Table, WellMetadata]:
         return ctx.read_file(path, "stations", reader=params.reader)
 
-    wells, stations = offset_tables(ctx.input_path(params.input), read, ctx.well)
+    wells, stations = offset_tables(
+        ctx.input_path(params.input), read, ctx.well, toolmodels.of_run(ctx)
+    )
     return {"wells": wells, "stations": stations}
 
 
 def offset_tables(
-    manifest: Path, read: Callable[[Path], tuple[pa.Table, WellMetadata]], well: WellMetadata
+    manifest: Path,
+    read: Callable[[Path], tuple[pa.Table, WellMetadata]],
+    well: WellMetadata,
+    catalogue: ModelCatalogue,
 ) -> tuple[pa.Table, pa.Table]:
-    """The offset wells a manifest lists (:mod:`pipeline.io.offset_manifest`) and their
-    stations, read by ``read``, every azimuth referred to the first file's north (each
-    file's own header, else ``well``, gives the corrections)."""
+    """The offset wells a manifest lists (:mod:`pipeline.io.offset_manifest`; their tool
+    models among ``catalogue``'s) and their stations, read by ``read``, every azimuth
+    referred to the first file's north (each file's own header, else ``well``, gives the
+    corrections)."""
     from pipeline.io.offset_manifest import read_offset_manifest
 
-    entries = read_offset_manifest(manifest, resolve_model)
+    entries = read_offset_manifest(manifest, functools.partial(resolve_model, catalogue=catalogue))
     tables = []
     north: str | None = None
     for entry in entries:
@@ -146,12 +160,14 @@ def offset_tables(
     return wells, stations
 
 
-def _site(params: ClearanceParams, well: WellMetadata, models: set[str]) -> ModelSite:
+def _site(
+    params: ClearanceParams, well: WellMetadata, models: set[str], catalogue: ModelCatalogue
+) -> ModelSite:
     """What the models in use need of the site, from the params or the well metadata."""
     from pipeline.earth.site import resolve_site
 
     latitude = None
-    wanted = frozenset().union(*(needs(m) for m in models))
+    wanted = frozenset().union(*(needs(m, catalogue) for m in models))
     if "latitude" in wanted:
         latitude = resolve_site(well, stage=STAGE, latitude=params.latitude).latitude
     magnetic = params.magnetic
@@ -170,8 +186,15 @@ class _Frame:
     """The scan's frame: the reference's north; azimuths to true for the models and the
     models' true-north covariances rotated into the frame."""
 
-    def __init__(self, north: str, well: WellMetadata, magnetic: MagneticReference | None):
+    def __init__(
+        self,
+        north: str,
+        well: WellMetadata,
+        magnetic: MagneticReference | None,
+        catalogue: ModelCatalogue,
+    ):
         self.north = north
+        self.catalogue = catalogue
         self.convergence = well.grid_convergence
         self.declination = (
             well.declination
@@ -199,7 +222,7 @@ class _Frame:
         site: ModelSite,
     ) -> np.ndarray:
         """The model's covariance (frame azimuths in rad) in the frame."""
-        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site)
+        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site, self.catalogue)
         c, s = np.cos(self.delta), np.sin(self.delta)
         rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
         out: np.ndarray = rot @ cov @ rot.T
@@ -233,12 +256,13 @@ def clearance(
     for name, table in (("reference", reference), ("offsets", stations), ("wells", wells)):
         if table.num_rows == 0:
             raise EmptyTableError(name, "no wells to scan")
+    catalogue = toolmodels.of_run(ctx)
     listed = wells.to_pylist()
     for w in listed:
-        w["model"] = resolve_model(w["model"])
+        w["model"] = resolve_model(w["model"], catalogue)
     models = {params.reference_model, *(w["model"] for w in listed)}
-    site = _site(params, ctx.well, models)
-    frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic)
+    site = _site(params, ctx.well, models, catalogue)
+    frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
     ref = _well(
         "reference",
         reference,

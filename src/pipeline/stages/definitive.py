@@ -11,7 +11,7 @@ from typing import Any, Literal
 
 import numpy as np
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, model_validator
 
 from pipeline.contracts import SOURCE_KEY, TableContract, column
 from pipeline.earth.site import MagneticReference, resolve_site
@@ -20,6 +20,7 @@ from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
+from pipeline.stages import toolmodels
 from pipeline.stages.uncertainty import (
     PositionUncertainty,
     UncertaintyParams,
@@ -38,10 +39,11 @@ from pipeline.survey.stations import (
     survey_offsets,
 )
 from pipeline.tables import DLS_COURSE_M, Stations
-from pipeline.uncertainty.engine import configure
-from pipeline.uncertainty.quantities import ModelSite, Quantities
+from pipeline.uncertainty.engine import configure, model_terms
+from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
-from pipeline.uncertainty.terms import Survey, Term
+from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import NorthReference, WellMetadata
 
 MAX_RUNS = 6
@@ -112,9 +114,11 @@ class RunSpec(BaseModel):
     md_to: float | None = Field(None, description="use the run down to this MD, m")
 
     @model_validator(mode="after")
-    def _valid(self) -> RunSpec:
+    def _valid(self, info: ValidationInfo) -> RunSpec:
         try:  # the model exists and has the tool fields
-            UncertaintyParams(model=self.model, tool=self.tool)
+            UncertaintyParams.model_validate(
+                {"model": self.model, "tool": self.tool}, context=info.context
+            )
         except ValidationError as exc:
             raise ValueError(exc.errors()[0]["msg"].removeprefix("Value error, ")) from None
         if self.md_from is not None and self.md_to is not None and self.md_to <= self.md_from:
@@ -201,10 +205,11 @@ def definitive_survey(
         raise ValueError(f"runs {missing} are configured but their ports are not wired")
     ports = [p for p in RUN_PORTS if p in inputs]
     north = params.north_reference or north_reference_of(inputs[ports[0]], "azi")
-    magnetic = _magnetic(params, ctx.well, [inputs[p] for p in ports], ports)
-    runs = [
-        _read(p, inputs[p], params.runs.get(p, RunSpec()), north, magnetic, ctx.well) for p in ports
-    ]
+    specs = {p: params.runs.get(p, RunSpec()) for p in ports}
+    catalogue = toolmodels.of_run(ctx)
+    tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
+    magnetic = _magnetic(params, tools, ctx.well, [inputs[p] for p in ports])
+    runs = [_read(p, inputs[p], specs[p], north, magnetic, ctx.well) for p in ports]
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ValueError(f"run names must differ; got {names}")
@@ -213,7 +218,7 @@ def definitive_survey(
     ]
     sections = plan_sections(stations, params.overlap, params.min_length)
     site = ModelSite(magnetic=magnetic)
-    if any("latitude" in configure(r.spec.model, r.spec.tool).needs for r in runs):
+    if any("latitude" in tool.needs for tool in tools.values()):
         site = replace(
             site,
             latitude=resolve_site(
@@ -235,7 +240,7 @@ def definitive_survey(
         survey = Survey.of(md, inc, azi_true, pos.tvd)
         nxt = sections[s + 1].tie_md if s + 1 < len(sections) else None
         cov, carried_next = section_covariance(
-            Section(run.name, survey, _terms(run.spec, site)),
+            Section(run.name, survey, model_terms(tools[run.port], site)),
             carried,
             basis=params.basis,
             surface_tie=params.surface_tie and s == 0,
@@ -298,21 +303,19 @@ def _read(
 
 
 def _magnetic(
-    params: DefinitiveParams, well: WellMetadata, tables: list[pa.Table], ports: list[str]
+    params: DefinitiveParams,
+    tools: Mapping[str, ToolModel],
+    well: WellMetadata,
+    tables: list[pa.Table],
 ) -> MagneticReference | None:
-    """The geomagnetic reference when an MWD model or a magnetic azimuth needs it."""
-    needed = any(
-        "magnetic" in configure(s.model, s.tool).needs for s in params.runs.values()
-    ) or any("magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables)
+    """The geomagnetic reference when an MWD model (``tools``: each run's) or a magnetic
+    azimuth needs it."""
+    needed = any("magnetic" in tool.needs for tool in tools.values()) or any(
+        "magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables
+    )
     if params.magnetic is not None or not needed:
         return params.magnetic
     return wellhead_field(well)
-
-
-def _terms(spec: RunSpec, site: ModelSite) -> list[Term]:
-    """The error terms of a run's model with its tool overrides, at the site."""
-    tool = configure(spec.model, spec.tool)
-    return tool.terms_for(lambda s: Quantities(s, site, tool.parameters, tool.name))
 
 
 def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: str) -> pa.Table:

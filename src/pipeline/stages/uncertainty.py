@@ -9,7 +9,7 @@ from typing import Literal
 
 import numpy as np
 import pyarrow as pa
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.contracts import column
 from pipeline.earth.geomagnetic import reference_field
@@ -18,6 +18,7 @@ from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
+from pipeline.stages import toolmodels
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
@@ -69,10 +70,9 @@ class UncertaintyParams(BaseModel):
     model_config = ConfigDict(extra="forbid")
     model: str = Field(
         "GYRO-NS",
-        description="error model: the name of a tool model (`gyropipe models` lists them: "
-        "ISCWSA-MWD-REV4, ISCWSA-MWD-REV5, ISCWSA-MWD-REV5.11, GYRO-NS, GYRO-NS-noXCL, "
-        "GYRO-NS-CT, GYRO-MWD and those plugins add) or the path of a tool-model file "
-        "(.yaml, docs/tool-models.md)",
+        description="error model: the name of a tool model (`gyropipe models` lists the "
+        "shipped ones and those plugins add) or the path of a tool-model file (.yaml, "
+        "docs/tool-models.md)",
     )
     confidence: float = Field(
         0.95, gt=0, lt=1, description="probability content of the *_conf ellipse columns"
@@ -107,9 +107,10 @@ class UncertaintyParams(BaseModel):
     init_sigma_azi: float | None = Field(
         None,
         ge=0,
-        description="continuous models (GYRO-NS-CT): measured 1σ azimuth of the stop the "
-        "continuous run starts from (the compass stage's sigma_azi), deg; replaces the "
-        "stationary gyro terms and starts the continuous section at the first station",
+        description="continuous models (those with a static end inclination): measured 1σ "
+        "azimuth of the stop the continuous run starts from (the compass stage's sigma_azi), "
+        "deg; replaces the stationary gyro terms and starts the continuous section at the "
+        "first station",
     )
     tool: dict[str, float] = Field(
         default_factory=dict,
@@ -120,12 +121,11 @@ class UncertaintyParams(BaseModel):
     )
 
     @model_validator(mode="after")
-    def _model_and_fields(self) -> UncertaintyParams:
+    def _model_and_fields(self, info: ValidationInfo) -> UncertaintyParams:
         try:
-            tool = configure(self.model, self.tool)
-        except KeyError as exc:  # an unknown model, term or parameter
-            what = "unknown tool fields" if self.tool else "unknown model"
-            raise ValueError(f"{what}: {exc.args[0]}") from None
+            tool = configure(toolmodels.find(self.model, info), self.tool)
+        except KeyError as exc:  # an unknown term or parameter
+            raise ValueError(f"unknown tool fields: {exc.args[0]}") from None
         gyro_only = [
             name
             for name in ("latitude", "measured_sigma_azi", "init_sigma_azi")
@@ -146,7 +146,7 @@ def position_uncertainty(
     """Trajectory → trajectory with NEV covariance and error ellipses per station."""
     table = inputs["trajectory"]
     azi_deg = table.column("azi").to_numpy()
-    tool = configure(params.model, params.tool)
+    tool = configure(params.model, params.tool, toolmodels.of_run(ctx))
     site = ModelSite()
     if "magnetic" in tool.needs:
         magnetic = params.magnetic or wellhead_field(ctx.well)
@@ -253,9 +253,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
         StageDef(
             name="position_uncertainty",
             func=position_uncertainty,
-            description="Propagate an ISCWSA/OWSG error model (a tool-model file: MWD Rev 4 "
-            "and Rev 5, GYRO-NS, GYRO-NS-CT, GYRO-MWD or a vendor's) into NEV covariance and "
-            "error ellipses per station.",
+            description="Propagate an ISCWSA/OWSG error model (a tool-model file, shipped "
+            "or a vendor's) into NEV covariance and error ellipses per station.",
             inputs={"trajectory": Trajectory, "stops": CompassStations},
             optional_inputs=frozenset({"stops"}),
             outputs={"trajectory": PositionUncertainty},
@@ -270,7 +269,7 @@ def uncertainty_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL
 
     confidence = float(stage.params.get("confidence", 0.0)) * 100
-    title, gyro = ctx.error_model(str(stage.params.get("model", "GYRO-NS")))
+    title, gyro = ctx.error_model(str(stage.params["model"]))
     method = f"{title} error model propagated as in {ctx.cite(ERROR_MODEL)}"
     also = f" with the gyro terms of {ctx.cite(GYRO_ERROR_MODEL)}" if gyro else ""
     return MethodNote("Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %")

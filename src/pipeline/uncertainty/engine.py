@@ -1,9 +1,10 @@
 """One engine for every tool model: find a model (by name, file or object) and evaluate it
 into NEV position covariance.
 
-Models are found, by name (case-insensitive), among the files shipped in
-``pipeline/uncertainty/models/`` and those plugins register
-(``gyropipe_register_tool_models``), or read from a file path. A file may ``extend`` any
+Models are found, by name (case-insensitive), in a :class:`ModelCatalogue`: the files shipped
+in ``pipeline/uncertainty/models/`` and those it is given — the files plugins register
+(``gyropipe_register_tool_models``), which the registry of the run hands down (the domain
+never loads plugins). A model may also be read from a file path; a file may ``extend`` any
 model found so.
 """
 
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -18,16 +20,19 @@ from numpy.typing import NDArray
 
 from pipeline.errors import GyropipeError, Location, Problem, ToolModelError, did_you_mean
 from pipeline.uncertainty.quantities import MissingSiteQuantity, ModelSite, Quantities
-from pipeline.uncertainty.terms import Survey, term_covariance
+from pipeline.uncertainty.terms import Survey, Term, term_covariance
 from pipeline.uncertainty.toolmodel import ToolModel, read_tool_model
 
 __all__ = [
     "MODELS_DIR",
+    "SHIPPED",
+    "ModelCatalogue",
     "SurveyValueError",
     "configure",
     "covariance",
     "find_model",
     "model_files",
+    "model_terms",
     "term_covariances",
     "term_for",
 ]
@@ -57,26 +62,36 @@ def _declared_name(path: Path) -> str:
     return str(data["name"])
 
 
-@functools.cache
-def _plugin_files() -> dict[str, Path]:
-    """Model files registered by plugins, by name; loaded on first need."""
-    from pipeline.plugins import load_registry
+@dataclass(frozen=True)
+class ModelCatalogue:
+    """The tool models a name can select: the shipped files and ``added`` ones (name, file)
+    — the files the run's plugins registered; a shipped name wins. Build it with
+    :meth:`of`; :data:`SHIPPED` holds the shipped files alone."""
 
-    registry = load_registry()
-    return {name: Path(d.path) for name, (d, _) in registry.tool_models.items()}
+    added: tuple[tuple[str, Path], ...] = ()
+
+    @classmethod
+    def of(cls, files: Mapping[str, Path]) -> ModelCatalogue:
+        """The shipped models and the model files ``files`` (name → YAML file)."""
+        return cls(tuple(sorted((name, Path(path)) for name, path in files.items())))
+
+    def files(self) -> dict[str, Path]:
+        """Every model found by name → its file: shipped files, then the added ones."""
+        shipped = _shipped()
+        taken = {name.upper() for name in shipped}
+        return {**shipped, **{n: p for n, p in self.added if n.upper() not in taken}}
 
 
-def model_files(*, plugins: bool = True) -> dict[str, Path]:
-    """Every model found by name: shipped files, then plugins' (a shipped name wins)."""
-    shipped = _shipped()
-    taken = {name.upper() for name in shipped}
-    found = dict(shipped)
-    if plugins:
-        found.update((n, p) for n, p in _plugin_files().items() if n.upper() not in taken)
-    return found
+SHIPPED = ModelCatalogue()
+"""The shipped tool models only (what a caller without a registry finds)."""
 
 
-def _named(files: dict[str, Path], key: str) -> Path | None:
+def model_files(catalogue: ModelCatalogue = SHIPPED) -> dict[str, Path]:
+    """Every model ``catalogue`` finds by name → its file (a shipped name wins)."""
+    return catalogue.files()
+
+
+def _named(files: Mapping[str, Path], key: str) -> Path | None:
     """The file of the model called ``key`` (case-insensitive), if any."""
     return next((p for n, p in files.items() if n.upper() == key.upper()), None)
 
@@ -85,25 +100,26 @@ _READING: list[Path] = []
 """Files being read (outermost first): a file met again extends itself."""
 
 
-def _read(path: Path) -> ToolModel:
-    """The model of a file, read once per version of it (path, size and mtime)."""
+def _read(path: Path, catalogue: ModelCatalogue) -> ToolModel:
+    """The model of a file, read once per version of it (path, size and mtime) and
+    catalogue its ``extends:`` is resolved in."""
     try:
         stat = path.stat()
-    except OSError:
-        return read_tool_model(path, base=_base)  # reports the file as unreadable
+    except OSError:  # reports the file as unreadable
+        return read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
     _READING.append(path)
     try:
-        return _read_version(path, stat.st_size, stat.st_mtime_ns)
+        return _read_version(path, stat.st_size, stat.st_mtime_ns, catalogue)
     finally:
         _READING.pop()
 
 
 @functools.lru_cache(maxsize=256)
-def _read_version(path: Path, size: int, mtime_ns: int) -> ToolModel:
-    return read_tool_model(path, base=_base)
+def _read_version(path: Path, size: int, mtime_ns: int, catalogue: ModelCatalogue) -> ToolModel:
+    return read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
 
 
-def _base(name: str, where: Location) -> ToolModel:
+def _base(name: str, where: Location, *, catalogue: ModelCatalogue) -> ToolModel:
     """The model an ``extends:`` names, found as :func:`find_model` finds one (a relative
     file path is relative to the extending file)."""
     path = Path(name)
@@ -114,13 +130,13 @@ def _base(name: str, where: Location) -> ToolModel:
         chain = " → ".join(p.name for p in _READING)
         raise ToolModelError([Problem(where, f"{name} extends itself ({chain} → {path.name})")])
     try:
-        return find_model(name)
+        return find_model(name, catalogue)
     except KeyError as exc:
         raise ToolModelError([Problem(where, str(exc.args[0]))]) from None
 
 
-def find_model(model: str | Path | ToolModel) -> ToolModel:
-    """A tool model by name (shipped or plugin-registered, case-insensitive), by file path
+def find_model(model: str | Path | ToolModel, catalogue: ModelCatalogue = SHIPPED) -> ToolModel:
+    """A tool model by name (in ``catalogue``, case-insensitive: shipped first), by file path
     (``.yaml``/``.yml``), or as given. An unknown name is a ``KeyError`` listing the known
     ones; a bad file a :class:`~pipeline.errors.ToolModelError`."""
     if isinstance(model, ToolModel):
@@ -128,22 +144,27 @@ def find_model(model: str | Path | ToolModel) -> ToolModel:
     key = str(model)
     shipped = _named(_shipped(), key)
     if shipped is not None:
-        return _read(shipped)
+        return _read(shipped, SHIPPED)  # shipped files extend shipped models only
     path = Path(model)
     if path.suffix.lower() in (".yaml", ".yml") or path.is_file():
         if not path.is_file():
             raise ToolModelError([Problem(Location(str(path)), "no such tool-model file")])
-        return _read(path.resolve())
-    plugin = _named(_plugin_files(), key)
-    if plugin is not None:
-        return _read(plugin.resolve())
-    known = sorted(model_files(), key=str.upper)
+        return _read(path.resolve(), catalogue)
+    added = _named(dict(catalogue.added), key)
+    if added is not None:
+        return _read(added.resolve(), catalogue)
+    known = sorted(catalogue.files(), key=str.upper)
     close = did_you_mean(key.upper(), [k.upper() for k in known])
     for name in known:  # say the names as their files write them
         close = close.replace(f"'{name.upper()}'", f"'{name}'")
     raise KeyError(
         f"unknown tool model {key!r}{close} (known: {', '.join(known)}; or give a .yaml file)"
     )
+
+
+def model_terms(model: ToolModel, site: ModelSite) -> list[Term]:
+    """The terms of a model at a site, magnitudes in SI (m, rad, rad/h…), in the file's order."""
+    return model.terms_for(lambda s: Quantities(s, site, model.parameters, model.name))
 
 
 def term_covariances(
@@ -154,8 +175,9 @@ def term_covariances(
     basis: str = "balanced_tangent",
     surface_tie: bool = True,
 ) -> tuple[list[str], FloatArray]:
-    """Per-term NEV covariance (m, n, 3, 3) (m²) of a survey under a tool model, and the term
-    names. ``survey`` azimuths are true (rad); ``site`` gives what the model needs
+    """Per-term NEV covariance (m, n, 3, 3) (m²) of a survey under a tool model (a
+    :class:`ToolModel`, or a shipped model's name or a file, :func:`find_model`), and the
+    term names. ``survey`` azimuths are true (rad); ``site`` gives what the model needs
     (:attr:`ToolModel.needs`: latitude, geomagnetic field); ``basis`` and ``surface_tie`` as
     in :func:`pipeline.uncertainty.model.station_jacobians` (the ISCWSA conventions by
     default)."""
@@ -210,11 +232,16 @@ def covariance(
 PARAMETER_ALIASES = {"xcl_tortuosity": "tortuosity"}
 
 
-def configure(model: str | Path | ToolModel, overrides: Mapping[str, float]) -> ToolModel:
-    """A model with ``overrides``: term magnitudes (by term name, or a field name such as
-    ``gxy_gd``, :func:`term_for`) and parameters (by name), each in the unit its file gives
-    it. An unknown key is a ``KeyError`` naming the model's terms."""
-    tool = find_model(model)
+def configure(
+    model: str | Path | ToolModel,
+    overrides: Mapping[str, float],
+    catalogue: ModelCatalogue = SHIPPED,
+) -> ToolModel:
+    """A model (found in ``catalogue``, :func:`find_model`) with ``overrides``: term
+    magnitudes (by term name, or a field name such as ``gxy_gd``, :func:`term_for`) and
+    parameters (by name), each in the unit its file gives it. An unknown key is a
+    ``KeyError`` naming the model's terms."""
+    tool = find_model(model, catalogue)
     magnitudes: dict[str, float] = {}
     params: dict[str, float] = {}
     for key, value in overrides.items():
