@@ -41,7 +41,6 @@ from pipeline.registry import (
     WriterDef,
 )
 from pipeline.streams import Port, TableStream, as_stream, as_table
-from pipeline.tables import AcceptanceGates
 from pipeline.version import __version__
 from pipeline.well import WellMetadata, well_of
 
@@ -66,7 +65,8 @@ class StageRecord:
     rows_out: dict[str, int] = field(default_factory=dict)
     status: str = "pending"
     acceptance: list[dict[str, Any]] = field(default_factory=list)
-    """the rows of its :class:`~pipeline.tables.AcceptanceGates` outputs"""
+    """the rows of its outputs that decide the run's acceptance
+    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`)"""
 
 
 @dataclass
@@ -571,16 +571,20 @@ def _manifest(
 
 
 def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[str, Any]]:
-    """The gates of a stage's :class:`AcceptanceGates` outputs, as ``run.json`` records them
-    (a value that is not a number, a gate not evaluated, as null)."""
+    """The gates of a stage's outputs whose contract decides the run's acceptance
+    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`), as ``run.json`` records
+    them: the contract's columns, a number that is not finite (a gate not evaluated) as null."""
     rows = []
     for port, table in tables.items():
-        if issubclass(st.definition.outputs[port], AcceptanceGates):
-            names = [c.name for c in AcceptanceGates.compiled().columns]
+        contract = st.definition.outputs[port]
+        if contract.decides_acceptance:
+            names = [c.name for c in contract.compiled().columns]
             for row in table.select(names).to_pylist():
-                value = row["value"]
-                row["value"] = value if value is not None and math.isfinite(value) else None
-                rows.append({"stage": st.id, "port": port, **row})
+                finite = {
+                    k: None if isinstance(v, float) and not math.isfinite(v) else v
+                    for k, v in row.items()
+                }
+                rows.append({"stage": st.id, "port": port, **finite})
     return rows
 
 
