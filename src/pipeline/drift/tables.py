@@ -51,7 +51,7 @@ class CalibrationResult(TableContract):
     """Drift-rate estimates of each calibrated instrument, one row per estimate; the
     instrument's linearity test is repeated on each of its rows. ``selected`` marks the
     estimate that drift correction uses by default. A batch's ledger records, per well, the
-    calibration results a run used (:meth:`ledger_entry`)."""
+    calibration results a run used."""
 
     in_ledger: ClassVar[bool] = True
 

@@ -40,7 +40,7 @@ from pipeline.uncertainty.engine import configure
 from pipeline.uncertainty.quantities import ModelSite, Quantities
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
 from pipeline.uncertainty.terms import Survey, Term
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import Latitude, NorthReference, WellMetadata
 
 MAX_RUNS = 6
 RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
@@ -144,8 +144,8 @@ class DefinitiveParams(BaseModel):
     north_reference: NorthReference | None = Field(
         None, description="azimuths of the survey (default: the first run's)"
     )
-    latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="latitude, deg (gyro models); default: the well's"
+    latitude: Latitude | None = Field(
+        None, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
         None, description="geomagnetic reference (MWD models, magnetic azimuths); default WMM"
@@ -215,7 +215,7 @@ def definitive_survey(
         site = replace(
             site,
             latitude=resolve_site(
-                ctx.well, stage="definitive_survey", latitude=params.latitude
+                ctx.well, stage="definitive_survey", latitude=params.latitude, north_seeking=True
             ).latitude,
         )
     parts: list[dict[str, Any]] = []

@@ -34,6 +34,7 @@ def well_of_simulation(spec: SimulationSpec) -> WellMetadata:
         elevation=spec.site.elevation,
         survey_date=spec.site.date,
         tool_type=f"simulated {spec.tool.preset}",
+        tool_preset=spec.tool.preset,
         north_reference="true",
     )
 
