@@ -111,7 +111,18 @@ class StageContext(Protocol):
     def stage_id(self) -> str: ...
 
     @property
-    def well(self) -> WellMetadata: ...
+    def well(self) -> WellMetadata:
+        """The run's well metadata as it stands: the pipeline's, updated by the stages before
+        this one (:meth:`update_well`), under the run's overrides."""
+        ...
+
+    def update_well(self, found: WellMetadata) -> None:
+        """Report well metadata the stage found or established (a simulation plan's site, the
+        north reference its azimuths were converted to): every field set in ``found`` enters
+        the run's well, under the run's overrides, for the stages after this one and
+        ``run.json``. The header of a pipeline input read by :meth:`read_input` or
+        :meth:`read_input_stream` is reported by the engine."""
+        ...
 
     @property
     def provenance(self) -> Provenance:

@@ -96,6 +96,11 @@ class _Context:
     staging: Path
     staged: list[Path]
     provenance: Provenance
+    found: list[WellMetadata] = field(default_factory=list)
+    """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
+
+    def update_well(self, found: WellMetadata) -> None:
+        self.found.append(found)
 
     def input_path(self, name: str) -> Path:
         given = self.inputs[name]
@@ -113,8 +118,11 @@ class _Context:
     ) -> tuple[pa.Table, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
-            return given, well_of(given) or WellMetadata()
+            header = well_of(given) or WellMetadata()
+            self.update_well(header)
+            return given, header
         table, header = self.read_file(given, kind, reader=reader, options=options)
+        self.update_well(header)
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
@@ -128,10 +136,13 @@ class _Context:
     ) -> tuple[TableStream, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
-            return TableStream.from_table(given), well_of(given) or WellMetadata()
+            header = well_of(given) or WellMetadata()
+            self.update_well(header)
+            return TableStream.from_table(given), header
         stream, header = self.registry.read_stream(
             given, kind, reader=reader, options=options, well=self.well
         )
+        self.update_well(header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
 
@@ -176,7 +187,10 @@ def run_plan(
     out_dir: Path | None,
     well: WellMetadata | None = None,
 ) -> RunResult:
-    """Run ``plan`` for one well. ``well`` overrides metadata from the pipeline and files.
+    """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
+    what the stages report (the headers of the inputs they read, a simulation's site:
+    :meth:`~pipeline.registry.StageContext.update_well`), under ``well`` (overrides); each
+    stage gets it as it stands (``ctx.well``), ``run.json`` records it at the end.
 
     With ``out_dir``, the run's files (stage outputs, persisted tables, ``run.json``) are
     written into a private staging directory beside it, and ``out_dir`` is replaced by it in
@@ -215,10 +229,9 @@ def run_plan(
             _check_ports(plan, st, tables, "output")
             record.rows_out.update({p: t.num_rows for p, t in tables.items()})
             record.acceptance = _acceptance(st, tables)
+            for header in ctx.found:
+                from_files = from_files.merged(header)
             for port, value in outs.items():
-                header = well_of(value.schema)
-                if header is not None:
-                    from_files = from_files.merged(header)
                 if isinstance(value, TableStream):
                     value = _produced(plan, st, port, value, registry, record)
                 ports[(st.id, port)] = value
