@@ -106,6 +106,19 @@ class TableContract(BaseModel):
 
     group_by: ClassVar[str | None] = None
     """Column whose equal values delimit independent groups (e.g. many surveys per table)."""
+    decides_acceptance: ClassVar[bool] = False
+    """Its rows are gates that decide a run's acceptance, each with a ``status`` (``pass``,
+    ``fail`` or ``not evaluated``): ``run.json`` records the rows of every output of such a
+    contract under ``acceptance`` (a number that is not finite as null), failed if one fails."""
+    in_ledger: ClassVar[bool] = False
+    """A result made elsewhere that a run uses (a drift calibration): a batch's ledger
+    records, per well, what :meth:`ledger_entry` says of every output of such a contract."""
+
+    @classmethod
+    def ledger_entry(cls, table: pa.Table) -> dict[str, Any]:
+        """What a batch's ledger records of a table of this contract (JSON values), when
+        :attr:`in_ledger` is set."""
+        return {}
 
     @classmethod
     def compiled(cls) -> CompiledContract:

@@ -47,8 +47,9 @@ What is here:
   (:class:`Stations`, :class:`RawSamples`, :class:`PositionReadings`, :class:`Trajectory`,
   :class:`CheckResults`, :class:`AnyTable`…) and the metadata keys :data:`SOURCE_LINE`,
   :data:`UNIT_KEY`, :data:`NORTH_KEY`;
-- the well: :class:`WellMetadata`, :data:`NorthReference`, :data:`DefaultNorthReference`
-  (a reader option filled from the well metadata), :func:`attach`, :func:`well_of`;
+- the well: :class:`WellMetadata`, :data:`Latitude` (the type of every latitude, deg),
+  :data:`NorthReference`, :data:`DefaultNorthReference` (a reader option filled from the
+  well metadata), :func:`attach`, :func:`well_of`;
 - units and conventions, converted once at ingest: :func:`conversion_factor`,
   :func:`canonical_unit`, :func:`is_unit_of`; :class:`Conventions` and :func:`to_canonical`
   (vendor axes and signs of raw samples); the canonical columns :data:`CURVES` (each a
@@ -114,7 +115,14 @@ from pipeline.tables import (
     Trajectory,
 )
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
-from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata, attach, well_of
+from pipeline.well import (
+    DefaultNorthReference,
+    Latitude,
+    NorthReference,
+    WellMetadata,
+    attach,
+    well_of,
+)
 
 __all__ = [
     "CURVES",
@@ -136,6 +144,7 @@ __all__ = [
     "FreeGyroReadings",
     "GyropipeError",
     "InputFileError",
+    "Latitude",
     "LogTable",
     "MethodNote",
     "MissingSiteError",

@@ -76,7 +76,18 @@ class StageContext(Protocol):
     def stage_id(self) -> str: ...
 
     @property
-    def well(self) -> WellMetadata: ...
+    def well(self) -> WellMetadata:
+        """The run's well metadata as it stands: the pipeline's, updated by the stages before
+        this one (:meth:`update_well`), under the run's overrides."""
+        ...
+
+    def update_well(self, found: WellMetadata) -> None:
+        """Report well metadata the stage found or established (a simulation plan's site, the
+        north reference its azimuths were converted to): every field set in ``found`` enters
+        the run's well, under the run's overrides, for the stages after this one and
+        ``run.json``. The header of a pipeline input read by :meth:`read_input` or
+        :meth:`read_input_stream` is reported by the engine."""
+        ...
 
     @property
     def provenance(self) -> Provenance:
@@ -216,6 +227,23 @@ class ReaderDef:
         if isinstance(said, Claim):
             return said
         return Claim.CONTENT if said is True else Claim.NO
+
+    def parse_options(
+        self, options: Mapping[str, Any], well: WellMetadata | None = None
+    ) -> BaseModel:
+        """``options`` validated by the reader's :attr:`options` model: the one place reader
+        options are validated (when a pipeline is validated and when a file is read; the
+        reader gets the model instance). An option marked as a well default
+        (:data:`~pipeline.well.WELL_DEFAULT`) and not given takes ``well``'s value. Raises
+        pydantic's ``ValidationError``."""
+        values = dict(options)
+        for name, info in self.options.model_fields.items():
+            extra = info.json_schema_extra
+            source = extra.get(WELL_DEFAULT) if isinstance(extra, dict) else None
+            default = getattr(well, str(source), None) if source and well is not None else None
+            if default is not None and name not in values:
+                values[name] = default
+        return self.options.model_validate(values)
 
     def what_it_claims(self) -> str:
         """What the reader recognises, in words."""
@@ -495,7 +523,7 @@ class Registry:
         errors: list[ValidationError] = []
         for candidate in candidates:
             try:
-                candidate.options.model_validate(dict(options))
+                candidate.parse_options(options)
                 return
             except ValidationError as exc:
                 errors.append(exc)
@@ -556,17 +584,10 @@ def read_violation(
 def reader_options(
     reader: ReaderDef, options: Mapping[str, Any], well: WellMetadata | None
 ) -> BaseModel:
-    """``options`` validated by ``reader``'s options model; an option marked as a well default
-    (:data:`~pipeline.well.WELL_DEFAULT`) and not given takes the well metadata's value."""
-    values = dict(options)
-    for name, info in reader.options.model_fields.items():
-        extra = info.json_schema_extra
-        source = extra.get(WELL_DEFAULT) if isinstance(extra, dict) else None
-        default = getattr(well, str(source), None) if source and well is not None else None
-        if default is not None and name not in values:
-            values[name] = default
+    """:meth:`ReaderDef.parse_options`, a problem a :class:`ReaderOptionsError` naming the
+    reader and every option at fault."""
     try:
-        return reader.options.model_validate(values)
+        return reader.parse_options(options, well)
     except ValidationError as exc:
         problems = "; ".join(
             f"{'.'.join(str(p) for p in e['loc']) or 'options'}: {e['msg']}" for e in exc.errors()

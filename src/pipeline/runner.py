@@ -43,7 +43,6 @@ from pipeline.registry import (
 )
 from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream, as_stream, as_table
-from pipeline.tables import AcceptanceGates
 from pipeline.version import __version__
 from pipeline.well import WellMetadata, well_of
 
@@ -68,7 +67,8 @@ class StageRecord:
     rows_out: dict[str, int] = field(default_factory=dict)
     status: str = "pending"
     acceptance: list[dict[str, Any]] = field(default_factory=list)
-    """the rows of its :class:`~pipeline.tables.AcceptanceGates` outputs"""
+    """the rows of its outputs that decide the run's acceptance
+    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`)"""
 
 
 @dataclass
@@ -98,6 +98,11 @@ class _Context:
     staging: Path
     staged: list[Path]
     provenance: Provenance
+    found: list[WellMetadata] = field(default_factory=list)
+    """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
+
+    def update_well(self, found: WellMetadata) -> None:
+        self.found.append(found)
 
     def input_path(self, name: str) -> Path:
         given = self.inputs[name]
@@ -115,8 +120,11 @@ class _Context:
     ) -> tuple[pa.Table, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
-            return given, well_of(given) or WellMetadata()
+            header = well_of(given) or WellMetadata()
+            self.update_well(header)
+            return given, header
         table, header = self.read_file(given, kind, reader=reader, options=options)
+        self.update_well(header)
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
@@ -130,10 +138,13 @@ class _Context:
     ) -> tuple[TableStream, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
-            return TableStream.from_table(given), well_of(given) or WellMetadata()
+            header = well_of(given) or WellMetadata()
+            self.update_well(header)
+            return TableStream.from_table(given), header
         stream, header = self.registry.read_stream(
             given, kind, reader=reader, options=options, well=self.well
         )
+        self.update_well(header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
 
@@ -181,7 +192,10 @@ def run_plan(
     out_dir: Path | None,
     well: WellMetadata | None = None,
 ) -> RunResult:
-    """Run ``plan`` for one well. ``well`` overrides metadata from the pipeline and files.
+    """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
+    what the stages report (the headers of the inputs they read, a simulation's site:
+    :meth:`~pipeline.registry.StageContext.update_well`), under ``well`` (overrides); each
+    stage gets it as it stands (``ctx.well``), ``run.json`` records it at the end.
 
     With ``out_dir``, the run's files (stage outputs, persisted tables, ``run.json``) are
     written into a private staging directory beside it, and ``out_dir`` is replaced by it in
@@ -220,10 +234,9 @@ def run_plan(
             _check_ports(plan, st, tables, "output")
             record.rows_out.update({p: t.num_rows for p, t in tables.items()})
             record.acceptance = _acceptance(st, tables)
+            for header in ctx.found:
+                from_files = from_files.merged(header)
             for port, value in outs.items():
-                header = well_of(value.schema)
-                if header is not None:
-                    from_files = from_files.merged(header)
                 if isinstance(value, TableStream):
                     value = _produced(plan, st, port, value, registry, record)
                 ports[(st.id, port)] = value
@@ -577,16 +590,20 @@ def _manifest(
 
 
 def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[str, Any]]:
-    """The gates of a stage's :class:`AcceptanceGates` outputs, as ``run.json`` records them
-    (a value that is not a number, a gate not evaluated, as null)."""
+    """The gates of a stage's outputs whose contract decides the run's acceptance
+    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`), as ``run.json`` records
+    them: the contract's columns, a number that is not finite (a gate not evaluated) as null."""
     rows = []
     for port, table in tables.items():
-        if issubclass(st.definition.outputs[port], AcceptanceGates):
-            names = [c.name for c in AcceptanceGates.compiled().columns]
+        contract = st.definition.outputs[port]
+        if contract.decides_acceptance:
+            names = [c.name for c in contract.compiled().columns]
             for row in table.select(names).to_pylist():
-                value = row["value"]
-                row["value"] = value if value is not None and math.isfinite(value) else None
-                rows.append({"stage": st.id, "port": port, **row})
+                finite = {
+                    k: None if isinstance(v, float) and not math.isfinite(v) else v
+                    for k, v in row.items()
+                }
+                rows.append({"stage": st.id, "port": port, **finite})
     return rows
 
 

@@ -6,6 +6,8 @@ columns state their north reference (true, grid or magnetic) in field metadata.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from pipeline.contracts import TableContract, column
 
 DLS_COURSE_M = 30.0
@@ -104,6 +106,8 @@ class AcceptanceGates(TableContract):
     """Acceptance gates of a survey (e.g. in-run against out-run): one row per gate, its
     worst value against its limit (both in ``unit``) and its status (``pass``, ``fail`` or
     ``not evaluated``). ``run.json`` records every such table a run produces."""
+
+    decides_acceptance: ClassVar[bool] = True
 
     gate: str = column(unit=None, description="gate name")
     value: float = column(unit=None, finite=False, description="worst value (NaN: none)")

@@ -21,6 +21,9 @@ def _yaml_true(value: Any) -> Any:
     return "true" if value is True else value
 
 
+Latitude = Annotated[float, Field(ge=-90, le=90, allow_inf_nan=False)]
+"""A geodetic latitude (WGS84), deg, north positive, −90 to 90: the one type of every
+latitude (well metadata, site, stage parameters)."""
 NorthReference = Annotated[Literal["true", "grid", "magnetic"], BeforeValidator(_yaml_true)]
 WELL_DEFAULT = "x-well-default"
 """JSON-schema marker of a reader option whose default is a well metadata field: when the
@@ -59,9 +62,7 @@ class WellMetadata(BaseModel):
     field: str | None = Field(None, description="field name")
     company: str | None = Field(None, description="operator")
     service_company: str | None = Field(None, description="survey service company")
-    latitude: float | None = Field(
-        None, ge=-90, le=90, description="wellhead geodetic latitude, deg (WGS84)"
-    )
+    latitude: Latitude | None = Field(None, description="wellhead geodetic latitude, deg (WGS84)")
     longitude: float | None = Field(
         None, ge=-180, le=360, description="wellhead longitude, deg east (WGS84)"
     )
@@ -73,6 +74,12 @@ class WellMetadata(BaseModel):
     )
     survey_date: dt.date | None = Field(None, description="date of the survey run")
     tool_type: str | None = Field(None, description="survey tool type")
+    tool_preset: str | None = Field(
+        None,
+        description="the survey tool's entry in the tool catalogue (the simulator's presets: "
+        "mems-vrg, dtg-xy, nav-grade…), whose error magnitudes compassing takes as its "
+        "default; the simulator sets it",
+    )
     tool_serial: str | None = Field(None, description="survey tool serial number")
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths: true, grid or magnetic"

@@ -209,7 +209,7 @@ def test_wrong_parameters_are_named() -> None:
     with pytest.raises(ParameterError, match="minimum_curvature: unknown parameter 'vs_azimth'"):
         gp.minimum_curvature(frame, vs_azimth=10)
     with pytest.raises(
-        ParameterError, match=r"compass: latitude: .*less than or equal to 89.9 \(got 161\)"
+        ParameterError, match=r"compass: latitude: .*less than or equal to 90 \(got 161\)"
     ):
         gp.compass(gp.simulate(POINT).samples.head(0), latitude=161)
 

@@ -111,7 +111,11 @@ def test_constant_gyro_bias_drifts_linearly_and_closure_removes_it() -> None:
 def test_stage_registers_and_runs() -> None:
     from types import SimpleNamespace
 
-    from pipeline.stages.continuous import continuous_stage, gyropipe_register_stages
+    from pipeline.stages.continuous import (
+        ContinuousParams,
+        continuous_stage,
+        gyropipe_register_stages,
+    )
     from pipeline.well import WellMetadata
 
     defs: list[Any] = []
@@ -121,7 +125,7 @@ def test_stage_registers_and_runs() -> None:
     ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), stage_id="c")
     out = continuous_stage(
         {"samples": sim.samples, "stops": stops},
-        ContinuousOptions(spacing=10.0, odometer_window=0.07),
+        ContinuousParams(spacing=10.0, odometer_window=0.07),
         ctx,
     )
     assert set(out) == {"stations", "series"}

@@ -10,7 +10,6 @@ import pyarrow as pa
 import pytest
 
 from pipeline.drift.allan import (
-    AllanOptions,
     NoiseFit,
     allan_deviation,
     azimuth_sigma,
@@ -132,7 +131,7 @@ def test_allan_stage_on_raw_samples():
         | {f"acc_{a}": acc[:, i] for i, a in enumerate("xyz")}
     )
     ctx = SimpleNamespace(well=WellMetadata(latitude=61.25))
-    params = AllanOptions(bias_model="gauss_markov", start=60.0, target_sigma_azi=1.0)
+    params = drift_plugin.AllanParams(bias_model="gauss_markov", start=60.0, target_sigma_azi=1.0)
     out = drift_plugin.allan_stage({"samples": samples}, params, ctx)
     AllanResult.validate_table(out["allan"])
     NoiseParameters.validate_table(out["noise"])
@@ -150,4 +149,4 @@ def test_allan_stage_on_raw_samples():
         drift_plugin.allan_stage({"samples": samples}, params, SimpleNamespace(well=WellMetadata()))
     gap = samples.filter(pa.array(np.arange(samples.num_rows) != 5000))
     with pytest.raises(ValueError, match="uniformly sampled"):
-        drift_plugin.allan_stage({"samples": gap}, AllanOptions(), ctx)
+        drift_plugin.allan_stage({"samples": gap}, drift_plugin.AllanParams(), ctx)

@@ -11,9 +11,11 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
+from pydantic import ValidationError
 
-from pipeline.earth.site import resolve_site
+from pipeline.earth.site import Site, SiteParams, resolve_site
 from pipeline.errors import GyropipeError, MissingSiteError
+from pipeline.stages.uncertainty import UncertaintyParams
 from pipeline.well import WellMetadata, attach, well_of
 from tests_support import ROOT, gyropipe
 
@@ -30,6 +32,29 @@ def test_the_stage_parameter_beats_the_well_metadata() -> None:
     assert resolve_site(WellMetadata(), stage="compass", latitude=10.0).latitude == 10.0
     bare = resolve_site(WellMetadata(latitude=5.0), stage="compass")
     assert (bare.longitude, bare.elevation, bare.date) == (0.0, 0.0, None)
+
+
+def test_one_latitude_type_bounds_every_latitude() -> None:
+    """The well's, the site's and every stage's latitude are one type: −90…90°, finite."""
+    for make in (
+        lambda v: WellMetadata(latitude=v),
+        lambda v: Site(latitude=v),
+        lambda v: SiteParams(latitude=v),
+        lambda v: UncertaintyParams(latitude=v),
+    ):
+        assert make(-90.0).latitude == -90.0 and make(90.0).latitude == 90.0
+        for bad, why in ((90.5, "less than or equal to 90"), (float("nan"), "finite number")):
+            with pytest.raises(ValidationError, match=why):
+                make(bad)
+
+
+def test_a_north_seeking_stage_refuses_a_latitude_at_a_pole() -> None:
+    polar = WellMetadata(latitude=89.95)
+    assert resolve_site(polar, stage="validity").latitude == 89.95
+    with pytest.raises(ValueError, match=r"latitude 89\.95° is beyond ±89\.9°: a north-seeking"):
+        resolve_site(polar, stage="compass", north_seeking=True)
+    with pytest.raises(ValueError, match="latitude -90° is beyond"):
+        resolve_site(WELL, stage="compass", latitude=-90.0, north_seeking=True)
 
 
 def test_missing_values_are_named_with_where_to_give_them() -> None:

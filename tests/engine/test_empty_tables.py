@@ -76,6 +76,9 @@ class Context:
     def output_path(self, filename: str) -> Path:
         return self.out / filename
 
+    def update_well(self, found: WellMetadata) -> None:
+        pass
+
     def read(self, *args: Any, **kwargs: Any) -> Any:
         raise AssertionError("no stage with inputs reads files")
 

@@ -23,6 +23,7 @@ from pipeline.runner import RunInputError, run_plan
 from pipeline.spec import load_spec
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations, Trajectory
+from pipeline.well import WellMetadata, attach
 from tests_support import ROOT, gyropipe, pythonpath
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
@@ -262,6 +263,64 @@ def test_stage_with_undeclared_ports_or_bad_output_is_reported(
         assert fragment in str(info.value)
         assert not out_dir.exists()
         assert not list(tmp_path.glob(f".{uses}.gyropipe-staging-*"))  # staging removed
+
+
+def test_the_runs_well_is_what_stages_report_not_what_tables_carry(
+    write_yaml, registry, add_stage, tmp_path: Path
+):
+    """The input's header and what a stage reports (``ctx.update_well``) make the run's well,
+    under the overrides; a header attached to an output table is that table's, no report."""
+    seen: list[WellMetadata] = []
+
+    def stamps(inputs: Mapping[str, pa.Table], params: object, ctx: StageContext):
+        seen.append(ctx.well)
+        return {"stations": attach(inputs["stations"], WellMetadata(well="B-2", latitude=-10.0))}
+
+    def reports(inputs: Mapping[str, pa.Table], params: object, ctx: StageContext):
+        seen.append(ctx.well)
+        ctx.update_well(WellMetadata(tool_serial="SN-7", latitude=-20.0))
+        return {"stations": inputs["stations"]}
+
+    for name, func in (("stamps", stamps), ("reports", reports), ("looks", stamps)):
+        add_stage(
+            StageDef(
+                f"tests.{name}",
+                func,
+                name,
+                inputs={"stations": Stations},
+                outputs={"stations": Stations},
+            )
+        )
+    src = tmp_path / "st.parquet"
+    pq.write_table(attach(stations_table(), WellMetadata(well="A-1", elevation=12.0)), src)
+    plan = make_plan(
+        write_yaml,
+        registry,
+        """
+      - id: read
+        uses: read_stations
+      - id: a
+        uses: tests.stamps
+        inputs: {stations: read}
+      - id: b
+        uses: tests.reports
+        inputs: {stations: a}
+      - id: c
+        uses: tests.looks
+        inputs: {stations: b}
+    """,
+    )
+    result = run_plan(
+        plan, registry, inputs={"stations": src}, out_dir=None, well=WellMetadata(latitude=60.0)
+    )
+    fields = ("well", "elevation", "latitude", "tool_serial")
+    assert [tuple(getattr(w, f) for f in fields) for w in seen] == [
+        ("A-1", 12.0, 60.0, None),
+        ("A-1", 12.0, 60.0, None),
+        ("A-1", 12.0, 60.0, "SN-7"),
+    ]
+    assert tuple(getattr(result.well, f) for f in fields) == ("A-1", 12.0, 60.0, "SN-7")
+    assert result.manifest["well"]["well"] == "A-1"
 
 
 def test_inputs_must_match_declaration(write_yaml, registry, tmp_path: Path):

@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 import pipeline as gp
+from pipeline.errors import StageError
 from tests_support import gyropipe
 
 PLAN: dict[str, Any] = {
@@ -95,3 +96,33 @@ def test_budget_predicts_the_g_dependent_share(tmp_path: Path):
     expected = np.degrees(gain * np.sin(i) / (k * np.hypot(np.sin(a) * np.cos(i), np.cos(a))))
     assert hold["sigma_azi_g"].to_numpy() == pytest.approx(expected, rel=0.01)
     assert np.all(hold["sigma_azi"] >= hold["sigma_azi_g"])
+
+
+def test_a_simulated_well_compasses_with_its_presets_tool_errors():
+    sim = gp.simulate({**PLAN, "seed": 0, "tool": {"preset": "dtg-xy"}})
+    assert sim.samples.attrs["well"]["tool_preset"] == "dtg-xy"
+    readings = gp.position_readings(sim.samples)
+    sigma = gp.compass(readings).stations["sigma_azi"].to_numpy()
+    # dtg-xy's transverse g-sensitivity rows (0.2, 1.0), (−1.0, 0.2) (°/h)/g; accelerometer
+    # bias (1.0, −0.8, 0.6)·1e-3 m/s², misalignment ±0.3/±0.2 mrad, scale factor 100 ppm
+    by_hand = gp.compass(
+        readings,
+        g_sensitivity=np.sqrt(1.04),
+        acc_bias=np.sqrt((1.0**2 + 0.8**2 + 0.6**2) / 3) * 1e-3,
+        acc_misalignment=np.sqrt((2 * 0.3**2 + 4 * 0.2**2) / 6),
+        acc_scale_factor=100.0,
+    )
+    np.testing.assert_allclose(sigma, by_hand.stations["sigma_azi"].to_numpy(), rtol=1e-12)
+    # a tool the catalogue does not name: the ISCWSA GYRO-NS magnitudes
+    undeclared = gp.compass(readings, well={"tool_preset": None}).stations["sigma_azi"]
+    gyro_ns = gp.compass(
+        readings,
+        g_sensitivity=0.2,
+        acc_bias=0.0017,
+        acc_misalignment=np.radians(0.0095) * 1e3,
+        acc_scale_factor=111.0,
+    ).stations["sigma_azi"]
+    np.testing.assert_allclose(undeclared.to_numpy(), gyro_ns.to_numpy(), rtol=1e-12)
+    assert not np.allclose(undeclared.to_numpy(), sigma, equal_nan=True)
+    with pytest.raises(StageError, match=r"tool_preset: unknown tool preset 'no-such'.*dtg-xy"):
+        gp.compass(readings, well={"tool_preset": "no-such"})

@@ -14,12 +14,14 @@ import pyarrow.csv as pacsv
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pydantic import ValidationError
 
-from pipeline.errors import InputFileError, SpecError, UnitError
+from pipeline.errors import InputFileError, ReaderOptionsError, SpecError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.io.conventions import to_canonical
 from pipeline.io.csv.options import CsvOptions, load_profile
 from pipeline.io.mnemonics import CURVES
+from pipeline.registry import Registry
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import RawSamples, Stations
@@ -325,3 +327,20 @@ def test_unquoted_yaml_true_is_true_north(tmp_path: Path) -> None:
     profile = tmp_path / "p.yaml"
     profile.write_text("north_reference: true\n")
     assert CsvOptions.model_validate({"profile": str(profile)}).resolved().north_reference == "true"
+
+
+def test_options_are_validated_once_by_the_model_the_reader_declares(tmp_path: Path):
+    """Validating a pipeline and reading a file use the reader's own options model (one
+    function), and the reader gets its instance; a well default fills an option not given."""
+    registry = Registry()
+    registry.readers["csv"] = (READER, "csv")
+    parsed = READER.parse_options({"delimiter": ";"}, WellMetadata(north_reference="grid"))
+    assert isinstance(parsed, CsvOptions)
+    assert (parsed.delimiter, parsed.default_north_reference) == (";", "grid")
+    with pytest.raises(ValidationError) as planned:
+        registry.check_reader_options("stations", "csv", {"delimiter": ":"})
+    path = put(tmp_path, "MD[m],INC[deg],AZI TN[deg]\n0,0,0\n", "s.csv")
+    with pytest.raises(ReaderOptionsError) as read:
+        registry.read(path, "stations", reader="csv", options={"delimiter": ":"})
+    (error,) = planned.value.errors()
+    assert str(read.value) == f"options of reader 'csv': delimiter: {error['msg']}"

@@ -98,7 +98,14 @@ HOME = {
         "pipeline.tables",
     ),
     **dict.fromkeys(
-        ["WellMetadata", "NorthReference", "DefaultNorthReference", "attach", "well_of"],
+        [
+            "WellMetadata",
+            "Latitude",
+            "NorthReference",
+            "DefaultNorthReference",
+            "attach",
+            "well_of",
+        ],
         "pipeline.well",
     ),
     **dict.fromkeys(["conversion_factor", "canonical_unit", "is_unit_of"], "pipeline.units"),

@@ -15,7 +15,7 @@ from pipeline.sim.sensors import (
     GyroErrors,
     MagnetometerErrors,
     OdometerErrors,
-    ToolModel,
+    ToolSensors,
     TriadErrors,
     measure,
     odometer_md,
@@ -252,7 +252,7 @@ def test_bare_triad_errors_refused() -> None:
 def test_presets_validate_and_are_named_by_their_key() -> None:
     assert {"mems-vrg", "nav-grade", "dtg-xy", "ideal"} <= PRESETS.keys()
     for key, tool in PRESETS.items():
-        assert ToolModel.model_validate(tool.model_dump()) == tool
+        assert ToolSensors.model_validate(tool.model_dump()) == tool
         assert tool.name == key
         assert tool.description
     assert PRESETS["mems-vrg"].gyro_axes == "x"

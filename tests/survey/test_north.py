@@ -72,10 +72,15 @@ def test_convert_table_relabels() -> None:
 
 
 def test_stage_given_declination() -> None:
-    ctx: Any = SimpleNamespace(well=WellMetadata())
+    reported: list[WellMetadata] = []
+    ctx: Any = SimpleNamespace(well=WellMetadata(), update_well=reported.append)
     params = NorthReferenceParams(target="true", declination=17.0)
     out = north_reference_stage({"stations": stations("magnetic")}, params, ctx)["stations"]
     np.testing.assert_allclose(out.column("azi").to_numpy(), [27.0, 7.0])
+    # the run's well learns the north reference and the declination used, nothing else
+    assert [w.model_dump(exclude_unset=True) for w in reported] == [
+        {"north_reference": "true", "declination": 17.0}
+    ]
 
 
 def test_stage_from_well_header() -> None:
@@ -83,7 +88,7 @@ def test_stage_from_well_header() -> None:
     from pipeline.earth.grid import grid_convergence
 
     well = WellMetadata(latitude=55.0, longitude=75.0, survey_date=dt.date(2026, 3, 1))
-    ctx: Any = SimpleNamespace(well=well)
+    ctx: Any = SimpleNamespace(well=well, update_well=lambda found: None)
     params = NorthReferenceParams(target="grid", crs="EPSG:32643")
     out = north_reference_stage({"stations": stations("magnetic")}, params, ctx)["stations"]
     d = float(reference_field(55.0, 75.0, 0.0, dt.date(2026, 3, 1)).declination)
@@ -95,7 +100,7 @@ def test_stage_from_well_header() -> None:
 
 
 def test_stage_needs_a_source_for_corrections() -> None:
-    ctx: Any = SimpleNamespace(well=WellMetadata())
+    ctx: Any = SimpleNamespace(well=WellMetadata(), update_well=lambda found: None)
     with pytest.raises(ValueError, match="declination"):
         north_reference_stage(
             {"stations": stations("magnetic")}, NorthReferenceParams(target="true"), ctx

@@ -22,7 +22,6 @@ from typing import Any
 from threadpoolctl import threadpool_limits
 
 from pipeline.atomic import atomic_write_bytes, replace_dir
-from pipeline.drift.tables import CalibrationResult
 from pipeline.errors import GyropipeError
 from pipeline.graph import Plan, build_plan
 from pipeline.lazy_pandas import defer_pandas
@@ -211,31 +210,26 @@ def _relocated(manifest: dict[str, Any], final: Path) -> dict[str, Any]:
 
 
 def _calibration(plan: Plan, result: RunResult) -> list[dict[str, Any]]:
-    """The drift calibration results a run consumed: the stage that brought each in, its
-    input file, the instruments it calibrates with their selected estimates, and the tool
-    serial of the well (which picks the instrument)."""
+    """What the ledger's ``calibration`` column holds of a run: per output whose contract
+    is one the ledger records (:attr:`~pipeline.contracts.TableContract.in_ledger`, e.g. a
+    drift calibration result), the stage that brought it in, its input file, what the
+    contract says of the table, and the tool serial of the well (which picks the instrument)."""
     inputs = result.manifest["inputs"]
     found = []
     for st in plan.stages:
         for port, contract in st.definition.outputs.items():
-            if contract is not CalibrationResult:
+            if not contract.in_ledger:
                 continue  # (looking another port up would read a streamed output whole)
             table = result.tables.get((st.id, port))
             if table is None:
                 continue
             name = getattr(st.params, "input", None)
-            rows = table.select(["instrument", "method", "drift_deg_h", "selected"]).to_pylist()
             found.append(
                 {
                     "stage": st.id,
                     "input": name,
                     "sha256": inputs[name]["sha256"] if name in inputs else None,
-                    "instruments": sorted({r["instrument"] for r in rows}),
-                    "selected": [
-                        {k: r[k] for k in ("instrument", "method", "drift_deg_h")}
-                        for r in rows
-                        if r["selected"]
-                    ],
+                    **contract.ledger_entry(table),
                     "tool_serial": result.well.tool_serial,
                 }
             )

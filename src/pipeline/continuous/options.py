@@ -12,9 +12,6 @@ class ContinuousOptions(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    latitude: float | None = Field(
-        None, ge=-90, le=90, description="site latitude, deg (default: the well's)"
-    )
     spacing: float = Field(10.0, gt=0, description="MD spacing of the output stations, m")
     vertical_below: float = Field(
         3.0, gt=0, lt=90, description="inclination below which samples are flagged, deg"

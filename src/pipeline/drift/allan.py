@@ -70,9 +70,6 @@ class AllanOptions(BaseModel):
     bias_model: BiasModel = Field(
         "flicker", description="flicker (IEEE 952 flat floor) or gauss_markov (bump)"
     )
-    latitude: float | None = Field(
-        None, ge=-90, le=90, description="site latitude, deg (default: the well's)"
-    )
     inclination: float = Field(45.0, ge=0, le=180, description="design inclination, deg")
     target_sigma_azi: float = Field(1.0, gt=0, description="wanted azimuth σ, deg")
     positions: list[float] = Field(

@@ -8,6 +8,10 @@ accelerations in m/s².
 
 from __future__ import annotations
 
+from typing import Any, ClassVar
+
+import pyarrow as pa
+
 from pipeline.contracts import TableContract, column
 from pipeline.tables import ACCEL_UNIT, RATE_UNIT, FreeGyroReadings, Stations
 
@@ -46,7 +50,10 @@ class CalibrationReadings(TableContract):
 class CalibrationResult(TableContract):
     """Drift-rate estimates of each calibrated instrument, one row per estimate; the
     instrument's linearity test is repeated on each of its rows. ``selected`` marks the
-    estimate that drift correction uses by default."""
+    estimate that drift correction uses by default. A batch's ledger records, per well, the
+    calibration results a run used."""
+
+    in_ledger: ClassVar[bool] = True
 
     instrument: str = column(unit=None, description="instrument serial number")
     method: str = column(
@@ -87,6 +94,20 @@ class CalibrationResult(TableContract):
         description="p-value of the linearity test (NaN: fewer than 3 series)",
     )
     verdict: str = column(unit=None, description="linear, non-linear: … or untested: …")
+
+    @classmethod
+    def ledger_entry(cls, table: pa.Table) -> dict[str, Any]:
+        """The instruments the result calibrates and its selected estimates (instrument,
+        method, drift rate °/h)."""
+        rows = table.select(["instrument", "method", "drift_deg_h", "selected"]).to_pylist()
+        return {
+            "instruments": sorted({r["instrument"] for r in rows}),
+            "selected": [
+                {k: r[k] for k in ("instrument", "method", "drift_deg_h")}
+                for r in rows
+                if r["selected"]
+            ],
+        }
 
 
 class CalibrationSeries(TableContract):

@@ -12,7 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.earth.frames import FloatArray, earth_rate_ned
 from pipeline.earth.gravity import normal_gravity
 from pipeline.errors import MissingSiteError
-from pipeline.well import WellMetadata
+from pipeline.well import Latitude, WellMetadata
 
 
 class MagneticReference(BaseModel):
@@ -37,7 +37,7 @@ class Site(BaseModel):
     """Wellhead position (WGS84) and survey date."""
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
-    latitude: float = Field(ge=-90, le=90, description="geodetic latitude, deg")
+    latitude: Latitude = Field(description="geodetic latitude, deg")
     longitude: float = Field(0.0, ge=-180, le=360, description="longitude, deg east")
     elevation: float = Field(0.0, description="height of the wellhead above the ellipsoid, m")
     date: dt.date | None = Field(
@@ -57,6 +57,20 @@ class Site(BaseModel):
         return earth_rate_ned(np.radians(self.latitude))
 
 
+class SiteParams(BaseModel):
+    """The parameter of a stage that works at the site: its latitude, if not the well's."""
+
+    model_config = ConfigDict(extra="forbid")
+    latitude: Latitude | None = Field(
+        None, description="site latitude, deg (default: the well metadata's)"
+    )
+
+
+NORTH_SEEKING_LIMIT = 89.9
+"""Largest |latitude|, deg, at which a north-seeking gyro is used: nearer a pole the
+horizontal Earth rate Ω cos φ it finds north by vanishes."""
+
+
 def resolve_site(
     well: WellMetadata,
     *,
@@ -64,6 +78,7 @@ def resolve_site(
     latitude: float | None = None,
     param: str | None = "latitude",
     field: bool = False,
+    north_seeking: bool = False,
 ) -> Site:
     """The site a stage works at. The latitude is the stage's own (``latitude``, from its
     parameter ``param``) when given, else the well's; with ``field`` (a geomagnetic model
@@ -71,7 +86,9 @@ def resolve_site(
     well knows is kept: longitude (else 0), survey date, and its elevation above sea level
     standing in for the ellipsoidal height (else 0; the geoid's tens of metres change
     gravity by < 1e-4 m/s²). Raises :class:`~pipeline.errors.MissingSiteError` naming
-    ``stage``, every value missing and where each may be given."""
+    ``stage``, every value missing and where each may be given; with ``north_seeking`` (the
+    stage divides by Ω cos φ), a ValueError for a latitude beyond
+    ±:data:`NORTH_SEEKING_LIMIT`."""
     if latitude is None:
         latitude = well.latitude
     missing = [
@@ -86,6 +103,11 @@ def resolve_site(
     if missing:
         raise MissingSiteError(stage, missing, param)
     assert latitude is not None
+    if north_seeking and abs(latitude) > NORTH_SEEKING_LIMIT:
+        raise ValueError(
+            f"latitude {latitude:g}° is beyond ±{NORTH_SEEKING_LIMIT}°: a north-seeking gyro "
+            "finds north by the horizontal Earth rate Ω cos φ, which vanishes at the poles"
+        )
     return Site(
         latitude=latitude,
         longitude=well.longitude or 0.0,

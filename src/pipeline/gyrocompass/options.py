@@ -14,9 +14,6 @@ class CompassOptions(BaseModel):
     """Compassing parameters (angles deg, rates °/h)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-    latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="site latitude, deg (default: the well metadata's)"
-    )
     gyro_axes: Literal["auto", "x", "xy", "xyz"] = Field(
         "auto", description="gyro axes to use (auto: every gyro column present)"
     )
@@ -84,7 +81,8 @@ class CompassOptions(BaseModel):
         description="g-dependent bias of a transverse gyro, (°/h)/g of transverse specific "
         "force (1σ): turning the frame cannot remove it, so it enters σ_azi as "
         "≈ sin I · g_sensitivity / (Ω cos φ). Default: the tool's (the stage takes it from "
-        "the tool model the well's tool_type names, else ISCWSA GYRO-NS's GXY-G1)",
+        "the tool catalogue's entry that the well's tool_preset names, else from ISCWSA "
+        "GYRO-NS's GXY-G1)",
     )
     acc_bias: float | None = Field(
         None,

@@ -19,7 +19,7 @@ Multi-position compassing removes each gyro's constant bias and linear drift, bu
   tool's 1σ magnitude.
 
 Units: g-sensitivity (°/h)/g, bias m/s², misalignment mrad, scale factor ppm — those of the
-simulator's tool models (:mod:`pipeline.sim.sensors`).
+simulator's tools (:class:`pipeline.sim.sensors.ToolSensors`).
 """
 
 from __future__ import annotations

@@ -145,10 +145,12 @@ class OdometerErrors(_Model):
     noise: float = Field(0.0, ge=0, description="white noise standard deviation per sample, m")
 
 
-class ToolModel(_Model):
-    """A survey tool: which gyro axes it has, the errors of each sensor, its sample rate."""
+class ToolSensors(_Model):
+    """The sensors of a simulated survey tool: which gyro axes it has, the errors of each
+    sensor, its sample rate. (Not an ISCWSA error model of position uncertainty: that is
+    :class:`pipeline.uncertainty.toolmodel.ToolModel`.)"""
 
-    name: str = Field(min_length=1, description="tool model name")
+    name: str = Field(min_length=1, description="name of the tool (a preset's)")
     description: str = Field("", description="what the tool is and where its numbers come from")
     gyro_axes: Literal["x", "xy", "xyz"] = Field(
         description="gyro input axes: 'x' a single-axis gyro on the frame x axis, 'xy' a "
@@ -275,7 +277,7 @@ def _g_dependent(errors: TriadErrors, specific_force: ArrayLike | None, n: int) 
     return bias
 
 
-def compass_errors(tool: ToolModel) -> ToolErrors:
+def compass_errors(tool: ToolSensors) -> ToolErrors:
     """1σ magnitudes of the tool's errors that compassing cannot remove
     (:mod:`pipeline.gyrocompass.systematic`), as the RMS over its axes: the g-sensitivity
     of its transverse gyros (row norm of K's transverse columns, (°/h)/g), the accelerometer
@@ -306,7 +308,7 @@ def _deep_merge(base: dict[str, Any], overrides: Mapping[str, Any]) -> dict[str,
     return merged
 
 
-def tool_preset(name: str, **overrides: Any) -> ToolModel:
+def tool_preset(name: str, **overrides: Any) -> ToolSensors:
     """A copy of preset ``name`` with ``overrides`` deep-merged into it and validated:
     ``tool_preset("mems-vrg", gyro={"bias": (1, 2, 3)})`` keeps every other gyro error.
     Unknown name → ``ValueError`` listing the presets; a bad override → pydantic
@@ -317,7 +319,7 @@ def tool_preset(name: str, **overrides: Any) -> ToolModel:
         raise ValueError(
             f"unknown tool preset {name!r}; known presets: {', '.join(sorted(PRESETS))}"
         ) from None
-    return ToolModel.model_validate(_deep_merge(preset.model_dump(), overrides))
+    return ToolSensors.model_validate(_deep_merge(preset.model_dump(), overrides))
 
 
 _WIRELINE = OdometerErrors(scale_factor=500.0, noise=0.05)
@@ -328,8 +330,8 @@ PAPER_ACC_NOISE_DENSITY = STANDARD_GRAVITY * float(np.sin(np.radians(10.0 / 60.0
 """(m/s)/√h whose per-sample σ at 100 Hz (dt = 0.01 s, σ = N / (60 √dt)) is g·sin(10′) =
 0.0285 m/s²: the accelerometer noise of 10 arc-min (1σ) of Binder & Khazov (2023)."""
 
-PRESETS: dict[str, ToolModel] = {
-    "mems-vrg": ToolModel(
+PRESETS: dict[str, ToolSensors] = {
+    "mems-vrg": ToolSensors(
         name="mems-vrg",
         description="Single-axis inductive MEMS vibrating-ring gyro on a rotating frame "
         "(seed 004): drift stability ~0.1 deg/h as the paper states (Gauss–Markov 0.1 deg/h, "
@@ -357,7 +359,7 @@ PRESETS: dict[str, ToolModel] = {
         ),
         odometer=_WIRELINE,
     ),
-    "mems-vrg-paper": ToolModel(
+    "mems-vrg-paper": ToolSensors(
         name="mems-vrg-paper",
         description="The error set of the continuous-mode simulation in Binder & Khazov "
         "(2023), 'Versatile gyroinclinometer based on a single axis angular rate sensor', "
@@ -374,7 +376,7 @@ PRESETS: dict[str, ToolModel] = {
         ),
         odometer=OdometerErrors(),
     ),
-    "nav-grade": ToolModel(
+    "nav-grade": ToolSensors(
         name="nav-grade",
         description="Three-axis navigation-grade (ring-laser/fibre-optic) gyro triad: ARW "
         "0.003 deg/√h, bias instability 0.01 deg/h, turn-on bias 0.01-0.03 deg/h, no "
@@ -398,7 +400,7 @@ PRESETS: dict[str, ToolModel] = {
         ),
         odometer=_WIRELINE,
     ),
-    "dtg-xy": ToolModel(
+    "dtg-xy": ToolSensors(
         name="dtg-xy",
         description="Two-axis dynamically tuned gyro (XY scheme, spin along the tool axis): "
         "mass-unbalance g-sensitivity 1 (deg/h)/g cross-axis and 0.2 (deg/h)/g in-axis, "
@@ -425,7 +427,7 @@ PRESETS: dict[str, ToolModel] = {
         ),
         odometer=_WIRELINE,
     ),
-    "ideal": ToolModel(
+    "ideal": ToolSensors(
         name="ideal",
         description="Error-free three-axis tool with magnetometers: the noise-free oracle "
         "for round-trip tests.",
@@ -436,4 +438,5 @@ PRESETS: dict[str, ToolModel] = {
         odometer=OdometerErrors(),
     ),
 }
-"""Named tool models; copy and modify them with :func:`tool_preset`."""
+"""The tool catalogue: named tools, by preset name; copy and modify them with
+:func:`tool_preset`."""

@@ -25,7 +25,7 @@ import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray, body_to_ned, to_body
 from pipeline.sim.plan import VERTICAL_BELOW, WellPath
-from pipeline.sim.sensors import ToolModel, gauss_markov, measure, odometer_md
+from pipeline.sim.sensors import ToolSensors, gauss_markov, measure, odometer_md
 from pipeline.sim.spec import ContinuousSurvey, PointSurvey, SimulationSpec, Torsion
 from pipeline.sim.timeline import Sampled, Timeline, continuous_timeline, point_timeline
 from pipeline.tables import RawSamples, SimTruth
@@ -94,7 +94,7 @@ def station_mds(survey: PointSurvey, path: WellPath) -> FloatArray:
 
 
 def kinematics(
-    spec: SimulationSpec, path: WellPath, tool: ToolModel, rng: np.random.Generator
+    spec: SimulationSpec, path: WellPath, tool: ToolSensors, rng: np.random.Generator
 ) -> Kinematics:
     """True attitude, motion and ideal sensor signals at every sample."""
     survey = spec.survey
@@ -218,7 +218,7 @@ def _smooth_gauss_markov(
     return spline(t), spline(t, 1)
 
 
-def _samples(kin: Kinematics, tool: ToolModel, rng: np.random.Generator) -> pa.Table:
+def _samples(kin: Kinematics, tool: ToolSensors, rng: np.random.Generator) -> pa.Table:
     s = kin.sampled
     rate = measure(
         kin.rate_body * RAD_S_TO_DEG_H, tool.gyro, s.time, rng, specific_force=kin.accel_body

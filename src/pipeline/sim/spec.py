@@ -27,7 +27,7 @@ from pipeline.earth.site import Site
 from pipeline.errors import GyropipeError, Location, Problem, SpecError
 from pipeline.gyrocompass.positions import DEFAULT_POSITIONS
 from pipeline.sim.plan import StationProblem, WellPath, WellPlan, build_path
-from pipeline.sim.sensors import PRESETS, ToolModel, tool_preset
+from pipeline.sim.sensors import PRESETS, ToolSensors, tool_preset
 from pipeline.yamlsource import load_mapping, validate_located
 
 
@@ -148,7 +148,7 @@ class ToolChoice(Strict):
             raise ValueError(f"unknown tool preset {name!r} (presets: {', '.join(PRESETS)})")
         return name
 
-    def model(self) -> ToolModel:
+    def model(self) -> ToolSensors:
         return tool_preset(self.preset, **self.overrides)
 
 

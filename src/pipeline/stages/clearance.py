@@ -33,7 +33,7 @@ from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import Stations
 from pipeline.uncertainty.engine import ModelCatalogue
-from pipeline.well import WellMetadata
+from pipeline.well import Latitude, WellMetadata
 
 STAGE = "clearance"
 
@@ -55,8 +55,8 @@ class ClearanceParams(BaseModel):
     surface_margin: float = Field(0.3, ge=0, description="surface margin S_m, m")
     stop: float = Field(1.0, description="separation factor below which the level is fail")
     caution: float = Field(1.5, description="separation factor below which the level is warn")
-    latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="latitude, deg (gyro models); default: the well's"
+    latitude: Latitude | None = Field(
+        None, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
         None,
@@ -169,7 +169,9 @@ def _site(
     latitude = None
     wanted = frozenset().union(*(needs(m, catalogue) for m in models))
     if "latitude" in wanted:
-        latitude = resolve_site(well, stage=STAGE, latitude=params.latitude).latitude
+        latitude = resolve_site(
+            well, stage=STAGE, latitude=params.latitude, north_seeking=True
+        ).latitude
     magnetic = params.magnetic
     if magnetic is None and "magnetic" in wanted:
         from pipeline.earth.geomagnetic import reference_field

@@ -7,7 +7,7 @@ from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
-from pipeline.earth.site import resolve_site
+from pipeline.earth.site import SiteParams, resolve_site
 from pipeline.errors import GyropipeError
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions
@@ -18,13 +18,15 @@ from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
-from pipeline.sim.sensors import PRESETS, compass_errors
+from pipeline.sim.sensors import compass_errors, tool_preset
 from pipeline.streams import TableStream
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
 from pipeline.well import WellMetadata
 
-SIMULATED = "simulated "
-"""How the simulator names its tool in the well's tool_type (``simulated dtg-xy``)."""
+
+class CompassParams(CompassOptions, SiteParams):
+    """Parameters of the compass stage: the site latitude (if not the well's) and the
+    compassing options."""
 
 
 def readings_stage(
@@ -36,7 +38,7 @@ def readings_stage(
 
 
 def compass_stage(
-    inputs: Mapping[str, pa.Table], params: CompassOptions, ctx: StageContext
+    inputs: Mapping[str, pa.Table], params: CompassParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Solve inclination, azimuth and toolfaces of every station. No readings give no
     stations; readings of which every station is rejected are an error giving the reasons
@@ -47,7 +49,7 @@ def compass_stage(
             "stations": CompassStations.compiled().schema(north_reference="true").empty_table(),
             "rejects": CompassRejects.compiled().schema().empty_table(),
         }
-    site = resolve_site(ctx.well, stage="compass", latitude=params.latitude)
+    site = resolve_site(ctx.well, stage="compass", latitude=params.latitude, north_seeking=True)
     stations, rejects = compass(
         readings, site.latitude, params.with_defaults(tool_errors(ctx.well))
     )
@@ -56,14 +58,17 @@ def compass_stage(
     return {"stations": stations, "rejects": rejects}
 
 
-def tool_errors(well: WellMetadata | None) -> ToolErrors:
+def tool_errors(well: WellMetadata) -> ToolErrors:
     """The error magnitudes of the well's survey tool that compassing cannot remove: those
-    of the tool model its ``tool_type`` names (a simulator preset, ``simulated dtg-xy`` or
-    ``dtg-xy``; overrides of the plan are not known here: set the stage parameters), else
-    the ISCWSA GYRO-NS magnitudes."""
-    name = (well.tool_type or "") if well is not None else ""
-    name = name.removeprefix(SIMULATED).strip()
-    return compass_errors(PRESETS[name]) if name in PRESETS else GYRO_NS
+    of its entry in the tool catalogue (``tool_preset``, set by the simulator; overrides of a
+    plan are not known here: set the stage parameters), else the ISCWSA GYRO-NS magnitudes.
+    A ``tool_preset`` the catalogue lacks is a ValueError listing the presets."""
+    if well.tool_preset is None:
+        return GYRO_NS
+    try:
+        return compass_errors(tool_preset(well.tool_preset))
+    except ValueError as exc:
+        raise ValueError(f"the well metadata's tool_preset: {exc}") from None
 
 
 class AllRejectedError(GyropipeError):
@@ -105,7 +110,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "high-side toolface with predicted σ per station; rejected stations with why.",
             inputs={"readings": PositionReadings},
             outputs={"stations": CompassStations, "rejects": CompassRejects},
-            params=CompassOptions,
+            params=CompassParams,
         )
     )
 

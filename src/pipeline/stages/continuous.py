@@ -6,7 +6,7 @@ from collections.abc import Callable, Mapping
 
 from pipeline.continuous.options import ContinuousOptions
 from pipeline.continuous.tables import ContinuousSeries, ContinuousStations
-from pipeline.earth.site import resolve_site
+from pipeline.earth.site import SiteParams, resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
@@ -16,8 +16,13 @@ from pipeline.streams import Port, as_table
 from pipeline.tables import CompassStations, RawSamples
 
 
+class ContinuousParams(ContinuousOptions, SiteParams):
+    """Parameters of the integrate_continuous stage: the site latitude (if not the well's)
+    and the integration options."""
+
+
 def continuous_stage(
-    inputs: Mapping[str, Port], params: ContinuousOptions, ctx: StageContext
+    inputs: Mapping[str, Port], params: ContinuousParams, ctx: StageContext
 ) -> dict[str, Port]:
     """Integrate the azimuth of the moving run; close it on the end stop. The samples stream
     in (read once into a disk-backed store), the full-rate series streams out."""
@@ -48,7 +53,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "sections; stations at a fixed MD spacing and the full-rate series.",
             inputs={"samples": RawSamples, "stops": CompassStations},
             outputs={"stations": ContinuousStations, "series": ContinuousSeries},
-            params=ContinuousOptions,
+            params=ContinuousParams,
             streamed_inputs=frozenset({"samples"}),
             streamed_outputs=frozenset({"series"}),
         )

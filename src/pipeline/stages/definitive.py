@@ -44,7 +44,7 @@ from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import Latitude, NorthReference, WellMetadata
 
 MAX_RUNS = 6
 RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
@@ -150,8 +150,8 @@ class DefinitiveParams(BaseModel):
     north_reference: NorthReference | None = Field(
         None, description="azimuths of the survey (default: the first run's)"
     )
-    latitude: float | None = Field(
-        None, ge=-89.9, le=89.9, description="latitude, deg (gyro models); default: the well's"
+    latitude: Latitude | None = Field(
+        None, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
         None, description="geomagnetic reference (MWD models, magnetic azimuths); default WMM"
@@ -222,7 +222,7 @@ def definitive_survey(
         site = replace(
             site,
             latitude=resolve_site(
-                ctx.well, stage="definitive_survey", latitude=params.latitude
+                ctx.well, stage="definitive_survey", latitude=params.latitude, north_seeking=True
             ).latitude,
         )
     parts: list[dict[str, Any]] = []

@@ -31,7 +31,7 @@ from pipeline.drift.tables import (
     InOutQc,
     NoiseParameters,
 )
-from pipeline.earth.site import resolve_site
+from pipeline.earth.site import SiteParams, resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
@@ -84,8 +84,13 @@ def correct_stage(
     return {"readings": survey.readings, "stations": survey.stations, "qc": survey.qc}
 
 
+class AllanParams(AllanOptions, SiteParams):
+    """Parameters of the allan stage: the site latitude (if not the well's) and the options
+    of the analysis."""
+
+
 def allan_stage(
-    inputs: Mapping[str, pa.Table], params: AllanOptions, ctx: StageContext
+    inputs: Mapping[str, pa.Table], params: AllanParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Static raw samples → Allan deviations, noise terms and the recommended dwell."""
     if inputs["samples"].num_rows == 0:
@@ -157,7 +162,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             "taken whole: the overlapping deviation at every averaging time needs it).",
             inputs={"samples": RawSamples},
             outputs={"allan": AllanResult, "noise": NoiseParameters, "dwell": DwellRecommendation},
-            params=AllanOptions,
+            params=AllanParams,
         )
     )
 

@@ -34,6 +34,7 @@ def well_of_simulation(spec: SimulationSpec) -> WellMetadata:
         elevation=spec.site.elevation,
         survey_date=spec.site.date,
         tool_type=f"simulated {spec.tool.preset}",
+        tool_preset=spec.tool.preset,
         north_reference="true",
     )
 
@@ -77,6 +78,7 @@ def run_simulation(
     spec = _load(params, ctx)
     if isinstance(spec.survey, FreeGyroSurvey):
         raise ValueError("this plan is a free_gyro survey: use the simulate_free_gyro stage")
+    ctx.update_well(well_of_simulation(spec))
     return simulation_tables(spec)
 
 
@@ -89,6 +91,7 @@ def run_free_gyro(
     spec = _load(params, ctx)
     if not isinstance(spec.survey, FreeGyroSurvey):
         raise ValueError(f"this plan is a {spec.survey.mode} survey: use the simulate stage")
+    ctx.update_well(well_of_simulation(spec))
     return simulation_tables(spec)
 
 

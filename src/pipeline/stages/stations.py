@@ -275,8 +275,9 @@ def north_reference_stage(
         north_reference=params.target,
         grid_convergence=convergence if len(refs) > 1 and "grid" in refs else None,
         declination=declination if len(refs) > 1 and "magnetic" in refs else None,
-    )
-    header = (well_of(stations) or WellMetadata()).merged(used.model_dump(exclude_none=True))
+    ).model_dump(exclude_none=True)
+    ctx.update_well(WellMetadata.model_validate(used))
+    header = (well_of(stations) or WellMetadata()).merged(used)
     return {"stations": attach(table, header)}
 
 

@@ -28,7 +28,7 @@ from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import WellMetadata
+from pipeline.well import Latitude, WellMetadata
 
 AREA = "m2"
 
@@ -77,11 +77,8 @@ class UncertaintyParams(BaseModel):
     confidence: float = Field(
         0.95, gt=0, lt=1, description="probability content of the *_conf ellipse columns"
     )
-    latitude: float | None = Field(
-        None,
-        ge=-89.9,
-        le=89.9,
-        description="latitude, deg (gyro models); default: the well's latitude",
+    latitude: Latitude | None = Field(
+        None, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
         None,
@@ -160,7 +157,7 @@ def position_uncertainty(
         )
     if "latitude" in tool.needs:
         latitude = resolve_site(
-            ctx.well, stage="position_uncertainty", latitude=params.latitude
+            ctx.well, stage="position_uncertainty", latitude=params.latitude, north_seeking=True
         ).latitude
         site = replace(site, latitude=latitude)
         tool = _measured(tool, params, latitude, _start_stop_sigma(inputs.get("stops"), table))

@@ -257,13 +257,13 @@ def _scaled(values: Any, factor: float) -> Any:
     return values
 
 
-def _open(path: Path, kind: str, options: Any) -> tuple[_Rows, WellMetadata]:
+def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, WellMetadata]:
     """The header found, the columns chosen with their units, the data rows delimited and
     the decimal mark resolved; and the title block's well metadata."""
     layout = LAYOUTS.get(kind)
     if layout is None:
         raise ValueError(f"the csv reader reads kinds {', '.join(LAYOUTS)}, not {kind!r}")
-    opts = CsvOptions.model_validate(options or {}).resolved()
+    opts = (options or CsvOptions()).resolved()
     text = load(path, max(HEADER_SEARCH_LINES, opts.header_line or 0))
     try:
         header = find_header(path, text.head, opts, layout.required)

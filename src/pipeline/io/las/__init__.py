@@ -146,7 +146,7 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
     of stations or samples; and the well metadata."""
     if kind not in (*KINDS, "log"):
         raise ValueError(f"the las reader reads kinds {sorted((*KINDS, 'log'))}, not {kind!r}")
-    opts = LasOptions.model_validate(options or {})
+    opts: LasOptions = options or LasOptions()
     source = load(path)
     header = parse_header(path, source.header)
     if kind == "log":

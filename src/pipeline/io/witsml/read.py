@@ -156,7 +156,7 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
     ``survey`` column when there are several, and the well metadata it holds."""
     if kind != "stations":
         raise ValueError(f"the witsml reader reads kind 'stations', not {kind!r}")
-    opts = WitsmlOptions.model_validate(options or {})
+    opts: WitsmlOptions = options or WitsmlOptions()
     root = parse(path)
     if root.name != "trajectorys" or root.namespace != NS:
         raise InputFileError(
