@@ -130,7 +130,10 @@ def _positions(sim: Simulation, stations: pa.Table, stops: pa.Table) -> tuple[An
         [np.interp(t, truth_t, sim.truth.column(c).to_numpy()) for c in ("north", "east", "tvd")],
         axis=-1,
     )
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT))
+    # a stage context as the runner gives it: the well, and a run whose plugins add no models
+    ctx: Any = SimpleNamespace(
+        well=WellMetadata(latitude=LAT), provenance=SimpleNamespace(tool_models={})
+    )
     tie = MinCurveParams(tie_north=truth[0, 0], tie_east=truth[0, 1], tie_tvd=truth[0, 2])
     traj = min_curve({"stations": stations}, tie, ctx)
     out = position_uncertainty(traj, _ct_params(stops), ctx)["trajectory"]
