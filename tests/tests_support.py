@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import math
 import os
 import re
 import shutil
-import subprocess
 import sys
+import warnings
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -15,13 +19,85 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import yaml
+from click.testing import CliRunner
 from hypothesis import strategies as st
 
+from pipeline.cli import main
 from pipeline.io.las_log import TEXT_NULL
 from pipeline.registry import ReaderDef, WriterDef
 
 ROOT = Path(__file__).resolve().parents[1]
 TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class CliResult:
+    """What a ``gyropipe`` command did: its exit status and what it wrote (the names of
+    :class:`subprocess.CompletedProcess`)."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+    output: str
+    """stdout and stderr interleaved as a terminal shows them."""
+
+
+def gyropipe_cli(
+    *args: str | Path,
+    env: Mapping[str, str] | None = None,
+    cwd: Path = ROOT,
+    site: Path | None = None,
+    check: bool = False,
+) -> CliResult:
+    """``gyropipe ARGS`` in this process through click's ``CliRunner``, from ``cwd`` (the
+    repository root: relative paths as a user types them) with ``env`` set for the command,
+    stdin and stderr not terminals. ``site``: a directory of plugin modules and their
+    dist-info entry points, importable for this command only (as on ``PYTHONPATH``).
+    ``check``: the command must succeed (its stderr is the failure's message). A
+    Python warning the command lets out is written to stderr, as a process does; an
+    exception it lets out is raised here (a process would print a traceback)."""
+    runner = CliRunner()
+    with contextlib.chdir(cwd), _importable(site), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")  # and a plain interpreter's exceptions:
+        for hidden in (
+            DeprecationWarning,
+            PendingDeprecationWarning,
+            ImportWarning,
+            ResourceWarning,
+        ):
+            warnings.simplefilter("ignore", hidden)
+        result = runner.invoke(
+            main,
+            [str(a) for a in args],
+            env=dict(env or {}),
+            catch_exceptions=False,
+            prog_name="gyropipe",
+        )
+    shown = "".join(
+        warnings.formatwarning(w.message, w.category, w.filename, w.lineno) for w in caught
+    )
+    done = CliResult(result.exit_code, result.stdout, shown + result.stderr, result.output + shown)
+    assert not check or done.returncode == 0, done.stderr
+    return done
+
+
+@contextlib.contextmanager
+def _importable(site: Path | None) -> Iterator[None]:
+    """``site`` first on ``sys.path`` for the block; the modules imported from it are
+    forgotten afterwards (the next command imports its own plugins afresh)."""
+    if site is None:
+        yield
+        return
+    sys.path.insert(0, str(site))
+    importlib.invalidate_caches()
+    try:
+        yield
+    finally:
+        sys.path.remove(str(site))
+        for name, module in list(sys.modules.items()):
+            if str(getattr(module, "__file__", None) or "").startswith(str(site)):
+                del sys.modules[name]
+        importlib.invalidate_caches()
 
 
 def gyropipe() -> list[str]:
@@ -187,18 +263,11 @@ def simulate_and_run(tmp_path: Path, plan_text: str, pipeline: str = "point-gyro
     the shipped ``pipeline`` on its samples into ``tmp_path/out``; return the run's directory
     (the run must succeed)."""
     (tmp_path / "plan.yaml").write_text(plan_text)
-    subprocess.run(
-        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
-        check=True,
-        capture_output=True,
+    gyropipe_cli(
+        "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim"), check=True
     )
     out = tmp_path / "out"
     pipeline_file, samples = ROOT / "pipelines" / pipeline, tmp_path / "sim" / "samples.parquet"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline_file), "--input", str(samples), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    result = gyropipe_cli("run", str(pipeline_file), "--input", str(samples), "--out", str(out))
     assert result.returncode == 0, result.stderr
     return out

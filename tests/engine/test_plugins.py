@@ -3,14 +3,13 @@ version, the other plugins keep working, and stage exceptions name their plugin.
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
 import pytest
 
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import gyropipe_cli
 
 PLUGINS = {
     # name: (version, module source)
@@ -77,7 +76,7 @@ PLUGINS = {
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A directory on PYTHONPATH holding plugin modules and their dist-info entry points."""
+    """A directory (on ``sys.path`` for a command) holding plugin modules and their dist-info entry points."""
     root = tmp_path_factory.mktemp("site")
     for name, (version, source) in PLUGINS.items():
         (root / f"{name}.py").write_text(textwrap.dedent(source))
@@ -88,15 +87,8 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
-def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = pythonpath(site)
-    return subprocess.run(
-        [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
-    )
-
-
 def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
-    out = run_cli(site, "plugins")
+    out = gyropipe_cli("plugins", site=site)
     assert out.returncode == 0, out.stderr
     text = out.stdout
     assert "goodplugin 1.2.3 (third-party): stage:goodplugin.explode" in text
@@ -129,8 +121,8 @@ def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
 
 
 def test_disabling_a_plugin(site: Path):
-    out = run_cli(
-        site, "plugins", "--disable-plugin", "brokenplugin", "--disable-plugin", "builtin.qc"
+    out = gyropipe_cli(
+        "plugins", "--disable-plugin", "brokenplugin", "--disable-plugin", "builtin.qc", site=site
     )
     assert "brokenplugin" not in out.stdout
     assert "builtin.qc" not in out.stdout
@@ -158,8 +150,14 @@ def test_pipeline_runs_despite_broken_plugins_and_stage_error_names_plugin(
     """)
     )
     out_dir = tmp_path / "out"
-    out = run_cli(
-        site, "run", str(pipeline), "--input", "examples/stations-j-well.csv", "--out", str(out_dir)
+    out = gyropipe_cli(
+        "run",
+        str(pipeline),
+        "--input",
+        "examples/stations-j-well.csv",
+        "--out",
+        str(out_dir),
+        site=site,
     )
     assert out.returncode == 1
     assert (

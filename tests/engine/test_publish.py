@@ -1,6 +1,6 @@
 """A run publishes its output directory in one step: a process SIGKILLed at each step of the
 publish leaves either the complete previous run or the complete new one, never a mixture
-(real processes, killed by the signal at a chosen step), and the next run cleans up."""
+(real processes, killed by the signal at a chosen step; the runs around them in process), and the next run cleans up."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
 PIPELINE = """
@@ -65,11 +65,15 @@ KILLER = textwrap.dedent(
 
 
 def run(tmp: Path, out: Path, vs_azimuth: float, kill_at: str | None = None) -> int:
+    """``gyropipe run`` of :data:`PIPELINE` into ``out``: in this process, or in a process
+    SIGKILLed at step ``kill_at``; its exit status."""
     pipeline = tmp / "p.yaml"
     pipeline.write_text(PIPELINE)
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
     args += ["--set", f"trajectory.vs_azimuth={vs_azimuth}"]
-    env = {**os.environ, "KILL_AT": kill_at or "nothing"}
+    if kill_at is None:
+        return gyropipe_cli(*args).returncode
+    env = {**os.environ, "KILL_AT": kill_at}
     done = subprocess.run(
         [sys.executable, "-c", KILLER, *args], capture_output=True, text=True, env=env, timeout=120
     )
@@ -94,6 +98,7 @@ def complete_run(out: Path) -> float:
     raise AssertionError("the trajectory is neither run's")
 
 
+@pytest.mark.process("the run is SIGKILLed at a step of its publish")
 @pytest.mark.parametrize(
     ("step", "published"),
     [("manifest", 0.0), ("publish", 0.0), ("swapped", 45.0), ("trash", 45.0)],
@@ -120,13 +125,7 @@ def test_a_directory_holding_other_files_is_not_replaced(tmp_path: Path) -> None
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(PIPELINE)
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
-    done = subprocess.run(
-        [sys.executable, "-c", KILLER, *args],
-        env={**os.environ, "KILL_AT": "nothing"},
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    done = gyropipe_cli(*args)
     assert done.returncode == 2
     assert "holds files that are not a previous run's (notes.txt)" in done.stderr
     assert (out / "notes.txt").read_text() == "mine"
