@@ -1,6 +1,7 @@
 """Helpers of the batch tests: wells made of copies of the bundled station listing (and
-corrupt copies) in a temporary directory, the CLI run in-process or as a real subprocess,
-and independent readers of the ledger (plain sqlite3) and of the published outputs."""
+corrupt copies) in a temporary directory, the CLI run as a real subprocess (in process:
+``tests_support.gyropipe_cli``), and independent readers of the ledger (plain sqlite3) and
+of the published outputs."""
 
 from __future__ import annotations
 
@@ -12,9 +13,6 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-from click.testing import CliRunner, Result
-
-from pipeline.cli import main
 from tests_support import ROOT, gyropipe
 
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
@@ -53,11 +51,6 @@ def survey_pipeline(directory: Path) -> Path:
     path = directory / "survey.yaml"
     path.write_text(SURVEY_YAML)
     return path
-
-
-def cli(*args: str | Path) -> Result:
-    """``gyropipe ARGS`` in this process (stderr not a terminal: JSON log lines)."""
-    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
 
 
 def spawn(*args: str | Path, stderr: Path) -> subprocess.Popen[str]:
