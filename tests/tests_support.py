@@ -10,7 +10,7 @@ import re
 import shutil
 import sys
 import warnings
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -115,6 +115,70 @@ def pythonpath(*dirs: Path) -> dict[str, str]:
     them (a worktree's ``src``, so a subprocess runs the gyropipe under test)."""
     kept = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, dirs), *kept])}
+
+
+TRUE_NORTH = {"north_reference": "true"}
+"""A pipeline's well defaults: azimuths are to true north unless the file says otherwise."""
+
+
+def stage(
+    id: str,
+    uses: str,
+    inputs: Mapping[str, str] | None = None,
+    persist: list[str] | None = None,
+    **with_: Any,
+) -> dict[str, Any]:
+    """One stage of a pipeline spec: ``id`` running ``uses`` on ``inputs`` (port → stage.port)
+    with the parameters ``with_`` (its ``with:``), persisting the ports ``persist``."""
+    out: dict[str, Any] = {"id": id, "uses": uses}
+    if inputs:
+        out["inputs"] = dict(inputs)
+    if with_:
+        out["with"] = with_
+    if persist:
+        out["persist"] = persist
+    return out
+
+
+def survey_stages(vs_azimuth: float = 0.0) -> list[dict[str, Any]]:
+    """The head of a survey pipeline: stations ``read``, their ``trajectory`` (persisted)."""
+    return [
+        stage("read", "read_stations"),
+        stage(
+            "trajectory",
+            "minimum_curvature",
+            {"stations": "read.stations"},
+            ["trajectory"],
+            vs_azimuth=vs_azimuth,
+        ),
+    ]
+
+
+def pipeline_yaml(
+    stages: Sequence[Mapping[str, Any]],
+    name: str = "test",
+    inputs: Sequence[str] = ("stations",),
+    well: Mapping[str, Any] | None = TRUE_NORTH,
+) -> str:
+    """The YAML of pipeline ``name`` 1.0 of ``stages`` (:func:`stage`) on ``inputs``, with the
+    ``well`` defaults (None: none)."""
+    spec: dict[str, Any] = {
+        "name": name,
+        "version": "1.0",
+        "inputs": {n: {"description": n} for n in inputs},
+        **({"well": dict(well)} if well is not None else {}),
+        "stages": list(stages),
+    }
+    return yaml.safe_dump(spec, sort_keys=False)
+
+
+def write_pipeline(directory: Path, stages: Sequence[Mapping[str, Any]], **spec: Any) -> Path:
+    """:func:`pipeline_yaml` of ``stages`` written to ``directory/<name>.yaml``."""
+    text = pipeline_yaml(stages, **spec)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{yaml.safe_load(text)['name']}.yaml"
+    path.write_text(text)
+    return path
 
 
 def without_report(name: str, directory: Path) -> Path:

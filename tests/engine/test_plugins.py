@@ -150,15 +150,8 @@ def test_pipeline_runs_despite_broken_plugins_and_stage_error_names_plugin(
     """)
     )
     out_dir = tmp_path / "out"
-    out = gyropipe_cli(
-        "run",
-        str(pipeline),
-        "--input",
-        "examples/stations-j-well.csv",
-        "--out",
-        str(out_dir),
-        site=site,
-    )
+    args = ("run", pipeline, "--input", "examples/stations-j-well.csv", "--out", out_dir)
+    out = gyropipe_cli(*args, site=site)
     assert out.returncode == 1
     assert (
         "stage 'boom' (goodplugin.explode from plugin goodplugin 1.2.3) failed: "

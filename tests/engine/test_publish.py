@@ -16,28 +16,15 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, stage, survey_stages, write_pipeline
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
-PIPELINE = """
-name: publish
-version: "1"
-inputs:
-  stations: {}
-well: {north_reference: "true"}
-stages:
-  - id: read
-    uses: read_stations
-  - id: trajectory
-    uses: minimum_curvature
-    inputs: {stations: read.stations}
-    with: {vs_azimuth: 0.0}
-    persist: [trajectory]
-  - id: csv
-    uses: write
-    inputs: {table: trajectory.trajectory}
-    with: {writer: csv, filename: trajectory.csv}
-"""
+STAGES = [
+    *survey_stages(),
+    stage(
+        "csv", "write", {"table": "trajectory.trajectory"}, writer="csv", filename="trajectory.csv"
+    ),
+]
 KILLER = textwrap.dedent(
     """
     import os, signal, sys
@@ -65,10 +52,9 @@ KILLER = textwrap.dedent(
 
 
 def run(tmp: Path, out: Path, vs_azimuth: float, kill_at: str | None = None) -> int:
-    """``gyropipe run`` of :data:`PIPELINE` into ``out``: in this process, or in a process
+    """``gyropipe run`` of :data:`STAGES` into ``out``: in this process, or in a process
     SIGKILLed at step ``kill_at``; its exit status."""
-    pipeline = tmp / "p.yaml"
-    pipeline.write_text(PIPELINE)
+    pipeline = write_pipeline(tmp, STAGES, name="publish")
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
     args += ["--set", f"trajectory.vs_azimuth={vs_azimuth}"]
     if kill_at is None:
@@ -122,8 +108,7 @@ def test_a_directory_holding_other_files_is_not_replaced(tmp_path: Path) -> None
     out = tmp_path / "out"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
-    pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE)
+    pipeline = write_pipeline(tmp_path, STAGES, name="publish")
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
     done = gyropipe_cli(*args)
     assert done.returncode == 2

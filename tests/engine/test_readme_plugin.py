@@ -40,15 +40,8 @@ def test_readme_plugin_example_runs(tmp_path: Path):
     )
     pipeline.write_text(survey + stage)
     out_dir = tmp_path / "out"
-    result = gyropipe_cli(
-        "run",
-        str(pipeline),
-        "--input",
-        "examples/stations-j-well.csv",
-        "--out",
-        str(out_dir),
-        site=site,
-    )
+    args = ("run", pipeline, "--input", "examples/stations-j-well.csv", "--out", out_dir)
+    result = gyropipe_cli(*args, site=site)
     assert result.returncode == 0, result.stderr
     deep = pq.read_table(out_dir / "deep.deep.parquet")
     md = deep.column("md").to_numpy()
