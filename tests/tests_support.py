@@ -272,6 +272,24 @@ def mutate_bytes(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
     return bytes(buf)
 
 
+def byte_mutations(
+    size: int, inserted: bytes, lines: bool = False
+) -> st.SearchStrategy[tuple[str, int, int]]:
+    """One :func:`mutate_bytes` operation at a position up to ``size``: flip, truncate, insert
+    one of the bytes ``inserted``, delete; with ``lines`` also delete_line and swap_columns."""
+    position = st.integers(min_value=0, max_value=size)
+    ops = [
+        st.tuples(st.just("flip"), position, st.integers(0, 255)),
+        st.tuples(st.just("truncate"), position, st.just(0)),
+        st.tuples(st.just("insert"), position, st.sampled_from(inserted)),
+        st.tuples(st.just("delete"), position, st.integers(1, 8)),
+    ]
+    if lines:
+        ops.append(st.tuples(st.just("delete_line"), position, st.just(0)))
+        ops.append(st.tuples(st.just("swap_columns"), position, st.integers(0, 3)))
+    return st.one_of(ops)
+
+
 def mutate_lines(data: bytes, ops: list[tuple[str, int, int]], delimiter: bytes) -> bytes:
     """Line-aware fuzz mutations: truncate, flip a byte, delete a line, swap two columns (in
     every line: a valid file stays valid) or two cells of one line (``swap_row``)."""

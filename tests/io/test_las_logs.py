@@ -34,6 +34,7 @@ from pipeline.well import WellMetadata
 from tests_support import (
     ROOT,
     assert_exported,
+    byte_mutations,
     comparable_cell,
     gyropipe_cli,
     mutate_bytes,
@@ -531,20 +532,7 @@ def test_auto_keeps_surveys_and_reports_a_broken_one(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------ fuzz
 
-_position = st.integers(0, 1000)
-_mutation = st.one_of(
-    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
-    st.tuples(st.just("truncate"), _position, st.just(0)),
-    st.tuples(st.just("insert"), _position, st.sampled_from(b" \t\r\n#~.:-+eE0123456789,\"'")),
-    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
-    st.tuples(st.just("delete_line"), _position, st.just(0)),
-    st.tuples(st.just("swap_columns"), _position, st.integers(0, 3)),
-)
-
-
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz")
+_mutation = byte_mutations(1000, b" \t\r\n#~.:-+eE0123456789,\"'", lines=True)
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)
