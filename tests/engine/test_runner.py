@@ -5,8 +5,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import signal
 import subprocess
+import sys
 import textwrap
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -93,6 +97,27 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
 
     qc = pq.read_table(out_dir / "dls_check.results.parquet")
     assert qc.num_rows == len(md) and all(qc.column("passed").to_pylist())
+
+
+def test_a_command_in_process_leaves_the_process_as_it_was(tmp_path: Path):
+    """What the helper and the command set up for the process (the pandas deferral's import
+    hooks, the SIGTERM handler, the environment, the working directory, the warning filters)
+    is as it was afterwards: the tests that follow see a plain process."""
+
+    def state() -> tuple[object, ...]:
+        return (
+            list(sys.meta_path),
+            signal.getsignal(signal.SIGTERM),
+            dict(os.environ),
+            os.getcwd(),
+            list(warnings.filters),
+        )
+
+    before = state()
+    args = ["--input", str(SAMPLE), "--out", str(tmp_path / "out")]
+    done = gyropipe_cli("run", SURVEY, *args, env={"SOURCE_DATE_EPOCH": "0"}, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert state() == before
 
 
 def test_cli_overrides_and_well_metadata(tmp_path: Path):
