@@ -27,9 +27,9 @@ def test_corrupt_wells_fail_alone_and_the_good_ones_complete(tmp_path: Path, sur
     paths[3].write_bytes(b"\x00\xff not a station listing\n")
     out = tmp_path / "out"
 
-    result = gyropipe_cli(
-        "batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--workers", "2"
-    )
+    args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    # a terminal wide enough for the table's rows (the details name long temporary paths)
+    result = gyropipe_cli(*args, "--workers", "2", env={"COLUMNS": "200"})
 
     assert result.returncode == 1, result.output
     rows = summary(out)
