@@ -1,4 +1,9 @@
-"""Shared test helpers: pipelines written to real files, a registry with test stages."""
+"""Shared test helpers: pipelines written to real files, a registry with test stages.
+
+The CLI runs in this process (:func:`tests_support.gyropipe_cli`). A test that needs a real
+process carries ``@pytest.mark.process("why")`` saying why (a signal, a crash, what a
+fresh interpreter imports, the console script itself); the reason is required.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ import textwrap
 from collections.abc import Callable
 from pathlib import Path
 
+import pandas  # noqa: F401 -- before any CLI command: see below
 import pytest
 
 from pipeline.plugins import load_registry
@@ -20,6 +26,20 @@ TEST_PLUGIN = PluginInfo("tests.helpers", "9.9", builtin=False)
 # environment says not to (PYTHONDONTWRITEBYTECODE): each would compile ≈ 130 modules again
 # (≈ 0.2 s of a command's ≈ 1.1 s).
 os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+
+# The CLI's commands keep pandas out of a fresh process until something imports it
+# (pipeline.lazy_pandas.defer_pandas, which is a no-op where pandas is already imported):
+# in this process pandas is imported first, so commands run in process leave the import
+# system as they found it, whatever order the tests run in. tests/engine/test_lazy_pandas.py
+# measures the deferral in real processes.
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A ``process`` mark must say why the test needs a real process."""
+    for item in items:
+        mark = item.get_closest_marker("process")
+        if mark is not None and not (mark.args and isinstance(mark.args[0], str)):
+            raise pytest.UsageError(f"{item.nodeid}: @pytest.mark.process needs a reason")
 
 
 @pytest.fixture

@@ -2,11 +2,10 @@
 ``benchmarks/fuzz_inputs.py``): a few hundred seeded, mutated inputs, each refused with an
 error naming the file and a location, or accepted with finite, contract-valid output (its
 copy readable again); never a traceback, never a hang. Refused inputs of each family also
-go through the real ``gyropipe`` command: exit 1 or 2, one ``error:`` line, no traceback."""
+go through the ``gyropipe`` command: exit 1 or 2, one ``error:`` line, no traceback."""
 
 from __future__ import annotations
 
-import subprocess
 from collections import Counter
 from pathlib import Path
 
@@ -26,7 +25,7 @@ from fuzz_support import (
     check_table,
 )
 from pipeline.tables import Stations
-from tests_support import gyropipe
+from tests_support import CliResult, gyropipe_cli
 
 SEED = 20261121
 COUNT = 25
@@ -45,31 +44,27 @@ SPOT = {
     "pipeline": ("validate", "{input}"),
 }
 """Commands the CLI spot check runs on a refused input of each kind (a text file, a binary
-file, a YAML file: each command costs seconds)."""
+file, a YAML file)."""
 
-Spot = tuple[str, Outcome, Path, "subprocess.Popen[str]"]
+Spot = tuple[str, Outcome, Path, CliResult]
 
 
 @pytest.fixture(scope="module")
 def spot(fuzzer: Fuzzer, tmp_path_factory: pytest.TempPathFactory) -> list[Spot]:
-    """The first refused input of each :data:`SPOT` kind, given to ``gyropipe`` in the
-    background (the commands run while the fuzzing runs in process)."""
+    """The first refused input of each :data:`SPOT` kind, given to ``gyropipe``."""
     work = tmp_path_factory.mktemp("spot")
-    running = []
+    done = []
     for kind, command in SPOT.items():
         outcome = next(o for o in fuzzer.fuzz(kind, SEED, COUNT) if o.label == REFUSED and o.data)
         path = work / f"refused-{kind}-{outcome.index}{outcome.suffix}"
         path.write_bytes(outcome.data)
         args = [a.format(input=path, out=work / f"out-{kind}") for a in command]
-        process = subprocess.Popen(
-            [*gyropipe(), *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-        )
-        running.append((kind, outcome, path, process))
-    return running
+        done.append((kind, outcome, path, gyropipe_cli(*args)))
+    return done
 
 
 @pytest.fixture(scope="module")
-def outcomes(fuzzer: Fuzzer, spot: list[Spot]) -> dict[str, list[Outcome]]:
+def outcomes(fuzzer: Fuzzer) -> dict[str, list[Outcome]]:
     return {kind: list(fuzzer.fuzz(kind, SEED, COUNT)) for kind in KIND_NAMES}
 
 
@@ -113,10 +108,10 @@ def test_refused_inputs_through_the_cli(spot: list[Spot]) -> None:
     """A refused input of a text, a binary and a YAML kind through ``gyropipe``: exit 1 or
     2, one ``error:`` line, the file named (a pipeline's problems follow the line,
     indented), warnings aside; no traceback."""
-    for kind, outcome, path, process in spot:
-        _, stderr = process.communicate(timeout=120)
+    for kind, outcome, path, result in spot:
+        stderr = result.stderr
         where = f"{kind} #{outcome.index} {list(outcome.mutations)}:\n{stderr}"
-        assert process.returncode in (1, 2), where
+        assert result.returncode in (1, 2), where
         assert "Traceback" not in stderr, where
         lines = [line for line in stderr.splitlines() if not line.startswith("warning:")]
         assert lines and lines[0].startswith("error:"), where

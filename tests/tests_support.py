@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import math
 import os
 import re
 import shutil
-import subprocess
 import sys
 import textwrap
-from collections.abc import Mapping
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -17,13 +20,89 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import yaml
+from click.testing import CliRunner
 from hypothesis import strategies as st
 
+from pipeline.cli import main
 from pipeline.io.las.log import TEXT_NULL
+from pipeline.plugins import forget_shared_registries
 from pipeline.registry import ReaderDef, WriterDef
 
 ROOT = Path(__file__).resolve().parents[1]
 TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class CliResult:
+    """What a ``gyropipe`` command did: its exit status and what it wrote (the names of
+    :class:`subprocess.CompletedProcess`)."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+    output: str
+    """stdout and stderr interleaved as a terminal shows them."""
+
+
+def gyropipe_cli(
+    *args: str | Path,
+    env: Mapping[str, str] | None = None,
+    cwd: Path = ROOT,
+    site: Path | None = None,
+    check: bool = False,
+) -> CliResult:
+    """``gyropipe ARGS`` in this process through click's ``CliRunner``, from ``cwd`` (the
+    repository root: relative paths as a user types them) with ``env`` set for the command,
+    stdin and stderr not terminals. ``site``: a directory of plugin modules and their
+    dist-info entry points, importable for this command only (as on ``PYTHONPATH``).
+    ``check``: the command must succeed (its stderr is the failure's message). A
+    Python warning the command lets out is written to stderr, as a process does; an
+    exception it lets out is raised here (a process would print a traceback)."""
+    runner = CliRunner()
+    with contextlib.chdir(cwd), _importable(site), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")  # and a plain interpreter's exceptions:
+        for hidden in (
+            DeprecationWarning,
+            PendingDeprecationWarning,
+            ImportWarning,
+            ResourceWarning,
+        ):
+            warnings.simplefilter("ignore", hidden)
+        result = runner.invoke(
+            main,
+            [str(a) for a in args],
+            env=dict(env or {}),
+            catch_exceptions=False,
+            prog_name="gyropipe",
+        )
+    shown = "".join(
+        warnings.formatwarning(w.message, w.category, w.filename, w.lineno) for w in caught
+    )
+    done = CliResult(result.exit_code, result.stdout, shown + result.stderr, result.output + shown)
+    assert not check or done.returncode == 0, done.stderr
+    return done
+
+
+@contextlib.contextmanager
+def _importable(site: Path | None) -> Iterator[None]:
+    """``site`` first on ``sys.path`` for the block; the modules imported from it, and the
+    registries the process loaded with them, are forgotten afterwards (the next command
+    imports its own plugins afresh)."""
+    if site is None:
+        yield
+        return
+    sys.path.insert(0, str(site))
+    importlib.invalidate_caches()
+    forget_shared_registries()
+    try:
+        yield
+    finally:
+        sys.path.remove(str(site))
+        for name, module in list(sys.modules.items()):
+            if str(getattr(module, "__file__", None) or "").startswith(str(site)):
+                del sys.modules[name]
+        importlib.invalidate_caches()
+        forget_shared_registries()
 
 
 def gyropipe() -> list[str]:
@@ -54,6 +133,70 @@ def plugin_site(root: Path, plugins: Mapping[str, tuple[str, str]]) -> Path:
         (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
         (info / "entry_points.txt").write_text(f"[gyropipe]\n{name} = {name}\n")
     return root
+
+
+TRUE_NORTH = {"north_reference": "true"}
+"""A pipeline's well defaults: azimuths are to true north unless the file says otherwise."""
+
+
+def stage(
+    id: str,
+    uses: str,
+    inputs: Mapping[str, str] | None = None,
+    persist: list[str] | None = None,
+    **with_: Any,
+) -> dict[str, Any]:
+    """One stage of a pipeline spec: ``id`` running ``uses`` on ``inputs`` (port → stage.port)
+    with the parameters ``with_`` (its ``with:``), persisting the ports ``persist``."""
+    out: dict[str, Any] = {"id": id, "uses": uses}
+    if inputs:
+        out["inputs"] = dict(inputs)
+    if with_:
+        out["with"] = with_
+    if persist:
+        out["persist"] = persist
+    return out
+
+
+def survey_stages(vs_azimuth: float = 0.0) -> list[dict[str, Any]]:
+    """The head of a survey pipeline: stations ``read``, their ``trajectory`` (persisted)."""
+    return [
+        stage("read", "read_stations"),
+        stage(
+            "trajectory",
+            "minimum_curvature",
+            {"stations": "read.stations"},
+            ["trajectory"],
+            vs_azimuth=vs_azimuth,
+        ),
+    ]
+
+
+def pipeline_yaml(
+    stages: Sequence[Mapping[str, Any]],
+    name: str = "test",
+    inputs: Sequence[str] = ("stations",),
+    well: Mapping[str, Any] | None = TRUE_NORTH,
+) -> str:
+    """The YAML of pipeline ``name`` 1.0 of ``stages`` (:func:`stage`) on ``inputs``, with the
+    ``well`` defaults (None: none)."""
+    spec: dict[str, Any] = {
+        "name": name,
+        "version": "1.0",
+        "inputs": {n: {"description": n} for n in inputs},
+        **({"well": dict(well)} if well is not None else {}),
+        "stages": list(stages),
+    }
+    return yaml.safe_dump(spec, sort_keys=False)
+
+
+def write_pipeline(directory: Path, stages: Sequence[Mapping[str, Any]], **spec: Any) -> Path:
+    """:func:`pipeline_yaml` of ``stages`` written to ``directory/<name>.yaml``."""
+    text = pipeline_yaml(stages, **spec)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{yaml.safe_load(text)['name']}.yaml"
+    path.write_text(text)
+    return path
 
 
 def without_report(name: str, directory: Path) -> Path:
@@ -147,6 +290,24 @@ def mutate_bytes(data: bytes, mutations: list[tuple[str, int, int]]) -> bytes:
     return bytes(buf)
 
 
+def byte_mutations(
+    size: int, inserted: bytes, lines: bool = False
+) -> st.SearchStrategy[tuple[str, int, int]]:
+    """One :func:`mutate_bytes` operation at a position up to ``size``: flip, truncate, insert
+    one of the bytes ``inserted``, delete; with ``lines`` also delete_line and swap_columns."""
+    position = st.integers(min_value=0, max_value=size)
+    ops = [
+        st.tuples(st.just("flip"), position, st.integers(0, 255)),
+        st.tuples(st.just("truncate"), position, st.just(0)),
+        st.tuples(st.just("insert"), position, st.sampled_from(inserted)),
+        st.tuples(st.just("delete"), position, st.integers(1, 8)),
+    ]
+    if lines:
+        ops.append(st.tuples(st.just("delete_line"), position, st.just(0)))
+        ops.append(st.tuples(st.just("swap_columns"), position, st.integers(0, 3)))
+    return st.one_of(ops)
+
+
 def mutate_lines(data: bytes, ops: list[tuple[str, int, int]], delimiter: bytes) -> bytes:
     """Line-aware fuzz mutations: truncate, flip a byte, delete a line, swap two columns (in
     every line: a valid file stays valid) or two cells of one line (``swap_row``)."""
@@ -202,18 +363,11 @@ def simulate_and_run(tmp_path: Path, plan_text: str, pipeline: str = "point-gyro
     the shipped ``pipeline`` on its samples into ``tmp_path/out``; return the run's directory
     (the run must succeed)."""
     (tmp_path / "plan.yaml").write_text(plan_text)
-    subprocess.run(
-        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim")],
-        check=True,
-        capture_output=True,
+    gyropipe_cli(
+        "simulate", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "sim"), check=True
     )
     out = tmp_path / "out"
     pipeline_file, samples = ROOT / "pipelines" / pipeline, tmp_path / "sim" / "samples.parquet"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline_file), "--input", str(samples), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    result = gyropipe_cli("run", str(pipeline_file), "--input", str(samples), "--out", str(out))
     assert result.returncode == 0, result.stderr
     return out

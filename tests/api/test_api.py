@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +18,7 @@ import pytest
 import pipeline as gp
 from pipeline.errors import ParameterError, SpecError, UnitError
 from pipeline.runner import RunInputError
-from tests_support import ROOT, export_tolerance, gyropipe
+from tests_support import ROOT, export_tolerance, gyropipe_cli
 
 SITE = {
     "latitude": 61.25,
@@ -85,14 +83,7 @@ def pipeline_run(samples_file: Path, tmp_path_factory: pytest.TempPathFactory) -
     """The shipped point-gyro pipeline run by the command line on the simulated samples."""
     out = tmp_path_factory.mktemp("cli") / "out"
     args = ["run", "pipelines/point-gyro.yaml", "--input", str(samples_file), "--out", str(out)]
-    result = subprocess.run(
-        [*gyropipe(), *args],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
-        env={**os.environ, "SOURCE_DATE_EPOCH": EPOCH},
-    )
+    result = gyropipe_cli(*args, env={"SOURCE_DATE_EPOCH": EPOCH})
     assert result.returncode == 0, result.stderr
     return out
 

@@ -1,6 +1,7 @@
 """Helpers of the batch tests: wells made of copies of the bundled station listing (and
-corrupt copies) in a temporary directory, the CLI run in-process or as a real subprocess,
-and independent readers of the ledger (plain sqlite3) and of the published outputs."""
+corrupt copies) in a temporary directory, the CLI run as a real subprocess (in process:
+``tests_support.gyropipe_cli``), and independent readers of the ledger (plain sqlite3) and
+of the published outputs."""
 
 from __future__ import annotations
 
@@ -12,52 +13,24 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-from click.testing import CliRunner, Result
-
-from pipeline.cli import main
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe, stage, survey_stages, write_pipeline
 
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
-SURVEY_YAML = """\
-# The survey job of pipelines/survey.yaml without its report: fast, and fixed while the
-# shipped pipeline evolves.
-name: survey
-version: "1.0"
-inputs:
-  stations: {description: Survey stations file}
-well:
-  north_reference: "true"
-stages:
-  - id: read
-    uses: read_stations
-  - id: trajectory
-    uses: minimum_curvature
-    inputs: {stations: read.stations}
-    with: {vs_azimuth: 0.0}
-    persist: [trajectory]
-  - id: dls_check
-    uses: check
-    inputs: {table: trajectory.trajectory}
-    with: {check: dls_limit, params: {limit: 10.0}}
-    persist: [results]
-  - id: export_csv
-    uses: write
-    inputs: {table: trajectory.trajectory}
-    with: {writer: csv, filename: trajectory.csv}
-"""
 
 
 def survey_pipeline(directory: Path) -> Path:
-    """Write the survey test pipeline into ``directory``."""
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / "survey.yaml"
-    path.write_text(SURVEY_YAML)
-    return path
-
-
-def cli(*args: str | Path) -> Result:
-    """``gyropipe ARGS`` in this process (stderr not a terminal: JSON log lines)."""
-    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    """Write the survey test pipeline into ``directory``: the survey job of
+    pipelines/survey.yaml without its report (fast, and fixed while the shipped pipeline
+    evolves)."""
+    trajectory = {"table": "trajectory.trajectory"}
+    stages = [
+        *survey_stages(),
+        stage(
+            "dls_check", "check", trajectory, ["results"], check="dls_limit", params={"limit": 10.0}
+        ),
+        stage("export_csv", "write", trajectory, writer="csv", filename="trajectory.csv"),
+    ]
+    return write_pipeline(directory, stages, name="survey")
 
 
 def spawn(*args: str | Path, stderr: Path) -> subprocess.Popen[str]:

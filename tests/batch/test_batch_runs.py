@@ -10,7 +10,6 @@ from pathlib import Path
 import pytest
 from batch_support import (
     assert_complete,
-    cli,
     corrupt,
     log_events,
     make_wells,
@@ -19,6 +18,8 @@ from batch_support import (
     summary,
 )
 
+from tests_support import gyropipe_cli
+
 
 def test_corrupt_wells_fail_alone_and_the_good_ones_complete(tmp_path: Path, survey: Path):
     paths = make_wells(tmp_path / "in", ["A-1", "A-2", "B-1", "B-2", "C-1"])
@@ -26,11 +27,11 @@ def test_corrupt_wells_fail_alone_and_the_good_ones_complete(tmp_path: Path, sur
     paths[3].write_bytes(b"\x00\xff not a station listing\n")
     out = tmp_path / "out"
 
-    result = cli(
-        "batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--workers", "2"
-    )
+    args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    # a terminal wide enough for the table's rows (the details name long temporary paths)
+    result = gyropipe_cli(*args, "--workers", "2", env={"COLUMNS": "200"})
 
-    assert result.exit_code == 1, result.output
+    assert result.returncode == 1, result.output
     rows = summary(out)
     assert {w: r["status"] for w, r in rows.items()} == {
         "A-1": "done",
@@ -100,9 +101,11 @@ def test_manifest_maps_wells_to_files_and_header_overrides(tmp_path: Path, surve
     )
     out = tmp_path / "out"
 
-    result = cli("batch", survey, "--manifest", manifest, "--out", out, "--well", "field=Samotlor")
+    result = gyropipe_cli(
+        "batch", survey, "--manifest", manifest, "--out", out, "--well", "field=Samotlor"
+    )
 
-    assert result.exit_code == 0, result.output
+    assert result.returncode == 0, result.output
     north = assert_complete(out / "N-1")
     assert north["inputs"]["stations"]["path"] == str(a)
     assert north["well"]["latitude"] == 61.5  # the manifest cell beats the file's 61.25
@@ -146,8 +149,8 @@ def test_bad_manifest_is_a_configuration_error(
 ):
     manifest = tmp_path / "wells.csv"
     manifest.write_text(manifest_text)
-    result = cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
-    assert result.exit_code == 2
+    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
+    assert result.returncode == 2
     assert message in result.stderr
     assert not (tmp_path / "out").exists()
 
@@ -157,8 +160,8 @@ def test_manifest_wells_equal_up_to_case_are_refused_naming_both_lines(
 ):
     manifest = tmp_path / "wells.csv"
     manifest.write_text("well_id,stations\nA,a.csv\nB,b.csv\na,c.csv\n")
-    result = cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
-    assert result.exit_code == 2
+    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
+    assert result.returncode == 2
     assert (
         f"{manifest}:4: well 'a' equals well 'A' of {manifest}:2 up to case: their output "
         "directories would collide on a case-insensitive file system"
@@ -171,8 +174,8 @@ def test_input_files_naming_wells_equal_up_to_case_are_refused(tmp_path: Path, s
     make_wells(tmp_path / "in", ["A-1", "B-1"])
     (tmp_path / "in" / "a-1.csv").write_bytes((tmp_path / "in" / "A-1.csv").read_bytes())
     out = tmp_path / "out"
-    result = cli("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
-    assert result.exit_code == 2, result.output
+    result = gyropipe_cli("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    assert result.returncode == 2, result.output
     first, second = tmp_path / "in" / "A-1.csv", tmp_path / "in" / "a-1.csv"
     assert f"{first} and {second} would be wells 'A-1' and 'a-1', equal up to case" in result.output
     assert not out.exists()
@@ -197,13 +200,15 @@ def test_configuration_errors_exit_2_and_a_clean_batch_exits_0(tmp_path: Path, s
         (["batch", survey, "--inputs", pattern, "--out", out, "--workers", "0"], "--workers"),
     ]
     for args, message in cases:
-        result = cli(*args)
-        assert result.exit_code == 2, (args, result.output)
+        result = gyropipe_cli(*args)
+        assert result.returncode == 2, (args, result.output)
         assert message in result.output, (args, result.output)
     assert not out.exists()
 
-    ok = cli("batch", survey, "--inputs", pattern, "--out", out, "--workers", "1", "--quiet")
-    assert ok.exit_code == 0, ok.output
+    ok = gyropipe_cli(
+        "batch", survey, "--inputs", pattern, "--out", out, "--workers", "1", "--quiet"
+    )
+    assert ok.returncode == 0, ok.output
     assert ok.stdout == ""  # --quiet: no table, only JSON log lines on stderr
     assert [e["status"] for e in log_events(ok.stderr) if e["event"] == "well"] == ["done"] * 2
 
@@ -213,8 +218,8 @@ def test_missing_input_file_fails_that_well_only(tmp_path: Path, survey: Path):
     manifest = tmp_path / "wells.csv"
     manifest.write_text(f"well_id,stations\nP,{a}\nM,{tmp_path / 'gone.csv'}\n")
     out = tmp_path / "out"
-    result = cli("batch", survey, "--manifest", manifest, "--out", out, "--workers", "1")
-    assert result.exit_code == 1
+    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", out, "--workers", "1")
+    assert result.returncode == 1
     rows = summary(out)
     assert rows["P"]["status"] == "done"
     assert rows["M"]["status"] == "failed"

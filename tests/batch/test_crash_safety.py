@@ -19,7 +19,6 @@ from batch_support import (
     STATIONS,
     assert_complete,
     batches,
-    cli,
     log_events,
     make_wells,
     no_staging_left,
@@ -34,6 +33,7 @@ from pipeline.batch.worker import PipelineRef, WellOutcome, WellTask
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.spec import load_spec
+from tests_support import gyropipe_cli
 
 TIMEOUT_S = 90
 
@@ -82,6 +82,7 @@ def gone(pid: int) -> bool:
     return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
 
 
+@pytest.mark.process("the batch is SIGKILLed mid-run")
 def test_sigkilled_batch_restarted_completes_and_recomputes_nothing(tmp_path: Path, survey: Path):
     names = [f"W{i:02d}" for i in range(16)]
     make_wells(tmp_path / "in", names)
@@ -137,6 +138,7 @@ def big_listing(path: Path, rows: int) -> None:
     path.write_text("\n".join([*lines[: header + 1], *body]) + "\n")
 
 
+@pytest.mark.process("a worker of a running batch is SIGKILLed")
 def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Path):
     (tmp_path / "in").mkdir()
     for i in range(3):
@@ -199,6 +201,7 @@ os.kill(os.getpid(), signal.SIGKILL)  # dies after publishing, before recording 
 """
 
 
+@pytest.mark.process("the batch SIGKILLs itself after a publish")
 def test_a_run_published_before_its_batch_died_is_recovered_not_recomputed(
     tmp_path: Path, survey: Path
 ):
@@ -224,12 +227,13 @@ def test_a_run_published_before_its_batch_died_is_recovered_not_recomputed(
     assert recovered.note == "recovered: its outputs were published before its batch process ended"
     assert recovered.outputs == assert_complete(out / "W")["outputs"]
     # started again, the batch does not recompute the well
-    again = cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
-    assert again.exit_code == 0, again.output
+    again = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
+    assert again.returncode == 0, again.output
     assert summary(out)["W"] == {**summary(out)["W"], "status": "skipped", "detail": "unchanged"}
     assert [r["id"] for r in runs(out / "ledger.sqlite")] == [run_id]
 
 
+@pytest.mark.process("two batch processes share one ledger at once")
 def test_two_batches_on_one_ledger_run_each_well_once(tmp_path: Path, survey: Path):
     names = [f"W{i:02d}" for i in range(12)]
     make_wells(tmp_path / "in", names)

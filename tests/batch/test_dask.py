@@ -9,13 +9,14 @@ from pathlib import Path
 import pytest
 from batch_support import (
     assert_complete,
-    cli,
     corrupt,
     log_events,
     make_wells,
     output_hashes,
     summary,
 )
+
+from tests_support import gyropipe_cli
 
 distributed = pytest.importorskip("distributed")
 
@@ -29,8 +30,10 @@ def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path
     paths = make_wells(tmp_path / "in", names)
     corrupt(paths[2])
     pattern = tmp_path / "in" / "*.csv"
-    local = cli("batch", survey, "--inputs", pattern, "--out", tmp_path / "local", "--workers", "2")
-    assert local.exit_code == 1, local.output
+    local = gyropipe_cli(
+        "batch", survey, "--inputs", pattern, "--out", tmp_path / "local", "--workers", "2"
+    )
+    assert local.returncode == 1, local.output
 
     with distributed.LocalCluster(
         n_workers=2,
@@ -41,11 +44,11 @@ def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path
         dashboard_address=None,
     ) as cluster:
         assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
-        on_cluster = cli(
+        on_cluster = gyropipe_cli(
             "batch", survey, "--inputs", pattern, "--out", tmp_path / "dask", "--executor", "dask",
             "--scheduler", cluster.scheduler_address,
         )  # fmt: skip
-    assert on_cluster.exit_code == 1, on_cluster.output
+    assert on_cluster.returncode == 1, on_cluster.output
     assert log_events(on_cluster.stderr)[0]["executor"] == "dask"
     good = ["D1", "D2", "D4"]
     assert output_hashes(tmp_path / "dask", good) == output_hashes(tmp_path / "local", good)
@@ -54,11 +57,11 @@ def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path
         assert_complete(tmp_path / "dask" / well)
 
     # no --scheduler: the batch starts a LocalCluster of worker processes on 127.0.0.1
-    own = cli(
+    own = gyropipe_cli(
         "batch", survey, "--inputs", tmp_path / "in" / "D[12].csv", "--out", tmp_path / "own",
         "--executor", "dask", "--workers", "1",
     )  # fmt: skip
-    assert own.exit_code == 0, own.output
+    assert own.returncode == 0, own.output
     assert output_hashes(tmp_path / "own", ["D1", "D2"]) == output_hashes(
         tmp_path / "local", ["D1", "D2"]
     )

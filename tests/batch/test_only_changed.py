@@ -11,7 +11,6 @@ from pathlib import Path
 from batch_support import (
     assert_complete,
     change_one_azimuth,
-    cli,
     corrupt,
     log_events,
     make_wells,
@@ -22,22 +21,23 @@ from batch_support import (
 from pipeline.batch.fingerprint import Fingerprint, changes
 from pipeline.batch.policy import Mode, Run, Skip, WellState, decide
 from pipeline.batch.records import RunRow
+from tests_support import gyropipe_cli
 
 
 def test_only_changed_reruns_exactly_the_touched_well_and_says_why(tmp_path: Path, survey: Path):
     paths = make_wells(tmp_path / "in", ["W1", "W2", "W3", "W4"])
     out = tmp_path / "out"
     pattern = tmp_path / "in" / "*.csv"
-    first = cli("batch", survey, "--inputs", pattern, "--out", out, "--workers", "2")
-    assert first.exit_code == 0, first.output
+    first = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--workers", "2")
+    assert first.returncode == 0, first.output
     before = {w: (out / w / "trajectory.csv").read_bytes() for w in ("W1", "W2", "W3", "W4")}
 
     change_one_azimuth(paths[1])  # W2: new content
     stat = paths[2].stat()  # W3: touched (newer mtime), same bytes
     os.utime(paths[2], ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
 
-    again = cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
-    assert again.exit_code == 0, again.output
+    again = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
+    assert again.returncode == 0, again.output
     rows = summary(out)
     assert {w: (r["status"], r["detail"]) for w, r in rows.items()} == {
         "W1": ("skipped", "unchanged"),
@@ -54,11 +54,11 @@ def test_only_changed_reruns_exactly_the_touched_well_and_says_why(tmp_path: Pat
     assert_complete(out / "W2")
 
     # a changed parameter re-runs every well and names the parameter
-    params = cli(
+    params = gyropipe_cli(
         "batch", survey, "--inputs", pattern, "--out", out, "--only-changed",
         "--set", "trajectory.vs_azimuth=37.5",
     )  # fmt: skip
-    assert params.exit_code == 0, params.output
+    assert params.returncode == 0, params.output
     assert {r["detail"] for r in summary(out).values()} == {
         "params changed: trajectory.vs_azimuth 0.0→37.5"
     }
@@ -68,11 +68,11 @@ def test_only_changed_reruns_exactly_the_touched_well_and_says_why(tmp_path: Pat
         "well_id,stations,latitude\n"
         + "".join(f"W{i},{paths[i - 1]},{61.25 if i != 4 else 61.5}\n" for i in range(1, 5))
     )
-    header = cli(
+    header = gyropipe_cli(
         "batch", survey, "--manifest", manifest, "--out", out, "--only-changed",
         "--set", "trajectory.vs_azimuth=37.5",
     )  # fmt: skip
-    assert header.exit_code == 0, header.output
+    assert header.returncode == 0, header.output
     details = {w: r["detail"] for w, r in summary(out).items()}
     assert details["W4"] == "well header changed: latitude unset→61.5"
     assert details["W1"] == "well header changed: latitude unset→61.25"
@@ -83,16 +83,16 @@ def test_rerun_failed_runs_only_the_failed_wells(tmp_path: Path, survey: Path):
     corrupt(paths[1])
     out = tmp_path / "out"
     pattern = tmp_path / "in" / "*.csv"
-    assert cli("batch", survey, "--inputs", pattern, "--out", out).exit_code == 1
+    assert gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out).returncode == 1
 
-    still = cli("batch", survey, "--inputs", pattern, "--out", out, "--rerun-failed")
-    assert still.exit_code == 1
+    still = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--rerun-failed")
+    assert still.returncode == 1
     assert summary(out)["ok"] == {**summary(out)["ok"], "status": "skipped"}
     assert summary(out)["broken"]["detail"].startswith("stage 'read'")
 
     make_wells(tmp_path / "in", ["broken"])  # fixed
-    fixed = cli("batch", survey, "--inputs", pattern, "--out", out, "--rerun-failed")
-    assert fixed.exit_code == 0, fixed.output
+    fixed = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--rerun-failed")
+    assert fixed.returncode == 0, fixed.output
     rows = summary(out)
     assert rows["ok"]["status"] == "skipped"
     assert rows["ok"]["detail"] == "last run did not fail"
@@ -109,10 +109,10 @@ def test_deleted_outputs_are_a_reason_to_run_again(tmp_path: Path, survey: Path)
     make_wells(tmp_path / "in", ["W"])
     out = tmp_path / "out"
     pattern = tmp_path / "in" / "*.csv"
-    assert cli("batch", survey, "--inputs", pattern, "--out", out).exit_code == 0
+    assert gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out).returncode == 0
     (out / "W" / "trajectory.csv").unlink()
-    again = cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
-    assert again.exit_code == 0
+    again = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed")
+    assert again.returncode == 0
     assert summary(out)["W"]["detail"] == "outputs missing"
     assert_complete(out / "W")
 

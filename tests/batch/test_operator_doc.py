@@ -8,9 +8,9 @@ import re
 import sqlite3
 from pathlib import Path
 
-from batch_support import cli, corrupt, log_events, make_wells
+from batch_support import corrupt, log_events, make_wells
 
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 DOC = (ROOT / "docs" / "batch.md").read_text()
 
@@ -32,8 +32,10 @@ def test_the_operator_guide_matches_a_real_ledger_and_log(tmp_path: Path, survey
     paths = make_wells(tmp_path / "in", ["A", "B", "C"])
     corrupt(paths[2])
     out = tmp_path / "out"
-    result = cli("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--quiet")
-    assert result.exit_code == 1, result.output  # C fails, A and B are done
+    result = gyropipe_cli(
+        "batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--quiet"
+    )
+    assert result.returncode == 1, result.output  # C fails, A and B are done
     with sqlite3.connect(out / "ledger.sqlite") as db:
         for table in ("runs", "batches"):
             columns = [row[1] for row in db.execute(f"PRAGMA table_info({table})")]

@@ -11,7 +11,6 @@ import pyarrow.parquet as pq
 from batch_support import (
     ROOT,
     change_one_azimuth,
-    cli,
     corrupt,
     make_wells,
     runs,
@@ -21,6 +20,7 @@ from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
+from tests_support import gyropipe_cli
 
 
 def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey: Path):
@@ -28,12 +28,17 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
     corrupt(paths[2])
     out = tmp_path / "out"
     pattern = tmp_path / "in" / "*.csv"
-    assert cli("batch", survey, "--inputs", pattern, "--out", out).exit_code == 1
+    assert gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out).returncode == 1
     change_one_azimuth(paths[0])
-    assert cli("batch", survey, "--inputs", pattern, "--out", out, "--only-changed").exit_code == 1
+    assert (
+        gyropipe_cli(
+            "batch", survey, "--inputs", pattern, "--out", out, "--only-changed"
+        ).returncode
+        == 1
+    )
 
-    status = cli("status", out)
-    assert status.exit_code == 0, status.output
+    status = gyropipe_cli("status", out)
+    assert status.returncode == 0, status.output
     lines = status.stdout.splitlines()
     assert lines[0] == f"ledger {out / 'ledger.sqlite'}: 3 wells — 2 done, 1 failed"
     assert lines[1].split()[:3] == ["batch", "1", "finished"]
@@ -44,7 +49,7 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
     assert by_well["S3"].split()[1] == "failed" and "  read: S3.csv:" in by_well["S3"]
     assert "InputFileError" not in status.stdout and str(tmp_path) not in by_well["S3"]
 
-    document = json.loads(cli("status", out, "--json").stdout)
+    document = json.loads(gyropipe_cli("status", out, "--json").stdout)
     assert [b["status"] for b in document["batches"]] == ["finished", "finished"]
     assert {w["well"]: w["status"] for w in document["wells"]} == {
         "S1": "done",
@@ -52,8 +57,8 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
         "S3": "failed",
     }
 
-    history = cli("history", "S1", "--dir", out)
-    assert history.exit_code == 0, history.output
+    history = gyropipe_cli("history", "S1", "--dir", out)
+    assert history.returncode == 0, history.output
     text = history.stdout
     assert text.startswith("well S1: 2 run(s)\nrun 1 (batch 1) done")
     assert "run 4 (batch 2) done" in text
@@ -61,11 +66,11 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
     digest = hashlib.sha256(paths[0].read_bytes()).hexdigest()
     assert f"  input stations: {paths[0]} sha256 {digest[:16]}…" in text
     assert f"  outputs: {out / 'S1'} (3 files)" in text
-    document = json.loads(cli("history", "S1", "--dir", out, "--json").stdout)
+    document = json.loads(gyropipe_cli("history", "S1", "--dir", out, "--json").stdout)
     assert [r["inputs"]["stations"]["sha256"] for r in document["runs"]][-1] == digest
 
-    assert cli("history", "nope", "--dir", out).exit_code == 2
-    assert cli("status", tmp_path / "elsewhere").exit_code == 2
+    assert gyropipe_cli("history", "nope", "--dir", out).returncode == 2
+    assert gyropipe_cli("status", tmp_path / "elsewhere").returncode == 2
 
 
 FREE_GYRO_CALIBRATED = """\
@@ -99,12 +104,12 @@ def test_the_calibration_a_run_consumed_is_recorded(tmp_path: Path):
     )
     result_file = calibration.out_dir / "drift.result.parquet"
     assert (
-        cli(
+        gyropipe_cli(
             "simulate",
             ROOT / "examples" / "plans" / "j-well-free-gyro.yaml",
             "--out",
             tmp_path / "sim",
-        ).exit_code
+        ).returncode
         == 0
     )
     pipeline = tmp_path / "free-gyro-calibrated.yaml"
@@ -115,8 +120,8 @@ def test_the_calibration_a_run_consumed_is_recorded(tmp_path: Path):
         f"FG-1,{tmp_path / 'sim' / 'readings.parquet'},{result_file},IG50-0417\n"
     )
     out = tmp_path / "out"
-    batch = cli("batch", pipeline, "--manifest", manifest, "--out", out, "--workers", "1")
-    assert batch.exit_code == 0, batch.output
+    batch = gyropipe_cli("batch", pipeline, "--manifest", manifest, "--out", out, "--workers", "1")
+    assert batch.returncode == 0, batch.output
 
     (run,) = runs(out / "ledger.sqlite")
     (recorded,) = json.loads(run["calibration"])
@@ -130,7 +135,7 @@ def test_the_calibration_a_run_consumed_is_recorded(tmp_path: Path):
         "selected": [{k: r[k] for k in ("instrument", "method", "drift_deg_h")} for r in selected],
         "tool_serial": "IG50-0417",
     }
-    text = cli("history", "FG-1", "--dir", out).stdout
+    text = gyropipe_cli("history", "FG-1", "--dir", out).stdout
     assert (
         f"calibration (calibration, input calibration sha256 {recorded['sha256'][:16]}…): tool IG50-0417; IG50-0417 fit"
         in text

@@ -4,7 +4,6 @@ continuous well stay streams: a worker holds one well's batches at a time, issue
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import yaml
@@ -15,7 +14,7 @@ from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
 from pipeline.streams import TableStream
-from tests_support import ROOT, gyropipe, pythonpath, without_report
+from tests_support import ROOT, gyropipe_cli, without_report
 
 
 def test_calibrations_are_found_without_reading_streamed_outputs(tmp_path: Path):
@@ -23,13 +22,7 @@ def test_calibrations_are_found_without_reading_streamed_outputs(tmp_path: Path)
     plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
     plan["survey"].update(start_md=600, end_md=640)
     plan_file.write_text(yaml.safe_dump(plan))
-    subprocess.run(
-        [*gyropipe(), "simulate", str(plan_file), "--out", "sim"],
-        env=pythonpath(ROOT / "src"),
-        cwd=tmp_path,
-        check=True,
-        capture_output=True,
-    )
+    gyropipe_cli("simulate", str(plan_file), "--out", "sim", cwd=tmp_path, check=True)
     pipeline = without_report("continuous-gyro", tmp_path)
     registry = load_registry()
     built = build_plan(load_spec(pipeline), registry)

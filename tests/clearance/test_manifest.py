@@ -4,7 +4,6 @@ manifest refused with its file and line, through the reader and through `gyropip
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -12,7 +11,7 @@ import pytest
 from pipeline.anticollision.models import resolve_model
 from pipeline.errors import InputFileError
 from pipeline.io.offset_manifest import read_offset_manifest
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 HEADER = "well_id,file,model,hole_diameter (in),north (m),east (ft),tvd (m)"
 
@@ -74,22 +73,15 @@ def test_missing_stations_file_fails_the_run_naming_manifest_and_line(tmp_path: 
         "offset-01,offsets/offset-01.csv,ISCWSA-MWD-REV4,24,0,100,",
         "offset-02,offsets/no-such.csv,ISCWSA-MWD-REV4,24,100,0,",
     )
-    result = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            "pipelines/clearance.yaml",
-            "--input",
-            "reference=examples/clearance/reference.csv",
-            "--input",
-            f"offsets={path}",
-            "--out",
-            str(tmp_path / "out"),
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
+    result = gyropipe_cli(
+        "run",
+        "pipelines/clearance.yaml",
+        "--input",
+        "reference=examples/clearance/reference.csv",
+        "--input",
+        f"offsets={path}",
+        "--out",
+        str(tmp_path / "out"),
     )
     assert result.returncode != 0
     assert f"{path}:4 (column 'file'): no stations file" in result.stderr

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.util
-import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -54,14 +53,7 @@ def test_study_runs_the_public_pipeline_and_writes_figures_and_numbers(tmp_path:
     plan = short_plan(tmp_path)
     args = ["--runs", "1", "--breakdown-runs", "1", "--sets", "realistic", "--plan", str(plan)]
     args += ["--out", str(out)]
-    done = subprocess.run(
-        [sys.executable, str(STUDY), *args, "--work", str(tmp_path / "work")],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=ROOT,
-    )
-    assert done.returncode == 0, done.stderr
+    assert study_module().main([*args, "--work", str(tmp_path / "work")]) == 0
     for name in FIGURES:
         data = (out / "figures" / f"error-budget-{name}.png").read_bytes()
         assert data.startswith(PNG_SIGNATURE) and 5_000 < len(data) < 300_000

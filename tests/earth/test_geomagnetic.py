@@ -363,6 +363,7 @@ def test_blackout_zone_is_visible_through_the_horizontal_field() -> None:
     assert float(near_dip_pole.horizontal) < BLACKOUT_ZONE_NT
 
 
+@pytest.mark.process("what a fresh interpreter imports")
 def test_importing_the_module_does_not_import_the_libraries() -> None:
     code = (
         "import sys, pipeline.earth.geomagnetic, pipeline.earth.grid; "

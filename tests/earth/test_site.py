@@ -5,7 +5,6 @@ that needs the site when neither gives the latitude."""
 from __future__ import annotations
 
 import datetime as dt
-import subprocess
 import textwrap
 from pathlib import Path
 
@@ -17,7 +16,7 @@ from pipeline.earth.site import Site, SiteParams, resolve_site
 from pipeline.errors import GyropipeError, MissingSiteError
 from pipeline.stages.uncertainty import UncertaintyParams
 from pipeline.well import WellMetadata, attach, well_of
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 WELL = WellMetadata(
     latitude=61.25, longitude=73.4, elevation=54.3, survey_date=dt.date(2026, 11, 21)
@@ -130,11 +129,7 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """One input file of each kind, its header without the latitude (the rest is kept)."""
     root = tmp_path_factory.mktemp("site")
     (root / "plan.yaml").write_text(SIM_PLAN)
-    subprocess.run(
-        [*gyropipe(), "simulate", str(root / "plan.yaml"), "--out", str(root / "sim")],
-        check=True,
-        capture_output=True,
-    )
+    gyropipe_cli("simulate", str(root / "plan.yaml"), "--out", str(root / "sim"), check=True)
     samples = pq.read_table(root / "sim" / "samples.parquet")
     known = well_of(samples)
     assert known is not None and known.latitude == 61.25
@@ -174,12 +169,7 @@ def test_a_stage_without_a_latitude_fails_in_one_line(
         + "\n"
     )
     out = tmp_path / "out"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline), "--input", str(inputs[kind]), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("run", str(pipeline), "--input", str(inputs[kind]), "--out", str(out))
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr
     (line,) = [text for text in result.stderr.splitlines() if text.startswith("error:")]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import subprocess
 import warnings
 from pathlib import Path
 
@@ -14,7 +13,7 @@ import pytest
 from pipeline.contracts import TableContract, column
 from pipeline.errors import ContractViolation, RuleFailure
 from pipeline.tables import MIN_COURSE_M, RawSamples, Stations, Trajectory
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 
 class Sample(TableContract):
@@ -231,12 +230,7 @@ def test_times_and_durations_a_copy_cannot_hold_are_refused(tmp_path: Path):
     lines[header + 2] = lines[header + 2].rsplit(",", 1)[0] + ",4.9e-324"
     path = tmp_path / "readings.csv"
     path.write_text("\n".join(lines[: header + 5]) + "\n")
-    result = subprocess.run(
-        [*gyropipe(), "convert", str(path), str(tmp_path / "copy.csv"), "--kind", "readings"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "copy.csv"), "--kind", "readings")
     assert result.returncode == 1, result.stderr
     assert result.stderr.splitlines() == [
         f"error: {path}:{header + 3}: not valid as readings (reader 'csv'): column 'duration': "

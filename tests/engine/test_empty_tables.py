@@ -6,7 +6,6 @@ GyropipeError saying which table is empty — never another exception."""
 from __future__ import annotations
 
 import datetime as dt
-import subprocess
 import textwrap
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -26,7 +25,7 @@ from pipeline.spec import load_spec
 from pipeline.streams import Port, TableStream, as_table
 from pipeline.tables import CompassRejects, PositionReadings, RawSamples, Stations, Trajectory
 from pipeline.well import WellMetadata
-from tests_support import gyropipe
+from tests_support import gyropipe_cli
 
 REGISTRY = load_registry()
 WELL = WellMetadata(
@@ -247,24 +246,16 @@ def test_compass_rejecting_every_station_says_why(tmp_path: Path):
     plan = tmp_path / "ideal.yaml"
     plan.write_text(textwrap.dedent(IDEAL_PLAN).lstrip())
     sim = tmp_path / "sim"
-    subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(sim)], check=True, capture_output=True
-    )
+    gyropipe_cli("simulate", str(plan), "--out", str(sim), check=True)
     out = tmp_path / "out"
-    result = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            "pipelines/point-gyro.yaml",
-            "--input",
-            str(sim / "samples.parquet"),
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
+    result = gyropipe_cli(
+        "run",
+        "pipelines/point-gyro.yaml",
+        "--input",
+        str(sim / "samples.parquet"),
+        "--out",
+        str(out),
         cwd=Path(__file__).resolve().parents[2],
-        timeout=300,
     )
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr and "IndexError" not in result.stderr

@@ -13,6 +13,8 @@ import yaml
 
 from tests_support import ROOT, pythonpath, without_report
 
+pytestmark = pytest.mark.process("what a fresh interpreter imports")
+
 SCRIPT = """
 import atexit, sys
 out = sys.argv.pop(1)

@@ -13,6 +13,8 @@ import pytest
 
 from tests_support import ROOT, pythonpath
 
+pytestmark = pytest.mark.process("the pandas deferral is the state of a fresh interpreter")
+
 CONVERSIONS = """
 import json, sys
 import numpy as np, pyarrow as pa, pyarrow.compute as pc

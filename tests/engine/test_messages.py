@@ -3,22 +3,19 @@ URL), with a suggestion where a name is misspelt."""
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import pytest
 
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, CliResult, gyropipe_cli
 
 SURVEY = ROOT / "pipelines" / "survey.yaml"
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
 
 
-def run(tmp_path: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+def run(tmp_path: Path, *extra: str) -> CliResult:
     args = ["run", str(SURVEY), "--input", str(SAMPLE), "--out", str(tmp_path / "o"), *extra]
-    return subprocess.run(
-        [*gyropipe(), *args], capture_output=True, text=True, cwd=ROOT, timeout=120
-    )
+    return gyropipe_cli(*args)
 
 
 @pytest.mark.parametrize(
@@ -64,13 +61,7 @@ def test_raw_samples_given_to_the_survey_pipeline(tmp_path: Path, suffix: str) -
 
     samples = tmp_path / f"samples{suffix}"
     gp.write(gp.simulate(TINY).samples, samples)
-    result = subprocess.run(
-        [*gyropipe(), "run", str(SURVEY), "--input", str(samples), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
+    result = gyropipe_cli("run", str(SURVEY), "--input", str(samples), "--out", str(tmp_path / "o"))
     assert result.returncode == 1
     assert "a table of raw sensor samples; not survey stations (needs " in result.stderr
     assert "as in pipelines/point-gyro.yaml and pipelines/continuous-gyro.yaml" in result.stderr
@@ -79,12 +70,8 @@ def test_raw_samples_given_to_the_survey_pipeline(tmp_path: Path, suffix: str) -
 
 def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
     pipeline = ROOT / "pipelines" / "point-gyro.yaml"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline), "--input", str(SAMPLE), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
+    result = gyropipe_cli(
+        "run", str(pipeline), "--input", str(SAMPLE), "--out", str(tmp_path / "o")
     )
     assert result.returncode == 1
     assert "a table of survey stations; not raw sensor samples" in result.stderr
@@ -92,13 +79,7 @@ def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
 
 
 def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(SURVEY), "--set", "trajectory.vs_azimth=10"],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=60,
-    )
+    result = gyropipe_cli("validate", str(SURVEY), "--set", "trajectory.vs_azimth=10")
     assert result.returncode == 2
     assert (
         "--set trajectory.vs_azimth=10: stage 'trajectory' (minimum_curvature): unknown field "
@@ -106,21 +87,14 @@ def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:
     ) in result.stderr
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nstagez: []\nstages:\n  - id: r\n    uzes: read_stations\n")
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(bad)], capture_output=True, text=True, timeout=60
-    )
+    result = gyropipe_cli("validate", str(bad))
     assert f"{bad}:5:5: unknown field 'stages.0.uzes'; did you mean 'uses'?" in result.stderr
     assert f"{bad}:2:1: unknown field 'stagez'; did you mean 'stages'?" in result.stderr
 
 
 def test_an_option_value_is_limited_yaml(tmp_path: Path) -> None:
     option = ["--option", "delimiter=!!python/name:os.system"]
-    result = subprocess.run(
-        [*gyropipe(), "convert", str(SAMPLE), "--out", str(tmp_path / "o.csv"), *option],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = gyropipe_cli("convert", str(SAMPLE), "--out", str(tmp_path / "o.csv"), *option)
     assert result.returncode == 2
     assert (
         "error: --option delimiter=!!python/name:os.system: YAML tag "

@@ -3,7 +3,6 @@ with ``filename: ../../escape.csv`` passed ``validate`` and failed inside the ru
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -13,7 +12,7 @@ from pipeline.errors import SpecError
 from pipeline.filenames import MAX_LENGTH, check_output_filename
 from pipeline.graph import build_plan
 from pipeline.spec import load_spec
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 BAD = ["../../escape.csv", "/tmp/abs.csv", "sub/../../x.csv", "run.json", "", "..", "a\\b.csv"]
 STAGES = [  # pipeline, stage id: every built-in stage that writes a named file
@@ -59,9 +58,7 @@ def test_bad_output_names_are_located_at_validate_time(
 
 def test_cli_validate_refuses_escaping_names_with_their_location(tmp_path: Path):
     path = with_filename("survey.yaml", "export_csv", BAD[:3], tmp_path / "p.yaml")
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=120
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2, result.stderr
     for line in filename_lines(path)[-3:]:
         assert f"{path}:{line}:" in result.stderr
@@ -132,9 +129,7 @@ def test_two_stages_writing_one_file_are_refused_at_validate_time(tmp_path: Path
     case, a persisted table's, a report's — failed only at run time, in the second stage."""
     path = tmp_path / "dup.yaml"
     path.write_text(DUPLICATES)
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=120
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2, result.stderr
     assert result.stderr.splitlines()[1:] == [
         f"  {path}:20:17: stage 'again' writes 'OUT.csv', as stage 'out' does ('out.csv' up to "

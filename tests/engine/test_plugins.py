@@ -3,14 +3,13 @@ version, the other plugins keep working, and stage exceptions name their plugin.
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
 import pytest
 
-from tests_support import ROOT, gyropipe, plugin_site, pythonpath
+from tests_support import gyropipe_cli, plugin_site
 
 PLUGINS = {
     # name: (version, module source)
@@ -77,19 +76,12 @@ PLUGINS = {
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A directory on PYTHONPATH holding plugin modules and their dist-info entry points."""
+    """A directory of installed plugins: their modules and dist-info entry points."""
     return plugin_site(tmp_path_factory.mktemp("site"), PLUGINS)
 
 
-def run_cli(site: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = pythonpath(site)
-    return subprocess.run(
-        [*gyropipe(), *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120
-    )
-
-
 def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
-    out = run_cli(site, "plugins")
+    out = gyropipe_cli("plugins", site=site)
     assert out.returncode == 0, out.stderr
     text = out.stdout
     assert "goodplugin 1.2.3 (third-party): stage:goodplugin.explode" in text
@@ -122,8 +114,8 @@ def test_plugins_command_reports_each_failure_by_name_and_version(site: Path):
 
 
 def test_disabling_a_plugin(site: Path):
-    out = run_cli(
-        site, "plugins", "--disable-plugin", "brokenplugin", "--disable-plugin", "builtin.qc"
+    out = gyropipe_cli(
+        "plugins", "--disable-plugin", "brokenplugin", "--disable-plugin", "builtin.qc", site=site
     )
     assert "brokenplugin" not in out.stdout
     assert "builtin.qc" not in out.stdout
@@ -151,9 +143,8 @@ def test_pipeline_runs_despite_broken_plugins_and_stage_error_names_plugin(
     """)
     )
     out_dir = tmp_path / "out"
-    out = run_cli(
-        site, "run", str(pipeline), "--input", "examples/stations-j-well.csv", "--out", str(out_dir)
-    )
+    args = ("run", pipeline, "--input", "examples/stations-j-well.csv", "--out", out_dir)
+    out = gyropipe_cli(*args, site=site)
     assert out.returncode == 1
     assert (
         "stage 'boom' (goodplugin.explode from plugin goodplugin 1.2.3) failed: "

@@ -1,6 +1,6 @@
 """A run publishes its output directory in one step: a process SIGKILLed at each step of the
 publish leaves either the complete previous run or the complete new one, never a mixture
-(real processes, killed by the signal at a chosen step), and the next run cleans up."""
+(real processes, killed by the signal at a chosen step; the runs around them in process), and the next run cleans up."""
 
 from __future__ import annotations
 
@@ -16,28 +16,15 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli, stage, survey_stages, write_pipeline
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
-PIPELINE = """
-name: publish
-version: "1"
-inputs:
-  stations: {}
-well: {north_reference: "true"}
-stages:
-  - id: read
-    uses: read_stations
-  - id: trajectory
-    uses: minimum_curvature
-    inputs: {stations: read.stations}
-    with: {vs_azimuth: 0.0}
-    persist: [trajectory]
-  - id: csv
-    uses: write
-    inputs: {table: trajectory.trajectory}
-    with: {writer: csv, filename: trajectory.csv}
-"""
+STAGES = [
+    *survey_stages(),
+    stage(
+        "csv", "write", {"table": "trajectory.trajectory"}, writer="csv", filename="trajectory.csv"
+    ),
+]
 KILLER = textwrap.dedent(
     """
     import os, signal, sys
@@ -65,11 +52,14 @@ KILLER = textwrap.dedent(
 
 
 def run(tmp: Path, out: Path, vs_azimuth: float, kill_at: str | None = None) -> int:
-    pipeline = tmp / "p.yaml"
-    pipeline.write_text(PIPELINE)
+    """``gyropipe run`` of :data:`STAGES` into ``out``: in this process, or in a process
+    SIGKILLed at step ``kill_at``; its exit status."""
+    pipeline = write_pipeline(tmp, STAGES, name="publish")
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
     args += ["--set", f"trajectory.vs_azimuth={vs_azimuth}"]
-    env = {**os.environ, "KILL_AT": kill_at or "nothing"}
+    if kill_at is None:
+        return gyropipe_cli(*args).returncode
+    env = {**os.environ, "KILL_AT": kill_at}
     done = subprocess.run(
         [sys.executable, "-c", KILLER, *args], capture_output=True, text=True, env=env, timeout=120
     )
@@ -94,6 +84,7 @@ def complete_run(out: Path) -> float:
     raise AssertionError("the trajectory is neither run's")
 
 
+@pytest.mark.process("the run is SIGKILLed at a step of its publish")
 @pytest.mark.parametrize(
     ("step", "published"),
     [("manifest", 0.0), ("publish", 0.0), ("swapped", 45.0), ("trash", 45.0)],
@@ -117,16 +108,9 @@ def test_a_directory_holding_other_files_is_not_replaced(tmp_path: Path) -> None
     out = tmp_path / "out"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
-    pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE)
+    pipeline = write_pipeline(tmp_path, STAGES, name="publish")
     args = ["run", str(pipeline), "--input", str(SAMPLE), "--out", str(out)]
-    done = subprocess.run(
-        [sys.executable, "-c", KILLER, *args],
-        env={**os.environ, "KILL_AT": "nothing"},
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    done = gyropipe_cli(*args)
     assert done.returncode == 2
     assert "holds files that are not a previous run's (notes.txt)" in done.stderr
     assert (out / "notes.txt").read_text() == "mine"

@@ -5,7 +5,6 @@ pipeline is validated, each problem at its YAML location."""
 
 from __future__ import annotations
 
-import subprocess
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,7 @@ from pipeline.plugins import load_registry
 from pipeline.registry import Claim, PluginInfo, ReaderDef, Registry
 from pipeline.tables import Stations
 from pipeline.well import DefaultNorthReference, WellMetadata
-from tests_support import ROOT, gyropipe
+from tests_support import gyropipe_cli
 
 STATIONS = "MD[m],INC[deg],AZI[deg]\n0,0,0\n30,2,40\n"
 
@@ -180,9 +179,7 @@ def test_validate_locates_a_wrong_reader_option(
 ) -> None:
     path = tmp_path / "p.yaml"
     path.write_text(PIPELINE.format(reader=reader, options=options))
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, cwd=ROOT, timeout=60
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2, result.stdout + result.stderr
     where, message = expected.split(": ", 1)
     assert f"{path}:{where}: stage 'read' (read_stations): {message}" in result.stderr
@@ -192,16 +189,12 @@ def test_validate_locates_a_wrong_reader_option(
 def test_validate_accepts_options_some_reader_of_the_kind_takes(tmp_path: Path) -> None:
     path = tmp_path / "p.yaml"
     path.write_text(PIPELINE.format(reader="auto", options="delimiter: ';'"))
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, cwd=ROOT, timeout=60
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 0, result.stderr
 
 
 def test_plugins_lists_what_each_reader_claims() -> None:
-    result = subprocess.run(
-        [*gyropipe(), "plugins"], capture_output=True, text=True, cwd=ROOT, timeout=60
-    )
+    result = gyropipe_cli("plugins")
     lines = result.stdout.splitlines()
     assert any(
         line.startswith("  csv (builtin.csv ") and "by name, a .csv/.txt/.tsv file" in line

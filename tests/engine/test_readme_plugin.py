@@ -4,12 +4,11 @@ point, wired after the survey job, its output checked against its own contract."
 from __future__ import annotations
 
 import re
-import subprocess
 from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import ROOT, gyropipe_cli
 
 
 def readme_block(marker: str) -> str:
@@ -41,21 +40,8 @@ def test_readme_plugin_example_runs(tmp_path: Path):
     )
     pipeline.write_text(survey + stage)
     out_dir = tmp_path / "out"
-    result = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            str(pipeline),
-            "--input",
-            "examples/stations-j-well.csv",
-            "--out",
-            str(out_dir),
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        env=pythonpath(site),
-    )
+    args = ("run", pipeline, "--input", "examples/stations-j-well.csv", "--out", out_dir)
+    result = gyropipe_cli(*args, site=site)
     assert result.returncode == 0, result.stderr
     deep = pq.read_table(out_dir / "deep.deep.parquet")
     md = deep.column("md").to_numpy()

@@ -6,8 +6,11 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import signal
 import subprocess
+import sys
 import textwrap
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -24,21 +27,10 @@ from pipeline.spec import load_spec
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations, Trajectory
 from pipeline.well import WellMetadata, attach
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import ROOT, gyropipe, gyropipe_cli, pythonpath
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
 SURVEY = ROOT / "pipelines" / "survey.yaml"
-
-
-def cli(*args: str, env: Mapping[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [*gyropipe(), *args],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        env={**os.environ, **(env or {})},
-        timeout=120,
-    )
 
 
 def sample_values() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -51,7 +43,7 @@ def sample_values() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
     out_dir = tmp_path / "out"
-    result = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir))
+    result = gyropipe_cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir))
     assert result.returncode == 0, result.stderr
     names = sorted(p.name for p in out_dir.iterdir())
     assert names == [
@@ -108,9 +100,30 @@ def test_survey_job_end_to_end_from_the_cli(tmp_path: Path):
     assert qc.num_rows == len(md) and all(qc.column("passed").to_pylist())
 
 
+def test_a_command_in_process_leaves_the_process_as_it_was(tmp_path: Path):
+    """What the helper and the command set up for the process (the pandas deferral's import
+    hooks, the SIGTERM handler, the environment, the working directory, the warning filters)
+    is as it was afterwards: the tests that follow see a plain process."""
+
+    def state() -> tuple[object, ...]:
+        return (
+            list(sys.meta_path),
+            signal.getsignal(signal.SIGTERM),
+            dict(os.environ),
+            os.getcwd(),
+            list(warnings.filters),
+        )
+
+    before = state()
+    args = ["--input", str(SAMPLE), "--out", str(tmp_path / "out")]
+    done = gyropipe_cli("run", SURVEY, *args, env={"SOURCE_DATE_EPOCH": "0"}, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert state() == before
+
+
 def test_cli_overrides_and_well_metadata(tmp_path: Path):
     out_dir = tmp_path / "out"
-    result = cli(
+    result = gyropipe_cli(
         "run",
         str(SURVEY),
         "--input",
@@ -157,7 +170,7 @@ def test_bad_input_is_a_clear_error_and_writes_nothing(case: str, tmp_path: Path
     bad = tmp_path / "bad.csv"
     bad.write_text(text)
     out_dir = tmp_path / "out"
-    result = cli("run", str(SURVEY), "--input", str(bad), "--out", str(out_dir))
+    result = gyropipe_cli("run", str(SURVEY), "--input", str(bad), "--out", str(out_dir))
     assert result.returncode == 1
     assert str(bad) in result.stderr
     for fragment in fragments:
@@ -175,14 +188,14 @@ def test_file_north_reference_wins_over_the_pipeline_default(
     src = tmp_path / "st.csv"
     src.write_text(f"MD (m),Inc (deg),{header}\n0,0,0\n30,1,1\n")
     out_dir = tmp_path / "out"
-    result = cli("run", str(SURVEY), "--input", str(src), "--out", str(out_dir))
+    result = gyropipe_cli("run", str(SURVEY), "--input", str(src), "--out", str(out_dir))
     assert result.returncode == 0, result.stderr
     trajectory = pq.read_table(out_dir / "trajectory.trajectory.parquet")
     assert trajectory.schema.field("azi").metadata[b"north_reference"] == expected
 
 
 def test_missing_input_file_is_a_configuration_error(tmp_path: Path):
-    result = cli(
+    result = gyropipe_cli(
         "run", str(SURVEY), "--input", str(tmp_path / "nope.csv"), "--out", str(tmp_path / "out")
     )
     assert result.returncode == 2
@@ -350,6 +363,10 @@ def gyropipe_register_writers(register):
 """
 
 
+KILL = ("--set", "export_csv.writer=killer")
+
+
+@pytest.mark.process("the run SIGKILLs its own process mid-write")
 def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     site = tmp_path / "site"
     site.mkdir()
@@ -359,23 +376,18 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: killerplugin\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text("[gyropipe]\nkillerplugin = killerplugin\n")
     out_dir = tmp_path / "out"
-    env = pythonpath(site)
-    killed = cli(
-        "run",
-        str(SURVEY),
-        "--input",
-        str(SAMPLE),
-        "--out",
-        str(out_dir),
-        "--set",
-        "export_csv.writer=killer",
-        env=env,
+    killed = subprocess.run(
+        [*gyropipe(), "run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir), *KILL],
+        capture_output=True,
+        text=True,
+        env=pythonpath(site),
+        timeout=120,
     )
     assert killed.returncode == -9
     assert not out_dir.exists()  # nothing published
     assert list(tmp_path.glob(".out.gyropipe-staging-*"))  # the dead run's private staging
 
-    again = cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir), env=env)
+    again = gyropipe_cli("run", str(SURVEY), "--input", str(SAMPLE), "--out", str(out_dir))
     assert again.returncode == 0, again.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == [
         "dls_check.results.parquet",

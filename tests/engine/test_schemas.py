@@ -7,7 +7,7 @@ from pathlib import Path
 
 from pipeline import schemas
 from pipeline.registry import Registry
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 
 def test_committed_schemas_match_the_models(registry: Registry):
@@ -25,20 +25,15 @@ def test_schemas_describe_units_and_pipeline_fields(registry: Registry):
 
 
 def test_schemas_command_writes_and_checks(tmp_path: Path):
-    import subprocess
 
     out = tmp_path / "schemas"
     where = ["--out", str(out), "--docs", str(tmp_path / "docs")]
-    wrote = subprocess.run(
-        [*gyropipe(), "schemas", *where], capture_output=True, text=True, check=True
-    )
+    wrote = gyropipe_cli("schemas", *where, check=True)
     assert "pipeline.schema.json" in wrote.stdout and "tables.md" in wrote.stdout
-    ok = subprocess.run([*gyropipe(), "schemas", *where, "--check"])
+    ok = gyropipe_cli("schemas", *where, "--check")
     assert ok.returncode == 0
     (out / "well.schema.json").write_text("{}")
-    stale = subprocess.run(
-        [*gyropipe(), "schemas", *where, "--check"], capture_output=True, text=True
-    )
+    stale = gyropipe_cli("schemas", *where, "--check")
     assert stale.returncode == 1
     assert "stale:" in stale.stdout and "well.schema.json" in stale.stdout
 

@@ -3,7 +3,6 @@ problems, never a traceback."""
 
 from __future__ import annotations
 
-import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -17,7 +16,7 @@ from pipeline.io.csv.options import load_profile
 from pipeline.sim.spec import load_simulation
 from pipeline.spec import load_spec
 from pipeline.yamlsource import MAX_NODES
-from tests_support import gyropipe
+from tests_support import gyropipe_cli
 
 WRONG: list[Any] = [[], ["x"], {}, {"a": [1]}, 1, 2.5, None, True, [[1]], [{"a": 1}]]
 """Values of the wrong type for some field: lists, mappings, numbers, null."""
@@ -68,9 +67,7 @@ def test_a_list_as_stage_id_is_a_located_problem_not_a_traceback(tmp_path: Path)
         "stages: [{id: [], uses: read_stations, with: {input: stations}}]\n"
     )
     for extra in ([], ["--set", "read.x=1"]):
-        result = subprocess.run(
-            [*gyropipe(), "validate", str(path), *extra], capture_output=True, text=True
-        )
+        result = gyropipe_cli("validate", str(path), *extra)
         assert result.returncode == 2, result.stderr
         assert f"{path}:4:15: stages.0.id: Input should be a valid string" in result.stderr
         assert "Traceback" not in result.stderr
@@ -130,9 +127,7 @@ def test_alias_bomb_is_refused_by_the_cli(tmp_path: Path, command: str):
     path = tmp_path / "laughs.yaml"
     path.write_text(laughs())
     extra = ["--input", f"s={path}", "--out", str(tmp_path / "out")] if command == "run" else []
-    result = subprocess.run(
-        [*gyropipe(), command, str(path), *extra], capture_output=True, text=True, timeout=60
-    )
+    result = gyropipe_cli(command, str(path), *extra)
     assert result.returncode == 2, result.stderr
     assert f"{path}:13:9: aliases expand the document" in result.stderr
 
@@ -144,12 +139,7 @@ def test_alias_bomb_in_a_simulation_plan_and_a_csv_profile(tmp_path: Path):
     with pytest.raises(SpecError, match=r"plan.yaml:13:9: aliases expand"):
         load_simulation(plan)
     assert time.perf_counter() - start < 1.0
-    result = subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "sim")],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = gyropipe_cli("simulate", str(plan), "--out", str(tmp_path / "sim"))
     assert result.returncode == 2 and f"{plan}:13:9: aliases expand" in result.stderr
     profile = tmp_path / "profile.yaml"
     profile.write_text(laughs(key="aliases").replace("name: p\nversion: 1\n", ""))
@@ -189,9 +179,7 @@ def test_recursive_and_deep_documents_are_located_problems(
     """These ended in RecursionError tracebacks."""
     path = tmp_path / "p.yaml"
     path.write_text("name: p\nversion: 1\n" + text)
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2, result.stderr
     assert message in result.stderr and f"{path}:{where}" in result.stderr
     assert "Traceback" not in result.stderr
@@ -244,9 +232,7 @@ def test_validate_reports_every_problem_in_one_pass(tmp_path: Path):
     checked the params of a stage whose id is a duplicate."""
     path = tmp_path / "p.yaml"
     path.write_text(ALL_AT_ONCE)
-    result = subprocess.run(
-        [*gyropipe(), "validate", str(path)], capture_output=True, text=True, timeout=60
-    )
+    result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2, result.stderr
     found = [line.strip() for line in result.stderr.splitlines()[1:]]
     expected = [

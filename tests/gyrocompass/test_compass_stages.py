@@ -4,7 +4,6 @@ pre-averaged readings, and the bad inputs that must be rejected or flagged."""
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,7 @@ import pytest
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.solve import compass
 from pipeline.tables import PositionReadings
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 PLAN = """
 name: short-j
@@ -35,29 +34,19 @@ survey: {mode: point, every: 30, dwell: 20, move_time: 2}
 def simulated(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("sim")
     (root / "plan.yaml").write_text(PLAN)
-    subprocess.run(
-        [*gyropipe(), "simulate", str(root / "plan.yaml"), "--out", str(root)],
-        check=True,
-        capture_output=True,
-    )
+    gyropipe_cli("simulate", str(root / "plan.yaml"), "--out", str(root), check=True)
     return root
 
 
 def run(pipeline: str, input_file: Path, out: Path, *extra: str):
-    return subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            str(ROOT / "pipelines" / pipeline),
-            "--input",
-            str(input_file),
-            "--out",
-            str(out),
-            *extra,
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
+    return gyropipe_cli(
+        "run",
+        str(ROOT / "pipelines" / pipeline),
+        "--input",
+        str(input_file),
+        "--out",
+        str(out),
+        *extra,
     )
 
 

@@ -11,7 +11,6 @@ fit) and a three-axis tool are solved as before.
 from __future__ import annotations
 
 import re
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +28,7 @@ from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.gyrocompass.solve import compass
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 LATITUDE = 61.25
 K = OMEGA_DEG_H * np.cos(np.radians(LATITUDE))  # 7.23 °/h
@@ -217,11 +216,7 @@ def simulated(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "    - {kind: build, dls: 9.0, inc: 40, azi: 37}\n    - {kind: hold, length: 60}\n"
         "tool: {preset: mems-vrg}\nsurvey: {mode: point, every: 30, dwell: 20, move_time: 2}\n"
     )
-    subprocess.run(
-        [*gyropipe(), "simulate", str(root / "plan.yaml"), "--out", str(root)],
-        check=True,
-        capture_output=True,
-    )
+    gyropipe_cli("simulate", str(root / "plan.yaml"), "--out", str(root), check=True)
     return root
 
 
@@ -232,19 +227,13 @@ def test_the_point_gyro_pipeline_stops_on_a_units_mistake(
     samples = tmp_path / "samples.parquet"
     pq.write_table(in_unit(pq.read_table(simulated / "samples.parquet"), UNITS[unit]), samples)
     out = tmp_path / "out"
-    result = subprocess.run(
-        [
-            *gyropipe(),
-            "run",
-            str(ROOT / "pipelines" / "point-gyro.yaml"),
-            "--input",
-            str(samples),
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
+    result = gyropipe_cli(
+        "run",
+        str(ROOT / "pipelines" / "point-gyro.yaml"),
+        "--input",
+        str(samples),
+        "--out",
+        str(out),
     )
     assert result.returncode == 1, result.stdout + result.stderr
     assert "Traceback" not in result.stderr

@@ -6,7 +6,6 @@ flagged; ``gyropipe budget`` predicts the same share."""
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +16,7 @@ import yaml
 
 import pipeline as gp
 from pipeline.errors import StageError
-from tests_support import gyropipe
+from tests_support import gyropipe_cli
 
 PLAN: dict[str, Any] = {
     "name": "short-hold",
@@ -79,9 +78,7 @@ def test_budget_predicts_the_g_dependent_share(tmp_path: Path):
     plan = tmp_path / "plan.yaml"
     plan.write_text(yaml.safe_dump({**PLAN, "seed": 1, "tool": {"preset": "dtg-xy"}}))
     out = tmp_path / "budget.csv"
-    done = subprocess.run(
-        [*gyropipe(), "budget", str(plan), "--out", str(out)], capture_output=True, text=True
-    )
+    done = gyropipe_cli("budget", str(plan), "--out", str(out))
     assert done.returncode == 0, done.stderr
     assert "g-sens" in done.stdout
     table = pd.read_csv(out, comment="#")

@@ -1,6 +1,8 @@
-"""Fixtures of the export tests."""
+"""Fixtures of the export tests, and the fuzz tests' directory."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -21,3 +23,9 @@ def exports_run(tmp_path_factory: pytest.TempPathFactory) -> RunResult:
 def trajectory(exports_run: RunResult) -> pa.Table:
     """The exports run's trajectory with its uncertainty columns, as persisted."""
     return pq.read_table(exports_run.out_dir / "uncertainty.trajectory.parquet")
+
+
+@pytest.fixture(scope="module")
+def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A directory for a test module's fuzzed input files."""
+    return tmp_path_factory.mktemp("fuzz")

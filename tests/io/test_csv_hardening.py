@@ -3,7 +3,6 @@ like NaN, and a binary file is refused after its first block, without reading it
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +12,7 @@ import pytest
 from pipeline.errors import InputFileError
 from pipeline.io import csv as csv_plugin
 from pipeline.well import WellMetadata
-from tests_support import gyropipe, plugin_io
+from tests_support import gyropipe_cli, plugin_io
 
 READER, _ = plugin_io(csv_plugin)
 
@@ -81,12 +80,7 @@ def test_binary_file_refused_after_its_first_block(
     assert err.line == 1 and "NUL byte" in str(err)
     assert 0 < counting.read <= 2 * 64 * 1024
     monkeypatch.undo()
-    result = subprocess.run(
-        [*gyropipe(), "convert", str(path), str(tmp_path / "o.parquet"), "--kind", "stations"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "o.parquet"), "--kind", "stations")
     assert result.returncode == 1
     assert f"{path}:1: NUL byte: this is not a text CSV file" in result.stderr
 

@@ -293,11 +293,6 @@ def test_unreadable_profiles(tmp_path: Path) -> None:
 _op = line_ops()
 
 
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz_profiles")
-
-
 def _typed_errors_only(path: Path, kind: str, profile: Path) -> None:
     try:
         table, _ = read(path, kind, profile=profile)

@@ -469,11 +469,6 @@ VALID = (
 _op = line_ops()
 
 
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz_samples")
-
-
 def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:
     table, well = read(put(fuzz_dir, VALID))
     assert column(table, "md") == [30.48, 100.5 * 0.3048, 101 * 0.3048]

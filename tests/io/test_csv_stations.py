@@ -19,7 +19,7 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata
-from tests_support import assert_exported, mutate_bytes, plugin_io
+from tests_support import assert_exported, byte_mutations, mutate_bytes, plugin_io
 
 READER, WRITER = plugin_io(csv_plugin)
 
@@ -638,18 +638,7 @@ VALID = (
     b"Well: A-12\n# north_reference=grid\nMD (ft);INC [deg];Azimuth Grid (deg);Survey\n"
     b"0;0;0;S1\n100,5;1,25;45;S1\n200;2,5;46;S1\nEnd of survey\n"
 )
-_position = st.integers(min_value=0, max_value=len(VALID))
-_mutation = st.one_of(
-    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
-    st.tuples(st.just("truncate"), _position, st.just(0)),
-    st.tuples(st.just("insert"), _position, st.sampled_from(b',;\t|"\r\n#:=[]()e.- ')),
-    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
-)
-
-
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz")
+_mutation = byte_mutations(len(VALID), b',;\t|"\r\n#:=[]()e.- ')
 
 
 def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:

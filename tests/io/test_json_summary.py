@@ -21,7 +21,7 @@ from pipeline.registry import InputFile, Provenance
 from pipeline.runner import RunResult
 from pipeline.tables import CheckResults, Trajectory
 from pipeline.well import WellMetadata, well_of
-from tests_support import ROOT
+from tests_support import ROOT, pipeline_yaml, stage, survey_stages
 
 SCHEMA = json.loads((ROOT / "schemas" / "writers" / "json_summary.schema.json").read_text())
 
@@ -173,38 +173,12 @@ def test_write_summarises_one_trajectory_and_refuses_other_tables(tmp_path: Path
 
 
 def test_export_stage_refuses_single_table_writers_and_no_tables(tmp_path: Path):
-    head = """
-        name: bad
-        version: "1.0"
-        inputs:
-          stations: {description: stations}
-        well: {north_reference: "true"}
-        stages:
-          - id: read
-            uses: read_stations
-          - id: trajectory
-            uses: minimum_curvature
-            inputs: {stations: read.stations}
-    """
-    csv_export = (
-        head
-        + """
-          - id: out
-            uses: export
-            inputs: {trajectory: trajectory.trajectory}
-            with: {writer: csv}
-    """
-    )
+    head = survey_stages()
+    trajectory = {"trajectory": "trajectory.trajectory"}
+    csv_export = pipeline_yaml([*head, stage("out", "export", trajectory, writer="csv")])
     with pytest.raises(StageError, match="writer 'csv' writes one table: use the write stage"):
         run_yaml(csv_export, {"stations": SAMPLE}, tmp_path / "a")
-    nothing = (
-        head
-        + """
-          - id: out
-            uses: export
-            with: {writer: json_summary}
-    """
-    )
+    nothing = pipeline_yaml([*head, stage("out", "export", writer="json_summary")])
     with pytest.raises(StageError, match="wire at least one of the ports trajectory, stations"):
         run_yaml(nothing, {"stations": SAMPLE}, tmp_path / "b")
     assert not (tmp_path / "a").exists()  # a failed run publishes nothing

@@ -31,7 +31,7 @@ from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import LogTable, RawSamples, Stations
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata
-from tests_support import assert_exported, mutate_bytes, plugin_io
+from tests_support import assert_exported, byte_mutations, mutate_bytes, plugin_io
 
 logging.getLogger("lasio").setLevel(logging.CRITICAL)
 
@@ -1305,15 +1305,7 @@ VALID = las(
     "0.0 0.0 0.0 45\n100.5 1.25 45.5 -999.25\n201.0 2.5 46.0 50\n",
     well=" STRT.FT 0.0 : start\n STOP.FT 201.0 : stop\n STEP.FT 100.5 : step\n WELL. A-12 : well\n",
 ).encode()
-_position = st.integers(min_value=0, max_value=len(VALID))
-_mutation = st.one_of(
-    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
-    st.tuples(st.just("truncate"), _position, st.just(0)),
-    st.tuples(st.just("insert"), _position, st.sampled_from(b" \t\r\n#~.:-+eE0123456789,")),
-    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
-    st.tuples(st.just("delete_line"), _position, st.just(0)),
-    st.tuples(st.just("swap_columns"), _position, st.integers(0, 3)),
-)
+_mutation = byte_mutations(len(VALID), b" \t\r\n#~.:-+eE0123456789,", lines=True)
 
 
 def _lasio_curves(path: Path) -> list[np.ndarray] | None:
@@ -1337,11 +1329,6 @@ def _lasio_curves(path: Path) -> list[np.ndarray] | None:
                 except UnitError:
                     continue
     return converted
-
-
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz")
 
 
 def test_valid_fuzz_seed_parses(fuzz_dir: Path) -> None:

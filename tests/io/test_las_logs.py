@@ -9,7 +9,6 @@ import io
 import logging
 import math
 import re
-import subprocess
 import warnings
 from pathlib import Path
 from typing import Any
@@ -35,8 +34,9 @@ from pipeline.well import WellMetadata
 from tests_support import (
     ROOT,
     assert_exported,
+    byte_mutations,
     comparable_cell,
-    gyropipe,
+    gyropipe_cli,
     mutate_bytes,
     plugin_io,
 )
@@ -422,12 +422,6 @@ def test_written_log_keeps_repeated_mnemonics_and_descriptions(tmp_path: Path) -
 # ----------------------------------------------------------------------- convert (CLI)
 
 
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [*gyropipe(), "convert", *args], capture_output=True, text=True, cwd=ROOT, timeout=120
-    )
-
-
 def _csv_table(path: Path) -> tuple[pa.Table, list[str | None]]:
     """A CSV written by gyropipe: ``# `` comment lines, then a ``name[unit]`` header."""
     lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
@@ -446,7 +440,7 @@ def _csv_table(path: Path) -> tuple[pa.Table, list[str | None]]:
 def test_convert_a_log(tmp_path: Path, suffix: str) -> None:
     source = DATA / "gr.las"
     out = tmp_path / f"gr.{suffix}"
-    result = cli(str(source), "--out", str(out))
+    result = gyropipe_cli("convert", str(source), "--out", str(out))
     assert result.returncode == 0, result.stderr
     assert result.stdout == (f"wrote {out}: well log, 5 rows × 4 columns (DEPT, GR, RHOB, NPHI)\n")
     original, _, _ = read_log(source)
@@ -470,15 +464,20 @@ def test_convert_a_log(tmp_path: Path, suffix: str) -> None:
 
 def test_convert_reads_the_log_back_from_parquet(tmp_path: Path) -> None:
     parquet = tmp_path / "gr.parquet"
-    assert cli(str(DATA / "gr.las"), "--out", str(parquet)).returncode == 0
+    assert gyropipe_cli("convert", str(DATA / "gr.las"), "--out", str(parquet)).returncode == 0
     table, well, kind = read_kind(load_registry(), parquet, kind="auto", reader="auto", options={})
     assert kind == "log" and well.well == "GR-7"
     assert table.column_names == ["DEPT", "GR", "RHOB", "NPHI"]
 
 
 def test_convert_a_log_as_a_survey_says_what_it_is(tmp_path: Path) -> None:
-    result = cli(
-        "tests/data/las/gr.las", "--out", str(tmp_path / "x.parquet"), "--kind", "stations"
+    result = gyropipe_cli(
+        "convert",
+        "tests/data/las/gr.las",
+        "--out",
+        str(tmp_path / "x.parquet"),
+        "--kind",
+        "stations",
     )
     assert result.returncode == 1
     assert result.stderr == (
@@ -489,10 +488,14 @@ def test_convert_a_log_as_a_survey_says_what_it_is(tmp_path: Path) -> None:
 
 
 def test_convert_prints_warnings_and_located_errors(tmp_path: Path) -> None:
-    runon = cli(str(LASIO / "null_policy_runon.las"), "--out", str(tmp_path / "r.parquet"))
+    runon = gyropipe_cli(
+        "convert", str(LASIO / "null_policy_runon.las"), "--out", str(tmp_path / "r.parquet")
+    )
     assert runon.returncode == 0, runon.stderr
     assert "warning: " in runon.stderr and ":33: '7.020101130.188' holds 2 values" in runon.stderr
-    wrong = cli(str(DATA / "wrong_count.las"), "--out", str(tmp_path / "w.parquet"))
+    wrong = gyropipe_cli(
+        "convert", str(DATA / "wrong_count.las"), "--out", str(tmp_path / "w.parquet")
+    )
     assert wrong.returncode == 1
     assert wrong.stderr == (
         f"error: {DATA / 'wrong_count.las'}:26: expected 4 values (one per curve: DEPT, GR, "
@@ -502,10 +505,12 @@ def test_convert_prints_warnings_and_located_errors(tmp_path: Path) -> None:
 
 def test_convert_positional_output_and_its_errors(tmp_path: Path) -> None:
     out = tmp_path / "gr.parquet"
-    assert cli(str(DATA / "gr.las"), str(out)).returncode == 0 and out.exists()
-    none = cli(str(DATA / "gr.las"))
+    assert gyropipe_cli("convert", str(DATA / "gr.las"), str(out)).returncode == 0 and out.exists()
+    none = gyropipe_cli("convert", str(DATA / "gr.las"))
     assert none.returncode == 2 and "give --out OUTPUT" in none.stderr
-    both = cli(str(DATA / "gr.las"), str(out), "--out", str(tmp_path / "other.csv"))
+    both = gyropipe_cli(
+        "convert", str(DATA / "gr.las"), str(out), "--out", str(tmp_path / "other.csv")
+    )
     assert both.returncode == 2 and "two outputs" in both.stderr
 
 
@@ -527,20 +532,7 @@ def test_auto_keeps_surveys_and_reports_a_broken_one(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------ fuzz
 
-_position = st.integers(0, 1000)
-_mutation = st.one_of(
-    st.tuples(st.just("flip"), _position, st.integers(0, 255)),
-    st.tuples(st.just("truncate"), _position, st.just(0)),
-    st.tuples(st.just("insert"), _position, st.sampled_from(b" \t\r\n#~.:-+eE0123456789,\"'")),
-    st.tuples(st.just("delete"), _position, st.integers(1, 8)),
-    st.tuples(st.just("delete_line"), _position, st.just(0)),
-    st.tuples(st.just("swap_columns"), _position, st.integers(0, 3)),
-)
-
-
-@pytest.fixture(scope="module")
-def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fuzz")
+_mutation = byte_mutations(1000, b" \t\r\n#~.:-+eE0123456789,\"'", lines=True)
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)
@@ -573,7 +565,7 @@ def test_index_steps_past_the_float_range_warn_located_without_an_overflow(tmp_p
         " GR.GAPI : gamma\n~A\n-1e308 45\n1e308 50\n"
     )
     out = tmp_path / "far-copy.las"
-    result = cli(str(src), str(out), "--kind", "log")
+    result = gyropipe_cli("convert", str(src), str(out), "--kind", "log")
     assert result.returncode == 0, result.stderr
     assert result.stderr.splitlines() == [
         f"warning: {src}:15: STEP is 1e+308 but the index steps by more than the float range "

@@ -5,7 +5,6 @@ message's index, log time and topic. Test files are made with the mcap writer.""
 from __future__ import annotations
 
 import json
-import subprocess
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -38,7 +37,7 @@ from pipeline.io.mcap.arrow import (
 from pipeline.plugins import load_registry
 from pipeline.tables import RawSamples
 from pipeline.well import WellMetadata
-from tests_support import gyropipe
+from tests_support import gyropipe_cli
 
 Mutate = Callable[[int, str, bytes], bytes]
 
@@ -111,12 +110,7 @@ def test_a_payload_cut_short_is_a_located_error_through_convert(tmp_path: Path):
     path = tmp_path / "cut.mcap"
     samples_file(path, lambda data: data[: len(data) // 3])
     out = tmp_path / "out.parquet"
-    result = subprocess.run(
-        [*gyropipe(), "convert", str(path), str(out), "--kind", "samples"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("convert", str(path), str(out), "--kind", "samples")
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr
     assert (
@@ -242,12 +236,7 @@ def test_unit_metadata_that_is_not_text_is_a_contract_violation_through_convert(
     path = tmp_path / "unit.mcap"
     samples_file(path, bytes, rows=100, schema_bytes=lambda d: d.replace(b"m/s2", b"m/s\xb2", 1))
     out = tmp_path / "out.csv"
-    result = subprocess.run(
-        [*gyropipe(), "convert", str(path), str(out), "--kind", "samples"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("convert", str(path), str(out), "--kind", "samples")
     assert result.returncode == 1 and "Traceback" not in result.stderr, result.stderr
     assert result.stderr.splitlines() == [
         f"error: {path}: not valid as samples (reader 'mcap'): column 'acc_z': unit: expected "

@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import math
 import re
-import subprocess
 from pathlib import Path
 
 import pyarrow as pa
@@ -14,7 +13,7 @@ import pyarrow as pa
 from pipeline.contracts import UNIT_KEY
 from pipeline.io.precision import DECIMALS, for_export
 from pipeline.units import QUANTITIES
-from tests_support import ROOT, gyropipe, pythonpath
+from tests_support import gyropipe_cli
 
 
 def decimals(cell: str) -> int:
@@ -31,14 +30,7 @@ def test_every_canonical_unit_has_decimals() -> None:
 def test_survey_run_exports_hold_no_float_noise(tmp_path: Path) -> None:
     out = tmp_path / "out"
     args = ["run", "pipelines/survey.yaml", "--input", "examples/stations-j-well.csv"]
-    run = subprocess.run(
-        [*gyropipe(), *args, "--out", str(out)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        env=pythonpath(ROOT / "src"),
-        timeout=300,
-    )
+    run = gyropipe_cli(*args, "--out", str(out))
     assert run.returncode == 0, run.stderr
 
     lines = (out / "trajectory.csv").read_text().splitlines()

@@ -26,7 +26,7 @@ from pipeline.io.witsml.terms import survey_tool
 from pipeline.runner import RunResult
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata, well_of
-from tests_support import mutate_bytes, plugin_io
+from tests_support import mutate_bytes, pipeline_yaml, plugin_io, survey_stages
 
 READER, WRITER = plugin_io(witsml_plugin)
 NS = "http://www.witsml.org/schemas/1series"
@@ -121,20 +121,7 @@ def test_a_pipeline_ingests_the_export(
     exports_run: RunResult, trajectory: pa.Table, tmp_path: Path
 ):
     again = run_yaml(
-        """
-        name: ingest
-        version: "1.0"
-        inputs:
-          stations: {description: WITSML trajectory}
-        stages:
-          - id: read
-            uses: read_stations
-          - id: trajectory
-            uses: minimum_curvature
-            inputs: {stations: read.stations}
-            with: {vs_azimuth: 30.0}
-            persist: [trajectory]
-        """,
+        pipeline_yaml(survey_stages(vs_azimuth=30.0), name="ingest", well=None),
         {"stations": exports_run.out_dir / "trajectory.xml"},
         tmp_path / "out",
     )

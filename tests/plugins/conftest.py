@@ -15,11 +15,9 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
-from click.testing import CliRunner, Result
 
-from pipeline.cli import main
 from pipeline.plugins import ENTRY_POINT_GROUP, forget_shared_registries
-from tests_support import ROOT
+from tests_support import ROOT, CliResult, gyropipe_cli
 
 PACKAGE = ROOT / "plugins" / "gyropipe-acme"
 
@@ -82,11 +80,6 @@ def acme(site: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[ModuleType]:
 
 
 @pytest.fixture
-def cli() -> Callable[..., Result]:
-    """``gyropipe ARGS…`` run in process (click's CliRunner): the exit code, stdout and
-    stderr of the command."""
-
-    def invoke(*args: str) -> Result:
-        return CliRunner().invoke(main, list(args), catch_exceptions=False)
-
-    return invoke
+def cli() -> Callable[..., CliResult]:
+    """``gyropipe ARGS…`` run in process (:func:`tests_support.gyropipe_cli`)."""
+    return gyropipe_cli

@@ -98,7 +98,7 @@ def column(table: pa.Table, name: str) -> np.ndarray:
 
 def test_plugins_command_lists_acme(acme: ModuleType, cli: Cli):
     out = cli("plugins")
-    assert out.exit_code == 0, out.stderr
+    assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert (
         "acme 0.1.0 (third-party): reader:acme, reader:acme_survey, writer:acme, "
@@ -115,13 +115,13 @@ def test_vendor_tool_model_is_found_by_name(acme: ModuleType, cli: Cli):
     """The plugin's model file (GYRO-NS extended by a formula term) is listed and selected
     by name like a shipped one."""
     out = cli("models")
-    assert out.exit_code == 0, out.stderr
+    assert out.returncode == 0, out.stderr
     assert any(
         line.startswith("ACME-GYRO-V2 ") and "acme-gyro-v2.yaml" in line
         for line in out.stdout.splitlines()
     )
     shown = cli("models", "acme-gyro-v2", "--json")
-    assert shown.exit_code == 0, shown.stderr
+    assert shown.returncode == 0, shown.stderr
     doc = json.loads(shown.stdout)
     terms = {t["name"]: t for t in doc["terms"]}
     assert terms["ACME-THERM"]["weight"] == "formula"
@@ -162,7 +162,7 @@ def test_pipeline_reads_acme_file_back_to_the_simulated_samples(
     spec.write_text(textwrap.dedent(PIPELINE))
     out_dir = tmp_path / "out"
     result = cli("run", str(spec), "--input", str(agl), "--out", str(out_dir))
-    assert result.exit_code == 0, result.stderr
+    assert result.returncode == 0, result.stderr
     manifest = json.loads((out_dir / "run.json").read_text())
     assert manifest["plugins"]["acme"] == "0.1.0"
 
@@ -219,7 +219,7 @@ def test_malformed_file_is_reported_by_file_and_line(
     spec = tmp_path / "acme.yaml"
     spec.write_text(textwrap.dedent(PIPELINE))
     result = cli("run", str(spec), "--input", str(agl), "--out", str(tmp_path / "out"))
-    assert result.exit_code == 1, result.output
+    assert result.returncode == 1, result.output
     assert "Traceback" not in result.stderr
     assert f"{agl}:{line}" in result.stderr
     assert message in result.stderr
@@ -249,11 +249,11 @@ def test_vendor_txt_reader_wins_over_the_builtin_csv_reader(
     survey = ROOT / "pipelines" / "survey.yaml"
     args = ("run", str(survey), "--input", str(report), "--out")
     without = cli(*args, str(tmp_path / "a"), "--disable-plugin", "acme")
-    assert without.exit_code == 1
+    assert without.returncode == 1
     assert "builtin.files" in without.stderr and "no header row with md, inc, azi" in without.stderr
     out = tmp_path / "b"
     result = cli(*args, str(out))
-    assert result.exit_code == 0, result.stderr
+    assert result.returncode == 0, result.stderr
     table = pq.read_table(out / "trajectory.trajectory.parquet")
     assert column(table, "md").tolist() == [0.0, 30.48, 60.96]
     assert column(table, "inc").tolist() == [0.0, 2.5, 5.0]
@@ -266,7 +266,7 @@ def test_a_failing_vendor_reader_is_named(acme: ModuleType, cli: Cli, tmp_path: 
     report.write_text(REPORT.replace("100.0 2.5 47.5", "100.0 2.5"))
     survey = ROOT / "pipelines" / "survey.yaml"
     result = cli("run", str(survey), "--input", str(report), "--out", str(tmp_path / "o"))
-    assert result.exit_code == 1
+    assert result.returncode == 1
     assert "Traceback" not in result.stderr
     assert "reader 'acme_survey' (plugin acme 0.1.0) failed: InputFileError:" in result.stderr
     assert f"{report}:6: expected three numbers, got '100.0 2.5'" in result.stderr

@@ -54,9 +54,9 @@ def pipeline_file(tmp_path: Path) -> Path:
 def test_validate_refuses_a_disabled_plugin_s_tool_model(
     acme: ModuleType, cli: Cli, pipeline_file: Path
 ):
-    assert cli("validate", str(pipeline_file)).exit_code == 0
+    assert cli("validate", str(pipeline_file)).returncode == 0
     out = cli("validate", str(pipeline_file), "--disable-plugin", "acme")
-    assert out.exit_code == 2, out.output
+    assert out.returncode == 2, out.output
     assert f"{pipeline_file}:" in out.stderr and "stage 'uncertainty'" in out.stderr
     assert REFUSAL in out.stderr
 
@@ -67,12 +67,12 @@ def test_run_with_the_plugin_disabled_is_refused_before_anything_runs(
     out_dir = tmp_path / "out"
     args = ("run", str(pipeline_file), "--input", str(STATIONS), "--out", str(out_dir))
     refused = cli(*args, "--disable-plugin", "acme")
-    assert refused.exit_code == 2, refused.output
+    assert refused.returncode == 2, refused.output
     assert REFUSAL in refused.stderr
     assert not out_dir.exists()
 
     done = cli(*args)
-    assert done.exit_code == 0, done.output
+    assert done.returncode == 0, done.output
     manifest = json.loads((out_dir / "run.json").read_text())
     assert manifest["plugins"]["acme"] == "0.1.0"  # the plugin whose model the run used
     # the report names the model by the title its file (the plugin's) gives it
@@ -101,14 +101,14 @@ def test_python_api_finds_the_plugin_model_and_honours_disable(
 
 def test_models_listing_honours_disable(acme: ModuleType, cli: Cli):
     listed = cli("models")
-    assert listed.exit_code == 0, listed.output
+    assert listed.returncode == 0, listed.output
     assert any(line.startswith("ACME-GYRO-V2 ") for line in listed.stdout.splitlines())
     without = cli("models", "--disable-plugin", "acme")
-    assert without.exit_code == 0, without.output
+    assert without.returncode == 0, without.output
     names = [line.split()[0] for line in without.stdout.splitlines()]
     assert "ACME-GYRO-V2" not in names and "GYRO-NS" in names
     shown = cli("models", "ACME-GYRO-V2", "--disable-plugin", "acme")
-    assert shown.exit_code == 2
+    assert shown.returncode == 2
     assert f"error: {REFUSAL}" in shown.stderr
 
 
@@ -155,7 +155,7 @@ def test_every_stage_naming_a_tool_model_takes_it_from_the_run_s_registry(
 def test_a_stage_of_a_disabled_builtin_plugin_is_named_with_its_plugin(cli: Cli):
     survey = ROOT / "pipelines" / "survey.yaml"
     out = cli("validate", str(survey), "--disable-plugin", "builtin.survey")
-    assert out.exit_code == 2, out.output
+    assert out.returncode == 2, out.output
     assert (
         "stage 'minimum_curvature' is provided by plugin builtin.survey, which is disabled "
         "(--disable-plugin builtin.survey)"

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
 from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from tests_support import ROOT, gyropipe, simulate_and_run
+from tests_support import ROOT, gyropipe_cli, simulate_and_run
 
 PLAN = """
 name: qc-run
@@ -66,18 +65,11 @@ def test_a_magnetometer_bias_is_named_on_the_terminal_in_the_summary_and_the_rep
         )
     )
     sim = tmp_path / "sim"
-    subprocess.run(
-        [*gyropipe(), "simulate", str(tmp_path / "plan.yaml"), "--out", str(sim)],
-        check=True,
-        capture_output=True,
-    )
+    gyropipe_cli("simulate", str(tmp_path / "plan.yaml"), "--out", str(sim), check=True)
     out = tmp_path / "out"
     pipeline = str(ROOT / "pipelines" / "point-gyro.yaml")
-    result = subprocess.run(
-        [*gyropipe(), "run", pipeline, "--input", str(sim / "samples.parquet"), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
+    result = gyropipe_cli(
+        "run", pipeline, "--input", str(sim / "samples.parquet"), "--out", str(out)
     )
     assert result.returncode == 0, result.stderr
     printed = re.search(

@@ -17,8 +17,6 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from tests_support import ROOT, gyropipe
-
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--headless",
@@ -31,18 +29,6 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 PDF_DPI = 50
-
-
-def run(*args: str) -> subprocess.CompletedProcess[str]:
-    """``gyropipe ARGS`` from the repository root (relative paths as a user types them)."""
-    return subprocess.run(
-        [*gyropipe(), *args], capture_output=True, text=True, cwd=ROOT, timeout=300
-    )
-
-
-def run_ok(*args: str) -> None:
-    result = run(*args)
-    assert result.returncode == 0, result.stderr
 
 
 @dataclass

@@ -17,12 +17,12 @@ from report_support import (
     inspect,
     overlap,
     pdf_pages,
-    run_ok,
     svg_boxes,
 )
 
 from pipeline.sim.calibration import CalibrationPlan, simulate_calibration
 from pipeline.sim.spec import Drift
+from tests_support import gyropipe_cli
 
 
 def number(cell: str) -> float:
@@ -30,7 +30,16 @@ def number(cell: str) -> float:
 
 
 def calibrate(readings: str, out: Path, *options: str) -> Path:
-    run_ok("run", "pipelines/calibration.yaml", "--input", readings, "--out", str(out), *options)
+    gyropipe_cli(
+        "run",
+        "pipelines/calibration.yaml",
+        "--input",
+        readings,
+        "--out",
+        str(out),
+        *options,
+        check=True,
+    )
     return out
 
 

@@ -21,7 +21,6 @@ from report_support import (
     inspect,
     overlap,
     pdf_pages,
-    run_ok,
     svg_boxes,
     svg_texts,
 )
@@ -32,7 +31,7 @@ from pipeline.reports.charts.scene import text_width
 from pipeline.reports.pdf_fonts import pdf_font
 from pipeline.sim.calibration import CalibrationPlan, Harmonic, simulate_calibration
 from pipeline.sim.spec import Drift
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 TINY = CalibrationPlan(
     series=4,
@@ -51,7 +50,9 @@ def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     pq.write_table(simulate_calibration(TINY), work / "cal.parquet")
     out = work / "out"
     readings = str(work / "cal.parquet")
-    run_ok("run", "pipelines/calibration.yaml", "--input", readings, "--out", str(out))
+    gyropipe_cli(
+        "run", "pipelines/calibration.yaml", "--input", readings, "--out", str(out), check=True
+    )
     return out
 
 

@@ -21,10 +21,9 @@ from report_support import (
     inspect,
     marks,
     pdf_pages,
-    run_ok,
 )
 
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 sys.path.insert(0, str(ROOT / "tests" / "clearance"))
 from iscwsa_support import OFFSETS, expected_sf
@@ -36,7 +35,7 @@ NAMES = {f"offset-0{k}": OFFSETS[k - 1] for k in range(1, 7)}
 @pytest.fixture(scope="module")
 def clearance_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("clearance") / "out"
-    run_ok(
+    gyropipe_cli(
         "run",
         "pipelines/clearance.yaml",
         "--input",
@@ -45,6 +44,7 @@ def clearance_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "offsets=examples/clearance/manifest.csv",
         "--out",
         str(out),
+        check=True,
     )
     return out
 

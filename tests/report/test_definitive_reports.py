@@ -6,7 +6,6 @@ Chromium; the gates also in run.json and on the command line."""
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -16,13 +15,7 @@ from report_support import assert_self_contained, inspect, pdf_pages
 
 import pipeline as gp
 from inout_support import simulated_runs
-from tests_support import ROOT, gyropipe
-
-
-def _run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [*gyropipe(), "run", *args], capture_output=True, text=True, cwd=ROOT, timeout=300
-    )
+from tests_support import ROOT, gyropipe_cli
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +24,8 @@ def inout(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     runs = simulated_runs()
     for name in ("in", "bad"):
         gp.write(runs[name], work / f"{name}.csv")
-    done = _run(
+    done = gyropipe_cli(
+        "run",
         "pipelines/inout-gyro.yaml",
         "--input",
         f"inrun={work / 'in.csv'}",
@@ -96,7 +90,8 @@ def test_gates_report_in_chromium(inout: tuple[Path, str], browser: Any, tmp_pat
 
 def test_definitive_survey_report_in_chromium(browser: Any, tmp_path: Path) -> None:
     examples = ROOT / "examples" / "definitive"
-    done = _run(
+    done = gyropipe_cli(
+        "run",
         "pipelines/definitive.yaml",
         "--input",
         f"gyro={examples / 'gyro-run.csv'}",

@@ -4,15 +4,18 @@ a text leaves it (a Cyrillic well name)."""
 
 from __future__ import annotations
 
+import gc
+import os
 import shutil
 import subprocess
+import warnings
 from pathlib import Path
 
 import pytest
 
 from pipeline.reports.document import Document, Fields, Paragraph, Section
 from pipeline.reports.pdf import render_pdf
-from pipeline.reports.pdf_fonts import REPERTOIRE
+from pipeline.reports.pdf_fonts import FONTS, REPERTOIRE
 
 USUAL = "Azimuth σ 0.12° ≤ 3.0°, closure 45.2 m @ 37.1° — χ² = 1.2 (p = 0.55) ± 2 µm"
 CYRILLIC = "Скважина Самотлор-7"
@@ -25,9 +28,8 @@ def pdf_text(pdf: Path) -> str:
     return " ".join(done.stdout.decode("utf-8").split())
 
 
-@pytest.mark.parametrize("subject", ["W-12", CYRILLIC])
-def test_every_character_comes_back_out(tmp_path: Path, subject: str):
-    doc = Document(
+def document(subject: str) -> Document:
+    return Document(
         title="Gyro survey report",
         subject=subject,
         subtitle="",
@@ -37,8 +39,27 @@ def test_every_character_comes_back_out(tmp_path: Path, subject: str):
             Section("Summary", (Fields("Results", (("Closure", USUAL),)), Paragraph(USUAL))),
         ),
     )
+
+
+@pytest.mark.parametrize("subject", ["W-12", CYRILLIC])
+def test_every_character_comes_back_out(tmp_path: Path, subject: str):
     pdf = tmp_path / "report.pdf"
-    render_pdf(doc, pdf)
+    render_pdf(document(subject), pdf)
     text = pdf_text(pdf)
     assert subject in text and text.count(USUAL) == 2
     assert (set(subject) <= REPERTOIRE) == (subject == "W-12")
+
+
+def test_fonts_leave_no_file_open(tmp_path: Path):
+    """Text outside the repertoire reads the whole fonts and subsets them: no font file stays
+    open, and none is left to the garbage collector (a ``ResourceWarning`` then, which
+    pytest reports from whatever test runs at the time)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ResourceWarning)
+        render_pdf(document(CYRILLIC + " ЖЩЮ"), tmp_path / "report.pdf")
+        gc.collect()
+    assert not [w for w in caught if issubclass(w.category, ResourceWarning)]
+    fds = Path("/proc/self/fd")
+    if fds.is_dir():
+        open_files = [os.path.realpath(fds / fd) for fd in os.listdir(fds)]
+        assert not [f for f in open_files if f.startswith(str(FONTS))]

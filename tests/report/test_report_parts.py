@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 import subprocess
+from collections.abc import Iterator
 from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
@@ -16,11 +17,10 @@ from typing import Any
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from click.testing import CliRunner, Result
 from report_support import assert_self_contained, inspect
 
-from pipeline.cli import main
-from tests_support import ROOT, plugin_site
+from pipeline.plugins import forget_shared_registries
+from tests_support import ROOT, CliResult, gyropipe_cli, plugin_site
 
 TORTUOSITY = """
 from pipeline.plugin import (
@@ -116,14 +116,18 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture
-def plugged(site: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The plugins installed for this test (on ``sys.path``; entry points are read afresh)."""
+def plugged(site: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """The plugins installed for this test (on ``sys.path``; the process's registries are
+    loaded afresh on entry and on exit, so no other test sees them)."""
     monkeypatch.syspath_prepend(str(site))
     monkeypatch.chdir(ROOT)
+    forget_shared_registries()
+    yield
+    forget_shared_registries()
 
 
-def gyropipe(*args: str) -> Result:
-    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+def gyropipe(*args: str) -> CliResult:
+    return gyropipe_cli(*args, cwd=Path.cwd())
 
 
 def pipeline_with_tortuosity(directory: Path) -> Path:
@@ -193,7 +197,7 @@ def report(site: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
             "--disable-plugin",
             "brokensection",
         )
-    assert done.exit_code == 0, done.output
+    assert done.returncode == 0, done.output
     return out / "run"
 
 
@@ -256,7 +260,7 @@ def test_a_raising_section_fails_the_report_naming_its_plugin(
         "--out",
         str(tmp_path / "run"),
     )
-    assert done.exit_code != 0
+    assert done.returncode != 0
     lines = [line for line in done.output.splitlines() if "no tortuosity today" in line]
     assert len(lines) == 1, done.output
     assert (
@@ -269,7 +273,7 @@ def test_a_raising_section_fails_the_report_naming_its_plugin(
 
 def test_an_empty_part_is_a_problem_of_its_plugin(plugged: None) -> None:
     done = gyropipe("plugins")
-    assert done.exit_code == 0, done.output
+    assert done.returncode == 0, done.output
     assert (
         "problem: plugin brokensection 0.0.1: report part 'brokensection.empty': give a "
         "method or a section (or both)"
@@ -294,7 +298,7 @@ def test_a_plugin_section_in_the_calibration_report(plugged: None, tmp_path: Pat
         "--disable-plugin",
         "brokensection",
     )
-    assert done.exit_code == 0, done.output
+    assert done.returncode == 0, done.output
     found = sections_of(tmp_path / "run" / "report.html")
     assert list(found)[-2:] == ["part-tortuosity-series", "provenance"]
     series = pq.read_table(tmp_path / "run" / "drift.series.parquet").num_rows

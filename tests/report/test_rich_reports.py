@@ -25,7 +25,6 @@ from report_support import (
     marks,
     pdf_images,
     pdf_pages,
-    run_ok,
     svg_texts,
 )
 
@@ -41,7 +40,7 @@ from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.reports.flags import COMPASS, CONTINUOUS
 from pipeline.sim.sensors import measure, tool_preset
 from pipeline.tables import RawSamples
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 POINT_PLAN = """
 name: report-point
@@ -65,15 +64,16 @@ def number(cell: str) -> float:
 def point_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     work = tmp_path_factory.mktemp("point")
     (work / "plan.yaml").write_text(POINT_PLAN)
-    run_ok("simulate", str(work / "plan.yaml"), "--out", str(work / "sim"))
+    gyropipe_cli("simulate", str(work / "plan.yaml"), "--out", str(work / "sim"), check=True)
     out = work / "out"
-    run_ok(
+    gyropipe_cli(
         "run",
         "pipelines/point-gyro.yaml",
         "--input",
         str(work / "sim" / "samples.parquet"),
         "--out",
         str(out),
+        check=True,
     )
     return out
 
@@ -166,15 +166,16 @@ def test_qc_chart_axes_fit_their_data(point_run: Path, browser: Any):
 
 def test_free_gyro_report_shows_drift_and_in_out_qc(browser: Any, tmp_path: Path):
     plan = ROOT / "examples" / "plans" / "j-well-free-gyro.yaml"
-    run_ok("simulate", str(plan), "--out", str(tmp_path / "sim"))
+    gyropipe_cli("simulate", str(plan), "--out", str(tmp_path / "sim"), check=True)
     out = tmp_path / "out"
-    run_ok(
+    gyropipe_cli(
         "run",
         "pipelines/free-gyro.yaml",
         "--input",
         str(tmp_path / "sim" / "readings.parquet"),
         "--out",
         str(out),
+        check=True,
     )
     page = inspect(browser, out / "report.html")
     assert_self_contained(page, out / "report.html")
@@ -236,7 +237,7 @@ def test_allan_section_from_a_static_record(browser: Any, tmp_path: Path):
     static_record(tmp_path / "static.parquet")
     (tmp_path / "p.yaml").write_text(textwrap.dedent(ALLAN_PIPELINE))
     out = tmp_path / "out"
-    run_ok(
+    gyropipe_cli(
         "run",
         str(tmp_path / "p.yaml"),
         "--input",
@@ -245,6 +246,7 @@ def test_allan_section_from_a_static_record(browser: Any, tmp_path: Path):
         f"static={tmp_path / 'static.parquet'}",
         "--out",
         str(out),
+        check=True,
     )
     assert not (out / "report.pdf").exists()
     page = inspect(browser, out / "report.html")
@@ -281,10 +283,12 @@ def continuous_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from the end stop alone: no closure) and ends 0.2 m past the last 10 m station."""
     work = tmp_path_factory.mktemp("continuous")
     (work / "plan.yaml").write_text(CONTINUOUS_PLAN)
-    run_ok("simulate", str(work / "plan.yaml"), "--out", str(work / "sim"))
+    gyropipe_cli("simulate", str(work / "plan.yaml"), "--out", str(work / "sim"), check=True)
     out = work / "out"
     samples = str(work / "sim" / "samples.parquet")
-    run_ok("run", "pipelines/continuous-gyro.yaml", "--input", samples, "--out", str(out))
+    gyropipe_cli(
+        "run", "pipelines/continuous-gyro.yaml", "--input", samples, "--out", str(out), check=True
+    )
     return out
 
 
@@ -350,7 +354,7 @@ def test_short_last_course_is_not_the_maximum_dls(continuous_run: Path, browser:
 def test_min_course_length_zero_counts_every_course(continuous_run: Path, tmp_path: Path):
     out = tmp_path / "out"
     samples = continuous_run.parent / "sim" / "samples.parquet"
-    run_ok(
+    gyropipe_cli(
         "run",
         "pipelines/continuous-gyro.yaml",
         "--input",
@@ -361,6 +365,7 @@ def test_min_course_length_zero_counts_every_course(continuous_run: Path, tmp_pa
         "report.min_course_length=0",
         "--set",
         "report.formats=[html]",
+        check=True,
     )
     trajectory = pq.read_table(out / "uncertainty.trajectory.parquet")
     md, dls = trajectory.column("md").to_numpy(), trajectory.column("dls").to_numpy()

@@ -22,8 +22,6 @@ from report_support import (
     inspect,
     marks,
     pdf_pages,
-    run,
-    run_ok,
 )
 
 from pipeline.errors import GyropipeError, StageError
@@ -32,7 +30,7 @@ from pipeline.registry import Registry, StageDef
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
 from pipeline.tables import Trajectory
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 SAMPLE = "examples/stations-j-well.csv"
 EXAMPLES = ROOT / "examples" / "report"
@@ -62,7 +60,7 @@ def example_run(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Pat
         if name not in done:
             pipeline, sample = EXAMPLE_RUNS[name]
             done[name] = tmp_path_factory.mktemp(name)
-            run_ok("run", pipeline, "--input", sample, "--out", str(done[name]))
+            gyropipe_cli("run", pipeline, "--input", sample, "--out", str(done[name]), check=True)
         return done[name]
 
     return get
@@ -127,7 +125,7 @@ def test_failed_check_highlights_the_row_and_is_explained(tmp_path: Path, browse
     highlighted, is named in the summary and its check is explained in the QC section; the
     stations that pass are not highlighted at all (#18 item 7)."""
     out = tmp_path / "out"
-    run_ok(
+    gyropipe_cli(
         "run",
         "pipelines/survey.yaml",
         "--input",
@@ -138,6 +136,7 @@ def test_failed_check_highlights_the_row_and_is_explained(tmp_path: Path, browse
         "dls_check.params={limit: 2.0}",
         "--set",
         "report.formats=[html]",
+        check=True,
     )
     checks = pq.read_table(out / "dls_check.results.parquet").to_pylist()
     failed = [not r["passed"] for r in checks]
@@ -239,6 +238,6 @@ def test_empty_trajectory_fails_the_run_naming_the_stage(
 
 
 def test_bad_report_filename_is_rejected_before_running(tmp_path: Path):
-    result = run("validate", "pipelines/survey.yaml", "--set", "report.filename=../escape")
+    result = gyropipe_cli("validate", "pipelines/survey.yaml", "--set", "report.filename=../escape")
     assert result.returncode == 2
     assert "--set report.filename=../escape: stage 'report'" in result.stderr

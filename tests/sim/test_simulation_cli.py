@@ -4,7 +4,6 @@ in a pipeline, free-gyro readings, bad plans, and the error budget."""
 from __future__ import annotations
 
 import json
-import subprocess
 import textwrap
 from pathlib import Path
 
@@ -19,7 +18,7 @@ from pipeline.sim.budget import error_budget
 from pipeline.sim.freegyro import simulate_free_gyro
 from pipeline.sim.spec import load_simulation
 from pipeline.tables import FreeGyroReadings, RawSamples, SimTruth, Stations
-from tests_support import ROOT, gyropipe, read_stations
+from tests_support import ROOT, gyropipe_cli, read_stations
 
 PLANS = ROOT / "examples" / "plans"
 SMALL = """
@@ -53,12 +52,7 @@ def test_every_example_plan_is_valid():
 def test_simulate_command_writes_contracted_tables(tmp_path: Path):
     plan = write(tmp_path, SMALL)
     out = tmp_path / "out"
-    result = subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("simulate", str(plan), "--out", str(out))
     assert result.returncode == 0, result.stderr
     samples = pq.read_table(out / "samples.parquet")
     RawSamples.validate_table(samples)
@@ -71,24 +65,10 @@ def test_simulate_command_writes_contracted_tables(tmp_path: Path):
     assert manifest["seed"] == 7
     assert manifest["outputs"]["samples"]["rows"] == samples.num_rows
     again = tmp_path / "again"
-    subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(again)], check=True, capture_output=True
-    )
+    gyropipe_cli("simulate", str(plan), "--out", str(again), check=True)
     assert pq.read_table(again / "samples.parquet").equals(samples)  # reproducible
-    csv = subprocess.run(
-        [
-            *gyropipe(),
-            "simulate",
-            str(plan),
-            "--out",
-            str(tmp_path / "c"),
-            "--format",
-            "csv",
-            "--seed",
-            "8",
-        ],
-        capture_output=True,
-        text=True,
+    csv = gyropipe_cli(
+        "simulate", str(plan), "--out", str(tmp_path / "c"), "--format", "csv", "--seed", "8"
     )
     assert csv.returncode == 0, csv.stderr
     assert (tmp_path / "c" / "stations.csv").read_text().startswith("# gyropipe small")
@@ -114,12 +94,7 @@ def test_pipeline_starts_from_a_simulation(tmp_path: Path):
         "pipeline.yaml",
     )
     out = tmp_path / "out"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline), "--input", str(plan), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("run", str(pipeline), "--input", str(plan), "--out", str(out))
     assert result.returncode == 0, result.stderr
     trajectory = pq.read_table(out / "trajectory.trajectory.parquet")
     truth = pq.read_table(out / "sim.samples.parquet")
@@ -166,11 +141,7 @@ def test_impossible_dls_for_the_section_length(tmp_path: Path):
     with pytest.raises(SpecError) as info:
         load_simulation(plan)
     assert "sections[1]" in str(info.value) and "100" in str(info.value)
-    result = subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-    )
+    result = gyropipe_cli("simulate", str(plan), "--out", str(tmp_path / "o"))
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and not (tmp_path / "o").exists()
 
@@ -254,9 +225,7 @@ def test_error_budget_declares_the_azimuth_undefined_at_vertical(tmp_path: Path)
         sigma = budget.column(name).to_numpy()
         assert np.all(np.isnan(sigma[inc == 0.0])), name
         assert np.all(np.isfinite(sigma[inc > 1.0])), name
-    done = subprocess.run(
-        [*gyropipe(), "budget", str(PLANS / "vertical.yaml")], capture_output=True, text=True
-    )
+    done = gyropipe_cli("budget", str(PLANS / "vertical.yaml"))
     assert done.returncode == 0, done.stderr
     rows = done.stdout.splitlines()[2:]
     assert rows and all("azimuth undefined" in row for row in rows)
@@ -296,12 +265,7 @@ def test_a_denormal_dls_is_refused_at_its_line(tmp_path: Path):
     """Fuzz finding: dls 5e-324 made the arc infinite (NumPy warned of a division by zero)
     and was reported against the well as a whole, with the other kind of well's fields."""
     plan = write(tmp_path, SMALL.replace("dls: 6.0", "dls: 5.0e-324"))
-    result = subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("simulate", str(plan), "--out", str(tmp_path / "o"))
     assert result.returncode == 2 and "Warning" not in result.stderr, result.stderr
     assert result.stderr.splitlines()[1:] == [
         f"  {plan}:9:26: well.sections.1.dls: Input should be greater than or equal to 0.001 "
@@ -339,12 +303,7 @@ def test_stations_file_problems_name_the_plan_line_and_the_file_line(
             "  stations: st.csv\n",
         ),
     )
-    result = subprocess.run(
-        [*gyropipe(), "simulate", str(plan), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("simulate", str(plan), "--out", str(tmp_path / "o"))
     assert result.returncode == 2, result.stderr
     lines = result.stderr.splitlines()
     assert len(lines) == 2 and lines[1].startswith(f"  {plan}:7:13: well.stations: "), lines

@@ -3,7 +3,6 @@ reference conversion — wired as a user would."""
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +12,7 @@ from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
-from tests_support import ROOT, gyropipe
+from tests_support import ROOT, gyropipe_cli
 
 PIPELINE = """
 name: stations
@@ -82,12 +81,7 @@ def test_a_course_of_a_few_ulp_is_refused_at_its_line_through_the_cli(tmp_path: 
     stations = tmp_path / "ulp.csv"
     stations.write_text("MD [m],INC [deg],Azimuth True [deg]\n0,0,0\n4.9e-324,1,0\n30,2,0\n")
     pipeline, out = ROOT / "pipelines/survey.yaml", tmp_path / "out"
-    result = subprocess.run(
-        [*gyropipe(), "run", str(pipeline), "--input", str(stations), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = gyropipe_cli("run", str(pipeline), "--input", str(stations), "--out", str(out))
     assert result.returncode == 1, result.stderr
     assert "Warning" not in result.stderr and "Traceback" not in result.stderr, result.stderr
     assert (

@@ -4,8 +4,10 @@ replace (``data/legacy-covariances.npz``, written by ``make_legacy_baseline.py``
 on ISCWSA test well #1 and a synthetic well, a measured noise, a continuous run from a
 measured initial azimuth, both Jacobian bases and both surface conventions.
 
-Criterion: equal bit for bit (the issue asks for 1e-12 m²; the engine evaluates the same
-float operations in the same order).
+Criterion: within 1e-12 m² (and 1e-12 relative, for the large elements), as the issue asked:
+the engine evaluates the same float operations in the same order, but the snapshot was written
+on one CPU, and NumPy's vectorised sin/cos/sqrt round the last bit differently on another
+(AVX-512: 2.3e-13 m² apart on these sums of many terms).
 """
 
 from __future__ import annotations
@@ -118,7 +120,8 @@ CASES = _cases()
 
 
 def _close(ours: Floats, ref: Floats) -> None:
-    np.testing.assert_array_equal(ours, ref)
+    """Covariances (m²) equal to the snapshot's within its CPU's rounding (see the module)."""
+    np.testing.assert_allclose(ours, ref, rtol=1e-12, atol=1e-12)
 
 
 def test_every_snapshot_case_is_covered() -> None:

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import subprocess
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -32,7 +31,7 @@ from pipeline.uncertainty.engine import SurveyValueError
 from pipeline.uncertainty.formula import Formula, FormulaError
 from pipeline.uncertainty.terms import stack
 from pipeline.well import WellMetadata
-from tests_support import ROOT, gyropipe
+from tests_support import gyropipe_cli
 
 DATA = Path(__file__).parent / "data"
 LAT = 60.0
@@ -310,8 +309,7 @@ def test_the_stage_takes_a_model_file(tmp_path: Path) -> None:
 
 
 def test_gyropipe_models_lists_and_checks(tmp_path: Path) -> None:
-    run = [*gyropipe(), "models"]
-    listed = subprocess.run(run, capture_output=True, text=True, cwd=ROOT, timeout=120)
+    listed = gyropipe_cli("models")
     assert listed.returncode == 0, listed.stderr
     names = [line.split()[0] for line in listed.stdout.splitlines()]
     assert names == [
@@ -325,7 +323,7 @@ def test_gyropipe_models_lists_and_checks(tmp_path: Path) -> None:
     ]
     bad = tmp_path / "vendor.yaml"
     bad.write_text(GOOD.replace("unit: deg", "unit: furlong"))
-    checked = subprocess.run([*run, str(bad)], capture_output=True, text=True, timeout=120)
+    checked = gyropipe_cli("models", str(bad))
     assert checked.returncode == 2
     assert f"{bad}:9:11: unknown unit 'furlong'" in checked.stderr
     assert "Traceback" not in checked.stderr

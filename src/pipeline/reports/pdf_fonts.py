@@ -74,9 +74,7 @@ class PdfFont:
     def _whole(self) -> TTFont:
         """The font's own tables: every glyph's cmap entry, advance, kerning and top."""
         if self._font is None:
-            from fontTools.ttLib import TTFont
-
-            tt = self._font = TTFont(self.path, lazy=True)
+            tt = self._font = _read_font(self.path)
             self._cmap = tt.getBestCmap()
             self._advance = {n: m[0] for n, m in tt["hmtx"].metrics.items()}
             if "kern" in tt:
@@ -156,7 +154,6 @@ def _make_subset(path: str, chars: set[str], *, kern: bool = False) -> Subset:
     """A subset of the font at ``path`` holding exactly ``chars`` (with its ``kern`` table
     if ``kern``)."""
     from fontTools import subset  # type: ignore[import-untyped]
-    from fontTools.ttLib import TTFont
 
     options = subset.Options()
     options.drop_tables += [t for t in DROPPED if not (kern and t == "kern")]
@@ -164,7 +161,7 @@ def _make_subset(path: str, chars: set[str], *, kern: bool = False) -> Subset:
     options.notdef_outline = True
     options.name_IDs = [1, 2, 4, 6]
     options.glyph_names = True
-    font = TTFont(path, lazy=True)
+    font = _read_font(path)
     subsetter = subset.Subsetter(options)
     subsetter.populate(unicodes=sorted(ord(c) for c in chars))
     logging.getLogger("fontTools.subset").setLevel(logging.ERROR)
@@ -180,6 +177,14 @@ def _make_subset(path: str, chars: set[str], *, kern: bool = False) -> Subset:
     return out.getvalue(), ids, widths, text
 
 
+def _read_font(path: str) -> TTFont:
+    """The font at ``path``, its tables parsed when first used, from its bytes in memory
+    (a font read lazily from its file keeps the file open as long as the font lives)."""
+    from fontTools.ttLib import TTFont
+
+    return TTFont(io.BytesIO(Path(path).read_bytes()), lazy=True)
+
+
 def _glyph_top(font: TTFont, name: str) -> int:
     """Highest point of glyph ``name`` above the baseline, font units."""
     outline = font["glyf"][name]
@@ -188,9 +193,7 @@ def _glyph_top(font: TTFont, name: str) -> int:
 
 def _metrics(path: str) -> dict[str, Any]:
     """Layout metrics of the :data:`REPERTOIRE`'s glyphs, read from the font at ``path``."""
-    from fontTools.ttLib import TTFont
-
-    tt = TTFont(path, lazy=True)
+    tt = _read_font(path)
     cmap = tt.getBestCmap()
     chars = {c: cmap[ord(c)] for c in sorted(REPERTOIRE) if ord(c) in cmap}
     glyphs = {*chars.values(), ".notdef"}
