@@ -133,12 +133,10 @@ def run(
 
     defer_pandas()
     from pipeline.api.run import execute
-    from pipeline.qc.gates import acceptance_lines, failed_gates
-    from pipeline.qc.tables import QcResults, QcSummary, diagnosis_lines
-    from pipeline.qc.verdict import qc_verdict
+    from pipeline.cli_run import qc_lines, verdict_line, warnings_echoed
+    from pipeline.qc.gates import acceptance_lines
     from pipeline.runner import REJECTED, RunInputError
     from pipeline.streams import use_returning_memory_pool
-    from pipeline.tables import CheckResults
 
     use_returning_memory_pool()
     registry = _registry(disabled)
@@ -150,7 +148,8 @@ def run(
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
     try:
-        result = execute(plan, registry, files, well=well, out=Path(out_dir))
+        with warnings_echoed():
+            result = execute(plan, registry, files, well=well, out=Path(out_dir))
     except RunInputError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
@@ -160,27 +159,13 @@ def run(
     for stage in result.manifest["stages"]:
         rows = ", ".join(f"{p}={n}" for p, n in stage["rows_out"].items()) or "-"
         click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
-    checks = []
-    for stage in plan.stages:  # QC tables only: other outputs are not read back
-        for port, contract in stage.definition.outputs.items():
-            name = f"{stage.id}.{port}"
-            if contract is QcSummary:
-                for line in diagnosis_lines(name, result.tables[name]):
-                    click.echo(line)
-            elif issubclass(contract, CheckResults | QcResults):
-                checks.append(result.tables[name])
+    for line in qc_lines(plan, result):
+        click.echo(line)
     for line in acceptance_lines(result.manifest):
         click.echo(line)
     for path in result.outputs:
         click.echo(f"wrote {path}")
-    said = [qc_verdict(checks)]
-    if result.manifest["status"] == REJECTED:
-        said.insert(0, f"acceptance FAILED ({', '.join(failed_gates(result.manifest))})")
-    verdict = "; ".join(s for s in said if s)
-    click.echo(
-        f"{result.manifest['status']}: {Path(out_dir) / 'run.json'}"
-        + (f" — {verdict}" if verdict else "")
-    )
+    click.echo(verdict_line(plan, result, Path(out_dir) / "run.json"))
     if result.manifest["status"] == REJECTED:
         sys.exit(EXIT_REJECTED)
 

@@ -4,19 +4,22 @@ check) and at how many stations, over every check table the run produced."""
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import pyarrow as pa
 
 __all__ = ["qc_verdict"]
 
 
-def qc_verdict(tables: Iterable[pa.Table]) -> str | None:
+def qc_verdict(
+    tables: Iterable[pa.Table], others: Iterable[tuple[str, int, Sequence[float]]] = ()
+) -> str | None:
     """``"QC: 8 failed checks (dls_limit: 8) at 8 stations"`` or ``"QC: all 60 checks
     passed"`` over ``tables`` (each with ``check``, ``passed`` and ``md`` columns: check
     results, validity results; a null ``passed`` was not evaluated and counts for neither);
     None when no table holds a result. Stations are told apart by MD; a failed row without
-    MD is a data window."""
+    MD is a data window. ``others``: checks recorded otherwise, as (name, stations
+    evaluated, MD of each failed station)."""
     failed: Counter[str] = Counter()
     stations: set[float] = set()
     windows = 0
@@ -35,6 +38,11 @@ def qc_verdict(tables: Iterable[pa.Table]) -> str | None:
                     windows += 1
                 else:
                     stations.add(round(float(depth), 6))
+    for name, count, failed_md in others:
+        evaluated += count
+        if failed_md:
+            failed[name] += len(failed_md)
+            stations.update(round(float(depth), 6) for depth in failed_md)
     if not evaluated:
         return None
     if not failed:
