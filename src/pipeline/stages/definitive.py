@@ -14,6 +14,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from pipeline.contracts import SOURCE_KEY, TableContract, column
+from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
@@ -24,7 +25,8 @@ from pipeline.stages.uncertainty import (
     PositionUncertainty,
     UncertaintyParams,
     covariance_columns,
-    wellhead_field,
+    magnetic_words,
+    with_magnetic,
 )
 from pipeline.survey.definitive import OverlapRule, RunStations, plan_sections, roles
 from pipeline.survey.definitive import Section as PlannedSection
@@ -150,7 +152,9 @@ class DefinitiveParams(BaseModel):
         None, ge=-89.9, le=89.9, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
-        None, description="geomagnetic reference (MWD models, magnetic azimuths); default WMM"
+        None,
+        description="geomagnetic reference (MWD models, magnetic azimuths); default: the well "
+        "metadata's magnetic_field, magnetic_dip and declination, else WMM2025 at the site",
     )
     basis: Literal["balanced_tangent", "min_curve"] = Field(
         "balanced_tangent", description="leg Jacobian of the error propagation"
@@ -201,7 +205,8 @@ def definitive_survey(
         raise ValueError(f"runs {missing} are configured but their ports are not wired")
     ports = [p for p in RUN_PORTS if p in inputs]
     north = params.north_reference or north_reference_of(inputs[ports[0]], "azi")
-    magnetic = _magnetic(params, ctx.well, [inputs[p] for p in ports], ports)
+    applied = _magnetic(params, ctx.well, [inputs[p] for p in ports])
+    magnetic = None if applied is None else applied.reference
     runs = [
         _read(p, inputs[p], params.runs.get(p, RunSpec()), north, magnetic, ctx.well) for p in ports
     ]
@@ -262,7 +267,7 @@ def definitive_survey(
             at = interpolate_md(md, inc, azi, nxt, tie=(pos.north[0], pos.east[0], pos.tvd[0]))
             tie = (float(at.north[0]), float(at.east[0]), float(at.tvd[0]))
             carried = carried_next
-    survey_table = _survey_table(parts, params, north)
+    survey_table = with_magnetic(_survey_table(parts, params, north), applied)
     return {
         "survey": survey_table,
         "overlap": _overlap(runs, stations, sections, survey_table, north),
@@ -298,15 +303,15 @@ def _read(
 
 
 def _magnetic(
-    params: DefinitiveParams, well: WellMetadata, tables: list[pa.Table], ports: list[str]
-) -> MagneticReference | None:
+    params: DefinitiveParams, well: WellMetadata, tables: list[pa.Table]
+) -> AppliedMagnetic | None:
     """The geomagnetic reference when an MWD model or a magnetic azimuth needs it."""
     needed = any(
         "magnetic" in configure(s.model, s.tool).needs for s in params.runs.values()
     ) or any("magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables)
-    if params.magnetic is not None or not needed:
-        return params.magnetic
-    return wellhead_field(well)
+    if not needed:
+        return None
+    return applied_magnetic(params.magnetic, well, stage="definitive_survey")
 
 
 def _terms(spec: RunSpec, site: ModelSite) -> list[Term]:
@@ -412,7 +417,7 @@ def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
         "runs tied at their first station to the survey above; each run's error model "
         f"propagated as in {ctx.cite(ERROR_MODEL)} with its systematic errors correlated "
         "within the run, the tie point's uncertainty carried below it, ellipses at "
-        f"{confidence:g} %",
+        f"{confidence:g} %{magnetic_words(ctx)}",
     )
 
 
