@@ -115,7 +115,8 @@ def checked(
         return trajectory
     if check.beyond_md:
         hint = (
-            " (its first station already: set the tie-in, tie_tvd/tie_north/tie_east)"
+            "; already at the first station: the file's tie-in is not the one applied (set "
+            "the stage's tie_tvd, tie_north and tie_east)"
             if check.beyond_md[0] == trajectory.column("md")[0].as_py()
             else ""
         )
