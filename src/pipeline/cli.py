@@ -1,7 +1,9 @@
 """The ``gyropipe`` command.
 
 Exit codes: 0 success; 1 the run failed (bad input data, a stage raised, a contract was
-broken); 2 the pipeline, its configuration or the command line is invalid.
+broken); 2 the pipeline, its configuration or the command line is invalid; 3 the run
+succeeded and published its outputs but the survey failed an acceptance gate (``run.json``
+``status: rejected``; a batch: some well was rejected, none failed).
 
 Only click and the standard library are imported here: each command imports what it uses
 (numpy, pyarrow, pydantic, the plugins) when it runs, so ``gyropipe --help`` stays fast.
@@ -36,6 +38,7 @@ if TYPE_CHECKING:
 
 EXIT_FAILED = 1
 EXIT_CONFIG = 2
+EXIT_REJECTED = 3
 
 set_option = click.option(
     "--set",
@@ -123,9 +126,9 @@ def run(
 
     defer_pandas()
     from pipeline.api.run import execute
+    from pipeline.cli_run import qc_lines, verdict_line, warnings_echoed
     from pipeline.qc.gates import acceptance_lines
-    from pipeline.qc.tables import QcSummary, diagnosis_lines
-    from pipeline.runner import RunInputError
+    from pipeline.runner import REJECTED, RunInputError
     from pipeline.streams import use_returning_memory_pool
 
     use_returning_memory_pool()
@@ -138,7 +141,8 @@ def run(
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
     try:
-        result = execute(plan, registry, files, well=well, out=Path(out_dir))
+        with warnings_echoed():
+            result = execute(plan, registry, files, well=well, out=Path(out_dir))
     except RunInputError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
@@ -148,18 +152,15 @@ def run(
     for stage in result.manifest["stages"]:
         rows = ", ".join(f"{p}={n}" for p, n in stage["rows_out"].items()) or "-"
         click.echo(f"  {stage['id']:<16} {stage['wall_time_s'] * 1e3:9.1f} ms  {rows}")
-    for stage in plan.stages:  # validity summaries only: other outputs are not read back
-        for port, contract in stage.definition.outputs.items():
-            if contract is QcSummary:
-                for line in diagnosis_lines(
-                    f"{stage.id}.{port}", result.tables[f"{stage.id}.{port}"]
-                ):
-                    click.echo(line)
+    for line in qc_lines(plan, result):
+        click.echo(line)
     for line in acceptance_lines(result.manifest):
         click.echo(line)
     for path in result.outputs:
         click.echo(f"wrote {path}")
-    click.echo(f"ok: {Path(out_dir) / 'run.json'}")
+    click.echo(verdict_line(plan, result, Path(out_dir) / "run.json"))
+    if result.manifest["status"] == REJECTED:
+        sys.exit(EXIT_REJECTED)
 
 
 @main.command()
@@ -233,7 +234,8 @@ def batch(
     disabled: tuple[str, ...],
 ) -> None:
     """Run a pipeline on many wells: one run per well into OUT/<well_id>/, recorded in a
-    run ledger. Exit 0 all wells done or skipped, 1 some failed, 2 configuration error."""
+    run ledger. Exit 0 all wells done or skipped, 1 some failed, 2 configuration error,
+    3 none failed but some rejected (a survey failed an acceptance gate)."""
     from pipeline.lazy_pandas import defer_pandas
 
     defer_pandas()

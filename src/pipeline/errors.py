@@ -86,6 +86,11 @@ class InputFileWarning(UserWarning):
     reader did about it (e.g. a header value contradicting the data it kept)."""
 
 
+class SurveyCheckWarning(UserWarning):
+    """A run's numbers disagree with what its input states (e.g. a stations file's own
+    positions with the recomputed ones), named with the stage and the first station."""
+
+
 def warn_input(path: str | Path, message: str, line: int = 0) -> None:
     """Issue an :class:`InputFileWarning` located at ``path:line``."""
     where = f"{path}:{line}" if line else str(path)

@@ -48,6 +48,8 @@ from pipeline.well import WellMetadata, well_of
 
 T = TypeVar("T")
 MANIFEST = "run.json"
+REJECTED = "rejected"
+"""``run.json``'s ``status`` of a run that succeeded but failed an acceptance gate"""
 STAGING_PREFIX = ".gyropipe-staging-"
 
 
@@ -550,7 +552,8 @@ def _manifest(
 ) -> dict[str, Any]:
     """``run.json``; ``outputs`` are (file written, its published path) pairs; with the gates
     of every acceptance-gates table the run produced (``acceptance``: overall ``pass`` unless
-    a gate failed)."""
+    a gate failed; a failed gate makes the run's ``status`` ``rejected``: it ran, its outputs
+    are the evidence, the survey is not accepted)."""
     manifest: dict[str, Any] = {
         "status": "ok",
         "gyropipe": provenance.gyropipe,
@@ -586,6 +589,8 @@ def _manifest(
     if gates:
         failed = any(g["status"] == "fail" for g in gates)
         manifest["acceptance"] = {"status": "fail" if failed else "pass", "gates": gates}
+        if failed:
+            manifest["status"] = REJECTED
     return manifest
 
 

@@ -98,6 +98,9 @@ class WellMetadata(BaseModel):
         description="grid convergence at the wellhead, deg (grid north east of true north "
         "positive)",
     )
+    # the geomagnetic reference of the site and date (default: the geomagnetic model's)
+    magnetic_field: float | None = Field(None, gt=0, description="geomagnetic total field, nT")
+    magnetic_dip: float | None = Field(None, ge=-90, le=90, description="magnetic dip, deg, down +")
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

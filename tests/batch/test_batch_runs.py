@@ -72,7 +72,13 @@ def test_corrupt_wells_fail_alone_and_the_good_ones_complete(tmp_path: Path, sur
         ]
     events = log_events(result.stderr)
     assert [e["event"] for e in events] == ["start", *["well"] * 5, "end"]
-    assert events[-1]["counts"] == {"done": 3, "failed": 2, "skipped": 0, "interrupted": 0}
+    assert events[-1]["counts"] == {
+        "done": 3,
+        "rejected": 0,
+        "failed": 2,
+        "skipped": 0,
+        "interrupted": 0,
+    }
 
     # the ledger recorded every run with hashes, versions and the published outputs
     recorded = {r["well"]: r for r in runs(out / "ledger.sqlite")}

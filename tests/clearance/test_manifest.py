@@ -80,6 +80,8 @@ def test_missing_stations_file_fails_the_run_naming_manifest_and_line(tmp_path: 
         "reference=examples/clearance/reference.csv",
         "--input",
         f"offsets={path}",
+        "--set",
+        "clearance.reference_hole_diameter=0.9144",
         "--out",
         str(tmp_path / "out"),
     )

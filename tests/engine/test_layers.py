@@ -46,6 +46,7 @@ LAYERS: dict[str, int] = {
     "pipeline.cli": 6,
     "pipeline.cli_models": 6,
     "pipeline.cli_args": 6,
+    "pipeline.cli_run": 6,
     "pipeline.api": 6,
     "pipeline.plugin": 6,
     # 5 — orchestration: many wells, built-in stages, reports

@@ -13,6 +13,7 @@ from pipeline.graph import build_plan
 from pipeline.registry import Registry, StageContext, StageDef
 from pipeline.spec import load_spec
 from pipeline.tables import AnyTable, Stations, Trajectory
+from tests_support import gyropipe_cli
 
 HEAD = """
 name: demo
@@ -338,14 +339,10 @@ def test_set_overrides(write_yaml, registry):
 
 
 def test_cli_validate_reports_locations_and_exit_code(write_yaml, tmp_path: Path):
-    from click.testing import CliRunner
-
-    from pipeline.cli import main
-
     path = write_yaml(HEAD + "  - id: a\n    uses: nope\n")
-    result = CliRunner().invoke(main, ["validate", str(path)])
-    assert result.exit_code == 2
+    result = gyropipe_cli("validate", str(path))
+    assert result.returncode == 2
     assert f"{path}:7:11: unknown stage 'nope'" in result.output
-    ok = CliRunner().invoke(main, ["validate", "pipelines/survey.yaml"])
-    assert ok.exit_code == 0, ok.output
+    ok = gyropipe_cli("validate", "pipelines/survey.yaml")
+    assert ok.returncode == 0, ok.output
     assert "ok: pipeline 'survey'" in ok.output

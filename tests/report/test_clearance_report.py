@@ -42,6 +42,11 @@ def clearance_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "reference=examples/clearance/reference.csv",
         "--input",
         "offsets=examples/clearance/manifest.csv",
+        # the set's reference well: its model and hole (its field is in its header)
+        "--set",
+        "clearance.reference_model=ISCWSA-MWD-REV4",
+        "--set",
+        "clearance.reference_hole_diameter=0.9144",
         "--out",
         str(out),
         check=True,

@@ -73,6 +73,8 @@ def point_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         str(work / "sim" / "samples.parquet"),
         "--out",
         str(out),
+        "--set",  # stations every 150 m, on purpose: not flagged as long courses here
+        "report.max_course_length=200",
         check=True,
     )
     return out

@@ -71,6 +71,18 @@ def test_convert_table_relabels() -> None:
     np.testing.assert_array_equal(out.column("inc").to_numpy(), [0.0, 5.0])
 
 
+def test_convert_table_turns_the_files_own_positions() -> None:
+    """A listing's north/east are in its azimuths' reference: converted with them (a
+    point 100 m along true azimuth 10° is 100 m along magnetic azimuth 10° − 17°)."""
+    table = stations("true").append_column("north", [[0.0, 100 * np.cos(np.radians(10.0))]])
+    table = table.append_column("east", [[0.0, 100 * np.sin(np.radians(10.0))]])
+    out = convert_table(table, "magnetic", declination_deg=17.0)
+    np.testing.assert_allclose(out.column("azi").to_numpy(), [353.0, 333.0])
+    turned = np.radians(-7.0)
+    np.testing.assert_allclose(out.column("north").to_numpy(), [0.0, 100 * np.cos(turned)])
+    np.testing.assert_allclose(out.column("east").to_numpy(), [0.0, 100 * np.sin(turned)])
+
+
 def test_stage_given_declination() -> None:
     reported: list[WellMetadata] = []
     ctx: Any = SimpleNamespace(well=WellMetadata(), update_well=reported.append)

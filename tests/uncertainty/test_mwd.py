@@ -378,7 +378,9 @@ def test_stage_mwd_parameters_are_checked() -> None:
         UncertaintyParams(model="MWD")
     md = np.arange(0.0, 91.0, 30.0)
     traj, ctx = _trajectory(md, np.zeros(4), np.zeros(4), "true", WellMetadata(latitude=60.0))
-    with pytest.raises(MissingSiteError, match=r"longitude and survey_date.*stage's `magnetic`"):
+    with pytest.raises(
+        MissingSiteError, match=r"`magnetic_field`.*missing: `longitude`, `survey_date`.*`magnetic`"
+    ):
         position_uncertainty(traj, UncertaintyParams(model="ISCWSA-MWD-REV5"), ctx)
 
 

@@ -35,7 +35,7 @@ from .fingerprint import Fingerprint
 from .jobs import BatchConfigError
 from .policy import Run, Skip, WellState
 from .publish import read_published
-from .records import BatchRow, RunRow
+from .records import BatchRow, RunRow, rejection
 from .worker import WellOutcome
 
 SCHEMA_VERSION = 1
@@ -282,14 +282,15 @@ class Ledger:
 
     def finish(self, outcome: WellOutcome, error: str | None = None) -> None:
         """Record a worker's outcome (``error`` overrides a done outcome that the batch
-        process found inconsistent)."""
+        process found inconsistent); a done run whose survey failed acceptance is noted
+        ``rejected: …`` (:attr:`RunRow.verdict`)."""
         status = "failed" if error or outcome.status != "done" else "done"
         manifest = outcome.manifest
         with self._write():
             self._db.execute(
                 "UPDATE runs SET status = ?, finished = ?, inputs = ?, outputs = ?, "
-                "calibration = ?, error = ?, wall_time_s = ?, run_time_s = ?, process_time_s = ?, "
-                "peak_rss_bytes = ?, worker = ? WHERE id = ?",
+                "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
+                "process_time_s = ?, peak_rss_bytes = ?, worker = ? WHERE id = ?",
                 (
                     status,
                     time.time(),
@@ -297,6 +298,7 @@ class Ledger:
                     json.dumps(manifest.get("outputs", [])),
                     json.dumps(outcome.calibration),
                     error or outcome.error,
+                    rejection(manifest) if status == "done" else None,
                     outcome.wall_time_s,
                     outcome.run_time_s,
                     outcome.process_time_s,

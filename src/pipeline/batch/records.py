@@ -9,6 +9,9 @@ from typing import Any
 from .fingerprint import Fingerprint
 
 RUN_STATUSES = ("running", "done", "failed", "interrupted")
+REJECTED = "rejected"
+"""a done run (outputs published) whose survey failed an acceptance gate: the ledger keeps
+status ``done`` and says so in the run's note (``rejected: acceptance FAILED (…)``)"""
 BATCH_STATUSES = ("running", "finished", "interrupted")
 
 
@@ -43,6 +46,21 @@ class RunRow:
     """the stages alone, s"""
     peak_rss_bytes: int | None = None
     worker: str | None = None
+
+    @property
+    def verdict(self) -> str:
+        """``rejected`` for a done run whose survey failed acceptance, else its status."""
+        rejected = self.status == "done" and (self.note or "").startswith(f"{REJECTED}:")
+        return REJECTED if rejected else self.status
+
+
+def rejection(manifest: dict[str, Any]) -> str | None:
+    """The note of a run whose ``run.json`` says ``rejected``: which gates failed."""
+    from pipeline.qc.gates import failed_gates
+
+    if manifest.get("status") != REJECTED:
+        return None
+    return f"{REJECTED}: acceptance FAILED ({', '.join(failed_gates(manifest))})"
 
 
 @dataclass(frozen=True)

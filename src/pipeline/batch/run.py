@@ -29,7 +29,7 @@ from .ledger import LEASE_S, Busy, Claimed, Ledger, Skipped
 from .policy import Mode, decide
 from .progress import Reporter
 from .publish import clean_work_dir, read_published
-from .records import BatchRow
+from .records import REJECTED, BatchRow, rejection
 from .summary import WellResult, counts, write_summary
 from .worker import PipelineRef, WellOutcome, WellTask
 
@@ -56,7 +56,9 @@ class BatchOptions:
 
 @dataclass
 class BatchReport:
-    """What a batch did. ``exit_code``: 0 every well done or skipped, 1 otherwise."""
+    """What a batch did. ``exit_code``: 0 every well done or skipped, 1 some well failed
+    (or was interrupted, or not processed), else 3 some well was rejected (its survey failed
+    an acceptance gate)."""
 
     batch: BatchRow
     results: list[WellResult]
@@ -66,7 +68,9 @@ class BatchReport:
     @property
     def exit_code(self) -> int:
         bad = any(r.status in ("failed", "interrupted") for r in self.results)
-        return 1 if bad or self.not_processed else 0
+        if bad or self.not_processed:
+            return 1
+        return 3 if any(r.status == REJECTED for r in self.results) else 0
 
 
 def run_batch(
@@ -249,8 +253,13 @@ class _Batch:
         error = self._inconsistency(outcome, fingerprint) if outcome.status == "done" else None
         self.ledger.finish(outcome, error)
         if outcome.status == "done" and error is None:
+            rejected = rejection(outcome.manifest)
             result = WellResult(
-                job.well_id, "done", "; ".join(reasons), outcome.wall_time_s, outcome.run_id
+                job.well_id,
+                REJECTED if rejected else "done",
+                rejected or "; ".join(reasons),
+                outcome.wall_time_s,
+                outcome.run_id,
             )
         else:
             detail = error or outcome.error or "failed"

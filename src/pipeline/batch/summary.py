@@ -18,7 +18,7 @@ from pipeline.atomic import atomic_write_bytes
 
 from .records import BatchRow, iso
 
-STATUSES = ("done", "failed", "skipped", "interrupted")
+STATUSES = ("done", "rejected", "failed", "skipped", "interrupted")
 
 
 @dataclass(frozen=True)
@@ -27,9 +27,11 @@ class WellResult:
 
     well: str
     status: str
-    """done, failed, skipped, or interrupted (the batch was stopped while it ran)"""
+    """done, rejected (done, outputs published, but the survey failed an acceptance gate),
+    failed, skipped, or interrupted (the batch was stopped while it ran)"""
     detail: str
-    """why it ran (done), the error (failed) or why it was skipped"""
+    """why it ran (done), the failed gates (rejected), the error (failed) or why it was
+    skipped"""
     time_s: float | None = None
     """wall time of the run in its worker, s"""
     run_id: int | None = None
@@ -65,10 +67,10 @@ def table_text(results: list[WellResult], width: int | None = None) -> str:
     terminal's); a failure's cause (:func:`cause`) is wrapped, never cut."""
     width = width or shutil.get_terminal_size((120, 24)).columns
     name = max([4, *(len(r.well) for r in results)])
-    lines = [f"{'well':<{name}}  {'status':<7} {'time s':>8}  detail"]
+    lines = [f"{'well':<{name}}  {'status':<8} {'time s':>8}  detail"]
     for r in results:
         time_s = f"{r.time_s:8.2f}" if r.time_s is not None else f"{'-':>8}"
-        lines += wrapped(f"{r.well:<{name}}  {r.status:<7} {time_s}  ", cause(r.detail), width)
+        lines += wrapped(f"{r.well:<{name}}  {r.status:<8} {time_s}  ", cause(r.detail), width)
     return "\n".join(lines)
 
 

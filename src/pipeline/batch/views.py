@@ -27,7 +27,7 @@ def status_text(ledger: Ledger) -> str:
     runs = ledger.latest_runs()
     tally: dict[str, int] = {}
     for run in runs:
-        tally[run.status] = tally.get(run.status, 0) + 1
+        tally[run.verdict] = tally.get(run.verdict, 0) + 1
     lines = [
         f"ledger {ledger.path}: {len(runs)} wells — "
         + (", ".join(f"{n} {s}" for s, n in sorted(tally.items())) or "no runs")
@@ -96,6 +96,7 @@ def history_document(well: str, runs: list[RunRow]) -> dict[str, Any]:
 
 def _run_document(run: RunRow) -> dict[str, Any]:
     document = asdict(run)
+    document["verdict"] = run.verdict
     document["started_iso"] = iso(run.started)
     document["finished_iso"] = iso(run.finished)
     return document
@@ -107,7 +108,7 @@ def _live(batch: BatchRow) -> bool:
 
 def _state(run: RunRow, batches: dict[int, BatchRow]) -> str:
     if run.status != "running":
-        return run.status
+        return run.verdict
     owner = batches.get(run.batch)
     return "running" if owner is not None and _live(owner) else "stale"
 

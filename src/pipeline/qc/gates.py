@@ -34,6 +34,7 @@ __all__ = [
     "acceptance_gates",
     "acceptance_lines",
     "compare_runs",
+    "failed_gates",
     "pair_stations",
 ]
 
@@ -193,3 +194,9 @@ def acceptance_lines(manifest: Mapping[str, Any]) -> list[str]:
             f"{g['unit']})"
         )
     return lines
+
+
+def failed_gates(manifest: Mapping[str, Any]) -> list[str]:
+    """``stage.gate`` of every failed gate ``run.json``'s ``acceptance`` records."""
+    gates = (manifest.get("acceptance") or {}).get("gates", [])
+    return [f"{g['stage']}.{g['gate']}" for g in gates if g["status"] == FAIL]

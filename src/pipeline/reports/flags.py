@@ -171,3 +171,29 @@ def failed_check(name: str) -> Flag:
     """The failure of QC check ``name``."""
     meaning = CHECKS.get(name, f"the check {name!r} found a value beyond its limit.")
     return Flag(f"{name} failed", meaning, failed=True)
+
+
+def long_course(max_course: float) -> Flag:
+    """A station at the end of a course longer than ``max_course`` m (a first course after
+    the tie-in, or a gap in the survey)."""
+    return Flag(
+        "long course",
+        f"the course from the previous station (or from the tie-in) is longer than "
+        f"{max_course:g} m: the hole between was not surveyed, and minimum curvature takes it "
+        "as one circular arc, so the positions from here on rest on that assumption; check "
+        "for missing stations.",
+        ("md",),
+    )
+
+
+POSITION_MISMATCH = Flag(
+    "position ≠ file",
+    "the position the stations file lists for this station (its TVD, north, east) differs "
+    "from the one recomputed from the file's MD, inclination and azimuth by more than the "
+    "tolerance stated in the method: an angle or depth differs from the one the positions "
+    "were computed with, or they rest on another tie-in or north reference; resolve it "
+    "before using either.",
+    ("tvd", "north", "east"),
+    failed=True,
+)
+"""The check of a stations file's own positions against the recomputed ones failed."""

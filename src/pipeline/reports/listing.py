@@ -31,15 +31,36 @@ def col(table: pa.Table, name: str) -> plots.FloatArray:
     return values
 
 
+MAX_COURSE = 100.0
+"""Default maximum course length, m: a station at the end of a longer course (a first course
+after the tie-in, a gap) is flagged."""
+
+
+def course_lengths(md: plots.FloatArray, offsets: tuple[int, ...]) -> plots.FloatArray:
+    """Each station's course from the previous station of its survey, m (0 at the first
+    station of a survey: it has no course)."""
+    course: plots.FloatArray = np.diff(md, prepend=md[:1])
+    course[list(offsets[:-1])] = 0.0
+    return course
+
+
 def short_courses(
     md: plots.FloatArray, offsets: tuple[int, ...], min_course: float
 ) -> plots.BoolArray:
     """Stations whose course from the previous station of their survey is shorter than
     ``min_course`` m (the first station of a survey has no course)."""
-    course = np.diff(md, prepend=md[:1])
-    course[list(offsets[:-1])] = 0.0
+    course = course_lengths(md, offsets)
     short: plots.BoolArray = (course > 0) & (course < min_course - 1e-6)
     return short
+
+
+def long_courses(
+    md: plots.FloatArray, offsets: tuple[int, ...], max_course: float
+) -> plots.BoolArray:
+    """Stations whose course from the previous station of their survey is longer than
+    ``max_course`` m."""
+    long: plots.BoolArray = course_lengths(md, offsets) > max_course + 1e-6
+    return long
 
 
 @dataclass(frozen=True)

@@ -32,14 +32,16 @@ from pipeline.reports.document import (
     items,
 )
 from pipeline.reports.envelope import FullRate
-from pipeline.reports.flags import Flag
+from pipeline.reports.flags import POSITION_MISMATCH, Flag, long_course
 from pipeline.reports.listing import (
     ELLIPSE_COLUMNS,
+    MAX_COURSE,
     MIN_COURSE,
     Course,
     col,
     confidence,
     listing,
+    long_courses,
     short_courses,
 )
 from pipeline.reports.literature import Citations
@@ -66,6 +68,7 @@ from pipeline.reports.sections import (
     unit_label,
 )
 from pipeline.reports.view3d import view_3d
+from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.well import WellMetadata
 
@@ -127,10 +130,12 @@ def survey_document(
     title: str,
     registered: Registered,
     min_course: float = MIN_COURSE,
+    max_course: float = MAX_COURSE,
 ) -> Document:
     """The survey report of one well, with what the ``registered`` report parts state and
     add; DLS over courses shorter than ``min_course`` m is left out of the summary's maximum
-    and marked in the listing."""
+    and marked in the listing; a course longer than ``max_course`` m is a station flag, as is
+    a station whose position the stations file states otherwise."""
     traj = tables.trajectory
     if traj.num_rows == 0:
         raise ReportInputError(
@@ -144,6 +149,7 @@ def survey_document(
     vs_azimuth = section_azimuth(north, east, vs)
     src = tables.qc_sources()
     flags = station_flags(md, src) if src.any() or _has(tables.stations, "flags") else None
+    flags = _own_flags(flags, traj, long_courses(md, path.offsets, max_course), max_course)
     short = short_courses(md, path.offsets, min_course)
     course = Course(short, min_course)
     citations = Citations()
@@ -204,6 +210,23 @@ def survey_document(
         footer=footer(provenance),
         sections=tuple(sections),
     )
+
+
+def _own_flags(
+    flags: list[list[Flag]] | None, traj: pa.Table, long: plots.BoolArray, max_course: float
+) -> list[list[Flag]] | None:
+    """``flags`` with the trajectory's own: long courses, and stations whose position the
+    stations file states otherwise (:mod:`pipeline.survey.crosscheck`)."""
+    check = position_check_of(traj)
+    mismatched = np.isin(col(traj, "md"), check.beyond_md) if check else np.zeros_like(long)
+    if not (long.any() or mismatched.any()):
+        return flags
+    out = [list(f) for f in flags] if flags is not None else [[] for _ in range(len(long))]
+    for i in np.flatnonzero(mismatched):
+        out[i].append(POSITION_MISMATCH)
+    for i in np.flatnonzero(long):
+        out[i].append(long_course(max_course))
+    return out
 
 
 def _has(table: pa.Table | None, column: str) -> bool:

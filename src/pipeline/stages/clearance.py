@@ -21,11 +21,14 @@ from pipeline.anticollision.models import (
 )
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
 from pipeline.anticollision.scan import Well, scan
-from pipeline.anticollision.tables import Clearance, OffsetWells, with_rule
+from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_rule
+from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import EmptyTableError, InputFileError
 from pipeline.hookspecs import hookimpl
+from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef, pipeline_input
+from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.runner import sha256_file
 from pipeline.stages import toolmodels
 from pipeline.survey.mincurve import minimum_curvature
@@ -48,7 +51,7 @@ class ClearanceParams(BaseModel):
         "(`gyropipe models` lists the shipped ones and those plugins add)",
     )
     reference_hole_diameter: float = Field(
-        gt=0, description="hole or casing diameter of the reference well, m"
+        gt=0, description="hole or casing diameter of the reference well, m (no default)"
     )
     k: float = Field(3.5, gt=0, description="scaling factor of the combined σ")
     sigma_pa: float = Field(0.5, ge=0, description="1σ project-ahead uncertainty, m")
@@ -60,8 +63,9 @@ class ClearanceParams(BaseModel):
     )
     magnetic: MagneticReference | None = Field(
         None,
-        description="geomagnetic reference at the site (MWD models); default: WMM2025 at the "
-        "well's latitude, longitude, elevation and survey date",
+        description="geomagnetic reference at the site (MWD models); default: the well "
+        "metadata's magnetic_field, magnetic_dip and declination, else WMM2025 at the well's "
+        "latitude, longitude, elevation and survey date",
     )
 
     @model_validator(mode="after")
@@ -162,8 +166,9 @@ def offset_tables(
 
 def _site(
     params: ClearanceParams, well: WellMetadata, models: set[str], catalogue: ModelCatalogue
-) -> ModelSite:
-    """What the models in use need of the site, from the params or the well metadata."""
+) -> tuple[ModelSite, AppliedMagnetic | None]:
+    """What the models in use need of the site, from the params or the well metadata, and
+    the geomagnetic reference applied (None: no model needs one)."""
     from pipeline.earth.site import resolve_site
 
     latitude = None
@@ -172,16 +177,11 @@ def _site(
         latitude = resolve_site(
             well, stage=STAGE, latitude=params.latitude, north_seeking=True
         ).latitude
-    magnetic = params.magnetic
-    if magnetic is None and "magnetic" in wanted:
-        from pipeline.earth.geomagnetic import reference_field
-
-        site = resolve_site(well, stage=STAGE, param="magnetic", field=True)
-        assert site.date is not None
-        magnetic = reference_field(
-            site.latitude, site.longitude, site.elevation, site.date
-        ).reference()
-    return ModelSite(latitude=latitude, magnetic=magnetic)
+    applied = None
+    if "magnetic" in wanted:
+        applied = applied_magnetic(params.magnetic, well, stage=STAGE)
+    magnetic = applied.reference if applied is not None else params.magnetic
+    return ModelSite(latitude=latitude, magnetic=magnetic), applied
 
 
 class _Frame:
@@ -263,7 +263,7 @@ def clearance(
     for w in listed:
         w["model"] = resolve_model(w["model"], catalogue)
     models = {params.reference_model, *(w["model"] for w in listed)}
-    site = _site(params, ctx.well, models, catalogue)
+    site, applied = _site(params, ctx.well, models, catalogue)
     frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
     ref = _well(
         "reference",
@@ -310,6 +310,7 @@ def clearance(
     )
     rule = {
         **params.model_dump(mode="json", exclude={"latitude", "magnetic"}),
+        **({"magnetic": applied.model_dump(mode="json")} if applied is not None else {}),
         "wells": {
             w["offset"]: {
                 k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)
@@ -343,3 +344,18 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             params=ClearanceParams,
         )
     )
+
+
+def clearance_method(stage: StageSetup, ctx: ReportContext) -> MethodNote | None:
+    """The geomagnetic reference the scan's MWD models applied, in the report's method
+    (None: no model needed one)."""
+    rule = rule_of(ctx.tables["clearance"]) if "clearance" in ctx.tables else {}
+    if "magnetic" not in rule:
+        return None
+    applied = AppliedMagnetic.model_validate(rule["magnetic"])
+    return MethodNote("Geomagnetic reference (clearance)", applied.words())
+
+
+@hookimpl
+def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> None:
+    register(ReportDef("clearance", method=clearance_method))

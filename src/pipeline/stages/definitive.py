@@ -14,6 +14,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, model_validator
 
 from pipeline.contracts import SOURCE_KEY, TableContract, column
+from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
@@ -25,7 +26,8 @@ from pipeline.stages.uncertainty import (
     PositionUncertainty,
     UncertaintyParams,
     covariance_columns,
-    wellhead_field,
+    magnetic_words,
+    with_magnetic,
 )
 from pipeline.survey.definitive import OverlapRule, RunStations, plan_sections, roles
 from pipeline.survey.definitive import Section as PlannedSection
@@ -154,7 +156,9 @@ class DefinitiveParams(BaseModel):
         None, description="latitude, deg (gyro models); default: the well's"
     )
     magnetic: MagneticReference | None = Field(
-        None, description="geomagnetic reference (MWD models, magnetic azimuths); default WMM"
+        None,
+        description="geomagnetic reference (MWD models, magnetic azimuths); default: the well "
+        "metadata's magnetic_field, magnetic_dip and declination, else WMM2025 at the site",
     )
     basis: Literal["balanced_tangent", "min_curve"] = Field(
         "balanced_tangent", description="leg Jacobian of the error propagation"
@@ -208,7 +212,8 @@ def definitive_survey(
     specs = {p: params.runs.get(p, RunSpec()) for p in ports}
     catalogue = toolmodels.of_run(ctx)
     tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
-    magnetic = _magnetic(params, tools, ctx.well, [inputs[p] for p in ports])
+    applied = _magnetic(params, tools, ctx.well, [inputs[p] for p in ports])
+    magnetic = None if applied is None else applied.reference
     runs = [_read(p, inputs[p], specs[p], north, magnetic, ctx.well) for p in ports]
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
@@ -267,7 +272,7 @@ def definitive_survey(
             at = interpolate_md(md, inc, azi, nxt, tie=(pos.north[0], pos.east[0], pos.tvd[0]))
             tie = (float(at.north[0]), float(at.east[0]), float(at.tvd[0]))
             carried = carried_next
-    survey_table = _survey_table(parts, params, north)
+    survey_table = with_magnetic(_survey_table(parts, params, north), applied)
     return {
         "survey": survey_table,
         "overlap": _overlap(runs, stations, sections, survey_table, north),
@@ -307,15 +312,15 @@ def _magnetic(
     tools: Mapping[str, ToolModel],
     well: WellMetadata,
     tables: list[pa.Table],
-) -> MagneticReference | None:
-    """The geomagnetic reference when an MWD model (``tools``: each run's) or a magnetic
-    azimuth needs it."""
+) -> AppliedMagnetic | None:
+    """The geomagnetic reference applied when an MWD model (``tools``: each run's) or a
+    magnetic azimuth needs it (None: nothing needs one)."""
     needed = any("magnetic" in tool.needs for tool in tools.values()) or any(
         "magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables
     )
-    if params.magnetic is not None or not needed:
-        return params.magnetic
-    return wellhead_field(well)
+    if not needed:
+        return None
+    return applied_magnetic(params.magnetic, well, stage="definitive_survey")
 
 
 def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: str) -> pa.Table:
@@ -415,7 +420,7 @@ def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
         "runs tied at their first station to the survey above; each run's error model "
         f"propagated as in {ctx.cite(ERROR_MODEL)} with its systematic errors correlated "
         "within the run, the tie point's uncertainty carried below it, ellipses at "
-        f"{confidence:g} %",
+        f"{confidence:g} %{magnetic_words(ctx)}",
     )
 
 

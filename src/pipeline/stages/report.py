@@ -56,6 +56,12 @@ class ReportParams(BaseModel):
         "the last course to an end stop) is left out of the summary's maximum DLS and marked "
         "in the listing; 0 counts every course",
     )
+    max_course_length: float = Field(
+        100.0,
+        gt=0,
+        description="survey report, m: a station at the end of a longer course (a first "
+        "course after the tie-in, a gap between stations) is flagged 'long course'",
+    )
 
     def output_names(self, stage_id: str, registry: Registry) -> list[str]:
         """The files the stage writes (checked by the planner against the other stages')."""
@@ -98,6 +104,7 @@ def survey_report(
         params.title or "Gyro survey report",
         ctx.report_parts(),
         min_course=params.min_course_length,
+        max_course=params.max_course_length,
     )
     _write(doc, params, ctx)
     return {}

@@ -16,7 +16,12 @@ from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
-from pipeline.stages.survey import MinCurveParams, trajectory_columns
+from pipeline.stages.survey import (
+    MinCurveParams,
+    calculation_note,
+    checked,
+    trajectory_columns,
+)
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
 from pipeline.survey.interpolate import Interpolated, interpolate_md, interpolate_tvd
 from pipeline.survey.methods import Method, build_turn_rates
@@ -86,7 +91,7 @@ def survey_method(
         north_reference=north_reference_of(stations, "azi"),
     )
     calculation = SurveyCalculation(method=params.method, vs_azimuth=params.vs_azimuth)
-    return {"trajectory": with_calculation(table, calculation)}
+    return {"trajectory": checked(with_calculation(table, calculation), stations, params, ctx)}
 
 
 # --- interpolation ------------------------------------------------------------------------------
@@ -340,7 +345,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
 
 def calculation_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     """The survey calculation in the report: the method chosen, in words."""
-    return MethodNote("Survey calculation", str(stage.params.get("method", "?")).replace("_", " "))
+    return calculation_note(str(stage.params.get("method", "?")).replace("_", " "), ctx)
 
 
 def north_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:

@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.errors import SurveyCheckWarning
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import CheckDef, StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
+from pipeline.survey.crosscheck import check_positions, position_check_of, with_position_check
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
@@ -33,6 +36,19 @@ class MinCurveParams(BaseModel):
         None,
         description="TVD of the first station, m; default: its MD (straight vertical hole "
         "above the first station)",
+    )
+    position_tolerance: float = Field(
+        0.1,
+        ge=0,
+        description="where the stations file lists its own TVD/north/east: the largest 3-D "
+        "difference from the recomputed position at a survey's first station, m, before a "
+        "warning (a vendor's listing rounds positions to 0.01 m or 0.1 ft)",
+    )
+    position_tolerance_rel: float = Field(
+        1e-4,
+        ge=0,
+        description="… plus this much per m of MD from the first station (1e-4: 0.1 m per "
+        "km, what angles rounded to 0.01° allow)",
     )
 
 
@@ -82,16 +98,45 @@ def trajectory_columns(
     return columns
 
 
+def checked(
+    trajectory: pa.Table, stations: pa.Table, params: MinCurveParams, ctx: StageContext
+) -> pa.Table:
+    """``trajectory`` with the check of the stations file's own TVD/north/east against its
+    positions recorded (:mod:`pipeline.survey.crosscheck`; none if the file lists none); a
+    :class:`~pipeline.errors.SurveyCheckWarning` names the first station beyond tolerance."""
+    check = check_positions(
+        stations,
+        survey_offsets(stations),
+        tuple(trajectory.column(c).to_numpy() for c in ("tvd", "north", "east")),
+        params.position_tolerance,
+        params.position_tolerance_rel,
+    )
+    if check is None:
+        return trajectory
+    if check.beyond_md:
+        hint = (
+            "; already at the first station: the file's tie-in is not the one applied (set "
+            "the stage's tie_tvd, tie_north and tie_east)"
+            if check.beyond_md[0] == trajectory.column("md")[0].as_py()
+            else ""
+        )
+        warnings.warn(
+            f"stage {ctx.stage_id!r}: {check.summary()}{hint}", SurveyCheckWarning, stacklevel=2
+        )
+    return with_position_check(trajectory, check)
+
+
 def min_curve(
     inputs: Mapping[str, pa.Table], params: MinCurveParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Stations → trajectory by minimum curvature, every survey of the table in one call."""
+    """Stations → trajectory by minimum curvature, every survey of the table in one call,
+    checked against the positions the stations file lists (:func:`checked`)."""
     stations = inputs["stations"]
     table = Trajectory.compiled().make_table(
         trajectory_columns(stations, params), north_reference=north_reference_of(stations, "azi")
     )
     calculation = SurveyCalculation(method="minimum_curvature", vs_azimuth=params.vs_azimuth)
-    return {"trajectory": with_calculation(table, calculation)}
+    return {"trajectory": checked(with_calculation(table, calculation), stations, params, ctx)}
 
 
 class DlsLimitParams(BaseModel):
@@ -146,9 +191,17 @@ def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
     )
 
 
+def calculation_note(method: str, ctx: ReportContext) -> MethodNote:
+    """The survey calculation ``method`` (in words) in the report, with the check against
+    the stations file's own positions when there was one."""
+    check = position_check_of(ctx.tables["trajectory"]) if "trajectory" in ctx.tables else None
+    text = method if check is None else f"{method}; {check.summary()}"
+    return MethodNote("Survey calculation", text)
+
+
 def mincurve_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     """The survey calculation in the report."""
-    return MethodNote("Survey calculation", "minimum curvature")
+    return calculation_note("minimum curvature", ctx)
 
 
 @hookimpl

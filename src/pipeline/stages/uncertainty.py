@@ -12,13 +12,14 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.contracts import column
-from pipeline.earth.geomagnetic import reference_field
+from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages import toolmodels
+from pipeline.survey.calculation import record_of, with_record
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
@@ -28,7 +29,7 @@ from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude, WellMetadata
+from pipeline.well import Latitude
 
 AREA = "m2"
 
@@ -83,7 +84,8 @@ class UncertaintyParams(BaseModel):
     magnetic: MagneticReference | None = Field(
         None,
         description="MWD models: geomagnetic reference at the wellhead (total field nT, dip "
-        "deg, declination deg east); default: WMM2025 at the well's latitude, longitude, "
+        "deg, declination deg east); default: the well metadata's magnetic_field, "
+        "magnetic_dip and declination, else WMM2025 at the well's latitude, longitude, "
         "elevation and survey date",
     )
     basis: Literal["balanced_tangent", "min_curve"] = Field(
@@ -145,15 +147,16 @@ def position_uncertainty(
     azi_deg = table.column("azi").to_numpy()
     tool = configure(params.model, params.tool, toolmodels.of_run(ctx))
     site = ModelSite()
+    applied = None
     if "magnetic" in tool.needs:
-        magnetic = params.magnetic or wellhead_field(ctx.well)
-        site = replace(site, magnetic=magnetic)
+        applied = applied_magnetic(params.magnetic, ctx.well, stage="position_uncertainty")
+        site = replace(site, magnetic=applied.reference)
         azi_deg, _ = convert_azimuth(
             azi_deg,
             north_reference_of(table, "azi"),
             "true",
             convergence_deg=ctx.well.grid_convergence,
-            declination_deg=magnetic.declination,
+            declination_deg=applied.reference.declination,
         )
     if "latitude" in tool.needs:
         latitude = resolve_site(
@@ -178,7 +181,9 @@ def position_uncertainty(
     out = PositionUncertainty.compiled().make_table(
         columns, north_reference=north_reference_of(table, "azi")
     )
-    return {"trajectory": out.replace_schema_metadata(table.schema.metadata)}
+    return {
+        "trajectory": with_magnetic(out.replace_schema_metadata(table.schema.metadata), applied)
+    }
 
 
 def covariance_columns(cov: np.ndarray, confidence: float) -> dict[str, np.ndarray]:
@@ -237,11 +242,24 @@ def _measured(
     return tool if init_sigma is None else with_initial_azimuth(tool, init_sigma)
 
 
-def wellhead_field(well: WellMetadata) -> MagneticReference:
-    """WMM2025 at the wellhead on the survey date (elevation above sea level as height)."""
-    site = resolve_site(well, stage="position_uncertainty", param="magnetic", field=True)
-    assert site.date is not None
-    return reference_field(site.latitude, site.longitude, site.elevation, site.date).reference()
+MAGNETIC_KEY = b"gyropipe.magnetic_reference"
+
+
+def with_magnetic(table: pa.Table, applied: AppliedMagnetic | None) -> pa.Table:
+    """``table`` with the geomagnetic reference a stage applied in its schema metadata."""
+    return table if applied is None else with_record(table, MAGNETIC_KEY, applied)
+
+
+def magnetic_of(table: pa.Table | None) -> AppliedMagnetic | None:
+    """The geomagnetic reference recorded in a table's schema metadata, if any."""
+    return None if table is None else record_of(table, MAGNETIC_KEY, AppliedMagnetic)
+
+
+def magnetic_words(ctx: ReportContext, port: str = "trajectory") -> str:
+    """ "; geomagnetic reference: total field …, dip …, declination … (source)" of the
+    report's ``port`` table ('' when it records none)."""
+    applied = magnetic_of(ctx.tables.get(port))
+    return "" if applied is None else f"; geomagnetic reference: {applied.words()}"
 
 
 @hookimpl
@@ -269,7 +287,10 @@ def uncertainty_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     title, gyro = ctx.error_model(str(stage.params["model"]))
     method = f"{title} error model propagated as in {ctx.cite(ERROR_MODEL)}"
     also = f" with the gyro terms of {ctx.cite(GYRO_ERROR_MODEL)}" if gyro else ""
-    return MethodNote("Position uncertainty", f"{method}{also}, ellipses at {confidence:g} %")
+    return MethodNote(
+        "Position uncertainty",
+        f"{method}{also}, ellipses at {confidence:g} %{magnetic_words(ctx)}",
+    )
 
 
 @hookimpl

@@ -8,12 +8,15 @@ summary) instead of assuming them. Stages that add columns to a trajectory keep 
 
 from __future__ import annotations
 
+from typing import TypeVar
+
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.survey.methods import Method
 
 CALCULATION_KEY = b"gyropipe.survey_calculation"
+Record = TypeVar("Record", bound=BaseModel)
 
 
 class SurveyCalculation(BaseModel):
@@ -28,14 +31,24 @@ class SurveyCalculation(BaseModel):
     )
 
 
+def with_record(table: pa.Table, key: bytes, record: BaseModel) -> pa.Table:
+    """``table`` with ``record`` (JSON) under ``key`` in its schema metadata."""
+    meta = dict(table.schema.metadata or {})
+    meta[key] = record.model_dump_json().encode()
+    return table.replace_schema_metadata(meta)
+
+
+def record_of(table: pa.Table, key: bytes, model: type[Record]) -> Record | None:
+    """The ``model`` recorded under ``key`` in a table's schema metadata, if any."""
+    raw = (table.schema.metadata or {}).get(key)
+    return None if raw is None else model.model_validate_json(raw)
+
+
 def with_calculation(table: pa.Table, calculation: SurveyCalculation) -> pa.Table:
     """``table`` with ``calculation`` recorded in its schema metadata."""
-    meta = dict(table.schema.metadata or {})
-    meta[CALCULATION_KEY] = calculation.model_dump_json().encode()
-    return table.replace_schema_metadata(meta)
+    return with_record(table, CALCULATION_KEY, calculation)
 
 
 def calculation_of(table: pa.Table) -> SurveyCalculation | None:
     """The calculation recorded in a table's schema metadata, if any."""
-    raw = (table.schema.metadata or {}).get(CALCULATION_KEY)
-    return None if raw is None else SurveyCalculation.model_validate_json(raw)
+    return record_of(table, CALCULATION_KEY, SurveyCalculation)

@@ -110,14 +110,19 @@ def convert_table(
     declination_deg: float | None = None,
 ) -> pa.Table:
     """``table`` with every column whose field states a north reference converted to
-    ``target`` (values wrapped to [0, 360), metadata relabelled); other columns untouched."""
+    ``target`` (values wrapped to [0, 360), metadata relabelled), and the positions a
+    stations file lists (``north``, ``east``: in the azimuths' reference) turned with them;
+    other columns untouched."""
     columns: list[pa.Array | pa.ChunkedArray] = []
     fields: list[pa.Field] = []
+    turned = _turned_positions(table, target, convergence_deg, declination_deg)
     for name in table.column_names:
         fld = table.schema.field(name)
         meta = dict(fld.metadata or {})
         column = table.column(name)
-        if NORTH_KEY in meta:
+        if name in turned:
+            column = pa.array(turned[name], type=fld.type)
+        elif NORTH_KEY in meta:
             values, label = convert_azimuth(
                 column.to_numpy(),
                 meta[NORTH_KEY].decode(),
@@ -131,3 +136,37 @@ def convert_table(
         columns.append(column)
         fields.append(fld)
     return pa.Table.from_arrays(columns, schema=pa.schema(fields, metadata=table.schema.metadata))
+
+
+def _turned_positions(
+    table: pa.Table,
+    target: NorthReference,
+    convergence_deg: float | None,
+    declination_deg: float | None,
+) -> dict[str, FloatArray]:
+    """``north`` and ``east`` (a horizontal position, m, referred to the north of the
+    ``azi`` column) referred to ``target`` north: turned by the azimuths' change δ
+    (A' = A + δ), so N' = N cos δ − E sin δ, E' = E cos δ + N sin δ. Nothing to turn: {}."""
+    names = table.column_names
+    if not {"azi", "north", "east"} <= set(names):
+        return {}
+    meta = table.schema.field("azi").metadata or {}
+    if NORTH_KEY not in meta or any(
+        NORTH_KEY in (table.schema.field(c).metadata or {}) for c in ("north", "east")
+    ):
+        return {}
+    zero = np.zeros(table.num_rows)
+    shift, _ = convert_azimuth(
+        zero,
+        meta[NORTH_KEY].decode(),
+        target,
+        convergence_deg=convergence_deg,
+        declination_deg=declination_deg,
+    )
+    delta = np.radians(shift)
+    north = table.column("north").to_numpy(zero_copy_only=False).astype(float)
+    east = table.column("east").to_numpy(zero_copy_only=False).astype(float)
+    return {
+        "north": north * np.cos(delta) - east * np.sin(delta),
+        "east": east * np.cos(delta) + north * np.sin(delta),
+    }
