@@ -180,6 +180,25 @@ class Seed:
     """the table behind a binary seed, for table-level mutations"""
 
 
+REQUIRED = {
+    "clearance": (
+        b"# reference_hole_diameter: m, required (e.g. 0.3112 for a 12\xc2\xbc in hole)",
+        b"reference_hole_diameter: 0.3112",
+    ),
+}
+"""Values a shipped pipeline leaves for the user to give (the well's own): the line of the
+pipeline that says so, and the line a user writes there."""
+
+
+def completed(name: str, text: bytes) -> bytes:
+    """A shipped pipeline as a user completes it (:data:`REQUIRED`): a valid seed."""
+    if name not in REQUIRED:
+        return text
+    left, given = REQUIRED[name]
+    assert left in text, f"pipelines/{name}.yaml no longer says {left!r}"
+    return text.replace(left, given)
+
+
 @dataclass(frozen=True)
 class InputKind:
     """One input kind: its seeds, how its files are mutated and run."""
@@ -408,7 +427,8 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             "yaml",
             None,
             tuple(
-                Seed(p.stem, p.read_bytes()) for p in sorted((ROOT / "pipelines").glob("*.yaml"))
+                Seed(p.stem, completed(p.stem, p.read_bytes()))
+                for p in sorted((ROOT / "pipelines").glob("*.yaml"))
             ),
         ),
         InputKind(
