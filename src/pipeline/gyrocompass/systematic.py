@@ -45,17 +45,6 @@ class ToolErrors:
     """ppm, per accelerometer axis"""
 
 
-GYRO_NS = ToolErrors(
-    g_sensitivity=0.2,
-    acc_bias=0.0017,
-    acc_misalignment=float(np.radians(0.0095) * 1e3),
-    acc_scale_factor=111.0,
-)
-"""A tool whose errors are not declared: the ISCWSA/OWSG GYRO-NS magnitudes (Rev 5; Torkildsen
-et al., SPE 90408): GXY-G1 0.2 (°/h)/g, AXYZ-ZB 0.0017 m/s², AXYZ-MIS 0.0095°, AXYZ-SF
-1.11e-4."""
-
-
 def g_dependent_variance(errors: ToolErrors, inclination: float) -> float:
     """Variance, (°/h)², the g-dependent gyro bias adds to each transverse Earth-rate
     component at inclination (rad)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable, Mapping
 
+import numpy as np
 import pyarrow as pa
 
 from pipeline.earth.site import SiteParams, resolve_site
@@ -13,7 +14,7 @@ from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions
 from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.gyrocompass.solve import compass
-from pipeline.gyrocompass.systematic import GYRO_NS, ToolErrors
+from pipeline.gyrocompass.systematic import ToolErrors
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
@@ -21,6 +22,7 @@ from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.sim.sensors import compass_errors, tool_preset
 from pipeline.streams import TableStream
 from pipeline.tables import CompassRejects, CompassStations, PositionReadings, RawSamples
+from pipeline.uncertainty.engine import find_model
 from pipeline.well import WellMetadata
 
 
@@ -58,13 +60,32 @@ def compass_stage(
     return {"stations": stations, "rejects": rejects}
 
 
+UNDECLARED_TOOL = "GYRO-NS"
+"""The tool model whose magnitudes a tool that declares none is given (ISCWSA/OWSG GYRO-NS,
+Torkildsen et al., SPE 90408): read from its file, not restated here."""
+
+
+def model_errors(name: str) -> ToolErrors:
+    """The compassing-relevant magnitudes of a shipped tool model's terms: the transverse
+    gyros' g-dependent error (GXY-G1) and the accelerometers' bias, misalignment and scale
+    factor (AXYZ-ZB, AXYZ-MIS, AXYZ-SF), in :class:`ToolErrors`' units."""
+    sigma = {term.name: term.sigma for term in find_model(name).terms}  # SI
+    return ToolErrors(
+        g_sensitivity=float(np.degrees(sigma["GXY-G1"])),  # rad/h/g → (°/h)/g
+        acc_bias=sigma["AXYZ-ZB"],  # m/s²
+        acc_misalignment=sigma["AXYZ-MIS"] * 1e3,  # rad → mrad
+        acc_scale_factor=sigma["AXYZ-SF"] * 1e6,  # → ppm
+    )
+
+
 def tool_errors(well: WellMetadata) -> ToolErrors:
     """The error magnitudes of the well's survey tool that compassing cannot remove: those
     of its entry in the tool catalogue (``tool_preset``, set by the simulator; overrides of a
-    plan are not known here: set the stage parameters), else the ISCWSA GYRO-NS magnitudes.
+    plan are not known here: set the stage parameters), else those of the tool model
+    :data:`UNDECLARED_TOOL`.
     A ``tool_preset`` the catalogue lacks is a ValueError listing the presets."""
     if well.tool_preset is None:
-        return GYRO_NS
+        return model_errors(UNDECLARED_TOOL)
     try:
         return compass_errors(tool_preset(well.tool_preset))
     except ValueError as exc:
