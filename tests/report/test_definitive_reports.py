@@ -82,6 +82,9 @@ def test_gates_report_in_chromium(inout: tuple[Path, str], browser: Any, tmp_pat
     assert [row[1] for row in program] == ["in-run"]
     assert program[0][-1] == "in.csv"
     assert "correlated within the run" in page.text  # the method line of the definitive survey
+    # a failed in/out station is the in-run's (the program above), not "the mean of the two"
+    assert "not corrected for the difference" in page.text
+    assert "mean of the two" not in page.text
 
     pages = pdf_pages(out / "report.pdf", tmp_path)
     text = " ".join(w[0] for p in pages for w in p.words)

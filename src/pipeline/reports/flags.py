@@ -146,8 +146,9 @@ CHECKS: dict[str, str] = {
     "are clipped.",
     "dls_limit": "the dogleg severity exceeds the limit set for the survey.",
     "in/out": "the in-run and out-run readings at this depth differ by more than the "
-    "tolerance: drift not fully removed, or the tool's depth or orientation differed; the "
-    "station is the mean of the two.",
+    "tolerance: drift not fully removed, or the tool's depth or orientation differed. The "
+    "listed station is not corrected for the difference (the Method section says which run "
+    "it comes from): check it before use.",
 }
 """QC checks (validity checks, survey checks, in-run/out-run comparison): what a failure
 means."""
