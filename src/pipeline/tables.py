@@ -6,6 +6,10 @@ columns state their north reference (true, grid or magnetic) in field metadata.
 
 from __future__ import annotations
 
+from typing import Annotated
+
+from pydantic import Field
+
 from pipeline.contracts import TableContract, column
 
 DLS_COURSE_M = 30.0
@@ -52,6 +56,24 @@ class Stations(TableContract):
         undefined_at_vertical=True,
         description="azimuth, clockwise from north (NaN: undefined, only at vertical)",
     )
+    tool_type: str | None = column(
+        unit=None, description="survey tool of the station, as the file names it", default=None
+    )
+    station_type: str | None = column(
+        unit=None, description="station type as the file names it (tie in point…)", default=None
+    )
+
+
+STATION_TEXT_COLUMNS = ("tool_type", "station_type")
+"""Per-station text columns a trajectory keeps from its stations."""
+AngleUnitConfirmed = Annotated[
+    bool,
+    Field(
+        description="the inclinations and azimuths are in the unit declared although they all "
+        "fit radians (see pipeline.plausibility)"
+    ),
+]
+"""A reader option: confirms a declared angle unit the plausibility check doubts."""
 
 
 class Trajectory(Stations):

@@ -91,6 +91,20 @@ class WellMetadata(BaseModel):
         description="grid convergence at the wellhead, deg (grid north east of true north "
         "positive)",
     )
+    declination_applied: float | None = Field(
+        None,
+        ge=-180,
+        le=180,
+        description="magnetic declination already applied to the azimuths, deg (WITSML "
+        "magDeclUsed: magnetic azimuths were corrected by it; 0: none applied)",
+    )
+    grid_convergence_applied: float | None = Field(
+        None,
+        ge=-180,
+        le=180,
+        description="grid convergence already applied to the azimuths, deg (WITSML "
+        "gridCorUsed: true azimuths were referred to grid north by it; 0: none applied)",
+    )
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

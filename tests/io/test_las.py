@@ -26,6 +26,7 @@ from pipeline.io.las import fast as las_fast
 from pipeline.io.las import header as las_header
 from pipeline.io.las import rows as las_rows
 from pipeline.io.las.options import LasOptions
+from pipeline.io.nulls import NULL_MARKERS
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.tables import LogTable, RawSamples, Stations
@@ -630,7 +631,7 @@ def test_comment_and_blank_lines_in_the_data(tmp_path: Path) -> None:
     ("null", "data", "nulls"),
     [
         ("-999.25", "0 0 -999.25\n100 -999.2500 45\n200 -9.9925E+02 46.5\n", 3),
-        ("-9999", "0 0 -9999\n100 -9999.0 45\n200 3 -999.25\n", 2),
+        ("-9999", "0 0 -9999\n100 -9999.0 45\n200 3 -999.25\n", 3),  # -999.25: always
         ("9999.99", "0 0 9999.99\n100 1.5 45\n200 3 46.5\n", 1),
         ("-999.25", "0 0 2147483647\n100 1.5 9999.99\n200 3 -9999\n", 0),
     ],
@@ -642,7 +643,10 @@ def test_declared_nulls(tmp_path: Path, null: str, data: str, nulls: int) -> Non
     assert table.column("inc").null_count + undefined == nulls
     reference = lasio.read(str(path))
     for name, i in (("md", 0), ("inc", 1), ("azi", 2)):
-        assert np.array_equal(as_nan(table, name), reference.curves[i].data, equal_nan=True)
+        expected = reference.curves[i].data.copy()
+        if name != "md":  # lasio keeps -999.25 under another NULL: a null in every gyropipe reader
+            expected[np.isin(expected, NULL_MARKERS)] = np.nan
+        assert np.array_equal(as_nan(table, name), expected, equal_nan=True)
 
 
 def test_other_null_declarations(tmp_path: Path) -> None:
@@ -1168,7 +1172,7 @@ def test_writer_null_value_avoids_real_values(tmp_path: Path) -> None:
     WRITER.write(table, path, WELL)
     assert " NULL    .         -9999.25                 : null value" in path.read_text()
     back, _ = read(path)
-    assert column(back, "inc") == [-999.25, None, 1.0]
+    assert column(back, "inc") == [None, None, 1.0]  # -999.25 is a null marker in every reader
 
 
 def test_writer_leaves_out_source_line(tmp_path: Path) -> None:

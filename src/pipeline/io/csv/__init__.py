@@ -94,6 +94,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.nulls import null_markers
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -215,11 +216,32 @@ class _Rows:
         )
         for values, rows in blocks:
             lines = rows.source_lines(len(values[self.layout.required[0]]))
-            yield self._table(values, lines)
+            yield self._table(self._without_markers(values, lines), lines)
 
     def batches(self) -> Iterator[pa.RecordBatch]:
         for table in self.tables():
             yield from table.to_batches()
+
+    def _without_markers(self, values: dict[str, Any], lines: Any) -> dict[str, Any]:
+        """Null markers (-999.25…, :mod:`pipeline.io.nulls`) as nulls where a cell may be
+        empty (azi, tvd…); elsewhere (md, inc, time…) an error at the cell's line."""
+        for name, array in values.items():
+            if not pa.types.is_floating(array.type):
+                continue
+            quantity = CURVES[name].quantity if name in CURVES else None
+            found = null_markers(array, angle=quantity in ("angle", "dogleg_severity"))
+            if found is None:
+                continue
+            if name not in self.layout.blanks:
+                first = int(np.flatnonzero(found)[0])
+                raise InputFileError(
+                    self.path,
+                    f"{array[first].as_py()!r} is a null marker: expected a value of {name}",
+                    line=int(lines[first]),
+                    column=self.chosen[name].text,
+                )
+            values[name] = pc.if_else(pa.array(found), pa.scalar(None, array.type), array)
+        return values
 
     def _types(self) -> dict[str, pa.DataType]:
         return {n: t for n, t in self.layout.types().items() if n in self.chosen}

@@ -5,6 +5,7 @@ exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text),
 UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
 the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
 well's magnetic declination and grid convergence, deg, east of true north positive),
+DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
@@ -239,6 +240,10 @@ def _header_text(
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
         _line(
             "GRIDCONV", "deg", meta["grid_convergence"], "grid convergence, east of true north +"
+        ),
+        _line("DECLUSED", "deg", meta["declination_applied"], "declination applied to azimuths"),
+        _line(
+            "GRIDUSED", "deg", meta["grid_convergence_applied"], "convergence applied to azimuths"
         ),
         _line(
             "METHOD", "", calculation and calculation.method.replace("_", " "), "survey calculation"
