@@ -3,8 +3,9 @@ through (:func:`pipeline.registry.check_read`), in canonical degrees after the r
 unit conversion:
 
 * an inclination outside [0, 180] or an azimuth outside [−360, 720) is an error at its line
-  — a null marker or a unit mistake, never a value to wrap. When the whole column would
-  fit once divided by 180/π, the message says the values look like degrees read as radians;
+  — a null marker or a unit mistake, never a value to wrap. When half the column or more is
+  out of range and every angle would fit once divided by 180/π, the message says the
+  values look like degrees declared as radians;
 * an azimuth in [−360, 0) or [360, 720) is read as the same direction in [0, 360), with a
   warning naming its line;
 * inclinations and azimuths that all fit radians — at least :data:`RADIAN_STATIONS`

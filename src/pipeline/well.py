@@ -46,6 +46,11 @@ NORTH_WORDS: dict[str, NorthReference] = {
 """Words naming a north reference in file headers (``Azimuth Grid``, ``AZI (MN)``, NREF)."""
 
 
+def _angle(description: str) -> Any:
+    """An optional north correction field, deg in [-180, 180]."""
+    return Field(None, ge=-180, le=180, description=description)
+
+
 class WellMetadata(BaseModel):
     """Header of one well and survey run. Angles in degrees, lengths in metres."""
 
@@ -77,33 +82,20 @@ class WellMetadata(BaseModel):
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths: true, grid or magnetic"
     )
-    declination: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="magnetic declination at the wellhead on the survey date, deg "
-        "(magnetic north east of true north positive)",
+    declination: float | None = _angle(
+        "magnetic declination at the wellhead on the survey date, deg (magnetic north east "
+        "of true north positive)"
     )
-    grid_convergence: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="grid convergence at the wellhead, deg (grid north east of true north "
-        "positive)",
+    grid_convergence: float | None = _angle(
+        "grid convergence at the wellhead, deg (grid north east of true north positive)"
     )
-    declination_applied: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="magnetic declination already applied to the azimuths, deg (WITSML "
-        "magDeclUsed: magnetic azimuths were corrected by it; 0: none applied)",
+    declination_applied: float | None = _angle(
+        "magnetic declination already applied to the azimuths, deg (WITSML magDeclUsed: "
+        "magnetic azimuths were corrected by it; 0: none applied)"
     )
-    grid_convergence_applied: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="grid convergence already applied to the azimuths, deg (WITSML "
-        "gridCorUsed: true azimuths were referred to grid north by it; 0: none applied)",
+    grid_convergence_applied: float | None = _angle(
+        "grid convergence already applied to the azimuths, deg (WITSML gridCorUsed: true "
+        "azimuths were referred to grid north by it; 0: none applied)"
     )
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:

@@ -162,6 +162,28 @@ def test_corrections_stated_per_station_are_what_was_applied(tmp_path: Path):
         gp.read(source, kind="stations")
 
 
+def test_a_correction_the_reference_cannot_carry_is_refused(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml", head='<gridCorUsed uom="rad">-0.0165</gridCorUsed>')
+    line = next(i for i, t in enumerate(source.read_text().splitlines(), 1) if "gridCorUsed" in t)
+    with pytest.raises(InputFileError, match="contradicts aziRef 'true north'") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == line
+
+
+def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path: Path):
+    head = '<gridCorUsed uom="dega">-0.9</gridCorUsed>'
+    source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=head)
+    to_true = {"id": "true", "uses": "north_reference", "with": {"target": "true"}}
+    pipe = survey_pipeline(tmp_path, to_true)
+    refused = run(pipe, source, tmp_path / "refused", "--set", "true.convergence=-0.95")
+    assert refused.exit_code != 0
+    assert "contradicts the grid convergence applied" in refused.output
+    result = run(pipe, source, tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.1, abs=1e-9)
+
+
 # --------------------------------------------------------------------------- 2. null markers
 
 STATIONS_CSV = "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n100,5,45\n200,10,{azi}\n300,12,46\n"

@@ -14,7 +14,10 @@ Kinds read (``read(path, kind, options)``):
   option ``conventions``.
 
 ``source_line`` is each row's 1-based file line, so later contract errors can cite it.
-Values are not range-checked here (the engine checks the contract).
+Null markers (:mod:`pipeline.io.nulls`: ``-999.25``…, in the file's unit) are empty cells:
+null where a cell may be empty (an azimuth then is undefined, allowed only at vertical), an
+error at their line elsewhere. Values are not range-checked here (the engine checks the
+contract and the angles' plausibility, :mod:`pipeline.plausibility`).
 
 File layout, in order:
 
