@@ -13,6 +13,10 @@ unit conversion:
   not zero — are radians read as degrees (a 3,510 m well "with a maximum inclination of
   0.95°" heading due north throughout): an error naming both columns, unless the reader's
   option ``angle_unit_confirmed`` says the degrees are meant.
+
+A station without an inclination, or without an azimuth away from vertical, is the
+contract's error at its line, unless the reader's option ``null_stations`` is ``drop``:
+then :func:`without_null_stations` leaves it out, with a warning.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from pipeline.contracts import SOURCE_LINE
+from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, warn_input
 
 INC_RANGE = (0.0, 180.0)
@@ -34,6 +38,8 @@ RADIAN_STATIONS = 5
 """Fewest stations whose angles all fitting radians is taken for radians read as degrees."""
 CONFIRM = "angle_unit_confirmed"
 """The reader option confirming degrees that look like radians."""
+DROP = "null_stations"
+"""The reader option that, set to ``drop``, leaves out stations missing an angle."""
 _PER_RAD = 180.0 / math.pi
 
 
@@ -46,6 +52,19 @@ def check_angles(path: Path, table: pa.Table, *, confirmed: bool = False) -> Non
     inc = _floats(table, "inc")
     azi = _floats(table, "azi")
     lines = table.column(SOURCE_LINE).to_pylist() if SOURCE_LINE in table.column_names else None
+    missing = _missing(inc, azi)
+    if missing.any():
+        first = int(np.flatnonzero(missing)[0])
+        name, what = ("inc", "inclination") if np.isnan(inc[first]) else ("azi", "azimuth")
+        raise InputFileError(
+            path,
+            f"station at md {_md(table, first)} has no {what}"
+            " (an empty cell or a null marker; an azimuth may be missing only at vertical): "
+            f"expected a value, or the reader option {DROP}: drop to leave such stations out"
+            + (f" ({int(missing.sum())} such stations)" if missing.sum() > 1 else ""),
+            _line(lines, first),
+            column=name,
+        )
     with np.errstate(invalid="ignore"):
         bad_inc = (inc < INC_RANGE[0]) | (inc > INC_RANGE[1])
         bad_azi = (azi < AZI_RANGE[0]) | (azi >= AZI_RANGE[1])
@@ -76,11 +95,44 @@ def check_angles(path: Path, table: pa.Table, *, confirmed: bool = False) -> Non
         )
 
 
+def without_null_stations(path: Path, table: pa.Table) -> pa.Table:
+    """The stations less those without an inclination, or without an azimuth away from
+    vertical (null or NaN, as a reader leaves a null marker), with a warning naming their
+    lines (the reader option ``null_stations: drop``)."""
+    if "inc" not in table.column_names or "azi" not in table.column_names:
+        return table
+    missing = _missing(_floats(table, "inc"), _floats(table, "azi"))
+    if not missing.any():
+        return table
+    lines = table.column(SOURCE_LINE).to_pylist() if SOURCE_LINE in table.column_names else None
+    rows = np.flatnonzero(missing)
+    shown = ", ".join(str(_line(lines, int(r))) for r in rows[:10])
+    warn_input(
+        path,
+        f"{rows.size} station(s) without inclination or azimuth left out ({DROP}: drop)"
+        + (f"; lines {shown}" if lines is not None else ""),
+        _line(lines, int(rows[0])),
+    )
+    return table.filter(pa.array(~missing))
+
+
+def _missing(inc: np.ndarray, azi: np.ndarray) -> np.ndarray:
+    """Stations without an inclination, or without an azimuth away from vertical."""
+    with np.errstate(invalid="ignore"):
+        vertical = np.minimum(np.abs(inc), np.abs(180.0 - inc)) <= VERTICAL_TOLERANCE
+    missing: np.ndarray = np.isnan(inc) | (np.isnan(azi) & ~vertical)
+    return missing
+
+
 def _floats(table: pa.Table, name: str) -> np.ndarray:
     column = table.column(name)
     if not pa.types.is_floating(column.type) and not pa.types.is_integer(column.type):
         return np.full(table.num_rows, np.nan)  # the contract names the wrong type
     return np.asarray(column.to_numpy(zero_copy_only=False), dtype=np.float64)
+
+
+def _md(table: pa.Table, row: int) -> str:
+    return repr(table.column("md")[row].as_py()) if "md" in table.column_names else "?"
 
 
 def _line(lines: list[int] | None, row: int) -> int:

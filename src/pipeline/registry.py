@@ -27,7 +27,7 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
-from pipeline.plausibility import CONFIRM, check_angles
+from pipeline.plausibility import CONFIRM, DROP, check_angles, without_null_stations
 from pipeline.streams import Port, TableStream
 from pipeline.tables import Stations
 from pipeline.well import WELL_DEFAULT, WellMetadata
@@ -423,6 +423,8 @@ class Registry:
     ) -> tuple[pa.Table, WellMetadata]:
         """``chosen``'s table of ``path`` (options parsed), checked against the kind."""
         table, found = self._reading(chosen, lambda: chosen.read(path, kind, parsed))
+        if getattr(parsed, DROP, None) == "drop":
+            table = without_null_stations(path, table)
         check_read(path, kind, chosen, table, confirmed=bool(getattr(parsed, CONFIRM, False)))
         return table, found
 

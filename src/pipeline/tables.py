@@ -6,7 +6,7 @@ columns state their north reference (true, grid or magnetic) in field metadata.
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field
 
@@ -74,6 +74,15 @@ AngleUnitConfirmed = Annotated[
     ),
 ]
 """A reader option: confirms a declared angle unit the plausibility check doubts."""
+NullStations = Annotated[
+    Literal["error", "drop"],
+    Field(
+        description="a station without inclination, or without azimuth away from vertical (an "
+        "empty cell or a null marker, -999.25…): 'error' (default) refuses the file at its "
+        "line; 'drop' leaves the station out, with a warning naming its line"
+    ),
+]
+"""A reader option: what a station missing an angle is (see pipeline.plausibility)."""
 
 
 class Trajectory(Stations):

@@ -201,6 +201,31 @@ def test_a_null_marker_azimuth_is_a_located_error(tmp_path: Path, marker: str):
     assert caught.value.line == 4
 
 
+def test_csv_and_las_stations_missing_an_angle_are_left_out_when_asked(tmp_path: Path):
+    source = tmp_path / "stations.csv"
+    source.write_text(STATIONS_CSV.format(azi="-999.25").replace("100,5,45", "100,-999.25,45"))
+    refused = run(survey_pipeline(tmp_path), source, tmp_path / "refused")
+    assert refused.exit_code != 0
+    assert f"{source}:3" in refused.output and "null_stations: drop" in refused.output
+    drop = ["--set", "read.options={null_stations: drop}"]
+    with pytest.warns(InputFileWarning, match=r"2 station\(s\) .* left out .*; lines 3, 4"):
+        dropped = run(survey_pipeline(tmp_path), source, tmp_path / "out", *drop)
+    assert dropped.exit_code == 0, dropped.output
+    md = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet").column("md")
+    assert md.to_pylist() == [0.0, 300.0]
+    las = tmp_path / "stations.las"  # NULL -999.25; a 999.25 azimuth is a null marker too
+    las.write_text(
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n NULL. -999.25 :\n WELL. W :\n"
+        "~Curve\n DEPT.m : md\n INC.deg : inc\n AZI.deg : azimuth\n~Parameter\n"
+        " NREF. true :\n~A\n0 0 0\n100 5 999.25\n200 10 46\n"
+    )
+    with pytest.raises(InputFileError, match=r"station at md 100\.0 has no azimuth") as caught:
+        gp.read(las, kind="stations")
+    assert (caught.value.line, caught.value.column) == (15, "azi")
+    with pytest.warns(InputFileWarning, match="left out"):
+        assert gp.read(las, kind="stations", null_stations="drop").md.tolist() == [0.0, 200.0]
+
+
 def test_a_null_marker_witsml_azimuth_is_an_error_or_a_dropped_station(tmp_path: Path):
     source = witsml(tmp_path / "vendor.xml", azi_rad={40: "999.25"})
     pipe = survey_pipeline(tmp_path)
@@ -210,7 +235,10 @@ def test_a_null_marker_witsml_azimuth_is_an_error_or_a_dropped_station(tmp_path:
     assert "null_stations: drop" in refused.output
     line = next(i for i, t in enumerate(source.read_text().splitlines(), 1) if 'uid="s40"' in t)
     assert f"{source}:{line}" in refused.output
-    with pytest.warns(InputFileWarning, match=rf"vendor\.xml:{line}: .* station left out"):
+    with pytest.warns(
+        InputFileWarning,
+        match=rf"vendor\.xml:{line}: 1 station\(s\) without inclination or azimuth left out",
+    ):
         dropped = run(pipe, source, tmp_path / "out", "--set", "read.options={null_stations: drop}")
     assert dropped.exit_code == 0, dropped.output
     md = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet").column("md")

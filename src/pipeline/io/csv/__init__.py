@@ -235,11 +235,14 @@ class _Rows:
             found = null_markers(array, angle=quantity in ("angle", "dogleg_severity"))
             if found is None:
                 continue
-            if name not in self.layout.blanks:
+            if name not in self.layout.blanks and not (
+                name == "inc" and self.opts.null_stations == "drop"
+            ):
                 first = int(np.flatnonzero(found)[0])
                 raise InputFileError(
                     self.path,
-                    f"{array[first].as_py()!r} is a null marker: expected a value of {name}",
+                    f"{array[first].as_py()!r} is a null marker: expected a value of {name}"
+                    + (" (or the option null_stations: drop)" if name == "inc" else ""),
                     line=int(lines[first]),
                     column=self.chosen[name].text,
                 )

@@ -12,7 +12,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 from xml.parsers import expat
 
 import numpy as np
@@ -20,12 +20,12 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
-from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
-from pipeline.tables import AngleUnitConfirmed
+from pipeline.tables import AngleUnitConfirmed, NullStations
 from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
 
 SNIFF_BYTES = 4096
@@ -83,12 +83,7 @@ class WitsmlOptions(BaseModel):
         "(must agree with it otherwise)",
     )
     default_north_reference: DefaultNorthReference = None
-    null_stations: Literal["error", "drop"] = Field(
-        "error",
-        description="a station whose md, incl or azi is missing or a null marker (-999.25…): "
-        "'error' (default) refuses the file at its line; 'drop' leaves the station out, with "
-        "a warning naming its line",
-    )
+    null_stations: NullStations = "error"
     angle_unit_confirmed: AngleUnitConfirmed = False
 
 
@@ -202,7 +197,7 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
-        rows = [row for node in nodes if (row := _station(path, node, opts)) is not None]
+        rows = [_station(path, node, opts) for node in nodes]
         rows.sort(key=lambda row: row["md"])
         for row in rows:
             for name in data:
@@ -281,9 +276,9 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
     return north
 
 
-def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any] | None:
-    """One station's values (None: a station without md, incl or azi, dropped as the option
-    ``null_stations`` asks); a null marker is no value."""
+def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
+    """One station's values; a null marker is no value (a missing incl or azi is NaN under
+    the option ``null_stations: drop``: the engine leaves the station out)."""
     row: dict[str, Any] = {SOURCE_LINE: node.line}
     for column, element, quantity, required in STATION_MEASURES:
         child = node.get(element)
@@ -298,9 +293,9 @@ def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any] | No
                     else f"trajectoryStation has no <{element}>"
                 )
                 where = " (it may be left out only at vertical)" if column == "azi" else ""
-                if opts.null_stations == "drop":
-                    warn_input(path, f"{what}: station left out (null_stations: drop)", node.line)
-                    return None
+                if opts.null_stations == "drop" and column != "md":
+                    row[column] = float("nan")
+                    continue
                 raise InputFileError(
                     path,
                     f"{what}{where}: expected a {quantity} (or the reader option "
