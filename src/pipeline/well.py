@@ -98,6 +98,14 @@ class WellMetadata(BaseModel):
         "azimuths were referred to grid north by it; 0: none applied)"
     )
 
+    def convergence_for(self, reference: str) -> float | None:
+        """γ (deg) relating azimuths referred to ``reference`` north to true north: for
+        grid-north azimuths the convergence applied to them (a WITSML gridCorUsed), else
+        the site's ``grid_convergence``."""
+        if reference == "grid" and self.grid_convergence_applied is not None:
+            return self.grid_convergence_applied
+        return self.grid_convergence
+
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""
         update = (

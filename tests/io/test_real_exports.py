@@ -25,6 +25,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pyproj
 import pytest
+import yaml
 from click.testing import CliRunner, Result
 from vendor_exports import CRS, SITE, Survey, survey_pipeline, witsml
 
@@ -182,6 +183,26 @@ def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path:
     assert result.exit_code == 0, result.output
     trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
     assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.1, abs=1e-9)
+
+
+def test_grid_north_exports_keep_their_applied_convergence_for_magnetic_models(tmp_path: Path):
+    g = gamma()
+    survey = Survey()
+    grid_azi = {k: repr(math.radians((45.0 - g) % 360.0)) for k in range(1, survey.md.size)}
+    source = witsml(
+        tmp_path / "grid.xml",
+        azi_ref="grid north",
+        head=f'<gridCorUsed uom="dega">{g!r}</gridCorUsed>',
+        azi_rad={k: v for k, v in grid_azi.items() if survey.inc[k] > 0},
+    )
+    mwd = {"id": "mwd", "uses": "position_uncertainty", "with": {"model": "ISCWSA-MWD-REV5"}}
+    pipe = survey_pipeline(tmp_path)
+    spec = yaml.safe_load(pipe.read_text())
+    spec["stages"].append({**mwd, "inputs": {"trajectory": "trajectory.trajectory"}})
+    pipe.write_text(yaml.safe_dump(spec, sort_keys=False))
+    result = gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "out")
+    assert result.well.grid_convergence_applied == g and result.well.grid_convergence is None
+    assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
 
 
 # --------------------------------------------------------------------------- 2. null markers

@@ -117,7 +117,7 @@ def offset_tables(
             azi,
             own,
             north,  # type: ignore[arg-type]
-            convergence_deg=known.grid_convergence,
+            convergence_deg=known.convergence_for(own),
             declination_deg=known.declination,
         )
         tables.append((entry.well_id, table, np.where(np.isnan(azi), np.nan, converted)))
@@ -172,7 +172,7 @@ class _Frame:
 
     def __init__(self, north: str, well: WellMetadata, magnetic: MagneticReference | None):
         self.north = north
-        self.convergence = well.grid_convergence
+        self.convergence = well.convergence_for(north)
         self.declination = (
             well.declination
             if well.declination is not None

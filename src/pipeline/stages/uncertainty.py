@@ -149,11 +149,12 @@ def position_uncertainty(
     if "magnetic" in tool.needs:
         magnetic = params.magnetic or wellhead_field(ctx.well)
         site = replace(site, magnetic=magnetic)
+        north = north_reference_of(table, "azi")
         azi_deg, _ = convert_azimuth(
             azi_deg,
-            north_reference_of(table, "azi"),
+            north,
             "true",
-            convergence_deg=ctx.well.grid_convergence,
+            convergence_deg=ctx.well.convergence_for(north),
             declination_deg=magnetic.declination,
         )
     if "latitude" in tool.needs:
