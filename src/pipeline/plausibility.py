@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Annotated, Literal
 
 import numpy as np
 import pyarrow as pa
+from pydantic import Field
 
 from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, warn_input
@@ -41,6 +43,24 @@ CONFIRM = "angle_unit_confirmed"
 DROP = "null_stations"
 """The reader option that, set to ``drop``, leaves out stations missing an angle."""
 _PER_RAD = 180.0 / math.pi
+
+AngleUnitConfirmed = Annotated[
+    bool,
+    Field(
+        description="the inclinations and azimuths are in the unit declared although they all "
+        "fit radians (pipeline.plausibility)"
+    ),
+]
+"""A reader option: confirms a declared angle unit the plausibility check doubts."""
+NullStations = Annotated[
+    Literal["error", "drop"],
+    Field(
+        description="a station without inclination, or without azimuth away from vertical (an "
+        "empty cell or a null marker, -999.25…): 'error' (default) refuses the file at its "
+        "line; 'drop' leaves the station out, with a warning naming its line"
+    ),
+]
+"""A reader option: what a station missing an angle is ."""
 
 
 def check_angles(path: Path, table: pa.Table, *, confirmed: bool = False) -> None:

@@ -6,10 +6,6 @@ columns state their north reference (true, grid or magnetic) in field metadata.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
-
-from pydantic import Field
-
 from pipeline.contracts import TableContract, column
 
 DLS_COURSE_M = 30.0
@@ -66,23 +62,6 @@ class Stations(TableContract):
 
 STATION_TEXT_COLUMNS = ("tool_type", "station_type")
 """Per-station text columns a trajectory keeps from its stations."""
-AngleUnitConfirmed = Annotated[
-    bool,
-    Field(
-        description="the inclinations and azimuths are in the unit declared although they all "
-        "fit radians (see pipeline.plausibility)"
-    ),
-]
-"""A reader option: confirms a declared angle unit the plausibility check doubts."""
-NullStations = Annotated[
-    Literal["error", "drop"],
-    Field(
-        description="a station without inclination, or without azimuth away from vertical (an "
-        "empty cell or a null marker, -999.25…): 'error' (default) refuses the file at its "
-        "line; 'drop' leaves the station out, with a warning naming its line"
-    ),
-]
-"""A reader option: what a station missing an angle is (see pipeline.plausibility)."""
 
 
 class Trajectory(Stations):

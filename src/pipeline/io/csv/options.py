@@ -30,7 +30,7 @@ from pydantic import (
 from pipeline.errors import InputFileError, SpecError, UnitError
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
-from pipeline.tables import AngleUnitConfirmed, NullStations
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.units import conversion_factor
 from pipeline.well import DefaultNorthReference, NorthReference
 from pipeline.yamlsource import load_mapping, validate_located

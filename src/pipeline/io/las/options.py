@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pipeline.errors import UnitError
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
-from pipeline.tables import AngleUnitConfirmed, NullStations
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.units import conversion_factor
 from pipeline.well import DefaultNorthReference, NorthReference
 

@@ -25,7 +25,7 @@ from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
-from pipeline.tables import AngleUnitConfirmed, NullStations
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
 
 SNIFF_BYTES = 4096
