@@ -388,12 +388,14 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
     start = first.get("dTimTrajStart")
     if start is not None:
         found["survey_date"] = (_date(path, start), start.line)
-    if "tool_type" not in found:  # the tie-in point names no tool: the first station that does
-        for traj in trajectories:
-            for station in traj.all("trajectoryStation"):
-                tool = _text(station, "typeSurveyTool")
-                if tool is not None and survey_tool(tool) != "unknown":
-                    found.setdefault("tool_type", (tool, station.line))
+    tools = (  # the tie-in point names no tool: the first station that names one
+        (tool, station.line)
+        for traj in trajectories
+        for station in traj.all("trajectoryStation")
+        if (tool := _text(station, "typeSurveyTool")) and survey_tool(tool) != "unknown"
+    )
+    if "tool_type" not in found and (tool_found := next(tools, None)) is not None:
+        found["tool_type"] = tool_found
     for name, (value, line) in found.items():
         try:
             WellMetadata.model_validate({name: value})
