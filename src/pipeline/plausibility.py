@@ -3,9 +3,9 @@ through (:func:`pipeline.registry.check_read`), in canonical degrees after the r
 unit conversion:
 
 * an inclination outside [0, 180] or an azimuth outside [−360, 720) is an error at its line
-  — a null marker or a unit mistake, never a value to wrap. When half the column or more is
-  out of range and every angle would fit once divided by 180/π, the message says the
-  values look like degrees declared as radians;
+  — a null marker or a unit mistake, never a value to wrap. When more than half the column
+  (and :data:`RADIAN_STATIONS` stations or more) is out of range and every angle would fit
+  once divided by 180/π, the message says the values look like degrees declared as radians;
 * an azimuth in [−360, 0) or [360, 720) is read as the same direction in [0, 360), with a
   warning naming its line;
 * inclinations and azimuths that all fit radians — at least :data:`RADIAN_STATIONS`
@@ -176,7 +176,8 @@ def _refusal(
     hint = ""
     with np.errstate(invalid="ignore"):
         if (
-            2 * rows.size >= np.isfinite(values).sum()
+            rows.size >= RADIAN_STATIONS
+            and 2 * rows.size > np.isfinite(values).sum()
             and np.all(np.isnan(inc) | (inc / _PER_RAD <= INC_RANGE[1]))
             and np.all(np.isnan(azi) | (np.abs(azi / _PER_RAD) < 360.0))
         ):
