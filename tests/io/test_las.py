@@ -1182,9 +1182,10 @@ def test_writer_refuses_values_every_reader_takes_for_nulls(
 def test_writer_keeps_a_depth_of_999_25(tmp_path: Path) -> None:
     table = _stations({"md": [0.0, 999.25, 9999.25], "inc": [0.0, None, 1.0], "azi": [0, 1, 2]})
     WRITER.write(table, tmp_path / "out.las", WELL)
-    assert " NULL    .         -999.25                  : null value" in (
-        tmp_path / "out.las"
-    ).read_text()
+    assert (
+        " NULL    .         -999.25                  : null value"
+        in (tmp_path / "out.las").read_text()
+    )
     back, _ = read(tmp_path / "out.las")
     assert column(back, "md") == [0.0, 999.25, 9999.25]
     assert column(back, "inc") == [0.0, None, 1.0]

@@ -234,6 +234,10 @@ def test_csv_and_las_stations_missing_an_angle_are_left_out_when_asked(tmp_path:
     assert dropped.exit_code == 0, dropped.output
     md = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet").column("md")
     assert md.to_pylist() == [0.0, 300.0]
+    source.write_text(STATIONS_CSV.format(azi="46").replace("100,5,45", "100,,45"))  # empty
+    with pytest.warns(InputFileWarning, match=r"1 station\(s\) .* left out"):
+        kept = gp.read(source, kind="stations", null_stations="drop")
+    assert kept.md.tolist() == [0.0, 200.0, 300.0]
     las = tmp_path / "stations.las"  # NULL -999.25; a 999.25 azimuth is a null marker too
     las.write_text(
         "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n NULL. -999.25 :\n WELL. W :\n"

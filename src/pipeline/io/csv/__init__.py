@@ -214,7 +214,7 @@ class _Rows:
             self.header,
             self.chosen,
             self._types(),
-            self.layout.blanks,
+            self._blanks(),
             self.decimal,
         )
         for values, rows in blocks:
@@ -235,9 +235,7 @@ class _Rows:
             found = null_markers(array, angle=quantity in ("angle", "dogleg_severity"))
             if found is None:
                 continue
-            if name not in self.layout.blanks and not (
-                name == "inc" and self.opts.null_stations == "drop"
-            ):
+            if name not in self._blanks():
                 first = int(np.flatnonzero(found)[0])
                 raise InputFileError(
                     self.path,
@@ -248,6 +246,12 @@ class _Rows:
                 )
             values[name] = pc.if_else(pa.array(found), pa.scalar(None, array.type), array)
         return values
+
+    def _blanks(self) -> frozenset[str]:
+        """Columns whose cells may be empty: the layout's, and a station's inclination under
+        the option ``null_stations: drop`` (the engine leaves such stations out)."""
+        drop = self.layout.contract is Stations and self.opts.null_stations == "drop"
+        return self.layout.blanks | {"inc"} if drop else self.layout.blanks
 
     def _types(self) -> dict[str, pa.DataType]:
         return {n: t for n, t in self.layout.types().items() if n in self.chosen}
