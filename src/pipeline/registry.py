@@ -27,11 +27,13 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
+from pipeline.plausibility import CONFIRM, DROP, check_angles, without_null_stations
 from pipeline.provenance import InputFile as InputFile
 from pipeline.provenance import Provenance as Provenance
 from pipeline.provenance import StageSetup as StageSetup
 from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream
+from pipeline.tables import Stations
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
 NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
@@ -450,7 +452,9 @@ class Registry:
     ) -> tuple[pa.Table, WellMetadata]:
         """``chosen``'s table of ``path`` (options parsed), checked against the kind."""
         table, found = self._reading(chosen, lambda: chosen.read(path, kind, parsed))
-        check_read(path, kind, chosen, table)
+        if getattr(parsed, DROP, None) == "drop":
+            table = without_null_stations(path, table)
+        check_read(path, kind, chosen, table, confirmed=bool(getattr(parsed, CONFIRM, False)))
         return table, found
 
     def read_stream(
@@ -544,14 +548,20 @@ class Registry:
         ]
 
 
-def check_read(path: Path, kind: str, reader: ReaderDef, table: pa.Table) -> None:
+def check_read(
+    path: Path, kind: str, reader: ReaderDef, table: pa.Table, *, confirmed: bool = False
+) -> None:
     """Raise an :class:`InputFileError` unless the table ``reader`` read from ``path`` meets
     the contract of ``kind`` (a :class:`WrongKindError` if it lacks a column the kind
     requires: a file of another kind): what a reader lets through (MD or time out of order, an
     inclination past 180°, a Parquet or MCAP column in another unit) is the file's fault,
     named with the line of its first bad row (when the table records lines) and every
-    rule broken, on one line."""
+    rule broken, on one line. Stations' angles are checked for plausibility first
+    (:func:`pipeline.plausibility.check_angles`; ``confirmed``: the reader option
+    ``angle_unit_confirmed``)."""
     check_columns(path, kind, reader, table.column_names)
+    if issubclass(reader.kinds[kind], Stations):
+        check_angles(path, table, confirmed=confirmed)
     try:
         reader.kinds[kind].validate_table(table)
     except ContractViolation as exc:

@@ -54,6 +54,16 @@ class Stations(TableContract):
         undefined_at_vertical=True,
         description="azimuth, clockwise from north (NaN: undefined, only at vertical)",
     )
+    tool_type: str | None = column(
+        unit=None, description="survey tool of the station, as the file names it", default=None
+    )
+    station_type: str | None = column(
+        unit=None, description="station type as the file names it (tie in point…)", default=None
+    )
+
+
+STATION_TEXT_COLUMNS = ("tool_type", "station_type")
+"""Per-station text columns a trajectory keeps from its stations."""
 
 
 class Trajectory(Stations):

@@ -49,6 +49,11 @@ NORTH_WORDS: dict[str, NorthReference] = {
 """Words naming a north reference in file headers (``Azimuth Grid``, ``AZI (MN)``, NREF)."""
 
 
+def _angle(description: str) -> Any:
+    """An optional north correction field, deg in [-180, 180]."""
+    return Field(None, ge=-180, le=180, description=description)
+
+
 class WellMetadata(BaseModel):
     """Header of one well and survey run. Angles in degrees, lengths in metres."""
 
@@ -84,23 +89,32 @@ class WellMetadata(BaseModel):
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths: true, grid or magnetic"
     )
-    declination: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="magnetic declination at the wellhead on the survey date, deg "
-        "(magnetic north east of true north positive)",
+    declination: float | None = _angle(
+        "magnetic declination at the wellhead on the survey date, deg (magnetic north east "
+        "of true north positive)"
     )
-    grid_convergence: float | None = Field(
-        None,
-        ge=-180,
-        le=180,
-        description="grid convergence at the wellhead, deg (grid north east of true north "
-        "positive)",
+    grid_convergence: float | None = _angle(
+        "grid convergence at the wellhead, deg (grid north east of true north positive)"
     )
     # the geomagnetic reference of the site and date (default: the geomagnetic model's)
     magnetic_field: float | None = Field(None, gt=0, description="geomagnetic total field, nT")
     magnetic_dip: float | None = Field(None, ge=-90, le=90, description="magnetic dip, deg, down +")
+    declination_applied: float | None = _angle(
+        "magnetic declination already applied to the azimuths, deg (WITSML magDeclUsed: "
+        "magnetic azimuths were corrected by it; 0: none applied)"
+    )
+    grid_convergence_applied: float | None = _angle(
+        "grid convergence already applied to the azimuths, deg (WITSML gridCorUsed: true "
+        "azimuths were referred to grid north by it; 0: none applied)"
+    )
+
+    def convergence_for(self, reference: str) -> float | None:
+        """γ (deg) relating azimuths referred to ``reference`` north to true north: for
+        grid-north azimuths the convergence applied to them (a WITSML gridCorUsed), else
+        the site's ``grid_convergence``."""
+        if reference == "grid" and self.grid_convergence_applied is not None:
+            return self.grid_convergence_applied
+        return self.grid_convergence
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

@@ -76,6 +76,7 @@ LAYERS: dict[str, int] = {
     "pipeline.hookspecs": 2,
     "pipeline.contracts": 2,
     "pipeline.tables": 2,
+    "pipeline.plausibility": 2,
     "pipeline.schemas": 2,
     "pipeline.yamlsource": 2,
     "pipeline.filenames": 2,

@@ -155,7 +155,7 @@ BAD_INPUTS = {
     ),
     "inclination out of range": (
         "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,181,1\n",
-        ["column 'inc': range", "values <= 180", "row 1 (line 3)"],
+        ["bad.csv:3 (column 'inc')", "inclination 181.0° is outside [0, 180]"],
     ),
     "azimuth not finite": (
         "MD (m),Inc (deg),Azi True (deg)\n0,0,0\n30,1,inf\n",

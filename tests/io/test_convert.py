@@ -168,7 +168,7 @@ def _inc_huge(tmp_path: Path) -> tuple[Path, str]:
     path.write_text("MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n30,1e308,10\n")
     return (
         path,
-        ":3: not valid as stations (reader 'csv'): column 'inc': range: expected values <= 180",
+        ":3 (column 'inc'): inclination 1e+308° is outside [0, 180]",  # pipeline.plausibility
     )
 
 
@@ -182,7 +182,7 @@ def _witsml_radians(tmp_path: Path) -> tuple[Path, str]:
     station = next(
         n for n in range(line, 0, -1) if "<trajectoryStation" in text.splitlines()[n - 1]
     )
-    return path, f":{station}: not valid as stations (reader 'witsml'): column 'inc': range"
+    return path, f":{station} (column 'inc'): inclination 572.957795130823"
 
 
 def _parquet_unit(tmp_path: Path) -> tuple[Path, str]:

@@ -65,6 +65,8 @@ def test_las_header_is_complete_for_lasio(exports_run: RunResult, trajectory: pa
         "NREF": ("grid", ""),
         "DECL": (17.0, "deg"),
         "GRIDCONV": (1.25, "deg"),
+        "DECLUSED": ("", "deg"),  # the site's declination was not applied to gyro azimuths
+        "GRIDUSED": (1.25, "deg"),
         "METHOD": ("minimum curvature", ""),
         "VSAZ": (30.0, "deg"),
     }

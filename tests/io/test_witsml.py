@@ -74,7 +74,9 @@ def test_export_is_valid_witsml_and_keeps_every_number(
     )
     assert traj.aziRef == "grid north"
     assert (traj.gridCorUsed.value(), traj.gridCorUsed.uom) == (1.25, "dega")
-    assert (traj.magDeclUsed.value(), traj.magDeclUsed.uom) == (17.0, "dega")
+    assert (
+        traj.magDeclUsed is None
+    )  # the site's declination (17°) was never applied to gyro azimuths
     assert traj.aziVertSect.value() == 30.0
     assert traj.dispNsVertSectOrig.value() == traj.dispEwVertSectOrig.value() == 0.0
     assert traj.dTimTrajStart == dt.datetime(2026, 11, 21, tzinfo=dt.UTC)
@@ -112,7 +114,7 @@ def test_reader_reads_the_export_back_exactly(exports_run: RunResult, trajectory
             == trajectory.schema.field(name).metadata[UNIT_KEY]
         )
     assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
-    assert table.column("source_line").to_pylist()[:2] == [17, 38]  # <trajectoryStation> lines
+    assert table.column("source_line").to_pylist()[:2] == [16, 37]  # <trajectoryStation> lines
     assert well == well_of(trajectory)
     assert (well.declination, well.grid_convergence, well.wellbore) == (17.0, 1.25, "J-12 ST1")
 
@@ -160,7 +162,17 @@ def test_several_surveys_become_several_trajectories(tmp_path: Path):
     assert back.column("survey").to_pylist() == table.column("survey").to_pylist()
     for name in ("md", "inc", "azi"):
         assert back.column(name).to_pylist() == table.column(name).to_pylist()
-    assert back.column_names == ["survey", "md", "inc", "azi", "source_line"]
+    assert back.column_names == [
+        "survey",
+        "md",
+        "inc",
+        "azi",
+        "tool_type",
+        "station_type",
+        "source_line",
+    ]
+    assert back.column("tool_type").to_pylist()[:2] == ["gyroscopic north seeking"] * 2
+    assert back.column("station_type").to_pylist()[:2] == ["tie in point", "gyro north seeking"]
     assert well == WellMetadata(well="W-2", tool_type="gyro north-seeking", north_reference="true")
     one, _ = READER.read(path, "stations", READER.options(trajectory="run 2"))
     assert one.column("md").to_pylist() == [50.0, 75.5, 120.25]
@@ -306,7 +318,7 @@ def test_reader_converts_units(tmp_path: Path):
     ]
     head = (
         '<dTimTrajStart>2024-05-01T10:30:00+03:00</dTimTrajStart><magDeclUsed uom="rad">0.1'
-        "</magDeclUsed><aziRef>magnetic north</aziRef>"
+        "</magDeclUsed><aziRef>true north</aziRef>"
     )
     table, well = READER.read(put(tmp_path, document(stations, head)), "stations", READER.options())
     assert table.column("md").to_pylist() == [0.0, 100 * 0.3048]
@@ -314,10 +326,11 @@ def test_reader_converts_units(tmp_path: Path):
     assert table.column("inc").to_pylist() == [0.0, pytest.approx(np.degrees(0.5), abs=1e-12)]
     assert table.column("azi").to_pylist()[1] == pytest.approx(np.degrees(1.0), abs=1e-12)
     assert table.column("dls").to_pylist()[1] == pytest.approx(3 * 30 / 30.48, abs=1e-12)
-    assert table.schema.field("azi").metadata[NORTH_KEY] == b"magnetic"
-    assert well.declination == pytest.approx(np.degrees(0.1), abs=1e-12)
+    assert table.schema.field("azi").metadata[NORTH_KEY] == b"true"
+    assert well.declination_applied == pytest.approx(np.degrees(0.1), abs=1e-12)
+    assert well.declination is None  # what was applied, not the site's declination
     assert well.survey_date is not None and well.survey_date.isoformat() == "2024-05-01"
-    assert (well.well, well.wellbore, well.north_reference) == ("W-1", None, "magnetic")
+    assert (well.well, well.wellbore, well.north_reference) == ("W-1", None, "true")
 
 
 def test_unknown_azimuth_reference_takes_the_option(tmp_path: Path):

@@ -89,9 +89,10 @@ def test_stage_given_declination() -> None:
     params = NorthReferenceParams(target="true", declination=17.0)
     out = north_reference_stage({"stations": stations("magnetic")}, params, ctx)["stations"]
     np.testing.assert_allclose(out.column("azi").to_numpy(), [27.0, 7.0])
-    # the run's well learns the north reference and the declination used, nothing else
+    # the run's well learns the north reference, the declination used and that the azimuths
+    # now have it applied (true north: magnetic + 17°), nothing else
     assert [w.model_dump(exclude_unset=True) for w in reported] == [
-        {"north_reference": "true", "declination": 17.0}
+        {"north_reference": "true", "declination": 17.0, "declination_applied": 17.0}
     ]
 
 

@@ -135,7 +135,7 @@ def offset_tables(
             azi,
             own,
             north,  # type: ignore[arg-type]
-            convergence_deg=known.grid_convergence,
+            convergence_deg=known.convergence_for(own),
             declination_deg=known.declination,
         )
         tables.append((entry.well_id, table, np.where(np.isnan(azi), np.nan, converted)))
@@ -197,7 +197,7 @@ class _Frame:
     ):
         self.north = north
         self.catalogue = catalogue
-        self.convergence = well.grid_convergence
+        self.convergence = well.convergence_for(north)
         self.declination = (
             well.declination
             if well.declination is not None

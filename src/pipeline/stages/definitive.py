@@ -297,7 +297,7 @@ def _read(
     md, inc, azi = station_angles(table)
     own = north_reference_of(table, "azi")
     declination = None if magnetic is None else magnetic.declination
-    kw = {"convergence_deg": well.grid_convergence, "declination_deg": declination}
+    kw = {"convergence_deg": well.convergence_for(own), "declination_deg": declination}
     try:
         azi_out, _ = convert_azimuth(azi, own, north, **kw)  # type: ignore[arg-type]
         azi_true, _ = convert_azimuth(azi, own, "true", **kw)

@@ -221,10 +221,14 @@ def interpolate_tvd_stage(
 
 class NorthReferenceParams(BaseModel):
     """Parameters of the north-reference conversion (angles deg). Corrections not given are
-    the well's ``grid_convergence`` and ``declination``, else derived from the well header:
-    γ from ``crs`` at the wellhead, D from the geomagnetic ``model`` at the wellhead on
-    ``date`` (default: the survey date). The output's well metadata records the new north
-    reference and the corrections applied, so exports state them."""
+    the well's ``grid_convergence`` and ``declination`` (the site's), else derived from the
+    well header: γ of grid-north azimuths from the grid convergence applied to them
+    (``grid_convergence_applied``, a WITSML gridCorUsed), else from ``crs`` at the wellhead;
+    D from the geomagnetic ``model`` at the wellhead on ``date`` (default: the survey date).
+    A correction applied to the azimuths is never taken for the site's: a gridCorUsed of 0 on
+    true-north azimuths says no grid correction was applied, not that γ is 0. The output's
+    well metadata records the new north reference, the corrections used and the ones now
+    applied to the azimuths, so exports state them."""
 
     model_config = ConfigDict(extra="forbid")
     target: NorthReference = Field(description="north reference to convert the azimuths to")
@@ -239,8 +243,9 @@ class NorthReferenceParams(BaseModel):
     date: dt.date | None = Field(None, description="date for D; default the well's survey date")
 
 
-def _needs(stations: pa.Table, target: str) -> set[str]:
-    refs = {target}
+def _sources(stations: pa.Table) -> set[str]:
+    """The north references of the table's azimuth columns."""
+    refs: set[str] = set()
     for fld in stations.schema:
         raw = (fld.metadata or {}).get(b"north_reference")
         if raw is not None:
@@ -253,17 +258,18 @@ def north_reference_stage(
 ) -> dict[str, pa.Table]:
     """Stations → the same stations with every azimuth column converted to ``target`` north."""
     stations = inputs["stations"]
-    refs = _needs(stations, params.target)
+    sources = _sources(stations)
+    refs = sources | {params.target}
+    converting = len(refs) > 1
     well = ctx.well
     convergence = _correction("convergence", params.convergence, well.grid_convergence)
     declination = _correction("declination", params.declination, well.declination)
-    if len(refs) > 1 and "grid" in refs and convergence is None:
-        if params.crs is None or well.latitude is None or well.longitude is None:
-            raise ValueError(
-                "grid north needs `convergence`, or `crs` and the well's latitude and longitude"
-            )
-        convergence = convergence_at(well.latitude, well.longitude, params.crs)
-    if len(refs) > 1 and "magnetic" in refs and declination is None:
+    used: dict[str, object] = {"north_reference": params.target}
+    if converting and "grid" in refs:
+        convergence = _grid_convergence(convergence, params, well, "grid" in sources)
+        used["grid_convergence"] = convergence
+        used["grid_convergence_applied"] = convergence if params.target == "grid" else 0.0
+    if converting and "magnetic" in refs and declination is None:
         date = params.date or well.survey_date
         if well.latitude is None or well.longitude is None or date is None:
             raise ValueError(
@@ -273,14 +279,12 @@ def north_reference_stage(
         declination = declination_at(
             well.latitude, well.longitude, date, height_m=well.elevation or 0.0, model=params.model
         )
+    if converting and "magnetic" in refs:
+        used["declination"] = declination
+        used["declination_applied"] = 0.0 if params.target == "magnetic" else declination
     table = convert_table(
         stations, params.target, convergence_deg=convergence, declination_deg=declination
     )
-    used = WellMetadata(
-        north_reference=params.target,
-        grid_convergence=convergence if len(refs) > 1 and "grid" in refs else None,
-        declination=declination if len(refs) > 1 and "magnetic" in refs else None,
-    ).model_dump(exclude_none=True)
     ctx.update_well(WellMetadata.model_validate(used))
     header = (well_of(stations) or WellMetadata()).merged(used)
     return {"stations": attach(table, header)}
@@ -292,6 +296,30 @@ def _correction(name: str, given: float | None, well: float | None) -> float | N
         field = "grid_convergence" if name == "convergence" else name
         raise ValueError(f"{name} {given} contradicts the well's {field} {well}: give one of them")
     return given if given is not None else well
+
+
+def _grid_convergence(
+    given: float | None, params: NorthReferenceParams, well: WellMetadata, from_grid: bool
+) -> float:
+    """γ for a conversion to or from grid north: the one given (stage or well), else the one
+    applied to grid-north azimuths, else the CRS's at the wellhead. Grid-north azimuths can
+    only be taken back to true north by the γ that was applied to them."""
+    applied = well.grid_convergence_applied if from_grid else None
+    if given is not None and applied is not None and given != applied:
+        raise ValueError(
+            f"convergence {given} contradicts the grid convergence applied to these grid-north "
+            f"azimuths ({applied}, the well's grid_convergence_applied): they can only be "
+            "referred back to true north by the correction applied to them"
+        )
+    if given is not None:
+        return given
+    if applied is not None:
+        return applied
+    if params.crs is None or well.latitude is None or well.longitude is None:
+        raise ValueError(
+            "grid north needs `convergence`, or `crs` and the well's latitude and longitude"
+        )
+    return convergence_at(well.latitude, well.longitude, params.crs)
 
 
 @hookimpl

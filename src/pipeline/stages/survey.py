@@ -19,7 +19,14 @@ from pipeline.survey.crosscheck import check_positions, position_check_of, with_
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
-from pipeline.tables import DLS_COURSE_M, DLS_UNIT, CheckResults, Stations, Trajectory
+from pipeline.tables import (
+    DLS_COURSE_M,
+    DLS_UNIT,
+    STATION_TEXT_COLUMNS,
+    CheckResults,
+    Stations,
+    Trajectory,
+)
 from pipeline.well import WellMetadata
 
 
@@ -95,6 +102,9 @@ def trajectory_columns(
     }
     if "survey" in stations.column_names:
         columns = {"survey": stations.column("survey"), **columns}
+    for name in STATION_TEXT_COLUMNS:
+        if name in stations.column_names:
+            columns[name] = stations.column(name)
     return columns
 
 

@@ -151,11 +151,12 @@ def position_uncertainty(
     if "magnetic" in tool.needs:
         applied = applied_magnetic(params.magnetic, ctx.well, stage="position_uncertainty")
         site = replace(site, magnetic=applied.reference)
+        north = north_reference_of(table, "azi")
         azi_deg, _ = convert_azimuth(
             azi_deg,
-            north_reference_of(table, "azi"),
+            north,
             "true",
-            convergence_deg=ctx.well.grid_convergence,
+            convergence_deg=ctx.well.convergence_for(north),
             declination_deg=applied.reference.declination,
         )
     if "latitude" in tool.needs:

@@ -14,7 +14,10 @@ Kinds read (``read(path, kind, options)``):
   option ``conventions``.
 
 ``source_line`` is each row's 1-based file line, so later contract errors can cite it.
-Values are not range-checked here (the engine checks the contract).
+Null markers (:mod:`pipeline.io.nulls`: ``-999.25``…, in the file's unit) are empty cells:
+null where a cell may be empty (an azimuth then is undefined, allowed only at vertical), an
+error at their line elsewhere. Values are not range-checked here (the engine checks the
+contract and the angles' plausibility, :mod:`pipeline.plausibility`).
 
 File layout, in order:
 
@@ -94,6 +97,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.nulls import null_markers
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -210,16 +214,44 @@ class _Rows:
             self.header,
             self.chosen,
             self._types(),
-            self.layout.blanks,
+            self._blanks(),
             self.decimal,
         )
         for values, rows in blocks:
             lines = rows.source_lines(len(values[self.layout.required[0]]))
-            yield self._table(values, lines)
+            yield self._table(self._without_markers(values, lines), lines)
 
     def batches(self) -> Iterator[pa.RecordBatch]:
         for table in self.tables():
             yield from table.to_batches()
+
+    def _without_markers(self, values: dict[str, Any], lines: Any) -> dict[str, Any]:
+        """Null markers (-999.25…, :mod:`pipeline.io.nulls`) as nulls where a cell may be
+        empty (azi, tvd…); elsewhere (md, inc, time…) an error at the cell's line."""
+        for name, array in values.items():
+            if not pa.types.is_floating(array.type):
+                continue
+            quantity = CURVES[name].quantity if name in CURVES else None
+            found = null_markers(array, angle=quantity in ("angle", "dogleg_severity"))
+            if found is None:
+                continue
+            if name not in self._blanks():
+                first = int(np.flatnonzero(found)[0])
+                raise InputFileError(
+                    self.path,
+                    f"{array[first].as_py()!r} is a null marker: expected a value of {name}"
+                    + (" (or the option null_stations: drop)" if name == "inc" else ""),
+                    line=int(lines[first]),
+                    column=self.chosen[name].text,
+                )
+            values[name] = pc.if_else(pa.array(found), pa.scalar(None, array.type), array)
+        return values
+
+    def _blanks(self) -> frozenset[str]:
+        """Columns whose cells may be empty: the layout's, and a station's inclination under
+        the option ``null_stations: drop`` (the engine leaves such stations out)."""
+        drop = self.layout.contract is Stations and self.opts.null_stations == "drop"
+        return self.layout.blanks | {"inc"} if drop else self.layout.blanks
 
     def _types(self) -> dict[str, pa.DataType]:
         return {n: t for n, t in self.layout.types().items() if n in self.chosen}

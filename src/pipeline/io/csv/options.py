@@ -30,6 +30,7 @@ from pydantic import (
 from pipeline.errors import InputFileError, SpecError, UnitError
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.units import conversion_factor
 from pipeline.well import DefaultNorthReference, NorthReference
 from pipeline.yamlsource import load_mapping, validate_located
@@ -87,6 +88,8 @@ class CsvSettings(BaseModel):
     angle_unit: str | None = Field(
         None, description="unit of inc and azi (short for units: {inc: …, azi: …})"
     )
+    angle_unit_confirmed: AngleUnitConfirmed = False
+    null_stations: NullStations = "error"
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths (true, grid or magnetic)"
     )

@@ -56,6 +56,8 @@ from pipeline.io.las.rows import (
 )
 from pipeline.io.las.well import well_metadata
 from pipeline.io.las.write import write_las
+from pipeline.io.mnemonics import CURVES
+from pipeline.io.nulls import ANGLE_NULL_MARKERS
 from pipeline.io.sniffing import file_head
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -112,11 +114,20 @@ class _Rows:
         column, STRT/STOP/STEP), in canonical units."""
         path, header, spec = self.path, self.header, KINDS[self.kind]
         nulls = null_values(path, header, self.opts)
+        angle_nulls = nulls + [m for m in ANGLE_NULL_MARKERS if m not in nulls]
+        angles = {
+            i
+            for name, i in self.chosen.items()
+            if name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
+        }
         index = IndexRange(path, header, nulls)
         for data in data_blocks(path, self.source, header, self._wanted()):
             if data.lines.size == 0:
                 continue
-            masks = {i: null_mask(values, nulls) for i, values in data.values.items()}
+            masks = {
+                i: null_mask(values, angle_nulls if i in angles else nulls)
+                for i, values in data.values.items()
+            }
             check_index(path, header, data, masks, [0, self.chosen[spec.key]])
             index.feed(data.values[0], data.lines)
             yield self._table(data, masks)

@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pipeline.errors import UnitError
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.units import conversion_factor
 from pipeline.well import DefaultNorthReference, NorthReference
 
@@ -30,6 +31,8 @@ class LasOptions(BaseModel):
         None, description="north reference of the azimuths (true, grid or magnetic)"
     )
     default_north_reference: DefaultNorthReference = None
+    angle_unit_confirmed: AngleUnitConfirmed = False
+    null_stations: NullStations = "error"
     conventions: Conventions = Field(
         default_factory=Conventions,
         description="vendor axis and sign conventions of the sensor curves (samples)",

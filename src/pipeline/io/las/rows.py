@@ -44,6 +44,7 @@ from pipeline.io.las.header import (
     split_lines,
 )
 from pipeline.io.las.options import LasOptions
+from pipeline.io.nulls import NULL_MARKERS
 from pipeline.units import conversion_factor
 
 Floats = NDArray[np.float64]
@@ -360,9 +361,11 @@ def _numbers(path: Path, cells: list[str], lines: Lines, mnemonic: str) -> Float
 
 
 def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
-    """Values meaning 'no value': every NULL item of ~Well/~Parameter and the option's."""
+    """Values meaning 'no value': every NULL item of ~Well/~Parameter, the option's and the
+    null markers of every reader (-999.25…, :data:`~pipeline.io.nulls.NULL_MARKERS`)."""
     items = [i for i in header.well + header.parameters if i.mnemonic == "NULL" and i.value]
-    return [header_number(path, item) for item in items] + list(opts.null_values)
+    found = [header_number(path, item) for item in items] + list(opts.null_values)
+    return found + [m for m in NULL_MARKERS if m not in found]
 
 
 def null_mask(values: Floats, nulls: list[float]) -> Mask:

@@ -7,7 +7,8 @@ LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes a
 the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
-error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR) in degrees or
+error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR), the site's,
+and DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or
 the item's angle unit. ``north_reference`` is the one the file names (an option's is not
 the file's).
 """
@@ -42,6 +43,8 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
 ANGLE_ITEMS = {
     "declination": ("DECL", "MAGDEC", "DECLINATION"),
     "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE", "GRIDCORR"),
+    "declination_applied": ("DECLUSED",),
+    "grid_convergence_applied": ("GRIDUSED",),
 }
 """Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
 COORDINATE_ITEMS = {

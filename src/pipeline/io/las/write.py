@@ -5,6 +5,7 @@ exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text),
 UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
 the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
 well's magnetic declination and grid convergence, deg, east of true north positive),
+DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
@@ -13,11 +14,12 @@ the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field
 shortest round-trip form). The first (index) column is ``md``
 for a stations-like table (md, inc and azi present), else ``time`` (raw samples dwell at one
 depth: only their time increases), else ``md``, else the first numeric column (a log's
-index). NULL is -999.25, or the first of -9999.25, -99999.25… that no value equals; NaN is
-written as NULL. Text columns are written as text (in double quotes when a value holds a
-space, as lasio and gyropipe read them; a null as NULL), except a canonical column the
-survey readers read as numbers (``survey``); those and boolean columns are left out and
-named in ``~Other``; ``source_line`` (a line of the file read) is not written. A column
+index). NULL is -999.25; NaN is written as NULL, and a value that is a null marker of
+:mod:`pipeline.io.nulls` (-999.25, -9999.25; ±999.25… in an angle) is refused: every reader
+would read it back as no value. Text columns are written as text (in double quotes when a
+value holds a space, as lasio and gyropipe read them; a null as NULL), except a canonical
+column the survey readers read as numbers (``survey``); those and boolean columns are left
+out and named in ``~Other``; ``source_line`` (a line of the file read) is not written. A column
 named ``NAME:2`` (how readers tell apart curves of one mnemonic) is written as ``NAME``. A
 file holds one north reference: the azimuth columns' (else the well's), in NREF and in each
 azimuth curve's description. The file is UTF-8, with a byte-order mark when it is not
@@ -27,7 +29,6 @@ ASCII (lasio takes UTF-8 without one for Windows-1252).
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -38,13 +39,14 @@ import pyarrow.csv as pacsv
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, null_markers
 from pipeline.io.precision import for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
-NULL_CHOICES = (-999.25, -9999.25, -99999.25, -999999.25, -9999999.25)
-"""NULL values the writer may use, in order of preference."""
+NULL = NULL_MARKERS[0]
+"""The NULL value written (-999.25)."""
 
 _MNEMONIC = re.compile(r"[^\s.:~#][^\s.:]*")
 _REPEATED = re.compile(r"(.+):[0-9]+")
@@ -67,7 +69,8 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     values = {f.name: _writable(table.column(f.name), f.name) for f in written}
     if values[index].null_count:
         raise ValueError(f"index column {index!r} has missing values")
-    null = _null_value(v for v in values.values() if not pa.types.is_string(v.type))
+    _refuse_null_markers(values)
+    null = NULL
     north = _written_north(numeric, well)
     text = _header_text(table, written, values[index], null, north, well, curve_lines)
     filled = [
@@ -172,13 +175,19 @@ def _text_cells(values: pa.Array) -> pa.Array:
     return pa.array(cells, pa.string())
 
 
-def _null_value(values: Iterable[pa.Array]) -> float:
-    """The first NULL choice that no value equals."""
-    arrays = [a.to_numpy(zero_copy_only=False) for a in values]
-    for null in NULL_CHOICES:
-        if not any(np.any(a == null) for a in arrays):
-            return null
-    raise ValueError(f"every NULL choice {NULL_CHOICES} is a value of the table")
+def _refuse_null_markers(values: dict[str, pa.Array]) -> None:
+    """A value every reader takes for no value (:mod:`pipeline.io.nulls`: -999.25…, and
+    ±999.25 in an angle) cannot be written: it would read back as a null."""
+    for name, array in values.items():
+        if pa.types.is_string(array.type):
+            continue
+        angle = name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
+        if pa.types.is_floating(array.type) and null_markers(array, angle=angle) is not None:
+            markers = ANGLE_NULL_MARKERS if angle else NULL_MARKERS
+            raise ValueError(
+                f"column {name!r} holds a null marker {markers}: every reader would read it "
+                "back as no value"
+            )
 
 
 def _written_north(fields: list[pa.Field], well: WellMetadata) -> str | None:
@@ -239,6 +248,10 @@ def _header_text(
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
         _line(
             "GRIDCONV", "deg", meta["grid_convergence"], "grid convergence, east of true north +"
+        ),
+        _line("DECLUSED", "deg", meta["declination_applied"], "declination applied to azimuths"),
+        _line(
+            "GRIDUSED", "deg", meta["grid_convergence_applied"], "convergence applied to azimuths"
         ),
         _line(
             "METHOD", "", calculation and calculation.method.replace("_", " "), "survey calculation"

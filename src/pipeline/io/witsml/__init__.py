@@ -11,18 +11,22 @@ trajectory's name and uid), holding
   as ``_``. Names and uids longer than WITSML's 64 characters are refused, never cut;
 * ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day);
   ``mdMn``/``mdMx``; ``serviceCompany``;
-* ``magDeclUsed`` and ``gridCorUsed`` — the well's ``declination`` and ``grid_convergence``
-  (set in the header, or recorded by the ``north_reference`` stage when it applied them;
-  both positive east of true north, as WITSML defines them);
+* ``magDeclUsed`` and ``gridCorUsed`` — the corrections applied to the azimuths, the
+  well's ``declination_applied`` and ``grid_convergence_applied`` (recorded by the reader
+  or by the ``north_reference`` stage when it applied them; left out when unknown: the
+  site's ``declination`` and ``grid_convergence`` are extension values). Both positive
+  east of true north, as WITSML defines them;
 * ``aziVertSect`` with its origin at the wellhead, from the calculation record of the
   trajectory (:mod:`pipeline.survey.calculation`); ``aziRef`` from the azimuth column's
   north reference;
-* per row a ``trajectoryStation``: ``typeTrajStation`` (``tie in point`` for the first,
-  else the station type of the tool), ``typeSurveyTool`` (from the well's free-text
-  ``tool_type``: 'gyro north-seeking' → ``gyroscopic north seeking``…, ``unknown`` when it
-  names no WITSML tool type), ``calcAlgorithm`` (when the trajectory records its method),
-  ``md``, ``tvd``, ``incl``, ``azi``, ``dispNs``, ``dispEw``, ``vertSect``, ``dls``,
-  ``rateTurn``, ``rateBuild`` for the columns present (uom ``m``, ``dega``, ``dega/30m``),
+* per row a ``trajectoryStation``: ``typeTrajStation`` (the station's ``station_type``
+  when it is a WITSML one, else ``tie in point`` for the first, else the station type of
+  the tool), ``typeSurveyTool`` (from the station's ``tool_type``, else the well's
+  free-text ``tool_type``: 'gyro north-seeking' → ``gyroscopic north seeking``…,
+  ``unknown`` when it names no WITSML tool type), ``calcAlgorithm`` (when the trajectory
+  records its method), ``md``, ``tvd``, ``incl``, ``azi``, ``dispNs``, ``dispEw``,
+  ``vertSect``, ``dls``, ``rateTurn``, ``rateBuild`` for the columns present (uom ``m``,
+  ``dega``, ``dega/30m``),
   and ``matrixCov`` (varianceNN … varianceVertVert, m², vertical down) from the ``cov_*``
   columns of a position-uncertainty trajectory;
 * ``commonData``: a comment on the frames, and every set well metadata field as an
@@ -34,13 +38,24 @@ validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings
 
 The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one
 named by the option ``trajectory``) as stations in canonical units — md, inc, azi required
-per station; tvd, north, east, dls kept when present — sorted by MD, with a ``survey``
-column (the names) when there are several and the ``source_line`` of each station;
-``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). The north reference
-is ``aziRef`` (``unknown`` or absent: the option ``north_reference``). Well metadata: the
-gyropipe extension values, overridden by the standard elements (nameWell, nameWellbore,
-serviceCompany, dTimTrajStart, magDeclUsed, gridCorUsed, typeSurveyTool). Every problem
-is an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+per station; tvd, north, east, dls kept when present; ``tool_type`` and ``station_type``
+(``typeSurveyTool``, ``typeTrajStation``; ``unknown`` is none) — sorted by MD, with a
+``survey`` column (the names) when there are several and the ``source_line`` of each
+station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A null
+marker (:mod:`pipeline.io.nulls`: ``-999.25``… in the element's own unit) is no value: a
+station without md, incl or azi (azi may be missing only at vertical) is an error at its
+line, or left out with a warning under the option ``null_stations: drop``. The north
+reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``). Well
+metadata: the gyropipe extension values, overridden by the standard elements (nameWell,
+nameWellbore, serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or
+gridConUsed) as the corrections *applied*, ``declination_applied`` and
+``grid_convergence_applied`` — never the site's: a gridCorUsed of 0 on true-north
+azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDeclUsed /
+stnGridCorUsed must agree with them and with each other; a non-zero grid correction on
+true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
+contradiction), and the tool: the first station's ``typeSurveyTool`` naming one (a tie-in
+point names none). Every problem is an :class:`~pipeline.errors.InputFileError` naming the
+file and the element's line.
 """
 
 from __future__ import annotations

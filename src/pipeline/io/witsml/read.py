@@ -22,8 +22,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv import LAYOUTS
+from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
+from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
 
 SNIFF_BYTES = 4096
@@ -39,17 +41,29 @@ STATION_MEASURES = (
 """Column, ``trajectoryStation`` element, quantity, required."""
 WELL_ELEMENTS = (
     ("service_company", "serviceCompany", None),
-    ("declination", "magDeclUsed", "angle"),
-    ("grid_convergence", "gridCorUsed", "angle"),
-    ("grid_convergence", "gridConUsed", "angle"),
+    ("declination_applied", "magDeclUsed", "angle"),
+    ("grid_convergence_applied", "gridCorUsed", "angle"),
+    ("grid_convergence_applied", "gridConUsed", "angle"),
 )
-"""Well metadata field, ``trajectory`` element holding it, quantity of a measure."""
+"""Well metadata field, ``trajectory`` element holding it, quantity of a measure. The
+corrections ``…Used`` are what was applied to the azimuths, not the site's declination or
+convergence (a gridCorUsed of 0 on true-north azimuths: no grid correction applied)."""
+STATION_CORRECTIONS = {
+    "stnMagDeclUsed": "declination_applied",
+    "stnGridCorUsed": "grid_convergence_applied",
+    "stnGridConUsed": "grid_convergence_applied",
+}
+"""``trajectoryStation/corUsed`` elements → the well metadata field they state per station."""
+STATION_TEXT = (("tool_type", "typeSurveyTool"), ("station_type", "typeTrajStation"))
+"""Text columns kept per station: column, ``trajectoryStation`` element."""
 EXTENSION_QUANTITY = {
     "latitude": "angle",
     "longitude": "angle",
     "elevation": "length",
     "declination": "angle",
     "grid_convergence": "angle",
+    "declination_applied": "angle",
+    "grid_convergence_applied": "angle",
 }
 _NORTH = {text: ref for ref, text in AZI_REF.items()}
 _ROOT = re.compile(rb"<(?:[A-Za-z_][\w.-]*:)?trajectorys[\s>/]")
@@ -69,6 +83,8 @@ class WitsmlOptions(BaseModel):
         "(must agree with it otherwise)",
     )
     default_north_reference: DefaultNorthReference = None
+    null_stations: NullStations = "error"
+    angle_unit_confirmed: AngleUnitConfirmed = False
 
 
 @dataclass
@@ -174,12 +190,14 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
     north = _north(path, trajectories, opts)
     labels = _labels(trajectories) if len(trajectories) > 1 else None
     data: dict[str, list[Any]] = {name: [] for name, *_ in STATION_MEASURES}
+    data.update({name: [] for name, _ in STATION_TEXT})
     data[SOURCE_LINE] = []
     survey: list[str] = []
     for index, traj in enumerate(trajectories):
-        rows = [_station(path, node) for node in traj.all("trajectoryStation")]
-        if not rows:
+        nodes = traj.all("trajectoryStation")
+        if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
+        rows = [_station(path, node, opts) for node in nodes]
         rows.sort(key=lambda row: row["md"])
         for row in rows:
             for name in data:
@@ -192,6 +210,9 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
             columns[name] = np.asarray(data[name], dtype=np.float64)
         elif any(v is not None for v in data[name]):
             columns[name] = data[name]
+    for name, _ in STATION_TEXT:
+        if any(v is not None for v in data[name]):
+            columns[name] = pa.array(data[name], pa.string())
     columns[SOURCE_LINE] = pa.array(data[SOURCE_LINE], pa.int64())
     table = LAYOUTS["stations"].table(columns, north)
     return table, _well(path, trajectories, north)
@@ -255,23 +276,38 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
     return north
 
 
-def _station(path: Path, node: Node) -> dict[str, Any]:
+def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
+    """One station's values; a null marker is no value (a missing incl or azi is NaN under
+    the option ``null_stations: drop``: the engine leaves the station out)."""
     row: dict[str, Any] = {SOURCE_LINE: node.line}
     for column, element, quantity, required in STATION_MEASURES:
         child = node.get(element)
-        if child is None:
+        value = _measure(path, child, quantity) if child is not None else None
+        if value is None:
             if column == "azi" and _vertical(row.get("inc")):
                 row[column] = float("nan")  # undefined at vertical, as the writer leaves it
             elif required:
+                what = (
+                    f"<{element}> {child.text.strip()} is a null marker"
+                    if child is not None
+                    else f"trajectoryStation has no <{element}>"
+                )
                 where = " (it may be left out only at vertical)" if column == "azi" else ""
+                if opts.null_stations == "drop" and column != "md":
+                    row[column] = float("nan")
+                    continue
                 raise InputFileError(
                     path,
-                    f"trajectoryStation has no <{element}>{where}",
-                    line=node.line,
+                    f"{what}{where}: expected a {quantity} (or the reader option "
+                    "null_stations: drop to leave such stations out)",
+                    line=child.line if child is not None else node.line,
                     column=element,
                 )
             continue
-        row[column] = _measure(path, child, quantity)
+        row[column] = value
+    for column, element in STATION_TEXT:
+        text = _text(node, element)
+        row[column] = text if text != "unknown" else None
     return row
 
 
@@ -280,8 +316,9 @@ def _vertical(inc: float | None) -> bool:
     return inc is not None and min(abs(inc), abs(180.0 - inc)) <= VERTICAL_TOLERANCE
 
 
-def _measure(path: Path, node: Node, quantity: str) -> float:
-    """A measure element's value in the canonical unit of ``quantity``."""
+def _measure(path: Path, node: Node, quantity: str) -> float | None:
+    """A measure element's value in the canonical unit of ``quantity`` (None: a null marker
+    of :mod:`pipeline.io.nulls`, in the element's own unit)."""
     uom = node.attrs.get("uom")
     if not uom:
         raise InputFileError(path, f"<{node.name}> has no uom", line=node.line, column=node.name)
@@ -301,6 +338,8 @@ def _measure(path: Path, node: Node, quantity: str) -> float:
             line=node.line,
             column=node.name,
         )
+    if is_null_marker(value, angle=quantity in ("angle", "dogleg_severity")):
+        return None
     try:
         return value * uom_factor(uom, quantity)
     except UnitError as exc:
@@ -326,10 +365,9 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
         if field_name not in WellMetadata.model_fields or field_name == "north_reference":
             continue
         quantity = EXTENSION_QUANTITY.get(field_name)
-        found[field_name] = (
-            _measure(path, holder, quantity) if quantity else holder.text.strip(),
-            holder.line,
-        )
+        value = _measure(path, holder, quantity) if quantity else holder.text.strip()
+        if value is not None:
+            found[field_name] = (value, holder.line)
     names = {_text(t, "nameWell") for t in trajectories}
     if len(names) > 1:
         raise InputFileError(path, f"trajectories of several wells {sorted(map(str, names))}")
@@ -342,14 +380,22 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
         node = first.get(element)
         if node is not None:
             value = _measure(path, node, quantity) if quantity else " ".join(node.text.split())
-            found[name] = (value, node.line)
+            if value is not None:
+                found[name] = (value, node.line)
+    for traj in trajectories:
+        _station_corrections(path, traj, found)
+    _applied_agrees(path, north, found)
     start = first.get("dTimTrajStart")
     if start is not None:
         found["survey_date"] = (_date(path, start), start.line)
-    station = first.get("trajectoryStation")
-    tool = _text(station, "typeSurveyTool") if station is not None else None
-    if "tool_type" not in found and tool is not None and survey_tool(tool) != "unknown":
-        found["tool_type"] = (tool, station.line if station else first.line)
+    tools = (  # the tie-in point names no tool: the first station that names one
+        (tool, station.line)
+        for traj in trajectories
+        for station in traj.all("trajectoryStation")
+        if (tool := _text(station, "typeSurveyTool")) and survey_tool(tool) != "unknown"
+    )
+    if "tool_type" not in found and (tool_found := next(tools, None)) is not None:
+        found["tool_type"] = tool_found
     for name, (value, line) in found.items():
         try:
             WellMetadata.model_validate({name: value})
@@ -358,6 +404,47 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
                 path, f"{name} {value!r}: {exc.errors()[0]['msg']}", line=line
             ) from None
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _station_corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
+    """The corrections each station says were applied to it (``corUsed``; null markers are
+    no value) must be one value per trajectory, the trajectory's own when it states one."""
+    for station in traj.all("trajectoryStation"):
+        used = station.get("corUsed")
+        for element, name in STATION_CORRECTIONS.items():
+            node = used.get(element) if used is not None else None
+            value = _measure(path, node, "angle") if node is not None else None
+            if value is None or node is None:
+                continue
+            if name not in found:
+                found[name] = (value, node.line)
+            elif not math.isclose(value, found[name][0], rel_tol=0.0, abs_tol=1e-9):
+                raise InputFileError(
+                    path,
+                    f"<{element}> {value!r}° differs from the {found[name][0]!r}° stated at "
+                    f"line {found[name][1]}: a correction varying along the trajectory is not "
+                    "supported (it would be applied as one value)",
+                    line=node.line,
+                    column=element,
+                )
+
+
+def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[Any, int]]) -> None:
+    """A correction applied to the azimuths must fit their north reference: true- and
+    magnetic-north azimuths carry no grid correction, magnetic ones no declination."""
+    refused = {
+        "grid_convergence_applied": ("true", "magnetic"),
+        "declination_applied": ("magnetic",),
+    }
+    for name, references in refused.items():
+        if name in found and north in references and found[name][0] != 0.0:
+            value, line = found[name]
+            raise InputFileError(
+                path,
+                f"{name.replace('_', ' ')} {value!r}° contradicts aziRef {AZI_REF[north]!r}: "
+                f"azimuths referred to {north} north carry no such correction",
+                line=line,
+            )
 
 
 def _date(path: Path, node: Node) -> dt.date:

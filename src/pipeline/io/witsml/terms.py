@@ -53,6 +53,22 @@ SURVEY_TOOLS: dict[str, str] = {
 }
 """``typeSurveyTool`` → the ``typeTrajStation`` of the stations it measures."""
 TIE_IN = "tie in point"
+STATION_TYPES = frozenset(
+    {
+        *SURVEY_TOOLS.values(),
+        TIE_IN,
+        "casing MD",
+        "casing TVD",
+        "formation MD",
+        "formation TVD",
+        "marker MD",
+        "marker TVD",
+        "target center",
+        "target offset",
+    }
+)
+"""``typeTrajStation`` values a station read from a file keeps when written (the measured
+and marker kinds of the closed enumeration)."""
 
 UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
 """Canonical column unit → WITSML uom (what the writer writes)."""

@@ -19,6 +19,7 @@ from pipeline.io.witsml.terms import (
     EXTENSION_PREFIX,
     NAME_MAX,
     NS,
+    STATION_TYPES,
     SURVEY_TOOLS,
     TIE_IN,
     UNIT_UOM,
@@ -27,6 +28,7 @@ from pipeline.io.witsml.terms import (
 )
 from pipeline.survey.calculation import calculation_of
 from pipeline.survey.stations import survey_offsets
+from pipeline.tables import STATION_TEXT_COLUMNS
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -61,6 +63,8 @@ WELL_UOM = {
     "elevation": "m",
     "declination": "dega",
     "grid_convergence": "dega",
+    "declination_applied": "dega",
+    "grid_convergence_applied": "dega",
 }
 """Units of the numeric well metadata fields written as extension values."""
 _XML_CHARS = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
@@ -77,6 +81,7 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     well_name = _name(well.well or UNNAMED, "well name")
     wellbore_name = _name(well.wellbore or well_name, "wellbore name")
     tool = survey_tool(well.tool_type)
+    tools, kinds = (_texts(table, name) for name in STATION_TEXT_COLUMNS)
     calculation = calculation_of(table)
     root = ET.Element("trajectorys", {"xmlns": NS, "version": VERSION})
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
@@ -99,10 +104,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
         _measure(traj, "mdMx", values["md"][hi - 1], "m")
         if well.service_company:
             _sub(traj, "serviceCompany", _name(well.service_company, "service company"))
-        if well.declination is not None:
-            _measure(traj, "magDeclUsed", well.declination, "dega")
-        if well.grid_convergence is not None:
-            _measure(traj, "gridCorUsed", well.grid_convergence, "dega")
+        if well.declination_applied is not None:
+            _measure(traj, "magDeclUsed", well.declination_applied, "dega")
+        if well.grid_convergence_applied is not None:
+            _measure(traj, "gridCorUsed", well.grid_convergence_applied, "dega")
         if calculation is not None and "vertical_section" in values:
             _measure(traj, "aziVertSect", calculation.vs_azimuth, "dega")
             _measure(traj, "dispNsVertSectOrig", 0.0, "m")
@@ -111,8 +116,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
         algorithm = CALC_ALGORITHM[calculation.method] if calculation is not None else None
         for row in range(lo, hi):
             station = _sub(traj, "trajectoryStation", uid=f"stn-{row - lo + 1}")
-            _sub(station, "typeTrajStation", TIE_IN if row == lo else SURVEY_TOOLS[tool])
-            _sub(station, "typeSurveyTool", tool)
+            own = survey_tool(tools[row]) if tools[row] is not None else tool
+            kind = TIE_IN if row == lo else SURVEY_TOOLS[own]
+            _sub(station, "typeTrajStation", kinds[row] if kinds[row] in STATION_TYPES else kind)
+            _sub(station, "typeSurveyTool", own)
             if algorithm is not None:
                 _sub(station, "calcAlgorithm", algorithm)
             for column, element, unit in STATION_COLUMNS:
@@ -157,6 +164,13 @@ def _station_values(table: pa.Table) -> dict[str, np.ndarray]:
         if bad.size:
             raise ValueError(f"column {column!r} row {int(bad[0])}: missing or not finite")
     return values
+
+
+def _texts(table: pa.Table, name: str) -> list[str | None]:
+    """A per-station text column's values (None where absent)."""
+    if name not in table.column_names:
+        return [None] * table.num_rows
+    return [str(v) if v is not None else None for v in table.column(name).to_pylist()]
 
 
 def _north(table: pa.Table) -> NorthReference:

@@ -1,0 +1,43 @@
+"""The null markers of the industry's exports: ``-999.25`` and its family.
+
+LAS writes ``-999.25`` (or ``-9999.25``) where a value is missing, and vendors' CSV and
+WITSML exports copy the habit, in angles with either sign (a ``stnGridCorUsed`` of
+``999.25`` rad on every station). Every reader takes these numbers, in the file's own unit
+(before any conversion), as 'no value', never as a measurement: the negative ones in every
+column, the positive ones in angles (and angle rates) only — an MD, TVD or displacement of
+999.25 m is a real one.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+
+NULL_MARKERS: tuple[float, ...] = (-999.25, -9999.25)
+"""Numbers that mean 'no value' in every column of every reader, whatever the header says."""
+ANGLE_NULL_MARKERS: tuple[float, ...] = (*NULL_MARKERS, 999.25, 9999.25)
+"""Numbers that mean 'no value' in an angle (no unit makes 999.25 a plausible angle)."""
+_SMALLEST = 999.25
+
+
+def is_null_marker(value: float, *, angle: bool) -> bool:
+    """Whether ``value`` (in the file's unit) is a null marker of a column (an ``angle``
+    or not)."""
+    return value in (ANGLE_NULL_MARKERS if angle else NULL_MARKERS)
+
+
+def null_markers(values: Any, *, angle: bool) -> np.ndarray | None:
+    """Where a float Arrow array holds a null marker (of an ``angle`` column or not); None
+    when nowhere (a min/max pass first: values within ±999.25 need no comparison each)."""
+    if len(values) == 0 or values.null_count == len(values):
+        return None
+    extremes = pc.min_max(values).as_py()
+    if extremes["min"] > -_SMALLEST and (not angle or extremes["max"] < _SMALLEST):
+        return None
+    markers = ANGLE_NULL_MARKERS if angle else NULL_MARKERS
+    mask = pc.is_in(values, value_set=pa.array(markers, values.type))
+    found = np.asarray(pc.fill_null(mask, False).to_numpy(zero_copy_only=False), dtype=bool)
+    return found if found.any() else None

@@ -1,0 +1,343 @@
+"""Real exports read for what they mean (issue 28, items 1–4), driven end to end through the
+command line (``pipelines/survey.yaml``) and the Python API on files built as vendors write
+them (:mod:`vendor_exports`):
+
+* WITSML ``gridCorUsed``/``magDeclUsed`` (and the per-station ``stnGridCorUsed``…) are the
+  corrections applied to the azimuths, never the site's convergence or declination: a
+  conversion to grid north takes γ from the CRS at the wellhead (expected values from
+  pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
+  was applied;
+* ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
+  is a located error, or left out when the user asks;
+* implausible angles and radians declared degrees (or the reverse) are located errors;
+* the survey tool of the stations reaches the exports and the report.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import lasio
+import numpy as np
+import pyarrow.parquet as pq
+import pyproj
+import pytest
+import yaml
+from vendor_exports import CRS, SITE, Survey, survey_pipeline, witsml
+
+import pipeline as gp
+import pipeline.cli
+from pipeline.errors import InputFileError, InputFileWarning
+from tests_support import CliResult, gyropipe_cli
+
+NS = {"w": "http://www.witsml.org/schemas/1series"}
+GRID = {"id": "grid", "uses": "north_reference", "with": {"target": "grid", "crs": CRS}}
+WELL_ARGS = ["--well", f"latitude={SITE['latitude']}", "--well", f"longitude={SITE['longitude']}"]
+
+
+def gamma() -> float:
+    """Meridian convergence of EPSG:23031 at the site, deg, straight from pyproj (PROJ)."""
+    factors = pyproj.Proj(CRS).get_factors(SITE["longitude"], SITE["latitude"])
+    return float(factors.meridian_convergence)
+
+
+def run(pipeline_yaml: Path, source: Path, out: Path, *extra: str) -> CliResult:
+    return gyropipe_cli(
+        "run", str(pipeline_yaml), "--input", f"stations={source}", "--out", str(out), *extra
+    )
+
+
+def trajectory_xml(out: Path) -> ET.Element:
+    (traj,) = ET.parse(out / "trajectory.xml").getroot().findall("w:trajectory", NS)
+    return traj
+
+
+def measure(traj: ET.Element, name: str) -> tuple[float, str]:
+    node = traj.find(f"w:{name}", NS)
+    assert node is not None, name
+    return float(node.text or ""), node.attrib["uom"]
+
+
+def las_params(out: Path) -> dict[str, object]:
+    return {p.mnemonic: p.value for p in lasio.read(str(out / "trajectory.las")).params}
+
+
+# ------------------------------------------------------------------- 1. applied corrections
+
+
+def test_grid_north_takes_the_crs_convergence_not_the_applied_0(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml")  # aziRef true north, gridCorUsed 0 (rad)
+    result = run(survey_pipeline(tmp_path, GRID), source, tmp_path / "out", *WELL_ARGS)
+    assert result.returncode == 0, result.output
+    g = gamma()
+    assert -0.96 < g < -0.94  # west of the zone's central meridian (3° E)
+    survey = Survey()
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    inclined = survey.inc > 0
+    np.testing.assert_allclose(
+        trajectory.column("azi").to_numpy()[inclined], (45.0 - g) % 360.0, atol=1e-9
+    )
+    _, north, east, _ = survey.positions()  # true-north positions; grid ones are turned by -γ
+    rad = math.radians(g)
+    grid_north = north[-1] * math.cos(rad) + east[-1] * math.sin(rad)
+    grid_east = east[-1] * math.cos(rad) - north[-1] * math.sin(rad)
+    td = (trajectory.column("north")[-1].as_py(), trajectory.column("east")[-1].as_py())
+    np.testing.assert_allclose(td, (grid_north, grid_east), atol=1e-6)
+    assert math.hypot(grid_north - north[-1], grid_east - east[-1]) > 17.0  # what was lost
+    traj = trajectory_xml(tmp_path / "out")
+    assert traj.findtext("w:aziRef", namespaces=NS) == "grid north"
+    value, uom = measure(traj, "gridCorUsed")
+    assert uom == "dega" and value == pytest.approx(g, abs=1e-12)
+    assert measure(traj, "magDeclUsed") == (0.0, "dega")  # the file's: none applied
+    params = las_params(tmp_path / "out")
+    assert params["GRIDCONV"] == pytest.approx(g, abs=1e-12)
+    assert params["GRIDUSED"] == pytest.approx(g, abs=1e-12)
+    assert params["NREF"] == "grid"
+
+
+def test_a_given_convergence_is_not_contradicted_by_an_applied_0(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml")
+    given = ["--set", "grid.convergence=-0.9484"]
+    result = run(survey_pipeline(tmp_path, GRID), source, tmp_path / "out", *given, *WELL_ARGS)
+    assert result.returncode == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(45.9484, abs=1e-9)
+    assert measure(trajectory_xml(tmp_path / "out"), "gridCorUsed") == (-0.9484, "dega")
+
+
+def test_magdeclused_0_is_not_the_sites_declination(tmp_path: Path):
+    import ppigrf
+
+    source = witsml(tmp_path / "vendor.xml")  # magDeclUsed 0: gyro azimuths, none applied
+    mag = {
+        "id": "mag",
+        "uses": "north_reference",
+        "with": {"target": "magnetic", "model": "igrf14"},
+    }
+    result = gp.run(
+        survey_pipeline(tmp_path, mag), {"stations": source}, well=SITE, out=tmp_path / "out"
+    )
+    b_east, b_north, _ = ppigrf.igrf(
+        SITE["longitude"], SITE["latitude"], 0.0, dt.datetime(2026, 3, 2)
+    )
+    declination = math.degrees(math.atan2(float(np.ravel(b_east)[0]), float(np.ravel(b_north)[0])))
+    assert abs(declination) > 0.3  # a real correction at this site
+    azi = result.tables["trajectory.trajectory"].column("azi").to_numpy()
+    assert azi[-1] == pytest.approx(45.0 - declination, abs=1e-3)
+    assert result.well.declination == pytest.approx(declination, abs=1e-3)
+    traj = trajectory_xml(tmp_path / "out")
+    assert measure(traj, "magDeclUsed") == (0.0, "dega")  # magnetic azimuths: none applied
+    assert traj.findtext("w:aziRef", namespaces=NS) == "magnetic north"
+
+
+def test_corrections_stated_per_station_are_what_was_applied(tmp_path: Path):
+    g = gamma()
+    survey = Survey()
+    grid_azi = {k: repr(math.radians((45.0 - g) % 360.0)) for k in range(1, survey.md.size)}
+    per_station = f'<stnGridCorUsed uom="rad">{math.radians(g)!r}</stnGridCorUsed>'
+    source = witsml(
+        tmp_path / "grid.xml",
+        azi_ref="grid north",
+        head="",
+        corrections='<stnMagDeclUsed uom="rad">-999.25</stnMagDeclUsed>' + per_station,
+        azi_rad={k: v for k, v in grid_azi.items() if survey.inc[k] > 0},
+    )
+    to_true = {"id": "true", "uses": "north_reference", "with": {"target": "true"}}
+    result = run(survey_pipeline(tmp_path, to_true), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(45.0, abs=1e-9)
+    assert measure(trajectory_xml(tmp_path / "out"), "gridCorUsed") == (0.0, "dega")
+    varying = source.read_text().replace(
+        per_station, '<stnGridCorUsed uom="dega">-0.5</stnGridCorUsed>', 1
+    )
+    source.write_text(varying)
+    with pytest.raises(InputFileError, match=r"grid\.xml:\d+ \(column 'stnGridCorUsed'\).*differs"):
+        gp.read(source, kind="stations")
+
+
+def test_a_correction_the_reference_cannot_carry_is_refused(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml", head='<gridCorUsed uom="rad">-0.0165</gridCorUsed>')
+    line = next(i for i, t in enumerate(source.read_text().splitlines(), 1) if "gridCorUsed" in t)
+    with pytest.raises(InputFileError, match="contradicts aziRef 'true north'") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == line
+
+
+def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path: Path):
+    head = '<gridCorUsed uom="dega">-0.9</gridCorUsed>'
+    source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=head)
+    to_true = {"id": "true", "uses": "north_reference", "with": {"target": "true"}}
+    pipe = survey_pipeline(tmp_path, to_true)
+    refused = run(pipe, source, tmp_path / "refused", "--set", "true.convergence=-0.95")
+    assert refused.returncode != 0
+    assert "contradicts the grid convergence applied" in refused.output
+    result = run(pipe, source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.1, abs=1e-9)
+
+
+def test_grid_north_exports_keep_their_applied_convergence_for_magnetic_models(tmp_path: Path):
+    g = gamma()
+    survey = Survey()
+    grid_azi = {k: repr(math.radians((45.0 - g) % 360.0)) for k in range(1, survey.md.size)}
+    source = witsml(
+        tmp_path / "grid.xml",
+        azi_ref="grid north",
+        head=f'<gridCorUsed uom="dega">{g!r}</gridCorUsed>',
+        azi_rad={k: v for k, v in grid_azi.items() if survey.inc[k] > 0},
+    )
+    mwd = {"id": "mwd", "uses": "position_uncertainty", "with": {"model": "ISCWSA-MWD-REV5"}}
+    pipe = survey_pipeline(tmp_path)
+    spec = yaml.safe_load(pipe.read_text())
+    spec["stages"].append({**mwd, "inputs": {"trajectory": "trajectory.trajectory"}})
+    pipe.write_text(yaml.safe_dump(spec, sort_keys=False))
+    result = gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "out")
+    assert result.well.grid_convergence_applied == g and result.well.grid_convergence is None
+    assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
+
+
+# --------------------------------------------------------------------------- 2. null markers
+
+STATIONS_CSV = "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n100,5,45\n200,10,{azi}\n300,12,46\n"
+
+
+@pytest.mark.parametrize("marker", ["-999.25", "999.25", "-9999.25"])
+def test_a_null_marker_azimuth_is_a_located_error(tmp_path: Path, marker: str):
+    source = tmp_path / "stations.csv"
+    source.write_text(STATIONS_CSV.format(azi=marker))
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode != 0
+    assert f"{source}:4" in result.output and "azi" in result.output
+    with pytest.raises(InputFileError) as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 4
+
+
+def test_csv_and_las_stations_missing_an_angle_are_left_out_when_asked(tmp_path: Path):
+    source = tmp_path / "stations.csv"
+    source.write_text(STATIONS_CSV.format(azi="-999.25").replace("100,5,45", "100,-999.25,45"))
+    refused = run(survey_pipeline(tmp_path), source, tmp_path / "refused")
+    assert refused.returncode != 0
+    assert f"{source}:3" in refused.output and "null_stations: drop" in refused.output
+    drop = ["--set", "read.options={null_stations: drop}"]
+    dropped = run(survey_pipeline(tmp_path), source, tmp_path / "out", *drop)
+    assert dropped.returncode == 0, dropped.output
+    assert re.search(r"warning: .*2 station\(s\) .* left out .*; lines 3, 4", dropped.stderr)
+    md = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet").column("md")
+    assert md.to_pylist() == [0.0, 300.0]
+    source.write_text(STATIONS_CSV.format(azi="46").replace("100,5,45", "100,,45"))  # empty
+    with pytest.warns(InputFileWarning, match=r"1 station\(s\) .* left out"):
+        kept = gp.read(source, kind="stations", null_stations="drop")
+    assert kept.md.tolist() == [0.0, 200.0, 300.0]
+    las = tmp_path / "stations.las"  # NULL -999.25; a 999.25 azimuth is a null marker too
+    las.write_text(
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n NULL. -999.25 :\n WELL. W :\n"
+        "~Curve\n DEPT.m : md\n INC.deg : inc\n AZI.deg : azimuth\n~Parameter\n"
+        " NREF. true :\n~A\n0 0 0\n100 5 999.25\n200 10 46\n"
+    )
+    with pytest.raises(InputFileError, match=r"station at md 100\.0 has no azimuth") as caught:
+        gp.read(las, kind="stations")
+    assert (caught.value.line, caught.value.column) == (15, "azi")
+    with pytest.warns(InputFileWarning, match="left out"):
+        assert gp.read(las, kind="stations", null_stations="drop").md.tolist() == [0.0, 200.0]
+
+
+def test_a_null_marker_witsml_azimuth_is_an_error_or_a_dropped_station(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml", azi_rad={40: "999.25"})
+    pipe = survey_pipeline(tmp_path)
+    refused = run(pipe, source, tmp_path / "refused")
+    assert refused.returncode != 0
+    assert "<azi> 999.25 is a null marker" in refused.output
+    assert "null_stations: drop" in refused.output
+    line = next(i for i, t in enumerate(source.read_text().splitlines(), 1) if 'uid="s40"' in t)
+    assert f"{source}:{line}" in refused.output
+    dropped = run(pipe, source, tmp_path / "out", "--set", "read.options={null_stations: drop}")
+    assert dropped.returncode == 0, dropped.output
+    left_out = rf"vendor\.xml:{line}: 1 station\(s\) without inclination or azimuth left out"
+    assert re.search(rf"warning: .*{left_out}", dropped.stderr), dropped.stderr
+    md = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet").column("md")
+    assert md.to_pylist() == [m for k, m in enumerate(Survey().md.tolist()) if k != 40]
+
+
+def test_null_markers_in_the_station_corrections_are_no_values(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml", head="")  # stn…Used: ±999.25 rad on every station
+    well = gp.read(source, kind="stations").attrs["well"]
+    assert "grid_convergence_applied" not in well and "declination_applied" not in well
+    stated = witsml(tmp_path / "stated.xml")  # and gridCorUsed 0 above them: no conflict
+    assert gp.read(stated, kind="stations").attrs["well"]["grid_convergence_applied"] == 0.0
+
+
+# ----------------------------------------------------------------------- 3. plausible angles
+
+
+@pytest.mark.parametrize(("azi", "line"), [("800", 4), ("-400", 4)])
+def test_an_azimuth_out_of_range_is_never_wrapped(tmp_path: Path, azi: str, line: int):
+    source = tmp_path / "stations.csv"
+    source.write_text(STATIONS_CSV.format(azi=azi))
+    with pytest.raises(InputFileError, match=r"azimuth .* is outside \[-360, 720\)") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (line, "azi")
+
+
+def test_an_azimuth_past_360_is_read_with_a_warning(tmp_path: Path):
+    source = tmp_path / "stations.csv"
+    source.write_text(STATIONS_CSV.format(azi="400"))
+    with pytest.warns(InputFileWarning, match=r"stations\.csv:4: azi 400\.0° read as 40\.0°"):
+        gp.read(source, kind="stations")
+
+
+def _radian_csv(path: Path, unit: str, scale: float) -> Path:
+    survey = Survey()
+    rows = [
+        f"{float(m)!r},{float(i * scale)!r},{float(a * scale)!r}"
+        for m, i, a in zip(survey.md, survey.inc, survey.azi, strict=True)
+    ]
+    path.write_text(f"MD (m),Inc ({unit}),Azimuth True ({unit})\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_radians_declared_degrees_are_refused_unless_confirmed(tmp_path: Path):
+    source = _radian_csv(tmp_path / "rad.csv", "deg", math.pi / 180.0)  # 3,510 m, max 0.70
+    pipe = survey_pipeline(tmp_path)
+    refused = run(pipe, source, tmp_path / "refused")
+    assert refused.returncode != 0
+    assert "inc and azi look like radians read as degrees" in refused.output
+    assert "angle_unit_confirmed" in refused.output
+    confirmed = run(
+        pipe, source, tmp_path / "out", "--set", "read.options={angle_unit_confirmed: true}"
+    )
+    assert confirmed.returncode == 0, confirmed.output
+    vendor = witsml(tmp_path / "vendor.xml", angle_uom="dega")  # radian numbers declared dega
+    with pytest.raises(InputFileError, match="look like radians read as degrees"):
+        gp.read(vendor, kind="stations")
+
+
+def test_degrees_declared_radians_name_the_likely_unit(tmp_path: Path):
+    source = _radian_csv(tmp_path / "deg.csv", "rad", 1.0)
+    with pytest.raises(InputFileError, match="looks like degrees declared as radians") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.column in ("inc", "azi") and caught.value.line > 1
+
+
+# ------------------------------------------------------------------------- 4. the survey tool
+
+
+def test_the_survey_tool_reaches_the_exports_and_the_report(tmp_path: Path):
+    source = witsml(tmp_path / "vendor.xml")  # the tie-in station names no tool
+    result = run(survey_pipeline(tmp_path, report=True), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    stations = trajectory_xml(tmp_path / "out").findall("w:trajectoryStation", NS)
+    tools = {s.findtext("w:typeSurveyTool", namespaces=NS) for s in stations}
+    assert tools == {"gyroscopic north seeking"}
+    kinds = [s.findtext("w:typeTrajStation", namespaces=NS) for s in stations]
+    assert kinds[0] == "tie in point" and set(kinds[1:]) == {"gyro north seeking"}
+    assert las_params(tmp_path / "out").get("TOOL") is None  # TOOL is a ~Well item
+    tool = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["TOOL"].value
+    assert tool == "gyroscopic north seeking"
+    assert "gyroscopic north seeking" in (tmp_path / "out" / "report.html").read_text()
