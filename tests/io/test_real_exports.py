@@ -18,6 +18,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -31,7 +32,7 @@ from vendor_exports import CRS, SITE, Survey, survey_pipeline, witsml
 
 import pipeline as gp
 import pipeline.cli
-from pipeline.errors import InputFileError, InputFileWarning
+from pipeline.errors import InputFileError, InputFileWarning, SurveyCheckWarning
 from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
@@ -191,13 +192,16 @@ def test_grid_north_exports_keep_their_applied_convergence_for_magnetic_models(t
         azi_ref="grid north",
         head=f'<gridCorUsed uom="dega">{g!r}</gridCorUsed>',
         azi_rad={k: v for k, v in grid_azi.items() if survey.inc[k] > 0},
+        grid_gamma=g,
     )
     mwd = {"id": "mwd", "uses": "position_uncertainty", "with": {"model": "ISCWSA-MWD-REV5"}}
     pipe = survey_pipeline(tmp_path)
     spec = yaml.safe_load(pipe.read_text())
     spec["stages"].append({**mwd, "inputs": {"trajectory": "trajectory.trajectory"}})
     pipe.write_text(yaml.safe_dump(spec, sort_keys=False))
-    result = gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "out")
+    with warnings.catch_warnings():  # the listing's grid-frame positions agree with its angles
+        warnings.simplefilter("error", SurveyCheckWarning)
+        result = gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "out")
     assert result.well.grid_convergence_applied == g and result.well.grid_convergence is None
     assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
 

@@ -70,13 +70,19 @@ def witsml(
     '<stnGridCorUsed uom="rad">999.25</stnGridCorUsed>',
     azi_rad: dict[int, str] | None = None,
     angle_uom: str = "rad",
+    grid_gamma: float = 0.0,
 ) -> Path:
     """A vendor's WITSML 1.4.1.1 trajectory of ``survey`` (default :class:`Survey`): the
     tie-in station names no tool, the others ``gyroscopic north seeking``; every station
     carries ``corUsed`` (``corrections``); ``azi_rad`` replaces the azimuth text of a
-    station (by index); ``angle_uom`` ``dega`` writes the radian numbers declared degrees."""
+    station (by index); ``angle_uom`` ``dega`` writes the radian numbers declared degrees;
+    ``grid_gamma`` (deg): the listed north/east are referred to a grid north that far east of
+    true north, as a vendor lists grid-north azimuths' positions."""
     survey = survey or Survey()
-    tvd, north, east, dls = survey.positions()
+    tvd, true_north, true_east, dls = survey.positions()
+    g = math.radians(grid_gamma)
+    north = true_north * math.cos(g) + true_east * math.sin(g)
+    east = true_east * math.cos(g) - true_north * math.sin(g)
     rows = []
     for k, md in enumerate(survey.md):
         tool = (
