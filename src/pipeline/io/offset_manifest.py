@@ -7,8 +7,10 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
 - ``file`` — its stations file (MD, inclination, azimuth), relative to the manifest's folder;
 - ``model`` — its tool model (e.g. ``ISCWSA-MWD-REV5``, ``GYRO-NS``);
 - ``hole_diameter`` — hole or casing diameter (a length);
-- ``north``, ``east`` — its first station's position relative to the reference well's
-  wellhead, in the north of the reference's azimuths (lengths; default 0);
+- ``north``, ``east`` — its slot: its first station's position relative to the reference
+  well's wellhead, in the north of the reference's azimuths (lengths; required on every
+  row: an empty cell is an error, never the reference's wellhead; a well on the
+  reference's own slot, a sidetrack or re-entry, says so with ``0,0``);
 - ``tvd`` — its first station's TVD below the reference's depth datum (a length; default:
   the first station's MD).
 
@@ -31,6 +33,7 @@ __all__ = ["LENGTHS", "OffsetEntry", "read_offset_manifest"]
 LENGTHS = ("hole_diameter", "north", "east", "tvd")
 """The length columns, each with its unit in the header."""
 _TEXT = ("well_id", "file", "model")
+_REQUIRED = ("hole_diameter", "north", "east")
 _HEADER = re.compile(r"^\s*([A-Za-z_]+)\s*(?:[\(\[]\s*([^\)\]]*?)\s*[\)\]])?\s*$")
 
 
@@ -75,7 +78,7 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
         else:
             factor = 1.0
         found[name] = (index, factor)
-    missing = [c for c in (*_TEXT, "hole_diameter") if c not in found]
+    missing = [c for c in (*_TEXT, *_REQUIRED) if c not in found]
     if missing:
         raise InputFileError(path, f"missing column(s) {', '.join(missing)}", line)
     return found
@@ -133,14 +136,24 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
             raise InputFileError(
                 path, "hole_diameter must be given and positive", line, "hole_diameter"
             )
+        north, east = lengths["north"], lengths["east"]
+        if north is None or east is None:
+            name = "north" if north is None else "east"
+            raise InputFileError(
+                path,
+                f"{name} is empty: expected the slot's {name} from the reference wellhead "
+                "(a length; 0,0 for a well on the reference's own slot)",
+                line,
+                name,
+            )
         entries.append(
             OffsetEntry(
                 well_id=well_id,
                 file=(path.parent / cell["file"]).resolve(),
                 model=model,
                 hole_diameter=diameter,
-                north=lengths["north"] or 0.0,
-                east=lengths["east"] or 0.0,
+                north=north,
+                east=east,
                 tvd=lengths["tvd"],
                 line=line,
             )

@@ -3,9 +3,11 @@ factor per offset well, the separation factor against MD and a travelling-cylind
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -17,9 +19,11 @@ from pipeline.reports.charts import ticks
 from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, Span, Text, grid
 from pipeline.reports.document import Block, Column, Fields, Plot, Section, Table, Verdict, fmt
 from pipeline.reports.listing import col
-from pipeline.reports.literature import ERROR_MODEL, SEPARATION_RULE, Citations
+from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL, SEPARATION_RULE, Citations
 
 FloatArray = NDArray[np.float64]
+ErrorModel = Callable[[str], tuple[str, bool]]
+"""A tool model's name → its title and whether it is a gyro model."""
 LEVEL_WORDS = {"pass": "pass", "warn": "caution", "fail": "stop"}
 
 
@@ -136,8 +140,50 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
     return Chart(size, [panel])
 
 
-def clearance_section(table: pa.Table, citations: Citations) -> Section:
-    """The clearance section of a clearance table (one block per offset well)."""
+def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
+    """The wells the scan rests on: the reference well, then each offset well's slot (from
+    the reference wellhead, in the reference's north), first-station TVD, hole and model."""
+    reference = {
+        "model": rule.get("reference_model"),
+        "hole_diameter": rule.get("reference_hole_diameter"),
+        "north": 0.0,
+        "east": 0.0,
+    }
+    rows = []
+    for name, well in {"Reference well": reference, **rule.get("wells", {})}.items():
+        hole, tvd, model = well.get("hole_diameter"), well.get("tvd"), str(well.get("model"))
+        rows.append(
+            (
+                name,
+                fmt(well.get("north")),
+                fmt(well.get("east")),
+                fmt(tvd) if tvd is not None else "its first MD",
+                fmt(hole / 0.0254, 3) if hole is not None else "",
+                fmt(hole, 4),
+                titles.get(model, model),
+            )
+        )
+    return Table(
+        "Wells scanned",
+        (
+            Column("Well", align="left"),
+            Column("Slot north", "m"),
+            Column("Slot east", "m"),
+            Column("First-station TVD", "m below the reference datum"),
+            Column("Hole diameter", "in"),
+            Column("Hole diameter", "m"),
+            Column("Tool model", align="left"),
+        ),
+        tuple(rows),
+        kind="clearance-wells",
+        note="Slot: the first station's position from the reference wellhead, in the north "
+        "of the reference's azimuths.",
+    )
+
+
+def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorModel) -> Section:
+    """The clearance section of a clearance table (one block per offset well); its tool
+    models titled (and the gyro paper cited for a gyro model) by ``error_model``."""
     rule = rule_of(table)
     stop, caution = float(rule.get("stop", 1.0)), float(rule.get("caution", 1.5))
     curves = _curves(table)
@@ -170,9 +216,16 @@ def clearance_section(table: pa.Table, citations: Citations) -> Section:
             worst = (float(sf[i]), c.name, float(c.md[i]))
     assert worst is not None
     verdict = _verdict(worst, stop, caution, len(curves))
+    models = {
+        str(rule.get("reference_model", "")),
+        *(str(w.get("model", "")) for w in wells.values()),
+    }
+    known = {m: error_model(m) for m in models if m}
+    titles = {m: title for m, (title, _) in known.items()}
+    gyro = any(is_gyro for _, is_gyro in known.values())
     fields = [
         ("Separation rule", f"ISCWSA separation factor {citations.cite(SEPARATION_RULE)}"),
-        ("Position uncertainty", f"ISCWSA error models {citations.cite(ERROR_MODEL)}"),
+        ("Position uncertainty", _uncertainty_words(citations, gyro)),
         ("Scaling factor k", fmt(rule.get("k", 3.5), 2)),
         ("Project-ahead σ", f"{fmt(rule.get('sigma_pa', 0.5), 2)} m"),
         ("Surface margin", f"{fmt(rule.get('surface_margin', 0.3), 2)} m"),
@@ -195,6 +248,7 @@ def clearance_section(table: pa.Table, citations: Citations) -> Section:
     blocks: list[Block] = [
         verdict,
         Fields("Rule and models", tuple(fields)),
+        wells_table(rule, titles),
         *([Fields("Offset well surveys", files)] if files else []),
         Table(
             "Minimum separation factor per offset well",
@@ -231,6 +285,12 @@ def clearance_section(table: pa.Table, citations: Citations) -> Section:
         ),
     ]
     return Section("Clearance", tuple(blocks), key="clearance")
+
+
+def _uncertainty_words(citations: Citations, gyro: bool) -> str:
+    """The error models' papers, the gyro model's where a well is surveyed by a gyro."""
+    words = f"ISCWSA error models {citations.cite(ERROR_MODEL)}"
+    return f"{words} with the gyro terms of {citations.cite(GYRO_ERROR_MODEL)}" if gyro else words
 
 
 def _verdict(worst: tuple[float, str, float], stop: float, caution: float, n: int) -> Verdict:

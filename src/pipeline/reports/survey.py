@@ -153,10 +153,14 @@ def survey_document(
     short = short_courses(md, path.offsets, min_course)
     course = Course(short, min_course)
     citations = Citations()
-    clearance = clearance_section(tables.clearance, citations) if _rows(tables.clearance) else None
     given = {f.name: getattr(tables, f.name) for f in dataclasses.fields(tables)}
     wired = {port: table for port, table in given.items() if isinstance(table, pa.Table)}
     parts = Parts(registered, "survey", wired, well, provenance, citations)
+    clearance = (
+        clearance_section(tables.clearance, citations, parts.error_model)
+        if _rows(tables.clearance)
+        else None
+    )
     added = parts.sections()  # before the method section's reference list: they may cite
 
     sections = [

@@ -313,7 +313,8 @@ def clearance(
         **({"magnetic": applied.model_dump(mode="json")} if applied is not None else {}),
         "wells": {
             w["offset"]: {
-                k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)
+                **{k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)},
+                **{k: w[k] for k in ("north", "east", "tvd")},  # the slot and datum (tvd null)
             }
             for w in listed
         },

@@ -41,7 +41,11 @@ class ReportParams(BaseModel):
     """Parameters of the report stages."""
 
     model_config = ConfigDict(extra="forbid")
-    title: str | None = Field(None, description="report title (default: the stage's own)")
+    title: str | None = Field(
+        None,
+        description="report title (default: the stage's own; 'Clearance report' for a survey "
+        "report with a clearance table wired)",
+    )
     filename: OutputFilename | None = Field(
         None,
         description="base file name: <filename>.html, <filename>.pdf (default: the stage id)",
@@ -101,7 +105,8 @@ def survey_report(
         SurveyTables(**tables),
         ctx.well,
         ctx.provenance,
-        params.title or "Gyro survey report",
+        params.title
+        or ("Clearance report" if tables.get("clearance") is not None else "Gyro survey report"),
         ctx.report_parts(),
         min_course=params.min_course_length,
         max_course=params.max_course_length,
