@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import json
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tests_support import ROOT
+from tests_support import ROOT, CliResult, gyropipe_cli
 
 DATA = ROOT / "tests" / "data" / "iscwsa-clearance" / "wells-01-06.json"
 INCH = 0.0254
@@ -74,3 +75,26 @@ def clearance_options(model: str) -> dict[str, Any]:
         "magnetic": magnetic(),
         "well": site(),
     }
+
+
+def run_clearance(
+    manifest: str | Path, out: Path, *settings: str, check: bool = False
+) -> CliResult:
+    """`gyropipe run pipelines/clearance.yaml` on the bundled reference well against the
+    offset wells ``manifest`` lists (the set's 36 in reference hole), ``settings`` as
+    ``--set`` values."""
+    sets = [
+        arg for s in ("clearance.reference_hole_diameter=0.9144", *settings) for arg in ("--set", s)
+    ]
+    return gyropipe_cli(
+        "run",
+        "pipelines/clearance.yaml",
+        "--input",
+        "reference=examples/clearance/reference.csv",
+        "--input",
+        f"offsets={manifest}",
+        *sets,
+        "--out",
+        str(out),
+        check=check,
+    )

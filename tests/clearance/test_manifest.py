@@ -7,11 +7,12 @@ import shutil
 from pathlib import Path
 
 import pytest
+from iscwsa_support import run_clearance
 
 from pipeline.anticollision.models import resolve_model
 from pipeline.errors import InputFileError
 from pipeline.io.offset_manifest import read_offset_manifest
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT
 
 HEADER = "well_id,file,model,hole_diameter (in),north (m),east (ft),tvd (m)"
 
@@ -52,6 +53,14 @@ def test_reads_wells_with_units_converted(tmp_path: Path):
         ("well_id,file,model,hole (in)", ["A,a.csv,GYRO-NS,12"], 2, "unknown column 'hole (in)'"),
         ("well_id,model,hole_diameter (in)", ["A,GYRO-NS,12"], 2, "missing column(s) file"),
         (HEADER, [], 2, "no offset wells listed"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,,5,"], 3, "north is empty: expected the slot's north"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,5,,"], 3, "east is empty: expected the slot's east"),
+        (
+            "well_id,file,model,hole_diameter (in)",
+            ["A,a.csv,GYRO-NS,12"],
+            2,
+            "column(s) north, east",
+        ),
     ],
 )
 def test_bad_manifest_is_located(
@@ -66,26 +75,33 @@ def test_bad_manifest_is_located(
         assert caught.value.line == line
 
 
-def test_missing_stations_file_fails_the_run_naming_manifest_and_line(tmp_path: Path):
+def test_well_on_the_reference_slot_says_so_with_zero(tmp_path: Path):
+    """0,0 is an explicit position (a sidetrack or re-entry from the reference's slot)."""
+    (entry,) = read_offset_manifest(manifest(tmp_path, "A,a.csv,GYRO-NS,8.5,0,0,"), resolve_model)
+    assert (entry.north, entry.east) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("second", "words"),
+    [
+        ("offsets/no-such.csv,ISCWSA-MWD-REV4,24,100,0,", "(column 'file'): no stations file"),
+        # an empty slot once placed the well at the reference wellhead and the run said ok
+        (
+            "offsets/offset-02.csv,ISCWSA-MWD-REV4,24,,,",
+            "(column 'north'): north is empty: expected the slot's north from the reference "
+            "wellhead (a length; 0,0 for a well on the reference's own slot)",
+        ),
+    ],
+)
+def test_bad_row_fails_the_run_naming_manifest_and_line(tmp_path: Path, second: str, words: str):
     shutil.copytree(ROOT / "examples" / "clearance" / "offsets", tmp_path / "offsets")
     path = manifest(
         tmp_path,
         "offset-01,offsets/offset-01.csv,ISCWSA-MWD-REV4,24,0,100,",
-        "offset-02,offsets/no-such.csv,ISCWSA-MWD-REV4,24,100,0,",
+        f"offset-02,{second}",
     )
-    result = gyropipe_cli(
-        "run",
-        "pipelines/clearance.yaml",
-        "--input",
-        "reference=examples/clearance/reference.csv",
-        "--input",
-        f"offsets={path}",
-        "--set",
-        "clearance.reference_hole_diameter=0.9144",
-        "--out",
-        str(tmp_path / "out"),
-    )
+    result = run_clearance(path, tmp_path / "out", "clearance.reference_model=ISCWSA-MWD-REV4")
     assert result.returncode != 0
-    assert f"{path}:4 (column 'file'): no stations file" in result.stderr
+    assert f"{path}:4 {words}" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "out" / "run.json").exists()

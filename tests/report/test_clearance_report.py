@@ -23,34 +23,21 @@ from report_support import (
     pdf_pages,
 )
 
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT
 
 sys.path.insert(0, str(ROOT / "tests" / "clearance"))
-from iscwsa_support import OFFSETS, expected_sf
+from iscwsa_support import OFFSETS, expected_sf, run_clearance
 
 EXAMPLE = ROOT / "examples" / "clearance"
+MANIFEST = "examples/clearance/manifest.csv"
 NAMES = {f"offset-0{k}": OFFSETS[k - 1] for k in range(1, 7)}
 
 
 @pytest.fixture(scope="module")
 def clearance_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("clearance") / "out"
-    gyropipe_cli(
-        "run",
-        "pipelines/clearance.yaml",
-        "--input",
-        "reference=examples/clearance/reference.csv",
-        "--input",
-        "offsets=examples/clearance/manifest.csv",
-        # the set's reference well: its model and hole (its field is in its header)
-        "--set",
-        "clearance.reference_model=ISCWSA-MWD-REV4",
-        "--set",
-        "clearance.reference_hole_diameter=0.9144",
-        "--out",
-        str(out),
-        check=True,
-    )
+    # the set's reference well: its model and hole (its field is in its header)
+    run_clearance(MANIFEST, out, "clearance.reference_model=ISCWSA-MWD-REV4", check=True)
     return out
 
 
@@ -98,6 +85,66 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     assert "SPE-187073" in text and "SPE 67616" in text
     for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):
         assert internal not in text.split("Provenance")[0], internal
+
+
+SLOTS = {  # examples/clearance/manifest.csv: north, east (m); every hole 24 in
+    "offset-01": ("0.00", "100.00"),
+    "offset-02": ("100.00", "0.00"),
+    "offset-03": ("0.00", "10.00"),
+    "offset-04": ("0.00", "20.00"),
+    "offset-05": ("−50.00", "−500.00"),
+    "offset-06": ("−2300.00", "100.00"),
+}
+
+
+def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, browser: Any):
+    page = inspect(browser, clearance_run / "report.html")
+    assert page.text.startswith("GYROPIPE\nClearance report\n")
+    assert "Gyro survey report" not in page.text
+    headers = page.headers["clearance-wells"]
+    assert headers == [
+        "Well",
+        "Slot north",
+        "Slot east",
+        "First-station TVD",
+        "Hole diameter",
+        "Hole diameter",
+        "Tool model",
+    ]
+    assert page.units["clearance-wells"] == [
+        "",
+        "m",
+        "m",
+        "m below the reference datum",
+        "in",
+        "m",
+        "",
+    ]
+    title = "ISCWSA MWD (fixed rig), Rev 4"  # the title in the ISCWSA-MWD-REV4 model file
+    reference, *offsets = page.tables["clearance-wells"]
+    assert reference == [
+        "Reference well",
+        "0.00",
+        "0.00",
+        "its first MD",
+        "36.000",
+        "0.9144",
+        title,
+    ]
+    assert [r[0] for r in offsets] == list(SLOTS)
+    for row in offsets:
+        assert row[1:] == [*SLOTS[row[0]], "its first MD", "24.000", "0.6096", title], row[0]
+    assert "SPE 90408" not in page.text  # no gyro model in this scan
+
+
+def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
+    """The pipeline's own reference model (GYRO-NS) against the set's MWD offsets."""
+    result = run_clearance(MANIFEST, tmp_path, "report.formats=[html]", check=True)
+    assert "Traceback" not in result.output
+    text = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "<h1>Clearance report</h1>" in text
+    assert "ISCWSA error models [2] with the gyro terms of [3]" in text
+    assert "Prediction of wellbore position accuracy when surveyed with gyroscopic tools" in text
 
 
 def test_clearance_figures_drawn_in_the_pdf(clearance_run: Path, tmp_path: Path):
