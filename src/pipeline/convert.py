@@ -5,7 +5,10 @@ found (``auto``): the survey kinds first (a file that is one reads as one, in ca
 units); a file that no reader takes for a survey, because it lacks a survey's curves (a
 well log), is read as a ``log`` when a reader reads logs (LAS). A file that is a survey but
 is broken is reported as such, never read as a log instead. A file that is not the kind
-asked for is reported in a few words, with the kind it can be read as.
+asked for is reported in a few words, with the kind it can be read as. A file that
+``auto`` cannot read is named in one line: the reader that took it and its first kind's
+error, or what the file looks like (a reader's description of it) and that no reader reads
+it as a log.
 """
 
 from __future__ import annotations
@@ -91,13 +94,12 @@ def read_kind(
                 raise
             raise WrongKindError(exc.path, f"{exc.reason} — use --kind {other}", exc.line) from None
         return table, well, kind
-    problems: list[str] = []
-    failures: list[GyropipeError] = []
+    failures: list[tuple[str, str, GyropipeError]] = []
+    wrong: list[str] = []
     for candidate in SURVEY_KINDS:
         try:
             chosen = registry.reader_for(path, candidate, reader)
-        except ReaderChoiceError as exc:
-            problems.append(f"as {candidate}: {exc}")
+        except ReaderChoiceError:
             continue
         try:
             table, well = registry.read(
@@ -106,30 +108,37 @@ def read_kind(
         except ReaderOptionsError:
             raise
         except WrongKindError as exc:
-            problems.append(f"as {candidate} ({chosen.name}): {exc}")
+            wrong.append(exc.reason)
             continue
         except GyropipeError as exc:
-            problems.append(f"as {candidate} ({chosen.name}): {exc}")
-            failures.append(exc)
+            failures.append((candidate, chosen.name, exc))
             continue
         missing = _missing_columns(chosen.kinds[candidate], table)
         if missing:  # a reader of tables of any kind (Parquet) read another kind's table
-            problems.append(f"as {candidate} ({chosen.name}): no column {', '.join(missing)}")
+            wrong.append(f"{chosen.name} table without column {', '.join(missing)}")
             continue
         return table, well, candidate
     if len(failures) == 1:  # the one kind the file is, broken: its own error
-        raise failures[0]
-    if not failures:  # not a survey: a log, if a reader reads it as one
-        try:
-            chosen = registry.reader_for(path, "log", reader)
-        except ReaderChoiceError:
-            pass
-        else:
-            table, well = registry.read(
-                path, "log", reader=chosen.name, options=options, well=defaults
-            )
-            return table, well, "log"
-    raise InputFileError(path, "cannot be read: " + "; ".join(problems))
+        raise failures[0][2]
+    if failures:  # a reader of several kinds took it and read none: the first one's error
+        kinds = ", ".join(kind for kind, _, _ in failures)
+        first, name, error = failures[0]
+        reason = error.reason if isinstance(error, InputFileError) else str(error)
+        line = error.line if isinstance(error, InputFileError) else 0
+        raise InputFileError(
+            path, f"a {name} file that reads as none of {kinds}; as {first}: {reason}", line
+        )
+    try:  # not a survey: a log, if a reader reads it as one
+        chosen = registry.reader_for(path, "log", reader)
+    except ReaderChoiceError:
+        pass
+    else:
+        table, well = registry.read(path, "log", reader=chosen.name, options=options, well=defaults)
+        return table, well, "log"
+    if wrong:
+        raise InputFileError(path, f"not a survey file and no reader reads it as a log: {wrong[0]}")
+    kinds = ", ".join(KINDS[:-1]) + f" or {KINDS[-1]}"
+    raise InputFileError(path, f"cannot be read: no installed reader recognises it as {kinds}")
 
 
 def _missing_columns(contract: type[TableContract], table: pa.Table) -> list[str]:

@@ -81,7 +81,7 @@ def test_errors(tmp_path: Path):
     garbage = tmp_path / "garbage.csv"
     garbage.write_bytes(b"\x00\x01\x02 not a survey")
     bad = gyropipe_cli("convert", str(garbage), str(tmp_path / "g.parquet"))
-    assert bad.returncode == 1 and "cannot be read" in bad.stderr
+    assert bad.returncode == 1 and "a csv file that reads as none of stations" in bad.stderr
     assert not (tmp_path / "g.parquet").exists()
     assert "Traceback" not in bad.stderr
 

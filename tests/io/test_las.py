@@ -160,7 +160,9 @@ def test_sniff(tmp_path: Path) -> None:
     assert READER.sniff(put(tmp_path, las(), "a.las"))
     assert READER.sniff(put(tmp_path, b"\xef\xbb\xbf\n# made by X\n\n  ~VERSION\n", "b.txt"))
     assert not READER.sniff(put(tmp_path, "MD,INC,AZI\n0,0,0\n", "c.csv"))
-    assert not READER.sniff(put(tmp_path, "~Well\n~Version\n", "d.las"))
+    assert READER.sniff(put(tmp_path, "~Well\n~Version\n", "d.las"))  # ~V, ~W, ~C or ~A
+    assert READER.sniff(put(tmp_path, "# barebones\n~A\n1 2\n", "g.las"))
+    assert not READER.sniff(put(tmp_path, "~Tops\n", "h.las"))
     assert not READER.sniff(put(tmp_path, bytes(range(256)), "e.bin"))
     assert not READER.sniff(put(tmp_path, b"", "f.las"))
     assert not READER.sniff(tmp_path / "missing.las")

@@ -164,10 +164,10 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
         return read_log(path, source, header, opts), well_metadata(path, header, None, strict=False)
     spec = KINDS[kind]
     require_curves(path, header)
-    if source.title_line == 0:
-        raise InputFileError(path, "no ~A (data) section")
     declared = declared_north(path, header)
     chosen = choose(path, header, spec, opts, declared)
+    if source.title_line == 0:  # after the curves: a log's header alone reads as a log
+        raise InputFileError(path, "no ~A (data) section")
     factors = {name: factor(path, header.curves[i], name, opts) for name, i in chosen.items()}
     north, file_north = None, one_north(path, declared)
     if "azi" in chosen:
@@ -177,16 +177,21 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
     return rows, well_metadata(path, header, file_north)
 
 
+_TITLES = (b"~V", b"~W", b"~C", b"~A")
+"""Sections a LAS file may open with: ``~V``, or ``~W``/``~C``/``~A`` in a minimal file
+(lasio's ``barebones.las`` opens with ``~C``, ``barebones2.las`` with ``~A``)."""
+
+
 def sniff(path: Path) -> bool:
-    """By content: the first line that is neither blank nor a ``#`` comment opens ``~V``
-    (in UTF-8, Windows-1252 or UTF-16 text)."""
+    """By content: the first line that is neither blank nor a ``#`` comment opens ``~V``,
+    ``~W``, ``~C`` or ``~A`` (in UTF-8, Windows-1252 or UTF-16 text)."""
     head = file_head(path, SNIFF_BYTES)
     if head is None:
         return False
     for line in text_head(head).removeprefix(BOM).splitlines():
         text = line.strip()
         if text and not text.startswith(b"#"):
-            return text[:2].upper() == b"~V"
+            return text[:2].upper() in _TITLES
     return False
 
 

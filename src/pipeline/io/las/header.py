@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileError, WrongKindError
 
 SNIFF_BYTES = 64 * 1024
 BOM = b"\xef\xbb\xbf"
@@ -240,9 +240,10 @@ def parse_header(path: Path, lines: list[str]) -> Header:
 
 
 def require_curves(path: Path, header: Header) -> None:
-    """A survey kind needs the ~Curve section (a log without one has unnamed columns)."""
+    """A survey kind needs the ~Curve section (a log without one has unnamed columns): else
+    a :class:`WrongKindError` (the file may still be read as a log)."""
     if not header.curves:
-        raise InputFileError(path, "no curves: the ~Curve section is missing or empty")
+        raise WrongKindError(path, "no curves: the ~Curve section is missing or empty", found="log")
 
 
 def section_role(title: str) -> Role | None:
