@@ -306,9 +306,8 @@ def _registry_quiet(disabled: tuple[str, ...]) -> Registry:
 
 
 def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:
-    from pipeline.batch.jobs import BatchConfigError
+    from pipeline.batch.jobs import LEDGER, BatchConfigError
     from pipeline.batch.ledger import Ledger
-    from pipeline.batch.run import LEDGER
 
     path = Path(ledger_file) if ledger_file else Path(out_dir) / LEDGER
     if not path.is_file():

@@ -11,11 +11,13 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import datetime as dt
+import errno
 import hashlib
 import json
 import math
 import os
 import shutil
+import stat
 import tempfile
 import time
 import uuid
@@ -211,7 +213,7 @@ def run_plan(
     """
     files = _check_inputs(plan, inputs)
     if out_dir is not None:
-        _check_out_dir(out_dir)
+        check_out_dir(out_dir)
     overrides = well or WellMetadata()
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
@@ -374,8 +376,10 @@ def _staging_prefix(out_dir: Path) -> str:
     return f".{out_dir.name}{STAGING_PREFIX}"
 
 
-def _check_out_dir(out_dir: Path) -> None:
-    """``out_dir`` is new, empty, or holds only a previous run's files (module docstring)."""
+def check_out_dir(out_dir: Path, own: frozenset[str] = frozenset()) -> None:
+    """``out_dir`` is new, empty, or holds only a previous run's files (``run.json``, the
+    outputs it lists, and the names in ``own``, e.g. a batch's marker); else
+    :class:`RunInputError` naming the directory and the foreign files."""
     if not out_dir.exists():
         return
     if not out_dir.is_dir():
@@ -385,7 +389,7 @@ def _check_out_dir(out_dir: Path) -> None:
         return
     try:
         previous = json.loads((out_dir / MANIFEST).read_text())
-        known = {MANIFEST} | {entry["file"] for entry in previous["outputs"]}
+        known = {MANIFEST, *own} | {entry["file"] for entry in previous["outputs"]}
     except (OSError, ValueError, KeyError, TypeError):
         known = set()
     foreign = sorted(entries - known)
@@ -628,12 +632,32 @@ def _input_entry(source: Source) -> InputFile:
 
 
 def sha256_file(path: Path) -> str:
-    """SHA-256 of a file's bytes."""
+    """SHA-256 of a regular file's bytes. A device, FIFO or socket is refused (``OSError``
+    "not a regular file") before anything is read: checked on the path, then on the file
+    opened non-blocking, so neither a FIFO nor a path swapped in between blocks or streams
+    forever."""
+    _require_regular(path, os.stat(path).st_mode)
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
+    with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+        _require_regular(path, os.fstat(fh.fileno()).st_mode)
         for block in iter(lambda: fh.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+_KINDS = {
+    stat.S_ISDIR: "a directory",
+    stat.S_ISCHR: "a character device",
+    stat.S_ISBLK: "a block device",
+    stat.S_ISFIFO: "a FIFO",
+    stat.S_ISSOCK: "a socket",
+}
+
+
+def _require_regular(path: Path, mode: int) -> None:
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS.items() if test(mode)), "something else")
+        raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
 
 
 def remove_stale_staging(directory: Path) -> list[Path]:

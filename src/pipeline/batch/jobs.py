@@ -25,8 +25,14 @@ from pipeline.well import WellMetadata
 
 WELL_ID_COLUMN = "well_id"
 WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
-RESERVED_NAMES = frozenset({"ledger.sqlite", "summary.csv", "summary.json"})
-"""Names the batch itself writes in the output directory; no well may be called so."""
+LEDGER = "ledger.sqlite"
+LEDGER_SIDECARS = ("-wal", "-shm", "-journal")
+"""SQLite's files beside a ledger ``L``: ``L-wal``, ``L-shm``, ``L-journal``"""
+SUMMARY_FILES = ("summary.json", "summary.csv")
+RESERVED_NAMES = frozenset({LEDGER, *(LEDGER + s for s in LEDGER_SIDECARS), *SUMMARY_FILES})
+"""Names the batch itself keeps in the output directory (lower case); no well may be called
+so, up to case. (Its staging directory ``.gyropipe-batch`` starts with a dot, which no well
+id does.)"""
 
 
 _UP_TO_CASE = (
@@ -171,9 +177,14 @@ def _check_text(values: Mapping[str, str], where: str) -> None:
 
 
 def _well_id(text: str, where: str) -> str:
-    if not WELL_ID.match(text) or text in RESERVED_NAMES:
+    if not WELL_ID.match(text):
         raise BatchConfigError(
             f"{where}: well id {text!r} is not a plain directory name (letters, digits, '.', "
-            f"'_', '-'; starting with a letter or digit; not {', '.join(sorted(RESERVED_NAMES))})"
+            "'_', '-'; starting with a letter or digit)"
+        )
+    if text.casefold() in RESERVED_NAMES:
+        raise BatchConfigError(
+            f"{where}: well id {text!r} names a file the batch keeps in its output directory "
+            f"(reserved, up to case: {', '.join(sorted(RESERVED_NAMES))})"
         )
     return text

@@ -24,16 +24,15 @@ from pipeline.version import __version__
 
 from .executors import Executor, make_executor
 from .fingerprint import Fingerprint, PlanIdentity
-from .jobs import WellJob
+from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, Skipped
 from .policy import Mode, decide
 from .progress import Reporter
-from .publish import clean_work_dir, read_published
+from .publish import WORK_DIR, clean_work_dir, read_published
 from .records import REJECTED, BatchRow, rejection
 from .summary import WellResult, counts, write_summary
 from .worker import PipelineRef, WellOutcome, WellTask
 
-LEDGER = "ledger.sqlite"
 BUSY_POLL_S = 0.5
 """how often a well held by another batch is looked at again"""
 PREFETCH = 2
@@ -84,6 +83,8 @@ def run_batch(
     :class:`~pipeline.batch.jobs.BatchConfigError` if the ledger cannot be used; a
     ``KeyboardInterrupt`` stops the batch and is re-raised after the ledger is closed."""
     out = options.out_dir.resolve()
+    ledger_path = options.ledger or out / LEDGER
+    _check_ledger_place(ledger_path, out, jobs)
     out.mkdir(parents=True, exist_ok=True)
     ref = PipelineRef(
         str(Path(plan.file).resolve()), options.overrides, options.disabled, plan.digest
@@ -91,7 +92,7 @@ def run_batch(
     # first: local workers fork before the ledger is open and before any thread starts
     executor = make_executor(options.executor, options.workers, ref, options.scheduler)
     try:
-        ledger = Ledger(options.ledger or out / LEDGER)
+        ledger = Ledger(ledger_path)
     except BaseException:
         executor.close(cancel=True)
         raise
@@ -310,6 +311,22 @@ class _Batch:
             sort_keys=True,
         )
         return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _check_ledger_place(ledger: Path, out: Path, jobs: Sequence[WellJob]) -> None:
+    """Refuse a ledger whose files (``L``, ``L-wal``…) lie where the batch publishes: in a
+    well's directory ``OUT/<well>``, its staging directory, or as a summary file (names
+    compared up to case)."""
+    taken = {j.well_id.casefold() for j in jobs} | {WORK_DIR, *SUMMARY_FILES}
+    resolved = ledger.resolve()
+    for path in (resolved, *(resolved.with_name(resolved.name + s) for s in LEDGER_SIDECARS)):
+        if path.is_relative_to(out) and path != out:
+            top = out / path.relative_to(out).parts[0]
+            if top.name.casefold() in taken:
+                raise BatchConfigError(
+                    f"--ledger {ledger}: {path} is at or inside {top}, which the batch "
+                    "replaces or writes: keep the ledger outside the wells' directories"
+                )
 
 
 def _input_bytes(job: WellJob) -> int:

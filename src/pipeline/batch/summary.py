@@ -16,6 +16,7 @@ from typing import Any
 
 from pipeline.atomic import atomic_write_bytes
 
+from .jobs import SUMMARY_FILES
 from .records import BatchRow, iso
 
 STATUSES = ("done", "rejected", "failed", "skipped", "interrupted")
@@ -91,7 +92,7 @@ def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> 
     for r in results:
         time_s = "" if r.time_s is None else f"{r.time_s:.3f}"
         writer.writerow([r.well, r.status, r.detail, time_s, r.run_id or ""])
-    paths = [out_dir / "summary.json", out_dir / "summary.csv"]
+    paths = [out_dir / name for name in SUMMARY_FILES]
     atomic_write_bytes(paths[0], json.dumps(document, indent=2).encode())
     atomic_write_bytes(paths[1], text.getvalue().encode())
     return paths

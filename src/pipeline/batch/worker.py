@@ -27,13 +27,15 @@ from pipeline.graph import Plan, build_plan
 from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
 from pipeline.registry import Registry
-from pipeline.runner import MANIFEST, RunResult, process_alive, run_plan
+from pipeline.runner import MANIFEST, RunResult, check_out_dir, process_alive, run_plan
 from pipeline.spec import load_spec
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
-from .publish import staging_dir, write_marker
+from .publish import MARKER, staging_dir, write_marker
 
+OWN = frozenset({MARKER})
+"""what a batch's published well directory holds besides the run's own files"""
 EXIT_ORPHAN = 70
 ORPHAN_POLL_S = 0.5
 
@@ -130,7 +132,9 @@ def run_well(task: WellTask) -> WellOutcome:
     t0 = time.perf_counter()
     staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
+    final = Path(task.out_root) / task.well_id
     try:
+        check_out_dir(final, OWN)  # early: a well that cannot be published is not run
         plan, registry = _plan(task.pipeline)
         shutil.rmtree(staging, ignore_errors=True)
         staging.mkdir(parents=True)
@@ -143,7 +147,6 @@ def run_well(task: WellTask) -> WellOutcome:
             well=WellMetadata.model_validate(task.well),
         )
         run_time = time.perf_counter() - t_run
-        final = Path(task.out_root) / task.well_id
         manifest = _relocated(result.manifest, final)
         atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
         write_marker(
@@ -155,6 +158,7 @@ def run_well(task: WellTask) -> WellOutcome:
                 "fingerprint": json.loads(task.fingerprint),
             },
         )
+        check_out_dir(final, OWN)  # again: the user may have put files there meanwhile
         replace_dir(staging, final)
         return WellOutcome(
             task.well_id,
