@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 from report_support import inspect
 
-from tests_support import gyropipe_cli
+from tests_support import ROOT, gyropipe_cli
 
 SAMPLE = "examples/stations-j-well.csv"
 GIVEN = {
@@ -140,3 +140,26 @@ def test_first_pages_have_no_local_path_and_no_plugin_list(runs: Runs):
         assert SAMPLE not in page and "stations-j-well.csv" not in page
         assert "survey.yaml" not in page and "Plugins loaded" not in page
         assert str(runs["absent"]) not in page
+
+
+def test_header_fields_from_the_file_header(tmp_path: Path):
+    """The same fields, given in a CSV title block (``Run number: 3``), reach the report."""
+    title = {
+        "Service company": "Acme Gyro Services",
+        "Tool name": "NorthStar 48",
+        "Tool serial": "NS-4471",
+        "Run number": "3",
+        "Job number": "JOB-2026-118",
+        "Survey type": "definitive",
+        "CRS": "EPSG:23031",
+        "Easting": "431250.5",
+        "Northing": "6478512.25",
+        "Depth reference": "RKB",
+    }
+    sample = (ROOT / SAMPLE).read_text()
+    stations = tmp_path / "stations.csv"
+    stations.write_text("".join(f"{k}: {v}\n" for k, v in title.items()) + sample)
+    gyropipe_cli(
+        "run", "pipelines/survey.yaml", "--input", stations, "--out", tmp_path / "out", check=True
+    )
+    assert _pairs(pdf_text(tmp_path / "out" / "report.pdf")[0]) == SHOWN
