@@ -71,6 +71,11 @@ class WellMetadata(BaseModel):
     longitude: float | None = Field(
         None, ge=-180, le=360, description="wellhead longitude, deg east (WGS84)"
     )
+    crs: str | None = Field(
+        None, description="coordinate reference system of the map coordinates (EPSG:23031…)"
+    )
+    easting: float | None = Field(None, description="wellhead map easting in the crs, m")
+    northing: float | None = Field(None, description="wellhead map northing in the crs, m")
     elevation: float | None = Field(
         None, description="depth reference elevation above mean sea level, m"
     )
@@ -85,7 +90,13 @@ class WellMetadata(BaseModel):
         "mems-vrg, dtg-xy, nav-grade…), whose error magnitudes compassing takes as its "
         "default; the simulator sets it",
     )
+    tool_name: str | None = Field(None, description="survey tool name (make and model)")
     tool_serial: str | None = Field(None, description="survey tool serial number")
+    run_number: str | None = Field(None, description="survey run number")
+    job_number: str | None = Field(None, description="service company's job number")
+    survey_type: Literal["definitive", "preliminary"] | None = Field(
+        None, description="survey status: definitive or preliminary"
+    )
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths: true, grid or magnetic"
     )

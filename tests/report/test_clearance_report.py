@@ -84,7 +84,7 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     assert "Clearance: stop — minimum separation factor" in text
     assert "SPE-187073" in text and "SPE 67616" in text
     for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):
-        assert internal not in text.split("Provenance")[0], internal
+        assert internal not in text.split("Appendix: provenance")[0], internal
 
 
 SLOTS = {  # examples/clearance/manifest.csv: north, east (m); every hole 24 in

@@ -207,7 +207,7 @@ PAPER = "Tortuosity versus micro-tortuosity: why little things mean a lot"
 def test_the_plugins_section_and_method_are_in_the_html(report: Path) -> None:
     found = sections_of(report / "report.html")
     keys = list(found)
-    assert keys[-2:] == ["part-tortuosity-section", "provenance"]  # before Provenance
+    assert keys[-3:] == ["part-tortuosity-section", "signoff", "provenance"]  # before sign-off
     section = found["part-tortuosity-section"]
     assert section.startswith("7. Tortuosity Cumulative dogleg over the well, after [1]: ")
     assert "at TD of J-12." in section
@@ -246,7 +246,7 @@ def test_the_plugins_section_is_in_the_pdf(report: Path) -> None:
     assert "Figure 6. Cumulative dogleg against MD" in flat
     assert "cumulative dogleg per 100 m of hole [1]" in flat
     assert PAPER in flat
-    assert flat.index("7. Tortuosity") < flat.index("8. Provenance")
+    assert flat.index("7. Tortuosity") < flat.index("8. Sign-off")
 
 
 def test_a_raising_section_fails_the_report_naming_its_plugin(

@@ -5,6 +5,8 @@ and flags, error ellipses (point-gyro.yaml), drift correction and in/out-run QC
 from __future__ import annotations
 
 import re
+import shutil
+import subprocess
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -122,6 +124,27 @@ def test_point_gyro_report_has_qc_sigma_and_ellipses(point_run: Path, browser: A
         evaluated = [r for r in qc if r["check"] == check and r["passed"] is not None]
         assert int(summary[check][2]) == len(evaluated)
         assert int(summary[check][4]) == sum(not r["passed"] for r in evaluated)
+
+
+def test_ellipse_columns_name_axes_model_and_confidence(point_run: Path, browser: Any):
+    """Beside the listing, in the HTML and the PDF: the ellipse columns are semi-axes, at the
+    pipeline's 95 % confidence, of the GYRO-NS error model (its title)."""
+    note = (
+        "Ellipse columns: semi-major and semi-minor axes of the horizontal error ellipse, "
+        "azimuth of its major axis and vertical half-interval; confidence level 95 %; "
+        "error model OWSG north-seeking gyro, stationary (GYRO-NS, A020Gb)."
+    )
+    text = inspect(browser, point_run / "report.html").text
+    assert text.index("Semi-major") < text.index(note)  # right after the listing's table
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext not found: apt-get install poppler-utils")
+    pdf = subprocess.run(
+        ["pdftotext", str(point_run / "report.pdf"), "-"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    assert note in " ".join(pdf.split())
 
 
 def test_point_gyro_pdf_draws_every_figure(point_run: Path, tmp_path: Path):

@@ -107,7 +107,13 @@ def test_pdf_report_pages_and_plots(survey_run: Path, tmp_path: Path):
     for page in pages:
         assert ink(page.pixels) > 0.005
     text = " ".join(w[0] for p in pages for w in p.words)
-    for words in ("Gyro survey report", "Survey listing", "Provenance", "2520.00", "2058.87"):
+    for words in (
+        "Gyro survey report",
+        "Survey listing",
+        "Appendix: provenance",
+        "2520.00",
+        "2058.87",
+    ):
         assert all(w in text for w in words.split())
     regions = figure_regions(pages)
     assert sorted(regions) == [1, 2, 3, 4, 5]

@@ -62,12 +62,19 @@ def _angle(value: float | None, positive: str, negative: str) -> str | None:
     return f"{abs(value):.6f}° {positive if value >= 0 else negative}"
 
 
+def _map_position(well: WellMetadata) -> str | None:
+    """The wellhead's map coordinates, m (either given alone is shown alone)."""
+    parts = [
+        f"{axis} {fmt(value)} m"
+        for axis, value in (("E", well.easting), ("N", well.northing))
+        if value is not None
+    ]
+    return ", ".join(parts) or None
+
+
 def site_fields(well: WellMetadata) -> Fields:
-    """Well name, identifiers and wellhead position."""
-    elevation = None
-    if well.elevation is not None:
-        ref = f" ({well.depth_reference})" if well.depth_reference else ""
-        elevation = f"{fmt(well.elevation)} m above MSL{ref}"
+    """Well name, identifiers, wellhead position (geodetic and map) and depth datum."""
+    elevation = None if well.elevation is None else f"{fmt(well.elevation)} m above MSL"
     return Fields(
         "Well and site",
         items(
@@ -79,21 +86,28 @@ def site_fields(well: WellMetadata) -> Fields:
                 ("Service company", well.service_company),
                 ("Latitude", _angle(well.latitude, "N", "S")),
                 ("Longitude", _angle(well.longitude, "E", "W")),
-                ("Depth reference", None if elevation else well.depth_reference),
-                ("Reference elevation", elevation),
+                ("Coordinate system", well.crs),
+                ("Wellhead map position", _map_position(well)),
+                ("Depth datum", well.depth_reference),
+                ("Datum elevation", elevation),
             ]
         ),
     )
 
 
 def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[str, str]]) -> Fields:
-    """Tool and run: tool type and serial, survey date, pipeline, run time, ``extra``."""
+    """Tool and run: survey type, tool name, type and serial, run and job number, survey
+    date, pipeline, run time, ``extra``."""
     return Fields(
         "Tool and run",
         items(
             [
+                ("Survey type", well.survey_type),
+                ("Tool", well.tool_name),
                 ("Tool type", well.tool_type),
                 ("Tool serial", well.tool_serial),
+                ("Run number", well.run_number),
+                ("Job number", well.job_number),
                 ("Survey date", well.survey_date.isoformat() if well.survey_date else None),
                 *extra,
                 ("Pipeline", f"{provenance.pipeline} {provenance.pipeline_version}"),
@@ -170,4 +184,26 @@ def provenance_section(provenance: Provenance) -> Section:
     blocks += [inputs] if inputs.rows else []
     blocks += [stages] if stages.rows else []
     blocks += [Paragraph(f"Plugins loaded: {plugins}.")] if plugins else []
-    return Section("Provenance", tuple(blocks), key="provenance")
+    return Section("Appendix: provenance", tuple(blocks), key="provenance")
+
+
+SIGNERS = ("Prepared by", "Checked by", "Approved by")
+BLANK = "_" * 20
+"""A blank line to write or sign on."""
+
+
+def signoff_section() -> Section:
+    """The sign-off block: a row each for preparer, checker and approver with blank name,
+    signature and date cells."""
+    table = Table(
+        "Prepared, checked and approved",
+        (
+            Column("Role", align="left"),
+            Column("Name", align="left"),
+            Column("Signature", align="left"),
+            Column("Date", align="left"),
+        ),
+        tuple((role, BLANK, BLANK, BLANK) for role in SIGNERS),
+        kind="signoff",
+    )
+    return Section("Sign-off", (table,), key="signoff")

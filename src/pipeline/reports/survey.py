@@ -63,6 +63,7 @@ from pipeline.reports.sections import (
     north_label,
     provenance_section,
     references,
+    signoff_section,
     site_fields,
     tool_fields,
     unit_label,
@@ -180,7 +181,10 @@ def survey_document(
         _method(tables, path, vs_azimuth, parts),
         Section(
             "Survey listing",
-            (listing(traj, tables.stations, vs_azimuth, flags, course),),
+            (
+                listing(traj, tables.stations, vs_azimuth, flags, course),
+                *_ellipse_note(traj, provenance, parts),
+            ),
             key="listing",
         ),
         _trajectory_plots(traj, path, vs, vs_azimuth, course, tables.series),
@@ -203,7 +207,7 @@ def survey_document(
         sections.append(_allan(tables.allan, tables.noise))
     if clearance is not None:
         sections.append(clearance)
-    sections += [*added, provenance_section(provenance)]
+    sections += [*added, signoff_section(), provenance_section(provenance)]
     subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
     return Document(
         title=title,
@@ -214,6 +218,24 @@ def survey_document(
         footer=footer(provenance),
         sections=tuple(sections),
     )
+
+
+def _ellipse_note(traj: pa.Table, provenance: Provenance, parts: Parts) -> list[Paragraph]:
+    """What the listing's ellipse columns are: their axes, confidence level and the error
+    model (by its title) of the run's position-uncertainty stage; none without ellipses."""
+    if not all(c in traj.column_names for c in ELLIPSE_COLUMNS):
+        return []
+    names = [str(s.params["model"]) for s in provenance.stages if s.uses == "position_uncertainty"]
+    titles = " and ".join(dict.fromkeys(parts.error_model(n)[0] for n in names))
+    model = f"; error model {titles}" if titles else ""
+    level = confidence(traj)
+    level = f"confidence level {level}" if level[0].isdigit() else "confidence level not stated"
+    return [
+        Paragraph(
+            "Ellipse columns: semi-major and semi-minor axes of the horizontal error ellipse, "
+            f"azimuth of its major axis and vertical half-interval; {level}{model}."
+        )
+    ]
 
 
 def _own_flags(
@@ -307,7 +329,7 @@ def _summary(
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
         results.append(
             (
-                f"Ellipse at TD ({confidence(traj)})",
+                f"Ellipse semi-axes at TD ({confidence(traj)})",
                 f"{fmt(col(traj, 'ellipse_major_conf')[-1])} × "
                 f"{fmt(col(traj, 'ellipse_minor_conf')[-1])} m, vertical ± "
                 f"{fmt(col(traj, 'vertical_conf')[-1])} m",
