@@ -78,6 +78,22 @@ def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
     assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
 
 
+def test_a_witsml_file_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
+    """Issue 28 item 13: 'no installed reader recognises … name one with `reader:`' said
+    nothing of what the file is; the WITSML reader knows it, and the stations pipeline is
+    named."""
+    witsml = tmp_path / "j.xml"
+    assert gyropipe_cli("convert", str(SAMPLE), "--out", str(witsml)).returncode == 0
+    pipeline = ROOT / "pipelines" / "point-gyro.yaml"
+    result = gyropipe_cli(
+        "run", str(pipeline), "--input", str(witsml), "--out", str(tmp_path / "o")
+    )
+    assert result.returncode == 1
+    assert f"{witsml}: a witsml file of stations, not samples" in result.stderr
+    assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
+    assert "name one with `reader:`" not in result.stderr
+
+
 def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:
     result = gyropipe_cli("validate", str(SURVEY), "--set", "trajectory.vs_azimth=10")
     assert result.returncode == 2
