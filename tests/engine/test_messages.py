@@ -3,6 +3,7 @@ URL), with a suggestion where a name is misspelt."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -92,6 +93,24 @@ def test_a_witsml_file_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
     assert f"{witsml}: a witsml file of stations, not samples" in result.stderr
     assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
     assert "name one with `reader:`" not in result.stderr
+
+
+def test_a_reader_option_hint_names_a_form_that_works(tmp_path: Path) -> None:
+    """Issue 28 item 13: the reader's 'set the option … md_unit' led to ``--set
+    read.md_unit=ft``, which is refused; the refusal names the working form, which runs."""
+    stations = tmp_path / "s.csv"
+    stations.write_text("md,inc [deg],azi TN [deg]\n0,0,0\n100,1,10\n200,2,20\n")
+    args = ["run", str(SURVEY), "--input", str(stations)]
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "a"))
+    assert "no unit for this column" in result.stderr
+    assert "or set the reader option units: {md: ft} or md_unit: ft" in result.stderr
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "b"), "--set", "read.md_unit=ft")
+    assert result.returncode == 2
+    hinted = re.search(r"reader options go under options: --set (\S+),", result.stderr)
+    assert hinted is not None, result.stderr
+    assert hinted[1] == "read.options.md_unit=ft"
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "c"), "--set", hinted[1])
+    assert result.returncode == 0, result.stderr
 
 
 def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:
