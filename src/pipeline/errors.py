@@ -117,7 +117,9 @@ class MissingSiteError(GyropipeError):
     model) and neither the stage's parameters nor the well metadata give it. Names the stage
     and every place the values may be given."""
 
-    def __init__(self, stage: str, missing: list[str], param: str | None = None) -> None:
+    def __init__(
+        self, stage: str, missing: list[str], param: str | None = None, *, python: bool = False
+    ) -> None:
         self.stage = stage
         self.missing = missing
         self.param = param
@@ -129,14 +131,25 @@ class MissingSiteError(GyropipeError):
             if model == missing
             else f" (the geomagnetic model needs the {_listed(model)})"
         )
+        head = f"the {stage} stage needs the site {_listed(missing)}{why}"
+        if python:  # a gp.* function: its argument or its well= mapping
+            argument = f"the function's `{param}=` argument or " if param else ""
+            mapping = ", ".join(f'"{name}": …' for name in missing)
+            super().__init__(
+                f"{head}: give {argument}`well={{{mapping}}}` (or the input's well metadata)"
+            )
+            return
         given = f"the {stage} stage's `{param}`, or " if param else ""
         fields = _listed([f"`{name}`" for name in missing])
         flags = " ".join(f"--well {name}=…" for name in missing)
         super().__init__(
-            f"the {stage} stage needs the site {_listed(missing)}{why}: set {given}the well's "
-            f"{fields} in the pipeline's `well:` block, on the command line ({flags}) or in "
-            "the input file's header"
+            f"{head}: set {given}the well's {fields} in the pipeline's `well:` block, on the "
+            f"command line ({flags}) or in the input file's header"
         )
+
+    def in_python(self) -> MissingSiteError:
+        """The same error worded for the Python API (``latitude=``, ``well={…}``)."""
+        return MissingSiteError(self.stage, self.missing, self.param, python=True)
 
 
 def _listed(names: list[str]) -> str:

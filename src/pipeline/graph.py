@@ -158,7 +158,10 @@ def _params(
         model = definition.params.model_validate(values, context={"registry": registry})
     except ValidationError as exc:
         problems += [
-            Problem(p.location, f"stage {stage.id!r} ({stage.uses}): {p.message}")
+            Problem(
+                p.location,
+                f"stage {stage.id!r} ({stage.uses}): {p.message}{_options_hint(stage, fields, p)}",
+            )
             for p in validation_problems(exc, ("stages", pos, "with"), source, definition.params)
         ]
         return None
@@ -174,6 +177,19 @@ def _params(
                 )
             )
     return model
+
+
+def _options_hint(stage: StageSpec, fields: Mapping[str, Any], problem: Problem) -> str:
+    """Where an unknown field of a stage with reader ``options`` (a read stage) goes, in a
+    form that works: ``--set read.md_unit=ft`` is ``--set read.options.md_unit=ft``."""
+    name = next((n for n in stage.with_ if problem.message.startswith(f"unknown field {n!r}")), "")
+    if "options" not in fields or not name:
+        return ""
+    value = stage.with_[name]
+    return (
+        f" (reader options go under options: --set {stage.id}.options.{name}={value}, "
+        f"or options: {{{name}: {value}}} in the YAML)"
+    )
 
 
 def _wire(

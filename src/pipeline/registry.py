@@ -427,6 +427,29 @@ class Registry:
             )
         return top[0][1]
 
+    def _reader_of(self, path: Path, kind: str, name: str) -> ReaderDef:
+        """:meth:`reader_for`; when no reader of ``kind`` claims ``path`` but a reader of one
+        other kind does by content, a :class:`WrongKindError` naming that kind (``found``): a
+        WITSML trajectory given as samples is a stations file, not a file no reader knows."""
+        try:
+            return self.reader_for(path, kind, name)
+        except ReaderChoiceError:
+            readers = [r for r, _ in self.readers.values()]
+            if name == "auto" and not any(kind in r.kinds and r.claim(path) for r in readers):
+                other = next(
+                    (r for r in readers if len(r.kinds) == 1 and r.claim(path) is Claim.CONTENT),
+                    None,
+                )
+                if other is not None:
+                    found = next(iter(other.kinds))
+                    raise WrongKindError(
+                        path,
+                        f"a {other.name} file of {found}, not {kind} (no reader of {kind} "
+                        "recognises it)",
+                        found=found,
+                    ) from None
+            raise
+
     def read(
         self,
         path: Path,
@@ -444,7 +467,7 @@ class Registry:
         failure (and any reader's unexpected exception) is a :class:`ReaderError` naming the
         reader and its plugin; built-in readers' located errors pass unchanged.
         """
-        chosen = self.reader_for(path, kind, reader)
+        chosen = self._reader_of(path, kind, reader)
         return self._read_whole(chosen, path, kind, reader_options(chosen, options or {}, well))
 
     def _read_whole(
@@ -472,7 +495,7 @@ class Registry:
         counted from the start of the file's table; a pass after one checked to its end is
         not checked again); a reader's failure while streaming is reported as :meth:`read`
         reports it."""
-        chosen = self.reader_for(path, kind, reader)
+        chosen = self._reader_of(path, kind, reader)
         parsed = reader_options(chosen, options or {}, well)
         if chosen.stream is None:  # the reader and its options are resolved once
             table, found = self._read_whole(chosen, path, kind, parsed)

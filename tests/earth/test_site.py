@@ -75,6 +75,22 @@ def test_missing_values_are_named_with_where_to_give_them() -> None:
     assert resolve_site(WELL, stage="validity_checks", field=True).date == WELL.survey_date
 
 
+def test_a_python_function_names_its_own_arguments() -> None:
+    """Issue 28 item 13: in Python the message spoke of ``--well``; it names the function's
+    ``latitude=`` argument and ``well=``, and the argument it names works."""
+    import pipeline as gp
+
+    readings = gp.read(ROOT / "examples" / "readings-j-well.csv", kind="readings")
+    with pytest.raises(GyropipeError) as info:
+        gp.compass(readings, well={"latitude": None})
+    assert str(info.value).endswith(
+        "the compass stage needs the site latitude: give the function's `latitude=` argument "
+        'or `well={"latitude": …}` (or the input\'s well metadata)'
+    )
+    assert "--well" not in str(info.value)
+    assert len(gp.compass(readings, latitude=61.25).stations) > 0
+
+
 SIM_PLAN = """
 name: no-latitude
 seed: 3

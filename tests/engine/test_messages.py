@@ -3,6 +3,7 @@ URL), with a suggestion where a name is misspelt."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -76,6 +77,40 @@ def test_stations_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "a table of survey stations; not raw sensor samples" in result.stderr
     assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
+
+
+def test_a_witsml_file_given_to_a_raw_samples_pipeline(tmp_path: Path) -> None:
+    """Issue 28 item 13: 'no installed reader recognises … name one with `reader:`' said
+    nothing of what the file is; the WITSML reader knows it, and the stations pipeline is
+    named."""
+    witsml = tmp_path / "j.xml"
+    assert gyropipe_cli("convert", str(SAMPLE), "--out", str(witsml)).returncode == 0
+    pipeline = ROOT / "pipelines" / "point-gyro.yaml"
+    result = gyropipe_cli(
+        "run", str(pipeline), "--input", str(witsml), "--out", str(tmp_path / "o")
+    )
+    assert result.returncode == 1
+    assert f"{witsml}: a witsml file of stations, not samples" in result.stderr
+    assert "survey stations are read by read_stations, as in pipelines/survey.yaml" in result.stderr
+    assert "name one with `reader:`" not in result.stderr
+
+
+def test_a_reader_option_hint_names_a_form_that_works(tmp_path: Path) -> None:
+    """Issue 28 item 13: the reader's 'set the option … md_unit' led to ``--set
+    read.md_unit=ft``, which is refused; the refusal names the working form, which runs."""
+    stations = tmp_path / "s.csv"
+    stations.write_text("md,inc [deg],azi TN [deg]\n0,0,0\n100,1,10\n200,2,20\n")
+    args = ["run", str(SURVEY), "--input", str(stations)]
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "a"))
+    assert "no unit for this column" in result.stderr
+    assert "or set the reader option units: {md: ft} or md_unit: ft" in result.stderr
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "b"), "--set", "read.md_unit=ft")
+    assert result.returncode == 2
+    hinted = re.search(r"reader options go under options: --set (\S+),", result.stderr)
+    assert hinted is not None, result.stderr
+    assert hinted[1] == "read.options.md_unit=ft"
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "c"), "--set", hinted[1])
+    assert result.returncode == 0, result.stderr
 
 
 def test_misspelt_names_get_a_suggestion(tmp_path: Path) -> None:

@@ -311,7 +311,7 @@ def test_extra_column_units(tmp_path: Path) -> None:
     err = failure(put(tmp_path, text))
     assert (err.line, err.column) == (1, "TVD")
     assert "no unit for this column" in str(err)
-    assert "units: {tvd: …}" in str(err)
+    assert "units: {tvd: ft}" in str(err)
     table, _ = read(put(tmp_path, text), units={"tvd": "ft", "md": "m"})
     assert column(table, "tvd") == [300 * 0.3048]
     assert column(table, "md") == [1000.0]  # units: win over the header

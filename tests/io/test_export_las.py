@@ -10,8 +10,11 @@ from pathlib import Path
 
 import lasio
 import numpy as np
+import pandas as pd
 import pyarrow as pa
+from export_support import SAMPLE
 
+import pipeline as gp
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.csv import read as read_csv
 from pipeline.io.las import read_las
@@ -133,3 +136,29 @@ def test_parquet_listing_keeps_units_north_reference_and_calculation(trajectory:
     assert calculation is not None and calculation.vs_azimuth == 30.0
     well = well_of(trajectory)
     assert well is not None and well.grid_convergence == 1.25
+
+
+def test_las_export_header_numbers_and_no_byte_order_mark(tmp_path: Path):
+    """Issue 28 item 13: LOC read ``1.8870000000000005 E`` (the longitude's wrap into
+    [-180, 180)) and the file began with a BOM (the north/east descriptions' minus sign);
+    a UTF-8 export has none, even with a non-ASCII well name, and reads back."""
+    stations = gp.read(SAMPLE)
+    well = {"well": "Brønn-1", "latitude": 58.44, "longitude": 1.887}
+    path = gp.write(gp.minimum_curvature(stations, well=well), tmp_path / "t.las")
+    raw = path.read_bytes()
+    assert raw.startswith(b"~Version")
+    header = raw.decode("utf-8").split("~ASCII")[0]
+    assert " LOC     .         58.44 N 1.887 E (WGS84)  : location\n" in header
+    assert [line for line in header.splitlines() if not line.isascii()] == [
+        " WELL    .         Brønn-1                  : well"
+    ]
+    _, back = read_las(path, "stations", None)
+    assert (back.well, back.latitude, back.longitude) == ("Brønn-1", 58.44, 1.887)
+
+
+def test_las_step_is_written_at_its_unit_decimals(tmp_path: Path):
+    """md 1000.1, 1000.2: STEP 0.1, not the difference's 0.10000000000002274."""
+    frame = pd.DataFrame({"md": [1000.1, 1000.2], "inc": [1.0, 1.1], "azi": [10.0, 11.0]})
+    frame.attrs = {"units": {"md": "m", "inc": "deg", "azi": "deg"}, "north_reference": "true"}
+    las = lasio.read(str(gp.write(frame, tmp_path / "s.las")))
+    assert (las.well["STEP"].value, las.well["STEP"].unit) == (0.1, "m")

@@ -119,5 +119,12 @@ def test_definitive_survey_report_in_chromium(browser: Any, tmp_path: Path) -> N
     counts = survey.groupby("run", sort=False).size()
     assert [int(row[4]) for row in program] == counts.tolist()
     assert len(page.tables["listing"]) == len(survey)
+    assert [row[0] for row in page.tables["listing"]] == survey["run"].tolist()  # Run column
+    html = (out / "report.html").read_text()
+    # each run's tool, not the last file header's (issue 28 item 8)
+    assert (
+        "<dt>Tool type</dt><dd>GYRO-1: north-seeking gyro (example); MWD-1: MWD (example)</dd>"
+    ) in html
+    assert '<th class="l">Run<span class="unit">&nbsp;</span></th><th class="r">MD<' in html
     csv = pd.read_csv(out / "definitive.csv", comment="#")
     assert len(csv) == len(survey)

@@ -15,7 +15,7 @@ import pyarrow as pa
 from pydantic import ValidationError
 
 from pipeline.api.frames import TableLike, WellLike, to_table, well_metadata, well_of_data
-from pipeline.errors import ParameterError
+from pipeline.errors import MissingSiteError, ParameterError, StageError
 from pipeline.graph import PlannedStage
 from pipeline.plugins import shared_registry
 from pipeline.registry import Provenance, Registry, StageSetup
@@ -67,14 +67,20 @@ def call(
         stages=(StageSetup(uses, uses, reg.plugin_label(plugin), parsed.model_dump(mode="json")),),
         tool_models=reg.tool_model_files(),
     )
-    outs, files = run_stage(
-        stage,
-        tables,
-        registry=reg,
-        well=merged,
-        provenance=provenance,
-        out_dir=out_dir or Path("."),
-    )
+    try:
+        outs, files = run_stage(
+            stage,
+            tables,
+            registry=reg,
+            well=merged,
+            provenance=provenance,
+            out_dir=out_dir or Path("."),
+        )
+    except StageError as exc:  # worded for Python: the `latitude=` argument, not --well
+        if not isinstance(exc.__cause__, MissingSiteError):
+            raise
+        python = exc.__cause__.in_python()
+        raise StageError(exc.stage_id, exc.uses, exc.plugin, python) from python
     return {port: attach(table, merged) for port, table in outs.items()}, merged, files
 
 

@@ -108,3 +108,7 @@ class MissingMagneticError(MissingSiteError):
             f"the command line (--well magnetic_field=…) or in the input file's header — or "
             f"the {stage} stage's `{param}`",
         )
+
+    def in_python(self) -> MissingSiteError:
+        """As it is: its fields are named as the well's (``well={…}`` in Python)."""
+        return self

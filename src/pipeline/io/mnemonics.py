@@ -74,13 +74,13 @@ CURVES: dict[str, Curve] = {
             "north",
             "length",
             ("NORTH", "NORTHING", "+N/-S", "N/S", "NS", "N-S", "DNS", "LAT DISP"),
-            "displacement north (+) / south (−)",
+            "displacement north (+) / south (-)",
         ),
         Curve(
             "east",
             "length",
             ("EAST", "EASTING", "+E/-W", "E/W", "EW", "E-W", "DEW", "DEP DISP"),
-            "displacement east (+) / west (−)",
+            "displacement east (+) / west (-)",
         ),
         Curve("dls", "dogleg_severity", ("DLS", "DOGLEG SEVERITY", "DOGLEG"), "dogleg severity"),
         Curve(

@@ -108,6 +108,11 @@ def listing(
     if "survey" in traj.column_names and len(set(traj.column("survey").to_pylist())) > 1:
         surveys = [str(s) for s in traj.column("survey").to_pylist()]
         spec["survey"] = (Column("Survey", align="left"), surveys)
+    if "run" in traj.column_names and len(set(traj.column("run").to_pylist())) > 1:
+        spec["run"] = (
+            Column("Run", align="left"),
+            [str(r) for r in traj.column("run").to_pylist()],
+        )
     spec["md"] = (Column("MD", "m"), num("md"))
     spec["inc"] = (Column("INC", "°"), num("inc"))
     spec[AZI] = (Column("AZI", f"° {ref}"), azimuths("azi"))

@@ -117,6 +117,20 @@ def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[st
     )
 
 
+def survey_tool(traj: pa.Table, well: WellMetadata) -> str | None:
+    """The survey tool of ``traj``: each run's (``GYRO-1: gyro; MWD-1: MWD``) when its
+    stations come from several runs (``several; see the program`` when a run names more
+    than one), else the well's ``tool_type``."""
+    names = traj.column_names
+    runs = traj.column("run").to_pylist() if "run" in names else []
+    if len(set(runs)) < 2 or "tool_type" not in names:
+        return well.tool_type
+    pairs = dict.fromkeys(zip(runs, traj.column("tool_type").to_pylist(), strict=True))
+    if len(pairs) > len(set(runs)):
+        return "several; see the program"
+    return "; ".join(f"{run}: {tool or 'not stated'}" for run, tool in pairs)
+
+
 def error_model(model: str, catalogue: ModelCatalogue) -> tuple[str, bool]:
     """The title a tool model's file gives it (the name if the file cannot be found now) and
     whether it is a gyro model (it reads the latitude)."""

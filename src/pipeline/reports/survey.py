@@ -65,6 +65,7 @@ from pipeline.reports.sections import (
     references,
     signoff_section,
     site_fields,
+    survey_tool,
     tool_fields,
     unit_label,
 )
@@ -170,7 +171,7 @@ def survey_document(
             (
                 site_fields(well),
                 tool_fields(
-                    well,
+                    well.model_copy(update={"tool_type": survey_tool(traj, well)}),
                     provenance,
                     [("Stations", f"{traj.num_rows} ({fmt(md[0])} – {fmt(md[-1])} m MD)")],
                 ),

@@ -46,7 +46,7 @@ from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude, NorthReference, WellMetadata
+from pipeline.well import Latitude, NorthReference, WellMetadata, well_of
 
 MAX_RUNS = 6
 RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
@@ -194,6 +194,7 @@ class _Run:
     azi: np.ndarray  #: deg, in the survey's north reference
     azi_true: np.ndarray  #: deg, true north (the error models')
     source: str
+    tool: list[str | None]  #: each station's tool: its own, else its file header's
 
     @property
     def name(self) -> str:
@@ -265,6 +266,7 @@ def definitive_survey(
                 "run": [run.name] * keep.size,
                 "tool_model": [run.spec.model] * keep.size,
                 "source": [run.source] * keep.size,
+                "tool_type": [run.tool[k] for k in sec.listed],
                 "section": np.full(keep.size, s),
             }
         )
@@ -304,7 +306,11 @@ def _read(
     except ValueError as exc:
         raise ValueError(f"{port}: {exc}") from None
     source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
-    return _Run(port, spec, md, inc, np.where(np.isnan(azi), np.nan, azi_out), azi_true, source)
+    header = (well_of(table) or WellMetadata()).tool_type
+    own = table.column("tool_type").to_pylist() if "tool_type" in table.column_names else []
+    tool = [t or header for t in own] if own else [header] * table.num_rows
+    azi_out = np.where(np.isnan(azi), np.nan, azi_out)
+    return _Run(port, spec, md, inc, azi_out, azi_true, source, tool)
 
 
 def _magnetic(

@@ -241,7 +241,8 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
     quantity = CURVES[name].quantity
     assert quantity is not None, name
     shorthand = next((opt for opt, names in SHORTHANDS.items() if name in names), None)
-    option = f"units: {{{name}: …}}" + (f" or {shorthand}" if shorthand else "")
+    example = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))[-1]
+    option = f"units: {{{name}: {example}}}" + (f" or {shorthand}: {example}" if shorthand else "")
     unit = opts.unit_of(name) or cell.unit
     if unit is None:
         one, *other = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))
@@ -249,7 +250,7 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
         raise InputFileError(
             path,
             f"no unit for this column: write it in the header (e.g. {spelled}) or set the "
-            f"option {option}",
+            f"reader option {option}",
             line=header.index + 1,
             column=cell.text,
         )
@@ -257,7 +258,10 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
         return conversion_factor(unit, quantity)
     except UnitError as exc:
         raise InputFileError(
-            path, f"{exc} (or set the option {option})", line=header.index + 1, column=cell.text
+            path,
+            f"{exc} (or set the reader option {option})",
+            line=header.index + 1,
+            column=cell.text,
         ) from None
 
 

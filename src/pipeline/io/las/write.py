@@ -22,8 +22,10 @@ column the survey readers read as numbers (``survey``); those and boolean column
 out and named in ``~Other``; ``source_line`` (a line of the file read) is not written. A column
 named ``NAME:2`` (how readers tell apart curves of one mnemonic) is written as ``NAME``. A
 file holds one north reference: the azimuth columns' (else the well's), in NREF and in each
-azimuth curve's description. The file is UTF-8, with a byte-order mark when it is not
-ASCII (lasio takes UTF-8 without one for Windows-1252).
+azimuth curve's description. Header numbers are written in shortest round-trip form,
+STEP at its unit's decimals and the LOC text's degrees at 6 decimals. The file is UTF-8
+without a byte-order mark (ASCII unless the well's or a column's own text is not: strict
+LAS readers expect ``~V`` as the first bytes).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, null_markers
-from pipeline.io.precision import for_export
+from pipeline.io.precision import DECIMALS, for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -50,7 +52,6 @@ NULL = NULL_MARKERS[0]
 
 _MNEMONIC = re.compile(r"[^\s.:~#][^\s.:]*")
 _REPEATED = re.compile(r"(.+):[0-9]+")
-BOM = b"\xef\xbb\xbf"
 _API = re.compile(r"[0-9]{2}-?[0-9]{3}-?[0-9]{5}(?:-?[0-9]{2}){0,2}")
 _UNIT = re.compile(r"[^\s:]*")
 
@@ -78,11 +79,8 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
         for v in values.values()
     ]
     texts = [i for i, v in enumerate(filled) if pa.types.is_string(v.type)]
-    head = text.encode()
-    if not head.isascii() or not all(pc.all(pc.string_is_ascii(filled[i])).as_py() for i in texts):
-        head = BOM + head
     with path.open("wb") as fh:
-        fh.write(head)
+        fh.write(text.encode())
         if not texts:
             pacsv.write_csv(
                 pa.table({f"c{i}": v for i, v in enumerate(filled)}),
@@ -218,6 +216,8 @@ def _header_text(
     step = steps[0] if regular else 0
     first, last = (values[0], values[-1]) if values.size else (None, None)
     unit = _field_unit(written[0])
+    if regular and unit in DECIMALS:  # md 1000.1, 1000.2: 0.1, not 0.10000000000002274
+        step = round(float(step), DECIMALS[unit])
     meta = well.model_dump(mode="json")
     calculation = calculation_of(table)
     lines = [
@@ -277,12 +277,19 @@ def _header_text(
 
 
 def _location(well: WellMetadata) -> str | None:
-    """The wellhead as text, e.g. ``61.25 N 73.4 E (WGS84)``."""
+    """The wellhead as text, e.g. ``61.25 N 73.4 E (WGS84)``: degrees at their export
+    decimals (:data:`~pipeline.io.precision.DECIMALS`), so 1.887 is not 1.8870000000000005
+    once the longitude is taken into [-180, 180)."""
     if well.latitude is None or well.longitude is None:
         return None
     lon = (well.longitude + 180.0) % 360.0 - 180.0
-    north = f"{abs(well.latitude)!r} {'N' if well.latitude >= 0 else 'S'}"
-    return f"{north} {abs(lon)!r} {'E' if lon >= 0 else 'W'} (WGS84)"
+    north = f"{_degrees(well.latitude)} {'N' if well.latitude >= 0 else 'S'}"
+    return f"{north} {_degrees(lon)} {'E' if lon >= 0 else 'W'} (WGS84)"
+
+
+def _degrees(value: float) -> str:
+    """``abs(value)`` at the export decimals of degrees, shortest form (``160.0``)."""
+    return repr(round(abs(value), DECIMALS["deg"]) + 0.0)
 
 
 def _api(uwi: str | None) -> str | None:
