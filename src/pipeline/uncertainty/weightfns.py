@@ -449,3 +449,157 @@ def gxy_grw(q: Quantities) -> FloatArray:
     """Continuous xy gyro random walk (SPE 90408 Table 7; OWSG GXY-GRW): ∂A = h_i √hours,
     h_i = √(h_{i−1}² + ΔMD_i/(c sin² Ī_i)), gated as GXY-GD."""
     return _dia(q, 0.0, 0.0, _running(q, 2) * np.sin(q.inc))
+
+
+# ------------------------------------------------------------------ axial correction (OWSG +AX)
+
+
+def _ax(q: Quantities) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """sin I, cos I, sin Am, cos Am and the axial-correction factor 1/(1 − sin² I sin² Am)
+    of the OWSG +AX sheets (the short-collar correction's sensitivity, SPE 67616 App.)."""
+    si, ci, sa, ca = _mag_angles(q)
+    return si, ci, sa, ca, 1.0 / (1.0 - (si * sa) ** 2)
+
+
+def _ax_lever(q: Quantities) -> FloatArray:
+    """sin Am (tan Θ cos I + sin I cos Am)/(1 − sin² I sin² Am), the factor the +AX
+    accelerometer and magnetometer weights share."""
+    si, ci, sa, ca, k = _ax(q)
+    return sa * (q.tan_dip * ci + si * ca) * k
+
+
+@_weight("ABIXY-TI1", "inc azi", "m/s2", site="magnetic")
+def abixy_ti1(q: Quantities) -> FloatArray:
+    """xy accelerometer bias, high side, axially corrected (OWSG +AX sheets): ∂I = −cos I/G,
+    ∂A = cos² I sin Am (tan Θ cos I + sin I cos Am)/(G (1 − sin² I sin² Am))."""
+    si, ci = np.sin(q.inc), np.cos(q.inc)
+    return _dia(q, 0.0, -ci / q.g, ci * ci * _ax_lever(q) / q.g * si)
+
+
+@_weight("ABIXY-TI2", "azi", "m/s2", site="magnetic")
+def abixy_ti2(q: Quantities) -> FloatArray:
+    """xy accelerometer bias, lateral, axially corrected (OWSG +AX):
+    ∂A = (cot I − tan Θ cos Am)/(G (1 − sin² I sin² Am)), as α weight
+    (cos I − tan Θ cos Am sin I)/(G (1 − sin² I sin² Am)), finite at vertical."""
+    si, ci, _sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, (ci - q.tan_dip * ca * si) * k / q.g)
+
+
+@_weight("ABIZ", "inc azi", "m/s2", site="magnetic")
+def abiz(q: Quantities) -> FloatArray:
+    """z accelerometer bias, axially corrected (OWSG +AX): ∂I = −sin I/G,
+    ∂A = sin I cos I sin Am (tan Θ cos I + sin I cos Am)/(G (1 − sin² I sin² Am))."""
+    si, ci = np.sin(q.inc), np.cos(q.inc)
+    return _dia(q, 0.0, -si / q.g, si * ci * _ax_lever(q) / q.g * si)
+
+
+@_weight("ASIXY-TI1", "inc azi", "-", site="magnetic")
+def asixy_ti1(q: Quantities) -> FloatArray:
+    """xy accelerometer scale factor, common, axially corrected (OWSG +AX):
+    ∂I = sin I cos I/√2, ∂A = −sin I cos² I sin Am (tan Θ cos I + sin I cos Am)/(√2 (1 − …))."""
+    si, ci, r2 = np.sin(q.inc), np.cos(q.inc), np.sqrt(2.0)
+    return _dia(q, 0.0, si * ci / r2, -si * ci * ci * _ax_lever(q) / r2 * si)
+
+
+@_weight("ASIXY-TI2", "inc azi", "-", site="magnetic")
+def asixy_ti2(q: Quantities) -> FloatArray:
+    """xy accelerometer scale factor, cos 2ψ half, axially corrected (OWSG +AX):
+    ∂I = sin I cos I/2, ∂A = −sin I cos² I sin Am (tan Θ cos I + sin I cos Am)/(2 (1 − …))."""
+    si, ci = np.sin(q.inc), np.cos(q.inc)
+    return _dia(q, 0.0, si * ci / 2.0, -si * ci * ci * _ax_lever(q) / 2.0 * si)
+
+
+@_weight("ASIXY-TI3", "azi", "-", site="magnetic")
+def asixy_ti3(q: Quantities) -> FloatArray:
+    """xy accelerometer scale factor, sin 2ψ half, axially corrected (OWSG +AX):
+    ∂A = (tan Θ sin I cos Am − cos I)/(2 (1 − sin² I sin² Am))."""
+    si, ci, _sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, (q.tan_dip * si * ca - ci) * k / 2.0 * si)
+
+
+@_weight("ASIZ", "inc azi", "-", site="magnetic")
+def asiz(q: Quantities) -> FloatArray:
+    """z accelerometer scale factor, axially corrected (OWSG +AX): ∂I = −sin I cos I,
+    ∂A = sin I cos² I sin Am (tan Θ cos I + sin I cos Am)/(1 − sin² I sin² Am)."""
+    si, ci = np.sin(q.inc), np.cos(q.inc)
+    return _dia(q, 0.0, -si * ci, si * ci * ci * _ax_lever(q) * si)
+
+
+@_weight("MBIXY-TI1", "azi", "nT", site="magnetic")
+def mbixy_ti1(q: Quantities) -> FloatArray:
+    """xy magnetometer bias, high side, axially corrected (OWSG +AX):
+    ∂A = −cos I sin Am/(B cos Θ (1 − sin² I sin² Am))."""
+    si, ci, sa, _ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, -ci * sa * k / q.b_horiz * si)
+
+
+@_weight("MBIXY-TI2", "azi", "nT", site="magnetic")
+def mbixy_ti2(q: Quantities) -> FloatArray:
+    """xy magnetometer bias, lateral, axially corrected (OWSG +AX):
+    ∂A = cos Am/(B cos Θ (1 − sin² I sin² Am))."""
+    si, _ci, _sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, ca * k / q.b_horiz * si)
+
+
+@_weight("MSIXY-TI1", "azi", "-", site="magnetic")
+def msixy_ti1(q: Quantities) -> FloatArray:
+    """xy magnetometer scale factor, common, axially corrected (OWSG +AX):
+    ∂A = sin I sin Am (tan Θ cos I + sin I cos Am)/(√2 (1 − sin² I sin² Am))."""
+    si = np.sin(q.inc)
+    return _dia(q, 0.0, 0.0, si * _ax_lever(q) / np.sqrt(2.0) * si)
+
+
+@_weight("MSIXY-TI2", "azi", "-", site="magnetic")
+def msixy_ti2(q: Quantities) -> FloatArray:
+    """xy magnetometer scale factor, cos 2ψ half, axially corrected (OWSG +AX):
+    ∂A = sin Am (tan Θ sin I cos I − cos² I cos Am − cos Am)/(2 (1 − sin² I sin² Am))."""
+    si, ci, sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, sa * (q.tan_dip * si * ci - ci * ci * ca - ca) * k / 2.0 * si)
+
+
+@_weight("MSIXY-TI3", "azi", "-", site="magnetic")
+def msixy_ti3(q: Quantities) -> FloatArray:
+    """xy magnetometer scale factor, sin 2ψ half, axially corrected (OWSG +AX):
+    ∂A = (cos I cos² Am − cos I sin² Am − tan Θ sin I cos Am)/(2 (1 − sin² I sin² Am))."""
+    si, ci, sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, (ci * (ca * ca - sa * sa) - q.tan_dip * si * ca) * k / 2.0 * si)
+
+
+@_weight("MDI", "azi", "rad", site="magnetic")
+def mdi(q: Quantities) -> FloatArray:
+    """Dip-angle error of the axial correction (OWSG +AX MDI-*):
+    ∂A = −sin I sin Am (cos I − tan Θ sin I cos Am)/(1 − sin² I sin² Am)."""
+    si, ci, sa, ca, k = _ax(q)
+    return _dia(q, 0.0, 0.0, -si * sa * (ci - q.tan_dip * si * ca) * k * si)
+
+
+@_weight("MFI", "azi", "nT", site="magnetic")
+def mfi(q: Quantities) -> FloatArray:
+    """Total-field error of the axial correction (OWSG +AX MFI-*):
+    ∂A = −sin I sin Am (tan Θ cos I + sin I cos Am)/((1 − sin² I sin² Am) B)."""
+    si = np.sin(q.inc)
+    return _dia(q, 0.0, 0.0, -si * _ax_lever(q) / q.b_total * si)
+
+
+# ------------------------------------------------------------------ film, dipmeter, blind (OWSG)
+
+
+@_weight("AMID", "azi", "rad", site="magnetic")
+def amid(q: Quantities) -> FloatArray:
+    """Axial magnetic interference as an angle (OWSG film/dipmeter sheets AMID):
+    ∂A = sin I sin Am."""
+    si = np.sin(q.inc)
+    return _dia(q, 0.0, 0.0, si * np.sin(q.azm) * si)
+
+
+@_weight("CNA", "azi", "-")
+def cna(q: Quantities) -> FloatArray:
+    """Cone of uncertainty, azimuth (OWSG BLIND/UNKNOWN/FINDS CNA): ∂A = 1/sin I, α weight
+    1 (at vertical the sheet's singular vector (−sin A, cos A, 0))."""
+    return _dia(q, 0.0, 0.0, 1.0)
+
+
+@_weight("CNI", "inc", "-")
+def cni(q: Quantities) -> FloatArray:
+    """Cone of uncertainty, inclination (OWSG BLIND/UNKNOWN/FINDS CNI): ∂I = 1."""
+    return _dia(q, 0.0, 1.0, 0.0)
