@@ -48,8 +48,9 @@ class SurveyValueError(GyropipeError, ValueError):
 
 @functools.cache
 def _shipped() -> dict[str, Path]:
-    """Shipped model files by the model name each declares."""
-    return {_declared_name(path): path for path in sorted(MODELS_DIR.glob("*.yaml"))}
+    """Shipped model files (``models/`` and its family folders, ``models/owsg/``) by the
+    model name each declares."""
+    return {_declared_name(path): path for path in sorted(MODELS_DIR.rglob("*.yaml"))}
 
 
 def _declared_name(path: Path) -> str:

@@ -118,6 +118,13 @@ class _Term(BaseModel):
     description: str = ""
 
 
+class _Validity(BaseModel):
+    """Where a model holds (the published sheet's range): inclination limits in degrees."""
+
+    model_config = ConfigDict(extra="forbid")
+    inclination_deg: tuple[float, float] = (0.0, 180.0)
+
+
 class _File(BaseModel):
     model_config = ConfigDict(extra="forbid")
     format: Literal["gyropipe-tool-model/1"]
@@ -126,6 +133,7 @@ class _File(BaseModel):
     source: str = ""
     revision: str = ""
     extends: str | None = None
+    validity: _Validity | None = None
     parameters: dict[str, _Parameter] = Field(default_factory=dict)
     magnitudes: dict[str, float] = Field(default_factory=dict)
     remove: list[str] = Field(default_factory=list)
@@ -228,6 +236,9 @@ class ToolModel:
     source: str = ""
     revision: str = ""
     file: str = ""
+    inclination_range: tuple[float, float] | None = None
+    """The published sheet's inclination range (deg, ``validity:`` of the file or of the
+    model it extends); None where the file states none."""
 
     @property
     def needs(self) -> frozenset[str]:
@@ -376,6 +387,11 @@ def _build(
         source=spec.source or (parent.source if parent else ""),
         revision=spec.revision,
         file=source.file,
+        inclination_range=(
+            spec.validity.inclination_deg
+            if spec.validity is not None
+            else (parent.inclination_range if parent else None)
+        ),
     )
 
 
@@ -492,5 +508,8 @@ def describe(model: ToolModel) -> dict[str, Any]:
         "source": model.source,
         "file": model.file,
         "needs": sorted(model.needs),
+        "inclination_range": (
+            list(model.inclination_range) if model.inclination_range is not None else None
+        ),
         "terms": [t.name for t in model.terms],
     }
