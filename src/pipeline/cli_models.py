@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
+from typing import Any
 
 import click
 
@@ -18,9 +20,10 @@ EXIT_CONFIG = 2
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 @disable_option
 def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
-    """List the tool models (shipped and from the plugins not disabled), or show one model's
-    terms — a model file given by path is read and checked (exit 2 and the file:line of each
-    problem if it is invalid)."""
+    """List the tool models (shipped, the OWSG library and from the plugins not disabled,
+    grouped, with each model's inclination range), or show one model's terms — a model
+    file given by path is read and checked (exit 2 and the file:line of each problem if it
+    is invalid)."""
     from pipeline.plugins import shared_registry
     from pipeline.stages.toolmodels import disabled_message, of_registry
     from pipeline.uncertainty.engine import find_model
@@ -35,12 +38,10 @@ def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
             if as_json:
                 click.echo(json.dumps(listing, indent=2))
                 return
-            for item in listing:
-                needs = _needs(item["needs"])
-                click.echo(
-                    f"{item['name']:<20} {item['title']} — {len(item['terms'])} terms; "
-                    f"needs the site's {needs} ({item['file']})"
-                )
+            for family, items in _families(listing):
+                click.echo(f"# {family}: {len(items)} models")
+                for item in items:
+                    click.echo(_line(item))
             return
         tool = find_model(model, catalogue)
     except (GyropipeError, KeyError) as exc:
@@ -68,6 +69,9 @@ def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
     if tool.source:
         click.echo(f"  {tool.source}")
     click.echo(f"  file: {tool.file}; needs the site's {_needs(sorted(tool.needs))}")
+    if tool.inclination_range is not None:
+        lo, hi = tool.inclination_range
+        click.echo(f"  valid for inclinations {lo:g}–{hi:g}° (the published sheet's range)")
     for name, value in tool.parameters.items():
         click.echo(f"  parameter {name} = {value:g} (SI; file unit {tool.units.get(name, '-')})")
     click.echo(f"  {'term':<10} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
@@ -76,6 +80,46 @@ def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
             f"  {t.name:<10} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
             f"{t.unit:<12} {t.code}"
         )
+
+
+def _families(listing: list[dict[str, Any]]) -> list[tuple[str, list[dict[str, Any]]]]:
+    """The listing grouped: the shipped ISCWSA/gyro models, the OWSG tool library
+    (``models/owsg/``), then the plugins' models."""
+    from pipeline.uncertainty.engine import MODELS_DIR
+
+    groups: dict[str, list[dict[str, Any]]] = {name: [] for name in FAMILIES}
+    for item in listing:
+        folder = Path(item["file"]).parent
+        key = (
+            "shipped"
+            if folder == MODELS_DIR
+            else "owsg"
+            if folder == MODELS_DIR / "owsg"
+            else "plugins"
+        )
+        groups[key].append(item)
+    return [(FAMILIES[k], items) for k, items in groups.items() if items]
+
+
+FAMILIES = {
+    "shipped": "ISCWSA MWD and gyro models (models/)",
+    "owsg": "OWSG tool library, sets A and B (models/owsg/)",
+    "plugins": "from plugins",
+}
+
+
+def _line(item: dict[str, Any]) -> str:
+    """One model: name, inclination range, terms, site needs, title (and the file of a
+    plugin's model)."""
+    from pipeline.uncertainty.engine import MODELS_DIR
+
+    rng = item["inclination_range"]
+    valid = f"{rng[0]:g}–{rng[1]:g}°" if rng is not None else "-"
+    file = "" if Path(item["file"]).is_relative_to(MODELS_DIR) else f" ({item['file']})"
+    return (
+        f"{item['name']:<26} {valid:<9} {len(item['terms']):>3} terms  "
+        f"{_needs(item['needs']):<34} {item['title']}{file}"
+    )
 
 
 def _needs(needs: list[str]) -> str:
