@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import GyropipeError
 from pipeline.survey.mincurve import minimum_curvature
+from pipeline.uncertainty.ellipse import hla_sigma
 from pipeline.uncertainty.engine import MODELS_DIR, covariance, find_model
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
@@ -58,8 +59,9 @@ CAUSES = {
     "BLIND_Fl": CNA_LEGACY,
     "UNKNOWN": CNA_LEGACY,
     "UNKNOWN_Fl": CNA_LEGACY,
-    "GYRO-NS-CT": "XCLA/XCLH in the OWSG sheet form here (issue 29 item 2), and welleng "
-    "freezes the stationary terms at the static end inclination (item 1)",
+    "GYRO-NS-CT": "XCLA/XCLH in the OWSG sheet form here (issue 29 item 2); on #3, which "
+    "returns to vertical and re-enters the continuous mode, also GXY-GRW (welleng carries the "
+    "walk per continuous section, here it restarts at the gate: re-initialisation per section)",
     "GYRO": "XCLA/XCLH in the OWSG sheet form here, the NEV form in welleng (issue 29 item 2)",
 }
 
@@ -109,26 +111,11 @@ def wells() -> dict[str, Well]:
     return out
 
 
-def hla(cov: Floats, inc: Floats, azi: Floats) -> Floats:
-    """σ (n, 3) high side, lateral, along hole of NEV covariances (n, 3, 3), m."""
-    si, ci, sa, ca = np.sin(inc), np.cos(inc), np.sin(azi), np.cos(azi)
-    axes = np.stack(
-        (
-            np.stack((ci * ca, ci * sa, -si), axis=-1),
-            np.stack((-sa, ca, np.zeros_like(sa)), axis=-1),
-            np.stack((si * ca, si * sa, ci), axis=-1),
-        ),
-        axis=1,
-    )
-    out: Floats = np.sqrt(np.clip(np.einsum("nij,njk,nik->ni", axes, cov, axes), 0.0, None))
-    return out
-
-
 def ours(model: str, well: Well) -> Floats:
     """σ H/L/A (n, 3) here."""
     inc, azi = np.radians(well.inc_deg), np.radians(well.azi_deg)
     survey = Survey.of(well.md, inc, azi, minimum_curvature(well.md, inc, azi).tvd)
-    return hla(covariance(survey, model, well.site), inc, azi)
+    return hla_sigma(covariance(survey, model, well.site), inc, azi)
 
 
 def welleng_sigma(model: str, well: Well, tie_every_term: bool = True) -> Floats | str:
@@ -166,7 +153,15 @@ def welleng_sigma(model: str, well: Well, tie_every_term: bool = True) -> Floats
             return "refused (beyond the sheet's inclination range)"
     errors = s.err.errors  # type: ignore[union-attr]
     rad = np.stack((well.md, np.radians(well.inc_deg), np.radians(well.azi_deg)), axis=-1)
-    return hla(np.asarray(errors.cov_NEVs, float), rad[:, 1], rad[:, 2])
+    sigma = hla_sigma(np.asarray(errors.cov_NEVs, float), rad[:, 1], rad[:, 2])
+    bad = np.flatnonzero(~np.isfinite(sigma).all(axis=1))
+    if bad.size:
+        k = int(bad[0])
+        return (
+            f"gives NaN from MD {well.md[k]:g} m (inc {well.inc_deg[k]:g}°, azimuth "
+            f"{well.azi_deg[k]:g}°: 1 − sin² I sin² Am = 0, the axial correction's singularity)"
+        )
+    return sigma
 
 
 def deviation(a: Floats, b: Floats) -> tuple[float, float]:

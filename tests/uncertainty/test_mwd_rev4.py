@@ -47,28 +47,12 @@ def _survey(well: dict[str, Any]) -> pu.Survey:
     )
 
 
-def _hla(cov: Floats, inc: Floats, azi: Floats) -> Floats:
-    """σ (3, n) along high side, lateral (right) and along hole of NEV covariances."""
-    si, ci, sa, ca = np.sin(inc), np.cos(inc), np.sin(azi), np.cos(azi)
-    axes = np.stack(
-        (
-            np.stack((ci * ca, ci * sa, -si), axis=-1),
-            np.stack((-sa, ca, np.zeros_like(sa)), axis=-1),
-            np.stack((si * ca, si * sa, ci), axis=-1),
-        ),
-        axis=1,
-    )
-    var = np.einsum("nij,njk,nik->in", axes, cov, axes)
-    out: Floats = np.sqrt(var)
-    return out
-
-
 @pytest.mark.parametrize("name", sorted(WELLS))
 def test_rev4_reproduces_the_clearance_set_sigmas(name: str) -> None:
     well = WELLS[name]
     survey = _survey(well)
     cov = pu.covariance(survey, "iscwsa-mwd-rev4", _site(well["header"]))
-    ours = _hla(cov, survey.inc, survey.azi)
+    ours = pu.hla_sigma(cov, survey.inc, survey.azi).T
     ref = np.array([well["sigmaH"], well["sigmaL"], well["sigmaA"]])
     assert well["MD"][:3] == [0, 1, 30]
     rel = np.abs(ours[:, 2:] - ref[:, 2:]) / ref[:, 2:]

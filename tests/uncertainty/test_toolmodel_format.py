@@ -311,7 +311,9 @@ def test_the_stage_takes_a_model_file(tmp_path: Path) -> None:
 def test_gyropipe_models_lists_and_checks(tmp_path: Path) -> None:
     listed = gyropipe_cli("models")
     assert listed.returncode == 0, listed.stderr
-    names = [line.split()[0] for line in listed.stdout.splitlines()]
+    lines = listed.stdout.splitlines()
+    assert lines[0] == "# ISCWSA MWD and gyro models (models/): 7 models"
+    names = [line.split()[0] for line in lines[1:8]]
     assert names == [
         "GYRO-MWD",
         "GYRO-NS",

@@ -1,6 +1,12 @@
 """Position uncertainty: ISCWSA error-model propagation of tool-model files, error ellipses."""
 
-from pipeline.uncertainty.ellipse import Ellipses, ellipses, horizontal_scale, vertical_scale
+from pipeline.uncertainty.ellipse import (
+    Ellipses,
+    ellipses,
+    hla_sigma,
+    horizontal_scale,
+    vertical_scale,
+)
 from pipeline.uncertainty.engine import (
     MODELS_DIR,
     SHIPPED,
@@ -35,6 +41,7 @@ __all__ = [
     "covariance",
     "ellipses",
     "find_model",
+    "hla_sigma",
     "horizontal_scale",
     "model_files",
     "model_terms",

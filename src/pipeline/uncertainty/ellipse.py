@@ -15,7 +15,7 @@ from statistics import NormalDist
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Ellipses", "ellipses", "horizontal_scale", "vertical_scale"]
+__all__ = ["Ellipses", "ellipses", "hla_sigma", "horizontal_scale", "vertical_scale"]
 
 FloatArray = NDArray[np.float64]
 
@@ -58,3 +58,23 @@ def ellipses(
     azimuth = np.mod(0.5 * np.arctan2(2.0 * ne, nn - ee), np.pi)
     sigma_v = np.sqrt(np.clip(np.asarray(cov_vv, dtype=np.float64), 0.0, None))
     return Ellipses(semi_major=major, semi_minor=minor, azimuth=azimuth, sigma_v=sigma_v)
+
+
+def hla_sigma(cov: ArrayLike, inc: ArrayLike, azi: ArrayLike) -> FloatArray:
+    """1σ (n, 3) high side, lateral (right) and along hole (m) of NEV covariances (n, 3, 3)
+    (m²) at stations of inclination ``inc`` and true azimuth ``azi`` (rad): the variance
+    along the axes (cos I cos A, cos I sin A, −sin I), (−sin A, cos A, 0) and
+    (sin I cos A, sin I sin A, cos I)."""
+    i, a = np.asarray(inc, dtype=np.float64), np.asarray(azi, dtype=np.float64)
+    si, ci, sa, ca = np.sin(i), np.cos(i), np.sin(a), np.cos(a)
+    axes = np.stack(
+        (
+            np.stack((ci * ca, ci * sa, -si), axis=-1),
+            np.stack((-sa, ca, np.zeros_like(sa)), axis=-1),
+            np.stack((si * ca, si * sa, ci), axis=-1),
+        ),
+        axis=1,
+    )
+    var = np.einsum("nij,njk,nik->ni", axes, np.asarray(cov, dtype=np.float64), axes)
+    out: FloatArray = np.sqrt(np.clip(var, 0.0, None))
+    return out
