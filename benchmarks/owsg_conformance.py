@@ -219,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             td, per = deviation(mine, ref)
             worst = max(worst, td)
-            cells.append(f"{100 * td:>10.3f} {100 * per:>11.3f}")
+            cells.append(f"{100 * td:>10.4f} {100 * per:>11.4f}")
             if max(td, per) > 1e-4:
                 why = cause(name) or (VERTICAL_FIRST_LEG if args.welleng_default else "unknown")
                 notes.append(f"{cases[w].name}: {why}")
