@@ -158,9 +158,12 @@ def find_model(model: str | Path | ToolModel, catalogue: ModelCatalogue = SHIPPE
     close = did_you_mean(key.upper(), [k.upper() for k in known])
     for name in known:  # say the names as their files write them
         close = close.replace(f"'{name.upper()}'", f"'{name}'")
-    raise KeyError(
-        f"unknown tool model {key!r}{close} (known: {', '.join(known)}; or give a .yaml file)"
+    listing = (
+        f"known: {', '.join(known)}"
+        if len(known) <= 12
+        else f"{len(known)} known: `gyropipe models` lists them"
     )
+    raise KeyError(f"unknown tool model {key!r}{close} ({listing}; or give a .yaml file)")
 
 
 def model_terms(model: ToolModel, site: ModelSite) -> list[Term]:
