@@ -246,16 +246,23 @@ def render(sheet: Sheet, how: Change) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
     import welleng
 
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument(
+        "--out", type=Path, default=OUT, help="folder to write (default: %(default)s)"
+    )
+    out = parser.parse_args(argv).out
     root = Path(welleng.__file__).parent / "errors"
     known: dict[str, tuple[T, ...]] = {
         ours: shipped_terms(find_model(ours)) for ours in SHIPPED.values()
     }
     tortuous = {name for name, terms in known.items() if any("XCL" in t.code for t in terms)}
-    OUT.mkdir(parents=True, exist_ok=True)
-    for old in OUT.glob("*.yaml"):
+    out.mkdir(parents=True, exist_ok=True)
+    for old in out.glob("*.yaml"):
         old.unlink()
     for sheet in read_sheets(root):
         if sheet.name.endswith("_Fl"):
@@ -271,11 +278,11 @@ def main() -> int:
         if best.cost >= full.cost and not sheet.name.endswith("_Fl"):
             best = full
         text = render(sheet, best)
-        (OUT / f"{sheet.name.lower()}.yaml").write_text(text, encoding="utf-8")
+        (out / f"{sheet.name.lower()}.yaml").write_text(text, encoding="utf-8")
         known[sheet.name] = sheet.terms
         if xcl:
             tortuous.add(sheet.name)
-    print(f"wrote {len(list(OUT.glob('*.yaml')))} files to {OUT}")
+    print(f"wrote {len(list(out.glob('*.yaml')))} files to {out}")
     return 0
 
 
