@@ -293,7 +293,7 @@ def station_checks(
             for s in r.keys.station[r.failed]:
                 findings.setdefault(int(s), Finding("undetermined", FIT_UNDETERMINED))
     magnetic = diagnose_magnetic(
-        rows, station, sensors, earth, options.isolation_margin, options.acc_errors()
+        rows, station, sensors, earth, options.isolation_margin, options.tool_errors()
     )
     for s, found in magnetic.items():
         other = findings.get(s)

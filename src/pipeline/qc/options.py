@@ -17,7 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.geomagnetic import ModelKey
 from pipeline.errors import GyropipeError
-from pipeline.gyrocompass.systematic import ToolErrors
+from pipeline.gyrocompass.options import AccelerometerOptions
 
 Policy = Literal["flag", "drop", "stop"]
 
@@ -74,12 +74,14 @@ class Limit(_Options):
     policy: Policy = Field("flag", description="flag, drop or stop")
 
 
-class QcOptions(_Options):
+class QcOptions(_Options, AccelerometerOptions):
     """Tolerances, limits and policies of every check, and the window settings of
     continuous data. Defaults: ``sigma`` 3 (0.27 % false alarms per reading from white
     noise alone) plus absolute floors for systematic sensor errors — gyro 0.5 °/h (≈ 3 ×
     ISCWSA GYRO-NS bias 0.15 °/h), accelerometer 0.012 m/s² (≈ 1.2 mg, 3 × a 0.004 m/s²
-    bias) — and the industry magnetic tolerances (ISCWSA eBook §22.1)."""
+    bias) — and the industry magnetic tolerances (ISCWSA eBook §22.1). The accelerometer
+    error magnitudes enter the σ of a magnetometer bias the diagnosis estimates (the dip is
+    measured against the accelerometers)."""
 
     earth_rate: Tolerance = Field(
         Tolerance(sigma=3, absolute=GYRO_FLOOR), description="|ω| vs Ω, °/h"
@@ -165,42 +167,6 @@ class QcOptions(_Options):
     magnetic_model: ModelKey = Field(
         "wmm2025", description="geomagnetic model when the site gives no magnetic reference"
     )
-    acc_bias: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer bias, m/s² (1σ per axis), in the σ of a magnetometer bias "
-        "the diagnosis estimates (the dip is measured against the accelerometers). Default: "
-        "the tool's (the stage takes it from the tool catalogue's entry that the well's "
-        "tool_preset names, else from ISCWSA GYRO-NS's AXYZ-ZB)",
-    )
-    acc_misalignment: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer axis misalignment, mrad (1σ per off-diagonal term); "
-        "default as acc_bias (GYRO-NS AXYZ-MIS)",
-    )
-    acc_scale_factor: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer scale-factor error, ppm (1σ per axis); default as "
-        "acc_bias (GYRO-NS AXYZ-SF)",
-    )
-
-    def acc_errors(self) -> ToolErrors:
-        """The accelerometer error magnitudes; an unset one counts as 0 (the validity stage
-        sets every one from the tool)."""
-        return ToolErrors(
-            g_sensitivity=0.0,
-            acc_bias=self.acc_bias or 0.0,
-            acc_misalignment=self.acc_misalignment or 0.0,
-            acc_scale_factor=self.acc_scale_factor or 0.0,
-        )
-
-    def with_tool(self, tool: ToolErrors) -> QcOptions:
-        """A copy whose unset accelerometer error magnitudes are ``tool``'s."""
-        names = ("acc_bias", "acc_misalignment", "acc_scale_factor")
-        unset = {n: getattr(tool, n) for n in names if getattr(self, n) is None}
-        return self.model_copy(update=unset)
 
 
 DEFAULTS = QcOptions()

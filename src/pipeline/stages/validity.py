@@ -39,7 +39,7 @@ def station_stage(
     magnitudes are the well's tool's (:func:`pipeline.stages.compass.tool_errors`)."""
     readings, samples = as_table(inputs["readings"]), inputs.get("samples")
     site = resolve_site(ctx.well, stage="validity_checks", param=None, field=_has_field(samples))
-    params = params.with_tool(tool_errors(ctx.well))
+    params = params.with_defaults(tool_errors(ctx.well))
     qc, summary = station_checks(readings, site, params, samples=samples)
     qc = with_references(qc, site, params, field=_has_field(samples))
     return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}
