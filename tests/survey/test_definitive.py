@@ -1,7 +1,8 @@
 """The definitive survey: which run each depth comes from (priorities, overlap rules, depth
-ranges, ties, gaps), positions tied section to section, provenance, and the covariance of
-one run equal to the position-uncertainty stage's. The covariance across sections against
-a Monte Carlo: tests/uncertainty/test_definitive_covariance.py."""
+ranges, ties, gaps) and the covariance of one run equal to the position-uncertainty
+stage's. The ties, positions and covariance of the shipped example and of three runs:
+tests/survey/test_definitive_ties.py; the covariance across sections against a Monte
+Carlo: tests/uncertainty/test_definitive_covariance.py."""
 
 from __future__ import annotations
 
@@ -43,11 +44,10 @@ def test_priority_keeps_the_higher_run_and_ties_the_other_below_it() -> None:
     assert [md for _, md in listed] == sorted(md for _, md in listed)  # one MD order
     assert [md for name, md in listed if name == "A"] == GYRO.tolist()
     assert [md for name, md in listed if name == "B"] == MWD[MWD > 600].tolist()
-    # the MWD's tie station: its last station on the gyro's depths (570 m, between two
-    # gyro stations), and the gyro's propagation survey reaches past it
-    assert sections[1].tie_md == 570.0 and sections[1].first == 0
-    assert GYRO[sections[0].last] >= 570.0
-    assert roles(runs, sections)[1][:1] == ["tie"]
+    # the MWD is tied at the gyro's last listed station (600 m), not at its own 570 m
+    # station placed on the gyro's path; that one is an overlap station
+    assert sections[1].tie_md == 600.0
+    assert roles(runs, sections)[1][:1] == ["overlap"]
 
 
 @pytest.mark.parametrize(
@@ -79,7 +79,7 @@ def test_a_run_inside_another_resumes_the_outer_run_tied_below_it() -> None:
     inner = RunStations("inner", np.arange(400.0, 701.0, 20.0), priority=1)
     sections = plan_sections([outer, inner])
     assert [s.run for s in sections] == [0, 1, 0]
-    assert sections[1].tie_md == 400.0 and sections[2].tie_md == 690.0  # last outer ≤ 700
+    assert sections[1].tie_md == 390.0 and sections[2].tie_md == 700.0  # last listed above
 
 
 def test_slivers_stay_with_the_neighbour() -> None:
@@ -149,58 +149,6 @@ def test_one_run_is_the_position_uncertainty_of_its_survey(model: str) -> None:
         )
     assert set(survey.column("run").to_pylist()) == {"run"}
     assert set(survey.column("tool_model").to_pylist()) == {model}
-
-
-def test_example_pipeline_ties_the_mwd_to_the_gyro() -> None:
-    """pipelines/definitive.yaml on the example runs: the gyro section is the gyro's own
-    minimum-curvature trajectory; the MWD section is the MWD's, started at its tie station
-    placed on the gyro's path (interpolated at the tie MD); provenance and units go with
-    every station."""
-    gyro = gp.read(EXAMPLES / "gyro-run.csv")
-    mwd = gp.read(EXAMPLES / "mwd-run.csv")
-    result = gp.run(
-        ROOT / "pipelines" / "definitive.yaml",
-        {"gyro": EXAMPLES / "gyro-run.csv", "mwd": EXAMPLES / "mwd-run.csv"},
-    )
-    survey = result.frame("definitive.survey")
-    overlap = result.frame("definitive.overlap")
-    tie = overlap[overlap["role"] == "tie"]
-    assert len(tie) == 1 and tie["run"].iloc[0] == "MWD-1"
-    tie_md = float(tie["md"].iloc[0])
-    upper = survey[survey["run"] == "GYRO-1"]
-    lower = survey[survey["run"] == "MWD-1"]
-    assert upper["md"].max() < lower["md"].min() and len(upper) + len(lower) == len(survey)
-
-    gyro_traj = gp.minimum_curvature(gyro)
-    np.testing.assert_allclose(
-        upper[["north", "east", "tvd"]],
-        gyro_traj.iloc[: len(upper)][["north", "east", "tvd"]],
-        atol=1e-9,
-    )
-    at = gp.interpolate(gyro_traj, md=[tie_md])
-    from_tie = mwd[mwd["md"] >= tie_md]
-    mwd_traj = gp.minimum_curvature(
-        from_tie,
-        tie_north=float(at["north"].iloc[0]),
-        tie_east=float(at["east"].iloc[0]),
-        tie_tvd=float(at["tvd"].iloc[0]),
-    )
-    below = mwd_traj[mwd_traj["md"].isin(lower["md"])]
-    np.testing.assert_allclose(
-        lower[["north", "east", "tvd"]], below[["north", "east", "tvd"]], atol=1e-9
-    )
-
-    assert set(lower["tool_model"]) == {"ISCWSA-MWD-REV5"} and set(upper["tool_model"]) == {
-        "GYRO-NS"
-    }
-    assert {str(p).rsplit("/", 1)[-1] for p in survey["source"]} == {"gyro-run.csv", "mwd-run.csv"}
-    assert list(survey["section"].unique()) == [0, 1]
-    units = survey.attrs["units"]
-    assert units["md"] == "m" and units["cov_nn"] == "m2" and units["ellipse_major"] == "m"
-    assert survey.attrs["north_reference"] == "true"
-    # the uncertainty grows down the well, and the MWD below carries the gyro's at the tie
-    sigma = np.sqrt(survey["cov_nn"] + survey["cov_ee"])
-    assert sigma.iloc[len(upper)] > np.sqrt(upper["cov_nn"] + upper["cov_ee"]).iloc[len(upper) // 2]
 
 
 def test_a_gap_fails_the_run_naming_the_runs(tmp_path: Any) -> None:

@@ -2,16 +2,60 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, Self
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.gyrocompass.azimuth import Method
 from pipeline.gyrocompass.systematic import ToolErrors
 
+ACC_BIAS = (
+    "accelerometer bias, m/s² (1σ per axis). Default: the tool's (the stage takes it from the "
+    "tool catalogue's entry that the well's tool_preset names, else from ISCWSA GYRO-NS's "
+    "AXYZ-ZB)"
+)
+ACC_MISALIGNMENT = (
+    "accelerometer axis misalignment, mrad (1σ per off-diagonal term); default as acc_bias "
+    "(GYRO-NS AXYZ-MIS)"
+)
+ACC_SCALE_FACTOR = (
+    "accelerometer scale-factor error, ppm (1σ per axis); default as acc_bias (GYRO-NS AXYZ-SF)"
+)
 
-class CompassOptions(BaseModel):
-    """Compassing parameters (angles deg, rates °/h)."""
+
+class AccelerometerOptions(BaseModel):
+    """The 1σ accelerometer error magnitudes of the tool, for the σ they add to what is
+    measured against the accelerometers (the compass's inclination and toolface, the
+    magnetometer diagnosis's dip); unset: the stage takes the tool's."""
+
+    acc_bias: float | None = Field(None, ge=0, description=ACC_BIAS)
+    acc_misalignment: float | None = Field(None, ge=0, description=ACC_MISALIGNMENT)
+    acc_scale_factor: float | None = Field(None, ge=0, description=ACC_SCALE_FACTOR)
+
+    def tool_errors(self) -> ToolErrors:
+        """The magnitudes these options hold (and their ``g_sensitivity`` where they have
+        one); an unset one counts as 0 (the stage sets every one from the tool first)."""
+        return ToolErrors(
+            g_sensitivity=getattr(self, "g_sensitivity", None) or 0.0,
+            acc_bias=self.acc_bias or 0.0,
+            acc_misalignment=self.acc_misalignment or 0.0,
+            acc_scale_factor=self.acc_scale_factor or 0.0,
+        )
+
+    def with_defaults(self, tool: ToolErrors) -> Self:
+        """A copy whose unset tool error magnitudes are ``tool``'s."""
+        fields = type(self).model_fields
+        unset = {
+            name: getattr(tool, name)
+            for name in ToolErrors.__dataclass_fields__
+            if name in fields and getattr(self, name) is None
+        }
+        return self.model_copy(update=unset)
+
+
+class CompassOptions(AccelerometerOptions):
+    """Compassing parameters (angles deg, rates °/h); the accelerometer errors enter σ_inc
+    and the σ of the gravity toolface."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
     gyro_axes: Literal["auto", "x", "xy", "xyz"] = Field(
@@ -84,40 +128,3 @@ class CompassOptions(BaseModel):
         "the tool catalogue's entry that the well's tool_preset names, else from ISCWSA "
         "GYRO-NS's GXY-G1)",
     )
-    acc_bias: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer bias, m/s² (1σ per axis), in σ_inc and σ of the gravity "
-        "toolface; default as g_sensitivity (GYRO-NS AXYZ-ZB)",
-    )
-    acc_misalignment: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer axis misalignment, mrad (1σ per off-diagonal term); "
-        "default as g_sensitivity (GYRO-NS AXYZ-MIS)",
-    )
-    acc_scale_factor: float | None = Field(
-        None,
-        ge=0,
-        description="accelerometer scale-factor error, ppm (1σ per axis); default as "
-        "g_sensitivity (GYRO-NS AXYZ-SF)",
-    )
-
-    def tool_errors(self) -> ToolErrors:
-        """The magnitudes of the errors compassing cannot remove; an unset one counts as 0
-        (the compass stage sets every one from the tool before solving)."""
-        return ToolErrors(
-            g_sensitivity=self.g_sensitivity or 0.0,
-            acc_bias=self.acc_bias or 0.0,
-            acc_misalignment=self.acc_misalignment or 0.0,
-            acc_scale_factor=self.acc_scale_factor or 0.0,
-        )
-
-    def with_defaults(self, tool: ToolErrors) -> CompassOptions:
-        """A copy whose unset tool error magnitudes are ``tool``'s."""
-        unset = {
-            name: getattr(tool, name)
-            for name in ToolErrors.__dataclass_fields__
-            if getattr(self, name) is None
-        }
-        return self.model_copy(update=unset)

@@ -292,7 +292,9 @@ def station_checks(
         if r.check == "earth_rate_fit":
             for s in r.keys.station[r.failed]:
                 findings.setdefault(int(s), Finding("undetermined", FIT_UNDETERMINED))
-    magnetic = diagnose_magnetic(rows, station, sensors, earth, options.isolation_margin)
+    magnetic = diagnose_magnetic(
+        rows, station, sensors, earth, options.isolation_margin, options.tool_errors()
+    )
     for s, found in magnetic.items():
         other = findings.get(s)
         findings[s] = (

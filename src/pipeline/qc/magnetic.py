@@ -12,8 +12,14 @@ with each other, all off by the same |B| and dip.
 Candidates, fitted to every evaluated |B| and dip reading of the survey, residuals in units
 of their tolerance (``e = (measured − reference)/tolerance``):
 
-- ``mag x|y|z``: a bias b on that axis, constant over the survey (1 parameter, Gauss–Newton;
-  its σ from the scatter of the fitted residuals, ``σ_b² = s²/ΣJ²``, s² = Σe²/(n − 1));
+- ``mag x|y|z``: a bias b on that axis, constant over the survey (1 parameter, Gauss–Newton).
+  Its σ has two parts: the scatter of the fitted residuals, ``s²/ΣJ²`` (s² = Σe²/(n − 1),
+  J = ∂e/∂b), and the tool's accelerometer errors, which the scatter does not show because
+  they are the same at every reading — the dip is measured against the accelerometers'
+  down, so their bias b_a, misalignment and scale factor (``δa = b_a + G a``, each term of
+  b_a and G independent with the tool's 1σ magnitude) move the fitted b by
+  ``∂b/∂θ = −Σ J·∂e/∂θ / ΣJ²`` per term θ, as the compass σ carries them;
+  ``σ_b² = s²/ΣJ² + Σ_θ (σ_θ ∂b/∂θ)²``;
 - ``reference``: the same |B| and dip offsets at every reading (2 parameters: a reference
   field that is wrong, or a field fixed in the Earth frame over the whole survey);
 - per station, ``interference``: that station's own |B| and dip offsets (its positions agree).
@@ -32,6 +38,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pipeline.earth.frames import FloatArray
+from pipeline.gyrocompass.systematic import ToolErrors
 from pipeline.qc.faults import Finding
 from pipeline.qc.reference import EarthReference
 from pipeline.qc.sensors import Sensors
@@ -42,6 +49,12 @@ ITERATIONS = 6
 """Gauss–Newton iterations of an axis bias (the residuals are nearly linear in it)."""
 STEP = 1.0
 """nT, central-difference step of the bias."""
+ACC_STEP = 1e-4
+"""Central-difference step of an accelerometer error: m/s² (bias), 1 (gain, per unit)."""
+NO_ACC_ERRORS = ToolErrors(
+    g_sensitivity=0.0, acc_bias=0.0, acc_misalignment=0.0, acc_scale_factor=0.0
+)
+"""A tool whose accelerometers are exact: the σ of a bias is its scatter alone."""
 
 
 def diagnose_magnetic(
@@ -50,10 +63,12 @@ def diagnose_magnetic(
     sensors: Sensors,
     earth: EarthReference,
     margin: float,
+    tool: ToolErrors = NO_ACC_ERRORS,
 ) -> dict[int, Finding]:
     """Diagnose the failed magnetic checks of a survey (module docstring): fills ``suspect``
     and replaces the generic note in the detail of the failed |B| and dip rows; returns the
-    finding of each station with a failed magnetic check."""
+    finding of each station with a failed magnetic check. ``tool``: the 1σ accelerometer
+    errors (bias m/s², misalignment mrad, scale factor ppm) in each axis bias's σ."""
     by_name = {r.check: r for r in rows if r.check in CHECKS}
     if len(by_name) < len(CHECKS) or sensors.mag is None or earth.magnetic is None:
         return {}
@@ -67,13 +82,15 @@ def diagnose_magnetic(
     ref = np.array([earth.magnetic.total_field, earth.magnetic.dip])
     dip = VECTOR_CHECKS["magnetic_dip"].func
 
-    def residuals(bias: FloatArray) -> FloatArray:
-        """(n, 2) residuals in tolerance units of the readings corrected by ``bias`` (3,)."""
+    def residuals(bias: FloatArray, acc_error: FloatArray | None = None) -> FloatArray:
+        """(n, 2) residuals in tolerance units of the readings corrected by ``bias`` (3,, nT)
+        and, when given, by an accelerometer error ``acc_error`` (n, 3, m/s²)."""
         m = mag - bias
-        out: FloatArray = (np.stack([norm(m), dip(m, acc)], axis=-1) - ref) / tol
+        a = acc if acc_error is None else acc - acc_error
+        out: FloatArray = (np.stack([norm(m), dip(m, a)], axis=-1) - ref) / tol
         return out
 
-    axes = [_axis_fit(residuals, j) for j in range(3)]
+    axes = [_axis_fit(residuals, j, _acc_errors(acc, tool)) for j in range(3)]
     offsets = residuals(np.zeros(3))
     reference = offsets - offsets.mean(axis=0)
     findings = _verdicts(axes, reference, offsets, tol, station[used], station[failed], margin)
@@ -85,20 +102,50 @@ def diagnose_magnetic(
     return findings
 
 
+def _acc_errors(acc: FloatArray, tool: ToolErrors) -> list[tuple[float, FloatArray]]:
+    """Each accelerometer error term as (1σ, its δa (n, 3) per unit): the bias of each
+    axis (m/s²), the misalignment of axis i towards j (rad) and the scale factor of each
+    axis, ``δa_i = G_ij a_j``; terms of zero magnitude left out."""
+    terms = []
+    for i in range(3):
+        unit = np.zeros_like(acc)
+        unit[:, i] = 1.0
+        terms.append((tool.acc_bias, unit))
+        for j in range(3):
+            gain = np.zeros_like(acc)
+            gain[:, i] = acc[:, j]
+            sigma = tool.acc_scale_factor * 1e-6 if i == j else tool.acc_misalignment * 1e-3
+            terms.append((sigma, gain))
+    return [(sigma, delta) for sigma, delta in terms if sigma > 0]
+
+
 def _axis_fit(
-    residuals: Callable[[FloatArray], FloatArray], j: int
+    residuals: Callable[[FloatArray, FloatArray | None], FloatArray],
+    j: int,
+    acc_errors: list[tuple[float, FloatArray]],
 ) -> tuple[float, float, FloatArray]:
-    """Bias (nT) of axis ``j`` minimising Σe², its σ (nT) and the fitted residuals."""
+    """Bias (nT) of axis ``j`` minimising Σe², its σ (nT: the scatter's and that of the
+    accelerometer errors ``acc_errors``, module docstring) and the fitted residuals."""
     unit = np.eye(3)[j]
+
+    def slope(b: float) -> FloatArray:
+        d = residuals((b + STEP) * unit, None) - residuals((b - STEP) * unit, None)
+        out: FloatArray = d.ravel() / (2 * STEP)
+        return out
+
     b = 0.0
     for _ in range(ITERATIONS):
-        r = residuals(b * unit).ravel()
-        jac = (residuals((b + STEP) * unit) - residuals((b - STEP) * unit)).ravel() / (2 * STEP)
-        b -= float(jac @ r / (jac @ jac))
-    r = residuals(b * unit)
-    jac = (residuals((b + STEP) * unit) - residuals((b - STEP) * unit)).ravel() / (2 * STEP)
+        jac = slope(b)
+        b -= float(jac @ residuals(b * unit, None).ravel() / (jac @ jac))
+    r = residuals(b * unit, None)
+    jac = slope(b)
     s2 = float(np.sum(r * r)) / max(r.size - 1, 1)
-    return b, float(np.sqrt(s2 / (jac @ jac))), r
+    var = s2 / float(jac @ jac)
+    for sigma, delta in acc_errors:
+        step = ACC_STEP * delta
+        d = (residuals(b * unit, step) - residuals(b * unit, -step)).ravel() / (2 * ACC_STEP)
+        var += (sigma * float(jac @ d) / float(jac @ jac)) ** 2
+    return b, float(np.sqrt(var)), r
 
 
 def _verdicts(
@@ -121,7 +168,8 @@ def _verdicts(
     readings = len(station)
     stations = len(np.unique(station))
     estimate = (
-        f"mag {'xyz'[best]}: bias ≈ {b:+.1f} ± {sigma:.2g} nT (1σ), one bias fitted to the "
+        f"mag {'xyz'[best]}: bias ≈ {b:+.1f} ± {sigma:.2g} nT (1σ of the noise and the "
+        "accelerometer errors), one bias fitted to the "
         f"|B| and dip of {readings} readings at {stations} stations"
     )
     if fits[best]:

@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.geomagnetic import ModelKey
 from pipeline.errors import GyropipeError
+from pipeline.gyrocompass.options import AccelerometerOptions
 
 Policy = Literal["flag", "drop", "stop"]
 
@@ -73,12 +74,14 @@ class Limit(_Options):
     policy: Policy = Field("flag", description="flag, drop or stop")
 
 
-class QcOptions(_Options):
+class QcOptions(_Options, AccelerometerOptions):
     """Tolerances, limits and policies of every check, and the window settings of
     continuous data. Defaults: ``sigma`` 3 (0.27 % false alarms per reading from white
     noise alone) plus absolute floors for systematic sensor errors — gyro 0.5 °/h (≈ 3 ×
     ISCWSA GYRO-NS bias 0.15 °/h), accelerometer 0.012 m/s² (≈ 1.2 mg, 3 × a 0.004 m/s²
-    bias) — and the industry magnetic tolerances (ISCWSA eBook §22.1)."""
+    bias) — and the industry magnetic tolerances (ISCWSA eBook §22.1). The accelerometer
+    error magnitudes enter the σ of a magnetometer bias the diagnosis estimates (the dip is
+    measured against the accelerometers)."""
 
     earth_rate: Tolerance = Field(
         Tolerance(sigma=3, absolute=GYRO_FLOOR), description="|ω| vs Ω, °/h"

@@ -52,10 +52,11 @@ def program_section(trajectory: pa.Table) -> Section | None:
                 kind="program",
             ),
             Paragraph(
-                "Each section below the first is tied to the survey above at its first "
-                "station. Position uncertainty is propagated per run with its tool's error "
-                "model (see Method): a run's systematic errors are correlated within that run "
-                "only, and each section carries the position uncertainty of its tie point."
+                "Each section below the first is tied at the last listed station of the "
+                "section above. Position uncertainty is propagated over the listed stations, "
+                "each with its own run's error model (see Method): a run's systematic errors "
+                "are correlated within that run only, and nothing carried from above is lost "
+                "at a tie."
             ),
         ),
         key="program",

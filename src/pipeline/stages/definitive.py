@@ -43,7 +43,8 @@ from pipeline.survey.stations import (
 from pipeline.tables import DLS_COURSE_M, Stations
 from pipeline.uncertainty.engine import configure, model_terms
 from pipeline.uncertainty.quantities import ModelSite
-from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
+from pipeline.uncertainty.sections import Section as CovSection
+from pipeline.uncertainty.sections import WellByWell, definitive_covariance
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, NorthReference, WellMetadata, well_of
@@ -70,8 +71,8 @@ class SurveyOverlap(TableContract):
     run: str = column(unit=None, description="run the station comes from")
     role: str = column(
         unit=None,
-        description="tie (a lower run's tie station), overlap (inside another run's section) "
-        "or excluded (outside its run's depth range)",
+        description="overlap (inside another run's section) or excluded (outside its run's "
+        "depth range)",
     )
     md: float = column(unit="m", description="measured depth")
     inc: float = column(unit="deg", ge=0, le=180, description="the run's inclination")
@@ -231,50 +232,41 @@ def definitive_survey(
                 ctx.well, stage="definitive_survey", latitude=params.latitude, north_seeking=True
             ).latitude,
         )
-    parts: list[dict[str, Any]] = []
-    carried = Carried()
-    tie = (params.tie_north, params.tie_east, params.tie_tvd)
-    for s, sec in enumerate(sections):
-        run = runs[sec.run]
-        rows = slice(sec.first, sec.last + 1)
-        md, inc = run.md[rows], np.radians(run.inc[rows])
-        azi, azi_true = (np.radians(defined_azimuths(a[rows])) for a in (run.azi, run.azi_true))
-        origin = (tie[0], tie[1], md[0] if tie[2] is None else tie[2])
-        pos = minimum_curvature(
-            md, inc, azi, tie_north=origin[0], tie_east=origin[1], tie_tvd=origin[2]
-        )
-        survey = Survey.of(md, inc, azi_true, pos.tvd)
-        nxt = sections[s + 1].tie_md if s + 1 < len(sections) else None
-        cov, carried_next = section_covariance(
-            Section(run.name, survey, model_terms(tools[run.port], site)),
-            carried,
-            basis=params.basis,
-            surface_tie=params.surface_tie and s == 0,
-            well_by_well=params.well_by_well,
-            tie_next=nxt,
-        )
-        keep = sec.listed - sec.first
-        parts.append(
-            {
-                "md": md[keep],
-                "inc": run.inc[sec.listed],
-                "azi": run.azi[sec.listed],
-                "north": pos.north[keep],
-                "east": pos.east[keep],
-                "tvd": pos.tvd[keep],
-                "cov": cov[keep],
-                "run": [run.name] * keep.size,
-                "tool_model": [run.spec.model] * keep.size,
-                "source": [run.source] * keep.size,
-                "tool_type": [run.tool[k] for k in sec.listed],
-                "section": np.full(keep.size, s),
-            }
-        )
-        if nxt is not None and carried_next is not None:
-            at = interpolate_md(md, inc, azi, nxt, tie=(pos.north[0], pos.east[0], pos.tvd[0]))
-            tie = (float(at.north[0]), float(at.east[0]), float(at.tvd[0]))
-            carried = carried_next
-    survey_table = with_magnetic(_survey_table(parts, params, north), applied)
+    listed = [(sec, runs[sec.run]) for sec in sections]
+    md = np.concatenate([run.md[sec.listed] for sec, run in listed])
+    inc_deg = np.concatenate([run.inc[sec.listed] for sec, run in listed])
+    azi_deg = np.concatenate([run.azi[sec.listed] for sec, run in listed])
+    azi_true = np.concatenate([run.azi_true[sec.listed] for sec, run in listed])
+    inc, azi = np.radians(inc_deg), np.radians(defined_azimuths(azi_deg))
+    tie_tvd = md[0] if params.tie_tvd is None else params.tie_tvd
+    pos = minimum_curvature(
+        md, inc, azi, tie_north=params.tie_north, tie_east=params.tie_east, tie_tvd=tie_tvd
+    )
+    bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
+    cov = definitive_covariance(
+        Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd),
+        [
+            CovSection(run.name, int(lo), int(hi), model_terms(tools[run.port], site))
+            for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True)
+        ],
+        basis=params.basis,
+        surface_tie=params.surface_tie,
+        well_by_well=params.well_by_well,
+    )
+    parts = {
+        "md": md,
+        "inc": inc_deg,
+        "azi": azi_deg,
+        "north": pos.north,
+        "east": pos.east,
+        "tvd": pos.tvd,
+        "run": [run.name for sec, run in listed for _ in sec.listed],
+        "tool_model": [run.spec.model for sec, run in listed for _ in sec.listed],
+        "source": [run.source for sec, run in listed for _ in sec.listed],
+        "tool_type": [run.tool[k] for sec, run in listed for k in sec.listed],
+        "section": np.repeat(np.arange(len(sections)), np.diff(bounds)),
+    }
+    survey_table = with_magnetic(_survey_table(parts, cov, params, north), applied)
     return {
         "survey": survey_table,
         "overlap": _overlap(runs, stations, sections, survey_table, north),
@@ -329,14 +321,16 @@ def _magnetic(
     return applied_magnetic(params.magnetic, well, stage="definitive_survey")
 
 
-def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: str) -> pa.Table:
-    """The listed stations of every section, in MD order, as a :class:`DefinitiveSurvey`."""
-    joined = {k: np.concatenate([np.asarray(p[k]) for p in parts]) for k in parts[0]}
-    cov = joined.pop("cov")
+def _survey_table(
+    columns: dict[str, Any], cov: np.ndarray, params: DefinitiveParams, north: str
+) -> pa.Table:
+    """The listed stations of every section, in MD order, with their NEV covariance (m²),
+    as a :class:`DefinitiveSurvey`."""
+    joined = {k: np.asarray(v) for k, v in columns.items()}
     md, inc, azi = joined["md"], joined["inc"], joined["azi"]
     steps = minimum_curvature(md, np.radians(inc), np.radians(azi))
     distance, direction = closure(joined["north"], joined["east"])
-    columns: dict[str, object] = {
+    table: dict[str, object] = {
         **joined,
         "dogleg": np.degrees(steps.dogleg),
         "dls": np.degrees(steps.dls) * DLS_COURSE_M,
@@ -347,7 +341,7 @@ def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: 
         "closure_direction": np.degrees(direction) % 360.0,
         **covariance_columns(cov, params.confidence),
     }
-    return DefinitiveSurvey.compiled().make_table(columns, north_reference=north)
+    return DefinitiveSurvey.compiled().make_table(table, north_reference=north)
 
 
 def _overlap(
@@ -423,9 +417,11 @@ def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     confidence = float(stage.params.get("confidence", 0.0)) * 100
     return MethodNote(
         "Definitive survey",
-        "runs tied at their first station to the survey above; each run's error model "
-        f"propagated as in {ctx.cite(ERROR_MODEL)} with its systematic errors correlated "
-        "within the run, the tie point's uncertainty carried below it, ellipses at "
+        "each run tied at the last listed station of the run above, positions by minimum "
+        "curvature through the listed stations; each station's errors from its own run's "
+        f"error model (depth terms on the run's own MD), propagated as in "
+        f"{ctx.cite(ERROR_MODEL)} over the listed stations with a run's systematic errors "
+        "correlated within the run, ellipses at "
         f"{confidence:g} %{magnetic_words(ctx)}",
     )
 

@@ -24,6 +24,7 @@ from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
 from pipeline.qc.windows import anomaly_intervals, window_checks
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
+from pipeline.stages.compass import tool_errors
 from pipeline.streams import Port, as_table
 from pipeline.tables import PositionReadings, RawSamples
 
@@ -34,9 +35,11 @@ def station_stage(
     inputs: Mapping[str, Port], params: QcOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Check every station × frame position; the readings of dropped stations are removed.
-    The raw samples (magnetometers) stream through in one pass."""
+    The raw samples (magnetometers) stream through in one pass. Unset accelerometer error
+    magnitudes are the well's tool's (:func:`pipeline.stages.compass.tool_errors`)."""
     readings, samples = as_table(inputs["readings"]), inputs.get("samples")
     site = resolve_site(ctx.well, stage="validity_checks", param=None, field=_has_field(samples))
+    params = params.with_defaults(tool_errors(ctx.well))
     qc, summary = station_checks(readings, site, params, samples=samples)
     qc = with_references(qc, site, params, field=_has_field(samples))
     return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}

@@ -8,12 +8,11 @@ Each run covers the MDs from its first to its last station, clipped to its ``md_
     lower     the run that started deeper takes over from its first station
 
 Consecutive depths won by one run are a *section*. A section below the first is tied to the
-section above at its tie station: the run's last station at or above the section's top
-depth (within its range), else its first station below it; the tie MD must lie on the
-section above's stations. A station on the boundary between two sections is listed once,
-from the section above. Every station not listed is kept for QC with its role: ``tie``,
-``overlap`` (inside another section's depths) or ``excluded`` (outside its run's range).
-MDs in m.
+section above at the last listed station of that section (its *tie MD*): the survey is one
+list of stations, the section's first course runs from that station. A station on the
+boundary between two sections is listed once, from the section above. Every station not
+listed is kept for QC with its role: ``overlap`` (inside another section's depths) or
+``excluded`` (outside its run's range). MDs in m.
 """
 
 from __future__ import annotations
@@ -35,7 +34,7 @@ OverlapRule = Literal["priority", "upper", "lower"]
 
 class SurveyGapError(ValueError):
     """No run covers an interval between the definitive survey's first and last MD, or a
-    run cannot be tied to the section above it."""
+    run adds no station below the section above it."""
 
 
 @dataclass(frozen=True)
@@ -56,18 +55,18 @@ class RunStations:
 
 @dataclass(frozen=True)
 class Section:
-    """A section: run index, the run's station rows listed in the definitive survey, and the
-    rows ``first``..``last`` (inclusive) of its propagation survey — from the tie station
-    (or the run's first listed station) through the station the next tie needs."""
+    """A section: run index and the run's station rows listed in the definitive survey."""
 
     run: int
     listed: IntArray
-    first: int
-    last: int
     top: float
     """MD where the section starts winning, m"""
     tie_md: float | None
-    """MD of the tie station on the section above (None: the first section)"""
+    """MD of the last listed station of the section above (None: the first section)"""
+
+    def tie_above(self, runs: Sequence[RunStations]) -> float:
+        """MD of this section's last listed station: the tie of the section below, m."""
+        return float(runs[self.run].md[self.listed[-1]])
 
 
 def _winner(runs: Sequence[RunStations], cands: list[int], rule: OverlapRule) -> int:
@@ -158,7 +157,7 @@ def plan_sections(
     (at the survey's ends, where none does, it is left out).
 
     Raises:
-        SurveyGapError: a depth no run covers, or a run that cannot be tied to the one above.
+        SurveyGapError: a depth no run covers, or a run adding no station below the one above.
     """
     segments: list[tuple[int, float, float]] = []
     for r, top, bottom in _absorb_slivers(runs, _segments(runs, rule), min_length):
@@ -170,61 +169,29 @@ def plan_sections(
         else:
             segments.append((r, top, bottom))
     sections: list[Section] = []
-    for s, (r, top, bottom) in enumerate(segments):
+    for r, top, bottom in segments:
         md = runs[r].md
-        lo, _ = runs[r].coverage()
         inside = (md >= top) & (md <= bottom)
-        if s > 0:
-            upper = runs[segments[s - 1][0]].md
-            if np.any(upper == top):  # listed from the section above
-                inside &= md > top
+        if sections:
+            inside &= md > sections[-1].tie_above(runs)  # the boundary: listed from above
         listed = np.flatnonzero(inside)
         if not listed.size:  # its only station is the boundary, listed from above
             raise SurveyGapError(
                 f"run {runs[r].name!r} adds no station below {top:g} m MD: widen its range"
             )
-        if s == 0:
-            first, tie_md = int(listed[0]), None
-        else:
-            at_or_above = np.flatnonzero((md >= lo) & (md <= top))
-            first = int(at_or_above[-1]) if at_or_above.size else int(listed[0])
-            tie_md = float(md[first])
-        sections.append(Section(r, listed, first, int(listed[-1]), top, tie_md))
-    for s in range(1, len(sections)):
-        above, here = sections[s - 1], sections[s]
-        md_above = runs[above.run].md
-        tie = here.tie_md
-        assert tie is not None
-        start = md_above[above.first]
-        if not start <= tie <= md_above[-1]:
-            raise SurveyGapError(
-                f"run {runs[here.run].name!r} cannot be tied at {tie:g} m MD to run "
-                f"{runs[above.run].name!r}, whose section runs {start:g} – "
-                f"{md_above[-1]:g} m: the tie station must lie on the run above"
-            )
-        need = int(np.searchsorted(md_above, tie, side="left"))
-        sections[s - 1] = Section(
-            above.run,
-            above.listed,
-            above.first,
-            max(above.last, need),
-            above.top,
-            above.tie_md,
-        )
+        tie_md = sections[-1].tie_above(runs) if sections else None
+        sections.append(Section(r, listed, top, tie_md))
     return sections
 
 
 def roles(runs: Sequence[RunStations], sections: Sequence[Section]) -> list[list[str]]:
-    """Per run, each station's role: ``listed``, ``tie``, ``overlap`` or ``excluded``."""
+    """Per run, each station's role: ``listed``, ``overlap`` or ``excluded``."""
     out = []
     for r, run in enumerate(runs):
         lo, hi = run.coverage()
         role = np.where((run.md >= lo) & (run.md <= hi), "overlap", "excluded").astype(object)
         for sec in sections:
-            if sec.run != r:
-                continue
-            if sec.tie_md is not None:
-                role[sec.first] = "tie"
-            role[sec.listed] = "listed"
+            if sec.run == r:
+                role[sec.listed] = "listed"
         out.append([str(x) for x in role])
     return out

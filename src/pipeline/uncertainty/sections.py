@@ -1,21 +1,27 @@
 """Position covariance of a survey assembled from tied sections (a definitive survey).
 
-A definitive survey is a chain of sections, each one run's stations over a depth interval.
-The first section starts from the surface tie; every later section is *tied* to the section
-above at its first station (the tie station): that station is placed on the path above at
-its MD, and the section's own stations are integrated from it. So the position error of a
-station k of section s is
+A definitive survey is one list of stations made of sections, each one run's stations over
+a depth interval; a section below the first is tied at the last station of the section
+above, so its first course runs from that station (the run above's MD and angles) to its
+own first station. The position of every station is minimum curvature through the list,
+and its error is the ISCWSA propagation over the list (SPE 67616,
+:mod:`pipeline.uncertainty.model`) with each station's measurement errors those of its own
+run:
 
-    ε_k = ε_tie(s) + ε_own,k
+    ε_K = Σ_{k<K} e_k + e*_K,   e_k, e*_k the effects of station k's errors, weighted by
+                                the terms of the run station k comes from
 
-ε_tie(s) the error of the path above at the tie MD (itself carrying every section above)
-and ε_own,k the error of section s's own terms propagated from a fixed tie
-(:func:`pipeline.uncertainty.model.station_jacobians` with ``surface_tie=False``: the tie
-station's angle errors move the legs below it, its own depth error does not move it — its
-MD is placed on the path above, in that path's depths).
+So a run's depth errors act on its own MD (the course from the tie to the run's first
+station is as long as the run's MD there minus the MD of the tie above); the angle errors
+of the tie station, the run above's, move the course below it too; and nothing carried
+from above is lost at a tie: the covariance is continuous.
 
-Correlation between sections follows the ISCWSA propagation modes (SPE 67616), an error
-source being one standard-normal draw per *correlation key*:
+Term weights are evaluated per section over its stations and the tie station above (so
+that a course-length weight sees the course into the section's first station); the tie
+station's own weight is the run above's.
+
+Correlation between sections follows the ISCWSA propagation modes, an error source being
+one standard-normal draw per *correlation key*:
 
     random        one draw per station: independent everywhere
     systematic    one draw per run: correlated within the run, independent between runs
@@ -23,10 +29,8 @@ source being one standard-normal draw per *correlation key*:
                   run (``"per_run"``)
     global        one draw for all: shared by every run
 
-so the covariance of a station is Σ over keys of v vᵀ (v the summed NEV effect of that key,
-tie included) plus the random terms' Σ e eᵀ. The error at a tie MD between two stations
-i and i + 1 of the section above (fraction f) is interpolated linearly in the errors:
-ε(T) = (1 − f)·ε_i + f·ε_{i+1}, exact at a station and first order between them.
+so the covariance of a station is Σ over keys of v vᵀ (v the summed NEV effect of every
+term of that key) plus the random terms' Σ e eᵀ.
 
 Frame NEV (north, east, vertical down), lengths m, angles rad, covariances m².
 """
@@ -34,16 +38,22 @@ Frame NEV (north, east, vertical down), lengths m, angles rad, covariances m².
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.uncertainty.model import Basis
-from pipeline.uncertainty.terms import Survey, Term, term_effects
+from pipeline.uncertainty.model import (
+    Basis,
+    Propagation,
+    leg_effects,
+    propagate_nev,
+    station_jacobians,
+)
+from pipeline.uncertainty.terms import Survey, Term
 
-__all__ = ["Carried", "Section", "WellByWell", "section_covariance"]
+__all__ = ["Section", "WellByWell", "definitive_covariance"]
 
 FloatArray = NDArray[np.float64]
 WellByWell = Literal["shared", "per_run"]
@@ -52,85 +62,68 @@ Key = tuple[str, ...]
 
 @dataclass(frozen=True)
 class Section:
-    """One section: the run's stations from its tie station (or the surface) on, the run's
-    error terms and the run id that scopes its systematic terms."""
+    """One section: the run id that scopes its systematic terms, the rows ``start`` to
+    ``stop`` (exclusive) of the survey it lists, and the run's error terms."""
 
     run: str
-    survey: Survey
+    start: int
+    stop: int
     terms: Sequence[Term]
 
 
-@dataclass
-class Carried:
-    """The position error at a tie: one NEV effect vector (m) per correlation key, and the
-    covariance (3, 3) (m²) of the random terms."""
-
-    vectors: dict[Key, FloatArray] = field(default_factory=dict)
-    random: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
-
-
-def _key(run: str, term: Term, well_by_well: WellByWell) -> Key | None:
-    """The correlation key of a term (None: random, one draw per station)."""
-    if term.mode == "random":
-        return None
+def _key(run: str, term: Term, well_by_well: WellByWell) -> Key:
+    """The correlation key of a systematic, well-by-well or global term."""
     if term.mode == "global" or (term.mode == "well_by_well" and well_by_well == "shared"):
         return (term.mode, term.name)
     return (term.mode, run, term.name)
 
 
-def section_covariance(
-    section: Section,
-    carried: Carried,
+def _errors(survey: Survey, section: Section) -> FloatArray:
+    """Each term's 1σ weight (m, n, 3) over the whole survey, zero off the section's rows,
+    evaluated over the section's stations and the tie station above."""
+    lo = max(section.start - 1, 0)
+    part = Survey(*(x[lo : section.stop] for x in (survey.md, survey.inc, survey.azi, survey.tvd)))
+    out = np.zeros((len(section.terms), survey.size, 3))
+    own = section.start - lo
+    for j, term in enumerate(section.terms):
+        out[j, section.start : section.stop] = (term.sigma * term.weight(part))[own:]
+    return out
+
+
+def definitive_covariance(
+    survey: Survey,
+    sections: Sequence[Section],
     *,
     basis: Basis = "balanced_tangent",
     surface_tie: bool = False,
     well_by_well: WellByWell = "shared",
-    tie_next: float | None = None,
-) -> tuple[FloatArray, Carried | None]:
-    """NEV covariance (n, 3, 3) of a section's stations given the error carried to its tie,
-    and the error carried to the next section's tie at MD ``tie_next`` (None: no next).
-
-    ``surface_tie`` applies the ISCWSA surface tie-on allowance (the first section only).
-    """
-    full, star = term_effects(section.survey, section.terms, basis=basis, surface_tie=surface_tie)
-    keys = [_key(section.run, t, well_by_well) for t in section.terms]
-    # systematic-type effect on each station: s_K = Σ_{k<K} e_k + e*_K
-    below = np.cumsum(full, axis=1) - full
-    summed = below + star
-    vectors: dict[Key, FloatArray] = {
-        k: np.broadcast_to(v, summed.shape[1:]) for k, v in carried.vectors.items()
-    }
-    rand = np.array([k is None for k in keys], dtype=bool)
-    for j, key in enumerate(keys):
-        if key is not None:
-            vectors[key] = vectors.get(key, np.zeros(summed.shape[1:])) + summed[j]
-    f_r, s_r = full[rand], star[rand]
-    outer = np.einsum("tni,tnj->nij", f_r, f_r)
-    random = np.cumsum(outer, axis=0) - outer + np.einsum("tni,tnj->nij", s_r, s_r)
-    cov = carried.random + random
-    for v in vectors.values():
-        cov = cov + v[:, :, None] * v[:, None, :]
-    if tie_next is None:
-        return cov, None
-    i, frac = _locate(section.survey.md, tie_next)
-    nxt = min(i + 1, section.survey.size - 1)
-    at = {key: (1.0 - frac) * v[i] + frac * v[nxt] for key, v in vectors.items()}
-    a = (1.0 - frac) * s_r[:, i] + frac * f_r[:, i]
-    b = frac * s_r[:, nxt]
-    tie_random = (
-        carried.random
-        + (np.cumsum(outer, axis=0)[i] - outer[i])
-        + np.einsum("ti,tj->ij", a, a)
-        + np.einsum("ti,tj->ij", b, b)
-    )
-    return cov, Carried(at, tie_random)
-
-
-def _locate(md: FloatArray, at: float) -> tuple[int, float]:
-    """Station index i and fraction f of MD ``at`` between stations i and i + 1."""
-    if not md[0] <= at <= md[-1]:
-        raise ValueError(f"tie MD {at} m is outside the section [{md[0]}, {md[-1]}] m")
-    i = int(np.clip(np.searchsorted(md, at, side="right") - 1, 0, md.size - 1))
-    if i == md.size - 1:
-        return i, 0.0
-    return i, float((at - md[i]) / (md[i + 1] - md[i]))
+) -> FloatArray:
+    """NEV covariance (n, 3, 3) of the stations of ``survey`` (m²), listed by ``sections``
+    (contiguous, top down, covering it); ``surface_tie`` applies the ISCWSA surface tie-on
+    allowance at the first station."""
+    jac = station_jacobians(survey.md, survey.inc, survey.azi, basis=basis, surface_tie=surface_tie)
+    sums: dict[Key, tuple[FloatArray, FloatArray]] = {}
+    randoms: list[tuple[FloatArray, FloatArray]] = []
+    for section in sections:
+        errors = _errors(survey, section)
+        dia = np.array([t.frame == "dia" for t in section.terms], dtype=bool)
+        full, star = errors.copy(), errors.copy()  # position-defined terms: e_k = e*_k
+        if dia.any():
+            full[dia], star[dia] = leg_effects(errors[dia], jac)
+        for j, term in enumerate(section.terms):
+            if term.mode == "random":
+                randoms.append((full[j], star[j]))
+                continue
+            key = _key(section.run, term, well_by_well)
+            zero = np.zeros_like(full[j])
+            f, s = sums.get(key, (zero, zero))
+            sums[key] = (f + full[j], s + star[j])
+    effects = [*sums.values(), *randoms]
+    if not effects:
+        return np.zeros((survey.size, 3, 3))
+    systematic: list[Propagation] = ["systematic"] * len(sums)
+    random: list[Propagation] = ["random"] * len(randoms)
+    full_all = np.stack([f for f, _ in effects])
+    star_all = np.stack([s for _, s in effects])
+    cov: FloatArray = propagate_nev(full_all, star_all, systematic + random).sum(axis=0)
+    return cov
