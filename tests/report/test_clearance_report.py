@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,12 +16,15 @@ import pyarrow.parquet as pq
 import pytest
 from report_support import (
     assert_self_contained,
+    assert_signoff_before_appendix,
     colour,
     figure_regions,
+    figure_svg,
     ink,
     inspect,
     marks,
     pdf_pages,
+    svg_texts,
 )
 
 from tests_support import ROOT
@@ -137,6 +141,11 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
     assert "SPE 90408" not in page.text  # no gyro model in this scan
 
 
+def test_clearance_report_has_a_signoff_block(clearance_run: Path, browser: Any):
+    """A clearance report is signed like a survey report (#28 item 9)."""
+    assert_signoff_before_appendix(browser, clearance_run)
+
+
 def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
     """The pipeline's own reference model (GYRO-NS) against the set's MWD offsets."""
     result = run_clearance(MANIFEST, tmp_path, "report.formats=[html]", check=True)
@@ -147,10 +156,29 @@ def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
     assert "Prediction of wellbore position accuracy when surveyed with gyroscopic tools" in text
 
 
+def _cylinder_md_labels(texts: list[str]) -> list[float]:
+    return [float(m[1]) for t in texts if (m := re.fullmatch(r"MD (\d+)", t))]
+
+
+def test_travelling_cylinder_traces_carry_md_labels(clearance_run: Path, browser: Any):
+    """Each offset's trace on the travelling cylinder is labelled with reference MDs (#28
+    item 9), each the MD of one of its points inside the plotted reach, a few per trace."""
+    html = clearance_run / "report.html"
+    table = pq.read_table(clearance_run / "clearance.clearance.parquet").to_pandas()
+    reach = float(re.search(r"within (\d+) m; labels", inspect(browser, html).text)[1])
+    near = table[table.distance <= reach]
+    labels = _cylinder_md_labels(svg_texts(browser, figure_svg(html, "cylinder"), "text"))
+    assert len(labels) >= 2 * near.offset.nunique()
+    assert len(labels) <= 6 * near.offset.nunique()
+    assert all(np.min(np.abs(near.md.to_numpy() - md)) < 0.5 for md in labels)
+    assert max(labels) - min(labels) > 0.5 * (near.md.max() - near.md.min())  # along the trace
+
+
 def test_clearance_figures_drawn_in_the_pdf(clearance_run: Path, tmp_path: Path):
     pages = pdf_pages(clearance_run / "report.pdf", tmp_path)
     words = " ".join(w[0] for p in pages for w in p.words)
     assert "Travelling cylinder" in words and "Separation factor against MD" in words
+    assert len(re.findall(r"MD \d+", words)) >= 6  # the cylinder's MD labels
     regions = figure_regions(pages)
     assert len(regions) >= 6
     sf_chart, cylinder = sorted(regions)[-2:]

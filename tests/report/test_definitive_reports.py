@@ -75,8 +75,10 @@ def test_gates_report_in_chromium(inout: tuple[Path, str], browser: Any, tmp_pat
     assert any(f.startswith("fig-qc") for f in page.figures)
     qc = {row[0]: row for row in page.tables["qc"]}
     comparison = pd.read_parquet(out / "gates.comparison.parquet")
-    assert qc["in/out azimuth"][4] == str(int((~comparison["passed"]).sum()))
-    assert qc["in/out azimuth"][5] == str(int(comparison["azi_diff"].isna().sum()))  # vertical
+    assert qc["In-run − out-run azimuth"][4] == str(int((~comparison["passed"]).sum()))
+    assert qc["In-run − out-run azimuth"][5] == str(
+        int(comparison["azi_diff"].isna().sum())
+    )  # vertical
     # the definitive survey's program: the in-run throughout
     program = page.tables["program"]
     assert [row[1] for row in program] == ["in-run"]

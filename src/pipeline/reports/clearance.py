@@ -122,22 +122,41 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
                 va="center" if degrees % 180 else ("bottom" if degrees == 0 else "top"),
             )
         )
+    near_md = np.concatenate([c.md[c.distance <= reach] for c in curves])
+    step = ticks.linear_ticks(*_span(near_md), MD_LABELS)[1] if near_md.size else 0.0
     for k, c in enumerate(curves):
         near = c.distance <= reach
         if near.any():
             a = np.radians(c.toolface[near])
-            panel.add(
-                Line(
-                    c.distance[near] * np.sin(a),
-                    c.distance[near] * np.cos(a),
-                    plots.series_colour(k),
-                    0,
-                    marker=Marker("o", 2.6),
-                    label=c.name,
-                )
-            )
+            east, north = c.distance[near] * np.sin(a), c.distance[near] * np.cos(a)
+            colour = plots.series_colour(k)
+            panel.add(Line(east, north, colour, 0, marker=Marker("o", 2.6), label=c.name))
+            for i in md_label_points(c.md[near], step):
+                text = f"MD {ticks.label(float(c.md[near][i]), step)}"
+                panel.add(Text(east[i], north[i], text, size=5.5, colour=colour, dx=3, dy=2))
     panel.legend = "outside"
     return Chart(size, [panel])
+
+
+MD_LABELS = 4
+"""About this many MD steps label the travelling cylinder's traces."""
+
+
+def _span(md: FloatArray) -> tuple[float, float]:
+    return float(md.min()), float(md.max())
+
+
+def md_label_points(md: FloatArray, step: float) -> list[int]:
+    """Indices of a trace's points to label with their reference MD: the first point at or
+    past each multiple of ``step`` (m) the trace's MDs reach (its first point when it
+    spans none)."""
+    if not md.size or step <= 0:
+        return []
+    order = np.argsort(md, kind="stable")
+    marks = np.arange(np.ceil(md.min() / step), np.floor(md.max() / step) + 1) * step
+    first = np.searchsorted(md[order], marks - 1e-9 * step)
+    picked = dict.fromkeys(int(order[i]) for i in first if i < len(md))
+    return list(picked) or [int(order[0])]
 
 
 def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
@@ -279,7 +298,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             "Travelling cylinder",
             "Closest approach of each offset well seen down the reference well: direction "
             "from the reference's high side (clockwise), distance centre to centre, within "
-            f"{fmt(reach, 0)} m.",
+            f"{fmt(reach, 0)} m; labels: the reference MD (m) of the station so marked.",
             partial(travelling_cylinder, curves=curves, reach=reach),
             (6.9, 4.2),
         ),
