@@ -88,6 +88,7 @@ def test_header_fields_in_the_html_when_given(runs: Runs, browser: Any):
         if label != "Tool":  # "Tool type" and "Tool and run" remain
             assert label not in absent, label
     assert "\nTool\n" not in absent and "\nTool\t" not in absent
+    assert "Pipeline\t" not in well and "Pipeline\n" not in well  # in the appendix only
 
 
 def test_header_fields_in_the_pdf_when_given(runs: Runs):

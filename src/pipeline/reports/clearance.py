@@ -20,6 +20,7 @@ from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, Span
 from pipeline.reports.document import Block, Column, Fields, Plot, Section, Table, Verdict, fmt
 from pipeline.reports.listing import col
 from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL, SEPARATION_RULE, Citations
+from pipeline.reports.numbers import fmt_inches
 
 FloatArray = NDArray[np.float64]
 ErrorModel = Callable[[str], tuple[str, bool]]
@@ -177,7 +178,7 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
                 fmt(well.get("north")),
                 fmt(well.get("east")),
                 fmt(tvd) if tvd is not None else "its first MD",
-                fmt(hole / 0.0254, 3) if hole is not None else "",
+                fmt_inches(hole),
                 fmt(hole, 4),
                 titles.get(model, model),
             )
@@ -221,7 +222,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             (
                 c.name,
                 str(own.get("model", "")),
-                fmt(own["hole_diameter"], 4) if "hole_diameter" in own else "",
+                fmt_inches(own.get("hole_diameter")),
                 fmt(c.sf[i], 2) if np.isfinite(c.sf[i]) else "undefined (centres meet)",
                 fmt(c.md[i]),
                 fmt(offset_md[rows_of[i]]),
@@ -251,10 +252,11 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
         ("Limits", f"stop below SF {fmt(stop, 2)}, caution below {fmt(caution, 2)}"),
     ]
     if "reference_model" in rule:
+        hole = float(rule["reference_hole_diameter"])
         fields.append(
             (
                 "Reference well",
-                f"{rule['reference_model']}, hole {fmt(rule['reference_hole_diameter'], 4)} m",
+                f"{rule['reference_model']}, hole {fmt_inches(hole)} in ({fmt(hole, 4)} m)",
             )
         )
     reach = max(4.0 * float(np.nanmin(col(table, "distance")) or 1.0), 10.0)
@@ -274,7 +276,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             (
                 Column("Offset well", align="left"),
                 Column("Tool model", align="left"),
-                Column("Hole", "m"),
+                Column("Hole", "in"),
                 Column("Minimum SF"),
                 Column("Reference MD", "m"),
                 Column("Offset MD", "m"),

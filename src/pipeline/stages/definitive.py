@@ -418,13 +418,18 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
 
 def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     """The definitive survey in the report: ties, per-run propagation, the confidence."""
-    from pipeline.reports.literature import ERROR_MODEL
+    from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL
 
     confidence = float(stage.params.get("confidence", 0.0)) * 100
+    runs = stage.params.get("runs") or {}
+    models = [str(r.get("model", RunSpec().model)) for r in runs.values()] or [RunSpec().model]
+    gyro = any(ctx.error_model(m)[1] for m in models)
+    cited = ctx.cite(ERROR_MODEL)
+    cited += f" (the gyro terms as in {ctx.cite(GYRO_ERROR_MODEL)})" if gyro else ""
     return MethodNote(
         "Definitive survey",
         "runs tied at their first station to the survey above; each run's error model "
-        f"propagated as in {ctx.cite(ERROR_MODEL)} with its systematic errors correlated "
+        f"propagated as in {cited} with its systematic errors correlated "
         "within the run, the tie point's uncertainty carried below it, ellipses at "
         f"{confidence:g} %{magnetic_words(ctx)}",
     )
