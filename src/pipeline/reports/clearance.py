@@ -125,6 +125,7 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
         )
     near_md = np.concatenate([c.md[c.distance <= reach] for c in curves])
     step = ticks.linear_ticks(*_span(near_md), MD_LABELS)[1] if near_md.size else 0.0
+    placed: list[tuple[float, float]] = []  # labels drawn: another this close is left out
     for k, c in enumerate(curves):
         near = c.distance <= reach
         if near.any():
@@ -133,14 +134,19 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
             colour = plots.series_colour(k)
             panel.add(Line(east, north, colour, 0, marker=Marker("o", 2.6), label=c.name))
             for i in md_label_points(c.md[near], step):
+                if any(np.hypot(east[i] - x, north[i] - y) < LABEL_GAP * reach for x, y in placed):
+                    continue
+                placed.append((float(east[i]), float(north[i])))
                 text = f"MD {ticks.label(float(c.md[near][i]), step)}"
                 panel.add(Text(east[i], north[i], text, size=5.5, colour=colour, dx=3, dy=2))
     panel.legend = "outside"
     return Chart(size, [panel])
 
 
-MD_LABELS = 4
+MD_LABELS = 6
 """About this many MD steps label the travelling cylinder's traces."""
+LABEL_GAP = 0.15
+"""Nearest two MD labels of the travelling cylinder may be, in units of its reach."""
 
 
 def _span(md: FloatArray) -> tuple[float, float]:
