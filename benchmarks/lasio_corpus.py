@@ -82,6 +82,11 @@ EXPLAINED: dict[str, str] = {
     "dodgy_param_sect.las": "a data line inside ~Parameter: both refuse it, gyropipe naming it",
     "issue92.las": "a line of dashes inside ~Curve: both refuse it, gyropipe naming it",
     "not_a_las_file.las": "no ~ section at all: both refuse it",
+    "missing_null.las": (
+        "the ~Well section has no NULL item and DT starts with -999.25: lasio keeps -999.25 "
+        "as a value; gyropipe reads the industry's null marker (-999.25, -9999.25) as a null "
+        "in every reader, with or without a NULL item (a DT of -999.25 us/ft is no reading)"
+    ),
     "null_policy_runon.las": (
         "values that ran together: '7.330-19508.961' is split at its minus sign by both; "
         "'7.020101130.188' (two values, border unknown) is read as two nulls by both, gyropipe "

@@ -99,8 +99,10 @@ def check_angles(path: Path, table: pa.Table, *, confirmed: bool = False) -> Non
         first = int(np.flatnonzero(wrapped)[0])
         warn_input(
             path,
-            f"azi {float(azi[first])!r}° read as {float(azi[first] % 360.0)!r}°"
-            + (f" ({int(wrapped.sum())} azimuths outside [0, 360))" if wrapped.sum() > 1 else ""),
+            f"azi {float(azi[first])!r}° read as {float(azi[first] % 360.0)!r}°, the same "
+            "direction (an azimuth in [-360, 720) is wrapped into [0, 360), one outside it "
+            "refused)"
+            + (f"; {int(wrapped.sum())} azimuths outside [0, 360)" if wrapped.sum() > 1 else ""),
             _line(lines, first),
         )
     if not confirmed and _radians(inc, azi):

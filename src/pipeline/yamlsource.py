@@ -22,6 +22,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from pipeline.errors import Location, Problem, SpecError, did_you_mean
+from pipeline.yaml_errors import explain
 
 PathKey = tuple[str | int, ...]
 M = TypeVar("M", bound=BaseModel)
@@ -78,8 +79,18 @@ def load_value(text: str, where: str) -> Any:
     except SpecError as exc:
         problems = exc.problems
     if problems:
-        raise SpecError([Problem(Location(where), p.message) for p in problems])
+        raise SpecError([Problem(Location(where), _within(p, text)) for p in problems])
     return value
+
+
+def _within(problem: Problem, text: str) -> str:
+    """A value's parse error with its place in the value ("column 7: …")."""
+    at = problem.location
+    if not at.column or not problem.message.startswith("malformed YAML"):
+        return problem.message
+    if "\n" not in text.strip("\n"):  # one line: columns only
+        return f"column {at.column}: {problem.message.replace('at line 1, column', 'at column')}"
+    return f"line {at.line}, column {at.column}: {problem.message}"
 
 
 def _compose(text: str, file: str) -> yaml.Node | None:
@@ -90,9 +101,8 @@ def _compose(text: str, file: str) -> yaml.Node | None:
     except _TooDeep as exc:
         raise SpecError([Problem(_location(file, exc.mark), exc.message)]) from None
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        loc = _location(file, mark) if mark else Location(file)
-        raise SpecError([Problem(loc, f"malformed YAML: {exc.problem or exc}")]) from exc
+        line, column, message = explain(exc, text)
+        raise SpecError([Problem(Location(file, line, column), message)]) from exc
     except yaml.reader.ReaderError as exc:  # a character YAML does not allow: no mark
         at = min(exc.position, len(text))
         line, column = text.count("\n", 0, at) + 1, at - text.rfind("\n", 0, at)

@@ -79,6 +79,7 @@ LAYERS: dict[str, int] = {
     "pipeline.plausibility": 2,
     "pipeline.schemas": 2,
     "pipeline.yamlsource": 2,
+    "pipeline.yaml_errors": 2,
     "pipeline.filenames": 2,
     "pipeline.units": 2,
     "pipeline.convert": 2,

@@ -197,7 +197,7 @@ def test_set_values_have_the_same_limits(tmp_path: Path, registry):
         build_plan(load_spec(path, [f"read.options={bomb}", "read.options=[1"]), registry)
     found = [str(p) for p in info.value.problems]
     assert found[0].startswith("--set read.options={a0") and ": value: aliases expand" in found[0]
-    assert "value: malformed YAML" in found[1]
+    assert "value: column 3: malformed YAML: the '[' at column 1 is not closed" in found[1]
 
 
 # ------------------------------------------------------------------ every problem at once

@@ -292,8 +292,13 @@ def test_an_azimuth_out_of_range_is_never_wrapped(tmp_path: Path, azi: str, line
 def test_an_azimuth_past_360_is_read_with_a_warning(tmp_path: Path):
     source = tmp_path / "stations.csv"
     source.write_text(STATIONS_CSV.format(azi="400"))
-    with pytest.warns(InputFileWarning, match=r"stations\.csv:4: azi 400\.0° read as 40\.0°"):
+    said = r"stations\.csv:4: azi 400\.0° read as 40\.0°, the same direction \(an azimuth in"
+    with pytest.warns(InputFileWarning, match=said):
         gp.read(source, kind="stations")
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")  # the CLI says it too
+    assert (
+        result.returncode == 0 and "wrapped into [0, 360), one outside it refused" in result.stderr
+    )
 
 
 def _radian_csv(path: Path, unit: str, scale: float) -> Path:

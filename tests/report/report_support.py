@@ -300,3 +300,82 @@ def line_words(page: PdfPage, first: str) -> list[tuple[str, float, float, float
         (w for w in page.words if abs(w[2] - start[2]) < 1.0 and w[1] >= start[1] - 1),
         key=lambda w: w[1],
     )
+
+
+def pdf_text(pdf: Path) -> list[str]:
+    """The text of each page of ``pdf`` (pdftotext, layout kept)."""
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext not found: apt-get install poppler-utils")
+    text = subprocess.run(
+        ["pdftotext", "-layout", str(pdf), "-"], check=True, capture_output=True, text=True
+    ).stdout
+    return text.split("\f")
+
+
+SIGNERS = ("Prepared by", "Checked by", "Approved by")
+
+
+def assert_signoff_before_appendix(browser: Any, out: Path) -> None:
+    """The report in ``out`` ends with a sign-off block (a row per signer, blank name,
+    signature and date to write on), then the provenance appendix — in the HTML (Chromium)
+    and in the PDF's text (issue 28 item 9)."""
+    html = inspect(browser, out / "report.html")
+    assert html.headers["signoff"] == ["Role", "Name", "Signature", "Date"]
+    assert [row[0] for row in html.tables["signoff"]] == list(SIGNERS)
+    assert all(set(cell) == {"_"} for row in html.tables["signoff"] for cell in row[1:])
+    text = html.text
+    assert text.rindex("Sign-off") < text.rindex("Appendix: provenance")
+    assert text.rindex("Approved by") < text.index("Input files")
+
+    whole = "\f".join(pdf_text(out / "report.pdf"))
+    signoff = whole.rindex("Sign-off")
+    assert whole.index("Appendix: provenance") > signoff
+    lines = whole[signoff:].splitlines()
+    assert any(line.split()[:4] == ["Role", "Name", "Signature", "Date"] for line in lines)
+    for role in SIGNERS:
+        assert any(re.fullmatch(rf"{role}(\s+_{{8,}}){{3}}", line.strip()) for line in lines), role
+
+
+_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+_WHITE = np.array([0.95047, 1.0, 1.08883])
+DICHROMACY = {
+    "normal": np.eye(3),
+    "deuteranopia": np.array(
+        [
+            [0.367322, 0.860646, -0.227968],
+            [0.280085, 0.672501, 0.047413],
+            [-0.01182, 0.04294, 0.968881],
+        ]
+    ),
+    "protanopia": np.array(
+        [
+            [0.152286, 1.052583, -0.204868],
+            [0.114503, 0.786281, 0.099216],
+            [-0.003882, -0.048116, 1.051998],
+        ]
+    ),
+    "tritanopia": np.array(
+        [
+            [1.255528, -0.076749, -0.178779],
+            [-0.078411, 0.930809, 0.147602],
+            [0.004733, 0.691367, 0.3039],
+        ]
+    ),
+}
+"""Colour vision → its matrix on linear sRGB (Machado, Oliveira & Fernandes 2009, severity 1)."""
+
+
+def lab(hex_colour: str, vision: str = "normal") -> np.ndarray:
+    """CIELAB (D65) of an sRGB ``#rrggbb`` as seen with ``vision`` (:data:`DICHROMACY`)."""
+    srgb = np.array([int(hex_colour[i : i + 2], 16) for i in (1, 3, 5)]) / 255
+    linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+    xyz = _TO_XYZ @ np.clip(DICHROMACY[vision] @ linear, 0, 1) / _WHITE
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+
+
+def closest_colours(colours: list[str], vision: str) -> float:
+    """The smallest CIE76 colour difference ΔE between two of ``colours`` seen with
+    ``vision`` (ΔE ≈ 2.3: just noticeable; above ~10: told apart at a glance)."""
+    seen = [lab(c, vision) for c in colours]
+    return min(float(np.linalg.norm(a - b)) for i, a in enumerate(seen) for b in seen[i + 1 :])

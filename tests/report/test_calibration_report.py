@@ -11,6 +11,7 @@ import pyarrow.parquet as pq
 import pytest
 from report_support import (
     assert_self_contained,
+    assert_signoff_before_appendix,
     figure_regions,
     figure_svg,
     ink,
@@ -85,6 +86,11 @@ def test_bundled_calibration_report(browser: Any, tmp_path: Path):
     assert list(regions) == [1] and ink(regions[1]) > 0.02
     words = " ".join(w[0] for p in pages for w in p.words)
     assert "Linear drift" in words and "traditional" in words
+
+
+def test_calibration_report_has_a_signoff_block(browser: Any, tmp_path: Path):
+    """A calibration certificate is signed like a survey report (#28 item 9)."""
+    assert_signoff_before_appendix(browser, calibrate("examples/calibration-ig50.csv", tmp_path))
 
 
 def test_non_linear_drift_is_a_failed_verdict(browser: Any, tmp_path: Path):

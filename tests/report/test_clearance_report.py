@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,12 +16,15 @@ import pyarrow.parquet as pq
 import pytest
 from report_support import (
     assert_self_contained,
+    assert_signoff_before_appendix,
     colour,
     figure_regions,
+    figure_svg,
     ink,
     inspect,
     marks,
     pdf_pages,
+    svg_texts,
 )
 
 from tests_support import ROOT
@@ -69,7 +73,7 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     for row in rows:
         best = worst.loc[row[0]]
         assert row[1] == "ISCWSA-MWD-REV4"
-        assert float(row[2]) == pytest.approx(24 * 0.0254, abs=5e-5)
+        assert row[2] == "24"  # in, as the industry writes a hole size
         assert float(row[3]) == pytest.approx(best.sf, abs=0.005)
         assert float(row[4]) == pytest.approx(best.md, abs=0.005)
         assert row[-1] == {"pass": "pass", "warn": "caution", "fail": "stop"}[best.level]
@@ -81,7 +85,11 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     for k in range(1, 7):  # each offset survey named with its file's hash
         data = (EXAMPLE / "offsets" / f"offset-0{k}.csv").read_bytes()
         assert f"offset-0{k}.csv · sha256 {hashlib.sha256(data).hexdigest()}" in text
-    assert "Clearance: stop — minimum separation factor" in text
+    verdict = "Clearance: stop — minimum separation factor 0.40 against offset-04 at 1830.00 m MD"
+    assert text.count(verdict) == 2  # in the summary on page 1, and atop the section
+    summary = text.index("Total depth (MD)")
+    assert verdict in text[summary : text.index("Method and reference models", summary)]
+    assert "ISCWSA-MWD-REV4, hole 36 in (0.9144 m)" in text
     assert "SPE-187073" in text and "SPE 67616" in text
     for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):
         assert internal not in text.split("Appendix: provenance")[0], internal
@@ -127,14 +135,19 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
         "0.00",
         "0.00",
         "its first MD",
-        "36.000",
+        "36",
         "0.9144",
         title,
     ]
     assert [r[0] for r in offsets] == list(SLOTS)
     for row in offsets:
-        assert row[1:] == [*SLOTS[row[0]], "its first MD", "24.000", "0.6096", title], row[0]
+        assert row[1:] == [*SLOTS[row[0]], "its first MD", "24", "0.6096", title], row[0]
     assert "SPE 90408" not in page.text  # no gyro model in this scan
+
+
+def test_clearance_report_has_a_signoff_block(clearance_run: Path, browser: Any):
+    """A clearance report is signed like a survey report (#28 item 9)."""
+    assert_signoff_before_appendix(browser, clearance_run)
 
 
 def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
@@ -147,10 +160,29 @@ def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
     assert "Prediction of wellbore position accuracy when surveyed with gyroscopic tools" in text
 
 
+def _cylinder_md_labels(texts: list[str]) -> list[float]:
+    return [float(m[1]) for t in texts if (m := re.fullmatch(r"MD (\d+)", t))]
+
+
+def test_travelling_cylinder_traces_carry_md_labels(clearance_run: Path, browser: Any):
+    """Each offset's trace on the travelling cylinder is labelled with reference MDs (#28
+    item 9), each the MD of one of its points inside the plotted reach, a few per trace."""
+    html = clearance_run / "report.html"
+    table = pq.read_table(clearance_run / "clearance.clearance.parquet").to_pandas()
+    reach = float(re.search(r"within (\d+) m; labels", inspect(browser, html).text)[1])
+    near = table[table.distance <= reach]
+    labels = _cylinder_md_labels(svg_texts(browser, figure_svg(html, "cylinder"), "text"))
+    assert len(labels) >= 2 * near.offset.nunique()
+    assert len(labels) <= 6 * near.offset.nunique()
+    assert all(np.min(np.abs(near.md.to_numpy() - md)) < 0.5 for md in labels)
+    assert max(labels) - min(labels) > 0.5 * (near.md.max() - near.md.min())  # along the trace
+
+
 def test_clearance_figures_drawn_in_the_pdf(clearance_run: Path, tmp_path: Path):
     pages = pdf_pages(clearance_run / "report.pdf", tmp_path)
     words = " ".join(w[0] for p in pages for w in p.words)
     assert "Travelling cylinder" in words and "Separation factor against MD" in words
+    assert len(re.findall(r"MD \d+", words)) >= 6  # the cylinder's MD labels
     regions = figure_regions(pages)
     assert len(regions) >= 6
     sf_chart, cylinder = sorted(regions)[-2:]

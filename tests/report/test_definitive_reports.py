@@ -6,6 +6,7 @@ Chromium; the gates also in run.json and on the command line."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -75,8 +76,10 @@ def test_gates_report_in_chromium(inout: tuple[Path, str], browser: Any, tmp_pat
     assert any(f.startswith("fig-qc") for f in page.figures)
     qc = {row[0]: row for row in page.tables["qc"]}
     comparison = pd.read_parquet(out / "gates.comparison.parquet")
-    assert qc["in/out azimuth"][4] == str(int((~comparison["passed"]).sum()))
-    assert qc["in/out azimuth"][5] == str(int(comparison["azi_diff"].isna().sum()))  # vertical
+    assert qc["In-run − out-run azimuth"][4] == str(int((~comparison["passed"]).sum()))
+    assert qc["In-run − out-run azimuth"][5] == str(
+        int(comparison["azi_diff"].isna().sum())
+    )  # vertical
     # the definitive survey's program: the in-run throughout
     program = page.tables["program"]
     assert [row[1] for row in program] == ["in-run"]
@@ -126,5 +129,10 @@ def test_definitive_survey_report_in_chromium(browser: Any, tmp_path: Path) -> N
         "<dt>Tool type</dt><dd>GYRO-1: north-seeking gyro (example); MWD-1: MWD (example)</dd>"
     ) in html
     assert '<th class="l">Run<span class="unit">&nbsp;</span></th><th class="r">MD<' in html
+    subtitle = re.search(r'<p class="subtitle">([^<]*)</p>', html)
+    assert subtitle is None or "MWD" not in subtitle[1]  # not the last file header's tool
+    # the GYRO-1 run's model cites the gyro error model's paper beside the MWD one's
+    assert "propagated as in [1] (the gyro terms as in [2])" in page.text
+    assert "Prediction of wellbore position accuracy when surveyed with gyroscopic" in page.text
     csv = pd.read_csv(out / "definitive.csv", comment="#")
     assert len(csv) == len(survey)

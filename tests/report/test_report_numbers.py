@@ -14,7 +14,7 @@ import pytest
 from report_support import figure_svg, inspect, pdf_pages, svg_texts
 
 import pipeline as gp
-from pipeline.reports.numbers import fmt_azimuth, fmt_measured, fmt_sigma
+from pipeline.reports.numbers import fmt_azimuth, fmt_inches, fmt_measured, fmt_sigma
 
 
 @pytest.mark.parametrize(
@@ -73,6 +73,24 @@ def test_a_measured_value_prints_down_to_its_sigma(
 )
 def test_azimuth_that_rounds_to_360_prints_as_0(azimuth: float, decimals: int, text: str):
     assert fmt_azimuth(azimuth, decimals) == text
+
+
+@pytest.mark.parametrize(
+    ("metres", "text"),
+    [
+        (0.3112, "12¼"),  # 12.252 in: the bit size, as drilled
+        (0.2159, "8½"),
+        (0.4445, "17½"),
+        (0.9144, "36"),
+        (0.0127, "½"),
+        (0.1556, "6 1/8"),  # an odd eighth: no such glyph in the report fonts
+        (0.0032, "1/8"),
+        (0.3137, "12.350"),  # no whole eighth: decimals
+        (None, ""),
+    ],
+)
+def test_hole_sizes_print_in_inches_as_the_industry_writes_them(metres: float | None, text: str):
+    assert fmt_inches(metres) == text
 
 
 def test_due_north_well_prints_no_azimuth_of_360(browser: Any, tmp_path: Path):

@@ -300,7 +300,7 @@ def test_a_plugin_section_in_the_calibration_report(plugged: None, tmp_path: Pat
     )
     assert done.returncode == 0, done.output
     found = sections_of(tmp_path / "run" / "report.html")
-    assert list(found)[-2:] == ["part-tortuosity-series", "provenance"]
+    assert list(found)[-3:] == ["part-tortuosity-series", "signoff", "provenance"]
     series = pq.read_table(tmp_path / "run" / "drift.series.parquet").num_rows
     assert f"{series} calibration series reached this section." in found["part-tortuosity-series"]
     assert "part-tortuosity-section" not in found

@@ -15,7 +15,9 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 from report_support import (
+    DICHROMACY,
     assert_self_contained,
+    closest_colours,
     colour,
     figure_regions,
     figure_svg,
@@ -56,6 +58,14 @@ well:
 tool: {preset: mems-vrg}
 survey: {mode: point, every: 150, positions: [0, 90, 180, 270, 0], dwell: 12}
 """
+
+
+CLIENT_TITLES = {
+    "earth_rate_fit": "Earth rate fitted over the positions",
+    "rest_gyro": "Tool at rest: gyros",
+    "rest_acc": "Tool at rest: accelerometers",
+}
+"""Checks of the point-gyro run → the title its QC chart and summary row carry."""
 
 
 def number(cell: str) -> float:
@@ -120,10 +130,11 @@ def test_point_gyro_report_has_qc_sigma_and_ellipses(point_run: Path, browser: A
 
     qc = pq.read_table(point_run / "validity.qc.parquet").to_pylist()
     summary = {r[0]: r for r in page.tables["qc"]}
-    for check in {r["check"] for r in qc if r["passed"] is not None}:
+    assert set(CLIENT_TITLES) <= {r["check"] for r in qc if r["passed"] is not None}
+    for check, title in CLIENT_TITLES.items():  # the summary names each check for a client
         evaluated = [r for r in qc if r["check"] == check and r["passed"] is not None]
-        assert int(summary[check][2]) == len(evaluated)
-        assert int(summary[check][4]) == sum(not r["passed"] for r in evaluated)
+        assert int(summary[title][2]) == len(evaluated)
+        assert int(summary[title][4]) == sum(not r["passed"] for r in evaluated)
 
 
 def test_ellipse_columns_name_axes_model_and_confidence(point_run: Path, browser: Any):
@@ -178,15 +189,49 @@ def test_qc_chart_axes_fit_their_data(point_run: Path, browser: Any):
     def legend(panel: str) -> list[str]:
         return svg_texts(browser, svg, f"#{panel} g.legend text")
 
-    rest = [r["measured"] - r["reference"] for r in qc if r["check"] == "rest_gyro"]
+    rest = [r["measured"] for r in qc if r["check"] == "rest_gyro"]
     limit = max(r["tolerance"] for r in qc if r["check"] == "rest_gyro")
     assert limit == 100 and 5 < max(rest) < limit / 5
     shown = ticks("qc-rest_gyro")
     assert max(rest) <= max(shown) + 2.5 and max(shown) < limit / 4  # ~0…14, not ±100
-    assert legend("qc-rest_gyro") == ["tolerance ±100 deg/h (beyond the axis)"]
+    assert legend("qc-rest_gyro") == ["tolerance 0 to 100 °/h (beyond the axis)"]
 
     fit = min(r["tolerance"] for r in qc if r["check"] == "earth_rate_fit")
     assert max(ticks("qc-earth_rate_fit")) >= fit * 0.8 and legend("qc-earth_rate_fit") == []
+
+
+def test_qc_charts_are_titled_for_a_client(point_run: Path, browser: Any, tmp_path: Path):
+    """Each QC chart has a plain title, not the check's internal name, and its y axis says
+    what is plotted with its unit: rest_gyro plots the largest per-axis standard deviation
+    of the gyros (°/h), not "measured − reference" (#28 item 9); the PDF says the same."""
+    svg = figure_svg(point_run / "report.html", "qc-0")
+    texts = svg_texts(browser, svg, "text")
+    rest = svg_texts(browser, svg, "#qc-rest_gyro text")
+    assert "Tool at rest: gyros" in rest
+    assert "largest gyro-axis std. deviation (°/h)" in rest
+    assert "largest accelerometer-axis std. deviation (m/s²)" in svg_texts(
+        browser, svg, "#qc-rest_acc text"
+    )
+    assert set(CLIENT_TITLES.values()) <= set(texts)
+    assert not [t for t in texts if any(name in t for name in CLIENT_TITLES)]  # no rest_gyro
+    assert not [t for t in texts if "deg/h" in t or "m/s2" in t]
+    words = " ".join(
+        w[0] for page in pdf_pages(point_run / "report.pdf", tmp_path) for w in page.words
+    )
+    assert all(title in words for title in CLIENT_TITLES.values())
+    assert "largest gyro-axis std. deviation (°/h)" in words
+
+
+def test_ellipse_plot_colours_are_told_apart(point_run: Path):
+    """The ellipses of the stations drawn (one colour each, as in their legend) differ
+    clearly to normal and to colour-blind eyes: no two near-identical oranges (#28 item 9)."""
+    svg = figure_svg(point_run / "report.html", "ellipses")
+    shapes = svg[svg.index('<g id="ellipse-shapes"') :]
+    legend = shapes[shapes.index('<g class="legend"') :]
+    colours = re.findall(r'stroke="(#[0-9a-f]{6})"', legend.split("</g>")[0])
+    assert len(colours) == 6 and len(set(colours)) == 6
+    for vision in DICHROMACY:
+        assert closest_colours(colours, vision) > (25 if vision == "normal" else 12), vision
 
 
 def test_free_gyro_report_shows_drift_and_in_out_qc(browser: Any, tmp_path: Path):
@@ -207,8 +252,10 @@ def test_free_gyro_report_shows_drift_and_in_out_qc(browser: Any, tmp_path: Path
     assert {"fig-drift", "fig-qc-0"} <= set(page.figures)
     inout = pq.read_table(out / "drift.qc.parquet")
     rows = {r[0]: r for r in page.tables["qc"]}
-    assert int(rows["in/out azimuth"][2]) == inout.num_rows
-    assert int(rows["in/out azimuth"][4]) == sum(not p for p in inout.column("passed").to_pylist())
+    assert int(rows["In-run − out-run azimuth"][2]) == inout.num_rows
+    assert int(rows["In-run − out-run azimuth"][4]) == sum(
+        not p for p in inout.column("passed").to_pylist()
+    )
     # the plan drifts 3 °/h; the report quotes the rate the correction applied
     readings = pq.read_table(out / "drift.readings.parquet")
     slope = np.polyfit(

@@ -6,13 +6,11 @@ after it — in the HTML (Chromium) and in the PDF text."""
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
 from pathlib import Path
 from typing import Any
 
 import pytest
-from report_support import inspect
+from report_support import assert_signoff_before_appendix, inspect, pdf_text
 
 from tests_support import ROOT, gyropipe_cli
 
@@ -40,7 +38,6 @@ SHOWN = {
     "Wellhead map position": "E 431250.50 m, N 6478512.25 m",
     "Depth datum": "RKB",
 }
-SIGNERS = ("Prepared by", "Checked by", "Approved by")
 
 
 def _run(out: Path, *well: str) -> Path:
@@ -68,16 +65,6 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Runs:
     return Runs(tmp_path_factory.mktemp("signable"))
 
 
-def pdf_text(pdf: Path) -> list[str]:
-    """The text of each page of ``pdf`` (pdftotext, layout kept)."""
-    if shutil.which("pdftotext") is None:
-        pytest.skip("pdftotext not found: apt-get install poppler-utils")
-    text = subprocess.run(
-        ["pdftotext", "-layout", str(pdf), "-"], check=True, capture_output=True, text=True
-    ).stdout
-    return text.split("\f")
-
-
 def _pairs(text: str) -> dict[str, str]:
     """Label → value of the shown labels in a page laid out as text (a label, then two or
     more spaces, then its value, in either column of the header)."""
@@ -101,6 +88,7 @@ def test_header_fields_in_the_html_when_given(runs: Runs, browser: Any):
         if label != "Tool":  # "Tool type" and "Tool and run" remain
             assert label not in absent, label
     assert "\nTool\n" not in absent and "\nTool\t" not in absent
+    assert "Pipeline\t" not in well and "Pipeline\n" not in well  # in the appendix only
 
 
 def test_header_fields_in_the_pdf_when_given(runs: Runs):
@@ -111,23 +99,7 @@ def test_header_fields_in_the_pdf_when_given(runs: Runs):
 
 
 def test_signoff_block_then_provenance_appendix(runs: Runs, browser: Any):
-    html = inspect(browser, runs["absent"] / "report.html")
-    header = html.headers["signoff"]
-    assert header == ["Role", "Name", "Signature", "Date"]
-    assert [row[0] for row in html.tables["signoff"]] == list(SIGNERS)
-    assert all(set(cell) == {"_"} for row in html.tables["signoff"] for cell in row[1:])
-    text = html.text
-    assert text.rindex("Sign-off") < text.rindex("Appendix: provenance")
-    assert text.rindex("Approved by") < text.index("Input files")
-
-    pages = pdf_text(runs["absent"] / "report.pdf")
-    whole = "\f".join(pages)
-    signoff = whole.rindex("Sign-off")
-    assert whole.index("Appendix: provenance") > signoff
-    lines = whole[signoff:].splitlines()
-    assert any(line.split()[:4] == ["Role", "Name", "Signature", "Date"] for line in lines)
-    for role in SIGNERS:
-        assert any(re.fullmatch(rf"{role}(\s+_{{8,}}){{3}}", line.strip()) for line in lines), role
+    assert_signoff_before_appendix(browser, runs["absent"])
 
 
 def test_first_pages_have_no_local_path_and_no_plugin_list(runs: Runs):

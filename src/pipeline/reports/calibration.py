@@ -33,7 +33,7 @@ from pipeline.reports.document import (
 from pipeline.reports.literature import DRIFT_CALIBRATION, Citations
 from pipeline.reports.numbers import fmt_measured
 from pipeline.reports.parts import Parts, Registered
-from pipeline.reports.sections import footer, provenance_section, tool_fields
+from pipeline.reports.sections import footer, provenance_section, signoff_section, tool_fields
 from pipeline.reports.survey import ReportInputError
 from pipeline.well import WellMetadata
 
@@ -124,7 +124,7 @@ def calibration_document(
                 cite=cite,
             )
         )
-    sections += [*added, provenance_section(provenance)]
+    sections += [*added, signoff_section(), provenance_section(provenance)]
     return Document(
         title=title,
         subject=", ".join(instruments),

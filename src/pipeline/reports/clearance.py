@@ -20,6 +20,7 @@ from pipeline.reports.charts.model import Axis, Chart, Line, Marker, Panel, Span
 from pipeline.reports.document import Block, Column, Fields, Plot, Section, Table, Verdict, fmt
 from pipeline.reports.listing import col
 from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL, SEPARATION_RULE, Citations
+from pipeline.reports.numbers import fmt_inches
 
 FloatArray = NDArray[np.float64]
 ErrorModel = Callable[[str], tuple[str, bool]]
@@ -122,22 +123,47 @@ def travelling_cylinder(size: plots.Size, curves: list[OffsetCurve], reach: floa
                 va="center" if degrees % 180 else ("bottom" if degrees == 0 else "top"),
             )
         )
+    near_md = np.concatenate([c.md[c.distance <= reach] for c in curves])
+    step = ticks.linear_ticks(*_span(near_md), MD_LABELS)[1] if near_md.size else 0.0
+    placed: list[tuple[float, float]] = []  # labels drawn: another this close is left out
     for k, c in enumerate(curves):
         near = c.distance <= reach
         if near.any():
             a = np.radians(c.toolface[near])
-            panel.add(
-                Line(
-                    c.distance[near] * np.sin(a),
-                    c.distance[near] * np.cos(a),
-                    plots.series_colour(k),
-                    0,
-                    marker=Marker("o", 2.6),
-                    label=c.name,
-                )
-            )
+            east, north = c.distance[near] * np.sin(a), c.distance[near] * np.cos(a)
+            colour = plots.series_colour(k)
+            panel.add(Line(east, north, colour, 0, marker=Marker("o", 2.6), label=c.name))
+            for i in md_label_points(c.md[near], step):
+                if any(np.hypot(east[i] - x, north[i] - y) < LABEL_GAP * reach for x, y in placed):
+                    continue
+                placed.append((float(east[i]), float(north[i])))
+                text = f"MD {ticks.label(float(c.md[near][i]), step)}"
+                panel.add(Text(east[i], north[i], text, size=5.5, colour=colour, dx=3, dy=2))
     panel.legend = "outside"
     return Chart(size, [panel])
+
+
+MD_LABELS = 6
+"""About this many MD steps label the travelling cylinder's traces."""
+LABEL_GAP = 0.15
+"""Nearest two MD labels of the travelling cylinder may be, in units of its reach."""
+
+
+def _span(md: FloatArray) -> tuple[float, float]:
+    return float(md.min()), float(md.max())
+
+
+def md_label_points(md: FloatArray, step: float) -> list[int]:
+    """Indices of a trace's points to label with their reference MD: the first point at or
+    past each multiple of ``step`` (m) the trace's MDs reach (its first point when it
+    spans none)."""
+    if not md.size or step <= 0:
+        return []
+    order = np.argsort(md, kind="stable")
+    marks = np.arange(np.ceil(md.min() / step), np.floor(md.max() / step) + 1) * step
+    first = np.searchsorted(md[order], marks - 1e-9 * step)
+    picked = dict.fromkeys(int(order[i]) for i in first if i < len(md))
+    return list(picked) or [int(order[0])]
 
 
 def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
@@ -158,7 +184,7 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
                 fmt(well.get("north")),
                 fmt(well.get("east")),
                 fmt(tvd) if tvd is not None else "its first MD",
-                fmt(hole / 0.0254, 3) if hole is not None else "",
+                fmt_inches(hole),
                 fmt(hole, 4),
                 titles.get(model, model),
             )
@@ -202,7 +228,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             (
                 c.name,
                 str(own.get("model", "")),
-                fmt(own["hole_diameter"], 4) if "hole_diameter" in own else "",
+                fmt_inches(own.get("hole_diameter")),
                 fmt(c.sf[i], 2) if np.isfinite(c.sf[i]) else "undefined (centres meet)",
                 fmt(c.md[i]),
                 fmt(offset_md[rows_of[i]]),
@@ -232,10 +258,11 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
         ("Limits", f"stop below SF {fmt(stop, 2)}, caution below {fmt(caution, 2)}"),
     ]
     if "reference_model" in rule:
+        hole = float(rule["reference_hole_diameter"])
         fields.append(
             (
                 "Reference well",
-                f"{rule['reference_model']}, hole {fmt(rule['reference_hole_diameter'], 4)} m",
+                f"{rule['reference_model']}, hole {fmt_inches(hole)} in ({fmt(hole, 4)} m)",
             )
         )
     reach = max(4.0 * float(np.nanmin(col(table, "distance")) or 1.0), 10.0)
@@ -255,7 +282,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             (
                 Column("Offset well", align="left"),
                 Column("Tool model", align="left"),
-                Column("Hole", "m"),
+                Column("Hole", "in"),
                 Column("Minimum SF"),
                 Column("Reference MD", "m"),
                 Column("Offset MD", "m"),
@@ -279,7 +306,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             "Travelling cylinder",
             "Closest approach of each offset well seen down the reference well: direction "
             "from the reference's high side (clockwise), distance centre to centre, within "
-            f"{fmt(reach, 0)} m.",
+            f"{fmt(reach, 0)} m; labels: the reference MD (m) of the station so marked.",
             partial(travelling_cylinder, curves=curves, reach=reach),
             (6.9, 4.2),
         ),

@@ -89,3 +89,25 @@ def fmt_azimuth(value: float | None, decimals: int = 2) -> str:
     if value is None or not math.isfinite(value):
         return fmt(value, decimals)
     return fmt(azimuth_value(value, decimals), decimals)
+
+
+INCH = 0.0254
+"""Metres per inch."""
+_QUARTERS = {2: "¼", 4: "½", 6: "¾"}
+"""Eighths printed as a Latin-1 fraction glyph (the report fonts' repertoire has no ⅛)."""
+
+
+def fmt_inches(metres: float | None) -> str:
+    """A hole or casing size in inches as the industry writes it: whole eighths as a
+    fraction (0.3112 m → '12¼', 0.2159 m → '8½', 0.9144 m → '36', 0.1556 m → '6 1/8'),
+    others to 3 decimals ('12.350'); blank for null."""
+    if metres is None or not math.isfinite(metres):
+        return fmt(metres)
+    inches = metres / INCH
+    eighths = round(inches * 8)
+    if abs(inches * 8 - eighths) > 0.02:  # 0.3112 m is 12.252 in: 12¼ as drilled
+        return fmt(inches, 3)
+    whole, part = divmod(eighths, 8)
+    if part % 2:
+        return f"{whole} {part}/8" if whole else f"{part}/8"
+    return f"{whole if whole or not part else ''}{_QUARTERS.get(part, '')}"

@@ -47,7 +47,9 @@ TEAL = "#23867a"
 RED = "#c0392b"
 GREY = "#8a94a6"
 BAND = "#dcefe3"
-SERIES_COLOURS = (BLUE, ORANGE, TEAL, "#8e44ad", "#b5651d", "#34495e", "#d35400", "#16a085")
+SERIES_COLOURS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377", "#000000")
+"""Colours of a chart's series (offset wells, ellipses, axes): Paul Tol's colour-blind-safe
+"bright" scheme and black, distinct also to deuteranopes, protanopes and tritanopes."""
 DOT = Marker("o", 2.6)
 """The marker of a station"""
 
@@ -200,7 +202,9 @@ def error_ellipses(size: Size, ell: Ellipses, north_label: str, shown: int = 6) 
     """Semi-axes against MD, and the ellipses of ``shown`` stations spread over the MD
     range drawn about a common centre."""
     b_md, b_shape = grid(size, 1, 2, wspace=0.8)
-    p_md = Panel(b_md, Axis("MD (m)"), Axis(f"Half-axis at {ell.confidence} (m)"))
+    p_md = Panel(
+        b_md, Axis("MD (m)"), Axis(f"Half-axis at {ell.confidence} (m)"), id="ellipse-axes"
+    )
     p_md.add(
         Line(ell.md, ell.major, BLUE, label="semi-major"),
         Line(ell.md, ell.minor, TEAL, label="semi-minor"),
@@ -217,6 +221,7 @@ def error_ellipses(size: Size, ell: Ellipses, north_label: str, shown: int = 6) 
         equal=True,
         legend="best",
         legend_size=6.5,
+        id="ellipse-shapes",
     )
     for k, i in enumerate(picks):
         east, north = ellipse(float(ell.major[i]), float(ell.minor[i]), float(ell.azimuth[i]))
@@ -232,7 +237,9 @@ class QcSeries:
     Rows that were not evaluated are left out (``skipped`` counts them)."""
 
     name: str
+    """the check's name (the chart panel's id)"""
     unit: str
+    """as printed (°/h, m/s²)"""
     x: FloatArray
     value: FloatArray
     low: FloatArray
@@ -241,6 +248,8 @@ class QcSeries:
     quantity: str
     """what ``value`` is, e.g. 'measured − reference'"""
     skipped: int = 0
+    title: str = ""
+    """what a client reads as the chart's title (empty: ``name``)"""
 
 
 BAND_WIDER = 5.0
@@ -292,7 +301,7 @@ def qc_charts(size: Size, series: Sequence[QcSeries], x_label: str = "MD (m)") -
             box,
             Axis(x_label, label_size=7),
             Axis(f"{s.quantity} ({s.unit})" if s.unit else s.quantity, limits=view, label_size=7),
-            title=f"{s.name}{tail}",
+            title=f"{s.title or s.name}{tail}",
             title_colour=RED if failed else NAVY,
             legend="best" if view is not None else None,
             id=f"qc-{s.name}".replace(" ", "-").replace("/", "-"),  # the panel in an SVG

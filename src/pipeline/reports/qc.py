@@ -18,6 +18,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.qc.tables import diagnoses
+from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.document import Column, Table, Verdict, fmt_sig
 from pipeline.reports.flags import Flag, compass_flag, continuous_flags, failed_check
 from pipeline.reports.numbers import fmt
@@ -69,17 +70,19 @@ def validity_series(qc: pa.Table) -> list[QcSeries]:
         done = rows & np.array([p is not None for p in passed]) & ~np.isnan(md)
         if not done.any():
             continue
+        titled = check_title(name, "measured − reference")
         out.append(
             QcSeries(
                 name=name,
-                unit=units[int(np.flatnonzero(rows)[0])],
+                unit=printed_unit(units[int(np.flatnonzero(rows)[0])]),
                 x=md[done],
                 value=deviation[done],
-                low=-tolerance[done],
+                low=np.zeros(done.sum()) if titled.limit else -tolerance[done],
                 high=tolerance[done],
                 passed=np.array([passed[i] for i in np.flatnonzero(done)], dtype=bool),
-                quantity="measured − reference",
+                quantity=titled.plotted,
                 skipped=int(rows.sum() - done.sum()),
+                title=titled.title,
             )
         )
     return out
@@ -98,16 +101,18 @@ def check_series(checks: pa.Table) -> list[QcSeries]:
     for name in dict.fromkeys(names):
         rows = np.array([n == name for n in names])
         low = np.zeros(rows.sum()) if (value[rows] >= 0).all() else -limit[rows]
+        titled = check_title(name, "value")
         out.append(
             QcSeries(
                 name,
-                units[int(np.flatnonzero(rows)[0])],
+                printed_unit(units[int(np.flatnonzero(rows)[0])]),
                 x[rows],
                 value[rows],
                 low,
                 limit[rows],
                 passed[rows],
-                "value",
+                titled.plotted,
+                title=titled.title,
             )
         )
     return out
@@ -132,6 +137,7 @@ def inout_series(inout: pa.Table) -> list[QcSeries]:
                 np.abs(diff[ok]) <= tol[ok],
                 "in − out",
                 skipped=int((~ok).sum()),
+                title=f"In-run − out-run {name.removeprefix('in/out ')}",
             )
         )
     return out
@@ -157,7 +163,7 @@ def summary_rows(series: list[QcSeries]) -> list[tuple[str, ...]]:
         worst = float(np.max(np.abs(s.value) / span)) if len(s.value) else float("nan")
         rows.append(
             (
-                s.name,
+                s.title or s.name,
                 s.unit,
                 str(len(s.value)),
                 str(int(s.passed.sum())),

@@ -97,7 +97,7 @@ def site_fields(well: WellMetadata) -> Fields:
 
 def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[str, str]]) -> Fields:
     """Tool and run: survey type, tool name, type and serial, run and job number, survey
-    date, pipeline, run time, ``extra``."""
+    date, ``extra``, processing time (the pipeline is named in the provenance appendix)."""
     return Fields(
         "Tool and run",
         items(
@@ -110,7 +110,6 @@ def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[st
                 ("Job number", well.job_number),
                 ("Survey date", well.survey_date.isoformat() if well.survey_date else None),
                 *extra,
-                ("Pipeline", f"{provenance.pipeline} {provenance.pipeline_version}"),
                 ("Processed", run_time(provenance)),
             ]
         ),

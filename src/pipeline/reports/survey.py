@@ -164,6 +164,8 @@ def survey_document(
         else None
     )
     added = parts.sections()  # before the method section's reference list: they may cite
+    tool = survey_tool(traj, well)
+    verdicts = [b for b in clearance.blocks if isinstance(b, Verdict)] if clearance else []
 
     sections = [
         Section(
@@ -171,14 +173,14 @@ def survey_document(
             (
                 site_fields(well),
                 tool_fields(
-                    well.model_copy(update={"tool_type": survey_tool(traj, well)}),
+                    well.model_copy(update={"tool_type": tool}),
                     provenance,
                     [("Stations", f"{traj.num_rows} ({fmt(md[0])} – {fmt(md[-1])} m MD)")],
                 ),
             ),
             key="well",
         ),
-        _summary(tables, path, vs_azimuth, flags, course),
+        _summary(tables, path, vs_azimuth, flags, course, verdicts),
         _method(tables, path, vs_azimuth, parts),
         Section(
             "Survey listing",
@@ -209,7 +211,9 @@ def survey_document(
     if clearance is not None:
         sections.append(clearance)
     sections += [*added, signoff_section(), provenance_section(provenance)]
-    subtitle = " · ".join(x for x in (well.field, well.company, well.tool_type) if x)
+    # the tool in the subtitle only when one tool surveyed it (several: the header says)
+    one_tool = well.tool_type if tool == well.tool_type else None
+    subtitle = " · ".join(x for x in (well.field, well.company, one_tool) if x)
     return Document(
         title=title,
         subject=well.well or "unnamed well",
@@ -311,7 +315,10 @@ def _summary(
     vs_azimuth: float | None,
     flags: list[list[Flag]] | None,
     course: Course,
+    verdicts: list[Verdict],
 ) -> Section:
+    """Results at TD and the verdicts of the QC, the acceptance gates and ``verdicts``
+    (the clearance's, repeated from its section)."""
     traj = tables.trajectory
     inc = col(traj, "inc")
     i_inc = int(np.argmax(inc))
@@ -341,7 +348,7 @@ def _summary(
         blocks.append(_qc_verdict(flags, path.md))
     if tables.gates is not None:
         blocks.append(gates_verdict(tables.gates))
-    return Section("Summary", tuple(blocks), key="summary")
+    return Section("Summary", (*blocks, *verdicts), key="summary")
 
 
 def _method(

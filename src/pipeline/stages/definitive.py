@@ -412,15 +412,20 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
 
 def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     """The definitive survey in the report: ties, per-run propagation, the confidence."""
-    from pipeline.reports.literature import ERROR_MODEL
+    from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL
 
     confidence = float(stage.params.get("confidence", 0.0)) * 100
+    runs = stage.params.get("runs") or {}
+    models = [str(r.get("model", RunSpec().model)) for r in runs.values()] or [RunSpec().model]
+    gyro = any(ctx.error_model(m)[1] for m in models)
+    cited = ctx.cite(ERROR_MODEL)
+    cited += f" (the gyro terms as in {ctx.cite(GYRO_ERROR_MODEL)})" if gyro else ""
     return MethodNote(
         "Definitive survey",
         "each run tied at the last listed station of the run above, positions by minimum "
         "curvature through the listed stations; each station's errors from its own run's "
         f"error model (depth terms on the run's own MD), propagated as in "
-        f"{ctx.cite(ERROR_MODEL)} over the listed stations with a run's systematic errors "
+        f"{cited} over the listed stations with a run's systematic errors "
         "correlated within the run, ellipses at "
         f"{confidence:g} %{magnetic_words(ctx)}",
     )

@@ -159,7 +159,7 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
         raise ValueError(f"the las reader reads kinds {sorted((*KINDS, 'log'))}, not {kind!r}")
     opts: LasOptions = options or LasOptions()
     source = load(path)
-    header = parse_header(path, source.header)
+    header = parse_header(path, source.header, source.data_set)
     if kind == "log":
         return read_log(path, source, header, opts), well_metadata(path, header, None, strict=False)
     spec = KINDS[kind]

@@ -44,6 +44,13 @@ SECTION_NAMES: dict[Role, str] = {
 """lasio's name of each section role (its header grammar depends on it)."""
 
 _DATA_TITLE = re.compile(rb"^[ \t]*~(?:A|LOG_DATA)", re.IGNORECASE | re.MULTILINE)
+_INCLINOMETRY_TITLE = re.compile(rb"^[ \t]*~INCLINOMETRY_DATA", re.IGNORECASE | re.MULTILINE)
+_NEXT_TITLE = re.compile(rb"^[ \t]*~", re.MULTILINE)
+LOG = "LOG"
+INCLINOMETRY = "INCLINOMETRY"
+"""LAS 3 data sets read: the log (``~Log_Definition``, ``~Log_Data``; LAS 2 ``~C``, ``~A``)
+and, in a file without one, the directional survey (``~Inclinometry_Definition``,
+``~Inclinometry_Data``)."""
 NUMBER = r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$"
 
 
@@ -97,8 +104,11 @@ class Source:
     title_line: int
     """1-based line of the data section title (0: there is none)"""
     raw: bytes | mmap.mmap
-    """the file's bytes, mapped into memory when they need no transcoding (:func:`load`)"""
+    """the file's bytes, mapped into memory when they need no transcoding (:func:`load`);
+    an ~Inclinometry_Data section's file up to its end"""
     start: int
+    data_set: str = LOG
+    """the LAS 3 data set read (:data:`LOG` or :data:`INCLINOMETRY`)"""
 
 
 # ------------------------------------------------------------------------- file text
@@ -139,8 +149,14 @@ def _mapped(path: Path) -> mmap.mmap | None:
 
 
 def _split(path: Path, raw: bytes | mmap.mmap) -> Source:
-    """``raw`` split at its data section title."""
+    """``raw`` split at its data section title: the log's, else a LAS 3 file's
+    ~Inclinometry_Data (``raw`` then ends where that section does)."""
     title = _DATA_TITLE.search(raw)
+    data_set = LOG
+    if title is None and (title := _INCLINOMETRY_TITLE.search(raw)) is not None:
+        data_set = INCLINOMETRY
+        after = _NEXT_TITLE.search(raw, title.end())
+        raw = raw[: after.start()] if after is not None else raw
     if title is None:
         lines = split_lines(decode(path, raw[:], 1))
         if not any(line.lstrip().startswith("~") for line in lines):
@@ -150,7 +166,7 @@ def _split(path: Path, raw: bytes | mmap.mmap) -> Source:
         return Source(lines, 0, b"", 0)
     end = raw.find(b"\n", title.start())
     lines = split_lines(decode(path, raw[: title.start()], 1))
-    return Source(lines[:-1], len(lines), raw, len(raw) if end < 0 else end + 1)
+    return Source(lines[:-1], len(lines), raw, len(raw) if end < 0 else end + 1, data_set)
 
 
 def utf16_codec(head: bytes) -> str | None:
@@ -221,7 +237,8 @@ def split_lines(text: str) -> list[str]:
 # ---------------------------------------------------------------------------- header
 
 
-def parse_header(path: Path, lines: list[str]) -> Header:
+def parse_header(path: Path, lines: list[str], data_set: str = LOG) -> Header:
+    """The ~Version, ~Well and ``data_set``'s definition and parameter sections."""
     sections: dict[Role, list[Item]] = {role: [] for role in SECTION_NAMES}
     role: Role | None = None
     for number, line in enumerate(lines, start=1):
@@ -229,7 +246,7 @@ def parse_header(path: Path, lines: list[str]) -> Header:
         if not text or text.startswith("#"):
             continue
         if text.startswith("~"):
-            role = section_role(text)
+            role = section_role(text, data_set)
         elif role is not None:
             sections[role].append(_item(path, text, number, role))
     version, wrapped, delimiter = _version(path, sections["version"])
@@ -246,9 +263,20 @@ def require_curves(path: Path, header: Header) -> None:
         raise WrongKindError(path, "no curves: the ~Curve section is missing or empty", found="log")
 
 
-def section_role(title: str) -> Role | None:
-    """The role of a section from its ``~`` title (None: a section not read)."""
+def section_role(title: str, data_set: str = LOG) -> Role | None:
+    """The role of a section from its ``~`` title when ``data_set`` is read (None: a
+    section not read)."""
     name = title[1:].strip().upper()
+    if data_set != LOG:
+        suffixes: tuple[tuple[str, Role], ...] = (
+            ("DEFINITION", "curves"),
+            ("PARAMETER", "parameter"),
+            ("DATA", "data"),
+        )
+        for suffix, role in suffixes:
+            if name.startswith(f"{data_set}_{suffix}"):
+                return role
+        return "version" if name.startswith("V") else "well" if name.startswith("W") else None
     if name.startswith("LOG_DEFINITION") or (name.startswith("C") and "_" not in name):
         return "curves"
     if name.startswith("LOG_PARAMETER") or (name.startswith("P") and "_" not in name):
