@@ -41,7 +41,14 @@ from pipeline.survey.stations import (
     survey_offsets,
 )
 from pipeline.tables import DLS_COURSE_M, Stations
-from pipeline.uncertainty.engine import configure, model_terms
+from pipeline.uncertainty.engine import (
+    OutsideValidity,
+    OutsideValidityError,
+    configure,
+    model_terms,
+    within_bound,
+    within_range,
+)
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Carried, Section, WellByWell, section_covariance
 from pipeline.uncertainty.terms import Survey
@@ -172,6 +179,12 @@ class DefinitiveParams(BaseModel):
         "correlated within each run only (per_run)",
     )
     confidence: float = Field(0.95, gt=0, lt=1, description="probability of the *_conf columns")
+    outside_validity: OutsideValidity = Field(
+        "refuse",
+        description="a station outside its run's error model's range: refuse (an error "
+        "naming the run and station), or flag (NaN σ from it down, through every run below, "
+        "and an outside_validity column)",
+    )
     vs_azimuth: float = Field(0.0, description="vertical-section azimuth, deg")
     tie_north: float = Field(0.0, description="northing of the first station, m")
     tie_east: float = Field(0.0, description="easting of the first station, m")
@@ -233,6 +246,7 @@ def definitive_survey(
         )
     parts: list[dict[str, Any]] = []
     carried = Carried()
+    valid = True  # no station above is outside its model's range
     tie = (params.tie_north, params.tie_east, params.tie_tvd)
     for s, sec in enumerate(sections):
         run = runs[sec.run]
@@ -245,14 +259,29 @@ def definitive_survey(
         )
         survey = Survey.of(md, inc, azi_true, pos.tvd)
         nxt = sections[s + 1].tie_md if s + 1 < len(sections) else None
-        cov, carried_next = section_covariance(
-            Section(run.name, survey, model_terms(tools[run.port], site)),
-            carried,
-            basis=params.basis,
-            surface_tie=params.surface_tie and s == 0,
-            well_by_well=params.well_by_well,
-            tie_next=nxt,
-        )
+        try:
+            n = within_range(survey, tools[run.port], params.outside_validity) if valid else 0
+            cov = np.full((md.size, 3, 3), np.nan)
+            carried_next = None
+            if n > 0:  # the stations above the first one outside its model's range
+                head = (
+                    survey
+                    if n == md.size
+                    else Survey.of(md[:n], inc[:n], azi_true[:n], pos.tvd[:n])
+                )
+                cov[:n], carried_next = section_covariance(
+                    Section(run.name, head, model_terms(tools[run.port], site)),
+                    carried,
+                    basis=params.basis,
+                    surface_tie=params.surface_tie and s == 0,
+                    well_by_well=params.well_by_well,
+                    tie_next=nxt if n == md.size else None,
+                )
+                n = within_bound(head, cov[:n], run.spec.model, params.outside_validity)
+        except OutsideValidityError as exc:
+            raise OutsideValidityError(f"run {run.name!r}: {exc}") from None
+        cov[n:] = np.nan
+        valid = valid and n == md.size
         keep = sec.listed - sec.first
         parts.append(
             {
@@ -270,10 +299,10 @@ def definitive_survey(
                 "section": np.full(keep.size, s),
             }
         )
-        if nxt is not None and carried_next is not None:
+        if nxt is not None:
             at = interpolate_md(md, inc, azi, nxt, tie=(pos.north[0], pos.east[0], pos.tvd[0]))
             tie = (float(at.north[0]), float(at.east[0]), float(at.tvd[0]))
-            carried = carried_next
+            carried = carried_next or Carried()
     survey_table = with_magnetic(_survey_table(parts, params, north), applied)
     return {
         "survey": survey_table,
@@ -345,7 +374,7 @@ def _survey_table(parts: list[dict[str, Any]], params: DefinitiveParams, north: 
         ),
         "closure_distance": distance,
         "closure_direction": np.degrees(direction) % 360.0,
-        **covariance_columns(cov, params.confidence),
+        **covariance_columns(cov, params.confidence, params.outside_validity),
     }
     return DefinitiveSurvey.compiled().make_table(columns, north_reference=north)
 
