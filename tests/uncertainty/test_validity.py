@@ -157,9 +157,7 @@ def test_gyro_ns_on_well_1_is_refused_by_default(model: str) -> None:
 @pytest.mark.parametrize("model", ["GYRO-NS", "GYRO-MWD"])
 def test_gyro_ns_on_well_1_flagged_gives_nan_there(model: str) -> None:
     md, inc, azi = _well_1()
-    _, per_term = pu.term_covariances(
-        _survey(md, inc, azi), model, SITE, outside_validity="flag"
-    )
+    _, per_term = pu.term_covariances(_survey(md, inc, azi), model, SITE, outside_validity="flag")
     sigma = _sigma(per_term.sum(axis=0))
     outside = md >= 5400.0
     assert np.isnan(per_term[:, outside]).all()
