@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from pipeline.cli_args import disable_option
 from pipeline.errors import GyropipeError
+
+if TYPE_CHECKING:
+    from pipeline.uncertainty.toolmodel import ToolTerm
 
 EXIT_CONFIG = 2
 
@@ -70,14 +74,25 @@ def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
     click.echo(f"  file: {tool.file}; needs the site's {_needs(sorted(tool.needs))}")
     for name, value in tool.parameters.items():
         click.echo(f"  parameter {name} = {value:g} (SI; file unit {tool.units.get(name, '-')})")
-    click.echo(f"  {'term':<10} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
+    lo, hi = tool.inclination_range_deg
+    click.echo(f"  valid for inclinations {lo:g}–{hi:g}°")
+    w = max(10, *(len(t.name) for t in tool.terms))
+    click.echo(f"  {'term':<{w}} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
     for t in tool.terms:
         click.echo(
-            f"  {t.name:<10} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
-            f"{t.unit:<12} {t.code}"
+            f"  {t.name:<{w}} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
+            f"{t.unit:<12} {t.code}{_switch_words(t)}"
         )
 
 
 def _needs(needs: list[str]) -> str:
     words = {"latitude": "latitude", "magnetic": "geomagnetic field"}
     return " and ".join(words.get(n, n) for n in needs) or "nothing"
+
+
+def _switch_words(term: ToolTerm) -> str:
+    """ " (above static_end_inc: freeze)" for a term that switches at an inclination."""
+    if term.switch is None:
+        return ""
+    below = "" if term.switch.below == "live" else ", below: zero"
+    return f" (above {term.switch.at}: {term.switch.above}{below})"

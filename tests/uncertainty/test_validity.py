@@ -56,6 +56,10 @@ def test_shipped_models_state_their_ranges() -> None:
     assert ranges["GYRO-NS-noXCL"] == (0.0, 89.0)  # inherited
     assert ranges["GYRO-NS-CT"] == (0.0, 150.0)  # OWSG A021Gc
     assert ranges["ISCWSA-MWD-REV4"] == (0.0, 180.0)  # no limit stated: all of it
+    shown = gyropipe_cli("models", "GYRO-NS-CT", check=True).stdout
+    assert "valid for inclinations 0–150°" in shown
+    assert "GXY-RN-INIT azi       systematic" in shown
+    assert "GXY-B1 (above static_end_inc: freeze)" in shown
 
 
 def test_a_child_inherits_or_sets_its_range(tmp_path: Path) -> None:
