@@ -176,6 +176,11 @@ class Change:
         return len(self.magnitudes) + len(self.remove) + 3 * len(self.add)
 
 
+OWN_TERMS = {"GXY-RN-INIT"}
+"""Terms a shipped model adds to its sheet, which its variants keep: the noise of the
+initialisation above GYRO-NS-CT's switch inclination (docs/tool-models.md)."""
+
+
 def change(parent: str | None, base: tuple[T, ...], terms: tuple[T, ...]) -> Change:
     """What a file extending ``parent`` (terms ``base``) writes to give ``terms``."""
     have = {t.name: t for t in base}
@@ -188,7 +193,7 @@ def change(parent: str | None, base: tuple[T, ...], terms: tuple[T, ...]) -> Cha
             out.add.append(t)
         elif abs(old.sigma - t.sigma) > 1e-12 * max(abs(t.sigma), 1e-300):
             out.magnitudes[t.name] = t.sigma / UNITS[old.unit][1]
-    names = {t.name for t in terms}
+    names = {t.name for t in terms} | OWN_TERMS
     out.remove += [n for n in have if n not in names]
     return out
 

@@ -5,12 +5,15 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from pipeline.cli_args import disable_option
 from pipeline.errors import GyropipeError
+
+if TYPE_CHECKING:
+    from pipeline.uncertainty.toolmodel import ToolTerm
 
 EXIT_CONFIG = 2
 
@@ -69,16 +72,16 @@ def models(model: str | None, as_json: bool, disabled: tuple[str, ...]) -> None:
     if tool.source:
         click.echo(f"  {tool.source}")
     click.echo(f"  file: {tool.file}; needs the site's {_needs(sorted(tool.needs))}")
-    if tool.inclination_range is not None:
-        lo, hi = tool.inclination_range
-        click.echo(f"  valid for inclinations {lo:g}–{hi:g}° (the published sheet's range)")
     for name, value in tool.parameters.items():
         click.echo(f"  parameter {name} = {value:g} (SI; file unit {tool.units.get(name, '-')})")
-    click.echo(f"  {'term':<10} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
+    lo, hi = tool.inclination_range_deg
+    click.echo(f"  valid for inclinations {lo:g}–{hi:g}°")
+    w = max(10, *(len(t.name) for t in tool.terms))
+    click.echo(f"  {'term':<{w}} {'acts on':<9} {'mode':<12} {'magnitude':>12} {'unit':<12} weight")
     for t in tool.terms:
         click.echo(
-            f"  {t.name:<10} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
-            f"{t.unit:<12} {t.code}"
+            f"  {t.name:<{w}} {','.join(t.acts_on):<9} {t.mode:<12} {t.magnitude:>12g} "
+            f"{t.unit:<12} {t.code}{_switch_words(t)}"
         )
 
 
@@ -114,7 +117,7 @@ def _line(item: dict[str, Any]) -> str:
     from pipeline.uncertainty.engine import MODELS_DIR
 
     rng = item["inclination_range"]
-    valid = f"{rng[0]:g}–{rng[1]:g}°" if rng is not None else "-"
+    valid = f"{rng[0]:g}–{rng[1]:g}°"
     file = "" if Path(item["file"]).is_relative_to(MODELS_DIR) else f" ({item['file']})"
     return (
         f"{item['name']:<26} {valid:<9} {len(item['terms']):>3} terms  "
@@ -125,3 +128,11 @@ def _line(item: dict[str, Any]) -> str:
 def _needs(needs: list[str]) -> str:
     words = {"latitude": "latitude", "magnetic": "geomagnetic field"}
     return " and ".join(words.get(n, n) for n in needs) or "nothing"
+
+
+def _switch_words(term: ToolTerm) -> str:
+    """ " (above static_end_inc: freeze)" for a term that switches at an inclination."""
+    if term.switch is None:
+        return ""
+    below = "" if term.switch.below == "live" else ", below: zero"
+    return f" (above {term.switch.at}: {term.switch.above}{below})"

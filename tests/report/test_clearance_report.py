@@ -151,8 +151,17 @@ def test_clearance_report_has_a_signoff_block(clearance_run: Path, browser: Any)
 
 
 def test_gyro_reference_cites_the_gyro_error_model(tmp_path: Path):
-    """The pipeline's own reference model (GYRO-NS) against the set's MWD offsets."""
-    result = run_clearance(MANIFEST, tmp_path, "report.formats=[html]", check=True)
+    """A gyro reference model against the set's MWD offsets. The pipeline's own, GYRO-NS,
+    holds to 89° and the reference reaches 90° at MD 2850 m: refused there (issue 29; it
+    gave σL 39.1 m, an artefact of tan 90°); GYRO-NS-CT holds to 150°."""
+    refused = run_clearance(MANIFEST, tmp_path / "refused", "report.formats=[html]")
+    assert refused.returncode != 0 and "Traceback" not in refused.output
+    assert (
+        "the reference: tool model GYRO-NS holds for inclinations 0–89°: the station at MD "
+        "2850 m has 90°" in refused.stderr
+    )
+    settings = ("report.formats=[html]", "clearance.reference_model=GYRO-NS-CT")
+    result = run_clearance(MANIFEST, tmp_path, *settings, check=True)
     assert "Traceback" not in result.output
     text = (tmp_path / "report.html").read_text(encoding="utf-8")
     assert "<h1>Clearance report</h1>" in text

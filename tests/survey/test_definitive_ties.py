@@ -23,6 +23,13 @@ EXAMPLES = ROOT / "examples" / "definitive"
 INPUTS = {"gyro": EXAMPLES / "gyro-run.csv", "mwd": EXAMPLES / "mwd-run.csv"}
 FIELD = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
 PSD_TOL = 1e-9  # m², round-off of covariances of a few m²
+SHRINK_TOL = 1e-3
+"""The most a direction's variance may shrink from one station to the next, as a fraction of
+the larger covariance's largest eigenvalue. A systematic error's effect can turn against
+itself where the hole turns (docs/definitive-survey.md), so a covariance need not grow in
+every direction; on the example it shrinks by 0.0025 m² of 10.4 m² at the first MWD station
+(the gyro's angle errors at the tie station also act on the course below it). The defect of
+issue 29 lost 0.33 m² there (3 %): this tolerance keeps the check's power against it."""
 
 
 def _textbook(md: np.ndarray, inc_deg: np.ndarray, azi_deg: np.ndarray) -> np.ndarray:
@@ -59,6 +66,15 @@ def _least_increment(survey: pd.DataFrame) -> float:
     return float(np.linalg.eigvalsh(np.diff(_cov(survey), axis=0)).min())
 
 
+def _least_relative_increment(survey: pd.DataFrame) -> float:
+    """The least eigenvalue of C[k] − C[k−1] over the stations, each as a fraction of the
+    largest eigenvalue of C[k]."""
+    cov = _cov(survey)
+    least = np.linalg.eigvalsh(np.diff(cov, axis=0)).min(axis=1)
+    scale = np.linalg.eigvalsh(cov[1:]).max(axis=1)
+    return float((least / np.maximum(scale, PSD_TOL)).min())
+
+
 def _check_positions(survey: pd.DataFrame) -> None:
     expected = _textbook(*(survey[c].to_numpy() for c in ("md", "inc", "azi")))
     np.testing.assert_allclose(survey[["north", "east", "tvd"]], expected, rtol=0, atol=1e-9)
@@ -77,7 +93,7 @@ def _check_example(survey: pd.DataFrame, overlap: pd.DataFrame) -> None:
     assert overlap["md"].tolist() == [660.03, 686.97]
     assert set(overlap["role"]) == {"overlap"}
     _check_positions(survey)
-    assert _least_increment(survey) >= -PSD_TOL
+    assert _least_relative_increment(survey) >= -SHRINK_TOL
     # across the tie the largest eigenvalue grows (10.43 → 10.10 m² before issue 29)
     k = len(upper)
     top, below = (np.linalg.eigvalsh(_cov(survey.iloc[j : j + 1]))[0, -1] for j in (k - 1, k))
@@ -148,7 +164,7 @@ def test_three_runs_tie_at_the_last_listed_station_above() -> None:
     assert listed.max().tolist() == [630.0, 1265.0, 1985.0]
     assert survey["tool_model"].unique().tolist() == [m for _, m, _ in THREE_RUNS.values()]
     _check_positions(survey)
-    assert _least_increment(survey) >= -PSD_TOL
+    assert _least_relative_increment(survey) >= -SHRINK_TOL
 
 
 DEPTH_ONLY = (

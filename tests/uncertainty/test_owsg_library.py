@@ -78,9 +78,8 @@ def test_the_library_ships_the_owsg_sets_each_file_naming_its_sheet() -> None:
     for model in models:
         assert re.match(r"OWSG tool code [AB]\d{3}[A-Z][a-z] \S+, Rev \d", model.source), model
         assert model.revision and model.title.startswith("OWSG"), model.name
-        assert model.inclination_range is not None, model.name
         assert pu.find_model(model.name).file == model.file  # found by its name
-    ranges = {m.name: m.inclination_range for m in models}
+    ranges = {m.name: m.inclination_range_deg for m in models}
     assert ranges["INC-ONLY"] == (0.0, 30.0) and ranges["INC-ONLY_PLANNED_5_DEG"] == (0.0, 5.0)
     assert ranges["GYRO-NS_Fl"] == (0.0, 89.0) and ranges["GYRO-NS-CT_Fl"] == (0.0, 150.0)
     assert ranges["MWD+SRGM+AX"] == (0.0, 180.0)
@@ -183,9 +182,9 @@ def test_a_files_validity_is_read_inherited_and_checked(tmp_path: Path) -> None:
     ``ToolModelError`` at its line."""
     child = tmp_path / "child.yaml"
     child.write_text("format: gyropipe-tool-model/1\nname: C\nextends: INC-ONLY\n")
-    assert pu.find_model(child).inclination_range == (0.0, 30.0)
+    assert pu.find_model(child).inclination_range_deg == (0.0, 30.0)
     child.write_text(child.read_text() + "validity: {inclination_deg: [0, 20]}\n")
-    assert pu.find_model(child).inclination_range == (0.0, 20.0)
+    assert pu.find_model(child).inclination_range_deg == (0.0, 20.0)
     child.write_text(child.read_text().replace("[0, 20]}", "[0, 20], azimuth: 1}"))
     with pytest.raises(ToolModelError, match=r"child\.yaml:4:.*azimuth"):
         pu.find_model(child)

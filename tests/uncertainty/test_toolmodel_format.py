@@ -40,6 +40,8 @@ Floats = NDArray[np.float64]
 
 #: The OWSG sheets' weighting formulas (GYRO-NS A020Gb and the ISCWSA MWD Rev 5 sheet), in
 #: this format's names: ``azi`` is ∂A/∂ε, ``azi_sin_inc`` ∂A/∂ε·sin I where ∂A has 1/sin I.
+#: The course-length terms XCLA/XCLH are in position for every model (:data:`XCL_NEV`, the
+#: ISCWSA Rev 5 form), not the gyro sheets' inclination/azimuth form.
 FORMULAS: dict[str, dict[str, str]] = {
     "DRFR": {"depth": "1"},
     "DSFS": {"depth": "md"},
@@ -55,8 +57,6 @@ FORMULAS: dict[str, dict[str, str]] = {
         "inc": "abs(cos(inc)) * sin(azi) * where(dmd > 0, maximum(1, sqrt(10 / dmd)), 0)",
         "azi_sin_inc": "abs(cos(inc)) * cos(azi) * where(dmd > 0, maximum(1, sqrt(10 / dmd)), 0)",
     },
-    "XCLA": {"azi_sin_inc": "maximum(sin(inc) * sin(abs(azi - prev(azi))), tortuosity * dmd)"},
-    "XCLH": {"inc": "maximum(abs(inc - prev(inc)), tortuosity * dmd)"},
     "AXYZ-MIS": {"inc": "1"},
     "AXYZ-SF": {"inc": "1.3 * sin(inc) * cos(inc)"},
     "AXYZ-ZB": {"inc": "sin(inc) / g"},
@@ -104,13 +104,13 @@ def _survey() -> pu.Survey:
     return pu.Survey.of(md, inc, azi, minimum_curvature(md, inc, azi).tvd)
 
 
-def _as_formulas(model: pu.ToolModel, path: Path, nev: bool = False) -> Path:
-    """The model re-written with every term of :data:`FORMULAS` as formulas (XCL in
-    position when ``nev``), the others by code."""
+def _as_formulas(model: pu.ToolModel, path: Path) -> Path:
+    """The model re-written with every term of :data:`FORMULAS` and :data:`XCL_NEV` as
+    formulas, the others by code."""
     terms = []
     for t in model.terms:
         weight: Any = t.code
-        if nev and t.name in XCL_NEV:
+        if t.name in XCL_NEV:
             weight = XCL_NEV[t.name]
         elif t.name in FORMULAS:
             weight = FORMULAS[t.name]
@@ -134,17 +134,14 @@ def _as_formulas(model: pu.ToolModel, path: Path, nev: bool = False) -> Path:
 
 
 @pytest.mark.parametrize(
-    ("name", "site", "nev"),
-    [
-        ("GYRO-NS", pu.ModelSite(latitude=LAT), False),
-        ("ISCWSA-MWD-REV5.11", pu.ModelSite(magnetic=FIELD), True),
-    ],
+    ("name", "site"),
+    [("GYRO-NS", pu.ModelSite(latitude=LAT)), ("ISCWSA-MWD-REV5.11", pu.ModelSite(magnetic=FIELD))],
 )
 def test_published_formulas_give_the_coded_weights(
-    name: str, site: pu.ModelSite, nev: bool, tmp_path: Path
+    name: str, site: pu.ModelSite, tmp_path: Path
 ) -> None:
     model = pu.find_model(name)
-    path = _as_formulas(model, tmp_path / "formulas.yaml", nev)
+    path = _as_formulas(model, tmp_path / "formulas.yaml")
     restated = pu.find_model(path)
     assert sum(t.code == "formula" for t in restated.terms) >= 12
     survey = _survey()

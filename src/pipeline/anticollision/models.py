@@ -14,7 +14,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pipeline.survey.stations import defined_azimuths
-from pipeline.uncertainty.engine import SHIPPED, ModelCatalogue, covariance, find_model
+from pipeline.uncertainty.engine import (
+    SHIPPED,
+    ModelCatalogue,
+    OutsideValidity,
+    covariance,
+    find_model,
+)
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 
@@ -45,11 +51,17 @@ def well_covariance(
     tvd: FloatArray,
     site: ModelSite,
     catalogue: ModelCatalogue = SHIPPED,
+    outside_validity: OutsideValidity = "refuse",
 ) -> FloatArray:
     """NEV covariance (n, 3, 3), m², true north, of one survey's stations (MD, TVD m;
-    inclination, true azimuth rad, NaN azimuth at vertical) under tool model ``model``."""
+    inclination, true azimuth rad, NaN azimuth at vertical) under tool model ``model``; a
+    station outside the model's range refused or, ``outside_validity="flag"``, NaN from it
+    down (:func:`pipeline.uncertainty.engine.term_covariances`)."""
     survey = Survey.of(md, inc, defined_azimuths(azi_true), tvd)
     out: FloatArray = covariance(
-        survey, find_model(resolve_model(model, catalogue), catalogue), site
+        survey,
+        find_model(resolve_model(model, catalogue), catalogue),
+        site,
+        outside_validity=outside_validity,
     )
     return out

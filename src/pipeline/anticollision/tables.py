@@ -63,13 +63,13 @@ class Clearance(TableContract):
         ge=0,
         finite=False,
         description="1σ of both wells' position errors along the centre-to-centre line "
-        "(NaN where the centres coincide)",
+        "(NaN where the centres coincide, or a well's σ is flagged outside its model's range)",
     )
     sf: float = column(
         unit=None,
         finite=False,
         description="ISCWSA separation factor (negative: the holes and margin overlap; NaN "
-        "where the centres coincide)",
+        "where the centres coincide or σ_S is NaN)",
     )
     level: str = column(unit=None, description="pass, warn or fail by the separation rule")
     toolface: float = column(
@@ -79,4 +79,10 @@ class Clearance(TableContract):
         finite=False,
         description="direction of the offset in the plane normal to the reference, clockwise "
         "from its high side (travelling cylinder; NaN where the centres coincide)",
+    )
+    outside_validity: bool = column(
+        unit=None,
+        default=False,
+        description="the reference station or the offset's closest point is beyond a station "
+        "outside its tool model's range: σ_S and SF NaN, level fail (outside_validity: flag)",
     )

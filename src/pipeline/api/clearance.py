@@ -53,7 +53,8 @@ def clearance(
     reference wellhead, default (0, 0) and TVD = first MD) give each well's, as one value or
     by well id. ``params``: the stage's (``reference_model``, ``reference_hole_diameter`` m,
     ``k``, ``sigma_pa`` m, ``surface_margin`` m, ``stop``, ``caution``, ``latitude``,
-    ``magnetic``). Returns the kind of table ``reference`` is (a DataFrame for a file).
+    ``magnetic``, ``outside_validity``: refuse or flag a station outside its model's range).
+    Returns the kind of table ``reference`` is (a DataFrame for a file).
     """
     reg = stages.registry()
     given = well_metadata(well)

@@ -167,7 +167,9 @@ def position_uncertainty(
     """Position covariance (NEV, m²) and error ellipses of a trajectory by an ISCWSA error
     model (``model``: a tool model's name — shipped or an installed plugin's, as ``gyropipe
     models`` lists them; default the stage's — or a model file; ``confidence``; ``latitude``
-    deg or the well's). ``stops``: compassed stops of a continuous survey."""
+    deg or the well's; ``outside_validity``: ``"refuse"`` a station outside the model's range,
+    the default, or ``"flag"`` it: NaN σ from it down and an ``outside_validity`` column).
+    ``stops``: compassed stops of a continuous survey."""
     inputs = {"trajectory": trajectory, "stops": stops}
     return _one("position_uncertainty", trajectory, inputs, params, well)
 

@@ -35,7 +35,7 @@ from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import Stations
-from pipeline.uncertainty.engine import ModelCatalogue
+from pipeline.uncertainty.engine import ModelCatalogue, OutsideValidity, OutsideValidityError
 from pipeline.well import Latitude, WellMetadata
 
 STAGE = "clearance"
@@ -66,6 +66,12 @@ class ClearanceParams(BaseModel):
         description="geomagnetic reference at the site (MWD models); default: the well "
         "metadata's magnetic_field, magnetic_dip and declination, else WMM2025 at the well's "
         "latitude, longitude, elevation and survey date",
+    )
+    outside_validity: OutsideValidity = Field(
+        "refuse",
+        description="a reference or offset station outside its tool model's range: refuse "
+        "(an error naming the well and station), or flag (that well's σ NaN from it down; SF "
+        "NaN, level fail, and an outside_validity column)",
     )
 
     @model_validator(mode="after")
@@ -222,9 +228,10 @@ class _Frame:
         azi: np.ndarray,
         tvd: np.ndarray,
         site: ModelSite,
+        outside: OutsideValidity = "refuse",
     ) -> np.ndarray:
         """The model's covariance (frame azimuths in rad) in the frame."""
-        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site, self.catalogue)
+        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site, self.catalogue, outside)
         c, s = np.cos(self.delta), np.sin(self.delta)
         rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
         out: np.ndarray = rot @ cov @ rot.T
@@ -239,6 +246,7 @@ def _well(
     diameter: float,
     tie: tuple[float, float, float | None],
     site: ModelSite,
+    outside: OutsideValidity,
 ) -> Well:
     md = table.column("md").to_numpy(zero_copy_only=False).astype(np.float64)
     inc = np.radians(table.column("inc").to_numpy(zero_copy_only=False))
@@ -246,7 +254,11 @@ def _well(
     azi = frame.azimuths(azi_deg, north_reference_of(table, "azi"))
     start = (tie[0], tie[1], float(md[0]) if tie[2] is None else tie[2])
     tvd = minimum_curvature(md, inc, azi, tie_tvd=start[2]).tvd
-    cov = frame.covariance(model, md, inc, azi, tvd, site)
+    try:
+        cov = frame.covariance(model, md, inc, azi, tvd, site, outside)
+    except OutsideValidityError as exc:
+        well = "the reference" if name == "reference" else f"offset well {name!r}"
+        raise OutsideValidityError(f"{well}: {exc}") from None
     return Well(name, md, inc, azi, start, cov, 0.5 * diameter)
 
 
@@ -273,6 +285,7 @@ def clearance(
         params.reference_hole_diameter,
         (0.0, 0.0, None),
         site,
+        params.outside_validity,
     )
     offsets = survey_offsets(stations)
     ids = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
@@ -289,7 +302,18 @@ def clearance(
                 "stations in the offsets table"
             )
         tie = (w["north"], w["east"], w["tvd"])
-        scanned.append(_well(w["offset"], block, frame, w["model"], w["hole_diameter"], tie, site))
+        scanned.append(
+            _well(
+                w["offset"],
+                block,
+                frame,
+                w["model"],
+                w["hole_diameter"],
+                tie,
+                site,
+                params.outside_validity,
+            )
+        )
     result = scan(
         ref,
         scanned,
@@ -306,6 +330,12 @@ def clearance(
             "sf": result.sf,
             "level": result.level.tolist(),
             "toolface": result.toolface,
+            # a NaN σ where the centres are apart: a well's σ not given (flagged)
+            **(
+                {"outside_validity": np.isnan(result.sigma_s) & (result.distance > 0)}
+                if params.outside_validity == "flag"
+                else {}
+            ),
         }
     )
     rule = {

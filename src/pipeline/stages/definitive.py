@@ -41,7 +41,14 @@ from pipeline.survey.stations import (
     survey_offsets,
 )
 from pipeline.tables import DLS_COURSE_M, Stations
-from pipeline.uncertainty.engine import configure, model_terms
+from pipeline.uncertainty.engine import (
+    OutsideValidity,
+    OutsideValidityError,
+    configure,
+    model_terms,
+    within_bound,
+    within_range,
+)
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Section as CovSection
 from pipeline.uncertainty.sections import WellByWell, definitive_covariance
@@ -173,6 +180,12 @@ class DefinitiveParams(BaseModel):
         "correlated within each run only (per_run)",
     )
     confidence: float = Field(0.95, gt=0, lt=1, description="probability of the *_conf columns")
+    outside_validity: OutsideValidity = Field(
+        "refuse",
+        description="a station outside its run's error model's range: refuse (an error "
+        "naming the run and station), or flag (NaN σ from it down, through every run below, "
+        "and an outside_validity column)",
+    )
     vs_azimuth: float = Field(0.0, description="vertical-section azimuth, deg")
     tie_north: float = Field(0.0, description="northing of the first station, m")
     tie_east: float = Field(0.0, description="easting of the first station, m")
@@ -243,16 +256,8 @@ def definitive_survey(
         md, inc, azi, tie_north=params.tie_north, tie_east=params.tie_east, tie_tvd=tie_tvd
     )
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
-    cov = definitive_covariance(
-        Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd),
-        [
-            CovSection(run.name, int(lo), int(hi), model_terms(tools[run.port], site))
-            for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True)
-        ],
-        basis=params.basis,
-        surface_tie=params.surface_tie,
-        well_by_well=params.well_by_well,
-    )
+    survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
+    cov = _valid_covariance(survey, listed, bounds, tools, site, params)
     parts = {
         "md": md,
         "inc": inc_deg,
@@ -321,6 +326,54 @@ def _magnetic(
     return applied_magnetic(params.magnetic, well, stage="definitive_survey")
 
 
+def _valid_covariance(
+    survey: Survey,
+    listed: list[tuple[Any, Any]],
+    bounds: np.ndarray,
+    tools: Mapping[str, ToolModel],
+    site: ModelSite,
+    params: DefinitiveParams,
+) -> np.ndarray:
+    """The listed stations' covariance (n, 3, 3), m², each run's errors from its own model;
+    NaN from the first station outside its run's model range (or beyond the physical bound)
+    down, which ``outside_validity: refuse`` makes an error naming the run."""
+    n = survey.size
+    for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True):
+        part = Survey.of(survey.md[lo:hi], survey.inc[lo:hi], survey.azi[lo:hi], survey.tvd[lo:hi])
+        try:
+            inside = within_range(part, tools[run.port], params.outside_validity)
+        except OutsideValidityError as exc:
+            raise OutsideValidityError(f"run {run.name!r}: {exc}") from None
+        if inside < part.size:
+            n = int(lo) + inside
+            break
+    cov = np.full((survey.size, 3, 3), np.nan)
+    if n == 0:
+        return cov
+    head = Survey.of(survey.md[:n], survey.inc[:n], survey.azi[:n], survey.tvd[:n])
+    sections = [
+        CovSection(run.name, int(lo), int(min(hi, n)), model_terms(tools[run.port], site))
+        for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True)
+        if lo < n
+    ]
+    cov[:n] = definitive_covariance(
+        head,
+        sections,
+        basis=params.basis,
+        surface_tie=params.surface_tie,
+        well_by_well=params.well_by_well,
+    )
+    models = ", ".join(
+        run.spec.model for (_, run), lo in zip(listed, bounds[:-1], strict=True) if lo < n
+    )
+    try:
+        good = within_bound(head, cov[:n], models, params.outside_validity)
+    except OutsideValidityError as exc:
+        raise OutsideValidityError(f"definitive survey: {exc}") from None
+    cov[good:] = np.nan
+    return cov
+
+
 def _survey_table(
     columns: dict[str, Any], cov: np.ndarray, params: DefinitiveParams, north: str
 ) -> pa.Table:
@@ -339,7 +392,7 @@ def _survey_table(
         ),
         "closure_distance": distance,
         "closure_direction": np.degrees(direction) % 360.0,
-        **covariance_columns(cov, params.confidence),
+        **covariance_columns(cov, params.confidence, params.outside_validity),
     }
     return DefinitiveSurvey.compiled().make_table(table, north_reference=north)
 

@@ -24,7 +24,7 @@ from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
-from pipeline.uncertainty.engine import configure, covariance
+from pipeline.uncertainty.engine import OutsideValidity, configure, covariance
 from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
@@ -36,32 +36,51 @@ AREA = "m2"
 
 class PositionUncertainty(Trajectory):
     """A trajectory with each station's NEV position covariance (1σ², m²) and its
-    horizontal error ellipse (semi-axes at 1σ and at the stage's confidence) and vertical σ."""
+    horizontal error ellipse (semi-axes at 1σ and at the stage's confidence) and vertical σ;
+    NaN at a station outside the error model's range and below it (``outside_validity``
+    flag; such a station is otherwise refused)."""
 
-    cov_nn: float = column(unit=AREA, description="north variance")
-    cov_ne: float = column(unit=AREA, description="north-east covariance")
-    cov_nv: float = column(unit=AREA, description="north-vertical covariance")
-    cov_ee: float = column(unit=AREA, description="east variance")
-    cov_ev: float = column(unit=AREA, description="east-vertical covariance")
-    cov_vv: float = column(unit=AREA, description="vertical variance")
-    ellipse_major: float = column(unit="m", ge=0, description="horizontal semi-major axis, 1σ")
-    ellipse_minor: float = column(unit="m", ge=0, description="horizontal semi-minor axis, 1σ")
+    cov_nn: float = column(unit=AREA, finite=False, description="north variance")
+    cov_ne: float = column(unit=AREA, finite=False, description="north-east covariance")
+    cov_nv: float = column(unit=AREA, finite=False, description="north-vertical covariance")
+    cov_ee: float = column(unit=AREA, finite=False, description="east variance")
+    cov_ev: float = column(unit=AREA, finite=False, description="east-vertical covariance")
+    cov_vv: float = column(unit=AREA, finite=False, description="vertical variance")
+    ellipse_major: float = column(
+        unit="m", ge=0, finite=False, description="horizontal semi-major axis, 1σ"
+    )
+    ellipse_minor: float = column(
+        unit="m", ge=0, finite=False, description="horizontal semi-minor axis, 1σ"
+    )
     ellipse_azimuth: float = column(
         unit="deg",
         ge=0,
         lt=180,
+        finite=False,
         north_reference=True,
         description="azimuth of the semi-major axis, clockwise from north",
     )
-    sigma_v: float = column(unit="m", ge=0, description="vertical σ")
+    sigma_v: float = column(unit="m", ge=0, finite=False, description="vertical σ")
     ellipse_major_conf: float = column(
-        unit="m", ge=0, description="semi-major axis at the confidence level (χ², 2 dof)"
+        unit="m",
+        ge=0,
+        finite=False,
+        description="semi-major axis at the confidence level (χ², 2 dof)",
     )
     ellipse_minor_conf: float = column(
-        unit="m", ge=0, description="semi-minor axis at the confidence level (χ², 2 dof)"
+        unit="m",
+        ge=0,
+        finite=False,
+        description="semi-minor axis at the confidence level (χ², 2 dof)",
     )
     vertical_conf: float = column(
-        unit="m", ge=0, description="vertical half-interval at the confidence level"
+        unit="m", ge=0, finite=False, description="vertical half-interval at the confidence level"
+    )
+    outside_validity: bool = column(
+        unit=None,
+        default=False,
+        description="the station, or one above it, is outside the error model's range: no σ "
+        "(NaN); written with outside_validity: flag",
     )
 
 
@@ -110,6 +129,12 @@ class UncertaintyParams(BaseModel):
         "azimuth of the stop the continuous run starts from (the compass stage's sigma_azi), "
         "deg; replaces the stationary gyro terms and starts the continuous section at the "
         "first station",
+    )
+    outside_validity: OutsideValidity = Field(
+        "refuse",
+        description="a station outside the error model's range (its inclination limits, or "
+        "a σ beyond any physical position error): refuse (an error naming it), or flag (NaN "
+        "σ from it down and an outside_validity column)",
     )
     tool: dict[str, float] = Field(
         default_factory=dict,
@@ -175,10 +200,15 @@ def position_uncertainty(
         # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
         survey = Survey.of(md[lo:hi], inc[lo:hi], defined_azimuths(azi[lo:hi]), tvd[lo:hi])
         cov[lo:hi] = covariance(
-            survey, tool, site, basis=params.basis, surface_tie=params.surface_tie
+            survey,
+            tool,
+            site,
+            basis=params.basis,
+            surface_tie=params.surface_tie,
+            outside_validity=params.outside_validity,
         )
     columns: dict[str, object] = {name: table.column(name) for name in table.column_names}
-    columns.update(covariance_columns(cov, params.confidence))
+    columns.update(covariance_columns(cov, params.confidence, params.outside_validity))
     out = PositionUncertainty.compiled().make_table(
         columns, north_reference=north_reference_of(table, "azi")
     )
@@ -187,9 +217,12 @@ def position_uncertainty(
     }
 
 
-def covariance_columns(cov: np.ndarray, confidence: float) -> dict[str, np.ndarray]:
+def covariance_columns(
+    cov: np.ndarray, confidence: float, outside: OutsideValidity = "refuse"
+) -> dict[str, np.ndarray]:
     """The :class:`PositionUncertainty` columns of NEV covariances (n, 3, 3) (m²): the six
-    covariance entries, the 1σ ellipse, vertical σ and their sizes at ``confidence``."""
+    covariance entries, the 1σ ellipse, vertical σ and their sizes at ``confidence``; with
+    ``outside="flag"`` the ``outside_validity`` column (NaN covariance)."""
     ell = ellipses(cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1], cov[:, 2, 2])
     k2 = horizontal_scale(confidence)
     k1 = vertical_scale(confidence)
@@ -207,6 +240,7 @@ def covariance_columns(cov: np.ndarray, confidence: float) -> dict[str, np.ndarr
         "ellipse_major_conf": k2 * ell.semi_major,
         "ellipse_minor_conf": k2 * ell.semi_minor,
         "vertical_conf": k1 * ell.sigma_v,
+        **({"outside_validity": np.isnan(cov[:, 0, 0])} if outside == "flag" else {}),
     }
 
 

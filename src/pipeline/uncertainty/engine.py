@@ -6,6 +6,13 @@ in ``pipeline/uncertainty/models/`` and those it is given — the files plugins 
 (``gyropipe_register_tool_models``), which the registry of the run hands down (the domain
 never loads plugins). A model may also be read from a file path; a file may ``extend`` any
 model found so.
+
+A model holds over its inclination range (:attr:`ToolModel.inclination_range_deg`). A station
+outside it has no σ: by default it is refused (:class:`OutsideValidityError`, naming the
+model, the station and the range); with ``outside_validity="flag"`` it and every station
+below it (whose positions it moves) get NaN covariance. A σ above :data:`PHYSICAL_BOUND_M`
+plus twice the station's MD — farther than the hole reaches — is treated the same way: a
+finite number is not a result when the linear model no longer holds.
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,6 +35,8 @@ __all__ = [
     "MODELS_DIR",
     "SHIPPED",
     "ModelCatalogue",
+    "OutsideValidity",
+    "OutsideValidityError",
     "SurveyValueError",
     "configure",
     "covariance",
@@ -35,6 +45,8 @@ __all__ = [
     "model_terms",
     "term_covariances",
     "term_for",
+    "within_bound",
+    "within_range",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -44,6 +56,21 @@ MODELS_DIR = Path(__file__).parent / "models"
 
 class SurveyValueError(GyropipeError, ValueError):
     """A survey given to an error model has a non-finite MD, inclination, azimuth or TVD."""
+
+
+class OutsideValidityError(GyropipeError, ValueError):
+    """A station lies outside the range a tool model holds for (its inclination range, or a
+    σ beyond the physical bound): no σ is given there."""
+
+
+OutsideValidity = Literal["refuse", "flag"]
+"""What a station outside its model's range gets: ``refuse`` (an error) or ``flag`` (NaN
+covariance from it on, and a flag)."""
+
+PHYSICAL_BOUND_M = 10.0
+"""A station's σ (√ of the covariance's trace, m) beyond 2·|MD| + this is not physical: both
+the true and the computed position lie within the hole's length of the wellhead (10 m for
+the depth reference and the tie-on)."""
 
 
 @functools.cache
@@ -178,14 +205,19 @@ def term_covariances(
     *,
     basis: str = "balanced_tangent",
     surface_tie: bool = True,
+    outside_validity: OutsideValidity = "refuse",
 ) -> tuple[list[str], FloatArray]:
     """Per-term NEV covariance (m, n, 3, 3) (m²) of a survey under a tool model (a
     :class:`ToolModel`, or a shipped model's name or a file, :func:`find_model`), and the
     term names. ``survey`` azimuths are true (rad); ``site`` gives what the model needs
     (:attr:`ToolModel.needs`: latitude, geomagnetic field); ``basis`` and ``surface_tie`` as
     in :func:`pipeline.uncertainty.model.station_jacobians` (the ISCWSA conventions by
-    default)."""
+    default). A station outside the model's range (see the module) is refused
+    (:class:`OutsideValidityError`) or, ``outside_validity="flag"``, it and those below it
+    get NaN."""
     tool = find_model(model)
+    if outside_validity not in ("refuse", "flag"):
+        raise ValueError(f"outside_validity must be 'refuse' or 'flag', not {outside_validity!r}")
     for label, values in (
         ("md", survey.md),
         ("inc", survey.inc),
@@ -208,12 +240,69 @@ def term_covariances(
         raise MissingSiteQuantity(
             f"tool model {tool.name} needs the site's {' and '.join(missing)}"
         )
-    shared = Quantities(survey, where, tool.parameters, tool.name)  # derived ones cached
+    n = within_range(survey, tool, outside_validity)
+    if n == 0:
+        return [t.name for t in tool.terms], np.full((len(tool.terms), survey.size, 3, 3), np.nan)
+    head = _head(survey, n)
+    shared = Quantities(head, where, tool.parameters, tool.name)  # derived ones cached
 
     def q(s: Survey) -> Quantities:
-        return shared if s is survey else Quantities(s, where, tool.parameters, tool.name)
+        return shared if s is head else Quantities(s, where, tool.parameters, tool.name)
 
-    return term_covariance(survey, tool.terms_for(q), basis=basis, surface_tie=surface_tie)
+    names, cov = term_covariance(head, tool.terms_for(q), basis=basis, surface_tie=surface_tie)
+    n = within_bound(head, cov.sum(axis=0), tool.name, outside_validity)
+    out = np.full((len(names), survey.size, 3, 3), np.nan)
+    out[:, :n] = cov[:, :n]
+    return names, out
+
+
+def within_range(survey: Survey, tool: ToolModel, outside_validity: OutsideValidity) -> int:
+    """How many leading stations of ``survey`` lie inside the model's inclination range (a
+    station written at a limit is inside); one outside is an :class:`OutsideValidityError`
+    naming it unless ``outside_validity`` is ``"flag"``."""
+    lo, hi = np.radians(tool.inclination_range_deg)
+    tol = 1e-9  # rad
+    outside = np.flatnonzero((survey.inc < lo - tol) | (survey.inc > hi + tol))
+    if outside.size == 0:
+        return survey.size
+    k = int(outside[0])
+    if outside_validity == "refuse":
+        lo_deg, hi_deg = tool.inclination_range_deg
+        raise OutsideValidityError(
+            f"tool model {tool.name} holds for inclinations {lo_deg:g}–{hi_deg:g}°: the station "
+            f"at MD {survey.md[k]:g} m has {np.degrees(survey.inc[k]):g}° ({outside.size} "
+            "station(s) outside the range); use a model that covers them, or "
+            "outside_validity: flag for NaN σ there"
+        )
+    return k
+
+
+def within_bound(
+    survey: Survey, cov: FloatArray, model: str, outside_validity: OutsideValidity
+) -> int:
+    """How many leading stations have a σ (√ trace of their covariance ``cov`` (n, 3, 3),
+    m²) within :data:`PHYSICAL_BOUND_M` + 2·|MD|; one beyond is an
+    :class:`OutsideValidityError` unless ``outside_validity`` is ``"flag"``."""
+    sigma = np.sqrt(np.abs(np.trace(cov, axis1=1, axis2=2)))
+    beyond = np.flatnonzero(~(sigma <= 2.0 * np.abs(survey.md) + PHYSICAL_BOUND_M))
+    if beyond.size == 0:
+        return survey.size
+    k = int(beyond[0])
+    if outside_validity == "refuse":
+        raise OutsideValidityError(
+            f"tool model {model}: σ {sigma[k]:.4g} m at MD {survey.md[k]:g} m (inclination "
+            f"{np.degrees(survey.inc[k]):g}°) is beyond any physical position error (2·MD + "
+            f"{PHYSICAL_BOUND_M:g} m): the model does not hold there; outside_validity: flag "
+            "gives such stations NaN σ"
+        )
+    return k
+
+
+def _head(survey: Survey, n: int) -> Survey:
+    """The first ``n`` stations of a survey."""
+    if n == survey.size:
+        return survey
+    return Survey.of(survey.md[:n], survey.inc[:n], survey.azi[:n], survey.tvd[:n])
 
 
 def covariance(
@@ -223,12 +312,14 @@ def covariance(
     *,
     basis: str = "balanced_tangent",
     surface_tie: bool = True,
+    outside_validity: OutsideValidity = "refuse",
 ) -> FloatArray:
     """Total NEV covariance (n, 3, 3) (m², north/east/vertical-down) of each station of a
-    survey under a tool model (see :func:`term_covariances`)."""
-    total: FloatArray = term_covariances(survey, model, site, basis=basis, surface_tie=surface_tie)[
-        1
-    ].sum(axis=0)
+    survey under a tool model (see :func:`term_covariances`; NaN at flagged stations)."""
+    _, terms = term_covariances(
+        survey, model, site, basis=basis, surface_tie=surface_tie, outside_validity=outside_validity
+    )
+    total: FloatArray = terms.sum(axis=0)
     return total
 
 

@@ -65,14 +65,17 @@ def with_initial_azimuth(model: ToolModel, sigma_deg: float) -> ToolModel:
 
 def with_measured_noise(model: ToolModel, sigma_azi_deg: float, latitude_deg: float) -> ToolModel:
     """``model`` whose GXY-RN reproduces a measured 1σ compassing azimuth scatter at I = 0:
-    σ_A = f·RN/(Ω cos φ) (f the noise reduction), so RN = σ_A·Ω cos φ/f (deg/h)."""
+    σ_A = f·RN/(Ω cos φ) (f the noise reduction), so RN = σ_A·Ω cos φ/f (deg/h) — every
+    term of the GXY-RN weighting function (GYRO-NS-CT's GXY-RN-INIT too: the same
+    compassing's noise, carried above the static end inclination)."""
     rate_deg_h = np.degrees(EARTH_RATE_RAD_H) * np.cos(np.radians(latitude_deg))
     f = model.parameters.get("noise_reduction", 1.0)
     rn = np.radians(sigma_azi_deg) * rate_deg_h / f
-    term = model.term("GXY-RN")
+    model.term("GXY-RN")  # a KeyError without one
     return replace(
         model,
         terms=tuple(
-            replace(t, magnitude=float(rn), unit="deg/h") if t is term else t for t in model.terms
+            replace(t, magnitude=float(rn), unit="deg/h") if t.code == "GXY-RN" else t
+            for t in model.terms
         ),
     )

@@ -5,7 +5,11 @@ measurements it acts on, propagation mode, 1σ magnitude and unit, and its weigh
 function: a published one by code (:data:`~pipeline.uncertainty.weightfns.WEIGHT_FUNCTIONS`)
 or formulas over named survey quantities (:mod:`pipeline.uncertainty.quantities`,
 :mod:`pipeline.uncertainty.formula`). A model may extend another (``extends:``), changing
-magnitudes, parameters and terms. The format is described in ``docs/tool-models.md``.
+magnitudes, parameters and terms. A model states the inclinations it holds for
+(``validity:``, the published sheet's range; a child inherits its parent's) and a term may
+switch at an inclination (``switch:``: its weight frozen at the value it has there, or zero,
+above or below it; SPE 90408's stationary terms above a continuous gyro's static end
+inclination). The format is described in ``docs/tool-models.md``.
 
 Every problem of a file is a :class:`~pipeline.errors.ToolModelError` naming the file, line
 and column.
@@ -37,7 +41,7 @@ from pipeline.uncertainty.terms import STANDARD_G, Frame, Survey, Term, stack
 from pipeline.uncertainty.weightfns import WEIGHT_FUNCTIONS, WeightFunction
 from pipeline.yamlsource import SourceMap, load_mapping, validate_located
 
-__all__ = ["UNITS", "FormulaWeight", "ToolModel", "ToolTerm", "parse_tool_model"]
+__all__ = ["UNITS", "FormulaWeight", "Switch", "ToolModel", "ToolTerm", "parse_tool_model"]
 
 FloatArray = NDArray[np.float64]
 FORMAT = "gyropipe-tool-model/1"
@@ -107,6 +111,16 @@ class _Formulas(BaseModel):
     vertical: str | float | None = None
 
 
+class _Switch(BaseModel):
+    """A weight that switches at an inclination (a parameter's name): ``above`` it live,
+    frozen at its value at the switch, or zero; ``below`` (at or under) it live or zero."""
+
+    model_config = ConfigDict(extra="forbid")
+    at: str = Field(min_length=1)
+    above: Literal["live", "freeze", "zero"] = "live"
+    below: Literal["live", "zero"] = "live"
+
+
 class _Term(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = Field(min_length=1)
@@ -115,6 +129,7 @@ class _Term(BaseModel):
     magnitude: float = Field(ge=0, allow_inf_nan=False)
     unit: str
     weight: str | _Formulas
+    switch: _Switch | None = None
     description: str = ""
 
 
@@ -174,8 +189,54 @@ class FormulaWeight:
 
 
 @dataclass(frozen=True)
+class Switch:
+    """A term's weight switching at the inclination of parameter ``at`` (rad): at stations
+    above it ``live``, ``freeze`` or ``zero``; at and below it ``live`` or ``zero``. A frozen
+    weight holds the measurement error the term has at the switch — ∂MD, ∂I and ∂A (so the
+    horizontal tilt ∂A·sin I follows the station's inclination) — interpolated linearly
+    between the two stations across which the survey rises through the switch, and again
+    at every rise after a drop back below it."""
+
+    at: str
+    above: Literal["live", "freeze", "zero"] = "live"
+    below: Literal["live", "zero"] = "live"
+
+    def apply(self, w: FloatArray, inc: FloatArray, gate: float, frame: Frame) -> FloatArray:
+        """Weights ``w`` (n, 3) in ``frame`` at inclinations ``inc`` (rad) switched at
+        ``gate`` (rad)."""
+        above = inc > gate
+        out = w.copy()
+        if self.below == "zero":
+            out[~above] = 0.0
+        if self.above == "zero":
+            out[above] = 0.0
+        elif self.above == "freeze":
+            under = np.flatnonzero(~above)
+            for j in np.flatnonzero(above & ~np.concatenate(([False], above[:-1]))):
+                later = under[under > j]
+                rows = slice(j, later[0] if later.size else inc.size)
+                frozen, sin_at = self._at_switch(w, inc, int(j), gate)
+                out[rows] = frozen
+                if frame == "dia":  # ∂A held: the tilt α = ∂A·sin I of each station
+                    out[rows, 2] = frozen[2] / sin_at * np.sin(inc[rows])
+        return out
+
+    @staticmethod
+    def _at_switch(w: FloatArray, inc: FloatArray, j: int, gate: float) -> tuple[Any, float]:
+        """The weight row at the switch inclination the survey rises through into station
+        ``j``, and the sine of that inclination."""
+        if j == 0:
+            return w[0], float(np.sin(inc[0]))
+        if inc[j - 1] >= gate:  # the station before is at the switch
+            return w[j - 1], float(np.sin(inc[j - 1]))
+        f = (gate - inc[j - 1]) / (inc[j] - inc[j - 1])
+        return w[j - 1] + f * (w[j] - w[j - 1]), float(np.sin(gate))
+
+
+@dataclass(frozen=True)
 class ToolTerm:
-    """One term of a tool model: magnitude in ``unit`` (``sigma`` in SI) and its weights."""
+    """One term of a tool model: magnitude in ``unit`` (``sigma`` in SI), its weights and
+    the inclination switch they follow (None: none)."""
 
     name: str
     acts_on: tuple[str, ...]
@@ -185,6 +246,7 @@ class ToolTerm:
     weight: WeightFunction | FormulaWeight
     location: Location
     description: str = ""
+    switch: Switch | None = None
 
     @property
     def sigma(self) -> float:
@@ -208,6 +270,8 @@ class ToolTerm:
         )
         with np.errstate(all="ignore"):
             w = fn(q)
+            if self.switch is not None:
+                w = self.switch.apply(w, q.inc, q.parameter(self.switch.at), self.frame)
         bad = ~np.isfinite(w).all(axis=1)
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
@@ -226,7 +290,8 @@ class ToolTerm:
 
 @dataclass(frozen=True)
 class ToolModel:
-    """An error model: its terms and parameters (SI values; ``units`` as written)."""
+    """An error model: its terms and parameters (SI values; ``units`` as written) and the
+    inclinations it holds for, ``inclination_range_deg`` (deg, inclusive)."""
 
     name: str
     terms: tuple[ToolTerm, ...]
@@ -236,9 +301,7 @@ class ToolModel:
     source: str = ""
     revision: str = ""
     file: str = ""
-    inclination_range: tuple[float, float] | None = None
-    """The published sheet's inclination range (deg, ``validity:`` of the file or of the
-    model it extends); None where the file states none."""
+    inclination_range_deg: tuple[float, float] = (0.0, 180.0)
 
     @property
     def needs(self) -> frozenset[str]:
@@ -368,6 +431,10 @@ def _build(
             continue
         terms.append(term)
     for t in terms:
+        if t.switch is not None and t.switch.at not in params:
+            problems.append(
+                Problem(t.location, f"term {t.name}: switch at {t.switch.at!r}, not a parameter")
+            )
         if isinstance(t.weight, WeightFunction):
             missing = [p for p in t.weight.parameters if p not in params]
             if missing:
@@ -376,6 +443,16 @@ def _build(
                 )
     if not terms:
         problems.append(Problem(source.locate(("terms",)), "a tool model needs terms"))
+    validity = parent.inclination_range_deg if parent else (0.0, 180.0)
+    if spec.validity is not None:
+        lo, hi = validity = spec.validity.inclination_deg
+        if not 0.0 <= lo < hi <= 180.0:
+            problems.append(
+                Problem(
+                    source.locate(("validity", "inclination_deg")),
+                    f"inclination range [{lo:g}, {hi:g}]° must rise within 0–180°",
+                )
+            )
     if problems:
         raise ToolModelError(problems)
     return ToolModel(
@@ -387,11 +464,7 @@ def _build(
         source=spec.source or (parent.source if parent else ""),
         revision=spec.revision,
         file=source.file,
-        inclination_range=(
-            spec.validity.inclination_deg
-            if spec.validity is not None
-            else (parent.inclination_range if parent else None)
-        ),
+        inclination_range_deg=(float(validity[0]), float(validity[1])),
     )
 
 
@@ -447,8 +520,9 @@ def _term(
         if formulas is None:
             return None
         weight = formulas
+    switch = None if raw.switch is None else Switch(**raw.switch.model_dump())
     return ToolTerm(
-        raw.name, acts_on, raw.mode, raw.magnitude, raw.unit, weight, where, raw.description
+        raw.name, acts_on, raw.mode, raw.magnitude, raw.unit, weight, where, raw.description, switch
     )
 
 
@@ -508,8 +582,6 @@ def describe(model: ToolModel) -> dict[str, Any]:
         "source": model.source,
         "file": model.file,
         "needs": sorted(model.needs),
-        "inclination_range": (
-            list(model.inclination_range) if model.inclination_range is not None else None
-        ),
+        "inclination_range": list(model.inclination_range_deg),
         "terms": [t.name for t in model.terms],
     }

@@ -340,27 +340,6 @@ def xclh(q: Quantities) -> FloatArray:
     return stack(size * ci * np.cos(q.azi), size * ci * np.sin(q.azi), -size * np.sin(q.inc), q.n)
 
 
-@_weight("XCLA-DIA", "azi", "-", ("tortuosity",))
-def xcla_dia(q: Quantities) -> FloatArray:
-    """Extended course length, azimuth, as a measurement error (OWSG gyro sheets, ISCWSA
-    Rev 5): α weight max(sin I sin |ΔA|, τ·ΔMD)."""
-    tort = q.parameter("tortuosity")
-    return _dia(
-        q,
-        0.0,
-        0.0,
-        np.maximum(np.sin(q.inc) * np.sin(np.abs(q.azi - previous(q.azi))), tort * q.dmd),
-    )
-
-
-@_weight("XCLH-DIA", "inc", "-", ("tortuosity",))
-def xclh_dia(q: Quantities) -> FloatArray:
-    """Extended course length, inclination, as a measurement error (OWSG gyro sheets):
-    ∂I = max(|ΔI|, τ·ΔMD)."""
-    tort = q.parameter("tortuosity")
-    return _dia(q, 0.0, np.maximum(np.abs(q.inc - previous(q.inc)), tort * q.dmd), 0.0)
-
-
 # ------------------------------------------------------------------ gyro (SPE 90408, OWSG GYRO-NS)
 
 
