@@ -53,16 +53,20 @@ CNA_LEGACY = (
     "station 1 whatever the header says (its JSON path, BLIND+TREND and FINDS, gives the whole "
     "leg as here): σ carries 15 m less of the first 30 m leg"
 )
+#: Models that differ from welleng on purpose (their cause in :data:`CAUSES`): not held to
+#: :data:`TOLERANCE`.
+DELIBERATE = ("GYRO-NS-CT", "GYRO-NS-CT_Fl")
 #: Known causes of deviations, by model name (exact, else the longest prefix that matches).
 CAUSES = {
     "BLIND": CNA_LEGACY,
     "BLIND_Fl": CNA_LEGACY,
     "UNKNOWN": CNA_LEGACY,
     "UNKNOWN_Fl": CNA_LEGACY,
-    "GYRO-NS-CT": "XCLA/XCLH in the OWSG sheet form here (issue 29 item 2); on #3, which "
-    "returns to vertical and re-enters the continuous mode, also GXY-GRW (welleng carries the "
-    "walk per continuous section, here it restarts at the gate: re-initialisation per section)",
-    "GYRO": "XCLA/XCLH in the OWSG sheet form here, the NEV form in welleng (issue 29 item 2)",
+    "GYRO-NS-CT": "by design: above the switch inclination the stationary terms are frozen "
+    "at their value there, as SPE 90408 states, where welleng keeps evaluating their 1/cos I "
+    "weights (3.4e18 m lateral at 90° on #1); on #3, which returns to vertical and re-enters "
+    "the continuous mode, also GXY-GRW (welleng carries the walk per continuous section, here "
+    "it restarts at the gate: re-initialisation per section)",
 }
 
 
@@ -218,7 +222,7 @@ def main(argv: list[str] | None = None) -> int:
                 notes.append(f"{cases[w].name}: here {str(exc).splitlines()[-1].strip()}")
                 continue
             td, per = deviation(mine, ref)
-            worst = max(worst, td)
+            worst = worst if name in DELIBERATE else max(worst, td)
             cells.append(f"{100 * td:>10.4f} {100 * per:>11.4f}")
             if max(td, per) > 1e-4:
                 why = cause(name) or (VERTICAL_FIRST_LEG if args.welleng_default else "unknown")
@@ -226,7 +230,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name:<28} " + " ".join(cells))
         for note in dict.fromkeys(notes):
             print(f"{'':<30}{note}")
-    print(f"largest deviation at TD: {100 * worst:.3f} % (bound {100 * TOLERANCE:.1f} %)")
+    print(
+        f"largest deviation at TD: {100 * worst:.3f} % (bound {100 * TOLERANCE:.1f} %; "
+        f"{', '.join(DELIBERATE)} differ by design)"
+    )
     return 0 if worst <= TOLERANCE else 1
 
 
