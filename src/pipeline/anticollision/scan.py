@@ -1,10 +1,22 @@
-"""Anti-collision scan: every reference station against the closest point of each offset well.
+"""Anti-collision scan: every reference station against the closest point of each offset well,
+and the least separation factor along each reference course.
 
 All wells are given in one frame: NEV positions (m) from one origin, azimuths from one north
 (radians), covariances (m²) in that frame. For each reference station and offset well the
 closest point of the offset's minimum-curvature path (:mod:`.geometry`) is found, the
 offset's covariance there interpolated linearly in MD between its two stations, and the
 separation factor computed by the ISCWSA rule (:mod:`.rule`).
+
+Between stations: along each reference course (station k → k + 1) the reference point moves
+on its minimum-curvature arc, its covariance interpolated linearly in MD, and the SF of each
+point against the offset's closest point is minimised — a grid of ``BETWEEN_GRID`` points,
+then golden-section refinement around the least (to ``BETWEEN_TOL`` of the course). The
+least SF of a course, its end stations included, is reported on the row of its upper
+station (the last station: its own SF).
+
+Each offset is scanned against its own view of the reference (:class:`Pair`): the whole
+reference, or — for a sidetrack of it — the reference from the common point down, with its
+covariance zeroed there.
 
 The travelling-cylinder angle is the direction of the closest approach in the plane normal
 to the reference well, clockwise from the high side looking down the hole (90°: right); at a
@@ -19,16 +31,26 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.anticollision.geometry import closest_points
-from pipeline.anticollision.rule import RuleLimits, SeparationRule, levels, separation
+from pipeline.anticollision.geometry import Closest, closest_points
+from pipeline.anticollision.rule import (
+    RuleLimits,
+    Separation,
+    SeparationRule,
+    levels,
+    separation,
+)
 from pipeline.survey.interpolate import MinCurvePath
-from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import wrap_360
 from pipeline.survey.stations import defined_azimuths
 
-__all__ = ["ClearanceScan", "Well", "scan"]
+__all__ = ["BETWEEN_GRID", "BETWEEN_TOL", "ClearanceScan", "Pair", "Well", "scan", "scan_pairs"]
 
 FloatArray = NDArray[np.float64]
+BETWEEN_GRID = 9
+"""Points per reference course (ends included) where the SF is sampled before refining."""
+BETWEEN_TOL = 1e-6
+"""Fraction of the course to which the between-station minimum is refined."""
+_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
 
 @dataclass(frozen=True)
@@ -50,8 +72,17 @@ class Well:
 
 
 @dataclass(frozen=True)
+class Pair:
+    """An offset well and the reference as scanned against it (its rows)."""
+
+    reference: Well
+    offset: Well
+
+
+@dataclass(frozen=True)
 class ClearanceScan:
-    """Rows (reference station × offset well), offset-major; lengths m, angles deg."""
+    """Rows (reference station × offset well), offset-major; lengths m, angles deg.
+    ``level`` is decided on ``sf_between`` (or on ``sf`` with ``level_on="station"``)."""
 
     offset: NDArray[np.str_]
     md: FloatArray
@@ -59,6 +90,8 @@ class ClearanceScan:
     distance: FloatArray
     sigma_s: FloatArray
     sf: FloatArray
+    sf_between: FloatArray
+    md_between: FloatArray
     level: NDArray[np.str_]
     toolface: FloatArray
 
@@ -72,58 +105,129 @@ def _normal_plane(inc: FloatArray, azi: FloatArray) -> tuple[FloatArray, FloatAr
     return high, right
 
 
+class _Course:
+    """SF of points along the reference courses against one offset well."""
+
+    def __init__(self, pair: Pair, rule: SeparationRule):
+        self.ref, self.off, self.rule = pair.reference, pair.offset, rule
+        self.ref_path, self.off_path = self.ref.path(), self.off.path()
+        self.radii = self.ref.radius + self.off.radius
+
+    def at(self, k: NDArray[np.intp], f: FloatArray) -> tuple[Closest, Separation]:
+        """Closest offset points and the separation of reference points at fractions f of
+        courses k (f = 0 of course k is station k; course n − 1 ends the path)."""
+        last = k >= self.ref.md.size - 1
+        kk = np.where(last, k - 1, k)
+        ff = np.where(last, 1.0, f)
+        p = self.ref_path.position(kk, ff).T
+        g = ff[:, None, None]
+        c_ref = (1.0 - g) * self.ref.cov[kk] + g * self.ref.cov[kk + 1]
+        near = closest_points(self.off_path, p)
+        h = near.fraction[:, None, None]
+        c_off = (1.0 - h) * self.off.cov[near.step] + h * self.off.cov[near.step + 1]
+        sep = separation(p, c_ref, near.position, c_off, self.radii, self.rule)
+        return near, sep
+
+    def sf(self, k: NDArray[np.intp], f: FloatArray) -> FloatArray:
+        out: FloatArray = self.at(k, f)[1].sf
+        return out
+
+    def least(self) -> tuple[FloatArray, FloatArray]:
+        """Least SF on each course (end stations included) and its fraction."""
+        n = self.ref.md.size - 1
+        if n < 1:
+            return np.zeros(0), np.zeros(0)
+        grid = np.linspace(0.0, 1.0, BETWEEN_GRID)
+        k = np.repeat(np.arange(n), grid.size)
+        values = self.sf(k, np.tile(grid, n)).reshape(n, grid.size)
+        values = np.where(np.isnan(values), -np.inf, values)
+        best = np.argmin(values, axis=1)
+        step = 1.0 / (BETWEEN_GRID - 1)
+        lo = np.clip(grid[best] - step, 0.0, 1.0)
+        hi = np.clip(grid[best] + step, 0.0, 1.0)
+        courses = np.arange(n)
+        a = hi - _GOLDEN * (hi - lo)
+        b = lo + _GOLDEN * (hi - lo)
+        fa, fb = self.sf(courses, a), self.sf(courses, b)
+        while (hi - lo).max() > BETWEEN_TOL:
+            left = fa < fb  # the least lies in [lo, b]: b becomes a, a new point below
+            hi = np.where(left, b, hi)
+            lo = np.where(left, lo, a)
+            x = np.where(left, hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo))
+            fx = self.sf(courses, x)
+            a, b = np.where(left, x, b), np.where(left, a, x)
+            fa, fb = np.where(left, fx, fb), np.where(left, fa, fx)
+        f = 0.5 * (lo + hi)
+        refined = self.sf(courses, f)
+        sampled = values[courses, best]
+        take = refined < sampled
+        return np.where(take, refined, sampled), np.where(take, f, grid[best])
+
+
 def scan(
     reference: Well,
     offsets: Sequence[Well],
     rule: SeparationRule | None = None,
     limits: RuleLimits | None = None,
+    level_on: str = "course",
 ) -> ClearanceScan:
     """The separation of every reference station from each offset well (at least two
     stations each) by ``rule`` and ``limits`` (default: the ISCWSA rule, SF 1.0 / 1.5)."""
-    m = reference.md.size
-    mc = minimum_curvature(
-        reference.md,
-        reference.inc,
-        reference.azi,
-        tie_north=reference.tie[0],
-        tie_east=reference.tie[1],
-        tie_tvd=reference.tie[2],
-    )
-    p_ref = np.stack([mc.north, mc.east, mc.tvd], axis=1)
+    return scan_pairs([Pair(reference, w) for w in offsets], rule, limits, level_on)
+
+
+def scan_pairs(
+    pairs: Sequence[Pair],
+    rule: SeparationRule | None = None,
+    limits: RuleLimits | None = None,
+    level_on: str = "course",
+) -> ClearanceScan:
+    """:func:`scan` of each offset well against its own view of the reference; the level
+    decided on the least SF along each course (``level_on="course"``) or at the station."""
+    if level_on not in ("course", "station"):
+        raise ValueError(f"level_on must be 'course' or 'station'; got {level_on!r}")
+    rule = rule or SeparationRule()
     parts = []
-    for well in offsets:
-        path = well.path()
-        near = closest_points(path, p_ref)
-        f = near.fraction[:, None, None]
-        cov = (1.0 - f) * well.cov[near.step] + f * well.cov[near.step + 1]
-        parts.append((near.md, near.position, cov, well.radius))
-    n = len(offsets)
-    p_off = np.concatenate([p[1] for p in parts]) if parts else np.zeros((0, 3))
-    c_off = np.concatenate([p[2] for p in parts]) if parts else np.zeros((0, 3, 3))
-    radii = reference.radius + np.repeat([p[3] for p in parts], m)
-    sep = separation(
-        np.tile(p_ref, (n, 1)),
-        np.tile(reference.cov, (n, 1, 1)),
-        p_off,
-        c_off,
-        radii,
-        rule or SeparationRule(),
-    )
-    high, right = _normal_plane(reference.inc, reference.azi)
-    d = sep.direction
-    toolface = np.degrees(
-        np.arctan2(
-            np.einsum("ij,ij->i", d, np.tile(right, (n, 1))),
-            np.einsum("ij,ij->i", d, np.tile(high, (n, 1))),
+    for pair in pairs:
+        ref = pair.reference
+        m = ref.md.size
+        course = _Course(pair, rule)
+        stations = np.arange(m)
+        near, sep = course.at(stations, np.zeros(m))
+        least, frac = course.least()
+        between = np.append(least, sep.sf[-1])
+        md_between = np.append(ref.md[:-1] + frac * np.diff(ref.md), ref.md[-1])
+        high, right = _normal_plane(ref.inc, ref.azi)
+        d = sep.direction
+        toolface = np.degrees(
+            np.arctan2(np.einsum("ij,ij->i", d, right), np.einsum("ij,ij->i", d, high))
         )
-    )
+        parts.append(
+            (
+                np.full(m, pair.offset.name, dtype=object),
+                ref.md,
+                near.md,
+                sep.distance,
+                sep.sigma_s,
+                sep.sf,
+                between,
+                md_between,
+                toolface,
+            )
+        )
+    cols = [np.concatenate(c) if parts else np.zeros(0) for c in zip(*parts, strict=True)]
+    if not parts:
+        cols = [np.zeros(0)] * 9
+    decided = cols[6] if level_on == "course" else cols[5]
     return ClearanceScan(
-        offset=np.repeat(np.array([w.name for w in offsets], dtype=str), m),
-        md=np.tile(reference.md, n),
-        offset_md=np.concatenate([p[0] for p in parts]) if parts else np.zeros(0),
-        distance=sep.distance,
-        sigma_s=sep.sigma_s,
-        sf=sep.sf,
-        level=levels(sep.sf, limits or RuleLimits()),
-        toolface=wrap_360(toolface),
+        offset=np.asarray(cols[0], dtype=str),
+        md=cols[1],
+        offset_md=cols[2],
+        distance=cols[3],
+        sigma_s=cols[4],
+        sf=cols[5],
+        sf_between=cols[6],
+        md_between=cols[7],
+        level=levels(decided, limits or RuleLimits()),
+        toolface=wrap_360(cols[8]),
     )

@@ -3,24 +3,23 @@ and the ``clearance`` stage (ISCWSA separation factor of a reference well agains
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
-from pipeline.anticollision.models import (
-    ModelSite,
-    needs,
-    resolve_model,
-    well_covariance,
-)
+from pipeline.anticollision.models import Conventions, ModelSite, Start, needs, resolve_model
+from pipeline.anticollision.models import well_covariance as model_covariance
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
-from pipeline.anticollision.scan import Well, scan
+from pipeline.anticollision.scan import Pair, Well, scan_pairs
+from pipeline.anticollision.sidetrack import Kickoff, common_point, cut, named_kickoff
 from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_rule
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference
@@ -58,6 +57,29 @@ class ClearanceParams(BaseModel):
     surface_margin: float = Field(0.3, ge=0, description="surface margin S_m, m")
     stop: float = Field(1.0, description="separation factor below which the level is fail")
     caution: float = Field(1.5, description="separation factor below which the level is warn")
+    level_on: Literal["course", "station"] = Field(
+        "course",
+        description="what the level is decided on: `course` the least SF along the course "
+        "from each reference station to the next (sf_between), `station` the SF at the station",
+    )
+    first_station_exact: bool = Field(
+        True,
+        description="each survey's first station has zero covariance (the ISCWSA clearance "
+        "set's convention: the surface position exact); false: the surface tie-on's depth "
+        "reference σ there",
+    )
+    vertical_azimuth: Literal["north", "given"] = Field(
+        "north",
+        description="azimuth of a vertical station in the error models: `north` 0° (the "
+        "ISCWSA clearance set's and welleng's), `given` the station's own (an undefined one: "
+        "the azimuth the hole leaves vertical in)",
+    )
+    common_tolerance: float = Field(
+        0.1,
+        gt=0,
+        description="an offset whose first station(s) lie within this distance (m) of the "
+        "reference path shares its hole there: a sidetrack, scanned from the deepest common point",
+    )
     latitude: Latitude | None = Field(
         None, description="latitude, deg (gyro models); default: the well's"
     )
@@ -157,6 +179,8 @@ def offset_tables(
             "north": [e.north for e in entries],
             "east": [e.east for e in entries],
             "tvd": [e.tvd for e in entries],
+            "parent": [e.parent for e in entries],
+            "kickoff_md": [e.kickoff_md for e in entries],
             "source": [str(e.file) for e in entries],
             "sha256": [sha256_file(e.file) for e in entries],
         }
@@ -217,37 +241,89 @@ class _Frame:
     def covariance(
         self,
         model: str,
-        md: np.ndarray,
-        inc: np.ndarray,
-        azi: np.ndarray,
-        tvd: np.ndarray,
+        survey: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         site: ModelSite,
+        start: Start,
+        conventions: Conventions,
     ) -> np.ndarray:
-        """The model's covariance (frame azimuths in rad) in the frame."""
-        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site, self.catalogue)
+        """The model's covariance of a survey (MD, inclination, frame azimuth rad, TVD) in
+        the frame."""
+        md, inc, azi, tvd = survey
+        cov = model_covariance(
+            model,
+            md,
+            inc,
+            azi + self.delta,
+            tvd,
+            site,
+            self.catalogue,
+            start=start,
+            conventions=conventions,
+        )
         c, s = np.cos(self.delta), np.sin(self.delta)
         rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
         out: np.ndarray = rot @ cov @ rot.T
         return out
 
 
-def _well(
-    name: str,
-    table: pa.Table,
-    frame: _Frame,
-    model: str,
-    diameter: float,
-    tie: tuple[float, float, float | None],
-    site: ModelSite,
-) -> Well:
+def _arrays(table: pa.Table, frame: _Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """MD (m), inclination and frame azimuth (rad, NaN at vertical kept) of a stations table."""
     md = table.column("md").to_numpy(zero_copy_only=False).astype(np.float64)
     inc = np.radians(table.column("inc").to_numpy(zero_copy_only=False))
     azi_deg = table.column("azi").to_numpy(zero_copy_only=False).astype(np.float64)
-    azi = frame.azimuths(azi_deg, north_reference_of(table, "azi"))
-    start = (tie[0], tie[1], float(md[0]) if tie[2] is None else tie[2])
-    tvd = minimum_curvature(md, inc, azi, tie_tvd=start[2]).tvd
-    cov = frame.covariance(model, md, inc, azi, tvd, site)
-    return Well(name, md, inc, azi, start, cov, 0.5 * diameter)
+    return md, inc, frame.azimuths(azi_deg, north_reference_of(table, "azi"))
+
+
+@dataclass(frozen=True)
+class _Survey:
+    """How one well's covariance is made: its model, site, frame and conventions."""
+
+    frame: _Frame
+    site: ModelSite
+    conventions: Conventions
+
+    def well(
+        self,
+        name: str,
+        stations: tuple[np.ndarray, np.ndarray, np.ndarray],
+        start_at: tuple[float, float, float],
+        model: str,
+        diameter: float,
+        start: Start = "surface",
+    ) -> Well:
+        md, inc, azi = stations
+        tvd = minimum_curvature(md, inc, azi, tie_tvd=start_at[2]).tvd
+        cov = self.frame.covariance(model, (md, inc, azi, tvd), self.site, start, self.conventions)
+        return Well(name, md, inc, azi, start_at, cov, 0.5 * diameter)
+
+
+def _kickoff(
+    w: dict[str, Any],
+    reference: Well,
+    offset: Well,
+    params: ClearanceParams,
+    reference_name: str | None,
+) -> Kickoff | None:
+    """The common point of an offset well with the reference: named by its ``parent`` /
+    ``kickoff_md``, else detected (None: none)."""
+    parent = w.get("parent")
+    names = {"reference", *([reference_name.casefold()] if reference_name else [])}
+    if parent and parent.strip().casefold() not in names:
+        raise ValueError(
+            f"offset well {w['offset']!r}: parent {parent!r} is not the reference well "
+            f"({reference_name or 'reference'!r}); a common section with another offset well "
+            "does not touch this scan: list that well's stations from its surface"
+        )
+    if w.get("kickoff_md") is None:
+        return common_point(reference.path(), offset.path(), params.common_tolerance)
+    kick = named_kickoff(reference.path(), offset.path(), float(w["kickoff_md"]))
+    if kick.distance > params.common_tolerance:
+        raise ValueError(
+            f"offset well {w['offset']!r}: at its kick-off MD {kick.offset_md:g} m it is "
+            f"{kick.distance:.3f} m from the reference path (common_tolerance "
+            f"{params.common_tolerance:g} m): not a common point"
+        )
+    return kick
 
 
 def clearance(
@@ -265,14 +341,18 @@ def clearance(
     models = {params.reference_model, *(w["model"] for w in listed)}
     site, applied = _site(params, ctx.well, models, catalogue)
     frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
-    ref = _well(
-        "reference",
-        reference,
+    make = _Survey(
         frame,
-        params.reference_model,
-        params.reference_hole_diameter,
-        (0.0, 0.0, None),
         site,
+        Conventions(
+            first_station_exact=params.first_station_exact,
+            vertical_azimuth=params.vertical_azimuth,
+        ),
+    )
+    ref_arrays = _arrays(reference, frame)
+    ref_model, ref_diameter = params.reference_model, params.reference_hole_diameter
+    ref = make.well(
+        "reference", ref_arrays, (0.0, 0.0, float(ref_arrays[0][0])), ref_model, ref_diameter
     )
     offsets = survey_offsets(stations)
     ids = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
@@ -280,7 +360,7 @@ def clearance(
         (ids[lo] if ids is not None else ""): stations.slice(lo, hi - lo)
         for lo, hi in itertools.pairwise(offsets)
     }
-    scanned = []
+    pairs, kickoffs = [], {}
     for w in listed:
         block = blocks.get(w["offset"])
         if block is None or block.num_rows < 2:
@@ -288,13 +368,36 @@ def clearance(
                 f"offset well {w['offset']!r}: {'no' if block is None else 'fewer than 2'} "
                 "stations in the offsets table"
             )
-        tie = (w["north"], w["east"], w["tvd"])
-        scanned.append(_well(w["offset"], block, frame, w["model"], w["hole_diameter"], tie, site))
-    result = scan(
-        ref,
-        scanned,
+        arrays = _arrays(block, frame)
+        start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
+        offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
+        kick = _kickoff(w, ref, offset, params, ctx.well.well)
+        if kick is None:
+            pairs.append(Pair(ref, offset))
+            continue
+        kickoffs[w["offset"]] = kick
+        r_md, r_inc, r_azi, r_at = cut(ref.path(), kick.reference_md)
+        o_md, o_inc, o_azi, o_at = cut(offset.path(), kick.offset_md)
+        pairs.append(
+            Pair(
+                make.well(
+                    "reference", (r_md, r_inc, r_azi), r_at, ref_model, ref_diameter, "same_run"
+                ),
+                make.well(
+                    w["offset"],
+                    (o_md, o_inc, o_azi),
+                    o_at,
+                    w["model"],
+                    w["hole_diameter"],
+                    "other_run",
+                ),
+            )
+        )
+    result = scan_pairs(
+        pairs,
         SeparationRule(k=params.k, sigma_pa=params.sigma_pa, surface_margin=params.surface_margin),
         RuleLimits(stop=params.stop, caution=params.caution),
+        params.level_on,
     )
     table = Clearance.compiled().make_table(
         {
@@ -304,6 +407,8 @@ def clearance(
             "distance": result.distance,
             "sigma_s": result.sigma_s,
             "sf": result.sf,
+            "sf_between": result.sf_between,
+            "md_between": result.md_between,
             "level": result.level.tolist(),
             "toolface": result.toolface,
         }
@@ -315,6 +420,11 @@ def clearance(
             w["offset"]: {
                 **{k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)},
                 **{k: w[k] for k in ("north", "east", "tvd")},  # the slot and datum (tvd null)
+                **(
+                    {"kickoff": dataclasses.asdict(kickoffs[w["offset"]])}
+                    if w["offset"] in kickoffs
+                    else {}
+                ),
             }
             for w in listed
         },
