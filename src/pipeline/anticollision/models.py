@@ -108,19 +108,14 @@ def _azimuths(inc: FloatArray, azi_true: FloatArray, conventions: Conventions) -
 
 def term_effects_of(
     model: str,
-    md: FloatArray,
-    inc: FloatArray,
-    azi_true: FloatArray,
-    tvd: FloatArray,
+    survey: Survey,
     site: ModelSite,
     catalogue: ModelCatalogue = SHIPPED,
-    *,
     start: Start = "surface",
-    conventions: Conventions = Conventions(),
 ) -> TermEffects:
-    """The terms' NEV effects on one survey's stations (MD, TVD m; inclination, true
-    azimuth rad, NaN azimuth at vertical) under tool model ``model``, from ``start``."""
-    survey = Survey.of(md, inc, _azimuths(inc, azi_true, conventions), tvd)
+    """The terms' NEV effects on a survey's stations under tool model ``model``, from
+    ``start``; the survey's azimuths true and defined at every station (:func:`well_covariance`
+    makes them by its :class:`Conventions`)."""
     tool = find_model(resolve_model(model, catalogue), catalogue)
     shared = Quantities(survey, site, tool.parameters, tool.name)
     terms = tool.terms_for(
@@ -169,9 +164,8 @@ def well_covariance(
     """NEV covariance (n, 3, 3), m², true north, of one survey's stations (MD, TVD m;
     inclination, true azimuth rad, NaN azimuth at vertical) under tool model ``model``,
     from ``start`` (module docstring)."""
-    fx = term_effects_of(
-        model, md, inc, azi_true, tvd, site, catalogue, start=start, conventions=conventions
-    )
+    survey = Survey.of(md, inc, _azimuths(inc, azi_true, conventions), tvd)
+    fx = term_effects_of(model, survey, site, catalogue, start)
     out: FloatArray = propagate_nev(fx.full, fx.star, fx.modes).sum(axis=0)
     out[1:] += fx.tie
     if conventions.first_station_exact:

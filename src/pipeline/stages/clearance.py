@@ -57,16 +57,16 @@ class ClearanceParams(BaseModel):
     surface_margin: float = Field(0.3, ge=0, description="surface margin S_m, m")
     stop: float = Field(1.0, description="separation factor below which the level is fail")
     caution: float = Field(1.5, description="separation factor below which the level is warn")
-    level_on: Literal["course", "station"] = Field(
-        "course",
-        description="what the level is decided on: `course` the least SF along the course "
-        "from each reference station to the next (sf_between), `station` the SF at the station",
-    )
     first_station_exact: bool = Field(
         True,
         description="each survey's first station has zero covariance (the ISCWSA clearance "
         "set's convention: the surface position exact); false: the surface tie-on's depth "
         "reference σ there",
+    )
+    level_on: Literal["course", "station"] = Field(
+        "course",
+        description="what the level is decided on: `course` the least SF along the course "
+        "from each reference station to the next (sf_between), `station` the SF at the station",
     )
     vertical_azimuth: Literal["north", "given"] = Field(
         "north",
