@@ -194,6 +194,9 @@ def test_the_set_through_gyropipe_run(tmp_path: Path):
         assert np.abs(sf / expected_sf(name) - 1.0).max() < 0.005, name
     assert table[table.offset == "10 - well"].md.iloc[0] == 900.0
     assert table[table.offset == "09 - well"].sf_between.min() == pytest.approx(-0.0619, abs=2e-4)
+    report = (tmp_path / "out" / "report.html").read_text()
+    assert "Common section: 10 - well" in report
+    assert "kick-off at reference MD 900.00 m (detected" in report
 
 
 def test_same_covariances_give_welleng_s_separation_factors():
