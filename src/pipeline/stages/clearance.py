@@ -316,7 +316,10 @@ def _kickoff(
         )
     if w.get("kickoff_md") is None:
         return common_point(reference.path(), offset.path(), params.common_tolerance)
-    kick = named_kickoff(reference.path(), offset.path(), float(w["kickoff_md"]))
+    try:
+        kick = named_kickoff(reference.path(), offset.path(), float(w["kickoff_md"]))
+    except ValueError as exc:
+        raise ValueError(f"offset well {w['offset']!r}: {exc}") from None
     if kick.distance > params.common_tolerance:
         raise ValueError(
             f"offset well {w['offset']!r}: at its kick-off MD {kick.offset_md:g} m it is "
