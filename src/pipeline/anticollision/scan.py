@@ -9,8 +9,11 @@ separation factor computed by the ISCWSA rule (:mod:`.rule`).
 
 Between stations: along each reference course (station k → k + 1) the reference point moves
 on its minimum-curvature arc, its covariance interpolated linearly in MD, and the SF of each
-point against the offset's closest point is minimised — a grid of ``BETWEEN_GRID`` points,
-then golden-section refinement around the least (to ``BETWEEN_TOL`` of the course). The
+point against the offset's closest point is minimised: where the SF falls inward from both
+ends of a course (sampled ``BETWEEN_STEP`` of the course inside each), golden-section search
+over the course (to ``BETWEEN_TOL`` of it) finds the least; elsewhere the least of the two
+stations stands (a course whose SF rises from both ends, then dips twice, is not looked
+into). The
 least SF of a course, its end stations included, is reported on the row of its upper
 station (the last station: its own SF).
 
@@ -31,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.anticollision.geometry import Closest, closest_points
+from pipeline.anticollision.geometry import Closest, ClosestPoints
 from pipeline.anticollision.rule import (
     RuleLimits,
     Separation,
@@ -43,11 +46,12 @@ from pipeline.survey.interpolate import MinCurvePath
 from pipeline.survey.north import wrap_360
 from pipeline.survey.stations import defined_azimuths
 
-__all__ = ["BETWEEN_GRID", "BETWEEN_TOL", "ClearanceScan", "Pair", "Well", "scan", "scan_pairs"]
+__all__ = ["BETWEEN_STEP", "BETWEEN_TOL", "ClearanceScan", "Pair", "Well", "scan", "scan_pairs"]
 
 FloatArray = NDArray[np.float64]
-BETWEEN_GRID = 9
-"""Points per reference course (ends included) where the SF is sampled before refining."""
+BETWEEN_STEP = 1e-4
+"""Fraction of a course inside each end where the SF is sampled: a course whose SF falls
+inward from both ends holds a minimum between its stations."""
 BETWEEN_TOL = 1e-6
 """Fraction of the course to which the between-station minimum is refined."""
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
@@ -110,7 +114,8 @@ class _Course:
 
     def __init__(self, pair: Pair, rule: SeparationRule):
         self.ref, self.off, self.rule = pair.reference, pair.offset, rule
-        self.ref_path, self.off_path = self.ref.path(), self.off.path()
+        self.ref_path = self.ref.path()
+        self.closest = ClosestPoints(self.off.path())
         self.radii = self.ref.radius + self.off.radius
 
     def at(self, k: NDArray[np.intp], f: FloatArray) -> tuple[Closest, Separation]:
@@ -122,7 +127,7 @@ class _Course:
         p = self.ref_path.position(kk, ff).T
         g = ff[:, None, None]
         c_ref = (1.0 - g) * self.ref.cov[kk] + g * self.ref.cov[kk + 1]
-        near = closest_points(self.off_path, p)
+        near = self.closest(p)
         h = near.fraction[:, None, None]
         c_off = (1.0 - h) * self.off.cov[near.step] + h * self.off.cov[near.step + 1]
         sep = separation(p, c_ref, near.position, c_off, self.radii, self.rule)
@@ -132,36 +137,39 @@ class _Course:
         out: FloatArray = self.at(k, f)[1].sf
         return out
 
-    def least(self) -> tuple[FloatArray, FloatArray]:
-        """Least SF on each course (end stations included) and its fraction."""
+    def least(self, at_stations: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Least SF on each course (end stations included, their SF ``at_stations``) and
+        its fraction of the course."""
         n = self.ref.md.size - 1
         if n < 1:
             return np.zeros(0), np.zeros(0)
-        grid = np.linspace(0.0, 1.0, BETWEEN_GRID)
-        k = np.repeat(np.arange(n), grid.size)
-        values = self.sf(k, np.tile(grid, n)).reshape(n, grid.size)
-        values = np.where(np.isnan(values), -np.inf, values)
-        best = np.argmin(values, axis=1)
-        step = 1.0 / (BETWEEN_GRID - 1)
-        lo = np.clip(grid[best] - step, 0.0, 1.0)
-        hi = np.clip(grid[best] + step, 0.0, 1.0)
+        start, end = at_stations[:-1], at_stations[1:]
         courses = np.arange(n)
-        a = hi - _GOLDEN * (hi - lo)
-        b = lo + _GOLDEN * (hi - lo)
-        fa, fb = self.sf(courses, a), self.sf(courses, b)
-        while (hi - lo).max() > BETWEEN_TOL:
-            left = fa < fb  # the least lies in [lo, b]: b becomes a, a new point below
-            hi = np.where(left, b, hi)
-            lo = np.where(left, lo, a)
-            x = np.where(left, hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo))
-            fx = self.sf(courses, x)
-            a, b = np.where(left, x, b), np.where(left, a, x)
-            fa, fb = np.where(left, fx, fb), np.where(left, fa, fx)
-        f = 0.5 * (lo + hi)
-        refined = self.sf(courses, f)
-        sampled = values[courses, best]
-        take = refined < sampled
-        return np.where(take, refined, sampled), np.where(take, f, grid[best])
+        inward = (self.sf(courses, np.full(n, BETWEEN_STEP)) < start) & (
+            self.sf(courses, np.full(n, 1.0 - BETWEEN_STEP)) < end
+        )
+        least = np.minimum(start, end)
+        frac = np.where(end < start, 1.0, 0.0)
+        courses = courses[inward]
+        if courses.size:
+            lo, hi = np.zeros(courses.size), np.ones(courses.size)
+            a = hi - _GOLDEN * (hi - lo)
+            b = lo + _GOLDEN * (hi - lo)
+            fa, fb = self.sf(courses, a), self.sf(courses, b)
+            while (hi - lo).max() > BETWEEN_TOL:
+                left = fa < fb  # the least lies in [lo, b]: b becomes a, a new point below
+                hi = np.where(left, b, hi)
+                lo = np.where(left, lo, a)
+                x = np.where(left, hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo))
+                fx = self.sf(courses, x)
+                a, b = np.where(left, x, b), np.where(left, a, x)
+                fa, fb = np.where(left, fx, fb), np.where(left, fa, fx)
+            f = 0.5 * (lo + hi)
+            refined = self.sf(courses, f)
+            take = refined < least[courses]
+            least[courses[take]] = refined[take]
+            frac[courses[take]] = f[take]
+        return least, frac
 
 
 def scan(
@@ -194,7 +202,7 @@ def scan_pairs(
         course = _Course(pair, rule)
         stations = np.arange(m)
         near, sep = course.at(stations, np.zeros(m))
-        least, frac = course.least()
+        least, frac = course.least(sep.sf)
         between = np.append(least, sep.sf[-1])
         md_between = np.append(ref.md[:-1] + frac * np.diff(ref.md), ref.md[-1])
         high, right = _normal_plane(ref.inc, ref.azi)
