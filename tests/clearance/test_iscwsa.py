@@ -98,6 +98,21 @@ def test_sidetrack_named_by_kickoff_matches_detected(rev4: pd.DataFrame):
     assert named.sf.to_numpy() == pytest.approx(detected.sf.to_numpy(), rel=1e-12)
 
 
+def test_sidetrack_listed_from_the_surface_shares_the_trunk(rev4: pd.DataFrame):
+    """Well 10 listed from the surface — the reference's stations down to MD 900, then its
+    own: the common stations are found on the reference path, the deepest (MD 900) the
+    common point, and the rows are the from-the-kick-off listing's."""
+    ref, own = stations("Reference well"), stations("10 - well")
+    full = pd.concat([ref[ref.md < 900.0], own], ignore_index=True)
+    full.attrs["north_reference"] = "grid"
+    options = clearance_options("ISCWSA-MWD-REV4")
+    options["offset_position"] = {"10 - well": (0.0, 0.0, 0.0)}
+    listed = gp.clearance(ref, {"10 - well": full}, **options)
+    detected = by_offset(rev4)["10 - well"]
+    assert listed.md.tolist() == detected.md.tolist()
+    assert listed.sf.to_numpy() == pytest.approx(detected.sf.to_numpy(), rel=1e-9)
+
+
 def test_least_sf_between_stations(rev4: pd.DataFrame):
     """Well 09 touches the reference between its stations at 2490 and 2520 m: the least SF
     on that course is −0.062 at MD 2491.23 (welleng's minimize_sf finds the same) against
