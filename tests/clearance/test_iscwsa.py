@@ -113,6 +113,24 @@ def test_sidetrack_listed_from_the_surface_shares_the_trunk(rev4: pd.DataFrame):
     assert listed.sf.to_numpy() == pytest.approx(detected.sf.to_numpy(), rel=1e-9)
 
 
+def test_sidetrack_shared_errors_option(rev4: pd.DataFrame):
+    """``sidetrack="shared"``: the exact relative error (the trunk's errors cancel, the two
+    runs independent): zero at the kick-off (SF the rule alone), a covariance below it (σ_S
+    real at every row), less conservative than the set's rule on the whole (median SF
+    higher) and near the set's values (median within 0.2 %)."""
+    options = clearance_options("ISCWSA-MWD-REV4") | {"sidetrack": "shared"}
+    shared = gp.clearance(
+        stations("Reference well"), {"10 - well": stations("10 - well")}, **options
+    )
+    zeroed = by_offset(rev4)["10 - well"]
+    assert shared.md.tolist() == zeroed.md.tolist()
+    assert shared.sf.iloc[0] == pytest.approx(-(0.4572 + 0.3048 + 0.3) / (3.5 * 0.5), rel=1e-12)
+    assert shared.sigma_s.iloc[0] == pytest.approx(0.0, abs=1e-12)
+    assert np.isfinite(shared.sigma_s).all() and (shared.sigma_s[1:] > 0).all()
+    assert np.median(shared.sf.to_numpy() / zeroed.sf.to_numpy()) > 1.0
+    assert np.median(np.abs(shared.sf.to_numpy() / expected_sf("10 - well") - 1.0)) < 0.002
+
+
 def test_least_sf_between_stations(rev4: pd.DataFrame):
     """Well 09 touches the reference between its stations at 2490 and 2520 m: the least SF
     on that course is −0.062 at MD 2491.23 (welleng's minimize_sf finds the same) against

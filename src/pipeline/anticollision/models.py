@@ -46,6 +46,7 @@ __all__ = [
     "ModelSite",
     "Start",
     "TermEffects",
+    "model_survey",
     "needs",
     "resolve_model",
     "term_effects_of",
@@ -97,6 +98,14 @@ class TermEffects:
     full: FloatArray
     star: FloatArray
     tie: FloatArray
+
+
+def model_survey(
+    md: FloatArray, inc: FloatArray, azi_true: FloatArray, tvd: FloatArray, conventions: Conventions
+) -> Survey:
+    """A survey as the error models take it: azimuths true, a vertical station's by the
+    conventions."""
+    return Survey.of(md, inc, _azimuths(inc, azi_true, conventions), tvd)
 
 
 def _azimuths(inc: FloatArray, azi_true: FloatArray, conventions: Conventions) -> FloatArray:
@@ -164,7 +173,7 @@ def well_covariance(
     """NEV covariance (n, 3, 3), m², true north, of one survey's stations (MD, TVD m;
     inclination, true azimuth rad, NaN azimuth at vertical) under tool model ``model``,
     from ``start`` (module docstring)."""
-    survey = Survey.of(md, inc, _azimuths(inc, azi_true, conventions), tvd)
+    survey = model_survey(md, inc, azi_true, tvd, conventions)
     fx = term_effects_of(model, survey, site, catalogue, start)
     out: FloatArray = propagate_nev(fx.full, fx.star, fx.modes).sum(axis=0)
     out[1:] += fx.tie

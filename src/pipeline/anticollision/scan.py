@@ -28,7 +28,7 @@ vertical station, from the direction of the station's azimuth.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,12 +75,20 @@ class Well:
         return MinCurvePath(self.md, self.inc, self.azi, self.tie)
 
 
+Relative = Callable[[NDArray[np.intp], FloatArray, NDArray[np.intp], FloatArray], FloatArray]
+"""The relative covariance (m, 3, 3) of reference points (course, fraction) and offset points
+(step, fraction): one pair's wells not independent."""
+
+
 @dataclass(frozen=True)
 class Pair:
-    """An offset well and the reference as scanned against it (its rows)."""
+    """An offset well and the reference as scanned against it (its rows); ``relative``: the
+    covariance of their relative position, where the two are not independent (their own
+    covariances then unused)."""
 
     reference: Well
     offset: Well
+    relative: Relative | None = None
 
 
 @dataclass(frozen=True)
@@ -114,6 +122,7 @@ class _Course:
 
     def __init__(self, pair: Pair, rule: SeparationRule):
         self.ref, self.off, self.rule = pair.reference, pair.offset, rule
+        self.relative = pair.relative
         self.ref_path = self.ref.path()
         self.closest = ClosestPoints(self.off.path())
         self.radii = self.ref.radius + self.off.radius
@@ -129,7 +138,11 @@ class _Course:
         c_ref = (1.0 - g) * self.ref.cov[kk] + g * self.ref.cov[kk + 1]
         near = self.closest(p)
         h = near.fraction[:, None, None]
-        c_off = (1.0 - h) * self.off.cov[near.step] + h * self.off.cov[near.step + 1]
+        if self.relative is not None:
+            c_ref = self.relative(kk, ff, near.step, near.fraction)
+            c_off = np.zeros_like(c_ref)
+        else:
+            c_off = (1.0 - h) * self.off.cov[near.step] + h * self.off.cov[near.step + 1]
         sep = separation(p, c_ref, near.position, c_off, self.radii, self.rule)
         return near, sep
 

@@ -254,7 +254,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
             else "the SF at each reference station (between stations reported, not judged)",
         ),
         ("Conventions", _convention_words(rule)),
-        *_common_sections(wells),
+        *_common_sections(wells, str(rule.get("sidetrack", "zeroed"))),
     ]
     if "reference_model" in rule:
         fields.append(
@@ -329,8 +329,15 @@ def _convention_words(rule: Mapping[str, Any]) -> str:
     return f"{first}; {vertical}"
 
 
-def _common_sections(wells: Mapping[str, Any]) -> list[tuple[str, str]]:
+def _common_sections(wells: Mapping[str, Any], method: str) -> list[tuple[str, str]]:
     """A field per offset well that shares the reference's hole above a common point."""
+    rule = (
+        "the exact relative error: the trunk's errors cancelling, each run's terms "
+        "independent (sidetrack: shared)"
+        if method == "shared"
+        else "both wells' uncertainty zeroed at the common point and independent below (the "
+        "ISCWSA clearance set's rule)"
+    )
     out = []
     for name, well in wells.items():
         kick = well.get("kickoff")
@@ -344,8 +351,7 @@ def _common_sections(wells: Mapping[str, Any]) -> list[tuple[str, str]]:
                 (
                     f"Common section: {name}",
                     f"kick-off at reference MD {fmt(kick['reference_md'], 2)} m ({how}); scanned "
-                    "from there, both wells' uncertainty zeroed at the common point and "
-                    "independent below (the ISCWSA clearance set's rule)",
+                    f"from there, {rule}",
                 )
             )
     return out

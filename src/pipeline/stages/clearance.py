@@ -15,10 +15,20 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
-from pipeline.anticollision.models import Conventions, ModelSite, Start, needs, resolve_model
+from pipeline.anticollision.models import (
+    Conventions,
+    ModelSite,
+    Start,
+    TermEffects,
+    model_survey,
+    needs,
+    resolve_model,
+    term_effects_of,
+)
 from pipeline.anticollision.models import well_covariance as model_covariance
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
 from pipeline.anticollision.scan import Pair, Well, scan_pairs
+from pipeline.anticollision.shared import SharedErrors
 from pipeline.anticollision.sidetrack import Kickoff, common_point, cut, named_kickoff
 from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_rule
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
@@ -73,6 +83,13 @@ class ClearanceParams(BaseModel):
         description="azimuth of a vertical station in the error models: `north` 0° (the "
         "ISCWSA clearance set's and welleng's), `given` the station's own (an undefined one: "
         "the azimuth the hole leaves vertical in)",
+    )
+    sidetrack: Literal["zeroed", "shared"] = Field(
+        "zeroed",
+        description="a sidetrack's covariance below its common point: `zeroed` both wells' "
+        "uncertainty zeroed there and independent below (the ISCWSA clearance set's rule); "
+        "`shared` the exact relative error, the trunk's errors cancelling and each run's "
+        "terms independent (less conservative; the kick-off must be a reference station)",
     )
     common_tolerance: float = Field(
         0.1,
@@ -260,10 +277,29 @@ class _Frame:
             start=start,
             conventions=conventions,
         )
-        c, s = np.cos(self.delta), np.sin(self.delta)
-        rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        rot = self.rotation()
         out: np.ndarray = rot @ cov @ rot.T
         return out
+
+    def rotation(self) -> np.ndarray:
+        """True-north NEV → the frame's."""
+        c, s = np.cos(self.delta), np.sin(self.delta)
+        return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    def effects(
+        self,
+        model: str,
+        survey: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        site: ModelSite,
+        conventions: Conventions,
+    ) -> TermEffects:
+        """The model's term effects on a survey from its surface, in the frame."""
+        md, inc, azi, tvd = survey
+        fx = term_effects_of(
+            model, model_survey(md, inc, azi + self.delta, tvd, conventions), site, self.catalogue
+        )
+        rot = self.rotation()
+        return TermEffects(fx.names, fx.modes, fx.full @ rot.T, fx.star @ rot.T, fx.tie)
 
 
 def _arrays(table: pa.Table, frame: _Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -295,6 +331,49 @@ class _Survey:
         tvd = minimum_curvature(md, inc, azi, tie_tvd=start_at[2]).tvd
         cov = self.frame.covariance(model, (md, inc, azi, tvd), self.site, start, self.conventions)
         return Well(name, md, inc, azi, start_at, cov, 0.5 * diameter)
+
+    def effects(
+        self, model: str, well: tuple[np.ndarray, np.ndarray, np.ndarray], tvd0: float
+    ) -> TermEffects:
+        """The model's term effects on a survey (MD, inclination, frame azimuth) from its
+        surface (TVD ``tvd0`` there), in the frame."""
+        md, inc, azi = well
+        tvd = minimum_curvature(md, inc, azi, tie_tvd=tvd0).tvd
+        return self.frame.effects(model, (md, inc, azi, tvd), self.site, self.conventions)
+
+
+def _shared(
+    make: _Survey, ref: Well, ref_model: str, off_model: str, kick: Kickoff, pair: Pair
+) -> Pair:
+    """The pair with the exact shared-error covariance (:mod:`pipeline.anticollision.shared`):
+    the sidetrack's path is the reference's trunk to the kick-off, then its own stations."""
+    at = np.flatnonzero(np.abs(ref.md - kick.reference_md) <= 1e-6)
+    if not at.size:
+        raise ValueError(
+            f"offset well {pair.offset.name!r}: sidetrack 'shared' needs a reference station "
+            f"at the kick-off MD {kick.reference_md:g} m"
+        )
+    k = int(at[0])
+    shift = kick.reference_md - kick.offset_md  # the offset's MDs on the reference's datum
+    off = pair.offset
+    side = (
+        np.concatenate((ref.md[: k + 1], off.md[1:] + shift)),
+        np.concatenate((ref.inc[: k + 1], off.inc[1:])),
+        np.concatenate((ref.azi[: k + 1], off.azi[1:])),
+    )
+    shared = SharedErrors(
+        make.effects(ref_model, (ref.md, ref.inc, ref.azi), ref.tie[2]),
+        make.effects(ref_model, side, ref.tie[2]),
+        make.effects(off_model, side, ref.tie[2]),
+        k,
+    )
+
+    def relative(
+        k_ref: np.ndarray, f_ref: np.ndarray, k_off: np.ndarray, f_off: np.ndarray
+    ) -> np.ndarray:
+        return shared(k_ref + k, f_ref, k_off + k, f_off)
+
+    return Pair(pair.reference, pair.offset, relative)
 
 
 def _kickoff(
@@ -381,21 +460,15 @@ def clearance(
         kickoffs[w["offset"]] = kick
         r_md, r_inc, r_azi, r_at = cut(ref.path(), kick.reference_md)
         o_md, o_inc, o_azi, o_at = cut(offset.path(), kick.offset_md)
-        pairs.append(
-            Pair(
-                make.well(
-                    "reference", (r_md, r_inc, r_azi), r_at, ref_model, ref_diameter, "same_run"
-                ),
-                make.well(
-                    w["offset"],
-                    (o_md, o_inc, o_azi),
-                    o_at,
-                    w["model"],
-                    w["hole_diameter"],
-                    "other_run",
-                ),
-            )
+        pair = Pair(
+            make.well("reference", (r_md, r_inc, r_azi), r_at, ref_model, ref_diameter, "same_run"),
+            make.well(
+                w["offset"], (o_md, o_inc, o_azi), o_at, w["model"], w["hole_diameter"], "other_run"
+            ),
         )
+        if params.sidetrack == "shared":
+            pair = _shared(make, ref, ref_model, w["model"], kick, pair)
+        pairs.append(pair)
     result = scan_pairs(
         pairs,
         SeparationRule(k=params.k, sigma_pa=params.sigma_pa, surface_margin=params.surface_margin),
