@@ -1,6 +1,7 @@
 """The ISCWSA standard clearance set (tests/data/iscwsa-clearance, see its README) as
 gyropipe inputs: stations DataFrames, the offset wells' first-station positions, the site
-and the rule's parameters as the set states them."""
+and the rule's parameters as the set states them; and the set's precision (it computes its
+separation factors from D and each well's σ rounded to 0.01 m)."""
 
 from __future__ import annotations
 
@@ -14,15 +15,41 @@ import pandas as pd
 
 from tests_support import ROOT, CliResult, gyropipe_cli
 
-DATA = ROOT / "tests" / "data" / "iscwsa-clearance" / "wells-01-06.json"
+DATA = ROOT / "tests" / "data" / "iscwsa-clearance"
 INCH = 0.0254
-OFFSETS = [f"0{k} - well" for k in range(1, 7)]
+OFFSETS = [f"{k:02d} - well" for k in range(1, 12)]
+ROUNDING = 0.005
+"""Half the 0.01 m to which the set rounds D and each well's σ before its SF."""
 
 
 @cache
 def data() -> dict[str, Any]:
-    loaded: dict[str, Any] = json.loads(DATA.read_text())
-    return loaded
+    """Both files of the set merged: the rule and every well (reference, 01–11)."""
+    first, second = (
+        json.loads((DATA / f).read_text()) for f in ("wells-01-06.json", "wells-07-11.json")
+    )
+    return {"acr": first["acr"], "wells": {**first["wells"], **second["wells"]}}
+
+
+def rounding_band(
+    distance: np.ndarray, sigma_s: np.ndarray, *, sigmas: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """The least and greatest SF the set's arithmetic can give from D and σ_S (m) rounded as
+    it rounds them: D ± 0.005 m, and (``sigmas``) each of the two wells' σ along the line
+    within one 0.01 m step of its rounding (± 0.01 m) — bounded through σ_S alone,
+    |Σ r(σ_i)² − σ_S²| ≤ 0.02·√2·σ_S + 2e-4 m². The rule's constants are the set's."""
+    acr = data()["acr"]
+    radii = 0.5 * (acr["reference_h_and_c"] + acr["offset_h_and_c"]) * INCH + acr["Sm"]
+    spread = (0.02 * np.sqrt(2.0) * sigma_s + 2e-4) if sigmas else np.zeros_like(sigma_s)
+    lo_var = np.clip(sigma_s**2 - spread, 0.0, None) + acr["sigmapa"] ** 2
+    hi_var = sigma_s**2 + spread + acr["sigmapa"] ** 2
+    k = acr["k"]
+    ends = [
+        (distance + dd - radii) / (k * np.sqrt(v))
+        for dd in (-ROUNDING, ROUNDING)
+        for v in (lo_var, hi_var)
+    ]
+    return np.min(ends, axis=0), np.max(ends, axis=0)
 
 
 def stations(name: str) -> pd.DataFrame:
@@ -65,7 +92,7 @@ def clearance_options(model: str) -> dict[str, Any]:
         "offset_model": model,
         "offset_hole_diameter": acr["offset_h_and_c"] * INCH,
         "offset_position": {
-            n: (data()["wells"][n]["N"][0], data()["wells"][n]["E"][0]) for n in OFFSETS
+            n: tuple(data()["wells"][n][c][0] for c in ("N", "E", "TVD")) for n in OFFSETS
         },
         "reference_model": model,
         "reference_hole_diameter": acr["reference_h_and_c"] * INCH,
@@ -98,3 +125,23 @@ def run_clearance(
         str(out),
         check=check,
     )
+
+
+def write_set(folder: Path) -> Path:
+    """The set's offset wells 01–11 as stations files and a manifest (24 in holes, MWD Rev 4,
+    each first station's position) in ``folder``; the manifest's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = ["well_id,file,model,hole_diameter (in),north (m),east (m),tvd (m)"]
+    for name in OFFSETS:
+        w = data()["wells"][name]
+        lines = ["MD (m),Inc (deg),Azimuth Grid (deg)"]
+        lines += [f"{m},{i},{a}" for m, i, a in zip(w["MD"], w["IncDeg"], w["AziDeg"], strict=True)]
+        file = folder / f"offset-{name[:2]}.csv"
+        file.write_text("\n".join(lines) + "\n")
+        rows.append(
+            f"{name},{file.name},ISCWSA-MWD-REV4,{data()['acr']['offset_h_and_c']},"
+            f"{w['N'][0]},{w['E'][0]},{w['TVD'][0]}"
+        )
+    manifest = folder / "manifest.csv"
+    manifest.write_text("\n".join(rows) + "\n")
+    return manifest

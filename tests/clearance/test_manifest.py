@@ -7,7 +7,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from iscwsa_support import run_clearance
+from iscwsa_support import run_clearance, write_set
 
 from pipeline.anticollision.models import resolve_model
 from pipeline.errors import InputFileError
@@ -105,3 +105,41 @@ def test_bad_row_fails_the_run_naming_manifest_and_line(tmp_path: Path, second: 
     assert f"{path}:4 {words}" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "out" / "run.json").exists()
+
+
+def test_reads_the_parent_and_kickoff_columns(tmp_path: Path):
+    """``parent`` names the wellbore a sidetrack left, ``kickoff_md`` its kick-off MD on the
+    reference (a length; naming it names the reference as parent)."""
+    path = manifest(
+        tmp_path,
+        "A,a.csv,GYRO-NS,8.5,0,0,,reference,3000",
+        "B,b.csv,GYRO-NS,8.5,0,0,,,1000",
+        "C,c.csv,GYRO-NS,8.5,5,0,,,",
+        header=f"{HEADER},parent,kickoff_md (ft)",
+    )
+    a, b, c = read_offset_manifest(path, resolve_model)
+    assert (a.parent, a.kickoff_md) == ("reference", pytest.approx(914.4))
+    assert (b.parent, b.kickoff_md) == ("reference", pytest.approx(304.8))
+    assert (c.parent, c.kickoff_md) == (None, None)
+
+
+@pytest.mark.parametrize(
+    ("cells", "words"),
+    [
+        ("A-9,900", "offset well '10 - well': parent 'A-9' is not the reference well"),
+        (",2000", "at its kick-off MD 2000 m it is 145.789 m from the reference path"),
+        (",2500", "'10 - well': kick-off MD 2500 m is outside the offset's stations"),
+    ],
+)
+def test_bad_sidetrack_fails_the_run_naming_the_well(tmp_path: Path, cells: str, words: str):
+    write_set(tmp_path / "set")
+    path = manifest(
+        tmp_path / "set",
+        f"10 - well,offset-10.csv,ISCWSA-MWD-REV4,24,0,0,900,{cells}",
+        header="well_id,file,model,hole_diameter (in),north (m),east (m),tvd (m),parent,"
+        "kickoff_md (m)",
+    )
+    result = run_clearance(path, tmp_path / "out", "clearance.reference_model=ISCWSA-MWD-REV4")
+    assert result.returncode != 0
+    assert words in result.stderr
+    assert "Traceback" not in result.stderr

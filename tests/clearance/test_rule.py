@@ -83,8 +83,42 @@ def test_travelling_cylinder_angle(tie: tuple[float, float, float], toolface: fl
     assert np.abs((got - toolface + 180.0) % 360.0 - 180.0).max() < 1e-9
 
 
-def test_coinciding_centres_are_undefined_and_fail():
+def test_coinciding_centres_take_the_largest_sigma_and_fail():
+    """D = 0: no direction n̂, so σ_S is the largest σ over directions (isotropic 1 m each:
+    √2 m); SF = (0 − 0.3 − 0.3)/(3.5·√(2 + 0.25)) = −0.6/5.25; the travelling-cylinder
+    angle is undefined."""
     ref = straight_well("ref", (0.0, 0.0, 0.0), 0.0, 0.0, sigma=1.0)
     result = scan(ref, [straight_well("twin", (0.0, 0.0, 0.0), 0.0, 0.0, sigma=1.0)])
-    assert np.isnan(result.sf).all() and np.isnan(result.sigma_s).all()
+    assert result.sigma_s == pytest.approx(np.full(11, np.sqrt(2.0)))
+    assert result.sf == pytest.approx(np.full(11, -0.6 / 5.25))
+    assert np.isnan(result.toolface).all()
     assert set(result.level.tolist()) == {"fail"}
+
+
+def test_common_point_of_exact_wells_is_the_rule_alone():
+    """Both covariances zero where the centres coincide (a sidetrack's kick-off): σ_S = 0
+    and SF = −(R_r + R_o + S_m)/(k·σ_pa) = −0.6/1.75, not NaN."""
+    ref = straight_well("ref", (0.0, 0.0, 0.0), 0.0, 0.0, sigma=0.0)
+    result = scan(ref, [straight_well("twin", (0.0, 0.0, 0.0), 0.0, 0.0, sigma=0.0)])
+    assert result.sigma_s == pytest.approx(np.zeros(11))
+    assert result.sf == pytest.approx(np.full(11, -0.6 / 1.75))
+
+
+def test_least_sf_between_stations_by_hand():
+    """A horizontal offset crosses 2 m east of a vertical reference at TVD 550, half-way
+    between its stations at 500 and 600 m (no position uncertainty): at those stations
+    D = √(2² + 50²); on the course between, the least SF is at MD 550, D = 2 m:
+    (2 − 0.3 − 0.3)/(3.5·0.5) = 0.8 — a fail the stations alone (SF 28) do not show."""
+    ref = straight_well("ref", (0.0, 0.0, 0.0), 0.0, 0.0, sigma=0.0)
+    offset = straight_well("cross", (-500.0, 2.0, 550.0), 90.0, 0.0, sigma=0.0)
+    result = scan(ref, [offset])
+    at = {md: k for k, md in enumerate(result.md)}
+    station = (np.hypot(2.0, 50.0) - 0.6) / 1.75
+    assert result.sf[at[500.0]] == pytest.approx(station)
+    assert result.sf_between[at[500.0]] == pytest.approx(0.8, abs=1e-9)
+    assert result.md_between[at[500.0]] == pytest.approx(550.0, abs=1e-3)
+    assert result.level[at[500.0]] == "fail"
+    assert result.sf_between[at[0.0]] == pytest.approx(result.sf[at[100.0]])  # its lower end
+    assert result.sf_between[-1] == result.sf[-1]  # the last station: no course below
+    by_station = scan(ref, [offset], level_on="station")
+    assert by_station.level[at[500.0]] == "pass"

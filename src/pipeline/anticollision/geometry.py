@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from pipeline.survey.interpolate import MinCurvePath
 
-__all__ = ["STRAIGHT_BELOW", "Closest", "closest_points"]
+__all__ = ["STRAIGHT_BELOW", "Closest", "ClosestPoints", "closest_points"]
 
 FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
@@ -92,26 +92,39 @@ def _on_arc(path: MinCurvePath, q: FloatArray, k: IndexArray) -> FloatArray:
     return out
 
 
+class ClosestPoints:
+    """The closest point of one path (at least two stations) to any points: its pieces and
+    their k-d tree built once, queried many times."""
+
+    def __init__(self, path: MinCurvePath):
+        from scipy.spatial import cKDTree
+
+        self.path = path
+        mids, self.step, self.h = _pieces(path)
+        self.tree = cKDTree(mids)
+
+    def __call__(self, points: FloatArray) -> Closest:
+        """The point of the path closest to each of ``points`` (m, 3)."""
+        path, step, h, tree = self.path, self.step, self.h, self.tree
+        q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        nearest, _ = tree.query(q)
+        balls = tree.query_ball_point(q, nearest + 0.5 * h + 1e-9 * (1.0 + nearest))
+        counts = np.fromiter(map(len, balls), dtype=np.intp, count=q.shape[0])
+        found = np.fromiter(itertools.chain.from_iterable(balls), dtype=np.intp, count=counts.sum())
+        pair_q = np.repeat(np.arange(q.shape[0], dtype=np.intp), counts)
+        pair_k = step[found]
+        f = _on_arc(path, q[pair_q], pair_k)
+        where = path.position(pair_k, f).T
+        dist = np.linalg.norm(where - q[pair_q], axis=1)
+        starts = np.cumsum(counts) - counts  # every point has a candidate: its nearest piece
+        least = np.repeat(np.minimum.reduceat(dist, starts), counts)
+        hits = np.flatnonzero(dist == least)
+        best = hits[np.searchsorted(pair_q[hits], np.arange(q.shape[0]))]
+        k, fb = pair_k[best], f[best]
+        md = path.md[k] + fb * path.length[k]
+        return Closest(md=md, position=where[best], step=k, fraction=fb)
+
+
 def closest_points(path: MinCurvePath, points: FloatArray) -> Closest:
     """The point of ``path`` (at least two stations) closest to each of ``points`` (m, 3)."""
-    from scipy.spatial import cKDTree
-
-    q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    mids, step, h = _pieces(path)
-    tree = cKDTree(mids)
-    nearest, _ = tree.query(q)
-    balls = tree.query_ball_point(q, nearest + 0.5 * h + 1e-9 * (1.0 + nearest))
-    counts = np.fromiter(map(len, balls), dtype=np.intp, count=q.shape[0])
-    found = np.fromiter(itertools.chain.from_iterable(balls), dtype=np.intp, count=counts.sum())
-    pair_q = np.repeat(np.arange(q.shape[0], dtype=np.intp), counts)
-    pair_k = step[found]
-    f = _on_arc(path, q[pair_q], pair_k)
-    where = path.position(pair_k, f).T
-    dist = np.linalg.norm(where - q[pair_q], axis=1)
-    starts = np.cumsum(counts) - counts  # every point has a candidate: its nearest piece
-    least = np.repeat(np.minimum.reduceat(dist, starts), counts)
-    hits = np.flatnonzero(dist == least)
-    best = hits[np.searchsorted(pair_q[hits], np.arange(q.shape[0]))]
-    k, fb = pair_k[best], f[best]
-    md = path.md[k] + fb * path.length[k]
-    return Closest(md=md, position=where[best], step=k, fraction=fb)
+    return ClosestPoints(path)(points)

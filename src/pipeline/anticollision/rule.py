@@ -8,8 +8,11 @@ an offset well (C_o, R_o), with d = p_o − p_r, D = |d| and n̂ = d/D:
     SF   = (D − R_r − R_o − S_m) / (k·√(σ_S² + σ_pa²))
 
 S_m the surface margin, σ_pa the 1σ project-ahead uncertainty, k the scaling factor. SF < 0
-means the holes, widened by the margin, overlap. Where the centres coincide (D = 0) n̂, σ_S
-and SF are undefined: NaN, and the level is fail. Lengths m, covariances m².
+means the holes, widened by the margin, overlap. Where the centres coincide (D = 0) n̂ is
+undefined: σ_S is then the largest σ over all directions (√ of the largest eigenvalue of
+C_r + C_o, the conservative choice), so SF = −(R_r + R_o + S_m)/(k·√(σ_S² + σ_pa²)) — at the
+common point of a sidetrack and its parent, where both covariances are zero,
+−(R_r + R_o + S_m)/(k·σ_pa). The level there is fail. Lengths m, covariances m².
 """
 
 from __future__ import annotations
@@ -70,13 +73,16 @@ def separation(
         n = d / dist[:, None]
     combined = np.asarray(c_ref) + np.asarray(c_off)
     var = np.einsum("ij,ijk,ik->i", n, combined, n)
+    same = dist == 0.0
+    if same.any():
+        var[same] = np.linalg.eigvalsh(combined[same])[:, -1]
     sigma_s = np.sqrt(np.clip(var, 0.0, None))
     sf = (dist - radii - rule.surface_margin) / (rule.k * np.sqrt(sigma_s**2 + rule.sigma_pa**2))
     return Separation(distance=dist, sigma_s=sigma_s, sf=sf, direction=n)
 
 
 def levels(sf: FloatArray, limits: RuleLimits) -> NDArray[np.str_]:
-    """``pass``, ``warn`` or ``fail`` per SF (an undefined SF, coinciding centres, fails)."""
+    """``pass``, ``warn`` or ``fail`` per SF (an undefined SF fails)."""
     sf = np.asarray(sf, dtype=np.float64)
     out = np.full(sf.shape, "pass", dtype="<U4")
     out[sf < limits.caution] = "warn"

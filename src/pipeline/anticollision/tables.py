@@ -43,6 +43,16 @@ class OffsetWells(TableContract):
         description="first station's TVD below the reference's depth datum (null: its MD)",
         default=None,
     )
+    parent: str | None = column(
+        unit=None,
+        description="the wellbore it was kicked off from ('reference': the reference well; "
+        "null: none named, a common section detected when its first station lies on the "
+        "reference path)",
+        default=None,
+    )
+    kickoff_md: float | None = column(
+        unit="m", description="MD of its kick-off on the reference (null: detected)", default=None
+    )
     source: str | None = column(unit=None, description="the stations file", default=None)
     sha256: str | None = column(unit=None, description="SHA-256 of the stations file", default=None)
 
@@ -50,7 +60,8 @@ class OffsetWells(TableContract):
 class Clearance(TableContract):
     """Per offset well (a contiguous block) and reference station: the closest point of the
     offset well, the centre-to-centre distance, the combined σ along it and the ISCWSA
-    separation factor with its level."""
+    separation factor, the least one along the course below and the level. A sidetrack's
+    rows start at its common point with the reference."""
 
     group_by = "offset"
 
@@ -63,15 +74,27 @@ class Clearance(TableContract):
         ge=0,
         finite=False,
         description="1σ of both wells' position errors along the centre-to-centre line "
-        "(NaN where the centres coincide, or a well's σ is flagged outside its model's range)",
+        "(where the centres coincide: the largest σ over directions; NaN where a well's σ is "
+        "flagged outside its model's range)",
     )
     sf: float = column(
         unit=None,
         finite=False,
-        description="ISCWSA separation factor (negative: the holes and margin overlap; NaN "
-        "where the centres coincide or σ_S is NaN)",
+        description="ISCWSA separation factor at the station (negative: the holes and margin "
+        "overlap; NaN where σ_S is NaN)",
     )
-    level: str = column(unit=None, description="pass, warn or fail by the separation rule")
+    sf_between: float = column(
+        unit=None,
+        finite=False,
+        description="least separation factor along the reference course from this station to "
+        "the next, both ends included (the last station: its own)",
+    )
+    md_between: float = column(unit="m", description="reference MD of that least SF")
+    level: str = column(
+        unit=None,
+        description="pass, warn or fail by the separation rule, decided on sf_between "
+        "(level_on: course, the default) or on sf (level_on: station)",
+    )
     toolface: float = column(
         unit="deg",
         ge=0,

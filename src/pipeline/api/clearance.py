@@ -38,6 +38,7 @@ def clearance(
     offset_model: str | Mapping[str, str] = "ISCWSA-MWD-REV5.11",
     offset_hole_diameter: float | Mapping[str, float] | None = None,
     offset_position: Mapping[str, Sequence[float]] | None = None,
+    offset_kickoff: Mapping[str, float] | None = None,
     well: WellLike = None,
     **params: Any,
 ) -> TableLike:
@@ -51,10 +52,14 @@ def clearance(
     by well id, or stations tables named by their well metadata; then ``offset_model``,
     ``offset_hole_diameter`` (m) and ``offset_position`` ((north, east[, tvd]) m from the
     reference wellhead, default (0, 0) and TVD = first MD) give each well's, as one value or
-    by well id. ``params``: the stage's (``reference_model``, ``reference_hole_diameter`` m,
-    ``k``, ``sigma_pa`` m, ``surface_margin`` m, ``stop``, ``caution``, ``latitude``,
-    ``magnetic``, ``outside_validity``: refuse or flag a station outside its model's range).
-    Returns the kind of table ``reference`` is (a DataFrame for a file).
+    by well id; ``offset_kickoff`` names sidetracks of the reference, well id → kick-off MD
+    on the reference (m) (a well whose first station lies on the reference path is found
+    without it; the manifest's ``parent`` and ``kickoff_md`` columns). ``params``: the
+    stage's (``reference_model``, ``reference_hole_diameter`` m, ``k``, ``sigma_pa`` m,
+    ``surface_margin`` m, ``stop``, ``caution``, ``level_on``, ``first_station_exact``,
+    ``vertical_azimuth``, ``common_tolerance`` m, ``latitude``, ``magnetic``,
+    ``outside_validity``: refuse or flag a station outside its model's range). Returns the
+    kind of table ``reference`` is (a DataFrame for a file).
     """
     reg = stages.registry()
     given = well_metadata(well)
@@ -74,7 +79,7 @@ def clearance(
         )
     else:
         wells, stations = _offsets(
-            offsets, offset_model, offset_hole_diameter, offset_position, ref_well
+            offsets, offset_model, offset_hole_diameter, offset_position, offset_kickoff, ref_well
         )
     inputs = {"reference": ref, "offsets": stations, "wells": wells}
     outs, _, _ = stages.call("clearance", inputs, params, well=ref_well)
@@ -95,6 +100,7 @@ def _offsets(
     model: str | Mapping[str, str],
     diameter: float | Mapping[str, float] | None,
     position: Mapping[str, Sequence[float]] | None,
+    kickoff: Mapping[str, float] | None,
     well: WellMetadata,
 ) -> tuple[pa.Table, pa.Table]:
     """The wells and stations tables of offsets given one by one."""
@@ -103,6 +109,9 @@ def _offsets(
     named = offsets if isinstance(offsets, Mapping) else _named(offsets)
     if not named:
         raise ParameterError("clearance: no offset wells given")
+    unknown = sorted(set(kickoff or {}) - set(named))
+    if unknown:
+        raise ParameterError(f"clearance: offset_kickoff names no offset well: {unknown}")
     reg = stages.registry()
     tables: dict[str, pa.Table] = {}
     for name, data in named.items():
@@ -147,6 +156,8 @@ def _offsets(
                 "north": float(at[0]),
                 "east": float(at[1]),
                 "tvd": float(at[2]) if len(at) == 3 else None,
+                "parent": "reference" if kickoff and name in kickoff else None,
+                "kickoff_md": float(kickoff[name]) if kickoff and name in kickoff else None,
             }
         )
     wells = OffsetWells.compiled().make_table({k: [r[k] for r in rows] for k in rows[0]})

@@ -12,7 +12,11 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
   row: an empty cell is an error, never the reference's wellhead; a well on the
   reference's own slot, a sidetrack or re-entry, says so with ``0,0``);
 - ``tvd`` — its first station's TVD below the reference's depth datum (a length; default:
-  the first station's MD).
+  the first station's MD);
+- ``parent`` — optional: ``reference`` (or the reference well's name) for a sidetrack of the
+  reference well; ``kickoff_md`` — optional: its kick-off MD on the reference (a length;
+  naming it names the parent). Without them a well whose first station lies on the reference
+  path is found to share its hole there.
 
 Every problem is an :class:`~pipeline.errors.InputFileError` naming the file and line.
 """
@@ -30,9 +34,10 @@ from pipeline.units import conversion_factor
 
 __all__ = ["LENGTHS", "OffsetEntry", "read_offset_manifest"]
 
-LENGTHS = ("hole_diameter", "north", "east", "tvd")
+LENGTHS = ("hole_diameter", "north", "east", "tvd", "kickoff_md")
 """The length columns, each with its unit in the header."""
 _TEXT = ("well_id", "file", "model")
+_OPTIONAL_TEXT = ("parent",)
 _REQUIRED = ("hole_diameter", "north", "east")
 _HEADER = re.compile(r"^\s*([A-Za-z_]+)\s*(?:[\(\[]\s*([^\)\]]*?)\s*[\)\]])?\s*$")
 
@@ -49,6 +54,8 @@ class OffsetEntry:
     east: float
     tvd: float | None
     line: int
+    parent: str | None = None
+    kickoff_md: float | None = None
 
 
 def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, float]]:
@@ -57,10 +64,11 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
     for index, cell in enumerate(cells):
         match = _HEADER.match(cell)
         name = match.group(1).lower() if match else cell.strip()
-        if name not in (*_TEXT, *LENGTHS):
+        if name not in (*_TEXT, *_OPTIONAL_TEXT, *LENGTHS):
+            known = ", ".join((*_TEXT, *_OPTIONAL_TEXT, *LENGTHS))
             raise InputFileError(
                 path,
-                f"unknown column {cell.strip()!r}; expected {', '.join((*_TEXT, *LENGTHS))}",
+                f"unknown column {cell.strip()!r}; expected {known}",
                 line,
             )
         if name in found:
@@ -156,6 +164,9 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
                 east=east,
                 tvd=lengths["tvd"],
                 line=line,
+                parent=cell.get("parent")
+                or ("reference" if lengths["kickoff_md"] is not None else None),
+                kickoff_md=lengths["kickoff_md"],
             )
         )
     if not entries:

@@ -216,30 +216,49 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
     levels = table.column("level").to_pylist()
     offset_md, names = col(table, "offset_md"), table.column("offset").to_pylist()
     wells = rule.get("wells", {})
+    between = col(table, "sf_between") if "sf_between" in table.column_names else col(table, "sf")
+    md_between = (
+        col(table, "md_between") if "md_between" in table.column_names else col(table, "md")
+    )
+    on_course = rule.get("level_on", "course") == "course"
     rows, marked = [], set()
     worst: tuple[float, str, float] | None = None
     for k, c in enumerate(curves):
         rows_of = [i for i, n in enumerate(names) if n == c.name]
         sf = np.where(np.isnan(c.sf), -np.inf, c.sf)
         i = int(np.argmin(sf))
-        level = levels[rows_of[i]]
+        least = np.where(np.isnan(between[rows_of]), -np.inf, between[rows_of])
+        j = int(np.argmin(least))
+        level = max((levels[r] for r in rows_of), key=("pass", "warn", "fail").index)
         own = wells.get(c.name, {})
         rows.append(
             (
                 c.name,
                 str(own.get("model", "")),
                 fmt_inches(own.get("hole_diameter")),
-                fmt(c.sf[i], 2) if np.isfinite(c.sf[i]) else "undefined (centres meet)",
+                fmt(c.sf[i], 2)
+                if np.isfinite(c.sf[i])
+                else "undefined (outside the model's range)",
                 fmt(c.md[i]),
                 fmt(offset_md[rows_of[i]]),
                 fmt(c.distance[i], 2),
+                fmt(least[j], 2) if np.isfinite(least[j]) else "undefined",
+                fmt(md_between[rows_of[j]], 2),
                 LEVEL_WORDS[level],
             )
         )
         if level == "fail":
             marked.add(k)
-        if worst is None or sf[i] < worst[0]:
-            worst = (float(sf[i]), c.name, float(c.md[i]))
+        decided = (
+            (float(least[j]), float(md_between[rows_of[j]]))
+            if on_course
+            else (
+                float(sf[i]),
+                float(c.md[i]),
+            )
+        )
+        if worst is None or decided[0] < worst[0]:
+            worst = (decided[0], c.name, decided[1])
     assert worst is not None
     verdict = _verdict(worst, stop, caution, len(curves))
     models = {
@@ -256,6 +275,14 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
         ("Project-ahead σ", f"{fmt(rule.get('sigma_pa', 0.5), 2)} m"),
         ("Surface margin", f"{fmt(rule.get('surface_margin', 0.3), 2)} m"),
         ("Limits", f"stop below SF {fmt(stop, 2)}, caution below {fmt(caution, 2)}"),
+        (
+            "Level decided on",
+            "the least SF along each reference course, between stations included"
+            if on_course
+            else "the SF at each reference station (between stations reported, not judged)",
+        ),
+        ("Conventions", _convention_words(rule)),
+        *_common_sections(wells, str(rule.get("sidetrack", "zeroed"))),
     ]
     if "reference_model" in rule:
         hole = float(rule["reference_hole_diameter"])
@@ -287,6 +314,8 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
                 Column("Reference MD", "m"),
                 Column("Offset MD", "m"),
                 Column("Centre distance", "m"),
+                Column("Least SF between stations"),
+                Column("at reference MD", "m"),
                 Column("Level", align="left"),
             ),
             tuple(rows),
@@ -312,6 +341,49 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
         ),
     ]
     return Section("Clearance", tuple(blocks), key="clearance")
+
+
+def _convention_words(rule: Mapping[str, Any]) -> str:
+    """The covariance conventions the scan applied (the ISCWSA clearance set's by default)."""
+    first = (
+        "each survey's first station exact (zero covariance)"
+        if rule.get("first_station_exact", True)
+        else "the surface tie-on's σ at each survey's first station"
+    )
+    vertical = (
+        "vertical stations at azimuth 0° in the error models"
+        if rule.get("vertical_azimuth", "north") == "north"
+        else "vertical stations at their listed azimuth in the error models"
+    )
+    return f"{first}; {vertical}"
+
+
+def _common_sections(wells: Mapping[str, Any], method: str) -> list[tuple[str, str]]:
+    """A field per offset well that shares the reference's hole above a common point."""
+    rule = (
+        "the exact relative error: the trunk's errors cancelling, each run's terms "
+        "independent (sidetrack: shared)"
+        if method == "shared"
+        else "both wells' uncertainty zeroed at the common point and independent below (the "
+        "ISCWSA clearance set's rule)"
+    )
+    out = []
+    for name, well in wells.items():
+        kick = well.get("kickoff")
+        if kick:
+            how = (
+                "named"
+                if kick["how"] == "named"
+                else "detected: its first stations on the reference path"
+            )
+            out.append(
+                (
+                    f"Common section: {name}",
+                    f"kick-off at reference MD {fmt(kick['reference_md'], 2)} m ({how}); scanned "
+                    f"from there, {rule}",
+                )
+            )
+    return out
 
 
 def _uncertainty_words(citations: Citations, gyro: bool) -> str:

@@ -3,24 +3,33 @@ and the ``clearance`` stage (ISCWSA separation factor of a reference well agains
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.anticollision.models import (
+    Conventions,
     ModelSite,
+    Start,
+    TermEffects,
+    model_survey,
     needs,
     resolve_model,
-    well_covariance,
+    term_effects_of,
 )
+from pipeline.anticollision.models import well_covariance as model_covariance
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
-from pipeline.anticollision.scan import Well, scan
+from pipeline.anticollision.scan import Pair, Well, scan_pairs
+from pipeline.anticollision.shared import SharedErrors
+from pipeline.anticollision.sidetrack import Kickoff, common_point, cut, named_kickoff
 from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_rule
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference
@@ -58,6 +67,36 @@ class ClearanceParams(BaseModel):
     surface_margin: float = Field(0.3, ge=0, description="surface margin S_m, m")
     stop: float = Field(1.0, description="separation factor below which the level is fail")
     caution: float = Field(1.5, description="separation factor below which the level is warn")
+    first_station_exact: bool = Field(
+        True,
+        description="each survey's first station has zero covariance (the ISCWSA clearance "
+        "set's convention: the surface position exact); false: the surface tie-on's depth "
+        "reference σ there",
+    )
+    level_on: Literal["course", "station"] = Field(
+        "course",
+        description="what the level is decided on: `course` the least SF along the course "
+        "from each reference station to the next (sf_between), `station` the SF at the station",
+    )
+    vertical_azimuth: Literal["north", "given"] = Field(
+        "north",
+        description="azimuth of a vertical station in the error models: `north` 0° (the "
+        "ISCWSA clearance set's and welleng's), `given` the station's own (an undefined one: "
+        "the azimuth the hole leaves vertical in)",
+    )
+    sidetrack: Literal["zeroed", "shared"] = Field(
+        "zeroed",
+        description="a sidetrack's covariance below its common point: `zeroed` both wells' "
+        "uncertainty zeroed there and independent below (the ISCWSA clearance set's rule); "
+        "`shared` the exact relative error, the trunk's errors cancelling and each run's "
+        "terms independent (less conservative; the kick-off must be a reference station)",
+    )
+    common_tolerance: float = Field(
+        0.1,
+        gt=0,
+        description="an offset whose first station(s) lie within this distance (m) of the "
+        "reference path shares its hole there: a sidetrack, scanned from the deepest common point",
+    )
     latitude: Latitude | None = Field(
         None, description="latitude, deg (gyro models); default: the well's"
     )
@@ -163,6 +202,8 @@ def offset_tables(
             "north": [e.north for e in entries],
             "east": [e.east for e in entries],
             "tvd": [e.tvd for e in entries],
+            "parent": [e.parent for e in entries],
+            "kickoff_md": [e.kickoff_md for e in entries],
             "source": [str(e.file) for e in entries],
             "sha256": [sha256_file(e.file) for e in entries],
         }
@@ -223,43 +264,163 @@ class _Frame:
     def covariance(
         self,
         model: str,
-        md: np.ndarray,
-        inc: np.ndarray,
-        azi: np.ndarray,
-        tvd: np.ndarray,
+        survey: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         site: ModelSite,
-        outside: OutsideValidity = "refuse",
+        start: Start,
+        conventions: Conventions,
+        outside: OutsideValidity,
     ) -> np.ndarray:
-        """The model's covariance (frame azimuths in rad) in the frame."""
-        cov = well_covariance(model, md, inc, azi + self.delta, tvd, site, self.catalogue, outside)
-        c, s = np.cos(self.delta), np.sin(self.delta)
-        rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        """The model's covariance of a survey (MD, inclination, frame azimuth rad, TVD) in
+        the frame (NaN from a flagged station down)."""
+        md, inc, azi, tvd = survey
+        cov = model_covariance(
+            model,
+            md,
+            inc,
+            azi + self.delta,
+            tvd,
+            site,
+            self.catalogue,
+            start=start,
+            conventions=conventions,
+            outside_validity=outside,
+        )
+        rot = self.rotation()
         out: np.ndarray = rot @ cov @ rot.T
         return out
 
+    def rotation(self) -> np.ndarray:
+        """True-north NEV → the frame's."""
+        c, s = np.cos(self.delta), np.sin(self.delta)
+        return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
-def _well(
-    name: str,
-    table: pa.Table,
-    frame: _Frame,
-    model: str,
-    diameter: float,
-    tie: tuple[float, float, float | None],
-    site: ModelSite,
-    outside: OutsideValidity,
-) -> Well:
+    def effects(
+        self,
+        model: str,
+        survey: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        site: ModelSite,
+        conventions: Conventions,
+    ) -> TermEffects:
+        """The model's term effects on a survey from its surface, in the frame."""
+        md, inc, azi, tvd = survey
+        fx = term_effects_of(
+            model, model_survey(md, inc, azi + self.delta, tvd, conventions), site, self.catalogue
+        )
+        rot = self.rotation()
+        return TermEffects(fx.names, fx.modes, fx.full @ rot.T, fx.star @ rot.T, fx.tie)
+
+
+def _arrays(table: pa.Table, frame: _Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """MD (m), inclination and frame azimuth (rad, NaN at vertical kept) of a stations table."""
     md = table.column("md").to_numpy(zero_copy_only=False).astype(np.float64)
     inc = np.radians(table.column("inc").to_numpy(zero_copy_only=False))
     azi_deg = table.column("azi").to_numpy(zero_copy_only=False).astype(np.float64)
-    azi = frame.azimuths(azi_deg, north_reference_of(table, "azi"))
-    start = (tie[0], tie[1], float(md[0]) if tie[2] is None else tie[2])
-    tvd = minimum_curvature(md, inc, azi, tie_tvd=start[2]).tvd
+    return md, inc, frame.azimuths(azi_deg, north_reference_of(table, "azi"))
+
+
+@dataclass(frozen=True)
+class _Survey:
+    """How one well's covariance is made: its model, site, frame and conventions."""
+
+    frame: _Frame
+    site: ModelSite
+    conventions: Conventions
+    outside: OutsideValidity
+
+    def well(
+        self,
+        name: str,
+        stations: tuple[np.ndarray, np.ndarray, np.ndarray],
+        start_at: tuple[float, float, float],
+        model: str,
+        diameter: float,
+        start: Start = "surface",
+    ) -> Well:
+        md, inc, azi = stations
+        tvd = minimum_curvature(md, inc, azi, tie_tvd=start_at[2]).tvd
+        try:
+            cov = self.frame.covariance(
+                model, (md, inc, azi, tvd), self.site, start, self.conventions, self.outside
+            )
+        except OutsideValidityError as exc:
+            well = "the reference" if name == "reference" else f"offset well {name!r}"
+            raise OutsideValidityError(f"{well}: {exc}") from None
+        return Well(name, md, inc, azi, start_at, cov, 0.5 * diameter)
+
+    def effects(
+        self, model: str, well: tuple[np.ndarray, np.ndarray, np.ndarray], tvd0: float
+    ) -> TermEffects:
+        """The model's term effects on a survey (MD, inclination, frame azimuth) from its
+        surface (TVD ``tvd0`` there), in the frame."""
+        md, inc, azi = well
+        tvd = minimum_curvature(md, inc, azi, tie_tvd=tvd0).tvd
+        return self.frame.effects(model, (md, inc, azi, tvd), self.site, self.conventions)
+
+
+def _shared(
+    make: _Survey, ref: Well, ref_model: str, off_model: str, kick: Kickoff, pair: Pair
+) -> Pair:
+    """The pair with the exact shared-error covariance (:mod:`pipeline.anticollision.shared`):
+    the sidetrack's path is the reference's trunk to the kick-off, then its own stations."""
+    at = np.flatnonzero(np.abs(ref.md - kick.reference_md) <= 1e-6)
+    if not at.size:
+        raise ValueError(
+            f"offset well {pair.offset.name!r}: sidetrack 'shared' needs a reference station "
+            f"at the kick-off MD {kick.reference_md:g} m"
+        )
+    k = int(at[0])
+    shift = kick.reference_md - kick.offset_md  # the offset's MDs on the reference's datum
+    off = pair.offset
+    side = (
+        np.concatenate((ref.md[: k + 1], off.md[1:] + shift)),
+        np.concatenate((ref.inc[: k + 1], off.inc[1:])),
+        np.concatenate((ref.azi[: k + 1], off.azi[1:])),
+    )
+    shared = SharedErrors(
+        make.effects(ref_model, (ref.md, ref.inc, ref.azi), ref.tie[2]),
+        make.effects(ref_model, side, ref.tie[2]),
+        make.effects(off_model, side, ref.tie[2]),
+        k,
+    )
+
+    def relative(
+        k_ref: np.ndarray, f_ref: np.ndarray, k_off: np.ndarray, f_off: np.ndarray
+    ) -> np.ndarray:
+        return shared(k_ref + k, f_ref, k_off + k, f_off)
+
+    return Pair(pair.reference, pair.offset, relative)
+
+
+def _kickoff(
+    w: dict[str, Any],
+    reference: Well,
+    offset: Well,
+    params: ClearanceParams,
+    reference_name: str | None,
+) -> Kickoff | None:
+    """The common point of an offset well with the reference: named by its ``parent`` /
+    ``kickoff_md``, else detected (None: none)."""
+    parent = w.get("parent")
+    names = {"reference", *([reference_name.casefold()] if reference_name else [])}
+    if parent and parent.strip().casefold() not in names:
+        raise ValueError(
+            f"offset well {w['offset']!r}: parent {parent!r} is not the reference well "
+            f"({reference_name or 'reference'!r}); a common section with another offset well "
+            "does not touch this scan: list that well's stations from its surface"
+        )
+    if w.get("kickoff_md") is None:
+        return common_point(reference.path(), offset.path(), params.common_tolerance)
     try:
-        cov = frame.covariance(model, md, inc, azi, tvd, site, outside)
-    except OutsideValidityError as exc:
-        well = "the reference" if name == "reference" else f"offset well {name!r}"
-        raise OutsideValidityError(f"{well}: {exc}") from None
-    return Well(name, md, inc, azi, start, cov, 0.5 * diameter)
+        kick = named_kickoff(reference.path(), offset.path(), float(w["kickoff_md"]))
+    except ValueError as exc:
+        raise ValueError(f"offset well {w['offset']!r}: {exc}") from None
+    if kick.distance > params.common_tolerance:
+        raise ValueError(
+            f"offset well {w['offset']!r}: at its kick-off MD {kick.offset_md:g} m it is "
+            f"{kick.distance:.3f} m from the reference path (common_tolerance "
+            f"{params.common_tolerance:g} m): not a common point"
+        )
+    return kick
 
 
 def clearance(
@@ -277,15 +438,19 @@ def clearance(
     models = {params.reference_model, *(w["model"] for w in listed)}
     site, applied = _site(params, ctx.well, models, catalogue)
     frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
-    ref = _well(
-        "reference",
-        reference,
+    make = _Survey(
         frame,
-        params.reference_model,
-        params.reference_hole_diameter,
-        (0.0, 0.0, None),
         site,
+        Conventions(
+            first_station_exact=params.first_station_exact,
+            vertical_azimuth=params.vertical_azimuth,
+        ),
         params.outside_validity,
+    )
+    ref_arrays = _arrays(reference, frame)
+    ref_model, ref_diameter = params.reference_model, params.reference_hole_diameter
+    ref = make.well(
+        "reference", ref_arrays, (0.0, 0.0, float(ref_arrays[0][0])), ref_model, ref_diameter
     )
     offsets = survey_offsets(stations)
     ids = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
@@ -293,7 +458,7 @@ def clearance(
         (ids[lo] if ids is not None else ""): stations.slice(lo, hi - lo)
         for lo, hi in itertools.pairwise(offsets)
     }
-    scanned = []
+    pairs, kickoffs = [], {}
     for w in listed:
         block = blocks.get(w["offset"])
         if block is None or block.num_rows < 2:
@@ -301,24 +466,30 @@ def clearance(
                 f"offset well {w['offset']!r}: {'no' if block is None else 'fewer than 2'} "
                 "stations in the offsets table"
             )
-        tie = (w["north"], w["east"], w["tvd"])
-        scanned.append(
-            _well(
-                w["offset"],
-                block,
-                frame,
-                w["model"],
-                w["hole_diameter"],
-                tie,
-                site,
-                params.outside_validity,
-            )
+        arrays = _arrays(block, frame)
+        start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
+        offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
+        kick = _kickoff(w, ref, offset, params, ctx.well.well)
+        if kick is None:
+            pairs.append(Pair(ref, offset))
+            continue
+        kickoffs[w["offset"]] = kick
+        r_md, r_inc, r_azi, r_at = cut(ref.path(), kick.reference_md)
+        o_md, o_inc, o_azi, o_at = cut(offset.path(), kick.offset_md)
+        pair = Pair(
+            make.well("reference", (r_md, r_inc, r_azi), r_at, ref_model, ref_diameter, "same_run"),
+            make.well(
+                w["offset"], (o_md, o_inc, o_azi), o_at, w["model"], w["hole_diameter"], "other_run"
+            ),
         )
-    result = scan(
-        ref,
-        scanned,
+        if params.sidetrack == "shared":
+            pair = _shared(make, ref, ref_model, w["model"], kick, pair)
+        pairs.append(pair)
+    result = scan_pairs(
+        pairs,
         SeparationRule(k=params.k, sigma_pa=params.sigma_pa, surface_margin=params.surface_margin),
         RuleLimits(stop=params.stop, caution=params.caution),
+        params.level_on,
     )
     table = Clearance.compiled().make_table(
         {
@@ -328,6 +499,8 @@ def clearance(
             "distance": result.distance,
             "sigma_s": result.sigma_s,
             "sf": result.sf,
+            "sf_between": result.sf_between,
+            "md_between": result.md_between,
             "level": result.level.tolist(),
             "toolface": result.toolface,
             # a NaN σ where the centres are apart: a well's σ not given (flagged)
@@ -345,6 +518,11 @@ def clearance(
             w["offset"]: {
                 **{k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)},
                 **{k: w[k] for k in ("north", "east", "tvd")},  # the slot and datum (tvd null)
+                **(
+                    {"kickoff": dataclasses.asdict(kickoffs[w["offset"]])}
+                    if w["offset"] in kickoffs
+                    else {}
+                ),
             }
             for w in listed
         },
