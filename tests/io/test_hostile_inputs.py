@@ -1,0 +1,111 @@
+"""Hostile inputs (issue 32 items 6, 9, 10): a file cut short while it is in use, chunks
+that claim or hold more than they may, JSON metadata nested without end — each a located
+error, fast and small, never a signal, a MemoryError or a RecursionError. The files come
+from ``hostile_inputs`` (shared with the fuzz suite)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from hostile_inputs import mcap_channel_metadata, mcap_chunk, nested_json
+from pipeline.errors import InputFileError
+from pipeline.io.mcap import read_samples, write_samples
+from pipeline.io.mcap.options import McapOptions
+from pipeline.io.mcap.records import MIN_DECOMPRESSED
+from pipeline.jsontext import MAX_DEPTH
+from pipeline.well import WellMetadata
+from tests_support import gyropipe_cli
+
+JSON = McapOptions(columns={"time": "t"}, units={"time": "s"})
+TOO_DEEP = f"JSON nested deeper than {MAX_DEPTH} levels: refused"
+
+
+# ------------------------------------------------------------- item 6: cut short in use
+
+TRUNCATE_IN_USE = """
+import os, sys
+from pathlib import Path
+from pipeline.io.mcap import stream_samples
+from pipeline.io.mcap.options import McapOptions
+
+path = Path(sys.argv[1])
+stream, _ = stream_samples(path, "samples", McapOptions())
+os.truncate(path, 64)  # cut short while the stream's batches are still to be used
+total = sum(batch.num_rows for batch in stream)
+values = sum(float(b.column(1).to_numpy().sum()) for b in stream)
+print("rows", total, "sum", values)
+"""
+
+
+@pytest.mark.process("a file mapped and cut short kills its process with SIGBUS")
+def test_an_mcap_cut_short_while_it_is_read_is_no_signal(tmp_path: Path):
+    """Issue 32 item 6: the reader mapped the file and handed out zero-copy views of it;
+    truncating the file while ``run`` used them killed the process (exit 135, SIGBUS)."""
+    samples = pa.table({"time": np.arange(50_000.0), "gyro_x": np.ones(50_000)})
+    path = tmp_path / "s.mcap"
+    write_samples(samples, path, WellMetadata())
+    script = tmp_path / "read.py"
+    script.write_text(TRUNCATE_IN_USE)
+    done = subprocess.run(
+        [sys.executable, str(script), str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr)
+    assert done.stdout == "rows 50000 sum 50000.0\n"
+
+
+# --------------------------------------------------- item 9: decompressed sizes bounded
+
+
+def test_a_zstd_chunk_claiming_gigabytes_is_refused_before_it_is_decompressed(tmp_path: Path):
+    """Issue 32 item 9: a 197 kB MCAP whose zstd chunk claimed 6 GiB reached 6.4 GB RSS and
+    ran past 120 s of CPU. Its declared size is checked against the file's budget first."""
+    path = tmp_path / "bomb.mcap"
+    path.write_bytes(mcap_chunk(declared=6 << 30, actual=64 << 20))
+    start = time.perf_counter()
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "o.csv"), "--kind", "samples")
+    assert time.perf_counter() - start < 2.0
+    assert result.returncode == 1, result.stderr
+    assert (
+        f"{path}: chunk at byte 32: declares 6,442,450,944 bytes of records; the compressed "
+        f"chunks would hold 6,442,450,944 bytes, more than {MIN_DECOMPRESSED:,} (100 times "
+        f"the file's {path.stat().st_size:,} bytes, at least {MIN_DECOMPRESSED:,}): refused"
+    ) in result.stderr
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4"])
+def test_a_chunk_holding_more_than_it_declares_is_cut_at_the_declared_size(
+    tmp_path: Path, compression: str
+):
+    """A chunk that declares 1,000 bytes and inflates to 8 MiB: decompressed into 1,001
+    bytes at most, then refused (the lz4 reader decompressed everything first)."""
+    path = tmp_path / "more.mcap"
+    path.write_bytes(mcap_chunk(declared=1000, actual=8 << 20, compression=compression))
+    with pytest.raises(InputFileError) as info:
+        read_samples(path, "samples", JSON)
+    assert str(info.value) == (
+        f"{path}: chunk at byte 32: decompressed to more than 1000 bytes, header says 1000"
+    )
+
+
+# ------------------------------------------------------ item 10: JSON metadata nesting
+
+
+@pytest.mark.parametrize("depth", [MAX_DEPTH + 1, 100_000])
+def test_deeply_nested_channel_metadata_is_located(tmp_path: Path, depth: int):
+    """Issue 32 item 10: channel metadata ``units`` nested 100,000 deep was a
+    RecursionError ("reader failed"); nested past the limit it is refused, by name."""
+    path = tmp_path / "deep.mcap"
+    path.write_bytes(mcap_channel_metadata("units", nested_json(depth)))
+    with pytest.raises(InputFileError) as info:
+        read_samples(path, "samples", JSON)
+    assert str(info.value) == (
+        f"{path}: topic '/imu': channel metadata 'units' must be a JSON object key → unit: "
+        f"{TOO_DEEP}"
+    )
