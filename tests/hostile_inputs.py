@@ -12,6 +12,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from pipeline.tables import Stations
+
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
@@ -82,23 +84,33 @@ def parquet_bytes(table: pa.Table, **options: object) -> bytes:
     return sink.getvalue()
 
 
+def _stations(rows: int, extra: int = 0) -> pa.Table:
+    """A valid stations table of ``rows`` rows (MD 0, 1, …) and ``extra`` zero columns."""
+    data = {"md": np.arange(rows, dtype=float), "inc": np.zeros(rows), "azi": np.zeros(rows)}
+    table = Stations.compiled().make_table(data, north_reference="true")
+    for i in range(extra):
+        table = table.append_column(f"c{i}", pa.array(np.zeros(rows)))
+    return table
+
+
 def parquet_with_metadata(key: bytes, value: bytes) -> bytes:
     """A valid stations Parquet file whose schema metadata ``key`` is ``value``."""
-    table = pa.table({"md": [0.0, 100.0], "inc": [0.0, 1.0], "azi": [0.0, 10.0]})
-    return parquet_bytes(table.replace_schema_metadata({key: value}))
+    table = _stations(3)
+    meta = {**(table.schema.metadata or {}), key: value}
+    return parquet_bytes(table.replace_schema_metadata(meta))
 
 
 def parquet_wide(columns: int, rows: int = 2) -> bytes:
     """A stations Parquet file with ``columns`` extra float64 columns."""
-    data = {"md": np.arange(rows, dtype=float), "inc": np.zeros(rows), "azi": np.zeros(rows)}
-    data |= {f"c{i}": np.zeros(rows) for i in range(columns)}
-    return parquet_bytes(pa.table(data))
+    return parquet_bytes(_stations(rows, columns))
 
 
 def parquet_long(rows: int) -> bytes:
-    """A stations Parquet file of ``rows`` constant rows: RLE packs them into a few kB."""
-    table = pa.table({n: pa.array(np.zeros(rows)) for n in ("md", "inc", "azi")})
-    return parquet_bytes(table, row_group_size=rows, use_dictionary=True, compression="zstd")
+    """A stations Parquet file of ``rows`` zero rows in one row group: run-length encoding
+    packs 3 × 8 bytes per row into a few kB."""
+    schema = _stations(1).schema
+    table = pa.table([pa.array(np.zeros(rows)) for _ in schema], schema=schema)
+    return parquet_bytes(table, row_group_size=rows, compression="zstd")
 
 
 def witsml_text(chars: int) -> bytes:

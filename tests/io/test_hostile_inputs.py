@@ -14,11 +14,20 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from hostile_inputs import mcap_channel_metadata, mcap_chunk, nested_json
+from hostile_inputs import (
+    mcap_channel_metadata,
+    mcap_chunk,
+    nested_json,
+    parquet_long,
+    parquet_wide,
+    parquet_with_metadata,
+)
 from pipeline.errors import InputFileError
+from pipeline.io import parquet
 from pipeline.io.mcap import read_samples, write_samples
 from pipeline.io.mcap.options import McapOptions
 from pipeline.io.mcap.records import MIN_DECOMPRESSED
+from pipeline.io.parquet import MAX_COLUMNS, MIN_DECODED
 from pipeline.jsontext import MAX_DEPTH
 from pipeline.well import WellMetadata
 from tests_support import gyropipe_cli
@@ -109,3 +118,42 @@ def test_deeply_nested_channel_metadata_is_located(tmp_path: Path, depth: int):
         f"{path}: topic '/imu': channel metadata 'units' must be a JSON object key → unit: "
         f"{TOO_DEEP}"
     )
+
+
+def test_a_parquet_file_of_too_many_columns_is_refused_from_its_footer(tmp_path: Path):
+    """Issue 32 item 9: a 35 MB Parquet file of 5,003 columns peaked at 3.6 GB RSS."""
+    path = tmp_path / "wide.parquet"
+    path.write_bytes(parquet_wide(MAX_COLUMNS - 2))
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "o.csv"), "--kind", "stations")
+    assert result.returncode == 1, result.stderr
+    assert f"{path}: 1,001 columns, more than 1,000: refused" in result.stderr
+
+
+@pytest.mark.parametrize("streamed", [False, True], ids=["read", "stream"])
+def test_a_tiny_run_length_encoded_parquet_file_is_refused_before_decoding(
+    tmp_path: Path, streamed: bool
+):
+    """Issue 32 item 9: RLE packs millions of equal values into a few bytes; a 1.2 MB file
+    of 10⁸ rows decoded to 7 GB RSS in 59 s. The footer's row count is checked first."""
+    path = tmp_path / "long.parquet"
+    path.write_bytes(parquet_long(3_000_000))
+    size = path.stat().st_size
+    with pytest.raises(InputFileError) as info:
+        (parquet.stream if streamed else parquet.read)(path, "stations", None)
+    assert str(info.value) == (
+        f"{path}: 3,000,000 rows × 3 columns would decode to about 72,000,000 bytes, more "
+        f"than {MIN_DECODED:,} (100 times the file's {size:,} bytes, at least "
+        f"{MIN_DECODED:,}): refused"
+    )
+
+
+def test_deeply_nested_parquet_well_metadata_is_located(tmp_path: Path):
+    """Issue 32 item 10: the ``gyropipe.well`` schema metadata nested 100,000 deep was a
+    RecursionError ("reader failed")."""
+    path = tmp_path / "deep.parquet"
+    path.write_bytes(parquet_with_metadata(b"gyropipe.well", nested_json(100_000).encode()))
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "o.csv"), "--kind", "stations")
+    assert result.returncode == 1, result.stderr
+    assert (
+        f"{path}: well metadata ('gyropipe.well' in the schema metadata): {TOO_DEEP}"
+    ) in result.stderr
