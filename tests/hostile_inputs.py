@@ -129,6 +129,7 @@ def _witsml(name: str = "w", attribute: str = "") -> bytes:
         '<?xml version="1.0"?>\n<trajectorys xmlns="http://www.witsml.org/schemas/1series" '
         f'version="1.4.1.1"><trajectory uidWell="w" uidWellbore="b" uid="t"{extra}>'
         f"<nameWell>{name}</nameWell><nameWellbore>b</nameWellbore><name>t</name>"
+        "<aziRef>true north</aziRef>"
         '<trajectoryStation uid="s1"><md uom="m">0</md><incl uom="dega">0</incl>'
         '<azi uom="dega">0</azi></trajectoryStation>'
         '<trajectoryStation uid="s2"><md uom="m">100</md><incl uom="dega">1</incl>'
