@@ -141,7 +141,7 @@ def csv_wide(columns: int) -> bytes:
     """A stations CSV with ``columns`` extra columns (two rows)."""
     names = ",".join(f"c{i}" for i in range(columns))
     zeros = ",".join("0" for _ in range(columns))
-    return f"md,inc,azi,{names}\n0,0,0,{zeros}\n100,1,10,{zeros}\n".encode()
+    return f"md [m],inc [deg],azi true [deg],{names}\n0,0,0,{zeros}\n100,1,10,{zeros}\n".encode()
 
 
 def yaml_binary_aliases(anchor_chars: int, aliases: int) -> bytes:
