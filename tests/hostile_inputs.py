@@ -1,12 +1,14 @@
 """Hostile input files (issue 32): small files that claim, nest or repeat their way to huge
-costs. Shared by the regression tests and the fuzz suite (``fuzz_support``, kind
-``hostile``); each generator returns the file's bytes."""
+costs. Shared by the regression tests and the fuzz suite (``fuzz_support``: :data:`HOSTILE`, the
+generators of each input kind); each generator returns the file's bytes."""
 
 from __future__ import annotations
 
 import io
 import json
+import random
 import struct
+from collections.abc import Callable
 
 import numpy as np
 import pyarrow as pa
@@ -149,3 +151,40 @@ def yaml_binary_aliases(anchor_chars: int, aliases: int) -> bytes:
     aliased ``aliases`` times."""
     many = ", ".join(["*b"] * aliases)
     return f"name: p\nversion: 1\nblob: &b !!binary {'A' * anchor_chars}\nmany: [{many}]\n".encode()
+
+
+Generator = Callable[[random.Random], tuple[bytes, str]]
+
+
+def _pick(rng: random.Random, *sizes: int) -> int:
+    return rng.choice(sizes)
+
+
+HOSTILE: dict[str, tuple[Generator, ...]] = {
+    "mcap": (
+        lambda r: (mcap_chunk(_pick(r, 6 << 30, 1 << 40), 8 << 20), "zstd chunk claims GiB"),
+        lambda r: (mcap_chunk(1000, 4 << 20, r.choice(["zstd", "lz4"])), "chunk holds more"),
+        lambda r: (
+            mcap_channel_metadata("units", nested_json(_pick(r, 65, 5_000, 100_000))),
+            "channel metadata nested deep",
+        ),
+    ),
+    "parquet": (
+        lambda r: (parquet_wide(_pick(r, 1_001, 5_003)), "too many columns"),
+        lambda r: (parquet_long(_pick(r, 3_000_000, 5_000_000)), "RLE rows claim GB"),
+        lambda r: (
+            parquet_with_metadata(b"gyropipe.well", nested_json(100_000).encode()),
+            "well metadata nested deep",
+        ),
+    ),
+    "witsml": (
+        lambda r: (witsml_text(_pick(r, 1_000_000, 5_000_000)), "huge text"),
+        lambda r: (witsml_attribute(_pick(r, 1_000_000, 5_000_000)), "huge attribute"),
+    ),
+    "csv-stations": (lambda r: (csv_wide(_pick(r, 1_001, 100_000)), "too many columns"),),
+    "pipeline": (
+        lambda r: (yaml_binary_aliases(100_000, _pick(r, 200, 20_000)), "binary aliases"),
+        lambda r: (b"name: p\nversion: 1\nwhen: !!timestamp abc\n", "bad timestamp"),
+    ),
+}
+"""The hostile generators of each fuzzed input kind (the fuzz suite's ``hostile`` op)."""
