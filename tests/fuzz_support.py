@@ -129,7 +129,7 @@ TARGETS: dict[str, tuple[str, ...]] = {
 """Formats each kind is converted to, in turn (``auto``: CSV and Parquet, which hold any)."""
 
 LOCATED = re.compile(
-    r"(:\d+\b|\blines? \d+|\bbyte \d+|\bmessage \d+|\brow \d+|\brecord\b|\bcolumn '|"
+    r"(:\d+\b|\blines? \d+|\bbyte \d+|\bmessage \d+|\brow \d+|\brecord\b|\bcolumn '|\bfooter\b|"
     r"in the schema metadata|/gyropipe/\w+|\btopic\b)",
     re.IGNORECASE,
 )

@@ -139,7 +139,7 @@ def test_a_parquet_file_of_too_many_columns_is_refused_from_its_footer(tmp_path:
     path = tmp_path / "wide.parquet"
     path.write_bytes(parquet_wide(MAX_COLUMNS - 2))
     stderr = refused_by_convert(path, "stations", ".csv")
-    assert f"{path}: 1,001 columns, more than 1,000: refused" in stderr
+    assert f"{path}: footer: 1,001 columns, more than 1,000: refused" in stderr
 
 
 @pytest.mark.parametrize("streamed", [False, True], ids=["read", "stream"])
@@ -154,7 +154,7 @@ def test_a_tiny_run_length_encoded_parquet_file_is_refused_before_decoding(
     with pytest.raises(InputFileError) as info:
         (parquet.stream if streamed else parquet.read)(path, "stations", None)
     assert str(info.value) == (
-        f"{path}: 3,000,000 rows × 3 columns would decode to about 72,000,000 bytes, more "
+        f"{path}: footer: 3,000,000 rows × 3 columns would decode to about 72,000,000 bytes, more "
         f"than {MIN_DECODED:,} (100 times the file's {size:,} bytes, at least "
         f"{MIN_DECODED:,}): refused"
     )

@@ -106,7 +106,7 @@ def _check_bounds(path: Path) -> None:
     meta = next(ds.dataset(str(path), format="parquet").get_fragments()).metadata
     if meta.num_columns > MAX_COLUMNS:
         raise InputFileError(
-            path, f"{meta.num_columns:,} columns, more than {MAX_COLUMNS:,}: refused"
+            path, f"footer: {meta.num_columns:,} columns, more than {MAX_COLUMNS:,}: refused"
         )
     size = path.stat().st_size
     budget = max(MIN_DECODED, MAX_INFLATION * size)
@@ -117,7 +117,7 @@ def _check_bounds(path: Path) -> None:
     if decoded > budget:
         raise InputFileError(
             path,
-            f"{meta.num_rows:,} rows × {meta.num_columns} columns would decode to about "
+            f"footer: {meta.num_rows:,} rows × {meta.num_columns} columns would decode to about "
             f"{decoded:,} bytes, more than {budget:,} ({MAX_INFLATION} times the file's "
             f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
         )
