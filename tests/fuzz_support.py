@@ -11,7 +11,9 @@ re-written with NaN/inf cells, dropped or renamed columns, wrong unit metadata, 
 garbled well metadata (Parquet, MCAP); MCAP messages cut short, flipped, emptied, dropped,
 repeated or re-timed and their JSON changed, with the file's CRCs intact; YAML values
 replaced, tags, anchors, aliases and merge keys injected, keys misspelt, nesting deepened,
-two problems made at once (pipelines, simulation plans); manifest cells replaced. Then it
+two problems made at once (pipelines, simulation plans); manifest cells replaced; files
+replaced by hostile ones of their kind (``hostile_inputs``: chunks and row counts claiming
+gigabytes, metadata nested 100,000 deep, megabyte XML tokens and YAML aliases). Then it
 is run the way the CLI runs it:
 
 * table files — :func:`pipeline.convert.convert` (``gyropipe convert``), the accepted table
@@ -49,6 +51,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from hostile_inputs import HOSTILE
 from pipeline.contracts import UNIT_KEY, VERTICAL_TOLERANCE, TableContract
 from pipeline.convert import convert, read_kind
 from pipeline.errors import (
@@ -126,7 +129,7 @@ TARGETS: dict[str, tuple[str, ...]] = {
 """Formats each kind is converted to, in turn (``auto``: CSV and Parquet, which hold any)."""
 
 LOCATED = re.compile(
-    r"(:\d+\b|\blines? \d+|\bbyte \d+|\bmessage \d+|\brow \d+|\brecord\b|\bcolumn '|"
+    r"(:\d+\b|\blines? \d+|\bbyte \d+|\bmessage \d+|\brow \d+|\brecord\b|\bcolumn '|\bfooter\b|"
     r"in the schema metadata|/gyropipe/\w+|\btopic\b)",
     re.IGNORECASE,
 )
@@ -851,6 +854,13 @@ def _yaml_op(rng: random.Random, data: bytes, ctx: Context) -> tuple[bytes, str]
     return b"\n".join(lines), f"yaml-{op}@line {i + 1}"
 
 
+def _hostile_op(rng: random.Random, data: bytes, ctx: Context) -> tuple[bytes, str]:
+    """Replace the file by a hostile one of its kind (``hostile_inputs``: claims, nesting,
+    huge tokens; issue 32)."""
+    made, what = rng.choice(HOSTILE[ctx.kind.name])(rng)
+    return made, f"hostile: {what}"
+
+
 TWO_FAULTS = "two-faults"
 """An operation that makes two independent spec problems (the count reported is checked)."""
 
@@ -963,6 +973,8 @@ class Fuzzer:
             ops, weights = (*ops, _two_faults), (*weights, 1)
         if kind.name == "mcap":
             ops, weights = (*ops, _mcap_op), (*weights, 8)
+        if kind.name in HOSTILE:
+            ops, weights = (*ops, _hostile_op), (*weights, 1)
         data = source.data
         done = []
         for _ in range(rng.choice([1, 1, 1, 2, 2, 3])):

@@ -7,11 +7,12 @@ Parquet files and stage boundaries.
 from __future__ import annotations
 
 import datetime as dt
-import json
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+
+from pipeline import jsontext
 
 WELL_KEY = b"gyropipe.well"
 
@@ -155,4 +156,4 @@ def well_of(table: pa.Table | pa.Schema) -> WellMetadata | None:
     raw = (schema.metadata or {}).get(WELL_KEY)
     if raw is None:
         return None
-    return WellMetadata.model_validate(json.loads(raw))
+    return WellMetadata.model_validate(jsontext.loads(raw))

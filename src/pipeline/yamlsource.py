@@ -5,11 +5,13 @@ tags on collections are refused), then converted to plain data while recording w
 node came from, so pydantic errors and later checks can point at ``file:line:column``.
 
 Aliases are followed (an alias is a copy of its anchor's node), but a document whose aliases
-expand it beyond :data:`MAX_NODES` nodes (a "billion laughs" document), an alias inside the
-node it refers to, and nesting deeper than :data:`MAX_DEPTH` are refused, located at the
-alias (or node), before anything is expanded. A scalar no safe constructor builds (a tag
-such as ``!!python/name:…`` or ``!custom``, a merge key ``<<``, ``!!int abc``, a date-like
-``2026-13-45``) is a located problem, not an exception.
+expand it beyond :data:`MAX_NODES` nodes (a "billion laughs" document) or
+:data:`MAX_SCALAR_CHARS` characters of scalar text (a large ``!!binary`` anchor aliased many
+times), an alias inside the node it refers to, and nesting deeper than :data:`MAX_DEPTH` are
+refused, located at the alias (or node), before anything is expanded. A scalar no safe
+constructor builds (a tag such as ``!!python/name:…`` or ``!custom``, a merge key ``<<``,
+``!!int abc``, ``!!timestamp abc``, a date-like ``2026-13-45``) is a located problem, not an
+exception.
 """
 
 from __future__ import annotations
@@ -29,6 +31,9 @@ M = TypeVar("M", bound=BaseModel)
 
 MAX_NODES = 100_000
 """Most nodes a loaded document may hold once its aliases are expanded."""
+MAX_SCALAR_CHARS = 10_000_000
+"""Most characters of scalar text a loaded document may hold once its aliases are expanded
+(a pipeline file is a few kB; its scalars are built once per alias)."""
 MAX_DEPTH = 100
 """Deepest nesting of collections a loaded document may have (aliases expanded)."""
 
@@ -243,6 +248,9 @@ def _to_data(node: yaml.Node, path: PathKey, source: SourceMap, problems: list[P
 
 
 _CONSTRUCTOR = yaml.SafeLoader("")
+_TIMESTAMP = "tag:yaml.org,2002:timestamp"
+"""PyYAML builds this tag from a regular expression match it does not check (None for
+``!!timestamp abc``: an AttributeError), so the match is checked first."""
 _STANDARD_TAGS: dict[type, str] = {
     yaml.MappingNode: "tag:yaml.org,2002:map",
     yaml.SequenceNode: "tag:yaml.org,2002:seq",
@@ -258,6 +266,8 @@ def _scalar(node: yaml.Node, file: str, problems: list[Problem]) -> Any:
     if not isinstance(node, yaml.ScalarNode):
         return node
     try:
+        if node.tag == _TIMESTAMP and not _CONSTRUCTOR.timestamp_regexp.match(node.value):
+            raise ValueError("expected a date YYYY-MM-DD or a date and time (ISO 8601)")
         return _CONSTRUCTOR.construct_object(node, deep=True)
     except (yaml.constructor.ConstructorError, ValueError, LookupError, OverflowError) as exc:
         # LookupError: !!bool maybe (PyYAML looks the word up in its table of booleans)
@@ -327,14 +337,14 @@ def _too_deep() -> str:
 
 def _check_size(root: yaml.Node, file: str) -> None:
     """Raise :class:`SpecError` if the document, its aliases expanded, holds more than
-    :data:`MAX_NODES` nodes or nests deeper than :data:`MAX_DEPTH`, or if an alias lies
-    inside the node it refers to. Counts without expanding: each node's expanded size and
-    height is computed once."""
-    measured: dict[int, tuple[int, int]] = {}  # id(node) → (expanded nodes, height)
+    :data:`MAX_NODES` nodes or :data:`MAX_SCALAR_CHARS` characters of scalars, or nests
+    deeper than :data:`MAX_DEPTH`, or if an alias lies inside the node it refers to. Counts
+    without expanding: each node's expanded size and height is computed once."""
+    measured: dict[int, tuple[int, int, int]] = {}  # id(node) → (nodes, characters, height)
     open_nodes: set[int] = set()
-    largest: list[tuple[int, _Alias]] = []  # the alias that expands to the most nodes
+    largest: list[tuple[int, int, _Alias]] = []  # the alias that expands the most
 
-    def measure(node: yaml.Node, depth: int) -> tuple[int, int]:
+    def measure(node: yaml.Node, depth: int) -> tuple[int, int, int]:
         target = node.value if isinstance(node, _Alias) else node
         key = id(target)
         if key in open_nodes:
@@ -345,34 +355,44 @@ def _check_size(root: yaml.Node, file: str) -> None:
             if depth > MAX_DEPTH:
                 raise SpecError([Problem(_location(file, node.start_mark), _too_deep())])
             open_nodes.add(key)
-            size, height = 1, 1
+            size, chars, height = 1, len(target.value) if _is_scalar(target) else 0, 1
             for child in _children(target):
-                child_size, child_height = measure(child, depth + 1)
+                child_size, child_chars, child_height = measure(child, depth + 1)
                 size += child_size
+                chars += child_chars
                 height = max(height, child_height + 1)
             open_nodes.discard(key)
-            measured[key] = (size, height)
-        size, height = measured[key]
+            measured[key] = (size, chars, height)
+        size, chars, height = measured[key]
         if depth + height - 1 > MAX_DEPTH:
             raise SpecError([Problem(_location(file, node.start_mark), _too_deep())])
-        if isinstance(node, _Alias) and (not largest or size > largest[0][0]):
-            largest[:] = [(size, node)]
-        return size, height
+        if isinstance(node, _Alias) and (not largest or (size, chars) > largest[0][:2]):
+            largest[:] = [(size, chars, node)]
+        return size, chars, height
 
-    total, _ = measure(root, 1)
-    if total <= MAX_NODES:
+    total, chars, _ = measure(root, 1)
+    if total <= MAX_NODES and chars <= MAX_SCALAR_CHARS:
         return
+    if total > MAX_NODES:
+        what, limit, alone = f"{total:,} nodes", MAX_NODES, 0
+    else:
+        what, limit, alone = f"{chars:,} characters of scalars (keys included)", MAX_SCALAR_CHARS, 1
     if largest:
-        size, alias = largest[0]
+        alias = largest[0][2]
         where = _location(file, alias.start_mark)
+        unit = "nodes" if alone == 0 else "characters"
         message = (
-            f"aliases expand the document to {total:,} nodes, more than {MAX_NODES:,}: "
-            f"refused (this alias alone expands to {size:,})"
+            f"aliases expand the document to {what}, more than {limit:,}: "
+            f"refused (this alias alone expands to {largest[0][alone]:,} {unit})"
         )
     else:
         where = _location(file, root.start_mark)
-        message = f"the document holds {total:,} nodes, more than {MAX_NODES:,}: refused"
+        message = f"the document holds {what}, more than {limit:,}: refused"
     raise SpecError([Problem(where, message)])
+
+
+def _is_scalar(node: yaml.Node) -> bool:
+    return isinstance(node, yaml.ScalarNode) and isinstance(node.value, str)
 
 
 def _children(node: yaml.Node) -> list[yaml.Node]:

@@ -88,6 +88,7 @@ LAYERS: dict[str, int] = {
     "pipeline.ports": 2,
     # 1 — foundation
     "pipeline.well": 1,
+    "pipeline.jsontext": 1,
     "pipeline.errors": 1,
     "pipeline.atomic": 1,
     "pipeline.version": 1,

@@ -10,12 +10,13 @@ from typing import Any
 import pytest
 import yaml
 
-from pipeline.errors import InputFileError, SpecError
+from hostile_inputs import yaml_binary_aliases
+from pipeline.errors import InputFileError, Problem, SpecError
 from pipeline.graph import build_plan
 from pipeline.io.csv.options import load_profile
 from pipeline.sim.spec import load_simulation
 from pipeline.spec import load_spec
-from pipeline.yamlsource import MAX_NODES
+from pipeline.yamlsource import MAX_NODES, MAX_SCALAR_CHARS
 from tests_support import gyropipe_cli
 
 WRONG: list[Any] = [[], ["x"], {}, {"a": [1]}, 1, 2.5, None, True, [[1]], [{"a": 1}]]
@@ -108,15 +109,21 @@ def laughs(levels: int = 9, width: int = 9, key: str = "stages") -> str:
     return "\n".join(lines) + "\n"
 
 
-def test_alias_bomb_is_refused_at_once(tmp_path: Path):
-    """Nine levels of nine aliases grew ``validate`` to 387 MB and past 60 s."""
-    path = tmp_path / "laughs.yaml"
-    path.write_text(laughs())
+def refused_at_once(path: Path) -> Problem:
+    """The one problem ``load_spec`` finds in ``path``, within a second."""
     start = time.perf_counter()
     with pytest.raises(SpecError) as info:
         load_spec(path)
     assert time.perf_counter() - start < 1.0
     (problem,) = info.value.problems
+    return problem
+
+
+def test_alias_bomb_is_refused_at_once(tmp_path: Path):
+    """Nine levels of nine aliases grew ``validate`` to 387 MB and past 60 s."""
+    path = tmp_path / "laughs.yaml"
+    path.write_text(laughs())
+    problem = refused_at_once(path)
     assert str(problem.location) == f"{path}:13:9"
     assert "aliases expand the document to" in problem.message
     assert f"more than {MAX_NODES:,}" in problem.message
@@ -145,6 +152,41 @@ def test_alias_bomb_in_a_simulation_plan_and_a_csv_profile(tmp_path: Path):
     profile.write_text(laughs(key="aliases").replace("name: p\nversion: 1\n", ""))
     with pytest.raises(InputFileError, match=r"profile.yaml:11:10: aliases expand"):
         load_profile(profile)
+
+
+def test_aliases_of_a_large_scalar_are_limited_by_their_expanded_size(tmp_path: Path):
+    """Issue 32 item 9: a 1 MB ``!!binary`` anchor aliased 20,000 times built ~20 GB of
+    bytes (MemoryError): the node count stayed small. The expanded text is counted too."""
+    path = tmp_path / "binary.yaml"
+    path.write_bytes(yaml_binary_aliases(100_000, 200))  # 75 kB of bytes per copy
+    problem = refused_at_once(path)
+    assert str(problem.location) == f"{path}:4:8"
+    assert problem.message == (
+        f"aliases expand the document to 20,100,021 characters of scalars (keys included), more than "
+        f"{MAX_SCALAR_CHARS:,}: refused (this alias alone expands to 100,000 characters)"
+    )
+
+
+@pytest.mark.parametrize("command", ["set", "option"])
+def test_a_bad_timestamp_in_set_and_option_is_one_line(tmp_path: Path, command: str):
+    """Issue 32 item 13: ``!!timestamp abc`` ended in AttributeError ('groupdict')."""
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nversion: 1\ninputs: {s: {}}\n"
+        "stages: [{id: read, uses: read_stations, with: {input: s}}]\n"
+    )
+    if command == "set":
+        result = gyropipe_cli("validate", str(path), "--set", "read.options=!!timestamp abc")
+        where = "--set read.options=!!timestamp abc: value"
+    else:
+        src = tmp_path / "s.csv"
+        src.write_text("md,inc,azi\n0,0,0\n100,1,10\n")
+        out = str(tmp_path / "o.csv")
+        result = gyropipe_cli("convert", str(src), "--out", out, "--option", "x=!!timestamp abc")
+        where = "--option x=!!timestamp abc"
+    assert result.returncode == 2, result.stderr
+    assert f"{where}: 'abc' is not a valid YAML timestamp: expected a date" in result.stderr
+    assert "Traceback" not in result.stderr
 
 
 def test_a_moderate_alias_is_fine_and_located_at_its_anchor(tmp_path: Path, registry):
@@ -304,8 +346,9 @@ def test_a_control_character_is_located(tmp_path: Path):
         ("    description: !!int abc", 18, "'abc' is not a valid YAML int: invalid literal"),
         ("    description: 2026-13-45", 18, "'2026-13-45' is not a valid YAML timestamp"),
         ("    description: !!bool maybe", 18, "'maybe' is not a valid YAML bool: 'maybe'"),
+        ("    description: !!timestamp abc", 18, "'abc' is not a valid YAML timestamp: expected"),
     ],
-    ids=["merge-key", "python-tag", "custom-tag", "bad-int", "bad-date", "bad-bool"],
+    ids=["merge-key", "python-tag", "custom-tag", "bad-int", "bad-date", "bad-bool", "bad-stamp"],
 )
 def test_a_scalar_yaml_cannot_build_is_a_located_problem(
     tmp_path: Path, registry, line: str, column: int, message: str

@@ -3,6 +3,12 @@
 Parquet keeps the Arrow schema, so units, north references and well metadata round-trip.
 Both stream: the reader reads a row group at a time (:func:`stream`), the writer writes a
 row group per batch (:func:`write_stream`).
+
+Bounds, checked on the footer before anything is decoded (:func:`_check_bounds`): at most
+:data:`MAX_COLUMNS` columns, and the decoded table (rows × columns × 8 bytes, or the row
+groups' declared sizes when larger) at most :data:`MAX_INFLATION` times the file's size or
+:data:`MIN_DECODED` bytes — run-length encoding packs millions of equal values into a few
+bytes, so a small file can claim gigabytes.
 """
 
 from __future__ import annotations
@@ -12,9 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
+import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 from pydantic import ValidationError
 
+from pipeline import jsontext
 from pipeline.contracts import TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
@@ -26,6 +34,12 @@ from pipeline.well import WELL_KEY, WellMetadata, well_of
 MAGIC = b"PAR1"
 READ_BUFFER = 1 << 20
 """Bytes read from the file at a time when streaming."""
+MAX_COLUMNS = 1_000
+"""Most (leaf) columns a Parquet input may have (a survey table has tens)."""
+MAX_INFLATION = 100
+"""Most times its own size a Parquet input may decode to (float sensor data: ~1.5)."""
+MIN_DECODED = 64 << 20
+"""The decoded size a small Parquet input may reach whatever its own size (bytes)."""
 KINDS: dict[str, type[TableContract]] = {
     "stations": Stations,
     "samples": RawSamples,
@@ -56,6 +70,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     A table of another kind than ``kind`` (its required columns missing, another kind's all
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
+        _check_bounds(path)
         table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         raise _unreadable(path, exc) from exc
@@ -68,6 +83,7 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     rows in batches of at most :data:`BATCH_ROWS` rows, row group after row group, the
     column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole)."""
     try:
+        _check_bounds(path)
         schema = pq.read_schema(path)
     except (OSError, pa.ArrowException) as exc:
         raise _unreadable(path, exc) from exc
@@ -81,6 +97,30 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
             raise _unreadable(path, exc) from exc
 
     return TableStream.of_batches(schema, batches), _well(path, schema)
+
+
+def _check_bounds(path: Path) -> None:
+    """Refuse a file of more than :data:`MAX_COLUMNS` columns, or one that would decode to
+    more than its budget (module docstring), before anything is decoded. (The footer is
+    read through a dataset fragment: ``pq.read_metadata`` decodes the column names.)"""
+    meta = next(ds.dataset(str(path), format="parquet").get_fragments()).metadata
+    if meta.num_columns > MAX_COLUMNS:
+        raise InputFileError(
+            path, f"footer: {meta.num_columns:,} columns, more than {MAX_COLUMNS:,}: refused"
+        )
+    size = path.stat().st_size
+    budget = max(MIN_DECODED, MAX_INFLATION * size)
+    decoded = 0
+    for i in range(meta.num_row_groups):
+        group = meta.row_group(i)
+        decoded += max(group.total_byte_size, group.num_rows * meta.num_columns * 8)
+    if decoded > budget:
+        raise InputFileError(
+            path,
+            f"footer: {meta.num_rows:,} rows × {meta.num_columns} columns would decode to about "
+            f"{decoded:,} bytes, more than {budget:,} ({MAX_INFLATION} times the file's "
+            f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
+        )
 
 
 def _unreadable(path: Path, exc: Exception) -> InputFileError:
@@ -125,6 +165,8 @@ def _well(path: Path, schema: pa.Schema) -> WellMetadata:
         problems = "; ".join(
             f"{'.'.join(map(str, e['loc'])) or 'value'}: {e['msg']}" for e in exc.errors()
         )
+    except jsontext.TooDeep as exc:
+        problems = str(exc)
     except ValueError as exc:  # not UTF-8, not JSON
         problems = f"not JSON text: {exc}"
     raise InputFileError(

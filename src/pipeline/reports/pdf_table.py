@@ -146,6 +146,9 @@ def _line(cells: list[str], widths: list[int], gaps: list[int], table: Table) ->
 def place_table(flow: Flow, table: Table) -> None:
     """Put ``table`` on the pages, continued with its header repeated where it breaks."""
     setting = _setting(table)
+    flagged: dict[int, list[int]] = {}  # row → its flagged columns, once for every piece
+    for k, j in sorted(table.cells):
+        flagged.setdefault(k, []).append(j)
     head_h = (len(setting.header) + (1 if setting.unit else 0)) * setting.pitch + 0.07
     title_h = 0.26 if table.title else 0.0
     count = len(setting.rows)
@@ -164,7 +167,7 @@ def place_table(flow: Flow, table: Table) -> None:
         chunk = range(start, end)
         title = table.title if start == 0 else f"{table.title} (continued)"
         height = title_h + head_h + sum(setting.row_height(k) for k in chunk) + TAIL
-        flow.place(height, _piece(table, setting, chunk, title, head_h))
+        flow.place(height, _piece(table, setting, flagged, chunk, title, head_h))
         start = end
         if start >= count:
             break
@@ -177,11 +180,15 @@ def place_table(flow: Flow, table: Table) -> None:
         )
 
 
-def _piece(table: Table, setting: _Setting, rows: range, title: str, head_h: float) -> Draw:
+def _piece(
+    table: Table,
+    setting: _Setting,
+    flagged: dict[int, list[int]],
+    rows: range,
+    title: str,
+    head_h: float,
+) -> Draw:
     size, pitch, width = setting.size, setting.pitch, setting.width
-    flagged: dict[int, list[int]] = {}
-    for k, j in sorted(table.cells):
-        flagged.setdefault(k, []).append(j)
 
     def draw(page: Page, top: float) -> None:
         y = top

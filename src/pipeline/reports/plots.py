@@ -64,6 +64,30 @@ def pieces(values: FloatArray, offsets: Sequence[int]) -> list[FloatArray]:
     return [values[lo:hi] for lo, hi in itertools.pairwise(offsets)]
 
 
+MAX_DRAWN = 2_000
+"""Most stations a trajectory chart draws (a 300,000-station survey drawn whole spent most
+of its run in the report; its listing is never thinned)."""
+
+
+def drawn_rows(md: FloatArray, offsets: Sequence[int], peaks: FloatArray) -> NDArray[np.intp]:
+    """The stations a chart draws: all when there are at most :data:`MAX_DRAWN`; else
+    :data:`MAX_DRAWN` evenly spaced ones plus every survey's first and last station and, in
+    each stretch between two drawn stations, the one of highest ``peaks`` (DLS: a dogleg is
+    never thinned away). Sorted row indices."""
+    n = len(md)
+    if n <= MAX_DRAWN:
+        return np.arange(n)
+    even = np.linspace(0, n - 1, MAX_DRAWN).astype(np.intp)
+    ends = np.array([*offsets[:-1], *(o - 1 for o in offsets[1:])], dtype=np.intp)
+    values = np.where(np.isfinite(peaks), peaks, -np.inf)
+    highest = np.array(
+        [lo + int(np.argmax(values[lo:hi])) for lo, hi in itertools.pairwise([*even, n])],
+        dtype=np.intp,
+    )
+    rows: NDArray[np.intp] = np.unique(np.concatenate([even, ends, highest]))
+    return rows
+
+
 def _span(values: FloatArray) -> tuple[float, float]:
     """Limits of an axis showing ``values`` with a 5 % margin (shared by stacked panels)."""
     finite = values[np.isfinite(values)]
@@ -83,6 +107,18 @@ class Path3:
     offsets: tuple[int, ...]
     north_label: str
     """e.g. 'true north'"""
+
+    def taken(self, rows: NDArray[np.intp]) -> Path3:
+        """The path through stations ``rows`` only (sorted; each survey's ends among them)."""
+        offsets = tuple(int(o) for o in np.searchsorted(rows, self.offsets))
+        return Path3(
+            self.md[rows],
+            self.north[rows],
+            self.east[rows],
+            self.tvd[rows],
+            offsets,
+            self.north_label,
+        )
 
 
 def plan_view(size: Size, path: Path3) -> Chart:

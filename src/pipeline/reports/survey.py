@@ -190,13 +190,18 @@ def survey_document(
             ),
             key="listing",
         ),
-        _trajectory_plots(traj, path, vs, vs_azimuth, course, tables.series),
     ]
+    drawn = plots.drawn_rows(md, path.offsets, col(traj, "dls"))  # charts of a very long
+    shown, shown_path = traj.take(drawn), path.taken(drawn)  # survey: thinned for drawing
+    shown_course = Course(course.short[drawn], course.min_course)  # (not for the listing)
+    sections.append(
+        _trajectory_plots(shown, shown_path, vs[drawn], vs_azimuth, shown_course, tables.series, md)
+    )
     program = program_section(traj)
     if program is not None:
         sections.insert(3, program)
     if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
-        sections.append(_uncertainty(traj, path))
+        sections.append(_uncertainty(shown, shown_path))
     groups = all_series(src)
     explained = flag_table(flags or [])
     diagnosed = diagnosis_table(src.summary)
@@ -391,8 +396,18 @@ def _trajectory_plots(
     vs_azimuth: float | None,
     course: Course,
     series: FullRate | None,
+    every_md: plots.FloatArray,
 ) -> Section:
+    """The trajectory charts, of the stations in ``traj`` (thinned from ``every_md`` when
+    the survey is very long: the captions say so)."""
     inc, azi, dls = col(traj, "inc"), col(traj, "azi"), col(traj, "dls")
+    drawn = (
+        f" Drawn at {traj.num_rows:,} of the {len(every_md):,} stations (evenly spaced, "
+        "each survey's ends and the highest DLS between two drawn stations); the listing "
+        "has them all."
+        if traj.num_rows < len(every_md)
+        else ""
+    )
     full: tuple[Plot, ...] = ()
     if series is not None and series.samples:
         full = (
@@ -412,7 +427,7 @@ def _trajectory_plots(
                 "plan",
                 "Plan view",
                 f"Horizontal projection of the stations relative to "
-                f"the wellhead ({path.north_label}); dashed: closure to TD.",
+                f"the wellhead ({path.north_label}); dashed: closure to TD.{drawn}",
                 partial(plots.plan_view, path=path),
                 (6.9, 4.0),
             ),
@@ -420,7 +435,7 @@ def _trajectory_plots(
                 "section",
                 "Vertical section",
                 "Displacement along the vertical-section "
-                "azimuth against true vertical depth (equal scales).",
+                "azimuth against true vertical depth (equal scales)." + drawn,
                 partial(plots.vertical_section, vs=vs, path=path, azimuth=vs_azimuth),
                 (6.9, 4.0),
             ),
@@ -429,7 +444,7 @@ def _trajectory_plots(
                 "3-D view",
                 "Well path (solid) and its projection on the plane "
                 "through the deepest station (dashed); square: wellhead, triangle: TD. East "
-                "and north at one scale, the vertical scaled to fit.",
+                "and north at one scale, the vertical scaled to fit." + drawn,
                 partial(view_3d, path=path),
                 (6.9, 4.2),
             ),
@@ -437,7 +452,8 @@ def _trajectory_plots(
                 "profiles",
                 "Inclination, azimuth and dogleg severity against MD",
                 "Azimuths drawn hollow where the inclination is too small to define them"
-                + (f"; DLS over {course.words} as grey rings." if course.short.any() else "."),
+                + (f"; DLS over {course.words} as grey rings." if course.short.any() else ".")
+                + drawn,
                 partial(
                     plots.profiles,
                     path=path,

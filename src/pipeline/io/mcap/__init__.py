@@ -11,15 +11,16 @@ column units in metadata records, uncompressed chunks with CRCs
 ``\\x89MCAP0\\r\\n``; options: :mod:`pipeline.io.mcap.options`):
 
 * gyropipe's channel → the table exactly as written (bit-for-bit values, nulls, units,
-  schema metadata, markers), fast: columns are mapped from the file, not copied;
+  schema metadata, markers), fast: columns are views of the file's bytes read once;
 * otherwise the readable channels — per-sample JSON, ROS 2 ``sensor_msgs`` Imu and
   MagneticField, protobuf with its schema — decoded (:mod:`pipeline.io.mcap.keyed`,
   :mod:`pipeline.io.mcap.sources`), converted to canonical units and conventions and
   joined on the base channel's times.
 
 **Stream** (:func:`stream_samples`): the same table as record batches, one per message of
-gyropipe's channel — zero-copy views of the mapped file, so a streamed port never copies
-the samples onto the heap; the other channels are decoded whole first.
+gyropipe's channel — zero-copy views of the file's bytes (read once into memory, not
+mapped: a file cut short while it is read is an error, not a SIGBUS); the other channels
+are decoded whole first.
 
 Well metadata comes from the ``gyropipe.well`` metadata record. Every CRC the file carries
 is checked first (:mod:`pipeline.io.mcap.records`); every problem raises

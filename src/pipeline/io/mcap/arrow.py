@@ -19,9 +19,9 @@
   and the reader checks them (:mod:`pipeline.io.mcap.records`). Uncompressed for speed:
   zstd saves about a third on simulated mems-vrg samples (time, depth and frame angle are
   smooth; sensor noise is not) but decompresses at ~0.6 GB/s on a 2-core VM, slower than
-  the reader needs, and it rules out mapping the batches straight from the file (the
-  columns the reader returns are chunked per message, zero-copy views of the mapped file;
-  the writer replaces a file by a new one rather than truncating it in place).
+  the reader needs, and it rules out handing out the batches as views of the file's bytes
+  (the columns the reader returns are chunked per message, zero-copy views of the bytes
+  read; the writer replaces a file by a new one rather than truncating it in place).
 
 Any table with a finite, strictly increasing float64 ``time`` column (s) is written, extra
 columns included; other tables (Stations, trajectories) are refused with a ``ValueError``
@@ -43,6 +43,7 @@ from mcap.records import Channel
 from mcap.writer import CompressionType, Writer
 from pydantic import ValidationError
 
+from pipeline import jsontext
 from pipeline.contracts import UNIT_KEY
 from pipeline.io.mcap.records import (
     McapFile,
@@ -245,7 +246,7 @@ def read_batches(file: McapFile, channel: Channel) -> pa.Table:
     full = arrow_schema(file, channel)
     meta = dict(full.metadata or {})
     try:
-        markers = json.loads(meta.pop(MARKERS_KEY, b"[]"))
+        markers = jsontext.loads(meta.pop(MARKERS_KEY, b"[]"))
     except ValueError as exc:
         raise file.fail(f"{where}: unreadable Arrow schema: {exc}") from None
     if "time" not in full.names or full.field("time").type != pa.float64():
@@ -373,13 +374,13 @@ def _marker_events(file: McapFile, markers: list[str]) -> tuple[list[dict[str, A
     messages = messages_of(file, channels[0].id)
     payloads = list(iter_payloads(messages))
     try:  # one parse of all events; message by message only to name a bad one
-        events = json.loads(b"[" + b",".join(data for data, _, _ in payloads) + b"]")
+        events = jsontext.loads(b"[" + b",".join(data for data, _, _ in payloads) + b"]")
     except ValueError:
         events = None
     expected = {"row", "time", *markers}
     for index, (data, _, located) in enumerate(payloads):
         try:
-            event = events[index] if events is not None else json.loads(data)
+            event = events[index] if events is not None else jsontext.loads(data)
         except (ValueError, IndexError) as exc:
             raise file.fail(f"{located}: not one JSON event: {exc}") from None
         if not isinstance(event, dict) or event.keys() != expected:

@@ -22,7 +22,6 @@ elements), else a JSON schema's ``unit`` keyword on the property. Time: a key ma
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -33,6 +32,7 @@ import pyarrow.compute as pc
 import pyarrow.json as pajson
 from mcap.records import Channel, Schema
 
+from pipeline import jsontext
 from pipeline.errors import UnitError
 from pipeline.io.mcap.options import SAMPLE_COLUMNS, McapOptions
 from pipeline.io.mcap.records import (
@@ -74,7 +74,7 @@ def json_leaves(
     regular, else message by message (which names the first bad message)."""
     block, rows = messages[0]
     try:
-        first = json.loads(block.payload(int(rows[0])).tobytes())
+        first = jsontext.loads(block.payload(int(rows[0])).tobytes())
     except ValueError:
         first = None
     schema = _arrow_schema(first, options.ignore) if isinstance(first, dict) else None
@@ -176,7 +176,7 @@ def _bulk_leaves(
 def _json_rows(messages: Messages) -> Iterator[tuple[Any, int, str]]:
     for data, log_time, where in iter_payloads(messages):
         try:
-            yield json.loads(data), log_time, where
+            yield jsontext.loads(data), log_time, where
         except ValueError as exc:
             yield _Invalid(f"not valid JSON: {exc}"), log_time, where
 
@@ -373,15 +373,16 @@ def _declared_units(file: McapFile, channel: Channel, schema: Schema | None) -> 
     units: dict[str, str] = {}
     if schema is not None and schema.encoding == "jsonschema":
         try:
-            _schema_units(json.loads(schema.data), "", units)
-        except (ValueError, AttributeError, TypeError):
+            _schema_units(jsontext.loads(schema.data), "", units)
+        except (ValueError, AttributeError, TypeError) as exc:
+            why = f": {exc}" if isinstance(exc, jsontext.TooDeep) else ""
             raise file.fail(
-                f"topic {channel.topic!r}: schema {schema.name!r} is not a JSON schema"
+                f"topic {channel.topic!r}: schema {schema.name!r} is not a JSON schema{why}"
             ) from None
     raw = channel.metadata.get("units")
     if raw is not None:
         try:
-            declared = json.loads(raw)
+            declared = jsontext.loads(raw)
             if not isinstance(declared, dict) or not all(
                 isinstance(v, str) for v in declared.values()
             ):

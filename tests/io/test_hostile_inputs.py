@@ -1,0 +1,200 @@
+"""Hostile inputs (issue 32 items 6, 9, 10, 11, 16): a file cut short while it is in use, chunks
+that claim or hold more than they may, JSON metadata nested without end, XML of huge tokens:
+each read fast or a located error, never a signal, a MemoryError or a RecursionError. The
+files come from ``hostile_inputs`` (shared with the fuzz suite)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from hostile_inputs import (
+    csv_wide,
+    mcap_channel_metadata,
+    mcap_chunk,
+    nested_json,
+    parquet_long,
+    parquet_wide,
+    parquet_with_metadata,
+    witsml_attribute,
+    witsml_text,
+)
+from pipeline.errors import InputFileError
+from pipeline.io import parquet
+from pipeline.io.csv.header import MAX_COLUMNS as CSV_COLUMNS
+from pipeline.io.mcap import read_samples, write_samples
+from pipeline.io.mcap.options import McapOptions
+from pipeline.io.mcap.records import MIN_DECOMPRESSED
+from pipeline.io.parquet import MAX_COLUMNS, MIN_DECODED
+from pipeline.jsontext import MAX_DEPTH
+from pipeline.plugins import load_registry
+from pipeline.well import WellMetadata
+from tests_support import gyropipe_cli
+
+
+def refused_by_convert(path: Path, kind: str, suffix: str) -> str:
+    """The stderr of ``gyropipe convert PATH OUT --kind KIND``, which must exit 1."""
+    out = path.with_name("out" + suffix)
+    result = gyropipe_cli("convert", str(path), str(out), "--kind", kind)
+    assert result.returncode == 1, result.stderr
+    assert not out.exists()
+    return result.stderr
+
+
+JSON = McapOptions(columns={"time": "t"}, units={"time": "s"})
+TOO_DEEP = f"JSON nested deeper than {MAX_DEPTH} levels: refused"
+
+
+# ------------------------------------------------------------- item 6: cut short in use
+
+TRUNCATE_IN_USE = """
+import os, sys
+from pathlib import Path
+from pipeline.io.mcap import stream_samples
+from pipeline.io.mcap.options import McapOptions
+
+path = Path(sys.argv[1])
+stream, _ = stream_samples(path, "samples", McapOptions())
+os.truncate(path, 64)  # cut short while the stream's batches are still to be used
+total = sum(batch.num_rows for batch in stream)
+values = sum(float(b.column(1).to_numpy().sum()) for b in stream)
+print("rows", total, "sum", values)
+"""
+
+
+@pytest.mark.process("a file mapped and cut short kills its process with SIGBUS")
+def test_an_mcap_cut_short_while_it_is_read_is_no_signal(tmp_path: Path):
+    """Issue 32 item 6: the reader mapped the file and handed out zero-copy views of it;
+    truncating the file while ``run`` used them killed the process (exit 135, SIGBUS)."""
+    samples = pa.table({"time": np.arange(50_000.0), "gyro_x": np.ones(50_000)})
+    path = tmp_path / "s.mcap"
+    write_samples(samples, path, WellMetadata())
+    script = tmp_path / "read.py"
+    script.write_text(TRUNCATE_IN_USE)
+    done = subprocess.run(
+        [sys.executable, str(script), str(path)], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr)
+    assert done.stdout == "rows 50000 sum 50000.0\n"
+
+
+# --------------------------------------------------- item 9: decompressed sizes bounded
+
+
+def test_a_zstd_chunk_claiming_gigabytes_is_refused_before_it_is_decompressed(tmp_path: Path):
+    """Issue 32 item 9: a 197 kB MCAP whose zstd chunk claimed 6 GiB reached 6.4 GB RSS and
+    ran past 120 s of CPU. Its declared size is checked against the file's budget first."""
+    path = tmp_path / "bomb.mcap"
+    path.write_bytes(mcap_chunk(declared=6 << 30, actual=64 << 20))
+    start = time.process_time()
+    stderr = refused_by_convert(path, "samples", ".csv")
+    assert time.process_time() - start < 3.0
+    assert (
+        f"{path}: chunk at byte 32: declares 6,442,450,944 bytes of records; the compressed "
+        f"chunks would hold 6,442,450,944 bytes, more than {MIN_DECOMPRESSED:,} (100 times "
+        f"the file's {path.stat().st_size:,} bytes, at least {MIN_DECOMPRESSED:,}): refused"
+    ) in stderr
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4"])
+def test_a_chunk_holding_more_than_it_declares_is_cut_at_the_declared_size(
+    tmp_path: Path, compression: str
+):
+    """A chunk that declares 1,000 bytes and inflates to 8 MiB: decompressed into 1,001
+    bytes at most, then refused (the lz4 reader decompressed everything first)."""
+    path = tmp_path / "more.mcap"
+    path.write_bytes(mcap_chunk(declared=1000, actual=8 << 20, compression=compression))
+    with pytest.raises(InputFileError) as info:
+        read_samples(path, "samples", JSON)
+    assert str(info.value) == (
+        f"{path}: chunk at byte 32: decompressed to more than 1000 bytes, header says 1000"
+    )
+
+
+# ------------------------------------------------------ item 10: JSON metadata nesting
+
+
+@pytest.mark.parametrize("depth", [MAX_DEPTH + 1, 100_000])
+def test_deeply_nested_channel_metadata_is_located(tmp_path: Path, depth: int):
+    """Issue 32 item 10: channel metadata ``units`` nested 100,000 deep was a
+    RecursionError ("reader failed"); nested past the limit it is refused, by name."""
+    path = tmp_path / "deep.mcap"
+    path.write_bytes(mcap_channel_metadata("units", nested_json(depth)))
+    with pytest.raises(InputFileError) as info:
+        read_samples(path, "samples", JSON)
+    assert str(info.value) == (
+        f"{path}: topic '/imu': channel metadata 'units' must be a JSON object key → unit: "
+        f"{TOO_DEEP}"
+    )
+
+
+def test_a_parquet_file_of_too_many_columns_is_refused_from_its_footer(tmp_path: Path):
+    """Issue 32 item 9: a 35 MB Parquet file of 5,003 columns peaked at 3.6 GB RSS."""
+    path = tmp_path / "wide.parquet"
+    path.write_bytes(parquet_wide(MAX_COLUMNS - 2))
+    stderr = refused_by_convert(path, "stations", ".csv")
+    assert f"{path}: footer: 1,001 columns, more than 1,000: refused" in stderr
+
+
+@pytest.mark.parametrize("streamed", [False, True], ids=["read", "stream"])
+def test_a_tiny_run_length_encoded_parquet_file_is_refused_before_decoding(
+    tmp_path: Path, streamed: bool
+):
+    """Issue 32 item 9: RLE packs millions of equal values into a few bytes; a 1.2 MB file
+    of 10⁸ rows decoded to 7 GB RSS in 59 s. The footer's row count is checked first."""
+    path = tmp_path / "long.parquet"
+    path.write_bytes(parquet_long(3_000_000))
+    size = path.stat().st_size
+    with pytest.raises(InputFileError) as info:
+        (parquet.stream if streamed else parquet.read)(path, "stations", None)
+    assert str(info.value) == (
+        f"{path}: footer: 3,000,000 rows × 3 columns would decode to about 72,000,000 bytes, more "
+        f"than {MIN_DECODED:,} (100 times the file's {size:,} bytes, at least "
+        f"{MIN_DECODED:,}): refused"
+    )
+
+
+def test_deeply_nested_parquet_well_metadata_is_located(tmp_path: Path):
+    """Issue 32 item 10: the ``gyropipe.well`` schema metadata nested 100,000 deep was a
+    RecursionError ("reader failed")."""
+    path = tmp_path / "deep.parquet"
+    path.write_bytes(parquet_with_metadata(b"gyropipe.well", nested_json(100_000).encode()))
+    stderr = refused_by_convert(path, "stations", ".csv")
+    assert f"{path}: well metadata ('gyropipe.well' in the schema metadata): {TOO_DEEP}" in stderr
+
+
+# ------------------------------------------------------- item 11: WITSML in linear time
+
+
+@pytest.mark.parametrize(
+    "make",
+    [lambda: witsml_text(20_000_000), lambda: witsml_attribute(4_000_000)],
+    ids=["text-20MB", "attribute-4MB"],
+)
+def test_witsml_with_huge_text_or_attributes_parses_in_linear_time(tmp_path: Path, make):
+    """Issue 32 item 11: a 20 MB well name took 5.5 s of CPU (text appended per expat chunk),
+    an 8 MB attribute over 120 s (expat re-parsing it on every ParseFile chunk); now 0.2 s."""
+    path = tmp_path / "huge.xml"
+    path.write_bytes(make())
+    start = time.process_time()
+    table, well = load_registry().read(path, "stations")
+    assert time.process_time() - start < 2.0
+    assert table.column("md").to_pylist() == [0.0, 100.0]
+    assert well.well is not None and len(well.well) in (1, 20_000_000)
+
+
+# ---------------------------------------------------------- item 16: huge valid inputs
+
+
+def test_a_csv_header_of_too_many_columns_is_refused_at_its_line(tmp_path: Path):
+    """Issue 32 item 16: a 12 MB CSV of 10⁶ columns converted in 26 s of CPU and 973 MB."""
+    path = tmp_path / "wide.csv"
+    path.write_bytes(csv_wide(CSV_COLUMNS - 2))
+    stderr = refused_by_convert(path, "stations", ".parquet")
+    assert f"{path}:1: 1,001 columns separated by ',', more than 1,000: refused" in stderr
