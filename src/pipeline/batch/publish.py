@@ -49,18 +49,25 @@ def write_marker(staging: Path, record: dict[str, Any]) -> None:
 
 
 def read_published(well_dir: Path) -> PublishedRun | None:
-    """The published run in ``well_dir``, if it is complete: marker and manifest present
-    and every output listed in the manifest on disk with its recorded size."""
+    """The published run in ``well_dir``, if it is complete: marker and manifest present and
+    well formed (``batch.json`` names an integer ``run_id``; ``run.json`` lists its outputs
+    with their file names and sizes) and every output listed on disk with its recorded
+    size. A marker or manifest that is missing, damaged or edited counts as not published."""
     try:
         marker = json.loads((well_dir / MARKER).read_text())
         manifest = json.loads((well_dir / MANIFEST).read_text())
-    except (OSError, ValueError):
-        return None
-    for entry in manifest.get("outputs", []):
-        path = well_dir / entry["file"]
-        if not path.is_file() or path.stat().st_size != entry["bytes"]:
+        run_id = marker["run_id"]
+        outputs = manifest["outputs"]
+        if not isinstance(run_id, int) or not isinstance(outputs, list):
             return None
-    return PublishedRun(int(marker["run_id"]), manifest)
+        for entry in outputs:
+            name, size = entry["file"], entry["bytes"]
+            path = well_dir / name
+            if path.parent != well_dir or not path.is_file() or path.stat().st_size != size:
+                return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return PublishedRun(run_id, manifest)
 
 
 def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
