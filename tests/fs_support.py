@@ -54,8 +54,7 @@ def full(where: Path) -> Iterator[Path]:
     with tmpfs(where, "size=64k") as mounted:
         if not mounted:
             pytest.skip("no tmpfs can be mounted here (needs CAP_SYS_ADMIN)")
-        with open(where / "filler", "wb") as fh, contextlib.suppress(OSError):
+        with contextlib.suppress(OSError), open(where / "filler", "wb", buffering=0) as fh:
             while True:
                 fh.write(b"\0" * 4096)
-                fh.flush()
         yield where
