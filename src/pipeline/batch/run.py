@@ -163,6 +163,7 @@ class _Batch:
         self.inflight.clear()
         results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
         self.ledger.end_batch(self.batch.id, status, counts(results))
+        clean_work_dir(self.out, self.ledger.running_ids())  # a killed batch's late orphans
         files = write_summary(self.out, self.batch, results)
         self.reporter.end(self.batch.id, time.perf_counter() - t0)
         return results, files
