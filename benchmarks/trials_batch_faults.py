@@ -26,7 +26,6 @@ import argparse
 import contextlib
 import hashlib
 import json
-import os
 import random
 import resource
 import signal
@@ -41,7 +40,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "batch")]
 
-from batch_support import make_wells, survey_pipeline  # noqa: E402
+from batch_support import children, gone, make_wells, survey_pipeline  # noqa: E402
 
 from pipeline.batch.records import batch_row, run_row  # noqa: E402
 from tests_support import gyropipe  # noqa: E402
@@ -70,24 +69,6 @@ def batch_args(pipeline: Path, inputs: Path, out: Path) -> list[str]:
         *gyropipe(), "batch", str(pipeline), "--inputs", str(inputs / "*.csv"), "--out",
         str(out), "--workers", "2", "--quiet",
     ]  # fmt: skip
-
-
-def children(pid: int) -> set[int]:
-    found: set[int] = set()
-    with contextlib.suppress(OSError):
-        for task in Path(f"/proc/{pid}/task").iterdir():
-            found |= {int(p) for p in (task / "children").read_text().split()}
-    return found
-
-
-def gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    with contextlib.suppress(OSError):
-        return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
-    return True
 
 
 def wait_gone(pids: set[int]) -> None:

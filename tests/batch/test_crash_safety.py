@@ -19,6 +19,8 @@ from batch_support import (
     STATIONS,
     assert_complete,
     batches,
+    children,
+    gone,
     log_events,
     make_wells,
     no_staging_left,
@@ -68,14 +70,6 @@ def runs_by_well(ledger: Path) -> dict[str, dict[str, object]]:
     return {r["well"]: r for r in runs(ledger) if r["status"] == "done"}
 
 
-def children(pid: int) -> set[int]:
-    """The processes ``pid`` started (its pool workers), as Linux lists them."""
-    found: set[int] = set()
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        found |= {int(p) for p in (task / "children").read_text().split()}
-    return found
-
-
 def published_unrecorded(out: Path) -> dict[str, int]:
     """Wells whose claimed ('running') run had published its outputs when the batch died."""
     found = {}
@@ -85,15 +79,6 @@ def published_unrecorded(out: Path) -> dict[str, int]:
         if row["status"] == "running" and published:
             found[row["well"]] = int(row["id"])
     return found
-
-
-def gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    # a zombie still answers kill(0); it is not running
-    return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
 
 
 @pytest.mark.process("the batch is SIGKILLed mid-run")

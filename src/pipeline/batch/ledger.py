@@ -99,6 +99,7 @@ CREATE INDEX IF NOT EXISTS batches_by_key ON batches (key, id);
 
 P = ParamSpec("P")
 R = TypeVar("R")
+T = TypeVar("T")
 ADVICE = {
     "SQLITE_FULL": "its file system is full: free space there (or give --ledger on another "
     "file system), then run the same command again: it resumes",
@@ -256,21 +257,20 @@ class Ledger:
 
     def _runs(self, rows: Iterable[sqlite3.Row]) -> list[RunRow]:
         """The rows that parse (the others told in :attr:`problems`)."""
-        parsed = []
-        for row in rows:
-            try:
-                parsed.append(run_row(dict(zip(row.keys(), row, strict=True))))
-            except BadRow as bad:
-                self._note("run", row, bad)
-        return parsed
+        return self._parsed("run", rows, run_row)
 
     def _batches(self, rows: Iterable[sqlite3.Row]) -> list[BatchRow]:
+        return self._parsed("batch", rows, batch_row)
+
+    def _parsed(
+        self, kind: str, rows: Iterable[sqlite3.Row], parse: Callable[[dict[str, Any]], T]
+    ) -> list[T]:
         parsed = []
         for row in rows:
             try:
-                parsed.append(batch_row(dict(zip(row.keys(), row, strict=True))))
+                parsed.append(parse(dict(zip(row.keys(), row, strict=True))))
             except BadRow as bad:
-                self._note("batch", row, bad)
+                self._note(kind, row, bad)
         return parsed
 
     # batches -----------------------------------------------------------------------------
