@@ -1,7 +1,8 @@
 """Fault trials of ``gyropipe batch`` with real processes (issue 32, "done when"):
 
-1. SIGKILL at a random moment (1–12 s after the start: while it starts, hashes, claims,
-   runs, publishes or records), then the same command again to completion;
+1. SIGKILL at a random moment (0–1.5 s after a random number of wells, 0–7, is done:
+   while it starts, hashes, claims, runs, publishes or records), then the same command
+   again to completion;
 2. disk full: the output tree, ledger included, on a tmpfs of a random small size (64 KiB
    – 1 MiB), so the batch meets ENOSPC / SQLITE_FULL wherever it happens to be; then the
    file system grown (``mount -o remount,size=64m``: space freed) and the same command
@@ -153,6 +154,15 @@ def complete_problems(out: Path, done_before: dict[str, int]) -> list[str]:
     return problems
 
 
+def done_count(out: Path) -> int:
+    """Runs done so far, read while the batch writes (0 while the ledger cannot be read)."""
+    try:
+        with sqlite3.connect(f"file:{out / 'ledger.sqlite'}?mode=ro", uri=True) as db:
+            return int(db.execute("SELECT count(*) FROM runs WHERE status = 'done'").fetchone()[0])
+    except sqlite3.Error:
+        return 0
+
+
 def done_runs(out: Path) -> dict[str, int]:
     """Wells whose run is done, or published though still claimed (killed in between)."""
     rows, _ = ledger_rows(out)
@@ -166,38 +176,45 @@ def done_runs(out: Path) -> dict[str, int]:
     return found
 
 
-def finish(args: list[str], out: Path, done_before: dict[str, int], **kw: object) -> list[str]:
-    final = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT_S, **kw)
+def finish(args: list[str], out: Path, done_before: dict[str, int]) -> list[str]:
+    final = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT_S)
     problems = output_problems(final.stderr)
     if final.returncode != 0:
         problems.append(f"exit {final.returncode}: {final.stderr.strip()[-300:]}")
     return problems + complete_problems(out, done_before) + tree_problems(out)
 
 
-def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> list[str]:
+def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> list[str] | None:
     user_files(out)
     user_before = tree_hashes(out)
     args = batch_args(pipeline, inputs, out)
     proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    delay = rng.uniform(1.0, 12.0)
-    deadline = time.monotonic() + delay
+    target = rng.randrange(len(WELLS))  # wells done (or published) when the kill comes
+    delay = rng.uniform(0.0, 1.5)
     workers: set[int] = set()
-    while time.monotonic() < deadline and proc.poll() is None:
+    deadline = time.monotonic() + TIMEOUT_S
+    while done_count(out) < target and proc.poll() is None and time.monotonic() < deadline:
+        workers |= children(proc.pid)
+        time.sleep(0.02)
+    end = time.monotonic() + delay
+    while time.monotonic() < end and proc.poll() is None:
         workers |= children(proc.pid)
         time.sleep(0.01)
     workers |= children(proc.pid)
     proc.send_signal(signal.SIGKILL)
     stderr = proc.communicate(timeout=TIMEOUT_S)[1]
     wait_gone(workers)
-    problems = output_problems(stderr) if proc.returncode != -signal.SIGKILL else []
+    killed = proc.returncode == -signal.SIGKILL
+    problems = [] if killed else output_problems(stderr)
     problems += ledger_rows(out)[1] + tree_problems(out)
-    done_before = done_runs(out)
+    done_before = done_runs(out) if killed else {}  # it had finished: all run again
     problems += finish(args, out, done_before)
     after = tree_hashes(out)
     problems += [f"user file changed: {n}" for n, h in user_before.items() if after.get(n) != h]
-    print(f"  kill after {delay:.2f} s: {len(done_before)} wells done before; "
-          f"{problems or 'OK'}")  # fmt: skip
-    return problems
+    when = f"kill {delay:.2f} s after {target} wells done"
+    print(f"  {when}: {len(done_before)} done before; {problems or 'OK'}"
+          if killed else f"  {when}: the batch had finished first (not counted)")  # fmt: skip
+    return problems if killed else None
 
 
 @contextlib.contextmanager
@@ -220,15 +237,17 @@ def full_trial(
     with tmpfs(out, size) if use_tmpfs else contextlib.nullcontext(False) as mounted:
         user_files(out)
         user_before = tree_hashes(out)
-        if mounted:
-            limit: dict[str, object] = {}
-        else:  # RLIMIT_FSIZE: no file of the batch may grow past ``size``
 
-            def limited() -> None:
-                resource.setrlimit(resource.RLIMIT_FSIZE, (size // 16, size // 16))
+        def limited() -> None:  # without a tmpfs: no file of the batch grows past size/16
+            resource.setrlimit(resource.RLIMIT_FSIZE, (size // 16, size // 16))
 
-            limit = {"preexec_fn": limited}
-        failed = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT_S, **limit)  # type: ignore[call-overload]
+        failed = subprocess.run(
+            args,
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT_S,
+            preexec_fn=None if mounted else limited,
+        )
         problems = output_problems(failed.stderr) + ledger_rows(out)[1] + tree_problems(out)
         errors = [x for x in failed.stderr.splitlines() if x.startswith("error:")]
         failing = [json.loads(x) for x in failed.stderr.splitlines() if x.startswith("{")]
@@ -262,8 +281,13 @@ def main() -> None:
         inputs_before = tree_hashes(inputs)
         bad: dict[str, int] = {"kill": 0, "full": 0}
         print(f"SIGKILL trials ({options.kills}), {len(WELLS)} wells, 2 workers:")
-        for i in range(options.kills):
-            bad["kill"] += bool(kill_trial(rng, pipeline, inputs, root / f"kill{i}"))
+        kills = 0
+        for i in range(3 * options.kills):  # until that many kills landed mid-batch
+            found = kill_trial(rng, pipeline, inputs, root / f"kill{i}")
+            kills += found is not None
+            bad["kill"] += bool(found)
+            if kills == options.kills:
+                break
         with tmpfs(root / "probe", 65536) as can_mount:
             pass
         how = "a tmpfs of its own" if can_mount else "RLIMIT_FSIZE (no tmpfs can be mounted)"
@@ -275,7 +299,7 @@ def main() -> None:
             print("the input files changed!")
             bad["kill"] += 1
         print(
-            f"SIGKILL: {options.kills - bad['kill']}/{options.kills} consistent; "
+            f"SIGKILL: {kills - bad['kill']}/{kills} consistent; "
             f"disk full: {options.fulls - bad['full']}/{options.fulls} consistent"
         )
         sys.exit(1 if any(bad.values()) else 0)
