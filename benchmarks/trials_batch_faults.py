@@ -90,6 +90,9 @@ def ledger_rows(out: Path) -> tuple[list[dict[str, object]], list[str]]:
         db.row_factory = sqlite3.Row
         if db.execute("PRAGMA integrity_check").fetchone()[0] != "ok":
             problems.append("integrity_check failed")
+        tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if not tables:  # killed before its schema was committed: an empty database
+            return [], problems
         rows = [dict(r) for r in db.execute("SELECT * FROM runs ORDER BY id")]
         for row in db.execute("SELECT * FROM batches"):
             try:
@@ -154,6 +157,16 @@ def complete_problems(out: Path, done_before: dict[str, int]) -> list[str]:
     return problems
 
 
+def finished(out: Path) -> bool:
+    """Whether the ledger says the batch finished (killed later, while it wrote its summary
+    or exited): the same command then runs every well again, by design, and is no resume."""
+    uri = f"file:{out / 'ledger.sqlite'}?mode=ro"
+    with contextlib.suppress(sqlite3.Error), sqlite3.connect(uri, uri=True) as db:
+        row = db.execute("SELECT status FROM batches ORDER BY id DESC LIMIT 1").fetchone()
+        return row is not None and row[0] == "finished"
+    return False
+
+
 def done_count(out: Path) -> int:
     """Runs done so far, read while the batch writes (0 while the ledger cannot be read)."""
     try:
@@ -207,7 +220,7 @@ def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> l
     killed = proc.returncode == -signal.SIGKILL
     problems = [] if killed else output_problems(stderr)
     problems += ledger_rows(out)[1] + tree_problems(out)
-    done_before = done_runs(out) if killed else {}  # it had finished: all run again
+    done_before = done_runs(out) if killed and not finished(out) else {}
     problems += finish(args, out, done_before)
     after = tree_hashes(out)
     problems += [f"user file changed: {n}" for n, h in user_before.items() if after.get(n) != h]
@@ -252,7 +265,7 @@ def full_trial(
         errors = [x for x in failed.stderr.splitlines() if x.startswith("error:")]
         failing = [json.loads(x) for x in failed.stderr.splitlines() if x.startswith("{")]
         wells_failed = [e for e in failing if e.get("event") == "well" and e["status"] == "failed"]
-        done_before = done_runs(out) if failed.returncode else {}  # finished: all run again
+        done_before = {} if finished(out) else done_runs(out)
         if mounted:
             subprocess.run(["mount", "-o", "remount,size=64m", str(out)], check=True)
         problems += finish(args, out, done_before)
