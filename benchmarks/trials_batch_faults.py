@@ -1,10 +1,10 @@
 """Fault trials of ``gyropipe batch`` with real processes (issue 32, "done when"):
 
-1. SIGKILL at a random moment (0–1.5 s after a random number of wells, 0–7, is done:
+1. SIGKILL at a random moment (0–0.4 s after a random number of wells, 0–7, is done:
    while it starts, hashes, claims, runs, publishes or records), then the same command
    again to completion;
 2. disk full: the output tree, ledger included, on a tmpfs of a random small size (64 KiB
-   – 1 MiB), so the batch meets ENOSPC / SQLITE_FULL wherever it happens to be; then the
+   – 640 KiB), so the batch meets ENOSPC / SQLITE_FULL wherever it happens to be; then the
    file system grown (``mount -o remount,size=64m``: space freed) and the same command
    again to completion. Where no tmpfs can be mounted (not root, no CAP_SYS_ADMIN), the
    batch runs under ``RLIMIT_FSIZE`` instead (``ulimit -f``: a write past the limit fails
@@ -203,7 +203,7 @@ def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> l
     args = batch_args(pipeline, inputs, out)
     proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     target = rng.randrange(len(WELLS))  # wells done (or published) when the kill comes
-    delay = rng.uniform(0.0, 1.5)
+    delay = rng.uniform(0.0, 0.4)
     workers: set[int] = set()
     deadline = time.monotonic() + TIMEOUT_S
     while done_count(out) < target and proc.poll() is None and time.monotonic() < deadline:
@@ -225,6 +225,8 @@ def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> l
     after = tree_hashes(out)
     problems += [f"user file changed: {n}" for n, h in user_before.items() if after.get(n) != h]
     when = f"kill {delay:.2f} s after {target} wells done"
+    if killed and finished(out):
+        when += " (the ledger had recorded the batch's end: no resume)"
     print(f"  {when}: {len(done_before)} done before; {problems or 'OK'}"
           if killed else f"  {when}: the batch had finished first (not counted)")  # fmt: skip
     return problems if killed else None
@@ -245,7 +247,7 @@ def tmpfs(where: Path, size: int) -> Iterator[bool]:
 def full_trial(
     rng: random.Random, pipeline: Path, inputs: Path, out: Path, use_tmpfs: bool
 ) -> list[str]:
-    size = rng.randint(64, 1024) * 1024
+    size = rng.randint(64, 640) * 1024
     args = batch_args(pipeline, inputs, out)
     with tmpfs(out, size) if use_tmpfs else contextlib.nullcontext(False) as mounted:
         user_files(out)
