@@ -220,12 +220,13 @@ def kill_trial(rng: random.Random, pipeline: Path, inputs: Path, out: Path) -> l
     killed = proc.returncode == -signal.SIGKILL
     problems = [] if killed else output_problems(stderr)
     problems += ledger_rows(out)[1] + tree_problems(out)
-    done_before = done_runs(out) if killed and not finished(out) else {}
+    ended = killed and finished(out)
+    done_before = done_runs(out) if killed and not ended else {}
     problems += finish(args, out, done_before)
     after = tree_hashes(out)
     problems += [f"user file changed: {n}" for n, h in user_before.items() if after.get(n) != h]
     when = f"kill {delay:.2f} s after {target} wells done"
-    if killed and finished(out):
+    if ended:
         when += " (the ledger had recorded the batch's end: no resume)"
     print(f"  {when}: {len(done_before)} done before; {problems or 'OK'}"
           if killed else f"  {when}: the batch had finished first (not counted)")  # fmt: skip
