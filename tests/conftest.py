@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pandas  # noqa: F401 -- before any CLI command: see below
@@ -70,3 +70,21 @@ def write_yaml(tmp_path: Path) -> Callable[[str], Path]:
         return path
 
     return write
+
+
+@pytest.fixture
+def read_only_dir(tmp_path: Path) -> Iterator[Path]:
+    """A read-only directory (:func:`fs_support.read_only`; skips where none can be made)."""
+    from fs_support import read_only
+
+    with read_only(tmp_path / "read-only") as where:
+        yield where
+
+
+@pytest.fixture
+def full_dir(tmp_path: Path) -> Iterator[Path]:
+    """A directory on a full file system (:func:`fs_support.full`; skips where it cannot)."""
+    from fs_support import full
+
+    with full(tmp_path / "full") as where:
+        yield where

@@ -1,7 +1,9 @@
 """Atomic file output: write to a temporary name in the same directory, fsync, rename.
 
 A reader of the final name sees either nothing or the complete file, never a truncated one,
-even if the process is killed mid-write.
+even if the process is killed mid-write. A failing file operation (disk full, read-only,
+permission) is raised as :class:`~pipeline.errors.FileSystemError` naming the final file
+or directory and what was being done.
 """
 
 from __future__ import annotations
@@ -16,22 +18,29 @@ import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
+from pipeline.errors import file_errors
+
 TEMP_PREFIX = ".gyropipe-tmp-"
 TRASH_SUFFIX = ".trash"
 
 
 @contextlib.contextmanager
 def atomic_path(final: Path) -> Iterator[Path]:
-    """Yield a temporary path next to ``final``; on success it replaces ``final``."""
-    final.parent.mkdir(parents=True, exist_ok=True)
+    """Yield a temporary path next to ``final``; on success it replaces ``final``. An
+    ``OSError`` while it is written (inside the block) or published is a
+    :class:`~pipeline.errors.FileSystemError` "cannot write ``final``"."""
+    with file_errors("create directory", final.parent):
+        final.parent.mkdir(parents=True, exist_ok=True)
     tmp = final.parent / f"{TEMP_PREFIX}{uuid.uuid4().hex}{final.suffix}"
     try:
-        yield tmp
-        fsync_file(tmp)
-        os.replace(tmp, final)
-        fsync_dir(final.parent)
+        with file_errors("write", final):
+            yield tmp
+            fsync_file(tmp)
+            os.replace(tmp, final)
+            fsync_dir(final.parent)
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # e.g. read-only: there is nothing to remove
+            tmp.unlink(missing_ok=True)
 
 
 def atomic_write_bytes(final: Path, data: bytes) -> None:
@@ -60,7 +69,13 @@ def replace_dir(staging: Path, final: Path) -> None:
     neither and never a mixture; elsewhere the old one is first renamed away, so for a moment
     neither exists. Several publishers of one ``final`` leave the last one's directory. The
     old directory goes to ``<staging>.trash`` before it is deleted, so whoever cleans up
-    dead staging directories finds it too."""
+    dead staging directories finds it too. Raises
+    :class:`~pipeline.errors.FileSystemError` "cannot publish ``final``"."""
+    with file_errors("publish", final):
+        _replace_dir(staging, final)
+
+
+def _replace_dir(staging: Path, final: Path) -> None:
     fsync_dir(staging)
     trash = staging.with_name(staging.name + TRASH_SUFFIX)  # cleaned up like its staging
     while True:

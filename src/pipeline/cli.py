@@ -26,7 +26,7 @@ import click
 
 from pipeline.cli_args import disable_option, input_files, reader_options, well_overrides
 from pipeline.cli_models import models
-from pipeline.errors import GyropipeError, ReaderOptionsError, SpecError
+from pipeline.errors import FileSystemError, GyropipeError, ReaderOptionsError, SpecError
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
@@ -69,7 +69,19 @@ def _plan(pipeline_file: str, overrides: tuple[str, ...], registry: Registry) ->
         sys.exit(EXIT_CONFIG)
 
 
-@click.group()
+class _Commands(click.Group):
+    """The command group: a file-system failure that no command reported itself (disk full,
+    read-only, permission, a file gone) is one located line and exit 1, never a traceback."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except OSError as exc:
+            click.echo(f"error: {FileSystemError.of(exc, 'access')}", err=True)
+            sys.exit(EXIT_FAILED)
+
+
+@click.group(cls=_Commands)
 @click.version_option(__version__, prog_name="gyropipe")
 def main() -> None:
     """gyropipe: gyro-survey processing pipelines."""
@@ -240,6 +252,7 @@ def batch(
 
     defer_pandas()
     from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
+    from pipeline.batch.ledger import LedgerError
     from pipeline.batch.policy import Mode
     from pipeline.batch.progress import reporter
     from pipeline.batch.run import BatchOptions, run_batch
@@ -281,8 +294,11 @@ def batch(
     previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         report = run_batch(plan, registry, jobs, options, reporter(quiet))
-    except (BatchConfigError, ImportError, OSError) as exc:
+    except (BatchConfigError, ImportError) as exc:
         config_error(str(exc))
+    except (LedgerError, FileSystemError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
     except KeyboardInterrupt:
         click.echo("interrupted: run the same command again to resume", err=True)
         sys.exit(EXIT_FAILED)
@@ -307,7 +323,7 @@ def _registry_quiet(disabled: tuple[str, ...]) -> Registry:
 
 def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:
     from pipeline.batch.jobs import LEDGER, BatchConfigError
-    from pipeline.batch.ledger import Ledger
+    from pipeline.batch.ledger import Ledger, LedgerError
 
     path = Path(ledger_file) if ledger_file else Path(out_dir) / LEDGER
     if not path.is_file():
@@ -315,9 +331,26 @@ def _open_ledger(out_dir: str, ledger_file: str | None) -> Ledger:
         sys.exit(EXIT_CONFIG)
     try:
         return Ledger(path)
-    except BatchConfigError as exc:
+    except (BatchConfigError, LedgerError) as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
+
+
+@contextlib.contextmanager
+def _reading(ledger: Ledger) -> Iterator[None]:
+    """Read ``ledger``: the rows that do not parse told as warnings, a failing ledger one
+    line and exit 1; closed after."""
+    from pipeline.batch.ledger import LedgerError
+
+    try:
+        yield
+    except LedgerError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(EXIT_FAILED)
+    finally:
+        for problem in ledger.problems:
+            click.echo(f"warning: {problem}", err=True)
+        ledger.close()
 
 
 ledger_option = click.option(
@@ -339,13 +372,9 @@ def status(out_dir: str, ledger_file: str | None, as_json: bool) -> None:
     from pipeline.batch.views import status_document, status_text
 
     ledger = _open_ledger(out_dir, ledger_file)
-    try:
-        if as_json:
-            click.echo(json.dumps(status_document(ledger), indent=2))
-        else:
-            click.echo(status_text(ledger))
-    finally:
-        ledger.close()
+    with _reading(ledger):
+        text = json.dumps(status_document(ledger), indent=2) if as_json else status_text(ledger)
+    click.echo(text)
 
 
 @main.command()
@@ -365,10 +394,8 @@ def history(well_id: str, out_dir: str, ledger_file: str | None, as_json: bool) 
     from pipeline.batch.views import history_document, history_text
 
     ledger = _open_ledger(out_dir, ledger_file)
-    try:
+    with _reading(ledger):
         runs = ledger.history(well_id)
-    finally:
-        ledger.close()
     if not runs:
         click.echo(f"error: no runs of well {well_id!r} in {ledger.path}", err=True)
         sys.exit(EXIT_CONFIG)
@@ -439,7 +466,7 @@ def simulate(plan_file: str, out_dir: str, seed: int | None, writer_name: str) -
 
     defer_pandas()
     from pipeline.atomic import atomic_path, atomic_write_bytes
-    from pipeline.runner import sha256_file
+    from pipeline.hashing import sha256_file
     from pipeline.sim.spec import load_simulation
     from pipeline.stages.simulation import simulation_tables, well_of_simulation
 

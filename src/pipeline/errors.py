@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import difflib
+import os
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -106,6 +109,44 @@ class EmptyTableError(GyropipeError, ValueError):
         super().__init__(
             f"the {table} table has no rows (the stage that produced it gave none): {needs}"
         )
+
+
+class FileSystemError(GyropipeError, OSError):
+    """A file operation failed (disk full, read-only, permission denied, a file gone): names
+    the operation and the file, "cannot write OUT/x.parquet: No space left on device
+    (errno 28)". An ``OSError`` too, with the cause's ``errno``, ``strerror`` and
+    ``filename``, so a handler of ``OSError`` still catches it."""
+
+    def __init__(self, operation: str, path: str | Path, code: int | None, reason: str) -> None:
+        super().__init__(code, reason, str(path))
+        self.operation = operation
+
+    @classmethod
+    def of(cls, exc: OSError, operation: str, path: str | Path | None = None) -> FileSystemError:
+        """``exc`` as a located error; ``path`` if given, else the file ``exc`` names."""
+        if isinstance(exc, FileSystemError):
+            return exc
+        where = path if path is not None else (exc.filename or "?")
+        reason = exc.strerror or str(exc)
+        if exc.errno and f"[errno {exc.errno}]" in reason.lower():  # Arrow's: names a temp file
+            reason = os.strerror(exc.errno)
+        return cls(operation, where, exc.errno, reason)
+
+    def __str__(self) -> str:
+        code = f" (errno {self.errno})" if self.errno else ""
+        return f"cannot {self.operation} {self.filename}: {self.strerror}{code}"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (type(self), (self.operation, self.filename, self.errno, self.strerror))
+
+
+@contextlib.contextmanager
+def file_errors(operation: str, path: str | Path | None = None) -> Iterator[None]:
+    """Raise an ``OSError`` inside as a :class:`FileSystemError` (``operation``, ``path``)."""
+    try:
+        yield
+    except OSError as exc:
+        raise FileSystemError.of(exc, operation, path) from exc
 
 
 class UnitError(GyropipeError):
@@ -235,10 +276,8 @@ class StageError(GyropipeError):
         self.stage_id = stage_id
         self.uses = uses
         self.plugin = plugin
-        super().__init__(
-            f"stage {stage_id!r} ({uses} from plugin {plugin}) failed: "
-            f"{type(cause).__name__}: {cause}"
-        )
+        why = cause if isinstance(cause, FileSystemError) else f"{type(cause).__name__}: {cause}"
+        super().__init__(f"stage {stage_id!r} ({uses} from plugin {plugin}) failed: {why}")
 
 
 class ParameterError(GyropipeError):

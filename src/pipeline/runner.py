@@ -11,13 +11,11 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import datetime as dt
-import errno
 import hashlib
 import json
 import math
 import os
 import shutil
-import stat
 import tempfile
 import time
 import uuid
@@ -31,8 +29,15 @@ import pyarrow as pa
 
 from pipeline.atomic import atomic_write_bytes, fsync_file, replace_dir
 from pipeline.contracts import SOURCE_KEY
-from pipeline.errors import ContractViolation, GyropipeError, StageError
+from pipeline.errors import (
+    ContractViolation,
+    FileSystemError,
+    GyropipeError,
+    StageError,
+    file_errors,
+)
 from pipeline.graph import Plan, PlannedStage
+from pipeline.hashing import sha256_file
 from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
 from pipeline.registry import (
     CheckDef,
@@ -104,9 +109,17 @@ class _Context:
     provenance: Provenance
     found: list[WellMetadata] = field(default_factory=list)
     """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
+    out_dir: Path | None = None
+    """where the staged files will be published"""
 
     def update_well(self, found: WellMetadata) -> None:
         self.found.append(found)
+
+    def published(self, path: Path) -> Path:
+        """Where a file of the staging directory will be once published (others: itself)."""
+        if self.out_dir is not None and path.parent == self.staging:
+            return self.out_dir / path.name
+        return path
 
     def input_path(self, name: str) -> Path:
         given = self.inputs[name]
@@ -230,7 +243,9 @@ def run_plan(
                 record.status = "skipped"  # it only writes files
                 continue
             ins = _stage_inputs(plan, st, ports, record)
-            ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
+            ctx = _Context(
+                st.id, current, registry, files, staging, staged, provenance, out_dir=out_dir
+            )
             t0 = time.perf_counter()
             outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
@@ -251,7 +266,7 @@ def run_plan(
             settled(lambda: [result[key] for key in result])  # the API returns tables
             manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
             return RunResult(None, manifest, result, current, [])
-        persisted = settled(lambda: _persist(plan, registry, ports, current, staging))
+        persisted = settled(lambda: _persist(plan, registry, ports, current, staging, out_dir))
         settled(lambda: _drain(plan, ports, records))
         written = staged + persisted
         clashes = {p.name for p in written if written.count(p) > 1} | (
@@ -260,7 +275,8 @@ def run_plan(
         if clashes:
             raise RunInputError(f"several outputs would be written as {sorted(clashes)}")
         for path in written:
-            fsync_file(path)
+            with file_errors("write", out_dir / path.name):
+                fsync_file(path)
         final = [out_dir / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = _manifest(
@@ -362,10 +378,11 @@ def _staging(out_dir: Path | None) -> Iterator[Path]:
         with tempfile.TemporaryDirectory(prefix=STAGING_PREFIX) as tmp:
             yield Path(tmp)
         return
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_staging(out_dir.parent)
     staging = out_dir.parent / f"{_staging_prefix(out_dir)}{os.getpid()}-{uuid.uuid4().hex[:8]}"
-    staging.mkdir()
+    with file_errors("create the output directory", out_dir):
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_staging(out_dir.parent)
+        staging.mkdir()
     try:
         yield staging
     finally:
@@ -438,10 +455,17 @@ def _call(
     st: PlannedStage, ins: dict[str, Port], ctx: _Context, registry: Registry
 ) -> dict[str, Port]:
     plugin = registry.plugin_label(st.plugin)
+    before = len(ctx.staged)
     try:
         outs = st.definition.func(ins, st.params, ctx)
     except UpstreamError:
         raise
+    except OSError as exc:  # the file named, else the stage's latest output (as published)
+        written = ctx.staged[before:]
+        named = Path(exc.filename) if exc.filename else written[-1] if written else None
+        where = ctx.published(named) if named is not None else f"the outputs of {st.id}"
+        failure = FileSystemError.of(exc, "write" if exc.filename is None else "access", where)
+        raise StageError(st.id, st.uses, plugin, failure) from exc
     except Exception as exc:  # any failure inside a stage is reported as that stage's
         raise StageError(st.id, st.uses, plugin, exc) from exc
     streamed = st.definition.streamed_outputs
@@ -514,13 +538,15 @@ def _persist(
     ports: Mapping[tuple[str, str], Port],
     well: WellMetadata,
     staging: Path,
+    out_dir: Path,
 ) -> list[Path]:
     writer = _lookup(registry.writers, plan.spec.defaults.persist_format, "writer")
     paths = []
     for st in plan.stages:
         for port in st.persist:
             path = staging / f"{st.id}.{port}.{writer.extension}"
-            write_port(writer, ports[(st.id, port)], path, well)
+            with file_errors("write", out_dir / path.name):
+                write_port(writer, ports[(st.id, port)], path, well)
             paths.append(path)
     return paths
 
@@ -617,7 +643,8 @@ def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[s
 
 
 def _file_entry(path: Path) -> dict[str, Any]:
-    return {"path": str(path), "sha256": sha256_file(path), "bytes": path.stat().st_size}
+    with file_errors("read", path):  # e.g. an input deleted since the run began
+        return {"path": str(path), "sha256": sha256_file(path), "bytes": path.stat().st_size}
 
 
 def _input_entry(source: Source) -> InputFile:
@@ -629,35 +656,6 @@ def _input_entry(source: Source) -> InputFile:
         writer.write_table(source)
     data = sink.getvalue()
     return InputFile("<table>", hashlib.sha256(data).hexdigest(), data.size)
-
-
-def sha256_file(path: Path) -> str:
-    """SHA-256 of a regular file's bytes. A device, FIFO or socket is refused (``OSError``
-    "not a regular file") before anything is read: checked on the path, then on the file
-    opened non-blocking, so neither a FIFO nor a path swapped in between blocks or streams
-    forever."""
-    _require_regular(path, os.stat(path).st_mode)
-    digest = hashlib.sha256()
-    with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
-        _require_regular(path, os.fstat(fh.fileno()).st_mode)
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-_KINDS = {
-    stat.S_ISDIR: "a directory",
-    stat.S_ISCHR: "a character device",
-    stat.S_ISBLK: "a block device",
-    stat.S_ISFIFO: "a FIFO",
-    stat.S_ISSOCK: "a socket",
-}
-
-
-def _require_regular(path: Path, mode: int) -> None:
-    if not stat.S_ISREG(mode):
-        kind = next((name for test, name in _KINDS.items() if test(mode)), "something else")
-        raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
 
 
 def remove_stale_staging(directory: Path) -> list[Path]:

@@ -127,3 +127,26 @@ def output_hashes(out: Path, wells: list[str]) -> dict[str, dict[str, str]]:
 def no_staging_left(out: Path) -> bool:
     work = out / ".gyropipe-batch"
     return not work.exists() or not any(work.iterdir())
+
+
+def gone(pid: int) -> bool:
+    """Whether process ``pid`` has ended (a zombie still answers kill(0); it is not running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
+    except OSError:  # reaped meanwhile
+        return True
+
+
+def children(pid: int) -> set[int]:
+    """The processes ``pid`` started (e.g. a batch's pool workers), as Linux lists them."""
+    found: set[int] = set()
+    try:
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            found |= {int(p) for p in (task / "children").read_text().split()}
+    except OSError:  # it has ended
+        pass
+    return found

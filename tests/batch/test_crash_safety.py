@@ -19,6 +19,8 @@ from batch_support import (
     STATIONS,
     assert_complete,
     batches,
+    children,
+    gone,
     log_events,
     make_wells,
     no_staging_left,
@@ -62,6 +64,12 @@ def done_runs(ledger: Path) -> dict[str, dict[str, object]]:
     return {r["well"]: dict(r) for r in rows}
 
 
+def runs_by_well(ledger: Path) -> dict[str, dict[str, object]]:
+    """Done runs by well, once the batch is dead (its ledger readable for certain: a read
+    failing here must not pass for "nothing done", which would skip waiting for workers)."""
+    return {r["well"]: r for r in runs(ledger) if r["status"] == "done"}
+
+
 def published_unrecorded(out: Path) -> dict[str, int]:
     """Wells whose claimed ('running') run had published its outputs when the batch died."""
     found = {}
@@ -71,15 +79,6 @@ def published_unrecorded(out: Path) -> dict[str, int]:
         if row["status"] == "running" and published:
             found[row["well"]] = int(row["id"])
     return found
-
-
-def gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    # a zombie still answers kill(0); it is not running
-    return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
 
 
 @pytest.mark.process("the batch is SIGKILLed mid-run")
@@ -94,12 +93,13 @@ def test_sigkilled_batch_restarted_completes_and_recomputes_nothing(tmp_path: Pa
     for attempt, kill_after in enumerate((2, 7)):
         proc = spawn(*args, "--quiet", stderr=tmp_path / f"kill{attempt}.log")
         wait_for(lambda n=kill_after: len(done_runs(ledger)) >= n, proc)
+        workers = children(proc.pid)
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(TIMEOUT_S)
-        done = done_runs(ledger)
+        done = runs_by_well(ledger)
         assert len(done) < len(names), "the kill came too late to test anything"
         # the batch's workers do not outlive it (no orphan goes on writing outputs)
-        workers = {int(str(r["worker"]).rsplit(":", 1)[1]) for r in done.values() if r["worker"]}
+        workers |= {int(str(r["worker"]).rsplit(":", 1)[1]) for r in done.values() if r["worker"]}
         wait_for(lambda w=workers: all(gone(pid) for pid in w))
         finished_before.update({w: int(str(r["id"])) for w, r in done.items()})
         finished_before.update(published_unrecorded(out))  # killed between publish and record
@@ -152,7 +152,7 @@ def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Pa
     def running_worker() -> int | None:
         for staging in (out / ".gyropipe-batch").glob(".*.staging.gyropipe-staging-*"):
             return int(staging.name.split(".gyropipe-staging-")[1].split("-")[0])
-        return None  # a run's private staging beside its well's: .<well>.<run>.staging…
+        return None  # a run's private staging beside its well's: .<well>.<run>.<pid>.staging…
 
     wait_for(lambda: running_worker() is not None, proc)
     victim = running_worker()

@@ -91,6 +91,7 @@ LAYERS: dict[str, int] = {
     "pipeline.jsontext": 1,
     "pipeline.errors": 1,
     "pipeline.atomic": 1,
+    "pipeline.hashing": 1,
     "pipeline.version": 1,
     "pipeline.lazy": 1,
 }

@@ -16,8 +16,8 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from pipeline.graph import Plan
+from pipeline.hashing import sha256_file
 from pipeline.registry import Registry
-from pipeline.runner import sha256_file
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
 

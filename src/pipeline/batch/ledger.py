@@ -16,26 +16,36 @@ Consistency with several batches on one ledger (processes on one or more machine
 - a run is marked ``done`` only after its outputs are published and on disk.
 
 Only the batch process opens the ledger; workers never do.
+
+Every failure of the ledger itself — its file system full or read-only, locked beyond the
+busy timeout, not a database or damaged, removed or replaced while in use — is a
+:class:`LedgerError` naming the ledger, what was being done and what to do. A failed change
+is rolled back whole, so the ledger stays as it was and the same command run again resumes.
+A row that does not parse (:func:`~pipeline.batch.records.run_row`) is left out and told in
+:attr:`Ledger.problems`; a well whose latest rows are unreadable runs again.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import socket
 import sqlite3
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
+
+from pipeline.errors import GyropipeError, file_errors
 
 from .fingerprint import Fingerprint
 from .jobs import BatchConfigError
 from .policy import Run, Skip, WellState
-from .publish import read_published
-from .records import BatchRow, RunRow, rejection
+from .publish import MARKER, read_published
+from .records import BadRow, BatchRow, RunRow, batch_row, decode_text, rejection, run_row
 from .worker import WellOutcome
 
 SCHEMA_VERSION = 1
@@ -87,7 +97,68 @@ CREATE INDEX IF NOT EXISTS runs_by_well ON runs (well, id);
 CREATE INDEX IF NOT EXISTS batches_by_key ON batches (key, id);
 """
 
-JSON_RUN_COLUMNS = ("reasons", "versions", "inputs", "outputs", "calibration")
+P = ParamSpec("P")
+R = TypeVar("R")
+T = TypeVar("T")
+ADVICE = {
+    "SQLITE_FULL": "its file system is full: free space there (or give --ledger on another "
+    "file system), then run the same command again: it resumes",
+    "SQLITE_READONLY": "it cannot be written: make the file and its directory writable (or "
+    "give --ledger elsewhere)",
+    "SQLITE_CANTOPEN": "it cannot be opened: check that its directory exists and is writable",
+    "SQLITE_PERM": "permission denied: make the file and its directory writable",
+    "SQLITE_BUSY": f"another process held it locked for more than {BUSY_TIMEOUT_MS // 1000} s: "
+    "run again once that process is done",
+    "SQLITE_LOCKED": "it is locked by another connection: run again once that is done",
+    "SQLITE_NOTADB": "the file is not a gyropipe ledger: give the right --ledger, or move the "
+    "file away (a new ledger starts an empty run history)",
+    "SQLITE_CORRUPT": "the file is damaged: restore it from a copy, or move it away (a new "
+    "ledger starts an empty run history)",
+    "SQLITE_IOERR_SHMSIZE": "its file system is full: free space there, then run the same "
+    "command again: it resumes",
+    "SQLITE_IOERR": "an I/O error writing it (its file system full or failing?): free space or "
+    "check the disk, then run the same command again: it resumes",
+}
+"""What to do, by SQLite's primary result code (``sqlite3.Error.sqlite_errorname``)."""
+GONE = (
+    "the file was removed or replaced since it was opened; the runs recorded since are lost: "
+    "restore it (or start again with a new --out)"
+)
+
+
+class LedgerError(GyropipeError):
+    """The ledger cannot be read or written (module docstring): names the ledger file, what
+    was being done, SQLite's reason and what to do."""
+
+    def __init__(self, path: Path, doing: str, cause: sqlite3.Error | OSError | str) -> None:
+        self.path = path
+        if isinstance(cause, str):
+            reason = cause
+        else:
+            name = getattr(cause, "sqlite_errorname", None) or ""
+            primary = "_".join(name.split("_")[:2])
+            advice = ADVICE.get(name) or ADVICE.get(primary, "check the file and its file system")
+            reason = f"{cause}{f' ({name})' if name else ''}; {advice}"
+        super().__init__(f"ledger {path}: cannot {doing}: {reason}")
+
+
+Method: TypeAlias = "Callable[Concatenate[Ledger, P], R]"
+
+
+def _guarded(doing: str) -> Callable[[Method[P, R]], Method[P, R]]:
+    """A :class:`Ledger` method whose SQLite failures are :class:`LedgerError` (``doing``)."""
+
+    def wrap(method: Method[P, R]) -> Method[P, R]:
+        def guarded(ledger: Ledger, /, *args: P.args, **kwargs: P.kwargs) -> R:
+            try:
+                return method(ledger, *args, **kwargs)
+            except sqlite3.Error as exc:
+                raise LedgerError(ledger.path, doing, exc) from None
+
+        functools.update_wrapper(guarded, method)
+        return guarded
+
+    return wrap
 
 
 @dataclass(frozen=True)
@@ -118,44 +189,93 @@ class Ledger:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        path.parent.mkdir(parents=True, exist_ok=True)
+        self.problems: list[str] = []
+        """rows that did not parse, as warning lines (each told once; the caller drains it)"""
+        self._told: set[tuple[str, int, str]] = set()
+        with file_errors("create the ledger's directory", path.parent):
+            path.parent.mkdir(parents=True, exist_ok=True)
         try:
             self._db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_MS / 1000, isolation_level=None)
-            self._db.row_factory = sqlite3.Row
-            self._db.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
-            self._db.execute("PRAGMA journal_mode = WAL")
-            self._db.execute("PRAGMA synchronous = FULL")
-            self._db.execute("PRAGMA foreign_keys = ON")
-            with self._write():
-                version = self._db.execute("PRAGMA user_version").fetchone()[0]
-                if version not in (0, SCHEMA_VERSION):
-                    raise BatchConfigError(
-                        f"{path}: ledger schema version {version}, this gyropipe uses "
-                        f"{SCHEMA_VERSION}"
-                    )
-                for statement in SCHEMA.split(";"):
-                    if statement.strip():
-                        self._db.execute(statement)
-                self._db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-        except sqlite3.DatabaseError as exc:
-            raise BatchConfigError(f"{path}: not a usable ledger: {exc}") from None
+        except sqlite3.Error as exc:
+            raise LedgerError(path, "open it", exc) from None
+        self._db.row_factory = sqlite3.Row
+        self._db.text_factory = decode_text
+        try:
+            self._open()
+        except BaseException:
+            self._db.close()
+            raise
+
+    @_guarded("open it")
+    def _open(self) -> None:
+        self._db.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        self._db.execute("PRAGMA journal_mode = WAL")
+        self._db.execute("PRAGMA synchronous = FULL")
+        self._db.execute("PRAGMA foreign_keys = ON")
+        self._identity = _identity(self.path)
+        with self._write():
+            version = self._db.execute("PRAGMA user_version").fetchone()[0]
+            if version not in (0, SCHEMA_VERSION):
+                raise BatchConfigError(
+                    f"{self.path}: ledger schema version {version}, this gyropipe uses "
+                    f"{SCHEMA_VERSION}"
+                )
+            for statement in SCHEMA.split(";"):
+                if statement.strip():
+                    self._db.execute(statement)
+            self._db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
 
     def close(self) -> None:
         self._db.close()
 
     @contextlib.contextmanager
     def _write(self) -> Iterator[None]:
-        """One write transaction, taken before any read (``BEGIN IMMEDIATE``)."""
+        """One write transaction, taken before any read (``BEGIN IMMEDIATE``), on the file
+        that was opened (not one put in its place); rolled back whole if anything fails."""
         self._db.execute("BEGIN IMMEDIATE")
         try:
+            if _identity(self.path) != self._identity:
+                raise LedgerError(self.path, "write", GONE)
             yield
+            self._db.execute("COMMIT")
         except BaseException:
-            self._db.execute("ROLLBACK")
+            with contextlib.suppress(sqlite3.Error):  # SQLite may have rolled back already
+                if self._db.in_transaction:
+                    self._db.execute("ROLLBACK")
             raise
-        self._db.execute("COMMIT")
+
+    def _note(self, kind: str, row: sqlite3.Row, bad: BadRow) -> None:
+        """Tell a row that does not parse once (``kind`` run or batch)."""
+        key = (kind, int(row["id"]), bad.column)
+        if key not in self._told:
+            self._told.add(key)
+            well = row["well"] if kind == "run" else None
+            of = f" of well {well!r}" if isinstance(well, str) else ""
+            self.problems.append(
+                f"ledger {self.path}: {kind} {row['id']}{of}: {bad}; the row is left out"
+            )
+
+    def _runs(self, rows: Iterable[sqlite3.Row]) -> list[RunRow]:
+        """The rows that parse (the others told in :attr:`problems`)."""
+        return self._parsed("run", rows, run_row)
+
+    def _batches(self, rows: Iterable[sqlite3.Row]) -> list[BatchRow]:
+        return self._parsed("batch", rows, batch_row)
+
+    def _parsed(
+        self, kind: str, rows: Iterable[sqlite3.Row], parse: Callable[[dict[str, Any]], T]
+    ) -> list[T]:
+        parsed = []
+        for row in rows:
+            try:
+                parsed.append(parse(dict(zip(row.keys(), row, strict=True))))
+            except BadRow as bad:
+                self._note(kind, row, bad)
+        return parsed
 
     # batches -----------------------------------------------------------------------------
 
+    @_guarded("record the batch's start")
     def start_batch(
         self,
         key: str,
@@ -186,12 +306,14 @@ class Ledger:
         assert batch is not None
         return batch
 
+    @_guarded("record the batch's heartbeat")
     def heartbeat(self, batch_id: int) -> None:
         with self._write():
             self._db.execute(
                 "UPDATE batches SET heartbeat = ? WHERE id = ?", (time.time(), batch_id)
             )
 
+    @_guarded("record the batch's end")
     def end_batch(self, batch_id: int, status: str, counts: dict[str, int]) -> None:
         """Close a batch (finished or interrupted); its runs still claimed become interrupted."""
         now = time.time()
@@ -201,32 +323,35 @@ class Ledger:
                 "WHERE id = ?",
                 (status, now, now, json.dumps(counts), batch_id),
             )
-            for row in self._db.execute(
-                "SELECT * FROM runs WHERE batch = ? AND status = 'running'", (batch_id,)
-            ).fetchall():
-                self._settle(_run(row))
+            self._settle_runs(batch_id)
 
+    @_guarded("read a batch")
     def batch(self, batch_id: int) -> BatchRow | None:
-        row = self._db.execute("SELECT * FROM batches WHERE id = ?", (batch_id,)).fetchone()
-        return _batch(row) if row is not None else None
+        """Batch ``batch_id``; None if there is none or its row does not parse."""
+        rows = self._db.execute("SELECT * FROM batches WHERE id = ?", (batch_id,)).fetchall()
+        parsed = self._batches(rows)
+        return parsed[0] if parsed else None
 
+    @_guarded("read the batches")
     def batches(self) -> list[BatchRow]:
-        return [_batch(r) for r in self._db.execute("SELECT * FROM batches ORDER BY id")]
+        return self._batches(self._db.execute("SELECT * FROM batches ORDER BY id").fetchall())
 
+    @_guarded("settle the batches that had stopped")
     def sweep(self) -> list[BatchRow]:
         """Mark batches whose process is gone as interrupted and settle their claimed runs
-        (module docstring). Returns the batches swept."""
+        (module docstring); a running batch whose row does not parse counts as gone.
+        Returns the batches swept that parse."""
         swept = []
         with self._write():
-            for row in self._db.execute(
-                "SELECT * FROM batches WHERE status = 'running'"
-            ).fetchall():
-                batch = _batch(row)
-                if not alive(batch):
-                    self._interrupt(batch)
-                    swept.append(batch)
+            rows = self._db.execute("SELECT * FROM batches WHERE status = 'running'").fetchall()
+            for row in rows:
+                parsed = self._batches([row])
+                if not parsed or not alive(parsed[0]):
+                    self._interrupt(int(row["id"]))
+                    swept += parsed
         return swept
 
+    @_guarded("read the batches")
     def resume_since(self, key: str, batch_id: int) -> int | None:
         """The first batch of the trailing chain of interrupted batches with ``key`` before
         ``batch_id`` (the same command killed, possibly several times), if any."""
@@ -234,7 +359,7 @@ class Ledger:
         for row in self._db.execute(
             "SELECT id, status FROM batches WHERE key = ? AND id < ? ORDER BY id DESC",
             (key, batch_id),
-        ):
+        ).fetchall():
             if row["status"] != "interrupted":
                 break
             since = int(row["id"])
@@ -242,6 +367,7 @@ class Ledger:
 
     # runs --------------------------------------------------------------------------------
 
+    @_guarded("claim a well")
     def claim(
         self,
         well: str,
@@ -260,8 +386,7 @@ class Ledger:
                 owner = self.batch(int(held["batch"]))
                 if owner is not None and alive(owner):
                     return Busy(owner.id, owner.host, owner.pid)
-                if owner is not None:
-                    self._interrupt(owner)
+                self._interrupt(int(held["batch"]))
             decision = decide(self._state(well))
             if isinstance(decision, Skip):
                 return Skipped(decision.reason)
@@ -280,6 +405,7 @@ class Ledger:
             )
             return Claimed(int(cursor.lastrowid or 0), decision.reasons)
 
+    @_guarded("record a well's outcome")
     def finish(self, outcome: WellOutcome, error: str | None = None) -> None:
         """Record a worker's outcome (``error`` overrides a done outcome that the batch
         process found inconsistent); a done run whose survey failed acceptance is noted
@@ -308,80 +434,99 @@ class Ledger:
                 ),
             )
 
+    @_guarded("read a run")
     def run(self, run_id: int) -> RunRow | None:
-        row = self._db.execute("SELECT * FROM runs WHERE id = ?", (run_id,)).fetchone()
-        return _run(row) if row is not None else None
+        parsed = self._runs(self._db.execute("SELECT * FROM runs WHERE id = ?", (run_id,)))
+        return parsed[0] if parsed else None
 
+    @_guarded("read a well's runs")
     def history(self, well: str) -> list[RunRow]:
-        return [
-            _run(r)
-            for r in self._db.execute("SELECT * FROM runs WHERE well = ? ORDER BY id", (well,))
-        ]
+        return self._runs(
+            self._db.execute("SELECT * FROM runs WHERE well = ? ORDER BY id", (well,))
+        )
 
+    @_guarded("read the wells' runs")
     def latest_runs(self) -> list[RunRow]:
-        """The latest run of every well, by well id."""
-        return [
-            _run(r)
-            for r in self._db.execute(
+        """The latest run of every well, by well id (a well whose latest row does not parse
+        is left out)."""
+        return self._runs(
+            self._db.execute(
                 "SELECT * FROM runs WHERE id IN (SELECT MAX(id) FROM runs GROUP BY well) "
                 "ORDER BY well"
             )
-        ]
+        )
 
+    @_guarded("read the claimed runs")
     def running_ids(self) -> set[int]:
         return {int(r[0]) for r in self._db.execute("SELECT id FROM runs WHERE status = 'running'")}
 
     # internals (inside a write transaction) ----------------------------------------------
 
-    def _interrupt(self, batch: BatchRow) -> None:
+    def _interrupt(self, batch_id: int) -> None:
         self._db.execute(
             "UPDATE batches SET status = 'interrupted' WHERE id = ? AND status = 'running'",
-            (batch.id,),
+            (batch_id,),
         )
-        for row in self._db.execute(
-            "SELECT * FROM runs WHERE batch = ? AND status = 'running'", (batch.id,)
-        ).fetchall():
-            self._settle(_run(row))
+        self._settle_runs(batch_id)
 
-    def _settle(self, run: RunRow) -> None:
-        """A claimed run whose batch is gone: done if it published, else interrupted."""
-        published = read_published(Path(run.out_dir))
-        if published is not None and published.run_id == run.id:
-            manifest = published.manifest
-            self._db.execute(
-                "UPDATE runs SET status = 'done', finished = ?, inputs = ?, outputs = ?, "
-                "note = ?, wall_time_s = ?, process_time_s = ? WHERE id = ?",
-                (
-                    (Path(run.out_dir) / "batch.json").stat().st_mtime,
-                    json.dumps(manifest.get("inputs", {})),
-                    json.dumps(manifest.get("outputs", [])),
-                    "recovered: its outputs were published before its batch process ended",
-                    manifest.get("wall_time_s"),
-                    sum(s["wall_time_s"] for s in manifest.get("stages", [])),
-                    run.id,
-                ),
-            )
-        else:
-            self._db.execute(
-                "UPDATE runs SET status = 'interrupted', finished = ?, "
-                "error = 'interrupted: its batch process ended before the run finished' "
-                "WHERE id = ?",
-                (time.time(), run.id),
-            )
+    def _settle_runs(self, batch_id: int) -> None:
+        """The runs batch ``batch_id`` still claims, its process gone: done if the run had
+        published (read from the row's id and out_dir only, so a damaged row is settled
+        too), else interrupted."""
+        for row in self._db.execute(
+            "SELECT id, out_dir FROM runs WHERE batch = ? AND status = 'running'", (batch_id,)
+        ).fetchall():
+            out_dir = row["out_dir"]
+            published = read_published(Path(out_dir)) if isinstance(out_dir, str) else None
+            if published is not None and published.run_id == row["id"]:
+                self._recover(int(row["id"]), Path(out_dir), published.manifest)
+            else:
+                self._db.execute(
+                    "UPDATE runs SET status = 'interrupted', finished = ?, "
+                    "error = 'interrupted: its batch process ended before the run finished' "
+                    "WHERE id = ?",
+                    (time.time(), row["id"]),
+                )
+
+    def _recover(self, run_id: int, out_dir: Path, manifest: dict[str, Any]) -> None:
+        """A claimed run that published before its batch process ended: done."""
+        stages = manifest.get("stages")
+        times = [s.get("wall_time_s") for s in stages] if isinstance(stages, list) else []
+        self._db.execute(
+            "UPDATE runs SET status = 'done', finished = ?, inputs = ?, outputs = ?, "
+            "note = ?, wall_time_s = ?, process_time_s = ? WHERE id = ?",
+            (
+                (out_dir / MARKER).stat().st_mtime,
+                json.dumps(manifest.get("inputs", {})),
+                json.dumps(manifest.get("outputs", [])),
+                "recovered: its outputs were published before its batch process ended",
+                _number(manifest.get("wall_time_s")),
+                sum(t for t in times if isinstance(t, int | float)),
+                run_id,
+            ),
+        )
 
     def _state(self, well: str) -> WellState:
-        latest = self._db.execute(
-            "SELECT * FROM runs WHERE well = ? AND status != 'running' ORDER BY id DESC LIMIT 1",
-            (well,),
-        ).fetchone()
-        done = self._db.execute(
-            "SELECT * FROM runs WHERE well = ? AND status = 'done' ORDER BY id DESC LIMIT 1",
-            (well,),
-        ).fetchone()
-        last_done = _run(done) if done is not None else None
+        """The well's latest finished run and its last done run that parse (a row that does
+        not is left out: with it the well runs again)."""
+        finished = self._runs(
+            self._db.execute(
+                "SELECT * FROM runs WHERE well = ? AND status != 'running' ORDER BY id DESC "
+                "LIMIT 1",
+                (well,),
+            )
+        )
+        done = self._runs(
+            self._db.execute(
+                "SELECT * FROM runs WHERE well = ? AND status = 'done' ORDER BY id DESC LIMIT 1",
+                (well,),
+            )
+        )
+        latest = finished[0] if finished else None
+        last_done = done[0] if done else None
         published = None if last_done is None else read_published(Path(last_done.out_dir))
         return WellState(
-            _run(latest) if latest is not None else None,
+            latest,
             last_done,
             published is not None and last_done is not None and published.run_id == last_done.id,
         )
@@ -402,16 +547,14 @@ def alive(batch: BatchRow) -> bool:
     return True
 
 
-def _run(row: sqlite3.Row) -> RunRow:
-    values = dict(zip(row.keys(), row, strict=True))
-    for key in JSON_RUN_COLUMNS:
-        values[key] = json.loads(values[key])
-    values["fingerprint"] = Fingerprint.from_json(values["fingerprint"])
-    return RunRow(**values)
+def _identity(path: Path) -> tuple[int, int] | None:
+    """The file ``path`` names (device, inode); None if there is none."""
+    try:
+        found = os.stat(path)
+    except OSError:
+        return None
+    return found.st_dev, found.st_ino
 
 
-def _batch(row: sqlite3.Row) -> BatchRow:
-    values = dict(zip(row.keys(), row, strict=True))
-    values["options"] = json.loads(values["options"])
-    values["counts"] = json.loads(values["counts"])
-    return BatchRow(**values)
+def _number(value: object) -> float | None:
+    return float(value) if isinstance(value, int | float) else None

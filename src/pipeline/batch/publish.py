@@ -1,20 +1,26 @@
 """A well's output directory is published whole: the run writes into a private staging
-directory ``OUT/.gyropipe-batch/<well>.<run id>.staging``, which is renamed to
-``OUT/<well>`` once every file in it is on disk (fsync). ``OUT/<well>`` therefore always
+directory ``OUT/.gyropipe-batch/<well>.<run id>.<worker pid>.staging``, which is renamed
+to ``OUT/<well>`` once every file in it is on disk (fsync). ``OUT/<well>`` therefore always
 holds one complete run — its outputs, its ``run.json`` and the ``batch.json`` marker naming
 the ledger run that produced it — or does not exist.
+
+A staging directory is removed once its run is no longer claimed and its worker process is
+gone: a worker of a killed batch may live on for a moment (it exits as soon as it sees its
+batch gone), and removing its directory under it would let it make the directory again
+(renaming its finished run there) and leave it behind.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes
-from pipeline.runner import MANIFEST, remove_stale_staging
+from pipeline.runner import MANIFEST, process_alive, remove_stale_staging
 
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
@@ -31,16 +37,21 @@ class PublishedRun:
 
 
 def staging_dir(out_root: Path, well_id: str, run_id: int) -> Path:
-    """The private directory where run ``run_id`` of ``well_id`` writes its files."""
-    return out_root / WORK_DIR / f"{well_id}.{run_id}{STAGING_SUFFIX}"
+    """The private directory where run ``run_id`` of ``well_id`` writes its files (in this
+    process)."""
+    return out_root / WORK_DIR / f"{well_id}.{run_id}.{os.getpid()}{STAGING_SUFFIX}"
 
 
-def staging_run_id(entry: Path) -> int | None:
-    """The run id in a staging directory's name (None for other entries)."""
+def staging_owner(entry: Path) -> tuple[int, int | None] | None:
+    """The run id and worker pid in a staging directory's name (the pid None in the names of
+    earlier versions, ``<well>.<run id>.staging``); None for other entries."""
     if not entry.name.endswith(STAGING_SUFFIX):
         return None
-    run_text = entry.name.removesuffix(STAGING_SUFFIX).rsplit(".", 1)[-1]
-    return int(run_text) if run_text.isdigit() else None
+    parts = entry.name.removesuffix(STAGING_SUFFIX).split(".")
+    numbers = [int(p) if p.isdigit() else None for p in parts[-2:]]
+    if len(numbers) == 2 and numbers[0] is not None and numbers[1] is not None:
+        return numbers[0], numbers[1]
+    return (numbers[-1], None) if numbers[-1] is not None else None
 
 
 def write_marker(staging: Path, record: dict[str, Any]) -> None:
@@ -49,30 +60,41 @@ def write_marker(staging: Path, record: dict[str, Any]) -> None:
 
 
 def read_published(well_dir: Path) -> PublishedRun | None:
-    """The published run in ``well_dir``, if it is complete: marker and manifest present
-    and every output listed in the manifest on disk with its recorded size."""
+    """The published run in ``well_dir``, if it is complete: marker and manifest present and
+    well formed (``batch.json`` names an integer ``run_id``; ``run.json`` lists its outputs
+    with their file names and sizes) and every output listed on disk with its recorded
+    size. A marker or manifest that is missing, damaged or edited counts as not published."""
     try:
         marker = json.loads((well_dir / MARKER).read_text())
         manifest = json.loads((well_dir / MANIFEST).read_text())
-    except (OSError, ValueError):
-        return None
-    for entry in manifest.get("outputs", []):
-        path = well_dir / entry["file"]
-        if not path.is_file() or path.stat().st_size != entry["bytes"]:
+        run_id = marker["run_id"]
+        outputs = manifest["outputs"]
+        if not isinstance(run_id, int) or not isinstance(outputs, list):
             return None
-    return PublishedRun(int(marker["run_id"]), manifest)
+        for entry in outputs:
+            name, size = entry["file"], entry["bytes"]
+            path = well_dir / name
+            if path.parent != well_dir or not path.is_file() or path.stat().st_size != size:
+                return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return PublishedRun(run_id, manifest)
 
 
 def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
-    """Remove staging directories of runs not in ``active_runs`` and leftover trash."""
+    """Remove the staging directories (and their trash) of runs not in ``active_runs`` whose
+    worker process is gone (module docstring)."""
     removed: list[Path] = []
     work = out_root / WORK_DIR
     if not work.is_dir():
         return removed
     removed += remove_stale_staging(work)  # the runner's own, inside a killed worker's run
     for entry in work.iterdir():
-        run_id = staging_run_id(entry)
-        if entry.name.endswith(TRASH_SUFFIX) or (run_id is not None and run_id not in active_runs):
+        owner = staging_owner(entry.with_name(entry.name.removesuffix(TRASH_SUFFIX)))
+        if owner is None:
+            continue
+        run_id, pid = owner
+        if run_id not in active_runs and (pid is None or not process_alive(pid)):
             shutil.rmtree(entry, ignore_errors=True)
             removed.append(entry)
     return removed

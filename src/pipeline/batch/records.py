@@ -1,10 +1,21 @@
-"""Rows of the run ledger as Python objects. Times are POSIX seconds (UTC)."""
+"""Rows of the run ledger as Python objects. Times are POSIX seconds (UTC).
+
+A row is read defensively (:func:`run_row`, :func:`batch_row`): a column that is not valid
+UTF-8, not JSON where JSON is stored, of the wrong type, or a status outside the known ones
+is a :class:`BadRow` naming the column, never a traceback.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
+import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
+
+from pydantic import TypeAdapter, ValidationError
+from typing_extensions import TypedDict
 
 from .fingerprint import Fingerprint
 
@@ -13,6 +24,23 @@ REJECTED = "rejected"
 """a done run (outputs published) whose survey failed an acceptance gate: the ledger keeps
 status ``done`` and says so in the run's note (``rejected: acceptance FAILED (…)``)"""
 BATCH_STATUSES = ("running", "finished", "interrupted")
+
+
+class InputEntry(TypedDict):
+    """An input file as a run read it."""
+
+    path: str
+    sha256: str
+    bytes: int
+
+
+class OutputEntry(TypedDict):
+    """A published output file."""
+
+    file: str
+    path: str
+    sha256: str
+    bytes: int
 
 
 @dataclass(frozen=True)
@@ -31,9 +59,9 @@ class RunRow:
     out_dir: str
     started: float
     finished: float | None = None
-    inputs: dict[str, Any] = field(default_factory=dict)
+    inputs: dict[str, InputEntry] = field(default_factory=dict)
     """input name → {path, sha256, bytes} as the run read them"""
-    outputs: list[dict[str, Any]] = field(default_factory=list)
+    outputs: list[OutputEntry] = field(default_factory=list)
     """{file, path, sha256, bytes} of every published output"""
     calibration: list[dict[str, Any]] = field(default_factory=list)
     error: str | None = None
@@ -87,3 +115,76 @@ def iso(seconds: float | None) -> str:
     if seconds is None:
         return ""
     return dt.datetime.fromtimestamp(seconds, dt.UTC).isoformat(timespec="seconds")
+
+
+JSON_RUN_COLUMNS = ("reasons", "fingerprint", "versions", "inputs", "outputs", "calibration")
+JSON_BATCH_COLUMNS = ("options", "counts")
+FINGERPRINT_KEYS = frozenset(f.name for f in dataclasses.fields(Fingerprint))
+
+
+class BadRow(Exception):
+    """A ledger row that does not parse: the column and what is wrong with it."""
+
+    def __init__(self, column: str, problem: str) -> None:
+        super().__init__(f"{column} {problem}")
+        self.column = column
+
+
+class Undecodable(bytes):
+    """A TEXT value that is not valid UTF-8 (the ledger's ``text_factory`` keeps its bytes)."""
+
+
+def decode_text(data: bytes) -> str | Undecodable:
+    """The ledger connection's ``text_factory``: UTF-8 text, else :class:`Undecodable`."""
+    try:
+        return data.decode()
+    except UnicodeDecodeError:
+        return Undecodable(data)
+
+
+def run_row(values: Mapping[str, Any]) -> RunRow:
+    """A ``runs`` row as a :class:`RunRow`; :class:`BadRow` if a column does not parse."""
+    parsed = _columns(values, JSON_RUN_COLUMNS)
+    fingerprint = parsed["fingerprint"]
+    if not isinstance(fingerprint, dict) or set(fingerprint) != FINGERPRINT_KEYS:
+        keys = ", ".join(sorted(FINGERPRINT_KEYS))
+        raise BadRow("fingerprint", f"is not an object with exactly the keys {keys}")
+    if parsed["status"] not in RUN_STATUSES:
+        raise BadRow("status", f"is {parsed['status']!r}, not one of {', '.join(RUN_STATUSES)}")
+    row: RunRow = _validated(_RUN, parsed)
+    return row
+
+
+def batch_row(values: Mapping[str, Any]) -> BatchRow:
+    """A ``batches`` row as a :class:`BatchRow`; :class:`BadRow` if a column does not parse."""
+    parsed = _columns(values, JSON_BATCH_COLUMNS)
+    if parsed["status"] not in BATCH_STATUSES:
+        raise BadRow("status", f"is {parsed['status']!r}, not one of {', '.join(BATCH_STATUSES)}")
+    row: BatchRow = _validated(_BATCH, parsed)
+    return row
+
+
+def _columns(values: Mapping[str, Any], json_columns: tuple[str, ...]) -> dict[str, Any]:
+    parsed = dict(values)
+    for column, value in parsed.items():
+        if isinstance(value, Undecodable):
+            raise BadRow(column, "is not valid UTF-8 text")
+    for column in json_columns:
+        try:
+            parsed[column] = json.loads(parsed[column])
+        except (TypeError, ValueError):
+            raise BadRow(column, "is not JSON") from None
+    return parsed
+
+
+def _validated(adapter: TypeAdapter[Any], values: dict[str, Any]) -> Any:
+    try:
+        return adapter.validate_python(values)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        column = str(first["loc"][0]) if first["loc"] else "?"
+        raise BadRow(column, f"is not valid: {first['msg']}") from None
+
+
+_RUN = TypeAdapter(RunRow)
+_BATCH = TypeAdapter(BatchRow)

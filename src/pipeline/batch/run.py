@@ -9,6 +9,7 @@ remaining wells and recomputes none that finished.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
@@ -18,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pipeline.errors import file_errors
 from pipeline.graph import Plan
 from pipeline.registry import Registry
 from pipeline.version import __version__
@@ -25,7 +27,7 @@ from pipeline.version import __version__
 from .executors import Executor, make_executor
 from .fingerprint import Fingerprint, PlanIdentity
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
-from .ledger import LEASE_S, Busy, Claimed, Ledger, Skipped
+from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
 from .policy import Mode, decide
 from .progress import Reporter
 from .publish import WORK_DIR, clean_work_dir, read_published
@@ -85,7 +87,8 @@ def run_batch(
     out = options.out_dir.resolve()
     ledger_path = options.ledger or out / LEDGER
     _check_ledger_place(ledger_path, out, jobs)
-    out.mkdir(parents=True, exist_ok=True)
+    with file_errors("create the output directory", out):
+        out.mkdir(parents=True, exist_ok=True)
     ref = PipelineRef(
         str(Path(plan.file).resolve()), options.overrides, options.disabled, plan.digest
     )
@@ -138,19 +141,32 @@ class _Batch:
             executor.close(cancel=True)
             raise
         t0 = time.perf_counter()
-        status = "interrupted"
         try:
             self._loop(executor)
-            status = "finished"
-        finally:
-            executor.close(cancel=status != "finished")
-            for job, _, _ in self.inflight.values():
-                self._report(WellResult(job.well_id, "interrupted", "the batch was stopped"))
-            results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
-            self.ledger.end_batch(self.batch.id, status, counts(results))
-            files = write_summary(self.out, self.batch, results)
-            self.reporter.end(self.batch.id, time.perf_counter() - t0)
+        except BaseException:
+            # the first failure is the one reported: the ledger or the disk failing again
+            # while closing (disk full) would only hide it, and the next batch settles
+            # whatever this one could not record
+            with contextlib.suppress(LedgerError, OSError):
+                self._end(executor, "interrupted", t0)
+            raise
+        results, files = self._end(executor, "finished", t0)
         return BatchReport(self.batch, results, files, len(self.jobs) - len(results))
+
+    def _end(
+        self, executor: Executor, status: str, t0: float
+    ) -> tuple[list[WellResult], list[Path]]:
+        """Stop the executor, close the batch in the ledger, write the summary files."""
+        executor.close(cancel=status != "finished")
+        for job, _, _ in self.inflight.values():
+            self._report(WellResult(job.well_id, "interrupted", "the batch was stopped"))
+        self.inflight.clear()
+        results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
+        self.ledger.end_batch(self.batch.id, status, counts(results))
+        clean_work_dir(self.out, self.ledger.running_ids())  # a killed batch's late orphans
+        files = write_summary(self.out, self.batch, results)
+        self.reporter.end(self.batch.id, time.perf_counter() - t0)
+        return results, files
 
     def _begin(self) -> None:
         """Settle dead batches, register this one, clean stale staging, announce it."""
@@ -159,6 +175,7 @@ class _Batch:
                 f"batch {swept.id} (pid {swept.pid} on {swept.host}) had stopped; "
                 "its unfinished runs were settled"
             )
+        self._tell_problems()
         key = self._key()
         self.batch = self.ledger.start_batch(
             key,
@@ -221,6 +238,7 @@ class _Batch:
         claim = self.ledger.claim(
             job.well_id, self.batch, fingerprint, self.versions, well_dir, choose
         )
+        self._tell_problems()
         if isinstance(claim, Skipped):
             self._report(WellResult(job.well_id, "skipped", claim.reason))
         elif isinstance(claim, Busy):
@@ -288,6 +306,12 @@ class _Batch:
                 "process (workers must share the output directory)"
             )
         return None
+
+    def _tell_problems(self) -> None:
+        """The ledger rows that did not parse, as notes (once each)."""
+        for problem in self.ledger.problems:
+            self.reporter.note(f"warning: {problem}")
+        self.ledger.problems.clear()
 
     def _report(self, result: WellResult) -> None:
         self.results[result.well] = result

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 from dataclasses import asdict
 from typing import Any
@@ -76,18 +77,24 @@ def history_text(well: str, runs: list[RunRow]) -> str:
         lines.append(f"  pipeline sha256 {r.fingerprint.pipeline[:16]}…")
         if r.fingerprint.well:
             lines.append(f"  well header: {dict(r.fingerprint.well)}")
-        for cal in r.calibration:
-            chosen = ", ".join(
-                f"{s['instrument']} {s['method']} {s['drift_deg_h']:.4f} deg/h"
-                for s in cal["selected"]
-            )
-            lines.append(
-                f"  calibration ({cal['stage']}, input {cal['input']} sha256 "
-                f"{(cal['sha256'] or '')[:16]}…): tool {cal['tool_serial']}; {chosen}"
-            )
+        lines += [_calibration_line(cal) for cal in r.calibration]
         if r.outputs:
             lines.append(f"  outputs: {r.out_dir} ({len(r.outputs)} files)")
     return "\n".join(lines)
+
+
+def _calibration_line(cal: dict[str, Any]) -> str:
+    """A drift calibration's entry in words; another contract's (or a damaged one) as JSON."""
+    try:
+        chosen = ", ".join(
+            f"{s['instrument']} {s['method']} {s['drift_deg_h']:.4f} deg/h" for s in cal["selected"]
+        )
+        return (
+            f"  calibration ({cal['stage']}, input {cal['input']} sha256 "
+            f"{(cal['sha256'] or '')[:16]}…): tool {cal['tool_serial']}; {chosen}"
+        )
+    except (KeyError, TypeError, ValueError):
+        return f"  calibration: {json.dumps(cal, sort_keys=True, default=str)}"
 
 
 def history_document(well: str, runs: list[RunRow]) -> dict[str, Any]:
@@ -114,7 +121,9 @@ def _state(run: RunRow, batches: dict[int, BatchRow]) -> str:
 
 
 def _plugins(versions: dict[str, Any]) -> str:
-    plugins: dict[str, str] = versions.get("plugins", {})
+    plugins = versions.get("plugins")
+    if not isinstance(plugins, dict):
+        return "unknown"
     builtin = sum(1 for n in plugins if n.startswith("builtin."))
     others = [f"{n} {v}" for n, v in plugins.items() if not n.startswith("builtin.")]
     return ", ".join([f"{builtin} built-in", *others])

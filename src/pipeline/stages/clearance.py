@@ -34,11 +34,11 @@ from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference
 from pipeline.errors import EmptyTableError, InputFileError
+from pipeline.hashing import sha256_file
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef, pipeline_input
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
-from pipeline.runner import sha256_file
 from pipeline.stages import toolmodels
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import convert_azimuth

@@ -1,0 +1,38 @@
+"""SHA-256 of a regular file, refusing devices, FIFOs and sockets before reading them."""
+
+from __future__ import annotations
+
+import errno
+import hashlib
+import os
+import stat
+from pathlib import Path
+
+
+def sha256_file(path: Path) -> str:
+    """SHA-256 of a regular file's bytes. A device, FIFO or socket is refused (``OSError``
+    "not a regular file") before anything is read: checked on the path, then on the file
+    opened non-blocking, so neither a FIFO nor a path swapped in between blocks or streams
+    forever."""
+    _require_regular(path, os.stat(path).st_mode)
+    digest = hashlib.sha256()
+    with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+        _require_regular(path, os.fstat(fh.fileno()).st_mode)
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+_KINDS = {
+    stat.S_ISDIR: "a directory",
+    stat.S_ISCHR: "a character device",
+    stat.S_ISBLK: "a block device",
+    stat.S_ISFIFO: "a FIFO",
+    stat.S_ISSOCK: "a socket",
+}
+
+
+def _require_regular(path: Path, mode: int) -> None:
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS.items() if test(mode)), "something else")
+        raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
