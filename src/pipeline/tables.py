@@ -13,7 +13,14 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from pipeline.contracts import EXAMPLES, SOURCE_KEY, SOURCE_LINE, UNIT_KEY, TableContract, column
+from pipeline.contracts import (
+    SOURCE_KEY,
+    SOURCE_LINE,
+    UNIT_KEY,
+    TableContract,
+    column,
+    rule_failure,
+)
 from pipeline.errors import ContractViolation, RuleFailure, UnitError
 from pipeline.units import conversion_factor
 
@@ -386,7 +393,7 @@ def _log_failures(table: pa.Table) -> list[RuleFailure]:
         if pa.types.is_floating(col.type):
             bad = np.isinf(col.to_numpy(zero_copy_only=False))
             if bad.any():
-                failures.append(_rows(name, "finite", "numbers or NaN (no ±inf)", bad, col))
+                failures.append(rule_failure(name, "finite", "numbers or NaN (no ±inf)", bad, col))
     return failures
 
 
@@ -397,20 +404,22 @@ def _index_failure(field: pa.Field, col: pa.ChunkedArray) -> RuleFailure | None:
         if not _measured(field):
             return None  # a time of day, a date: the index as written
         number = pc.match_substring_regex(col, FINITE_NUMBER).fill_null(False)
-        return _rows(field.name, "index", expected, ~number.to_numpy(zero_copy_only=False), col)
+        return rule_failure(
+            field.name, "index", expected, ~number.to_numpy(zero_copy_only=False), col
+        )
     if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
         return None
     values = col.to_numpy(zero_copy_only=False).astype(np.float64)
     bad = ~np.isfinite(values)
     if bad.any():
-        return _rows(field.name, "index", expected, bad, col)
+        return rule_failure(field.name, "index", expected, bad, col)
     steps = np.greater(values[1:], values[:-1]).astype(np.int8) - np.less(
         values[1:], values[:-1]
     )  # the sign of each step (a difference may pass the float range)
     moving = steps[steps != 0]
     direction = moving[0] if moving.size else 1.0  # decreasing throughout: recorded upwards
     bad[1:] = steps != direction
-    return _rows(field.name, "index", expected, bad, col) if bad.any() else None
+    return rule_failure(field.name, "index", expected, bad, col) if bad.any() else None
 
 
 def _measured(field: pa.Field) -> bool:
@@ -424,11 +433,3 @@ def _measured(field: pa.Field) -> bool:
             continue
         return bool(unit)
     return False
-
-
-def _rows(
-    name: str, rule: str, expected: str, bad: np.ndarray, col: pa.ChunkedArray
-) -> RuleFailure:
-    rows = np.flatnonzero(bad)
-    examples = tuple((int(i), col[int(i)].as_py()) for i in rows[:EXAMPLES])
-    return RuleFailure(name, rule, expected, bad_rows=len(rows), examples=examples)
