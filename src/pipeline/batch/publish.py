@@ -8,12 +8,11 @@ the ledger run that produced it — or does not exist.
 from __future__ import annotations
 
 import json
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes
+from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes, discard
 from pipeline.runner import MANIFEST, remove_stale_staging
 
 WORK_DIR = ".gyropipe-batch"
@@ -73,6 +72,6 @@ def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
     for entry in work.iterdir():
         run_id = staging_run_id(entry)
         if entry.name.endswith(TRASH_SUFFIX) or (run_id is not None and run_id not in active_runs):
-            shutil.rmtree(entry, ignore_errors=True)
+            discard(entry)
             removed.append(entry)
     return removed
