@@ -68,6 +68,17 @@ def test_a_record_after_a_multiline_one_is_named_by_its_own_line(
     assert f"{manifest}:2: 3 cells, the header has 2" in result.stderr
 
 
+def test_a_manifest_cell_naming_a_symlink_loop_is_refused_at_its_line(
+    tmp_path: Path, survey: Path
+) -> None:
+    """Fuzz finding: resolving the loop raised RuntimeError out of the manifest reader."""
+    (tmp_path / "loop.csv").symlink_to(tmp_path / "loop.csv")
+    manifest = _manifest(tmp_path, "w1,loop.csv\n")
+    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
+    assert result.returncode == 2
+    assert f"error: {manifest}:2: well 'w1': stations 'loop.csv': " in result.stderr
+
+
 def test_a_reserved_well_id_is_refused_up_to_case(tmp_path: Path, survey: Path) -> None:
     manifest = _manifest(tmp_path, "LEDGER.SQLITE,a.csv\n")
     result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")

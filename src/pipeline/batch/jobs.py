@@ -99,7 +99,12 @@ def jobs_from_manifest(
             cell = values.pop(name)
             if not cell:
                 raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: no file for {name!r}")
-            inputs[name] = (base / cell).resolve()
+            try:
+                inputs[name] = (base / cell).resolve()
+            except (OSError, RuntimeError) as exc:  # a symlink loop (RuntimeError before 3.13)
+                raise BatchConfigError(
+                    f"{manifest}:{line}: well {well_id!r}: {name} {cell!r}: {exc}"
+                ) from None
         overrides = {k: v for k, v in values.items() if v}
         try:
             well = defaults.merged(WellMetadata.model_validate(overrides))
