@@ -59,31 +59,24 @@ def test_a_quoted_line_break_in_a_manifest_id_is_refused_at_its_line(
     assert not out.exists()
 
 
-def test_a_record_after_a_multiline_one_is_named_by_its_own_line(
-    tmp_path: Path, survey: Path
+@pytest.mark.parametrize(
+    ("rows", "refusal"),
+    [
+        # a record after a multi-line one is named by its own line (3 cells on line 2)
+        ('w0,"a.csv\n",x\nw1,a.csv\n', ":2: 3 cells, the header has 2"),
+        # fuzz finding: resolving a symlink loop raised RuntimeError out of the reader
+        ("w1,loop.csv\n", ":2: well 'w1': stations 'loop.csv': "),
+        ("LEDGER.SQLITE,a.csv\n", ":2: well id 'LEDGER.SQLITE' names a file the batch keeps"),
+    ],
+)
+def test_manifest_rows_refused_at_their_line(
+    tmp_path: Path, survey: Path, rows: str, refusal: str
 ) -> None:
-    manifest = _manifest(tmp_path, 'w0,"a.csv\n",x\nw1,a.csv\n')  # 3 cells on line 2
-    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
-    assert result.returncode == 2
-    assert f"{manifest}:2: 3 cells, the header has 2" in result.stderr
-
-
-def test_a_manifest_cell_naming_a_symlink_loop_is_refused_at_its_line(
-    tmp_path: Path, survey: Path
-) -> None:
-    """Fuzz finding: resolving the loop raised RuntimeError out of the manifest reader."""
     (tmp_path / "loop.csv").symlink_to(tmp_path / "loop.csv")
-    manifest = _manifest(tmp_path, "w1,loop.csv\n")
+    manifest = _manifest(tmp_path, rows)
     result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
     assert result.returncode == 2
-    assert f"error: {manifest}:2: well 'w1': stations 'loop.csv': " in result.stderr
-
-
-def test_a_reserved_well_id_is_refused_up_to_case(tmp_path: Path, survey: Path) -> None:
-    manifest = _manifest(tmp_path, "LEDGER.SQLITE,a.csv\n")
-    result = gyropipe_cli("batch", survey, "--manifest", manifest, "--out", tmp_path / "out")
-    assert result.returncode == 2
-    assert f"{manifest}:2: well id 'LEDGER.SQLITE' names a file the batch keeps" in result.stderr
+    assert f"error: {manifest}{refusal}" in result.stderr
 
 
 def test_a_well_id_from_a_file_name_ending_in_a_newline_is_refused(
