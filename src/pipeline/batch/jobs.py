@@ -135,7 +135,8 @@ def jobs_from_glob(
     jobs: list[WellJob] = []
     seen: dict[str, tuple[str, Path]] = {}  # casefolded id → (id, file)
     for path in files:
-        well_id = _well_id(path.stem, str(path))
+        shown = str(path) if str(path).isprintable() else repr(str(path))  # one line
+        well_id = _well_id(path.stem, shown)
         if (same := seen.get(well_id.casefold())) is not None:
             first, first_path = same
             what = (
