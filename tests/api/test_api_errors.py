@@ -7,6 +7,7 @@ a simulation plan that does not validate, a parameter that is not finite."""
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -86,3 +87,12 @@ def test_bad_arguments_raise_a_gyropipe_error(
     with pytest.raises(gp.GyropipeError) as caught:
         BAD_CALLS[name]()
     assert "\n" not in str(caught.value).strip()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_reading_a_fifo_says_what_it_is_without_blocking(tmp_path: Path) -> None:
+    """Fuzz finding: a FIFO was 'no such file'."""
+    fifo = tmp_path / "survey.csv"
+    os.mkfifo(fifo)
+    with pytest.raises(gp.GyropipeError, match=r"survey.csv: not a regular file \(a FIFO\)"):
+        gp.read(fifo)
