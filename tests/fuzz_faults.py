@@ -361,7 +361,7 @@ def cli_outcome(result: CliResult, paths: list[Path]) -> tuple[str, str]:
     if result.returncode == 0:
         return "accepted", f"exit 0{'; warned' if 'warning:' in result.stderr else ''}"
     lines = result.stderr.splitlines()
-    errors = [line for line in lines if line.startswith(("error:", "Error:"))]  # click's too
+    errors = _error_block(lines)
     if "Traceback" in result.stderr:
         return "traceback", f"exit {result.returncode}: {result.stderr.strip()[-600:]}"
     failed = [e for e in map(_event, lines) if e.get("status") == "failed"]
@@ -372,6 +372,15 @@ def cli_outcome(result: CliResult, paths: list[Path]) -> tuple[str, str]:
     if not errors:
         return "traceback", f"exit {result.returncode}: {result.stderr.strip()[-600:]}"
     return _refused_or_unlocated("\n".join(errors), paths)
+
+
+def _error_block(lines: list[str]) -> list[str]:
+    """The ``error:`` lines (click's ``Error:`` too) and the indented problems each lists."""
+    block: list[str] = []
+    for line in lines:
+        if line.startswith(("error:", "Error:")) or (block and line.startswith("  ")):
+            block.append(line)
+    return block
 
 
 def _event(line: str) -> dict[str, Any]:
@@ -386,8 +395,8 @@ def _event(line: str) -> dict[str, Any]:
 
 
 def _refused_or_unlocated(message: str, paths: list[Path]) -> tuple[str, str]:
-    """Refused if every error line of ``message`` names a file (one of ``paths``, or any
-    absolute path), else unlocated."""
+    """Refused if ``message`` (an error and the problems it lists) names a file (one of
+    ``paths``, or any absolute path), else unlocated."""
     lines = [line for line in message.strip().splitlines() if line.strip()] or [""]
-    named = all(any(p.name in line for p in paths) or "/" in line for line in lines)
+    named = any(p.name in message for p in paths) or "/" in message
     return ("refused" if named else "unlocated"), " | ".join(lines)[:600]
