@@ -67,6 +67,7 @@ def test_a_quoted_line_break_in_a_manifest_id_is_refused_at_its_line(
         # fuzz finding: resolving a symlink loop raised RuntimeError out of the reader
         ("w1,loop.csv\n", ":2: well 'w1': stations 'loop.csv': "),
         ("LEDGER.SQLITE,a.csv\n", ":2: well id 'LEDGER.SQLITE' names a file the batch keeps"),
+        ("", ":1: no wells listed below the header"),  # fuzz finding: the header's line
     ],
 )
 def test_manifest_rows_refused_at_their_line(

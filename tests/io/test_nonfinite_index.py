@@ -85,3 +85,13 @@ def test_the_csv_writer_writes_infinite_values_as_empty_cells(tmp_path: Path) ->
     path = tmp_path / "w.csv"
     write_csv(pa.table({"a": [1.0, math.inf, -math.inf, math.nan]}), path, WellMetadata())
     assert path.read_text().splitlines()[-5:] == ["a", "1", "", "", ""]
+
+
+def test_the_las_writer_refuses_a_log_indexed_by_text(tmp_path: Path) -> None:
+    """Fuzz finding: a log whose first column was text was written indexed on the next
+    curve (repeating values), a copy no reader takes back; gp.write says so typed."""
+    path = tmp_path / "log.las"
+    table = pa.table({"DEPT": ["a", "b", "c"], "GR": [1.0, 1.0, 3.0]})
+    with pytest.raises(gp.GyropipeError, match=r"the first column 'DEPT' is text"):
+        gp.write(table, path)
+    assert not path.exists()

@@ -128,8 +128,13 @@ def write(data: TableLike, path: str | Path, *, writer: str | None = None) -> Pa
         raise ParameterError(f"no writer named {writer!r} (installed: {', '.join(reg.writers)})")
     table = to_table(data, what="table to write")
     well = well_of_data(data)
-    with atomic_path(target) as tmp:
-        chosen.write(attach(table, well), tmp, well)
+    try:
+        with atomic_path(target) as tmp:
+            chosen.write(attach(table, well), tmp, well)
+    except ValueError as exc:  # a table the format cannot hold
+        raise ParameterError(
+            f"{target}: writer {chosen.name!r} cannot hold the table: {exc}"
+        ) from None
     return target
 
 

@@ -115,7 +115,7 @@ def jobs_from_manifest(
             raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: {problems}") from None
         jobs.append(WellJob(well_id, inputs, well))
     if not jobs:
-        raise BatchConfigError(f"{manifest}: no wells listed below the header")
+        raise BatchConfigError(f"{manifest}:{header_line}: no wells listed below the header")
     return jobs
 
 
