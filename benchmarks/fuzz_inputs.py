@@ -6,7 +6,9 @@ examples of every outcome that is not ``accepted`` or ``refused``, each saved un
 ``--out`` for reproduction (the input file, and a ``.txt`` with the mutations, the outcome
 and the command that replays it). Exits 1 if any input broke the contract (a traceback, a
 hang, non-finite or contract-breaking output, an unreadable copy, a validate reporting one
-of two problems) or printed a warning other than gyropipe's own (NumPy's overflow…).
+of two problems, a peak resident memory past 1 GiB) or printed a warning other than
+gyropipe's own (NumPy's overflow…). The fault kinds (``tests/fuzz_faults.py``: special files
+in a manifest, a corrupted ledger, file-system faults) run as the input kinds do.
 
     python benchmarks/fuzz_inputs.py --count 10000 --seed 1 --out /tmp/fuzz --jobs 2
     python benchmarks/fuzz_inputs.py --replay csv-stations 4711 --seed 1   # one input again
@@ -40,6 +42,10 @@ from fuzz_support import (  # noqa: E402  (tests/ is put on the path first)
 
 WARNED = "warned"
 """Inputs that raised a warning other than InputFileWarning (counted beside the outcomes)."""
+BIG = "over-1GiB"
+"""Inputs that raised the process's peak resident memory past :data:`OVER` (counted beside
+the outcomes, as a contract breach)."""
+OVER = 2**30
 SHOWN = (ACCEPTED, REFUSED)
 """Outcomes that need no example."""
 COST = {"las-samples": 5, "csv-readings": 5, "parquet": 4, "witsml": 4, "csv-samples": 3}
@@ -92,9 +98,12 @@ def main() -> int:
             for example in examples:
                 print(f"  #{example['index']} {example['mutations']}\n    {example['detail']}")
                 print(f"    saved: {example['file']}")
-    summary = {k: {"counts": dict(c), "seconds": by_kind[k]["seconds"]} for k, c in counts.items()}
+    summary = {
+        k: {"counts": dict(c), **{m: by_kind[k][m] for m in ("seconds", "peak_rss_mib")}}
+        for k, c in counts.items()
+    }
     (out / "summary.json").write_text(json.dumps({"seed": args.seed, "kinds": summary}, indent=2))
-    bad = sum(c[label] for c in counts.values() for label in BAD)
+    bad = sum(c[label] for c in counts.values() for label in (*BAD, BIG))
     warned = sum(c[WARNED] for c in counts.values())
     print(
         f"\n{'FAIL' if bad or warned else 'ok'}: {bad} input(s) broke the contract, {warned} "
@@ -112,9 +121,17 @@ def _run_kind(task: tuple[str, int, int, Path, int, float, float]) -> dict[str, 
     examples: dict[str, list[dict[str, object]]] = {}
     started = time.perf_counter()
     slowest = 0.0
+    peak = _peak_rss()
     for outcome in fuzzer.fuzz(kind, seed, count):
         counts[outcome.label] += 1
         slowest = max(slowest, outcome.seconds)
+        if (now := _peak_rss()) > peak:  # this input raised the process's peak
+            peak = now
+            if now > OVER:
+                counts[BIG] += 1
+                big = examples.setdefault(BIG, [])
+                if len(big) < keep:
+                    big.append(_save(outcome, out, seed, f"peak RSS {now / 2**20:.0f} MiB", BIG))
         kept = examples.setdefault(outcome.label, []) if outcome.label not in SHOWN else None
         if kept is not None and len(kept) < keep:
             kept.append(_save(outcome, out, seed))
@@ -127,19 +144,33 @@ def _run_kind(task: tuple[str, int, int, Path, int, float, float]) -> dict[str, 
         if done % 250 == 0:
             print(f"  {kind}: {done}/{count} {dict(counts)}", flush=True)
     seconds = time.perf_counter() - started
-    print(f"  {kind}: done in {seconds:.0f} s (slowest input {slowest:.2f} s)", flush=True)
+    print(
+        f"  {kind}: done in {seconds:.0f} s (slowest input {slowest:.2f} s, peak RSS "
+        f"{peak / 2**20:.0f} MiB)",
+        flush=True,
+    )
     return {
         "kind": kind,
         "counts": dict(counts),
         "examples": examples,
         "seconds": round(seconds, 1),
+        "peak_rss_mib": round(peak / 2**20),
     }
 
 
-def _save(outcome: Outcome, out: Path, seed: int, note: str = "") -> dict[str, object]:
+def _peak_rss() -> int:
+    """The process's peak resident set so far, bytes (Linux reports KiB). No input peaks
+    above it: a peak below 1 GiB bounds every input's; an input that raises it past 1 GiB
+    is counted as :data:`BIG`."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def _save(
+    outcome: Outcome, out: Path, seed: int, note: str = "", label: str = WARNED
+) -> dict[str, object]:
     where = out / outcome.kind
     where.mkdir(parents=True, exist_ok=True)
-    path = where / f"{WARNED if note else outcome.label}-{outcome.index}{outcome.suffix}"
+    path = where / f"{label if note else outcome.label}-{outcome.index}{outcome.suffix}"
     path.write_bytes(outcome.data)
     replay = (
         f"python benchmarks/fuzz_inputs.py --replay {outcome.kind} {outcome.index} --seed {seed}"
@@ -149,7 +180,7 @@ def _save(outcome: Outcome, out: Path, seed: int, note: str = "") -> dict[str, o
         f"mutations: {list(outcome.mutations)}\nseconds: {outcome.seconds:.3f}\n"
         f"detail: {outcome.detail}\nreplay: {replay}\n"
     )
-    detail = f"{outcome.label}; warned: {note}" if note else outcome.detail
+    detail = f"{outcome.label}; {label}: {note}" if note else outcome.detail
     detail = detail if len(detail) < 600 else detail[:600] + " …"
     return {
         "index": outcome.index,

@@ -51,6 +51,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from fuzz_faults import FAULT_KINDS, FS_FAULT, LEDGER, MANIFEST_SPECIAL, Faults, make_fault
 from hostile_inputs import HOSTILE
 from pipeline.contracts import UNIT_KEY, VERTICAL_TOLERANCE, TableContract
 from pipeline.convert import convert, read_kind
@@ -209,7 +210,7 @@ class InputKind:
     name: str
     suffix: str
     family: str
-    """``text``, ``binary``, ``yaml``, ``manifest``"""
+    """``text``, ``binary``, ``yaml``, ``manifest``, ``fault`` (made and run by ``fuzz_faults``)"""
     expect: str | None
     """the table kind asked for (None: the seed's name is its kind, as for Parquet, or the
     file is no table: YAML, manifests)"""
@@ -303,6 +304,8 @@ MANIFEST = (
     'K_7.b,sub/k7.csv,-12.5,120.25,"SN, 7"\n'
 )
 MANIFEST_INPUTS = ("stations",)
+SPECIAL_MANIFEST = b"well_id,stations\nA-1,a.csv\nB-2,a.csv\n"
+"""The manifest whose cells ``fuzz_faults`` points at special files."""
 STATIONS_PLAN = (
     "name: stations-plan\nseed: 1\n"
     "site: {latitude: 61.25, longitude: 73.4, elevation: 54.3, date: 2026-11-21}\n"
@@ -312,7 +315,7 @@ STATIONS_PLAN = (
 )
 
 
-KIND_NAMES = (
+INPUT_KIND_NAMES = (
     "las-stations",
     "las-samples",
     "las-log",
@@ -326,7 +329,10 @@ KIND_NAMES = (
     "plan",
     "manifest",
 )
-"""Every input kind fuzzed (:func:`build_kinds` makes their seeds)."""
+"""Every kind of input file fuzzed by mutating its bytes."""
+KIND_NAMES = (*INPUT_KIND_NAMES, *FAULT_KINDS)
+"""Every kind fuzzed (:func:`build_kinds` makes their seeds): the input files, then the
+fault kinds of ``fuzz_faults`` (special files, a corrupted ledger, file-system faults)."""
 
 
 def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
@@ -448,6 +454,9 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             ),
         ),
         InputKind("manifest", ".csv", "manifest", None, (Seed("manifest", MANIFEST.encode()),)),
+        InputKind(MANIFEST_SPECIAL, ".csv", "fault", None, (Seed("manifest", SPECIAL_MANIFEST),)),
+        InputKind(LEDGER, ".json", "fault", None, (Seed("faults", b"[]"),)),
+        InputKind(FS_FAULT, ".json", "fault", None, (Seed("faults", b"[]"),)),
     ]
     assert tuple(k.name for k in kinds) == KIND_NAMES
     return {k.name: k for k in kinds}
@@ -957,6 +966,7 @@ class Fuzzer:
         self.kinds = build_kinds(self.registry, work / "seeds")
         self.inputs = work / "inputs"
         self.inputs.mkdir(parents=True, exist_ok=True)
+        self.faults = Faults(work / "faults", self.registry)
         stations = "stations-j-well.csv"  # the stations file of the stations plan
         (self.inputs / stations).write_bytes((work / "seeds" / stations).read_bytes())
 
@@ -968,11 +978,15 @@ class Fuzzer:
         rng = random.Random(f"{seed}/{kind.name}/{index}")
         source = rng.choice(kind.seeds)
         ctx = Context(kind, source, self._rewriter(kind), table=source.table)
-        ops, weights = zip(*OPS[kind.family], strict=True)
+        ops, weights = zip(*OPS.get(kind.family, OPS["text"]), strict=True)
         if kind.name == "pipeline":
             ops, weights = (*ops, _two_faults), (*weights, 1)
         if kind.name == "mcap":
             ops, weights = (*ops, _mcap_op), (*weights, 8)
+        if kind.family == "fault":  # made by fuzz_faults: no byte-level mutations
+            data, what = make_fault(kind.name, rng, source.data)
+            ctx.notes.add(what)
+            return data, source, ctx
         if kind.name in HOSTILE:
             ops, weights = (*ops, _hostile_op), (*weights, 1)
         data = source.data
@@ -1063,6 +1077,8 @@ class Fuzzer:
             return self._run_pipeline(path, ctx)
         if kind.name == "plan":
             return self._run_plan(path)
+        if kind.family == "fault":
+            return self.faults.run(kind.name, path.read_bytes(), index)
         return self._run_manifest(path)
 
     def _run_table(self, kind: InputKind, path: Path, source: Seed, index: int) -> tuple[str, str]:

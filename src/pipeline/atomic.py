@@ -95,7 +95,18 @@ def _replace_dir(staging: Path, final: Path) -> None:
     fsync_dir(final.parent)
     if staging.parent != final.parent:
         fsync_dir(staging.parent)
-    shutil.rmtree(trash, ignore_errors=True)
+    discard(trash)
+
+
+def discard(path: Path) -> None:
+    """Delete ``path``, whatever it is, never following a link: a directory tree, or the
+    symlink itself (an old well directory that was a link to a user's directory: the link
+    goes, what it points to stays). Errors are ignored, as for leftovers of a dead run."""
+    if path.is_symlink() or (path.exists() and not path.is_dir()):
+        with contextlib.suppress(OSError):
+            path.unlink()
+        return
+    shutil.rmtree(path, ignore_errors=True)
 
 
 def _exchange(a: Path, b: Path) -> bool:

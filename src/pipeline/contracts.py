@@ -310,7 +310,7 @@ def _check_column(
         )
     if not spec.nullable and col.null_count:
         mask = pc.is_null(col).to_numpy(zero_copy_only=False)
-        failures.append(_failure(spec.name, "not null", "no missing values", mask, col))
+        failures.append(rule_failure(spec.name, "not null", "no missing values", mask, col))
     if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
         failures.extend(_check_numbers(spec, col, groups, _undefined_at_vertical(spec, table)))
     return failures
@@ -361,7 +361,7 @@ def _check_numbers(
             if spec.undefined_at_vertical
             else "finite numbers (no NaN/inf)"
         )
-        failures.append(_failure(spec.name, "finite", expected, bad, col))
+        failures.append(rule_failure(spec.name, "finite", expected, bad, col))
     bounds = (  # (bound, symbol, test of a bad value, extreme that shows any bad value)
         (spec.ge, ">=", np.less, lo),
         (spec.le, "<=", np.greater, hi),
@@ -373,7 +373,9 @@ def _check_numbers(
             bad = bad_op(values, bound)
             if valid is not None:
                 bad &= valid
-            failures.append(_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col))
+            failures.append(
+                rule_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col)
+            )
     if spec.monotonic and len(values) > 1:
         compare = np.less_equal if spec.monotonic == "strict" else np.less
         bad_step = compare(values[1:], values[:-1])
@@ -392,13 +394,16 @@ def _check_numbers(
                 scope = " within each group" if groups is not None else ""
                 if spec.min_step is not None:
                     scope += f", by at least {spec.min_step:g} {spec.unit or ''}".rstrip()
-                failures.append(_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col))
+                failures.append(
+                    rule_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
+                )
     return failures
 
 
-def _failure(
+def rule_failure(
     name: str, rule: str, expected: str, bad: np.ndarray, col: pa.ChunkedArray
 ) -> RuleFailure:
+    """The failure of ``rule`` on column ``name`` at the rows ``bad`` marks (a few shown)."""
     rows = np.flatnonzero(bad)
     examples = tuple((int(i), col[int(i)].as_py()) for i in rows[:EXAMPLES])
     return RuleFailure(name, rule, expected, bad_rows=len(rows), examples=examples)

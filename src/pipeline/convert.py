@@ -28,6 +28,7 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
+from pipeline.hashing import file_kind
 from pipeline.registry import Registry, WriterDef
 from pipeline.well import WellMetadata, attach
 
@@ -84,7 +85,11 @@ def read_kind(
 ) -> tuple[pa.Table, WellMetadata, str]:
     """:func:`read_any`, also returning the kind read."""
     if not path.is_file():
-        raise InputFileError(path, "no such file")
+        try:
+            mode = path.stat().st_mode
+        except OSError:  # missing, a dangling link, a loop
+            raise InputFileError(path, "no such file") from None
+        raise InputFileError(path, f"not a regular file ({file_kind(mode)}): give a file")
     if kind != "auto":
         try:
             table, well = registry.read(path, kind, reader=reader, options=options, well=defaults)

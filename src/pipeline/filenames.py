@@ -20,7 +20,9 @@ MAX_LENGTH = 200
 """Longest output file name (file systems allow 255 bytes; report stages add ``.html``)."""
 RESERVED = frozenset({MANIFEST})
 """Names the runner itself writes in the output directory."""
-PLAIN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+NAME_CHARACTERS = r"[A-Za-z0-9][A-Za-z0-9._-]*"
+PLAIN = re.compile(rf"{NAME_CHARACTERS}\Z")
+"""A plain name, matched to its very end (``$`` would also match before a final newline)."""
 
 
 def check_output_filename(name: str) -> str:
@@ -34,7 +36,7 @@ def check_output_filename(name: str) -> str:
         )
     if name in (".", ".."):
         raise ValueError("not a file name")
-    if name in RESERVED:
+    if name.casefold() in RESERVED:  # one file on a case-insensitive file system
         raise ValueError(f"{name} is the run's manifest: choose another output file name")
     if len(name) > MAX_LENGTH:
         raise ValueError(f"an output file name has at most {MAX_LENGTH} characters")
@@ -49,6 +51,6 @@ def check_output_filename(name: str) -> str:
 OutputFilename = Annotated[
     str,
     AfterValidator(check_output_filename),
-    Field(json_schema_extra={"pattern": PLAIN.pattern, "maxLength": MAX_LENGTH}),
+    Field(json_schema_extra={"pattern": f"^{NAME_CHARACTERS}$", "maxLength": MAX_LENGTH}),
 ]
 """A stage parameter naming a file in the run's output directory (see the module doc)."""

@@ -3,7 +3,8 @@ wired, contracts matched and an execution order found — or every problem, loca
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -165,6 +166,22 @@ def _params(
             for p in validation_problems(exc, ("stages", pos, "with"), source, definition.params)
         ]
         return None
+    unfinite = [  # 1e400 (text to YAML) is inf to pydantic: no parameter is meant so
+        Problem(
+            source.locate(
+                ("stages", pos, "with", *path)
+                if path[0] in stage.with_
+                else ("defaults", "with", *path)
+            ),
+            f"stage {stage.id!r} ({stage.uses}): {'.'.join(map(str, path))} is {value!r}: "
+            "expected a finite number",
+        )
+        for path, value in not_finite(model.model_dump(by_alias=True))
+        if path[0] in values  # given, not a default of the stage's own
+    ]
+    if unfinite:
+        problems += unfinite
+        return None
     for name, info in fields.items():
         extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
         value = getattr(model, name)
@@ -177,6 +194,21 @@ def _params(
                 )
             )
     return model
+
+
+def not_finite(
+    value: Any, path: tuple[str | int, ...] = ()
+) -> Iterator[tuple[tuple[str | int, ...], float]]:
+    """The path and value of every float in ``value`` (mappings and lists walked) that is
+    NaN or ±inf."""
+    if isinstance(value, float) and not math.isfinite(value):
+        yield path, value
+    elif isinstance(value, Mapping):
+        for key, item in value.items():
+            yield from not_finite(item, (*path, key))
+    elif isinstance(value, list | tuple):
+        for i, item in enumerate(value):
+            yield from not_finite(item, (*path, i))
 
 
 def _options_hint(stage: StageSpec, fields: Mapping[str, Any], problem: Problem) -> str:
@@ -288,7 +320,14 @@ def _check_persist(
     if isinstance(stage.persist, bool):
         return
     for j, port in enumerate(stage.persist):
-        if port not in definition.outputs:
+        if port in stage.persist[:j]:
+            problems.append(
+                Problem(
+                    source.locate(("stages", pos, "persist", j)),
+                    f"stage {stage.id!r} persists {port!r} twice: name each output once",
+                )
+            )
+        elif port not in definition.outputs:
             problems.append(
                 Problem(
                     source.locate(("stages", pos, "persist", j)),

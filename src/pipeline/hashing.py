@@ -32,7 +32,12 @@ _KINDS = {
 }
 
 
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular one is, in words (``a FIFO``), from its mode."""
+    return next((name for test, name in _KINDS.items() if test(mode)), "something else")
+
+
 def _require_regular(path: Path, mode: int) -> None:
     if not stat.S_ISREG(mode):
-        kind = next((name for test, name in _KINDS.items() if test(mode)), "something else")
+        kind = file_kind(mode)
         raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))

@@ -36,7 +36,7 @@ from pipeline.streams import Port, TableStream
 from pipeline.tables import Stations
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
-NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
+NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*\Z")
 PIPELINE_INPUT = "x-pipeline-input"
 """JSON-schema marker of a params field that names one of the pipeline's ``inputs``."""
 
@@ -298,7 +298,7 @@ class ToolModelDef:
     description: str = ""
 
 
-TOOL_MODEL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
+TOOL_MODEL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*\Z")
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from typing import Any, TypeAlias, TypeVar
 
 import pyarrow as pa
 
-from pipeline.atomic import atomic_write_bytes, fsync_file, replace_dir
+from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import (
     ContractViolation,
@@ -665,7 +665,7 @@ def remove_stale_staging(directory: Path) -> list[Path]:
     for entry in directory.glob(f".*{STAGING_PREFIX}*"):
         pid_text = entry.name.split(STAGING_PREFIX, 1)[1].split("-", 1)[0]
         if pid_text.isdigit() and not process_alive(int(pid_text)):
-            shutil.rmtree(entry, ignore_errors=True)
+            discard(entry)
             removed.append(entry)
     return removed
 

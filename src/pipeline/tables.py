@@ -6,9 +6,23 @@ columns state their north reference (true, grid or magnetic) in field metadata.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import ClassVar
 
-from pipeline.contracts import TableContract, column
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+
+from pipeline.contracts import (
+    SOURCE_KEY,
+    SOURCE_LINE,
+    UNIT_KEY,
+    TableContract,
+    column,
+    rule_failure,
+)
+from pipeline.errors import ContractViolation, RuleFailure, UnitError
+from pipeline.units import conversion_factor
 
 DLS_COURSE_M = 30.0
 """Course length of the dogleg severity unit, m."""
@@ -340,4 +354,82 @@ class LogTable(TableContract):
     """A well log as read: the index (depth, time or what the file is indexed by) first,
     then any curves, each with the unit its file gives in the field's ``unit`` metadata
     (not converted); float64 curves hold NaN for no value, text curves null. No column is
-    required: a log has whatever curves it was logged with."""
+    required: a log has whatever curves it was logged with.
+
+    The index is a log's key: numbers, finite and strictly monotonic (increasing, or
+    decreasing throughout: a log recorded upwards), never null; text only where its unit is
+    no length or time (a time of day, ``HHMMSS``). A float curve holds no ±inf (NaN is its
+    only marker of no value)."""
+
+    @classmethod
+    def validate_table(cls, table: pa.Table) -> None:
+        super().validate_table(table)
+        failures = _log_failures(table)
+        if failures:
+            if SOURCE_LINE in table.column_names:
+                lines = table.column(SOURCE_LINE)
+                failures = [
+                    replace(f, lines=tuple(int(lines[i].as_py()) for i, _ in f.examples))
+                    for f in failures
+                ]
+            source = (table.schema.metadata or {}).get(SOURCE_KEY, b"")
+            raise ContractViolation("LogTable", failures, source=source.decode("utf-8", "replace"))
+
+
+FINITE_NUMBER = r"^\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\s*$"
+"""A text cell spelling a number (not inf or NaN)."""
+
+
+def _log_failures(table: pa.Table) -> list[RuleFailure]:
+    """The rules a log's index (its first column) and float curves break (:class:`LogTable`)."""
+    names = [n for n in table.column_names if n != SOURCE_LINE]
+    failures = []
+    if names and table.num_rows:
+        failure = _index_failure(table.schema.field(names[0]), table.column(names[0]))
+        if failure is not None:
+            failures.append(failure)
+    for name in names[1:]:
+        col = table.column(name)
+        if pa.types.is_floating(col.type):
+            bad = np.isinf(col.to_numpy(zero_copy_only=False))
+            if bad.any():
+                failures.append(rule_failure(name, "finite", "numbers or NaN (no ±inf)", bad, col))
+    return failures
+
+
+def _index_failure(field: pa.Field, col: pa.ChunkedArray) -> RuleFailure | None:
+    """Why ``col`` cannot index a log, or None."""
+    expected = "finite, strictly monotonic numbers (the log's index)"
+    if pa.types.is_string(col.type) or pa.types.is_large_string(col.type):
+        if not _measured(field):
+            return None  # a time of day, a date: the index as written
+        number = pc.match_substring_regex(col, FINITE_NUMBER).fill_null(False)
+        return rule_failure(
+            field.name, "index", expected, ~number.to_numpy(zero_copy_only=False), col
+        )
+    if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+        return None
+    values = col.to_numpy(zero_copy_only=False).astype(np.float64)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        return rule_failure(field.name, "index", expected, bad, col)
+    steps = np.greater(values[1:], values[:-1]).astype(np.int8) - np.less(
+        values[1:], values[:-1]
+    )  # the sign of each step (a difference may pass the float range)
+    moving = steps[steps != 0]
+    direction = moving[0] if moving.size else 1.0  # decreasing throughout: recorded upwards
+    bad[1:] = steps != direction
+    return rule_failure(field.name, "index", expected, bad, col) if bad.any() else None
+
+
+def _measured(field: pa.Field) -> bool:
+    """Whether a field's unit is a length or a time (its values must be numbers)."""
+    raw = (field.metadata or {}).get(UNIT_KEY)
+    unit = raw.decode("utf-8", "replace") if raw else ""
+    for quantity in ("length", "time"):
+        try:
+            conversion_factor(unit, quantity)
+        except UnitError:
+            continue
+        return bool(unit)
+    return False

@@ -21,12 +21,13 @@ the column — never silently used.
 from __future__ import annotations
 
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import TYPE_CHECKING, Any, TypeAlias, TypeGuard
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
+from pydantic import ValidationError
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
@@ -35,6 +36,9 @@ from pipeline.well import WellMetadata, attach, well_of
 
 if TYPE_CHECKING:
     import pandas as pd
+
+PANDAS_KEY = b"pandas"
+"""Schema metadata pandas writes (and pyarrow reads back) to restore an index and dtypes."""
 
 TableLike: TypeAlias = "pd.DataFrame | pa.Table"
 """A table the API takes: a pandas DataFrame or an Arrow table."""
@@ -50,9 +54,15 @@ def well_metadata(*wells: WellLike) -> WellMetadata:
     for well in wells:
         if well is None:
             continue
-        merged = merged.merged(
-            well if isinstance(well, WellMetadata) else WellMetadata.model_validate(dict(well))
-        )
+        if isinstance(well, WellMetadata):
+            merged = merged.merged(well)
+            continue
+        if not isinstance(well, Mapping):
+            raise ParameterError(f"well: expected a mapping of well metadata fields, got {well!r}")
+        try:
+            merged = merged.merged(WellMetadata.model_validate(dict(well)))
+        except ValidationError as exc:
+            raise ParameterError(f"well: {describe(exc)}") from None
     return merged
 
 
@@ -66,6 +76,8 @@ def well_of_data(data: TableLike) -> WellMetadata:
     """The well metadata a table carries (none: empty)."""
     if is_frame(data):
         return well_metadata(data.attrs.get("well"))
+    if not isinstance(data, pa.Table):
+        raise ParameterError(f"expected a pandas DataFrame or a pyarrow Table, got {data!r}")
     return well_of(data) or WellMetadata()
 
 
@@ -86,7 +98,9 @@ def to_table(
         table = data
         north = None
     else:
-        raise TypeError(f"{what}: expected a pandas DataFrame or a pyarrow Table, got {data!r}")
+        raise ParameterError(
+            f"{what}: expected a pandas DataFrame or a pyarrow Table, got {data!r}"
+        )
     if contract is None:
         return table
     units = {f.name: f.metadata[UNIT_KEY].decode() for f in table.schema if _has(f, UNIT_KEY)}
@@ -110,19 +124,35 @@ def to_table(
                 "well={'north_reference': …}"
             )
         fields.append(spec.field(ref if spec.north_reference else None))
-        arrays.append(array.cast(spec.type) if array.type != spec.type else array)
+        try:
+            arrays.append(array.cast(spec.type) if array.type != spec.type else array)
+        except (pa.ArrowInvalid, pa.ArrowNotImplementedError) as exc:  # text in a number column
+            raise ParameterError(
+                f"{what}: column {field.name!r} ({array.type}) is not {spec.type}: {exc}"
+            ) from None
     out = pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=table.schema.metadata))
     return out
 
 
 def to_frame(table: pa.Table) -> pd.DataFrame:
     """``table`` as a DataFrame whose ``attrs`` hold the units, the north reference (when the
-    table has one) and the well metadata."""
+    table has one) and the well metadata. A ``pandas`` schema metadata item that pyarrow
+    cannot use (not JSON, not pandas' form) is a :class:`ParameterError`."""
     import pandas as pd
 
+    if not isinstance(table, pa.Table):
+        raise ParameterError(f"to_frame: expected a pyarrow Table, got {table!r}")
     nullable = {pa.int64(): pd.Int64Dtype(), pa.int32(): pd.Int32Dtype()}
     nullable_float = {pa.float64(): pd.Float64Dtype(), pa.float32(): pd.Float32Dtype()}
-    frame: pd.DataFrame = table.to_pandas(types_mapper=nullable.get)
+    try:
+        frame: pd.DataFrame = table.to_pandas(types_mapper=nullable.get)
+    except Exception as exc:  # pyarrow's own parsing of a file's "pandas" metadata
+        if not _pandas_metadata_at_fault(table):
+            raise
+        raise ParameterError(
+            "the table's pandas metadata (schema metadata 'pandas') cannot be used: "
+            f"{type(exc).__name__}: {exc}"
+        ) from None
     for name, column in zip(table.column_names, table.columns, strict=True):
         if pa.types.is_floating(column.type) and column.null_count:  # null is not NaN
             frame[name] = column.to_pandas(types_mapper=nullable_float.get)
@@ -138,6 +168,20 @@ def to_frame(table: pa.Table) -> pd.DataFrame:
     if well is not None:
         frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
     return frame
+
+
+def _pandas_metadata_at_fault(table: pa.Table) -> bool:
+    """Whether ``table`` converts to a DataFrame once its ``pandas`` metadata is left out
+    (called after a conversion failed: the metadata was the fault, not the data)."""
+    meta = table.schema.metadata or {}
+    if PANDAS_KEY not in meta:
+        return False
+    rest = {k: v for k, v in meta.items() if k != PANDAS_KEY}
+    try:
+        table.replace_schema_metadata(rest).to_pandas()
+    except Exception:
+        return False
+    return True
 
 
 def _from_frame(data: pd.DataFrame) -> pa.Table:
@@ -187,3 +231,21 @@ def _factor(declared: str, canonical: str, field: pa.Field, what: str) -> float:
 
 def _has(field: pa.Field, key: bytes) -> bool:
     return field.metadata is not None and key in field.metadata
+
+
+def describe(exc: ValidationError) -> str:
+    """A pydantic error as ``field: problem (got value)`` items, one per problem."""
+    return "; ".join(_items(exc))
+
+
+def _items(exc: ValidationError) -> Iterator[str]:
+    for err in exc.errors():
+        where = ".".join(str(p) for p in err["loc"]) or "value"
+        if err["type"] == "extra_forbidden":
+            yield f"unknown parameter {where!r}"
+            continue
+        got = err.get("input")
+        shown = (
+            "" if err["type"] == "missing" or isinstance(got, dict | list) else f" (got {got!r})"
+        )
+        yield f"{where}: {err['msg']}{shown}"

@@ -11,6 +11,7 @@ east and TVD (down) from the wellhead.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -18,11 +19,13 @@ from typing import Any
 
 import pandas as pd
 import pyarrow as pa
+from pydantic import ValidationError
 
 from pipeline.api import stages
 from pipeline.api.frames import (
     TableLike,
     WellLike,
+    describe,
     like,
     to_frame,
     to_table,
@@ -31,7 +34,7 @@ from pipeline.api.frames import (
 )
 from pipeline.atomic import atomic_path, fsync_file
 from pipeline.convert import read_any, writer_for
-from pipeline.errors import ParameterError
+from pipeline.errors import InputFileError, ParameterError
 from pipeline.sim.spec import SimulationSpec, load_simulation
 from pipeline.stages.simulation import simulation_tables
 from pipeline.well import attach
@@ -80,8 +83,13 @@ def read(
     the file is one, else a log); ``reader``: a reader's name or ``auto`` (the engine's
     choice among the installed readers, plugins included, as in pipelines); ``options``: the
     reader's options; ``well``: metadata that fills what the file leaves out (e.g. the north
-    reference of azimuths the file does not name)."""
-    return to_frame(read_table(path, kind=kind, reader=reader, well=well, **options))
+    reference of azimuths the file does not name). A file whose pandas metadata is unusable
+    is an :class:`InputFileError`."""
+    table = read_table(path, kind=kind, reader=reader, well=well, **options)
+    try:
+        return to_frame(table)
+    except ParameterError as exc:  # the file's own pandas metadata (Parquet)
+        raise InputFileError(Path(path), str(exc)) from None
 
 
 def read_table(
@@ -94,6 +102,8 @@ def read_table(
 ) -> pa.Table:
     """:func:`read`, returning the Arrow table (units in the field metadata, the well
     metadata in the schema metadata)."""
+    if not isinstance(path, str | os.PathLike):
+        raise ParameterError(f"read: expected a file path, got {path!r}")
     given = well_metadata(well)
     table, header = read_any(
         stages.registry(), Path(path), kind=kind, reader=reader, options=options, well=given
@@ -108,15 +118,23 @@ def write(data: TableLike, path: str | Path, *, writer: str | None = None) -> Pa
     target = Path(path)
     reg = stages.registry()
     if writer is None:
-        chosen = writer_for(reg, target)
+        try:
+            chosen = writer_for(reg, target)
+        except ValueError as exc:  # an extension no writer has
+            raise ParameterError(str(exc)) from None
     elif writer in reg.writers:
         chosen = reg.writers[writer][0]
     else:
         raise ParameterError(f"no writer named {writer!r} (installed: {', '.join(reg.writers)})")
     table = to_table(data, what="table to write")
     well = well_of_data(data)
-    with atomic_path(target) as tmp:
-        chosen.write(attach(table, well), tmp, well)
+    try:
+        with atomic_path(target) as tmp:
+            chosen.write(attach(table, well), tmp, well)
+    except ValueError as exc:  # a table the format cannot hold
+        raise ParameterError(
+            f"{target}: writer {chosen.name!r} cannot hold the table: {exc}"
+        ) from None
     return target
 
 
@@ -252,7 +270,12 @@ def simulate(plan: str | Path | Mapping[str, Any], *, seed: int | None = None) -
     ``stations`` — or, for a free-gyro survey, its ``readings``."""
     read = _stations_reader
     if isinstance(plan, Mapping):
-        spec = SimulationSpec.model_validate({**plan, **({} if seed is None else {"seed": seed})})
+        try:
+            spec = SimulationSpec.model_validate(
+                {**plan, **({} if seed is None else {"seed": seed})}
+            )
+        except ValidationError as exc:
+            raise ParameterError(f"simulate: plan: {describe(exc)}") from None
         if hasattr(spec.well, "load"):
             spec.well.load(read)
     else:

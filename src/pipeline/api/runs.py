@@ -26,6 +26,10 @@ def definitive_survey(
     or lower), ``latitude``, ``magnetic``, ``basis``, ``surface_tie``, ``well_by_well``,
     ``confidence``… Returns ``survey`` (stations, positions, NEV covariance m², ellipses,
     run, tool model and source file per station) and ``overlap`` (the stations not listed)."""
+    if not isinstance(runs, Mapping):
+        raise ParameterError(
+            f"definitive_survey: runs: expected a mapping of run id to stations, got {runs!r}"
+        )
     options = dict(run_options or {})
     unknown = sorted(set(options) - set(runs))
     if unknown:

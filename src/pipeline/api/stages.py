@@ -7,16 +7,23 @@ compute the same thing.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
 from pydantic import ValidationError
 
-from pipeline.api.frames import TableLike, WellLike, to_table, well_metadata, well_of_data
+from pipeline.api.frames import (
+    TableLike,
+    WellLike,
+    describe,
+    to_table,
+    well_metadata,
+    well_of_data,
+)
 from pipeline.errors import MissingSiteError, ParameterError, StageError
-from pipeline.graph import PlannedStage
+from pipeline.graph import PlannedStage, not_finite
 from pipeline.plugins import shared_registry
 from pipeline.registry import Provenance, Registry, StageSetup
 from pipeline.runner import run_stage, start_time
@@ -50,6 +57,10 @@ def call(
         parsed = definition.params.model_validate(dict(params), context={"registry": reg})
     except ValidationError as exc:
         raise ParameterError(f"{uses}: {describe(exc)}") from None
+    for path, value in not_finite(parsed.model_dump(by_alias=True)):
+        if path[0] in params:  # given (1e400 is inf to pydantic), not a default of the stage
+            where = ".".join(map(str, path))
+            raise ParameterError(f"{uses}: {where} is {value!r}: expected a finite number")
     tables = {
         port: to_table(data, definition.inputs[port], what=f"{uses} input {port!r}", well=merged)
         for port, data in given.items()
@@ -82,21 +93,3 @@ def call(
         python = exc.__cause__.in_python()
         raise StageError(exc.stage_id, exc.uses, exc.plugin, python) from python
     return {port: attach(table, merged) for port, table in outs.items()}, merged, files
-
-
-def describe(exc: ValidationError) -> str:
-    """A pydantic error as ``field: problem (got value)`` items, one per problem."""
-    return "; ".join(_items(exc))
-
-
-def _items(exc: ValidationError) -> Iterator[str]:
-    for err in exc.errors():
-        where = ".".join(str(p) for p in err["loc"]) or "value"
-        if err["type"] == "extra_forbidden":
-            yield f"unknown parameter {where!r}"
-            continue
-        got = err.get("input")
-        shown = (
-            "" if err["type"] == "missing" or isinstance(got, dict | list) else f" (got {got!r})"
-        )
-        yield f"{where}: {err['msg']}{shown}"

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import csv
 import glob
+import io
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +25,7 @@ from pipeline.errors import GyropipeError
 from pipeline.well import WellMetadata
 
 WELL_ID_COLUMN = "well_id"
-WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
+WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}\Z")
 LEDGER = "ledger.sqlite"
 LEDGER_SIDECARS = ("-wal", "-shm", "-journal")
 """SQLite's files beside a ledger ``L``: ``L-wal``, ``L-shm``, ``L-journal``"""
@@ -65,7 +66,7 @@ def jobs_from_manifest(
         raise BatchConfigError(f"{manifest}: cannot read the manifest: {exc}") from None
     rows = [
         (number, cells)
-        for number, cells in enumerate(csv.reader(text.splitlines()), 1)
+        for number, cells in _records(text)
         if cells and any(c.strip() for c in cells) and not cells[0].lstrip().startswith("#")
     ]
     if not rows:
@@ -98,7 +99,12 @@ def jobs_from_manifest(
             cell = values.pop(name)
             if not cell:
                 raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: no file for {name!r}")
-            inputs[name] = (base / cell).resolve()
+            try:
+                inputs[name] = (base / cell).resolve()
+            except (OSError, RuntimeError) as exc:  # a symlink loop (RuntimeError before 3.13)
+                raise BatchConfigError(
+                    f"{manifest}:{line}: well {well_id!r}: {name} {cell!r}: {exc}"
+                ) from None
         overrides = {k: v for k, v in values.items() if v}
         try:
             well = defaults.merged(WellMetadata.model_validate(overrides))
@@ -109,7 +115,7 @@ def jobs_from_manifest(
             raise BatchConfigError(f"{manifest}:{line}: well {well_id!r}: {problems}") from None
         jobs.append(WellJob(well_id, inputs, well))
     if not jobs:
-        raise BatchConfigError(f"{manifest}: no wells listed below the header")
+        raise BatchConfigError(f"{manifest}:{header_line}: no wells listed below the header")
     return jobs
 
 
@@ -129,7 +135,8 @@ def jobs_from_glob(
     jobs: list[WellJob] = []
     seen: dict[str, tuple[str, Path]] = {}  # casefolded id → (id, file)
     for path in files:
-        well_id = _well_id(path.stem, str(path))
+        shown = str(path) if str(path).isprintable() else repr(str(path))  # one line
+        well_id = _well_id(path.stem, shown)
         if (same := seen.get(well_id.casefold())) is not None:
             first, first_path = same
             what = (
@@ -169,11 +176,27 @@ def _check_header(
         )
 
 
+def _records(text: str) -> Iterator[tuple[int, list[str]]]:
+    """The manifest's CSV records, each with the line it starts on (a quoted cell may hold
+    a line break: kept in the cell, refused by :func:`_check_text`, never joined away)."""
+    reader = csv.reader(io.StringIO(text, newline=""))
+    start = 1
+    for cells in reader:
+        yield start, cells
+        start = reader.line_num + 1
+
+
 def _check_text(values: Mapping[str, str], where: str) -> None:
-    """Refuse a cell holding a NUL byte (no file name, id or header field can hold one)."""
+    """Refuse a cell holding a NUL byte or a line break (no file name, id or header field
+    can hold one)."""
     for column, cell in values.items():
         if "\x00" in cell:
             raise BatchConfigError(f"{where}: column {column!r}: a NUL byte in {cell!r}")
+        if "\n" in cell or "\r" in cell:
+            raise BatchConfigError(
+                f"{where}: column {column!r}: a line break in {cell!r} (a quoted cell spans "
+                "lines): a manifest cell is one line"
+            )
 
 
 def _well_id(text: str, where: str) -> str:

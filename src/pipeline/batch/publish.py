@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes
+from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes, discard
 from pipeline.runner import MANIFEST, process_alive, remove_stale_staging
 
 WORK_DIR = ".gyropipe-batch"
@@ -95,6 +94,6 @@ def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
             continue
         run_id, pid = owner
         if run_id not in active_runs and (pid is None or not process_alive(pid)):
-            shutil.rmtree(entry, ignore_errors=True)
+            discard(entry)
             removed.append(entry)
     return removed

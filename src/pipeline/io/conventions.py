@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pipeline.earth.frames import FloatArray
 
 AXES = ("x", "y", "z")
-_AXIS = re.compile(r"^[+-]?[xyz]$")
+_AXIS = re.compile(r"^[+-]?[xyz]\Z")
 
 
 class Conventions(BaseModel):

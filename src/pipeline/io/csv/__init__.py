@@ -420,8 +420,8 @@ def sniff(path: Path) -> Claim:
 
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
-    then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN as
-    an empty cell)."""
+    then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
+    ±inf as an empty cell)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -453,9 +453,12 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
 
 
 def _nan_as_null(table: pa.Table) -> pa.Table:
-    """NaN (an undefined value) written as CSV's null, the empty cell."""
+    """NaN (an undefined value) and ±inf written as CSV's null, the empty cell: a writer
+    never writes a number that is not finite."""
     columns = [
-        pc.if_else(pc.is_nan(column), None, column) if pa.types.is_floating(column.type) else column
+        pc.if_else(pc.is_finite(column), column, None)
+        if pa.types.is_floating(column.type)
+        else column
         for column in table.columns
     ]
     return pa.Table.from_arrays(columns, schema=table.schema)

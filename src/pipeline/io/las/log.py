@@ -30,7 +30,9 @@
   that ran together in fixed-width columns are split as lasio splits them (see
   :func:`pipeline.io.las.rows.read_cells`). STRT, STOP and STEP that contradict the index
   are warnings naming their line (the data are kept: a log's header is often stale), as
-  are well metadata items that cannot be read.
+  are well metadata items that cannot be read. An index that is not finite and strictly
+  monotonic (:class:`~pipeline.tables.LogTable`) and a cell spelling an infinite number
+  (``-inf``, ``Infinity``) are errors naming their line.
 """
 
 from __future__ import annotations
@@ -44,15 +46,19 @@ import pyarrow as pa
 import pyarrow.compute as pc
 
 from pipeline.contracts import SOURCE_LINE, UNIT_KEY
-from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.errors import ContractViolation, InputFileError, UnitError, warn_input
 from pipeline.io.las.header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
 from pipeline.io.las.options import LasOptions
 from pipeline.io.las.rows import Cells, Data, IndexRange, null_mask, null_values, read_all
 from pipeline.io.mnemonics import canonical_name
+from pipeline.tables import LogTable
 from pipeline.units import conversion_factor
 
 TEXT_NULL = r"^(?:\(null\)|null|[+-]?nan|#n/a|[+-]?1\.#(?:ind|inf|qnan|snan|io)[0-9]*|-+)$"
 """Cells meaning 'no value' whatever the NULL item says (compared ignoring case)."""
+_INFINITE = r"^[+-]?(?:inf|infinity)$"
+"""Cells spelling an infinite number: a number out of range, not text (compared ignoring
+case)."""
 _DECIMAL_COMMA = r"^([+-]?[0-9]*),([0-9]+(?:[eE][+-]?[0-9]+)?)$"
 _FORMAT = re.compile(r"\{([^}]*)\}\s*(?:\|.*)?$")
 _TEXT_FORMAT = re.compile(r"S|A[0-9]*|.*[/:].*|[DMYhms]+", re.IGNORECASE)
@@ -96,7 +102,14 @@ def read_log(path: Path, source: Source, header: Header, opts: LasOptions) -> pa
             "names them), with no units",
         )
     _check_range(path, header, index, nulls)
-    return _table(header, arrays, lines)
+    table = _table(header, arrays, lines)
+    try:  # an index that is no key (not finite, out of order, text in a depth unit)
+        LogTable.validate_table(table)
+    except ContractViolation as exc:
+        lines_at = [n for failure in exc.failures for n in failure.lines]
+        rules = "; ".join(map(str, exc.failures))
+        raise InputFileError(path, f"not valid as a log: {rules}", min(lines_at)) from None
+    return table
 
 
 def _curve(header: Header, i: int) -> Item | None:
@@ -129,7 +142,10 @@ def _typed(
         pc.equal(pc.utf8_length(strings), 0),
         pc.match_substring_regex(strings, TEXT_NULL, ignore_case=True),
     )
-    numeric = pc.match_substring_regex(strings, NUMBER)
+    numeric = pc.or_(
+        pc.match_substring_regex(strings, NUMBER),
+        pc.match_substring_regex(strings, _INFINITE, ignore_case=True),
+    )
     if not _declared_text(curve) and pc.all(pc.or_(numeric, empty)).as_py() is not False:
         values = pc.cast(pc.if_else(empty, pa.scalar(None, pa.string()), strings), pa.float64())
         floats = values.to_numpy(zero_copy_only=False)

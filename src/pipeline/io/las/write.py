@@ -64,6 +64,11 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     numeric = [f for f in written if not pa.types.is_string(f.type)]
     if not numeric:
         raise ValueError("no numeric column to write: a LAS file needs a numeric index")
+    if written[0] not in numeric and written[0].name not in ("md", "time"):
+        raise ValueError(  # a log indexed by text: another curve would become its index
+            f"the first column {written[0].name!r} is text: a LAS file's index is its first "
+            "curve, a number"
+        )
     curve_lines = {f.name: _curve_line(f) for f in written}
     index = _index_column([f.name for f in numeric])
     written.sort(key=lambda f: f.name != index)
