@@ -187,16 +187,18 @@ def run(
 )
 @click.option(
     "--executor",
-    type=click.Choice(["local", "dask"]),
+    metavar="NAME",
     default="local",
     show_default=True,
-    help="local: a process pool; dask: a Dask distributed cluster (extra 'dask').",
+    help="A registered executor (gyropipe plugins lists them): local, a process pool; dask, "
+    "a Dask distributed cluster (extra 'dask'); or one a plugin adds.",
 )
 @click.option(
     "--scheduler",
     metavar="ADDRESS",
     default=None,
-    help="Dask scheduler address (default: a LocalCluster on 127.0.0.1).",
+    help="Scheduler address for an executor that takes one (dask; default: a LocalCluster "
+    "on 127.0.0.1).",
 )
 @click.option("--only-changed", is_flag=True, help="Skip wells whose run would be unchanged.")
 @click.option("--rerun-failed", is_flag=True, help="Run only wells whose last run failed.")
@@ -239,6 +241,7 @@ def batch(
     from pipeline.lazy_pandas import defer_pandas
 
     defer_pandas()
+    from pipeline.batch.executors import executor_def
     from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
     from pipeline.batch.policy import Mode
     from pipeline.batch.progress import reporter
@@ -254,9 +257,11 @@ def batch(
 
     if (inputs_glob is None) == (manifest is None):
         config_error("give either --inputs GLOB or --manifest FILE")
-    if scheduler is not None and executor != "dask":
-        config_error("--scheduler needs --executor dask")
     registry = _registry(disabled)
+    try:
+        executor_def(registry, executor, scheduler)
+    except BatchConfigError as exc:
+        config_error(str(exc))
     plan = _plan(pipeline_file, overrides, registry)
     names = list(plan.spec.inputs)
     try:
@@ -275,7 +280,6 @@ def batch(
         scheduler=scheduler,
         mode=Mode(only_changed=only_changed, rerun_failed=rerun_failed),
         ledger=Path(ledger_file) if ledger_file else None,
-        overrides=overrides,
         disabled=disabled,
     )
     previous = signal.signal(signal.SIGTERM, _interrupt)
@@ -393,6 +397,10 @@ def plugins(disabled: tuple[str, ...]) -> None:
         kinds = ", ".join(reader.kinds)
         claims = reader.what_it_claims()
         click.echo(f"  {name} ({registry.plugin_label(owner)}) reads {kinds}: {claims}")
+    if registry.executors:
+        click.echo("executors (gyropipe batch --executor NAME):")
+    for name, (runner, owner) in sorted(registry.executors.items()):
+        click.echo(f"  {name} ({registry.plugin_label(owner)}): {runner.description}")
     for problem in registry.problems:
         click.echo(f"problem: {problem}")
 

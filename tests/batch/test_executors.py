@@ -10,7 +10,7 @@ from batch_support import make_wells, runs
 from threadpoolctl import threadpool_info
 
 from pipeline.batch.executors import DaskExecutor, LocalExecutor
-from pipeline.batch.worker import PipelineRef
+from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.spec import load_spec
@@ -21,7 +21,7 @@ def test_pool_workers_run_blas_single_threaded(survey: Path):
     """Wells are the parallelism: a worker's BLAS must not spin threads on the other
     workers' cores (2 workers on 2 cores lost 18 % of their time to it)."""
     plan = build_plan(load_spec(survey), load_registry())
-    executor = LocalExecutor(2, PipelineRef(str(survey), (), (), plan.digest))
+    executor = LocalExecutor(2, PipelineRef(str(survey), plan.spec))
     try:
         libraries = executor._pool.submit(threadpool_info).result(timeout=60)
     finally:
@@ -31,11 +31,11 @@ def test_pool_workers_run_blas_single_threaded(survey: Path):
     assert {lib["num_threads"] for lib in blas} == {1}
 
 
-def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc():
+def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc(survey: Path):
     """Dask's default MALLOC_TRIM_THRESHOLD_ for its workers made continuous processing 44 %
     slower; the batch's own cluster leaves it out and keeps BLAS single-threaded."""
     pytest.importorskip("distributed")
-    executor = DaskExecutor(1, None)
+    executor = DaskExecutor(1, PipelineRef(str(survey), load_spec(survey).spec), None)
     try:
         environ = executor._client.run(lambda: dict(os.environ))
     finally:
