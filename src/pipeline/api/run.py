@@ -72,9 +72,13 @@ def run(
     that failed: a malformed file, a broken contract, a stage that raised).
     """
     registry = shared_registry(disable)
-    overrides = [f"{key}={json.dumps(value)}" for key, value in (set or {}).items()]
-    plan = build_plan(load_spec(pipeline, overrides), registry)
+    plan = build_plan(load_spec(pipeline, set_overrides(set)), registry)
     return execute(plan, registry, inputs, well=well_metadata(well), out=out)
+
+
+def set_overrides(values: Mapping[str, Any] | None) -> list[str]:
+    """``set=`` of the API as ``--set`` items (``stage.param=JSON``)."""
+    return [f"{key}={json.dumps(value)}" for key, value in (values or {}).items()]
 
 
 def execute(
