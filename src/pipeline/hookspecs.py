@@ -85,4 +85,4 @@ def gyropipe_register_executors(register: Callable[[ExecutorDef], None]) -> None
     :class:`~pipeline.executing.PipelineRef`, ``--scheduler``) and returns an object with
     ``submit``, ``wait`` and ``close`` (:class:`pipeline.batch.executors.Executor`) that
     runs :func:`pipeline.batch.worker.run_well` on each task. The built-in ``local`` and
-    ``dask`` register through this hook too (``docs/plugins.md``, "Executors")."""
+    ``dask`` register through this hook too (``docs/batch.md``, "Executors")."""

@@ -2,7 +2,7 @@
 installed offline: fixture ``serial_site``) registers ``serial``, which runs each
 well in the batch process itself. A real batch runs on it end to end, through the command
 line (in process) and the Python API: every well published and recorded done in the ledger
-by this very process. An executor name that is not registered is refused (exit 2) naming
+by this very process; docs/batch.md shows this plugin's code. An executor name that is not registered is refused (exit 2) naming
 the registered ones, and a disabled plugin's executor names its plugin."""
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import sqlite3
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,7 @@ from tests_support import ROOT, CliResult, gyropipe_cli, stage, survey_stages, w
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
 WELLS = ["north", "south", "west"]
 LAST_STATION = "2520,44.99,45.35,"
+PLUGIN = Path(__file__).parent / "gyropipe-serial" / "src" / "gyropipe_serial" / "plugin.py"
 
 
 @pytest.fixture
@@ -146,3 +148,12 @@ def test_a_plugin_executor_runs_a_batch_from_python(
         assert not (tmp_path / "again").exists()
     finally:
         forget_shared_registries()
+
+
+def test_the_guide_s_example_executor_is_the_test_plugin():
+    """docs/batch.md shows, under "Executors", the code of the plugin these tests run."""
+    doc = (ROOT / "docs" / "batch.md").read_text()
+    section = doc[doc.index("\n## Executors\n") : doc.index("\n## The ledger\n")]
+    (block,) = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    assert "@hookimpl\ndef gyropipe_register_executors" in block
+    assert block in PLUGIN.read_text()
