@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import signal
 import sys
 import time
@@ -241,11 +240,8 @@ def batch(
     from pipeline.lazy_pandas import defer_pandas
 
     defer_pandas()
-    from pipeline.batch.executors import executor_def
-    from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
-    from pipeline.batch.policy import Mode
-    from pipeline.batch.progress import reporter
-    from pipeline.batch.run import BatchOptions, run_batch
+    from pipeline.api.batch import run_batch
+    from pipeline.batch.jobs import BatchConfigError
     from pipeline.batch.summary import table_text
     from pipeline.streams import use_returning_memory_pool
 
@@ -257,35 +253,30 @@ def batch(
 
     if (inputs_glob is None) == (manifest is None):
         config_error("give either --inputs GLOB or --manifest FILE")
-    registry = _registry(disabled)
-    try:
-        executor_def(registry, executor, scheduler)
-    except BatchConfigError as exc:
-        config_error(str(exc))
-    plan = _plan(pipeline_file, overrides, registry)
-    names = list(plan.spec.inputs)
+    _registry(disabled)  # its plugins' problems shown once, as warnings
     try:
         defaults = well_overrides(well_items)
-        jobs = (
-            jobs_from_manifest(Path(manifest), names, defaults)
-            if manifest is not None
-            else jobs_from_glob(str(inputs_glob), names, defaults)
-        )
-    except (click.BadParameter, BatchConfigError) as exc:
+    except click.BadParameter as exc:
         config_error(str(exc))
-    options = BatchOptions(
-        out_dir=Path(out_dir),
-        workers=workers or os.cpu_count() or 1,
-        executor=executor,
-        scheduler=scheduler,
-        mode=Mode(only_changed=only_changed, rerun_failed=rerun_failed),
-        ledger=Path(ledger_file) if ledger_file else None,
-        disabled=disabled,
-    )
     previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        report = run_batch(plan, registry, jobs, options, reporter(quiet))
-    except (BatchConfigError, ImportError, OSError) as exc:
+        report = run_batch(
+            pipeline_file,
+            inputs_glob,
+            out=out_dir,
+            manifest=manifest,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            only_changed=only_changed,
+            rerun_failed=rerun_failed,
+            ledger=ledger_file,
+            set=overrides,
+            well=defaults,
+            disable=disabled,
+            progress=not quiet,
+        )
+    except (SpecError, BatchConfigError, ImportError, OSError) as exc:
         config_error(str(exc))
     except KeyboardInterrupt:
         click.echo("interrupted: run the same command again to resume", err=True)

@@ -91,42 +91,44 @@ def test_plugins_lists_the_executors(serial_site: Path):
     assert "  dask (builtin.executors 0.1.0): a Dask distributed cluster" in listing
 
 
-def test_an_unregistered_executor_is_refused_naming_the_registered_ones(
-    serial_site: Path, survey: Path, wells: str, tmp_path: Path
-):
-    out = tmp_path / "out"
-    typo = batch(survey, wells, out, "--executor", "serail", site=serial_site)
-    assert typo.returncode == 2
-    assert typo.stderr.strip() == (
+REFUSALS = [
+    (
+        ("--executor", "serail"),
         "error: --executor serail: no executor named 'serail'; did you mean 'serial'? "
-        "(registered: dask, local, serial)"
-    )
-    absent = batch(survey, wells, out, "--executor", "serial", site=None)
-    assert absent.returncode == 2
-    assert "no executor named 'serial' (registered: dask, local)" in absent.stderr
-    assert not out.exists()  # refused before anything was created
+        "(registered: dask, local, serial)",
+    ),
+    (
+        ("--executor", "serial", "--disable-plugin", "serial"),
+        "error: --executor serial: executor 'serial' is provided by plugin serial, which is "
+        "disabled (--disable-plugin serial)",
+    ),
+    (
+        ("--executor", "local", "--disable-plugin", "builtin.executors"),
+        "error: --executor local: executor 'local' is provided by plugin builtin.executors, "
+        "which is disabled (--disable-plugin builtin.executors)",
+    ),
+    (
+        ("--executor", "serial", "--scheduler", "tcp://127.0.0.1:8786"),
+        "error: --scheduler needs an executor that takes one (dask), not 'serial'",
+    ),
+]
 
 
-def test_a_disabled_plugin_s_executor_names_the_plugin(
-    serial_site: Path, survey: Path, wells: str, tmp_path: Path
+@pytest.mark.parametrize(("args", "message"), REFUSALS)
+def test_an_executor_that_cannot_run_the_batch_is_refused_before_anything_is_made(
+    serial_site: Path, survey: Path, wells: str, tmp_path: Path, args: tuple[str, ...], message: str
 ):
-    args = ("--executor", "serial", "--disable-plugin", "serial")
     result = batch(survey, wells, tmp_path / "out", *args, site=serial_site)
-    assert result.returncode == 2
-    assert "executor 'serial' is provided by plugin serial, which is disabled" in result.stderr
-    builtins = ("--executor", "local", "--disable-plugin", "builtin.executors")
-    result = batch(survey, wells, tmp_path / "out", *builtins, site=None)
-    assert result.returncode == 2
-    assert "provided by plugin builtin.executors, which is disabled" in result.stderr
+    assert (result.returncode, result.stderr.strip()) == (2, message)
+    assert not (tmp_path / "out").exists()
 
 
-def test_a_scheduler_needs_an_executor_that_takes_one(
-    serial_site: Path, survey: Path, wells: str, tmp_path: Path
+def test_without_the_plugin_its_executor_is_not_registered(
+    survey: Path, wells: str, tmp_path: Path
 ):
-    args = ("--executor", "serial", "--scheduler", "tcp://127.0.0.1:8786")
-    result = batch(survey, wells, tmp_path / "out", *args, site=serial_site)
+    result = batch(survey, wells, tmp_path / "out", "--executor", "serial", site=None)
     assert result.returncode == 2
-    assert "--scheduler needs an executor that takes one (dask), not 'serial'" in result.stderr
+    assert "no executor named 'serial' (registered: dask, local)" in result.stderr
 
 
 def test_a_plugin_executor_runs_a_batch_from_python(

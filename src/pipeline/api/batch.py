@@ -14,7 +14,7 @@ from pipeline.batch import run as batch_run
 from pipeline.batch.executors import executor_def
 from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
 from pipeline.batch.policy import Mode
-from pipeline.batch.progress import JsonLines
+from pipeline.batch.progress import JsonLines, reporter
 from pipeline.batch.run import BatchOptions, BatchReport
 from pipeline.graph import build_plan
 from pipeline.plugins import shared_registry
@@ -33,24 +33,29 @@ def run_batch(
     only_changed: bool = False,
     rerun_failed: bool = False,
     ledger: str | Path | None = None,
-    set: Mapping[str, Any] | None = None,
+    set: Mapping[str, Any] | Sequence[str] | None = None,
     well: WellLike = None,
     disable: Sequence[str] = (),
     log: TextIO | None = None,
+    progress: bool = False,
 ) -> BatchReport:
-    """Run a pipeline YAML on many wells, as ``gyropipe batch`` (``docs/batch.md``).
+    """Run a pipeline YAML on many wells: ``gyropipe batch`` (``docs/batch.md``), which
+    calls it.
 
     The wells are the files matching the glob ``inputs`` (one-input pipelines; the well id
     is the file name without extension) or the rows of the CSV ``manifest``; ``well`` gives
-    header fields for every well (a manifest column overrides them); ``set`` and
-    ``disable`` are those of :func:`pipeline.run`. ``executor`` names a registered executor
-    (``gyropipe plugins`` lists them), ``scheduler`` the address for one that takes it
-    (dask); ``workers`` defaults to the number of CPUs. The batch's JSON log lines go to
-    ``log`` (default: stderr). The returned report's ``exit_code`` is the command's.
+    header fields for every well (a manifest column overrides them); ``set`` (a mapping as
+    :func:`pipeline.run` takes it, or ``--set`` items) and ``disable`` are those of
+    :func:`pipeline.run`. ``executor`` names a registered executor (``gyropipe plugins``
+    lists them), ``scheduler`` the address for one that takes it (dask); ``workers``
+    defaults to the number of CPUs. The batch's JSON log lines go to ``log`` (default:
+    stderr), or with ``progress`` a progress bar is drawn when stderr is a terminal. The
+    report's ``exit_code`` is the command's. (Named ``run_batch``: ``pipeline.batch`` is the
+    package.)
 
     Raises :class:`~pipeline.errors.SpecError` (an invalid pipeline) or
     :class:`~pipeline.batch.jobs.BatchConfigError` (an unknown executor, no wells, an
-    unusable ledger); a failing well is in the report, never raised.
+    unusable ledger), before any well runs; a failing well is in the report, never raised.
     """
     registry = shared_registry(disable)
     plan = build_plan(load_spec(pipeline, set_overrides(set)), registry)
@@ -72,4 +77,5 @@ def run_batch(
         ledger=Path(ledger) if ledger is not None else None,
         disabled=tuple(disable),
     )
-    return batch_run.run_batch(plan, registry, jobs, options, JsonLines(log))
+    shown = reporter(quiet=False) if progress else JsonLines(log)
+    return batch_run.run_batch(plan, registry, jobs, options, shown)

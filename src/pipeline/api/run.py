@@ -76,9 +76,12 @@ def run(
     return execute(plan, registry, inputs, well=well_metadata(well), out=out)
 
 
-def set_overrides(values: Mapping[str, Any] | None) -> list[str]:
-    """``set=`` of the API as ``--set`` items (``stage.param=JSON``)."""
-    return [f"{key}={json.dumps(value)}" for key, value in (values or {}).items()]
+def set_overrides(values: Mapping[str, Any] | Sequence[str] | None) -> list[str]:
+    """``set=`` of the API as ``--set`` items: a mapping's values as JSON
+    (``stage.param=JSON``); a list of items (the command line's) as it is."""
+    if isinstance(values, Mapping):
+        return [f"{key}={json.dumps(value)}" for key, value in values.items()]
+    return list(values or ())
 
 
 def execute(
