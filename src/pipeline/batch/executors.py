@@ -42,8 +42,6 @@ continuous survey's processing 44 % slower (one hour at 100 Hz: 13.7 s → 19.6 
 class Executor(Protocol):
     """Runs well tasks; ``wait`` returns those finished within ``timeout`` seconds."""
 
-    name: str
-
     def submit(self, task: WellTask) -> None: ...
 
     def wait(self, timeout: float) -> list[WellOutcome]: ...
@@ -55,8 +53,6 @@ class Executor(Protocol):
 
 class LocalExecutor:
     """``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes."""
-
-    name = "local"
 
     def __init__(self, workers: int, ref: PipelineRef) -> None:
         self._workers = workers
@@ -128,8 +124,6 @@ class DaskExecutor:
     """Tasks on a Dask distributed cluster: the scheduler at ``address``, or a
     ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker processes. The
     pipeline ``ref`` is scattered to the workers once; each task names it."""
-
-    name = "dask"
 
     def __init__(self, workers: int, ref: PipelineRef, address: str | None) -> None:
         try:

@@ -12,8 +12,6 @@ from pipeline.plugin import ExecutorDef, ExecutorSetup, WellOutcome, WellTask, h
 class SerialExecutor:
     """Runs each task at once in this process; ``wait`` hands back what has run since."""
 
-    name = "serial"
-
     def __init__(self, setup: ExecutorSetup) -> None:
         self._ref = setup.ref  # the batch's pipeline: run_well builds its plan once
         self._finished: list[WellOutcome] = []
