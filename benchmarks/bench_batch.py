@@ -45,7 +45,8 @@ from pipeline.batch.policy import Mode, decide
 from pipeline.batch.progress import JsonLines
 from pipeline.batch.records import RunRow
 from pipeline.batch.run import BatchOptions, BatchReport, run_batch
-from pipeline.batch.worker import PipelineRef, WellOutcome, peak_rss_bytes
+from pipeline.batch.worker import WellOutcome, peak_rss_bytes
+from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.runner import run_plan
@@ -122,7 +123,7 @@ def runs_of(out: Path) -> list[RunRow]:
 def startup(kind: str, ref: PipelineRef) -> float:
     """Seconds to start and stop an executor with 2 workers and no task."""
     t0 = time.perf_counter()
-    executor = DaskExecutor(2, None) if kind == "dask" else LocalExecutor(2, ref)
+    executor = DaskExecutor(2, ref, None) if kind == "dask" else LocalExecutor(2, ref)
     executor.close(cancel=False)
     return time.perf_counter() - t0
 
@@ -255,7 +256,7 @@ def main() -> int:
         t1, t2, td = min(t1s), min(t2s), min(tds)
         print(f"after the batch timings: {uptime()}")
         plan = build_plan(load_spec(PIPELINE), load_registry())
-        ref = PipelineRef(str(PIPELINE), (), (), plan.digest)
+        ref = PipelineRef(str(PIPELINE), plan.spec)
         start_local, start_dask = startup("local", ref), startup("dask", ref)
         tiny_pool, tiny_dask = executor_overhead(scratch, n)
         coordinator = coordinator_cost(jobs, scratch / "coordinator")

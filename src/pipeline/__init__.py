@@ -5,6 +5,7 @@ The Python API (``import pipeline as gp``)::
     stations = gp.read("survey.csv")                  # DataFrame, units in .attrs
     trajectory = gp.minimum_curvature(stations, vs_azimuth=37.5)
     result = gp.run("pipelines/point-gyro.yaml", {"samples": "well-1.mcap"})
+    report = gp.run_batch("pipelines/survey.yaml", "wells/*.csv", out="out")  # many wells
     result.frame("trajectory.trajectory")
 
 Functions take pandas DataFrames or Arrow tables and return the same kind; units are
@@ -23,6 +24,7 @@ from pipeline.lazy import lazy_names
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
+    from pipeline.api.batch import run_batch
     from pipeline.api.clearance import clearance
     from pipeline.api.frames import TableLike, to_frame, to_table
     from pipeline.api.functions import (
@@ -46,10 +48,12 @@ if TYPE_CHECKING:
     from pipeline.api.plots import plot_plan, plot_section
     from pipeline.api.run import RunResult, run
     from pipeline.api.runs import acceptance_gates, definitive_survey
+    from pipeline.batch.run import BatchReport
     from pipeline.errors import GyropipeError
     from pipeline.well import WellMetadata
 
 _HOMES = {
+    "pipeline.api.batch": ("run_batch",),
     "pipeline.api.clearance": ("clearance",),
     "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
     "pipeline.api.functions": (
@@ -73,11 +77,13 @@ _HOMES = {
     "pipeline.api.plots": ("plot_plan", "plot_section"),
     "pipeline.api.run": ("RunResult", "run"),
     "pipeline.api.runs": ("acceptance_gates", "definitive_survey"),
+    "pipeline.batch.run": ("BatchReport",),
     "pipeline.errors": ("GyropipeError",),
     "pipeline.well": ("WellMetadata",),
 }
 
 __all__ = [
+    "BatchReport",
     "GyropipeError",
     "RunResult",
     "TableLike",
@@ -101,6 +107,7 @@ __all__ = [
     "read_table",
     "report",
     "run",
+    "run_batch",
     "simulate",
     "survey_method",
     "to_frame",

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import signal
 import sys
 import time
@@ -199,16 +198,18 @@ def run(
 )
 @click.option(
     "--executor",
-    type=click.Choice(["local", "dask"]),
+    metavar="NAME",
     default="local",
     show_default=True,
-    help="local: a process pool; dask: a Dask distributed cluster (extra 'dask').",
+    help="A registered executor (gyropipe plugins lists them): local, a process pool; dask, "
+    "a Dask distributed cluster (extra 'dask'); or one a plugin adds.",
 )
 @click.option(
     "--scheduler",
     metavar="ADDRESS",
     default=None,
-    help="Dask scheduler address (default: a LocalCluster on 127.0.0.1).",
+    help="Scheduler address for an executor that takes one (dask; default: a LocalCluster "
+    "on 127.0.0.1).",
 )
 @click.option("--only-changed", is_flag=True, help="Skip wells whose run would be unchanged.")
 @click.option("--rerun-failed", is_flag=True, help="Run only wells whose last run failed.")
@@ -251,11 +252,9 @@ def batch(
     from pipeline.lazy_pandas import defer_pandas
 
     defer_pandas()
-    from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
+    from pipeline.api.batch import run_batch
+    from pipeline.batch.jobs import BatchConfigError
     from pipeline.batch.ledger import LedgerError
-    from pipeline.batch.policy import Mode
-    from pipeline.batch.progress import reporter
-    from pipeline.batch.run import BatchOptions, run_batch
     from pipeline.batch.summary import table_text
     from pipeline.streams import use_returning_memory_pool
 
@@ -267,38 +266,34 @@ def batch(
 
     if (inputs_glob is None) == (manifest is None):
         config_error("give either --inputs GLOB or --manifest FILE")
-    if scheduler is not None and executor != "dask":
-        config_error("--scheduler needs --executor dask")
-    registry = _registry(disabled)
-    plan = _plan(pipeline_file, overrides, registry)
-    names = list(plan.spec.inputs)
+    _registry(disabled)  # its plugins' problems shown once, as warnings
     try:
         defaults = well_overrides(well_items)
-        jobs = (
-            jobs_from_manifest(Path(manifest), names, defaults)
-            if manifest is not None
-            else jobs_from_glob(str(inputs_glob), names, defaults)
-        )
-    except (click.BadParameter, BatchConfigError) as exc:
+    except click.BadParameter as exc:
         config_error(str(exc))
-    options = BatchOptions(
-        out_dir=Path(out_dir),
-        workers=workers or os.cpu_count() or 1,
-        executor=executor,
-        scheduler=scheduler,
-        mode=Mode(only_changed=only_changed, rerun_failed=rerun_failed),
-        ledger=Path(ledger_file) if ledger_file else None,
-        overrides=overrides,
-        disabled=disabled,
-    )
     previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        report = run_batch(plan, registry, jobs, options, reporter(quiet))
-    except (BatchConfigError, ImportError) as exc:
-        config_error(str(exc))
-    except (LedgerError, FileSystemError) as exc:
+        report = run_batch(
+            pipeline_file,
+            inputs_glob,
+            out=out_dir,
+            manifest=manifest,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            only_changed=only_changed,
+            rerun_failed=rerun_failed,
+            ledger=ledger_file,
+            set=overrides,
+            well=defaults,
+            disable=disabled,
+            progress=not quiet,
+        )
+    except (LedgerError, FileSystemError) as exc:  # not a configuration: exit 1
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_FAILED)
+    except (SpecError, BatchConfigError, ImportError, OSError) as exc:
+        config_error(str(exc))
     except KeyboardInterrupt:
         click.echo("interrupted: run the same command again to resume", err=True)
         sys.exit(EXIT_FAILED)
@@ -420,6 +415,10 @@ def plugins(disabled: tuple[str, ...]) -> None:
         kinds = ", ".join(reader.kinds)
         claims = reader.what_it_claims()
         click.echo(f"  {name} ({registry.plugin_label(owner)}) reads {kinds}: {claims}")
+    if registry.executors:
+        click.echo("executors (gyropipe batch --executor NAME):")
+    for name, (runner, owner) in sorted(registry.executors.items()):
+        click.echo(f"  {name} ({registry.plugin_label(owner)}): {runner.description}")
     for problem in registry.problems:
         click.echo(f"problem: {problem}")
 

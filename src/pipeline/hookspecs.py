@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 import pluggy
 
+from pipeline.executing import ExecutorDef
 from pipeline.registry import CheckDef, ReaderDef, StageDef, ToolModelDef, WriterDef
 from pipeline.reporting import ReportDef
 
@@ -72,3 +73,16 @@ def gyropipe_register_report_parts(register: Callable[[ReportDef], None]) -> Non
     units, a figure) to the survey and calibration reports, in HTML and PDF alike. Built-in
     stages describe themselves through this hook too (``docs/vendor-adapter.md``, "Add to
     the report"). A part that raises fails the report with one line naming its plugin."""
+
+
+@hookspec
+def gyropipe_register_executors(register: Callable[[ExecutorDef], None]) -> None:
+    """Register batch executors: call ``register(ExecutorDef(...))`` for each.
+
+    ``gyropipe batch --executor NAME`` (and ``executor=`` of the Python API) runs the
+    batch's wells on the executor called ``NAME``; ``factory`` is given an
+    :class:`~pipeline.executing.ExecutorSetup` (workers, the batch's
+    :class:`~pipeline.executing.PipelineRef`, ``--scheduler``) and returns an object with
+    ``submit``, ``wait`` and ``close`` (:class:`pipeline.batch.executors.Executor`) that
+    runs :func:`pipeline.batch.worker.run_well` on each task. The built-in ``local`` and
+    ``dask`` register through this hook too (``docs/batch.md``, "Executors")."""

@@ -43,6 +43,10 @@ What is here:
   given, :class:`StageContext` and :class:`Provenance`; :class:`TableStream`, what a
   streamed port carries (a schema and record batches: ``StageDef.streamed_inputs`` /
   ``streamed_outputs``, ``ReaderDef.stream``, ``WriterDef.write_stream``);
+- batch executors: :class:`ExecutorDef` (``gyropipe batch --executor NAME``), whose factory
+  is given an :class:`ExecutorSetup` (workers, the batch's :class:`PipelineRef`, a scheduler
+  address) and runs :func:`run_well` on each :class:`WellTask`, handing back its
+  :class:`WellOutcome` (``docs/batch.md``, "Executors");
 - tables: :class:`TableContract` and :func:`column`, the standard contracts
   (:class:`Stations`, :class:`RawSamples`, :class:`PositionReadings`, :class:`Trajectory`,
   :class:`CheckResults`, :class:`AnyTable`…) and the metadata keys :data:`SOURCE_LINE`,
@@ -62,6 +66,7 @@ What is here:
 
 from __future__ import annotations
 
+from pipeline.batch.worker import WellOutcome, WellTask, run_well
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract, column
 from pipeline.errors import (
     ContractViolation,
@@ -73,6 +78,7 @@ from pipeline.errors import (
     ReaderOptionsError,
     UnitError,
 )
+from pipeline.executing import ExecutorDef, ExecutorSetup, PipelineRef
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mnemonics import CURVES, Curve, canonical_name, register_alias
@@ -141,6 +147,8 @@ __all__ = [
     "Curve",
     "DefaultNorthReference",
     "ErrorBudget",
+    "ExecutorDef",
+    "ExecutorSetup",
     "FreeGyroReadings",
     "GyropipeError",
     "InputFileError",
@@ -150,6 +158,7 @@ __all__ = [
     "MissingSiteError",
     "NoParams",
     "NorthReference",
+    "PipelineRef",
     "PositionReadings",
     "Provenance",
     "RawSamples",
@@ -174,6 +183,8 @@ __all__ = [
     "Trajectory",
     "UnitError",
     "WellMetadata",
+    "WellOutcome",
+    "WellTask",
     "WriterDef",
     "attach",
     "canonical_name",
@@ -185,6 +196,7 @@ __all__ = [
     "pipeline_input",
     "register_alias",
     "registered",
+    "run_well",
     "to_canonical",
     "well_of",
 ]

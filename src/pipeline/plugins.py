@@ -17,6 +17,7 @@ import pluggy
 
 from pipeline import hookspecs
 from pipeline.errors import PluginError
+from pipeline.executing import ExecutorDef
 from pipeline.registry import (
     CheckDef,
     PluginInfo,
@@ -54,6 +55,7 @@ BUILTIN_PLUGINS = {
     "builtin.json_summary": "pipeline.io.json_summary",
     "builtin.drift_tables": "pipeline.io.drift_tables",
     "builtin.exports": "pipeline.stages.exports",
+    "builtin.executors": "pipeline.batch.builtin_executors",
 }
 """Built-in plugins by name → module; they register through the same hooks as any other."""
 
@@ -64,6 +66,7 @@ HOOKS: tuple[tuple[str, type], ...] = (
     ("gyropipe_register_checks", CheckDef),
     ("gyropipe_register_tool_models", ToolModelDef),
     ("gyropipe_register_report_parts", ReportDef),
+    ("gyropipe_register_executors", ExecutorDef),
 )
 
 

@@ -1,5 +1,5 @@
-"""What plugins register: stages, readers, writers, checks, tool models and report parts, and
-the registry holding them.
+"""What plugins register: stages, readers, writers, checks, tool models, report parts and
+executors, and the registry holding them.
 
 Every registration is tagged with the plugin that made it, so any later error can name it.
 """
@@ -27,6 +27,7 @@ from pipeline.errors import (
     ReaderOptionsError,
     WrongKindError,
 )
+from pipeline.executing import ExecutorDef
 from pipeline.plausibility import CONFIRM, DROP, check_angles, without_null_stations
 from pipeline.provenance import InputFile as InputFile
 from pipeline.provenance import Provenance as Provenance
@@ -312,7 +313,7 @@ class PluginInfo:
     error: str | None = None
 
 
-Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef | ReportDef
+Registration = StageDef | ReaderDef | WriterDef | CheckDef | ToolModelDef | ReportDef | ExecutorDef
 KIND_OF: dict[type, str] = {
     StageDef: "stage",
     ReaderDef: "reader",
@@ -320,6 +321,7 @@ KIND_OF: dict[type, str] = {
     CheckDef: "check",
     ToolModelDef: "tool_model",
     ReportDef: "report",
+    ExecutorDef: "executor",
 }
 
 
@@ -333,6 +335,7 @@ class Registry:
     checks: dict[str, tuple[CheckDef, str]] = field(default_factory=dict)
     tool_models: dict[str, tuple[ToolModelDef, str]] = field(default_factory=dict)
     reports: dict[str, tuple[ReportDef, str]] = field(default_factory=dict)
+    executors: dict[str, tuple[ExecutorDef, str]] = field(default_factory=dict)
     plugins: dict[str, PluginInfo] = field(default_factory=dict)
     problems: list[PluginError] = field(default_factory=list)
     disabled: frozenset[str] = frozenset()
@@ -658,6 +661,7 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
         "reader": ("read", "sniff"),
         "writer": ("write",),
         "check": ("func",),
+        "executor": ("factory",),
     }[kind]
     for attr in callables:
         if not callable(getattr(item, attr)):

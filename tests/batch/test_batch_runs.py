@@ -200,7 +200,11 @@ def test_configuration_errors_exit_2_and_a_clean_batch_exits_0(tmp_path: Path, s
         (["batch", bad_pipeline, "--inputs", pattern, "--out", out], "unknown stage"),
         (
             ["batch", survey, "--inputs", pattern, "--out", out, "--scheduler", "x"],
-            "needs --executor dask",
+            "--scheduler needs an executor that takes one (dask), not 'local'",
+        ),
+        (
+            ["batch", survey, "--inputs", pattern, "--out", out, "--executor", "dsak"],
+            "no executor named 'dsak'; did you mean 'dask'? (registered: dask, local)",
         ),
         (["batch", survey, "--inputs", pattern, "--out", out, "--well", "latitude"], "FIELD=VALUE"),
         (["batch", survey, "--inputs", pattern, "--out", out, "--workers", "0"], "--workers"),

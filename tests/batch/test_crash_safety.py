@@ -31,7 +31,8 @@ from batch_support import (
 
 from pipeline.batch.executors import LocalExecutor
 from pipeline.batch.ledger import Ledger
-from pipeline.batch.worker import PipelineRef, WellOutcome, WellTask
+from pipeline.batch.worker import WellOutcome, WellTask
+from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.spec import load_spec
@@ -174,7 +175,8 @@ from pipeline.batch.fingerprint import PlanIdentity
 from pipeline.batch.jobs import jobs_from_glob
 from pipeline.batch.ledger import Ledger
 from pipeline.batch.policy import Mode, decide
-from pipeline.batch.worker import PipelineRef, WellTask, run_well
+from pipeline.batch.worker import WellTask, run_well
+from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.spec import load_spec
@@ -192,10 +194,10 @@ claim = ledger.claim(
     lambda state: decide(Mode(), state, fingerprint, batch_id=batch.id,
                          batch_started=batch.started, resume_since=None),
 )
-ref = PipelineRef(survey, (), (), plan.digest)
-task = WellTask("W", claim.run_id, batch.id, ref, {"stations": str(job.inputs["stations"])},
-                {}, str(out), fingerprint.to_json())
-assert run_well(task).status == "done"
+ref = PipelineRef(survey, plan.spec)
+task = WellTask("W", claim.run_id, batch.id, ref.digest,
+                {"stations": str(job.inputs["stations"])}, {}, str(out), fingerprint.to_json())
+assert run_well(task, ref).status == "done"
 print(claim.run_id, flush=True)
 os.kill(os.getpid(), signal.SIGKILL)  # dies after publishing, before recording the outcome
 """
@@ -271,7 +273,7 @@ def test_a_pool_broken_between_waits_still_takes_new_wells(tmp_path: Path, surve
     make_wells(tmp_path / "in", ["W"])
     registry = load_registry()
     plan = build_plan(load_spec(survey), registry)
-    ref = PipelineRef(str(survey), (), (), plan.digest)
+    ref = PipelineRef(str(survey), plan.spec)
     executor = LocalExecutor(2, ref)
     try:
         pool = executor._pool
@@ -279,7 +281,7 @@ def test_a_pool_broken_between_waits_still_takes_new_wells(tmp_path: Path, surve
         os.kill(next(iter(pool._processes or {})), signal.SIGKILL)
         wait_for(lambda: bool(pool._broken))
         inputs = {"stations": str(tmp_path / "in" / "W.csv")}
-        task = WellTask("W", 1, 1, ref, inputs, {}, str(tmp_path / "out"), "{}")
+        task = WellTask("W", 1, 1, ref.digest, inputs, {}, str(tmp_path / "out"), "{}")
         executor.submit(task)
         outcomes: list[WellOutcome] = []
         wait_for(lambda: bool(outcomes.extend(executor.wait(0.05)) or outcomes))

@@ -1,8 +1,10 @@
-"""The executors' worker processes, as the batch starts them."""
+"""The executors' worker processes, as the batch starts them, and the pipeline they run."""
 
 from __future__ import annotations
 
+import json
 import os
+import time
 from pathlib import Path
 
 import pytest
@@ -10,7 +12,8 @@ from batch_support import make_wells, runs
 from threadpoolctl import threadpool_info
 
 from pipeline.batch.executors import DaskExecutor, LocalExecutor
-from pipeline.batch.worker import PipelineRef
+from pipeline.batch.worker import WellOutcome, WellTask, run_well
+from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
 from pipeline.spec import load_spec
@@ -21,7 +24,7 @@ def test_pool_workers_run_blas_single_threaded(survey: Path):
     """Wells are the parallelism: a worker's BLAS must not spin threads on the other
     workers' cores (2 workers on 2 cores lost 18 % of their time to it)."""
     plan = build_plan(load_spec(survey), load_registry())
-    executor = LocalExecutor(2, PipelineRef(str(survey), (), (), plan.digest))
+    executor = LocalExecutor(2, PipelineRef(str(survey), plan.spec))
     try:
         libraries = executor._pool.submit(threadpool_info).result(timeout=60)
     finally:
@@ -31,11 +34,11 @@ def test_pool_workers_run_blas_single_threaded(survey: Path):
     assert {lib["num_threads"] for lib in blas} == {1}
 
 
-def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc():
+def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc(survey: Path):
     """Dask's default MALLOC_TRIM_THRESHOLD_ for its workers made continuous processing 44 %
     slower; the batch's own cluster leaves it out and keeps BLAS single-threaded."""
     pytest.importorskip("distributed")
-    executor = DaskExecutor(1, None)
+    executor = DaskExecutor(1, PipelineRef(str(survey), load_spec(survey).spec), None)
     try:
         environ = executor._client.run(lambda: dict(os.environ))
     finally:
@@ -59,3 +62,38 @@ def test_a_pool_worker_process_runs_many_wells(tmp_path: Path, survey: Path):
     pids = [int(str(r["worker"]).rsplit(":", 1)[1]) for r in rows]
     assert 1 <= len(set(pids)) <= 2 and os.getpid() not in pids
     assert max(pids.count(pid) for pid in pids) >= 4
+
+
+def test_workers_run_the_pipeline_the_batch_planned_not_its_file(tmp_path: Path, survey: Path):
+    """The batch's plan travels to the workers (PipelineRef, once per worker): a pipeline
+    file deleted after the batch planned it changes nothing, and the run is of the pipeline
+    with the batch's --set overrides, which no worker applies again."""
+    make_wells(tmp_path / "in", ["W"])
+    plain = build_plan(load_spec(survey), load_registry())
+    plan = build_plan(load_spec(survey, ["trajectory.vs_azimuth=37.5"]), load_registry())
+    assert plan.digest != plain.digest
+    ref = PipelineRef(str(survey), plan.spec)
+    survey.unlink()
+    executor = LocalExecutor(1, ref)
+    outcomes: list[WellOutcome] = []
+    try:
+        inputs = {"stations": str(tmp_path / "in" / "W.csv")}
+        executor.submit(WellTask("W", 1, 1, ref.digest, inputs, {}, str(tmp_path / "out"), "{}"))
+        deadline = time.monotonic() + 60
+        while not outcomes and time.monotonic() < deadline:
+            outcomes.extend(executor.wait(0.1))
+    finally:
+        executor.close(cancel=True)
+    assert [(o.well_id, o.status) for o in outcomes] == [("W", "done")], outcomes
+    recorded = json.loads((tmp_path / "out" / "W" / "run.json").read_text())["pipeline"]
+    assert (recorded["file"], recorded["sha256"]) == (str(survey), plan.digest)
+
+
+def test_a_worker_not_given_the_pipeline_fails_the_well_naming_it(tmp_path: Path):
+    task = WellTask("W", 1, 1, "ab" * 32, {}, {}, str(tmp_path / "out"), "{}")
+    outcome = run_well(task)
+    assert outcome.status == "failed"
+    assert outcome.error == (
+        "this worker was not given the batch's pipeline abababababab… (an executor hands it "
+        "to worker_init or to run_well)"
+    )

@@ -72,6 +72,7 @@ LAYERS: dict[str, int] = {
     "pipeline.registry": 2,
     "pipeline.provenance": 2,
     "pipeline.reporting": 2,
+    "pipeline.executing": 2,
     "pipeline.plugins": 2,
     "pipeline.hookspecs": 2,
     "pipeline.contracts": 2,

@@ -121,8 +121,11 @@ def test_a_batch_worker_defers_pandas(tmp_path):
     pipeline = ROOT / "pipelines" / "survey.yaml"
     got = probe(
         "import os\n"
-        "from pipeline.batch.worker import PipelineRef, worker_init\n"
-        f"worker_init(PipelineRef({str(pipeline)!r}, (), (), ''), os.getpid())\n"
+        "from pipeline.batch.worker import worker_init\n"
+        "from pipeline.executing import PipelineRef\n"
+        "from pipeline.spec import load_spec\n"
+        f"worker_init(PipelineRef({str(pipeline)!r}, load_spec({str(pipeline)!r}).spec), "
+        "os.getpid())\n"
         "survey_conversions()\n"
         "print(json.dumps({'pandas': 'pandas' in sys.modules}))"
     )

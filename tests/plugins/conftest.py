@@ -61,6 +61,14 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return target
 
 
+@pytest.fixture(scope="session")
+def serial_site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A site directory with the test plugin ``gyropipe-serial`` installed (an executor)."""
+    target = tmp_path_factory.mktemp("serial-site")
+    install_offline(Path(__file__).parent / "gyropipe-serial", target)
+    return target
+
+
 @pytest.fixture
 def acme(site: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[ModuleType]:
     """The plugin installed for this test only: its site directory on ``sys.path`` and the

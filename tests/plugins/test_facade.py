@@ -64,6 +64,8 @@ HOME = {
         "pipeline.registry",
     ),
     **dict.fromkeys(["Provenance", "StageSetup"], "pipeline.provenance"),
+    **dict.fromkeys(["ExecutorDef", "ExecutorSetup", "PipelineRef"], "pipeline.executing"),
+    **dict.fromkeys(["WellTask", "WellOutcome", "run_well"], "pipeline.batch.worker"),
     **dict.fromkeys(
         [
             "ReportDef",

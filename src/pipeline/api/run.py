@@ -72,9 +72,16 @@ def run(
     that failed: a malformed file, a broken contract, a stage that raised).
     """
     registry = shared_registry(disable)
-    overrides = [f"{key}={json.dumps(value)}" for key, value in (set or {}).items()]
-    plan = build_plan(load_spec(pipeline, overrides), registry)
+    plan = build_plan(load_spec(pipeline, set_overrides(set)), registry)
     return execute(plan, registry, inputs, well=well_metadata(well), out=out)
+
+
+def set_overrides(values: Mapping[str, Any] | Sequence[str] | None) -> list[str]:
+    """``set=`` of the API as ``--set`` items: a mapping's values as JSON
+    (``stage.param=JSON``); a list of items (the command line's) as it is."""
+    if isinstance(values, Mapping):
+        return [f"{key}={json.dumps(value)}" for key, value in values.items()]
+    return list(values or ())
 
 
 def execute(

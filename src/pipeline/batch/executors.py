@@ -1,7 +1,10 @@
-"""Where the per-well tasks run: a local process pool (default) or a Dask cluster.
+"""Where the per-well tasks run: the executor named by ``--executor``, one registered by a
+plugin (:class:`~pipeline.executing.ExecutorDef`) — built in, a local process pool (default)
+or a Dask cluster.
 
-Both run :func:`~pipeline.batch.worker.run_well` on a :class:`WellTask` and hand back its
-:class:`WellOutcome`, so the results do not depend on the executor.
+Each runs :func:`~pipeline.batch.worker.run_well` on a :class:`WellTask` and hands back its
+:class:`WellOutcome`, so the results do not depend on the executor; each hands its workers the
+batch's :class:`~pipeline.executing.PipelineRef` once, not with every task.
 
 On Linux the local pool forks its workers from the batch process when it is created — before
 the batch opens its ledger or starts any thread — so they start with gyropipe and its plugins
@@ -22,7 +25,12 @@ import os
 import sys
 from typing import Any, Protocol
 
-from .worker import PipelineRef, WellOutcome, WellTask, run_well, worker_init
+from pipeline.errors import did_you_mean
+from pipeline.executing import ExecutorDef, ExecutorSetup, PipelineRef
+from pipeline.registry import Registry
+
+from .jobs import BatchConfigError
+from .worker import WellOutcome, WellTask, run_well, worker_init
 
 PRELOAD = ["pipeline.batch.preload"]
 WORKER_ENVIRON = {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1}
@@ -33,8 +41,6 @@ continuous survey's processing 44 % slower (one hour at 100 Hz: 13.7 s → 19.6 
 
 class Executor(Protocol):
     """Runs well tasks; ``wait`` returns those finished within ``timeout`` seconds."""
-
-    name: str
 
     def submit(self, task: WellTask) -> None: ...
 
@@ -47,8 +53,6 @@ class Executor(Protocol):
 
 class LocalExecutor:
     """``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes."""
-
-    name = "local"
 
     def __init__(self, workers: int, ref: PipelineRef) -> None:
         self._workers = workers
@@ -118,11 +122,10 @@ class LocalExecutor:
 
 class DaskExecutor:
     """Tasks on a Dask distributed cluster: the scheduler at ``address``, or a
-    ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker processes."""
+    ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker processes. The
+    pipeline ``ref`` is scattered to the workers once; each task names it."""
 
-    name = "dask"
-
-    def __init__(self, workers: int, address: str | None) -> None:
+    def __init__(self, workers: int, ref: PipelineRef, address: str | None) -> None:
         try:
             self._dask: Any = importlib.import_module("distributed")  # the optional extra
         except ImportError:
@@ -144,11 +147,12 @@ class DaskExecutor:
             self._client: Any = self._dask.Client(self._cluster)
         else:
             self._client = self._dask.Client(address)
+        self._ref = self._client.scatter(ref, broadcast=True, hash=False)
         self._futures: dict[Any, WellTask] = {}
 
     def submit(self, task: WellTask) -> None:
         future = self._client.submit(
-            run_well, task, key=f"gyropipe-{task.well_id}-{task.run_id}", pure=False
+            run_well, task, self._ref, key=f"gyropipe-{task.well_id}-{task.run_id}", pure=False
         )
         self._futures[future] = task
 
@@ -176,11 +180,37 @@ class DaskExecutor:
             self._cluster.close()
 
 
-def make_executor(kind: str, workers: int, ref: PipelineRef, scheduler: str | None) -> Executor:
-    """The executor named ``kind`` (local or dask)."""
-    if kind == "dask":
-        return DaskExecutor(workers, scheduler)
-    return LocalExecutor(workers, ref)
+class UnknownExecutor(BatchConfigError):
+    """``--executor`` names no registered executor, or ``--scheduler`` one that takes none."""
+
+
+def executor_def(registry: Registry, name: str, scheduler: str | None = None) -> ExecutorDef:
+    """The executor registered as ``name``, which must take a ``scheduler`` if one is given;
+    else an :class:`UnknownExecutor` naming the registered ones."""
+    found = registry.executors.get(name)
+    if found is None:
+        plugin = registry.disabled_provider("executor", name)
+        known = sorted(registry.executors)
+        raise UnknownExecutor(
+            f"--executor {name}: executor {name!r} is provided by plugin {plugin}, which is "
+            f"disabled (--disable-plugin {plugin})"
+            if plugin is not None
+            else f"--executor {name}: no executor named {name!r}{did_you_mean(name, known)} "
+            f"(registered: {', '.join(known) or 'none'})"
+        )
+    if scheduler is not None and not found[0].scheduler:
+        takes = sorted(n for n, (d, _) in registry.executors.items() if d.scheduler)
+        raise UnknownExecutor(
+            f"--scheduler needs an executor that takes one ({', '.join(takes) or 'none'}), "
+            f"not {name!r}"
+        )
+    return found[0]
+
+
+def open_executor(registry: Registry, name: str, setup: ExecutorSetup) -> Executor:
+    """The executor ``name`` (:func:`executor_def`) created for a batch."""
+    executor: Executor = executor_def(registry, name, setup.scheduler).factory(setup)
+    return executor
 
 
 def _failed(task: WellTask, error: str) -> WellOutcome:

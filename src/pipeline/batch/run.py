@@ -20,11 +20,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pipeline.errors import file_errors
+from pipeline.executing import ExecutorSetup, PipelineRef
 from pipeline.graph import Plan
 from pipeline.registry import Registry
 from pipeline.version import __version__
 
-from .executors import Executor, make_executor
+from .executors import Executor, open_executor
 from .fingerprint import Fingerprint, PlanIdentity
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
@@ -33,7 +34,7 @@ from .progress import Reporter
 from .publish import WORK_DIR, clean_work_dir, read_published
 from .records import REJECTED, BatchRow, rejection
 from .summary import WellResult, counts, write_summary
-from .worker import PipelineRef, WellOutcome, WellTask
+from .worker import WellOutcome, WellTask
 
 BUSY_POLL_S = 0.5
 """how often a well held by another batch is looked at again"""
@@ -51,7 +52,6 @@ class BatchOptions:
     scheduler: str | None = None
     mode: Mode = field(default_factory=Mode)
     ledger: Path | None = None
-    overrides: tuple[str, ...] = ()
     disabled: tuple[str, ...] = ()
 
 
@@ -89,11 +89,10 @@ def run_batch(
     _check_ledger_place(ledger_path, out, jobs)
     with file_errors("create the output directory", out):
         out.mkdir(parents=True, exist_ok=True)
-    ref = PipelineRef(
-        str(Path(plan.file).resolve()), options.overrides, options.disabled, plan.digest
-    )
+    ref = PipelineRef(str(Path(plan.file).resolve()), plan.spec, options.disabled)
     # first: local workers fork before the ledger is open and before any thread starts
-    executor = make_executor(options.executor, options.workers, ref, options.scheduler)
+    setup = ExecutorSetup(options.workers, ref, options.scheduler)
+    executor = open_executor(registry, options.executor, setup)
     try:
         ledger = Ledger(ledger_path)
     except BaseException:
@@ -259,7 +258,7 @@ class _Batch:
                     job.well_id,
                     claim.run_id,
                     self.batch.id,
-                    self.ref,
+                    self.ref.digest,
                     {name: str(path) for name, path in job.inputs.items()},
                     dict(fingerprint.well),
                     str(self.out),

@@ -23,12 +23,12 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.atomic import atomic_write_bytes, replace_dir
 from pipeline.errors import GyropipeError
+from pipeline.executing import PipelineRef
 from pipeline.graph import Plan, build_plan
 from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
 from pipeline.registry import Registry
 from pipeline.runner import MANIFEST, RunResult, check_out_dir, process_alive, run_plan
-from pipeline.spec import load_spec
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
@@ -41,24 +41,15 @@ ORPHAN_POLL_S = 0.5
 
 
 @dataclass(frozen=True)
-class PipelineRef:
-    """How a worker rebuilds the batch's plan; ``sha256`` guards against a pipeline file
-    edited while the batch runs."""
-
-    file: str
-    overrides: tuple[str, ...]
-    disabled: tuple[str, ...]
-    sha256: str
-
-
-@dataclass(frozen=True)
 class WellTask:
     """One claimed run of one well."""
 
     well_id: str
     run_id: int
     batch_id: int
-    pipeline: PipelineRef
+    pipeline: str
+    """the digest of the batch's :class:`~pipeline.executing.PipelineRef` (the worker was
+    given the reference once: :func:`worker_init`, or with the task)"""
     inputs: dict[str, str]
     """pipeline input name → absolute file path"""
     well: dict[str, Any]
@@ -91,11 +82,15 @@ class WellOutcome:
     worker: str = ""
 
 
-_PLANS: dict[tuple[str, tuple[str, ...], tuple[str, ...]], tuple[Plan, Registry]] = {}
+_PLANS: dict[tuple[str, tuple[str, ...]], tuple[Plan, Registry]] = {}
+"""(pipeline digest, disabled plugins) → the plan built in this process and its registry"""
+_GIVEN: dict[str, PipelineRef] = {}
+"""the pipelines :func:`worker_init` gave this process, by digest"""
 
 
 def worker_init(ref: PipelineRef, batch_pid: int) -> None:
-    """Process-pool initialiser: load the plan once, and exit as soon as the batch process
+    """Process-pool initialiser: keep the batch's pipeline ``ref`` and build its plan once,
+    and exit as soon as the batch process
     ``batch_pid`` is gone (killed), so no orphan goes on writing outputs.
 
     BLAS and OpenMP run single-threaded here, as in Dask's workers: the wells are the
@@ -107,6 +102,7 @@ def worker_init(ref: PipelineRef, batch_pid: int) -> None:
     threadpool_limits(limits=1)
     use_returning_memory_pool()
     threading.Thread(target=_exit_with, args=(batch_pid,), daemon=True).start()
+    _GIVEN[ref.digest] = ref
     try:
         _plan(ref)
     except Exception:  # reported per well by run_well
@@ -127,15 +123,16 @@ def _exit_with(pid: int) -> None:
     os._exit(EXIT_ORPHAN)
 
 
-def run_well(task: WellTask) -> WellOutcome:
-    """Run one well (module docstring)."""
+def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
+    """Run one well (module docstring) of the pipeline ``ref``, by default the one
+    :func:`worker_init` gave this process."""
     t0 = time.perf_counter()
     staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
     final = Path(task.out_root) / task.well_id
     try:
         check_out_dir(final, OWN)  # early: a well that cannot be published is not run
-        plan, registry = _plan(task.pipeline)
+        plan, registry = _plan(_given(task, ref))
         shutil.rmtree(staging, ignore_errors=True)
         staging.mkdir(parents=True)
         t_run = time.perf_counter()
@@ -187,24 +184,29 @@ def run_well(task: WellTask) -> WellOutcome:
         shutil.rmtree(staging, ignore_errors=True)
 
 
-class PipelineChanged(GyropipeError):
-    """The pipeline file changed after the batch started."""
+class NoPipeline(GyropipeError):
+    """A worker was handed a task without the batch's pipeline."""
+
+
+def _given(task: WellTask, ref: PipelineRef | None) -> PipelineRef:
+    """The pipeline of ``task``: ``ref``, else the one :func:`worker_init` gave."""
+    found = ref if ref is not None else _GIVEN.get(task.pipeline)
+    if found is None or found.digest != task.pipeline:
+        raise NoPipeline(
+            f"this worker was not given the batch's pipeline {task.pipeline[:12]}… "
+            "(an executor hands it to worker_init or to run_well)"
+        )
+    return found
 
 
 def _plan(ref: PipelineRef) -> tuple[Plan, Registry]:
-    key = (ref.file, ref.overrides, ref.disabled)
+    """The plan of ``ref`` built against this process's plugins, once per process."""
+    key = (ref.digest, ref.disabled)
     cached = _PLANS.get(key)
-    if cached is not None and cached[0].digest == ref.sha256:
-        return cached
-    registry = shared_registry(ref.disabled)
-    plan = build_plan(load_spec(ref.file, list(ref.overrides)), registry)
-    if plan.digest != ref.sha256:
-        raise PipelineChanged(
-            f"{ref.file} changed after the batch started (sha256 {ref.sha256[:12]}… → "
-            f"{plan.digest[:12]}…); start the batch again"
-        )
-    _PLANS[key] = (plan, registry)
-    return plan, registry
+    if cached is None:
+        registry = shared_registry(ref.disabled)
+        cached = _PLANS[key] = (build_plan(ref.loaded(), registry), registry)
+    return cached
 
 
 def _relocated(manifest: dict[str, Any], final: Path) -> dict[str, Any]:
