@@ -22,7 +22,7 @@ import pytest
 from pipeline.errors import ContractViolation, StageError
 from pipeline.graph import build_plan
 from pipeline.registry import StageContext, StageDef
-from pipeline.runner import RunInputError, run_plan
+from pipeline.runner import RunInputError, run_plan, sha256_file
 from pipeline.spec import load_spec
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations, Trajectory
@@ -119,6 +119,14 @@ def test_a_command_in_process_leaves_the_process_as_it_was(tmp_path: Path):
     done = gyropipe_cli("run", SURVEY, *args, env={"SOURCE_DATE_EPOCH": "0"}, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert state() == before
+
+
+def test_a_file_longer_than_the_hash_buffer_hashes_whole(tmp_path: Path):
+    """Hashed through a reused buffer: every block counts, the last partial one too."""
+    path = tmp_path / "big.bin"
+    data = np.random.default_rng(3).bytes((3 << 20) + 7)
+    path.write_bytes(data)
+    assert sha256_file(path) == hashlib.sha256(data).hexdigest()
 
 
 def test_cli_overrides_and_well_metadata(tmp_path: Path):
