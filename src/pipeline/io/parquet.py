@@ -2,7 +2,8 @@
 
 Parquet keeps the Arrow schema, so units, north references and well metadata round-trip.
 Both stream: the reader reads a row group at a time (:func:`stream`), the writer writes a
-row group per batch (:func:`write_stream`).
+row group per batch (:func:`write_stream`). Columns are decoded on pyarrow's threads when
+the readers have more than one (:func:`~pipeline.io.threads.reader_threads`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pydantic import ValidationError
 from pipeline.contracts import TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
+from pipeline.io.threads import reader_threads
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
@@ -56,7 +58,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     A table of another kind than ``kind`` (its required columns missing, another kind's all
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
-        table = pq.read_table(path)
+        table = pq.read_table(path, use_threads=reader_threads() > 1)
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, table.schema)
@@ -76,7 +78,9 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     def batches() -> Iterator[pa.RecordBatch]:
         try:  # buffered reads, not the whole row group at once (they hold ~1 M rows)
             with pq.ParquetFile(path, pre_buffer=False, buffer_size=READ_BUFFER) as file:
-                yield from file.iter_batches(batch_size=BATCH_ROWS, use_threads=False)
+                yield from file.iter_batches(
+                    batch_size=BATCH_ROWS, use_threads=reader_threads() > 1
+                )
         except (OSError, pa.ArrowException) as exc:
             raise _unreadable(path, exc) from exc
 
