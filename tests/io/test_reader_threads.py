@@ -139,3 +139,15 @@ def test_a_batch_worker_reads_on_one_thread_and_a_run_on_every_core(
     note = json.loads((alone / "note.csv").read_text())
     assert note["pid"] == os.getpid()
     assert note["reader_threads"] == note["cores"] == len(os.sched_getaffinity(0))
+
+
+def test_a_bad_environment_value_fails_a_run_with_its_name(tmp_path: Path) -> None:
+    pipeline = write_pipeline(tmp_path, survey_stages(), name="survey")
+    out = tmp_path / "out"
+    run = gyropipe_cli("run", pipeline, "--input", SAMPLE, "--out", out, env={ENV: "two"})
+    assert run.returncode != 0
+    assert "GYROPIPE_READ_THREADS='two': expected a whole number of threads, at least 1" in (
+        run.stderr
+    )
+    assert "Traceback" not in run.output
+    assert not out.exists()
