@@ -11,10 +11,10 @@ above a header of vendor names with units in brackets or parentheses.
     .venv/bin/python benchmarks/bench_csv.py [--rows N] [--rounds R]
 
 Candidates run interleaved, R rounds; medians of wall and CPU time, each as peer / ours
-(above 1: ours is faster). Prints ``uptime`` before and after and on how many threads our
-reader parsed in each of its reads (more than one only when a core is idle, or
-``--threads on``). Targets: pandas / ours ≥ 1.2 on (a), ≥ 1.0 on (b). Exits 1 if our
-values differ from pandas + units.
+(above 1: ours is faster). Prints ``uptime`` before and after and the readers' thread count
+(:func:`~pipeline.io.threads.reader_threads`: every core this process may run on, or
+``--threads N``; pyarrow's pool sized to it). Targets: pandas / ours ≥ 1.2 on (a), ≥ 1.0 on
+(b). Exits 1 if our values differ from pandas + units.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from pipeline.io import arrow_text
 from pipeline.io.csv import read
+from pipeline.io.threads import reader_threads, set_reader_threads
 from timing import interleaved, table, uptime
 
 NAMES = ("time", "md", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
@@ -135,23 +135,14 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument(
         "--threads",
-        choices=["auto", "on", "off"],
-        default="auto",
-        help="threads in our reader: auto (only when a core is idle), on or off",
+        type=int,
+        default=None,
+        help="the readers' threads (default: every core this process may run on)",
     )
     args = parser.parse_args()
-    if args.threads != "auto":
-        arrow_text.use_threads = lambda: args.threads == "on"  # type: ignore[assignment]
-    threads: list[int] = []
-    decide = arrow_text.workers
-
-    def noted() -> int:
-        threads.append(decide())
-        return threads[-1]
-
-    arrow_text.workers = noted  # type: ignore[assignment]
+    set_reader_threads(args.threads if args.threads is not None else reader_threads())
     print(f"before: {uptime()}")
-    print(f"a core idle at the start (our reader's threads): {arrow_text.use_threads()}")
+    print(f"readers' threads (ours; pyarrow's pool): {reader_threads()}; {pa.cpu_count()}")
     worst, summary = 0.0, []
     with tempfile.TemporaryDirectory() as tmp:
         for layout in ("plain", "titled"):
@@ -165,8 +156,6 @@ def main() -> int:
             )
             timings = interleaved(candidates(path, skip, layout), args.rounds)
             print(table(timings, "gyropipe csv (samples)"))
-            print(f"our reader's threads in each of its reads: {threads}")
-            threads.clear()
             got = timings["gyropipe csv (samples)"].result
             expected = timings["pandas.read_csv + units by hand"].result
             worst = max(worst, *(float(np.max(np.abs(got[n] - expected[n]))) for n in NAMES))

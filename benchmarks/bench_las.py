@@ -9,7 +9,8 @@ fixed-width columns; some -999.25 nulls) to a temporary directory and times, int
   (every curve as logged);
 * the **pyarrow floor**: ``pyarrow.csv.read_csv`` parsing the same ``~A`` data section
   already repacked in memory (one space between values, none at line starts or ends; the
-  repacking is not timed), every column as float64, with the reader's own thread setting.
+  repacking is not timed), every column as float64, on the readers' threads
+  (:func:`~pipeline.io.threads.reader_threads`, or ``--threads N``).
   No reader of the file can beat it by parsing with ``pyarrow.csv``: ours also reads the
   file, checks and rewrites the bytes, and builds the checked table.
 
@@ -32,10 +33,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from pipeline.io import arrow_text
 from pipeline.io.arrow_text import read_options
 from pipeline.io.las import read_las
 from pipeline.io.las.options import LasOptions
+from pipeline.io.threads import reader_threads, set_reader_threads
 from timing import interleaved, table, uptime
 
 CURVES = [
@@ -105,16 +106,15 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument(
         "--threads",
-        choices=["auto", "on", "off"],
-        default="auto",
-        help="pyarrow threads in our reader: auto (only when a core is idle), on or off",
+        type=int,
+        default=None,
+        help="the readers' threads (default: every core this process may run on)",
     )
     args = parser.parse_args()
-    if args.threads != "auto":
-        arrow_text.use_threads = lambda: args.threads == "on"  # type: ignore[assignment]
+    set_reader_threads(args.threads if args.threads is not None else reader_threads())
     options = LasOptions()
     print(f"before: {uptime()}")
-    print(f"pyarrow threads (ours and the floor): {'yes' if arrow_text.use_threads() else 'no'}")
+    print(f"readers' threads (ours and the floor; pyarrow's pool): {reader_threads()}")
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.las"
         write_file(path, args.rows)

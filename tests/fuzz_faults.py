@@ -140,7 +140,7 @@ class Faults:
     def _manifest(self, case: Path, text: str) -> tuple[str, str]:
         from pipeline.batch.jobs import jobs_from_manifest
         from pipeline.convert import read_kind
-        from pipeline.runner import sha256_file
+        from pipeline.hashing import sha256_file
         from pipeline.well import WellMetadata
 
         shutil.copy(STATIONS, case / "a.csv")

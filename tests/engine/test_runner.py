@@ -21,6 +21,7 @@ import pytest
 
 from pipeline.errors import ContractViolation, StageError
 from pipeline.graph import build_plan
+from pipeline.hashing import sha256_file
 from pipeline.registry import StageContext, StageDef
 from pipeline.runner import RunInputError, run_plan
 from pipeline.spec import load_spec
@@ -119,6 +120,47 @@ def test_a_command_in_process_leaves_the_process_as_it_was(tmp_path: Path):
     done = gyropipe_cli("run", SURVEY, *args, env={"SOURCE_DATE_EPOCH": "0"}, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert state() == before
+
+
+def test_a_file_longer_than_the_hash_buffer_hashes_whole(tmp_path: Path):
+    """Hashed through a reused buffer: every block counts, the last partial one too."""
+    path = tmp_path / "big.bin"
+    data = np.random.default_rng(3).bytes((3 << 20) + 7)
+    path.write_bytes(data)
+    assert sha256_file(path) == hashlib.sha256(data).hexdigest()
+
+
+HASH_FAULTS = """
+import resource, sys
+from pathlib import Path
+from pipeline.hashing import sha256_file
+from pipeline.streams import use_returning_memory_pool
+
+use_returning_memory_pool()
+path = Path(sys.argv[1])
+sha256_file(path)
+before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+sha256_file(path)
+print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+"""
+
+
+@pytest.mark.process("glibc's mmap threshold fixed as in a batch process, from a fresh heap")
+@pytest.mark.skipif(sys.platform != "linux", reason="glibc's mallopt")
+def test_hashing_at_the_batch_mmap_threshold_maps_no_block_afresh(tmp_path: Path):
+    """At the batch's fixed mmap threshold a fresh 1 MiB block per read was mapped and
+    faulted in afresh (11,521 page faults for 47 MB); one reused buffer is not."""
+    path = tmp_path / "big.bin"
+    path.write_bytes(np.random.default_rng(4).bytes(16 << 20))  # 4,096 pages
+    found = subprocess.run(
+        [sys.executable, "-c", HASH_FAULTS, str(path)],
+        capture_output=True,
+        text=True,
+        env=pythonpath(),
+        timeout=60,
+        check=True,
+    )
+    assert int(found.stdout) < 256, found.stdout
 
 
 def test_cli_overrides_and_well_metadata(tmp_path: Path):

@@ -17,7 +17,7 @@ import pytest
 
 from pipeline.errors import InputFileError
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.io import arrow_text
+from pipeline.io import threads as io_threads
 from pipeline.io.csv import rows as csv_rows
 from pipeline.io.las import fast as las_fast
 from pipeline.plugins import load_registry
@@ -105,8 +105,9 @@ def test_a_bad_cell_in_a_late_block_is_located_on_its_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, small_blocks: None, fmt: str, threads: int
 ) -> None:
     """Also when the CSV reader parses blocks on three threads ahead of the one handed on
-    (as when cores are idle): the bad cell's line is counted from the blocks before."""
-    monkeypatch.setattr(arrow_text, "workers", lambda: threads)
+    (a reader alone on three cores or more): the bad cell's line is counted from the
+    blocks before."""
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: threads)
     path = write(tmp_path, fmt, notes=True)
     lines, _ = data_lines(path)
     bad = lines[len(lines) * 3 // 4]
@@ -175,9 +176,9 @@ def test_the_reader_holds_a_few_blocks_not_the_file(
 ) -> None:
     """While a stream of either reader is consumed batch by batch, Arrow's memory in use
     stays a small part of the table the whole read holds: 1/20 on one thread; 1/5 with blocks
-    read ahead on threads (an idle machine), as each parse in progress also holds pyarrow's
+    read ahead on threads (a reader alone), as each parse in progress also holds pyarrow's
     working buffers (~130 KiB whatever the block's size)."""
-    monkeypatch.setattr(arrow_text, "use_threads", lambda: threads)
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: 2 if threads else 1)
     for fmt in FORMATS:
         path = write(tmp_path, fmt)
         whole = load_registry().read(path, "samples")[0]
@@ -199,7 +200,7 @@ def test_csv_blocks_parsed_on_threads_hold_a_few_blocks(
     blocks of 64 KiB, as each parse in progress holds pyarrow's working buffers (~130 KiB
     whatever the block's size)."""
     monkeypatch.setattr(csv_rows, "ROWS_BLOCK", 64 * 1024)
-    monkeypatch.setattr(arrow_text, "workers", lambda: 3)
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: 3)
     path = write(tmp_path, "csv", rows=None)
     whole = load_registry().read(path, "samples")[0]
     stream, _ = load_registry().read_stream(path, "samples")

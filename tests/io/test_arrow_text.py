@@ -1,18 +1,15 @@
-"""How the text readers share the machine: blocks worked on threads a few ahead and handed
-on in order (:func:`~pipeline.io.arrow_text.in_order`), and the other processes' load
-told from this process's own (:func:`~pipeline.io.arrow_text.others_load`)."""
+"""How the text readers work on threads: blocks worked on threads a few ahead and handed
+on in order (:func:`~pipeline.io.arrow_text.in_order`)."""
 
 from __future__ import annotations
 
-import os
 import random
 import threading
 import time
 
 import pytest
 
-from pipeline.io import arrow_text
-from pipeline.io.arrow_text import CpuTimes, cpu_times, in_order, others_load
+from pipeline.io.arrow_text import in_order
 
 
 def _slow_square(started: list[int]) -> object:
@@ -71,37 +68,3 @@ def test_a_consumer_that_stops_leaves_no_thread_working() -> None:
     count = len(started)
     time.sleep(0.02)
     assert len(started) == count
-
-
-def test_the_other_processes_load_leaves_out_this_process() -> None:
-    """Over 2 s the machine's cores were busy 3.1 s, 1.9 s of it this process's threads:
-    the others kept 0.6 of a core busy."""
-    before, after = CpuTimes(10.0, 500.0, 7.0), CpuTimes(12.0, 503.1, 8.9)
-    assert others_load(before, after) == pytest.approx(0.6)
-    assert others_load(after, CpuTimes(13.0, 503.5, 9.4)) == 0.0  # tick rounding: never < 0
-
-
-def test_this_process_busy_shows_in_its_own_cpu_time() -> None:
-    before = cpu_times()
-    if before is None:
-        pytest.skip("no /proc/stat on this system")
-    end = time.process_time() + 0.3  # /proc counts in 10 ms ticks, sampled: a margin
-    while time.process_time() < end:
-        pass
-    after = cpu_times()
-    assert after is not None
-    assert after.own - before.own >= 0.2
-    assert after.machine - before.machine >= 0.15  # the machine saw it (10 ms ticks)
-
-
-@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork on this system")
-def test_a_forked_process_does_not_compare_its_time_with_its_parents() -> None:
-    """A batch worker forked from a process that has looked: its own CPU time restarts
-    from zero, so it looks afresh."""
-    arrow_text.use_threads()
-    assert arrow_text._last or arrow_text.cpu_times() is None
-    pid = os.fork()
-    if pid == 0:  # the child: exit status 0 if it starts with no previous look
-        os._exit(0 if not arrow_text._last else 1)
-    _, status = os.waitpid(pid, 0)
-    assert os.waitstatus_to_exitcode(status) == 0

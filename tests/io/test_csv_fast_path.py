@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from pipeline.errors import InputFileError
-from pipeline.io import arrow_text
+from pipeline.io import threads as io_threads
 from pipeline.io.csv import LAYOUTS, read
 from pipeline.io.csv import rows as csv_rows
 from pipeline.io.csv.header import HEADER_SEARCH_LINES, find_header
@@ -44,7 +44,7 @@ def blocks(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> s
     if request.param != BLOCKS[0]:
         monkeypatch.setattr(csv_rows, "ROWS_BLOCK", 16 * 1024)
         threads = 3 if request.param == BLOCKS[2] else 1
-        monkeypatch.setattr(arrow_text, "workers", lambda: threads)
+        monkeypatch.setattr(io_threads, "reader_threads", lambda: threads)
     return str(request.param)
 
 

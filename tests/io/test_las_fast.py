@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pipeline.errors import InputFileError
-from pipeline.io import arrow_text
+from pipeline.io import threads as io_threads
 from pipeline.io.las import fast as las_fast
 from pipeline.io.las import header as las_header
 from pipeline.io.las import read_las
@@ -95,7 +95,9 @@ def test_fast_path_equals_careful_path_and_float(
 ) -> None:
     lines, n = section
     monkeypatch.setattr(las_fast, "BLOCK", block)  # many blocks: layouts change between them
-    monkeypatch.setattr(arrow_text, "use_threads", lambda: threads)  # blocks read ahead or not
+    monkeypatch.setattr(
+        io_threads, "reader_threads", lambda: 2 if threads else 1
+    )  # blocks read ahead or not
     path = _file(tmp_path, lines, n, "\r\n" if crlf else "\n")
     fast, slow = _paths(path)
     assert fast is not None  # every such layout is read by the fast path
@@ -121,7 +123,7 @@ def test_a_bad_row_among_fixed_width_blocks_is_located(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, bad: str, line: int, threads: bool
 ) -> None:
     monkeypatch.setattr(las_fast, "BLOCK", 64)
-    monkeypatch.setattr(arrow_text, "use_threads", lambda: threads)
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: 2 if threads else 1)
     good = [f"{i:11.4f}{2 * i:12.4f}{3 * i:11.4f}" for i in range(8)]
     lines = [*good[:3], bad, *good[3:]]
     path = _file(tmp_path, lines, 3)
@@ -156,7 +158,7 @@ def test_tabs_and_crlf_in_fixed_width_padding_keep_the_layout(
     """Fixed-width lines ending in CRLF whose padding holds tabs are read as fixed-width
     blocks (no rewrite of the tabs or CRs), each value as ``float`` reads its cell."""
     monkeypatch.setattr(las_fast, "BLOCK", 300)
-    monkeypatch.setattr(arrow_text, "use_threads", lambda: threads)
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: 2 if threads else 1)
     lines = [f"{i:10.2f}{-i / 3:14.5f}{i * 1e3:14.1f}" for i in range(60)]
     lines = [line[:11] + "\t" + line[12:] for line in lines]  # padding of the second value
     path = _file(tmp_path, lines, 3, "\r\n")

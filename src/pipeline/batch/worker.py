@@ -25,6 +25,7 @@ from pipeline.atomic import atomic_write_bytes, replace_dir
 from pipeline.errors import GyropipeError
 from pipeline.executing import PipelineRef
 from pipeline.graph import Plan, build_plan
+from pipeline.io.threads import set_reader_threads
 from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
 from pipeline.registry import Registry
@@ -125,8 +126,10 @@ def _exit_with(pid: int) -> None:
 
 def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
     """Run one well (module docstring) of the pipeline ``ref``, by default the one
-    :func:`worker_init` gave this process."""
+    :func:`worker_init` gave this process, its readers on one thread: the workers are the
+    parallelism."""
     t0 = time.perf_counter()
+    set_reader_threads(1)
     staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
     final = Path(task.out_root) / task.well_id

@@ -8,7 +8,8 @@ Bounds, checked on the footer before anything is decoded (:func:`_check_bounds`)
 :data:`MAX_COLUMNS` columns, and the decoded table (rows × columns × 8 bytes, or the row
 groups' declared sizes when larger) at most :data:`MAX_INFLATION` times the file's size or
 :data:`MIN_DECODED` bytes — run-length encoding packs millions of equal values into a few
-bytes, so a small file can claim gigabytes.
+bytes, so a small file can claim gigabytes. Columns are decoded on pyarrow's
+threads when the readers have more than one (:func:`~pipeline.io.threads.reader_threads`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from pipeline import jsontext
 from pipeline.contracts import TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
+from pipeline.io.threads import reader_threads
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
@@ -71,7 +73,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     there) is a :class:`WrongKindError` saying which kind it is."""
     try:
         _check_bounds(path)
-        table = pq.read_table(path)
+        table = pq.read_table(path, use_threads=reader_threads() > 1)
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, table.schema)
@@ -92,7 +94,9 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     def batches() -> Iterator[pa.RecordBatch]:
         try:  # buffered reads, not the whole row group at once (they hold ~1 M rows)
             with pq.ParquetFile(path, pre_buffer=False, buffer_size=READ_BUFFER) as file:
-                yield from file.iter_batches(batch_size=BATCH_ROWS, use_threads=False)
+                yield from file.iter_batches(
+                    batch_size=BATCH_ROWS, use_threads=reader_threads() > 1
+                )
         except (OSError, pa.ArrowException) as exc:
             raise _unreadable(path, exc) from exc
 

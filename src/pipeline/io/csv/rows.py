@@ -8,9 +8,9 @@ Only its first lines (where the title block and the header row are) are decoded 
 the data rows stay bytes and are handed to ``pyarrow.csv`` a block of about
 :data:`ROWS_BLOCK` bytes of whole lines at a time (:func:`parse_blocks`: a stream's
 batches; the pages of the mapped file let go once read), which parses them with the
-declared column types, one thread per block; when cores are idle (see
-:mod:`pipeline.io.arrow_text`), blocks are parsed on as many threads, a few ahead of
-the one handed on (each scanned first on the thread that hands them on). A block that
+declared column types, one thread per block; when the readers have more than one thread
+(:func:`~pipeline.io.threads.reader_threads`), blocks are parsed on as many, a few ahead
+of the one handed on (each scanned first on the thread that hands them on). A block that
 does not parse that way (a bad cell, a wrong cell count, decimal commas to detect) is
 parsed again as strings on one thread, in order (its first line then known), which
 locates every problem on its file line.
@@ -33,7 +33,7 @@ import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
 from pipeline.errors import InputFileError
-from pipeline.io import arrow_text
+from pipeline.io import threads as io_threads
 from pipeline.io.arrow_text import in_order, read_options, release
 from pipeline.io.csv.header import Cell, Header, cells_of
 
@@ -392,14 +392,15 @@ def parse_blocks(
     is found over all the rows (:func:`decimal_of`), and if it is '.' the blocks before
     are parsed again with it (an error if one held a decimal comma).
 
-    When a core is idle (:func:`~pipeline.io.arrow_text.workers`), blocks are scanned here
-    and parsed on that many threads, a few blocks ahead of the one handed on: a block's lines
-    are known only once the blocks before it are counted, so a block that is not plain
-    ASCII rows of good cells is left to :func:`checked` and :func:`parse` in order."""
+    With more than one reader thread (:func:`~pipeline.io.threads.reader_threads`), blocks
+    are scanned here and parsed on that many threads, a few blocks ahead of the one handed
+    on: a block's lines are known only once the blocks before it are counted, so a block
+    that is not plain ASCII rows of good cells is left to :func:`checked` and :func:`parse`
+    in order."""
     mark = decimal or ("," if header.delimiter != "," and rows.anywhere(b",") else ".")
     numbers = {n: c for n, c in chosen.items() if not pa.types.is_string(types[n])}
     names, wanted = _column_names(header, chosen)
-    workers = arrow_text.workers()
+    workers = io_threads.reader_threads()
     single = _block_end(rows, rows.start) >= rows.end  # one block: pyarrow's threads
     start, line = rows.start, rows.first_line
 

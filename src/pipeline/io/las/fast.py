@@ -21,9 +21,9 @@ than the line count (a lone CR) or a non-finite value (``1e999``; looked for val
 only when the sum of the block's values is not finite) declines, so the careful path
 reports it with its line.
 
-When a core is idle (:func:`~pipeline.io.arrow_text.use_threads`), :data:`AHEAD` threads
-read (copy, rewrite, parse) the next blocks while the caller uses one, each with its own
-buffer: the parse of a block is serial, blocks are parsed in parallel.
+With more than one reader thread (:func:`~pipeline.io.threads.reader_threads`), that many
+threads read (copy, rewrite, parse) the next blocks while the caller uses one, each with its
+own buffer: the parse of a block is serial, blocks are parsed in parallel.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.io import arrow_text
+from pipeline.io import threads as io_threads
 from pipeline.io.arrow_text import release
 
 Floats = NDArray[np.float64]
@@ -51,8 +51,6 @@ Layout = tuple[int, NDArray[np.intp]]
 
 BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
-AHEAD = 2
-"""Blocks read by other threads while one is used, when a core is idle."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
 _TAB_TO_SPACE = bytes.maketrans(b"\t", b" ")
 _BLANK = b" \t\r\n"
@@ -80,14 +78,15 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
     time; a :class:`Declined` block for the careful path where the fast path cannot read
     one (every line of it, blank and comment lines too, is left to the careful path). Each
     block is copied into a reused buffer, rewritten and parsed there, so the section's text
-    is never held whole; when a core is idle, blocks are read ahead by other threads."""
+    is never held whole; with more than one reader thread, blocks are read ahead on them."""
     end = _content_end(raw, start)
     if n == 0:
         yield Declined(start, end)
         return
     parser = _Parser(raw, n, wanted)
     spans = _spans(raw, start, end)
-    if end - start <= BLOCK or not arrow_text.use_threads():
+    threads = io_threads.reader_threads()
+    if end - start <= BLOCK or threads < 2:
         buffer = _buffer(0)
         layout: Layout | None = None
         for first, last in spans:
@@ -95,19 +94,21 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
             layout = found or layout
             yield block
         return
-    yield from _ahead(parser, spans)
+    yield from _ahead(parser, spans, threads)
 
 
-def _ahead(parser: _Parser, spans: Iterator[tuple[int, int]]) -> Iterator[Block | Declined]:
-    """:meth:`_Parser.read` of each span in order, :data:`AHEAD` blocks read by other
+def _ahead(
+    parser: _Parser, spans: Iterator[tuple[int, int]], ahead: int
+) -> Iterator[Block | Declined]:
+    """:meth:`_Parser.read` of each span in order, ``ahead`` blocks read by as many other
     threads while this one's block is used (each read in flight has its own buffer)."""
-    with ThreadPoolExecutor(AHEAD, thread_name_prefix="las-block") as pool:
+    with ThreadPoolExecutor(ahead, thread_name_prefix="las-block") as pool:
         free: list[Bytes] = []
         layout: Layout | None = None
         pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
         for first, last in spans:
             done = None
-            if len(pending) == AHEAD:
+            if len(pending) == ahead:
                 done = pending.popleft().result()
                 layout = done[1] or layout
                 free.append(done[2])

@@ -44,6 +44,7 @@ from pipeline.io.mcap.records import (
     iter_payloads,
 )
 from pipeline.io.mnemonics import CURVES, canonical_name
+from pipeline.io.threads import reader_threads
 from pipeline.units import conversion_factor
 
 INTEGER_COLUMNS = ("station", "position")
@@ -129,7 +130,7 @@ def _parse_bulk(messages: Messages, schema: pa.Schema) -> pa.Table | None:
     try:
         table = pajson.read_json(
             pa.BufferReader(pa.py_buffer(text)),
-            read_options=pajson.ReadOptions(block_size=1 << 24),
+            read_options=pajson.ReadOptions(use_threads=reader_threads() > 1, block_size=1 << 24),
             parse_options=pajson.ParseOptions(
                 explicit_schema=schema, unexpected_field_behavior="infer"
             ),
