@@ -140,6 +140,13 @@ class StageContext(Protocol):
         (:meth:`Registry.read`); options marked as well defaults come from the run's well."""
         ...
 
+    def record_file(self, path: Path, param: str, what: str) -> str:
+        """Declare a file the stage reads besides its tables (an offset well its manifest
+        lists, a tool-model file): hashed, recorded in ``run.json`` and in a batch's
+        fingerprint (:mod:`pipeline.inputfiles`); returns its SHA-256. Files its params name
+        as :data:`~pipeline.inputfiles.InputPath` are recorded by the engine."""
+        ...
+
     def writer(self, name: str) -> WriterDef: ...
 
     def check(self, name: str) -> CheckDef: ...
@@ -536,26 +543,29 @@ class Registry:
         except Exception as exc:  # a reader's bug is reported against the reader
             raise ReaderError(reader.name, self.plugin_label(owner), exc) from exc
 
-    def check_reader_options(self, kind: str, reader: str, options: Mapping[str, Any]) -> None:
-        """Raise the :class:`ValidationError` of ``options`` for the reader called ``reader``
-        or, with ``auto``, unless some reader of ``kind`` takes them, for the reader they fit
-        best (fewest errors). Used when a pipeline is validated, before any file is seen."""
+    def check_reader_options(
+        self, kind: str, reader: str, options: Mapping[str, Any]
+    ) -> BaseModel | None:
+        """The options parsed by the reader called ``reader`` or, with ``auto``, the first
+        reader of ``kind`` that takes them (None: no options for ``auto``, or no such
+        reader); else the :class:`ValidationError` of the reader they fit best (fewest
+        errors). Used when a pipeline is validated, before any file is seen."""
         if reader != "auto":
             found = self.readers.get(reader)
             candidates = [found[0]] if found is not None else []
         else:
             if not options:
-                return
+                return None
             candidates = [r for r, _ in self.readers.values() if kind in r.kinds]
         errors: list[ValidationError] = []
         for candidate in candidates:
             try:
-                candidate.parse_options(options)
-                return
+                return candidate.parse_options(options)
             except ValidationError as exc:
                 errors.append(exc)
         if errors:
             raise min(errors, key=lambda e: e.error_count())
+        return None
 
     def _builtin(self, plugin: str) -> bool:
         info = self.plugins.get(plugin)

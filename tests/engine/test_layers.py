@@ -81,6 +81,7 @@ LAYERS: dict[str, int] = {
     "pipeline.yamlsource": 2,
     "pipeline.yaml_errors": 2,
     "pipeline.filenames": 2,
+    "pipeline.inputfiles": 2,
     "pipeline.units": 2,
     "pipeline.convert": 2,
     "pipeline.streams": 2,
