@@ -280,17 +280,24 @@ class Ledger:
             )
             return Claimed(int(cursor.lastrowid or 0), decision.reasons)
 
-    def finish(self, outcome: WellOutcome, error: str | None = None) -> None:
+    def finish(
+        self,
+        outcome: WellOutcome,
+        error: str | None = None,
+        fingerprint: Fingerprint | None = None,
+    ) -> None:
         """Record a worker's outcome (``error`` overrides a done outcome that the batch
         process found inconsistent); a done run whose survey failed acceptance is noted
-        ``rejected: …`` (:attr:`RunRow.verdict`)."""
+        ``rejected: …`` (:attr:`RunRow.verdict`). ``fingerprint``, when given, replaces the
+        claim's (it adds the files the run read through parameters)."""
         status = "failed" if error or outcome.status != "done" else "done"
         manifest = outcome.manifest
         with self._write():
             self._db.execute(
                 "UPDATE runs SET status = ?, finished = ?, inputs = ?, outputs = ?, "
                 "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
-                "process_time_s = ?, peak_rss_bytes = ?, worker = ? WHERE id = ?",
+                "process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
+                "fingerprint = COALESCE(?, fingerprint) WHERE id = ?",
                 (
                     status,
                     time.time(),
@@ -304,6 +311,7 @@ class Ledger:
                     outcome.process_time_s,
                     outcome.peak_rss_bytes or None,
                     outcome.worker or None,
+                    fingerprint.to_json() if fingerprint is not None else None,
                     outcome.run_id,
                 ),
             )
