@@ -141,10 +141,7 @@ class StageContext(Protocol):
         ...
 
     def record_file(self, path: Path, param: str, what: str) -> str:
-        """Declare a file the stage reads besides its tables (an offset well its manifest
-        lists, a tool-model file): hashed, recorded in ``run.json`` and in a batch's
-        fingerprint (:mod:`pipeline.inputfiles`); returns its SHA-256. Files its params name
-        as :data:`~pipeline.inputfiles.InputPath` are recorded by the engine."""
+        """Record a file read through ``param``; its SHA-256 (:mod:`pipeline.inputfiles`)."""
         ...
 
     def writer(self, name: str) -> WriterDef: ...
@@ -546,10 +543,8 @@ class Registry:
     def check_reader_options(
         self, kind: str, reader: str, options: Mapping[str, Any]
     ) -> BaseModel | None:
-        """The options parsed by the reader called ``reader`` or, with ``auto``, the first
-        reader of ``kind`` that takes them (None: no options for ``auto``, or no such
-        reader); else the :class:`ValidationError` of the reader they fit best (fewest
-        errors). Used when a pipeline is validated, before any file is seen."""
+        """``options`` parsed by ``reader`` (``auto``: the first reader of ``kind`` taking them;
+        None: none), else the best fit's :class:`ValidationError`. Used by validation."""
         if reader != "auto":
             found = self.readers.get(reader)
             candidates = [found[0]] if found is not None else []
