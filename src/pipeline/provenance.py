@@ -63,6 +63,9 @@ class Provenance:
     """UTC start of the run"""
     stages: tuple[StageSetup, ...]
     """every stage of the plan, in execution order"""
+    read: dict[ParameterFile, None] = field(default_factory=dict)
+    """the files the stages so far read through parameters, in order (an ordered set, filled
+    as the run goes on: :meth:`~pipeline.registry.StageContext.record_file`)"""
     tool_models: Mapping[str, Path] = field(default_factory=dict)
     """the tool-model files the run's plugins registered, by model name (what a stage's
     ``model:`` may name besides the shipped models; :meth:`Registry.tool_model_files`)"""

@@ -104,13 +104,12 @@ class _Context:
     staging: Path
     staged: list[Path]
     provenance: Provenance
-    read: dict[ParameterFile, None] = field(default_factory=dict)  # ordered set (record_file)
     found: list[WellMetadata] = field(default_factory=list)
     """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
 
     def record_file(self, path: Path, param: str, what: str) -> str:
         entry = ParameterFile(str(path.absolute()), sha256_file(path), self.stage_id, param, what)
-        self.read.setdefault(entry)
+        self.provenance.read.setdefault(entry)
         return entry.sha256
 
     def update_well(self, found: WellMetadata) -> None:
@@ -226,7 +225,6 @@ def run_plan(
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
-    read: dict[ParameterFile, None] = {}
     provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
     with _staging(out_dir) as staging:
@@ -239,7 +237,7 @@ def run_plan(
                 record.status = "skipped"  # it only writes files
                 continue
             ins = _stage_inputs(plan, st, ports, record)
-            ctx = _Context(st.id, current, registry, files, staging, staged, provenance, read)
+            ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
             for param, path in parameter_paths(st.params):
                 ctx.record_file(path, param, param.rsplit(".", 1)[-1])
             t0 = time.perf_counter()
@@ -260,9 +258,7 @@ def run_plan(
         if out_dir is None:
             result = Tables(ports)
             settled(lambda: [result[key] for key in result])  # the API returns tables
-            manifest = _manifest(
-                provenance, current, records, [], time.perf_counter() - t_run, list(read)
-            )
+            manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
             return RunResult(None, manifest, result, current, [])
         persisted = settled(lambda: _persist(plan, registry, ports, current, staging))
         settled(lambda: _drain(plan, ports, records))
@@ -277,7 +273,7 @@ def run_plan(
         final = [out_dir / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = _manifest(
-            provenance, current, records, list(zip(written, final, strict=True)), wall, list(read)
+            provenance, current, records, list(zip(written, final, strict=True)), wall
         )
         atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
         replace_dir(staging, out_dir)
@@ -566,10 +562,8 @@ def _manifest(
     records: list[StageRecord],
     outputs: list[tuple[Path, Path]],
     wall: float,
-    read: list[ParameterFile],
 ) -> dict[str, Any]:
-    """``run.json``; ``outputs`` are (file written, its published path) pairs, ``read`` the
-    files read through parameters (``parameter_inputs``); with the gates
+    """``run.json``; ``outputs`` are (file written, its published path) pairs; with the gates
     of every acceptance-gates table the run produced (``acceptance``: overall ``pass`` unless
     a gate failed; a failed gate makes the run's ``status`` ``rejected``: it ran, its outputs
     are the evidence, the survey is not accepted)."""
@@ -586,7 +580,7 @@ def _manifest(
         "wall_time_s": round(wall, 6),
         "plugins": dict(provenance.plugins),
         "inputs": {n: dataclasses.asdict(f) for n, f in provenance.inputs.items()},
-        "parameter_inputs": [dataclasses.asdict(f) for f in read],
+        "parameter_inputs": [dataclasses.asdict(f) for f in provenance.read],
         "well": well.model_dump(mode="json", exclude_none=True),
         "stages": [
             {

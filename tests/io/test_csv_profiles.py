@@ -282,7 +282,7 @@ def test_every_problem_of_a_profile_is_listed(tmp_path: Path) -> None:
 
 
 def test_unreadable_profiles(tmp_path: Path) -> None:
-    with pytest.raises(ValidationError, match="no such file: .*absent.yaml") as refused:
+    with pytest.raises(ValidationError, match=r"no such file: .*absent\.yaml") as refused:
         CsvOptions(profile=tmp_path / "absent.yaml")  # refused with the options
     assert refused.value.errors()[0]["loc"] == ("profile",)
     with pytest.raises(ValidationError, match="not a regular file"):
