@@ -146,3 +146,32 @@ def test_validate_refuses_a_missing_profile_at_its_line(tmp_path: Path):
     assert f"{pipeline.name}:{line}:" in result.output
     assert "no such file: 'profile.yaml'" in result.output
     assert "Traceback" not in result.output
+
+
+def test_a_simulation_plan_s_stations_file_is_recorded(tmp_path: Path):
+    (tmp_path / "st.csv").write_text(
+        "MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n30,0,0\n60,3,45\n90,6,45\n"
+    )
+    (tmp_path / "plan.yaml").write_text(
+        "name: small\nseed: 7\nsite: {latitude: 61.25, date: 2026-11-21}\n"
+        "well: {stations: st.csv}\ntool: {preset: mems-vrg}\n"
+        "survey: {mode: point, every: 30, dwell: 5, move_time: 1}\n"
+    )
+    pipeline = write_pipeline(
+        tmp_path, [stage("sim", "simulate", persist=["stations"])], name="sim", inputs=("plan",)
+    )
+    result = gyropipe_cli(
+        "run", pipeline, "--input", "plan=plan.yaml", "--out", "out", cwd=tmp_path
+    )
+    assert result.returncode == 0, result.output
+    recorded = json.loads((tmp_path / "out" / "run.json").read_text())["parameter_inputs"]
+    digest = hashlib.sha256((tmp_path / "st.csv").read_bytes()).hexdigest()
+    assert recorded == [
+        {
+            "path": str(tmp_path / "st.csv"),
+            "sha256": digest,
+            "stage": "sim",
+            "param": "plan",
+            "what": "stations file",
+        }
+    ]
