@@ -10,8 +10,11 @@ import hashlib
 import json
 from pathlib import Path
 
+import pytest
 from batch_support import STATIONS, change_one_azimuth, runs, summary
 
+import pipeline as gp
+from pipeline.errors import SpecError
 from tests_support import gyropipe_cli, stage, write_pipeline
 
 MANIFEST_HEADER = "well_id,file,model,hole_diameter (in),north (m),east (m)\n"
@@ -175,3 +178,25 @@ def test_a_simulation_plan_s_stations_file_is_recorded(tmp_path: Path):
             "what": "stations file",
         }
     ]
+
+
+def test_the_python_api_records_and_refuses_the_same_files(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    make_fleet(tmp_path)
+    pipeline = clearance_pipeline(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    result = gp.run(pipeline, {"reference": "ref.csv", "offsets": "wa.csv"})
+    recorded = result.manifest["parameter_inputs"]
+    assert [(Path(e["path"]).relative_to(tmp_path).as_posix(), e["what"]) for e in recorded] == [
+        ("profile.yaml", "profile"),
+        ("offsets/a.csv", "offset file"),
+        ("models/acme.yaml", "tool-model file"),
+        ("models/base.yaml", "tool-model file"),
+    ]
+    wells = result.tables["offsets.wells"]
+    assert wells.column("sha256").to_pylist() == [recorded[1]["sha256"]]  # the same record
+    (tmp_path / "profile.yaml").unlink()
+    with pytest.raises(SpecError, match=r"no such file: 'profile\.yaml'") as refused:
+        gp.run(pipeline, {"reference": "ref.csv", "offsets": "wa.csv"})
+    assert refused.value.problems[0].location.file == str(pipeline)
