@@ -200,3 +200,31 @@ def test_the_python_api_records_and_refuses_the_same_files(
     with pytest.raises(SpecError, match=r"no such file: 'profile\.yaml'") as refused:
         gp.run(pipeline, {"reference": "ref.csv", "offsets": "wa.csv"})
     assert refused.value.problems[0].location.file == str(pipeline)
+
+
+def test_a_definitive_survey_records_each_run_s_model_file(tmp_path: Path):
+    make_fleet(tmp_path)
+    pipeline = write_pipeline(
+        tmp_path,
+        [
+            stage("read", "read_stations", input="reference"),
+            stage(
+                "definitive",
+                "definitive_survey",
+                {"run1": "read.stations"},
+                ["survey"],
+                runs={"run1": {"model": "models/acme.yaml"}},
+            ),
+        ],
+        name="definitive",
+        inputs=("reference",),
+    )
+    result = gyropipe_cli(
+        "run", pipeline, "--input", "reference=ref.csv", "--out", "out", cwd=tmp_path
+    )
+    assert result.returncode == 0, result.output
+    recorded = json.loads((tmp_path / "out" / "run.json").read_text())["parameter_inputs"]
+    assert [(e["path"], e["param"], e["what"]) for e in recorded] == [
+        (str(tmp_path / "models" / name), "runs.run1.model", "tool-model file")
+        for name in ("acme.yaml", "base.yaml")
+    ]
