@@ -358,7 +358,7 @@ class Ledger:
             manifest = published.manifest
             self._db.execute(
                 "UPDATE runs SET status = 'done', finished = ?, inputs = ?, outputs = ?, "
-                "note = ?, wall_time_s = ?, process_time_s = ? WHERE id = ?",
+                "note = ?, wall_time_s = ?, process_time_s = ?, fingerprint = ? WHERE id = ?",
                 (
                     (Path(run.out_dir) / "batch.json").stat().st_mtime,
                     json.dumps(manifest.get("inputs", {})),
@@ -366,6 +366,7 @@ class Ledger:
                     "recovered: its outputs were published before its batch process ended",
                     manifest.get("wall_time_s"),
                     sum(s["wall_time_s"] for s in manifest.get("stages", [])),
+                    run.fingerprint.reading_manifest(manifest).to_json(),
                     run.id,
                 ),
             )
