@@ -14,6 +14,7 @@ import pytest
 from batch_support import STATIONS, change_one_azimuth, runs, summary
 
 import pipeline as gp
+from pipeline.batch.fingerprint import Fingerprint, changes
 from pipeline.errors import SpecError
 from tests_support import gyropipe_cli, stage, write_pipeline
 
@@ -227,4 +228,27 @@ def test_a_definitive_survey_records_each_run_s_model_file(tmp_path: Path):
     assert [(e["path"], e["param"], e["what"]) for e in recorded] == [
         (str(tmp_path / "models" / name), "runs.run1.model", "tool-model file")
         for name in ("acme.yaml", "base.yaml")
+    ]
+
+
+def test_a_recorded_file_gone_is_a_change_named_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    monkeypatch.chdir(tmp_path)
+    offset = tmp_path / "w3.csv"
+    offset.write_text("MD (m),Inc (deg),Azimuth True (deg)\n0,0,0\n")
+    digest = hashlib.sha256(offset.read_bytes()).hexdigest()
+    base = Fingerprint(inputs={}, pipeline="p", params={}, gyropipe="1", plugins={}, well={})
+    manifest = {
+        "parameter_inputs": [
+            {"path": str(offset), "sha256": digest, "stage": "o", "param": "input",
+             "what": "offset file"},
+        ]
+    }  # fmt: skip
+    done = base.reading_manifest(manifest)
+    assert done.files == {str(offset): {"sha256": digest, "what": "offset file"}}
+    assert Fingerprint.from_json(done.to_json()) == done
+    assert base.reading(done.files) == done
+    assert changes(done, base.reading(done.files)) == []
+    offset.unlink()
+    assert changes(done, base.reading(done.files)) == [
+        "offset file w3.csv changed (now unreadable)"
     ]
