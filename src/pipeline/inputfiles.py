@@ -37,11 +37,15 @@ InputPath = Annotated[Path, CHECK, Field(json_schema_extra={"format": "path"})]
 
 def parameter_paths(params: BaseModel, prefix: str = "") -> Iterator[tuple[str, Path]]:
     """(dotted parameter name, path) of every :data:`InputPath` value set in ``params``,
-    nested models included, and of the files a model lists in its ``parameter_files()``."""
+    nested models and lists of paths (``files.0``) included, and of the files a model lists
+    in its ``parameter_files()``."""
     for name, info in type(params).model_fields.items():
         value = getattr(params, name)
-        if isinstance(value, Path) and (CHECK in info.metadata or _marked(info.annotation)):
+        marked = CHECK in info.metadata or _marked(info.annotation)
+        if isinstance(value, Path) and marked:
             yield f"{prefix}{name}", value
+        elif isinstance(value, list | tuple) and marked:
+            yield from ((f"{prefix}{name}.{i}", p) for i, p in enumerate(value))
         elif isinstance(value, BaseModel):
             yield from parameter_paths(value, f"{prefix}{name}.")
     own: Any = getattr(params, "parameter_files", None)
@@ -51,7 +55,8 @@ def parameter_paths(params: BaseModel, prefix: str = "") -> Iterator[tuple[str, 
 
 
 def _marked(annotation: Any) -> bool:
-    """Whether ``annotation`` holds :data:`InputPath` (``InputPath | None``)."""
+    """Whether ``annotation`` holds :data:`InputPath` (``InputPath | None``,
+    ``list[InputPath]``)."""
     if get_origin(annotation) is Annotated:
         return CHECK in annotation.__metadata__
     return any(_marked(arg) for arg in get_args(annotation))

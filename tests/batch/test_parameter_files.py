@@ -12,10 +12,12 @@ from pathlib import Path
 
 import pytest
 from batch_support import STATIONS, change_one_azimuth, runs, summary
+from pydantic import BaseModel, ValidationError
 
 import pipeline as gp
 from pipeline.batch.fingerprint import Fingerprint, changes
 from pipeline.errors import SpecError
+from pipeline.inputfiles import InputPath, parameter_paths
 from tests_support import gyropipe_cli, stage, write_pipeline
 
 MANIFEST_HEADER = "well_id,file,model,hole_diameter (in),north (m),east (m)\n"
@@ -252,3 +254,30 @@ def test_a_recorded_file_gone_is_a_change_named_so(tmp_path: Path, monkeypatch: 
     assert changes(done, base.reading(done.files)) == [
         "offset file w3.csv changed (now unreadable)"
     ]
+
+
+def test_parameter_paths_finds_every_input_path_of_a_params_model(tmp_path: Path):
+    class Inner(BaseModel):
+        table: InputPath
+
+    class Params(BaseModel):
+        profile: InputPath | None = None
+        files: list[InputPath] = []
+        inner: Inner
+        name: Path = Path("not-read")
+
+    for name in ("a.yaml", "b.csv", "c.csv", "d.csv"):
+        (tmp_path / name).write_text("x\n")
+    params = Params(
+        profile=tmp_path / "a.yaml",
+        files=[tmp_path / "b.csv", tmp_path / "c.csv"],
+        inner=Inner(table=tmp_path / "d.csv"),
+    )
+    assert list(parameter_paths(params)) == [
+        ("profile", tmp_path / "a.yaml"),
+        ("files.0", tmp_path / "b.csv"),
+        ("files.1", tmp_path / "c.csv"),
+        ("inner.table", tmp_path / "d.csv"),
+    ]
+    with pytest.raises(ValidationError, match="not a regular file"):
+        Inner(table=tmp_path)
