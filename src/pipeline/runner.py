@@ -238,8 +238,6 @@ def run_plan(
                 continue
             ins = _stage_inputs(plan, st, ports, record)
             ctx = _Context(st.id, current, registry, files, staging, staged, provenance)
-            for param, path in parameter_paths(st.params):
-                ctx.record_file(path, param, param.rsplit(".", 1)[-1])
             t0 = time.perf_counter()
             outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
@@ -448,6 +446,8 @@ def _call(
 ) -> dict[str, Port]:
     plugin = registry.plugin_label(st.plugin)
     try:
+        for param, path in parameter_paths(st.params):  # the files its params name
+            ctx.record_file(path, param, param.rsplit(".", 1)[-1])
         outs = st.definition.func(ins, st.params, ctx)
     except UpstreamError:
         raise
