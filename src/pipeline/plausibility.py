@@ -1,5 +1,5 @@
 """Angle plausibility of survey stations as read, the one rule every reader's stations pass
-through (:func:`pipeline.registry.check_read`), in canonical degrees after the reader's
+through (:func:`pipeline.read_checks.check_read`), in canonical degrees after the reader's
 unit conversion:
 
 * an inclination outside [0, 180] or an azimuth outside [−360, 720) is an error at its line

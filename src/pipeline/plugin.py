@@ -39,8 +39,10 @@ What is here:
   :class:`ReportSection` of paragraphs, :class:`ReportTable` tables and a
   :class:`ReportFigure` of :class:`ReportLine` series; a :class:`MethodNote`; both given
   a :class:`ReportContext`, and the method a run's :class:`StageSetup`); params
-  helpers :class:`NoParams`, :func:`pipeline_input`, :func:`registered`; what a stage is
-  given, :class:`StageContext` and :class:`Provenance`; :class:`TableStream`, what a
+  helpers :class:`NoParams`, :func:`pipeline_input`, :func:`registered`, :data:`InputPath`
+  (a parameter naming a file to read: checked by ``validate``, hashed into ``run.json``);
+  what a stage is given, :class:`StageContext` (``record_file`` declares a file it finds
+  while it runs) and :class:`Provenance`; :class:`TableStream`, what a
   streamed port carries (a schema and record batches: ``StageDef.streamed_inputs`` /
   ``streamed_outputs``, ``ReaderDef.stream``, ``WriterDef.write_stream``);
 - batch executors: :class:`ExecutorDef` (``gyropipe batch --executor NAME``), whose factory
@@ -80,6 +82,7 @@ from pipeline.errors import (
 )
 from pipeline.executing import ExecutorDef, ExecutorSetup, PipelineRef
 from pipeline.hookspecs import hookimpl
+from pipeline.inputfiles import InputPath
 from pipeline.io.conventions import Conventions, to_canonical
 from pipeline.io.mnemonics import CURVES, Curve, canonical_name, register_alias
 from pipeline.provenance import Provenance, StageSetup
@@ -152,6 +155,7 @@ __all__ = [
     "FreeGyroReadings",
     "GyropipeError",
     "InputFileError",
+    "InputPath",
     "Latitude",
     "LogTable",
     "MethodNote",

@@ -20,6 +20,22 @@ class InputFile:
 
 
 @dataclass(frozen=True)
+class ParameterFile:
+    """A file a stage read because a parameter named it, or a file it found through one (an
+    offset well a manifest lists, a tool-model file a model extends): ``run.json``'s
+    ``parameter_inputs`` (:mod:`pipeline.inputfiles`)."""
+
+    path: str
+    """absolute path"""
+    sha256: str
+    stage: str
+    param: str
+    """the parameter that named it or led to it (dotted: ``options.profile``)"""
+    what: str
+    """what it is, in words (``offset file``, ``tool-model file``, ``profile``)"""
+
+
+@dataclass(frozen=True)
 class StageSetup:
     """One stage of the running plan: what it uses, from which plugin, with which params."""
 
@@ -47,6 +63,9 @@ class Provenance:
     """UTC start of the run"""
     stages: tuple[StageSetup, ...]
     """every stage of the plan, in execution order"""
+    read: dict[ParameterFile, None] = field(default_factory=dict)
+    """the files the stages so far read through parameters, in order (an ordered set, filled
+    as the run goes on: :meth:`~pipeline.registry.StageContext.record_file`)"""
     tool_models: Mapping[str, Path] = field(default_factory=dict)
     """the tool-model files the run's plugins registered, by model name (what a stage's
     ``model:`` may name besides the shipped models; :meth:`Registry.tool_model_files`)"""

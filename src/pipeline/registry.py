@@ -20,21 +20,19 @@ from pipeline.contracts import BatchChecker, TableContract
 from pipeline.errors import (
     ContractViolation,
     GyropipeError,
-    InputFileError,
     PluginError,
     ReaderChoiceError,
     ReaderError,
-    ReaderOptionsError,
     WrongKindError,
 )
 from pipeline.executing import ExecutorDef
-from pipeline.plausibility import CONFIRM, DROP, check_angles, without_null_stations
+from pipeline.plausibility import CONFIRM, DROP, without_null_stations
 from pipeline.provenance import InputFile as InputFile
 from pipeline.provenance import Provenance as Provenance
 from pipeline.provenance import StageSetup as StageSetup
+from pipeline.read_checks import check_columns, check_read, read_violation, reader_options
 from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream
-from pipeline.tables import Stations
 from pipeline.well import WELL_DEFAULT, WellMetadata
 
 NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*\Z")
@@ -139,6 +137,10 @@ class StageContext(Protocol):
     ) -> tuple[pa.Table, WellMetadata]:
         """Read ``path`` as a table of ``kind`` with the reader the engine chooses
         (:meth:`Registry.read`); options marked as well defaults come from the run's well."""
+        ...
+
+    def record_file(self, path: Path, param: str, what: str) -> str:
+        """Record a file read through ``param``; its SHA-256 (:mod:`pipeline.inputfiles`)."""
         ...
 
     def writer(self, name: str) -> WriterDef: ...
@@ -539,26 +541,27 @@ class Registry:
         except Exception as exc:  # a reader's bug is reported against the reader
             raise ReaderError(reader.name, self.plugin_label(owner), exc) from exc
 
-    def check_reader_options(self, kind: str, reader: str, options: Mapping[str, Any]) -> None:
-        """Raise the :class:`ValidationError` of ``options`` for the reader called ``reader``
-        or, with ``auto``, unless some reader of ``kind`` takes them, for the reader they fit
-        best (fewest errors). Used when a pipeline is validated, before any file is seen."""
+    def check_reader_options(
+        self, kind: str, reader: str, options: Mapping[str, Any]
+    ) -> BaseModel | None:
+        """``options`` parsed by ``reader`` (``auto``: the first reader of ``kind`` taking them;
+        None: none), else the best fit's :class:`ValidationError`. Used by validation."""
         if reader != "auto":
             found = self.readers.get(reader)
             candidates = [found[0]] if found is not None else []
         else:
             if not options:
-                return
+                return None
             candidates = [r for r, _ in self.readers.values() if kind in r.kinds]
         errors: list[ValidationError] = []
         for candidate in candidates:
             try:
-                candidate.parse_options(options)
-                return
+                return candidate.parse_options(options)
             except ValidationError as exc:
                 errors.append(exc)
         if errors:
             raise min(errors, key=lambda e: e.error_count())
+        return None
 
     def _builtin(self, plugin: str) -> bool:
         info = self.plugins.get(plugin)
@@ -572,63 +575,6 @@ class Registry:
             for name, (_, owner) in getattr(self, kind + "s").items()
             if owner == plugin
         ]
-
-
-def check_read(
-    path: Path, kind: str, reader: ReaderDef, table: pa.Table, *, confirmed: bool = False
-) -> None:
-    """Raise an :class:`InputFileError` unless the table ``reader`` read from ``path`` meets
-    the contract of ``kind`` (a :class:`WrongKindError` if it lacks a column the kind
-    requires: a file of another kind): what a reader lets through (MD or time out of order, an
-    inclination past 180°, a Parquet or MCAP column in another unit) is the file's fault,
-    named with the line of its first bad row (when the table records lines) and every
-    rule broken, on one line. Stations' angles are checked for plausibility first
-    (:func:`pipeline.plausibility.check_angles`; ``confirmed``: the reader option
-    ``angle_unit_confirmed``)."""
-    check_columns(path, kind, reader, table.column_names)
-    if issubclass(reader.kinds[kind], Stations):
-        check_angles(path, table, confirmed=confirmed)
-    try:
-        reader.kinds[kind].validate_table(table)
-    except ContractViolation as exc:
-        raise read_violation(path, kind, reader, exc) from None
-
-
-def check_columns(path: Path, kind: str, reader: ReaderDef, names: list[str]) -> None:
-    """A :class:`WrongKindError` unless the columns ``names`` read from ``path`` include
-    every column the kind requires (else it is a file of another kind)."""
-    columns = reader.kinds[kind].compiled().columns
-    missing = [c.name for c in columns if c.required and c.name not in names]
-    if missing:  # a reader of any kind of table (Parquet) found another kind's
-        raise WrongKindError(
-            path, f"not {kind}: no column {', '.join(map(repr, missing))} (reader {reader.name!r})"
-        )
-
-
-def read_violation(
-    path: Path, kind: str, reader: ReaderDef, exc: ContractViolation
-) -> InputFileError:
-    """What a table read from ``path`` breaking the kind's contract is: the file's fault,
-    at the line of its first bad row (when the table records lines), every rule on one line."""
-    lines = [n for failure in exc.failures for n in failure.lines]
-    rules = "; ".join(map(str, exc.failures))
-    return InputFileError(
-        path, f"not valid as {kind} (reader {reader.name!r}): {rules}", min(lines, default=0)
-    )
-
-
-def reader_options(
-    reader: ReaderDef, options: Mapping[str, Any], well: WellMetadata | None
-) -> BaseModel:
-    """:meth:`ReaderDef.parse_options`, a problem a :class:`ReaderOptionsError` naming the
-    reader and every option at fault."""
-    try:
-        return reader.parse_options(options, well)
-    except ValidationError as exc:
-        problems = "; ".join(
-            f"{'.'.join(str(p) for p in e['loc']) or 'options'}: {e['msg']}" for e in exc.errors()
-        )
-        raise ReaderOptionsError(f"options of reader {reader.name!r}: {problems}") from None
 
 
 def _validate(item: object, expected: type) -> tuple[str, str]:

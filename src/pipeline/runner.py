@@ -38,7 +38,9 @@ from pipeline.errors import (
 )
 from pipeline.graph import Plan, PlannedStage
 from pipeline.hashing import sha256_file
+from pipeline.inputfiles import parameter_paths
 from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
+from pipeline.provenance import ParameterFile
 from pipeline.registry import (
     CheckDef,
     InputFile,
@@ -111,6 +113,11 @@ class _Context:
     """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
     out_dir: Path | None = None
     """where the staged files will be published"""
+
+    def record_file(self, path: Path, param: str, what: str) -> str:
+        entry = ParameterFile(str(path.absolute()), sha256_file(path), self.stage_id, param, what)
+        self.provenance.read.setdefault(entry)
+        return entry.sha256
 
     def update_well(self, found: WellMetadata) -> None:
         self.found.append(found)
@@ -457,6 +464,8 @@ def _call(
     plugin = registry.plugin_label(st.plugin)
     before = len(ctx.staged)
     try:
+        for param, path in parameter_paths(st.params):  # the files its params name
+            ctx.record_file(path, param, param.rsplit(".", 1)[-1])
         outs = st.definition.func(ins, st.params, ctx)
     except UpstreamError:
         raise
@@ -597,6 +606,7 @@ def _manifest(
         "wall_time_s": round(wall, 6),
         "plugins": dict(provenance.plugins),
         "inputs": {n: dataclasses.asdict(f) for n, f in provenance.inputs.items()},
+        "parameter_inputs": [dataclasses.asdict(f) for f in provenance.read],
         "well": well.model_dump(mode="json", exclude_none=True),
         "stages": [
             {

@@ -282,8 +282,13 @@ def test_every_problem_of_a_profile_is_listed(tmp_path: Path) -> None:
 
 
 def test_unreadable_profiles(tmp_path: Path) -> None:
+    with pytest.raises(ValidationError, match=r"no such file: .*absent\.yaml") as refused:
+        CsvOptions(profile=tmp_path / "absent.yaml")  # refused with the options
+    assert refused.value.errors()[0]["loc"] == ("profile",)
+    with pytest.raises(ValidationError, match="not a regular file"):
+        CsvOptions(profile=tmp_path)
     with pytest.raises(InputFileError, match="cannot read the profile"):
-        CsvOptions(profile=tmp_path / "absent.yaml").resolved()
+        load_profile(tmp_path / "absent.yaml")  # gone after the options were validated
     with pytest.raises(InputFileError, match="not UTF-8"):
         CsvOptions(profile=put(tmp_path, b"delimiter: '\xff'\n", "bad.yaml")).resolved()
 

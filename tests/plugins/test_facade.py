@@ -48,6 +48,7 @@ GUIDE = ROOT / "docs" / "vendor-adapter.md"
 HOME = {
     "hookimpl": "pipeline.hookspecs",
     "TableStream": "pipeline.streams",
+    "InputPath": "pipeline.inputfiles",
     **dict.fromkeys(
         [
             "StageDef",

@@ -57,6 +57,11 @@ def test_cli_table_reproduces_the_iscwsa_set(clearance_run: Path):
         assert np.abs(sf[offsets == ours] / expected_sf(theirs) - 1.0).max() < 0.005, ours
     manifest = json.loads((clearance_run / "run.json").read_text())
     assert set(manifest["inputs"]) == {"reference", "offsets"}
+    offset_files = [e for e in manifest["parameter_inputs"] if e["what"] == "offset file"]
+    assert [(e["path"], e["sha256"], e["stage"], e["param"]) for e in offset_files] == [
+        (str(path), hashlib.sha256(path.read_bytes()).hexdigest(), "offsets", "input")
+        for path in (EXAMPLE / "offsets" / f"offset-0{k}.csv" for k in range(1, 7))
+    ]
     assert (clearance_run / "clearance.csv").is_file()
 
 
@@ -101,6 +106,11 @@ def test_clearance_section_in_chromium(clearance_run: Path, browser: Any):
     assert "SPE-187073" in text and "SPE 67616" in text
     for internal in ("anticollision", "sigma_pa", "surface_margin", "read_offsets"):
         assert internal not in text.split("Appendix: provenance")[0], internal
+    appendix = text.split("Appendix: provenance")[-1]  # the files pinned, as run.json has them
+    recorded = json.loads((clearance_run / "run.json").read_text())["parameter_inputs"]
+    assert len(recorded) == 6
+    for entry in recorded:
+        assert f"{entry['path']} (offset file)" in appendix and entry["sha256"] in appendix
 
 
 SLOTS = {  # examples/clearance/manifest.csv: north, east (m); every hole 24 in

@@ -2,17 +2,25 @@
 
 A :class:`Fingerprint` holds the SHA-256 of every input file, the hash of the pipeline's
 structure (its spec without stage parameters), the resolved parameters of every stage, the
-gyropipe version and the versions of third-party plugins, and the well's header overrides.
-Two runs with equal fingerprints produce the same outputs; :func:`changes` says in words
-what differs ("input changed: stations", "plugin acme 1.2→1.3").
+gyropipe version and the versions of third-party plugins, the well's header overrides, and
+the SHA-256 of every file the run read through a parameter (``run.json``'s
+``parameter_inputs``: offset wells, tool-model files, reader profiles). Which files those
+are is known once the run has read them: a well's last run records them
+(:meth:`Fingerprint.reading_manifest`) and the next batch hashes the same files again
+(:meth:`Fingerprint.reading`) — the set changes only with the pipeline, its inputs or
+params, or one of those files, each of which is a reason already. Two runs with equal
+fingerprints produce the same outputs; :func:`changes` says in words what differs ("input
+changed: stations", "plugin acme 1.2→1.3", "offset file offsets/w3.csv changed").
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from pipeline.graph import Plan
@@ -41,6 +49,28 @@ class Fingerprint:
     """third-party plugin name → version (built-ins go with the gyropipe version)"""
     well: Mapping[str, Any]
     """header fields the batch overrides (JSON values)"""
+    files: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
+    """absolute path → ``{"sha256", "what"}`` of every file the run read through a
+    parameter (:mod:`pipeline.inputfiles`)"""
+
+    def reading(self, files: Mapping[str, Mapping[str, str]]) -> Fingerprint:
+        """This fingerprint with the files ``files`` names (a previous run's) hashed now
+        (``unreadable`` when they cannot be read)."""
+        now = {}
+        for path, entry in files.items():
+            try:
+                digest = sha256_file(Path(path))
+            except OSError:
+                digest = UNREADABLE
+            now[path] = {"sha256": digest, "what": entry["what"]}
+        return replace(self, files=now)
+
+    def reading_manifest(self, manifest: Mapping[str, Any]) -> Fingerprint:
+        """This fingerprint with the files a run's ``run.json`` says it read."""
+        files: dict[str, dict[str, str]] = {}
+        for entry in manifest.get("parameter_inputs", []):
+            files.setdefault(entry["path"], {"sha256": entry["sha256"], "what": entry["what"]})
+        return replace(self, files=files)
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True, separators=(",", ":"))
@@ -130,7 +160,18 @@ def changes(old: Fingerprint, new: Fingerprint) -> list[str]:
                 else f"plugin {name} {before}→{after}"
             )
     reasons += _diff("well header changed", dict(old.well), dict(new.well))
+    for path in sorted(old.files):
+        read, now = old.files[path], new.files.get(path)
+        if now is not None and now["sha256"] != read["sha256"]:
+            gone = " (now unreadable)" if now["sha256"] == UNREADABLE else ""
+            reasons.append(f"{read['what']} {_shown(path)} changed{gone}")
     return reasons
+
+
+def _shown(path: str) -> str:
+    """``path`` relative to the current directory when it lies below it."""
+    relative = os.path.relpath(path)
+    return path if relative.startswith("..") else relative
 
 
 def _flatten(params: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:

@@ -34,7 +34,7 @@ import os
 import socket
 import sqlite3
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
@@ -406,17 +406,24 @@ class Ledger:
             return Claimed(int(cursor.lastrowid or 0), decision.reasons)
 
     @_guarded("record a well's outcome")
-    def finish(self, outcome: WellOutcome, error: str | None = None) -> None:
+    def finish(
+        self,
+        outcome: WellOutcome,
+        error: str | None = None,
+        fingerprint: Fingerprint | None = None,
+    ) -> None:
         """Record a worker's outcome (``error`` overrides a done outcome that the batch
         process found inconsistent); a done run whose survey failed acceptance is noted
-        ``rejected: …`` (:attr:`RunRow.verdict`)."""
+        ``rejected: …`` (:attr:`RunRow.verdict`). ``fingerprint``, when given, replaces the
+        claim's (it adds the files the run read through parameters)."""
         status = "failed" if error or outcome.status != "done" else "done"
         manifest = outcome.manifest
         with self._write():
             self._db.execute(
                 "UPDATE runs SET status = ?, finished = ?, inputs = ?, outputs = ?, "
                 "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
-                "process_time_s = ?, peak_rss_bytes = ?, worker = ? WHERE id = ?",
+                "process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
+                "fingerprint = COALESCE(?, fingerprint) WHERE id = ?",
                 (
                     status,
                     time.time(),
@@ -430,6 +437,7 @@ class Ledger:
                     outcome.process_time_s,
                     outcome.peak_rss_bytes or None,
                     outcome.worker or None,
+                    fingerprint.to_json() if fingerprint is not None else None,
                     outcome.run_id,
                 ),
             )
@@ -474,12 +482,13 @@ class Ledger:
         published (read from the row's id and out_dir only, so a damaged row is settled
         too), else interrupted."""
         for row in self._db.execute(
-            "SELECT id, out_dir FROM runs WHERE batch = ? AND status = 'running'", (batch_id,)
+            "SELECT id, out_dir, fingerprint FROM runs WHERE batch = ? AND status = 'running'",
+            (batch_id,),
         ).fetchall():
             out_dir = row["out_dir"]
             published = read_published(Path(out_dir)) if isinstance(out_dir, str) else None
             if published is not None and published.run_id == row["id"]:
-                self._recover(int(row["id"]), Path(out_dir), published.manifest)
+                self._recover(int(row["id"]), Path(out_dir), published.manifest, row["fingerprint"])
             else:
                 self._db.execute(
                     "UPDATE runs SET status = 'interrupted', finished = ?, "
@@ -488,13 +497,17 @@ class Ledger:
                     (time.time(), row["id"]),
                 )
 
-    def _recover(self, run_id: int, out_dir: Path, manifest: dict[str, Any]) -> None:
-        """A claimed run that published before its batch process ended: done."""
+    def _recover(
+        self, run_id: int, out_dir: Path, manifest: dict[str, Any], fingerprint: object
+    ) -> None:
+        """A claimed run that published before its batch process ended: done, its
+        fingerprint given the files its ``run.json`` says it read (kept as it was where the
+        row's fingerprint or the manifest's list does not parse)."""
         stages = manifest.get("stages")
         times = [s.get("wall_time_s") for s in stages] if isinstance(stages, list) else []
         self._db.execute(
             "UPDATE runs SET status = 'done', finished = ?, inputs = ?, outputs = ?, "
-            "note = ?, wall_time_s = ?, process_time_s = ? WHERE id = ?",
+            "note = ?, wall_time_s = ?, process_time_s = ?, fingerprint = ? WHERE id = ?",
             (
                 (out_dir / MARKER).stat().st_mtime,
                 json.dumps(manifest.get("inputs", {})),
@@ -502,6 +515,7 @@ class Ledger:
                 "recovered: its outputs were published before its batch process ended",
                 _number(manifest.get("wall_time_s")),
                 sum(t for t in times if isinstance(t, int | float)),
+                _with_files(fingerprint, manifest),
                 run_id,
             ),
         )
@@ -558,3 +572,15 @@ def _identity(path: Path) -> tuple[int, int] | None:
 
 def _number(value: object) -> float | None:
     return float(value) if isinstance(value, int | float) else None
+
+
+def _with_files(fingerprint: object, manifest: Mapping[str, Any]) -> object:
+    """A stored fingerprint (JSON text) with the files a run's ``run.json`` lists; as it was
+    where either does not parse (the next batch then re-runs the well, as for any damaged
+    row)."""
+    if not isinstance(fingerprint, str):
+        return fingerprint
+    try:
+        return Fingerprint.from_json(fingerprint).reading_manifest(manifest).to_json()
+    except (ValueError, TypeError, KeyError, AttributeError):
+        return fingerprint

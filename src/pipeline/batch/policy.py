@@ -4,7 +4,8 @@
   while this one was running (it is adopted, never computed twice) and, when the same batch
   command is started again after it was killed, the wells it already completed;
 - ``--only-changed``: a well runs if it is new, its last run failed or was interrupted, its
-  published outputs are missing, or its fingerprint changed (the reasons say what changed);
+  published outputs are missing, or its fingerprint changed — the files its last done run
+  read through parameters hashed again (the reasons say what changed);
 - ``--rerun-failed``: only wells whose last run failed or was interrupted run.
   With both flags a well runs if either says so.
 """
@@ -58,7 +59,8 @@ def decide(
     """Run or skip a well (module docstring); ``resume_since`` is the first batch of the
     interrupted run of this same batch command, if it is being resumed."""
     latest, done = state.latest, state.last_done
-    same_done = done is not None and done.fingerprint == current and state.last_done_published
+    now = current.reading(done.fingerprint.files) if done is not None else current
+    same_done = done is not None and done.fingerprint == now and state.last_done_published
     if same_done and done is not None and done.batch != batch_id:
         if done.finished is not None and done.finished >= batch_started:
             return Skip(f"done by batch {done.batch} meanwhile")
@@ -71,7 +73,7 @@ def decide(
         reasons = [f"previous run {latest.status}", *changes(latest.fingerprint, current)]
     else:
         assert done is not None  # the latest finished run is done
-        reasons = changes(done.fingerprint, current)
+        reasons = changes(done.fingerprint, now)
         if not state.last_done_published:
             reasons.append("outputs missing")
     if mode.only_changed and reasons:

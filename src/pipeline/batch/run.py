@@ -269,7 +269,7 @@ class _Batch:
     def _record(self, outcome: WellOutcome) -> None:
         job, fingerprint, reasons = self.inflight.pop(outcome.run_id)
         error = self._inconsistency(outcome, fingerprint) if outcome.status == "done" else None
-        self.ledger.finish(outcome, error)
+        self.ledger.finish(outcome, error, fingerprint.reading_manifest(outcome.manifest))
         if outcome.status == "done" and error is None:
             rejected = rejection(outcome.manifest)
             result = WellResult(

@@ -157,7 +157,9 @@ def _params_text(params: Mapping[str, Any]) -> str:
 
 
 def provenance_section(provenance: Provenance) -> Section:
-    """Pipeline, software, input files and every stage with its parameters."""
+    """Pipeline, software, input files, the files read through parameters by the stages
+    before the report (``run.json``'s ``parameter_inputs``), and every stage with its
+    parameters."""
     run = Fields(
         "Run",
         items(
@@ -181,6 +183,17 @@ def provenance_section(provenance: Provenance) -> Section:
         tuple((name, f.path, str(f.bytes), f.sha256) for name, f in provenance.inputs.items()),
         kind="inputs",
     )
+    read = Table(
+        "Files read through parameters",
+        (
+            Column("Stage", align="left"),
+            Column("Parameter", align="left"),
+            Column("File", align="left", wrap=True),
+            Column("SHA-256", align="left", wrap=True),
+        ),
+        tuple((f.stage, f.param, f"{f.path} ({f.what})", f.sha256) for f in provenance.read),
+        kind="inputs",
+    )
     stages = Table(
         "Processing stages",
         (
@@ -195,6 +208,7 @@ def provenance_section(provenance: Provenance) -> Section:
     plugins = ", ".join(f"{n} {v}" for n, v in provenance.plugins.items())
     blocks: list[Block] = [run]
     blocks += [inputs] if inputs.rows else []
+    blocks += [read] if read.rows else []
     blocks += [stages] if stages.rows else []
     blocks += [Paragraph(f"Plugins loaded: {plugins}.")] if plugins else []
     return Section("Appendix: provenance", tuple(blocks), key="provenance")

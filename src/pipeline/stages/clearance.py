@@ -44,7 +44,12 @@ from pipeline.survey.mincurve import minimum_curvature
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import Stations
-from pipeline.uncertainty.engine import ModelCatalogue, OutsideValidity, OutsideValidityError
+from pipeline.uncertainty.engine import (
+    ModelCatalogue,
+    OutsideValidity,
+    OutsideValidityError,
+    find_model,
+)
 from pipeline.well import Latitude, WellMetadata
 
 STAGE = "clearance"
@@ -144,7 +149,11 @@ def read_offsets(
         return ctx.read_file(path, "stations", reader=params.reader)
 
     wells, stations = offset_tables(
-        ctx.input_path(params.input), read, ctx.well, toolmodels.of_run(ctx)
+        ctx.input_path(params.input),
+        read,
+        ctx.well,
+        toolmodels.of_run(ctx),
+        functools.partial(ctx.record_file, param="input", what="offset file"),
     )
     return {"wells": wells, "stations": stations}
 
@@ -154,11 +163,13 @@ def offset_tables(
     read: Callable[[Path], tuple[pa.Table, WellMetadata]],
     well: WellMetadata,
     catalogue: ModelCatalogue,
+    hash_file: Callable[[Path], str] = sha256_file,
 ) -> tuple[pa.Table, pa.Table]:
     """The offset wells a manifest lists (:mod:`pipeline.io.offset_manifest`; their tool
     models among ``catalogue``'s) and their stations, read by ``read``, every azimuth
     referred to the first file's north (each file's own header, else ``well``, gives the
-    corrections)."""
+    corrections); each file's ``sha256`` by ``hash_file`` (a stage's records it:
+    :meth:`StageContext.record_file`)."""
     from pipeline.io.offset_manifest import read_offset_manifest
 
     entries = read_offset_manifest(manifest, functools.partial(resolve_model, catalogue=catalogue))
@@ -205,7 +216,7 @@ def offset_tables(
             "parent": [e.parent for e in entries],
             "kickoff_md": [e.kickoff_md for e in entries],
             "source": [str(e.file) for e in entries],
-            "sha256": [sha256_file(e.file) for e in entries],
+            "sha256": [hash_file(e.file) for e in entries],
         }
     )
     return wells, stations
@@ -436,6 +447,9 @@ def clearance(
     for w in listed:
         w["model"] = resolve_model(w["model"], catalogue)
     models = {params.reference_model, *(w["model"] for w in listed)}
+    for model in sorted(models):  # the reference's and the manifest's (the wells' model)
+        param = "reference_model" if model == params.reference_model else "wells.model"
+        toolmodels.record(ctx, find_model(model, catalogue), param)
     site, applied = _site(params, ctx.well, models, catalogue)
     frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
     make = _Survey(

@@ -227,6 +227,8 @@ def definitive_survey(
     specs = {p: params.runs.get(p, RunSpec()) for p in ports}
     catalogue = toolmodels.of_run(ctx)
     tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
+    for port, tool in tools.items():
+        toolmodels.record(ctx, tool, f"runs.{port}.model")
     applied = _magnetic(params, tools, ctx.well, [inputs[p] for p in ports])
     magnetic = None if applied is None else applied.reference
     runs = [_read(p, inputs[p], specs[p], north, magnetic, ctx.well) for p in ports]

@@ -16,6 +16,7 @@ from pydantic import (
     ConfigDict,
     Field,
     ModelWrapValidatorHandler,
+    PrivateAttr,
     ValidationError,
     ValidationInfo,
     create_model,
@@ -27,6 +28,7 @@ from pipeline.contracts import TableContract
 from pipeline.errors import WrongKindError
 from pipeline.filenames import OutputFilename
 from pipeline.hookspecs import hookimpl
+from pipeline.inputfiles import parameter_paths
 from pipeline.ports import write_port
 from pipeline.registry import (
     Registry,
@@ -62,6 +64,12 @@ class ReadParams(BaseModel):
     )
     reads: ClassVar[str] = "stations"
     """the kind of table the stage reads"""
+    _option_files: list[tuple[str, Path]] = PrivateAttr(default_factory=list)
+
+    def parameter_files(self) -> list[tuple[str, Path]]:
+        """The files the reader options name (``options.profile``), found when the
+        pipeline was validated with its registry (:mod:`pipeline.inputfiles`)."""
+        return self._option_files
 
     @model_validator(mode="wrap")
     @classmethod
@@ -75,7 +83,9 @@ class ReadParams(BaseModel):
         registry = (info.context or {}).get("registry")
         if isinstance(registry, Registry):
             try:
-                registry.check_reader_options(cls.reads, params.reader, params.options)
+                parsed = registry.check_reader_options(cls.reads, params.reader, params.options)
+                if parsed is not None:
+                    params._option_files = list(parameter_paths(parsed, "options."))
             except ValidationError as exc:
                 raise ValidationError.from_exception_data(
                     cls.__name__,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pyarrow as pa
@@ -62,10 +63,12 @@ def simulation_tables(spec: SimulationSpec) -> dict[str, pa.Table]:
 def _load(params: SimulateParams, ctx: StageContext) -> SimulationSpec:
     from pipeline.sim.spec import load_simulation
 
+    def read_stations(path: Path, reader: str) -> pa.Table:
+        ctx.record_file(path, "plan", "stations file")  # a file the plan names
+        return ctx.read_file(path, "stations", reader=reader)[0]
+
     return load_simulation(
-        ctx.input_path(params.plan),
-        seed=params.seed,
-        read_stations=lambda path, reader: ctx.read_file(path, "stations", reader=reader)[0],
+        ctx.input_path(params.plan), seed=params.seed, read_stations=read_stations
     )
 
 

@@ -5,10 +5,12 @@ uncertainty code never loads plugins)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from pydantic import ValidationInfo
 
 from pipeline.registry import Registry, StageContext
-from pipeline.uncertainty.engine import SHIPPED, ModelCatalogue, find_model
+from pipeline.uncertainty.engine import MODELS_DIR, SHIPPED, ModelCatalogue, find_model
 from pipeline.uncertainty.toolmodel import ToolModel
 
 
@@ -54,3 +56,12 @@ def find(model: str, info: ValidationInfo) -> ToolModel:
     except KeyError as exc:
         why = disabled_message(model, registry_of(info))
         raise ValueError(why or f"unknown model: {exc.args[0]}") from None
+
+
+def record(ctx: StageContext, tool: ToolModel, param: str) -> None:
+    """Declare the files of ``tool`` (its own and those it extends) that are not shipped
+    with gyropipe as files the stage read through ``param`` (``run.json``, fingerprint)."""
+    for file in tool.files:
+        path = Path(file)
+        if path.is_file() and not path.resolve().is_relative_to(MODELS_DIR.resolve()):
+            ctx.record_file(path, param, "tool-model file")

@@ -171,6 +171,7 @@ def position_uncertainty(
     table = inputs["trajectory"]
     azi_deg = table.column("azi").to_numpy()
     tool = configure(params.model, params.tool, toolmodels.of_run(ctx))
+    toolmodels.record(ctx, tool, "model")
     site = ModelSite()
     applied = None
     if "magnetic" in tool.needs:

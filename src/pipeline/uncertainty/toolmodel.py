@@ -302,6 +302,8 @@ class ToolModel:
     revision: str = ""
     file: str = ""
     inclination_range_deg: tuple[float, float] = (0.0, 180.0)
+    files: tuple[str, ...] = ()
+    """the model's file and the files it extends, outermost first"""
 
     @property
     def needs(self) -> frozenset[str]:
@@ -465,6 +467,7 @@ def _build(
         revision=spec.revision,
         file=source.file,
         inclination_range_deg=(float(validity[0]), float(validity[1])),
+        files=(source.file, *(parent.files if parent else ())),
     )
 
 

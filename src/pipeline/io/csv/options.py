@@ -28,6 +28,7 @@ from pydantic import (
 )
 
 from pipeline.errors import InputFileError, SpecError, UnitError
+from pipeline.inputfiles import InputPath
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
 from pipeline.plausibility import AngleUnitConfirmed, NullStations
@@ -145,7 +146,7 @@ class CsvProfile(CsvSettings):
 class CsvOptions(CsvSettings):
     """Options of the CSV reader (both kinds: stations and samples)."""
 
-    profile: Path | None = Field(
+    profile: InputPath | None = Field(
         None,
         description="YAML profile of options merged under these (relative to the current "
         "directory)",
