@@ -6,24 +6,34 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import pyarrow as pa
 from pydantic import BaseModel, ValidationError
 
+from pipeline.contracts import TableContract
 from pipeline.errors import ContractViolation, InputFileError, ReaderOptionsError, WrongKindError
 from pipeline.plausibility import check_angles
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata
 
-if TYPE_CHECKING:
-    from pipeline.registry import ReaderDef
+__all__ = ["Reader", "check_columns", "check_read", "read_violation", "reader_options"]
 
-__all__ = ["check_columns", "check_read", "read_violation", "reader_options"]
+
+class Reader(Protocol):
+    """What the checks need of a reader (:class:`pipeline.registry.ReaderDef`)."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def kinds(self) -> Mapping[str, type[TableContract]]: ...
+
+    def parse_options(self, options: Mapping[str, Any], well: WellMetadata | None) -> BaseModel: ...
 
 
 def check_read(
-    path: Path, kind: str, reader: ReaderDef, table: pa.Table, *, confirmed: bool = False
+    path: Path, kind: str, reader: Reader, table: pa.Table, *, confirmed: bool = False
 ) -> None:
     """Raise an :class:`InputFileError` unless the table ``reader`` read from ``path`` meets
     the contract of ``kind`` (a :class:`WrongKindError` if it lacks a column the kind
@@ -42,7 +52,7 @@ def check_read(
         raise read_violation(path, kind, reader, exc) from None
 
 
-def check_columns(path: Path, kind: str, reader: ReaderDef, names: list[str]) -> None:
+def check_columns(path: Path, kind: str, reader: Reader, names: list[str]) -> None:
     """A :class:`WrongKindError` unless the columns ``names`` read from ``path`` include
     every column the kind requires (else it is a file of another kind)."""
     columns = reader.kinds[kind].compiled().columns
@@ -53,9 +63,7 @@ def check_columns(path: Path, kind: str, reader: ReaderDef, names: list[str]) ->
         )
 
 
-def read_violation(
-    path: Path, kind: str, reader: ReaderDef, exc: ContractViolation
-) -> InputFileError:
+def read_violation(path: Path, kind: str, reader: Reader, exc: ContractViolation) -> InputFileError:
     """What a table read from ``path`` breaking the kind's contract is: the file's fault,
     at the line of its first bad row (when the table records lines), every rule on one line."""
     lines = [n for failure in exc.failures for n in failure.lines]
@@ -66,10 +74,10 @@ def read_violation(
 
 
 def reader_options(
-    reader: ReaderDef, options: Mapping[str, Any], well: WellMetadata | None
+    reader: Reader, options: Mapping[str, Any], well: WellMetadata | None
 ) -> BaseModel:
-    """:meth:`ReaderDef.parse_options`, a problem a :class:`ReaderOptionsError` naming the
-    reader and every option at fault."""
+    """The reader's options parsed (``ReaderDef.parse_options``), a problem a
+    :class:`ReaderOptionsError` naming the reader and every option at fault."""
     try:
         return reader.parse_options(options, well)
     except ValidationError as exc:
