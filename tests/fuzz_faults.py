@@ -305,6 +305,8 @@ def _corrupt(out: Path, fault: list[Any]) -> None:
             fh.truncate(arg % max(size, 1))
     elif what == "flip-ledger":
         data = bytearray(ledger.read_bytes())
+        if not data:  # emptied by an earlier edit
+            return
         data[arg % len(data)] ^= 0xFF
         ledger.write_bytes(bytes(data))
     elif what == "empty-ledger":
@@ -319,7 +321,7 @@ def _garble_json(path: Path, how: str) -> None:
     if how == "delete":
         path.unlink()
         return
-    text = path.read_text()
+    text = path.read_bytes().decode("utf-8", errors="replace")  # an earlier edit may garble it
     if how == "empty-object":
         path.write_text("{}")
     elif how == "garbage":
@@ -329,7 +331,10 @@ def _garble_json(path: Path, how: str) -> None:
     elif how == "list":
         path.write_text("[]")
     else:  # drop-sizes: the run's files without their byte counts
-        data = json.loads(text)
+        try:
+            data = json.loads(text)
+        except ValueError:  # an earlier edit left no JSON to edit
+            return
         for entry in data.get("files", []) if isinstance(data, dict) else []:
             if isinstance(entry, dict):
                 entry.pop("bytes", None)
