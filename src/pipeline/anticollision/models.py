@@ -40,8 +40,8 @@ from pipeline.uncertainty.engine import (
     SHIPPED,
     ModelCatalogue,
     OutsideValidity,
+    bounded_covariance,
     find_model,
-    within_bound,
     within_range,
 )
 from pipeline.uncertainty.model import Propagation, propagate_nev
@@ -186,20 +186,14 @@ def well_covariance(
     (:func:`pipeline.uncertainty.engine.term_covariances`)."""
     survey = model_survey(md, inc, azi_true, tvd, conventions)
     tool = find_model(resolve_model(model, catalogue), catalogue)
-    out: FloatArray = np.full((survey.size, 3, 3), np.nan)
-    n = within_range(survey, tool, outside_validity)
-    if n == 0:
-        return out
-    head = (
-        survey
-        if n == survey.size
-        else model_survey(md[:n], inc[:n], azi_true[:n], tvd[:n], conventions)
-    )
-    fx = term_effects_of(model, head, site, catalogue, start)
-    cov = propagate_nev(fx.full, fx.star, fx.modes).sum(axis=0)
-    cov[1:] += fx.tie
-    if conventions.first_station_exact:
-        cov[0] = 0.0
-    n = within_bound(head, cov, tool.name, outside_validity)
-    out[:n] = cov[:n]
-    return out
+
+    def compute(head: Survey) -> FloatArray:
+        fx = term_effects_of(model, head, site, catalogue, start)
+        cov: FloatArray = propagate_nev(fx.full, fx.star, fx.modes).sum(axis=0)
+        cov[1:] += fx.tie
+        if conventions.first_station_exact:
+            cov[0] = 0.0
+        return cov
+
+    inside = within_range(survey, tool, outside_validity)
+    return bounded_covariance(survey, inside, compute, tool.name, outside_validity)

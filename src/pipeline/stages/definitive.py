@@ -44,9 +44,9 @@ from pipeline.tables import DLS_COURSE_M, Stations
 from pipeline.uncertainty.engine import (
     OutsideValidity,
     OutsideValidityError,
+    bounded_covariance,
     configure,
     model_terms,
-    within_bound,
     within_range,
 )
 from pipeline.uncertainty.quantities import ModelSite
@@ -349,31 +349,28 @@ def _valid_covariance(
         if inside < part.size:
             n = int(lo) + inside
             break
-    cov = np.full((survey.size, 3, 3), np.nan)
-    if n == 0:
-        return cov
-    head = Survey.of(survey.md[:n], survey.inc[:n], survey.azi[:n], survey.tvd[:n])
     sections = [
         CovSection(run.name, int(lo), int(min(hi, n)), model_terms(tools[run.port], site))
         for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True)
         if lo < n
     ]
-    cov[:n] = definitive_covariance(
-        head,
-        sections,
-        basis=params.basis,
-        surface_tie=params.surface_tie,
-        well_by_well=params.well_by_well,
-    )
     models = ", ".join(
         run.spec.model for (_, run), lo in zip(listed, bounds[:-1], strict=True) if lo < n
     )
+
+    def compute(head: Survey) -> np.ndarray:
+        return definitive_covariance(
+            head,
+            sections,
+            basis=params.basis,
+            surface_tie=params.surface_tie,
+            well_by_well=params.well_by_well,
+        )
+
     try:
-        good = within_bound(head, cov[:n], models, params.outside_validity)
+        return bounded_covariance(survey, n, compute, models, params.outside_validity)
     except OutsideValidityError as exc:
         raise OutsideValidityError(f"definitive survey: {exc}") from None
-    cov[good:] = np.nan
-    return cov
 
 
 def _survey_table(

@@ -18,7 +18,7 @@ finite number is not a result when the linear model no longer holds.
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -38,6 +38,7 @@ __all__ = [
     "OutsideValidity",
     "OutsideValidityError",
     "SurveyValueError",
+    "bounded_covariance",
     "configure",
     "covariance",
     "find_model",
@@ -296,6 +297,27 @@ def within_bound(
             "gives such stations NaN σ"
         )
     return k
+
+
+def bounded_covariance(
+    survey: Survey,
+    inside: int,
+    compute: Callable[[Survey], FloatArray],
+    model: str,
+    outside_validity: OutsideValidity,
+) -> FloatArray:
+    """NEV covariance (n, 3, 3), m², of a survey: ``compute`` over its first ``inside``
+    stations (those within their models' ranges, :func:`within_range`), NaN below them and
+    from the first station beyond the physical bound (:func:`within_bound`, ``model`` naming
+    the model(s) in its error)."""
+    out: FloatArray = np.full((survey.size, 3, 3), np.nan)
+    if inside == 0:
+        return out
+    head = _head(survey, inside)
+    cov = compute(head)
+    good = within_bound(head, cov, model, outside_validity)
+    out[:good] = cov[:good]
+    return out
 
 
 def _head(survey: Survey, n: int) -> Survey:
