@@ -345,7 +345,7 @@ def main() -> int:
         "--data",
         type=Path,
         default=Path(tempfile.gettempdir()) / "gyropipe-bench-fleet",
-        help="simulated wells (kept), their links, the manifests and the runs (default: %(default)s)",
+        help="simulated wells (kept), links, manifests and runs (default: %(default)s)",
     )
     parser.add_argument(
         "--wells", type=int, default=TARGET_WELLS, help="wells a batch (default: %(default)s)"
