@@ -254,13 +254,13 @@ def batch(manifest: Path, out: Path, workers: int, log: Path) -> Run:
         wall = time.perf_counter() - wall0
         driver = cpu_s(resource.RUSAGE_SELF) - self0
         workers_cpu = cpu_s(resource.RUSAGE_CHILDREN) - children0
-    summary = json.loads((out / "summary.json").read_text()) if code in (0, 3) else None
-    if summary is None or summary["counts"]["done"] + summary["counts"]["rejected"] == 0:
-        raise SystemExit(f"gyropipe batch exited {code}; its log: {log}")
-    processed = [w for w in summary["wells"] if w["status"] in ("done", "rejected")]
-    if len(processed) != len(summary["wells"]):
-        bad = next(w for w in summary["wells"] if w not in processed)
-        raise SystemExit(f"{bad['well']} {bad['status']}: {bad['detail']} (log: {log})")
+    written = out / "summary.json"
+    wells = json.loads(written.read_text())["wells"] if written.is_file() else []
+    processed = [w for w in wells if w["status"] in ("done", "rejected")]
+    bad = [w for w in wells if w not in processed]
+    if bad or not processed or code not in (0, 3):
+        first = f": {bad[0]['well']} {bad[0]['status']}: {bad[0]['detail']}" if bad else ""
+        raise SystemExit(f"gyropipe batch exited {code}{first} (its log: {log})")
     run = Run(
         workers,
         len(processed),
