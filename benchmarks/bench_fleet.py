@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import json
 import os
 import resource
@@ -90,13 +91,24 @@ def cpu_s(who: int) -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+def simulated_from_plan(folder: Path) -> bool:
+    """Whether ``folder`` holds a simulation of :data:`PLAN` as it is now."""
+    try:
+        record = json.loads((folder / "simulation.json").read_text())
+        plan = hashlib.sha256(PLAN.read_bytes()).hexdigest()
+        return (folder / "samples.parquet").is_file() and record["plan"]["sha256"] == plan
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
 def simulate(data: Path, seeds: int) -> list[Path]:
-    """``samples.parquet`` of seeds 1…``seeds``, simulated once into ``data/seed-K`` (written
-    to a temporary directory, then renamed: a killed run leaves no half-written well)."""
+    """``samples.parquet`` of seeds 1…``seeds``, simulated into ``data/seed-K`` unless there
+    from the same plan (written to a temporary directory, then renamed: a killed run leaves no
+    half-written well)."""
     sources = []
     for seed in range(1, seeds + 1):
         target = data / f"seed-{seed}"
-        if not (target / "samples.parquet").is_file():
+        if not simulated_from_plan(target):
             print(f"simulating seed {seed} …", flush=True)
             tmp = Path(tempfile.mkdtemp(prefix=f".seed-{seed}-", dir=data))
             cmd = [str(GYROPIPE), "simulate", str(PLAN), "--seed", str(seed), "--out", str(tmp)]
