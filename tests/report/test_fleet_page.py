@@ -57,7 +57,10 @@ def fleet_pipeline(directory: Path) -> Path:
             "definitive_survey",
             {"run1": "read_in.stations", "run2": "read_out.stations"},
             ["survey"],
-            runs={"run1": {"name": "in-run", "priority": 1}, "run2": {"name": "out", "priority": 0}},
+            runs={
+                "run1": {"name": "in-run", "priority": 1},
+                "run2": {"name": "out", "priority": 0},
+            },
         ),
         stage(
             "dls",
@@ -229,7 +232,7 @@ def test_failed_wells_say_why_in_words_and_have_no_figures(batch: Batch) -> None
     for well in BROKEN:
         status = rows[well]["Status"]
         assert "stage" not in status and "InputFileError" not in status  # no internal words
-        for head in batch.heads[2:9] + ["Report"]:
+        for head in [*batch.heads[2:9], "Report"]:
             assert rows[well][head] == "—", (well, head)
 
 
@@ -286,17 +289,6 @@ def test_each_report_link_opens_the_well_s_report(batch: Batch) -> None:
         (link,) = row["links"]
         target = (batch.page.parent / urllib.parse.unquote(link)).resolve()
         assert target == (batch.out / well / "report.html").resolve() and target.is_file()
-
-
-def test_the_screenshot_for_the_docs(batch: Batch) -> None:
-    """The first rows of the page, kept where the docs show it when asked
-    (``GYROPIPE_FLEET_FIGURE=docs/figures/fleet-page.png``)."""
-    import os
-
-    wanted = os.environ.get("GYROPIPE_FLEET_FIGURE")
-    if not wanted:
-        pytest.skip("set GYROPIPE_FLEET_FIGURE to keep the screenshot")
-    shutil.copyfile(batch.screenshot, ROOT / wanted)
 
 
 @pytest.fixture

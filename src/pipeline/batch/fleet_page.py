@@ -76,6 +76,8 @@ class Fleet:
     wells: tuple[FleetWell, ...]
     not_run: int = 0
     """wells of the batch it never came to"""
+    ended: float | None = None
+    """when the batch ended, POSIX s (its page is written before the ledger row says so)"""
 
 
 def fleet_title(out_dir: Path) -> str:
@@ -252,8 +254,9 @@ def _about(fleet: Fleet, pipelines: list[str], wells: Sequence[FleetWell]) -> st
     if len(batches) == 1:
         b = batches[0]
         when = f"started {_when(b.started)}"
-        if b.finished is not None:
-            when += f", {b.status} {_when(b.finished)} after {_duration(b.finished - b.started)}"
+        ended = b.finished or fleet.ended
+        if ended is not None:
+            when += f", ended {_when(ended)} after {_duration(ended - b.started)}"
         lines.append(f"Batch {b.id} {when}")
     elif batches:
         last = batches[-1]

@@ -8,6 +8,7 @@ import io
 import json
 import shutil
 import textwrap
+import time
 from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -97,4 +98,4 @@ def batch_fleet(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> Fl
     wells = tuple(
         FleetWell(r.well, r.status, r.detail, r.time_s, r.run_id, out_dir / r.well) for r in results
     )
-    return Fleet(f"Batch {batch.id}", (batch,), wells, not_run)
+    return Fleet(f"Batch {batch.id}", (batch,), wells, not_run, ended=time.time())
