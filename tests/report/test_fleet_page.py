@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import html
 import json
+import re
 import shutil
 import urllib.parse
 from dataclasses import dataclass
@@ -17,6 +18,7 @@ from typing import Any
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
+from report_support import DICHROMACY, closest_colours
 
 import pipeline as gp
 from tests_support import ROOT, gyropipe_cli, stage, without_report, write_pipeline
@@ -35,6 +37,13 @@ ROW_CELLS = """() => Array.from(document.querySelectorAll('table.wells tbody tr'
   cells: Array.from(r.cells).map(c => c.innerText.trim()),
   links: Array.from(r.querySelectorAll('a')).map(a => a.getAttribute('href')),
 }))"""
+COLOURS = """() => ['done', 'rejected', 'failed', 'interrupted', 'skipped', 'not-run'].map(s => {
+  const probe = document.createElement('span');
+  probe.className = 's-' + s;
+  document.querySelector('.bar').appendChild(probe);
+  return getComputedStyle(probe).backgroundColor;
+})"""
+"""the bar's colour of each status (a probe segment of each)"""
 HEADS = """() => Array.from(document.querySelectorAll('table.wells thead th'))
   .map(c => c.innerText.trim())"""
 
@@ -224,6 +233,19 @@ def test_the_counts_are_the_batch_s(batch: Batch) -> None:
     assert 'aria-label="3 failed, 4 rejected, 33 done"' in source
 
 
+def test_the_status_colours_are_told_apart_by_colour_blind_readers(
+    batch: Batch, browser: Any
+) -> None:
+    page = browser.new_page()
+    page.goto(batch.page.resolve().as_uri(), wait_until="load")
+    rgb = page.evaluate(COLOURS)
+    page.close()
+    colours = ["#" + "".join(f"{int(c):02x}" for c in re.findall(r"\d+", v)) for v in rgb]
+    assert len(set(colours)) == 6
+    for vision in DICHROMACY:
+        assert closest_colours(colours, vision) > (25 if vision == "normal" else 12), vision
+
+
 def test_failed_wells_say_why_in_words_and_have_no_figures(batch: Batch) -> None:
     rows = by_well(batch)
     assert "broken.csv:25: expected 3 cells" in rows["W-07"]["Status"]
@@ -370,3 +392,27 @@ def test_the_drift_of_a_calibration_is_shown_with_its_units(tmp_path: Path) -> N
     shown = source.split(f"{chosen['instrument']}: ")[1].split(" °/h")[0]
     value, shown_sigma = (float(x) for x in shown.split(" ± "))
     assert value == pytest.approx(rate, abs=5e-4) and shown_sigma == pytest.approx(sigma, rel=0.05)
+
+
+def test_the_drift_of_a_free_gyro_survey_is_its_tie_in_rate(tmp_path: Path) -> None:
+    """The rate a free-gyro correction grows at: the tie station's azimuth change from its
+    first in-run to its last out-run reading over the time between (here from the readings
+    file), near the simulated 3 °/h."""
+    plan = ROOT / "examples" / "plans" / "j-well-free-gyro.yaml"
+    gyropipe_cli("simulate", plan, "--out", tmp_path / "sim", check=True)
+    wells = tmp_path / "in"
+    wells.mkdir()
+    shutil.copyfile(tmp_path / "sim" / "readings.parquet", wells / "FG-1.parquet")
+    out = tmp_path / "out"
+    pipeline = without_report("free-gyro", tmp_path)
+    args = ["batch", pipeline, "--inputs", f"{wells}/*.parquet", "--out", out]
+    gyropipe_cli(*args, "--well", "latitude=61.25", check=True)
+    readings = pq.read_table(wells / "FG-1.parquet").to_pylist()
+    tie = [r for r in readings if r["station"] == 0]
+    first = next(r for r in tie if r["run"] == "in")
+    last = [r for r in tie if r["run"] == "out"][-1]
+    change = (last["azi"] - first["azi"] + 180) % 360 - 180
+    rate = change / ((last["time"] - first["time"]) / 3600)
+    assert abs(rate - 3.0) < 0.3
+    source = (out / "fleet.html").read_text(encoding="utf-8")
+    assert f"<td>{rate:.3g} °/h</td>" in source

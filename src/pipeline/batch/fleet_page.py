@@ -327,7 +327,7 @@ PAGE = """<!DOCTYPE html>
 <title>{title}</title>
 <style>
 :root {{ --done:#009E73; --rejected:#E69F00; --failed:#D55E00; --interrupted:#CC79A7;
-  --skipped:#56B4E9; --other:#999999; --ink:#1a1a1a; --soft:#555; --rule:#d9d9d9; }}
+  --skipped:#56B4E9; --other:#CCCCCC; --ink:#1a1a1a; --soft:#555; --rule:#d9d9d9; }}
 * {{ box-sizing: border-box; }}
 body {{ font: 13px/1.35 system-ui, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif;
   color: var(--ink); margin: 20px 24px; }}
