@@ -331,6 +331,7 @@ def test_status_html_says_which_outputs_are_missing(
     """A damaged or missing output spoils only its own well's cells."""
     (small_batch / "W-01" / "clearance.clearance.parquet").unlink()
     (small_batch / "W-02" / "run.json").write_text("{not json")
+    (small_batch / "W-03" / "definitive.survey.parquet").write_bytes(b"PAR1 not a table")
     result = gyropipe_cli("status", small_batch, "--html", check=True)
     page = small_batch / "fleet.html"
     assert result.stdout.strip() == str(page)
@@ -341,7 +342,10 @@ def test_status_html_says_which_outputs_are_missing(
     assert cells["W-01"][heads.index("Clearance: least SF")] == "—"
     assert cells["W-01"][heads.index("TD MD m")] == "2520.0"  # the other figures stand
     assert "run.json is damaged (not JSON)" in cells["W-02"]
-    assert cells["W-03"][heads.index("TD MD m")] == "2520.0"
+    assert "Output: definitive.survey.parquet cannot be read (" in cells["W-03"][1]
+    for head in ("TD MD m", "TD TVD m", "Max DLS °/30 m"):
+        assert cells["W-03"][heads.index(head)] == "—"
+    assert cells["W-03"][heads.index("Clearance: least SF")] != "—"
     assert "Wells in out: 3 wells" in page.read_text(encoding="utf-8")
 
 
