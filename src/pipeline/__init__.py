@@ -6,6 +6,7 @@ The Python API (``import pipeline as gp``)::
     trajectory = gp.minimum_curvature(stations, vs_azimuth=37.5)
     result = gp.run("pipelines/point-gyro.yaml", {"samples": "well-1.mcap"})
     report = gp.run_batch("pipelines/survey.yaml", "wells/*.csv", out="out")  # many wells
+    page = gp.fleet_page("out")                       # out/fleet.html: every well on a page
     result.frame("trajectory.trajectory")
 
 Functions take pandas DataFrames or Arrow tables and return the same kind; units are
@@ -24,7 +25,7 @@ from pipeline.lazy import lazy_names
 from pipeline.version import __version__
 
 if TYPE_CHECKING:
-    from pipeline.api.batch import run_batch
+    from pipeline.api.batch import fleet_page, run_batch
     from pipeline.api.clearance import clearance
     from pipeline.api.frames import TableLike, to_frame, to_table
     from pipeline.api.functions import (
@@ -53,7 +54,7 @@ if TYPE_CHECKING:
     from pipeline.well import WellMetadata
 
 _HOMES = {
-    "pipeline.api.batch": ("run_batch",),
+    "pipeline.api.batch": ("fleet_page", "run_batch"),
     "pipeline.api.clearance": ("clearance",),
     "pipeline.api.frames": ("TableLike", "to_frame", "to_table"),
     "pipeline.api.functions": (
@@ -96,6 +97,7 @@ __all__ = [
     "compass",
     "correct_drift",
     "definitive_survey",
+    "fleet_page",
     "integrate_continuous",
     "interpolate",
     "minimum_curvature",

@@ -362,11 +362,35 @@ json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON."
 @click.argument("out_dir", metavar="DIR", type=click.Path(file_okay=False))
 @ledger_option
 @json_option
-def status(out_dir: str, ledger_file: str | None, as_json: bool) -> None:
+@click.option(
+    "--html",
+    "html_file",
+    is_flag=False,
+    flag_value="",
+    default=None,
+    metavar="[FILE]",
+    type=click.Path(dir_okay=False),
+    help="Write the fleet page (one HTML page of every well, failing wells first) to FILE "
+    "(default: DIR/fleet.html) and print its path.",
+)
+def status(out_dir: str, ledger_file: str | None, as_json: bool, html_file: str | None) -> None:
     """Batches and the latest run of every well in a batch output directory."""
     from pipeline.batch.views import status_document, status_text
 
     ledger = _open_ledger(out_dir, ledger_file)
+    if html_file is not None:
+        from pipeline.batch.fleet_page import FLEET_PAGE, fleet_title, write_fleet_page
+        from pipeline.batch.views import status_fleet
+
+        with _reading(ledger):
+            fleet = status_fleet(ledger, fleet_title(Path(out_dir)))
+        try:
+            page = write_fleet_page(fleet, Path(html_file or Path(out_dir) / FLEET_PAGE))
+        except GyropipeError as exc:
+            click.echo(f"error: {exc}", err=True)
+            sys.exit(EXIT_FAILED)
+        click.echo(str(page))
+        return
     with _reading(ledger):
         text = json.dumps(status_document(ledger), indent=2) if as_json else status_text(ledger)
     click.echo(text)

@@ -84,7 +84,7 @@ def test_a_previous_batch_run_of_the_well_is_replaced(tmp_path: Path, survey: Pa
 @pytest.mark.parametrize(
     "well_id",
     ["ledger.sqlite-wal", "ledger.sqlite-shm", "ledger.sqlite-journal", "LEDGER.SQLITE",
-     "Summary.Json", "summary.csv"],
+     "Summary.Json", "summary.csv", "Fleet.HTML"],
 )  # fmt: skip
 def test_a_well_id_naming_a_file_the_batch_keeps_is_refused(
     tmp_path: Path, survey: Path, well_id: str
@@ -97,7 +97,7 @@ def test_a_well_id_naming_a_file_the_batch_keeps_is_refused(
     assert result.returncode == 2, result.output
     assert (
         f"error: {manifest}:3: well id {well_id!r} names a file the batch keeps in its output "
-        "directory (reserved, up to case: ledger.sqlite, ledger.sqlite-journal, "
+        "directory (reserved, up to case: fleet.html, ledger.sqlite, ledger.sqlite-journal, "
         "ledger.sqlite-shm, ledger.sqlite-wal, summary.csv, summary.json)"
     ) in result.stderr
     assert not out.exists()

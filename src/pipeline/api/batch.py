@@ -1,5 +1,7 @@
 """Many wells from Python: ``gp.run_batch`` — what ``gyropipe batch`` does: one run per well into
-``out/<well>``, on the executor named (a built-in or a plugin's), recorded in the ledger."""
+``out/<well>``, on the executor named (a built-in or a plugin's), recorded in the ledger — and
+``gp.fleet_page``, the page of every well of an output directory (``gyropipe status DIR
+--html``)."""
 
 from __future__ import annotations
 
@@ -12,10 +14,13 @@ from pipeline.api.frames import WellLike, well_metadata
 from pipeline.api.run import set_overrides
 from pipeline.batch import run as batch_run
 from pipeline.batch.executors import executor_def
-from pipeline.batch.jobs import BatchConfigError, jobs_from_glob, jobs_from_manifest
+from pipeline.batch.fleet_page import FLEET_PAGE, fleet_title, write_fleet_page
+from pipeline.batch.jobs import LEDGER, BatchConfigError, jobs_from_glob, jobs_from_manifest
+from pipeline.batch.ledger import Ledger
 from pipeline.batch.policy import Mode
 from pipeline.batch.progress import JsonLines, reporter
 from pipeline.batch.run import BatchOptions, BatchReport
+from pipeline.batch.views import status_fleet
 from pipeline.graph import build_plan
 from pipeline.plugins import shared_registry
 from pipeline.spec import load_spec
@@ -79,3 +84,25 @@ def run_batch(
     )
     shown = reporter(quiet=False) if progress else JsonLines(log)
     return batch_run.run_batch(plan, registry, jobs, options, shown)
+
+
+def fleet_page(
+    out: str | Path, path: str | Path | None = None, *, ledger: str | Path | None = None
+) -> Path:
+    """Write the fleet page of the batch output directory ``out`` — what ``gyropipe status
+    DIR --html`` writes (``docs/batch.md``): the latest run of every well its ledger knows
+    (``ledger``, default ``out/ledger.sqlite``), failing wells first, with each well's QC,
+    acceptance, clearance, drift, TD and DLS figures and a link to its report. Written
+    atomically to ``path`` (default ``out/fleet.html``, the page each batch writes); returns
+    it. Raises :class:`~pipeline.batch.jobs.BatchConfigError` when there is no ledger,
+    :class:`~pipeline.batch.ledger.LedgerError` when it cannot be read."""
+    out = Path(out)
+    ledger_path = Path(ledger) if ledger is not None else out / LEDGER
+    if not ledger_path.is_file():
+        raise BatchConfigError(f"no ledger at {ledger_path}")
+    opened = Ledger(ledger_path)
+    try:
+        fleet = status_fleet(opened, fleet_title(out))
+    finally:
+        opened.close()
+    return write_fleet_page(fleet, Path(path) if path is not None else out / FLEET_PAGE)

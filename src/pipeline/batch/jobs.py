@@ -29,7 +29,8 @@ WELL_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}\Z")
 LEDGER = "ledger.sqlite"
 LEDGER_SIDECARS = ("-wal", "-shm", "-journal")
 """SQLite's files beside a ledger ``L``: ``L-wal``, ``L-shm``, ``L-journal``"""
-SUMMARY_FILES = ("summary.json", "summary.csv")
+SUMMARY_FILES = ("summary.json", "summary.csv", "fleet.html")
+"""what each batch writes in the output directory: its summary table and the fleet page"""
 RESERVED_NAMES = frozenset({LEDGER, *(LEDGER + s for s in LEDGER_SIDECARS), *SUMMARY_FILES})
 """Names the batch itself keeps in the output directory (lower case); no well may be called
 so, up to case. (Its staging directory ``.gyropipe-batch`` starts with a dot, which no well

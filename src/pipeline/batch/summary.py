@@ -6,9 +6,9 @@ from __future__ import annotations
 import csv
 import io
 import json
-import re
 import shutil
 import textwrap
+import time
 from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -16,6 +16,8 @@ from typing import Any
 
 from pipeline.atomic import atomic_write_bytes
 
+from .causes import cause
+from .fleet_page import Fleet, FleetWell, write_fleet_page
 from .jobs import SUMMARY_FILES
 from .records import BatchRow, iso
 
@@ -43,18 +45,6 @@ def counts(results: list[WellResult]) -> dict[str, int]:
     return {status: found.get(status, 0) for status in STATUSES}
 
 
-STAGE_FAILED = re.compile(r"^stage '([^']+)' \([^)]*\) failed: (?:\w+Error: )?")
-PATH = re.compile(r"(?:[^\s:'\"]*/)+([^\s:/'\"]+)")
-
-
-def cause(detail: str) -> str:
-    """A run's failure as a reader wants it on a terminal: ``stage: file:line: message``
-    (the stage's plugin and the error's class dropped, paths shortened to file names)."""
-    text = " ".join(detail.split())
-    text = STAGE_FAILED.sub(lambda m: f"{m.group(1)}: ", text)
-    return PATH.sub(lambda m: m.group(1), text)
-
-
 def wrapped(prefix: str, detail: str, width: int) -> list[str]:
     """``prefix`` then ``detail`` wrapped to ``width`` columns, continuation lines indented
     under the detail (nothing is cut)."""
@@ -76,7 +66,8 @@ def table_text(results: list[WellResult], width: int | None = None) -> str:
 
 
 def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> list[Path]:
-    """Write ``summary.json`` (batch, counts, rows) and ``summary.csv`` (rows) atomically."""
+    """Write ``summary.json`` (batch, counts, rows), ``summary.csv`` (rows) and the fleet
+    page ``fleet.html`` (:mod:`pipeline.batch.fleet_page`) atomically."""
     document: dict[str, Any] = {
         "batch": batch.id,
         "pipeline": batch.pipeline_file,
@@ -95,4 +86,16 @@ def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> 
     paths = [out_dir / name for name in SUMMARY_FILES]
     atomic_write_bytes(paths[0], json.dumps(document, indent=2).encode())
     atomic_write_bytes(paths[1], text.getvalue().encode())
+    write_fleet_page(batch_fleet(out_dir, batch, results), paths[2])
     return paths
+
+
+def batch_fleet(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> Fleet:
+    """The fleet page of one batch: its wells as it left them (``not_run``: the wells it
+    listed and never came to)."""
+    listed = batch.options.get("wells")
+    not_run = max(0, listed - len(results)) if isinstance(listed, int) else 0
+    wells = tuple(
+        FleetWell(r.well, r.status, r.detail, r.time_s, r.run_id, out_dir / r.well) for r in results
+    )
+    return Fleet(f"Batch {batch.id}", (batch,), wells, not_run, ended=time.time())

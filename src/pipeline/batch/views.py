@@ -1,15 +1,19 @@
-"""What ``gyropipe status DIR`` and ``gyropipe history WELL`` show from a ledger."""
+"""What ``gyropipe status DIR`` (its text, JSON and fleet page) and ``gyropipe history WELL``
+show from a ledger."""
 
 from __future__ import annotations
 
 import json
 import shutil
 from dataclasses import asdict
+from pathlib import Path
 from typing import Any
 
+from .causes import cause
+from .fleet_page import Fleet, FleetWell
 from .ledger import Ledger, alive
 from .records import BatchRow, RunRow, iso
-from .summary import cause, wrapped
+from .summary import wrapped
 
 
 def status_document(ledger: Ledger) -> dict[str, Any]:
@@ -52,6 +56,24 @@ def status_text(ledger: Ledger) -> str:
             prefix = f"{r.well:<{width}}  {_state(r, batches):<11} {iso(r.finished):<25} {time_s}  "
             lines += wrapped(prefix, _detail(r), columns)
     return "\n".join(lines)
+
+
+def status_fleet(ledger: Ledger, title: str) -> Fleet:
+    """The fleet page of every well the ledger knows: its latest run (a running well whose
+    batch is gone is ``stale``), the figures from the outputs that run published."""
+    batches = {b.id: b for b in ledger.batches()}
+    wells = tuple(
+        FleetWell(
+            r.well,
+            _state(r, batches),
+            r.error or r.note or "; ".join(r.reasons),
+            r.wall_time_s,
+            r.id,
+            Path(r.out_dir),
+        )
+        for r in ledger.latest_runs()
+    )
+    return Fleet(title, tuple(batches.values()), wells)
 
 
 def history_text(well: str, runs: list[RunRow]) -> str:

@@ -216,6 +216,15 @@ def correct_survey(
     )
 
 
+def correction_rate(time_s: FloatArray, correction_deg: FloatArray) -> float:
+    """How fast the drift correction grows, °/h: the slope of the correction (°) against
+    time (s) by least squares (NaN for fewer than two readings or no time span)."""
+    time_h = np.asarray(time_s, dtype=float) / 3600.0
+    if len(time_h) < 2 or not np.ptp(time_h) > 0:
+        return float("nan")
+    return float(np.polyfit(time_h, np.asarray(correction_deg, dtype=float), 1)[0])
+
+
 def _pairs(run: np.ndarray, station: np.ndarray) -> np.ndarray:
     """(k, 2) row indices of the in-run and out-run readings of each station read twice."""
     rows_in = {int(s): i for i, s in enumerate(station) if run[i] == "in"}

@@ -11,6 +11,7 @@ from functools import partial
 import numpy as np
 import pyarrow as pa
 
+from pipeline.drift.correction import correction_rate
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
 from pipeline.reports import plots
@@ -583,11 +584,7 @@ def _drift(tables: SurveyTables) -> Section:
         correction = col(drift, "correction")
         outbound = np.array([r == "out" for r in drift.column("run").to_pylist()])
         span = float(np.ptp(time_h))
-        rate = (
-            float(np.polyfit(time_h, correction, 1)[0])
-            if span > 0 and len(time_h) > 1
-            else float("nan")
-        )
+        rate = correction_rate(col(drift, "time"), correction)
         blocks.append(
             Paragraph(
                 f"{drift.num_rows} readings corrected over {fmt(span, 2)} h; the correction "

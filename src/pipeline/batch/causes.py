@@ -1,0 +1,22 @@
+"""A failed run's error as a reader wants it: the stage's plugin and the error's class
+dropped, paths shortened to file names (:func:`cause`, the terminal), and the stage too
+(:func:`plain_cause`, the fleet page's readers do not know the pipeline's stages)."""
+
+from __future__ import annotations
+
+import re
+
+STAGE_FAILED = re.compile(r"^stage '([^']+)' \([^)]*\) failed: (?:\w+Error: )?")
+PATH = re.compile(r"(?:[^\s:'\"]*/)+([^\s:/'\"]+)")
+
+
+def cause(detail: str) -> str:
+    """``stage: file:line: message``."""
+    text = STAGE_FAILED.sub(lambda m: f"{m.group(1)}: ", " ".join(detail.split()))
+    return PATH.sub(lambda m: m.group(1), text)
+
+
+def plain_cause(detail: str) -> str:
+    """``file:line: message``."""
+    text = STAGE_FAILED.sub("", " ".join(detail.split()))
+    return PATH.sub(lambda m: m.group(1), text)
