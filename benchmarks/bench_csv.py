@@ -1,7 +1,8 @@
-"""CSV reader speed against pandas' C engine, in one run: a 1M-row × 8-column raw-samples
-CSV read by gyropipe's reader (kind ``samples``: header recognition, units, canonical
-conventions, contract-typed table) and by ``pandas.read_csv(engine="c")``, plain and with
-the unit conversion a pandas user does by hand; for scale, ``pyarrow.csv.read_csv`` with its
+"""CSV reader speed against the pyarrow floor and pandas' C engine, in one run: a 1M-row ×
+8-column raw-samples CSV read by gyropipe's reader (kind ``samples``: header recognition,
+units, canonical conventions, contract-typed table) and by ``pandas.read_csv(engine="c")``,
+plain and with the unit conversion a pandas user does by hand; for scale,
+``pyarrow.csv.read_csv`` with its
 defaults and told the columns are float64 without quotes (the parse our reader builds on), and
 ``polars.read_csv`` (Rust, multi-threaded; the ``bench`` extra) typed the same way. Two
 files: (a) one ``#`` title line above a ``name [unit]`` header; (b) a title block of
