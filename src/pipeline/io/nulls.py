@@ -37,7 +37,8 @@ def value_range(values: Any) -> tuple[float, float] | None:
         return None
     chunks = values.chunks if isinstance(values, pa.ChunkedArray) else [values]
     parts = [chunk.to_numpy() for chunk in chunks if len(chunk)]
-    return min(float(np.min(p)) for p in parts), max(float(np.max(p)) for p in parts)
+    lows, highs = np.array([p.min() for p in parts]), np.array([p.max() for p in parts])
+    return float(lows.min()), float(highs.max())  # numpy's, which carry a NaN
 
 
 def null_markers(values: Any, *, angle: bool) -> np.ndarray | None:
