@@ -4,12 +4,19 @@ Every candidate runs once per round, rounds repeat (each in its own shuffled ord
 so that no candidate always follows the same one: one that runs right after another can pay
 for its memory), and each candidate's median wall and CPU time
 (this process's, all threads) is reported, so that a change of load during the run weighs on
-every candidate alike. ``uptime`` is printed before and after.
+every candidate alike. CPU time is this process's user + system time
+(``resource.getrusage``). ``uptime`` is printed before and after.
+
+:func:`thread_counts` and :func:`floor_lines` serve the reader benchmarks: the same
+candidates at every reader thread count the machine allows, each reader's CPU and wall time
+as a ratio to its floor's.
 """
 
 from __future__ import annotations
 
+import os
 import random
+import resource
 import statistics
 import subprocess
 import time
@@ -43,6 +50,26 @@ def uptime() -> str:
         return "uptime unavailable"
 
 
+def cpu_seconds() -> float:
+    """User + system CPU seconds of this process so far (all its threads)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def thread_counts(cores: int) -> list[int]:
+    """Reader thread counts to measure on ``cores`` cores: 1, then powers of two, then
+    ``cores`` itself (1, 2 on two cores; 1, 2, 4, 8, 16 on sixteen)."""
+    counts = [1]
+    while counts[-1] * 2 < cores:
+        counts.append(counts[-1] * 2)
+    return [*counts, cores] if cores > 1 else counts
+
+
+def load() -> str:
+    """The load averages over 1, 5 and 15 minutes."""
+    return ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
 def interleaved(candidates: dict[str, Callable[[], Any]], rounds: int) -> dict[str, Timing]:
     """Run every candidate once per round, ``rounds`` times, in a shuffled order each round;
     only the last round's results are kept (earlier ones are freed before the next run)."""
@@ -51,10 +78,10 @@ def interleaved(candidates: dict[str, Callable[[], Any]], rounds: int) -> dict[s
     order = random.Random(19)
     for round_ in range(rounds):
         for name in order.sample(names, len(names)):
-            cpu, wall = time.process_time(), time.perf_counter()
+            cpu, wall = cpu_seconds(), time.perf_counter()
             result = candidates[name]()
             timings[name].wall.append(time.perf_counter() - wall)
-            timings[name].cpu.append(time.process_time() - cpu)
+            timings[name].cpu.append(cpu_seconds() - cpu)
             timings[name].result = result if round_ == rounds - 1 else None
             del result
     return timings
@@ -71,3 +98,21 @@ def table(timings: dict[str, Timing], ours: str, width: int = 40) -> str:
             f"{t.cpu_median * 1e3:>9.0f}{t.cpu_median / base.cpu_median:>8.2f}"
         )
     return "\n".join(lines)
+
+
+def floor_lines(
+    threads: int, timings: dict[str, Timing], floor: str, readers: list[str]
+) -> list[str]:
+    """One line per reader at ``threads`` reader threads: median CPU and wall ms, and each
+    as ours / the ``floor``'s (below 1: under the floor), with the load now."""
+    base = timings[floor]
+    lines = []
+    for name in readers:
+        t = timings[name]
+        lines.append(
+            f"threads {threads:>2}  {name:<24} CPU {t.cpu_median * 1e3:6.0f} ms / floor "
+            f"{base.cpu_median * 1e3:6.0f} = {t.cpu_median / base.cpu_median:5.2f}   wall "
+            f"{t.median * 1e3:6.0f} ms / floor {base.median * 1e3:6.0f} = "
+            f"{t.median / base.median:5.2f}   (load {load()})"
+        )
+    return lines

@@ -29,13 +29,28 @@ def is_null_marker(value: float, *, angle: bool) -> bool:
     return value in (ANGLE_NULL_MARKERS if angle else NULL_MARKERS)
 
 
+def value_range(values: Any) -> tuple[float, float] | None:
+    """The smallest and largest value of a float64 Arrow array (or chunked array) without
+    nulls, NaN if it holds one (by numpy over its buffers: ~20× faster than
+    ``pyarrow.compute.min_max``); None when it is empty, holds nulls or is not float64."""
+    if len(values) == 0 or values.null_count or not pa.types.is_float64(values.type):
+        return None
+    chunks = values.chunks if isinstance(values, pa.ChunkedArray) else [values]
+    parts = [chunk.to_numpy() for chunk in chunks if len(chunk)]
+    lows, highs = np.array([p.min() for p in parts]), np.array([p.max() for p in parts])
+    return float(lows.min()), float(highs.max())  # numpy's, which carry a NaN
+
+
 def null_markers(values: Any, *, angle: bool) -> np.ndarray | None:
     """Where a float Arrow array holds a null marker (of an ``angle`` column or not); None
     when nowhere (a min/max pass first: values within ±999.25 need no comparison each)."""
     if len(values) == 0 or values.null_count == len(values):
         return None
-    extremes = pc.min_max(values).as_py()
-    if extremes["min"] > -_SMALLEST and (not angle or extremes["max"] < _SMALLEST):
+    extremes = value_range(values)
+    if extremes is None:
+        found = pc.min_max(values).as_py()
+        extremes = found["min"], found["max"]
+    if extremes[0] > -_SMALLEST and (not angle or extremes[1] < _SMALLEST):
         return None
     markers = ANGLE_NULL_MARKERS if angle else NULL_MARKERS
     mask = pc.is_in(values, value_set=pa.array(markers, values.type))

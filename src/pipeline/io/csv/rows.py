@@ -36,6 +36,7 @@ from pipeline.errors import InputFileError
 from pipeline.io import threads as io_threads
 from pipeline.io.arrow_text import in_order, read_options, release
 from pipeline.io.csv.header import Cell, Header, cells_of
+from pipeline.io.nulls import value_range
 
 SHOWN = 5
 """Bad cells quoted in one error message."""
@@ -555,9 +556,17 @@ def _typed(
     for name, values in columns.items():
         if values.null_count and name not in blanks and not pa.types.is_string(types[name]):
             return None
-        if pa.types.is_floating(types[name]) and not pc.all(pc.is_finite(values)).as_py():
+        if pa.types.is_floating(types[name]) and not _finite(values):
             return None
     return columns
+
+
+def _finite(values: pa.ChunkedArray) -> bool:
+    """Whether every value of a float column is finite (nulls aside)."""
+    extremes = value_range(values)
+    if extremes is None:
+        return bool(pc.all(pc.is_finite(values)).as_py())
+    return bool(np.isfinite(extremes[0]) and np.isfinite(extremes[1]))
 
 
 def _strings(

@@ -369,8 +369,13 @@ def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
 
 
 def null_mask(values: Floats, nulls: list[float]) -> Mask:
-    """Where ``values`` equal any of ``nulls`` (a comparison each: a list is short)."""
+    """Where ``values`` equal any of ``nulls`` (a comparison each of those within the
+    values' range: a list is short, and most columns hold none)."""
     mask = np.zeros(values.shape, dtype=bool)
+    if values.size:
+        low, high = float(values.min()), float(values.max())
+        if np.isfinite(low) and np.isfinite(high):
+            nulls = [null for null in nulls if low <= null <= high]
     for null in nulls:
         mask |= values == null
     return mask
