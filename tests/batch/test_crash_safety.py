@@ -171,7 +171,7 @@ def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Pa
 DYING_BATCH = """
 import os, signal, sys
 from pathlib import Path
-from pipeline.batch.fingerprint import PlanIdentity
+from pipeline.batch.fingerprint import PENDING, PlanIdentity
 from pipeline.batch.jobs import jobs_from_glob
 from pipeline.batch.ledger import Ledger
 from pipeline.batch.policy import Mode, decide
@@ -186,7 +186,7 @@ survey, pattern, out = sys.argv[1], sys.argv[2], Path(sys.argv[3])
 registry = load_registry()
 plan = build_plan(load_spec(survey), registry)
 (job,) = jobs_from_glob(pattern, ["stations"], WellMetadata())
-fingerprint, _ = PlanIdentity.of(plan, registry).fingerprint(job)
+fingerprint = PlanIdentity.of(plan, registry).fingerprint(job, {"stations": PENDING})
 ledger = Ledger(out / "ledger.sqlite")
 batch = ledger.start_batch("key", survey, plan.digest, out, {})
 claim = ledger.claim(
