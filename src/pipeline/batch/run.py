@@ -387,7 +387,7 @@ class _Batch:
             dict(flight.fingerprint.well),
             str(self.out),
             flight.fingerprint.to_json(),
-            None if check is None else [*(str(job.inputs[n]) for n in check.inputs), *check.files],
+            None if check is None else _check_paths(job, check),
         )
 
     def _settle(self, outcome: WellOutcome, turn: _Turn) -> None:
@@ -401,7 +401,7 @@ class _Batch:
     def _checked(self, flight: _Flight, outcome: WellOutcome, turn: _Turn) -> None:
         """A check's hashes: skip the well (its claim dropped) or run it (made a run)."""
         assert flight.check is not None
-        paths = self._task(flight).check or []
+        paths = _check_paths(flight.job, flight.check)
         digests = {path: outcome.hashes.get(path, UNREADABLE) for path in paths}
         self._learn(flight, digests)
         known = {**flight.known, **digests}
@@ -419,8 +419,9 @@ class _Batch:
             return
         assert isinstance(decision, Run)  # every hash is known now
         self.ledger.checked(flight.run_id, decision.reasons)
-        ran = replace(flight, fingerprint=fingerprint, reasons=decision.reasons, known=known)
-        ran.check = None
+        ran = replace(
+            flight, fingerprint=fingerprint, reasons=decision.reasons, known=known, check=None
+        )
         self.inflight[flight.run_id] = ran
         turn.tasks.append(self._task(ran))
 
@@ -544,6 +545,11 @@ def _check_ledger_place(ledger: Path, out: Path, jobs: Sequence[WellJob]) -> Non
 def _input_bytes(job: WellJob) -> int:
     """Total size of a well's input files (missing files count 0)."""
     return sum(path.stat().st_size if path.is_file() else 0 for path in job.inputs.values())
+
+
+def _check_paths(job: WellJob, check: Check) -> list[str]:
+    """The files a check hashes: its inputs' paths, then its parameter files."""
+    return [*(str(job.inputs[name]) for name in check.inputs), *check.files]
 
 
 def _hashes_read(job: WellJob, outcome: WellOutcome) -> dict[str, str]:
