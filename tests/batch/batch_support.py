@@ -5,11 +5,14 @@ of the published outputs."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import sqlite3
 import subprocess
+import sys
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -33,8 +36,11 @@ def survey_pipeline(directory: Path) -> Path:
     return write_pipeline(directory, stages, name="survey")
 
 
-def spawn(*args: str | Path, stderr: Path) -> subprocess.Popen[str]:
-    """``gyropipe ARGS`` as a real subprocess, its stderr to a file."""
+def spawn(
+    *args: str | Path, stderr: Path, env: Mapping[str, str] | None = None
+) -> subprocess.Popen[str]:
+    """``gyropipe ARGS`` as a real subprocess, its stderr to a file (``env`` added to the
+    environment)."""
     with open(stderr, "w") as err:
         return subprocess.Popen(
             [*gyropipe(), *map(str, args)],
@@ -42,7 +48,7 @@ def spawn(*args: str | Path, stderr: Path) -> subprocess.Popen[str]:
             stderr=err,
             text=True,
             cwd=ROOT,
-            env={**os.environ, "COLUMNS": "200"},
+            env={**os.environ, "COLUMNS": "200", **(env or {})},
         )
 
 
@@ -150,3 +156,44 @@ def children(pid: int) -> set[int]:
     except OSError:  # it has ended
         pass
     return found
+
+
+class Opens:
+    """The files this process opens through Python (an audit hook, installed once for the
+    test process), while active (``with``): by the batch process's own code, or inside
+    :meth:`worker` blocks (an executor running a task in this process)."""
+
+    def __init__(self) -> None:
+        self.driver: list[str] = []
+        self.worker: list[str] = []
+        self._in_worker = False
+
+    def __enter__(self) -> Opens:
+        if not _ACTIVE and not _HOOKED:
+            sys.addaudithook(_audit)
+            _HOOKED.append(True)
+        _ACTIVE.append(self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        _ACTIVE.remove(self)
+
+    @contextlib.contextmanager
+    def worker_code(self) -> Iterator[None]:
+        self._in_worker = True
+        try:
+            yield
+        finally:
+            self._in_worker = False
+
+    def record(self, path: str) -> None:
+        (self.worker if self._in_worker else self.driver).append(path)
+
+
+_ACTIVE: list[Opens] = []
+_HOOKED: list[bool] = []  # the hook cannot be removed: installed once
+
+
+def _audit(event: str, args: tuple[Any, ...]) -> None:
+    if event == "open" and _ACTIVE and isinstance(args[0], str | bytes | os.PathLike):
+        _ACTIVE[-1].record(os.fsdecode(args[0]))

@@ -171,7 +171,7 @@ def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Pa
 DYING_BATCH = """
 import os, signal, sys
 from pathlib import Path
-from pipeline.batch.fingerprint import PlanIdentity
+from pipeline.batch.fingerprint import PENDING, PlanIdentity
 from pipeline.batch.jobs import jobs_from_glob
 from pipeline.batch.ledger import Ledger
 from pipeline.batch.policy import Mode, decide
@@ -186,7 +186,7 @@ survey, pattern, out = sys.argv[1], sys.argv[2], Path(sys.argv[3])
 registry = load_registry()
 plan = build_plan(load_spec(survey), registry)
 (job,) = jobs_from_glob(pattern, ["stations"], WellMetadata())
-fingerprint, _ = PlanIdentity.of(plan, registry).fingerprint(job)
+fingerprint = PlanIdentity.of(plan, registry).fingerprint(job, {"stations": PENDING})
 ledger = Ledger(out / "ledger.sqlite")
 batch = ledger.start_batch("key", survey, plan.digest, out, {})
 claim = ledger.claim(
@@ -289,3 +289,61 @@ def test_a_pool_broken_between_waits_still_takes_new_wells(tmp_path: Path, surve
         executor.close(cancel=True)
     assert [(o.well_id, o.status) for o in outcomes] == [("W", "done")], outcomes
     assert_complete(tmp_path / "out" / "W")
+
+
+def staging_pids(out: Path) -> set[int]:
+    """The worker processes named by the staging directories left in OUT (the next batch
+    removes those of processes that no longer exist: a zombie still does, until this
+    machine's init reaps it)."""
+    work = out / ".gyropipe-batch"
+    names = [p.name.split(".") for p in work.iterdir()] if work.is_dir() else []
+    return {int(parts[-2]) for parts in names if len(parts) > 2 and parts[-2].isdigit()}
+
+
+@pytest.mark.process("the batch SIGKILLs itself at each step of its loop")
+@pytest.mark.parametrize(
+    "kills",
+    [("commit:2",), ("committed:2",), ("submitted:2",), ("received:1", "received:1")],
+    ids=["in-transaction", "committed", "submitted", "received-then-checking"],
+)
+def test_a_batch_killed_at_any_step_resumes_with_every_well_done_once(
+    tmp_path: Path, survey: Path, kills: tuple[str, ...]
+):
+    names = [f"K{i}" for i in range(6)]
+    make_wells(tmp_path / "in", names)
+    out = tmp_path / "out"
+    ledger = out / "ledger.sqlite"
+    args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out, "--workers", "2")
+    finished_before: dict[str, int] = {}
+    for attempt, step in enumerate(kills):
+        log = tmp_path / f"kill{attempt}.log"
+        proc = spawn(*args, "--quiet", stderr=log, env={"GYROPIPE_TEST_CRASH_AT": step})
+        assert proc.wait(TIMEOUT_S) == -signal.SIGKILL, log.read_text()
+        done = runs_by_well(ledger)
+        workers = {int(str(r["worker"]).rsplit(":", 1)[1]) for r in done.values() if r["worker"]}
+        wait_for(lambda w=workers: all(gone(pid) for pid in w))
+        wait_for(lambda: not any(Path(f"/proc/{pid}").exists() for pid in staging_pids(out)))
+        finished_before.update({w: int(str(r["id"])) for w, r in done.items()})
+        finished_before.update(published_unrecorded(out))  # killed between publish and record
+
+    final = spawn(*args, stderr=tmp_path / "final.log")
+    assert final.wait(TIMEOUT_S) == 0, (tmp_path / "final.log").read_text()
+    rows = runs(ledger)
+    assert "running" not in {r["status"] for r in rows}  # no claim (nor check) left behind
+    for well in names:
+        mine = [r for r in rows if r["well"] == well]
+        assert [r["status"] for r in mine].count("done") == 1, mine  # done exactly once
+        done_row = next(r for r in mine if r["status"] == "done")
+        if well in finished_before:  # finished before a kill: never run again
+            assert done_row["id"] == finished_before[well]
+        assert {r["status"] for r in mine} <= {"done", "interrupted"}
+        assert_complete(out / well)
+        assert json.loads((out / well / "batch.json").read_text())["run_id"] == done_row["id"]
+        history = json.loads(gyropipe_cli("history", well, "--dir", out, "--json").stdout)
+        assert [(r["id"], r["status"]) for r in history["runs"]] == [
+            (r["id"], r["status"]) for r in mine
+        ]
+    assert no_staging_left(out)
+    last = summary(out)
+    assert {w for w, r in last.items() if r["status"] == "skipped"} == set(finished_before)
+    assert {r["status"] for w, r in last.items() if w not in finished_before} == {"done"}

@@ -1,6 +1,7 @@
 """The Dask executor gives the same outputs, statuses and errors as the local process pool:
-on a scheduler given by address (a LocalCluster on 127.0.0.1 in this process) and on the
-LocalCluster the batch starts itself."""
+on a scheduler given by address (a LocalCluster on 127.0.0.1 in this process), where the
+batch keeps as many wells in flight as the cluster has worker threads, and on the
+LocalCluster the batch starts itself, whose worker processes alone read the inputs."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from batch_support import (
+    Opens,
     assert_complete,
     corrupt,
     log_events,
@@ -46,10 +48,11 @@ def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path
         assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
         on_cluster = gyropipe_cli(
             "batch", survey, "--inputs", pattern, "--out", tmp_path / "dask", "--executor", "dask",
-            "--scheduler", cluster.scheduler_address,
+            "--scheduler", cluster.scheduler_address, "--workers", "1",
         )  # fmt: skip
     assert on_cluster.returncode == 1, on_cluster.output
-    assert log_events(on_cluster.stderr)[0]["executor"] == "dask"
+    start = log_events(on_cluster.stderr)[0]
+    assert (start["executor"], start["workers"]) == ("dask", 2)  # the cluster's, not --workers
     good = ["D1", "D2", "D4"]
     assert output_hashes(tmp_path / "dask", good) == output_hashes(tmp_path / "local", good)
     assert statuses(tmp_path / "dask") == statuses(tmp_path / "local")
@@ -57,11 +60,14 @@ def test_dask_executor_outputs_equal_the_local_ones(tmp_path: Path, survey: Path
         assert_complete(tmp_path / "dask" / well)
 
     # no --scheduler: the batch starts a LocalCluster of worker processes on 127.0.0.1
-    own = gyropipe_cli(
-        "batch", survey, "--inputs", tmp_path / "in" / "D[12].csv", "--out", tmp_path / "own",
-        "--executor", "dask", "--workers", "1",
-    )  # fmt: skip
+    with Opens() as opens:
+        own = gyropipe_cli(
+            "batch", survey, "--inputs", tmp_path / "in" / "D[12].csv", "--out",
+            tmp_path / "own", "--executor", "dask", "--workers", "1",
+        )  # fmt: skip
     assert own.returncode == 0, own.output
+    assert any(Path(p).name == survey.name for p in opens.driver)  # the hook saw the batch
+    assert not {str(p.resolve()) for p in paths} & set(opens.driver)  # only workers read them
     assert output_hashes(tmp_path / "own", ["D1", "D2"]) == output_hashes(
         tmp_path / "local", ["D1", "D2"]
     )

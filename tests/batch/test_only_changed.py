@@ -18,8 +18,8 @@ from batch_support import (
     summary,
 )
 
-from pipeline.batch.fingerprint import Fingerprint, changes
-from pipeline.batch.policy import Mode, Run, Skip, WellState, decide
+from pipeline.batch.fingerprint import PENDING, Fingerprint, changes
+from pipeline.batch.policy import Check, Mode, Run, Skip, WellState, decide, why
 from pipeline.batch.records import RunRow
 from tests_support import gyropipe_cli
 
@@ -189,3 +189,37 @@ def test_policy_table():
 def test_fingerprint_round_trips_through_json():
     assert Fingerprint.from_json(FP.to_json()) == FP
     assert json.loads(FP.to_json())["params"] == {"trajectory": {"vs_azimuth": 0.0}}
+
+
+def test_a_choice_that_turns_on_a_pending_hash_is_a_check():
+    done = row(1, "done", FP, batch=1, finished=100.0)
+    kw = {"batch_id": 5, "batch_started": 500.0, "resume_since": None}
+    pending = replaced(inputs={"stations": PENDING})
+    looked: list[str] = []
+
+    def published() -> bool:
+        looked.append("OUT/W")
+        return True
+
+    state = WellState(done, done, published)
+    # runs whatever the file holds: no check, no look at OUT/W, reasons from what is known
+    assert decide(Mode(), state, pending, **kw) == Run(["unchanged, run requested"])
+    newer = replaced(inputs={"stations": PENDING}, gyropipe="0.2.0")
+    assert decide(Mode(only_changed=True), state, newer, **kw) == Run(["gyropipe 0.1.0→0.2.0"])
+    assert looked == []
+    # skipped only if the file is as the last done run read it: a worker hashes it
+    assert decide(Mode(only_changed=True), state, pending, **kw) == Check(
+        ["stations"], [], 1, Skip("unchanged")
+    )
+    resumed = {**kw, "resume_since": 1}
+    assert decide(Mode(), state, pending, **resumed) == Check(
+        ["stations"], [], 1, Skip("done before the interruption (batch 1)")
+    )
+    assert decide(Mode(rerun_failed=True), state, pending, **kw) == Skip("last run did not fail")
+    assert looked == []
+    # every hash known: the publication decides, looked at once
+    assert decide(Mode(only_changed=True), state, FP, **kw) == Skip("unchanged")
+    assert looked == ["OUT/W"]
+    # the reasons of a run come from its own hashes
+    changed = replaced(inputs={"stations": "b" * 64})
+    assert why(state, changed, published=False) == ["input changed: stations", "outputs missing"]

@@ -37,7 +37,7 @@ def test_the_operator_guide_matches_a_real_ledger_and_log(tmp_path: Path, survey
     )
     assert result.returncode == 1, result.output  # C fails, A and B are done
     with sqlite3.connect(out / "ledger.sqlite") as db:
-        for table in ("runs", "batches"):
+        for table in ("runs", "batches", "file_hashes"):
             columns = [row[1] for row in db.execute(f"PRAGMA table_info({table})")]
             assert first_cells(section(f"### {table}")) == columns, table
         sha256 = hashlib.sha256((tmp_path / "in" / "A.csv").read_bytes()).hexdigest()

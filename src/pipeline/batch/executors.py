@@ -40,7 +40,9 @@ continuous survey's processing 44 % slower (one hour at 100 Hz: 13.7 s → 19.6 
 
 
 class Executor(Protocol):
-    """Runs well tasks; ``wait`` returns those finished within ``timeout`` seconds."""
+    """Runs well tasks; ``wait`` returns those finished within ``timeout`` seconds. One may
+    also say how many tasks it runs at once (an ``int`` attribute or property ``slots``;
+    the batch keeps twice that many claimed wells in flight, else twice ``--workers``)."""
 
     def submit(self, task: WellTask) -> None: ...
 
@@ -56,6 +58,7 @@ class LocalExecutor:
 
     def __init__(self, workers: int, ref: PipelineRef) -> None:
         self._workers = workers
+        self.slots = workers
         self._ref = ref
         self._later = multiprocessing.get_context("forkserver")
         self._later.set_forkserver_preload(PRELOAD)
@@ -123,7 +126,8 @@ class LocalExecutor:
 class DaskExecutor:
     """Tasks on a Dask distributed cluster: the scheduler at ``address``, or a
     ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker processes. The
-    pipeline ``ref`` is scattered to the workers once; each task names it."""
+    pipeline ``ref`` is scattered to the workers once; each task names it. Its
+    :attr:`slots` are the cluster's worker threads, asked of the scheduler."""
 
     def __init__(self, workers: int, ref: PipelineRef, address: str | None) -> None:
         try:
@@ -149,11 +153,17 @@ class DaskExecutor:
             self._client = self._dask.Client(address)
         self._ref = self._client.scatter(ref, broadcast=True, hash=False)
         self._futures: dict[Any, WellTask] = {}
+        self._submitted = 0
+
+    @property
+    def slots(self) -> int:
+        """The threads of the cluster's workers now (at least 1)."""
+        return max(1, int(sum(self._client.nthreads().values())))
 
     def submit(self, task: WellTask) -> None:
-        future = self._client.submit(
-            run_well, task, self._ref, key=f"gyropipe-{task.well_id}-{task.run_id}", pure=False
-        )
+        self._submitted += 1  # a check and the run after it share their run id
+        key = f"gyropipe-{task.well_id}-{task.run_id}-{self._submitted}"
+        future = self._client.submit(run_well, task, self._ref, key=key, pure=False)
         self._futures[future] = task
 
     def wait(self, timeout: float) -> list[WellOutcome]:

@@ -6,11 +6,15 @@ gyropipe version and the versions of third-party plugins, the well's header over
 the SHA-256 of every file the run read through a parameter (``run.json``'s
 ``parameter_inputs``: offset wells, tool-model files, reader profiles). Which files those
 are is known once the run has read them: a well's last run records them
-(:meth:`Fingerprint.reading_manifest`) and the next batch hashes the same files again
+(:meth:`Fingerprint.completed`) and the next batch compares the same files again
 (:meth:`Fingerprint.reading`) — the set changes only with the pipeline, its inputs or
 params, or one of those files, each of which is a reason already. Two runs with equal
 fingerprints produce the same outputs; :func:`changes` says in words what differs ("input
 changed: stations", "plugin acme 1.2→1.3", "offset file offsets/w3.csv changed").
+
+The batch process reads no file: a hash it does not know from the file's stat
+(:mod:`pipeline.batch.filestate`) is :data:`PENDING` until a worker has hashed the file
+(:func:`hashed`); a pending hash is no reason of its own (:func:`changes` leaves it out).
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import hashlib
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +36,8 @@ from pipeline.well import WellMetadata
 from .jobs import WellJob
 
 UNREADABLE = "unreadable"
+PENDING = "pending"
+"""the hash of a file the batch process has not had hashed yet"""
 
 
 @dataclass(frozen=True)
@@ -53,27 +59,53 @@ class Fingerprint:
     """absolute path → ``{"sha256", "what"}`` of every file the run read through a
     parameter (:mod:`pipeline.inputfiles`)"""
 
-    def reading(self, files: Mapping[str, Mapping[str, str]]) -> Fingerprint:
-        """This fingerprint with the files ``files`` names (a previous run's) hashed now
-        (``unreadable`` when they cannot be read)."""
-        now = {}
-        for path, entry in files.items():
-            try:
-                digest = sha256_file(Path(path))
-            except OSError:
-                digest = UNREADABLE
-            now[path] = {"sha256": digest, "what": entry["what"]}
+    def reading(
+        self, files: Mapping[str, Mapping[str, str]], digests: Mapping[str, str]
+    ) -> Fingerprint:
+        """This fingerprint with the files ``files`` names (a previous run's), their hashes
+        now from ``digests`` (path → SHA-256, :data:`UNREADABLE`; :data:`PENDING` where
+        missing)."""
+        now = {
+            path: {"sha256": digests.get(path, PENDING), "what": entry["what"]}
+            for path, entry in files.items()
+        }
         return replace(self, files=now)
 
-    def reading_manifest(self, manifest: Mapping[str, Any]) -> Fingerprint:
-        """This fingerprint with the files a run's ``run.json`` says it read."""
+    def completed(self, manifest: Mapping[str, Any]) -> Fingerprint:
+        """This fingerprint with the input hashes and the files a run's ``run.json`` says it
+        read (the run's own hashes replace pending or earlier ones)."""
+        hashes = {name: entry["sha256"] for name, entry in manifest.get("inputs", {}).items()}
         files: dict[str, dict[str, str]] = {}
         for entry in manifest.get("parameter_inputs", []):
             files.setdefault(entry["path"], {"sha256": entry["sha256"], "what": entry["what"]})
-        return replace(self, files=files)
+        return replace(self.with_inputs(hashes), files=files)
+
+    def with_inputs(self, hashes: Mapping[str, str]) -> Fingerprint:
+        """This fingerprint with the input hashes ``hashes`` gives (name → SHA-256)."""
+        inputs = {name: hashes.get(name, digest) for name, digest in self.inputs.items()}
+        return replace(self, inputs=inputs)
+
+    def pending(self) -> tuple[list[str], list[str]]:
+        """The inputs (by name) and files (by path) whose hash is :data:`PENDING`."""
+        inputs = [name for name, digest in self.inputs.items() if digest == PENDING]
+        files = [path for path, entry in self.files.items() if entry["sha256"] == PENDING]
+        return inputs, files
+
+    def assuming(self, other: Fingerprint) -> Fingerprint:
+        """This fingerprint with each pending hash taken from ``other`` (where it has one)."""
+        inputs = {n: other.inputs.get(n, d) if d == PENDING else d for n, d in self.inputs.items()}
+        files = {
+            p: {**e, "sha256": other.files[p]["sha256"]}
+            if e["sha256"] == PENDING and p in other.files
+            else e
+            for p, e in self.files.items()
+        }
+        return replace(self, inputs=inputs, files=files)
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True, separators=(",", ":"))
+        """The fields as one JSON object (their values are JSON values already: no
+        :func:`dataclasses.asdict` deep copy, 1 ms a call for a report pipeline's params)."""
+        return json.dumps(vars(self), sort_keys=True, separators=(",", ":"))
 
     @classmethod
     def from_json(cls, text: str) -> Fingerprint:
@@ -107,26 +139,37 @@ class PlanIdentity:
             },
         )
 
-    def fingerprint(self, job: WellJob) -> tuple[Fingerprint, list[str]]:
-        """The fingerprint of ``job`` (hashes its input files), and the problems of the
-        input files that cannot be read (their hash is recorded as ``unreadable``)."""
-        hashes: dict[str, str] = {}
-        problems: list[str] = []
-        for name, path in sorted(job.inputs.items()):
-            try:
-                hashes[name] = sha256_file(path)
-            except OSError as exc:
-                hashes[name] = UNREADABLE
-                problems.append(f"input {name!r}: cannot read {str(path)!r}: {exc.strerror}")
-        fingerprint = Fingerprint(
-            inputs=hashes,
+    def fingerprint(self, job: WellJob, inputs: Mapping[str, str]) -> Fingerprint:
+        """The fingerprint of ``job`` with the hashes ``inputs`` (input name → SHA-256,
+        :data:`PENDING` or :data:`UNREADABLE`)."""
+        return Fingerprint(
+            inputs=dict(sorted(inputs.items())),
             pipeline=self.pipeline,
             params=self.params,
             gyropipe=self.gyropipe,
             plugins=self.plugins,
             well=well_overrides(job.well),
         )
-        return fingerprint, problems
+
+
+def hashed(path: str) -> str:
+    """The SHA-256 of the file ``path``, :data:`UNREADABLE` if it cannot be read."""
+    try:
+        return sha256_file(Path(path))
+    except OSError:
+        return UNREADABLE
+
+
+def completed_json(fingerprint: object, manifest: Mapping[str, Any]) -> object:
+    """A stored fingerprint (JSON text) completed by a run's ``run.json``
+    (:meth:`Fingerprint.completed`); as it was where either does not parse (the next batch
+    then re-runs the well, as for any damaged row)."""
+    if not isinstance(fingerprint, str):
+        return fingerprint
+    try:
+        return Fingerprint.from_json(fingerprint).completed(manifest).to_json()
+    except (ValueError, TypeError, KeyError, AttributeError):
+        return fingerprint
 
 
 def well_overrides(well: WellMetadata) -> dict[str, Any]:
@@ -135,14 +178,17 @@ def well_overrides(well: WellMetadata) -> dict[str, Any]:
 
 
 def changes(old: Fingerprint, new: Fingerprint) -> list[str]:
-    """Why a run with fingerprint ``new`` differs from one with ``old``; empty if equal."""
+    """Why a run with fingerprint ``new`` differs from one with ``old``; empty if equal (a
+    :data:`PENDING` hash on either side is no reason)."""
     reasons: list[str] = []
     for name in sorted(set(old.inputs) | set(new.inputs)):
         if name not in old.inputs:
             reasons.append(f"new input {name}")
         elif name not in new.inputs:
             reasons.append(f"input {name} removed")
-        elif old.inputs[name] != new.inputs[name]:
+        elif PENDING not in (old.inputs[name], new.inputs[name]) and (
+            old.inputs[name] != new.inputs[name]
+        ):
             reasons.append(f"input changed: {name}")
     if old.pipeline != new.pipeline:
         reasons.append("pipeline changed")
@@ -162,7 +208,11 @@ def changes(old: Fingerprint, new: Fingerprint) -> list[str]:
     reasons += _diff("well header changed", dict(old.well), dict(new.well))
     for path in sorted(old.files):
         read, now = old.files[path], new.files.get(path)
-        if now is not None and now["sha256"] != read["sha256"]:
+        if (
+            now is not None
+            and PENDING not in (now["sha256"], read["sha256"])
+            and (now["sha256"] != read["sha256"])
+        ):
             gone = " (now unreadable)" if now["sha256"] == UNREADABLE else ""
             reasons.append(f"{read['what']} {_shown(path)} changed{gone}")
     return reasons

@@ -3,7 +3,10 @@
 Consistency with several batches on one ledger (processes on one or more machines):
 
 - WAL journal, ``synchronous=FULL`` (a committed row survives a power cut), a busy timeout,
-  and every change in one ``BEGIN IMMEDIATE`` transaction;
+  and every change in one ``BEGIN IMMEDIATE`` transaction; the batch groups its changes
+  (:meth:`Ledger.group`): one transaction records the outcomes that came back together
+  and claims the wells that take their place, so a kill at any point leaves the ledger as
+  it was after the last commit, and the next batch settles the rest as below;
 - a well is *claimed* by inserting its ``running`` run row; a unique partial index allows
   one ``running`` row per well, and the claim decides run-or-skip inside the same
   transaction, so two batches never run one well at the same time and never both run it
@@ -13,7 +16,13 @@ Consistency with several batches on one ledger (processes on one or more machine
   :data:`LEASE_S`) is settled by the next batch that meets it: ``done`` if the run had
   published its complete outputs before the process died (``batch.json`` names the run),
   else ``interrupted``;
-- a run is marked ``done`` only after its outputs are published and on disk.
+- a claim whose choice turns on files whose hash the batch process does not know is a
+  *check* (note :data:`CHECKING`): its worker only hashes the files, and the claim is then
+  dropped (the well is skipped) or made a run, in one commit, before the run is handed
+  out — so a check publishes nothing, and one whose batch died is dropped, not counted;
+- a run is marked ``done`` only after its outputs are published and on disk;
+- the ``file_hashes`` table remembers the SHA-256 a worker found for a file's stat key
+  (:mod:`pipeline.batch.filestate`): a cache, never the record of a run.
 
 Only the batch process opens the ledger; workers never do.
 
@@ -34,16 +43,18 @@ import os
 import socket
 import sqlite3
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
 
 from pipeline.errors import GyropipeError, file_errors
 
-from .fingerprint import Fingerprint
+from . import filestate
+from .filestate import FileKey, HashCache
+from .fingerprint import Fingerprint, completed_json
 from .jobs import BatchConfigError
-from .policy import Run, Skip, WellState
+from .policy import Check, Run, Skip, WellState
 from .publish import MARKER, read_published
 from .records import BadRow, BatchRow, RunRow, batch_row, decode_text, rejection, run_row
 from .worker import WellOutcome
@@ -52,6 +63,8 @@ SCHEMA_VERSION = 1
 LEASE_S = 60.0
 """A batch whose heartbeat is older than this is presumed dead (heartbeat every LEASE_S/6)."""
 BUSY_TIMEOUT_MS = 60_000
+CHECKING = "checking: its files are hashed to decide whether it runs"
+"""the note of a claim that is a check (module docstring)"""
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS batches (
@@ -165,6 +178,8 @@ def _guarded(doing: str) -> Callable[[Method[P, R]], Method[P, R]]:
 class Claimed:
     run_id: int
     reasons: list[str]
+    check: Check | None = None
+    """a check: its worker hashes files, then the claim is dropped or made a run"""
 
 
 @dataclass(frozen=True)
@@ -181,7 +196,7 @@ class Busy:
     pid: int
 
 
-Decide = Callable[[WellState], Run | Skip]
+Decide = Callable[[WellState], Run | Skip | Check]
 
 
 class Ledger:
@@ -192,6 +207,8 @@ class Ledger:
         self.problems: list[str] = []
         """rows that did not parse, as warning lines (each told once; the caller drains it)"""
         self._told: set[tuple[str, int, str]] = set()
+        self._depth = 0
+        """open :meth:`_write` blocks (more than one inside :meth:`group`)"""
         with file_errors("create the ledger's directory", path.parent):
             path.parent.mkdir(parents=True, exist_ok=True)
         try:
@@ -220,10 +237,11 @@ class Ledger:
                     f"{self.path}: ledger schema version {version}, this gyropipe uses "
                     f"{SCHEMA_VERSION}"
                 )
-            for statement in SCHEMA.split(";"):
+            for statement in (SCHEMA + ";" + filestate.SCHEMA).split(";"):
                 if statement.strip():
                     self._db.execute(statement)
             self._db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+        self._hashes = HashCache(self._db)
 
     def close(self) -> None:
         self._db.close()
@@ -231,8 +249,17 @@ class Ledger:
     @contextlib.contextmanager
     def _write(self) -> Iterator[None]:
         """One write transaction, taken before any read (``BEGIN IMMEDIATE``), on the file
-        that was opened (not one put in its place); rolled back whole if anything fails."""
+        that was opened (not one put in its place); rolled back whole if anything fails.
+        Inside :meth:`group`, part of the group's transaction."""
+        if self._depth:
+            self._depth += 1
+            try:
+                yield
+            finally:
+                self._depth -= 1
+            return
         self._db.execute("BEGIN IMMEDIATE")
+        self._depth = 1
         try:
             if _identity(self.path) != self._identity:
                 raise LedgerError(self.path, "write", GONE)
@@ -243,6 +270,17 @@ class Ledger:
                 if self._db.in_transaction:
                     self._db.execute("ROLLBACK")
             raise
+        finally:
+            self._depth = 0
+
+    @contextlib.contextmanager
+    def group(self) -> Iterator[None]:
+        """The changes made inside, in one transaction: all committed, or none."""
+        try:
+            with self._write():
+                yield
+        except sqlite3.Error as exc:
+            raise LedgerError(self.path, "record the batch's progress", exc) from None
 
     def _note(self, kind: str, row: sqlite3.Row, bad: BadRow) -> None:
         """Tell a row that does not parse once (``kind`` run or batch)."""
@@ -390,20 +428,51 @@ class Ledger:
             decision = decide(self._state(well))
             if isinstance(decision, Skip):
                 return Skipped(decision.reason)
+            check = decision if isinstance(decision, Check) else None
+            reasons = decision.reasons if isinstance(decision, Run) else []
             cursor = self._db.execute(
                 "INSERT INTO runs (well, batch, status, reasons, fingerprint, versions, out_dir, "
-                "started) VALUES (?, ?, 'running', ?, ?, ?, ?, ?)",
+                "started, note) VALUES (?, ?, 'running', ?, ?, ?, ?, ?, ?)",
                 (
                     well,
                     batch.id,
-                    json.dumps(decision.reasons),
+                    json.dumps(reasons),
                     fingerprint.to_json(),
                     json.dumps(versions, sort_keys=True),
                     str(out_dir),
                     time.time(),
+                    CHECKING if check is not None else None,
                 ),
             )
-            return Claimed(int(cursor.lastrowid or 0), decision.reasons)
+            return Claimed(int(cursor.lastrowid or 0), reasons, check)
+
+    @_guarded("record a well's check")
+    def checked(self, run_id: int, reasons: list[str] | None) -> None:
+        """A check's end: the claim dropped (``reasons`` None: the well is skipped), or made
+        the run of the well for ``reasons``."""
+        with self._write():
+            if reasons is None:
+                self._db.execute(
+                    "DELETE FROM runs WHERE id = ? AND status = 'running' AND note = ?",
+                    (run_id, CHECKING),
+                )
+            else:
+                self._db.execute(
+                    "UPDATE runs SET reasons = ?, note = NULL WHERE id = ?",
+                    (json.dumps(reasons), run_id),
+                )
+
+    @_guarded("read the file hashes")
+    def known_hash(self, key: FileKey) -> str | None:
+        """The SHA-256 remembered for a file's stat key (:mod:`~pipeline.batch.filestate`)."""
+        return self._hashes.get(key)
+
+    @_guarded("remember file hashes")
+    def remember(self, entries: list[tuple[str, FileKey, str]]) -> None:
+        """Remember (path, stat key, SHA-256) of files a worker hashed."""
+        if entries:
+            with self._write():
+                self._hashes.put(entries)
 
     @_guarded("record a well's outcome")
     def finish(
@@ -411,11 +480,13 @@ class Ledger:
         outcome: WellOutcome,
         error: str | None = None,
         fingerprint: Fingerprint | None = None,
+        reasons: list[str] | None = None,
     ) -> None:
         """Record a worker's outcome (``error`` overrides a done outcome that the batch
         process found inconsistent); a done run whose survey failed acceptance is noted
-        ``rejected: …`` (:attr:`RunRow.verdict`). ``fingerprint``, when given, replaces the
-        claim's (it adds the files the run read through parameters)."""
+        ``rejected: …`` (:attr:`RunRow.verdict`). ``fingerprint`` and ``reasons``, when
+        given, replace the claim's (the run's own hashes, the files it read through
+        parameters, and why it ran in their light)."""
         status = "failed" if error or outcome.status != "done" else "done"
         manifest = outcome.manifest
         with self._write():
@@ -423,7 +494,8 @@ class Ledger:
                 "UPDATE runs SET status = ?, finished = ?, inputs = ?, outputs = ?, "
                 "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
                 "process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
-                "fingerprint = COALESCE(?, fingerprint) WHERE id = ?",
+                "fingerprint = COALESCE(?, fingerprint), reasons = COALESCE(?, reasons) "
+                "WHERE id = ?",
                 (
                     status,
                     time.time(),
@@ -438,6 +510,7 @@ class Ledger:
                     outcome.peak_rss_bytes or None,
                     outcome.worker or None,
                     fingerprint.to_json() if fingerprint is not None else None,
+                    json.dumps(reasons) if reasons is not None else None,
                     outcome.run_id,
                 ),
             )
@@ -480,7 +553,11 @@ class Ledger:
     def _settle_runs(self, batch_id: int) -> None:
         """The runs batch ``batch_id`` still claims, its process gone: done if the run had
         published (read from the row's id and out_dir only, so a damaged row is settled
-        too), else interrupted."""
+        too), else interrupted; a check (which publishes nothing) is dropped."""
+        self._db.execute(
+            "DELETE FROM runs WHERE batch = ? AND status = 'running' AND note = ?",
+            (batch_id, CHECKING),
+        )
         for row in self._db.execute(
             "SELECT id, out_dir, fingerprint FROM runs WHERE batch = ? AND status = 'running'",
             (batch_id,),
@@ -501,8 +578,8 @@ class Ledger:
         self, run_id: int, out_dir: Path, manifest: dict[str, Any], fingerprint: object
     ) -> None:
         """A claimed run that published before its batch process ended: done, its
-        fingerprint given the files its ``run.json`` says it read (kept as it was where the
-        row's fingerprint or the manifest's list does not parse)."""
+        fingerprint completed by its ``run.json`` (its input hashes, the files it read; kept
+        as it was where the row's fingerprint or the manifest does not parse)."""
         stages = manifest.get("stages")
         times = [s.get("wall_time_s") for s in stages] if isinstance(stages, list) else []
         self._db.execute(
@@ -515,7 +592,7 @@ class Ledger:
                 "recovered: its outputs were published before its batch process ended",
                 _number(manifest.get("wall_time_s")),
                 sum(t for t in times if isinstance(t, int | float)),
-                _with_files(fingerprint, manifest),
+                completed_json(fingerprint, manifest),
                 run_id,
             ),
         )
@@ -538,12 +615,7 @@ class Ledger:
         )
         latest = finished[0] if finished else None
         last_done = done[0] if done else None
-        published = None if last_done is None else read_published(Path(last_done.out_dir))
-        return WellState(
-            latest,
-            last_done,
-            published is not None and last_done is not None and published.run_id == last_done.id,
-        )
+        return WellState(latest, last_done, functools.partial(_published, last_done))
 
 
 def alive(batch: BatchRow) -> bool:
@@ -561,6 +633,14 @@ def alive(batch: BatchRow) -> bool:
     return True
 
 
+def _published(run: RunRow | None) -> bool:
+    """Whether ``run``'s outputs are the ones published in its directory."""
+    if run is None:
+        return False
+    published = read_published(Path(run.out_dir))
+    return published is not None and published.run_id == run.id
+
+
 def _identity(path: Path) -> tuple[int, int] | None:
     """The file ``path`` names (device, inode); None if there is none."""
     try:
@@ -572,15 +652,3 @@ def _identity(path: Path) -> tuple[int, int] | None:
 
 def _number(value: object) -> float | None:
     return float(value) if isinstance(value, int | float) else None
-
-
-def _with_files(fingerprint: object, manifest: Mapping[str, Any]) -> object:
-    """A stored fingerprint (JSON text) with the files a run's ``run.json`` lists; as it was
-    where either does not parse (the next batch then re-runs the well, as for any damaged
-    row)."""
-    if not isinstance(fingerprint, str):
-        return fingerprint
-    try:
-        return Fingerprint.from_json(fingerprint).reading_manifest(manifest).to_json()
-    except (ValueError, TypeError, KeyError, AttributeError):
-        return fingerprint

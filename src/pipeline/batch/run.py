@@ -1,23 +1,39 @@
 """``gyropipe batch``: one DAG run per well, on an executor, recorded in the ledger.
 
-The batch process hashes each well's inputs, claims the well in the ledger (or skips it,
-see :mod:`pipeline.batch.policy`), hands claimed wells to the executor a few at a time, and
-records each outcome once the well's outputs are published. A failing well never stops the
-others. Killed at any point and started again with the same command, it completes the
-remaining wells and recomputes none that finished.
+The batch process claims each well in the ledger (or skips it, see
+:mod:`pipeline.batch.policy`), hands claimed wells to the executor a few at a time, and
+records each outcome once the well's outputs are published. It reads no input: it stats
+them, takes their hashes from the ledger's cache where their stat is unchanged
+(:mod:`pipeline.batch.filestate`), and leaves every read to the workers — the run's own
+hashes, a check's hashes when the choice turns on files it has no hash for. A failing well
+never stops the others.
+
+Each turn of its loop is one ledger transaction: the outcomes that came back are recorded
+and the wells that take their place claimed, all committed or none; only then are the new
+tasks handed out and the results told. Killed at any point and started again with the same
+command, it completes the remaining wells and recomputes none that finished: a claim
+committed but not run is settled ``interrupted`` and runs again, a run published but not
+recorded is settled ``done`` (recovered), a check is dropped; nothing is counted twice.
+
+Test-only: ``GYROPIPE_TEST_CRASH_AT=STEP:N`` makes the batch process SIGKILL itself the N-th
+time it reaches STEP — ``commit`` (inside a turn's transaction, before it commits),
+``committed`` (after, before anything is handed out), ``submitted`` (tasks handed out),
+``received`` (outcomes back, not yet recorded) — so tests kill it exactly there.
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
 import hashlib
 import json
+import os
+import signal
 import time
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 from pipeline.errors import file_errors
 from pipeline.executing import ExecutorSetup, PipelineRef
@@ -26,10 +42,11 @@ from pipeline.registry import Registry
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
-from .fingerprint import Fingerprint, PlanIdentity
+from .filestate import Seen, key_after, look
+from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
-from .policy import Mode, decide
+from .policy import Check, Mode, Run, Skip, WellState, decide, why
 from .progress import Reporter
 from .publish import WORK_DIR, clean_work_dir, read_published
 from .records import REJECTED, BatchRow, rejection
@@ -40,6 +57,10 @@ BUSY_POLL_S = 0.5
 """how often a well held by another batch is looked at again"""
 PREFETCH = 2
 """wells claimed per worker ahead of time, so no worker waits for the ledger"""
+TURN_MAX = 256
+"""wells considered in one transaction at most (skips take no worker: a long run of them
+would hold the ledger's write lock)"""
+CRASH_AT = "GYROPIPE_TEST_CRASH_AT"
 
 
 @dataclass(frozen=True)
@@ -104,6 +125,33 @@ def run_batch(
         ledger.close()
 
 
+@dataclass
+class _Flight:
+    """A claimed well handed to the executor: a run, or a check (``check``)."""
+
+    job: WellJob
+    run_id: int
+    fingerprint: Fingerprint
+    """the claim's (its input hashes as far as the batch process knew them)"""
+    reasons: list[str]
+    state: WellState
+    """what the ledger knew of the well when it was claimed"""
+    seen: dict[str, Seen]
+    """path → the input and parameter files as the batch process saw them then"""
+    known: dict[str, str]
+    """path → the hashes the batch process had for them (pending where it had none)"""
+    check: Check | None = None
+
+
+@dataclass
+class _Turn:
+    """What one transaction decided, told and handed out once it has committed."""
+
+    results: list[WellResult] = field(default_factory=list)
+    tasks: list[WellTask] = field(default_factory=list)
+    busy: list[tuple[WellJob, Busy]] = field(default_factory=list)
+
+
 class _Batch:
     def __init__(
         self,
@@ -129,12 +177,19 @@ class _Batch:
         }
         self.ref = ref
         self.results: dict[str, WellResult] = {}
-        self.inflight: dict[int, tuple[WellJob, Fingerprint, list[str]]] = {}
+        self.inflight: dict[int, _Flight] = {}
         self.waiting: dict[str, tuple[float, WellJob]] = {}
         self.noted: set[str] = set()
+        self.seeing: set[str] = set()
+        """worker hosts seen to publish where the batch process sees OUT"""
+        self.slots = max(1, options.workers)
+        step, _, count = os.environ.get(CRASH_AT, "").partition(":")
+        self.crash_at = (step, int(count or 1)) if step else None
+        self.reached: Counter[str] = Counter()
 
     def run(self, executor: Executor) -> BatchReport:
         try:
+            self._size(executor)
             self._begin()
         except BaseException:
             executor.close(cancel=True)
@@ -152,13 +207,19 @@ class _Batch:
         results, files = self._end(executor, "finished", t0)
         return BatchReport(self.batch, results, files, len(self.jobs) - len(results))
 
+    def _size(self, executor: Executor) -> None:
+        """Tasks the executor runs at once, if it says (a cluster: its workers' threads)."""
+        slots = getattr(executor, "slots", None)
+        if isinstance(slots, int) and slots > 0:
+            self.slots = slots
+
     def _end(
         self, executor: Executor, status: str, t0: float
     ) -> tuple[list[WellResult], list[Path]]:
         """Stop the executor, close the batch in the ledger, write the summary files."""
         executor.close(cancel=status != "finished")
-        for job, _, _ in self.inflight.values():
-            self._report(WellResult(job.well_id, "interrupted", "the batch was stopped"))
+        for flight in self.inflight.values():
+            self._report(WellResult(flight.job.well_id, "interrupted", "the batch was stopped"))
         self.inflight.clear()
         results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
         self.ledger.end_batch(self.batch.id, status, counts(results))
@@ -194,17 +255,13 @@ class _Batch:
             self.reporter.note(f"resuming the interrupted batch {self.resume_since}")
         clean_work_dir(self.out, self.ledger.running_ids())
         self.reporter.start(
-            self.batch.id,
-            self.plan.file,
-            len(self.jobs),
-            self.options.executor,
-            self.options.workers,
+            self.batch.id, self.plan.file, len(self.jobs), self.options.executor, self.slots
         )
 
     def _loop(self, executor: Executor) -> None:
         # largest inputs first: the long wells do not end up alone at the end of the batch
         queue = deque(sorted(self.jobs, key=_input_bytes, reverse=True))
-        capacity = max(1, self.options.workers) * PREFETCH
+        outcomes: list[WellOutcome] = []
         beat = time.monotonic()
         while queue or self.inflight or self.waiting:
             now = time.monotonic()
@@ -212,85 +269,207 @@ class _Batch:
                 if due <= now:
                     del self.waiting[well]
                     queue.appendleft(job)
-            while queue and len(self.inflight) < capacity:
-                self._consider(queue.popleft(), executor)
+            if outcomes or (queue and len(self.inflight) < self.slots * PREFETCH):
+                turn = _Turn()
+                with self.ledger.group():
+                    for outcome in outcomes:
+                        self._settle(outcome, turn)
+                    self._claim(queue, turn)
+                    self._crash_point("commit")
+                self._crash_point("committed")
+                outcomes = []
+                self._tell(turn, executor)
             if self.inflight:
-                for outcome in executor.wait(BUSY_POLL_S if self.waiting else LEASE_S / 6):
-                    self._record(outcome)
+                outcomes = executor.wait(BUSY_POLL_S if self.waiting else LEASE_S / 6)
+                if outcomes:
+                    self._crash_point("received")
             elif self.waiting and not queue:
                 time.sleep(BUSY_POLL_S)
             if time.monotonic() - beat > LEASE_S / 6:
                 self.ledger.heartbeat(self.batch.id)
+                self._size(executor)
                 beat = time.monotonic()
 
-    def _consider(self, job: WellJob, executor: Executor) -> None:
-        fingerprint, problems = self.identity.fingerprint(job)
-        well_dir = self.out / job.well_id
-        choose = functools.partial(
-            decide,
+    def _tell(self, turn: _Turn, executor: Executor) -> None:
+        """A committed turn: hand out its tasks, tell its results and the wells waited for."""
+        self._tell_problems()
+        for task in turn.tasks:
+            executor.submit(task)
+        if turn.tasks:
+            self._crash_point("submitted")
+        for result in turn.results:
+            self._report(result)
+        for job, busy in turn.busy:
+            if job.well_id not in self.noted:
+                self.noted.add(job.well_id)
+                self.reporter.note(
+                    f"{job.well_id}: being run by batch {busy.batch} (pid {busy.pid} on "
+                    f"{busy.host}); waiting for it"
+                )
+            self.waiting[job.well_id] = (time.monotonic() + BUSY_POLL_S, job)
+
+    def _claim(self, queue: deque[WellJob], turn: _Turn) -> None:
+        """Consider wells from ``queue`` until the executor has enough (inside a turn)."""
+        for _ in range(TURN_MAX):
+            if not queue or len(self.inflight) >= self.slots * PREFETCH:
+                return
+            self._consider(queue.popleft(), turn)
+
+    def _consider(self, job: WellJob, turn: _Turn) -> None:
+        """Claim ``job`` or skip it, from the stat of its files (no file is read)."""
+        seen: dict[str, Seen] = {}
+        known: dict[str, str] = {}
+        hashes: dict[str, str] = {}
+        problems: list[str] = []
+        for name, path in sorted(job.inputs.items()):
+            hashes[name], problem = self._known(str(path), seen, known)
+            if problem is not None:
+                problems.append(f"input {name!r}: cannot read {str(path)!r}: {problem.strerror}")
+        fingerprint = self.identity.fingerprint(job, hashes)
+        states: list[WellState] = []
+
+        def choose(state: WellState) -> Run | Skip | Check:
+            states.append(state)
+            files = state.last_done.fingerprint.files if state.last_done is not None else {}
+            digests = {path: self._known(path, seen, known)[0] for path in files}
+            return self._decide(state, fingerprint.reading(files, digests))
+
+        claim = self.ledger.claim(
+            job.well_id, self.batch, fingerprint, self.versions, self.out / job.well_id, choose
+        )
+        if isinstance(claim, Skipped):
+            turn.results.append(WellResult(job.well_id, "skipped", claim.reason))
+        elif isinstance(claim, Busy):
+            turn.busy.append((job, claim))
+        elif isinstance(claim, Claimed):
+            flight = _Flight(
+                job, claim.run_id, fingerprint, claim.reasons, states[-1], seen, known, claim.check
+            )
+            if problems:
+                failed = WellOutcome(job.well_id, claim.run_id, "failed", "; ".join(problems))
+                self._record(flight, failed, turn)
+            else:
+                self.inflight[claim.run_id] = flight
+                turn.tasks.append(self._task(flight))
+
+    def _decide(self, state: WellState, current: Fingerprint) -> Run | Skip | Check:
+        return decide(
             self.options.mode,
-            current=fingerprint,
+            state,
+            current,
             batch_id=self.batch.id,
             batch_started=self.batch.started,
             resume_since=self.resume_since,
         )
-        claim = self.ledger.claim(
-            job.well_id, self.batch, fingerprint, self.versions, well_dir, choose
-        )
-        self._tell_problems()
-        if isinstance(claim, Skipped):
-            self._report(WellResult(job.well_id, "skipped", claim.reason))
-        elif isinstance(claim, Busy):
-            if job.well_id not in self.noted:
-                self.noted.add(job.well_id)
-                self.reporter.note(
-                    f"{job.well_id}: being run by batch {claim.batch} (pid {claim.pid} on "
-                    f"{claim.host}); waiting for it"
-                )
-            self.waiting[job.well_id] = (time.monotonic() + BUSY_POLL_S, job)
-        elif isinstance(claim, Claimed):
-            self.inflight[claim.run_id] = (job, fingerprint, claim.reasons)
-            if problems:
-                self._record(WellOutcome(job.well_id, claim.run_id, "failed", "; ".join(problems)))
-                return
-            executor.submit(
-                WellTask(
-                    job.well_id,
-                    claim.run_id,
-                    self.batch.id,
-                    self.ref.digest,
-                    {name: str(path) for name, path in job.inputs.items()},
-                    dict(fingerprint.well),
-                    str(self.out),
-                    fingerprint.to_json(),
-                )
-            )
 
-    def _record(self, outcome: WellOutcome) -> None:
-        job, fingerprint, reasons = self.inflight.pop(outcome.run_id)
-        error = self._inconsistency(outcome, fingerprint) if outcome.status == "done" else None
-        self.ledger.finish(outcome, error, fingerprint.reading_manifest(outcome.manifest))
+    def _known(
+        self, path: str, seen: dict[str, Seen], known: dict[str, str]
+    ) -> tuple[str, OSError | None]:
+        """The hash of ``path`` as its stat tells (the ledger's cache): a SHA-256, or
+        ``pending``, or ``unreadable`` with the reason; how it was seen goes into ``seen``,
+        the hash into ``known``."""
+        found, problem = look(path)
+        seen[path] = found
+        if found.key is None:
+            known[path] = UNREADABLE
+        else:
+            known[path] = self.ledger.known_hash(found.key) or PENDING
+        return known[path], problem
+
+    def _task(self, flight: _Flight) -> WellTask:
+        job, check = flight.job, flight.check
+        return WellTask(
+            job.well_id,
+            flight.run_id,
+            self.batch.id,
+            self.ref.digest,
+            {name: str(path) for name, path in job.inputs.items()},
+            dict(flight.fingerprint.well),
+            str(self.out),
+            flight.fingerprint.to_json(),
+            None if check is None else _check_paths(job, check),
+        )
+
+    def _settle(self, outcome: WellOutcome, turn: _Turn) -> None:
+        """Record what came back of a task (inside a turn)."""
+        flight = self.inflight.pop(outcome.run_id)
+        if flight.check is not None:
+            self._checked(flight, outcome, turn)
+        else:
+            self._record(flight, outcome, turn)
+
+    def _checked(self, flight: _Flight, outcome: WellOutcome, turn: _Turn) -> None:
+        """A check's hashes: skip the well (its claim dropped) or run it (made a run)."""
+        assert flight.check is not None
+        paths = _check_paths(flight.job, flight.check)
+        digests = {path: outcome.hashes.get(path, UNREADABLE) for path in paths}
+        self._learn(flight, digests)
+        known = {**flight.known, **digests}
+        job, state = flight.job, flight.state
+        inputs = {name: known[str(path)] for name, path in job.inputs.items()}
+        fingerprint = self.identity.fingerprint(job, inputs)
+        files = state.last_done.fingerprint.files if state.last_done is not None else {}
+        published = outcome.published_run == flight.check.previous
+        decision = self._decide(
+            replace(state, last_done_published=published), fingerprint.reading(files, known)
+        )
+        if isinstance(decision, Skip):
+            self.ledger.checked(flight.run_id, None)
+            turn.results.append(WellResult(job.well_id, "skipped", decision.reason))
+            return
+        assert isinstance(decision, Run)  # every hash is known now
+        self.ledger.checked(flight.run_id, decision.reasons)
+        ran = replace(
+            flight, fingerprint=fingerprint, reasons=decision.reasons, known=known, check=None
+        )
+        self.inflight[flight.run_id] = ran
+        turn.tasks.append(self._task(ran))
+
+    def _record(self, flight: _Flight, outcome: WellOutcome, turn: _Turn) -> None:
+        """A run's outcome in the ledger, its reasons from its own hashes (inside a turn)."""
+        job = flight.job
+        fingerprint, reasons = None, None
+        error = self._inconsistency(outcome) if outcome.status == "done" else None
+        read = _hashes_read(job, outcome)
+        if read:
+            fingerprint = flight.fingerprint.completed(outcome.manifest).with_inputs(
+                {name: read[str(path)] for name, path in job.inputs.items() if str(path) in read}
+            )
+            done = flight.state.last_done
+            published = done is not None and outcome.published_run == done.id
+            reasons = why(flight.state, fingerprint, published)
+            self._learn(flight, read)
+        self.ledger.finish(outcome, error, fingerprint, reasons)
         if outcome.status == "done" and error is None:
             rejected = rejection(outcome.manifest)
             result = WellResult(
                 job.well_id,
                 REJECTED if rejected else "done",
-                rejected or "; ".join(reasons),
+                rejected or "; ".join(reasons or flight.reasons),
                 outcome.wall_time_s,
                 outcome.run_id,
             )
         else:
             detail = error or outcome.error or "failed"
             result = WellResult(job.well_id, "failed", detail, outcome.wall_time_s, outcome.run_id)
-        self._report(result)
+        turn.results.append(result)
 
-    def _inconsistency(self, outcome: WellOutcome, fingerprint: Fingerprint) -> str | None:
-        """Why a worker's done outcome cannot be recorded as done, if it cannot."""
+    def _learn(self, flight: _Flight, digests: dict[str, str]) -> None:
+        """Remember the hashes a worker took of files whose stat held meanwhile."""
+        entries = []
+        for path, digest in digests.items():
+            seen = flight.seen.get(path)
+            if seen is None or seen.key is None or flight.known.get(path) == digest:
+                continue
+            if seen.settled(key_after(path)):
+                entries.append((path, seen.key, digest))
+        self.ledger.remember(entries)
+
+    def _inconsistency(self, outcome: WellOutcome) -> str | None:
+        """Why a worker's done outcome cannot be recorded as done, if it cannot: other
+        versions in the worker, or (looked at once per worker host) outputs this process
+        does not see."""
         manifest = outcome.manifest
-        read = {name: entry["sha256"] for name, entry in manifest["inputs"].items()}
-        changed = sorted(n for n in read if read[n] != fingerprint.inputs.get(n))
-        if changed:
-            return f"input changed while the well ran: {', '.join(changed)}; run it again"
         plugins = self.versions["plugins"]
         if manifest["gyropipe"] != __version__ or manifest["plugins"] != plugins:
             return (
@@ -298,13 +477,24 @@ class _Batch:
                 f"{manifest['plugins']}, the batch process has {__version__} with "
                 f"{plugins}: install the same versions everywhere"
             )
-        published = read_published(self.out / outcome.well_id)
-        if published is None or published.run_id != outcome.run_id:
-            return (
-                f"the outputs are not visible at {self.out / outcome.well_id} from the batch "
-                "process (workers must share the output directory)"
-            )
+        host = outcome.worker.rpartition(":")[0]
+        if host not in self.seeing:
+            published = read_published(self.out / outcome.well_id)
+            if published is None or published.run_id != outcome.run_id:
+                return (
+                    f"the outputs are not visible at {self.out / outcome.well_id} from the "
+                    "batch process (workers must share the output directory)"
+                )
+            self.seeing.add(host)
         return None
+
+    def _crash_point(self, step: str) -> None:
+        """The test-only kill (module docstring)."""
+        if self.crash_at is None or self.crash_at[0] != step:
+            return
+        self.reached[step] += 1
+        if self.reached[step] == self.crash_at[1]:
+            os.kill(os.getpid(), signal.SIGKILL)
 
     def _tell_problems(self) -> None:
         """The ledger rows that did not parse, as notes (once each)."""
@@ -355,3 +545,18 @@ def _check_ledger_place(ledger: Path, out: Path, jobs: Sequence[WellJob]) -> Non
 def _input_bytes(job: WellJob) -> int:
     """Total size of a well's input files (missing files count 0)."""
     return sum(path.stat().st_size if path.is_file() else 0 for path in job.inputs.values())
+
+
+def _check_paths(job: WellJob, check: Check) -> list[str]:
+    """The files a check hashes: its inputs' paths, then its parameter files."""
+    return [*(str(job.inputs[name]) for name in check.inputs), *check.files]
+
+
+def _hashes_read(job: WellJob, outcome: WellOutcome) -> dict[str, str]:
+    """path → SHA-256 of the files a run's worker hashed: the input and parameter files its
+    ``run.json`` lists, or a failed run's inputs."""
+    manifest: dict[str, Any] = outcome.manifest
+    found = {str(job.inputs[n]): e["sha256"] for n, e in manifest.get("inputs", {}).items()}
+    for entry in manifest.get("parameter_inputs", []):
+        found.setdefault(entry["path"], entry["sha256"])
+    return found or dict(outcome.hashes)

@@ -2,6 +2,10 @@
 whole to ``OUT/<well>``. It never raises: any failure comes back as a failed
 :class:`WellOutcome`. It never touches the ledger (only the batch process does), so it can
 run on any machine that sees the input and output files.
+
+The worker is where files are read: it hashes the inputs (``run.json``) and the files a
+check names (:attr:`WellTask.check`), fails a run whose input changed while it ran (its
+stat before and after), and checks that ``OUT/<well>`` holds the run once published.
 """
 
 from __future__ import annotations
@@ -33,7 +37,9 @@ from pipeline.runner import MANIFEST, RunResult, check_out_dir, process_alive, r
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
-from .publish import MARKER, staging_dir, write_marker
+from .filestate import key_after
+from .fingerprint import completed_json, hashed
+from .publish import MARKER, read_published, staging_dir, write_marker
 
 OWN = frozenset({MARKER})
 """what a batch's published well directory holds besides the run's own files"""
@@ -57,7 +63,9 @@ class WellTask:
     """header overrides (WellMetadata fields, JSON values)"""
     out_root: str
     fingerprint: str
-    """the claim's fingerprint (JSON), recorded in ``batch.json``"""
+    """the claim's fingerprint (JSON), recorded in ``batch.json`` with the run's hashes"""
+    check: list[str] | None = None
+    """a check, not a run: the files (absolute paths) to hash; nothing is run or written"""
 
 
 @dataclass(frozen=True)
@@ -67,7 +75,7 @@ class WellOutcome:
     well_id: str
     run_id: int
     status: str
-    """done or failed"""
+    """done, failed, or checked (a check's :attr:`hashes` taken)"""
     error: str | None = None
     manifest: dict[str, Any] = field(default_factory=dict)
     """the published ``run.json``"""
@@ -81,6 +89,11 @@ class WellOutcome:
     peak_rss_bytes: int = 0
     """the worker process's peak resident memory so far (OS accounting)"""
     worker: str = ""
+    hashes: dict[str, str] = field(default_factory=dict)
+    """path → SHA-256 (``unreadable`` where it cannot be read) of a check's files, or of a
+    failed run's inputs (a done run's are in its manifest)"""
+    published_run: int | None = None
+    """the run whose outputs ``OUT/<well>`` held when the task began (None: none whole)"""
 
 
 _PLANS: dict[tuple[str, tuple[str, ...]], tuple[Plan, Registry]] = {}
@@ -127,17 +140,31 @@ def _exit_with(pid: int) -> None:
 def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
     """Run one well (module docstring) of the pipeline ``ref``, by default the one
     :func:`worker_init` gave this process, its readers on one thread: the workers are the
-    parallelism."""
+    parallelism. A check (:attr:`WellTask.check`) hashes its files and runs nothing."""
     t0 = time.perf_counter()
-    set_reader_threads(1)
-    staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
     final = Path(task.out_root) / task.well_id
+    held = read_published(final)
+    held_run = held.run_id if held is not None else None
+    if task.check is not None:
+        hashes = {path: hashed(path) for path in task.check}
+        return WellOutcome(
+            task.well_id,
+            task.run_id,
+            "checked",
+            wall_time_s=time.perf_counter() - t0,
+            worker=worker,
+            hashes=hashes,
+            published_run=held_run,
+        )
+    set_reader_threads(1)
+    staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
     try:
         check_out_dir(final, OWN)  # early: a well that cannot be published is not run
         plan, registry = _plan(_given(task, ref))
         shutil.rmtree(staging, ignore_errors=True)
         staging.mkdir(parents=True)
+        before = {name: key_after(path) for name, path in task.inputs.items()}
         t_run = time.perf_counter()
         result = run_plan(
             plan,
@@ -155,11 +182,21 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
                 "well_id": task.well_id,
                 "run_id": task.run_id,
                 "batch_id": task.batch_id,
-                "fingerprint": json.loads(task.fingerprint),
+                "fingerprint": json.loads(str(completed_json(task.fingerprint, manifest))),
             },
         )
+        changed = [n for n, key in before.items() if key_after(task.inputs[n]) != key]
+        if changed:
+            raise Inconsistent(
+                f"input changed while the well ran: {', '.join(changed)}; run it again"
+            )
         check_out_dir(final, OWN)  # again: the user may have put files there meanwhile
         replace_dir(staging, final)
+        published = read_published(final)
+        if published is None or published.run_id != task.run_id:
+            raise Inconsistent(
+                f"{final} does not hold this run whole once published (replaced meanwhile?)"
+            )
         return WellOutcome(
             task.well_id,
             task.run_id,
@@ -171,6 +208,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             process_time_s=sum(s["wall_time_s"] for s in manifest["stages"]),
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
+            published_run=held_run,
         )
     except Exception as exc:  # a failing well is reported, never raised into the batch
         error = str(exc) if isinstance(exc, GyropipeError) else f"{type(exc).__name__}: {exc}"
@@ -182,9 +220,16 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             wall_time_s=time.perf_counter() - t0,
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
+            hashes={path: hashed(path) for path in task.inputs.values()},
+            published_run=held_run,
         )
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+class Inconsistent(GyropipeError):
+    """A run whose outputs cannot be taken as done: an input changed while it ran, or
+    ``OUT/<well>`` does not hold it once published."""
 
 
 class NoPipeline(GyropipeError):
