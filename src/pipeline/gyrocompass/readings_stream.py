@@ -15,8 +15,9 @@ the first batch, and the scan's rate confirms them at the end (the readings' dur
 the scan's). Where it does not — trims of another number of samples, a column without data
 — or the dwells are detected, a second pass does step 2 as the scan says.
 
-What stays in memory is the current station's averaged samples, the samples since the last
-dwell (or the current dwell) and one batch, whatever the survey's length.
+What stays in memory is the current station's averaged samples (marked: the batches they lie
+in), the samples since the last dwell (or the current dwell) and one batch, whatever the
+survey's length.
 
 Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a moving
 average) and the unwrapped frame angle are recomputed over the buffer, and only samples
@@ -217,11 +218,12 @@ class _Stations:
         self.done: list[pa.Table] = []
 
     def add(self, station: int, position: int, values: dict[str, FloatArray]) -> None:
-        """One reading's averaged samples (copies of the columns)."""
+        """One reading's averaged samples, kept until the station is reduced (marked runs:
+        views of the batches' columns, which they hold until then; copied once, then)."""
         if station != self.station:
             self.close()
             self.station = station
-        self.pieces.append({k: np.array(v) for k, v in values.items()})
+        self.pieces.append(values)
         self.positions.append(position)
 
     def close(self) -> None:
@@ -444,7 +446,8 @@ class _Detected:
     def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
         self._fold(smooth[s:e])
         a, b = s + self.k_start, e - self.k_end
-        self.stations.add(self.station, self.position, {k: v[a:b] for k, v in self.buffer.items()})
+        dwell = {k: np.array(v[a:b]) for k, v in self.buffer.items()}  # not the whole buffer
+        self.stations.add(self.station, self.position, dwell)
 
     def _fold(self, values: FloatArray) -> None:
         if values.size:
