@@ -4,11 +4,16 @@ pipelines (their reports included) beside the least honest computation each surv
 Floors (one well, in this process, CPU time = user + system from ``getrusage``):
 
 - **point-gyro**: the 842,201-sample ``samples.parquet`` of ``gyropipe simulate
-  examples/plans/j-well.yaml --seed 1`` read with pyarrow (the columns a reading needs, on
-  one thread), and each marked stop's trimmed means (``trim_start`` = 1 s) in NumPy;
-- **continuous-gyro**: ``j-well-continuous.yaml``'s samples decoded likewise, and one
-  vectorised integration: inclination and high side from the accelerometers, the azimuth
-  rate from the gyro, integrated along the run (NumPy, whole arrays).
+  examples/plans/j-well.yaml --seed 1`` read with pyarrow (the columns the readings use:
+  time, MD, frame angle, gyro, accelerometers, markers; on one thread), and each marked
+  stop's trimmed means (``trim_start`` = 1 s) of MD, frame angle and sensors in NumPy;
+- **continuous-gyro**: ``j-well-continuous.yaml``'s samples (163,601) decoded likewise, and
+  one vectorised integration: inclination and high side from the accelerometers, the
+  azimuth rate from the gyro, integrated along the run and sampled every 10 m of MD (NumPy,
+  whole arrays).
+
+Floor and worker alternate, well after well, so that a change of the machine's load falls
+on both alike.
 
 The worker path: :func:`pipeline.batch.worker.run_well` in this process, set up as a pool
 worker is (:func:`~pipeline.batch.worker.worker_init`: BLAS on one thread, pandas deferred,
@@ -60,6 +65,10 @@ TARGETS = {"point-gyro": 3.0, "continuous-gyro": 6.0}
 TRIM_S = 1.0
 """the pipelines' ``trim_start``, s"""
 SIGNALS = ["gyro_x", "acc_x", "acc_y", "acc_z"]
+COLUMNS = ["time", "md", "frame_angle", *SIGNALS, "station", "position"]
+"""what the pipelines read of the samples"""
+SPACING_M = 10.0
+"""the continuous pipeline's output station spacing"""
 EARTH_RATE = 15.041  # deg/h
 GYROPIPE = [str(Path(sys.executable).parent / "gyropipe")]
 
@@ -77,7 +86,7 @@ def load() -> str:
 
 def stop_means(path: Path) -> np.ndarray:
     """Point-gyro floor: each marked stop's trimmed means of every sensor column."""
-    table = pq.read_table(path, columns=["time", *SIGNALS, "station", "position"], use_threads=False)
+    table = pq.read_table(path, columns=COLUMNS, use_threads=False)
     time_s = table.column("time").to_numpy()
     station = table.column("station").fill_null(-1).to_numpy()
     position = table.column("position").fill_null(-1).to_numpy()
@@ -88,7 +97,7 @@ def stop_means(path: Path) -> np.ndarray:
     skip = round(TRIM_S / (time_s[1] - time_s[0]))
     starts, ends = starts[marked] + skip, ends[marked]
     means = []
-    for name in SIGNALS:
+    for name in ["md", "frame_angle", *SIGNALS]:
         x = table.column(name).to_numpy()
         total = np.add.reduceat(x, np.stack([starts, ends], axis=1).ravel()[:-1])[::2]
         means.append(total / (ends - starts))
@@ -97,16 +106,20 @@ def stop_means(path: Path) -> np.ndarray:
 
 def integrated_azimuth(path: Path) -> np.ndarray:
     """Continuous floor: inclination and high side from the accelerometers, the azimuth
-    rate from the gyro, integrated over time (deg)."""
-    table = pq.read_table(path, columns=["time", "md", *SIGNALS], use_threads=False)
-    t = table.column("time").to_numpy()
+    rate from the gyro, integrated over time, every :data:`SPACING_M` of MD (deg)."""
+    table = pq.read_table(path, columns=COLUMNS, use_threads=False)
+    t, md = table.column("time").to_numpy(), table.column("md").to_numpy()
     gx, ax, ay, az = (table.column(n).to_numpy() for n in SIGNALS)
     g = np.sqrt(ax * ax + ay * ay + az * az)
     inc = np.arccos(np.clip(az / g, -1.0, 1.0))
     highside = np.arctan2(ay, -ax)
     rate = (gx - EARTH_RATE * np.cos(inc)) * np.cos(highside) / np.maximum(np.sin(inc), 1e-3)
     steps = 0.5 * (rate[1:] + rate[:-1]) * np.diff(t) / 3600.0
-    return np.concatenate([[0.0], np.cumsum(steps)])
+    azimuth = np.concatenate([[0.0], np.cumsum(steps)])
+    moving = np.flatnonzero(table.column("station").is_null().to_numpy(zero_copy_only=False))
+    along = md[moving]
+    stations = np.arange(along.min(), along.max(), SPACING_M)
+    return np.interp(stations, along, azimuth[moving])
 
 
 FLOORS: dict[str, Callable[[Path], np.ndarray]] = {
@@ -171,14 +184,14 @@ def main() -> int:
             samples = args.data / plan / "samples.parquet"
             floor_fn = FLOORS[name]
             floor_fn(samples)  # warm-up: page cache, first calls
-            floors = [timed(lambda: floor_fn(samples)) for _ in range(args.runs)]  # noqa: B023
             spec = load_spec(ROOT / "pipelines" / f"{name}.yaml").spec
             assert spec is not None
             ref = PipelineRef(str(ROOT / "pipelines" / f"{name}.yaml"), spec)
             out_root = Path(tmp) / name
             checked(run_well(task(ref, samples, out_root, 0), ref))  # warm-up
-            cpus, last = [], None
+            floors, cpus, last = [], [], None
             for n in range(1, args.runs + 1):
+                floors.append(timed(lambda: floor_fn(samples)))  # noqa: B023
                 start = cpu()
                 last = checked(run_well(task(ref, samples, out_root, n), ref))
                 cpus.append(cpu() - start)
