@@ -20,9 +20,11 @@ worker is (:func:`~pipeline.batch.worker.worker_init`: BLAS on one thread, panda
 Arrow's returning allocator; the readers on one thread), each pipeline warmed up by one well
 first so that imports and first-call costs are not counted, then ``--runs`` wells timed
 (median). Prints CPU ms of each, the ratio to its floor (targets: point-gyro ≤ 3×,
-continuous ≤ 6×), the load average before and after, and where the worker's time goes: each
-stage's wall time (``run.json``), the runner's bookkeeping around them (contract checks,
-persisted tables, ``run.json``) and the worker's own (staging, publish). ``--profile``
+continuous ≤ 6×), the load average before and after, and where the worker's CPU goes: each
+stage's call (a streamed input is decoded and checked in the stage that consumes it: the
+samples in ``readings``), the SHA-256 of the files ``run.json`` records, and the rest — the
+runner's bookkeeping (contract checks of whole tables, persisted tables, ``run.json``) and the
+worker's (staging, publish); each stage's wall time (``run.json``) beside it. ``--profile``
 prints the top of a cProfile of one more well of each.
 
     python benchmarks/bench_well_floor.py [--data DIR] [--runs 3] [--profile]
@@ -42,13 +44,16 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
 from threadpoolctl import threadpool_limits
 
+import pipeline.runner as runner
 from pipeline.batch.worker import WellOutcome, WellTask, run_well
 from pipeline.executing import PipelineRef
 from pipeline.io.threads import set_reader_threads
@@ -128,6 +133,37 @@ FLOORS: dict[str, Callable[[Path], np.ndarray]] = {
 }
 
 
+class Clock:
+    """CPU seconds spent in each stage's call and in hashing, while installed (it wraps
+    the runner's ``_call`` and ``sha256_file``: this benchmark's instrument only)."""
+
+    def __init__(self) -> None:
+        self.spent: dict[str, float] = {}
+        call, digest = runner._call, runner.sha256_file
+
+        def timed_call(st: Any, *args: Any) -> Any:
+            with self.charged(st.id):
+                return call(st, *args)
+
+        def timed_digest(path: Path) -> str:
+            with self.charged(HASHING):
+                return digest(path)
+
+        runner._call = timed_call  # type: ignore[assignment]
+        runner.sha256_file = timed_digest  # type: ignore[assignment]
+
+    @contextmanager
+    def charged(self, key: str) -> Iterator[None]:
+        start = time.process_time()
+        try:
+            yield
+        finally:
+            self.spent[key] = self.spent.get(key, 0.0) + time.process_time() - start
+
+
+HASHING = "SHA-256 (run.json)"
+
+
 def timed(fn: Callable[[], object]) -> float:
     start = cpu()
     fn()
@@ -176,8 +212,9 @@ def main() -> int:
             command = [*GYROPIPE, "simulate", str(plan_file), "--seed", "1"]
             subprocess.run([*command, "--out", str(target.parent)], check=True, capture_output=True)
     worker_setup()
+    clock = Clock()
     print(f"at start: {load()}")
-    results: dict[str, tuple[float, float, WellOutcome]] = {}
+    results: dict[str, tuple[float, float, WellOutcome, dict[str, float], float]] = {}
     profiles: dict[str, str] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, plan) in enumerate(CASES.items()):
@@ -192,11 +229,13 @@ def main() -> int:
             floors, cpus, last = [], [], None
             for n in range(1, args.runs + 1):
                 floors.append(timed(lambda: floor_fn(samples)))  # noqa: B023
+                clock.spent.clear()
                 start = cpu()
                 last = checked(run_well(task(ref, samples, out_root, n), ref))
                 cpus.append(cpu() - start)
+                spent = dict(clock.spent)
             assert last is not None
-            results[name] = (statistics.median(floors), statistics.median(cpus), last)
+            results[name] = (statistics.median(floors), statistics.median(cpus), last, spent, cpus[-1])
             if args.profile:
                 profiler = cProfile.Profile()
                 profiler.enable()
@@ -209,22 +248,22 @@ def main() -> int:
                 profiles[name] = text.getvalue()
     print(f"at end:   {load()}\n")
     print(f"median of {args.runs} wells each; CPU = user + system of this process")
-    for name, (floor, worker, _) in results.items():
+    for name, (floor, worker, *_) in results.items():
         ratio = worker / floor
         verdict = "ok" if ratio <= TARGETS[name] else "OVER"
         print(
             f"{name:16} floor {floor * 1e3:6.0f} ms   worker {worker * 1e3:6.0f} ms   "
             f"→ {ratio:4.2f}× (target ≤ {TARGETS[name]:g}×: {verdict})"
         )
-    for name, (_, worker, outcome) in results.items():
-        stages = outcome.manifest["stages"]
-        print(f"\n{name}: where the last timed well's wall time goes (ms)")
-        for s in stages:
-            print(f"  {s['id']:28} {s['wall_time_s'] * 1e3:7.1f}")
-        in_stages = sum(s["wall_time_s"] for s in stages)
-        print(f"  {'runner bookkeeping':28} {(outcome.run_time_s - in_stages) * 1e3:7.1f}")
-        print(f"  {'worker (staging, publish)':28} {(outcome.wall_time_s - outcome.run_time_s) * 1e3:7.1f}")
-        print(f"  {'whole task (wall)':28} {outcome.wall_time_s * 1e3:7.1f}")
+    for name, (_, _, outcome, spent, total) in results.items():
+        walls = {s["id"]: s["wall_time_s"] for s in outcome.manifest["stages"]}
+        print(f"\n{name}: the last timed well, ms        CPU    wall")
+        for key in [*walls, HASHING]:
+            wall = f"{walls[key] * 1e3:7.1f}" if key in walls else f"{'':7}"
+            print(f"  {key:34} {spent.get(key, 0.0) * 1e3:7.1f} {wall}")
+        rest = total - sum(spent.values())
+        print(f"  {'the rest: runner and worker':34} {rest * 1e3:7.1f}")
+        print(f"  {'whole task':34} {total * 1e3:7.1f} {outcome.wall_time_s * 1e3:7.1f}")
     for name, text in profiles.items():
         print(f"\n===== cProfile: {name} =====\n{text}")
     return 0
