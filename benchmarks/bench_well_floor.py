@@ -35,7 +35,6 @@ from __future__ import annotations
 import argparse
 import cProfile
 import io
-import json
 import os
 import pstats
 import resource
@@ -235,7 +234,8 @@ def main() -> int:
                 cpus.append(cpu() - start)
                 spent = dict(clock.spent)
             assert last is not None
-            results[name] = (statistics.median(floors), statistics.median(cpus), last, spent, cpus[-1])
+            floor, worker = statistics.median(floors), statistics.median(cpus)
+            results[name] = (floor, worker, last, spent, cpus[-1])
             if args.profile:
                 profiler = cProfile.Profile()
                 profiler.enable()
