@@ -336,6 +336,8 @@ def _check_numbers(
     undefined: np.ndarray | None = None,
 ) -> list[RuleFailure]:
     """Finite, range and monotonic rules; rows in ``undefined`` (allowed NaN) are skipped."""
+    if undefined is None and _integers_in_range(spec, col):
+        return []
     values = col.to_numpy() if col.null_count == 0 else col.to_numpy(zero_copy_only=False)
     if len(values) == 0:
         return []
@@ -376,7 +378,7 @@ def _check_numbers(
             failures.append(
                 rule_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col)
             )
-    if spec.monotonic and len(values) > 1:
+    if spec.monotonic and len(values) > 1 and not (is_float and _steps_hold(spec, values)):
         compare = np.less_equal if spec.monotonic == "strict" else np.less
         bad_step = compare(values[1:], values[:-1])
         if spec.min_step is not None:  # a step past the float range is inf: no warning
@@ -398,6 +400,36 @@ def _check_numbers(
                     rule_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
                 )
     return failures
+
+
+def _integers_in_range(spec: ColumnSpec, col: pa.ChunkedArray) -> bool:
+    """An integer column with missing values (no order rule) whose values all lie within
+    the bounds: told by Arrow's ``min_max`` (nulls skipped), without the column converted
+    to floats and filtered first."""
+    if not (col.null_count and pa.types.is_integer(col.type)) or spec.monotonic:
+        return False
+    extremes = pc.min_max(col)
+    lo, hi = extremes["min"].as_py(), extremes["max"].as_py()
+    if lo is None:  # every value missing
+        return True
+    return not (
+        (spec.ge is not None and lo < spec.ge)
+        or (spec.le is not None and hi > spec.le)
+        or (spec.gt is not None and lo <= spec.gt)
+        or (spec.lt is not None and hi >= spec.lt)
+    )
+
+
+def _steps_hold(spec: ColumnSpec, values: np.ndarray) -> bool:
+    """Every step of a float column keeps its order rule (and ``min_step``), told by the
+    smallest step (a NaN or an infinite value makes it NaN or negative: then the rows are
+    looked at one by one)."""
+    with np.errstate(over="ignore", invalid="ignore"):  # a step past the float range: inf
+        smallest = np.diff(values).min()
+    floor = 0.0 if spec.min_step is None else spec.min_step
+    if spec.monotonic == "strict":
+        return bool(smallest > 0.0 and smallest >= floor)
+    return bool(smallest >= 0.0 and smallest >= floor)
 
 
 def rule_failure(

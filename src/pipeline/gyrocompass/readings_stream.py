@@ -2,15 +2,22 @@
 
 The same readings as :func:`~pipeline.gyrocompass.readings.position_readings` on the whole
 table (same dwells, stations and numbers: each station is reduced by the same function on
-the same samples), from two passes over the stream:
+the same samples), from what a pass over the stream finds:
 
 1. the time column and the null counts: sample rate and uniformity exactly as the whole
    table gives them (so the trims and windows are the same), and which columns have data;
 2. the dwells, found as the whole-table path finds them, a station's averaged samples kept
    until the station ends, then reduced.
 
-What stays in memory is the current station's averaged samples, the samples since the last
-dwell (or the current dwell) and one batch, whatever the survey's length.
+Samples with station/position markers take one pass (each batch decoded once): the marked
+runs are cut and reduced in the same pass as the scan, with the trims of the sample rate of
+the first batch, and the scan's rate confirms them at the end (the readings' durations are
+the scan's). Where it does not — trims of another number of samples, a column without data
+— or the dwells are detected, a second pass does step 2 as the scan says.
+
+What stays in memory is the current station's averaged samples (marked: the batches they lie
+in), the samples since the last dwell (or the current dwell) and one batch, whatever the
+survey's length.
 
 Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a moving
 average) and the unwrapped frame angle are recomputed over the buffer, and only samples
@@ -99,9 +106,14 @@ def stream_position_readings(samples: TableStream, options: ReadingOptions = DEF
     already), in bounded memory (module docstring). No samples give no readings (an empty
     table)."""
     wanted = ("md", "frame_angle", *MARKERS, *SIGNALS)
-    scan = _Scan(nulls={n: 0 for n in wanted if n in samples.schema.names})
+    names = samples.schema.names
+    scan = _Scan(nulls={n: 0 for n in wanted if n in names})
+    marks = all(m in names for m in ("md", *MARKERS))
+    ahead = _MarkedAhead(options, names) if marks else None
     for batch in RawSamples.validate_stream(samples):
         scan.add(batch)
+        if ahead is not None:
+            ahead.add(batch)
     if scan.rows == 0:
         return PositionReadings.compiled().schema().empty_table()
     rate = _rate(samples, scan)
@@ -117,10 +129,54 @@ def stream_position_readings(samples: TableStream, options: ReadingOptions = DEF
     if not marked and not angle:
         raise ValueError(NO_ANGLE)
     columns = ["time", "md", *(["frame_angle"] if angle else []), *_signals(scan)]
+    if marked and ahead is not None and ahead.holds(columns, counts(options, rate)):
+        return ahead.finish(rate)
     reducer = _Stations(columns, rate)
     if marked:
         return _Marked(options, rate, reducer).run(samples)
     return _Detected(options, rate, reducer).run(samples)
+
+
+class _MarkedAhead:
+    """The marked runs cut and reduced during the scan, with the trims of the first
+    batch's sample rate and every column the schema has (module docstring)."""
+
+    def __init__(self, options: ReadingOptions, names: list[str]) -> None:
+        self.options = options
+        self.columns = [n for n in ("time", "md", "frame_angle", *SIGNALS) if n in names]
+        self.marked: _Marked | None = None
+        self.counts: tuple[int, int, int, int] | None = None
+        self.missed = False
+        """a batch came before one that gives a rate: the second pass does it all"""
+
+    def add(self, batch: pa.RecordBatch) -> None:
+        if self.missed:
+            return
+        if self.marked is None:
+            time = batch.column("time").to_numpy()
+            if time.size < 2 or not time[-1] > time[0]:
+                self.missed = batch.num_rows > 0
+                return
+            rate = (time.size - 1) / float(time[-1] - time[0])
+            self.counts = counts(self.options, rate)
+            self.marked = _Marked(self.options, rate, _Stations(self.columns, rate))
+        self.marked.add(batch)
+
+    def holds(self, columns: list[str], trims: tuple[int, int, int, int]) -> bool:
+        """Whether the runs cut are those of the scan's ``columns`` and trims ``trims``
+        (the smoothing window is the detection's only: not compared)."""
+        return (
+            self.marked is not None
+            and not self.missed
+            and columns == self.columns
+            and self.counts is not None
+            and trims[:3] == self.counts[:3]
+        )
+
+    def finish(self, rate: float) -> pa.Table:
+        assert self.marked is not None
+        self.marked.stations.rate = rate
+        return self.marked.finish()
 
 
 def _signals(scan: _Scan) -> list[str]:
@@ -162,11 +218,12 @@ class _Stations:
         self.done: list[pa.Table] = []
 
     def add(self, station: int, position: int, values: dict[str, FloatArray]) -> None:
-        """One reading's averaged samples (copies of the columns)."""
+        """One reading's averaged samples, kept until the station is reduced (marked runs:
+        views of the batches' columns, which they hold until then; copied once, then)."""
         if station != self.station:
             self.close()
             self.station = station
-        self.pieces.append({k: np.array(v) for k, v in values.items()})
+        self.pieces.append(values)
         self.positions.append(position)
 
     def close(self) -> None:
@@ -195,11 +252,16 @@ class _Stations:
         self.pieces, self.positions = [], []
 
     def table(self) -> pa.Table:
+        """Every station's readings, their durations at the rate set now (:class:`_MarkedAhead`
+        reduces at the first batch's rate; the scan's is the run's)."""
         self.close()
         if not self.done:  # the whole-table path's message
             none = np.empty(0, np.intp)
             reduce_readings({}, np.empty(0), self.rate, np.empty(0), None, *[none] * 4)
-        return pa.concat_tables(self.done).combine_chunks()
+        table = pa.concat_tables(self.done).combine_chunks()
+        at = table.schema.get_field_index("duration")
+        duration = table.column("n").to_numpy() / self.rate
+        return table.set_column(at, table.schema.field(at), pa.array(duration))
 
 
 def _arrays(batch: pa.RecordBatch, names: Iterable[str]) -> dict[str, FloatArray]:
@@ -219,29 +281,37 @@ class _Marked:
         self.orphans = 0
 
     def run(self, samples: TableStream) -> pa.Table:
-        """Readings of the marked runs; then the whole-table path's checks of the markers
-        (orphans, a position marked twice, positions too short), in its order."""
+        """Readings of the marked runs of one pass over ``samples`` (:meth:`finish`)."""
         for batch in samples:
-            station, position = (
-                batch.column(m).fill_null(-1).to_numpy().astype(np.int64) for m in MARKERS
+            self.add(batch)
+        return self.finish()
+
+    def add(self, batch: pa.RecordBatch) -> None:
+        """Cut the next batch into runs of equal markers; a run that ends is reduced."""
+        station, position = (
+            batch.column(m).fill_null(-1).to_numpy().astype(np.int64) for m in MARKERS
+        )
+        self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
+        values = _arrays(batch, self.stations.columns)
+        change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1]))
+        cuts = [0, *(change + 1).tolist(), batch.num_rows]
+        for a, b in itertools.pairwise(cuts):
+            key = (int(station[a]), int(position[a]))
+            if key != self.key:
+                self.end_run()
+                self.key = key
+            if key[0] < 0 or key[1] < 0:
+                continue  # unmarked samples are not kept
+            part = {k: v[a:b] for k, v in values.items()}
+            self.current = (
+                {k: np.concatenate([self.current[k], part[k]]) for k in part}
+                if self.current
+                else part
             )
-            self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
-            values = _arrays(batch, self.stations.columns)
-            change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1]))
-            cuts = [0, *(change + 1).tolist(), batch.num_rows]
-            for a, b in itertools.pairwise(cuts):
-                key = (int(station[a]), int(position[a]))
-                if key != self.key:
-                    self.end_run()
-                    self.key = key
-                if key[0] < 0 or key[1] < 0:
-                    continue  # unmarked samples are not kept
-                part = {k: v[a:b] for k, v in values.items()}
-                self.current = (
-                    {k: np.concatenate([self.current[k], part[k]]) for k in part}
-                    if self.current
-                    else part
-                )
+
+    def finish(self) -> pa.Table:
+        """The readings; before them the whole-table path's checks of the markers (orphans,
+        a position marked twice, positions too short), in its order."""
         self.end_run()
         if self.orphans:
             raise ValueError(f"{self.orphans} samples have a position marker but no station marker")
@@ -376,7 +446,8 @@ class _Detected:
     def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
         self._fold(smooth[s:e])
         a, b = s + self.k_start, e - self.k_end
-        self.stations.add(self.station, self.position, {k: v[a:b] for k, v in self.buffer.items()})
+        dwell = {k: np.array(v[a:b]) for k, v in self.buffer.items()}  # not the whole buffer
+        self.stations.add(self.station, self.position, dwell)
 
     def _fold(self, values: FloatArray) -> None:
         if values.size:

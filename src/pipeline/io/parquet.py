@@ -187,16 +187,29 @@ def _missing(contract: type[TableContract], schema: pa.Schema) -> list[str]:
 def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` (schema and field metadata included) as Parquet, in row groups of
     :data:`~pipeline.streams.BATCH_ROWS` rows: a streamed read decodes a row group at a
-    time, so its memory is bounded by the row group, not by the survey."""
-    pq.write_table(table, path, row_group_size=BATCH_ROWS)
+    time, so its memory is bounded by the row group, not by the survey. Float columns are
+    stored plain (:func:`dictionary_columns`)."""
+    pq.write_table(
+        table, path, row_group_size=BATCH_ROWS, use_dictionary=dictionary_columns(table.schema)
+    )
 
 
 def write_stream(stream: TableStream, path: Path, well: WellMetadata) -> None:
     """Write one pass of ``stream`` as Parquet, a row group per batch (the schema, with its
     field and schema metadata, as :func:`write` keeps it)."""
-    with pq.ParquetWriter(path, stream.schema) as writer:
+    with pq.ParquetWriter(
+        path, stream.schema, use_dictionary=dictionary_columns(stream.schema)
+    ) as writer:
         for batch in stream:
             writer.write_batch(batch)
+
+
+def dictionary_columns(schema: pa.Schema) -> list[str]:
+    """The columns worth dictionary encoding: all but the floating-point ones. Sensor
+    samples and computed values are nearly all distinct, so a float column's dictionary
+    only fills up and is dropped, and building it cost 6× the rest of writing a full-rate
+    series (benchmarks/bench_well_floor.py); plain, the file is smaller and decodes faster."""
+    return [f.name for f in schema if not pa.types.is_floating(f.type)]
 
 
 @hookimpl

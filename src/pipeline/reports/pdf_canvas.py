@@ -18,6 +18,8 @@ PT = 72.0
 """Points per inch."""
 SANS = "DejaVu Sans"
 MONO = "DejaVu Sans Mono"
+LEVEL = 6
+"""zlib's compression level of the file's streams."""
 
 
 @cache
@@ -132,11 +134,14 @@ class Page:
 
 @dataclass
 class _Embedded:
-    """A font as embedded in one file: resource name, subset glyph ids, units per em."""
+    """A font as embedded in one file: resource name, subset glyph ids, the font."""
 
     name: str
-    ids: dict[str, int]
+    codes: dict[str, str]
+    """glyph name → glyph id (four hex digits)"""
     font: PdfFont
+    runs: dict[str, str] = field(default_factory=dict)
+    """text → its glyph runs (the ``TJ`` operand), for the texts shown so far"""
 
 
 class _Writer:
@@ -152,9 +157,13 @@ class _Writer:
         self.objects[number - 1] = body.encode("latin-1") if isinstance(body, str) else body
         return number
 
-    def stream(self, entries: str, data: bytes, compress: bool = True) -> int:
-        if compress:
-            data, entries = zlib.compress(data, 6), f"{entries} /Filter /FlateDecode"
+    def stream(self, entries: str, data: bytes) -> int:
+        """A stream of ``data``, deflated."""
+        return self.deflated(entries, zlib.compress(data, LEVEL))
+
+    def deflated(self, entries: str, data: bytes) -> int:
+        """A stream of ``data`` deflated already."""
+        entries = f"{entries} /Filter /FlateDecode"
         head = f"<< {entries} /Length {len(data)} >>\nstream\n".encode("latin-1")
         return self.put(head + data + b"\nendstream")
 
@@ -179,22 +188,39 @@ def _text_string(value: str) -> str:
     return "<FEFF" + value.encode("utf-16-be").hex().upper() + ">"
 
 
-def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[int, _Embedded]:
+@dataclass(frozen=True)
+class _Program:
+    """What a font subset embeds as, the same in every file: the font file and its
+    ``ToUnicode`` map (both deflated), the glyph widths and the glyph ids."""
+
+    base: str
+    length: int
+    font_file: bytes
+    widths: str
+    to_unicode: bytes
+    codes: dict[str, str]
+    """glyph name → its glyph id as the four hex digits a text string shows"""
+
+
+_PROGRAMS: dict[tuple[str, str], _Program] = {}
+"""(font file, subset tag) → the subset's embedded form, for the first :data:`PROGRAMS`"""
+PROGRAMS = 16
+
+
+def _program(font: PdfFont, chars: set[str]) -> _Program:
+    """The embedded form of ``font``'s subset for ``chars``, made once per process for
+    the subsets used first (most reports share the repertoire's: :mod:`.pdf_fonts`)."""
+    tag = font.tag(font.subset_chars(chars))
+    found = _PROGRAMS.get((font.path, tag))
+    if found is None:
+        found = _make_program(font, tag, chars)
+        if len(_PROGRAMS) < PROGRAMS:
+            _PROGRAMS[font.path, tag] = found
+    return found
+
+
+def _make_program(font: PdfFont, tag: str, chars: set[str]) -> _Program:
     data, ids, widths, text = font.subset(chars)
-    base = f"{font.tag(font.subset_chars(chars))}+{font.name.replace(' ', '')}"
-    file = w.stream(f"/Length1 {len(data)}", data)
-    scale = 1000.0 / font.upem
-    descriptor = w.put(
-        f"<< /Type /FontDescriptor /FontName /{base} /Flags 32 /FontBBox "
-        f"[{' '.join(str(round(v * scale)) for v in font.bbox)}] /ItalicAngle 0 "
-        f"/Ascent {round(font.ascent * scale)} /Descent {round(font.descent * scale)} "
-        f"/CapHeight {round(font.cap_height * scale)} /StemV 80 /FontFile2 {file} 0 R >>"
-    )
-    cid = w.put(
-        f"<< /Type /Font /Subtype /CIDFontType2 /BaseFont /{base} /CIDSystemInfo << "
-        f"/Registry (Adobe) /Ordering (Identity) /Supplement 0 >> /FontDescriptor "
-        f"{descriptor} 0 R /W [0 [{' '.join(map(str, widths))}]] /CIDToGIDMap /Identity >>"
-    )
     pairs = sorted(text.items())
     chunks = [pairs[k : k + 100] for k in range(0, len(pairs), 100)]
     cmap = (
@@ -209,30 +235,64 @@ def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[
         )
         + "endcmap CMapName currentdict /CMap defineresource pop end end"
     )
-    unicode = w.stream("", cmap.encode("ascii"))
+    return _Program(
+        base=f"{tag}+{font.name.replace(' ', '')}",
+        length=len(data),
+        font_file=zlib.compress(data, LEVEL),
+        widths=" ".join(map(str, widths)),
+        to_unicode=zlib.compress(cmap.encode("ascii"), LEVEL),
+        codes={glyph: f"{k:04X}" for glyph, k in ids.items()},
+    )
+
+
+def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[int, _Embedded]:
+    program = _program(font, chars)
+    base = program.base
+    file = w.deflated(f"/Length1 {program.length}", program.font_file)
+    scale = 1000.0 / font.upem
+    descriptor = w.put(
+        f"<< /Type /FontDescriptor /FontName /{base} /Flags 32 /FontBBox "
+        f"[{' '.join(str(round(v * scale)) for v in font.bbox)}] /ItalicAngle 0 "
+        f"/Ascent {round(font.ascent * scale)} /Descent {round(font.descent * scale)} "
+        f"/CapHeight {round(font.cap_height * scale)} /StemV 80 /FontFile2 {file} 0 R >>"
+    )
+    cid = w.put(
+        f"<< /Type /Font /Subtype /CIDFontType2 /BaseFont /{base} /CIDSystemInfo << "
+        f"/Registry (Adobe) /Ordering (Identity) /Supplement 0 >> /FontDescriptor "
+        f"{descriptor} 0 R /W [0 [{program.widths}]] /CIDToGIDMap /Identity >>"
+    )
+    unicode = w.deflated("", program.to_unicode)
     number = w.put(
         f"<< /Type /Font /Subtype /Type0 /BaseFont /{base} /Encoding /Identity-H "
         f"/DescendantFonts [{cid} 0 R] /ToUnicode {unicode} 0 R >>"
     )
-    return number, _Embedded(name, ids, font)
+    return number, _Embedded(name, program.codes, font)
 
 
 def _show(op: _Text, embedded: _Embedded) -> str:
-    """The text operators of ``op``: glyph runs split where kerning moves a glyph."""
-    glyphs, kerns, _ = embedded.font.layout(op.content)
-    parts: list[str] = []
-    run = ""
-    for glyph, kern in zip(glyphs, kerns, strict=True):
-        if kern and run:
-            parts.append(f"<{run}> {_num(-kern * 1000 / embedded.font.upem)}")
-            run = ""
-        run += f"{embedded.ids.get(glyph, 0):04X}"
-    parts.append(f"<{run}>")
+    """The text operators of ``op``."""
+    runs = embedded.runs.get(op.content)
+    if runs is None:
+        runs = embedded.runs[op.content] = _runs(op.content, embedded)
     matrix = "0 1 -1 0" if op.angle == 90 else "1 0 0 1"
     return (
         f"BT /{embedded.name} {_num(op.size)} Tf {_rgb(op.colour)} rg {matrix} {_num(op.x)} "
-        f"{_num(op.y)} Tm [{' '.join(parts)}] TJ ET"
+        f"{_num(op.y)} Tm [{runs}] TJ ET"
     )
+
+
+def _runs(content: str, embedded: _Embedded) -> str:
+    """The glyph runs of ``content``, split where kerning moves a glyph."""
+    glyphs, kerns, _ = embedded.font.layout(content)
+    codes = [embedded.codes.get(glyph, "0000") for glyph in glyphs]
+    parts: list[str] = []
+    start = 0
+    for k, kern in enumerate(kerns):
+        if kern and k > start:
+            parts.append(f"<{''.join(codes[start:k])}> {_num(-kern * 1000 / embedded.font.upem)}")
+            start = k
+    parts.append(f"<{''.join(codes[start:])}>")
+    return " ".join(parts)
 
 
 def write_pdf(pages: list[Page], path: Path, title: str, creator: str) -> None:

@@ -46,6 +46,10 @@ REPERTOIRE = frozenset(
 """Characters of the cached subset every report can share (Latin-1, Greek, symbols)."""
 Subset = tuple[bytes, dict[str, int], list[int], dict[int, str]]
 """font file bytes, glyph name → glyph id, advance of each glyph (1/1000 em), id → text"""
+Layout = tuple[tuple[str, ...], tuple[int, ...], int]
+"""glyph names, the kerning before each and the total advance (font units)"""
+MEASURED = 50_000
+"""Most texts a font keeps the layout of (a process making many reports stays bounded)."""
 
 
 @dataclass
@@ -70,6 +74,11 @@ class PdfFont:
         self._top: dict[str, int] = meta["top"]
         self._font: TTFont | None = None
         """the whole font, once text outside the repertoire needs it"""
+        self._layouts: dict[str, Layout] = {}
+        """text → its layout, for the texts measured so far (a report repeats most of its
+        labels, units and numbers on every page)"""
+        self._tops: dict[str, int] = {}
+        self._shared: Subset | None = None
 
     def _whole(self) -> TTFont:
         """The font's own tables: every glyph's cmap entry, advance, kerning and top."""
@@ -79,6 +88,8 @@ class PdfFont:
             self._advance = {n: m[0] for n, m in tt["hmtx"].metrics.items()}
             if "kern" in tt:
                 self._kern = dict(tt["kern"].kernTables[0].kernTable)
+            self._layouts.clear()  # measured with the repertoire's tables only
+            self._tops.clear()
         return self._font
 
     def glyph(self, char: str) -> str:
@@ -89,13 +100,18 @@ class PdfFont:
             found = self._cmap.get(ord(char))
         return found or ".notdef"
 
-    def layout(self, text: str) -> tuple[list[str], list[int], int]:
+    def layout(self, text: str) -> Layout:
         """Glyph names of ``text``, the kerning before each (font units) and the total
-        advance (font units)."""
-        glyphs = [self.glyph(c) for c in text]
-        kerns = [self._kern.get(pair, 0) for pair in itertools.pairwise(glyphs)]
-        kerns = [0, *kerns] if glyphs else []
-        return glyphs, kerns, sum(self._advance[g] for g in glyphs) + sum(kerns)
+        advance (font units); measured once per text."""
+        found = self._layouts.get(text)
+        if found is None:
+            glyphs = tuple(self.glyph(c) for c in text)
+            kerns = tuple(self._kern.get(pair, 0) for pair in itertools.pairwise(glyphs))
+            kerns = (0, *kerns) if glyphs else ()
+            found = (glyphs, kerns, sum(self._advance[g] for g in glyphs) + sum(kerns))
+            if len(self._layouts) < MEASURED:
+                self._layouts[text] = found
+        return found
 
     def width(self, text: str, size: float) -> float:
         """Advance of ``text`` at ``size`` points, in points."""
@@ -104,11 +120,16 @@ class PdfFont:
     def top(self, text: str) -> int:
         """Highest point of ``text``'s glyphs and of 'l' above the baseline, font units (what
         a text aligned by its top is hung from)."""
+        best = self._tops.get(text)
+        if best is not None:
+            return best
         best = 0
         for name in {self.glyph(c) for c in text + "l"}:
             if name not in self._top:
                 self._top[name] = _glyph_top(self._whole(), name)
             best = max(best, self._top[name])
+        if len(self._tops) < MEASURED:
+            self._tops[text] = best
         return best
 
     def subset(self, chars: set[str]) -> Subset:
@@ -123,13 +144,17 @@ class PdfFont:
         return set(REPERTOIRE) if chars <= REPERTOIRE else chars
 
     def _repertoire(self) -> Subset:
-        meta = _index(self.path)
-        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
-        try:
-            data = cached.read_bytes()
-        except OSError:
-            data = _make_subset(self.path, set(REPERTOIRE))[0]
-        return data, meta["ids"], meta["widths"], {int(k): v for k, v in meta["text"].items()}
+        """The :data:`REPERTOIRE`'s subset (read once)."""
+        if self._shared is None:
+            meta = _index(self.path)
+            cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
+            try:
+                data = cached.read_bytes()
+            except OSError:
+                data = _make_subset(self.path, set(REPERTOIRE))[0]
+            text = {int(k): v for k, v in meta["text"].items()}
+            self._shared = data, meta["ids"], meta["widths"], text
+        return self._shared
 
     def kerned_repertoire(self) -> bytes:
         """The :data:`REPERTOIRE` subset with the font's ``kern`` table, for a browser (which
