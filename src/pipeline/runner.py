@@ -40,6 +40,7 @@ from pipeline.graph import Plan, PlannedStage
 from pipeline.hashing import sha256_file
 from pipeline.inputfiles import parameter_paths
 from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
+from pipeline.processes import owner_alive
 from pipeline.provenance import ParameterFile
 from pipeline.registry import (
     CheckDef,
@@ -674,18 +675,7 @@ def remove_stale_staging(directory: Path) -> list[Path]:
     removed = []
     for entry in directory.glob(f".*{STAGING_PREFIX}*"):
         pid_text = entry.name.split(STAGING_PREFIX, 1)[1].split("-", 1)[0]
-        if pid_text.isdigit() and not process_alive(int(pid_text)):
+        if pid_text.isdigit() and not owner_alive(int(pid_text), entry):
             discard(entry)
             removed.append(entry)
     return removed
-
-
-def process_alive(pid: int) -> bool:
-    """Whether a process ``pid`` exists on this host (one of another user counts)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True

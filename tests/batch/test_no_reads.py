@@ -92,6 +92,12 @@ def test_the_batch_process_reads_no_input_and_a_stat_spares_the_hash(
     assert [t.check for t in tasks] == [None] * 3  # runs only
     assert not inputs & set(opens.driver)
     assert inputs <= set(opens.worker)
+    # the fleet page's figures of a run came back with it: of the published files, the
+    # batch process reads only one well's, to see once per worker host that OUT is shared
+    published = {str(out / w / name) for w in "ABC" for name in ("run.json", "batch.json")}
+    assert len({Path(p).parent for p in published & set(opens.driver)}) == 1
+    assert published <= set(opens.worker)
+    assert (out / "fleet.html").is_file()
     digest = hashlib.sha256(a.read_bytes()).hexdigest()  # the three are copies
     assert remembered(out / "ledger.sqlite") == {
         p.stat().st_ino: (digest, p.stat().st_ctime_ns) for p in (a, b, c)

@@ -95,6 +95,7 @@ LAYERS: dict[str, int] = {
     "pipeline.errors": 1,
     "pipeline.atomic": 1,
     "pipeline.hashing": 1,
+    "pipeline.processes": 1,
     "pipeline.version": 1,
     "pipeline.lazy": 1,
 }

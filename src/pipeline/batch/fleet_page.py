@@ -4,7 +4,9 @@ with its QC checks, acceptance gates, worst clearance separation factor, drift r
 largest dogleg severity and a link to its report (:mod:`pipeline.batch.fleet`).
 
 Every batch writes it as ``OUT/fleet.html`` (:func:`pipeline.batch.summary.write_summary`);
-``gyropipe status DIR --html`` writes it from the ledger. No script, no request: styles are
+``gyropipe status DIR --html`` writes it from the ledger. A batch takes the figures of the
+wells it ran from their workers (each reads its well's once published), so the batch process
+reads no well's outputs for it. No script, no request: styles are
 inline, links are relative; statuses are told in words and symbols as well as colours
 (Okabe–Ito, safe for colour-blind readers); every text from the wells is escaped.
 """
@@ -65,6 +67,8 @@ class FleetWell:
     run_id: int | None
     """the run whose outputs the well's figures must come from (None: any)"""
     well_dir: Path
+    figures: WellFigures | None = None
+    """its figures as the worker that ran it read them (None: read from ``well_dir``)"""
 
 
 @dataclass(frozen=True)
@@ -97,9 +101,7 @@ def write_fleet_page(fleet: Fleet, path: Path) -> Path:
 def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     """The page (module docstring); report links relative to ``page_dir``."""
     rows = sorted(fleet.wells, key=lambda w: (_rank(w.status), w.well))
-    figures = [
-        well_figures(w.well_dir, w.run_id) if w.status in PUBLISHED else WellFigures() for w in rows
-    ]
+    figures = [_figures(w) for w in rows]
     tally = Counter(w.status for w in fleet.wells)
     tally["not run"] += fleet.not_run
     body = "\n".join(_row(w, f, page_dir) for w, f in zip(rows, figures, strict=True))
@@ -130,6 +132,13 @@ HEADS = (
     ('Time <span class="u">s</span>', ' class="n"'),
     ("Report", ""),
 )
+
+
+def _figures(well: FleetWell) -> WellFigures:
+    """A well's figures: the worker's, else read from its published outputs."""
+    if well.figures is not None:
+        return well.figures
+    return well_figures(well.well_dir, well.run_id) if well.status in PUBLISHED else WellFigures()
 
 
 def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:

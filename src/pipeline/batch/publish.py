@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes, discard
-from pipeline.runner import MANIFEST, process_alive, remove_stale_staging
+from pipeline.processes import owner_alive
+from pipeline.runner import MANIFEST, remove_stale_staging
 
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
@@ -93,7 +94,7 @@ def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:
         if owner is None:
             continue
         run_id, pid = owner
-        if run_id not in active_runs and (pid is None or not process_alive(pid)):
+        if run_id not in active_runs and (pid is None or not owner_alive(pid, entry)):
             discard(entry)
             removed.append(entry)
     return removed

@@ -44,6 +44,7 @@ from pipeline.version import __version__
 from .executors import Executor, open_executor
 from .filestate import Seen, key_after, look
 from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
+from .fleet import WellFigures
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
 from .policy import Check, Mode, Run, Skip, WellState, decide, why
@@ -177,6 +178,8 @@ class _Batch:
         }
         self.ref = ref
         self.results: dict[str, WellResult] = {}
+        self.figures: dict[str, WellFigures] = {}
+        """done wells' fleet figures, as their workers read them"""
         self.inflight: dict[int, _Flight] = {}
         self.waiting: dict[str, tuple[float, WellJob]] = {}
         self.noted: set[str] = set()
@@ -224,7 +227,7 @@ class _Batch:
         results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
         self.ledger.end_batch(self.batch.id, status, counts(results))
         clean_work_dir(self.out, self.ledger.running_ids())  # a killed batch's late orphans
-        files = write_summary(self.out, self.batch, results)
+        files = write_summary(self.out, self.batch, results, self.figures)
         self.reporter.end(self.batch.id, time.perf_counter() - t0)
         return results, files
 
@@ -449,6 +452,8 @@ class _Batch:
                 outcome.wall_time_s,
                 outcome.run_id,
             )
+            if outcome.figures is not None:
+                self.figures[job.well_id] = outcome.figures
         else:
             detail = error or outcome.error or "failed"
             result = WellResult(job.well_id, "failed", detail, outcome.wall_time_s, outcome.run_id)

@@ -10,6 +10,7 @@ import shutil
 import textwrap
 import time
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ from typing import Any
 from pipeline.atomic import atomic_write_bytes
 
 from .causes import cause
+from .fleet import WellFigures
 from .fleet_page import Fleet, FleetWell, write_fleet_page
 from .jobs import SUMMARY_FILES
 from .records import BatchRow, iso
@@ -65,9 +67,15 @@ def table_text(results: list[WellResult], width: int | None = None) -> str:
     return "\n".join(lines)
 
 
-def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> list[Path]:
+def write_summary(
+    out_dir: Path,
+    batch: BatchRow,
+    results: list[WellResult],
+    figures: Mapping[str, WellFigures] | None = None,
+) -> list[Path]:
     """Write ``summary.json`` (batch, counts, rows), ``summary.csv`` (rows) and the fleet
-    page ``fleet.html`` (:mod:`pipeline.batch.fleet_page`) atomically."""
+    page ``fleet.html`` (:mod:`pipeline.batch.fleet_page`) atomically; ``figures``: the
+    wells' fleet figures as their workers read them (the others are read from OUT)."""
     document: dict[str, Any] = {
         "batch": batch.id,
         "pipeline": batch.pipeline_file,
@@ -86,16 +94,24 @@ def write_summary(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> 
     paths = [out_dir / name for name in SUMMARY_FILES]
     atomic_write_bytes(paths[0], json.dumps(document, indent=2).encode())
     atomic_write_bytes(paths[1], text.getvalue().encode())
-    write_fleet_page(batch_fleet(out_dir, batch, results), paths[2])
+    write_fleet_page(batch_fleet(out_dir, batch, results, figures or {}), paths[2])
     return paths
 
 
-def batch_fleet(out_dir: Path, batch: BatchRow, results: list[WellResult]) -> Fleet:
+def batch_fleet(
+    out_dir: Path,
+    batch: BatchRow,
+    results: list[WellResult],
+    figures: Mapping[str, WellFigures],
+) -> Fleet:
     """The fleet page of one batch: its wells as it left them (``not_run``: the wells it
     listed and never came to)."""
     listed = batch.options.get("wells")
     not_run = max(0, listed - len(results)) if isinstance(listed, int) else 0
     wells = tuple(
-        FleetWell(r.well, r.status, r.detail, r.time_s, r.run_id, out_dir / r.well) for r in results
+        FleetWell(
+            r.well, r.status, r.detail, r.time_s, r.run_id, out_dir / r.well, figures.get(r.well)
+        )
+        for r in results
     )
     return Fleet(f"Batch {batch.id}", (batch,), wells, not_run, ended=time.time())

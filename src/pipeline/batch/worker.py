@@ -32,13 +32,15 @@ from pipeline.graph import Plan, build_plan
 from pipeline.io.threads import set_reader_threads
 from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
+from pipeline.processes import process_alive
 from pipeline.registry import Registry
-from pipeline.runner import MANIFEST, RunResult, check_out_dir, process_alive, run_plan
+from pipeline.runner import MANIFEST, RunResult, check_out_dir, run_plan
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
 from .filestate import key_after
 from .fingerprint import completed_json, hashed
+from .fleet import WellFigures, well_figures
 from .publish import MARKER, read_published, staging_dir, write_marker
 
 OWN = frozenset({MARKER})
@@ -94,6 +96,9 @@ class WellOutcome:
     failed run's inputs (a done run's are in its manifest)"""
     published_run: int | None = None
     """the run whose outputs ``OUT/<well>`` held when the task began (None: none whole)"""
+    figures: WellFigures | None = None
+    """a done run's figures for the fleet page, read here from its published outputs so
+    that the batch process reads none"""
 
 
 _PLANS: dict[tuple[str, tuple[str, ...]], tuple[Plan, Registry]] = {}
@@ -209,6 +214,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
             published_run=held_run,
+            figures=well_figures(final, task.run_id),
         )
     except Exception as exc:  # a failing well is reported, never raised into the batch
         error = str(exc) if isinstance(exc, GyropipeError) else f"{type(exc).__name__}: {exc}"
