@@ -226,8 +226,9 @@ class CompiledContract:
         """Raise :class:`ContractViolation` listing every failed rule (all columns)."""
         failures: list[RuleFailure] = []
         groups = self._group_keys(table)
+        present = set(table.column_names)
         for spec in self.columns:
-            if spec.name not in table.column_names:
+            if spec.name not in present:
                 if spec.required:
                     failures.append(RuleFailure(spec.name, "present", "a column of that name"))
                 continue
