@@ -458,5 +458,26 @@ def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatAr
         order = np.argsort(label, kind="stable")
         values, label = values[order], label[order]
     bounds = np.searchsorted(label, np.arange(groups + 1))
-    median: FloatArray = np.array([np.median(values[a:b]) for a, b in itertools.pairwise(bounds)])
+    median: FloatArray = np.array(
+        [exact_median(values[a:b]) for a, b in itertools.pairwise(bounds)]
+    )
     return median
+
+
+def exact_median(values: FloatArray) -> float:
+    """``np.median(values)``, the same number, found among the values near it: those between
+    two quantiles of a sparse sample are selected from, the rest only counted (when they do
+    not bracket the middle — or a NaN is there — the whole array is)."""
+    n = values.size
+    if n < 4096:
+        return float(np.median(values))
+    sample = np.sort(values[:: n // 256])
+    lo, hi = sample[int(0.375 * sample.size)], sample[int(0.625 * sample.size)]
+    below = int(np.count_nonzero(values < lo))
+    near = values[(values >= lo) & (values <= hi)]
+    above = int(np.count_nonzero(values > hi))
+    middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
+    if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
+        return float(np.median(values))
+    picked = np.partition(near, middle)[list(middle)]
+    return float(np.mean(picked))

@@ -47,6 +47,7 @@ from pipeline.gyrocompass.readings import (
     ReadingOptions,
     check_lengths,
     counts,
+    exact_median,
     moving_average,
     not_uniform,
     reading_stats,
@@ -252,7 +253,7 @@ class _Stations:
     def close(self) -> None:
         """The current station's MD (as the whole-table path takes it)."""
         if self.md:
-            md = float(np.median(np.concatenate(self.md)))
+            md = exact_median(np.concatenate(self.md))
             self.medians.append(np.full(len(self.md), md))
         self.md = []
 
