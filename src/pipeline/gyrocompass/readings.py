@@ -433,22 +433,23 @@ def _mean_std(
 
 def _circular_mean(degrees: FloatArray, cuts: IndexArray) -> FloatArray:
     """Circular mean (deg, [0, 360)) of the angles of each even segment (split at ``cuts``)."""
-    sin, cos = (np.add.reduceat(v, cuts)[::2] for v in _sin_cos(np.radians(degrees)))
+    sin, cos = (np.add.reduceat(v, cuts)[::2] for v in _sin_cos(degrees))
     mean = np.degrees(np.arctan2(sin, cos)) % 360.0
     wrapped: FloatArray = np.where(mean < 360.0, mean, 0.0)  # −tiny % 360 rounds to 360
     return wrapped
 
 
-def _sin_cos(rad: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Sine and cosine of each angle (rad), computed once per run of equal values when the
+def _sin_cos(degrees: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Sine and cosine of each angle (deg), computed once per run of equal values when the
     runs are long (a frame held in a position reads one angle for thousands of samples)."""
-    bits = rad.view(np.int64)  # equal bits, equal results (−0.0 and NaN included)
+    bits = degrees.view(np.int64)  # equal bits, equal results (−0.0 and NaN included)
     new = np.flatnonzero(bits[1:] != bits[:-1]) + 1
-    if new.size > rad.size // 8:
+    if new.size > degrees.size // 8:
+        rad = np.radians(degrees)
         return np.sin(rad), np.cos(rad)
     starts = np.concatenate([[0], new])
-    lengths = np.diff(starts, append=rad.size)
-    held = rad[starts]
+    lengths = np.diff(starts, append=degrees.size)
+    held = np.radians(degrees[starts])
     return np.repeat(np.sin(held), lengths), np.repeat(np.cos(held), lengths)
 
 
