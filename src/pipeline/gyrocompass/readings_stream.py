@@ -15,9 +15,11 @@ the first batch, and the scan's rate confirms them at the end (the readings' dur
 the scan's). Where it does not — trims of another number of samples, a column without data
 — or the dwells are detected, a second pass does step 2 as the scan says.
 
-What stays in memory is the current station's averaged samples (marked: the batches they lie
-in), the samples since the last dwell (or the current dwell) and one batch, whatever the
-survey's length.
+Each reading is reduced as soon as its samples have passed (those wholly inside a batch
+together, by the same function as the whole-table path: the same numbers); what stays in
+memory is the current station's averaged MD samples (for its median: views of the MD columns
+they lie in), the current marked run or the samples since the last dwell (or the current
+dwell), and one batch, whatever the survey's length.
 
 Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a moving
 average) and the unwrapped frame angle are recomputed over the buffer, and only samples
