@@ -80,7 +80,8 @@ class _Scan:
         if time.size == 0:
             return
         if self.rows:
-            time = np.concatenate([[self.last], time])
+            step = float(time[0] - self.last)  # from the batch before
+            self.low, self.high = min(self.low, step), max(self.high, step)
         else:
             self.first = float(time[0])
         if time.size > 1:
@@ -308,7 +309,7 @@ class _Marked:
         if batch.num_rows == 0:
             return
         station, position = (
-            batch.column(m).fill_null(-1).to_numpy().astype(np.int64) for m in MARKERS
+            batch.column(m).fill_null(-1).to_numpy().astype(np.int64, copy=False) for m in MARKERS
         )
         self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
         values = _arrays(batch, self.stations.columns)
