@@ -460,25 +460,27 @@ def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatAr
         values, label = values[order], label[order]
     bounds = np.searchsorted(label, np.arange(groups + 1))
     median: FloatArray = np.array(
-        [exact_median(values[a:b]) for a, b in itertools.pairwise(bounds)]
+        [exact_median([values[a:b]]) for a, b in itertools.pairwise(bounds)]
     )
     return median
 
 
-def exact_median(values: FloatArray) -> float:
-    """``np.median(values)``, the same number, found among the values near it: those between
-    two quantiles of a sparse sample are selected from, the rest only counted (when they do
-    not bracket the middle — or a NaN is there — the whole array is)."""
-    n = values.size
+def exact_median(pieces: list[FloatArray]) -> float:
+    """``np.median`` of the values of ``pieces`` together, the same number, found among the
+    values near it: those between two quantiles of a sparse sample are selected from, the
+    rest only counted (when they do not bracket the middle — or a NaN is there — every value
+    is); the pieces are not concatenated."""
+    n = sum(p.size for p in pieces)
     if n < 4096:
-        return float(np.median(values))
-    sample = np.sort(values[:: n // 256])
+        return float(np.median(np.concatenate(pieces)))
+    step = n // 256
+    sample = np.sort(np.concatenate([p[::step] for p in pieces]))
     lo, hi = sample[int(0.375 * sample.size)], sample[int(0.625 * sample.size)]
-    below = int(np.count_nonzero(values < lo))
-    near = values[(values >= lo) & (values <= hi)]
-    above = int(np.count_nonzero(values > hi))
+    below = sum(int(np.count_nonzero(p < lo)) for p in pieces)
+    near = np.concatenate([p[(p >= lo) & (p <= hi)] for p in pieces])
+    above = sum(int(np.count_nonzero(p > hi)) for p in pieces)
     middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
     if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
-        return float(np.median(values))
+        return float(np.median(np.concatenate(pieces)))
     picked = np.partition(near, middle)[list(middle)]
     return float(np.mean(picked))

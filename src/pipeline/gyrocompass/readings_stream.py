@@ -256,7 +256,7 @@ class _Stations:
     def close(self) -> None:
         """The current station's MD (as the whole-table path takes it)."""
         if self.md:
-            md = exact_median(np.concatenate(self.md))
+            md = exact_median(self.md)
             self.medians.append(np.full(len(self.md), md))
         self.md = []
 
