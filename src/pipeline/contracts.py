@@ -226,8 +226,9 @@ class CompiledContract:
         """Raise :class:`ContractViolation` listing every failed rule (all columns)."""
         failures: list[RuleFailure] = []
         groups = self._group_keys(table)
+        present = set(table.column_names)
         for spec in self.columns:
-            if spec.name not in table.column_names:
+            if spec.name not in present:
                 if spec.required:
                     failures.append(RuleFailure(spec.name, "present", "a column of that name"))
                 continue
@@ -262,21 +263,28 @@ class BatchChecker:
         self.offset = 0
         """rows checked so far"""
         self.last: pa.Table | None = None
-        self.ordered = any(c.monotonic for c in contract.columns)
+        ordered = tuple(c for c in contract.columns if c.monotonic)
+        self.steps = replace(contract, columns=ordered) if ordered else None
+        """the contract's order rules: all that the step between two batches can break"""
 
     def check(self, batch: pa.RecordBatch) -> None:
         """Raise :class:`ContractViolation` if ``batch`` (the next one) breaks the contract."""
         table = pa.Table.from_batches([batch])
-        self._validate(table, self.offset)
-        if self.last is not None and self.ordered and batch.num_rows:
-            self._validate(pa.concat_tables([self.last, table.slice(0, 1)]), self.offset - 1)
+        self._validate(self.contract, table, self.offset)
+        if self.steps is not None and batch.num_rows:
+            group = [self.steps.group_by] if self.steps.group_by else []
+            names = [*(c.name for c in self.steps.columns), *group, SOURCE_LINE]
+            ordered = table.select([n for n in names if n in table.column_names])
+            if self.last is not None:
+                step = pa.concat_tables([self.last, ordered.slice(0, 1)])
+                self._validate(self.steps, step, self.offset - 1)
+            # a copy: a slice would keep the whole batch alive
+            self.last = ordered.take([batch.num_rows - 1])
         self.offset += batch.num_rows
-        if batch.num_rows:  # a copy: a slice would keep the whole batch alive
-            self.last = pa.Table.from_batches([batch.take([batch.num_rows - 1])])
 
-    def _validate(self, table: pa.Table, shift: int) -> None:
+    def _validate(self, contract: CompiledContract, table: pa.Table, shift: int) -> None:
         try:
-            self.contract.validate(table)
+            contract.validate(table)
         except ContractViolation as exc:
             failures = [
                 replace(f, examples=tuple((i + shift, v) for i, v in f.examples))

@@ -98,10 +98,10 @@ def use_returning_memory_pool() -> None:
     jemalloc), and glibc's ``malloc`` with a fixed mmap threshold of :data:`MMAP_THRESHOLD`
     (glibc's default moves up to the largest block freed, 32 MiB at most, after which arrays
     of a survey's length stay in the heap and a process's peak grew with the survey it
-    streamed). jemalloc purges freed pages after its decay time and reuses them meanwhile:
-    it peaks lower than the system allocator, which maps and faults in every block of a
-    batch afresh (Parquet decoding took 2.5× as long), and than mimalloc, pyarrow's default
-    on Linux (benchmarks/bench_memory.py)."""
+    streamed) and trim threshold of :data:`TRIM_THRESHOLD`. jemalloc purges freed pages
+    after its decay time and reuses them meanwhile: it peaks lower than the system
+    allocator, which maps and faults in every block of a batch afresh (Parquet decoding took
+    2.5× as long), and than mimalloc, pyarrow's default on Linux (benchmarks/bench_memory.py)."""
     if not os.environ.get("ARROW_DEFAULT_MEMORY_POOL"):
         try:
             pool = pa.jemalloc_memory_pool()
@@ -114,6 +114,8 @@ def use_returning_memory_pool() -> None:
         except OSError:  # not glibc
             return
         libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
+        if not os.environ.get("MALLOC_TRIM_THRESHOLD_"):
+            libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
 
 
 MMAP_THRESHOLD = 1 << 20
@@ -122,5 +124,11 @@ mapped and unmapped whole. Above a column of a batch or of a continuous-integrat
 (65,536 rows × 8 B = 512 KiB, plus a filter's overlap), which at 128 KiB were mapped and
 faulted in afresh for every temporary: a continuous well took 2.73 s CPU then, 2.00 s now,
 for peaks 20–30 MiB higher (benchmarks/bench_memory.py; still within the targets)."""
+TRIM_THRESHOLD = 4 << 20
+"""bytes: free memory at the top of glibc's heap kept for reuse, not handed back. A fixed
+mmap threshold also fixes this one at glibc's 128 KiB, below which every batch's
+temporaries (a few 512 KiB columns) were given back when freed and faulted in afresh for
+the next batch: a point-gyro well's position readings took 1.7× their CPU time then."""
 _M_MMAP_THRESHOLD = -3
-"""glibc's ``mallopt`` parameter number (malloc.h)."""
+_M_TRIM_THRESHOLD = -1
+"""glibc's ``mallopt`` parameter numbers (malloc.h)."""

@@ -15,7 +15,7 @@ import pytest
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.gravity import normal_gravity
 from pipeline.errors import ContractViolation
-from pipeline.gyrocompass.readings import ReadingOptions, position_readings
+from pipeline.gyrocompass.readings import ReadingOptions, exact_median, position_readings
 from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.sim.simulate import Simulation, simulate
 from pipeline.sim.spec import SimulationSpec
@@ -325,3 +325,22 @@ def test_input_units_are_checked() -> None:
     field = samples.schema.field("gyro_x").with_metadata({"unit": "rad/s"})
     with pytest.raises(ContractViolation, match="gyro_x"):
         position_readings(samples.set_column(index, field, samples.column("gyro_x")))
+
+
+@pytest.mark.parametrize(
+    "pieces",
+    [
+        [np.random.default_rng(1).normal(450.0, 0.05, 21_400)],  # a station's odometer MD
+        [np.random.default_rng(2).normal(size=n) for n in (7_000, 0, 6_001, 9_000)],  # odd
+        [np.repeat(np.arange(4.0), 3_000)],  # ties at the middle
+        [np.sort(np.random.default_rng(3).standard_cauchy(50_000))],  # sorted, heavy tails
+        [np.r_[np.random.default_rng(4).normal(size=9_999), np.nan]],  # a NaN: NaN
+        [np.array([2.0, -1.0, 5.0])],  # few values
+    ],
+)
+def test_the_station_md_median_is_numpys_median_of_the_pieces_together(
+    pieces: list[np.ndarray],
+) -> None:
+    expected = np.median(np.concatenate(pieces))
+    got = exact_median(pieces)
+    assert got == expected or (np.isnan(got) and np.isnan(expected))

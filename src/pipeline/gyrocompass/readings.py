@@ -376,47 +376,81 @@ def reduce_readings(
         "position": position,
         "t": (time[a] + time[b - 1]) / 2,
     }
-    if angle is not None:
-        columns["frame_angle"] = _circular_mean(used(angle), offsets)
-    stds: dict[str, FloatArray] = {}
-    for name, values in signals.items():
-        columns[name], stds[f"{name}_std"] = _mean_std(used(values), offsets, n)
-    columns |= stds
+    columns |= reading_stats(signals, angle, a, b)
     columns["n"] = n
     columns["duration"] = n / rate
     return PositionReadings.compiled().make_table(columns)
+
+
+def reading_stats(
+    signals: dict[str, FloatArray], angle: FloatArray | None, a: IndexArray, b: IndexArray
+) -> dict[str, FloatArray]:
+    """Each reading's circular mean frame angle (when ``angle`` is given), then the mean and
+    sample standard deviation of each signal, over the samples [a, b) of the columns (the
+    readings in order, none overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2
+    samples). Reduced in place, gaps included, so a reading's numbers do not depend on its
+    neighbours (the samples between readings are passed over and dropped)."""
+    cuts = np.stack([a, b], axis=1).ravel()[:-1] - a[0]
+    """reading starts and ends (even: a reading, odd: a gap) within [a[0], b[-1])"""
+    lengths = np.diff(cuts, append=b[-1] - a[0])
+    span = slice(int(a[0]), int(b[-1]))
+    columns: dict[str, FloatArray] = {}
+    if angle is not None:
+        columns["frame_angle"] = _circular_mean(angle[span], cuts)
+    stds: dict[str, FloatArray] = {}
+    for name, values in signals.items():
+        columns[name], stds[f"{name}_std"] = _mean_std(values[span], cuts, lengths)
+    return columns | stds
 
 
 def _used_samples(
     a: IndexArray, offsets: IndexArray, n: IndexArray, size: int
 ) -> Callable[[FloatArray], FloatArray]:
     """The samples of the readings [a, b) of a column, reading after reading: the column
-    itself when the readings are all its samples in order (the streamed path hands over
-    each station so), else a gathered copy."""
+    itself when the readings are all its samples in order, else a gathered copy."""
     if int(n.sum()) == size and np.array_equal(a, offsets):
         return lambda column: column
     index = np.arange(int(n.sum())) - np.repeat(offsets - a, n)
     return lambda column: column[index]
 
 
-def _mean_std(x: FloatArray, offsets: IndexArray, n: IndexArray) -> tuple[FloatArray, FloatArray]:
-    """Mean and sample standard deviation (ddof = 1) of each reading's samples, taken about
-    the reading's first sample so that constant signals average exactly."""
-    first = x[offsets]
-    dev = x - np.repeat(first, n)
-    shift = np.add.reduceat(dev, offsets) / n
-    dev -= np.repeat(shift, n)
-    var = np.add.reduceat(np.multiply(dev, dev, out=dev), offsets) / (n - 1)
-    return first + shift, np.sqrt(var)
+def _mean_std(
+    x: FloatArray, cuts: IndexArray, lengths: IndexArray
+) -> tuple[FloatArray, FloatArray]:
+    """Mean and sample standard deviation (ddof = 1) of the even segments of ``x`` (split at
+    ``cuts``, of ``lengths``), taken about each segment's first sample so that constant
+    signals average exactly."""
+    first = x[cuts]
+    dev = x - np.repeat(first, lengths)
+    shift = np.add.reduceat(dev, cuts)
+    n = lengths[::2]
+    shift[::2] /= n
+    shift[1::2] = 0.0  # the gaps: not reduced
+    dev -= np.repeat(shift, lengths)
+    var = np.add.reduceat(np.multiply(dev, dev, out=dev), cuts)[::2] / (n - 1)
+    return first[::2] + shift[::2], np.sqrt(var)
 
 
-def _circular_mean(degrees: FloatArray, offsets: IndexArray) -> FloatArray:
-    """Circular mean (deg, [0, 360)) of each reading's angles."""
-    rad = np.radians(degrees)
-    sin, cos = np.add.reduceat(np.sin(rad), offsets), np.add.reduceat(np.cos(rad), offsets)
+def _circular_mean(degrees: FloatArray, cuts: IndexArray) -> FloatArray:
+    """Circular mean (deg, [0, 360)) of the angles of each even segment (split at ``cuts``)."""
+    sin, cos = (np.add.reduceat(v, cuts)[::2] for v in _sin_cos(degrees))
     mean = np.degrees(np.arctan2(sin, cos)) % 360.0
     wrapped: FloatArray = np.where(mean < 360.0, mean, 0.0)  # −tiny % 360 rounds to 360
     return wrapped
+
+
+def _sin_cos(degrees: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Sine and cosine of each angle (deg), computed once per run of equal values when the
+    runs are long (a frame held in a position reads one angle for thousands of samples)."""
+    bits = degrees.view(np.int64)  # equal bits, equal results (−0.0 and NaN included)
+    new = np.flatnonzero(bits[1:] != bits[:-1]) + 1
+    if new.size > degrees.size // 8:
+        rad = np.radians(degrees)
+        return np.sin(rad), np.cos(rad)
+    starts = np.concatenate([[0], new])
+    lengths = np.diff(starts, append=degrees.size)
+    held = np.radians(degrees[starts])
+    return np.repeat(np.sin(held), lengths), np.repeat(np.cos(held), lengths)
 
 
 def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatArray:
@@ -425,5 +459,28 @@ def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatAr
         order = np.argsort(label, kind="stable")
         values, label = values[order], label[order]
     bounds = np.searchsorted(label, np.arange(groups + 1))
-    median: FloatArray = np.array([np.median(values[a:b]) for a, b in itertools.pairwise(bounds)])
+    median: FloatArray = np.array(
+        [exact_median([values[a:b]]) for a, b in itertools.pairwise(bounds)]
+    )
     return median
+
+
+def exact_median(pieces: list[FloatArray]) -> float:
+    """``np.median`` of the values of ``pieces`` together, the same number, found among the
+    values near it: those between two quantiles of a sparse sample are selected from, the
+    rest only counted (when they do not bracket the middle — or a NaN is there — every value
+    is); the pieces are not concatenated."""
+    n = sum(p.size for p in pieces)
+    if n < 4096:
+        return float(np.median(np.concatenate(pieces)))
+    step = n // 256
+    sample = np.sort(np.concatenate([p[::step] for p in pieces]))
+    lo, hi = sample[int(0.375 * sample.size)], sample[int(0.625 * sample.size)]
+    below = sum(int(np.count_nonzero(p < lo)) for p in pieces)
+    near = np.concatenate([p[(p >= lo) & (p <= hi)] for p in pieces])
+    above = sum(int(np.count_nonzero(p > hi)) for p in pieces)
+    middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
+    if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
+        return float(np.median(np.concatenate(pieces)))
+    picked = np.partition(near, middle)[list(middle)]
+    return float(np.mean(picked))

@@ -15,9 +15,11 @@ the first batch, and the scan's rate confirms them at the end (the readings' dur
 the scan's). Where it does not — trims of another number of samples, a column without data
 — or the dwells are detected, a second pass does step 2 as the scan says.
 
-What stays in memory is the current station's averaged samples (marked: the batches they lie
-in), the samples since the last dwell (or the current dwell) and one batch, whatever the
-survey's length.
+Each reading is reduced as soon as its samples have passed (those wholly inside a batch
+together, by the same function as the whole-table path: the same numbers); what stays in
+memory is the current station's averaged MD samples (for its median: views of the MD columns
+they lie in), the current marked run or the samples since the last dwell (or the current
+dwell), and one batch, whatever the survey's length.
 
 Detection runs the whole-table steps on a sliding buffer: the smoothed MD (a moving
 average) and the unwrapped frame angle are recomputed over the buffer, and only samples
@@ -29,7 +31,6 @@ tolerance. Marked positions are exact. A station marked again after another stat
 
 from __future__ import annotations
 
-import itertools
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -44,11 +45,14 @@ from pipeline.gyrocompass.readings import (
     SIGNALS,
     UNIFORM_RTOL,
     FloatArray,
+    IndexArray,
     ReadingOptions,
     check_lengths,
     counts,
+    exact_median,
     moving_average,
     not_uniform,
+    reading_stats,
     reduce_readings,
     remarked_stations,
     steady_starts,
@@ -76,7 +80,8 @@ class _Scan:
         if time.size == 0:
             return
         if self.rows:
-            time = np.concatenate([[self.last], time])
+            step = float(time[0] - self.last)  # from the batch before
+            self.low, self.high = min(self.low, step), max(self.high, step)
         else:
             self.first = float(time[0])
         if time.size > 1:
@@ -208,60 +213,71 @@ def _rate(samples: TableStream, scan: _Scan) -> float:
 
 
 class _Stations:
-    """Averaged samples of the current station, reduced to readings when it ends."""
+    """Readings reduced as their samples arrive; each station's MD (the median over all its
+    averaged samples) when the station ends."""
 
     def __init__(self, columns: list[str], rate: float) -> None:
         self.columns, self.rate = columns, rate
-        self.pieces: list[dict[str, FloatArray]] = []
-        self.positions: list[int] = []
+        self.parts: list[dict[str, np.ndarray]] = []
+        """the readings so far, a group of them at a time"""
+        self.md: list[FloatArray] = []
+        """the current station's averaged MD samples (views of the batches' columns)"""
+        self.medians: list[FloatArray] = []
+        """each station's MD, repeated for its readings"""
         self.station = -1
-        self.done: list[pa.Table] = []
 
-    def add(self, station: int, position: int, values: dict[str, FloatArray]) -> None:
-        """One reading's averaged samples, kept until the station is reduced (marked runs:
-        views of the batches' columns, which they hold until then; copied once, then)."""
-        if station != self.station:
-            self.close()
-            self.station = station
-        self.pieces.append(values)
-        self.positions.append(position)
+    def add(
+        self,
+        station: IndexArray,
+        position: IndexArray,
+        values: dict[str, FloatArray],
+        a: IndexArray,
+        b: IndexArray,
+    ) -> None:
+        """Readings of the samples [a, b) of the columns ``values`` (in time order, none
+        overlapping), of the markers ``station`` and ``position``."""
+        signals = {k: values[k] for k in SIGNALS if k in values}
+        time = values["time"]
+        part: dict[str, np.ndarray] = {
+            "station": station,
+            "position": position,
+            "t": (time[a] + time[b - 1]) / 2,
+        }
+        part |= reading_stats(signals, values.get("frame_angle"), a, b)
+        part["n"] = b - a
+        self.parts.append(part)
+        md = values["md"]
+        for s, i, j in zip(station.tolist(), a.tolist(), b.tolist(), strict=True):
+            if s != self.station:
+                self.close()
+                self.station = s
+            self.md.append(md[i:j])
 
     def close(self) -> None:
-        """Reduce the current station's readings (as the whole-table path reduces them)."""
-        if not self.pieces:
-            return
-        n = np.array([len(p["time"]) for p in self.pieces], dtype=np.intp)
-        a = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.intp)
-        data = {k: np.concatenate([p[k] for p in self.pieces]) for k in self.columns}
-        signals = {k: data[k] for k in SIGNALS if k in data}
-        station = np.full(n.size, self.station, dtype=np.intp)
-        position = np.array(self.positions, dtype=np.intp)
-        self.done.append(
-            reduce_readings(
-                signals,
-                data["time"],
-                self.rate,
-                data["md"],
-                data.get("frame_angle"),
-                a,
-                a + n,
-                station,
-                position,
-            )
-        )
-        self.pieces, self.positions = [], []
+        """The current station's MD (as the whole-table path takes it)."""
+        if self.md:
+            md = exact_median(self.md)
+            self.medians.append(np.full(len(self.md), md))
+        self.md = []
 
     def table(self) -> pa.Table:
         """Every station's readings, their durations at the rate set now (:class:`_MarkedAhead`
         reduces at the first batch's rate; the scan's is the run's)."""
         self.close()
-        if not self.done:  # the whole-table path's message
+        if not self.parts:  # the whole-table path's message
             none = np.empty(0, np.intp)
             reduce_readings({}, np.empty(0), self.rate, np.empty(0), None, *[none] * 4)
-        table = pa.concat_tables(self.done).combine_chunks()
-        at = table.schema.get_field_index("duration")
-        duration = table.column("n").to_numpy() / self.rate
-        return table.set_column(at, table.schema.field(at), pa.array(duration))
+        columns: dict[str, np.ndarray] = {
+            k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]
+        }
+        columns = {
+            "station": columns.pop("station"),
+            "md": np.concatenate(self.medians),
+            "position": columns.pop("position"),
+            **columns,
+        }
+        columns["duration"] = columns["n"] / self.rate
+        return PositionReadings.compiled().make_table(columns)
 
 
 def _arrays(batch: pa.RecordBatch, names: Iterable[str]) -> dict[str, FloatArray]:
@@ -275,6 +291,7 @@ class _Marked:
         self.k_start, self.k_end, self.need, _ = counts(options, rate)
         self.stations = stations
         self.current: dict[str, FloatArray] = {}
+        """the samples of the run that the last batch ended in (marked runs only)"""
         self.key = (-1, -1)
         self.runs: list[tuple[int, int, float, int]] = []
         """every marked run: station, position, first time, samples left after trimming"""
@@ -287,27 +304,64 @@ class _Marked:
         return self.finish()
 
     def add(self, batch: pa.RecordBatch) -> None:
-        """Cut the next batch into runs of equal markers; a run that ends is reduced."""
+        """Cut the next batch into runs of equal markers: the runs that end in it are
+        reduced (those wholly inside it together), the last one is kept for the next."""
+        if batch.num_rows == 0:
+            return
         station, position = (
-            batch.column(m).fill_null(-1).to_numpy().astype(np.int64) for m in MARKERS
+            batch.column(m).fill_null(-1).to_numpy().astype(np.int64, copy=False) for m in MARKERS
         )
         self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
         values = _arrays(batch, self.stations.columns)
         change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1]))
-        cuts = [0, *(change + 1).tolist(), batch.num_rows]
-        for a, b in itertools.pairwise(cuts):
-            key = (int(station[a]), int(position[a]))
-            if key != self.key:
-                self.end_run()
-                self.key = key
-            if key[0] < 0 or key[1] < 0:
-                continue  # unmarked samples are not kept
-            part = {k: v[a:b] for k, v in values.items()}
-            self.current = (
-                {k: np.concatenate([self.current[k], part[k]]) for k in part}
-                if self.current
-                else part
-            )
+        starts = np.concatenate([[0], change + 1])
+        ends = np.concatenate([change + 1, [batch.num_rows]])
+        key = (int(station[0]), int(position[0]))
+        if key != self.key:
+            self.end_run()
+            self.key = key
+        self._extend(values, 0, int(ends[0]))
+        if starts.size == 1:
+            return
+        self.end_run()
+        inner = slice(1, -1)
+        self._reduce(
+            values, station[starts[inner]], position[starts[inner]], starts[inner], ends[inner]
+        )
+        self.key = (int(station[starts[-1]]), int(position[starts[-1]]))
+        self._extend(values, int(starts[-1]), batch.num_rows)
+
+    def _extend(self, values: dict[str, FloatArray], a: int, b: int) -> None:
+        """The samples [a, b) of the batch's columns added to the current run (if marked)."""
+        if self.key[0] < 0 or self.key[1] < 0:
+            return  # unmarked samples are not kept
+        part = {k: v[a:b] for k, v in values.items()}
+        self.current = (
+            {k: np.concatenate([self.current[k], part[k]]) for k in part} if self.current else part
+        )
+
+    def _reduce(
+        self,
+        values: dict[str, FloatArray],
+        station: IndexArray,
+        position: IndexArray,
+        starts: IndexArray,
+        ends: IndexArray,
+    ) -> None:
+        """The runs [starts, ends) of the columns ``values``: the marked ones recorded, the
+        long enough among them reduced."""
+        marked = (station >= 0) & (position >= 0)
+        station, position = station[marked], position[marked]
+        starts, ends = starts[marked], ends[marked]
+        left = ends - starts - self.k_start - self.k_end
+        t0 = values["time"][starts]
+        self.runs.extend(
+            zip(station.tolist(), position.tolist(), t0.tolist(), left.tolist(), strict=True)
+        )
+        keep = left >= self.need
+        if keep.any():
+            a, b = starts[keep] + self.k_start, ends[keep] - self.k_end
+            self.stations.add(station[keep], position[keep], values, a, b)
 
     def finish(self) -> pa.Table:
         """The readings; before them the whole-table path's checks of the markers (orphans,
@@ -336,16 +390,13 @@ class _Marked:
         return self.stations.table()
 
     def end_run(self) -> None:
-        station, position = self.key
+        """The current run ended: recorded, and reduced if long enough."""
         run, self.current = self.current, {}
-        if station < 0 or position < 0 or not run:
+        if not run:
             return
-        left = len(run["time"]) - self.k_start - self.k_end
-        self.runs.append((station, position, float(run["time"][0]), left))
-        if left < self.need:
-            return
-        end = len(run["time"]) - self.k_end
-        self.stations.add(station, position, {k: v[self.k_start : end] for k, v in run.items()})
+        station, position = (np.array([k], dtype=np.intp) for k in self.key)
+        ends = np.array([len(run["time"])], dtype=np.intp)
+        self._reduce(run, station, position, np.zeros(1, np.intp), ends)
 
 
 class _Detected:
@@ -445,9 +496,9 @@ class _Detected:
 
     def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
         self._fold(smooth[s:e])
-        a, b = s + self.k_start, e - self.k_end
-        dwell = {k: np.array(v[a:b]) for k, v in self.buffer.items()}  # not the whole buffer
-        self.stations.add(self.station, self.position, dwell)
+        a, b = (np.array([i], dtype=np.intp) for i in (s + self.k_start, e - self.k_end))
+        station, position = (np.array([k], dtype=np.intp) for k in (self.station, self.position))
+        self.stations.add(station, position, self.buffer, a, b)
 
     def _fold(self, values: FloatArray) -> None:
         if values.size:

@@ -64,10 +64,12 @@ def validity_series(qc: pa.Table) -> list[QcSeries]:
     md = _floats(qc, "md")
     deviation = _floats(qc, "measured") - _floats(qc, "reference")
     tolerance = _floats(qc, "tolerance")
+    evaluated = np.array([p is not None for p in passed], dtype=bool) & ~np.isnan(md)
+    names = np.array(checks, dtype=object)
     out = []
     for name in dict.fromkeys(checks):
-        rows = np.array([c == name for c in checks])
-        done = rows & np.array([p is not None for p in passed]) & ~np.isnan(md)
+        rows = names == name
+        done = rows & evaluated
         if not done.any():
             continue
         titled = check_title(name, "measured − reference")

@@ -89,7 +89,10 @@ class Scale:
         return mapped
 
     def at(self, value: float) -> float:
-        return float(self(np.array([value]))[0])
+        """One value mapped (the same number as an array of it)."""
+        if self.log or self.hi == self.lo:
+            return float(self(np.array([value]))[0])
+        return float(self.start + (float(value) - self.lo) / (self.hi - self.lo) * self.length)
 
 
 def _data(panel: Panel, axis: str) -> FloatArray:

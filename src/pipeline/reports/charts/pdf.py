@@ -34,9 +34,15 @@ class _Placed:
 
     def __init__(self, ox: float, oy: float, s: float) -> None:
         self.ox, self.oy, self.s = ox, oy, s
+        self._scale, self._origin = np.array([s, -s]), np.array([ox, oy])
 
     def xy(self, points: Points) -> Points:
-        return np.column_stack([self.ox + self.s * points[:, 0], self.oy - self.s * points[:, 1]])
+        placed: Points = points * self._scale + self._origin  # = (ox + s·x, oy − s·y)
+        return placed
+
+    def point(self, x: float, y: float) -> tuple[float, float]:
+        """One point placed (the same numbers as :meth:`xy`)."""
+        return self.ox + self.s * x, self.oy - self.s * y
 
 
 def _polyline(points: Points, closed: bool) -> str:
@@ -103,7 +109,7 @@ def _marks(m: Marks, at: _Placed) -> str:
 def _label(page: Page, t: Label, at: _Placed) -> None:
     if t.box:
         x0, y0, x1, y1 = t.extent()
-        ((bx, by),) = at.xy(np.array([[x0 - 1.5, y1 + 1]]))
+        bx, by = at.point(x0 - 1.5, y1 + 1)
         page.raw(
             f"{fill_colour('#ffffff')} {_n(bx)} {_n(by)} {_n((x1 - x0 + 3) * at.s)} "
             f"{_n((y1 - y0 + 2) * at.s)} re f"
@@ -113,14 +119,14 @@ def _label(page: Page, t: Label, at: _Placed) -> None:
         x, y = t.x, t.y + shift
     else:
         x, y = t.x - shift, t.y
-    ((px, py),) = at.xy(np.array([[x, y]]))
+    px, py = at.point(x, y)
     page.glyphs(px, py, t.text, t.size * at.s, t.colour, bold=t.bold, angle=t.angle)
 
 
 def _group(page: Page, g: Group, at: _Placed) -> None:
     if g.clip is not None:
         x, y, w, h = g.clip
-        ((cx, cy),) = at.xy(np.array([[x, y + h]]))
+        cx, cy = at.point(x, y + h)
         page.raw(f"q {_n(cx)} {_n(cy)} {_n(w * at.s)} {_n(h * at.s)} re W n")
     for item in g.items:
         if isinstance(item, Group):
