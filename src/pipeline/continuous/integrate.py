@@ -350,9 +350,9 @@ the ``attitude``'s inclination and misalignment δ (its toolface); flags.
     by_cos = np.where(usable, oc * cos_i / sin_u, 0.0)
     by_sin = np.where(usable, -oc * sin_d / cos_u / sin_u, 0.0)
 
-    def rate(sin_a: FloatArray, cos_a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
-        """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at the azimuths of sine ``sin_a`` and
-        cosine ``cos_a`` (0 where held)."""
+    def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
+        """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
+        sin_a, cos_a = np.sin(a), np.cos(a)
         return (
             const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
             by_sin[k] * cos_a - by_cos[k] * sin_a,
@@ -364,8 +364,8 @@ the ``attitude``'s inclination and misalignment δ (its toolface); flags.
     return _heun_series(np.diff(t), rate, feedback, start, tolerance), flags, held
 
 
-RateFunction = Callable[[FloatArray, FloatArray, slice], tuple[FloatArray, FloatArray]]
-"""Ȧ and ∂Ȧ/∂A of a slice of the samples at the azimuths of given sines and cosines."""
+RateFunction = Callable[[FloatArray, slice], tuple[FloatArray, FloatArray]]
+"""Ȧ and ∂Ȧ/∂A of a slice of the samples at given azimuths."""
 
 _NEWTON_TOLERANCE = 1e-12
 """rad: bound of the error left in a converged series."""
@@ -394,45 +394,21 @@ def _heun_series(
     half = step / 2
     reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
     growth = reach * float(np.exp(min(reach, 700.0)))
-    sin_a, cos_a = np.sin(azi), np.cos(azi)
     for _ in range(_NEWTON_ITERATIONS):
-        f, df = rate(sin_a, cos_a, slice(None))
-        move = step * f[:-1]
-        turned = _turned(sin_a[:-1], cos_a[:-1], move, azi[:-1] + move)
-        f_next, df_next = rate(*turned, slice(1, None))
+        f, df = rate(azi, slice(None))
+        predicted = azi[:-1] + step * f[:-1]
+        f_next, df_next = rate(predicted, slice(1, None))
         residual = azi[:-1] + half * (f[:-1] + f_next) - azi[1:]
         gain = 1.0 + half * (df[:-1] + df_next * (1.0 + step * df[:-1]))
         correction = _affine_recursion(gain, residual)
-        before = azi[1:].copy()
         azi[1:] += correction
         largest = float(np.max(np.abs(correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
-        sin_a[1:], cos_a[1:] = _turned(sin_a[1:], cos_a[1:], azi[1:] - before, azi[1:])
     raise ContinuousError(
         f"the azimuth integration did not converge in {_NEWTON_ITERATIONS} Newton iterations "
         f"(last correction {largest:.3g} rad)"
     )
-
-
-_TURN_LIMIT = 1e-4
-"""rad: the largest turn :func:`_turned` takes by its Taylor series (truncation ≤ 5e-18)."""
-
-
-def _turned(
-    sin_a: FloatArray, cos_a: FloatArray, turn: FloatArray, angle: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Sine and cosine of ``angle`` = a + ``turn`` (rad) from those of a: by the angle-sum
-    formulas with the turn's Taylor series (cos ≈ 1 − t²/2, sin ≈ t − t³/6) where
-    |turn| ≤ :data:`_TURN_LIMIT`, else by the trig functions of ``angle`` (a sixth of their
-    cost where the turns are small: a Newton correction, a Heun predictor's step)."""
-    half_square = 0.5 * turn * turn
-    cos_t, sin_t = 1.0 - half_square, turn - turn * half_square / 3.0
-    sin_out, cos_out = sin_a * cos_t + cos_a * sin_t, cos_a * cos_t - sin_a * sin_t
-    far = np.flatnonzero(~(np.abs(turn) <= _TURN_LIMIT))  # (NaN: by the trig functions)
-    if far.size:
-        sin_out[far], cos_out[far] = np.sin(angle[far]), np.cos(angle[far])
-    return sin_out, cos_out
 
 
 def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:

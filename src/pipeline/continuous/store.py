@@ -152,7 +152,10 @@ def savgol_range(
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same dot product with the same samples, and the edge
     polynomial is fitted to the same first or last ``points`` samples."""
-    out: FloatArray = savgol_filter(values, points, order, deriv=deriv, delta=dt)[a - wlo : b - wlo]
+    half = points // 2
+    ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
+    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
+    out: FloatArray = fit[a - wlo : b - wlo]
     return out
 
 
