@@ -327,7 +327,7 @@ def _integrate(
     tolerance: float = 1e-12,
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:
     """Heun (trapezoid) integration of Ȧ from the high-side gyro component ``y`` (rad/s) at
-the ``attitude``'s inclination and misalignment δ (its toolface); flags.
+    the ``attitude``'s inclination and misalignment δ (its toolface); flags.
 
     Each step maps ``A_k`` to ``A_{k+1} = A_k + Δt/2·(Ȧ_k(A_k) + Ȧ_{k+1}(A_k + Δt·Ȧ_k(A_k)))``.
     The recursion is solved for all samples at once by Newton's method on the whole series

@@ -74,7 +74,7 @@ class ColumnStore:
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o600)
             column = self._columns[name] = _Column(fd, values.dtype, 0)
         data = np.ascontiguousarray(values, dtype=column.dtype)
-        os.pwrite(column.fd, memoryview(data).cast("B"), start * column.dtype.itemsize)
+        os.pwrite(column.fd, data.data, start * column.dtype.itemsize)
         column.rows = max(column.rows, start + data.size)
 
     def append(self, name: str, values: NDArray[np.generic]) -> None:
@@ -86,7 +86,7 @@ class ColumnStore:
         column = self._columns[name]
         lo, hi = max(lo, 0), min(hi, column.rows)
         out = np.empty(max(hi - lo, 0), dtype=column.dtype)
-        if out.size and os.preadv(column.fd, [out], lo * column.dtype.itemsize) != out.nbytes:
+        if out.size and os.preadv(column.fd, [out.data], lo * column.dtype.itemsize) != out.nbytes:
             raise OSError(f"short read of column {name!r} of {self.directory}")
         return out
 
