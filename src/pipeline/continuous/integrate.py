@@ -68,7 +68,7 @@ from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
 from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
 from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
-from pipeline.earth.frames import OMEGA_EARTH, FloatArray
+from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.errors import EmptyTableError
 from pipeline.streams import Port, as_stream
 
@@ -208,7 +208,7 @@ def _apsidal_run(
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
             if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
-                inc_rate = right[seg] + oc * np.sin(azi)
+                inc_rate = right[seg] + oc * sin_cos(azi)[0]
             store.write(f"inc_rate{n % 2}", a, inc_rate[own])
             if n == options.passes - 1:
                 for name, values in (
@@ -352,7 +352,7 @@ def _integrate(
 
     def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
-        sin_a, cos_a = np.sin(a), np.cos(a)
+        sin_a, cos_a = sin_cos(a)
         return (
             const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
             by_sin[k] * cos_a - by_cos[k] * sin_a,
