@@ -360,7 +360,7 @@ def _integrate(
 
     start = np.full(t.size, azi0) if guess is None else guess.copy()
     start[0] = azi0
-    feedback = np.hypot(by_cos, by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
+    feedback = np.sqrt(by_cos * by_cos + by_sin * by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
     return _heun_series(np.diff(t), rate, feedback, start, tolerance), flags, held
 
 
