@@ -208,7 +208,7 @@ def _apsidal_run(
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
             if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
-                inc_rate = right[seg] + oc * sin_cos(azi)[0]
+                inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
             store.write(f"inc_rate{n % 2}", a, inc_rate[own])
             if n == options.passes - 1:
                 for name, values in (
