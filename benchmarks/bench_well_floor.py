@@ -7,10 +7,14 @@ Floors (one well, in this process, CPU time = user + system from ``getrusage``):
   examples/plans/j-well.yaml --seed 1`` read with pyarrow (the columns the readings use:
   time, MD, frame angle, gyro, accelerometers, markers; on one thread), and each marked
   stop's trimmed means (``trim_start`` = 1 s) of MD, frame angle and sensors in NumPy;
-- **continuous-gyro**: ``j-well-continuous.yaml``'s samples (163,601) decoded likewise, and
-  one vectorised integration: inclination and high side from the accelerometers, the
-  azimuth rate from the gyro, integrated along the run and sampled every 10 m of MD (NumPy,
-  whole arrays).
+- **continuous-gyro**: ``j-well-continuous.yaml``'s samples (163,601) decoded likewise, the
+  stops' trimmed means (what compassing the tie and closing stops needs; the compass solve
+  on those few numbers is not counted), and one vectorised integration: inclination and
+  high side from the accelerometers, the azimuth rate from the gyro, integrated along the
+  run, inclination and azimuth sampled every 10 m of MD, and the stations' positions by
+  minimum curvature (NumPy, whole arrays). Not counted: what the pipeline adds to that
+  least computation (the odometer's cubic fit and the tool's acceleration removed, a second
+  pass, Heun's method solved by Newton's, the closure, the σ budget).
 
 Floor and worker alternate, well after well, so that a change of the machine's load falls
 on both alike.
@@ -52,6 +56,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 from threadpoolctl import threadpool_limits
 
@@ -93,7 +98,11 @@ def load() -> str:
 
 def stop_means(path: Path) -> np.ndarray:
     """Point-gyro floor: each marked stop's trimmed means of every sensor column."""
-    table = pq.read_table(path, columns=COLUMNS, use_threads=False)
+    return trimmed_means(pq.read_table(path, columns=COLUMNS, use_threads=False))
+
+
+def trimmed_means(table: pa.Table) -> np.ndarray:
+    """Each marked stop's (station, position) trimmed means of MD, frame angle and sensors."""
     time_s = table.column("time").to_numpy()
     station = table.column("station").fill_null(-1).to_numpy()
     position = table.column("position").fill_null(-1).to_numpy()
@@ -112,9 +121,12 @@ def stop_means(path: Path) -> np.ndarray:
 
 
 def integrated_azimuth(path: Path) -> np.ndarray:
-    """Continuous floor: inclination and high side from the accelerometers, the azimuth
-    rate from the gyro, integrated over time, every :data:`SPACING_M` of MD (deg)."""
+    """Continuous floor: the stops' trimmed means; inclination and high side from the
+    accelerometers, the azimuth rate from the gyro, integrated over time, every
+    :data:`SPACING_M` of MD, and the stations' positions (north, east, TVD, m) beside the
+    stops' means."""
     table = pq.read_table(path, columns=COLUMNS, use_threads=False)
+    means = trimmed_means(table)
     t, md = table.column("time").to_numpy(), table.column("md").to_numpy()
     gx, ax, ay, az = (table.column(n).to_numpy() for n in SIGNALS)
     g = np.sqrt(ax * ax + ay * ay + az * az)
@@ -126,7 +138,26 @@ def integrated_azimuth(path: Path) -> np.ndarray:
     moving = np.flatnonzero(table.column("station").is_null().to_numpy(zero_copy_only=False))
     along = md[moving]
     stations = np.arange(along.min(), along.max(), SPACING_M)
-    return np.interp(stations, along, azimuth[moving])
+    at = np.radians([np.interp(stations, along, x[moving]) for x in (np.degrees(inc), azimuth)])
+    return np.concatenate([minimum_curvature(stations, *at).ravel(), means.ravel()])
+
+
+def minimum_curvature(md: np.ndarray, inc: np.ndarray, azi: np.ndarray) -> np.ndarray:
+    """Positions (north, east, TVD, m; rows) of stations at ``md`` (m), ``inc`` and ``azi``
+    (rad) by minimum curvature, from the first station."""
+    i1, i2, a1, a2 = inc[:-1], inc[1:], azi[:-1], azi[1:]
+    cos_dogleg = np.cos(i2 - i1) - np.sin(i1) * np.sin(i2) * (1.0 - np.cos(a2 - a1))
+    dogleg = np.arccos(np.clip(cos_dogleg, -1.0, 1.0))
+    ratio = np.where(dogleg > 1e-9, 2.0 / np.maximum(dogleg, 1e-9) * np.tan(dogleg / 2), 1.0)
+    half = np.diff(md) / 2 * ratio
+    steps = half * np.stack(
+        [
+            np.sin(i1) * np.cos(a1) + np.sin(i2) * np.cos(a2),
+            np.sin(i1) * np.sin(a1) + np.sin(i2) * np.sin(a2),
+            np.cos(i1) + np.cos(i2),
+        ]
+    )
+    return np.concatenate([np.zeros((3, 1)), np.cumsum(steps, axis=1)], axis=1)
 
 
 FLOORS: dict[str, Callable[[Path], np.ndarray]] = {

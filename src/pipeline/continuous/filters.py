@@ -8,6 +8,7 @@ process's memory floor, issue #20); convolutions by NumPy's FFT.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -17,17 +18,19 @@ from pipeline.earth.frames import FloatArray
 __all__ = ["convolve_same", "savgol_coeffs", "savgol_filter"]
 
 
+@functools.lru_cache(maxsize=64)
 def savgol_coeffs(points: int, order: int, deriv: int = 0, delta: float = 1.0) -> FloatArray:
     """Convolution kernel (odd ``points``) of the ``deriv``-th derivative of the local
     least-squares polynomial of degree ``order`` at the window's centre, sample interval
-    ``delta``."""
+    ``delta`` (read-only: one array per kernel, kept for the passes that reuse it)."""
     half = points // 2
     x = np.arange(-half, points - half, dtype=np.float64)[::-1]  # reversed: a convolution
     design = x ** np.arange(order + 1)[:, None]
     target = np.zeros(order + 1)
     target[deriv] = math.factorial(deriv) / delta**deriv
-    coeffs = np.linalg.lstsq(design, target, rcond=None)[0]
-    return np.asarray(coeffs, dtype=np.float64)
+    coeffs = np.asarray(np.linalg.lstsq(design, target, rcond=None)[0], dtype=np.float64)
+    coeffs.setflags(write=False)
+    return coeffs
 
 
 def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
@@ -45,17 +48,27 @@ def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
 
 
 def savgol_filter(
-    values: FloatArray, points: int, order: int, deriv: int = 0, delta: float = 1.0
+    values: FloatArray,
+    points: int,
+    order: int,
+    deriv: int = 0,
+    delta: float = 1.0,
+    ends: tuple[bool, bool] = (True, True),
 ) -> FloatArray:
     """The Savitzky–Golay fit (its ``deriv``-th derivative) at every sample: the kernel of
     :func:`savgol_coeffs` inside, and within half a window of either end the polynomial
-    fitted to the first or last ``points`` samples (SciPy's mode ``interp``)."""
+    fitted to the first or last ``points`` samples (SciPy's mode ``interp``); ``ends``: the
+    (first, last) half windows fitted so (not: left as the convolution's, which treats the
+    samples beyond as zeros — for a caller that discards them)."""
     if values.size < points:
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
     out = convolve_same(values, savgol_coeffs(points, order, deriv, delta))
     half = points // 2
     position = np.arange(points, dtype=np.float64)
-    for window, where in ((slice(0, points), slice(0, half)), (slice(-points, None), None)):
+    fits = ((slice(0, points), slice(0, half)), (slice(-points, None), None))
+    for (window, where), fitted in zip(fits, ends, strict=True):
+        if not fitted:
+            continue
         poly = np.asarray(np.polyfit(position, values[window], order), dtype=np.float64)
         if deriv:
             poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)

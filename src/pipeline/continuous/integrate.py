@@ -45,6 +45,7 @@ samples (:mod:`pipeline.continuous.stations`).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 import pyarrow as pa
@@ -67,7 +68,7 @@ from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
 from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
 from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
-from pipeline.earth.frames import OMEGA_EARTH, FloatArray
+from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.errors import EmptyTableError
 from pipeline.streams import Port, as_stream
 
@@ -165,11 +166,12 @@ def _apsidal_run(
             lo, hi = savgol_span(0, size, sa, sb, window) if smooth else (sa - 1, sb + 1)
             lo, hi = max(lo, 0), min(hi, size)
             t = odometer.time(lo, hi)
-            inc, tf = _pass_angles(odometer, lo, hi, previous, t)
+            angles = _pass_angles(odometer, lo, hi, previous, t)
+            inc, tf = angles.inc, angles.tf
             y = store.floats("gyro_x", odometer.begin + lo, odometer.begin + hi) * DEG_H
             seg = slice(sa - lo, sb - lo)
             if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
-                high, delta = y, tf
+                high, attitude = y, angles
                 inc_rate = (
                     savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
                     if smooth
@@ -177,8 +179,11 @@ def _apsidal_run(
                 )
             else:  # two axes: h and r by the toolface; İ from r after the first pass (below)
                 y_right = store.floats("gyro_y", odometer.begin + lo, odometer.begin + hi) * DEG_H
-                (high, right), delta = apsidal_components(y, y_right, tf), np.zeros(hi - lo)
+                high, right = apsidal_components(y, y_right, tf)
+                zeros = np.zeros(hi - lo)
+                attitude = angles._replace(tf=zeros, sin_tf=zeros, cos_tf=np.ones(hi - lo))
                 inc_rate = _previous(store, "inc_rate", previous, sa, sb)
+            delta = attitude.tf
             order = slice(None, None, -1) if backward else slice(None)
             guess = None if previous is None else store.floats(f"azi{previous}", sa, sb)[order]
             index = np.arange(sa, sb)
@@ -187,9 +192,8 @@ def _apsidal_run(
                 for x in _integrate(
                     t[seg][order],
                     high[seg][order],
-                    inc[seg][order],
+                    _Angles(*(x[seg][order] for x in attitude)),
                     inc_rate[order],
-                    delta[seg][order],
                     carry,
                     oc,
                     os_,
@@ -204,7 +208,7 @@ def _apsidal_run(
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
             if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
-                inc_rate = right[seg] + oc * np.sin(azi)
+                inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
             store.write(f"inc_rate{n % 2}", a, inc_rate[own])
             if n == options.passes - 1:
                 for name, values in (
@@ -240,53 +244,79 @@ def _previous(store: ColumnStore, name: str, previous: str | None, lo: int, hi: 
     return np.zeros(hi - lo) if previous is None else store.floats(f"{name}{previous}", lo, hi)
 
 
+class _Angles(NamedTuple):
+    """Inclination and toolface (rad) of run samples, and their sines and cosines."""
+
+    inc: FloatArray
+    tf: FloatArray
+    sin_i: FloatArray
+    cos_i: FloatArray
+    sin_tf: FloatArray
+    cos_tf: FloatArray
+
+
 def _pass_angles(
     odometer: Odometer, lo: int, hi: int, previous: str | None, t: FloatArray
-) -> tuple[FloatArray, FloatArray]:
+) -> _Angles:
     """Inclination and toolface (rad) at run samples ``lo``…``hi − 1`` with the tool's
-    acceleration removed, from the previous pass's İ and Ȧ (zero before the first)."""
+    acceleration removed, from the previous pass's İ and Ȧ (none before the first)."""
     store, begin = odometer.store, odometer.begin
     gx, gy, gz = (store.floats(f"acc_{a}", begin + lo, begin + hi) for a in "xyz")
-    inc_rate = _previous(store, "inc_rate", previous, lo, hi)
-    if previous is None:
-        azi_rate = np.zeros(hi - lo)
-    else:  # the gradient at the range's ends needs one sample beyond it
-        wlo, whi = max(lo - 1, 0), min(hi + 1, odometer.size)
-        wide = np.gradient(store.floats(f"azi{previous}", wlo, whi), odometer.time(wlo, whi))
-        azi_rate = wide[lo - wlo : lo - wlo + hi - lo]
-    speed, accel = odometer.column("speed", lo, hi), odometer.column("accel", lo, hi)
-    return _inclination_toolface(gx, gy, gz, speed, accel, inc_rate, azi_rate)
+    accel = odometer.column("accel", lo, hi)
+    if previous is None:  # nothing across the axis to remove yet
+        return _inclination_toolface(gx, gy, gz, accel)
+    inc_rate = store.floats(f"inc_rate{previous}", lo, hi)
+    # the gradient at the range's ends needs one sample beyond it
+    wlo, whi = max(lo - 1, 0), min(hi + 1, odometer.size)
+    wide = np.gradient(store.floats(f"azi{previous}", wlo, whi), odometer.time(wlo, whi))
+    azi_rate = wide[lo - wlo : lo - wlo + hi - lo]
+    speed = odometer.column("speed", lo, hi)
+    return _inclination_toolface(gx, gy, gz, accel, (speed, inc_rate, azi_rate))
 
 
 def _inclination_toolface(
     gx: FloatArray,
     gy: FloatArray,
     gz: FloatArray,
-    speed: FloatArray,
     accel: FloatArray,
-    inc_rate: FloatArray,
-    azi_rate: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
+    across: tuple[FloatArray, FloatArray, FloatArray] | None = None,
+) -> _Angles:
     """Inclination and gravity toolface of frame x (rad) from the accelerometers (m/s²) with
     the tool's acceleration removed: along the axis the odometer's ``accel`` (m/s²), across
-    it v·(İ·hs + sin I·Ȧ·rs) from the ``speed`` (m/s) and the current İ and Ȧ (rad/s)."""
-    tf = np.arctan2(gy, -gx)
-    inc = np.arctan2(np.hypot(gx, gy), gz + accel)
-    cross_h = speed * inc_rate
-    cross_r = speed * np.sin(inc) * azi_rate
-    cx = gx + cross_h * np.cos(tf) + cross_r * np.sin(tf)
-    cy = gy - cross_h * np.sin(tf) + cross_r * np.cos(tf)
-    inc_out: FloatArray = np.arctan2(np.hypot(cx, cy), gz + accel)
-    tf_out: FloatArray = np.arctan2(cy, -cx)
-    return inc_out, tf_out
+    it v·(İ·hs + sin I·Ȧ·rs) from ``across``: the speed (m/s) and the current İ and Ȧ
+    (rad/s; None: zero)."""
+    axial = gz + accel
+    tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
+    if across is not None:
+        speed, inc_rate, azi_rate = across
+        cross_h = speed * inc_rate
+        cross_r = speed * _polar(transverse, axial)[1] * azi_rate
+        cx = gx + cross_h * cos_tf + cross_r * sin_tf
+        cy = gy - cross_h * sin_tf + cross_r * cos_tf
+        tf, sin_tf, cos_tf, transverse = _polar(cy, -cx)
+    inc, sin_i, cos_i, _ = _polar(transverse, axial)
+    return _Angles(inc, tf, sin_i, cos_i, sin_tf, cos_tf)
+
+
+def _polar(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``arctan2(y, x)``, its sine and cosine, and ``r = √(x² + y²)``: the sine and cosine as
+    y/r and x/r (the trig functions' values to an ulp or two, at a tenth of their cost; by
+    the trig functions where r is 0, not finite or NaN)."""
+    r = np.sqrt(x * x + y * y)
+    angle = np.arctan2(y, x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sin, cos = y / r, x / r
+    odd = np.flatnonzero(~((r > 0) & (r < np.inf)))
+    if odd.size:
+        sin[odd], cos[odd] = np.sin(angle[odd]), np.cos(angle[odd])
+    return angle, sin, cos, r
 
 
 def _integrate(
     t: FloatArray,
     y: FloatArray,
-    inc: FloatArray,
+    attitude: _Angles,
     inc_rate: FloatArray,
-    tf: FloatArray,
     azi0: float,
     oc: float,
     os_: float,
@@ -296,15 +326,16 @@ def _integrate(
     rest: NDArray[np.bool_],
     tolerance: float = 1e-12,
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:
-    """Heun (trapezoid) integration of Ȧ from the high-side gyro component; flags.
+    """Heun (trapezoid) integration of Ȧ from the high-side gyro component ``y`` (rad/s) at
+    the ``attitude``'s inclination and misalignment δ (its toolface); flags.
 
     Each step maps ``A_k`` to ``A_{k+1} = A_k + Δt/2·(Ȧ_k(A_k) + Ȧ_{k+1}(A_k + Δt·Ȧ_k(A_k)))``.
     The recursion is solved for all samples at once by Newton's method on the whole series
     (:func:`_heun_series`), from ``guess`` (rad: e.g. a previous pass's azimuth; default the
     start azimuth throughout); ``rest``: the samples on a stop, never held; ``tolerance``
     (rad): the error bound left in the series."""
-    sin_i, cos_i = np.sin(inc), np.cos(inc)
-    sin_d, cos_d = np.sin(tf), np.cos(tf)
+    sin_i, cos_i = attitude.sin_i, attitude.cos_i
+    sin_d, cos_d = attitude.sin_tf, attitude.cos_tf
     flags = np.zeros(t.size, dtype=np.int64)
     vertical = sin_i < np.sin(np.radians(options.vertical_below))
     flags[vertical] |= FLAG_NEAR_VERTICAL
@@ -321,7 +352,7 @@ def _integrate(
 
     def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
-        sin_a, cos_a = np.sin(a), np.cos(a)
+        sin_a, cos_a = sin_cos(a)
         return (
             const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
             by_sin[k] * cos_a - by_cos[k] * sin_a,
@@ -329,7 +360,7 @@ def _integrate(
 
     start = np.full(t.size, azi0) if guess is None else guess.copy()
     start[0] = azi0
-    feedback = np.hypot(by_cos, by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
+    feedback = np.sqrt(by_cos * by_cos + by_sin * by_sin)  # bounds |∂Ȧ/∂A| and |∂²Ȧ/∂A²|
     return _heun_series(np.diff(t), rate, feedback, start, tolerance), flags, held
 
 

@@ -22,10 +22,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
-import numpy as np
-
 from pipeline.continuous.run import ContinuousError
-from pipeline.earth.frames import FloatArray
+from pipeline.earth.frames import FloatArray, sin_cos
 
 GyroAxes = Literal["x", "xy", "xyz"]
 
@@ -55,7 +53,7 @@ def apsidal_components(
 ) -> tuple[FloatArray, FloatArray]:
     """High-side and right-side rates (h, r) from the transverse gyros (any rate unit, same
     out) and the gravity toolface ψ of frame x (rad)."""
-    cos_tf, sin_tf = np.cos(toolface), np.sin(toolface)
+    sin_tf, cos_tf = sin_cos(toolface)
     high: FloatArray = gyro_x * cos_tf - gyro_y * sin_tf
     right: FloatArray = gyro_x * sin_tf + gyro_y * cos_tf
     return high, right

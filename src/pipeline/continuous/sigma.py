@@ -60,7 +60,7 @@ from numpy.typing import NDArray
 from pipeline.continuous.run import DEG_H
 from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
 from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
-from pipeline.earth.frames import OMEGA_EARTH, FloatArray
+from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
 __all__ = [
@@ -323,8 +323,9 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     """Rate sensitivities per sample (time order) of a run's samples; the gradients at the
     ends are one-sided (read one sample beyond a range to have them central)."""
     t = run.time
-    sin_i, cos_i = np.sin(run.inc), np.cos(run.inc)
-    sin_a, cos_a = np.sin(run.azi), np.cos(run.azi)
+    sin_i, cos_i = sin_cos(run.inc)
+    sin_a, cos_a = sin_cos(run.azi)
+    sin_d, cos_d = sin_cos(run.misalignment)
     tan_d = np.tan(run.misalignment)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
@@ -332,13 +333,13 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     r = -oc * sin_a + np.gradient(run.inc, t)
     h = oc * cos_a * cos_i + os_ * sin_i - azi_rate * sin_i
     sens = {
-        "gain": 1.0 / (safe_sin * np.cos(run.misalignment)),  # |∂Ȧ/∂y|
+        "gain": 1.0 / (safe_sin * cos_d),  # |∂Ȧ/∂y|
         "feedback": -oc * (sin_a * cos_i + cos_a * tan_d) / safe_sin,  # ∂Ȧ/∂A
         "d_inc": (-oc * cos_a * sin_i + (os_ - azi_rate) * cos_i) / safe_sin,  # ∂Ȧ/∂I
         "d_inc_rate": tan_d / safe_sin,  # ∂Ȧ/∂İ
         "d_tf": (r - h * tan_d) / safe_sin,  # ∂Ȧ/∂ψ
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
-        "rate_x": h * np.cos(run.misalignment) + r * np.sin(run.misalignment),
+        "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
         "rate_z": np.gradient(np.unwrap(run.misalignment), t)
         + azi_rate * cos_i

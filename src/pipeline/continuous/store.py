@@ -74,7 +74,7 @@ class ColumnStore:
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o600)
             column = self._columns[name] = _Column(fd, values.dtype, 0)
         data = np.ascontiguousarray(values, dtype=column.dtype)
-        os.pwrite(column.fd, data.tobytes(), start * column.dtype.itemsize)
+        os.pwrite(column.fd, data.data, start * column.dtype.itemsize)
         column.rows = max(column.rows, start + data.size)
 
     def append(self, name: str, values: NDArray[np.generic]) -> None:
@@ -85,9 +85,10 @@ class ColumnStore:
         """Rows ``lo``…``hi − 1`` of column ``name`` (a fresh array of its type)."""
         column = self._columns[name]
         lo, hi = max(lo, 0), min(hi, column.rows)
-        size = column.dtype.itemsize
-        data = os.pread(column.fd, max(hi - lo, 0) * size, lo * size)
-        return np.frombuffer(data, dtype=column.dtype).copy()
+        out = np.empty(max(hi - lo, 0), dtype=column.dtype)
+        if out.size and os.preadv(column.fd, [out.data], lo * column.dtype.itemsize) != out.nbytes:
+            raise OSError(f"short read of column {name!r} of {self.directory}")
+        return out
 
     def floats(self, name: str, lo: int, hi: int) -> FloatArray:
         """:meth:`read` as float64."""
@@ -151,7 +152,10 @@ def savgol_range(
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same dot product with the same samples, and the edge
     polynomial is fitted to the same first or last ``points`` samples."""
-    out: FloatArray = savgol_filter(values, points, order, deriv=deriv, delta=dt)[a - wlo : b - wlo]
+    half = points // 2
+    ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
+    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
+    out: FloatArray = fit[a - wlo : b - wlo]
     return out
 
 

@@ -19,7 +19,11 @@ PT = 72.0
 SANS = "DejaVu Sans"
 MONO = "DejaVu Sans Mono"
 LEVEL = 6
-"""zlib's compression level of the file's streams."""
+"""zlib's compression level of the font programs (deflated once per process)."""
+PAGE_LEVEL = 1
+"""zlib's compression level of each report's own streams (pages, figures): level 1 deflates
+a continuous survey's pages in a third of level 6's CPU time (≈ 9 against 31 ms), the file
+13 % larger."""
 
 
 @cache
@@ -159,7 +163,7 @@ class _Writer:
 
     def stream(self, entries: str, data: bytes) -> int:
         """A stream of ``data``, deflated."""
-        return self.deflated(entries, zlib.compress(data, LEVEL))
+        return self.deflated(entries, zlib.compress(data, PAGE_LEVEL))
 
     def deflated(self, entries: str, data: bytes) -> int:
         """A stream of ``data`` deflated already."""
