@@ -681,11 +681,17 @@ def remove_stale_staging(directory: Path) -> list[Path]:
 
 
 def process_alive(pid: int) -> bool:
-    """Whether a process ``pid`` exists on this host (one of another user counts)."""
+    """Whether a process ``pid`` runs on this host (one of another user counts; a zombie,
+    ended but not yet reaped by its parent, does not: an orphan's can linger for seconds,
+    or for ever under a container's init that never reaps)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         return True
-    return True
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
+    except (OSError, IndexError):  # no /proc (macOS), or reaped meanwhile
+        return True
+    return state != "Z"

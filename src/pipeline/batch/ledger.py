@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
 
 from pipeline.errors import GyropipeError, file_errors
+from pipeline.runner import process_alive
 
 from . import filestate
 from .filestate import FileKey, HashCache
@@ -622,15 +623,7 @@ def alive(batch: BatchRow) -> bool:
     """Whether a batch's process still runs (module docstring)."""
     if time.time() - batch.heartbeat > LEASE_S:
         return False
-    if batch.host != socket.gethostname():
-        return True
-    try:
-        os.kill(batch.pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+    return batch.host != socket.gethostname() or process_alive(batch.pid)
 
 
 def _published(run: RunRow | None) -> bool:
