@@ -8,6 +8,7 @@ well done exactly once, and no well whose content changed is skipped as unchange
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import signal
@@ -29,9 +30,20 @@ from batch_support import (
 )
 
 from pipeline.batch import filestate
-from pipeline.batch.ledger import Ledger
+from pipeline.batch.fingerprint import PENDING, Fingerprint
+from pipeline.batch.jobs import jobs_from_glob
+from pipeline.batch.ledger import Claimed, Ledger
+from pipeline.batch.policy import Check, Mode, Run, Skip
+from pipeline.batch.progress import JsonLines
 from pipeline.batch.publish import WORK_DIR, clean_work_dir
+from pipeline.batch.run import BatchOptions, run_batch
+from pipeline.batch.worker import WellOutcome, WellTask, run_well
+from pipeline.executing import ExecutorDef, ExecutorSetup
+from pipeline.graph import build_plan
+from pipeline.plugins import load_registry
 from pipeline.runner import STAGING_PREFIX
+from pipeline.spec import load_spec
+from pipeline.well import WellMetadata
 from tests_support import gyropipe_cli
 
 TIMEOUT_S = 90
@@ -282,3 +294,94 @@ def test_two_batches_checking_the_same_wells_run_each_changed_well_once(
     assert sorted(ran) == names[1::2]  # each changed well run by one batch only
     for well, path in zip(names, paths, strict=True):
         assert published_azimuth(out / well) == float(path.read_text().rstrip().split(",")[-1])
+
+
+def test_a_check_settled_by_another_batch_is_not_made_a_run_on_a_reused_row(tmp_path: Path):
+    """A batch silent past its lease (stopped, suspended) is taken for dead and its check
+    dropped; SQLite then gives the dropped row's id to the next claim, another well's. The
+    stopped batch, going on, must neither rewrite that row nor run its well under that id."""
+    fingerprint = Fingerprint({"stations": PENDING}, "p" * 64, {}, "0", {}, {})
+    ledger = Ledger(tmp_path / "ledger.sqlite")
+    other = Ledger(tmp_path / "ledger.sqlite")
+    try:
+        stopped = ledger.start_batch("a", "p.yaml", "0" * 64, tmp_path, {})
+        check = Check(["stations"], [], 1, Skip("unchanged"))
+        claim = ledger.claim("W", stopped, fingerprint, {}, tmp_path / "W", lambda _: check)
+        assert isinstance(claim, Claimed) and claim.check == check
+        with sqlite3.connect(tmp_path / "ledger.sqlite") as db:  # silent for two leases
+            db.execute("UPDATE batches SET heartbeat = heartbeat - 120 WHERE id = ?", (stopped.id,))
+        assert [b.id for b in other.sweep()] == [stopped.id]
+        later = other.start_batch("b", "p.yaml", "0" * 64, tmp_path, {})
+        taken = other.claim("X", later, fingerprint, {}, tmp_path / "X", lambda _: Run(["new"]))
+        assert isinstance(taken, Claimed) and taken.run_id == claim.run_id  # the id reused
+
+        assert ledger.checked(claim.run_id, ["input changed: stations"]) is False
+        assert ledger.checked(claim.run_id, None) is False
+        ledger.finish(WellOutcome("W", claim.run_id, "done", manifest={"inputs": {}}))
+        (row,) = runs(tmp_path / "ledger.sqlite")
+        assert (row["well"], row["status"], row["reasons"]) == ("X", "running", '["new"]')
+    finally:
+        ledger.close()
+        other.close()
+
+
+class TakenForDead:
+    """Runs each task in this process; before the first check, another batch takes this one
+    for dead (its heartbeat aged past the lease), settles it and claims a new well ``X``."""
+
+    def __init__(self, setup: ExecutorSetup, ledger: Path) -> None:
+        self._ref, self._ledger, self._finished = setup.ref, ledger, []
+        self.taken: int | None = None
+
+    def submit(self, task: WellTask) -> None:
+        if task.check is not None and self.taken is None:
+            with sqlite3.connect(self._ledger) as db:
+                db.execute("UPDATE batches SET heartbeat = heartbeat - 120")
+            other = Ledger(self._ledger)
+            try:
+                assert [b.id for b in other.sweep()] == [task.batch_id]
+                later = other.start_batch("b", "p.yaml", "0" * 64, self._ledger.parent, {})
+                fingerprint = Fingerprint({}, "p" * 64, {}, "0", {}, {})
+                new = Run(["new well"])
+                claim = other.claim(
+                    "X", later, fingerprint, {}, self._ledger.parent / "X", lambda _: new
+                )
+                assert isinstance(claim, Claimed)
+                self.taken = claim.run_id
+            finally:
+                other.close()
+        self._finished.append(run_well(task, self._ref))
+
+    def wait(self, timeout: float) -> list[WellOutcome]:
+        finished, self._finished = self._finished, []
+        return finished
+
+    def close(self, cancel: bool) -> None:
+        self._finished = []
+
+
+def test_a_batch_taken_for_dead_while_checking_does_not_run_the_well_under_a_lost_claim(
+    tmp_path: Path, survey: Path
+):
+    (path,) = make_wells(tmp_path / "in", ["W"])
+    pattern, out = tmp_path / "in" / "*.csv", tmp_path / "out"
+    batch(survey, pattern, out)
+    change_one_azimuth(path)  # W is checked (its hash unknown), and would run
+    registry = load_registry()
+    executors: list[TakenForDead] = []
+
+    def factory(setup: ExecutorSetup) -> TakenForDead:
+        executors.append(TakenForDead(setup, out / "ledger.sqlite"))
+        return executors[-1]
+
+    registry.executors["taken"] = (ExecutorDef("taken", "test", factory), "builtin.executors")
+    plan = build_plan(load_spec(survey), registry)
+    jobs = jobs_from_glob(str(pattern), ["stations"], WellMetadata())
+    options = BatchOptions(out, 1, executor="taken", mode=Mode(only_changed=True))
+    report = run_batch(plan, registry, jobs, options, JsonLines(io.StringIO()))
+    assert [(r.well, r.status) for r in report.results] == [("W", "interrupted")]
+    assert "settled by another batch" in report.results[0].detail
+    (executor,) = executors
+    rows = {r["id"]: r for r in runs(out / "ledger.sqlite")}
+    assert (rows[executor.taken]["well"], rows[executor.taken]["status"]) == ("X", "running")
+    assert json.loads((out / "W" / "batch.json").read_text())["run_id"] == 1  # the first run's
