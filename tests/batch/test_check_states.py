@@ -178,7 +178,7 @@ def test_rerun_failed_with_hashes_pending_runs_the_failed_well_only(tmp_path: Pa
 
 
 @pytest.mark.process("the batch SIGKILLs itself while checks are out or being recorded")
-@pytest.mark.parametrize("step", ["submitted:1", "received:1", "commit:2"])
+@pytest.mark.parametrize("step", ["submitted:1", "commit:2"], ids=["checks-out", "checks-recorded"])
 def test_a_batch_killed_around_its_checks_leaves_each_well_once_and_no_stale_skip(
     tmp_path: Path, survey: Path, step: str
 ):
