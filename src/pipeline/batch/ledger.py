@@ -144,10 +144,16 @@ class LedgerError(GyropipeError):
     """The ledger cannot be read or written (module docstring): names the ledger file, what
     was being done, SQLite's reason and what to do."""
 
-    def __init__(self, path: Path, doing: str, cause: sqlite3.Error | OSError | str) -> None:
+    def __init__(
+        self, path: Path, doing: str, cause: sqlite3.Error | OSError | UnicodeDecodeError | str
+    ) -> None:
         self.path = path
         if isinstance(cause, str):
             reason = cause
+        elif isinstance(cause, UnicodeDecodeError):  # SQLite quoting a damaged name
+            reason = (
+                f"SQLite's message is not text (the file is damaged?); {ADVICE['SQLITE_CORRUPT']}"
+            )
         else:
             name = getattr(cause, "sqlite_errorname", None) or ""
             primary = "_".join(name.split("_")[:2])
@@ -166,7 +172,7 @@ def _guarded(doing: str) -> Callable[[Method[P, R]], Method[P, R]]:
         def guarded(ledger: Ledger, /, *args: P.args, **kwargs: P.kwargs) -> R:
             try:
                 return method(ledger, *args, **kwargs)
-            except sqlite3.Error as exc:
+            except (sqlite3.Error, UnicodeDecodeError) as exc:
                 raise LedgerError(ledger.path, doing, exc) from None
 
         functools.update_wrapper(guarded, method)
