@@ -10,6 +10,13 @@
    batch runs under ``RLIMIT_FSIZE`` instead (``ulimit -f``: a write past the limit fails
    with EFBIG; Python ignores SIGXFSZ), the limit lifted for the second run.
 
+3. SIGKILL of an ``--only-changed`` batch at a random moment (0.4–2 s after its start)
+   after a complete batch, half the inputs written again with the same bytes (their hashes
+   unknown to the batch process: checked, then skipped) and 1–4 of them changed (checked,
+   then run); then the same command to completion. Checks: each well done once more if it
+   changed and never else, its published trajectory the one of its input now, no claim
+   (nor check) left, the ledger and the tree as below.
+
 After every fault and after every completion the trial checks: the ledger passes SQLite's
 ``integrity_check`` and every row parses; every ``OUT/<well>`` that exists holds one
 complete run (every output of its ``run.json`` with its recorded hash, ``batch.json``,
@@ -18,7 +25,7 @@ files — in OUT beside the wells, and the inputs — are byte for byte as befor
 completion also: every well done exactly once since, its published run the ledger's, no
 well that was done before the fault run again, no staging directory left.
 
-    python benchmarks/trials_batch_faults.py [--kills 10] [--fulls 10] [--seed 1]
+    python benchmarks/trials_batch_faults.py [--kills 10] [--fulls 10] [--checks 10] [--seed 1]
 """
 
 from __future__ import annotations
@@ -41,7 +48,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "batch")]
 
-from batch_support import children, gone, make_wells, survey_pipeline  # noqa: E402
+from batch_support import (  # noqa: E402
+    change_one_azimuth,
+    children,
+    gone,
+    make_wells,
+    survey_pipeline,
+)
 
 from pipeline.batch.records import batch_row, run_row  # noqa: E402
 from tests_support import gyropipe  # noqa: E402
@@ -282,10 +295,54 @@ def full_trial(
     return problems
 
 
+def last_azimuth(path: Path, column: int) -> float:
+    """The azimuth of the last row of a station listing (column 2) or a trajectory CSV."""
+    return float(path.read_text().rstrip("\n").splitlines()[-1].split(",")[column])
+
+
+def check_trial(rng: random.Random, pipeline: Path, root: Path) -> list[str]:
+    inputs, out = root / "in", root / "out"
+    paths = make_wells(inputs, WELLS)
+    args = batch_args(pipeline, inputs, out)
+    problems = finish(args, out, {})
+    rewritten = rng.sample(paths, len(paths) // 2)
+    changed = set(rng.sample(rewritten, rng.randint(1, 4)))
+    for path in rewritten:
+        path.write_bytes(path.read_bytes())
+        if path in changed:
+            change_one_azimuth(path)
+    proc = subprocess.Popen([*args, "--only-changed"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    delay = rng.uniform(0.4, 2.0)  # the batch process takes about 0.5 s to start
+    workers: set[int] = set()
+    end = time.monotonic() + delay
+    while time.monotonic() < end and proc.poll() is None:
+        workers |= children(proc.pid)
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    stderr = proc.communicate(timeout=TIMEOUT_S)[1]
+    wait_gone(workers)
+    killed = proc.returncode == -signal.SIGKILL
+    checking = sum(r["status"] == "running" for r in ledger_rows(out)[0])
+    problems += ([] if killed else output_problems(stderr)) + ledger_rows(out)[1]
+    problems += finish([*args, "--only-changed"], out, {}) + tree_problems(out)
+    rows = ledger_rows(out)[0]
+    for well, path in zip(WELLS, paths, strict=True):
+        done = sum(r["well"] == well and r["status"] == "done" for r in rows)
+        if done != 1 + (path in changed):
+            problems.append(f"{well}: done {done} times, changed: {path in changed}")
+        if last_azimuth(out / well / "trajectory.csv", 2) != last_azimuth(path, 2):
+            problems.append(f"{well}: its published trajectory is not of its input now")
+    when = f"kill {delay:.2f} s after the start" if killed else "finished before the kill"
+    print(f"  {when}, {len(changed)} changed, {checking} claims left: {problems or 'OK'}")
+    return problems
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--kills", type=int, default=10)
     parser.add_argument("--fulls", type=int, default=10)
+    parser.add_argument("--checks", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1)
     options = parser.parse_args()
     rng = random.Random(options.seed)
@@ -295,7 +352,7 @@ def main() -> None:
         inputs = root / "in"
         make_wells(inputs, WELLS)
         inputs_before = tree_hashes(inputs)
-        bad: dict[str, int] = {"kill": 0, "full": 0}
+        bad: dict[str, int] = {"kill": 0, "full": 0, "check": 0}
         print(f"SIGKILL trials ({options.kills}), {len(WELLS)} wells, 2 workers:")
         kills = 0
         for i in range(4 * options.kills):  # until that many kills landed mid-batch
@@ -311,12 +368,16 @@ def main() -> None:
         for i in range(options.fulls):
             out = root / f"full{i}"
             bad["full"] += bool(full_trial(rng, pipeline, inputs, out, can_mount))
+        print(f"--only-changed SIGKILL trials ({options.checks}), checks out:")
+        for i in range(options.checks):
+            bad["check"] += bool(check_trial(rng, pipeline, root / f"check{i}"))
         if tree_hashes(inputs) != inputs_before:
             print("the input files changed!")
             bad["kill"] += 1
         print(
             f"SIGKILL: {kills - bad['kill']}/{kills} consistent; "
-            f"disk full: {options.fulls - bad['full']}/{options.fulls} consistent"
+            f"disk full: {options.fulls - bad['full']}/{options.fulls} consistent; "
+            f"--only-changed: {options.checks - bad['check']}/{options.checks} consistent"
         )
         sys.exit(1 if any(bad.values()) else 0)
 

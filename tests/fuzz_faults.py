@@ -200,7 +200,8 @@ class Faults:
         root = case / "b"
         out = root / "out"
         for fault in faults:
-            with contextlib.suppress(sqlite3.Error, OSError):  # a fault an earlier one undid
+            # a fault an earlier one undid (SQLite's message about a damaged name: not text)
+            with contextlib.suppress(sqlite3.Error, OSError, UnicodeDecodeError):
                 _corrupt(out, fault)
         pipeline = root / "survey.yaml"
         commands: list[tuple[str | Path, ...]] = [

@@ -75,6 +75,26 @@ def test_a_file_that_is_not_a_ledger_is_named_with_what_to_do(tmp_path: Path):
     )
 
 
+def test_a_damaged_ledger_whose_message_is_not_text_is_named(tmp_path: Path):
+    """SQLite's message about a damaged schema quotes the damaged name, whose bytes need not
+    be UTF-8 (found by the fuzz suite's ledger kind: a flipped byte in the schema page)."""
+    path = tmp_path / "ledger.sqlite"
+    Ledger(path).close()
+    with sqlite3.connect(path) as db:
+        db.execute("PRAGMA writable_schema = ON")
+        db.execute(
+            "UPDATE sqlite_master SET name = CAST(X'DF41' AS TEXT), sql = 'CREATE garbage' "
+            "WHERE name = 'file_hashes'"
+        )
+    status = gyropipe_cli("status", tmp_path)
+    assert status.returncode == 2
+    assert status.stderr == (
+        f"error: ledger {path}: cannot open it: SQLite's message is not text (the file is "
+        "damaged?); the file is damaged: restore it from a copy, or move it away (a new "
+        "ledger starts an empty run history)\n"
+    )
+
+
 def test_a_ledger_locked_beyond_the_busy_timeout_is_named(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ):

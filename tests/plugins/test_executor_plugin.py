@@ -159,3 +159,29 @@ def test_the_guide_s_example_executor_is_the_test_plugin():
     (block,) = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
     assert "@hookimpl\ndef gyropipe_register_executors" in block
     assert block in PLUGIN.read_text()
+
+
+def test_a_plugin_executor_runs_the_checks_of_an_only_changed_batch(
+    serial_site: Path, survey: Path, wells: str, tmp_path: Path
+):
+    """Files rewritten since the last batch have no hash the batch process knows: their
+    wells are checked (the executor runs a task that only hashes), then skipped or run."""
+    out = tmp_path / "out"
+    assert batch(survey, wells, out, "--executor", "serial", site=serial_site).returncode == 0
+    north, south = tmp_path / "in" / "north.csv", tmp_path / "in" / "south.csv"
+    north.write_bytes(north.read_bytes())  # the same bytes, written again
+    south.write_text(STATIONS.read_text().replace("2520.00,44.99,45.35", "2520.00,44.99,46.35"))
+    again = batch(survey, wells, out, "--executor", "serial", "--only-changed", site=serial_site)
+    assert again.returncode == 0, again.stderr
+    told = [json.loads(line) for line in again.stderr.splitlines()]
+    assert {e["well"]: (e["status"], e["detail"]) for e in told if e["event"] == "well"} == {
+        "north": ("skipped", "unchanged"),
+        "south": ("done", "input changed: stations"),
+        "west": ("skipped", "unchanged"),
+    }
+    rows = runs(out / "ledger.sqlite")
+    assert [(r["well"], r["status"]) for r in rows] == [
+        ("north", "done"), ("south", "done"), ("south", "done"), ("west", "done")
+    ]  # fmt: skip
+    last = (out / "south" / "trajectory.csv").read_text().splitlines()[-1]
+    assert last.startswith("2520,44.99,46.35,")

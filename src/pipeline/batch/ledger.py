@@ -144,10 +144,16 @@ class LedgerError(GyropipeError):
     """The ledger cannot be read or written (module docstring): names the ledger file, what
     was being done, SQLite's reason and what to do."""
 
-    def __init__(self, path: Path, doing: str, cause: sqlite3.Error | OSError | str) -> None:
+    def __init__(
+        self, path: Path, doing: str, cause: sqlite3.Error | OSError | UnicodeDecodeError | str
+    ) -> None:
         self.path = path
         if isinstance(cause, str):
             reason = cause
+        elif isinstance(cause, UnicodeDecodeError):  # SQLite quoting a damaged name
+            reason = (
+                f"SQLite's message is not text (the file is damaged?); {ADVICE['SQLITE_CORRUPT']}"
+            )
         else:
             name = getattr(cause, "sqlite_errorname", None) or ""
             primary = "_".join(name.split("_")[:2])
@@ -166,7 +172,7 @@ def _guarded(doing: str) -> Callable[[Method[P, R]], Method[P, R]]:
         def guarded(ledger: Ledger, /, *args: P.args, **kwargs: P.kwargs) -> R:
             try:
                 return method(ledger, *args, **kwargs)
-            except sqlite3.Error as exc:
+            except (sqlite3.Error, UnicodeDecodeError) as exc:
                 raise LedgerError(ledger.path, doing, exc) from None
 
         functools.update_wrapper(guarded, method)
@@ -448,20 +454,24 @@ class Ledger:
             return Claimed(int(cursor.lastrowid or 0), reasons, check)
 
     @_guarded("record a well's check")
-    def checked(self, run_id: int, reasons: list[str] | None) -> None:
+    def checked(self, run_id: int, reasons: list[str] | None) -> bool:
         """A check's end: the claim dropped (``reasons`` None: the well is skipped), or made
-        the run of the well for ``reasons``."""
+        the run of the well for ``reasons``. False if the claim is no longer a check: the
+        batch was taken for dead meanwhile (silent past :data:`LEASE_S`) and its check
+        dropped — its id may be another claim's now, which stays as it is."""
         with self._write():
             if reasons is None:
-                self._db.execute(
+                cursor = self._db.execute(
                     "DELETE FROM runs WHERE id = ? AND status = 'running' AND note = ?",
                     (run_id, CHECKING),
                 )
             else:
-                self._db.execute(
-                    "UPDATE runs SET reasons = ?, note = NULL WHERE id = ?",
-                    (json.dumps(reasons), run_id),
+                cursor = self._db.execute(
+                    "UPDATE runs SET reasons = ?, note = NULL "
+                    "WHERE id = ? AND status = 'running' AND note = ?",
+                    (json.dumps(reasons), run_id, CHECKING),
                 )
+            return cursor.rowcount == 1
 
     @_guarded("read the file hashes")
     def known_hash(self, key: FileKey) -> str | None:
@@ -496,7 +506,7 @@ class Ledger:
                 "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
                 "process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
                 "fingerprint = COALESCE(?, fingerprint), reasons = COALESCE(?, reasons) "
-                "WHERE id = ?",
+                "WHERE id = ? AND well = ?",
                 (
                     status,
                     time.time(),
@@ -513,6 +523,7 @@ class Ledger:
                     fingerprint.to_json() if fingerprint is not None else None,
                     json.dumps(reasons) if reasons is not None else None,
                     outcome.run_id,
+                    outcome.well_id,  # (an id reused after its batch's check was dropped)
                 ),
             )
 

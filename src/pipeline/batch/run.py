@@ -421,7 +421,10 @@ class _Batch:
             turn.results.append(WellResult(job.well_id, "skipped", decision.reason))
             return
         assert isinstance(decision, Run)  # every hash is known now
-        self.ledger.checked(flight.run_id, decision.reasons)
+        if not self.ledger.checked(flight.run_id, decision.reasons):
+            lost = "its claim was settled by another batch meanwhile (this one was silent)"
+            turn.results.append(WellResult(job.well_id, "interrupted", lost))
+            return
         ran = replace(
             flight, fingerprint=fingerprint, reasons=decision.reasons, known=known, check=None
         )
