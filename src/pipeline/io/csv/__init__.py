@@ -36,7 +36,8 @@ File layout, in order:
 * **footer** (optional): a trailing run of lines after the last data row, each with a
   non-numeric first cell and either fewer cells than the header or no numeric cell in a
   required column (``End of survey``, ``Total,,,1234``). Any other bad cell is an error
-  naming its file line — a truncated or corrupt last row is never dropped as a footer.
+  naming its file line — a truncated or corrupt last row is never dropped as a footer; a
+  footer left out is told in a warning at its first line.
 
 Delimiters are detected (runs of spaces are not supported: names like ``Measured Depth``
 make them ambiguous); line ends may be LF, CRLF or CR; text is UTF-8 with or without a BOM.

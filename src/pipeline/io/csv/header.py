@@ -1,4 +1,4 @@
-"""Header row and title block of a CSV file (see :mod:`pipeline.io.csv` for the layout).
+"""Header row, title block and footer of a CSV file (see :mod:`pipeline.io.csv`, the layout).
 
 Header cells name canonical columns through :mod:`pipeline.io.mnemonics` (the ``aliases``
 option is consulted first), carry units in brackets (``MD [ft]``, ``Rate X (deg/h)``) and,
@@ -22,6 +22,7 @@ from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
 DELIMITERS = (",", ";", "\t", "|")
+_NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
 HEADER_SEARCH_LINES = 500
 MAX_COLUMNS = 1_000
 """Most cells a header row may have (a survey table has tens; 10⁶ took 16 s and 430 MB)."""
@@ -343,3 +344,13 @@ def _well_value(path: Path, field: str, value: str, line: int) -> Any:
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
         reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
         raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None
+
+
+def is_footer(cells: list[str], width: int, required: list[int]) -> bool:
+    """A line after the data that is text: non-numeric first cell, and fewer cells than the
+    header or no numeric cell in a required column."""
+    first = next((c.strip() for c in cells if c.strip()), "")
+    if _NUMBERISH.match(first):
+        return False
+    numeric = any(i < len(cells) and _NUMBERISH.match(cells[i].strip()) for i in required)
+    return len(cells) < width or not numeric

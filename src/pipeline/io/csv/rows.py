@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import codecs
 import mmap
-import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,10 +31,10 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 from numpy.typing import NDArray
 
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileError, warn_input
 from pipeline.io import threads as io_threads
 from pipeline.io.arrow_text import in_order, read_options, release
-from pipeline.io.csv.header import Cell, Header, cells_of
+from pipeline.io.csv.header import Cell, Header, cells_of, is_footer
 from pipeline.io.nulls import value_range
 
 SHOWN = 5
@@ -50,7 +49,6 @@ MARKED = (b"\0", b"\r", b"#", b'"')
 """Bytes a block is checked for: NUL, CR (line ends), comment marks and quotes."""
 BOM = b"\xef\xbb\xbf"
 
-_NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
 _NUMBER = {
     ".": r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$",
     ",": r"^[+-]?([0-9]+(,[0-9]*)?|,[0-9]+)([eE][+-]?[0-9]+)?$",
@@ -255,12 +253,13 @@ def split_head(data: Data, limit: int) -> tuple[list[str], list[int]]:
 
 def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Rows:
     """The data rows: every line after the header up to the footer (a trailing run of text
-    lines, see :func:`_is_footer`), blank and comment lines left out. ``required`` are the
-    indices of the cells a data row must fill."""
+    lines, :func:`~pipeline.io.csv.header.is_footer`, told in a warning), blank and comment
+    lines left out. ``required`` are the indices of the cells a data row must fill."""
     data = text.data
     after = data.find(b"\n", text.starts[header.index])
     start = len(data) if after < 0 else after + 1
     end = None
+    footer: list[tuple[int, bytes]] = []  # (start, line), last line first
     for line_start, line_end in _lines_backwards(data, start):
         line = data[line_start:line_end]
         if _skipped(line):
@@ -270,11 +269,19 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
         except UnicodeDecodeError as exc:  # a mapped file's lines are checked when parsed
             where = _line_ends(data, 0, line_start) + 1
             raise InputFileError(path, f"not UTF-8 text: {exc.reason}", line=where) from None
-        if not _is_footer(cells, len(header.cells), required):
+        if not is_footer(cells, len(header.cells), required):
             end = line_end
             break
+        footer.append((line_start, line))
     if end is None:
         raise InputFileError(path, "no data rows after the header", line=header.index + 1)
+    if footer:  # told at its first line: a row left out is never left out quietly
+        (at, first), n = footer[-1], len(footer)
+        lines = f"{n} trailing lines" if n > 1 else "a trailing line"
+        shown = first.decode()[:60].strip()
+        message = f"{lines} after the last data row read as a footer (text, no number where a"
+        message += f" row has one) and left out, the first: {shown!r}"
+        warn_input(path, message, line=_line_ends(data, 0, at) + 1)
     first_line = header.index + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
@@ -322,16 +329,6 @@ def _without_skipped(rows: Rows) -> Rows:
     kept = block[np.repeat(keep, lengths)[: len(block)]].tobytes()
     lines = rows.source_lines(len(keep))[keep]
     return Rows(kept, 0, len(kept), int(lines[0]), lines)
-
-
-def _is_footer(cells: list[str], width: int, required: list[int]) -> bool:
-    """A line after the data that is text: non-numeric first cell, and fewer cells than the
-    header or no numeric cell in a required column."""
-    first = next((c.strip() for c in cells if c.strip()), "")
-    if _NUMBERISH.match(first):
-        return False
-    numeric = any(i < len(cells) and _NUMBERISH.match(cells[i].strip()) for i in required)
-    return len(cells) < width or not numeric
 
 
 # ------------------------------------------------------------------------- parsing
