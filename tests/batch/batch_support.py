@@ -195,5 +195,10 @@ _HOOKED: list[bool] = []  # the hook cannot be removed: installed once
 
 
 def _audit(event: str, args: tuple[Any, ...]) -> None:
-    if event == "open" and _ACTIVE and isinstance(args[0], str | bytes | os.PathLike):
-        _ACTIVE[-1].record(os.fsdecode(args[0]))
+    # open() and io.open() give their mode; os.open() gives None: a descriptor opened to
+    # fstat a file (the batch's stat key) is not a read, and is left out
+    if event != "open" or not _ACTIVE:
+        return
+    path, mode = args[0], args[1]
+    if mode is not None and isinstance(path, str | bytes | os.PathLike):
+        _ACTIVE[-1].record(os.fsdecode(path))

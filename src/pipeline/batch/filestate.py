@@ -6,7 +6,11 @@ nanoseconds — stands for its content while it holds: writing a file moves its 
 which no program can set back. The batch process never reads an input: it stats it (O(1)),
 and a worker hashes it; the ledger's ``file_hashes`` table (:class:`HashCache`) keeps the
 hash a worker found for the key the batch process saw, so the next batch knows the hash of
-an untouched file from its stat alone. Hard links share an inode, hence one entry.
+an untouched file from its stat alone. Hard links share an inode, hence one entry. The key
+is read through a descriptor opened for it (nothing is read): on NFS, opening a file makes
+the client check its attributes with the server (close-to-open consistency), where a plain
+``stat`` may answer from the attribute cache (``acregmax``, 60 s by default) and miss a
+write made on another machine meanwhile.
 
 A hash is remembered only when the batch process saw the same key before the worker hashed
 the file and after its result came back, and the file's last change lay at least
@@ -88,6 +92,14 @@ def file_key(path: Path | str) -> FileKey:
     if not stat.S_ISREG(found.st_mode):
         kind = file_kind(found.st_mode)
         raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
+    # opened (nothing read) and stat'ed through the descriptor: an NFS client checks a file's
+    # attributes with the server on open (close-to-open), where a plain stat may answer from
+    # its attribute cache for up to a minute and miss another machine's write
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        found = os.fstat(fd)
+    finally:
+        os.close(fd)
     return FileKey(found.st_dev, found.st_ino, found.st_size, found.st_mtime_ns, found.st_ctime_ns)
 
 
