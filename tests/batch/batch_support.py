@@ -1,7 +1,7 @@
 """Helpers of the batch tests: wells made of copies of the bundled station listing (and
 corrupt copies) in a temporary directory, the CLI run as a real subprocess (in process:
 ``tests_support.gyropipe_cli``), and independent readers of the ledger (plain sqlite3) and
-of the published outputs."""
+of the published outputs, and an executor that runs each task in this process."""
 
 from __future__ import annotations
 
@@ -16,6 +16,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from pipeline.batch.worker import WellOutcome, WellTask, run_well
+from pipeline.executing import ExecutorSetup
 from tests_support import ROOT, gyropipe, stage, survey_stages, write_pipeline
 
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
@@ -202,3 +204,25 @@ def _audit(event: str, args: tuple[Any, ...]) -> None:
     path, mode = args[0], args[1]
     if mode is not None and isinstance(path, str | bytes | os.PathLike):
         _ACTIVE[-1].record(os.fsdecode(path))
+
+
+class InProcess:
+    """An executor running each task at once in this process (as the ``serial`` test plugin
+    does); ``wait`` hands back what has run since. Tests act around :meth:`run`."""
+
+    def __init__(self, setup: ExecutorSetup) -> None:
+        self.ref = setup.ref
+        self._finished: list[WellOutcome] = []
+
+    def run(self, task: WellTask) -> WellOutcome:
+        return run_well(task, self.ref)
+
+    def submit(self, task: WellTask) -> None:
+        self._finished.append(self.run(task))
+
+    def wait(self, timeout: float) -> list[WellOutcome]:
+        finished, self._finished = self._finished, []
+        return finished
+
+    def close(self, cancel: bool) -> None:
+        self._finished = []

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from batch_support import (
+    InProcess,
     assert_complete,
     change_one_azimuth,
     corrupt,
@@ -37,7 +38,7 @@ from pipeline.batch.policy import Check, Mode, Run, Skip
 from pipeline.batch.progress import JsonLines
 from pipeline.batch.publish import WORK_DIR, clean_work_dir
 from pipeline.batch.run import BatchOptions, run_batch
-from pipeline.batch.worker import WellOutcome, WellTask, run_well
+from pipeline.batch.worker import WellOutcome, WellTask
 from pipeline.executing import ExecutorDef, ExecutorSetup
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
@@ -325,15 +326,16 @@ def test_a_check_settled_by_another_batch_is_not_made_a_run_on_a_reused_row(tmp_
         other.close()
 
 
-class TakenForDead:
+class TakenForDead(InProcess):
     """Runs each task in this process; before the first check, another batch takes this one
     for dead (its heartbeat aged past the lease), settles it and claims a new well ``X``."""
 
     def __init__(self, setup: ExecutorSetup, ledger: Path) -> None:
-        self._ref, self._ledger, self._finished = setup.ref, ledger, []
+        super().__init__(setup)
+        self._ledger = ledger
         self.taken: int | None = None
 
-    def submit(self, task: WellTask) -> None:
+    def run(self, task: WellTask) -> WellOutcome:
         if task.check is not None and self.taken is None:
             with sqlite3.connect(self._ledger) as db:
                 db.execute("UPDATE batches SET heartbeat = heartbeat - 120")
@@ -350,14 +352,7 @@ class TakenForDead:
                 self.taken = claim.run_id
             finally:
                 other.close()
-        self._finished.append(run_well(task, self._ref))
-
-    def wait(self, timeout: float) -> list[WellOutcome]:
-        finished, self._finished = self._finished, []
-        return finished
-
-    def close(self, cancel: bool) -> None:
-        self._finished = []
+        return super().run(task)
 
 
 def test_a_batch_taken_for_dead_while_checking_does_not_run_the_well_under_a_lost_claim(

@@ -12,14 +12,14 @@ import sqlite3
 from pathlib import Path
 
 import pytest
-from batch_support import Opens, change_one_azimuth, make_wells, runs
+from batch_support import InProcess, Opens, change_one_azimuth, make_wells, runs
 
 from pipeline.batch import filestate
 from pipeline.batch.jobs import jobs_from_glob
 from pipeline.batch.policy import Mode
 from pipeline.batch.progress import JsonLines
 from pipeline.batch.run import BatchOptions, BatchReport, run_batch
-from pipeline.batch.worker import WellOutcome, WellTask, run_well
+from pipeline.batch.worker import WellOutcome, WellTask
 from pipeline.executing import ExecutorDef, ExecutorSetup
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
@@ -27,26 +27,18 @@ from pipeline.spec import load_spec
 from pipeline.well import WellMetadata
 
 
-class Recording:
+class Recording(InProcess):
     """Runs each task at once in this process, its opens counted as the worker's."""
 
     def __init__(self, setup: ExecutorSetup, opens: Opens, tasks: list[WellTask]) -> None:
-        self._ref = setup.ref
+        super().__init__(setup)
         self._opens = opens
         self._tasks = tasks
-        self._finished: list[WellOutcome] = []
 
-    def submit(self, task: WellTask) -> None:
+    def run(self, task: WellTask) -> WellOutcome:
         self._tasks.append(task)
         with self._opens.worker_code():
-            self._finished.append(run_well(task, self._ref))
-
-    def wait(self, timeout: float) -> list[WellOutcome]:
-        finished, self._finished = self._finished, []
-        return finished
-
-    def close(self, cancel: bool) -> None:
-        self._finished = []
+            return super().run(task)
 
 
 def batch(
