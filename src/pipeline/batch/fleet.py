@@ -106,13 +106,18 @@ CALIBRATION = required(CalibrationResult)
 CORRECTED = required(CorrectedFreeGyroReadings)
 
 
-def well_figures(well_dir: Path, run_id: int | None = None) -> WellFigures:
+def well_figures(
+    well_dir: Path, run_id: int | None = None, manifest: Mapping[str, Any] | None = None
+) -> WellFigures:
     """The figures of the run published in ``well_dir`` (module docstring); with
-    ``run_id``, a published run of another id is told in ``problems``."""
-    manifest, missing = _manifest(well_dir)
-    if manifest is None:
-        return WellFigures(missing=missing)
+    ``run_id``, a published run of another id is told in ``problems``. ``manifest``: the
+    published run's ``run.json`` where the caller holds it (the worker that published it),
+    else it is read."""
     problems: list[str] = []
+    if manifest is None:
+        manifest, missing = _manifest(well_dir)
+        if manifest is None:
+            return WellFigures(missing=missing)
     if run_id is not None:
         marked = _marked_run(well_dir)
         if marked != run_id:

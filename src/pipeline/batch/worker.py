@@ -214,7 +214,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
             published_run=held_run,
-            figures=well_figures(final, task.run_id),
+            figures=well_figures(final, manifest=manifest),  # published whole above
         )
     except Exception as exc:  # a failing well is reported, never raised into the batch
         error = str(exc) if isinstance(exc, GyropipeError) else f"{type(exc).__name__}: {exc}"
