@@ -28,6 +28,7 @@ import hashlib
 import json
 import os
 import signal
+import stat
 import time
 from collections import Counter, deque
 from collections.abc import Sequence
@@ -551,8 +552,14 @@ def _check_ledger_place(ledger: Path, out: Path, jobs: Sequence[WellJob]) -> Non
 
 
 def _input_bytes(job: WellJob) -> int:
-    """Total size of a well's input files (missing files count 0)."""
-    return sum(path.stat().st_size if path.is_file() else 0 for path in job.inputs.values())
+    """Total size of a well's input files (missing files and other kinds count 0), one stat
+    each."""
+    total = 0
+    for path in job.inputs.values():
+        with contextlib.suppress(OSError):
+            found = path.stat()
+            total += found.st_size if stat.S_ISREG(found.st_mode) else 0
+    return total
 
 
 def _check_paths(job: WellJob, check: Check) -> list[str]:
