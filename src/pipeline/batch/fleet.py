@@ -23,6 +23,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline import jsontext
+from pipeline.anticollision.rule import LEVELS
 from pipeline.anticollision.tables import Clearance, rule_of
 from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
@@ -36,8 +37,6 @@ from pipeline.tables import CheckResults, Trajectory
 from .publish import MARKER
 
 REPORT_SUFFIXES = (".html", ".pdf")
-LEVELS = ("pass", "warn", "fail")
-"""clearance levels, best first"""
 
 
 @dataclass(frozen=True)
