@@ -126,10 +126,10 @@ def well_figures(
         name = entry.get("file") if isinstance(entry, Mapping) else None
         if isinstance(name, str) and name.endswith(".parquet") and "/" not in name:
             reader.read(name)
-    qc = qc_tally(reader.checks, reader.positions) if reader.checks or reader.positions else None
+    qc = qc_tally(reader.checks, reader.positions)
     return WellFigures(
         pipeline=_pipeline(manifest),
-        qc=qc if qc is not None and qc.evaluated else None,
+        qc=qc if qc.evaluated else None,
         gates=_gates(manifest, problems),
         clearance=reader.clearance,
         drift=tuple(reader.drift) if reader.drift else None,
