@@ -121,10 +121,10 @@ def well_figures(
         marked = _marked_run(well_dir)
         if marked != run_id:
             problems.append(f"the outputs published are of run {marked}, not run {run_id}")
+    outputs = _outputs(manifest)
     reader = _Tables(well_dir, problems)
-    for entry in manifest["outputs"]:
-        name = entry.get("file") if isinstance(entry, Mapping) else None
-        if isinstance(name, str) and name.endswith(".parquet") and "/" not in name:
+    for name in outputs:
+        if name.endswith(".parquet"):
             reader.read(name)
     qc = qc_tally(reader.checks, reader.positions)
     return WellFigures(
@@ -136,7 +136,7 @@ def well_figures(
         td_md=reader.td_md,
         td_tvd=reader.td_tvd,
         max_dls=reader.max_dls,
-        reports=_reports(well_dir, manifest),
+        reports=_reports(well_dir, outputs),
         problems=tuple(problems),
     )
 
@@ -265,17 +265,15 @@ def _gates(manifest: Mapping[str, Any], problems: list[str]) -> tuple[Gate, ...]
         return None
 
 
-def _reports(well_dir: Path, manifest: Mapping[str, Any]) -> tuple[str, ...]:
-    """The report files listed in ``run.json`` and on disk, HTML before PDF."""
-    names = [
-        e["file"]
-        for e in manifest["outputs"]
-        if isinstance(e, Mapping)
-        and isinstance(e.get("file"), str)
-        and "/" not in e["file"]
-        and e["file"].endswith(REPORT_SUFFIXES)
-    ]
-    names = [n for n in names if (well_dir / n).is_file()]
+def _outputs(manifest: Mapping[str, Any]) -> list[str]:
+    """The names of the files ``run.json`` lists in the well's directory."""
+    names = (e.get("file") if isinstance(e, Mapping) else None for e in manifest["outputs"])
+    return [n for n in names if isinstance(n, str) and "/" not in n]
+
+
+def _reports(well_dir: Path, outputs: list[str]) -> tuple[str, ...]:
+    """The report files among ``outputs`` that are on disk, HTML before PDF."""
+    names = [n for n in outputs if n.endswith(REPORT_SUFFIXES) and (well_dir / n).is_file()]
     return tuple(sorted(names, key=lambda n: (REPORT_SUFFIXES.index(Path(n).suffix), n)))
 
 
