@@ -157,28 +157,32 @@ class _Tables:
 
     def read(self, name: str) -> None:
         try:
-            file = pq.ParquetFile(self.well_dir / name)
-            names = set(file.schema_arrow.names)
-            if names >= TRAJECTORY:
-                self._trajectory(file.read(columns=["md", "tvd", "dls"]))
-            elif any(names >= kind for kind in CHECKS):
-                self.checks.append(file.read(columns=["check", "passed", "md"]))
-            elif names >= CLEARANCE:
-                columns = ["offset", "md", "sf", "sf_between", "md_between", "level"]
-                self._clearance(file.read(columns=columns))
-            elif names >= CALIBRATION:
-                columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
-                self._calibration(file.read(columns=columns))
-            elif names >= CORRECTED:
-                table = file.read(columns=["time", "correction"])
-                rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
-                if math.isfinite(rate):
-                    self.drift.append(DriftFigure(rate, None, None))
+            with pq.ParquetFile(self.well_dir / name) as file:  # closed here, not at GC
+                self._table(file)
         except FileNotFoundError:
             self.problems.append(f"{name} is missing")
         except (OSError, pa.ArrowException, ValueError, KeyError, TypeError) as exc:
             reason = " ".join(str(exc).split())[:160]
             self.problems.append(f"{name} cannot be read ({reason})")
+
+    def _table(self, file: pq.ParquetFile) -> None:
+        """A table, known by the columns its contract requires, read into its figure."""
+        names = set(file.schema_arrow.names)
+        if names >= TRAJECTORY:
+            self._trajectory(file.read(columns=["md", "tvd", "dls"]))
+        elif any(names >= kind for kind in CHECKS):
+            self.checks.append(file.read(columns=["check", "passed", "md"]))
+        elif names >= CLEARANCE:
+            columns = ["offset", "md", "sf", "sf_between", "md_between", "level"]
+            self._clearance(file.read(columns=columns))
+        elif names >= CALIBRATION:
+            columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
+            self._calibration(file.read(columns=columns))
+        elif names >= CORRECTED:
+            table = file.read(columns=["time", "correction"])
+            rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
+            if math.isfinite(rate):
+                self.drift.append(DriftFigure(rate, None, None))
 
     def _trajectory(self, table: pa.Table) -> None:
         """The last trajectory persisted gives TD and the largest DLS (a later stage's is
