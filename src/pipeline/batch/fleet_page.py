@@ -25,8 +25,9 @@ from pathlib import Path
 
 from pipeline.atomic import atomic_write_bytes
 from pipeline.errors import file_errors
-from pipeline.reports.check_titles import check_title
+from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.numbers import fmt, fmt_measured, fmt_sig, fmt_sigma
+from pipeline.tables import DLS_UNIT
 
 from .causes import plain_cause
 from .fleet import WellFigures, well_figures
@@ -119,16 +120,20 @@ def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     )
 
 
-HEADS = (
-    ("Well", ""),
-    ("Status", ""),
+FIGURE_HEADS = (
     ("QC checks", ""),
     ("Acceptance", ""),
     ("Clearance: least SF", ""),
     ("Drift", ""),
     ('TD MD <span class="u">m</span>', ' class="n"'),
     ('TD TVD <span class="u">m</span>', ' class="n"'),
-    ('Max DLS <span class="u">°/30 m</span>', ' class="n"'),
+    (f'Max DLS <span class="u">{printed_unit(DLS_UNIT)}</span>', ' class="n"'),
+)
+"""the columns of a well's figures (one cell saying why where it has none)"""
+HEADS = (
+    ("Well", ""),
+    ("Status", ""),
+    *FIGURE_HEADS,
     ('Time <span class="u">s</span>', ' class="n"'),
     ("Report", ""),
 )
@@ -151,7 +156,7 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
         status += f'<div class="why problem">Output: {_e(problem)}</div>'
     cells = [f'<th scope="row">{_e(well.well)}</th>', f'<td class="st">{status}</td>']
     if figures.missing:
-        cells.append(f'<td colspan="7" class="problem">{_e(figures.missing)}</td>')
+        cells.append(f'<td colspan="{len(FIGURE_HEADS)}" class="problem">{_e(figures.missing)}</td>')
     else:
         cells += [
             f"<td>{_qc(figures)}</td>",
