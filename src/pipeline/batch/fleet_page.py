@@ -19,7 +19,6 @@ import os
 import time
 import urllib.parse
 from collections import Counter
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -112,7 +111,7 @@ def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     title = f"{fleet.title}: {_plural(len(fleet.wells) + fleet.not_run, 'well')}"
     return PAGE.format(
         title=_e(title),
-        about=_about(fleet, pipelines, fleet.wells),
+        about=_about(fleet, pipelines),
         bar=_bar(tally),
         counts=_counts(tally),
         rows=body or f'<tr><td colspan="{len(HEADS)}">No wells.</td></tr>',
@@ -260,7 +259,7 @@ def _number(value: float | None, decimals: int) -> str:
     return f'<td class="n">{NONE if value is None else fmt(value, decimals)}</td>'
 
 
-def _about(fleet: Fleet, pipelines: list[str], wells: Sequence[FleetWell]) -> str:
+def _about(fleet: Fleet, pipelines: list[str]) -> str:
     lines = []
     if pipelines:
         lines.append(f"Pipeline {_e(', '.join(pipelines))}")
@@ -278,7 +277,7 @@ def _about(fleet: Fleet, pipelines: list[str], wells: Sequence[FleetWell]) -> st
             f"{len(batches)} batches, {_when(batches[0].started)} to "
             f"{_when(last.finished or last.heartbeat)}; latest batch {last.id} ({last.status})"
         )
-    spent = sum(r.time_s for r in wells if r.time_s is not None)
+    spent = sum(r.time_s for r in fleet.wells if r.time_s is not None)
     lines.append(f"Processing time of the wells listed: {_duration(spent)} in total")
     lines.append(f"Page written {_when(time.time())}")
     return "".join(f"<li>{line}</li>" for line in lines)
