@@ -24,8 +24,9 @@ from pathlib import Path
 
 from pipeline.atomic import atomic_write_bytes
 from pipeline.errors import file_errors
+from pipeline.qc.gates import FAIL, PASS
 from pipeline.reports.check_titles import check_title, printed_unit
-from pipeline.reports.numbers import fmt, fmt_measured, fmt_sig, fmt_sigma
+from pipeline.reports.numbers import UNDEFINED, fmt, fmt_measured, fmt_sig, fmt_sigma
 from pipeline.tables import DLS_UNIT
 
 from .causes import plain_cause
@@ -155,7 +156,8 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
         status += f'<div class="why problem">Output: {_e(problem)}</div>'
     cells = [f'<th scope="row">{_e(well.well)}</th>', f'<td class="st">{status}</td>']
     if figures.missing:
-        cells.append(f'<td colspan="{len(FIGURE_HEADS)}" class="problem">{_e(figures.missing)}</td>')
+        span = len(FIGURE_HEADS)
+        cells.append(f'<td colspan="{span}" class="problem">{_e(figures.missing)}</td>')
     else:
         cells += [
             f"<td>{_qc(figures)}</td>",
@@ -197,8 +199,8 @@ def _gates(figures: WellFigures) -> str:
     gates = figures.gates
     if gates is None:
         return NONE
-    failed = [g for g in gates if g.status == "fail"]
-    unknown = sum(g.status not in ("pass", "fail") for g in gates)
+    failed = [g for g in gates if g.status == FAIL]
+    unknown = sum(g.status not in (PASS, FAIL) for g in gates)
     extra = f'<div class="why">{unknown} not evaluated</div>' if unknown else ""
     if not failed:
         passed = len(gates) - unknown
@@ -215,7 +217,7 @@ def _clearance(figures: WellFigures) -> str:
         return NONE
     symbol, word = CLEARANCE_WORDS.get(worst.level, ("?", worst.level))
     tone = "ok" if worst.level == "pass" else "bad"
-    sf = "undefined" if worst.sf == float("-inf") else fmt(worst.sf, 2)
+    sf = UNDEFINED if worst.sf == float("-inf") else fmt(worst.sf, 2)
     return (
         f'<span class="{tone}">{symbol}</span> {sf} ({word})'
         f'<div class="why">against {_e(worst.offset)} at {fmt(worst.md, 1)} m MD</div>'
