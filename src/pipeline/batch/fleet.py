@@ -83,8 +83,11 @@ class WellFigures:
     clearance: WorstClearance | None = None
     drift: tuple[DriftFigure, ...] | None = None
     td_md: float | None = None
+    """MD of the deepest station, m"""
     td_tvd: float | None = None
+    """its TVD below the well's depth reference, m"""
     max_dls: float | None = None
+    """the largest dogleg severity over every course (short ones too), °/30 m"""
     reports: tuple[str, ...] = ()
     """the report files (HTML first), names in the well's directory"""
     missing: str | None = None

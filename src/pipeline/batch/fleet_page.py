@@ -409,7 +409,7 @@ footer {{ margin-top: 14px; color: var(--soft); font-size: 12px; }}
 <footer>Failing wells first (failed, interrupted, rejected), then done and skipped wells;
 by well within each. {none} the well has no such figure. SF: separation factor of the
 reference well against its offset wells (the least, where the scan decides); DLS: dogleg
-severity; TD: the deepest station.</footer>
+severity; TD: the deepest station (TVD below the well's depth reference).</footer>
 </body>
 </html>
 """.replace("{none}", NONE)
