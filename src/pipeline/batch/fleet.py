@@ -211,7 +211,7 @@ class _Tables:
         md = _floats(table, "md_between" if on_course else "md")
         decided = np.where(np.isnan(sf), -np.inf, sf)
         k = int(np.argmin(decided))
-        levels = [lv for lv in table.column("level").to_pylist() if lv in LEVELS]
+        levels = [lv for lv in table.column("level").unique().to_pylist() if lv in LEVELS]
         level = max(levels, key=LEVELS.index) if levels else "fail"
         offset = str(table.column("offset")[k].as_py())
         found = WorstClearance(float(decided[k]), offset, float(md[k]), level)
