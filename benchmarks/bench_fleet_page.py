@@ -3,9 +3,11 @@
 One clearance well (``pipelines/clearance.yaml`` on ``examples/clearance``: trajectory,
 clearance table of 6 offset wells × 100 stations, report) is run once by a 1-well batch;
 its published directory is hard-linked N times (``OUT/W-0000`` …) and the page of the N
-wells built as a batch builds it. Printed: CPU ms per well (user + sys of this process,
-``resource.getrusage``) for the whole page and for its floor — reading each well's
-``run.json`` alone — the page's bytes per well, and the load average.
+wells built with every well's figures read from its published outputs, as ``gyropipe status
+DIR --html`` builds it (a batch has its workers read those of the wells it ran). Printed:
+CPU ms per well (user + sys of this process, ``resource.getrusage``) for the whole page and
+for its floor — reading each well's ``run.json`` alone — the page's bytes per well, and the
+load average.
 
     python benchmarks/bench_fleet_page.py [--wells 1000]
 """

@@ -361,9 +361,17 @@ def test_status_html_writes_the_file_given(small_batch: Path, tmp_path: Path) ->
     assert len(links) == 3
 
 
+def unstamped(page: Path) -> str:
+    """The page's source without the minute it was written."""
+    return re.sub(r"Page written [^<]*", "Page written", page.read_text(encoding="utf-8"))
+
+
 def test_the_api_writes_the_same_page(small_batch: Path, tmp_path: Path) -> None:
+    gyropipe_cli("status", small_batch, "--html", check=True)
+    by_cli = unstamped(small_batch / "fleet.html")
     path = gp.fleet_page(small_batch)
     assert path == small_batch / "fleet.html"
+    assert unstamped(path) == by_cli
     other = gp.fleet_page(small_batch, tmp_path / "page.html")
     for page in (path, other):  # the three wells' reports linked from where each page is
         links = [h.split('"')[0] for h in page.read_text().split('href="')[1:]]

@@ -5,6 +5,7 @@ dropped, paths shortened to file names (:func:`cause`, the terminal), and the st
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 STAGE_FAILED = re.compile(r"^stage '([^']+)' \([^)]*\) failed: (?:\w+Error: )?")
 PATH = re.compile(r"(?:[^\s:'\"]*/)+([^\s:/'\"]+)")
@@ -12,11 +13,16 @@ PATH = re.compile(r"(?:[^\s:'\"]*/)+([^\s:/'\"]+)")
 
 def cause(detail: str) -> str:
     """``stage: file:line: message``."""
-    text = STAGE_FAILED.sub(lambda m: f"{m.group(1)}: ", " ".join(detail.split()))
-    return PATH.sub(lambda m: m.group(1), text)
+    return _shortened(detail, lambda m: f"{m.group(1)}: ")
 
 
 def plain_cause(detail: str) -> str:
     """``file:line: message``."""
-    text = STAGE_FAILED.sub("", " ".join(detail.split()))
+    return _shortened(detail, "")
+
+
+def _shortened(detail: str, stage: str | Callable[[re.Match[str]], str]) -> str:
+    """``detail`` on one line, its ``stage '…' (…) failed: XError:`` prefix replaced by
+    ``stage``, paths shortened to file names."""
+    text = STAGE_FAILED.sub(stage, " ".join(detail.split()))
     return PATH.sub(lambda m: m.group(1), text)

@@ -23,6 +23,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline import jsontext
+from pipeline.anticollision.rule import LEVELS
 from pipeline.anticollision.tables import Clearance, rule_of
 from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
@@ -36,8 +37,6 @@ from pipeline.tables import CheckResults, Trajectory
 from .publish import MARKER
 
 REPORT_SUFFIXES = (".html", ".pdf")
-LEVELS = ("pass", "warn", "fail")
-"""clearance levels, best first"""
 
 
 @dataclass(frozen=True)
@@ -84,8 +83,11 @@ class WellFigures:
     clearance: WorstClearance | None = None
     drift: tuple[DriftFigure, ...] | None = None
     td_md: float | None = None
+    """MD of the deepest station, m"""
     td_tvd: float | None = None
+    """its TVD below the well's depth reference, m"""
     max_dls: float | None = None
+    """the largest dogleg severity over every course (short ones too), °/30 m"""
     reports: tuple[str, ...] = ()
     """the report files (HTML first), names in the well's directory"""
     missing: str | None = None
@@ -122,22 +124,22 @@ def well_figures(
         marked = _marked_run(well_dir)
         if marked != run_id:
             problems.append(f"the outputs published are of run {marked}, not run {run_id}")
+    outputs = _outputs(manifest)
     reader = _Tables(well_dir, problems)
-    for entry in manifest["outputs"]:
-        name = entry.get("file") if isinstance(entry, Mapping) else None
-        if isinstance(name, str) and name.endswith(".parquet") and "/" not in name:
+    for name in outputs:
+        if name.endswith(".parquet"):
             reader.read(name)
-    qc = qc_tally(reader.checks, reader.positions) if reader.checks or reader.positions else None
+    qc = qc_tally(reader.checks, reader.positions)
     return WellFigures(
         pipeline=_pipeline(manifest),
-        qc=qc if qc is not None and qc.evaluated else None,
+        qc=qc if qc.evaluated else None,
         gates=_gates(manifest, problems),
         clearance=reader.clearance,
         drift=tuple(reader.drift) if reader.drift else None,
         td_md=reader.td_md,
         td_tvd=reader.td_tvd,
         max_dls=reader.max_dls,
-        reports=_reports(well_dir, manifest),
+        reports=_reports(well_dir, outputs),
         problems=tuple(problems),
     )
 
@@ -158,28 +160,32 @@ class _Tables:
 
     def read(self, name: str) -> None:
         try:
-            file = pq.ParquetFile(self.well_dir / name)
-            names = set(file.schema_arrow.names)
-            if names >= TRAJECTORY:
-                self._trajectory(file.read(columns=["md", "tvd", "dls"]))
-            elif any(names >= kind for kind in CHECKS):
-                self.checks.append(file.read(columns=["check", "passed", "md"]))
-            elif names >= CLEARANCE:
-                columns = ["offset", "md", "sf", "sf_between", "md_between", "level"]
-                self._clearance(file.read(columns=columns))
-            elif names >= CALIBRATION:
-                columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
-                self._calibration(file.read(columns=columns))
-            elif names >= CORRECTED:
-                table = file.read(columns=["time", "correction"])
-                rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
-                if math.isfinite(rate):
-                    self.drift.append(DriftFigure(rate, None, None))
+            with pq.ParquetFile(self.well_dir / name) as file:  # closed here, not at GC
+                self._table(file)
         except FileNotFoundError:
             self.problems.append(f"{name} is missing")
         except (OSError, pa.ArrowException, ValueError, KeyError, TypeError) as exc:
             reason = " ".join(str(exc).split())[:160]
             self.problems.append(f"{name} cannot be read ({reason})")
+
+    def _table(self, file: pq.ParquetFile) -> None:
+        """A table, known by the columns its contract requires, read into its figure."""
+        names = set(file.schema_arrow.names)
+        if names >= TRAJECTORY:
+            self._trajectory(file.read(columns=["md", "tvd", "dls"]))
+        elif any(names >= kind for kind in CHECKS):
+            self.checks.append(file.read(columns=["check", "passed", "md"]))
+        elif names >= CLEARANCE:
+            columns = ["offset", "md", "sf", "sf_between", "md_between", "level"]
+            self._clearance(file.read(columns=columns))
+        elif names >= CALIBRATION:
+            columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
+            self._calibration(file.read(columns=columns))
+        elif names >= CORRECTED:
+            table = file.read(columns=["time", "correction"])
+            rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
+            if math.isfinite(rate):
+                self.drift.append(DriftFigure(rate, None, None))
 
     def _trajectory(self, table: pa.Table) -> None:
         """The last trajectory persisted gives TD and the largest DLS (a later stage's is
@@ -205,7 +211,7 @@ class _Tables:
         md = _floats(table, "md_between" if on_course else "md")
         decided = np.where(np.isnan(sf), -np.inf, sf)
         k = int(np.argmin(decided))
-        levels = [lv for lv in table.column("level").to_pylist() if lv in LEVELS]
+        levels = [lv for lv in table.column("level").unique().to_pylist() if lv in LEVELS]
         level = max(levels, key=LEVELS.index) if levels else "fail"
         offset = str(table.column("offset")[k].as_py())
         found = WorstClearance(float(decided[k]), offset, float(md[k]), level)
@@ -266,17 +272,15 @@ def _gates(manifest: Mapping[str, Any], problems: list[str]) -> tuple[Gate, ...]
         return None
 
 
-def _reports(well_dir: Path, manifest: Mapping[str, Any]) -> tuple[str, ...]:
-    """The report files listed in ``run.json`` and on disk, HTML before PDF."""
-    names = [
-        e["file"]
-        for e in manifest["outputs"]
-        if isinstance(e, Mapping)
-        and isinstance(e.get("file"), str)
-        and "/" not in e["file"]
-        and e["file"].endswith(REPORT_SUFFIXES)
-    ]
-    names = [n for n in names if (well_dir / n).is_file()]
+def _outputs(manifest: Mapping[str, Any]) -> list[str]:
+    """The names of the files ``run.json`` lists in the well's directory."""
+    names = (e.get("file") if isinstance(e, Mapping) else None for e in manifest["outputs"])
+    return [n for n in names if isinstance(n, str) and "/" not in n]
+
+
+def _reports(well_dir: Path, outputs: list[str]) -> tuple[str, ...]:
+    """The report files among ``outputs`` that are on disk, HTML before PDF."""
+    names = [n for n in outputs if n.endswith(REPORT_SUFFIXES) and (well_dir / n).is_file()]
     return tuple(sorted(names, key=lambda n: (REPORT_SUFFIXES.index(Path(n).suffix), n)))
 
 

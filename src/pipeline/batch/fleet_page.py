@@ -19,14 +19,15 @@ import os
 import time
 import urllib.parse
 from collections import Counter
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from pipeline.atomic import atomic_write_bytes
 from pipeline.errors import file_errors
-from pipeline.reports.check_titles import check_title
-from pipeline.reports.numbers import fmt, fmt_measured, fmt_sig, fmt_sigma
+from pipeline.qc.gates import FAIL, PASS
+from pipeline.reports.check_titles import check_title, printed_unit
+from pipeline.reports.numbers import UNDEFINED, fmt, fmt_measured, fmt_sig, fmt_sigma
+from pipeline.tables import DLS_UNIT
 
 from .causes import plain_cause
 from .fleet import WellFigures, well_figures
@@ -111,7 +112,7 @@ def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     title = f"{fleet.title}: {_plural(len(fleet.wells) + fleet.not_run, 'well')}"
     return PAGE.format(
         title=_e(title),
-        about=_about(fleet, pipelines, fleet.wells),
+        about=_about(fleet, pipelines),
         bar=_bar(tally),
         counts=_counts(tally),
         rows=body or f'<tr><td colspan="{len(HEADS)}">No wells.</td></tr>',
@@ -119,16 +120,20 @@ def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     )
 
 
-HEADS = (
-    ("Well", ""),
-    ("Status", ""),
+FIGURE_HEADS = (
     ("QC checks", ""),
     ("Acceptance", ""),
     ("Clearance: least SF", ""),
     ("Drift", ""),
     ('TD MD <span class="u">m</span>', ' class="n"'),
     ('TD TVD <span class="u">m</span>', ' class="n"'),
-    ('Max DLS <span class="u">°/30 m</span>', ' class="n"'),
+    (f'Max DLS <span class="u">{printed_unit(DLS_UNIT)}</span>', ' class="n"'),
+)
+"""the columns of a well's figures (one cell saying why where it has none)"""
+HEADS = (
+    ("Well", ""),
+    ("Status", ""),
+    *FIGURE_HEADS,
     ('Time <span class="u">s</span>', ' class="n"'),
     ("Report", ""),
 )
@@ -151,7 +156,8 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
         status += f'<div class="why problem">Output: {_e(problem)}</div>'
     cells = [f'<th scope="row">{_e(well.well)}</th>', f'<td class="st">{status}</td>']
     if figures.missing:
-        cells.append(f'<td colspan="7" class="problem">{_e(figures.missing)}</td>')
+        span = len(FIGURE_HEADS)
+        cells.append(f'<td colspan="{span}" class="problem">{_e(figures.missing)}</td>')
     else:
         cells += [
             f"<td>{_qc(figures)}</td>",
@@ -193,8 +199,8 @@ def _gates(figures: WellFigures) -> str:
     gates = figures.gates
     if gates is None:
         return NONE
-    failed = [g for g in gates if g.status == "fail"]
-    unknown = sum(g.status not in ("pass", "fail") for g in gates)
+    failed = [g for g in gates if g.status == FAIL]
+    unknown = sum(g.status not in (PASS, FAIL) for g in gates)
     extra = f'<div class="why">{unknown} not evaluated</div>' if unknown else ""
     if not failed:
         passed = len(gates) - unknown
@@ -211,7 +217,7 @@ def _clearance(figures: WellFigures) -> str:
         return NONE
     symbol, word = CLEARANCE_WORDS.get(worst.level, ("?", worst.level))
     tone = "ok" if worst.level == "pass" else "bad"
-    sf = "undefined" if worst.sf == float("-inf") else fmt(worst.sf, 2)
+    sf = UNDEFINED if worst.sf == float("-inf") else fmt(worst.sf, 2)
     return (
         f'<span class="{tone}">{symbol}</span> {sf} ({word})'
         f'<div class="why">against {_e(worst.offset)} at {fmt(worst.md, 1)} m MD</div>'
@@ -255,7 +261,7 @@ def _number(value: float | None, decimals: int) -> str:
     return f'<td class="n">{NONE if value is None else fmt(value, decimals)}</td>'
 
 
-def _about(fleet: Fleet, pipelines: list[str], wells: Sequence[FleetWell]) -> str:
+def _about(fleet: Fleet, pipelines: list[str]) -> str:
     lines = []
     if pipelines:
         lines.append(f"Pipeline {_e(', '.join(pipelines))}")
@@ -273,7 +279,7 @@ def _about(fleet: Fleet, pipelines: list[str], wells: Sequence[FleetWell]) -> st
             f"{len(batches)} batches, {_when(batches[0].started)} to "
             f"{_when(last.finished or last.heartbeat)}; latest batch {last.id} ({last.status})"
         )
-    spent = sum(r.time_s for r in wells if r.time_s is not None)
+    spent = sum(r.time_s for r in fleet.wells if r.time_s is not None)
     lines.append(f"Processing time of the wells listed: {_duration(spent)} in total")
     lines.append(f"Page written {_when(time.time())}")
     return "".join(f"<li>{line}</li>" for line in lines)
@@ -403,7 +409,7 @@ footer {{ margin-top: 14px; color: var(--soft); font-size: 12px; }}
 <footer>Failing wells first (failed, interrupted, rejected), then done and skipped wells;
 by well within each. {none} the well has no such figure. SF: separation factor of the
 reference well against its offset wells (the least, where the scan decides); DLS: dogleg
-severity; TD: the deepest station.</footer>
+severity; TD: the deepest station (TVD below the well's depth reference).</footer>
 </body>
 </html>
 """.replace("{none}", NONE)

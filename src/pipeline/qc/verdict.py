@@ -28,10 +28,6 @@ class QcTally:
     def failures(self) -> int:
         return sum(self.failed.values())
 
-    @property
-    def passed(self) -> int:
-        return self.evaluated - self.failures
-
 
 def qc_tally(
     tables: Iterable[pa.Table], others: Iterable[tuple[str, int, Sequence[float]]] = ()
