@@ -377,6 +377,8 @@ def status(out_dir: str, ledger_file: str | None, as_json: bool, html_file: str 
     """Batches and the latest run of every well in a batch output directory."""
     from pipeline.batch.views import status_document, status_text
 
+    if html_file is not None and as_json:
+        raise click.UsageError("--html writes the fleet page, --json prints JSON: give one")
     ledger = _open_ledger(out_dir, ledger_file)
     if html_file is not None:
         from pipeline.batch.fleet_page import FLEET_PAGE, fleet_title, write_fleet_page

@@ -428,3 +428,10 @@ def test_the_drift_of_a_free_gyro_survey_is_its_tie_in_rate(tmp_path: Path) -> N
     assert abs(rate - 3.0) < 0.3
     source = (out / "fleet.html").read_text(encoding="utf-8")
     assert f"<td>{rate:.3g} °/h</td>" in source
+
+
+def test_status_html_and_json_together_are_refused(small_batch: Path) -> None:
+    result = gyropipe_cli("status", small_batch, "--json", "--html")
+    assert result.returncode == 2
+    assert "--html writes the fleet page, --json prints JSON: give one" in result.stderr
+    assert result.stdout == ""  # nothing written, nothing printed
