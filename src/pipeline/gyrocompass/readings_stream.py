@@ -150,7 +150,6 @@ class _MarkedAhead:
         self.options = options
         self.columns = [n for n in ("time", "md", "frame_angle", *SIGNALS) if n in names]
         self.marked: _Marked | None = None
-        self.counts: tuple[int, int, int, int] | None = None
         self.missed = False
         """a batch came before one that gives a rate: the second pass does it all"""
 
@@ -163,22 +162,21 @@ class _MarkedAhead:
                 self.missed = batch.num_rows > 0
                 return
             rate = (time.size - 1) / float(time[-1] - time[0])
-            self.counts = counts(self.options, rate)
             self.marked = _Marked(self.options, rate, _Stations(self.columns, rate))
         self.marked.add(batch)
 
     def holds(self, columns: list[str], trims: tuple[int, int, int, int]) -> bool:
         """Whether the runs cut are those of the scan's ``columns`` and trims ``trims``
         (the smoothing window is the detection's only: not compared)."""
+        marked = self.marked
         return (
-            self.marked is not None
-            and not self.missed
+            marked is not None  # (never set after a batch missed)
             and columns == self.columns
-            and self.counts is not None
-            and trims[:3] == self.counts[:3]
+            and trims[:3] == (marked.k_start, marked.k_end, marked.need)
         )
 
     def finish(self, rate: float) -> pa.Table:
+        """The readings, their durations at the scan's sample ``rate`` (Hz)."""
         assert self.marked is not None
         self.marked.stations.rate = rate
         return self.marked.finish()
