@@ -466,5 +466,5 @@ def exact_median(pieces: list[FloatArray]) -> float:
     middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
     if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
         return float(np.median(np.concatenate(pieces)))
-    picked = np.partition(near, middle)[list(middle)]
+    picked = np.partition(near, middle)[middle[0] : middle[1] + 1]  # one or two, as NumPy's
     return float(np.mean(picked))
