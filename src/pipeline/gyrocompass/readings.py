@@ -369,33 +369,36 @@ def reduce_readings(
         "station": station,
         "md": _station_medians(md, a, b, label, groups.size)[label],
         "position": position,
-        "t": (time[a] + time[b - 1]) / 2,
     }
-    columns |= reading_stats(signals, angle, a, b)
-    columns["n"] = n
+    columns |= reading_stats(signals, time, angle, a, b)
     columns["duration"] = n / rate
     return PositionReadings.compiled().make_table(columns)
 
 
 def reading_stats(
-    signals: dict[str, FloatArray], angle: FloatArray | None, a: IndexArray, b: IndexArray
-) -> dict[str, FloatArray]:
-    """Each reading's circular mean frame angle (when ``angle`` is given), then the mean and
-    sample standard deviation of each signal, over the samples [a, b) of the columns (the
-    readings in order, none overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2
-    samples). Reduced in place, gaps included, so a reading's numbers do not depend on its
-    neighbours (the samples between readings are passed over and dropped)."""
+    signals: dict[str, FloatArray],
+    time: FloatArray,
+    angle: FloatArray | None,
+    a: IndexArray,
+    b: IndexArray,
+) -> dict[str, np.ndarray]:
+    """Each reading's mid time ``t`` (s, of ``time``), circular mean frame angle (deg, when
+    ``angle`` is given), the mean and sample standard deviation of each signal and its
+    sample count ``n``, over the samples [a, b) of the columns (the readings in order, none
+    overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2 samples). Reduced in place,
+    gaps included, so a reading's numbers do not depend on its neighbours (the samples
+    between readings are passed over and dropped)."""
     cuts = np.stack([a, b], axis=1).ravel()[:-1] - a[0]
     """reading starts and ends (even: a reading, odd: a gap) within [a[0], b[-1])"""
     lengths = np.diff(cuts, append=b[-1] - a[0])
     span = slice(int(a[0]), int(b[-1]))
-    columns: dict[str, FloatArray] = {}
+    columns: dict[str, np.ndarray] = {"t": (time[a] + time[b - 1]) / 2}
     if angle is not None:
         columns["frame_angle"] = _circular_mean(angle[span], cuts)
     stds: dict[str, FloatArray] = {}
     for name, values in signals.items():
         columns[name], stds[f"{name}_std"] = _mean_std(values[span], cuts, lengths)
-    return columns | stds
+    return columns | stds | {"n": b - a}
 
 
 def _mean_std(

@@ -235,14 +235,8 @@ class _Stations:
         """Readings of the samples [a, b) of the columns ``values`` (in time order, none
         overlapping), of the markers ``station`` and ``position``."""
         signals = {k: values[k] for k in SIGNALS if k in values}
-        time = values["time"]
-        part: dict[str, np.ndarray] = {
-            "station": station,
-            "position": position,
-            "t": (time[a] + time[b - 1]) / 2,
-        }
-        part |= reading_stats(signals, values.get("frame_angle"), a, b)
-        part["n"] = b - a
+        part: dict[str, np.ndarray] = {"station": station, "position": position}
+        part |= reading_stats(signals, values["time"], values.get("frame_angle"), a, b)
         self.parts.append(part)
         md = values["md"]
         for s, i, j in zip(station.tolist(), a.tolist(), b.tolist(), strict=True):
