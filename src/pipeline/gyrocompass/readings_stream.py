@@ -66,7 +66,8 @@ MARKERS = ("station", "position")
 
 @dataclass
 class _Scan:
-    """What the first pass finds: rows, time span, smallest and largest step, null counts."""
+    """What the first pass finds: rows, first and last time, smallest and largest time step
+    (s), null counts."""
 
     rows: int = 0
     first: float = np.nan
