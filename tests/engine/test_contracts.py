@@ -244,3 +244,14 @@ def test_times_and_durations_a_copy_cannot_hold_are_refused(tmp_path: Path):
         RawSamples.validate_table(samples)
     (failure,) = info.value.failures
     assert failure.expected == "strictly increasing values, by at least 5e-06 s"
+
+
+def test_an_integer_column_with_missing_values_is_still_range_checked():
+    """Missing values are told apart from the bounds: a count of 0 among them is out of
+    range at its row, counts within range leave only the missing ones to report."""
+    (missing,) = [f for f in failures(table(n=[1, None, 0, 4])) if f.rule == "not null"]
+    (low,) = [f for f in failures(table(n=[1, None, 0, 4])) if f.rule == "range"]
+    assert missing.examples == ((1, None),)
+    assert (low.expected, low.examples) == ("values >= 1", ((2, 0),))
+    f = only(table(n=[1, None, 3, None]))
+    assert (f.rule, f.bad_rows) == ("not null", 2)
