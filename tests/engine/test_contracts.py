@@ -12,6 +12,7 @@ import pytest
 
 from pipeline.contracts import TableContract, column
 from pipeline.errors import ContractViolation, RuleFailure
+from pipeline.streams import TableStream
 from pipeline.tables import MIN_COURSE_M, RawSamples, Stations, Trajectory
 from tests_support import ROOT, gyropipe_cli
 
@@ -244,3 +245,26 @@ def test_times_and_durations_a_copy_cannot_hold_are_refused(tmp_path: Path):
         RawSamples.validate_table(samples)
     (failure,) = info.value.failures
     assert failure.expected == "strictly increasing values, by at least 5e-06 s"
+
+
+def test_an_integer_column_with_missing_values_is_still_range_checked():
+    """Missing values are told apart from the bounds: a count of 0 among them is out of
+    range at its row, counts within range leave only the missing ones to report."""
+    (missing,) = [f for f in failures(table(n=[1, None, 0, 4])) if f.rule == "not null"]
+    (low,) = [f for f in failures(table(n=[1, None, 0, 4])) if f.rule == "range"]
+    assert missing.examples == ((1, None),)
+    assert (low.expected, low.examples) == ("values >= 1", ((2, 0),))
+    f = only(table(n=[1, None, 3, None]))
+    assert (f.rule, f.bad_rows) == ("not null", 2)
+
+
+def test_a_streamed_check_takes_order_across_batches_within_groups():
+    """The step from one batch's last row to the next one's first: a new group is no
+    violation; a step back within a group is, at its row counted from the stream's start."""
+    into_new_group = table(well=["a", "a", "b", "b"], md=[5.0, 10.0, 0.0, 3.0])
+    assert len(list(Sample.validate_stream(TableStream.from_table(into_new_group, 2)))) == 2
+    back = table(well=["a", "a", "a", "a"], md=[0.0, 10.0, 5.0, 20.0])
+    with pytest.raises(ContractViolation) as info:
+        list(Sample.validate_stream(TableStream.from_table(back, 2)))
+    (f,) = info.value.failures
+    assert (f.column, f.rule, f.examples) == ("md", "monotonic", ((2, 5.0),))

@@ -336,6 +336,7 @@ def test_input_units_are_checked() -> None:
         [np.sort(np.random.default_rng(3).standard_cauchy(50_000))],  # sorted, heavy tails
         [np.r_[np.random.default_rng(4).normal(size=9_999), np.nan]],  # a NaN: NaN
         [np.array([2.0, -1.0, 5.0])],  # few values
+        [np.random.default_rng(5).uniform(1e308, 1.7e308, 4_097)],  # odd: the middle, not 2x/2
     ],
 )
 def test_the_station_md_median_is_numpys_median_of_the_pieces_together(

@@ -22,9 +22,6 @@ angles in degrees, times in seconds; the sample rate comes from the (uniform) ti
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Callable
-
 import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
@@ -366,52 +363,42 @@ def reduce_readings(
             "no frame positions found: no dwell long enough for min_dwell after trimming"
         )
     n = b - a
-    offsets = np.concatenate([[0], np.cumsum(n)[:-1]])
-    used = _used_samples(a, offsets, n, time.size)
     groups, inverse = np.unique(station, return_inverse=True)
     label = inverse.ravel()  # station of each reading as 0 … groups − 1
     columns: dict[str, object] = {
         "station": station,
-        "md": _group_median(used(md), np.repeat(label, n), groups.size)[label],
+        "md": _station_medians(md, a, b, label, groups.size)[label],
         "position": position,
-        "t": (time[a] + time[b - 1]) / 2,
     }
-    columns |= reading_stats(signals, angle, a, b)
-    columns["n"] = n
+    columns |= reading_stats(signals, time, angle, a, b)
     columns["duration"] = n / rate
     return PositionReadings.compiled().make_table(columns)
 
 
 def reading_stats(
-    signals: dict[str, FloatArray], angle: FloatArray | None, a: IndexArray, b: IndexArray
-) -> dict[str, FloatArray]:
-    """Each reading's circular mean frame angle (when ``angle`` is given), then the mean and
-    sample standard deviation of each signal, over the samples [a, b) of the columns (the
-    readings in order, none overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2
-    samples). Reduced in place, gaps included, so a reading's numbers do not depend on its
-    neighbours (the samples between readings are passed over and dropped)."""
+    signals: dict[str, FloatArray],
+    time: FloatArray,
+    angle: FloatArray | None,
+    a: IndexArray,
+    b: IndexArray,
+) -> dict[str, np.ndarray]:
+    """Each reading's mid time ``t`` (s, of ``time``), circular mean frame angle (deg, when
+    ``angle`` is given), the mean and sample standard deviation of each signal and its
+    sample count ``n``, over the samples [a, b) of the columns (the readings in order, none
+    overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2 samples). Reduced in place,
+    gaps included, so a reading's numbers do not depend on its neighbours (the samples
+    between readings are passed over and dropped)."""
     cuts = np.stack([a, b], axis=1).ravel()[:-1] - a[0]
     """reading starts and ends (even: a reading, odd: a gap) within [a[0], b[-1])"""
     lengths = np.diff(cuts, append=b[-1] - a[0])
     span = slice(int(a[0]), int(b[-1]))
-    columns: dict[str, FloatArray] = {}
+    columns: dict[str, np.ndarray] = {"t": (time[a] + time[b - 1]) / 2}
     if angle is not None:
         columns["frame_angle"] = _circular_mean(angle[span], cuts)
     stds: dict[str, FloatArray] = {}
     for name, values in signals.items():
         columns[name], stds[f"{name}_std"] = _mean_std(values[span], cuts, lengths)
-    return columns | stds
-
-
-def _used_samples(
-    a: IndexArray, offsets: IndexArray, n: IndexArray, size: int
-) -> Callable[[FloatArray], FloatArray]:
-    """The samples of the readings [a, b) of a column, reading after reading: the column
-    itself when the readings are all its samples in order, else a gathered copy."""
-    if int(n.sum()) == size and np.array_equal(a, offsets):
-        return lambda column: column
-    index = np.arange(int(n.sum())) - np.repeat(offsets - a, n)
-    return lambda column: column[index]
+    return columns | stds | {"n": b - a}
 
 
 def _mean_std(
@@ -453,15 +440,15 @@ def _sin_cos(degrees: FloatArray) -> tuple[FloatArray, FloatArray]:
     return np.repeat(np.sin(held), lengths), np.repeat(np.cos(held), lengths)
 
 
-def _group_median(values: FloatArray, label: IndexArray, groups: int) -> FloatArray:
-    """Median of ``values`` per group label 0 … groups − 1 (every group non-empty)."""
-    if np.any(np.diff(label) < 0):  # stations come in time order; sort only if they do not
-        order = np.argsort(label, kind="stable")
-        values, label = values[order], label[order]
-    bounds = np.searchsorted(label, np.arange(groups + 1))
-    median: FloatArray = np.array(
-        [exact_median([values[a:b]]) for a, b in itertools.pairwise(bounds)]
-    )
+def _station_medians(
+    md: FloatArray, a: IndexArray, b: IndexArray, label: IndexArray, groups: int
+) -> FloatArray:
+    """Median MD (m) of each station (``label`` of each reading: 0 … groups − 1, every group
+    non-empty) over the samples [a, b) of its readings, taken in place."""
+    pieces: list[list[FloatArray]] = [[] for _ in range(groups)]
+    for g, i, j in zip(label.tolist(), a.tolist(), b.tolist(), strict=True):
+        pieces[g].append(md[i:j])
+    median: FloatArray = np.array([exact_median(p) for p in pieces])
     return median
 
 
@@ -482,5 +469,5 @@ def exact_median(pieces: list[FloatArray]) -> float:
     middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
     if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
         return float(np.median(np.concatenate(pieces)))
-    picked = np.partition(near, middle)[list(middle)]
+    picked = np.partition(near, middle)[middle[0] : middle[1] + 1]  # one or two, as NumPy's
     return float(np.mean(picked))

@@ -66,7 +66,8 @@ MARKERS = ("station", "position")
 
 @dataclass
 class _Scan:
-    """What the first pass finds: rows, time span, smallest and largest step, null counts."""
+    """What the first pass finds: rows, first and last time, smallest and largest time step
+    (s), null counts."""
 
     rows: int = 0
     first: float = np.nan
@@ -150,7 +151,6 @@ class _MarkedAhead:
         self.options = options
         self.columns = [n for n in ("time", "md", "frame_angle", *SIGNALS) if n in names]
         self.marked: _Marked | None = None
-        self.counts: tuple[int, int, int, int] | None = None
         self.missed = False
         """a batch came before one that gives a rate: the second pass does it all"""
 
@@ -163,22 +163,21 @@ class _MarkedAhead:
                 self.missed = batch.num_rows > 0
                 return
             rate = (time.size - 1) / float(time[-1] - time[0])
-            self.counts = counts(self.options, rate)
             self.marked = _Marked(self.options, rate, _Stations(self.columns, rate))
         self.marked.add(batch)
 
     def holds(self, columns: list[str], trims: tuple[int, int, int, int]) -> bool:
         """Whether the runs cut are those of the scan's ``columns`` and trims ``trims``
         (the smoothing window is the detection's only: not compared)."""
+        marked = self.marked
         return (
-            self.marked is not None
-            and not self.missed
+            marked is not None  # (never set after a batch missed)
             and columns == self.columns
-            and self.counts is not None
-            and trims[:3] == self.counts[:3]
+            and trims[:3] == (marked.k_start, marked.k_end, marked.need)
         )
 
     def finish(self, rate: float) -> pa.Table:
+        """The readings, their durations at the scan's sample ``rate`` (Hz)."""
         assert self.marked is not None
         self.marked.stations.rate = rate
         return self.marked.finish()
@@ -237,14 +236,8 @@ class _Stations:
         """Readings of the samples [a, b) of the columns ``values`` (in time order, none
         overlapping), of the markers ``station`` and ``position``."""
         signals = {k: values[k] for k in SIGNALS if k in values}
-        time = values["time"]
-        part: dict[str, np.ndarray] = {
-            "station": station,
-            "position": position,
-            "t": (time[a] + time[b - 1]) / 2,
-        }
-        part |= reading_stats(signals, values.get("frame_angle"), a, b)
-        part["n"] = b - a
+        part: dict[str, np.ndarray] = {"station": station, "position": position}
+        part |= reading_stats(signals, values["time"], values.get("frame_angle"), a, b)
         self.parts.append(part)
         md = values["md"]
         for s, i, j in zip(station.tolist(), a.tolist(), b.tolist(), strict=True):

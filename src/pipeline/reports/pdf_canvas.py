@@ -209,6 +209,7 @@ class _Program:
 _PROGRAMS: dict[tuple[str, str], _Program] = {}
 """(font file, subset tag) → the subset's embedded form, for the first :data:`PROGRAMS`"""
 PROGRAMS = 16
+"""Most font subsets whose embedded form a process keeps (most reports share a few)."""
 
 
 def _program(font: PdfFont, chars: set[str]) -> _Program:

@@ -78,7 +78,6 @@ class PdfFont:
         """text → its layout, for the texts measured so far (a report repeats most of its
         labels, units and numbers on every page)"""
         self._tops: dict[str, int] = {}
-        self._shared: Subset | None = None
 
     def _whole(self) -> TTFont:
         """The font's own tables: every glyph's cmap entry, advance, kerning and top."""
@@ -144,17 +143,14 @@ class PdfFont:
         return set(REPERTOIRE) if chars <= REPERTOIRE else chars
 
     def _repertoire(self) -> Subset:
-        """The :data:`REPERTOIRE`'s subset (read once)."""
-        if self._shared is None:
-            meta = _index(self.path)
-            cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
-            try:
-                data = cached.read_bytes()
-            except OSError:
-                data = _make_subset(self.path, set(REPERTOIRE))[0]
-            text = {int(k): v for k, v in meta["text"].items()}
-            self._shared = data, meta["ids"], meta["widths"], text
-        return self._shared
+        """The :data:`REPERTOIRE`'s subset (embedded once per process: :mod:`.pdf_canvas`)."""
+        meta = _index(self.path)
+        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
+        try:
+            data = cached.read_bytes()
+        except OSError:
+            data = _make_subset(self.path, set(REPERTOIRE))[0]
+        return data, meta["ids"], meta["widths"], {int(k): v for k, v in meta["text"].items()}
 
     def kerned_repertoire(self) -> bytes:
         """The :data:`REPERTOIRE` subset with the font's ``kern`` table, for a browser (which
