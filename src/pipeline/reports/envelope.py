@@ -54,17 +54,16 @@ class Envelope:
             self.width = max(hi - lo, abs(lo) * 1e-9, 1e-9) / (self.columns - 1)
         self._cover(lo, hi)
         index = np.minimum(((x - self.origin) / self.width).astype(np.int64), self.columns - 1)
-        order = np.argsort(index, kind="stable")  # linear when x already runs in order
-        index, x, y = index[order], x[order], y[order]
+        if np.any(index[1:] < index[:-1]):  # x not in order (a stable sort keeps ties')
+            order = np.argsort(index, kind="stable")
+            index, x, y = index[order], x[order], y[order]
         starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
-        counts = np.diff(np.r_[starts, len(index)])
         bins = index[starts]
-        for values, best, beats, at in (
-            (np.minimum.reduceat(y, starts), self.low, np.less, self.x_low),
-            (np.maximum.reduceat(y, starts), self.high, np.greater, self.x_high),
+        for reduce, best, beats, at in (
+            (np.minimum, self.low, np.less, self.x_low),
+            (np.maximum, self.high, np.greater, self.x_high),
         ):
-            hits = np.flatnonzero(y == np.repeat(values, counts))
-            first = hits[np.searchsorted(hits, starts)]  # each bin's first sample at it
+            values, first = _extremes(reduce, y, starts)
             better = beats(values, best[bins])
             best[bins[better]] = values[better]
             at[bins[better]] = x[first[better]]
@@ -83,17 +82,20 @@ class Envelope:
             factor *= 2
         if shift == 0 and factor == 1:
             return
-        old = np.arange(self.columns)
-        target = (old + shift) // factor
-        filled = np.isfinite(self.low) & (target < self.columns)
+        target = (np.arange(self.columns) + shift) // factor
+        filled = np.flatnonzero(np.isfinite(self.low) & (target < self.columns))
         low, high = np.full(self.columns, np.inf), np.full(self.columns, -np.inf)
         x_low, x_high = np.zeros(self.columns), np.zeros(self.columns)
-        for k in np.flatnonzero(filled):  # at most COLUMNS bins, once per widening
-            t = target[k]
-            if self.low[k] < low[t]:
-                low[t], x_low[t] = self.low[k], self.x_low[k]
-            if self.high[k] > high[t]:
-                high[t], x_high[t] = self.high[k], self.x_high[k]
+        if len(filled):
+            merged = target[filled]  # in order: the old bins merge in runs
+            starts = np.flatnonzero(np.r_[True, merged[1:] != merged[:-1]])
+            bins = merged[starts]
+            for reduce, old, x_old, new, x_new in (
+                (np.minimum, self.low, self.x_low, low, x_low),
+                (np.maximum, self.high, self.x_high, high, x_high),
+            ):
+                new[bins], first = _extremes(reduce, old[filled], starts)
+                x_new[bins] = x_old[filled][first]
         self.low, self.high, self.x_low, self.x_high = low, high, x_low, x_high
         self.origin, self.width = origin, self.width * factor
 
@@ -108,6 +110,17 @@ class Envelope:
         single = (x[:, 0] == x[:, 1]) & (y[:, 0] == y[:, 1])
         keep = np.column_stack([np.ones(len(used), bool), ~single]).ravel()
         return x.ravel()[keep], y.ravel()[keep]
+
+
+def _extremes(
+    reduce: np.ufunc, values: FloatArray, starts: NDArray[np.intp]
+) -> tuple[FloatArray, NDArray[np.intp]]:
+    """Each run's extreme (``reduce``: ``np.minimum`` or ``np.maximum``) of ``values``,
+    the runs starting at ``starts``, and the index of the run's first value at it."""
+    extreme = reduce.reduceat(values, starts)
+    counts = np.diff(np.r_[starts, len(values)])
+    hits = np.flatnonzero(values == np.repeat(extreme, counts))
+    return extreme, hits[np.searchsorted(hits, starts)]
 
 
 @dataclass(frozen=True)

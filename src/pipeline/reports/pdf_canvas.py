@@ -6,6 +6,7 @@ same bytes (no creation date)."""
 
 from __future__ import annotations
 
+import itertools
 import zlib
 from dataclasses import dataclass, field
 from functools import cache
@@ -141,8 +142,9 @@ class _Embedded:
     """A font as embedded in one file: resource name, subset glyph ids, the font."""
 
     name: str
-    codes: dict[str, str]
-    """glyph name → glyph id (four hex digits)"""
+    codes: dict[int, str]
+    """character (code point) → its glyph's id (four hex digits), for the file's characters
+    (a ``str.translate`` table)"""
     font: PdfFont
     runs: dict[str, str] = field(default_factory=dict)
     """text → its glyph runs (the ``TJ`` operand), for the texts shown so far"""
@@ -271,7 +273,8 @@ def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[
         f"<< /Type /Font /Subtype /Type0 /BaseFont /{base} /Encoding /Identity-H "
         f"/DescendantFonts [{cid} 0 R] /ToUnicode {unicode} 0 R >>"
     )
-    return number, _Embedded(name, program.codes, font)
+    codes = {ord(c): program.codes.get(font.glyph(c), "0000") for c in chars}
+    return number, _Embedded(name, codes, font)
 
 
 def _show(op: _Text, embedded: _Embedded) -> str:
@@ -288,15 +291,14 @@ def _show(op: _Text, embedded: _Embedded) -> str:
 
 def _runs(content: str, embedded: _Embedded) -> str:
     """The glyph runs of ``content``, split where kerning moves a glyph."""
-    glyphs, kerns, _ = embedded.font.layout(content)
-    codes = [embedded.codes.get(glyph, "0000") for glyph in glyphs]
+    kerns = embedded.font.layout(content)[1]
+    codes, upem = embedded.codes, embedded.font.upem
     parts: list[str] = []
     start = 0
-    for k, kern in enumerate(kerns):
-        if kern and k > start:
-            parts.append(f"<{''.join(codes[start:k])}> {_num(-kern * 1000 / embedded.font.upem)}")
-            start = k
-    parts.append(f"<{''.join(codes[start:])}>")
+    for k in itertools.compress(range(len(kerns)), kerns):  # never the first glyph
+        parts.append(f"<{content[start:k].translate(codes)}> {_num(-kerns[k] * 1000 / upem)}")
+        start = k
+    parts.append(f"<{content[start:].translate(codes)}>")
     return " ".join(parts)
 
 

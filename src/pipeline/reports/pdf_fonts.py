@@ -104,10 +104,14 @@ class PdfFont:
         advance (font units); measured once per text."""
         found = self._layouts.get(text)
         if found is None:
-            glyphs = tuple(self.glyph(c) for c in text)
-            kerns = tuple(self._kern.get(pair, 0) for pair in itertools.pairwise(glyphs))
-            kerns = (0, *kerns) if glyphs else ()
-            found = (glyphs, kerns, sum(self._advance[g] for g in glyphs) + sum(kerns))
+            names = {c: self.glyph(c) for c in set(text)}  # may read the whole font
+            glyphs = tuple(map(names.__getitem__, text))
+            if self._kern and glyphs:
+                pairs = itertools.pairwise(glyphs)
+                kerns = (0, *map(self._kern.get, pairs, itertools.repeat(0)))
+            else:
+                kerns = (0,) * len(glyphs)
+            found = (glyphs, kerns, sum(map(self._advance.__getitem__, glyphs)) + sum(kerns))
             if len(self._layouts) < MEASURED:
                 self._layouts[text] = found
         return found
@@ -123,7 +127,7 @@ class PdfFont:
         if best is not None:
             return best
         best = 0
-        for name in {self.glyph(c) for c in text + "l"}:
+        for name in {self.glyph(c) for c in {*text, "l"}}:
             if name not in self._top:
                 self._top[name] = _glyph_top(self._whole(), name)
             best = max(best, self._top[name])

@@ -113,31 +113,35 @@ def _setting(table: Table) -> _Setting:
         gaps = [
             g + extra // len(gaps) + (1 if k < extra % len(gaps) else 0) for k, g in enumerate(gaps)
         ]
+    line = _line(widths, gaps, table).format
     header_lines = [textwrap.wrap(c.header, w) or [""] for c, w in zip(cols, widths, strict=True)]
     depth = max(len(h) for h in header_lines)
     padded = [[""] * (depth - len(h)) + h for h in header_lines]  # headers sit on the units
-    header = [_line([p[i] for p in padded], widths, gaps, table) for i in range(depth)]
-    unit = _line([c.unit for c in cols], widths, gaps, table) if any(c.unit for c in cols) else ""
+    header = [line(*(p[i] for p in padded)) for i in range(depth)]
+    unit = line(*(c.unit for c in cols)) if any(c.unit for c in cols) else ""
+    wrapped: dict[tuple[str, int], list[str]] = {}  # (value, width) → its lines
     rows = []
     for row in table.rows:
-        cells = [
-            textwrap.wrap(v, w, break_long_words=True) or [""] if c.wrap else [v]
-            for v, c, w in zip(row, cols, widths, strict=True)
-        ]
-        depth = max(len(c) for c in cells)
-        rows.append(
-            [
-                _line([c[i] if i < len(c) else "" for c in cells], widths, gaps, table)
-                for i in range(depth)
-            ]
-        )
+        if not wraps:
+            rows.append([line(*row)])
+            continue
+        cells = [[v] for v in row]
+        for j in wraps:
+            key = (row[j], widths[j])
+            if key not in wrapped:
+                wrapped[key] = textwrap.wrap(row[j], widths[j], break_long_words=True) or [""]
+            cells[j] = wrapped[key]
+        depth = max(map(len, cells))
+        rows.append([line(*(c[i] if i < len(c) else "" for c in cells)) for i in range(depth)])
     return _Setting(size, widths, gaps, header, unit, rows)
 
 
-def _line(cells: list[str], widths: list[int], gaps: list[int], table: Table) -> str:
+def _line(widths: list[int], gaps: list[int], table: Table) -> str:
+    """The format of a printed line: a leading space, then each column's cell aligned in
+    its width and the gap after it."""
     out = " "
-    for j, (cell, width, col) in enumerate(zip(cells, widths, table.columns, strict=True)):
-        out += cell.rjust(width) if col.align == "right" else cell.ljust(width)
+    for j, (width, col) in enumerate(zip(widths, table.columns, strict=True)):
+        out += f"{{:{'>' if col.align == 'right' else '<'}{width}}}"
         if j < len(gaps):
             out += " " * gaps[j]
     return out
