@@ -4,10 +4,12 @@ scene's y-down points mapped onto the page and scaled."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path as FilePath
 
 import numpy as np
 
+from pipeline.reports.charts.fixed import rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -46,9 +48,8 @@ class _Placed:
 
 
 def _polyline(points: Points, closed: bool) -> str:
-    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
-    head = f"{xs[0]:.2f} {ys[0]:.2f} m "
-    return head + " ".join(map("{:.2f} {:.2f} l".format, xs[1:], ys[1:])) + (" h" if closed else "")
+    head = rows("{} {} m ", points[:1], 2)
+    return head + rows("{} {} l ", points[1:], 2)[:-1] + (" h" if closed else "")
 
 
 def _stroke(p: Path, s: float) -> str:
@@ -71,19 +72,20 @@ def _path(p: Path, at: _Placed) -> str:
 
 
 CIRCLE = (
-    "{0:.2f} {1:.2f} m {0:.2f} {2:.2f} {3:.2f} {4:.2f} {5:.2f} {4:.2f} c "
-    "{6:.2f} {4:.2f} {7:.2f} {2:.2f} {7:.2f} {1:.2f} c {7:.2f} {8:.2f} {6:.2f} {9:.2f} "
-    "{5:.2f} {9:.2f} c {3:.2f} {9:.2f} {0:.2f} {8:.2f} {0:.2f} {1:.2f} c h"
+    "{0} {1} m {0} {2} {3} {4} {5} {4} c {6} {4} {7} {2} {7} {1} c {7} {8} {6} {9} "
+    "{5} {9} c {3} {9} {0} {8} {0} {1} c h "
 )
 """A circle of four Bézier quarters from x + r, y + r·κ, x + r·κ, x, y + r, x − r·κ, x − r,
 y − r·κ, y − r (arguments 0…9)."""
+_CIRCLE_ORDER = [int(k) for k in re.findall(r"\{(\d)\}", CIRCLE)]
+_CIRCLE_TEMPLATE = re.sub(r"\{\d\}", "{}", CIRCLE)
 
 
 def _circles(centres: Points, r: float) -> str:
     k = KAPPA * r
     x, y = centres[:, 0], centres[:, 1]
-    columns = (x + r, y, y + k, x + k, y + r, x, x - k, x - r, y - k, y - r)
-    return " ".join(map(CIRCLE.format, *(c.tolist() for c in columns)))
+    columns = np.column_stack((x + r, y, y + k, x + k, y + r, x, x - k, x - r, y - k, y - r))
+    return rows(_CIRCLE_TEMPLATE, columns[:, _CIRCLE_ORDER], 2)[:-1]
 
 
 def _marks(m: Marks, at: _Placed) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from html import escape
 
+from pipeline.reports.charts.fixed import rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -29,9 +30,8 @@ def _n(value: float) -> str:
 
 
 def _polyline(points: Points, closed: bool) -> str:
-    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
-    rest = " ".join(map("{:.1f},{:.1f}".format, xs[1:], ys[1:]))
-    return f"M{xs[0]:.1f},{ys[0]:.1f}" + (f"L{rest}" if rest else "") + ("Z" if closed else "")
+    rest = rows("{},{} ", points[1:], 1)[:-1]
+    return rows("M{},{}", points[:1], 1) + (f"L{rest}" if rest else "") + ("Z" if closed else "")
 
 
 def _path(p: Path) -> str:
@@ -51,9 +51,7 @@ def _marks(m: Marks) -> str:
     if shape is None:
         r = m.size / 2 if m.shape != "." else m.size / 4
         arcs = f"a{r:.2f},{r:.2f} 0 1,0 {2 * r:.2f},0a{r:.2f},{r:.2f} 0 1,0 {-2 * r:.2f},0"
-        d = "".join(
-            map(f"M{{:.1f}},{{:.1f}}{arcs}".format, (m.xy[:, 0] - r).tolist(), m.xy[:, 1].tolist())
-        )
+        d = rows(f"M{{}},{{}}{arcs}", m.xy - [r, 0.0], 1)
         closed = True
     else:
         offsets, closed = shape

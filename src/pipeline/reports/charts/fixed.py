@@ -1,0 +1,51 @@
+"""Drawn coordinates as text in bulk: each row of an array written into a template with a
+fixed number of decimals — the same text as Python's ``f"{v:.2f}"``, its digits made by
+integer arithmetic on the whole array (a long line or many markers cost a few array
+operations, not a formatted string per number)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+BULK = 64
+"""Arrays of fewer numbers are formatted one by one (the array operations cost more)."""
+LIMIT = 1e9
+"""Largest scaled magnitude (value × 10^decimals) written from its digits: the product is
+then within 1.2e-7 of exact, so rounding it to the nearest integer rounds the exact value."""
+TIE = 1e-6
+"""A scaled magnitude closer than this to a half (a rounding tie, to the product's error)
+is formatted by Python (round half to even on the exact value)."""
+
+
+def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
+    """Each row of ``values`` (n × k) written into ``template`` (k ``{}``, plain text
+    otherwise) with ``decimals`` decimals, the rows one after the other."""
+    n, k = values.shape
+    pieces = template.split("{}")
+    assert len(pieces) == k + 1, "one {} per column"
+    scaled = np.abs(values) * 10.0**decimals
+    off_tie = np.abs(scaled - np.floor(scaled) - 0.5) > TIE  # False for NaN
+    if values.size < BULK or not (off_tie.all() and scaled.max() < LIMIT):
+        each = template.replace("{}", f"{{:.{decimals}f}}")
+        return "".join(map(each.format, *values.T.tolist()))
+    units = np.rint(scaled).astype(np.uint32)  # < LIMIT < 2³²
+    digits = max(len(str(int(units.max()))), decimals + 1)  # one at least before the point
+    point = 1 if decimals else 0
+    field = np.zeros((n, k, 1 + digits + point), np.uint8)  # NUL: no character
+    field[..., 0] = np.signbit(values) * ord("-")  # f"{-0.0:.1f}" is "-0.0"
+    rest, column = units, field.shape[-1] - 1
+    for place in range(digits):  # from the last decimal leftwards
+        if decimals and place == decimals:
+            field[..., column] = ord(".")
+            column -= 1
+        rest, digit = np.divmod(rest, np.uint32(10))
+        field[..., column] = digit + ord("0")
+        if place > decimals:  # a leading zero is no character
+            field[..., column] *= units >= 10**place
+        column -= 1
+    parts = [np.broadcast_to(np.frombuffer(pieces[0].encode("ascii"), np.uint8), (n, len(pieces[0])))]
+    for j in range(k):
+        text = np.frombuffer(pieces[j + 1].encode("ascii"), np.uint8)
+        parts += [field[:, j], np.broadcast_to(text, (n, len(text)))]
+    return np.concatenate(parts, axis=1).tobytes().replace(b"\0", b"").decode("ascii")
