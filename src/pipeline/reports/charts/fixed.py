@@ -44,8 +44,8 @@ def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
         if place > decimals:  # a leading zero is no character
             field[..., column] *= units >= 10**place
         column -= 1
-    parts = [np.broadcast_to(np.frombuffer(pieces[0].encode("ascii"), np.uint8), (n, len(pieces[0])))]
+    texts = [np.frombuffer(piece.encode("ascii"), np.uint8) for piece in pieces]
+    parts = [np.broadcast_to(texts[0], (n, len(texts[0])))]
     for j in range(k):
-        text = np.frombuffer(pieces[j + 1].encode("ascii"), np.uint8)
-        parts += [field[:, j], np.broadcast_to(text, (n, len(text)))]
+        parts += [field[:, j], np.broadcast_to(texts[j + 1], (n, len(texts[j + 1])))]
     return np.concatenate(parts, axis=1).tobytes().replace(b"\0", b"").decode("ascii")
