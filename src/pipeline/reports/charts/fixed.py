@@ -21,14 +21,23 @@ is formatted by Python (round half to even on the exact value)."""
 def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
     """Each row of ``values`` (n × k) written into ``template`` (k ``{}``, plain text
     otherwise) with ``decimals`` decimals, the rows one after the other."""
+    if values.size >= BULK:
+        scaled = np.abs(values) * 10.0**decimals
+        off_tie = np.abs(scaled - np.floor(scaled) - 0.5) > TIE  # False for NaN
+        if off_tie.all() and scaled.max() < LIMIT:
+            return _digits(template, values, scaled, decimals)
+    each = template.replace("{}", f"{{:.{decimals}f}}")
+    return "".join(map(each.format, *values.T.tolist()))
+
+
+def _digits(
+    template: str, values: NDArray[np.float64], scaled: NDArray[np.float64], decimals: int
+) -> str:
+    """:func:`rows` from the digits of ``scaled`` (|values| × 10^decimals, each of them
+    below :data:`LIMIT` and off a tie)."""
     n, k = values.shape
     pieces = template.split("{}")
     assert len(pieces) == k + 1, "one {} per column"
-    scaled = np.abs(values) * 10.0**decimals
-    off_tie = np.abs(scaled - np.floor(scaled) - 0.5) > TIE  # False for NaN
-    if values.size < BULK or not (off_tie.all() and scaled.max() < LIMIT):
-        each = template.replace("{}", f"{{:.{decimals}f}}")
-        return "".join(map(each.format, *values.T.tolist()))
     units = np.rint(scaled).astype(np.uint32)  # < LIMIT < 2³²
     digits = max(len(str(int(units.max()))), decimals + 1)  # one at least before the point
     point = 1 if decimals else 0

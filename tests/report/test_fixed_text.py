@@ -1,0 +1,55 @@
+"""Coordinates written in bulk (charts/fixed.py) read exactly as Python writes each number:
+rounding ties (exact binary halves and three-decimal values near them), negative zero,
+values that round to zero from below, NaN, and large and tiny magnitudes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from pipeline.reports.charts.fixed import BULK, rows
+
+
+def python(template: str, values: np.ndarray, decimals: int) -> str:
+    each = template.replace("{}", f"{{:.{decimals}f}}")
+    return "".join(each.format(*row) for row in values.tolist())
+
+
+CASES = {
+    "uniform": np.random.default_rng(1).uniform(-1000.0, 1000.0, (300, 2)),
+    "binary halves": np.arange(-400, 400).reshape(-1, 2) / 8.0,
+    "three decimals": np.round(np.random.default_rng(2).uniform(-50.0, 50.0, (300, 2)), 3),
+    "near zero": np.random.default_rng(3).uniform(-1.0, 1.0, (300, 2)) * 1e-3,
+    "large": np.random.default_rng(4).uniform(0.0, 1e7, (300, 2)),
+}
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 2, 3])
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_rows_read_as_python_writes_each_number(case: str, decimals: int):
+    values = CASES[case].copy()
+    values[0, 0], values[1, 1] = -0.0, -0.004
+    assert values.size >= BULK
+    for template in ("{} {} l ", "M{},{}a1,1 0 1,0 2,0"):
+        assert rows(template, values, decimals) == python(template, values, decimals)
+
+
+def test_a_nan_is_written_as_python_writes_it():
+    values = np.full((BULK, 2), 1.25)
+    values[3, 1] = np.nan
+    assert rows("{} {} ", values, 2) == python("{} {} ", values, 2)
+    assert "nan" in rows("{} {} ", values, 2)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    arrays(np.float64, st.tuples(st.integers(1, 80), st.integers(1, 3)),
+           elements=st.floats(-1e6, 1e6, allow_nan=False)),
+    st.integers(0, 3),
+)  # fmt: skip
+def test_any_coordinates_read_as_python_writes_them(values: np.ndarray, decimals: int):
+    template = "<" + "|".join(["{}"] * values.shape[1]) + ">"
+    assert rows(template, values, decimals) == python(template, values, decimals)
