@@ -27,7 +27,7 @@ from typing import Any, TypeAlias, TypeVar
 
 import pyarrow as pa
 
-from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir
+from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir, write_synced
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import (
     ContractViolation,
@@ -216,6 +216,7 @@ def run_plan(
     inputs: Mapping[str, Source],
     out_dir: Path | None,
     well: WellMetadata | None = None,
+    publish_as: Path | None = None,
 ) -> RunResult:
     """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
     what the stages report (the headers of the inputs they read, a simulation's site:
@@ -230,6 +231,13 @@ def run_plan(
     anything else there is refused, never deleted. Without ``out_dir`` nothing is written:
     stages that only write files are skipped, and the tables are returned.
 
+    With ``publish_as``, ``out_dir`` is a new private directory that the caller publishes
+    whole as ``publish_as`` (a batch worker's staging directory): the run writes into it
+    directly, every file it writes is on disk (fsync) when it returns, ``run.json`` names
+    them at ``publish_as``, and nothing is renamed here (the caller's
+    :func:`~pipeline.atomic.replace_dir` makes the directory's entries durable and renames
+    it).
+
     Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`.
     """
     files = _check_inputs(plan, inputs)
@@ -241,7 +249,7 @@ def run_plan(
     records: list[StageRecord] = []
     provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
-    with _staging(out_dir) as staging:
+    with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
         ports: dict[tuple[str, str], Port] = {}
         for st in plan.stages:
@@ -285,13 +293,17 @@ def run_plan(
         for path in written:
             with file_errors("write", out_dir / path.name):
                 fsync_file(path)
-        final = [out_dir / p.name for p in written]
+        final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = _manifest(
             provenance, current, records, list(zip(written, final, strict=True)), wall
         )
-        atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
-        replace_dir(staging, out_dir)
+        text = json.dumps(manifest, indent=2).encode()
+        if publish_as is not None:
+            write_synced(staging / MANIFEST, text)
+        else:
+            atomic_write_bytes(staging / MANIFEST, text)
+            replace_dir(staging, out_dir)
     return RunResult(out_dir, manifest, Tables(ports), current, final)
 
 
@@ -379,9 +391,13 @@ def _drain(plan: Plan, ports: Mapping[tuple[str, str], Port], records: list[Stag
 
 
 @contextlib.contextmanager
-def _staging(out_dir: Path | None) -> Iterator[Path]:
+def _staging(out_dir: Path | None, *, private: bool = False) -> Iterator[Path]:
     """A private directory for the run's files: beside ``out_dir`` (so it can be renamed to
-    it), or a temporary one; removed unless it was published."""
+    it), or a temporary one; removed unless it was published. ``private``: ``out_dir``
+    itself, already private (its caller publishes it)."""
+    if out_dir is not None and private:
+        yield out_dir
+        return
     if out_dir is None:
         with tempfile.TemporaryDirectory(prefix=STAGING_PREFIX) as tmp:
             yield Path(tmp)
