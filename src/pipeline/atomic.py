@@ -49,6 +49,16 @@ def atomic_write_bytes(final: Path, data: bytes) -> None:
         tmp.write_bytes(data)
 
 
+def write_synced(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` and fsync it, for a file of a private directory that is
+    published whole (:func:`replace_dir` makes its entries durable before the rename): a
+    temporary name and a rename of its own would add nothing there."""
+    with file_errors("write", path), open(path, "wb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
 def fsync_file(path: Path) -> None:
     with open(path, "rb") as fh:
         os.fsync(fh.fileno())

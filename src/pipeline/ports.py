@@ -1,6 +1,7 @@
 """How the runner moves streamed ports (:class:`~pipeline.streams.TableStream`) between
 stages: the run's outputs as tables on demand, a stream's error carried to where it is
-reported, rows counted as they pass, and a port written batch by batch."""
+reported, rows counted as they pass, a port written batch by batch, and the tables already
+checked against a contract."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from typing import Generic, TypeVar
 
 import pyarrow as pa
 
+from pipeline.contracts import TableContract
 from pipeline.registry import WriterDef
 from pipeline.streams import Port, TableStream, as_table
 from pipeline.well import WellMetadata, attach, attached
@@ -80,3 +82,22 @@ def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -
         writer.write_stream(value.replace_schema_metadata(attached(value.schema, well)), path, well)
     else:
         writer.write(attach(as_table(value), well), path, well)
+
+
+class CheckedTables:
+    """The tables of a run already checked, and the contracts each passed: a table is
+    immutable, so checking it again against the same contract (for its next consumer, or
+    its producer's output contract as a consumer's input) proves nothing."""
+
+    def __init__(self) -> None:
+        self._passed: dict[int, tuple[pa.Table, set[type[TableContract]]]] = {}
+        """id → the table (held, so that its id is not reused) and its contracts"""
+
+    def first(self, table: pa.Table, contract: type[TableContract]) -> bool:
+        """True the first time ``table`` is checked against ``contract``: it is then
+        counted as checked (a failing check ends the run)."""
+        _, passed = self._passed.setdefault(id(table), (table, set()))
+        if contract in passed:
+            return False
+        passed.add(contract)
+        return True

@@ -27,7 +27,7 @@ from typing import Any, TypeAlias, TypeVar
 
 import pyarrow as pa
 
-from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir
+from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir, write_synced
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import (
     ContractViolation,
@@ -39,7 +39,7 @@ from pipeline.errors import (
 from pipeline.graph import Plan, PlannedStage
 from pipeline.hashing import sha256_file
 from pipeline.inputfiles import parameter_paths
-from pipeline.ports import Tables, UpstreamError, counted, settled, write_port
+from pipeline.ports import CheckedTables, Tables, UpstreamError, counted, settled, write_port
 from pipeline.processes import owner_alive
 from pipeline.provenance import ParameterFile
 from pipeline.registry import (
@@ -216,6 +216,7 @@ def run_plan(
     inputs: Mapping[str, Source],
     out_dir: Path | None,
     well: WellMetadata | None = None,
+    publish_as: Path | None = None,
 ) -> RunResult:
     """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
     what the stages report (the headers of the inputs they read, a simulation's site:
@@ -230,6 +231,10 @@ def run_plan(
     anything else there is refused, never deleted. Without ``out_dir`` nothing is written:
     stages that only write files are skipped, and the tables are returned.
 
+    With ``publish_as``, ``out_dir`` is a new private directory (a batch worker's staging)
+    that the caller publishes as ``publish_as`` (:func:`~pipeline.atomic.replace_dir`): the
+    run writes into it, each file fsynced, ``run.json`` naming them at ``publish_as``.
+
     Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`.
     """
     files = _check_inputs(plan, inputs)
@@ -241,16 +246,17 @@ def run_plan(
     records: list[StageRecord] = []
     provenance = _provenance(plan, registry, files, start_time())
     t_run = time.perf_counter()
-    with _staging(out_dir) as staging:
+    with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
         ports: dict[tuple[str, str], Port] = {}
+        checked = CheckedTables()
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
             if out_dir is None and not st.definition.outputs:
                 record.status = "skipped"  # it only writes files
                 continue
-            ins = _stage_inputs(plan, st, ports, record)
+            ins = _stage_inputs(plan, st, ports, record, checked)
             ctx = _Context(
                 st.id, current, registry, files, staging, staged, provenance, out_dir=out_dir
             )
@@ -258,7 +264,7 @@ def run_plan(
             outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
             tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
-            _check_ports(plan, st, tables, "output")
+            _check_ports(plan, st, tables, "output", checked)
             record.rows_out.update({p: t.num_rows for p, t in tables.items()})
             record.acceptance = _acceptance(st, tables)
             for header in ctx.found:
@@ -285,19 +291,22 @@ def run_plan(
         for path in written:
             with file_errors("write", out_dir / path.name):
                 fsync_file(path)
-        final = [out_dir / p.name for p in written]
+        final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = _manifest(
             provenance, current, records, list(zip(written, final, strict=True)), wall
         )
-        atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
-        replace_dir(staging, out_dir)
+        write = atomic_write_bytes if publish_as is None else write_synced
+        write(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
+        if publish_as is None:
+            replace_dir(staging, out_dir)
     return RunResult(out_dir, manifest, Tables(ports), current, final)
 
 
 def _stage_inputs(
-    plan: Plan, st: PlannedStage, ports: dict[tuple[str, str], Port], record: StageRecord
-) -> dict[str, Port]:
+    plan: Plan, st: PlannedStage, ports: dict[tuple[str, str], Port], record: StageRecord,
+    checked: CheckedTables,
+) -> dict[str, Port]:  # fmt: skip
     """The stage's inputs by port: a stream on a streamed input port (a table cut into
     slices; checked per batch as it passes unless its producer checked the same contract),
     a table on any other (a stream read whole once, and kept for the next consumer)."""
@@ -315,7 +324,7 @@ def _stage_inputs(
         ins[port] = counted(stream, record.rows_in, port)
     tables = {p: t for p, t in ins.items() if isinstance(t, pa.Table)}
     record.rows_in.update({p: t.num_rows for p, t in tables.items()})
-    _check_ports(plan, st, tables, "input")
+    _check_ports(plan, st, tables, "input", checked)
     return ins
 
 
@@ -379,9 +388,12 @@ def _drain(plan: Plan, ports: Mapping[tuple[str, str], Port], records: list[Stag
 
 
 @contextlib.contextmanager
-def _staging(out_dir: Path | None) -> Iterator[Path]:
+def _staging(out_dir: Path | None, *, private: bool = False) -> Iterator[Path]:
     """A private directory for the run's files: beside ``out_dir`` (so it can be renamed to
-    it), or a temporary one; removed unless it was published."""
+    it), or a temporary one; removed unless it was published (``private``: ``out_dir``)."""
+    if out_dir is not None and private:
+        yield out_dir
+        return
     if out_dir is None:
         with tempfile.TemporaryDirectory(prefix=STAGING_PREFIX) as tmp:
             yield Path(tmp)
@@ -497,10 +509,14 @@ def _call(
 
 
 def _check_ports(
-    plan: Plan, st: PlannedStage, tables: Mapping[str, pa.Table], direction: str
-) -> None:
+    plan: Plan, st: PlannedStage, tables: Mapping[str, pa.Table], direction: str,
+    checked: CheckedTables,
+) -> None:  # fmt: skip
+    """Check a stage's input or output tables, each (table, contract) once in the run."""
     if direction == "input":
         tables = {p: t for p, t in tables.items() if not _checked_upstream(plan, st, p)}
+    contracts = st.definition.inputs if direction == "input" else st.definition.outputs
+    tables = {p: t for p, t in tables.items() if checked.first(t, contracts[p])}
     _check_contracts(plan.spec.name, st, tables, direction)
 
 

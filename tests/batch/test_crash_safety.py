@@ -31,6 +31,7 @@ from batch_support import (
 
 from pipeline.batch.executors import LocalExecutor
 from pipeline.batch.ledger import Ledger
+from pipeline.batch.publish import WORK_DIR, staging_owner
 from pipeline.batch.worker import WellOutcome, WellTask
 from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
@@ -151,9 +152,11 @@ def test_a_worker_killed_by_the_os_costs_only_a_retry(tmp_path: Path, survey: Pa
     )  # fmt: skip
 
     def running_worker() -> int | None:
-        for staging in (out / ".gyropipe-batch").glob(".*.staging.gyropipe-staging-*"):
-            return int(staging.name.split(".gyropipe-staging-")[1].split("-")[0])
-        return None  # a run's private staging beside its well's: .<well>.<run>.<pid>.staging…
+        for staging in (out / WORK_DIR).glob("*.staging"):
+            owner = staging_owner(staging)  # a running well's staging: <well>.<run>.<pid>.staging
+            if owner is not None and owner[1] is not None:
+                return owner[1]
+        return None
 
     wait_for(lambda: running_worker() is not None, proc)
     victim = running_worker()

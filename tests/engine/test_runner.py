@@ -19,16 +19,26 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+import pipeline.runner as runner
 from pipeline.errors import ContractViolation, StageError
-from pipeline.graph import build_plan
+from pipeline.graph import PlannedStage, build_plan
 from pipeline.hashing import sha256_file
+from pipeline.plugins import load_registry
 from pipeline.registry import StageContext, StageDef
 from pipeline.runner import RunInputError, run_plan
 from pipeline.spec import load_spec
 from pipeline.survey.mincurve import minimum_curvature
 from pipeline.tables import Stations, Trajectory
 from pipeline.well import WellMetadata, attach
-from tests_support import ROOT, gyropipe, gyropipe_cli, pythonpath
+from tests_support import (
+    ROOT,
+    gyropipe,
+    gyropipe_cli,
+    pythonpath,
+    stage,
+    survey_stages,
+    write_pipeline,
+)
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
 SURVEY = ROOT / "pipelines" / "survey.yaml"
@@ -443,3 +453,46 @@ def test_run_killed_mid_write_leaves_no_final_file(tmp_path: Path):
         "trajectory.xml",
     ]
     assert not list(tmp_path.glob(".out.gyropipe-staging-*"))  # the dead run's was cleaned up
+
+
+def test_a_table_is_checked_once_per_contract_whatever_its_consumers(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """The check's results reach two export stages as their ``qc`` (QcTable, not the
+    check's own output contract): the runner checks the table against QcTable once, not
+    once per consumer, and against every contract it meets."""
+    stages = [
+        *survey_stages(),
+        stage(
+            "dls_check", "check", {"table": "trajectory.trajectory"}, check="dls_limit",
+            params={"limit": 10.0},
+        ),
+        *(
+            stage(name, "export", {"trajectory": "trajectory.trajectory", "qc": "dls_check.results"},
+                  writer="json_summary")
+            for name in ("summary_a", "summary_b")
+        ),
+    ]  # fmt: skip
+    survey = write_pipeline(tmp_path, stages)
+    registry = load_registry()
+    plan = build_plan(load_spec(survey), registry)
+    checks: list[tuple[str, int]] = []
+    original = runner._check_contracts
+
+    def recorded(
+        pipeline: str, st: PlannedStage, tables: Mapping[str, pa.Table], direction: str
+    ) -> None:
+        contracts = st.definition.inputs if direction == "input" else st.definition.outputs
+        checks.extend((contracts[port].__name__, id(t)) for port, t in tables.items())
+        original(pipeline, st, tables, direction)
+
+    monkeypatch.setattr(runner, "_check_contracts", recorded)
+    result = run_plan(plan, registry, inputs={"stations": SAMPLE}, out_dir=tmp_path / "out")
+    assert len(checks) == len(set(checks))  # no table checked twice against one contract
+    assert ("Trajectory", id(result.tables[("trajectory", "trajectory")])) in checks
+    results = id(result.tables[("dls_check", "results")])
+    assert sorted(name for name, table in checks if table == results) == [
+        "CheckResults",
+        "QcTable",
+    ]
+    assert (tmp_path / "out" / "summary_b.json").is_file()

@@ -5,6 +5,7 @@ reader, batching and log times of a long series, and refusals."""
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from pipeline.io.mcap.arrow import BATCH_ROWS, write_samples
 from pipeline.io.mcap.tables import read_tables, write_tables
 from pipeline.registry import Provenance
 from pipeline.runner import RunResult
+from pipeline.streams import TableStream
 from pipeline.well import WellMetadata, attach
 
 
@@ -92,6 +94,57 @@ def test_long_series_is_batched_and_logged_at_its_times(tmp_path: Path):
     tables, well = read_tables(path)
     assert tables["series"].equals(series, check_metadata=True)
     assert well == WellMetadata(well="S")
+
+
+def _counted_stream(table: pa.Table, passes: list[int]) -> TableStream:
+    """``table`` as a stream of batches, counting its passes in ``passes``."""
+
+    def batches() -> Iterator[pa.RecordBatch]:
+        passes.append(1)
+        yield from table.to_batches(max_chunksize=BATCH_ROWS)
+
+    return TableStream(table.schema, batches)
+
+
+@pytest.mark.parametrize("gap", [None, "null", "nan"])
+def test_a_streamed_series_is_read_once_unless_its_times_cannot_stamp(
+    tmp_path: Path, gap: str | None
+):
+    """A stream is written in one pass, its messages logged at their first rows' times; a
+    time column with a null or a NaN in a later batch logs every message of the stream at
+    0 (the file written again: a second pass), the other tables at their own times."""
+    n = 2 * BATCH_ROWS + 500
+    time = pa.array(100.0 + 0.01 * np.arange(n))
+    if gap is not None:
+        values = time.to_pylist()
+        values[BATCH_ROWS + 7] = None if gap == "null" else float("nan")
+        time = pa.array(values, pa.float64())
+    schema = pa.schema([pa.field("time", pa.float64(), metadata={UNIT_KEY: b"s"})])
+    series = pa.Table.from_arrays([time, pa.array(np.arange(n))], names=["time", "n"])
+    series = series.cast(schema.append(pa.field("n", pa.int64())))
+    stations = pa.table({"time": [5.0, 6.0], "md": [0.0, 10.0]})
+    passes: list[int] = []
+    path = tmp_path / "s.mcap"
+    tables = {"stations": stations, "series": _counted_stream(series, passes)}
+    write_tables(tables, path, WellMetadata(well="S"), _provenance())
+    with path.open("rb") as fh:
+        messages = make_reader(fh).iter_messages(log_time_order=False)
+        stamps = [(c.topic, m.log_time) for _, c, m in messages]
+    logged = [0, 0, 0] if gap else [100_000_000_000, 200_000_000_000, 300_000_000_000]
+    assert stamps == [("/gyropipe/stations", 5_000_000_000)] + [
+        ("/gyropipe/series", t) for t in logged
+    ]
+    assert len(passes) == (2 if gap else 1)
+    back, _ = read_tables(path)
+    assert _ipc(back["series"]) == _ipc(series)  # bit for bit, NaN included
+
+
+def _ipc(table: pa.Table) -> bytes:
+    """The table, its chunks combined, as Arrow IPC stream bytes (schema metadata too)."""
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, table.schema) as writer:
+        writer.write_table(table.combine_chunks())
+    return sink.getvalue().to_pybytes()
 
 
 def test_refusals_and_typed_errors(tmp_path: Path):

@@ -192,6 +192,45 @@ def test_a_well_without_a_name_is_written_as_unnamed(tmp_path: Path):
     )
 
 
+def _elementtree_text(path: Path) -> bytes:
+    """The document at ``path`` parsed and written again by ElementTree (indented)."""
+    root = ET.fromstring(path.read_bytes())
+    for element in root.iter():  # the namespace as the plain attribute the writer sets
+        element.tag = element.tag.removeprefix(f"{{{NS}}}")
+    root.attrib = {"xmlns": NS, **root.attrib}
+    ET.indent(root)
+    text: bytes = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return text + b"\n"
+
+
+def test_the_document_is_what_elementtree_writes_of_it(exports_run: RunResult, tmp_path: Path):
+    """The writer's text is ElementTree's serialisation of the same elements (escapes of
+    text and attributes, empty elements, indentation), for a real run's export and for a
+    well whose header holds characters XML escapes."""
+    export = exports_run.out_dir / "trajectory.xml"
+    assert export.read_bytes() == _elementtree_text(export)
+    hostile = WellMetadata(
+        well='A&B <"W-1">',
+        wellbore="W-1 'ST'",
+        company="R&D > ops",
+        service_company="Gyro & <Co>",
+        survey_date=dt.date(2024, 5, 1),
+        latitude=-33.5,
+    )
+    table = _stations(
+        {
+            "survey": ["a&b", "a&b", 'c"d'],
+            "md": [0.0, 100.0, 250.125],
+            "inc": [0.0, 1.5, 2.0],
+            "azi": [0.0, 45.0, 359.999],
+        }
+    )
+    path = tmp_path / "hostile.xml"
+    WRITER.write(table, path, hostile)
+    assert path.read_bytes() == _elementtree_text(path)
+    assert [t.name for t in schema_parse(path).trajectory] == ["a&b", 'c"d']
+
+
 @pytest.mark.parametrize(
     ("tool_type", "expected"),
     [

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pipeline.atomic import TRASH_SUFFIX, atomic_write_bytes, discard
+from pipeline.atomic import TRASH_SUFFIX, discard, write_synced
 from pipeline.processes import owner_alive
 from pipeline.runner import MANIFEST, remove_stale_staging
 
@@ -55,8 +55,9 @@ def staging_owner(entry: Path) -> tuple[int, int | None] | None:
 
 
 def write_marker(staging: Path, record: dict[str, Any]) -> None:
-    """Write ``batch.json`` (well, run id, batch id, fingerprint) into the staging dir."""
-    atomic_write_bytes(staging / MARKER, json.dumps(record, indent=2).encode())
+    """Write ``batch.json`` (well, run id, batch id, fingerprint) into the staging dir, on
+    disk (fsync) before the directory is published."""
+    write_synced(staging / MARKER, json.dumps(record, indent=2).encode())
 
 
 def read_published(well_dir: Path) -> PublishedRun | None:

@@ -25,7 +25,7 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
-from pipeline.atomic import atomic_write_bytes, replace_dir
+from pipeline.atomic import replace_dir
 from pipeline.errors import GyropipeError
 from pipeline.executing import PipelineRef
 from pipeline.graph import Plan, build_plan
@@ -34,7 +34,7 @@ from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
 from pipeline.processes import process_alive
 from pipeline.registry import Registry
-from pipeline.runner import MANIFEST, RunResult, check_out_dir, run_plan
+from pipeline.runner import RunResult, check_out_dir, run_plan
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
@@ -177,10 +177,10 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             inputs={name: Path(path) for name, path in task.inputs.items()},
             out_dir=staging,
             well=WellMetadata.model_validate(task.well),
+            publish_as=final,
         )
         run_time = time.perf_counter() - t_run
-        manifest = _relocated(result.manifest, final)
-        atomic_write_bytes(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
+        manifest = result.manifest
         write_marker(
             staging,
             {
@@ -261,12 +261,6 @@ def _plan(ref: PipelineRef) -> tuple[Plan, Registry]:
         registry = shared_registry(ref.disabled)
         cached = _PLANS[key] = (build_plan(ref.loaded(), registry), registry)
     return cached
-
-
-def _relocated(manifest: dict[str, Any], final: Path) -> dict[str, Any]:
-    """The manifest with output paths naming the published directory, not the staging one."""
-    outputs = [{**entry, "path": str(final / entry["file"])} for entry in manifest["outputs"]]
-    return {**manifest, "outputs": outputs}
 
 
 def _calibration(plan: Plan, result: RunResult) -> list[dict[str, Any]]:

@@ -130,12 +130,15 @@ def add_arrow_channel(
     """A channel ``topic`` whose schema record is ``schema`` (the whole Arrow IPC schema),
     with ``data`` (a table, or record batches as they come) as record batches of up to
     :data:`BATCH_ROWS` rows; each message's log time is ``times`` (s) at its first row —
-    ``True``: the batch's own ``time`` column — or 0."""
+    ``True``: the batch's own ``time`` column, which must be complete and finite
+    (:class:`UnstampedBatch` at the first batch whose column is not) — or 0."""
     schema_id = writer.register_schema(schema_name, ARROW_SCHEMA_ENCODING, schema.serialize())
     channel = writer.register_channel(topic, ARROW_MESSAGE_ENCODING, schema_id)
     batches = data.to_batches() if isinstance(data, pa.Table) else data
     row = sequence = 0
     for whole in batches:
+        if times is True and not _stamps(whole):
+            raise UnstampedBatch(topic)
         for batch in pa.Table.from_batches([whole]).to_batches(max_chunksize=BATCH_ROWS):
             if not batch.num_rows:
                 continue
@@ -146,6 +149,21 @@ def add_arrow_channel(
             writer.add_message(channel, stamp, batch.serialize().to_pybytes(), stamp, sequence)
             row += batch.num_rows
             sequence += 1
+
+
+class UnstampedBatch(Exception):
+    """A batch of the channel ``topic`` whose ``time`` column cannot stamp its messages (a
+    null, a value not finite)."""
+
+    def __init__(self, topic: str) -> None:
+        super().__init__(f"{topic}: a batch's 'time' column has nulls or values not finite")
+        self.topic = topic
+
+
+def _stamps(batch: pa.RecordBatch) -> bool:
+    """The batch's ``time`` column is complete and finite (it can stamp messages)."""
+    column = batch.column(batch.schema.get_field_index("time"))
+    return not column.null_count and bool(np.isfinite(column.to_numpy()).all())
 
 
 def check_encodable(table: pa.Table | pa.Schema) -> None:

@@ -25,6 +25,7 @@ from pipeline.io.mcap.arrow import (
     SAMPLES_TOPIC,
     UNITS_RECORD,
     WELL_RECORD,
+    UnstampedBatch,
     add_arrow_channel,
     arrow_batches,
     arrow_schema,
@@ -47,9 +48,27 @@ def write_tables(
     tables: Mapping[str, Port], path: Path, well: WellMetadata, provenance: Provenance
 ) -> None:
     """Write each table on the topic ``/gyropipe/<role>`` of one MCAP file; a stream (the
-    full-rate series) is written batch by batch as it is read."""
+    full-rate series) is written batch by batch as it is read, in one pass (a second, the
+    file written again with the stream's messages logged at 0, only when a batch's
+    ``time`` column turns out to have a null or a value not finite)."""
     for table in tables.values():
         check_encodable(table.schema)
+    times = {role: _times(table) for role, table in tables.items()}
+    while True:
+        try:
+            return _write(tables, times, path, well, provenance)
+        except UnstampedBatch as exc:
+            times[exc.topic.removeprefix(TOPIC_PREFIX)] = None
+
+
+def _write(
+    tables: Mapping[str, Port],
+    times: Mapping[str, np.ndarray | bool | None],
+    path: Path,
+    well: WellMetadata,
+    provenance: Provenance,
+) -> None:
+    """:func:`write_tables` with each table's message ``times`` (:func:`_times`)."""
     path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
     with path.open("wb") as fh:
         writer = start_writer(fh)
@@ -60,7 +79,7 @@ def write_tables(
                 f"gyropipe.{role}",
                 table if isinstance(table, pa.Table) else iter(table),
                 table.schema,
-                _times(table),
+                times[role],
             )
         writer.add_metadata(WELL_RECORD, well_strings(well))
         for role, table in tables.items():
@@ -79,17 +98,13 @@ def write_tables(
 
 def _times(table: Port) -> np.ndarray | bool | None:
     """The ``time`` column (s) when it can stamp messages: float64, complete, finite (for a
-    stream, checked in a pass of its own; then ``True``: each batch stamps its messages)."""
+    stream ``True``: each batch stamps its messages, checked as it is written)."""
     if "time" not in table.column_names or table.schema.field("time").type != pa.float64():
         return None
     if isinstance(table, pa.Table):
         column = table.column("time")
         times: np.ndarray = column.to_numpy(zero_copy_only=False)
         return times if column.null_count == 0 and np.isfinite(times).all() else None
-    for batch in table:
-        column = batch.column(batch.schema.get_field_index("time"))
-        if column.null_count or not np.isfinite(column.to_numpy(zero_copy_only=False)).all():
-            return None
     return True
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import itertools
 import re
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -77,63 +76,71 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     if table.num_rows == 0:
         raise EmptyTableError("trajectory", "a WITSML trajectory needs at least one station")
     values = _station_values(table)
+    texts = {column: _numbers(array) for column, array in values.items()}
     north = _north(table)
     well_name = _name(well.well or UNNAMED, "well name")
     wellbore_name = _name(well.wellbore or well_name, "wellbore name")
     tool = survey_tool(well.tool_type)
     tools, kinds = (_texts(table, name) for name in STATION_TEXT_COLUMNS)
     calculation = calculation_of(table)
-    root = ET.Element("trajectorys", {"xmlns": NS, "version": VERSION})
+    doc = _Document()
+    doc.open("trajectorys", xmlns=NS, version=VERSION)
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
+    stations = [(c, e, UNIT_UOM[u]) for c, e, u in STATION_COLUMNS if c in texts]
+    covariance = [(c, e, UNIT_UOM[u]) for c, e, u in COVARIANCE if c in texts]
     for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
-        traj = _sub(
-            root,
+        doc.open(
             "trajectory",
             uidWell=_uid(well.uwi or well_name),
             uidWellbore=_uid(wellbore_name),
             uid=_uid(name),
         )
-        _sub(traj, "nameWell", well_name)
-        _sub(traj, "nameWellbore", wellbore_name)
-        _sub(traj, "name", name)
+        doc.leaf("nameWell", well_name)
+        doc.leaf("nameWellbore", wellbore_name)
+        doc.leaf("name", name)
         if well.survey_date is not None:
-            _sub(traj, "dTimTrajStart", f"{well.survey_date.isoformat()}T00:00:00Z")
-        _measure(traj, "mdMn", values["md"][lo], "m")
-        _measure(traj, "mdMx", values["md"][hi - 1], "m")
+            doc.leaf("dTimTrajStart", f"{well.survey_date.isoformat()}T00:00:00Z")
+        doc.leaf("mdMn", texts["md"][lo], uom="m")
+        doc.leaf("mdMx", texts["md"][hi - 1], uom="m")
         if well.service_company:
-            _sub(traj, "serviceCompany", _name(well.service_company, "service company"))
+            doc.leaf("serviceCompany", _name(well.service_company, "service company"))
         if well.declination_applied is not None:
-            _measure(traj, "magDeclUsed", well.declination_applied, "dega")
+            doc.leaf("magDeclUsed", _number(well.declination_applied), uom="dega")
         if well.grid_convergence_applied is not None:
-            _measure(traj, "gridCorUsed", well.grid_convergence_applied, "dega")
+            doc.leaf("gridCorUsed", _number(well.grid_convergence_applied), uom="dega")
         if calculation is not None and "vertical_section" in values:
-            _measure(traj, "aziVertSect", calculation.vs_azimuth, "dega")
-            _measure(traj, "dispNsVertSectOrig", 0.0, "m")
-            _measure(traj, "dispEwVertSectOrig", 0.0, "m")
-        _sub(traj, "aziRef", AZI_REF[north])
+            doc.leaf("aziVertSect", _number(calculation.vs_azimuth), uom="dega")
+            doc.leaf("dispNsVertSectOrig", _number(0.0), uom="m")
+            doc.leaf("dispEwVertSectOrig", _number(0.0), uom="m")
+        doc.leaf("aziRef", AZI_REF[north])
         algorithm = CALC_ALGORITHM[calculation.method] if calculation is not None else None
         for row in range(lo, hi):
-            station = _sub(traj, "trajectoryStation", uid=f"stn-{row - lo + 1}")
+            doc.open("trajectoryStation", uid=f"stn-{row - lo + 1}")
             own = survey_tool(tools[row]) if tools[row] is not None else tool
             kind = TIE_IN if row == lo else SURVEY_TOOLS[own]
-            _sub(station, "typeTrajStation", kinds[row] if kinds[row] in STATION_TYPES else kind)
-            _sub(station, "typeSurveyTool", own)
+            doc.leaf("typeTrajStation", kinds[row] if kinds[row] in STATION_TYPES else kind)
+            doc.leaf("typeSurveyTool", own)
             if algorithm is not None:
-                _sub(station, "calcAlgorithm", algorithm)
-            for column, element, unit in STATION_COLUMNS:
-                if column in values and np.isfinite(values[column][row]):
-                    _measure(station, element, values[column][row], UNIT_UOM[unit])
-            if all(c in values and np.isfinite(values[c][row]) for c, _, _ in COVARIANCE):
-                matrix = _sub(station, "matrixCov")
-                for column, element, unit in COVARIANCE:
-                    _measure(matrix, element, values[column][row], UNIT_UOM[unit])
-        _common_data(traj, well)
-    ET.indent(root)
+                doc.leaf("calcAlgorithm", algorithm)
+            for column, element, uom in stations:
+                text = texts[column][row]
+                if text is not None:
+                    doc.leaf(element, text, uom=uom)
+            if len(covariance) == len(COVARIANCE) and all(
+                texts[column][row] is not None for column, _, _ in covariance
+            ):
+                doc.open("matrixCov")
+                for column, element, uom in covariance:
+                    doc.leaf(element, texts[column][row], uom=uom)
+                doc.close()
+            doc.close()
+        _common_data(doc, well)
+        doc.close()
+    doc.close()
     with path.open("wb") as fh:
-        ET.ElementTree(root).write(fh, encoding="UTF-8", xml_declaration=True)
-        fh.write(b"\n")
+        fh.write(doc.text().encode())
 
 
 def _station_values(table: pa.Table) -> dict[str, np.ndarray]:
@@ -207,34 +214,91 @@ def _checked(text: str, what: str, longest: int | None) -> str:
     return text
 
 
-def _sub(parent: ET.Element, tag: str, text: str | None = None, **attrs: str) -> ET.Element:
-    element = ET.SubElement(parent, tag, attrs)
-    element.text = text
-    return element
+def _number(value: float) -> str:
+    """A number in shortest round-trip form."""
+    return repr(float(value))
 
 
-def _measure(parent: ET.Element, tag: str, value: float, uom: str) -> None:
-    _sub(parent, tag, repr(float(value)), uom=uom)
+def _numbers(array: np.ndarray) -> list[str | None]:
+    """Each value of a float column in shortest round-trip form (None where not finite)."""
+    finite = np.isfinite(array).tolist()
+    return [repr(v) if ok else None for v, ok in zip(array.tolist(), finite, strict=True)]
 
 
-def _common_data(traj: ET.Element, well: WellMetadata) -> None:
+class _Document:
+    """An XML document written as text, as ElementTree serialises it after ``ET.indent``
+    (two spaces per level, ``<tag />`` when empty, text and attribute values escaped)."""
+
+    def __init__(self) -> None:
+        self._parts = ["<?xml version='1.0' encoding='UTF-8'?>\n"]
+        self._open: list[tuple[str, int]] = []
+        """the open elements: tag, index of the start tag in ``_parts``"""
+
+    def open(self, tag: str, **attrs: str) -> None:
+        """Start an element that holds elements."""
+        self._open.append((tag, len(self._parts)))
+        self._parts.append(f"{'  ' * (len(self._open) - 1)}<{tag}{_attributes(attrs)}>\n")
+
+    def close(self) -> None:
+        """End the innermost open element."""
+        tag, at = self._open.pop()
+        if at == len(self._parts) - 1:  # it holds nothing
+            self._parts[at] = self._parts[at][:-2] + " />\n"
+        else:
+            self._parts.append(f"{'  ' * len(self._open)}</{tag}>\n")
+
+    def leaf(self, tag: str, text: str | None, **attrs: str) -> None:
+        """An element holding ``text`` alone."""
+        start = f"{'  ' * len(self._open)}<{tag}{_attributes(attrs)}"
+        if not text:
+            self._parts.append(f"{start} />\n")
+        else:
+            self._parts.append(f"{start}>{_escape(text)}</{tag}>\n")
+
+    def text(self) -> str:
+        """The document, every element closed."""
+        if self._open:
+            raise RuntimeError(f"element {self._open[-1][0]!r} is not closed")
+        return "".join(self._parts)
+
+
+_TEXT_ESCAPES = {ord("&"): "&amp;", ord("<"): "&lt;", ord(">"): "&gt;"}
+_ATTRIBUTE_ESCAPES = _TEXT_ESCAPES | {
+    ord('"'): "&quot;",
+    ord("\r"): "&#13;",
+    ord("\n"): "&#10;",
+    ord("\t"): "&#09;",
+}
+
+
+def _escape(text: str) -> str:
+    return text.translate(_TEXT_ESCAPES)
+
+
+def _attributes(attrs: dict[str, str]) -> str:
+    return "".join(f' {k}="{v.translate(_ATTRIBUTE_ESCAPES)}"' for k, v in attrs.items())
+
+
+def _common_data(doc: _Document, well: WellMetadata) -> None:
     """Provenance comment and every set well metadata field as an extension value."""
-    common = _sub(traj, "commonData")
+    doc.open("commonData")
     comment = (
         f"Written by gyropipe {__version__}. dispNs/dispEw from the wellhead; tvd "
         f"below the depth reference ({well.depth_reference or 'not stated'}); matrixCov: "
         "position covariance north-east-vertical (vertical down), 1 sigma squared."
     )
-    _sub(common, "comments", _checked(comment, "depth reference", None))
+    doc.leaf("comments", _checked(comment, "depth reference", None))
     for field, value in well.model_dump(exclude_none=True).items():
         if not str(value).strip():
             continue  # WITSML values are never empty
-        entry = _sub(common, "extensionNameValue", uid=f"well.{field}")
-        _sub(entry, "name", EXTENSION_PREFIX + field)
+        doc.open("extensionNameValue", uid=f"well.{field}")
+        doc.leaf("name", EXTENSION_PREFIX + field)
         if field in WELL_UOM:
-            _measure(entry, "value", value, WELL_UOM[field])
+            doc.leaf("value", _number(value), uom=WELL_UOM[field])
             kind = "double"
         else:
-            _sub(entry, "value", _checked(str(value), f"well {field}", None))
+            doc.leaf("value", _checked(str(value), f"well {field}", None))
             kind = "date" if field == "survey_date" else "string"
-        _sub(entry, "dataType", kind)
+        doc.leaf("dataType", kind)
+        doc.close()
+    doc.close()
