@@ -385,37 +385,53 @@ def reading_stats(
     """Each reading's mid time ``t`` (s, of ``time``), circular mean frame angle (deg, when
     ``angle`` is given), the mean and sample standard deviation of each signal and its
     sample count ``n``, over the samples [a, b) of the columns (the readings in order, none
-    overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2 samples). Reduced in place,
-    gaps included, so a reading's numbers do not depend on its neighbours (the samples
-    between readings are passed over and dropped)."""
+    overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2 samples). A reading's numbers
+    do not depend on its neighbours: the frame angle is reduced in place (the samples
+    between readings passed over and dropped), each signal in a buffer of the readings'
+    samples alone (:class:`_Packed`: the gaps are not gone over)."""
     cuts = np.stack([a, b], axis=1).ravel()[:-1] - a[0]
     """reading starts and ends (even: a reading, odd: a gap) within [a[0], b[-1])"""
-    lengths = np.diff(cuts, append=b[-1] - a[0])
     span = slice(int(a[0]), int(b[-1]))
+    n = b - a
     columns: dict[str, np.ndarray] = {"t": (time[a] + time[b - 1]) / 2}
     if angle is not None:
         columns["frame_angle"] = _circular_mean(angle[span], cuts)
     stds: dict[str, FloatArray] = {}
-    for name, values in signals.items():
-        columns[name], stds[f"{name}_std"] = _mean_std(values[span], cuts, lengths)
-    return columns | stds | {"n": b - a}
+    if signals:
+        packed = _Packed(a, b)
+        for name, values in signals.items():
+            columns[name], stds[f"{name}_std"] = packed.mean_std(values)
+    return columns | stds | {"n": n}
 
 
-def _mean_std(
-    x: FloatArray, cuts: IndexArray, lengths: IndexArray
-) -> tuple[FloatArray, FloatArray]:
-    """Mean and sample standard deviation (ddof = 1) of the even segments of ``x`` (split at
-    ``cuts``, of ``lengths``), taken about each segment's first sample so that constant
-    signals average exactly."""
-    first = x[cuts]
-    dev = x - np.repeat(first, lengths)
-    shift = np.add.reduceat(dev, cuts)
-    n = lengths[::2]
-    shift[::2] /= n
-    shift[1::2] = 0.0  # the gaps: not reduced
-    dev -= np.repeat(shift, lengths)
-    var = np.add.reduceat(np.multiply(dev, dev, out=dev), cuts)[::2] / (n - 1)
-    return first[::2] + shift[::2], np.sqrt(var)
+class _Packed:
+    """The samples [a, b) of each reading (in order, none overlapping, each of at least 2),
+    laid end to end in one scratch buffer that every signal reuses."""
+
+    def __init__(self, a: IndexArray, b: IndexArray) -> None:
+        self.a, self.n = a, b - a
+        starts = np.concatenate([[0], np.cumsum(self.n)[:-1]])
+        self.starts: IndexArray = starts
+        """each reading's first sample in the buffer"""
+        self.pieces = [
+            (slice(i, j), slice(s, s + j - i))
+            for i, j, s in zip(a.tolist(), b.tolist(), starts.tolist(), strict=True)
+        ]
+        """(samples in the signal, the same samples in the buffer) of each reading"""
+        self.dev: FloatArray = np.empty(int(self.n.sum()))
+
+    def mean_std(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Mean and sample standard deviation (ddof = 1) of each reading's samples of ``x``,
+        taken about the reading's first sample so that constant signals average exactly."""
+        first = x[self.a]
+        dev = self.dev
+        for (signal, packed), f in zip(self.pieces, first.tolist(), strict=True):
+            np.subtract(x[signal], f, out=dev[packed])
+        shift = np.add.reduceat(dev, self.starts) / self.n
+        for (_, packed), s in zip(self.pieces, shift.tolist(), strict=True):
+            dev[packed] -= s
+        var = np.add.reduceat(np.multiply(dev, dev, out=dev), self.starts) / (self.n - 1)
+        return first + shift, np.sqrt(var)
 
 
 def _circular_mean(degrees: FloatArray, cuts: IndexArray) -> FloatArray:
