@@ -198,11 +198,19 @@ _HOOKED: list[bool] = []  # the hook cannot be removed: installed once
 
 def _audit(event: str, args: tuple[Any, ...]) -> None:
     # open() and io.open() give their mode; os.open() gives None: a descriptor opened to
-    # fstat a file (the batch's stat key) is not a read, and is left out
+    # fstat a file (the batch's stat key) is not a read, and is left out — unless it is then
+    # opened for reading (open(fd), as the hashing does): named by what the descriptor is
     if event != "open" or not _ACTIVE:
         return
     path, mode = args[0], args[1]
-    if mode is not None and isinstance(path, str | bytes | os.PathLike):
+    if mode is None:
+        return
+    if isinstance(path, int):
+        try:
+            path = os.readlink(f"/proc/self/fd/{path}")
+        except OSError:
+            return
+    if isinstance(path, str | bytes | os.PathLike):
         _ACTIVE[-1].record(os.fsdecode(path))
 
 

@@ -139,6 +139,11 @@ class HashCache:
         digest = row[0] if row is not None else None
         return digest if isinstance(digest, str) and SHA256.match(digest) else None
 
+    def forget(self, paths: Iterable[str]) -> None:
+        """Drop what is remembered of the files at ``paths`` (replaced: a well published
+        again)."""
+        self._db.executemany("DELETE FROM file_hashes WHERE path = ?", [(p,) for p in paths])
+
     def put(self, entries: Iterable[tuple[str, FileKey, str]]) -> None:
         """Remember (path, key, sha256) for each entry (one row per device and inode)."""
         self._db.executemany(

@@ -12,7 +12,10 @@ deg/30m, deg/h).
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,6 +97,47 @@ class WellFigures:
     """why there are no figures at all (no or a damaged ``run.json``)"""
     problems: tuple[str, ...] = ()
     """published files that could not be read"""
+
+
+def figures_json(figures: WellFigures) -> str:
+    """``figures`` as JSON text (the ledger keeps a done run's, :func:`figures_of_json`);
+    an undefined SF is ``-Infinity``."""
+    qc = figures.qc
+    record = dataclasses.asdict(dataclasses.replace(figures, qc=None))
+    if qc is not None:  # (asdict would count a Counter's items as keys)
+        record["qc"] = {
+            "evaluated": qc.evaluated,
+            "failed": dict(qc.failed),
+            "stations": sorted(qc.stations),
+            "windows": qc.windows,
+        }
+    return json.dumps(record, sort_keys=True, separators=(",", ":"))
+
+
+def figures_of_json(text: str) -> WellFigures | None:
+    """The figures :func:`figures_json` wrote; None where the text is not such a record."""
+    try:
+        record = json.loads(text)
+        qc, gates, worst, drift = (record.get(k) for k in ("qc", "gates", "clearance", "drift"))
+        return WellFigures(
+            pipeline=record["pipeline"],
+            qc=None
+            if qc is None
+            else QcTally(
+                qc["evaluated"], Counter(qc["failed"]), set(qc["stations"]), qc["windows"]
+            ),
+            gates=None if gates is None else tuple(Gate(**g) for g in gates),
+            clearance=None if worst is None else WorstClearance(**worst),
+            drift=None if drift is None else tuple(DriftFigure(**d) for d in drift),
+            td_md=record["td_md"],
+            td_tvd=record["td_tvd"],
+            max_dls=record["max_dls"],
+            reports=tuple(record["reports"]),
+            missing=record["missing"],
+            problems=tuple(record["problems"]),
+        )
+    except (ValueError, TypeError, KeyError, AttributeError):
+        return None
 
 
 def required(contract: type[TableContract]) -> frozenset[str]:

@@ -22,7 +22,11 @@ Consistency with several batches on one ledger (processes on one or more machine
   out — so a check publishes nothing, and one whose batch died is dropped, not counted;
 - a run is marked ``done`` only after its outputs are published and on disk;
 - the ``file_hashes`` table remembers the SHA-256 a worker found for a file's stat key
-  (:mod:`pipeline.batch.filestate`): a cache, never the record of a run.
+  (:mod:`pipeline.batch.filestate`): a cache, never the record of a run;
+- the ``publications`` table remembers, per done run, the hashes of the ``batch.json`` and
+  ``run.json`` a worker found it published with, and its fleet figures: with the stat keys
+  of those two files in ``file_hashes``, the batch process knows a well's publication
+  without reading a file in it.
 
 Only the batch process opens the ledger; workers never do.
 
@@ -56,7 +60,7 @@ from .filestate import FileKey, HashCache
 from .fingerprint import Fingerprint, completed_json
 from .jobs import BatchConfigError
 from .policy import Check, Run, Skip, WellState
-from .publish import MARKER, read_published
+from .publish import MARKER, Publication, read_published
 from .records import BadRow, BatchRow, RunRow, batch_row, decode_text, rejection, run_row
 from .worker import WellOutcome
 
@@ -109,6 +113,12 @@ CREATE UNIQUE INDEX IF NOT EXISTS one_running_run_per_well ON runs (well)
     WHERE status = 'running';
 CREATE INDEX IF NOT EXISTS runs_by_well ON runs (well, id);
 CREATE INDEX IF NOT EXISTS batches_by_key ON batches (key, id);
+CREATE TABLE IF NOT EXISTS publications (
+    run INTEGER PRIMARY KEY,
+    marker_sha256 TEXT NOT NULL,
+    manifest_sha256 TEXT NOT NULL,
+    figures TEXT
+);
 """
 
 P = ParamSpec("P")
@@ -485,6 +495,30 @@ class Ledger:
             with self._write():
                 self._hashes.put(entries)
 
+    @_guarded("remember a publication")
+    def published(
+        self, publication: Publication, figures: str | None, files: Iterable[str] = ()
+    ) -> None:
+        """Remember how a worker found run ``publication.run_id`` published, with its fleet
+        figures (JSON, :func:`~pipeline.batch.fleet.figures_json`; None: keep the ones
+        remembered), and forget the hashes remembered for ``files`` (its ``batch.json`` and
+        ``run.json``: an earlier run's there are replaced)."""
+        with self._write():
+            self._hashes.forget(files)
+            self._db.execute(
+                "INSERT INTO publications (run, marker_sha256, manifest_sha256, figures) "
+                "VALUES (?, ?, ?, ?) ON CONFLICT (run) DO UPDATE SET "
+                "marker_sha256 = excluded.marker_sha256, "
+                "manifest_sha256 = excluded.manifest_sha256, "
+                "figures = COALESCE(excluded.figures, figures)",
+                (
+                    publication.run_id,
+                    publication.marker_sha256,
+                    publication.manifest_sha256,
+                    figures,
+                ),
+            )
+
     @_guarded("record a well's outcome")
     def finish(
         self,
@@ -578,6 +612,7 @@ class Ledger:
             published = read_published(Path(out_dir)) if isinstance(out_dir, str) else None
             if published is not None and published.run_id == row["id"]:
                 self._recover(int(row["id"]), Path(out_dir), published.manifest, row["fingerprint"])
+                self.published(published.publication, None)
             else:
                 self._db.execute(
                     "UPDATE runs SET status = 'interrupted', finished = ?, "
@@ -627,7 +662,19 @@ class Ledger:
         )
         latest = finished[0] if finished else None
         last_done = done[0] if done else None
-        return WellState(latest, last_done, functools.partial(_published, last_done))
+        publication, figures = None, None
+        if last_done is not None:
+            row = self._db.execute(
+                "SELECT * FROM publications WHERE run = ?", (last_done.id,)
+            ).fetchone()
+            if row is not None and all(
+                isinstance(row[k], str) for k in ("marker_sha256", "manifest_sha256")
+            ):
+                publication = Publication(
+                    last_done.id, row["marker_sha256"], row["manifest_sha256"]
+                )
+                figures = row["figures"] if isinstance(row["figures"], str) else None
+        return WellState(latest, last_done, None, publication, figures)
 
 
 def alive(batch: BatchRow) -> bool:
@@ -635,14 +682,6 @@ def alive(batch: BatchRow) -> bool:
     if time.time() - batch.heartbeat > LEASE_S:
         return False
     return batch.host != socket.gethostname() or process_alive(batch.pid)
-
-
-def _published(run: RunRow | None) -> bool:
-    """Whether ``run``'s outputs are the ones published in its directory."""
-    if run is None:
-        return False
-    published = read_published(Path(run.out_dir))
-    return published is not None and published.run_id == run.id
 
 
 def _identity(path: Path) -> tuple[int, int] | None:

@@ -11,11 +11,13 @@
 
 The batch process decides without reading a file. A hash it does not know from the file's
 stat is pending (:data:`~pipeline.batch.fingerprint.PENDING`), and whether the last done
-run is still published in OUT/<well> is looked at only when the choice turns on it. A well
-that runs whatever those hold runs (:func:`why` gives its reasons from the run's own hashes
-once it is recorded); one that is skipped only if its files are as its last done run read
-them, with a hash pending, is a :class:`Check`: a worker hashes the files and looks at
-OUT/<well>, and :func:`decide` chooses again with what it found.
+run is still published in OUT/<well> is looked at only when the choice turns on it — known
+from the stat of its ``batch.json`` and ``run.json`` where the ledger holds their hashes,
+else unknown. A well that runs whatever those hold runs (:func:`why` gives its reasons from
+the run's own hashes once it is recorded); one that is skipped only if its files are as its
+last done run read them, with a hash pending or the publication unknown, is a
+:class:`Check`: a worker hashes the files and looks at OUT/<well>, and :func:`decide`
+chooses again with what it found.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .fingerprint import Fingerprint, changes
+from .publish import Publication
 from .records import RunRow
 
 
@@ -43,11 +46,16 @@ class WellState:
     latest: RunRow | None
     """its latest finished run (done, failed or interrupted)"""
     last_done: RunRow | None
-    last_done_published: bool | Callable[[], bool]
+    last_done_published: bool | Callable[[], bool | None] | None
     """the last done run's outputs are still the ones in OUT/<well>; or a function that
-    looks, called only when the choice turns on it"""
+    looks, called only when the choice turns on it; None where that cannot be told without
+    reading a file there (a worker looks)"""
+    publication: Publication | None = None
+    """how a worker last found the last done run published (None: never recorded)"""
+    figures: str | None = None
+    """the last done run's fleet figures (JSON) as that worker read them"""
 
-    def published(self) -> bool:
+    def published(self) -> bool | None:
         found = self.last_done_published
         return found() if callable(found) else found
 
@@ -107,7 +115,10 @@ def decide(
     inputs, files = current.pending()
     if inputs or files:
         return Check(inputs, files, done.id, as_done)
-    return as_done if state.published() else otherwise
+    published = state.published()
+    if published is None:
+        return Check([], [], done.id, as_done)
+    return as_done if published else otherwise
 
 
 def why(state: WellState, current: Fingerprint, published: bool) -> list[str]:

@@ -12,6 +12,7 @@ batch gone), and removing its directory under it would let it make the directory
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from dataclasses import dataclass
@@ -28,12 +29,30 @@ STAGING_SUFFIX = ".staging"
 
 
 @dataclass(frozen=True)
+class Publication:
+    """A run as published in ``OUT/<well>``, known by the SHA-256 of its ``batch.json`` and
+    ``run.json`` bytes: files whose hashes are these hold this run's marker and manifest."""
+
+    run_id: int
+    marker_sha256: str
+    manifest_sha256: str
+
+
+@dataclass(frozen=True)
 class PublishedRun:
     """What a published well directory says about itself."""
 
     run_id: int
     manifest: dict[str, Any]
     """the runner's ``run.json``"""
+    marker_sha256: str
+    """SHA-256 of the ``batch.json`` bytes read"""
+    manifest_sha256: str
+    """SHA-256 of the ``run.json`` bytes read"""
+
+    @property
+    def publication(self) -> Publication:
+        return Publication(self.run_id, self.marker_sha256, self.manifest_sha256)
 
 
 def staging_dir(out_root: Path, well_id: str, run_id: int) -> Path:
@@ -64,10 +83,14 @@ def read_published(well_dir: Path) -> PublishedRun | None:
     """The published run in ``well_dir``, if it is complete: marker and manifest present and
     well formed (``batch.json`` names an integer ``run_id``; ``run.json`` lists its outputs
     with their file names and sizes) and every output listed on disk with its recorded
-    size. A marker or manifest that is missing, damaged or edited counts as not published."""
+    size. A marker or manifest that is missing, damaged or edited counts as not published.
+    The hashes of the two files' bytes as read come with it: the batch process knows the
+    publication again by them (:mod:`pipeline.batch.filestate`) without reading a file."""
     try:
-        marker = json.loads((well_dir / MARKER).read_text())
-        manifest = json.loads((well_dir / MANIFEST).read_text())
+        marker_bytes = (well_dir / MARKER).read_bytes()
+        manifest_bytes = (well_dir / MANIFEST).read_bytes()
+        marker = json.loads(marker_bytes)
+        manifest = json.loads(manifest_bytes)
         run_id = marker["run_id"]
         outputs = manifest["outputs"]
         if not isinstance(run_id, int) or not isinstance(outputs, list):
@@ -79,7 +102,12 @@ def read_published(well_dir: Path) -> PublishedRun | None:
                 return None
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    return PublishedRun(run_id, manifest)
+    return PublishedRun(
+        run_id,
+        manifest,
+        hashlib.sha256(marker_bytes).hexdigest(),
+        hashlib.sha256(manifest_bytes).hexdigest(),
+    )
 
 
 def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:

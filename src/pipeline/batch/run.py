@@ -2,11 +2,12 @@
 
 The batch process claims each well in the ledger (or skips it, see
 :mod:`pipeline.batch.policy`), hands claimed wells to the executor a few at a time, and
-records each outcome once the well's outputs are published. It reads no input: it stats
-them, takes their hashes from the ledger's cache where their stat is unchanged
-(:mod:`pipeline.batch.filestate`), and leaves every read to the workers — the run's own
-hashes, a check's hashes when the choice turns on files it has no hash for. A failing well
-never stops the others.
+records each outcome once the well's outputs are published. It reads no input, no file a
+parameter names and no well's outputs: it stats them, takes their hashes from the ledger's
+cache where their stat is unchanged (:mod:`pipeline.batch.filestate`) — a well's
+publication too, by the hashes of its ``batch.json`` and ``run.json`` — and leaves every
+read to the workers: the run's own hashes, a check's hashes and look at OUT/<well> when the
+choice turns on what it cannot know so. A failing well never stops the others.
 
 Each turn of its loop is one ledger transaction: the outcomes that came back are recorded
 and the wells that take their place claimed, all committed or none; only then are the new
@@ -24,6 +25,7 @@ time it reaches STEP — ``commit`` (inside a turn's transaction, before it comm
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import os
@@ -40,17 +42,18 @@ from pipeline.errors import file_errors
 from pipeline.executing import ExecutorSetup, PipelineRef
 from pipeline.graph import Plan
 from pipeline.registry import Registry
+from pipeline.runner import MANIFEST
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
-from .filestate import Seen, key_after, look
+from .filestate import Seen, file_key, key_after, look
 from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
-from .fleet import WellFigures
+from .fleet import WellFigures, figures_json, figures_of_json
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
 from .policy import Check, Mode, Run, Skip, WellState, decide, why
 from .progress import Reporter
-from .publish import WORK_DIR, clean_work_dir, read_published
+from .publish import MARKER, WORK_DIR, clean_work_dir, read_published
 from .records import REJECTED, BatchRow, rejection
 from .summary import WellResult, counts, write_summary
 from .worker import WellOutcome, WellTask
@@ -143,6 +146,8 @@ class _Flight:
     known: dict[str, str]
     """path → the hashes the batch process had for them (pending where it had none)"""
     check: Check | None = None
+    handed: float = 0.0
+    """when its task was made, POSIX s (before any worker read a file for it)"""
 
 
 @dataclass
@@ -333,6 +338,9 @@ class _Batch:
         states: list[WellState] = []
 
         def choose(state: WellState) -> Run | Skip | Check:
+            state = replace(
+                state, last_done_published=functools.partial(self._published, state, seen, known)
+            )
             states.append(state)
             files = state.last_done.fingerprint.files if state.last_done is not None else {}
             digests = {path: self._known(path, seen, known)[0] for path in files}
@@ -343,6 +351,7 @@ class _Batch:
         )
         if isinstance(claim, Skipped):
             turn.results.append(WellResult(job.well_id, "skipped", claim.reason))
+            self._remembered_figures(job, states[-1])
         elif isinstance(claim, Busy):
             turn.busy.append((job, claim))
         elif isinstance(claim, Claimed):
@@ -380,7 +389,36 @@ class _Batch:
             known[path] = self.ledger.known_hash(found.key) or PENDING
         return known[path], problem
 
+    def _published(
+        self, state: WellState, seen: dict[str, Seen], known: dict[str, str]
+    ) -> bool | None:
+        """Whether the last done run is what OUT/<well> holds, from the stat of its files
+        alone: its ``batch.json`` and ``run.json`` hashed (the ledger's cache) as a worker
+        found them published, every output it lists a regular file of its size. False where
+        either file is missing; None (a worker looks) where their hashes are not known so."""
+        done = state.last_done
+        if done is None:
+            return False
+        well_dir = Path(done.out_dir)
+        marker = self._known(str(well_dir / MARKER), seen, known)[0]
+        manifest = self._known(str(well_dir / MANIFEST), seen, known)[0]
+        if UNREADABLE in (marker, manifest):
+            return False
+        found = state.publication
+        if found is None or (found.marker_sha256, found.manifest_sha256) != (marker, manifest):
+            return None
+        return all(_has_size(well_dir, entry) for entry in done.outputs)
+
+    def _remembered_figures(self, job: WellJob, state: WellState) -> None:
+        """A skipped well's figures on the fleet page: its last done run's, as the ledger
+        holds them (else the page reads them from OUT/<well>)."""
+        if state.figures is not None:
+            figures = figures_of_json(state.figures)
+            if figures is not None:
+                self.figures[job.well_id] = figures
+
     def _task(self, flight: _Flight) -> WellTask:
+        flight.handed = time.time()
         job, check = flight.job, flight.check
         return WellTask(
             job.well_id,
@@ -414,12 +452,16 @@ class _Batch:
         fingerprint = self.identity.fingerprint(job, inputs)
         files = state.last_done.fingerprint.files if state.last_done is not None else {}
         published = outcome.published_run == flight.check.previous
+        if published:
+            self._publication(flight, outcome)
         decision = self._decide(
             replace(state, last_done_published=published), fingerprint.reading(files, known)
         )
         if isinstance(decision, Skip):
             self.ledger.checked(flight.run_id, None)
             turn.results.append(WellResult(job.well_id, "skipped", decision.reason))
+            if published and outcome.figures is not None:
+                self.figures[job.well_id] = outcome.figures
             return
         assert isinstance(decision, Run)  # every hash is known now
         if not self.ledger.checked(flight.run_id, decision.reasons):
@@ -458,19 +500,40 @@ class _Batch:
             )
             if outcome.figures is not None:
                 self.figures[job.well_id] = outcome.figures
+            self._publication(flight, outcome)
         else:
             detail = error or outcome.error or "failed"
             result = WellResult(job.well_id, "failed", detail, outcome.wall_time_s, outcome.run_id)
         turn.results.append(result)
 
+    def _publication(self, flight: _Flight, outcome: WellOutcome) -> None:
+        """Remember how a worker found a well published (its fleet figures with it), and the
+        hashes of its ``batch.json`` and ``run.json`` by their stat (inside a turn)."""
+        found = outcome.publication
+        if found is None:
+            return
+        figures = figures_json(outcome.figures) if outcome.figures is not None else None
+        well_dir = self.out / flight.job.well_id
+        files = {str(well_dir / MARKER): found.marker_sha256}
+        files[str(well_dir / MANIFEST)] = found.manifest_sha256
+        self.ledger.published(found, figures, files)
+        self._learn(flight, files)
+
     def _learn(self, flight: _Flight, digests: dict[str, str]) -> None:
-        """Remember the hashes a worker took of files whose stat held meanwhile."""
+        """Remember the hashes a worker took of files whose stat held meanwhile: seen before
+        the task and the same after, or — a file the batch process had not looked at (one a
+        parameter names, found by the run) — unchanged since before the task was made."""
         entries = []
         for path, digest in digests.items():
-            seen = flight.seen.get(path)
-            if seen is None or seen.key is None or flight.known.get(path) == digest:
+            if flight.known.get(path) == digest:
                 continue
-            if seen.settled(key_after(path)):
+            after = key_after(path)
+            seen = flight.seen.get(path) or Seen(path, after, flight.handed)
+            if (
+                seen.key is not None
+                and seen.settled(after)
+                and (self.ledger.known_hash(seen.key) != digest)
+            ):
                 entries.append((path, seen.key, digest))
         self.ledger.remember(entries)
 
@@ -560,6 +623,17 @@ def _input_bytes(job: WellJob) -> int:
             found = path.stat()
             total += found.st_size if stat.S_ISREG(found.st_mode) else 0
     return total
+
+
+def _has_size(well_dir: Path, entry: Any) -> bool:
+    """Whether a listed output (``{"file", "bytes"}``) is a regular file of its size in
+    ``well_dir`` (stat'ed, as :func:`~pipeline.batch.publish.read_published` checks it)."""
+    try:
+        name, size = entry["file"], entry["bytes"]
+        path = well_dir / name
+        return bool(path.parent == well_dir and file_key(path).size == size)
+    except (OSError, KeyError, TypeError):
+        return False
 
 
 def _check_paths(job: WellJob, check: Check) -> list[str]:

@@ -41,7 +41,7 @@ from pipeline.well import WellMetadata
 from .filestate import key_after
 from .fingerprint import completed_json, hashed
 from .fleet import WellFigures, well_figures
-from .publish import MARKER, read_published, staging_dir, write_marker
+from .publish import MARKER, Publication, read_published, staging_dir, write_marker
 
 OWN = frozenset({MARKER})
 """what a batch's published well directory holds besides the run's own files"""
@@ -96,9 +96,12 @@ class WellOutcome:
     failed run's inputs (a done run's are in its manifest)"""
     published_run: int | None = None
     """the run whose outputs ``OUT/<well>`` held when the task began (None: none whole)"""
+    publication: Publication | None = None
+    """the run ``OUT/<well>`` holds as the task ends (a check: the one it held; a done run:
+    itself), by the hashes of its ``batch.json`` and ``run.json``"""
     figures: WellFigures | None = None
-    """a done run's figures for the fleet page, read here from its published outputs so
-    that the batch process reads none"""
+    """the fleet page's figures of that run, read here from its published outputs so that
+    the batch process reads none"""
 
 
 _PLANS: dict[tuple[str, tuple[str, ...]], tuple[Plan, Registry]] = {}
@@ -161,6 +164,8 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             worker=worker,
             hashes=hashes,
             published_run=held_run,
+            publication=held.publication if held is not None else None,
+            figures=well_figures(final, manifest=held.manifest) if held is not None else None,
         )
     set_reader_threads(1)
     staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
@@ -214,6 +219,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
             published_run=held_run,
+            publication=published.publication,
             figures=well_figures(final, manifest=manifest),  # published whole above
         )
     except Exception as exc:  # a failing well is reported, never raised into the batch
