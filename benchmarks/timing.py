@@ -101,18 +101,19 @@ def table(timings: dict[str, Timing], ours: str, width: int = 40) -> str:
 
 
 def floor_lines(
-    threads: int, timings: dict[str, Timing], floor: str, readers: list[str]
+    threads: int, timings: dict[str, Timing], floor: str, readers: list[str], label: str = "floor"
 ) -> list[str]:
     """One line per reader at ``threads`` reader threads: median CPU and wall ms, and each
-    as ours / the ``floor``'s (below 1: under the floor), with the load now."""
+    as ours / the ``floor``'s (named ``label``; below 1: under the floor), with the load
+    now."""
     base = timings[floor]
     lines = []
     for name in readers:
         t = timings[name]
         lines.append(
-            f"threads {threads:>2}  {name:<24} CPU {t.cpu_median * 1e3:6.0f} ms / floor "
+            f"threads {threads:>2}  {name:<24} CPU {t.cpu_median * 1e3:6.0f} ms / {label} "
             f"{base.cpu_median * 1e3:6.0f} = {t.cpu_median / base.cpu_median:5.2f}   wall "
-            f"{t.median * 1e3:6.0f} ms / floor {base.median * 1e3:6.0f} = "
+            f"{t.median * 1e3:6.0f} ms / {label} {base.median * 1e3:6.0f} = "
             f"{t.median / base.median:5.2f}   (load {load()})"
         )
     return lines

@@ -9,17 +9,20 @@ file's text is never copied whole):
 
 * a block of fixed-width lines (every line as long; columns blank on every line split it
   into one group of columns per curve, as LAS writers lay values out) keeps its bytes: the
-  first column after each group, a space on every line, becomes a comma, and
+  first column after each group, a space on every line, becomes a comma (by an XOR that
+  makes a comma of a space only, so the layout found in one block is tried on the next
+  without a check: where it does not fit, a line has a value too few), and
   ``pyarrow.csv`` trims the padding of each value (spaces and tabs; CRLF ends a line);
 * any other block has tabs made spaces and CRLF made LF, each run of spaces made one comma
   and the spaces at line starts and ends dropped (a vectorised pass).
 
-Every value, read or not, is parsed as a float64 (correctly rounded, as Python's ``float``):
-a cell that is not exactly one number (a blank line, a wrong value count, a token like
-``1-2``, text, a control byte other than a tab) fails the parse, and a row count other
-than the line count (a lone CR) or a non-finite value (``1e999``; looked for value by value
-only when the sum of the block's values is not finite) declines, so the careful path
-reports it with its line.
+A block holding a comma is left to the careful path, which splits lines at blanks only
+(``1.0,2.0`` is one cell, not a number). Every value, read or not, is parsed as a float64
+(correctly rounded, as Python's ``float``): a cell that is not exactly one number (a blank
+line, a wrong value count, a token like ``1-2``, text, a control byte other than a tab)
+fails the parse, and a row count other than the line count (a lone CR) or a non-finite
+value (``1e999``; looked for value by value only when the sum of the block's values is not
+finite) declines, so the careful path reports it with its line.
 
 With more than one reader thread (:func:`~pipeline.io.threads.reader_threads`), that many
 threads read (copy, rewrite, parse) the next blocks while the caller uses one, each with its
@@ -46,12 +49,14 @@ Floats = NDArray[np.float64]
 Bytes = NDArray[np.uint8]
 Text = bytes | mmap.mmap
 """A file's bytes, read or mapped."""
-Layout = tuple[int, NDArray[np.intp]]
+Layout = tuple[int, tuple[int, ...]]
 """A fixed-width block's line width (with its LF) and separator columns."""
 
 BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
+FLIP = SPACE ^ COMMA
+"""XOR making a space a comma and any other byte no comma (nor a tab, LF or CR)."""
 _TAB_TO_SPACE = bytes.maketrans(b"\t", b" ")
 _BLANK = b" \t\r\n"
 
@@ -196,20 +201,26 @@ class _Parser:
         self, first: int, last: int, buffer: Bytes, known: Layout | None
     ) -> tuple[Block | None, Layout | None]:
         text, size = self.text, last - first
+        if text.find(b",", first, last) >= 0:
+            return None, None  # the careful path splits at blanks only: "1,2" is one cell
         width = text.find(b"\n", first, last) + 1 - first
         block = buffer[: size + (text[last - 1] != NEWLINE)]
-        block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
         width = width if width > 0 else block.size  # the last line, without its LF
-        separators = _fixed_width(block, width, self.n, known)
-        if separators is not None:
-            block.reshape(-1, width)[:, separators] = COMMA
+        tried = None
+        for guess in (known, None) if known is not None else (None,):
+            block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
+            layout = _fixed_width(block, width, self.n, guess)
+            if layout is None or layout == tried:
+                continue
+            grid = block.reshape(-1, width)
+            for column in layout[1]:
+                grid[:, column] ^= FLIP
             parsed = self._parsed(block, block.size // width)
             if parsed is not None:
-                return parsed, (width, separators)
-            # lines of other lengths adding up to whole lines of the first's (or bad
-            # cells, which the packed block fails too): the bytes again, packed
-            block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
+                return parsed, layout
+            tried = layout  # a layout that changed (or bad cells: packing fails them too)
+        block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
         if np.count_nonzero(block < SPACE) != np.count_nonzero(block == NEWLINE):
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
@@ -249,26 +260,30 @@ def _spaced(lines: bytes) -> Bytes | None:
     return np.frombuffer(lines.translate(_TAB_TO_SPACE, b"\r"), np.uint8)
 
 
-def _fixed_width(block: Bytes, width: int, n: int, known: Layout | None) -> NDArray[np.intp] | None:
-    """The separator columns of a block of lines all ``width`` bytes long (with their LF):
-    the first column after each of the ``n`` groups of columns holding values but the last,
-    a space on every line (those of the ``known`` layout of a block before when they are);
-    None when the lines differ in length or have another number of groups. Tabs and CRs
-    count as blanks (``pyarrow.csv`` trims tabs around a value and ends a line at CRLF; a
-    lone CR makes a row too many, declined)."""
+def _fixed_width(block: Bytes, width: int, n: int, known: Layout | None) -> Layout | None:
+    """The layout of a block of lines all ``width`` bytes long (with their LF): the
+    ``known`` layout of a block before when it is as wide, else the first column after
+    each of the ``n`` groups of columns holding values but the last, where it is a space
+    on every line; None when the lines differ in length or have another number of groups.
+    Tabs and CRs count as blanks (``pyarrow.csv`` trims tabs around a value and ends a
+    line at CRLF; a lone CR makes a row too many, declined). A known layout is not checked
+    here: :data:`FLIP` makes a comma of a space only, so a line whose separator column holds
+    anything else has a value too few, which the parse refuses (the block holds no comma)."""
     if width < 2 or block.size % width:
         return None
     grid = block.reshape(-1, width)
     if not (grid[:, -1] == NEWLINE).all():
         return None  # lines of other lengths
-    if known is not None and known[0] == width and (grid[:, known[1]] == SPACE).all():
-        return known[1]
+    if known is not None:
+        return known if known[0] == width else None
     filled = np.concatenate(([False], _column_max(grid[:, :-1]) > SPACE, [False]))
     edges = np.flatnonzero(filled[1:] != filled[:-1])  # where each group starts and ends
     if edges.size != 2 * n:
         return None
     separators = edges[1:-2:2]
-    return separators if (grid[:, separators] == SPACE).all() else None
+    if not (grid[:, separators] == SPACE).all():
+        return None
+    return width, tuple(int(column) for column in separators)
 
 
 def _column_max(grid: Bytes) -> Bytes:
