@@ -122,7 +122,9 @@ def floor(path: Path, buffer: bytearray) -> pa.Table:
         start = done = buffer.index(b"\n", buffer.index(b"~A", 0, size)) + 1
         while True:
             end = start + (size - start) // WIDTH * WIDTH
-            grid[done:end].reshape(-1, WIDTH)[:, SEPARATORS] = ord(",")
+            lines = grid[done:end].reshape(-1, WIDTH)
+            for column in SEPARATORS:  # a strided write each: no index arrays
+                lines[:, column] = ord(",")
             done = end
             if size == len(buffer):
                 break
