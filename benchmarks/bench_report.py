@@ -66,7 +66,7 @@ for label in ("cold", "warm"):
         if "series" in given:
             given["series"] = full_rate(TableStream.from_table(given["series"]), "true north")
         return survey_document(SurveyTables(**given), WellMetadata(well="bench"), provenance,
-                               "Gyro survey report")
+                               "Gyro survey report", ())  # no plugin's report parts
     doc = timed(f"{label}: document (incl. series envelope)", document)
     figures = Figures()
     timed(f"{label}: lay out figures (vector)", lambda: [figures.scene(p) for p in doc.plots()])
