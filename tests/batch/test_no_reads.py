@@ -59,20 +59,9 @@ def batch(
 ) -> tuple[BatchReport, list[WellTask], Opens]:
     """A batch on the recording executor: its report, the tasks it handed out, the opens."""
     registry = load_registry()
-    tasks: list[WellTask] = []
-    with Opens() as opens:
-        factory = lambda setup: Recording(setup, opens, tasks)  # noqa: E731
-        registry.executors["recording"] = (
-            ExecutorDef("recording", "this process, recorded", factory),
-            "builtin.executors",
-        )
-        plan = build_plan(load_spec(survey), registry)
-        jobs = jobs_from_glob(str(pattern), ["stations"], WellMetadata())
-        options = BatchOptions(
-            out_dir=out, workers=1, executor="recording", mode=Mode(only_changed=only_changed)
-        )
-        report = run_batch(plan, registry, jobs, options, JsonLines(io.StringIO()))
-    return report, tasks, opens
+    plan = build_plan(load_spec(survey), registry)
+    jobs = jobs_from_glob(str(pattern), ["stations"], WellMetadata())
+    return run_recorded(plan, registry, jobs, out, only_changed)
 
 
 def remembered(ledger: Path) -> dict[int, tuple[str, int]]:
