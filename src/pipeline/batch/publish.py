@@ -23,6 +23,8 @@ from pipeline.atomic import TRASH_SUFFIX, discard, write_synced
 from pipeline.processes import owner_alive
 from pipeline.runner import MANIFEST, remove_stale_staging
 
+from .filestate import file_key
+
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
 STAGING_SUFFIX = ".staging"
@@ -95,11 +97,8 @@ def read_published(well_dir: Path) -> PublishedRun | None:
         outputs = manifest["outputs"]
         if not isinstance(run_id, int) or not isinstance(outputs, list):
             return None
-        for entry in outputs:
-            name, size = entry["file"], entry["bytes"]
-            path = well_dir / name
-            if path.parent != well_dir or not path.is_file() or path.stat().st_size != size:
-                return None
+        if not all(output_on_disk(well_dir, entry) for entry in outputs):
+            return None
     except (OSError, ValueError, KeyError, TypeError):
         return None
     return PublishedRun(
@@ -108,6 +107,17 @@ def read_published(well_dir: Path) -> PublishedRun | None:
         hashlib.sha256(marker_bytes).hexdigest(),
         hashlib.sha256(manifest_bytes).hexdigest(),
     )
+
+
+def output_on_disk(well_dir: Path, entry: Any) -> bool:
+    """Whether an output ``run.json`` lists (``{"file", "bytes"}``) is a regular file of
+    that size directly in ``well_dir``, its status read through a descriptor
+    (:func:`~pipeline.batch.filestate.file_key`: fresh on NFS too)."""
+    try:
+        path = well_dir / entry["file"]
+        return bool(path.parent == well_dir and file_key(path).size == entry["bytes"])
+    except (OSError, KeyError, TypeError):
+        return False
 
 
 def clean_work_dir(out_root: Path, active_runs: set[int]) -> list[Path]:

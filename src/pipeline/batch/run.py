@@ -46,14 +46,14 @@ from pipeline.runner import MANIFEST
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
-from .filestate import Seen, file_key, key_after, look
+from .filestate import Seen, key_after, look
 from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
 from .fleet import WellFigures, figures_json, figures_of_json
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
 from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
 from .policy import Check, Mode, Run, Skip, WellState, decide, why
 from .progress import Reporter
-from .publish import MARKER, WORK_DIR, clean_work_dir, read_published
+from .publish import MARKER, WORK_DIR, clean_work_dir, output_on_disk, read_published
 from .records import REJECTED, BatchRow, rejection
 from .summary import WellResult, counts, write_summary
 from .worker import WellOutcome, WellTask
@@ -407,7 +407,7 @@ class _Batch:
         found = state.publication
         if found is None or (found.marker_sha256, found.manifest_sha256) != (marker, manifest):
             return None
-        return all(_has_size(well_dir, entry) for entry in done.outputs)
+        return all(output_on_disk(well_dir, entry) for entry in done.outputs)
 
     def _remembered_figures(self, job: WellJob, state: WellState) -> None:
         """A skipped well's figures on the fleet page: its last done run's, as the ledger
@@ -623,17 +623,6 @@ def _input_bytes(job: WellJob) -> int:
             found = path.stat()
             total += found.st_size if stat.S_ISREG(found.st_mode) else 0
     return total
-
-
-def _has_size(well_dir: Path, entry: Any) -> bool:
-    """Whether a listed output (``{"file", "bytes"}``) is a regular file of its size in
-    ``well_dir`` (stat'ed, as :func:`~pipeline.batch.publish.read_published` checks it)."""
-    try:
-        name, size = entry["file"], entry["bytes"]
-        path = well_dir / name
-        return bool(path.parent == well_dir and file_key(path).size == size)
-    except (OSError, KeyError, TypeError):
-        return False
 
 
 def _check_paths(job: WellJob, check: Check) -> list[str]:
