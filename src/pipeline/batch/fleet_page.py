@@ -166,7 +166,7 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
             f"<td>{_drift(figures)}</td>",
             _number(figures.td_md, 1),
             _number(figures.td_tvd, 1),
-            _number(figures.max_dls, 2),
+            _dls(figures),
         ]
     cells += [_number(well.time_s, 1), f"<td>{_links(well.well_dir, figures, page_dir)}</td>"]
     return f'<tr class="s-{_e(well.status)}">{"".join(cells)}</tr>'
@@ -237,6 +237,20 @@ def _drift(figures: WellFigures) -> str:
         who = f"{_e(d.instrument)}: " if d.instrument else ""
         parts.append(f"{who}{rate}{sigma} °/h")
     return "<br>".join(parts)
+
+
+def _dls(figures: WellFigures) -> str:
+    """The largest DLS and, under it, the courses it is over."""
+    if figures.max_dls is None:
+        return _number(None, 2)
+    shortest = f"{figures.dls_min_course:g} m"
+    if figures.dls_by_report:
+        rule = f"courses ≥ {shortest}, as its report"
+    elif figures.dls_min_course > 0:
+        rule = f"courses ≥ {shortest} (no survey report: its default)"
+    else:
+        rule = "every course"
+    return f'<td class="n">{fmt(figures.max_dls, 2)}<div class="why">{rule}</div></td>'
 
 
 def _links(well_dir: Path, figures: WellFigures, page_dir: Path) -> str:
@@ -409,7 +423,10 @@ footer {{ margin-top: 14px; color: var(--soft); font-size: 12px; }}
 <footer>Failing wells first (failed, interrupted, rejected), then done and skipped wells;
 by well within each. {none} the well has no such figure. SF: separation factor of the
 reference well against its offset wells (the least, where the scan decides); DLS: dogleg
-severity; TD: the deepest station (TVD below the well's depth reference).</footer>
+severity, the largest over the courses the well's survey report counts (those at least its
+minimum course length long; a well without a survey report: the report's default), as told
+under each; TD: the deepest station (TVD below the well's depth reference). Drift: the rate
+a survey was corrected with or a calibration's, ± its σ.</footer>
 </body>
 </html>
 """.replace("{none}", NONE)
