@@ -16,6 +16,11 @@ With a ``reference_azimuth`` (the known azimuth at the tie-in station) the orien
 offset A_first − reference is removed as well; without one, azimuths stay referenced to the
 gyro's orientation at the tie-in.
 
+The rate's σ: the calibration's or the given one; a tie-in misclosure's is that of its two
+readings, σ_ω = √2·σ_r / (t_last − t_first). The corrected readings carry the rate and its
+σ (``drift_rate``, ``sigma_drift_rate``, °/h) so that every document quoting the rate can
+state its uncertainty.
+
 Predicted errors: the corrected errors are a linear map of the reading errors ε (σ_r each)
 plus the rate error δω (σ_ω): ``err = G·ε + τ·δω`` with τ = t − t0 in hours, so
 ``Cov = σ_r²·G·Gᵀ + σ_ω²·τ·τᵀ`` exactly (tie-in: G = I − u·(e_last − e_first)ᵀ,
