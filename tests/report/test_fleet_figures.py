@@ -5,11 +5,14 @@ computes itself from the files (the CLI in process; ``gp.fleet_page`` for the AP
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import html
+import json
 import math
 import re
 import shutil
+import sqlite3
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +22,7 @@ import pytest
 import yaml
 
 import pipeline as gp
+from pipeline.batch import filestate
 from tests_support import ROOT, gyropipe_cli, pipeline_yaml, stage, survey_stages
 
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
@@ -236,3 +240,30 @@ def test_a_free_gyro_survey_s_drift_sigma_is_persisted_and_shown(tmp_path: Path)
     assert float(shown_sigma) == pytest.approx(sigma, rel=0.05)
     report = html.unescape(re.sub(r"<[^>]+>", "", (out / "FG-1" / "report.html").read_text()))
     assert f"drift rate {value} °/h, σ {shown_sigma} °/h" in report
+
+
+def test_figures_an_earlier_version_put_in_the_ledger_read_as_computed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A ledger's figures without the DLS rule (an earlier version's: DLS over every
+    course): an ``--only-changed`` batch that skips the well from the ledger alone shows
+    them, said so."""
+    monkeypatch.setattr(filestate, "SETTLED_S", 0.0)
+    wells = tmp_path / "in"
+    wells.mkdir()
+    with_short_courses(wells / "SHORT.csv")
+    pipeline = tmp_path / "bare.yaml"
+    pipeline.write_text(pipeline_yaml(survey_stages(), name="bare"))
+    out = tmp_path / "out"
+    args = ["batch", pipeline, "--inputs", f"{wells}/*.csv", "--out", out]
+    gyropipe_cli(*args, check=True)
+    gyropipe_cli(*args, "--only-changed", check=True)  # a worker looks at the publication
+    with contextlib.closing(sqlite3.connect(out / "ledger.sqlite")) as db, db:
+        (text,) = db.execute("SELECT figures FROM publications").fetchone()
+        older = {k: v for k, v in json.loads(text).items() if not k.startswith("dls_")}
+        older["max_dls"] = 99.0  # what it said, whatever the tables say now
+        db.execute("UPDATE publications SET figures = ?", (json.dumps(older),))
+    gyropipe_cli(*args, "--only-changed", check=True)  # known unchanged from the stat alone
+    rows = page_rows(out / "fleet.html")
+    assert rows["SHORT"][HEADS.index("status")].startswith("○ Skipped")
+    assert cell(rows, "SHORT", "dls") == "99.00 | every course"

@@ -5,8 +5,8 @@ largest dogleg severity and a link to its report (:mod:`pipeline.batch.fleet`).
 
 Every batch writes it as ``OUT/fleet.html`` (:func:`pipeline.batch.summary.write_summary`);
 ``gyropipe status DIR --html`` writes it from the ledger. A batch takes the figures of the
-wells it ran from their workers (each reads its well's once published), so the batch process
-reads no well's outputs for it. No script, no request: styles are
+wells it ran from their workers (each records its well's as the run ends), so the batch
+process reads no well's outputs for it. No script, no request: styles are
 inline, links are relative; statuses are told in words and symbols as well as colours
 (Okabe–Ito, safe for colour-blind readers); every text from the wells is escaped.
 """
