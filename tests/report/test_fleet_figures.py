@@ -117,6 +117,14 @@ def test_the_fleet_states_the_max_dls_of_the_well_s_report(tmp_path: Path) -> No
     assert cell(pages["bare"], "SHORT", "dls") == (
         f"{by_default:.2f} | courses ≥ 10 m (no survey report: its default)"
     )
+    # published by an earlier version (batch.json without figures): read back from the
+    # tables by the report's default, which the page says is not the run's own
+    marker = tmp_path / "reported" / "SHORT" / "batch.json"
+    marker.write_text(json.dumps({**json.loads(marker.read_text()), "figures": None}))
+    gyropipe_cli("status", tmp_path / "reported", "--html", check=True)
+    assert cell(page_rows(tmp_path / "reported" / "fleet.html"), "SHORT", "dls") == (
+        f"{by_default:.2f} | courses ≥ 10 m (the report's default: the run's own not recorded)"
+    )
 
 
 def csv_pipeline(directory: Path) -> Path:

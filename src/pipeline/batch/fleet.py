@@ -48,6 +48,8 @@ from pipeline.tables import CheckResults, Trajectory
 from .publish import MARKER, output_on_disk
 
 REPORT_SUFFIXES = (".html", ".pdf")
+UNRECORDED = "unrecorded"
+"""the DLS rule of figures an earlier version made (:attr:`WellFigures.dls_rule`)"""
 
 
 @dataclass(frozen=True)
@@ -102,11 +104,12 @@ class WellFigures:
     """the largest dogleg severity over the courses at least :attr:`dls_min_course` long,
     °/30 m"""
     dls_min_course: float = 0.0
-    """m: the shortest course counted in :attr:`max_dls` (0: every course, the rule of
-    figures recorded before the report's rule was followed)"""
-    dls_by_report: bool = False
-    """:attr:`max_dls` is the one the run's survey report states (False: the run has no
-    survey report; the report's default rule, or every course in older figures)"""
+    """m: the shortest course counted in :attr:`max_dls` (0: every course)"""
+    dls_rule: str = UNRECORDED
+    """where :attr:`dls_min_course` comes from: ``report`` (the run's survey report, whose
+    maximum this is), ``default`` (no survey report: the report's default) or
+    ``unrecorded`` (figures of an earlier version: read back from the tables by the
+    default, or in the ledger over every course)"""
     reports: tuple[str, ...] = ()
     """the report files (HTML first), names in the well's directory"""
     missing: str | None = None
@@ -163,7 +166,7 @@ def figures_of_record(record: Any) -> WellFigures | None:
             td_tvd=record["td_tvd"],
             max_dls=record["max_dls"],
             dls_min_course=float(record.get("dls_min_course", 0.0)),
-            dls_by_report=bool(record.get("dls_by_report", False)),
+            dls_rule=str(record.get("dls_rule", UNRECORDED)),
             reports=tuple(record["reports"]),
             missing=record["missing"],
             problems=tuple(record["problems"]),
@@ -192,27 +195,25 @@ def run_figures(
     """The figures of a run as it ends (module docstring): ``tables``, its stage outputs by
     (stage id, port); ``manifest``, its ``run.json``; ``at``, the directory its files are
     in (the report files are looked for there)."""
-    report = _survey_report(plan)
-    min_course = MIN_COURSE if report is None else float(report.params.min_course_length)
-    reader = _Tables([], min_course, report is not None)
+    reports = [  # survey reports: a trajectory stated by a minimum course length
+        (st, float(shortest))
+        for st in plan.stages
+        if "trajectory" in st.wiring
+        and isinstance(shortest := getattr(st.params, "min_course_length", None), int | float)
+    ]
+    if reports:
+        report, min_course = reports[-1]
+        reader = _Tables([], min_course, "report")
+    else:
+        reader = _Tables([], MIN_COURSE, "default")
     for st in plan.stages:
         for port in st.persist:
             if port not in st.definition.streamed_outputs:
                 table = tables[(st.id, port)]
                 reader.take(set(table.column_names), table.select)
-    if report is not None:  # TD and DLS as the report states them
+    if reports:  # TD and DLS as the report states them
         reader.td_dls(tables[report.wiring["trajectory"]])
     return reader.figures(manifest, at)
-
-
-def _survey_report(plan: Plan) -> Any:
-    """The last stage of ``plan`` that reports a trajectory by a minimum course length (a
-    survey report), or None."""
-    found = None
-    for st in plan.stages:
-        if "trajectory" in st.wiring and hasattr(st.params, "min_course_length"):
-            found = st
-    return found
 
 
 def well_figures(
@@ -238,7 +239,7 @@ def well_figures(
     if recorded is not None:
         problems += _not_as_run(well_dir, manifest)
         return dataclasses.replace(recorded, problems=(*recorded.problems, *problems))
-    reader = _Tables(problems, MIN_COURSE, False)
+    reader = _Tables(problems, MIN_COURSE, UNRECORDED)
     for name in _outputs(manifest):
         if name.endswith(".parquet"):
             reader.read(well_dir, name)
@@ -247,12 +248,13 @@ def well_figures(
 
 class _Tables:
     """The persisted tables of one well, taken one by one into its figures; TD and the
-    largest DLS over courses at least ``min_course`` m (``by_report``: the report's rule)."""
+    largest DLS over courses at least ``min_course`` m (``rule``: its source,
+    :attr:`WellFigures.dls_rule`)."""
 
-    def __init__(self, problems: list[str], min_course: float, by_report: bool) -> None:
+    def __init__(self, problems: list[str], min_course: float, rule: str) -> None:
         self.problems = problems
         self.min_course = min_course
-        self.by_report = by_report
+        self.rule = rule
         self.checks: list[pa.Table] = []
         self.positions: list[tuple[str, int, list[float]]] = []
         self.clearance: WorstClearance | None = None
@@ -276,7 +278,7 @@ class _Tables:
             td_tvd=self.td_tvd,
             max_dls=self.max_dls,
             dls_min_course=self.min_course,
-            dls_by_report=self.by_report,
+            dls_rule=self.rule,
             reports=_reports(at, _outputs(manifest)),
             problems=tuple(problems),
         )

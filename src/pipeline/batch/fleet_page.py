@@ -243,13 +243,17 @@ def _dls(figures: WellFigures) -> str:
     """The largest DLS and, under it, the courses it is over."""
     if figures.max_dls is None:
         return _number(None, 2)
-    shortest = f"{figures.dls_min_course:g} m"
-    if figures.dls_by_report:
-        rule = f"courses ≥ {shortest}, as its report"
-    elif figures.dls_min_course > 0:
-        rule = f"courses ≥ {shortest} (no survey report: its default)"
-    else:
-        rule = "every course"
+    courses = (
+        f"courses ≥ {figures.dls_min_course:g} m" if figures.dls_min_course > 0 else "every course"
+    )
+    if figures.dls_rule == "report":
+        rule = f"{courses}, as its report"
+    elif figures.dls_rule == "default":
+        rule = f"{courses} (no survey report: its default)"
+    elif figures.dls_min_course > 0:  # read back from the tables of an earlier version's run
+        rule = f"{courses} (the report's default: the run's own not recorded)"
+    else:  # an earlier version's, in the ledger
+        rule = courses
     return f'<td class="n">{fmt(figures.max_dls, 2)}<div class="why">{rule}</div></td>'
 
 
