@@ -275,3 +275,30 @@ def test_figures_an_earlier_version_put_in_the_ledger_read_as_computed(
     rows = page_rows(out / "fleet.html")
     assert rows["SHORT"][HEADS.index("status")].startswith("○ Skipped")
     assert cell(rows, "SHORT", "dls") == "99.00 | every course"
+
+
+def test_figures_edited_in_batch_json_are_not_shown(tmp_path: Path) -> None:
+    """A ``batch.json`` whose figures hold text where numbers belong (edited by hand): the
+    page says so and reads the well's tables instead, saying the rule is not the run's own."""
+    wells = tmp_path / "in"
+    wells.mkdir()
+    with_short_courses(wells / "SHORT.csv")
+    pipeline = tmp_path / "bare.yaml"
+    pipeline.write_text(pipeline_yaml(survey_stages(), name="bare"))
+    out = tmp_path / "out"
+    gyropipe_cli("batch", pipeline, "--inputs", f"{wells}/*.csv", "--out", out, check=True)
+    marker = out / "SHORT" / "batch.json"
+    record = json.loads(marker.read_text())
+    record["figures"]["max_dls"] = "<b>huge</b>"
+    marker.write_text(json.dumps(record))
+    gyropipe_cli("status", out, "--html", check=True)
+    trajectory = pq.read_table(out / "SHORT" / "trajectory.trajectory.parquet")
+    md, dls = trajectory["md"].to_pylist(), trajectory["dls"].to_pylist()
+    rows = page_rows(out / "fleet.html")
+    assert "Output: batch.json: the figures recorded are damaged (read from the tables)" in (
+        cell(rows, "SHORT", "status")
+    )
+    assert cell(rows, "SHORT", "dls") == (
+        f"{largest(md, dls, 10.0):.2f} | courses ≥ 10 m (the report's default: the run's own "
+        "not recorded)"
+    )

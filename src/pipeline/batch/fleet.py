@@ -152,7 +152,7 @@ def figures_of_record(record: Any) -> WellFigures | None:
     as what it was computed by: DLS over every course, σ None."""
     try:
         qc, gates, worst, drift = (record.get(k) for k in ("qc", "gates", "clearance", "drift"))
-        return WellFigures(
+        figures = WellFigures(
             pipeline=record["pipeline"],
             qc=None
             if qc is None
@@ -173,6 +173,21 @@ def figures_of_record(record: Any) -> WellFigures | None:
         )
     except (ValueError, TypeError, KeyError, AttributeError):
         return None
+    return figures if _well_typed(figures) else None
+
+
+def _well_typed(figures: WellFigures) -> bool:
+    """Whether the numbers of ``figures`` are numbers and its file names and problems text
+    (a record read from a file could hold anything)."""
+    numbers: list[object] = [figures.td_md, figures.td_tvd, figures.max_dls]
+    if figures.clearance is not None:
+        numbers += [figures.clearance.sf, figures.clearance.md]
+    numbers += [x for d in figures.drift or () for x in (d.rate_deg_h, d.sigma_deg_h)]
+    if figures.qc is not None:
+        numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
+    return all(
+        n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers
+    ) and all(isinstance(t, str) for t in (*figures.reports, *figures.problems))
 
 
 def required(contract: type[TableContract]) -> frozenset[str]:
@@ -239,6 +254,8 @@ def well_figures(
     if recorded is not None:
         problems += _not_as_run(well_dir, manifest)
         return dataclasses.replace(recorded, problems=(*recorded.problems, *problems))
+    if marker.get("figures") is not None:
+        problems.append(f"{MARKER}: the figures recorded are damaged (read from the tables)")
     reader = _Tables(problems, MIN_COURSE, UNRECORDED)
     for name in _outputs(manifest):
         if name.endswith(".parquet"):
