@@ -51,8 +51,8 @@ def cell(rows: dict[str, list[str]], well: str, head: str) -> str:
 
 
 def with_short_courses(path: Path) -> None:
-    """The J well with a 7 m course of 2° more inclination (1980 → 1987 m MD, then back), a
-    2 m course of 4° more at the bottom: spikes of DLS over short courses."""
+    """The J well with a 7 m course of 2° more inclination (1980 → 1987 m MD, then back) and
+    a 2 m course of 4° more at the bottom: spikes of DLS over short courses."""
     lines = STATIONS.read_text().splitlines()
     header = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
     rows = [line.split(",") for line in lines[header + 1 :]]
