@@ -54,6 +54,17 @@ wall) is shown beside the prediction; on a shared machine it says more of the lo
 the batch.
 
     python benchmarks/bench_fleet.py [--wells 64] [--workers-list 1,2] [--quick] [--data DIR]
+
+``--only-changed``: the driver's CPU per well when nothing changed. A first full batch of
+the N wells (``--workers``, default 2), then ``--passes`` (default 3) ``gyropipe batch …
+--only-changed`` runs over the same, unchanged wells into the same output directory, each
+well skipped: the first pass after the files settled
+(:data:`pipeline.batch.filestate.SETTLED_S`) has each well's published files looked at by a
+worker once, the later ones know every well unchanged from the stat alone. Printed per pass:
+the driver's CPU per well (measured as above), its least and median over the stat-only
+passes, and the target: ≤ 5 ms a well with 2 workers on 2 cores over ≥ 64 wells of 47 MB.
+
+    python benchmarks/bench_fleet.py --only-changed [--wells 64] [--workers 2] [--passes 3]
 """
 
 from __future__ import annotations
@@ -65,11 +76,12 @@ import json
 import os
 import resource
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -240,12 +252,20 @@ class Run:
         return "n/a" if seconds is None else f"{seconds / self.wells * 1e3:.1f}"
 
 
-def batch(manifest: Path, out: Path, workers: int, log: Path) -> Run:
-    """``gyropipe batch`` in this process (module docstring); every well must be processed."""
+def batch(
+    manifest: Path,
+    out: Path,
+    workers: int,
+    log: Path,
+    flags: Sequence[str] = (),
+    expect: tuple[str, ...] = ("done", "rejected"),
+) -> Run:
+    """``gyropipe batch`` (with ``flags``) in this process (module docstring); every well
+    must end with a status in ``expect`` (processed; ``skipped`` for ``--only-changed``)."""
     from pipeline.cli import main as cli
 
     args = ["batch", str(PIPELINE), "--manifest", str(manifest), "--out", str(out)]
-    args += ["--workers", str(workers), "--quiet"]
+    args += ["--workers", str(workers), "--quiet", *flags]
     load0 = os.getloadavg()[0]
     with (
         log.open("a") as sink,
@@ -268,7 +288,7 @@ def batch(manifest: Path, out: Path, workers: int, log: Path) -> Run:
         workers_cpu = cpu_s(resource.RUSAGE_CHILDREN) - children0
     written = out / "summary.json"
     wells = json.loads(written.read_text())["wells"] if written.is_file() else []
-    processed = [w for w in wells if w["status"] in ("done", "rejected")]
+    processed = [w for w in wells if w["status"] in expect]
     bad = [w for w in wells if w not in processed]
     if bad or not processed or code not in (0, 3):
         first = f": {bad[0]['well']} {bad[0]['status']}: {bad[0]['detail']}" if bad else ""
@@ -299,11 +319,12 @@ HEADER = (
 )
 
 
-def row(r: Run, one: Run | None) -> str:
-    """A run's line under :data:`HEADER`; the speed-up is against the 1-worker run ``one``."""
+def row(r: Run, one: Run | None, label: str | None = None) -> str:
+    """A run's line under :data:`HEADER` (first column ``label``, else its workers); the
+    speed-up is against the 1-worker run ``one``."""
     gain = f"{one.wall_s / r.wall_s:.2f}×" if one is not None else "—"
     return (
-        f"{r.workers:>7} {r.wall_s:>7.1f} {r.wells / r.wall_s:>7.2f} {gain:>8} │ "
+        f"{label or r.workers:>7} {r.wall_s:>7.1f} {r.wells / r.wall_s:>7.2f} {gain:>8} │ "
         f"{'':15} {r.per_well_ms(r.driver_cpu_s):>5} {r.per_well_ms(r.loop_cpu_s):>5} "
         f"{r.per_well_ms(r.serial_s):>5} │ {'':15} {r.per_well_ms(r.worker_cpu_s):>5} "
         f"{r.per_well_ms(r.worker_wall_s):>5} │ {r.load[0]:.1f} → {r.load[1]:.1f}"
@@ -351,6 +372,47 @@ def verdict(runs: list[Run]) -> str:
     )
 
 
+def only_changed(
+    manifest: Path, out: Path, workers: int, passes: int, log: Path, wells: int
+) -> list[Run]:
+    """A full batch, then ``passes`` ``--only-changed`` batches of the unchanged wells into
+    the same ``out`` (module docstring), each printed; returns the ``--only-changed`` runs."""
+    from pipeline.batch.filestate import SETTLED_S
+
+    full = batch(manifest, out, workers, log)
+    print(HEADER.replace("workers", "   pass", 1), flush=True)
+    print(row(full, None, "full"), flush=True)
+    runs = []
+    for k in range(1, passes + 1):
+        time.sleep(SETTLED_S + 0.5)  # the files settled: their keys can be remembered
+        runs.append(batch(manifest, out, workers, log, ["--only-changed"], ("skipped",)))
+        print(row(runs[-1], None, str(k)), flush=True)
+    if any(r.wells != wells for r in runs):
+        raise SystemExit(f"not every well was skipped as unchanged (its log: {log})")
+    stat_only = [r.driver_cpu_s / r.wells * 1e3 for r in runs[1:]] or [
+        runs[0].driver_cpu_s / runs[0].wells * 1e3
+    ]
+    least, median = min(stat_only), statistics.median(stat_only)
+    which = "passes 2…" if len(runs) > 1 else "pass 1"
+    print(
+        f"\n--only-changed, {workers} workers, {wells} unchanged wells: driver CPU a well "
+        f"(pass 1, publications looked at by workers: "
+        f"{runs[0].driver_cpu_s / runs[0].wells * 1e3:.2f} ms); {which}: least "
+        f"{least:.2f} ms, median {median:.2f} ms"
+    )
+    measured = workers == 2 and wells >= TARGET_WELLS
+    print(
+        f"driver CPU ≤ {TARGET_DRIVER_MS:.0f} ms a well, --only-changed, 2 workers over "
+        f"≥ {TARGET_WELLS} wells: "
+        + (
+            f"{'yes' if median <= TARGET_DRIVER_MS else 'no'} (median {median:.2f} ms)"
+            if measured
+            else f"not measured (needs --workers 2 and --wells ≥ {TARGET_WELLS})"
+        )
+    )
+    return runs
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -370,7 +432,20 @@ def main() -> int:
     )
     parser.add_argument("--quick", action="store_true", help="skip the 1-worker run")
     parser.add_argument("--keep", action="store_true", help="keep the output directories")
+    parser.add_argument(
+        "--only-changed",
+        action="store_true",
+        help="a full batch, then --passes --only-changed batches of the unchanged wells",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=2, help="workers of --only-changed (default: 2)"
+    )
+    parser.add_argument(
+        "--passes", type=int, default=3, help="--only-changed batches (default: %(default)s)"
+    )
     args = parser.parse_args()
+    if args.only_changed and (args.workers < 1 or args.passes < 1):
+        parser.error("--workers and --passes must be ≥ 1")
     counts = sorted({int(n) for n in args.workers_list.split(",")})
     if args.quick and len(counts) > 1:
         counts = [n for n in counts if n != 1]
@@ -395,16 +470,26 @@ def main() -> int:
         f"{sources[0].stat().st_size / 1e6:.0f} MB each), {PIPELINE.relative_to(ROOT)}, "
         f"{cores} cores, batch log {log}; load " + " ".join(f"{x:.2f}" for x in os.getloadavg())
     )
+    warm = Path(tempfile.mkdtemp(prefix="warm-", dir=runs_dir))
+    try:  # a one-well warm-up (imports, plugins), not counted
+        batch(make_wells(data, sources, 1), warm, 1, log)
+    finally:
+        shutil.rmtree(warm, ignore_errors=True)
+    if args.only_changed:
+        out = Path(tempfile.mkdtemp(prefix=f"only-changed-w{args.workers}-", dir=runs_dir))
+        try:
+            only_changed(manifest, out, args.workers, args.passes, log, args.wells)
+        finally:
+            if not args.keep:
+                shutil.rmtree(out, ignore_errors=True)
+        return 0
+    print(HEADER, flush=True)
     runs: list[Run] = []
-    for workers in [0, *counts]:  # 0: a one-well warm-up (imports, plugins), not counted
+    for workers in counts:  # 0: a one-well warm-up (imports, plugins), not counted
         out = Path(tempfile.mkdtemp(prefix=f"w{workers}-", dir=runs_dir))
         try:
-            if workers == 0:
-                batch(make_wells(data, sources, 1), out, 1, log)
-                print(HEADER, flush=True)
-            else:
-                runs.append(batch(manifest, out, workers, log))
-                print(row(runs[-1], runs[0] if runs[0].workers == 1 else None), flush=True)
+            runs.append(batch(manifest, out, workers, log))
+            print(row(runs[-1], runs[0] if runs[0].workers == 1 else None), flush=True)
         finally:
             if not args.keep:
                 shutil.rmtree(out, ignore_errors=True)

@@ -243,4 +243,4 @@ def test_an_unchanged_batch_reads_no_well_s_outputs_in_the_batch_process(
 def figure_cells(page: str) -> list[list[str]]:
     """Per well row of a fleet page, its numeric figure cells (TD MD, TD TVD, max DLS)."""
     rows = re.findall(r"<tr class=\"s-[a-z]+\">(.*?)</tr>", page)
-    return [re.findall(r'<td class="n">([^<]*)</td>', row)[:3] for row in rows]
+    return [re.findall(r'<td class="n">([^<]*)(?:<div|</td>)', row)[:3] for row in rows]

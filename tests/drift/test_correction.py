@@ -94,6 +94,40 @@ def test_calibrated_rate_correction_carries_the_rate_sigma():
     assert np.all(np.abs(z.mean(axis=0)) < 0.15)
 
 
+def test_the_tie_in_rate_s_sigma_is_its_scatter():
+    """Over 300 simulated surveys drifting RATE, the tie-in misclosure's rate scatters by the
+    σ it states, √2·σ_r over the time between its two readings (σ_r given); the corrected
+    readings carry both, in deg/h."""
+    z = []
+    for seed in range(300):
+        out = correct_survey(simulate_free_gyro(spec(seed)), CorrectionOptions(reading_sigma=NOISE))
+        z.append((out.rate.rate - RATE) / out.rate.sigma)
+        for name, value in (("drift_rate", out.rate.rate), ("sigma_drift_rate", out.rate.sigma)):
+            assert out.readings.column(name).to_pylist() == [value] * out.readings.num_rows
+            assert out.readings.schema.field(name).metadata[b"unit"] == b"deg/h"
+    assert 0.85 < np.std(z) < 1.15 and abs(np.mean(z)) < 0.15, (np.std(z), np.mean(z))
+
+
+def test_an_estimated_reading_sigma_gives_the_tie_in_rate_s_sigma():
+    """σ_r estimated from the in/out pairs: the rate's σ is √2·σ_r over the tie readings'
+    time apart (the first in-run and the last out-run reading at station 0)."""
+    readings = simulate_free_gyro(spec(3))
+    out = correct_survey(readings, CorrectionOptions())
+    rows = readings.select(["run", "station", "time"]).to_pylist()
+    first = next(r["time"] for r in rows if r["station"] == 0 and r["run"] == "in")
+    last = [r["time"] for r in rows if r["station"] == 0 and r["run"] == "out"][-1]
+    expected = np.sqrt(2.0) * out.reading_sigma / ((last - first) / 3600.0)
+    assert out.rate.sigma == pytest.approx(expected, rel=1e-12) and out.rate.sigma > 0
+
+
+def test_a_given_rate_keeps_its_sigma():
+    out = correct_survey(
+        simulate_free_gyro(spec()), CorrectionOptions(), DriftRate(2.5, 0.125, "given")
+    )
+    assert out.readings.column("drift_rate")[0].as_py() == 2.5
+    assert out.readings.column("sigma_drift_rate")[0].as_py() == 0.125
+
+
 def test_reading_sigma_is_estimated_from_the_in_out_pairs():
     estimates = [
         correct_survey(simulate_free_gyro(spec(seed)), CorrectionOptions()).reading_sigma

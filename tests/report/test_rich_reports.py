@@ -256,13 +256,15 @@ def test_free_gyro_report_shows_drift_and_in_out_qc(browser: Any, tmp_path: Path
     assert int(rows["In-run − out-run azimuth"][4]) == sum(
         not p for p in inout.column("passed").to_pylist()
     )
-    # the plan drifts 3 °/h; the report quotes the rate the correction applied
+    # the plan drifts 3 °/h; the report quotes the rate the correction applied and its σ
+    # (tests/report/test_fleet_figures.py computes the σ from the readings)
     readings = pq.read_table(out / "drift.readings.parquet")
     slope = np.polyfit(
         readings.column("time").to_numpy() / 3600, readings.column("correction").to_numpy(), 1
     )[0]
     assert slope == pytest.approx(3.0, abs=0.3)
-    assert f"grows at {slope:.3g} °/h" in page.text
+    sigma = readings.column("sigma_drift_rate")[0].as_py()
+    assert f"drift rate {slope:.3f} °/h, σ {sigma:.2f} °/h" in page.text
     pages = pdf_pages(out / "report.pdf", tmp_path)
     assert all(ink(r) > 0.02 for r in figure_regions(pages).values())
 

@@ -1,13 +1,18 @@
 """The figures of one published well for the fleet page (:mod:`pipeline.batch.fleet_page`):
 QC checks passed and failed, the acceptance gates, the worst clearance separation factor,
-the drift rate, TD and the largest dogleg severity.
+the drift rate (with its σ), TD and the largest dogleg severity.
 
-They come from the well's ``run.json`` and its persisted Parquet tables, each known by the
-columns its contract requires (so a plugin's trajectory counts as one): a table's footer is
-read, then only the few columns a figure needs — never a sample stream. A figure the well
-has no table for is None; a file that cannot be read is named in ``problems`` and its figure
-stays None. Persisted tables are in the canonical units of their contracts (m, deg,
-deg/30m, deg/h).
+The worker records them as it runs the well (:func:`run_figures`, into the ``batch.json``
+it publishes with the run): from the run's persisted tables as they are in memory, whatever
+format they were written in, each known by the columns its contract requires (so a
+plugin's trajectory counts as one) — never a sample stream. TD and the largest DLS are
+those of the trajectory the run's survey report states, by its own rule
+(:func:`pipeline.survey.courses.max_dls` over its ``min_course_length``); a run without a
+survey report gives the last persisted trajectory's by the report's default rule. A well
+published before figures were recorded has them read back from its persisted Parquet tables
+(a table's footer, then only the few columns a figure needs). A figure the well has no table
+for is None; a file that cannot be read is named in ``problems`` and its figure stays None.
+Tables are in the canonical units of their contracts (m, deg, deg/30m, deg/h).
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import dataclasses
 import json
 import math
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,15 +36,20 @@ from pipeline.anticollision.tables import Clearance, rule_of
 from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
+from pipeline.graph import Plan
 from pipeline.qc.tables import QcResults
 from pipeline.qc.verdict import QcTally, qc_tally
 from pipeline.runner import MANIFEST
+from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
+from pipeline.survey.stations import survey_offsets
 from pipeline.tables import CheckResults, Trajectory
 
-from .publish import MARKER
+from .publish import MARKER, output_on_disk
 
 REPORT_SUFFIXES = (".html", ".pdf")
+UNRECORDED = "unrecorded"
+"""the DLS rule of figures an earlier version made (:attr:`WellFigures.dls_rule`)"""
 
 
 @dataclass(frozen=True)
@@ -67,8 +77,9 @@ class WorstClearance:
 
 @dataclass(frozen=True)
 class DriftFigure:
-    """A drift rate, °/h: a calibration's selected estimate (with its σ) or the rate at
-    which a free-gyro survey's drift correction grows (σ None)."""
+    """A drift rate, °/h: a calibration's selected estimate or the rate a free-gyro
+    survey was corrected with, with its σ (None: a corrected survey written before its σ
+    was recorded, its rate the slope of its correction)."""
 
     rate_deg_h: float
     sigma_deg_h: float | None
@@ -90,7 +101,15 @@ class WellFigures:
     td_tvd: float | None = None
     """its TVD below the well's depth reference, m"""
     max_dls: float | None = None
-    """the largest dogleg severity over every course (short ones too), °/30 m"""
+    """the largest dogleg severity over the courses at least :attr:`dls_min_course` long,
+    °/30 m"""
+    dls_min_course: float = 0.0
+    """m: the shortest course counted in :attr:`max_dls` (0: every course)"""
+    dls_rule: str = UNRECORDED
+    """where :attr:`dls_min_course` comes from: ``report`` (the run's survey report, whose
+    maximum this is), ``default`` (no survey report: the report's default) or
+    ``unrecorded`` (figures of an earlier version: read back from the tables by the
+    default, or in the ledger over every course)"""
     reports: tuple[str, ...] = ()
     """the report files (HTML first), names in the well's directory"""
     missing: str | None = None
@@ -99,9 +118,8 @@ class WellFigures:
     """published files that could not be read"""
 
 
-def figures_json(figures: WellFigures) -> str:
-    """``figures`` as JSON text (the ledger keeps a done run's, :func:`figures_of_json`);
-    an undefined SF is ``-Infinity``."""
+def figures_record(figures: WellFigures) -> dict[str, Any]:
+    """``figures`` as JSON values (:func:`figures_of_record`); an undefined SF is -inf."""
     qc = figures.qc
     record = dataclasses.asdict(dataclasses.replace(figures, qc=None))
     if qc is not None:  # (asdict would count a Counter's items as keys)
@@ -111,15 +129,30 @@ def figures_json(figures: WellFigures) -> str:
             "stations": sorted(qc.stations),
             "windows": qc.windows,
         }
-    return json.dumps(record, sort_keys=True, separators=(",", ":"))
+    return record
+
+
+def figures_json(figures: WellFigures) -> str:
+    """``figures`` as JSON text (the ledger keeps a done run's, :func:`figures_of_json`);
+    an undefined SF is ``-Infinity``."""
+    return json.dumps(figures_record(figures), sort_keys=True, separators=(",", ":"))
 
 
 def figures_of_json(text: str) -> WellFigures | None:
     """The figures :func:`figures_json` wrote; None where the text is not such a record."""
     try:
-        record = json.loads(text)
+        return figures_of_record(json.loads(text))
+    except ValueError:
+        return None
+
+
+def figures_of_record(record: Any) -> WellFigures | None:
+    """The figures :func:`figures_record` made; None where ``record`` is not such a record.
+    A record of an earlier version (no DLS rule, no drift σ of a corrected survey) reads
+    as what it was computed by: DLS over every course, σ None."""
+    try:
         qc, gates, worst, drift = (record.get(k) for k in ("qc", "gates", "clearance", "drift"))
-        return WellFigures(
+        figures = WellFigures(
             pipeline=record["pipeline"],
             qc=None
             if qc is None
@@ -132,12 +165,29 @@ def figures_of_json(text: str) -> WellFigures | None:
             td_md=record["td_md"],
             td_tvd=record["td_tvd"],
             max_dls=record["max_dls"],
+            dls_min_course=float(record.get("dls_min_course", 0.0)),
+            dls_rule=str(record.get("dls_rule", UNRECORDED)),
             reports=tuple(record["reports"]),
             missing=record["missing"],
             problems=tuple(record["problems"]),
         )
     except (ValueError, TypeError, KeyError, AttributeError):
         return None
+    return figures if _well_typed(figures) else None
+
+
+def _well_typed(figures: WellFigures) -> bool:
+    """Whether the numbers of ``figures`` are numbers and its file names and problems text
+    (a record read from a file could hold anything)."""
+    numbers: list[object] = [figures.td_md, figures.td_tvd, figures.max_dls]
+    if figures.clearance is not None:
+        numbers += [figures.clearance.sf, figures.clearance.md]
+    numbers += [x for d in figures.drift or () for x in (d.rate_deg_h, d.sigma_deg_h)]
+    if figures.qc is not None:
+        numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
+    return all(
+        n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers
+    ) and all(isinstance(t, str) for t in (*figures.reports, *figures.problems))
 
 
 def required(contract: type[TableContract]) -> frozenset[str]:
@@ -150,50 +200,78 @@ CHECKS = (required(CheckResults), required(QcResults))
 CLEARANCE = required(Clearance)
 CALIBRATION = required(CalibrationResult)
 CORRECTED = required(CorrectedFreeGyroReadings)
+RATE_COLUMNS = frozenset({"drift_rate", "sigma_drift_rate"})
+"""the columns of a corrected survey that record its drift rate and σ"""
+
+
+def run_figures(
+    plan: Plan, tables: Mapping[tuple[str, str], pa.Table], manifest: Mapping[str, Any], at: Path
+) -> WellFigures:
+    """The figures of a run as it ends (module docstring): ``tables``, its stage outputs by
+    (stage id, port); ``manifest``, its ``run.json``; ``at``, the directory its files are
+    in (the report files are looked for there)."""
+    reports = [  # survey reports: a trajectory stated by a minimum course length
+        (st, float(shortest))
+        for st in plan.stages
+        if "trajectory" in st.wiring
+        and isinstance(shortest := getattr(st.params, "min_course_length", None), int | float)
+    ]
+    if reports:
+        report, min_course = reports[-1]
+        reader = _Tables([], min_course, "report")
+    else:
+        reader = _Tables([], MIN_COURSE, "default")
+    for st in plan.stages:
+        for port in st.persist:
+            if port not in st.definition.streamed_outputs:
+                table = tables[(st.id, port)]
+                reader.take(set(table.column_names), table.select)
+    if reports:  # TD and DLS as the report states them
+        reader.td_dls(tables[report.wiring["trajectory"]])
+    return reader.figures(manifest, at)
 
 
 def well_figures(
     well_dir: Path, run_id: int | None = None, manifest: Mapping[str, Any] | None = None
 ) -> WellFigures:
-    """The figures of the run published in ``well_dir`` (module docstring); with
-    ``run_id``, a published run of another id is told in ``problems``. ``manifest``: the
-    published run's ``run.json`` where the caller holds it (the worker that published it),
-    else it is read."""
+    """The figures of the run published in ``well_dir`` (module docstring): those its worker
+    recorded (an output no longer on disk as the run wrote it told in ``problems``), else
+    read from its persisted Parquet tables; with ``run_id``, a published run of another id
+    is told in ``problems``. ``manifest``: the published run's ``run.json``
+    where the caller holds it, else it is read."""
     problems: list[str] = []
     if manifest is None:
         manifest, missing = _manifest(well_dir)
         if manifest is None:
             return WellFigures(missing=missing)
+    marker = _marker(well_dir)
     if run_id is not None:
-        marked = _marked_run(well_dir)
+        marked = marker.get("run_id")
+        marked = marked if isinstance(marked, int) else None
         if marked != run_id:
             problems.append(f"the outputs published are of run {marked}, not run {run_id}")
-    outputs = _outputs(manifest)
-    reader = _Tables(well_dir, problems)
-    for name in outputs:
+    recorded = figures_of_record(marker.get("figures"))
+    if recorded is not None:
+        problems += _not_as_run(well_dir, manifest)
+        return dataclasses.replace(recorded, problems=(*recorded.problems, *problems))
+    if marker.get("figures") is not None:
+        problems.append(f"{MARKER}: the figures recorded are damaged (read from the tables)")
+    reader = _Tables(problems, MIN_COURSE, UNRECORDED)
+    for name in _outputs(manifest):
         if name.endswith(".parquet"):
-            reader.read(name)
-    qc = qc_tally(reader.checks, reader.positions)
-    return WellFigures(
-        pipeline=_pipeline(manifest),
-        qc=qc if qc.evaluated else None,
-        gates=_gates(manifest, problems),
-        clearance=reader.clearance,
-        drift=tuple(reader.drift) if reader.drift else None,
-        td_md=reader.td_md,
-        td_tvd=reader.td_tvd,
-        max_dls=reader.max_dls,
-        reports=_reports(well_dir, outputs),
-        problems=tuple(problems),
-    )
+            reader.read(well_dir, name)
+    return reader.figures(manifest, well_dir)
 
 
 class _Tables:
-    """The persisted tables of one well, read one by one into its figures."""
+    """The persisted tables of one well, taken one by one into its figures; TD and the
+    largest DLS over courses at least ``min_course`` m (``rule``: its source,
+    :attr:`WellFigures.dls_rule`)."""
 
-    def __init__(self, well_dir: Path, problems: list[str]) -> None:
-        self.well_dir = well_dir
+    def __init__(self, problems: list[str], min_course: float, rule: str) -> None:
         self.problems = problems
+        self.min_course = min_course
+        self.rule = rule
         self.checks: list[pa.Table] = []
         self.positions: list[tuple[str, int, list[float]]] = []
         self.clearance: WorstClearance | None = None
@@ -202,48 +280,84 @@ class _Tables:
         self.td_tvd: float | None = None
         self.max_dls: float | None = None
 
-    def read(self, name: str) -> None:
+    def figures(self, manifest: Mapping[str, Any], at: Path) -> WellFigures:
+        """The figures of the tables taken, with what ``manifest`` says (``at``: where the
+        report files are)."""
+        problems = self.problems
+        qc = qc_tally(self.checks, self.positions)
+        return WellFigures(
+            pipeline=_pipeline(manifest),
+            qc=qc if qc.evaluated else None,
+            gates=_gates(manifest, problems),
+            clearance=self.clearance,
+            drift=tuple(self.drift) if self.drift else None,
+            td_md=self.td_md,
+            td_tvd=self.td_tvd,
+            max_dls=self.max_dls,
+            dls_min_course=self.min_course,
+            dls_rule=self.rule,
+            reports=_reports(at, _outputs(manifest)),
+            problems=tuple(problems),
+        )
+
+    def read(self, well_dir: Path, name: str) -> None:
+        """A persisted Parquet table: its footer, then the columns its figure needs."""
         try:
-            with pq.ParquetFile(self.well_dir / name) as file:  # closed here, not at GC
-                self._table(file)
+            with pq.ParquetFile(well_dir / name) as file:  # closed here, not at GC
+                self.take(set(file.schema_arrow.names), lambda c: file.read(columns=c))
         except FileNotFoundError:
             self.problems.append(f"{name} is missing")
         except (OSError, pa.ArrowException, ValueError, KeyError, TypeError) as exc:
             reason = " ".join(str(exc).split())[:160]
             self.problems.append(f"{name} cannot be read ({reason})")
 
-    def _table(self, file: pq.ParquetFile) -> None:
-        """A table, known by the columns its contract requires, read into its figure."""
-        names = set(file.schema_arrow.names)
+    def take(self, names: set[str], read: Callable[[list[str]], pa.Table]) -> None:
+        """A table of columns ``names``, known by the columns its contract requires, into
+        its figure; ``read(columns)`` gives those columns of it."""
         if names >= TRAJECTORY:
-            self._trajectory(file.read(columns=["md", "tvd", "dls"]))
+            self._trajectory(read(["md", "tvd", "dls", *({"survey"} & names)]))
         elif any(names >= kind for kind in CHECKS):
-            self.checks.append(file.read(columns=["check", "passed", "md"]))
+            self.checks.append(read(["check", "passed", "md"]))
         elif names >= CLEARANCE:
             columns = ["offset", "md", "sf", "sf_between", "md_between", "level"]
-            self._clearance(file.read(columns=columns))
+            self._clearance(read(columns))
         elif names >= CALIBRATION:
             columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
-            self._calibration(file.read(columns=columns))
+            self._calibration(read(columns))
         elif names >= CORRECTED:
-            table = file.read(columns=["time", "correction"])
-            rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
-            if math.isfinite(rate):
-                self.drift.append(DriftFigure(rate, None, None))
+            self._corrected(read(["time", "correction", *(RATE_COLUMNS & names)]))
 
     def _trajectory(self, table: pa.Table) -> None:
         """The last trajectory persisted gives TD and the largest DLS (a later stage's is
         the same survey with more columns); each file-position check is counted once."""
-        md, tvd, dls = (_floats(table, c) for c in ("md", "tvd", "dls"))
-        if len(md):
-            deepest = int(np.nanargmax(md)) if np.isfinite(md).any() else len(md) - 1
-            self.td_md, self.td_tvd = _number(md[deepest]), _number(tvd[deepest])
-            self.max_dls = _number(np.nanmax(dls)) if np.isfinite(dls).any() else None
+        self.td_dls(table)
         check = position_check_of(table)
         if check is not None:
             entry = ("file_positions", check.compared, list(check.beyond_md))
             if entry not in self.positions:
                 self.positions.append(entry)
+
+    def td_dls(self, table: pa.Table) -> None:
+        """TD and the largest DLS of a trajectory (:func:`~pipeline.survey.courses.max_dls`
+        over courses at least ``min_course`` m)."""
+        md, tvd, dls = (_floats(table, c) for c in ("md", "tvd", "dls"))
+        if len(md):
+            deepest = int(np.nanargmax(md)) if np.isfinite(md).any() else len(md) - 1
+            self.td_md, self.td_tvd = _number(md[deepest]), _number(tvd[deepest])
+            offsets = tuple(int(o) for o in survey_offsets(table))
+            found = max_dls(md, dls, offsets, self.min_course)
+            self.max_dls = None if found is None else found.dls
+
+    def _corrected(self, table: pa.Table) -> None:
+        """A drift-corrected survey: the rate and σ it was corrected with; one written
+        before they were recorded, the slope of its correction (σ None)."""
+        if set(table.column_names) >= RATE_COLUMNS and table.num_rows:
+            rate, sigma = (_floats(table, c)[0] for c in ("drift_rate", "sigma_drift_rate"))
+            self.drift.append(DriftFigure(float(rate), float(sigma), None))
+            return
+        rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
+        if math.isfinite(rate):
+            self.drift.append(DriftFigure(rate, None, None))
 
     def _clearance(self, table: pa.Table) -> None:
         """The least SF the rule decides on (``sf_between`` on courses, the default; ``sf``
@@ -286,12 +400,13 @@ def _manifest(well_dir: Path) -> tuple[dict[str, Any] | None, str | None]:
     return manifest, None
 
 
-def _marked_run(well_dir: Path) -> int | None:
+def _marker(well_dir: Path) -> dict[str, Any]:
+    """The well's ``batch.json`` ({} where it cannot be read or is not an object)."""
     try:
-        run_id = jsontext.loads((well_dir / MARKER).read_bytes()).get("run_id")
-    except (OSError, ValueError, AttributeError):
-        return None
-    return run_id if isinstance(run_id, int) else None
+        marker = jsontext.loads((well_dir / MARKER).read_bytes())
+    except (OSError, ValueError):
+        return {}
+    return marker if isinstance(marker, dict) else {}
 
 
 def _pipeline(manifest: Mapping[str, Any]) -> str | None:
@@ -320,6 +435,19 @@ def _outputs(manifest: Mapping[str, Any]) -> list[str]:
     """The names of the files ``run.json`` lists in the well's directory."""
     names = (e.get("file") if isinstance(e, Mapping) else None for e in manifest["outputs"])
     return [n for n in names if isinstance(n, str) and "/" not in n]
+
+
+def _not_as_run(well_dir: Path, manifest: Mapping[str, Any]) -> list[str]:
+    """The outputs ``run.json`` lists that are no longer on disk as the run wrote them (a
+    stat each: the figures recorded are the run's, these files no longer all show them)."""
+    found = []
+    for entry in manifest["outputs"]:
+        name = entry.get("file") if isinstance(entry, Mapping) else None
+        if not isinstance(name, str) or output_on_disk(well_dir, entry):
+            continue
+        gone = not (well_dir / name).exists()
+        found.append(f"{name} is {'missing' if gone else 'not as the run wrote it (its size)'}")
+    return found
 
 
 def _reports(well_dir: Path, outputs: list[str]) -> tuple[str, ...]:

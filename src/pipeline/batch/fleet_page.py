@@ -5,8 +5,8 @@ largest dogleg severity and a link to its report (:mod:`pipeline.batch.fleet`).
 
 Every batch writes it as ``OUT/fleet.html`` (:func:`pipeline.batch.summary.write_summary`);
 ``gyropipe status DIR --html`` writes it from the ledger. A batch takes the figures of the
-wells it ran from their workers (each reads its well's once published), so the batch process
-reads no well's outputs for it. No script, no request: styles are
+wells it ran from their workers (each records its well's as the run ends), so the batch
+process reads no well's outputs for it. No script, no request: styles are
 inline, links are relative; statuses are told in words and symbols as well as colours
 (Okabe–Ito, safe for colour-blind readers); every text from the wells is escaped.
 """
@@ -166,7 +166,7 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
             f"<td>{_drift(figures)}</td>",
             _number(figures.td_md, 1),
             _number(figures.td_tvd, 1),
-            _number(figures.max_dls, 2),
+            _dls(figures),
         ]
     cells += [_number(well.time_s, 1), f"<td>{_links(well.well_dir, figures, page_dir)}</td>"]
     return f'<tr class="s-{_e(well.status)}">{"".join(cells)}</tr>'
@@ -237,6 +237,24 @@ def _drift(figures: WellFigures) -> str:
         who = f"{_e(d.instrument)}: " if d.instrument else ""
         parts.append(f"{who}{rate}{sigma} °/h")
     return "<br>".join(parts)
+
+
+def _dls(figures: WellFigures) -> str:
+    """The largest DLS and, under it, the courses it is over."""
+    if figures.max_dls is None:
+        return _number(None, 2)
+    courses = (
+        f"courses ≥ {figures.dls_min_course:g} m" if figures.dls_min_course > 0 else "every course"
+    )
+    if figures.dls_rule == "report":
+        rule = f"{courses}, as its report"
+    elif figures.dls_rule == "default":
+        rule = f"{courses} (no survey report: its default)"
+    elif figures.dls_min_course > 0:  # read back from the tables of an earlier version's run
+        rule = f"{courses} (the report's default: the run's own not recorded)"
+    else:  # an earlier version's, in the ledger
+        rule = courses
+    return f'<td class="n">{fmt(figures.max_dls, 2)}<div class="why">{rule}</div></td>'
 
 
 def _links(well_dir: Path, figures: WellFigures, page_dir: Path) -> str:
@@ -409,7 +427,10 @@ footer {{ margin-top: 14px; color: var(--soft); font-size: 12px; }}
 <footer>Failing wells first (failed, interrupted, rejected), then done and skipped wells;
 by well within each. {none} the well has no such figure. SF: separation factor of the
 reference well against its offset wells (the least, where the scan decides); DLS: dogleg
-severity; TD: the deepest station (TVD below the well's depth reference).</footer>
+severity, the largest over the courses the well's survey report counts (those at least its
+minimum course length long; a well without a survey report: the report's default), as told
+under each; TD: the deepest station (TVD below the well's depth reference). Drift: the rate
+a survey was corrected with or a calibration's, ± its σ.</footer>
 </body>
 </html>
 """.replace("{none}", NONE)

@@ -40,7 +40,7 @@ from pipeline.well import WellMetadata
 
 from .filestate import key_after
 from .fingerprint import completed_json, hashed
-from .fleet import WellFigures, well_figures
+from .fleet import WellFigures, figures_record, run_figures, well_figures
 from .publish import MARKER, Publication, read_published, staging_dir, write_marker
 
 OWN = frozenset({MARKER})
@@ -100,8 +100,8 @@ class WellOutcome:
     """the run ``OUT/<well>`` holds as the task ends (a check: the one it held; a done run:
     itself), by the hashes of its ``batch.json`` and ``run.json``"""
     figures: WellFigures | None = None
-    """the fleet page's figures of that run, read here from its published outputs so that
-    the batch process reads none"""
+    """the fleet page's figures of that run (:mod:`pipeline.batch.fleet`), recorded here as
+    it ran (in its ``batch.json``) so that the batch process reads none"""
 
 
 _PLANS: dict[tuple[str, tuple[str, ...]], tuple[Plan, Registry]] = {}
@@ -186,6 +186,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
         )
         run_time = time.perf_counter() - t_run
         manifest = result.manifest
+        figures = run_figures(plan, result.tables, manifest, staging)
         write_marker(
             staging,
             {
@@ -193,6 +194,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
                 "run_id": task.run_id,
                 "batch_id": task.batch_id,
                 "fingerprint": json.loads(str(completed_json(task.fingerprint, manifest))),
+                "figures": figures_record(figures),
             },
         )
         changed = [n for n, key in before.items() if key_after(task.inputs[n]) != key]
@@ -220,7 +222,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             worker=worker,
             published_run=held_run,
             publication=published.publication,
-            figures=well_figures(final, manifest=manifest),  # published whole above
+            figures=figures,
         )
     except Exception as exc:  # a failing well is reported, never raised into the batch
         error = str(exc) if isinstance(exc, GyropipeError) else f"{type(exc).__name__}: {exc}"

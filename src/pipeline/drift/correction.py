@@ -16,6 +16,11 @@ With a ``reference_azimuth`` (the known azimuth at the tie-in station) the orien
 offset A_first − reference is removed as well; without one, azimuths stay referenced to the
 gyro's orientation at the tie-in.
 
+The rate's σ: the calibration's or the given one; a tie-in misclosure's is that of its two
+readings, σ_ω = √2·σ_r / (t_last − t_first). The corrected readings carry the rate and its
+σ (``drift_rate``, ``sigma_drift_rate``, °/h) so that every document quoting the rate can
+state its uncertainty.
+
 Predicted errors: the corrected errors are a linear map of the reading errors ε (σ_r each)
 plus the rate error δω (σ_ω): ``err = G·ε + τ·δω`` with τ = t − t0 in hours, so
 ``Cov = σ_r²·G·Gᵀ + σ_ω²·τ·τᵀ`` exactly (tie-in: G = I − u·(e_last − e_first)ᵀ,
@@ -85,7 +90,9 @@ class CorrectionOptions(BaseModel):
 
 @dataclass(frozen=True)
 class DriftRate:
-    """A drift rate (°/h), its σ and where it came from."""
+    """A drift rate (°/h), its σ and where it came from. The σ of a tie-in misclosure's
+    rate is √2·σ_r / (t_last − t_first) (h), σ_r that of one reading: known once the
+    survey is corrected (:attr:`CorrectedSurvey.rate`), 0 before."""
 
     rate: float
     sigma: float
@@ -166,6 +173,7 @@ def correct_survey(
     t0 = time[first] if first is not None else time[0]
     tau = (time - t0) / 3600.0
     mix = np.eye(n)
+    span_h: float | None = None  # tie-in: the time between its two readings, h
     if rate is None:
         if first is None or not len(tie_out) or tie_out[-1] <= first:
             raise ValueError(
@@ -173,10 +181,10 @@ def correct_survey(
                 f"{options.tie_station}; give a calibration or a drift_rate instead"
             )
         last = int(tie_out[-1])
-        span = tau[last]
-        rate = DriftRate(float(wrap(azi[last] - azi[first]) / span), 0.0, "tie-in misclosure")
-        mix[:, last] -= tau / span
-        mix[:, first] += tau / span
+        span_h = float(tau[last])
+        rate = DriftRate(float(wrap(azi[last] - azi[first]) / span_h), 0.0, "tie-in misclosure")
+        mix[:, last] -= tau / span_h
+        mix[:, first] += tau / span_h
     correction = rate.rate * tau
     if options.reference_azimuth is not None:
         if first is None:
@@ -192,6 +200,8 @@ def correct_survey(
     if sigma_r is None:
         sigma_r = _reading_sigma(corrected, mix, tau, rate.sigma, pairs)
     cov = sigma_r**2 * mix @ mix.T + rate.sigma**2 * np.outer(tau, tau)
+    if span_h is not None:  # the rate's error is in ``mix``: the two tie-in readings'
+        rate = DriftRate(rate.rate, float(np.sqrt(2.0) * sigma_r / span_h), rate.source)
     north = (readings.schema.field("azi").metadata or {}).get(NORTH_KEY, b"true").decode()
     table = readings
     for name, values in (
@@ -199,6 +209,8 @@ def correct_survey(
         ("azi_raw", azi),
         ("correction", correction),
         ("sigma_azi", np.sqrt(np.diag(cov))),
+        ("drift_rate", np.full(n, rate.rate)),
+        ("sigma_drift_rate", np.full(n, rate.sigma)),
     ):
         spec = next(c for c in CorrectedFreeGyroReadings.compiled().columns if c.name == name)
         field = spec.field(north)

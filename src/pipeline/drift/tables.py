@@ -132,6 +132,18 @@ class CorrectedFreeGyroReadings(FreeGyroReadings):
     )
     correction: float = column(unit="deg", description="drift correction subtracted")
     sigma_azi: float = column(unit="deg", ge=0, description="predicted σ of the corrected azimuth")
+    drift_rate: float | None = column(
+        unit="deg/h",
+        description="drift rate the survey was corrected with (the same on every row)",
+        default=None,
+    )
+    sigma_drift_rate: float | None = column(
+        unit="deg/h",
+        ge=0,
+        description="σ of drift_rate: the calibration's or the given one; of a tie-in "
+        "misclosure √2·σ_r / (t_last − t_first)",
+        default=None,
+    )
 
 
 class DriftStations(Stations):

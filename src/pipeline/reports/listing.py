@@ -15,11 +15,9 @@ from pipeline.reports.document import Column, Table, fmt, fmt_azimuth, fmt_sigma
 from pipeline.reports.flags import AZI, SIGMA_AZI, Flag
 from pipeline.reports.numbers import UNDEFINED
 from pipeline.reports.sections import north_label, unit_label
+from pipeline.survey.courses import course_lengths
 
 ELLIPSE_COLUMNS = ("ellipse_major_conf", "ellipse_minor_conf", "ellipse_azimuth", "vertical_conf")
-MIN_COURSE = 10.0
-"""Default minimum course length, m: dogleg severity over a shorter course is not counted
-in the summary's maximum (angle errors divided by a short course make spikes)."""
 UNDEFINED_SIGMA = (
     "σ AZI undefined: near vertical the inclination does not define an azimuth (the tool "
     "axis has no horizontal direction), so the azimuth has no finite uncertainty."
@@ -34,24 +32,6 @@ def col(table: pa.Table, name: str) -> plots.FloatArray:
 MAX_COURSE = 100.0
 """Default maximum course length, m: a station at the end of a longer course (a first course
 after the tie-in, a gap) is flagged."""
-
-
-def course_lengths(md: plots.FloatArray, offsets: tuple[int, ...]) -> plots.FloatArray:
-    """Each station's course from the previous station of its survey, m (0 at the first
-    station of a survey: it has no course)."""
-    course: plots.FloatArray = np.diff(md, prepend=md[:1])
-    course[list(offsets[:-1])] = 0.0
-    return course
-
-
-def short_courses(
-    md: plots.FloatArray, offsets: tuple[int, ...], min_course: float
-) -> plots.BoolArray:
-    """Stations whose course from the previous station of their survey is shorter than
-    ``min_course`` m (the first station of a survey has no course)."""
-    course = course_lengths(md, offsets)
-    short: plots.BoolArray = (course > 0) & (course < min_course - 1e-6)
-    return short
 
 
 def long_courses(

@@ -37,13 +37,11 @@ from pipeline.reports.flags import POSITION_MISMATCH, Flag, long_course
 from pipeline.reports.listing import (
     ELLIPSE_COLUMNS,
     MAX_COURSE,
-    MIN_COURSE,
     Course,
     col,
     confidence,
     listing,
     long_courses,
-    short_courses,
 )
 from pipeline.reports.literature import Citations
 from pipeline.reports.numbers import fmt_measured
@@ -71,6 +69,7 @@ from pipeline.reports.sections import (
     unit_label,
 )
 from pipeline.reports.view3d import view_3d
+from pipeline.survey.courses import MIN_COURSE, max_dls, short_courses
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.well import WellMetadata
@@ -271,19 +270,18 @@ def _has(table: pa.Table | None, column: str) -> bool:
 
 
 def _max_dls(traj: pa.Table, path: plots.Path3, course: Course) -> str:
-    """Largest DLS over the courses at least ``min_course`` long, saying how many were
-    left out."""
-    dls = col(traj, "dls")
-    counted = ~course.short
-    if not counted.any():
-        counted = np.ones_like(counted)
+    """Largest DLS over the courses at least ``min_course`` long
+    (:func:`~pipeline.survey.courses.max_dls`), saying how many were left out."""
+    found = max_dls(path.md, col(traj, "dls"), path.offsets, course.min_course)
+    if found is None:
+        return "not defined (no course between stations)"
+    if found.all_short:
         note = f" (every course shorter than {course.min_course:g} m)"
-    elif course.short.any():
-        note = f" ({course.words} not counted: {int(course.short.sum())})"
+    elif found.left_out:
+        note = f" ({course.words} not counted: {found.left_out})"
     else:
         note = ""
-    i = int(np.flatnonzero(counted)[np.argmax(dls[counted])])
-    return f"{fmt(dls[i])} {unit_label(traj, 'dls')} at {fmt(path.md[i])} m MD{note}"
+    return f"{fmt(found.dls)} {unit_label(traj, 'dls')} at {fmt(path.md[found.row])} m MD{note}"
 
 
 def _qc_verdict(flags: list[list[Flag]], md: plots.FloatArray) -> Verdict:
@@ -549,6 +547,16 @@ def _rows(table: pa.Table | None) -> int:
     return 0 if table is None else table.num_rows
 
 
+def _rate(drift: pa.Table) -> str:
+    """The drift rate a survey was corrected with and its σ; of a table written before
+    they were recorded, the slope of its correction."""
+    if "sigma_drift_rate" in drift.column_names:
+        rate, sigma = (float(col(drift, c)[0]) for c in ("drift_rate", "sigma_drift_rate"))
+        return f"drift rate {fmt_measured(rate, sigma, 3)} °/h, σ {fmt_sigma(sigma)} °/h"
+    rate = correction_rate(col(drift, "time"), col(drift, "correction"))
+    return f"the correction grows at {fmt_sig(rate)} °/h (slope of the correction against time)"
+
+
 def _drift(tables: SurveyTables) -> Section:
     blocks: list[Block] = []
     cal = tables.calibration
@@ -584,12 +592,8 @@ def _drift(tables: SurveyTables) -> Section:
         correction = col(drift, "correction")
         outbound = np.array([r == "out" for r in drift.column("run").to_pylist()])
         span = float(np.ptp(time_h))
-        rate = correction_rate(col(drift, "time"), correction)
         blocks.append(
-            Paragraph(
-                f"{drift.num_rows} readings corrected over {fmt(span, 2)} h; the correction "
-                f"grows at {fmt_sig(rate)} °/h (slope of the correction against time)."
-            )
+            Paragraph(f"{drift.num_rows} readings corrected over {fmt(span, 2)} h; {_rate(drift)}.")
         )
         blocks.append(
             Plot(

@@ -31,6 +31,7 @@ from pipeline.hookspecs import hookimpl
 from pipeline.qc.tables import QcResults, QcSummary, RunComparison
 from pipeline.registry import Registry, StageContext, StageDef
 from pipeline.streams import Port, as_stream
+from pipeline.survey.courses import MIN_COURSE
 from pipeline.tables import AcceptanceGates, CheckResults, Stations, Trajectory
 
 if TYPE_CHECKING:
@@ -54,11 +55,12 @@ class ReportParams(BaseModel):
         ["html", "pdf"], min_length=1, description="files to write"
     )
     min_course_length: float = Field(
-        10.0,
+        MIN_COURSE,
         ge=0,
         description="survey report, m: dogleg severity over a course shorter than this (e.g. "
-        "the last course to an end stop) is left out of the summary's maximum DLS and marked "
-        "in the listing; 0 counts every course",
+        "the last course to an end stop) is left out of the summary's maximum DLS (and of the "
+        "fleet page's, which states this report's) and marked in the listing; 0 counts every "
+        "course",
     )
     max_course_length: float = Field(
         100.0,
