@@ -20,7 +20,7 @@ from pipeline.io.mcap.arrow import BATCH_ROWS, write_samples
 from pipeline.io.mcap.tables import read_tables, write_tables
 from pipeline.registry import Provenance
 from pipeline.runner import RunResult
-from pipeline.streams import TableStream
+from pipeline.streams import MMAP_THRESHOLD, TableStream
 from pipeline.well import WellMetadata, attach
 
 
@@ -94,6 +94,26 @@ def test_long_series_is_batched_and_logged_at_its_times(tmp_path: Path):
     tables, well = read_tables(path)
     assert tables["series"].equals(series, check_metadata=True)
     assert well == WellMetadata(well="S")
+
+
+def test_a_full_rate_series_goes_in_chunks_below_the_mmap_threshold(tmp_path: Path):
+    """A series of several MB (six float columns, as the continuous pipeline's) is written in
+    chunks of one or two messages, each under the allocator's mmap threshold (their buffers
+    are reused from the heap, not mapped afresh), and reads back exactly."""
+    n = 6 * BATCH_ROWS + 123
+    rng = np.random.default_rng(5)
+    columns = {"time": 10.0 + 0.01 * np.arange(n), **{c: rng.normal(size=n) for c in "abcde"}}
+    series = pa.table(columns)
+    path = tmp_path / "s.mcap"
+    write_tables({"series": series}, path, WellMetadata(well="S"), _provenance())
+    with path.open("rb") as fh:
+        summary = make_reader(fh).get_summary()
+    assert summary is not None and summary.statistics.message_count == 7
+    chunks = summary.chunk_indexes
+    assert len(chunks) >= 4
+    assert all(c.uncompressed_size < MMAP_THRESHOLD for c in chunks)
+    tables, _ = read_tables(path)
+    assert _ipc(tables["series"]) == _ipc(series)
 
 
 def _counted_stream(table: pa.Table, passes: list[int]) -> TableStream:
