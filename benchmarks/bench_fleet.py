@@ -6,8 +6,9 @@ driver's) own CPU per well, the workers' CPU per well, the load before and after
 speed-up a many-core machine would see, predicted from the two CPU figures.
 
 The wells are hard links of a few simulated ones (``gyropipe simulate
-examples/plans/j-well.yaml --seed K``: 842,201 samples, a 47 MB ``samples.parquet`` each;
-simulated once and kept under ``--data``), named W001…, listed in a manifest. Each batch runs
+examples/plans/j-well.yaml --seed K``: 842,201 samples, a 37 MB ``samples.parquet`` each,
+47 MB from the simulator the issue measured; simulated once and kept under ``--data``),
+named W001…, listed in a manifest. Each batch runs
 into a fresh output directory, removed afterwards unless ``--keep``.
 
 How the driver's CPU is measured. The batch runs in this process: the ``gyropipe batch``
@@ -62,7 +63,8 @@ well skipped: the first pass after the files settled
 (:data:`pipeline.batch.filestate.SETTLED_S`) has each well's published files looked at by a
 worker once, the later ones know every well unchanged from the stat alone. Printed per pass:
 the driver's CPU per well (measured as above), its least and median over the stat-only
-passes, and the target: ≤ 5 ms a well with 2 workers on 2 cores over ≥ 64 wells of 47 MB.
+passes, and the target: ≤ 5 ms a well with 2 workers on 2 cores over ≥ 64 wells (of 47 MB
+in the issue; the driver reads no input, so their size does not enter).
 
     python benchmarks/bench_fleet.py --only-changed [--wells 64] [--workers 2] [--passes 3]
 """
