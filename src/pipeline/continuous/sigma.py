@@ -57,6 +57,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from pipeline.continuous.filters import TimeGradient, unwrapped
 from pipeline.continuous.run import DEG_H
 from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
 from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
@@ -322,15 +323,15 @@ _KERNEL_ROWS = 256
 def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatArray]:
     """Rate sensitivities per sample (time order) of a run's samples; the gradients at the
     ends are one-sided (read one sample beyond a range to have them central)."""
-    t = run.time
+    grad = TimeGradient(run.time)
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
     sin_d, cos_d = sin_cos(run.misalignment)
     tan_d = np.tan(run.misalignment)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
-    azi_rate = np.gradient(np.unwrap(run.azi), t)
-    r = -oc * sin_a + np.gradient(run.inc, t)
+    azi_rate = grad(unwrapped(run.azi))
+    r = -oc * sin_a + grad(run.inc)
     h = oc * cos_a * cos_i + os_ * sin_i - azi_rate * sin_i
     sens = {
         "gain": 1.0 / (safe_sin * cos_d),  # |∂Ȧ/∂y|
@@ -341,14 +342,17 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
         "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
-        "rate_z": np.gradient(np.unwrap(run.misalignment), t)
+        "rate_z": grad(unwrapped(run.misalignment))
         + azi_rate * cos_i
         + oc * sin_i * cos_a
         - os_ * cos_i,
-        "sin": np.abs(sin_i),
         "cot": cos_i / safe_sin,
     }
-    return {k: np.where(ok, v, 0.0) if k != "sin" else v for k, v in sens.items()}
+    outside = np.flatnonzero(~ok)  # each array is new: zeroed in place where not integrated
+    for values in sens.values():
+        values[outside] = 0.0
+    sens["sin"] = np.abs(sin_i)
+    return sens
 
 
 class _Integrals:
