@@ -415,9 +415,13 @@ def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
     """``x_1 … x_n`` of ``x_{k+1} = gain_k·x_k + forcing_k`` from ``x_0 = 0``: within a
     segment ``x = P·(x_start + cumsum(forcing/P))`` with P the running product of the gains,
     segments cut where the gains' log-variation reaches ``_SCAN_SPAN`` (P stays in range)."""
-    with np.errstate(divide="ignore"):
-        variation = np.cumsum(np.nan_to_num(np.abs(np.log(np.abs(gain))), nan=0.0))
-    cuts = np.searchsorted(variation, np.arange(_SCAN_SPAN, variation[-1], _SCAN_SPAN))
+    least, most = float(np.min(gain)), float(np.max(gain))
+    if least > 0 and gain.size * max(np.log(most), -np.log(least)) < _SCAN_SPAN / 2:
+        cuts = np.empty(0, dtype=np.intp)  # the whole variation is below one segment's
+    else:
+        with np.errstate(divide="ignore"):
+            variation = np.cumsum(np.nan_to_num(np.abs(np.log(np.abs(gain))), nan=0.0))
+        cuts = np.searchsorted(variation, np.arange(_SCAN_SPAN, variation[-1], _SCAN_SPAN))
     out = np.empty_like(forcing)
     carry = 0.0
     for lo, hi in zip([0, *cuts], [*cuts, gain.size], strict=True):

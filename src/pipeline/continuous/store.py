@@ -160,9 +160,10 @@ def savgol_range(
 
 
 class Interpolation:
-    """``np.interp(x, xp, f)`` for points ``x`` known up front while ``xp`` (increasing) and
-    the values ``f`` (one row per quantity) come in consecutive chunks: each point is
-    interpolated between the same two samples as over the whole series."""
+    """``np.interp(x, xp, f)`` for points ``x`` known up front while ``xp`` (strictly
+    increasing) and the values ``f`` (one row per quantity) come in consecutive chunks: each
+    point is interpolated between the same two samples as over the whole series. Only those
+    samples of a chunk are copied, whatever its length."""
 
     def __init__(self, x: FloatArray, quantities: int) -> None:
         self._order = np.argsort(x, kind="stable")
@@ -175,16 +176,21 @@ class Interpolation:
         """The next chunk of samples: ``xp`` and one array per quantity."""
         if xp.size == 0:
             return
-        f = np.stack(values)
-        if self._last is not None:
-            xp = np.concatenate([[self._last[0]], xp])
-            f = np.concatenate([self._last[1][:, None], f], axis=1)
         stop = int(np.searchsorted(self._x, xp[-1], side="right"))
         here = slice(self._next, stop)
+        # the samples around each point (np.interp reads only those two): at or before it,
+        # and after it; the one before the chunk is the last of the chunk before
+        after = np.searchsorted(xp, self._x[here], side="right")
+        picked = np.unique(np.concatenate([after - 1, np.minimum(after, xp.size - 1), [xp.size - 1]]))
+        picked = picked[picked >= 0]
+        sub_xp, f = xp[picked], np.stack([v[picked] for v in values])
+        if self._last is not None:
+            sub_xp = np.concatenate([[self._last[0]], sub_xp])
+            f = np.concatenate([self._last[1][:, None], f], axis=1)
         for row in range(f.shape[0]):
-            self._out[row, here] = np.interp(self._x[here], xp, f[row])
+            self._out[row, here] = np.interp(self._x[here], sub_xp, f[row])
         self._next = stop
-        self._last = (float(xp[-1]), f[:, -1].copy())
+        self._last = (float(sub_xp[-1]), f[:, -1].copy())
 
     def result(self) -> FloatArray:
         """Rows of interpolated values (quantity, point) in the points' given order; points
