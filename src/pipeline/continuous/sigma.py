@@ -60,7 +60,7 @@ from numpy.typing import NDArray
 from pipeline.continuous.filters import TimeGradient, unwrapped
 from pipeline.continuous.run import DEG_H
 from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
-from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
+from pipeline.continuous.store import Interpolation, RunningIntegrals, carried_cumsum, chunks
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
@@ -360,7 +360,8 @@ class _Integrals:
     integration order (time order, or back in time from the end stop): the integrals of each
     error's rate over the cells between ``edges`` (elapsed s), Φ at the stations and at the
     end, and the inclination-noise sums. Each running integral carries its last value from
-    one chunk to the next, so the numbers are those of the whole series."""
+    one chunk to the next, so the numbers are those of the whole series (the cells'
+    integrals to the rounding of their sums: :class:`~.store.RunningIntegrals`)."""
 
     def __init__(
         self,
@@ -378,9 +379,9 @@ class _Integrals:
             else NoiseSums(run.inc_noise, self.size, self._station_index(st_elapsed))
         )
         halo = 2 + (0 if self.noise is None else self.noise.halo)
-        at_edges = Interpolation(edges, len(_INTEGRANDS))
+        at_edges = RunningIntegrals(edges, len(_INTEGRANDS))
         at_stations = Interpolation(st_elapsed, 1)
-        feedback_carry, carries = 0.0, np.zeros(len(_INTEGRANDS))
+        feedback_carry = 0.0
         for lo, hi in chunks(0, self.size, run.rows):
             v0, v1 = max(lo - halo, 0), min(hi + halo, self.size)
             elapsed, sens = self._ordered(v0, v1)
@@ -398,15 +399,7 @@ class _Integrals:
             own = slice(lo - v0, hi - v0)
             before = slice(max(lo - 1, 0) - v0, hi - v0)  # the chunk and the sample before it
             y = self._integrands(sens, elapsed, transition)
-            for k, integrand in enumerate(y):
-                values = integrand[before]
-                traps = _trapezoids(values, elapsed[before])
-                running = carried_cumsum(traps, float(carries[k]))
-                if lo == 0:
-                    running = np.concatenate([[0.0], running])
-                y[k] = running[-(hi - lo) :]
-                carries[k] = running[-1]
-            at_edges.feed(elapsed[own], *y)
+            at_edges.add(elapsed[before], *(integrand[before] for integrand in y))
             at_stations.feed(elapsed[own], transition[own])
             if hi == self.size:
                 self.phi_t = float(transition[own][-1])

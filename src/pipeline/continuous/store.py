@@ -32,6 +32,7 @@ __all__ = [
     "CHUNK_ROWS",
     "ColumnStore",
     "Interpolation",
+    "RunningIntegrals",
     "carried_cumsum",
     "chunks",
     "median_step",
@@ -181,7 +182,9 @@ class Interpolation:
         # the samples around each point (np.interp reads only those two): at or before it,
         # and after it; the one before the chunk is the last of the chunk before
         after = np.searchsorted(xp, self._x[here], side="right")
-        picked = np.unique(np.concatenate([after - 1, np.minimum(after, xp.size - 1), [xp.size - 1]]))
+        picked = np.unique(
+            np.concatenate([after - 1, np.minimum(after, xp.size - 1), [xp.size - 1]])
+        )
         picked = picked[picked >= 0]
         sub_xp, f = xp[picked], np.stack([v[picked] for v in values])
         if self._last is not None:
@@ -197,6 +200,55 @@ class Interpolation:
         past the last sample take its values."""
         if self._last is not None:
             self._out[:, self._next :] = self._last[1][:, None]
+        out: FloatArray = np.empty_like(self._out)
+        out[:, self._order] = self._out
+        return out
+
+
+class RunningIntegrals:
+    """Trapezoid-rule integrals, from the first sample, of several quantities at points ``x``
+    known up front, while the samples come in chunks: each chunk starts on the sample the
+    one before ended on, so the steps tile. A point's integral is the whole steps before it,
+    summed a cell (between consecutive points) at a time, and the part of its own step, the
+    running integral taken linear there (as ``np.interp`` of the running integral would).
+    Points before the first sample have 0, after the last the whole integral."""
+
+    def __init__(self, x: FloatArray, quantities: int) -> None:
+        self._order = np.argsort(x, kind="stable")
+        self._x = np.asarray(x, dtype=np.float64)[self._order]
+        self._out = np.zeros((quantities, self._x.size))
+        self._next = 0
+        self._total = np.zeros(quantities)
+
+    def add(self, xp: FloatArray, *values: FloatArray) -> None:
+        """The next chunk: ``xp`` (increasing; its first the last sample of the chunk before)
+        and one array of samples per quantity."""
+        if xp.size == 0:
+            return
+        stop = int(np.searchsorted(self._x, xp[-1], side="right"))
+        here = slice(self._next, stop)
+        # the step [xp[j], xp[j + 1]) holding each point: −1 before the first sample (first
+        # chunk only), xp.size − 1 at the last sample
+        step = np.searchsorted(xp, self._x[here], side="right") - 1
+        inside = (step >= 0) & (step < xp.size - 1)
+        j = step[inside]
+        part = (self._x[here][inside] - xp[j]) / (xp[j + 1] - xp[j])
+        starts = np.unique(np.concatenate([[0], j]))  # cells: from each point's step
+        at = np.searchsorted(starts, j)
+        width = np.diff(xp)
+        for row, f in enumerate(values):
+            steps = width * (f[1:] + f[:-1]) / 2
+            cells = np.add.reduceat(steps, starts) if steps.size else np.zeros(0)
+            before = self._total[row] + np.concatenate([[0.0], np.cumsum(cells)])
+            out = np.where(step < 0, 0.0, before[-1])
+            out[inside] = before[at] + part * steps[j]
+            self._out[row, here] = out
+            self._total[row] = before[-1]
+        self._next = stop
+
+    def result(self) -> FloatArray:
+        """Rows of integrals (quantity, point) in the points' given order."""
+        self._out[:, self._next :] = self._total[:, None]
         out: FloatArray = np.empty_like(self._out)
         out[:, self._order] = self._out
         return out
