@@ -28,7 +28,13 @@ import pytest
 from continuous_support import LAT
 
 from pipeline.continuous import ContinuousOptions, integrate_continuous
-from pipeline.continuous.store import CHUNK_ROWS, Interpolation, RunningIntegrals
+from pipeline.continuous.store import (
+    CHUNK_ROWS,
+    ColumnStore,
+    Interpolation,
+    RunningIntegrals,
+    median_step,
+)
 from pipeline.graph import build_plan
 from pipeline.runner import run_plan
 from pipeline.sim.simulate import simulate
@@ -118,6 +124,25 @@ def test_running_integrals_in_chunks_are_the_whole_series_trapezoids(rows: int) 
     for row, values in zip(got, (line, wiggle), strict=True):
         running = np.concatenate([[0.0], np.cumsum(np.diff(xp) * (values[1:] + values[:-1]) / 2)])
         np.testing.assert_allclose(row, np.interp(x, xp, running), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("rows", [1, 13, 5000])
+def test_median_step_in_chunks_is_the_median_of_the_whole_diff(rows: int) -> None:
+    rng = np.random.default_rng(rows)
+    clock = 100.0 + np.cumsum(rng.choice([0.01, 0.01 + 1e-9, 0.02], size=3000, p=[0.6, 0.3, 0.1]))
+    cases = {
+        "clock": clock,  # a few distinct steps: the middle ones share a bin
+        "walk": np.cumsum(rng.normal(size=2999)),  # negative steps too, an even count
+        "steady": np.arange(500) * 0.25,  # one step throughout
+        "one step": np.array([3.0, 4.5]),
+    }
+    store = ColumnStore()
+    for name, x in cases.items():
+        store.write(name, 0, x)
+        for lo in (0, 7):
+            want = np.median(np.diff(x[lo:])) if x.size - lo > 1 else np.nan
+            got = median_step(store, name, lo, x.size, rows)
+            assert got == want or (np.isnan(got) and np.isnan(want)), (name, lo)
 
 
 PIPELINE = """

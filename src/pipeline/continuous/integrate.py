@@ -74,7 +74,8 @@ from pipeline.streams import Port, as_stream
 
 __all__ = ["integrate_continuous"]
 
-_COLUMNS = ("time", "md", "station", "position", "acc_x", "acc_y", "acc_z")
+_COLUMNS = ("time", "md", "station", "acc_x", "acc_y", "acc_z", "position")
+"""the samples' columns kept in the store (the stop positions: for the strapdown's stops only)"""
 
 
 def integrate_continuous(
@@ -96,7 +97,8 @@ def integrate_continuous(
         raise ContinuousError("continuous integration needs the station markers of the stops")
     store = ColumnStore()
     gyros = [f"gyro_{a}" for a in axes]
-    names = [n for n in (*_COLUMNS, *gyros) if n in stream.column_names]
+    kept = (*_COLUMNS, *gyros) if axes == "xyz" else (*_COLUMNS[:-1], *gyros)
+    names = [n for n in kept if n in stream.column_names]
     if store.add_batches(stream, names) == 0:
         raise EmptyTableError("samples", "a continuous run needs samples")
     begin, end, first_id, last_id = run_bounds(store, rows)

@@ -273,17 +273,22 @@ def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> f
     high = max(float(s.max()) for s in steps())
     if not low < high:
         return low
-    edges = np.linspace(low, high, 4097)
-    hist = np.zeros(edges.size - 1, dtype=np.int64)
+    n_bins = 4096
+    edges = np.linspace(low, high, n_bins + 1)  # NumPy's edges of the equal bins below
+    hist = np.zeros(n_bins, dtype=np.int64)
     for s in steps():
-        hist += np.histogram(s, bins=edges)[0]
+        hist += np.histogram(s, bins=n_bins, range=(low, high))[0]
     ranks = ((count - 1) // 2, count // 2)
     below = np.concatenate([[0], np.cumsum(hist)])
     bins = sorted({int(np.searchsorted(below, r, side="right")) - 1 for r in ranks})
     picked: dict[float, int] = {}
     for s in steps():
-        where = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, hist.size - 1)
-        for value, n in zip(*np.unique(s[np.isin(where, bins)], return_counts=True), strict=True):
+        # a bin holds edges[b] ≤ s < edges[b + 1], the last one its right edge too
+        inside = [
+            (s >= edges[b]) & (s < edges[b + 1]) if b < n_bins - 1 else s >= edges[b] for b in bins
+        ]
+        chosen = s[inside[0] | inside[-1]]
+        for value, n in zip(*np.unique(chosen, return_counts=True), strict=True):
             picked[float(value)] = picked.get(float(value), 0) + int(n)
     keys = sorted(picked)
     cumulative = np.cumsum([picked[k] for k in keys])
