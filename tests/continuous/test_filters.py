@@ -1,6 +1,6 @@
 """The NumPy Savitzky–Golay filters and convolutions against SciPy's (scipy.signal), which
-a continuous run no longer imports; the shared-weight gradient and the unwrap against NumPy's,
-to the bit."""
+a continuous run no longer imports; the shared-weight gradient, the unwrap and the azimuth
+in degrees against NumPy's, to the bit."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from pipeline.continuous.filters import (
     savgol_filter,
     unwrapped,
 )
+from pipeline.continuous.series import azimuth_degrees
 
 
 @pytest.mark.parametrize(("points", "order", "deriv"), [(7, 3, 0), (101, 2, 1), (201, 3, 2)])
@@ -73,3 +74,16 @@ def test_unwrapped_is_numpys_unwrap_to_the_bit() -> None:
         got, want = unwrapped(angle), np.unwrap(angle)
         assert np.array_equal(got, want, equal_nan=True)
         assert np.array_equal(np.signbit(got), np.signbit(want))
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in remainder")
+def test_azimuth_degrees_is_numpys_modulo_to_the_bit() -> None:
+    turns = np.linspace(-4 * np.pi, 4 * np.pi, 20_001)  # 0, ±360°, ±720° among them
+    edges = [0.0, -0.0, -1e-300, -1e-17, 1e-17, 2 * np.pi, -2 * np.pi, np.nan, np.inf, -np.inf]
+    azi = np.concatenate([turns, edges])
+    degrees = np.degrees(azi) % 360.0
+    want = np.where(degrees < 360.0, degrees, 0.0)  # −1e-17 rad: % 360 rounds to 360
+    got = azimuth_degrees(azi)
+    assert np.array_equal(got, want, equal_nan=True)
+    assert np.array_equal(np.signbit(got), np.signbit(want))
+    assert ((got >= 0.0) & (got < 360.0))[: turns.size].all()

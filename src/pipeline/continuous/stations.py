@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from pipeline.continuous.options import ContinuousOptions
 from pipeline.continuous.run import ContinuousError, Odometer, RunStops
-from pipeline.continuous.series import StoredRun, series_stream
+from pipeline.continuous.series import StoredRun, azimuth_degrees, series_stream
 from pipeline.continuous.sigma import (
     AccelErrors,
     GyroNoise,
@@ -128,12 +128,11 @@ def _resample(run: StoredRun, stops: RunStops, options: ContinuousOptions) -> pa
     # the end stations are the stops, at rest: no acceleration removed from their inclination
     ends = [0, -1]
     sigma_inc[ends] = inclination_sigma(inc[ends], replace(run.inc_noise, odometer=0.0), accel)
-    azi_deg = np.degrees(azi) % 360.0
     return ContinuousStations.compiled().make_table(
         {
             "md": grid,
             "inc": np.degrees(inc),
-            "azi": np.where(azi_deg < 360.0, azi_deg, 0.0),
+            "azi": azimuth_degrees(azi),
             "time": times,
             "sigma_inc": np.degrees(sigma_inc),
             "sigma_azi": sigma_azi,
