@@ -30,6 +30,7 @@ from continuous_support import LAT
 from pipeline.continuous import ContinuousOptions, integrate_continuous
 from pipeline.continuous.store import (
     CHUNK_ROWS,
+    CarriedUnwrap,
     ColumnStore,
     Interpolation,
     RunningIntegrals,
@@ -143,6 +144,19 @@ def test_median_step_in_chunks_is_the_median_of_the_whole_diff(rows: int) -> Non
             want = np.median(np.diff(x[lo:])) if x.size - lo > 1 else np.nan
             got = median_step(store, name, lo, x.size, rows)
             assert got == want or (np.isnan(got) and np.isnan(want)), (name, lo)
+
+
+@pytest.mark.parametrize("rows", [1, 13, 5000])
+def test_carried_unwrap_in_chunks_is_np_unwrap_of_the_whole_series(rows: int) -> None:
+    rng = np.random.default_rng(rows)
+    turning = np.cumsum(rng.normal(scale=0.05, size=3000)) + 0.02 * np.arange(3000)
+    wrapped = (turning + np.pi) % (2 * np.pi) - np.pi  # jumps of about 2π, 9 turns
+    halfway = np.tile([0.0, np.pi, 0.0, -np.pi], 50)  # steps of exactly π
+    smooth = np.cumsum(rng.normal(scale=0.01, size=3000))  # no jump: carried zeros
+    for angle in (wrapped, halfway, smooth):
+        unwrap = CarriedUnwrap()
+        got = np.concatenate([unwrap(angle[a:b]) for a, b in chunked(angle.size, rows)])
+        assert np.array_equal(got, np.unwrap(angle))
 
 
 PIPELINE = """

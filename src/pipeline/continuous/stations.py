@@ -19,7 +19,7 @@ from pipeline.continuous.sigma import (
     azimuth_budget,
     inclination_sigma,
 )
-from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
+from pipeline.continuous.store import CarriedUnwrap, Interpolation, chunks
 from pipeline.continuous.tables import (
     FLAG_AZIMUTH_UNDEFINED,
     FLAG_NEAR_VERTICAL,
@@ -151,19 +151,11 @@ def _at_stations(
     values = Interpolation(times, 2)
     flags = np.zeros(times.size, dtype=np.int64)
     done = 0
-    raw = correction = 0.0
+    unwrap = CarriedUnwrap()  # np.unwrap of the whole series
     for a, b in chunks(0, run.size, run.rows):
         part = run.read(a, b, held)
-        t, azi = part.time, part.azi
-        # np.unwrap of the whole series: each step's correction summed in sequence
-        step = np.diff(np.concatenate([[raw if a else azi[0]], azi]))
-        fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
-        fix[(fix == -np.pi) & (step > 0)] = np.pi
-        fix = fix - step
-        fix[np.abs(step) < np.pi] = 0.0
-        corrections = carried_cumsum(fix, correction)
-        values.feed(t, part.inc, azi + corrections)
-        raw, correction = float(azi[-1]), float(corrections[-1])
+        t = part.time
+        values.feed(t, part.inc, unwrap(part.azi))
         here = int(np.searchsorted(times, t[-1], side="right"))
         flags[done:here] = part.flags[np.searchsorted(t, times[done:here], side="left")]
         done = here

@@ -30,6 +30,7 @@ from pipeline.earth.frames import FloatArray
 
 __all__ = [
     "CHUNK_ROWS",
+    "CarriedUnwrap",
     "ColumnStore",
     "Interpolation",
     "RunningIntegrals",
@@ -137,6 +138,34 @@ def carried_cumsum(values: FloatArray, carry: float) -> FloatArray:
     whole series would, so the chunks give the same numbers)."""
     out: FloatArray = np.cumsum(np.concatenate([[carry], values]))[1:]
     return out
+
+
+class CarriedUnwrap:
+    """``np.unwrap`` (rad) of a series given in consecutive chunks, called once per chunk:
+    each step's correction summed in sequence from the first chunk on, as over the whole
+    series (where no step of a chunk reaches π all its corrections are zeros: the sum stays
+    the carried one, −0 made +0 as NumPy's cumulative sum makes it)."""
+
+    def __init__(self) -> None:
+        self._last: float | None = None
+        self._correction = 0.0
+
+    def __call__(self, angle: FloatArray) -> FloatArray:
+        """The next chunk's angles unwrapped (a new array)."""
+        if angle.size == 0:
+            return angle.copy()
+        step = np.diff(np.concatenate([[angle[0] if self._last is None else self._last], angle]))
+        if (np.abs(step) < np.pi).all():
+            corrections = np.full(step.size, self._correction + 0.0)
+        else:
+            fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
+            fix[(fix == -np.pi) & (step > 0)] = np.pi
+            fix = fix - step
+            fix[np.abs(step) < np.pi] = 0.0
+            corrections = carried_cumsum(fix, self._correction)
+        self._last, self._correction = float(angle[-1]), float(corrections[-1])
+        out: FloatArray = angle + corrections
+        return out
 
 
 def savgol_span(lo: int, hi: int, a: int, b: int, points: int) -> tuple[int, int]:
