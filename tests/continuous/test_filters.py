@@ -1,6 +1,6 @@
 """The NumPy Savitzky–Golay filters and convolutions against SciPy's (scipy.signal), which
-a continuous run no longer imports; the shared-weight gradient, the unwrap and the azimuth
-in degrees against NumPy's, to the bit."""
+a continuous run no longer imports; the shared-weight gradient and the azimuth in degrees
+against NumPy's, to the bit."""
 
 from __future__ import annotations
 
@@ -13,7 +13,6 @@ from pipeline.continuous.filters import (
     convolve_same,
     savgol_coeffs,
     savgol_filter,
-    unwrapped,
 )
 from pipeline.continuous.series import azimuth_degrees
 
@@ -55,25 +54,6 @@ def test_time_gradient_is_numpys_gradient_to_the_bit(uniform: bool) -> None:
     assert np.array_equal(TimeGradient(two)(np.array([1.0, 4.0])), np.gradient([1.0, 4.0], two))
     with pytest.raises(ValueError, match="two samples"):
         TimeGradient(t[:1])
-
-
-def test_unwrapped_is_numpys_unwrap_to_the_bit() -> None:
-    rng = np.random.default_rng(8)
-    smooth = np.cumsum(rng.normal(scale=0.1, size=500))  # no step reaches π
-    wrapped = (np.cumsum(rng.normal(scale=1.0, size=500)) + np.pi) % (2 * np.pi) - np.pi
-    signed_zeros = np.array([-0.0, -0.0, 0.5, -0.0])
-    halfway = np.array([0.0, np.pi, 0.0, -np.pi])  # steps of exactly π: NumPy's boundary case
-    for angle in (
-        smooth,
-        wrapped,
-        signed_zeros,
-        halfway,
-        np.array([-0.0]),
-        np.array([np.nan, 1.0]),
-    ):
-        got, want = unwrapped(angle), np.unwrap(angle)
-        assert np.array_equal(got, want, equal_nan=True)
-        assert np.array_equal(np.signbit(got), np.signbit(want))
 
 
 @pytest.mark.filterwarnings("ignore:invalid value encountered in remainder")

@@ -3,9 +3,9 @@
 The same filters as SciPy's ``scipy.signal.savgol_coeffs`` / ``savgol_filter`` (mode
 ``interp``) and ``oaconvolve(mode="same")`` for odd kernels, written here so that a
 continuous run does not import ``scipy.signal`` (with it most of SciPy: ≈ 80 MiB of the
-process's memory floor, issue #20); convolutions by NumPy's FFT. ``np.gradient`` and
-``np.unwrap`` of series, to the bit, at less cost where they repeat (:class:`TimeGradient`,
-:func:`unwrapped`).
+process's memory floor, issue #20); convolutions by NumPy's FFT. ``np.gradient`` of
+several series on the same times, to the bit, its weights computed once
+(:class:`TimeGradient`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from pipeline.earth.frames import FloatArray
 
-__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter", "unwrapped"]
+__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter"]
 
 
 @functools.lru_cache(maxsize=64)
@@ -114,14 +114,3 @@ class TimeGradient:
         out[0] = (f[1] - f[0]) / self._edges[0]
         out[-1] = (f[-1] - f[-2]) / self._edges[1]
         return out
-
-
-def unwrapped(angle: FloatArray) -> FloatArray:
-    """``np.unwrap(angle)`` (rad, 1-D) to the bit: where no step reaches π (the usual case of
-    a chunk) NumPy adds zero corrections, so only that sum is made (−0 becomes +0 after the
-    first sample, as there)."""
-    if angle.size > 1 and bool((np.abs(np.diff(angle)) < np.pi).all()):
-        out: FloatArray = angle + 0.0
-        out[0] = angle[0]
-        return out
-    return np.asarray(np.unwrap(angle), dtype=np.float64)

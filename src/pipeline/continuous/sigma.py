@@ -57,10 +57,16 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.continuous.filters import TimeGradient, unwrapped
+from pipeline.continuous.filters import TimeGradient
 from pipeline.continuous.run import DEG_H
 from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
-from pipeline.continuous.store import Interpolation, RunningIntegrals, carried_cumsum, chunks
+from pipeline.continuous.store import (
+    CarriedUnwrap,
+    Interpolation,
+    RunningIntegrals,
+    carried_cumsum,
+    chunks,
+)
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
@@ -330,7 +336,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     tan_d = np.tan(run.misalignment)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
-    azi_rate = grad(unwrapped(run.azi))
+    azi_rate = grad(CarriedUnwrap()(run.azi))
     r = -oc * sin_a + grad(run.inc)
     h = oc * cos_a * cos_i + os_ * sin_i - azi_rate * sin_i
     sens = {
@@ -342,7 +348,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
         "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
-        "rate_z": grad(unwrapped(run.misalignment))
+        "rate_z": grad(CarriedUnwrap()(run.misalignment))
         + azi_rate * cos_i
         + oc * sin_i * cos_a
         - os_ * cos_i,
