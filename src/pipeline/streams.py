@@ -124,11 +124,17 @@ mapped and unmapped whole. Above a column of a batch or of a continuous-integrat
 (65,536 rows × 8 B = 512 KiB, plus a filter's overlap), which at 128 KiB were mapped and
 faulted in afresh for every temporary: a continuous well took 2.73 s CPU then, 2.00 s now,
 for peaks 20–30 MiB higher (benchmarks/bench_memory.py; still within the targets)."""
-TRIM_THRESHOLD = 4 << 20
-"""bytes: free memory at the top of glibc's heap kept for reuse, not handed back. A fixed
-mmap threshold also fixes this one at glibc's 128 KiB, below which every batch's
-temporaries (a few 512 KiB columns) were given back when freed and faulted in afresh for
-the next batch: a point-gyro well's position readings took 1.7× their CPU time then."""
+TRIM_THRESHOLD = 64 << 20
+"""bytes: free memory at the top of glibc's heap kept for reuse, not handed back (so a
+process's resident memory stays at most this much above what it uses). A fixed mmap
+threshold also fixes this one at glibc's 128 KiB, below which every batch's temporaries
+(a few 512 KiB columns) were given back when freed and faulted in afresh for the next
+batch: a point-gyro well's position readings took 1.7× their CPU time then. At 4 MiB a
+continuous well's heap (≈ 47 MiB at its top, ≈ 30 MiB of it a chunk's temporaries, freed
+and taken again chunk after chunk and by the series' passes) was still handed back and
+faulted in again: 25,900 page faults a well (bench_well_floor's continuous well), ≈ 50 ms
+of its CPU; kept, ≈ 600. A chunk's temporaries do not grow with the survey (CHUNK_ROWS),
+so neither does what is kept."""
 _M_MMAP_THRESHOLD = -3
 _M_TRIM_THRESHOLD = -1
 """glibc's ``mallopt`` parameter numbers (malloc.h)."""

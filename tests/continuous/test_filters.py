@@ -1,5 +1,6 @@
 """The NumPy Savitzky–Golay filters and convolutions against SciPy's (scipy.signal), which
-a continuous run no longer imports."""
+a continuous run no longer imports; the shared-weight gradient and the azimuth in degrees
+against NumPy's, to the bit."""
 
 from __future__ import annotations
 
@@ -7,7 +8,13 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from pipeline.continuous.filters import convolve_same, savgol_coeffs, savgol_filter
+from pipeline.continuous.filters import (
+    TimeGradient,
+    convolve_same,
+    savgol_coeffs,
+    savgol_filter,
+)
+from pipeline.continuous.series import azimuth_degrees
 
 
 @pytest.mark.parametrize(("points", "order", "deriv"), [(7, 3, 0), (101, 2, 1), (201, 3, 2)])
@@ -32,3 +39,31 @@ def test_convolve_same_matches_scipy_rows_and_series() -> None:
     np.testing.assert_allclose(convolve_same(series, kernel), want, atol=1e-12)
     want = signal.oaconvolve(rows, kernel[None, :], mode="same", axes=1)
     np.testing.assert_allclose(convolve_same(rows, kernel), want, atol=1e-12)
+
+
+@pytest.mark.parametrize("uniform", [True, False])
+def test_time_gradient_is_numpys_gradient_to_the_bit(uniform: bool) -> None:
+    rng = np.random.default_rng(7)
+    t = np.full(400, 0.25) if uniform else 0.01 + rng.uniform(0.0, 0.002, size=400)
+    t = np.concatenate([[12.0], 12.0 + np.cumsum(t)])
+    gradient = TimeGradient(t)
+    assert (np.diff(t) == np.diff(t)[0]).all() == uniform
+    for series in (np.cumsum(rng.normal(size=t.size)), np.sin(t), np.zeros(t.size)):
+        assert np.array_equal(gradient(series), np.gradient(series, t))
+    two = t[:2]
+    assert np.array_equal(TimeGradient(two)(np.array([1.0, 4.0])), np.gradient([1.0, 4.0], two))
+    with pytest.raises(ValueError, match="two samples"):
+        TimeGradient(t[:1])
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in remainder")
+def test_azimuth_degrees_is_numpys_modulo_to_the_bit() -> None:
+    turns = np.linspace(-4 * np.pi, 4 * np.pi, 20_001)  # 0, ±360°, ±720° among them
+    edges = [0.0, -0.0, -1e-300, -1e-17, 1e-17, 2 * np.pi, -2 * np.pi, np.nan, np.inf, -np.inf]
+    azi = np.concatenate([turns, edges])
+    degrees = np.degrees(azi) % 360.0
+    want = np.where(degrees < 360.0, degrees, 0.0)  # −1e-17 rad: % 360 rounds to 360
+    got = azimuth_degrees(azi)
+    assert np.array_equal(got, want, equal_nan=True)
+    assert np.array_equal(np.signbit(got), np.signbit(want))
+    assert ((got >= 0.0) & (got < 360.0))[: turns.size].all()

@@ -1,9 +1,11 @@
-"""Savitzky–Golay filters and short convolutions in NumPy alone.
+"""Savitzky–Golay filters, short convolutions and derivatives in time, in NumPy alone.
 
 The same filters as SciPy's ``scipy.signal.savgol_coeffs`` / ``savgol_filter`` (mode
 ``interp``) and ``oaconvolve(mode="same")`` for odd kernels, written here so that a
 continuous run does not import ``scipy.signal`` (with it most of SciPy: ≈ 80 MiB of the
-process's memory floor, issue #20); convolutions by NumPy's FFT.
+process's memory floor, issue #20); convolutions by NumPy's FFT. ``np.gradient`` of
+several series on the same times, to the bit, its weights computed once
+(:class:`TimeGradient`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import numpy as np
 
 from pipeline.earth.frames import FloatArray
 
-__all__ = ["convolve_same", "savgol_coeffs", "savgol_filter"]
+__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter"]
 
 
 @functools.lru_cache(maxsize=64)
@@ -77,3 +79,38 @@ def savgol_filter(
         else:
             out[where] = np.polyval(poly, position[:half]) / delta**deriv
     return out
+
+
+class TimeGradient:
+    """``np.gradient(f, t)`` (first-order edges) of series ``f`` sampled at the times ``t``
+    (s; at least two): NumPy's weights of the non-uniform central differences (or its step,
+    where the steps are all equal) computed once for all the series on the same times, and
+    applied as NumPy applies them, so the derivatives (per s) are np.gradient's to the bit."""
+
+    def __init__(self, t: FloatArray) -> None:
+        step = np.diff(np.asarray(t, dtype=np.float64))
+        if step.size < 1:
+            raise ValueError("a gradient needs at least two samples")
+        self._edges = step[0], step[-1]
+        self._uniform = bool((step == step[0]).all())
+        if self._uniform:
+            self._twice = 2.0 * step[0]
+        else:
+            dx1, dx2 = step[:-1], step[1:]
+            self._weights = (
+                -dx2 / (dx1 * (dx1 + dx2)),
+                (dx2 - dx1) / (dx1 * dx2),
+                dx1 / (dx2 * (dx1 + dx2)),
+            )
+
+    def __call__(self, f: FloatArray) -> FloatArray:
+        """d``f``/dt at every sample (``f`` float64, one value per time)."""
+        out: FloatArray = np.empty_like(f, dtype=np.float64)
+        if self._uniform:
+            out[1:-1] = (f[2:] - f[:-2]) / self._twice
+        else:
+            a, b, c = self._weights
+            out[1:-1] = a * f[:-2] + b * f[1:-1] + c * f[2:]
+        out[0] = (f[1] - f[0]) / self._edges[0]
+        out[-1] = (f[-1] - f[-2]) / self._edges[1]
+        return out

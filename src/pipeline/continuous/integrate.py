@@ -74,7 +74,8 @@ from pipeline.streams import Port, as_stream
 
 __all__ = ["integrate_continuous"]
 
-_COLUMNS = ("time", "md", "station", "position", "acc_x", "acc_y", "acc_z")
+_COLUMNS = ("time", "md", "station", "acc_x", "acc_y", "acc_z", "position")
+"""the samples' columns kept in the store (the stop positions: for the strapdown's stops only)"""
 
 
 def integrate_continuous(
@@ -96,7 +97,8 @@ def integrate_continuous(
         raise ContinuousError("continuous integration needs the station markers of the stops")
     store = ColumnStore()
     gyros = [f"gyro_{a}" for a in axes]
-    names = [n for n in (*_COLUMNS, *gyros) if n in stream.column_names]
+    kept = (*_COLUMNS, *gyros) if axes == "xyz" else (*_COLUMNS[:-1], *gyros)
+    names = [n for n in kept if n in stream.column_names]
     if store.add_batches(stream, names) == 0:
         raise EmptyTableError("samples", "a continuous run needs samples")
     begin, end, first_id, last_id = run_bounds(store, rows)
@@ -415,9 +417,13 @@ def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
     """``x_1 … x_n`` of ``x_{k+1} = gain_k·x_k + forcing_k`` from ``x_0 = 0``: within a
     segment ``x = P·(x_start + cumsum(forcing/P))`` with P the running product of the gains,
     segments cut where the gains' log-variation reaches ``_SCAN_SPAN`` (P stays in range)."""
-    with np.errstate(divide="ignore"):
-        variation = np.cumsum(np.nan_to_num(np.abs(np.log(np.abs(gain))), nan=0.0))
-    cuts = np.searchsorted(variation, np.arange(_SCAN_SPAN, variation[-1], _SCAN_SPAN))
+    least, most = float(np.min(gain)), float(np.max(gain))
+    if least > 0 and gain.size * max(np.log(most), -np.log(least)) < _SCAN_SPAN / 2:
+        cuts = np.empty(0, dtype=np.intp)  # the whole variation is below one segment's
+    else:
+        with np.errstate(divide="ignore"):
+            variation = np.cumsum(np.nan_to_num(np.abs(np.log(np.abs(gain))), nan=0.0))
+        cuts = np.searchsorted(variation, np.arange(_SCAN_SPAN, variation[-1], _SCAN_SPAN))
     out = np.empty_like(forcing)
     carry = 0.0
     for lo, hi in zip([0, *cuts], [*cuts, gain.size], strict=True):

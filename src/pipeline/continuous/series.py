@@ -29,7 +29,7 @@ from pipeline.continuous.tables import (
 from pipeline.earth.frames import FloatArray
 from pipeline.streams import TableStream
 
-__all__ = ["RunPart", "StoredRun", "series_stream"]
+__all__ = ["RunPart", "StoredRun", "azimuth_degrees", "series_stream"]
 
 _NOT_INTEGRATED = FLAG_NEAR_VERTICAL | FLAG_LARGE_MISALIGNMENT | FLAG_AZIMUTH_UNDEFINED
 
@@ -44,8 +44,6 @@ class RunPart:
     azi: FloatArray
     """closed azimuth"""
     toolface: FloatArray
-    misalignment: FloatArray
-    """gyro axis from the high side δ"""
     flags: NDArray[np.int64]
 
 
@@ -92,7 +90,7 @@ class StoredRun:
         return None if first < 0 else (first, last)
 
     def read(self, lo: int, hi: int, held: tuple[int, int] | None) -> RunPart:
-        """Time (s), odometer MD (m), inc, closed azimuth, toolface, δ (rad) and flags of run
+        """Time (s), odometer MD (m), inc, closed azimuth, toolface (rad) and flags of run
         samples ``lo``…``hi − 1``; ``held``: :meth:`held_span`."""
         store, t = self.odometer.store, self.odometer.time(lo, hi)
         azi = store.floats(self.azi_column, lo, hi)
@@ -106,14 +104,14 @@ class StoredRun:
         if held is not None:  # integrated after a held section (back in time: before it)
             index = np.arange(lo, hi)
             after = index <= held[1] if self.backward else index >= held[0]
-            flags[after & (store.ints("held", lo, hi) == 0)] |= FLAG_AFTER_VERTICAL
+            after &= store.read("held", lo, hi) == 0
+            np.bitwise_or(flags, FLAG_AFTER_VERTICAL, out=flags, where=after)
         return RunPart(
             time=t,
             md=self.odometer.reading(lo, hi),
             inc=store.floats("inc", lo, hi),
             azi=azi,
             toolface=store.floats("toolface", lo, hi),
-            misalignment=store.floats("misalignment", lo, hi),
             flags=flags,
         )
 
@@ -125,7 +123,7 @@ class StoredRun:
             time=part.time,
             inc=part.inc,
             azi=part.azi,
-            misalignment=part.misalignment,
+            misalignment=self.odometer.store.floats("misalignment", lo, hi),
             usable=(part.flags & _NOT_INTEGRATED) == 0,
             latitude=self.latitude,
             closure=self.closure,
@@ -145,13 +143,12 @@ def series_stream(run: StoredRun) -> TableStream:
     def batches() -> Iterator[pa.RecordBatch]:
         for a, b in chunks(0, run.size, run.rows):
             part = run.read(a, b, held)
-            azi_deg = np.degrees(part.azi) % 360.0
             table = contract.make_table(
                 {
                     "time": part.time,
                     "md": part.md,
                     "inc": np.degrees(part.inc),
-                    "azi": np.where(azi_deg < 360.0, azi_deg, 0.0),
+                    "azi": azimuth_degrees(part.azi),
                     "toolface": np.degrees(part.toolface),
                     "flags": part.flags,
                 },
@@ -160,3 +157,15 @@ def series_stream(run: StoredRun) -> TableStream:
             yield from table.to_batches()
 
     return TableStream(schema, batches)
+
+
+def azimuth_degrees(azi: FloatArray) -> FloatArray:
+    """Azimuths (rad, any turn) in degrees in [0, 360): ``np.degrees(azi) % 360``, a result
+    of 360 (a tiny negative angle rounded) made 0, to the bit; the modulo (≈ 9 ns a value)
+    taken only where an angle is not already inside (0, 360) (−0 and 0 go through it too)."""
+    deg: FloatArray = np.degrees(azi)
+    outside = np.flatnonzero(~((deg > 0.0) & (deg < 360.0)))
+    if outside.size:
+        turned = deg[outside] % 360.0
+        deg[outside] = np.where(turned < 360.0, turned, 0.0)
+    return deg

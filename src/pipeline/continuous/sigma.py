@@ -57,9 +57,16 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from pipeline.continuous.filters import TimeGradient
 from pipeline.continuous.run import DEG_H
 from pipeline.continuous.sigma_noise import InclinationNoise, NoiseSums, derivative_kernel
-from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
+from pipeline.continuous.store import (
+    CarriedUnwrap,
+    Interpolation,
+    RunningIntegrals,
+    carried_cumsum,
+    chunks,
+)
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
@@ -322,15 +329,15 @@ _KERNEL_ROWS = 256
 def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatArray]:
     """Rate sensitivities per sample (time order) of a run's samples; the gradients at the
     ends are one-sided (read one sample beyond a range to have them central)."""
-    t = run.time
+    grad = TimeGradient(run.time)
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
     sin_d, cos_d = sin_cos(run.misalignment)
     tan_d = np.tan(run.misalignment)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
-    azi_rate = np.gradient(np.unwrap(run.azi), t)
-    r = -oc * sin_a + np.gradient(run.inc, t)
+    azi_rate = grad(CarriedUnwrap()(run.azi))
+    r = -oc * sin_a + grad(run.inc)
     h = oc * cos_a * cos_i + os_ * sin_i - azi_rate * sin_i
     sens = {
         "gain": 1.0 / (safe_sin * cos_d),  # |∂Ȧ/∂y|
@@ -341,14 +348,17 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
         "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
-        "rate_z": np.gradient(np.unwrap(run.misalignment), t)
+        "rate_z": grad(CarriedUnwrap()(run.misalignment))
         + azi_rate * cos_i
         + oc * sin_i * cos_a
         - os_ * cos_i,
-        "sin": np.abs(sin_i),
         "cot": cos_i / safe_sin,
     }
-    return {k: np.where(ok, v, 0.0) if k != "sin" else v for k, v in sens.items()}
+    outside = np.flatnonzero(~ok)  # each array is new: zeroed in place where not integrated
+    for values in sens.values():
+        values[outside] = 0.0
+    sens["sin"] = np.abs(sin_i)
+    return sens
 
 
 class _Integrals:
@@ -356,7 +366,8 @@ class _Integrals:
     integration order (time order, or back in time from the end stop): the integrals of each
     error's rate over the cells between ``edges`` (elapsed s), Φ at the stations and at the
     end, and the inclination-noise sums. Each running integral carries its last value from
-    one chunk to the next, so the numbers are those of the whole series."""
+    one chunk to the next, so the numbers are those of the whole series (the cells'
+    integrals to the rounding of their sums: :class:`~.store.RunningIntegrals`)."""
 
     def __init__(
         self,
@@ -374,9 +385,9 @@ class _Integrals:
             else NoiseSums(run.inc_noise, self.size, self._station_index(st_elapsed))
         )
         halo = 2 + (0 if self.noise is None else self.noise.halo)
-        at_edges = Interpolation(edges, len(_INTEGRANDS))
+        at_edges = RunningIntegrals(edges, len(_INTEGRANDS))
         at_stations = Interpolation(st_elapsed, 1)
-        feedback_carry, carries = 0.0, np.zeros(len(_INTEGRANDS))
+        feedback_carry = 0.0
         for lo, hi in chunks(0, self.size, run.rows):
             v0, v1 = max(lo - halo, 0), min(hi + halo, self.size)
             elapsed, sens = self._ordered(v0, v1)
@@ -394,15 +405,7 @@ class _Integrals:
             own = slice(lo - v0, hi - v0)
             before = slice(max(lo - 1, 0) - v0, hi - v0)  # the chunk and the sample before it
             y = self._integrands(sens, elapsed, transition)
-            for k, integrand in enumerate(y):
-                values = integrand[before]
-                traps = _trapezoids(values, elapsed[before])
-                running = carried_cumsum(traps, float(carries[k]))
-                if lo == 0:
-                    running = np.concatenate([[0.0], running])
-                y[k] = running[-(hi - lo) :]
-                carries[k] = running[-1]
-            at_edges.feed(elapsed[own], *y)
+            at_edges.add(elapsed[before], *(integrand[before] for integrand in y))
             at_stations.feed(elapsed[own], transition[own])
             if hi == self.size:
                 self.phi_t = float(transition[own][-1])

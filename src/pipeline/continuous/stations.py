@@ -12,14 +12,14 @@ from numpy.typing import NDArray
 
 from pipeline.continuous.options import ContinuousOptions
 from pipeline.continuous.run import ContinuousError, Odometer, RunStops
-from pipeline.continuous.series import StoredRun, series_stream
+from pipeline.continuous.series import StoredRun, azimuth_degrees, series_stream
 from pipeline.continuous.sigma import (
     AccelErrors,
     GyroNoise,
     azimuth_budget,
     inclination_sigma,
 )
-from pipeline.continuous.store import Interpolation, carried_cumsum, chunks
+from pipeline.continuous.store import CarriedUnwrap, Interpolation, chunks
 from pipeline.continuous.tables import (
     FLAG_AZIMUTH_UNDEFINED,
     FLAG_NEAR_VERTICAL,
@@ -128,12 +128,11 @@ def _resample(run: StoredRun, stops: RunStops, options: ContinuousOptions) -> pa
     # the end stations are the stops, at rest: no acceleration removed from their inclination
     ends = [0, -1]
     sigma_inc[ends] = inclination_sigma(inc[ends], replace(run.inc_noise, odometer=0.0), accel)
-    azi_deg = np.degrees(azi) % 360.0
     return ContinuousStations.compiled().make_table(
         {
             "md": grid,
             "inc": np.degrees(inc),
-            "azi": np.where(azi_deg < 360.0, azi_deg, 0.0),
+            "azi": azimuth_degrees(azi),
             "time": times,
             "sigma_inc": np.degrees(sigma_inc),
             "sigma_azi": sigma_azi,
@@ -152,19 +151,11 @@ def _at_stations(
     values = Interpolation(times, 2)
     flags = np.zeros(times.size, dtype=np.int64)
     done = 0
-    raw = correction = 0.0
+    unwrap = CarriedUnwrap()  # np.unwrap of the whole series
     for a, b in chunks(0, run.size, run.rows):
         part = run.read(a, b, held)
-        t, azi = part.time, part.azi
-        # np.unwrap of the whole series: each step's correction summed in sequence
-        step = np.diff(np.concatenate([[raw if a else azi[0]], azi]))
-        fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
-        fix[(fix == -np.pi) & (step > 0)] = np.pi
-        fix = fix - step
-        fix[np.abs(step) < np.pi] = 0.0
-        corrections = carried_cumsum(fix, correction)
-        values.feed(t, part.inc, azi + corrections)
-        raw, correction = float(azi[-1]), float(corrections[-1])
+        t = part.time
+        values.feed(t, part.inc, unwrap(part.azi))
         here = int(np.searchsorted(times, t[-1], side="right"))
         flags[done:here] = part.flags[np.searchsorted(t, times[done:here], side="left")]
         done = here

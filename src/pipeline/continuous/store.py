@@ -2,24 +2,24 @@
 helpers that let the integration work chunk by chunk with carried state.
 
 A survey of any length goes through :mod:`pipeline.continuous` a chunk of rows at a time:
-the raw columns it needs are written once to a :class:`ColumnStore` (one file per column in
-a temporary directory, read with ``pread``, so the operating system's page cache holds
-them, not the process), and each pass of the integration reads the rows of one chunk plus
-the few rows of overlap its filters need, and writes its per-sample results back. Memory is
-a few chunks whatever the survey's length. Chunking does not change the numbers: filters
-read their whole window (:func:`savgol_range`), running sums carry the last value
-(:func:`carried_cumsum`) and interpolations at given points see the same two samples
-(:class:`Interpolation`) as over the whole series.
+the raw columns it needs are written once to a :class:`ColumnStore` (one unnamed temporary
+file per column, read with ``pread``, so the operating system's page cache holds them, not
+the process), and each pass of the integration reads the rows of one chunk plus the few
+rows of overlap its filters need, and writes its per-sample results back. Memory is a few
+chunks whatever the survey's length. Chunking does not change the numbers: filters read
+their whole window (:func:`savgol_range`), running sums carry the last value
+(:func:`carried_cumsum`, :class:`RunningIntegrals`) and interpolations at given points see
+the same two samples (:class:`Interpolation`) as over the whole series.
 """
 
 from __future__ import annotations
 
 import os
-import shutil
 import tempfile
 import weakref
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from typing import IO
 
 import numpy as np
 import pyarrow as pa
@@ -30,8 +30,10 @@ from pipeline.earth.frames import FloatArray
 
 __all__ = [
     "CHUNK_ROWS",
+    "CarriedUnwrap",
     "ColumnStore",
     "Interpolation",
+    "RunningIntegrals",
     "carried_cumsum",
     "chunks",
     "median_step",
@@ -45,19 +47,24 @@ CHUNK_ROWS = 65_536
 
 @dataclass
 class _Column:
-    fd: int
+    file: IO[bytes]
     dtype: np.dtype[np.generic]
     rows: int
 
+    @property
+    def fd(self) -> int:
+        return self.file.fileno()
+
 
 class ColumnStore:
-    """Columns of numbers on disk (a temporary directory, removed when the store is garbage
-    collected: when the last stream reading it is dropped)."""
+    """Columns of numbers on disk: temporary files without a name where the system has them
+    (``tempfile.TemporaryFile``: no directory entry made and removed per column, ≈ 4 ms of
+    a well's CPU for its 22 columns), closed and gone when the store is garbage collected
+    (when the last stream reading it is dropped)."""
 
     def __init__(self) -> None:
-        self.directory = tempfile.mkdtemp(prefix="gyropipe-continuous-")
         self._columns: dict[str, _Column] = {}
-        weakref.finalize(self, _remove, self.directory, self._columns)
+        weakref.finalize(self, _close, self._columns)
 
     def __contains__(self, name: str) -> bool:
         return name in self._columns
@@ -70,9 +77,8 @@ class ColumnStore:
         """Write ``values`` at rows ``start``… of column ``name`` (created with their type)."""
         column = self._columns.get(name)
         if column is None:
-            path = os.path.join(self.directory, f"{len(self._columns)}.bin")
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o600)
-            column = self._columns[name] = _Column(fd, values.dtype, 0)
+            file = tempfile.TemporaryFile(prefix="gyropipe-continuous-")  # noqa: SIM115 (_close)
+            column = self._columns[name] = _Column(file, values.dtype, 0)
         data = np.ascontiguousarray(values, dtype=column.dtype)
         os.pwrite(column.fd, data.data, start * column.dtype.itemsize)
         column.rows = max(column.rows, start + data.size)
@@ -87,7 +93,7 @@ class ColumnStore:
         lo, hi = max(lo, 0), min(hi, column.rows)
         out = np.empty(max(hi - lo, 0), dtype=column.dtype)
         if out.size and os.preadv(column.fd, [out.data], lo * column.dtype.itemsize) != out.nbytes:
-            raise OSError(f"short read of column {name!r} of {self.directory}")
+            raise OSError(f"short read of column {name!r} of a continuous run's store")
         return out
 
     def floats(self, name: str, lo: int, hi: int) -> FloatArray:
@@ -113,11 +119,10 @@ class ColumnStore:
         return int(batch.num_rows)
 
 
-def _remove(directory: str, columns: dict[str, _Column]) -> None:
+def _close(columns: dict[str, _Column]) -> None:
     for column in columns.values():
-        os.close(column.fd)
+        column.file.close()
     columns.clear()
-    shutil.rmtree(directory, ignore_errors=True)
 
 
 def chunks(lo: int, hi: int, rows: int, *, reverse: bool = False) -> Iterator[tuple[int, int]]:
@@ -133,6 +138,34 @@ def carried_cumsum(values: FloatArray, carry: float) -> FloatArray:
     whole series would, so the chunks give the same numbers)."""
     out: FloatArray = np.cumsum(np.concatenate([[carry], values]))[1:]
     return out
+
+
+class CarriedUnwrap:
+    """``np.unwrap`` (rad) of a series given in consecutive chunks, called once per chunk:
+    each step's correction summed in sequence from the first chunk on, as over the whole
+    series (where no step of a chunk reaches π all its corrections are zeros: the sum stays
+    the carried one, −0 made +0 as NumPy's cumulative sum makes it)."""
+
+    def __init__(self) -> None:
+        self._last: float | None = None
+        self._correction = 0.0
+
+    def __call__(self, angle: FloatArray) -> FloatArray:
+        """The next chunk's angles unwrapped (a new array)."""
+        if angle.size == 0:
+            return angle.copy()
+        step = np.diff(np.concatenate([[angle[0] if self._last is None else self._last], angle]))
+        if (np.abs(step) < np.pi).all():
+            corrections = np.full(step.size, self._correction + 0.0)
+        else:
+            fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
+            fix[(fix == -np.pi) & (step > 0)] = np.pi
+            fix = fix - step
+            fix[np.abs(step) < np.pi] = 0.0
+            corrections = carried_cumsum(fix, self._correction)
+        self._last, self._correction = float(angle[-1]), float(corrections[-1])
+        out: FloatArray = angle + corrections
+        return out
 
 
 def savgol_span(lo: int, hi: int, a: int, b: int, points: int) -> tuple[int, int]:
@@ -160,9 +193,10 @@ def savgol_range(
 
 
 class Interpolation:
-    """``np.interp(x, xp, f)`` for points ``x`` known up front while ``xp`` (increasing) and
-    the values ``f`` (one row per quantity) come in consecutive chunks: each point is
-    interpolated between the same two samples as over the whole series."""
+    """``np.interp(x, xp, f)`` for points ``x`` known up front while ``xp`` (strictly
+    increasing) and the values ``f`` (one row per quantity) come in consecutive chunks: each
+    point is interpolated between the same two samples as over the whole series. Only those
+    samples of a chunk are copied, whatever its length."""
 
     def __init__(self, x: FloatArray, quantities: int) -> None:
         self._order = np.argsort(x, kind="stable")
@@ -175,22 +209,78 @@ class Interpolation:
         """The next chunk of samples: ``xp`` and one array per quantity."""
         if xp.size == 0:
             return
-        f = np.stack(values)
-        if self._last is not None:
-            xp = np.concatenate([[self._last[0]], xp])
-            f = np.concatenate([self._last[1][:, None], f], axis=1)
         stop = int(np.searchsorted(self._x, xp[-1], side="right"))
         here = slice(self._next, stop)
+        # the samples around each point (np.interp reads only those two): at or before it,
+        # and after it; the one before the chunk is the last of the chunk before
+        after = np.searchsorted(xp, self._x[here], side="right")
+        picked = np.unique(
+            np.concatenate([after - 1, np.minimum(after, xp.size - 1), [xp.size - 1]])
+        )
+        picked = picked[picked >= 0]
+        sub_xp, f = xp[picked], np.stack([v[picked] for v in values])
+        if self._last is not None:
+            sub_xp = np.concatenate([[self._last[0]], sub_xp])
+            f = np.concatenate([self._last[1][:, None], f], axis=1)
         for row in range(f.shape[0]):
-            self._out[row, here] = np.interp(self._x[here], xp, f[row])
+            self._out[row, here] = np.interp(self._x[here], sub_xp, f[row])
         self._next = stop
-        self._last = (float(xp[-1]), f[:, -1].copy())
+        self._last = (float(sub_xp[-1]), f[:, -1].copy())
 
     def result(self) -> FloatArray:
         """Rows of interpolated values (quantity, point) in the points' given order; points
         past the last sample take its values."""
         if self._last is not None:
             self._out[:, self._next :] = self._last[1][:, None]
+        out: FloatArray = np.empty_like(self._out)
+        out[:, self._order] = self._out
+        return out
+
+
+class RunningIntegrals:
+    """Trapezoid-rule integrals, from the first sample, of several quantities at points ``x``
+    known up front, while the samples come in chunks: each chunk starts on the sample the
+    one before ended on, so the steps tile. A point's integral is the whole steps before it,
+    summed a cell (between consecutive points) at a time, and the part of its own step, the
+    running integral taken linear there (as ``np.interp`` of the running integral would).
+    Points before the first sample have 0, after the last the whole integral."""
+
+    def __init__(self, x: FloatArray, quantities: int) -> None:
+        self._order = np.argsort(x, kind="stable")
+        self._x = np.asarray(x, dtype=np.float64)[self._order]
+        self._out = np.zeros((quantities, self._x.size))
+        self._next = 0
+        self._total = np.zeros(quantities)
+
+    def add(self, xp: FloatArray, *values: FloatArray) -> None:
+        """The next chunk: ``xp`` (increasing; its first the last sample of the chunk before)
+        and one array of samples per quantity."""
+        if xp.size == 0:
+            return
+        stop = int(np.searchsorted(self._x, xp[-1], side="right"))
+        here = slice(self._next, stop)
+        # the step [xp[j], xp[j + 1]) holding each point: −1 before the first sample (first
+        # chunk only), xp.size − 1 at the last sample
+        step = np.searchsorted(xp, self._x[here], side="right") - 1
+        inside = (step >= 0) & (step < xp.size - 1)
+        j = step[inside]
+        part = (self._x[here][inside] - xp[j]) / (xp[j + 1] - xp[j])
+        starts = np.unique(np.concatenate([[0], j]))  # cells: from each point's step
+        at = np.searchsorted(starts, j)
+        width = np.diff(xp)
+        for row, f in enumerate(values):
+            steps = width * (f[1:] + f[:-1]) / 2
+            cells = np.add.reduceat(steps, starts) if steps.size else np.zeros(0)
+            before = self._total[row] + np.concatenate([[0.0], np.cumsum(cells)])
+            out = np.where(step < 0, 0.0, before[-1])
+            out[inside] = before[at] + part * steps[j]
+            self._out[row, here] = out
+            self._total[row] = before[-1]
+        self._next = stop
+
+    def result(self) -> FloatArray:
+        """Rows of integrals (quantity, point) in the points' given order."""
+        self._out[:, self._next :] = self._total[:, None]
         out: FloatArray = np.empty_like(self._out)
         out[:, self._order] = self._out
         return out
@@ -212,17 +302,22 @@ def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> f
     high = max(float(s.max()) for s in steps())
     if not low < high:
         return low
-    edges = np.linspace(low, high, 4097)
-    hist = np.zeros(edges.size - 1, dtype=np.int64)
+    n_bins = 4096
+    edges = np.linspace(low, high, n_bins + 1)  # NumPy's edges of the equal bins below
+    hist = np.zeros(n_bins, dtype=np.int64)
     for s in steps():
-        hist += np.histogram(s, bins=edges)[0]
+        hist += np.histogram(s, bins=n_bins, range=(low, high))[0]
     ranks = ((count - 1) // 2, count // 2)
     below = np.concatenate([[0], np.cumsum(hist)])
     bins = sorted({int(np.searchsorted(below, r, side="right")) - 1 for r in ranks})
     picked: dict[float, int] = {}
     for s in steps():
-        where = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, hist.size - 1)
-        for value, n in zip(*np.unique(s[np.isin(where, bins)], return_counts=True), strict=True):
+        # a bin holds edges[b] ≤ s < edges[b + 1], the last one its right edge too
+        inside = [
+            (s >= edges[b]) & (s < edges[b + 1]) if b < n_bins - 1 else s >= edges[b] for b in bins
+        ]
+        chosen = s[inside[0] | inside[-1]]
+        for value, n in zip(*np.unique(chosen, return_counts=True), strict=True):
             picked[float(value)] = picked.get(float(value), 0) + int(n)
     keys = sorted(picked)
     cumulative = np.cumsum([picked[k] for k in keys])
