@@ -5,6 +5,8 @@ operations, not a formatted string per number)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -28,6 +30,20 @@ def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
             return _digits(template, values, scaled, decimals)
     each = template.replace("{}", f"{{:.{decimals}f}}")
     return "".join(map(each.format, *values.T.tolist()))
+
+
+def point_texts(
+    points: NDArray[np.float64], lengths: Sequence[int], decimals: int, sep: str
+) -> list[list[str]]:
+    """The rows (x, y) of ``points`` as ``f"{x:.2f}{sep}{y:.2f}"`` (``decimals`` decimals:
+    :func:`rows`' text), in one call for all of them, cut into runs of ``lengths`` rows
+    (the subpaths of a path laid end to end)."""
+    texts = rows(f"{{}}{sep}{{}}\n", points, decimals).split("\n")
+    runs, start = [], 0
+    for length in lengths:
+        runs.append(texts[start : start + length])
+        start += length
+    return runs
 
 
 def _digits(
