@@ -46,7 +46,7 @@ def test_a_nan_is_written_as_python_writes_it():
 
 @settings(max_examples=200, deadline=None)
 @given(
-    arrays(np.float64, st.tuples(st.integers(1, 80), st.integers(1, 3)),
+    arrays(np.float64, st.tuples(st.integers(1, 200), st.integers(1, 3)),
            elements=st.floats(-1e6, 1e6, allow_nan=False)),
     st.integers(0, 3),
 )  # fmt: skip
@@ -67,3 +67,14 @@ def test_point_texts_cut_one_call_into_subpaths_as_python_writes_each_point():
         f"{x:.2f} {y:.2f}" for x, y in values.tolist()
     ]
     assert point_texts(values[:3], [3], 1, ",") == [[f"{x:.1f},{y:.1f}" for x, y in values[:3]]]
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 2, 3])
+def test_many_columns_between_texts_of_any_length_read_as_python_writes_them(decimals: int):
+    """A row of many numbers (a marker's outline: 26) between texts of differing lengths,
+    none at either end."""
+    values = np.random.default_rng(6).uniform(-700.0, 700.0, (40, 13))
+    values[5, 7] = -0.0
+    template = "".join(f"{{}}{' ' * (j % 3)}{'c' * (j % 2)}" for j in range(13))
+    assert values.size >= BULK and not template.startswith(" ")
+    assert rows(template, values, decimals) == python(template, values, decimals)
