@@ -329,3 +329,24 @@ def test_a_streamed_check_refuses_each_bad_value_at_its_row(
     (f,) = [f for f in info.value.failures if (f.column, f.rule) == (column, rule)]
     assert f.examples[0][0] == row
     assert len(list(RawSamples.validate_stream(TableStream.from_table(good, 4)))) == 3
+
+
+@pytest.mark.parametrize(
+    ("step", "rule"), [(-0.5, "monotonic"), (1e-6, "monotonic"), (math.nan, "finite")]
+)
+def test_a_step_across_batches_is_refused_at_its_row_and_line(step: float, rule: str):
+    """The step from one batch's last time to the next one's first: backwards, or forwards
+    by less than the shortest time step, is refused at its row (and its file line); a NaN
+    there is refused as not finite, in its own batch."""
+    times = [0.0, 1.0, 2.0, 2.0 + step, 3.0, 4.0]
+    samples = (
+        RawSamples.compiled()
+        .make_table(
+            {"time": times, **{c: [0.0] * 6 for c in ("gyro_x", "acc_x", "acc_y", "acc_z")}}
+        )
+        .append_column("source_line", pa.array(range(10, 16), pa.int64()))
+    )
+    with pytest.raises(ContractViolation) as info:
+        list(RawSamples.validate_stream(TableStream.from_table(samples, 3)))
+    (f,) = info.value.failures
+    assert (f.column, f.rule, f.examples[0][0], f.lines) == ("time", rule, 3, (13,))
