@@ -262,7 +262,9 @@ class BatchChecker:
         self.contract = contract
         self.offset = 0
         """rows checked so far"""
-        self.last: pa.Table | None = None
+        self.last: dict[str, Any] | None = None
+        """the ordered columns' values in the last row of the batch before (copies: a slice
+        would keep the whole batch alive)"""
         ordered = tuple(c for c in contract.columns if c.monotonic)
         self.steps = replace(contract, columns=ordered) if ordered else None
         """the contract's order rules: all that the step between two batches can break"""
@@ -275,12 +277,33 @@ class BatchChecker:
             group = [self.steps.group_by] if self.steps.group_by else []
             names = [*(c.name for c in self.steps.columns), *group, SOURCE_LINE]
             ordered = table.select([n for n in names if n in table.column_names])
-            if self.last is not None:
-                step = pa.concat_tables([self.last, ordered.slice(0, 1)])
+            first = {name: ordered.column(name)[0].as_py() for name in ordered.column_names}
+            if self.last is not None and not self._step_holds(self.last, first):
+                step = pa.Table.from_pylist([self.last, first], schema=ordered.schema)
                 self._validate(self.steps, step, self.offset - 1)
-            # a copy: a slice would keep the whole batch alive
-            self.last = ordered.take([batch.num_rows - 1])
+            last = batch.num_rows - 1
+            self.last = {name: ordered.column(name)[last].as_py() for name in ordered.column_names}
         self.offset += batch.num_rows
+
+    def _step_holds(self, last: dict[str, Any], first: dict[str, Any]) -> bool:
+        """Whether the step from row ``last`` to row ``first`` plainly keeps every order rule
+        (float columns, no value missing, within one group): the step of two numbers, as
+        :func:`_steps_hold` takes it; else it is checked as a table of the two rows."""
+        assert self.steps is not None
+        group = self.steps.group_by
+        if group in first and (first[group] is None or first[group] != last[group]):
+            return False
+        for spec in self.steps.columns:
+            if spec.name not in first:
+                continue
+            before, after = last[spec.name], first[spec.name]
+            if not (isinstance(before, float) and isinstance(after, float)):
+                return False
+            step = after - before  # IEEE double, as NumPy's
+            floor = 0.0 if spec.min_step is None else spec.min_step
+            if not ((step > 0.0 if spec.monotonic == "strict" else step >= 0.0) and step >= floor):
+                return False
+        return True
 
     def _validate(self, contract: CompiledContract, table: pa.Table, shift: int) -> None:
         try:
@@ -360,10 +383,11 @@ def _check_numbers(
             return []
     else:
         checked = values
-    # One pass each for min and max: NaN propagates through them, so finite data and
-    # in-range data (the common case) need no per-row work at all.
-    lo, hi = checked.min(), checked.max()
-    if is_float and spec.finite and not (np.isfinite(lo) and np.isfinite(hi)):
+    in_order = (
+        spec.monotonic is not None and is_float and len(values) > 1 and _steps_hold(spec, values)
+    )
+    lo, hi, finite = _extremes(spec, checked, in_order and valid is None)
+    if is_float and spec.finite and not finite:
         bad = ~np.isfinite(values) if valid is None else (~np.isfinite(values) & valid)
         expected = (
             f"finite numbers (NaN, undefined, only where inc is within {VERTICAL_TOLERANCE:g}° "
@@ -386,7 +410,7 @@ def _check_numbers(
             failures.append(
                 rule_failure(spec.name, "range", f"values {symbol} {bound:g}", bad, col)
             )
-    if spec.monotonic and len(values) > 1 and not (is_float and _steps_hold(spec, values)):
+    if spec.monotonic and len(values) > 1 and not in_order:
         compare = np.less_equal if spec.monotonic == "strict" else np.less
         bad_step = compare(values[1:], values[:-1])
         if spec.min_step is not None:  # a step past the float range is inf: no warning
@@ -408,6 +432,28 @@ def _check_numbers(
                     rule_failure(spec.name, "monotonic", f"{what} values{scope}", bad, col)
                 )
     return failures
+
+
+def _extremes(spec: ColumnSpec, values: np.ndarray, in_order: bool) -> tuple[Any, Any, bool]:
+    """The smallest and largest of ``values`` (no missing ones among them) and whether they
+    are all finite, in as few passes as the column's rules need: a column whose steps hold
+    its order (``in_order``: a NaN would have broken it) has its first and last values for
+    extremes, which are finite only if all are; a bounded column takes one pass each for
+    min and max (NaN propagates through both, ±inf shows in one); an unbounded one needs
+    no extremes, only finiteness: one sum (a NaN or an infinite value makes it NaN or
+    infinite, so a finite sum proves every value finite; a sum past the float range of
+    finite values is told by looking at them one by one)."""
+    if in_order:
+        lo, hi = values[0], values[-1]
+        return lo, hi, bool(np.isfinite(lo) and np.isfinite(hi))
+    if any(bound is not None for bound in (spec.ge, spec.le, spec.gt, spec.lt)):
+        lo, hi = values.min(), values.max()
+        return lo, hi, bool(np.isfinite(lo) and np.isfinite(hi))
+    if values.dtype.kind != "f" or not spec.finite:
+        return None, None, True
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.add.reduce(values)
+    return None, None, bool(np.isfinite(total) or np.isfinite(values).all())
 
 
 def _integers_in_range(spec: ColumnSpec, col: pa.ChunkedArray) -> bool:

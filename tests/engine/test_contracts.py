@@ -268,3 +268,85 @@ def test_a_streamed_check_takes_order_across_batches_within_groups():
         list(Sample.validate_stream(TableStream.from_table(back, 2)))
     (f,) = info.value.failures
     assert (f.column, f.rule, f.examples) == ("md", "monotonic", ((2, 5.0),))
+
+
+def test_an_ordered_column_is_checked_finite_and_in_range_from_its_ends():
+    """A column whose steps keep its order has its first and last values for extremes:
+    an infinite end is still refused, at its row, and a NaN that breaks the order too."""
+    f = only(table(md=[0.0, 10.0, 20.0, math.inf]))
+    assert (f.column, f.rule, f.examples) == ("md", "finite", ((3, math.inf),))
+    rules = {(f.rule, f.examples[0][0]) for f in failures(table(md=[-math.inf, 1.0, 2.0, 3.0]))}
+    assert rules == {("finite", 0), ("range", 0)}
+    f = only(table(md=[0.0, math.nan, 20.0, 30.0]))
+    assert (f.column, f.rule, f.examples[0][0]) == ("md", "finite", 1)
+
+
+def test_an_unbounded_column_whose_sum_overflows_is_not_refused():
+    """Finiteness of a column without bounds is told by one sum: finite values whose sum
+    is past the float range pass; +inf and −inf together (a NaN sum) are both refused."""
+    Sample.validate_table(table(azi=[1.7e308, 1.7e308, -1.7e308, -1.7e308]))
+    f = only(table(azi=[math.inf, 1.0, -math.inf, 4.0]))
+    assert (f.column, f.rule, f.bad_rows) == ("azi", "finite", 2)
+    assert [i for i, _ in f.examples] == [0, 2]
+
+
+def raw_samples(rows: int) -> pa.Table:
+    return RawSamples.compiled().make_table(
+        {
+            "time": np.arange(rows) * 0.01,
+            "frame_angle": np.full(rows, 90.0),
+            **{c: np.ones(rows) for c in ("gyro_x", "acc_x", "acc_y", "acc_z")},
+        }
+    )
+
+
+@pytest.mark.parametrize(
+    ("column", "row", "value", "rule"),
+    [
+        ("gyro_x", 7, math.nan, "finite"),
+        ("acc_z", 5, -math.inf, "finite"),
+        ("time", 7, math.inf, "finite"),  # the last row of its batch: an ordered column's end
+        ("time", 4, math.nan, "finite"),  # the first row of its batch
+        ("frame_angle", 6, 360.0, "range"),
+        ("frame_angle", 9, -0.5, "range"),
+        ("gyro_x", 5, None, "not null"),
+    ],
+)
+def test_a_streamed_check_refuses_each_bad_value_at_its_row(
+    column: str, row: int, value: float | None, rule: str
+):
+    """Each batch of a stream is checked as a whole table is: a NaN, an infinity, a value
+    out of range or a missing one is refused naming its column and its row from the start."""
+    good = raw_samples(12)
+    values = good.column(column).to_pylist()
+    values[row] = value
+    i = good.schema.get_field_index(column)
+    bad = good.set_column(i, good.schema.field(i), pa.array(values, pa.float64()))
+    with pytest.raises(ContractViolation) as info:
+        list(RawSamples.validate_stream(TableStream.from_table(bad, 4)))
+    found = [(f.column, f.rule) for f in info.value.failures]
+    assert (column, rule) in found
+    (f,) = [f for f in info.value.failures if (f.column, f.rule) == (column, rule)]
+    assert f.examples[0][0] == row
+    assert len(list(RawSamples.validate_stream(TableStream.from_table(good, 4)))) == 3
+
+
+@pytest.mark.parametrize(
+    ("step", "rule"), [(-0.5, "monotonic"), (1e-6, "monotonic"), (math.nan, "finite")]
+)
+def test_a_step_across_batches_is_refused_at_its_row_and_line(step: float, rule: str):
+    """The step from one batch's last time to the next one's first: backwards, or forwards
+    by less than the shortest time step, is refused at its row (and its file line); a NaN
+    there is refused as not finite, in its own batch."""
+    times = [0.0, 1.0, 2.0, 2.0 + step, 3.0, 4.0]
+    samples = (
+        RawSamples.compiled()
+        .make_table(
+            {"time": times, **{c: [0.0] * 6 for c in ("gyro_x", "acc_x", "acc_y", "acc_z")}}
+        )
+        .append_column("source_line", pa.array(range(10, 16), pa.int64()))
+    )
+    with pytest.raises(ContractViolation) as info:
+        list(RawSamples.validate_stream(TableStream.from_table(samples, 3)))
+    (f,) = info.value.failures
+    assert (f.column, f.rule, f.examples[0][0], f.lines) == ("time", rule, 3, (13,))

@@ -82,7 +82,20 @@ def test_errors_are_the_whole_table_errors() -> None:
     keep = np.ones(samples.num_rows, dtype=bool)
     keep[[1234, 5000]] = False  # dropped samples
     unmarked = samples.drop_columns(["station", "position"])
+    station = samples.column("station").to_pylist()
+    marked = [i for i, s in enumerate(station) if s is not None]
+    for i in [*marked[:5], *marked[400:733], marked[-1]]:  # 3 runs, one over batches of 333
+        station[i] = None  # their position markers kept: orphans where there is one
+    position = samples.column("position").to_pylist()
+    orphaned = sum(s is None and p is not None for s, p in zip(station, position, strict=True))
+    assert orphaned > 333  # more than a batch
+    orphans = samples.set_column(
+        samples.schema.get_field_index("station"),
+        samples.schema.field("station"),
+        pa.array(station, pa.int64()),
+    )
     cases = [
+        (orphans, ReadingOptions(), f"^{orphaned} samples have a position marker but no station"),
         (samples.drop_columns(["station"]), ReadingOptions(), "position markers but no station"),
         (samples.drop_columns(["md"]), ReadingOptions(), "no md column"),
         (unmarked.drop_columns(["frame_angle"]), ReadingOptions(), "neither station/position"),

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.reports.charts.fixed import BULK, rows
+from pipeline.reports.charts.fixed import BULK, point_texts, rows
 
 
 def python(template: str, values: np.ndarray, decimals: int) -> str:
@@ -46,10 +46,35 @@ def test_a_nan_is_written_as_python_writes_it():
 
 @settings(max_examples=200, deadline=None)
 @given(
-    arrays(np.float64, st.tuples(st.integers(1, 80), st.integers(1, 3)),
+    arrays(np.float64, st.tuples(st.integers(1, 200), st.integers(1, 3)),
            elements=st.floats(-1e6, 1e6, allow_nan=False)),
     st.integers(0, 3),
 )  # fmt: skip
 def test_any_coordinates_read_as_python_writes_them(values: np.ndarray, decimals: int):
     template = "<" + "|".join(["{}"] * values.shape[1]) + ">"
+    assert rows(template, values, decimals) == python(template, values, decimals)
+
+
+def test_point_texts_cut_one_call_into_subpaths_as_python_writes_each_point():
+    """The points of several subpaths written in one call (in bulk when there are many)
+    and cut back into the subpaths: each point as Python writes it, single points too."""
+    values = CASES["three decimals"][:150].copy()
+    values[0, 0] = -0.0
+    lengths = [1, 2, 60, 1, 86]
+    runs = point_texts(values, lengths, 2, " ")
+    assert [len(run) for run in runs] == lengths
+    assert [text for run in runs for text in run] == [
+        f"{x:.2f} {y:.2f}" for x, y in values.tolist()
+    ]
+    assert point_texts(values[:3], [3], 1, ",") == [[f"{x:.1f},{y:.1f}" for x, y in values[:3]]]
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 2, 3])
+def test_many_columns_between_texts_of_any_length_read_as_python_writes_them(decimals: int):
+    """A row of many numbers (a marker's outline: 26) between texts of differing lengths,
+    none at either end."""
+    values = np.random.default_rng(6).uniform(-700.0, 700.0, (40, 13))
+    values[5, 7] = -0.0
+    template = "".join(f"{{}}{' ' * (j % 3)}{'c' * (j % 2)}" for j in range(13))
+    assert values.size >= BULK and not template.startswith(" ")
     assert rows(template, values, decimals) == python(template, values, decimals)

@@ -472,18 +472,18 @@ def exact_median(pieces: list[FloatArray]) -> float:
     """``np.median`` of the values of ``pieces`` together, the same number, found among the
     values near it: those between two quantiles of a sparse sample are selected from, the
     rest only counted (when they do not bracket the middle — or a NaN is there — every value
-    is); the pieces are not concatenated."""
-    n = sum(p.size for p in pieces)
+    is)."""
+    values = pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+    n = values.size
     if n < 4096:
-        return float(np.median(np.concatenate(pieces)))
-    step = n // 256
-    sample = np.sort(np.concatenate([p[::step] for p in pieces]))
-    lo, hi = sample[int(0.375 * sample.size)], sample[int(0.625 * sample.size)]
-    below = sum(int(np.count_nonzero(p < lo)) for p in pieces)
-    near = np.concatenate([p[(p >= lo) & (p <= hi)] for p in pieces])
-    above = sum(int(np.count_nonzero(p > hi)) for p in pieces)
+        return float(np.median(values))
+    sample = np.sort(values[:: n // 512])
+    lo, hi = sample[int(0.4 * sample.size)], sample[int(0.6 * sample.size)]
+    below = int(np.count_nonzero(values < lo))
+    near = values[(values >= lo) & (values <= hi)]
+    above = int(np.count_nonzero(values > hi))
     middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
     if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
-        return float(np.median(np.concatenate(pieces)))
+        return float(np.median(values))
     picked = np.partition(near, middle)[middle[0] : middle[1] + 1]  # one or two, as NumPy's
     return float(np.mean(picked))

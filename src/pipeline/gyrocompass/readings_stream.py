@@ -304,11 +304,12 @@ class _Marked:
         station, position = (
             batch.column(m).fill_null(-1).to_numpy().astype(np.int64, copy=False) for m in MARKERS
         )
-        self.orphans += int(np.count_nonzero((station < 0) & (position >= 0)))
         values = _arrays(batch, self.stations.columns)
         change = np.flatnonzero((station[1:] != station[:-1]) | (position[1:] != position[:-1]))
         starts = np.concatenate([[0], change + 1])
         ends = np.concatenate([change + 1, [batch.num_rows]])
+        orphan = (station[starts] < 0) & (position[starts] >= 0)  # runs of equal markers
+        self.orphans += int((ends - starts)[orphan].sum())
         key = (int(station[0]), int(position[0]))
         if key != self.key:
             self.end_run()

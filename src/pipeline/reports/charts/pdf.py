@@ -9,7 +9,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from pipeline.reports.charts.fixed import rows
+from pipeline.reports.charts.fixed import point_texts, rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -47,9 +47,10 @@ class _Placed:
         return self.ox + self.s * x, self.oy - self.s * y
 
 
-def _polyline(points: Points, closed: bool) -> str:
-    head = rows("{} {} m ", points[:1], 2)
-    return head + rows("{} {} l ", points[1:], 2)[:-1] + (" h" if closed else "")
+def _polyline(points: list[str], closed: bool) -> str:
+    """A subpath through ``points`` (each "x y", page points)."""
+    rest = " l ".join(points[1:]) + (" l" if len(points) > 1 else "")
+    return f"{points[0]} m {rest}" + (" h" if closed else "")
 
 
 def _stroke(p: Path, s: float) -> str:
@@ -59,9 +60,12 @@ def _stroke(p: Path, s: float) -> str:
 
 
 def _path(p: Path, at: _Placed) -> str:
-    body = " ".join(_polyline(at.xy(part), p.closed) for part in p.parts if len(part))
-    if not body:
+    parts = [part for part in p.parts if len(part)]
+    if not parts:
         return ""
+    placed = at.xy(parts[0] if len(parts) == 1 else np.concatenate(parts))
+    texts = point_texts(placed, [len(part) for part in parts], 2, " ")
+    body = " ".join(_polyline(points, p.closed) for points in texts)
     style = []
     if p.fill:
         style.append(fill_colour(p.fill))

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 from html import escape
 
-from pipeline.reports.charts.fixed import rows
+import numpy as np
+
+from pipeline.reports.charts.fixed import point_texts, rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
     Marks,
     Path,
-    Points,
     Scene,
     outline,
     outline_runs,
@@ -29,13 +30,19 @@ def _n(value: float) -> str:
     return "0" if out == "-0" else out
 
 
-def _polyline(points: Points, closed: bool) -> str:
-    rest = rows("{},{} ", points[1:], 1)[:-1]
-    return rows("M{},{}", points[:1], 1) + (f"L{rest}" if rest else "") + ("Z" if closed else "")
+def _polyline(points: list[str], closed: bool) -> str:
+    """A subpath through ``points`` (each "x,y")."""
+    rest = f"L{' '.join(points[1:])}" if len(points) > 1 else ""
+    return f"M{points[0]}{rest}" + ("Z" if closed else "")
 
 
 def _path(p: Path) -> str:
-    d = "".join(_polyline(part, p.closed) for part in p.parts if len(part))
+    parts = [part for part in p.parts if len(part)]
+    d = ""
+    if parts:
+        points = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        texts = point_texts(points, [len(part) for part in parts], 1, ",")
+        d = "".join(_polyline(run, p.closed) for run in texts)
     attrs = [f'd="{d}"', f'fill="{p.fill or "none"}"']
     if p.stroke is not None:
         attrs.append(f'stroke="{p.stroke.colour}" stroke-width="{p.stroke.width:g}"')
