@@ -79,8 +79,8 @@ def listing(
     vs_unit = f"m @ {fmt_azimuth(vs_azimuth, 1)}°" if vs_azimuth is not None else "m"
     spec: dict[str, tuple[Column, list[str]]] = {}
 
-    def num(name: str, decimals: int = 2) -> list[str]:
-        return [fmt(v, decimals) for v in col(traj, name).tolist()]  # floats: faster than NumPy scalars
+    def num(name: str, decimals: int = 2) -> list[str]:  # Python floats: faster to format
+        return [fmt(v, decimals) for v in col(traj, name).tolist()]
 
     def azimuths(name: str, decimals: int = 2) -> list[str]:
         return [fmt_azimuth(v, decimals) for v in col(traj, name).tolist()]

@@ -11,6 +11,7 @@ import zlib
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
+from typing import NamedTuple
 
 from pipeline.reports.charts.scene import rgb
 from pipeline.reports.pdf_fonts import PdfFont, pdf_font
@@ -48,8 +49,7 @@ def _num(value: float) -> str:
     return "0" if out in ("-0", "") else out
 
 
-@dataclass(frozen=True)
-class _Text:
+class _Text(NamedTuple):
     font: tuple[str, bool]
     size: float
     x: float
@@ -61,8 +61,7 @@ class _Text:
     """0, or 90: reading upwards"""
 
 
-@dataclass(frozen=True)
-class _Rect:
+class _Rect(NamedTuple):
     x: float
     y: float
     w: float
@@ -70,8 +69,7 @@ class _Rect:
     colour: str
 
 
-@dataclass(frozen=True)
-class _Raw:
+class _Raw(NamedTuple):
     """Graphics operators as they are (paths, clipping), coordinates in points."""
 
     content: str
@@ -217,7 +215,7 @@ PROGRAMS = 16
 def _program(font: PdfFont, chars: set[str]) -> _Program:
     """The embedded form of ``font``'s subset for ``chars``, made once per process for
     the subsets used first (most reports share the repertoire's: :mod:`.pdf_fonts`)."""
-    tag = font.tag(font.subset_chars(chars))
+    tag = font.subset_tag(chars)
     found = _PROGRAMS.get((font.path, tag))
     if found is None:
         found = _make_program(font, tag, chars)
