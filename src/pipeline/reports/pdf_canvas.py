@@ -289,6 +289,8 @@ def _show(op: _Text, embedded: _Embedded) -> str:
 
 def _runs(content: str, embedded: _Embedded) -> str:
     """The glyph runs of ``content``, split where kerning moves a glyph."""
+    if not embedded.font.kerned:  # one run (the table rows: no layout to work out)
+        return f"<{content.translate(embedded.codes)}>"
     kerns = embedded.font.layout(content)[1]
     codes, upem = embedded.codes, embedded.font.upem
     parts: list[str] = []

@@ -116,6 +116,12 @@ class PdfFont:
                 self._layouts[text] = found
         return found
 
+    @property
+    def kerned(self) -> bool:
+        """True if the font's tables read so far hold kerning pairs (a monospaced font's
+        have none: its text is never split into runs)."""
+        return bool(self._kern)
+
     def width(self, text: str, size: float) -> float:
         """Advance of ``text`` at ``size`` points, in points."""
         return self.layout(text)[2] * size / self.upem
