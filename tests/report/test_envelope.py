@@ -118,3 +118,21 @@ def test_envelope_draws_what_the_raw_line_draws():
     assert (images[1] < 128).mean() > 0.01  # the raw lines do draw
     differs = np.abs(images[0] - images[1]) > 64
     assert differs.mean() < 0.002
+
+
+def test_a_series_columns_envelope_as_each_alone_whatever_they_leave_out():
+    """full_rate's inclination and azimuth share one binning per batch where they keep the
+    same samples: the same envelopes as each column folded alone, also where one column's
+    NaNs leave it other samples (and other bins) than the other's, or none in a batch."""
+    md, inc, azi = survey(200_000, seed=8)
+    md[::997] = md[::997] - 30.0  # back steps: not in order
+    inc[50_000:50_040] = np.nan
+    azi[150_000:] = np.nan  # the azimuth's last batches empty, its range shorter
+    series = full_rate(batches(md, inc, azi, 65_536), "grid north")
+    for got, y in ((series.inc, inc), (series.azi, azi)):
+        alone = Envelope()
+        for k in range(0, len(md), 65_536):
+            alone.add(md[k : k + 65_536], y[k : k + 65_536])
+        want = alone.points()
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+    assert series.samples == np.isfinite(inc).sum()

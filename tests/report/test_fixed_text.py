@@ -78,3 +78,11 @@ def test_many_columns_between_texts_of_any_length_read_as_python_writes_them(dec
     template = "".join(f"{{}}{' ' * (j % 3)}{'c' * (j % 2)}" for j in range(13))
     assert values.size >= BULK and not template.startswith(" ")
     assert rows(template, values, decimals) == python(template, values, decimals)
+
+
+def test_a_percent_sign_in_the_template_is_text_in_the_few_numbers_path():
+    """Fewer numbers than :data:`BULK` are written by Python's ``%``: a ``%`` of the
+    template stays a character."""
+    values = np.array([[1.005, -0.0], [np.inf, 250.5]])
+    assert values.size < BULK
+    assert rows("{}% of {}%%\n", values, 2) == "1.00% of -0.00%%\ninf% of 250.50%%\n"

@@ -12,7 +12,7 @@ and are merged pairwise (their minima and maxima are exact) whenever the data ou
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,30 +44,29 @@ class Envelope:
 
     def add(self, x: FloatArray, y: FloatArray) -> None:
         """Fold the samples (x, y) in; non-finite ones are left out."""
-        keep = np.isfinite(x) & np.isfinite(y)
-        x, y = np.asarray(x, float)[keep], np.asarray(y, float)[keep]
-        if not len(x):
-            return
-        lo, hi = float(x.min()), float(x.max())
+        fold((self,), x, (y,))
+
+    def _place(self, lo: float, hi: float) -> None:
+        """Bins covering [lo, hi] (the first samples set their width)."""
         if self.width == 0.0:
             self.origin = lo
             self.width = max(hi - lo, abs(lo) * 1e-9, 1e-9) / (self.columns - 1)
         self._cover(lo, hi)
-        index = np.minimum(((x - self.origin) / self.width).astype(np.int64), self.columns - 1)
-        if np.any(index[1:] < index[:-1]):  # x not in order (a stable sort keeps ties')
-            order = np.argsort(index, kind="stable")
-            index, x, y = index[order], x[order], y[order]
-        starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
-        bins = index[starts]
+
+    def _fold(self, binned: _Binned, y: FloatArray) -> None:
+        """Fold in the kept samples' y (in the samples' order) binned as ``binned``."""
+        if binned.order is not None:
+            y = y[binned.order]
+        bins = binned.bins
         for reduce, best, beats, at in (
             (np.minimum, self.low, np.less, self.x_low),
             (np.maximum, self.high, np.greater, self.x_high),
         ):
-            values, first = _extremes(reduce, y, starts)
+            values, first = _extremes(reduce, y, binned.starts)
             better = beats(values, best[bins])
             best[bins[better]] = values[better]
-            at[bins[better]] = x[first[better]]
-        self.samples += len(x)
+            at[bins[better]] = binned.x[first[better]]
+        self.samples += len(y)
 
     def _cover(self, lo: float, hi: float) -> None:
         """Widen the bins (merging 2^k at a time, keeping their edges) and move the origin
@@ -112,6 +111,56 @@ class Envelope:
         return x.ravel()[keep], y.ravel()[keep]
 
 
+@dataclass(frozen=True)
+class _Binned:
+    """Kept samples binned: their x and bins in bin order (stable: x order within a bin),
+    ``order`` the samples' permutation into it (None: in order already), and the first
+    sample of each bin (``starts``, ``bins``)."""
+
+    x: FloatArray
+    order: NDArray[np.intp] | None
+    starts: NDArray[np.intp]
+    bins: NDArray[np.int64]
+
+
+def _binned(envelope: Envelope, x: FloatArray) -> _Binned:
+    """The samples at ``x`` in ``envelope``'s bins (which cover them)."""
+    index = np.minimum(
+        ((x - envelope.origin) / envelope.width).astype(np.int64), envelope.columns - 1
+    )
+    order = None
+    if np.any(index[1:] < index[:-1]):  # x not in order (a stable sort keeps ties')
+        order = np.argsort(index, kind="stable")
+        index, x = index[order], x[order]
+    starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
+    return _Binned(x, order, starts, index[starts])
+
+
+def fold(envelopes: Sequence[Envelope], x: FloatArray, ys: Sequence[FloatArray]) -> None:
+    """Fold the samples (x, y) of each of ``ys`` into the envelope beside it, non-finite ones
+    left out. Envelopes in the same bins keeping the same samples (the columns of one
+    series, as a rule) share the samples' binning and x order, made once."""
+    x = np.asarray(x, float)
+    finite = np.isfinite(x)
+    shared: tuple[tuple[int, float, float], NDArray[np.bool_], float, float, _Binned] | None
+    shared = None
+    for envelope, y in zip(envelopes, ys, strict=True):
+        keep = finite & np.isfinite(y)
+        state = (envelope.columns, envelope.origin, envelope.width)
+        if shared is not None and shared[0] == state and np.array_equal(shared[1], keep):
+            lo, hi, binned = shared[2:]
+            envelope._place(lo, hi)
+        else:
+            kept = x[keep]
+            if not len(kept):
+                continue
+            lo, hi = float(kept.min()), float(kept.max())
+            envelope._place(lo, hi)
+            binned = _binned(envelope, kept)
+            shared = state, keep, lo, hi, binned
+        envelope._fold(binned, np.asarray(y, float)[keep])
+
+
 def _extremes(
     reduce: np.ufunc, values: FloatArray, starts: NDArray[np.intp]
 ) -> tuple[FloatArray, NDArray[np.intp]]:
@@ -141,6 +190,6 @@ def full_rate(batches: Iterable[pa.RecordBatch], north: str) -> FullRate:
     inc, azi = Envelope(), Envelope()
     for batch in batches:
         md = batch.column("md").to_numpy(zero_copy_only=False)
-        inc.add(md, batch.column("inc").to_numpy(zero_copy_only=False))
-        azi.add(md, batch.column("azi").to_numpy(zero_copy_only=False))
+        values = [batch.column(c).to_numpy(zero_copy_only=False) for c in ("inc", "azi")]
+        fold((inc, azi), md, values)
     return FullRate(inc.points(), azi.points(), inc.samples, north)

@@ -182,13 +182,19 @@ def _table(table: Table) -> str:
     flagged: dict[int, set[int]] = {}
     for i, j in table.cells:
         flagged.setdefault(i, set()).add(j)
-    body = "\n".join(
-        ('<tr class="marked">' if i in table.marked else "<tr>")
-        + "".join(
-            f'<td class="{k}{" flag" if j in flagged.get(i, ()) else ""}">{escape(v)}</td>'
+    plain = "".join(f'<td class="{k}">{{}}</td>' for k in classes)  # a row with no flag
+
+    def cells(i: int, row: tuple[str, ...]) -> str:
+        marks = flagged.get(i)
+        if marks is None and len(row) == len(classes):
+            return plain.format(*map(escape, row))
+        return "".join(  # (a row of another length fails here)
+            f'<td class="{k}{" flag" if j in (marks or ()) else ""}">{escape(v)}</td>'
             for j, (k, v) in enumerate(zip(classes, row, strict=True))
         )
-        + "</tr>"
+
+    body = "\n".join(
+        ('<tr class="marked">' if i in table.marked else "<tr>") + cells(i, row) + "</tr>"
         for i, row in enumerate(table.rows)
     )
     compact = "" if len(table.columns) > 4 or table.kind == "listing" else " compact"

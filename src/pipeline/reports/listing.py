@@ -79,11 +79,11 @@ def listing(
     vs_unit = f"m @ {fmt_azimuth(vs_azimuth, 1)}°" if vs_azimuth is not None else "m"
     spec: dict[str, tuple[Column, list[str]]] = {}
 
-    def num(name: str, decimals: int = 2) -> list[str]:
-        return [fmt(v, decimals) for v in col(traj, name)]
+    def num(name: str, decimals: int = 2) -> list[str]:  # Python floats: faster to format
+        return [fmt(v, decimals) for v in col(traj, name).tolist()]
 
     def azimuths(name: str, decimals: int = 2) -> list[str]:
-        return [fmt_azimuth(v, decimals) for v in col(traj, name)]
+        return [fmt_azimuth(v, decimals) for v in col(traj, name).tolist()]
 
     if "survey" in traj.column_names and len(set(traj.column("survey").to_pylist())) > 1:
         surveys = [str(s) for s in traj.column("survey").to_pylist()]
@@ -163,7 +163,7 @@ def _station_sigmas(traj: pa.Table, st: pa.Table | None) -> list[tuple[str, str,
     out = []
     for name, header in (("sigma_inc", "σ INC"), (SIGMA_AZI, "σ AZI")):
         if name in st.column_names:
-            values = col(st, name)[index]
+            values = col(st, name)[index].tolist()
             cells = [fmt_sigma(v) if ok else "" for v, ok in zip(values, found, strict=True)]
             out.append((name, header, cells))
     return out

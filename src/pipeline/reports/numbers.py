@@ -27,7 +27,9 @@ def fmt(value: float | None, decimals: int = 2) -> str:
     if math.isinf(value):
         return "∞" if value > 0 else "−∞"
     text = f"{value:.{decimals}f}"
-    return _minus(text) if text.lstrip("-").strip("0. ") else text.lstrip("-")
+    if text[0] != "-":  # the only place a minus can be
+        return text
+    return _minus(text) if text.strip("-0. ") else text[1:]
 
 
 def fmt_sig(value: float | None, digits: int = 3) -> str:

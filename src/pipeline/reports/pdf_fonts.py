@@ -116,6 +116,12 @@ class PdfFont:
                 self._layouts[text] = found
         return found
 
+    @property
+    def kerned(self) -> bool:
+        """True if the font's tables read so far hold kerning pairs (a monospaced font's
+        have none: its text is never split into runs)."""
+        return bool(self._kern)
+
     def width(self, text: str, size: float) -> float:
         """Advance of ``text`` at ``size`` points, in points."""
         return self.layout(text)[2] * size / self.upem
@@ -142,14 +148,14 @@ class PdfFont:
             return self._repertoire()
         return _make_subset(self.path, chars)
 
-    def subset_chars(self, chars: set[str]) -> set[str]:
-        """The characters the subset embedded for ``chars`` holds (names it: :meth:`tag`)."""
-        return set(REPERTOIRE) if chars <= REPERTOIRE else chars
+    def subset_tag(self, chars: set[str]) -> str:
+        """:meth:`tag` of the subset embedded for ``chars`` (of the characters it holds)."""
+        return repertoire_tag() if chars <= REPERTOIRE else self.tag(chars)
 
     def _repertoire(self) -> Subset:
         """The :data:`REPERTOIRE`'s subset (embedded once per process: :mod:`.pdf_canvas`)."""
         meta = _index(self.path)
-        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}.ttf"
+        cached = FONTS / f"{Path(self.path).stem}-{repertoire_tag()}.ttf"
         try:
             data = cached.read_bytes()
         except OSError:
@@ -160,7 +166,7 @@ class PdfFont:
         """The :data:`REPERTOIRE` subset with the font's ``kern`` table, for a browser (which
         kerns only as the font says, where the PDF positions each glyph itself); shipped
         beside the fonts, made when missing."""
-        cached = FONTS / f"{Path(self.path).stem}-{self.tag(set(REPERTOIRE))}-kern.ttf"
+        cached = FONTS / f"{Path(self.path).stem}-{repertoire_tag()}-kern.ttf"
         try:
             return cached.read_bytes()
         except OSError:
@@ -173,6 +179,12 @@ class PdfFont:
         """Six capitals naming the subset of ``chars`` (the same characters, the same tag)."""
         digest = hashlib.sha256("".join(sorted(chars)).encode()).digest()
         return "".join(chr(65 + b % 26) for b in digest[:6])
+
+
+@cache
+def repertoire_tag() -> str:
+    """:meth:`PdfFont.tag` of the :data:`REPERTOIRE` (worked out once)."""
+    return PdfFont.tag(set(REPERTOIRE))
 
 
 def _make_subset(path: str, chars: set[str], *, kern: bool = False) -> Subset:
@@ -245,7 +257,7 @@ def _index(path: str) -> dict[str, Any]:
     glyph ids, widths and text, and the repertoire's metrics; made (and written, if the
     directory allows) when missing."""
     stem = Path(path).stem
-    tag = PdfFont.tag(set(REPERTOIRE))
+    tag = repertoire_tag()
     font_file, index = FONTS / f"{stem}-{tag}.ttf", FONTS / f"{stem}-{tag}.json"
     try:
         found: dict[str, Any] = json.loads(index.read_text())

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import textwrap
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 
 from pipeline.reports.document import Table
 from pipeline.reports.pdf_layout import (
@@ -46,6 +46,9 @@ MARKED = "#fbe3e0"
 FLAGGED = "#fcebc0"
 FLAG_EDGE = "#d9a21b"
 UNIT_INK = "#d5dfeb"
+WRAPPED = 1024
+"""Most (text, width) pairs whose wrapped lines a process keeps (headers and QC labels
+recur in every report)."""
 
 
 @cache
@@ -85,10 +88,10 @@ class _Setting:
 
 def _setting(table: Table) -> _Setting:
     cols = table.columns
-    data = [[row[j] for row in table.rows] for j in range(len(cols))]
+    data = list(zip(*table.rows, strict=True)) if table.rows else [()] * len(cols)
     natural = [
         max(
-            max((len(c) for c in data[j]), default=0),
+            max(map(len, data[j]), default=0),
             len(col.header)
             if len(col.header) <= SHORT_HEADER
             else max((len(w) for w in col.header.split()), default=0),
@@ -114,26 +117,29 @@ def _setting(table: Table) -> _Setting:
             g + extra // len(gaps) + (1 if k < extra % len(gaps) else 0) for k, g in enumerate(gaps)
         ]
     line = _line(widths, gaps, table).format
-    header_lines = [textwrap.wrap(c.header, w) or [""] for c, w in zip(cols, widths, strict=True)]
+    header_lines = [_wrapped(c.header, w) for c, w in zip(cols, widths, strict=True)]
     depth = max(len(h) for h in header_lines)
-    padded = [[""] * (depth - len(h)) + h for h in header_lines]  # headers sit on the units
+    padded = [[""] * (depth - len(h)) + list(h) for h in header_lines]  # headers sit on the units
     header = [line(*(p[i] for p in padded)) for i in range(depth)]
     unit = line(*(c.unit for c in cols)) if any(c.unit for c in cols) else ""
-    wrapped: dict[tuple[str, int], list[str]] = {}  # (value, width) → its lines
     rows = []
     for row in table.rows:
         if not wraps:
             rows.append([line(*row)])
             continue
-        cells = [[v] for v in row]
+        cells: list[tuple[str, ...]] = [(v,) for v in row]
         for j in wraps:
-            key = (row[j], widths[j])
-            if key not in wrapped:
-                wrapped[key] = textwrap.wrap(row[j], widths[j], break_long_words=True) or [""]
-            cells[j] = wrapped[key]
+            cells[j] = _wrapped(row[j], widths[j])
         depth = max(map(len, cells))
         rows.append([line(*(c[i] if i < len(c) else "" for c in cells)) for i in range(depth)])
     return _Setting(size, widths, gaps, header, unit, rows)
+
+
+@lru_cache(maxsize=WRAPPED)
+def _wrapped(value: str, width: int) -> tuple[str, ...]:
+    """``value`` wrapped into lines of ``width`` characters at most (a word cut if longer);
+    one empty line for an empty value."""
+    return tuple(textwrap.wrap(value, width, break_long_words=True)) or ("",)
 
 
 def _line(widths: list[int], gaps: list[int], table: Table) -> str:

@@ -53,6 +53,13 @@ def _polyline(points: list[str], closed: bool) -> str:
     return f"{points[0]} m {rest}" + (" h" if closed else "")
 
 
+def _line(points: Points, closed: bool) -> str:
+    """The subpath through ``points`` (page points) as :func:`_polyline` writes it, from one
+    text of all its points (no text per point)."""
+    text = rows("{} {} l ", points, 2).replace(" l ", " m ", 1)  # no number holds an "l"
+    return (text[:-1] if len(points) > 1 else text) + (" h" if closed else "")
+
+
 def _stroke(p: Path, s: float) -> str:
     assert p.stroke is not None
     dash = " ".join(_n(d * s) for d in p.stroke.dash)
@@ -63,9 +70,11 @@ def _path(p: Path, at: _Placed) -> str:
     parts = [part for part in p.parts if len(part)]
     if not parts:
         return ""
-    placed = at.xy(parts[0] if len(parts) == 1 else np.concatenate(parts))
-    texts = point_texts(placed, [len(part) for part in parts], 2, " ")
-    body = " ".join(_polyline(points, p.closed) for points in texts)
+    if len(parts) == 1:
+        body = _line(at.xy(parts[0]), p.closed)
+    else:
+        texts = point_texts(at.xy(np.concatenate(parts)), [len(part) for part in parts], 2, " ")
+        body = " ".join(_polyline(points, p.closed) for points in texts)
     style = []
     if p.fill:
         style.append(fill_colour(p.fill))

@@ -173,18 +173,28 @@ def anchored(
     return Label(x, y, text, size, colour, anchor, bold, angle, box)  # type: ignore[arg-type]
 
 
+SHAPES = {
+    "s": (((-1, -1), (1, -1), (1, 1), (-1, 1)), 0.9, True),
+    "D": (((0, -1), (1, 0), (0, 1), (-1, 0)), 1.2, True),
+    "v": (((-1, -0.6), (1, -0.6), (0, 1)), 1.1, True),
+    "^": (((-1, 0.6), (1, 0.6), (0, -1)), 1.1, True),
+    "x": (((-1, -1), (1, 1), (np.nan, np.nan), (-1, 1), (1, -1)), 0.8, False),
+}
+"""Marker outlines: vertices in half-sizes about the centre (y down; NaN lifts the pen),
+their scale and whether they close."""
+
+
+@cache
 def outline(shape: str, size: float) -> tuple[Points, bool] | None:
-    """A marker's outline about its centre (points, y down) and whether it is closed;
-    None for a circle (each writer draws its own)."""
-    h = size / 2
-    shapes = {
-        "s": (np.array([[-h, -h], [h, -h], [h, h], [-h, h]]) * 0.9, True),
-        "D": (np.array([[0, -h], [h, 0], [0, h], [-h, 0]]) * 1.2, True),
-        "v": (np.array([[-h, -0.6 * h], [h, -0.6 * h], [0, h]]) * 1.1, True),
-        "^": (np.array([[-h, 0.6 * h], [h, 0.6 * h], [0, -h]]) * 1.1, True),
-        "x": (np.array([[-h, -h], [h, h], [np.nan, np.nan], [-h, h], [h, -h]]) * 0.8, False),
-    }
-    return shapes.get(shape)
+    """A marker's outline about its centre (points, y down; read-only) and whether it is
+    closed; None for a circle (each writer draws its own). Made once per shape and size."""
+    found = SHAPES.get(shape)
+    if found is None:
+        return None
+    corners, scale, closed = found
+    offsets = np.array(corners) * (size / 2) * scale
+    offsets.flags.writeable = False
+    return offsets, closed
 
 
 def outline_runs(

@@ -39,9 +39,10 @@ def _polyline(points: list[str], closed: bool) -> str:
 def _path(p: Path) -> str:
     parts = [part for part in p.parts if len(part)]
     d = ""
-    if parts:
-        points = parts[0] if len(parts) == 1 else np.concatenate(parts)
-        texts = point_texts(points, [len(part) for part in parts], 1, ",")
+    if len(parts) == 1:  # from one text of all its points (no text per point)
+        d = f"M{rows('{},{} ', parts[0], 1)[:-1].replace(' ', 'L', 1)}" + ("Z" if p.closed else "")
+    elif parts:
+        texts = point_texts(np.concatenate(parts), [len(part) for part in parts], 1, ",")
         d = "".join(_polyline(run, p.closed) for run in texts)
     attrs = [f'd="{d}"', f'fill="{p.fill or "none"}"']
     if p.stroke is not None:
