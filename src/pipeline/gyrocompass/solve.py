@@ -380,7 +380,7 @@ def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
     errors, :mod:`pipeline.gyrocompass.systematic`)."""
     g = np.linalg.norm(st.acc, axis=1)
     transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
-    if np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY):
+    if (np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY).any():
         raise StationReject(
             f"accelerometers read |g| = {g.min():.3g}…{g.max():.3g} m/s², not gravity: "
             "check units and the sign convention"
@@ -394,18 +394,18 @@ def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
     var_k = (cos_i * in_plane) ** 2 + (sin_i * sz) ** 2
     var_k = np.maximum(var_k / g**2, 1e-30)
     weight = 1.0 / var_k
-    inc = float(np.sum(weight * inc_k) / weight.sum())
+    inc = float((weight * inc_k).sum() / weight.sum())
     if not np.isfinite(inc) or len(inc_k) == 0:
         raise StationReject("accelerometer readings give no inclination")
     grad_inc = np.stack([-cos_p * cos_i, sin_p * cos_i, -sin_i], axis=-1) / g[:, None]
     sigma_inc = float(
         np.hypot(np.sqrt(1.0 / weight.sum()), accelerometer_sigma(grad_inc, st.acc, weight, tool))
     )
-    if np.any(transverse <= 0):  # exactly vertical: no horizontal gravity at all
+    if (transverse <= 0).any():  # exactly vertical: no horizontal gravity at all
         return _Tilt(inc, sigma_inc, psi, float("inf"), False)
     across = np.hypot(sin_p * sx, cos_p * sy) / transverse
     grad_psi = np.stack([sin_p, cos_p, np.zeros_like(psi)], axis=-1) / transverse[:, None]
-    noise = float(np.sqrt(np.sum(across**2)) / len(psi))
+    noise = float(np.sqrt((across**2).sum()) / len(psi))
     sigma_psi = float(
         np.hypot(noise, accelerometer_sigma(grad_psi, st.acc, np.ones_like(psi), tool))
     )
@@ -429,7 +429,7 @@ def fit_positions(
     """Weighted least squares of the gyro readings (see the module docstring) with
     ``terms`` extra unknowns per transverse axis: 0 none, 1 a bias, 2 a bias and a trend."""
     n, m = gyro.shape
-    if not np.all(sigma > 0):
+    if not (sigma > 0).all():
         raise StationReject("a position's gyro σ is zero (noise-free data?): set noise_floor")
     tau = t - t.mean()
     c, s = np.cos(alpha), np.sin(alpha)
@@ -462,8 +462,8 @@ def fit_positions(
         cov=cov,
         bias=float(params[2]) if terms else 0.0,
         trend=float(params[3]) if terms == 2 else 0.0,
-        rms=float(np.sqrt(np.mean(res**2))),
-        chi2=float(np.sum(w * res**2)),
+        rms=float(np.sqrt((res**2).mean())),
+        chi2=float((w * res**2).sum()),
         dof=len(y) - columns,
     )
 
