@@ -276,7 +276,8 @@ class BatchChecker:
         if self.steps is not None and batch.num_rows:
             group = [self.steps.group_by] if self.steps.group_by else []
             names = [*(c.name for c in self.steps.columns), *group, SOURCE_LINE]
-            ordered = table.select([n for n in names if n in table.column_names])
+            present = set(table.column_names)  # (a list built afresh on each access)
+            ordered = table.select([n for n in names if n in present])
             first = {name: ordered.column(name)[0].as_py() for name in ordered.column_names}
             if self.last is not None and not self._step_holds(self.last, first):
                 step = pa.Table.from_pylist([self.last, first], schema=ordered.schema)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pyarrow as pa
 
 from pipeline.contracts import UNIT_KEY
-from pipeline.io.precision import DECIMALS, for_export
+from pipeline.io.precision import BLOCK_VALUES, DECIMALS, blocks, for_export
 from pipeline.units import QUANTITIES
 from tests_support import gyropipe_cli
 
@@ -81,3 +81,30 @@ def test_for_export_rounds_listed_units_and_leaves_the_rest() -> None:
         assert list(map(repr, exported.column(name).to_pylist())) == list(
             map(repr, table.column(name).to_pylist())
         ), name
+
+
+def test_columns_are_stacked_in_blocks_of_bounded_size() -> None:
+    names = ["a", "b", "c", "d", "e"]
+    assert list(blocks(names, 0)) == [names]  # no rows: every column in one block
+    assert list(blocks(names, BLOCK_VALUES // 2)) == [["a", "b"], ["c", "d"], ["e"]]
+    assert list(blocks(names, BLOCK_VALUES + 1)) == [[n] for n in names]  # long: one each
+    assert list(blocks([], 10)) == []
+
+
+def test_a_long_table_is_rounded_as_a_short_one() -> None:
+    rows = BLOCK_VALUES // 2 + 1  # two columns exceed a block: rounded one by one
+    field = pa.field("md", pa.float64(), metadata={UNIT_KEY: b"m"})
+    angle = pa.field("azi", pa.float64(), metadata={UNIT_KEY: b"deg"})
+    tvd = pa.field("tvd", pa.float64(), metadata={UNIT_KEY: b"m"})
+    md = [914.4000000000001] * rows
+    azi = [359.9999997] * rows
+    table = pa.table(
+        [md, azi, [None, 29.999999847691296] * (rows // 2) + [1.0]],
+        schema=pa.schema([field, angle, tvd]),
+    )
+    exported = for_export(table)
+    assert set(exported.column("md").to_pylist()) == {914.4}
+    assert set(exported.column("azi").to_pylist()) == {359.999999}
+    tvd_values = exported.column("tvd").to_pylist()
+    assert tvd_values[:2] == [None, 30.0] and tvd_values[-1] == 1.0
+    assert exported.column("tvd").null_count == rows // 2

@@ -15,7 +15,7 @@ import pytest
 from pipeline.errors import InputFileError
 from pipeline.io import threads as io_threads
 from pipeline.io.csv import read
-from pipeline.io.nulls import null_markers, value_range
+from pipeline.io.nulls import marked_rows, null_markers, value_range
 
 
 def test_value_range_is_the_min_and_max_over_every_chunk() -> None:
@@ -45,6 +45,23 @@ def test_null_markers_are_found_beside_a_nan_and_among_nulls() -> None:
     assert null_markers(pa.array([1.0, math.nan, 999.25]), angle=False) is None
     angles = null_markers(pa.chunked_array([[10.0], [999.25]]), angle=True)
     assert angles is not None and np.flatnonzero(angles).tolist() == [1]
+
+
+def test_marked_rows_tells_each_column_of_a_stack_by_its_own_markers() -> None:
+    nan = math.nan
+    stacked = np.array(
+        [
+            [1.0, nan, -999.25],  # a marker of every column beside a NaN
+            [1.0, nan, 999.25],  # + 999.25: a marker of an angle only
+            [10.0, nan, 999.25],  # the same, an angle
+            [nan, nan, nan],  # no values at all
+            [-2000.0, 5000.0, 3.0],  # beyond ±999.25 but no marker
+            [-9999.25, 0.0, 1.0],
+        ]
+    )
+    angle = np.array([False, False, True, True, True, False])
+    assert marked_rows(stacked, angle).tolist() == [True, False, True, False, False, True]
+    assert marked_rows(np.empty((2, 0)), np.array([True, False])).tolist() == [False, False]
 
 
 @pytest.mark.parametrize("threads", [1, 2], ids=["one thread", "two threads"])

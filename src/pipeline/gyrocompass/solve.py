@@ -32,7 +32,7 @@ Rates in °/h, accelerations in m/s², angles in radians internally, degrees in 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pyarrow as pa
@@ -73,7 +73,33 @@ class _Station:
     gyro: FloatArray  # (n, axes)
     gyro_sigma: FloatArray  # (n, axes)
     acc: FloatArray  # (n, 3)
-    acc_sigma: FloatArray  # (n, 3)
+    gravity: _Gravity
+
+
+@dataclass(frozen=True)
+class _Gravity:
+    """What each position's accelerometer reading (m/s²) gives alone, for the positions of
+    a station (or of all of them: :func:`_gravity`; angles rad)."""
+
+    g: FloatArray
+    """|a|, m/s²"""
+    transverse: FloatArray
+    """|a_xy|, m/s²"""
+    inc: FloatArray
+    """I_k"""
+    psi: FloatArray
+    """gravity toolface ψ_k"""
+    weight: FloatArray
+    """1 / σ²(I_k) of the accelerometer noise and resolution"""
+    grad_inc: FloatArray
+    """(n, 3): ∂I_k/∂a"""
+    across: FloatArray
+    """σ(ψ_k) of the noise and resolution"""
+    grad_psi: FloatArray
+    """(n, 3): ∂ψ_k/∂a"""
+
+    def __getitem__(self, rows: slice) -> _Gravity:
+        return _Gravity(*(getattr(self, f.name)[rows] for f in fields(self)))
 
 
 @dataclass
@@ -247,6 +273,7 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
     md = readings.column("md").to_numpy()
     starts = np.flatnonzero(np.r_[True, station[1:] != station[:-1]])
     ends = np.r_[starts[1:], len(station)]
+    gravity = _gravity(acc, acc_sigma)
     return [
         _Station(
             int(station[a]),
@@ -256,10 +283,32 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
             gyro[a:b],
             gyro_sigma[a:b],
             acc[a:b],
-            acc_sigma[a:b],
+            gravity[a:b],
         )
         for a, b in zip(starts, ends, strict=True)
     ]
+
+
+def _gravity(acc: FloatArray, acc_sigma: FloatArray) -> _Gravity:
+    """:class:`_Gravity` of every position at once from its accelerometer readings and their
+    σ (n, 3; m/s²): each an elementwise function of its own position's, the same numbers as
+    position by position (a reading that is no gravity, or vertical, gives inf or NaN
+    here, which :func:`_inclination` never uses)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.linalg.norm(acc, axis=1)
+        transverse = np.hypot(acc[:, 0], acc[:, 1])
+        inc_k = np.arctan2(transverse, acc[:, 2])
+        psi = np.arctan2(acc[:, 1], -acc[:, 0])
+        cos_p, sin_p, cos_i, sin_i = np.cos(psi), np.sin(psi), np.cos(inc_k), np.sin(inc_k)
+        # σ of I_k: in-plane transverse part (cos I) and axial part (sin I) of the accel noise
+        sx, sy, sz = acc_sigma.T
+        in_plane = np.hypot(cos_p * sx, sin_p * sy)
+        var_k = (cos_i * in_plane) ** 2 + (sin_i * sz) ** 2
+        var_k = np.maximum(var_k / g**2, 1e-30)
+        grad_inc = np.stack([-cos_p * cos_i, sin_p * cos_i, -sin_i], axis=-1) / g[:, None]
+        across = np.hypot(sin_p * sx, cos_p * sy) / transverse
+        grad_psi = np.stack([sin_p, cos_p, np.zeros_like(psi)], axis=-1) / transverse[:, None]
+    return _Gravity(g, transverse, inc_k, psi, 1.0 / var_k, grad_inc, across, grad_psi)
 
 
 def _solve(
@@ -378,36 +427,27 @@ class _Tilt:
 def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
     """Inclination and gravity toolfaces with their σ (noise and the tool's accelerometer
     errors, :mod:`pipeline.gyrocompass.systematic`)."""
-    g = np.linalg.norm(st.acc, axis=1)
-    transverse = np.hypot(st.acc[:, 0], st.acc[:, 1])
-    if np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY):
+    gravity = st.gravity
+    g = gravity.g
+    if (np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY).any():
         raise StationReject(
             f"accelerometers read |g| = {g.min():.3g}…{g.max():.3g} m/s², not gravity: "
             "check units and the sign convention"
         )
-    inc_k = np.arctan2(transverse, st.acc[:, 2])
-    psi = np.arctan2(st.acc[:, 1], -st.acc[:, 0])
-    cos_p, sin_p, cos_i, sin_i = np.cos(psi), np.sin(psi), np.cos(inc_k), np.sin(inc_k)
-    # σ of I_k: in-plane transverse part (cos I) and axial part (sin I) of the accel noise
-    sx, sy, sz = st.acc_sigma.T
-    in_plane = np.hypot(cos_p * sx, sin_p * sy)
-    var_k = (cos_i * in_plane) ** 2 + (sin_i * sz) ** 2
-    var_k = np.maximum(var_k / g**2, 1e-30)
-    weight = 1.0 / var_k
-    inc = float(np.sum(weight * inc_k) / weight.sum())
+    inc_k, psi, weight = gravity.inc, gravity.psi, gravity.weight
+    inc = float((weight * inc_k).sum() / weight.sum())
     if not np.isfinite(inc) or len(inc_k) == 0:
         raise StationReject("accelerometer readings give no inclination")
-    grad_inc = np.stack([-cos_p * cos_i, sin_p * cos_i, -sin_i], axis=-1) / g[:, None]
     sigma_inc = float(
-        np.hypot(np.sqrt(1.0 / weight.sum()), accelerometer_sigma(grad_inc, st.acc, weight, tool))
+        np.hypot(
+            np.sqrt(1.0 / weight.sum()), accelerometer_sigma(gravity.grad_inc, st.acc, weight, tool)
+        )
     )
-    if np.any(transverse <= 0):  # exactly vertical: no horizontal gravity at all
+    if (gravity.transverse <= 0).any():  # exactly vertical: no horizontal gravity at all
         return _Tilt(inc, sigma_inc, psi, float("inf"), False)
-    across = np.hypot(sin_p * sx, cos_p * sy) / transverse
-    grad_psi = np.stack([sin_p, cos_p, np.zeros_like(psi)], axis=-1) / transverse[:, None]
-    noise = float(np.sqrt(np.sum(across**2)) / len(psi))
+    noise = float(np.sqrt((gravity.across**2).sum()) / len(psi))
     sigma_psi = float(
-        np.hypot(noise, accelerometer_sigma(grad_psi, st.acc, np.ones_like(psi), tool))
+        np.hypot(noise, accelerometer_sigma(gravity.grad_psi, st.acc, np.ones_like(psi), tool))
     )
     return _Tilt(inc, sigma_inc, psi, sigma_psi, bool(sigma_psi * detection < 1.0))
 
@@ -429,7 +469,7 @@ def fit_positions(
     """Weighted least squares of the gyro readings (see the module docstring) with
     ``terms`` extra unknowns per transverse axis: 0 none, 1 a bias, 2 a bias and a trend."""
     n, m = gyro.shape
-    if not np.all(sigma > 0):
+    if not (sigma > 0).all():
         raise StationReject("a position's gyro σ is zero (noise-free data?): set noise_floor")
     tau = t - t.mean()
     c, s = np.cos(alpha), np.sin(alpha)
@@ -462,8 +502,8 @@ def fit_positions(
         cov=cov,
         bias=float(params[2]) if terms else 0.0,
         trend=float(params[3]) if terms == 2 else 0.0,
-        rms=float(np.sqrt(np.mean(res**2))),
-        chi2=float(np.sum(w * res**2)),
+        rms=float(np.sqrt((res**2).mean())),
+        chi2=float((w * res**2).sum()),
         dof=len(y) - columns,
     )
 

@@ -51,6 +51,10 @@ def g_dependent_variance(errors: ToolErrors, inclination: float) -> float:
     return float((errors.g_sensitivity * np.sin(inclination)) ** 2)
 
 
+_OFF_DIAGONAL = ~np.eye(3, dtype=bool)
+"""The off-diagonal terms of a triad's 3 × 3 matrix"""
+
+
 def accelerometer_sigma(
     gradient: FloatArray, acc: FloatArray, weights: FloatArray, errors: ToolErrors
 ) -> float:
@@ -60,10 +64,9 @@ def accelerometer_sigma(
     w = weights / weights.sum()
     d_bias = w @ gradient
     d_gain = np.einsum("k,ki,kj->ij", w, gradient, acc)
-    off = ~np.eye(3, dtype=bool)
     var = (
         errors.acc_bias**2 * float(d_bias @ d_bias)
-        + (errors.acc_misalignment * 1e-3) ** 2 * float(np.sum(d_gain[off] ** 2))
-        + (errors.acc_scale_factor * 1e-6) ** 2 * float(np.sum(np.diag(d_gain) ** 2))
+        + (errors.acc_misalignment * 1e-3) ** 2 * float((d_gain[_OFF_DIAGONAL] ** 2).sum())
+        + (errors.acc_scale_factor * 1e-6) ** 2 * float((d_gain.diagonal() ** 2).sum())
     )
     return float(np.sqrt(var))

@@ -56,3 +56,20 @@ def null_markers(values: Any, *, angle: bool) -> np.ndarray | None:
     mask = pc.is_in(values, value_set=pa.array(markers, values.type))
     found = np.asarray(pc.fill_null(mask, False).to_numpy(zero_copy_only=False), dtype=bool)
     return found if found.any() else None
+
+
+def marked_rows(values: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Which rows of a 2-D float array (columns of one table as rows; NaN: no value) hold
+    a null marker, each of an ``angle`` column (a bool per row) or not: as
+    :func:`null_markers` tells a column, the rows' smallest and largest values first (NaN
+    skipped), then the values of the rows beyond ±999.25 compared one by one."""
+    found = np.zeros(len(values), dtype=bool)
+    if values.size == 0:
+        return found
+    with np.errstate(invalid="ignore"):
+        low, high = np.fmin.reduce(values, axis=1), np.fmax.reduce(values, axis=1)
+    beyond = ~((low > -_SMALLEST) & (~angle | (high < _SMALLEST)))
+    for row in np.flatnonzero(beyond):
+        markers = ANGLE_NULL_MARKERS if angle[row] else NULL_MARKERS
+        found[row] = bool(np.isin(values[row], markers).any())
+    return found

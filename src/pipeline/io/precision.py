@@ -9,6 +9,9 @@ is not listed (and integer or text columns) keep their full, shortest round-trip
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from typing import TypeVar
+
 import numpy as np
 import pyarrow as pa
 
@@ -33,34 +36,59 @@ are [0, 360) by contract), so 359.9999997 is written 359.999999, not 360."""
 
 _EXACT = 2.0**52
 """From this magnitude on, a float64 is a whole number: rounding leaves it as it is."""
+BLOCK_VALUES = 1 << 16
+"""The most values of several columns stacked into one array (:func:`blocks`)."""
+T = TypeVar("T")
 
 
 def for_export(table: pa.Table) -> pa.Table:
     """``table`` with every float column of a listed unit rounded to its decimals (half to
     even; −0 written as 0; NaN, ±inf and nulls as they are; an angle below 360° stays below
-    it, one step under, :data:`FULL_TURN`)."""
-    columns = []
-    for field, column in zip(table.schema, table.columns, strict=True):
+    it, one step under, :data:`FULL_TURN`). The columns of one rounding are rounded
+    together, as rows of one array (:func:`blocks`; the same numbers: every step is
+    elementwise)."""
+    columns = list(table.columns)
+    rounding: dict[tuple[int, float | None], list[int]] = {}
+    for i, field in enumerate(table.schema):
         unit = (field.metadata or {}).get(UNIT_KEY, b"").decode()
         decimals = DECIMALS.get(unit)
         if decimals is not None and pa.types.is_floating(field.type):
             below = FULL_TURN if unit == "deg" else None
-            column = _rounded(column.combine_chunks(), decimals, below)
-        columns.append(column)
+            rounding.setdefault((decimals, below), []).append(i)
+    for (decimals, below), same in rounding.items():
+        for at in blocks(same, table.num_rows):
+            arrays = [columns[i].combine_chunks() for i in at]
+            for i, array in zip(at, _rounded(arrays, decimals, below), strict=True):
+                columns[i] = array
     return pa.Table.from_arrays(columns, schema=table.schema)
 
 
-def _rounded(array: pa.Array, decimals: int, below: float | None = None) -> pa.Array:
-    """``array`` rounded to ``decimals``. numpy scales, rounds and divides back, so a value
-    is the float nearest its decimal text (pyarrow's round keeps ``914.4000000000001``). A
-    value under ``below`` that would round up to it is written one step under it."""
-    values = array.to_numpy(zero_copy_only=False)
-    wide = values.astype(np.float64)
+def blocks(columns: list[T], rows: int) -> Iterator[list[T]]:
+    """``columns`` (of ``rows`` values each) in blocks to be stacked into one array of at
+    most :data:`BLOCK_VALUES` values (a column alone if longer): the columns of a small
+    table in one step, a long one's one at a time, so no copy of a long table is made."""
+    step = max(1, BLOCK_VALUES // max(rows, 1))
+    for start in range(0, len(columns), step):
+        yield columns[start : start + step]
+
+
+def _rounded(arrays: list[pa.Array], decimals: int, below: float | None) -> list[pa.Array]:
+    """``arrays`` (floats, of one length) rounded to ``decimals``. numpy scales, rounds and
+    divides back, so a value is the float nearest its decimal text (pyarrow's round keeps
+    ``914.4000000000001``). A value under ``below`` that would round up to it is written one
+    step under it."""
+    values = [array.to_numpy(zero_copy_only=False) for array in arrays]
+    wide = np.stack(values).astype(np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
         rounded = np.where(np.abs(wide) < _EXACT, np.round(wide, decimals), wide) + 0.0
         if below is not None:
             under = np.round(below - 10.0**-decimals, decimals)
             rounded = np.where((wide < below) & (rounded >= below), under, rounded)
-    rounded = rounded.astype(values.dtype)
-    mask = array.is_null().to_numpy(zero_copy_only=False) if array.null_count else None
-    return pa.array(rounded, type=array.type, mask=mask)
+    return [
+        pa.array(
+            row.astype(column.dtype),
+            type=array.type,
+            mask=array.is_null().to_numpy(zero_copy_only=False) if array.null_count else None,
+        )
+        for row, column, array in zip(rounded, values, arrays, strict=True)
+    ]

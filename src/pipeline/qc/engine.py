@@ -101,9 +101,9 @@ def fit_checks(
     measured, sig = np.full(s, np.nan), np.full(s, np.nan)
     detail = np.full(s, "", dtype=object)
     for i, (a, b) in enumerate(zip(starts, ends, strict=True)):
-        inc = float(np.mean(inc_k[a:b]))
+        inc = float(inc_k[a:b].mean())
         near = min(inc, np.pi - inc) < np.radians(options.vertical_below)
-        if not np.all(np.isfinite(sigma[a:b])):
+        if not np.isfinite(sigma[a:b]).all():
             detail[i] = "skipped: the readings carry no gyro std/n (the fit needs σ)"
             continue
         if near and np.isnan(frame[a:b]).any():
@@ -127,7 +127,7 @@ def fit_checks(
         jac = np.array([u / (c * c * k), v / k])
         var = jac @ fit.cov[:2, :2] @ jac
         if not near:  # through I: ∂k/∂I = u² sin I / (k cos³ I)
-            sigma_inc = np.sqrt(np.sum(sigma_inc_k[a:b] ** 2)) / (b - a)
+            sigma_inc = np.sqrt((sigma_inc_k[a:b] ** 2).sum()) / (b - a)
             var += (u * u * np.sin(inc) / (k * c**3) * sigma_inc) ** 2
         measured[i], sig[i] = k, np.sqrt(var)
     keys = Keys(station[starts], np.full(s, -1), md[starts], np.full(s, np.nan), np.full(s, np.nan))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections import Counter
 from collections.abc import Callable, Mapping
 
@@ -87,9 +88,16 @@ def tool_errors(well: WellMetadata) -> ToolErrors:
     if well.tool_preset is None:
         return model_errors(UNDECLARED_TOOL)
     try:
-        return compass_errors(tool_preset(well.tool_preset))
+        return _preset_errors(well.tool_preset)
     except ValueError as exc:
         raise ValueError(f"the well metadata's tool_preset: {exc}") from None
+
+
+@functools.lru_cache(maxsize=16)
+def _preset_errors(name: str) -> ToolErrors:
+    """:func:`~pipeline.sim.sensors.compass_errors` of the catalogue's preset ``name``,
+    once per process (a preset is a constant; the result is frozen)."""
+    return compass_errors(tool_preset(name))
 
 
 class AllRejectedError(GyropipeError):

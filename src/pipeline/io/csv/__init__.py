@@ -64,6 +64,7 @@ from __future__ import annotations
 
 import csv as stdcsv
 import io
+import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -98,7 +99,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import null_markers
+from pipeline.io.nulls import null_markers, value_range
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -458,11 +459,18 @@ def _nan_as_null(table: pa.Table) -> pa.Table:
     never writes a number that is not finite."""
     columns = [
         pc.if_else(pc.is_finite(column), column, None)
-        if pa.types.is_floating(column.type)
+        if pa.types.is_floating(column.type) and not _all_finite(column)
         else column
         for column in table.columns
     ]
     return pa.Table.from_arrays(columns, schema=table.schema)
+
+
+def _all_finite(column: pa.ChunkedArray) -> bool:
+    """Whether a float column holds finite numbers only (no null), told by its extremes
+    (:func:`~pipeline.io.nulls.value_range`; False where they cannot tell)."""
+    extremes = value_range(column)
+    return extremes is not None and math.isfinite(extremes[0]) and math.isfinite(extremes[1])
 
 
 def _header_cell(field: pa.Field) -> str:

@@ -41,8 +41,8 @@ import pyarrow.csv as pacsv
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, null_markers
-from pipeline.io.precision import DECIMALS, for_export
+from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, marked_rows
+from pipeline.io.precision import DECIMALS, blocks, for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -180,17 +180,24 @@ def _text_cells(values: pa.Array) -> pa.Array:
 
 def _refuse_null_markers(values: dict[str, pa.Array]) -> None:
     """A value every reader takes for no value (:mod:`pipeline.io.nulls`: -999.25…, and
-    ±999.25 in an angle) cannot be written: it would read back as a null."""
-    for name, array in values.items():
-        if pa.types.is_string(array.type):
-            continue
-        angle = name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
-        if pa.types.is_floating(array.type) and null_markers(array, angle=angle) is not None:
-            markers = ANGLE_NULL_MARKERS if angle else NULL_MARKERS
-            raise ValueError(
-                f"column {name!r} holds a null marker {markers}: every reader would read it "
-                "back as no value"
-            )
+    ±999.25 in an angle) cannot be written: it would read back as a null. The float
+    columns are looked at a block of them at a time (:func:`~pipeline.io.precision.blocks`)."""
+    floats = [name for name, array in values.items() if pa.types.is_floating(array.type)]
+    rows = len(values[floats[0]]) if floats else 0
+    for block in blocks(floats, rows):
+        stacked = np.stack([values[name].to_numpy(zero_copy_only=False) for name in block])
+        angle = np.array([_is_angle(name) for name in block], dtype=bool)
+        for name, marked, is_angle in zip(block, marked_rows(stacked, angle), angle, strict=True):
+            if marked:
+                markers = ANGLE_NULL_MARKERS if is_angle else NULL_MARKERS
+                raise ValueError(
+                    f"column {name!r} holds a null marker {markers}: every reader would read "
+                    "it back as no value"
+                )
+
+
+def _is_angle(name: str) -> bool:
+    return name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
 
 
 def _written_north(fields: list[pa.Field], well: WellMetadata) -> str | None:

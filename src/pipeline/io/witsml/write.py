@@ -86,8 +86,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     doc = _Document()
     doc.open("trajectorys", xmlns=NS, version=VERSION)
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
-    stations = [(c, e, UNIT_UOM[u]) for c, e, u in STATION_COLUMNS if c in texts]
-    covariance = [(c, e, UNIT_UOM[u]) for c, e, u in COVARIANCE if c in texts]
+    stations = [
+        (c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in STATION_COLUMNS if c in texts
+    ]
+    covariance = [(c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in COVARIANCE if c in texts]
     for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
@@ -127,13 +129,13 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
             for column, element, uom in stations:
                 text = texts[column][row]
                 if text is not None:
-                    doc.leaf(element, text, uom=uom)
+                    doc.leaf_of(element, text, uom)
             if len(covariance) == len(COVARIANCE) and all(
                 texts[column][row] is not None for column, _, _ in covariance
             ):
                 doc.open("matrixCov")
                 for column, element, uom in covariance:
-                    doc.leaf(element, texts[column][row], uom=uom)
+                    doc.leaf_of(element, texts[column][row], uom)
                 doc.close()
             doc.close()
         _common_data(doc, well)
@@ -145,14 +147,16 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
 
 def _station_values(table: pa.Table) -> dict[str, np.ndarray]:
     """The written columns as float arrays (NaN where null), units checked."""
-    missing = [c for c in REQUIRED if c not in table.column_names]
+    names = set(table.column_names)  # (built afresh on each access: once here)
+    missing = [c for c in REQUIRED if c not in names]
     if missing:
         raise ValueError(f"WITSML trajectory stations need columns {missing}")
+    schema = table.schema
     values: dict[str, np.ndarray] = {}
     for column, element, unit in (*STATION_COLUMNS, *COVARIANCE):
-        if column not in table.column_names:
+        if column not in names:
             continue
-        found = (table.schema.field(column).metadata or {}).get(UNIT_KEY, b"").decode()
+        found = (schema.field(column).metadata or {}).get(UNIT_KEY, b"").decode()
         if found != unit:
             raise ValueError(
                 f"column {column!r} is in {found or 'no unit'!r}: WITSML {element} is "
@@ -249,7 +253,12 @@ class _Document:
 
     def leaf(self, tag: str, text: str | None, **attrs: str) -> None:
         """An element holding ``text`` alone."""
-        start = f"{'  ' * len(self._open)}<{tag}{_attributes(attrs)}"
+        self.leaf_of(tag, text, _attributes(attrs))
+
+    def leaf_of(self, tag: str, text: str | None, attributes: str) -> None:
+        """An element holding ``text`` alone, its attributes as :func:`_attributes` writes
+        them (a column's, the same on every station)."""
+        start = f"{'  ' * len(self._open)}<{tag}{attributes}"
         if not text:
             self._parts.append(f"{start} />\n")
         else:
