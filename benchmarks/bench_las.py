@@ -212,7 +212,7 @@ def main() -> int:
                 f"\nlasio at {counts[-1]} reader threads, {args.lasio_rounds} interleaved rounds:"
             )
             peers = ours | {"lasio.read": lambda: lasio.read(str(path))}
-            timings = interleaved(peers, args.lasio_rounds)
+            with_lasio = interleaved(peers, args.lasio_rounds)
     for count, timings in ratios.items():
         for low in (FLOOR, OLD_FLOOR):
             print(
@@ -234,9 +234,9 @@ def main() -> int:
     if not args.lasio_rounds:
         print(f"lasio not run: values not compared\nafter: {uptime()}")
         return 0
-    print(table(timings, "gyropipe las, samples"))
-    samples, log = timings["gyropipe las, samples"], timings["gyropipe las, log"]
-    las = timings["lasio.read"]
+    print(table(with_lasio, "gyropipe las, samples"))
+    samples, log = with_lasio["gyropipe las, samples"], with_lasio["gyropipe las, log"]
+    las = with_lasio["lasio.read"]
     same = all(
         np.array_equal(
             samples.result.column(name).to_numpy(zero_copy_only=False),
