@@ -390,11 +390,19 @@ def _log_failures(table: pa.Table) -> list[RuleFailure]:
             failures.append(failure)
     for name in names[1:]:
         col = table.column(name)
-        if pa.types.is_floating(col.type):
+        if pa.types.is_floating(col.type) and _holds_infinity(col):
             bad = np.isinf(col.to_numpy(zero_copy_only=False))
-            if bad.any():
-                failures.append(rule_failure(name, "finite", "numbers or NaN (no ±inf)", bad, col))
+            failures.append(rule_failure(name, "finite", "numbers or NaN (no ±inf)", bad, col))
     return failures
+
+
+def _holds_infinity(col: pa.ChunkedArray) -> bool:
+    """Whether a float column holds ±inf among its values (not its nulls): chunk by chunk,
+    a chunk without nulls read in place (no copy of the column; a log's curve read from
+    LAS comes in a chunk per block), one with nulls as NumPy with NaN for them."""
+    return any(
+        np.isinf(chunk.to_numpy(zero_copy_only=chunk.null_count == 0)).any() for chunk in col.chunks
+    )
 
 
 def _index_failure(field: pa.Field, col: pa.ChunkedArray) -> RuleFailure | None:
@@ -409,7 +417,7 @@ def _index_failure(field: pa.Field, col: pa.ChunkedArray) -> RuleFailure | None:
         )
     if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
         return None
-    values = col.to_numpy(zero_copy_only=False).astype(np.float64)
+    values = col.to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
     bad = ~np.isfinite(values)
     if bad.any():
         return rule_failure(field.name, "index", expected, bad, col)

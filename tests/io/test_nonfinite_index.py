@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -15,6 +16,7 @@ import pytest
 import pipeline as gp
 from pipeline.errors import InputFileError
 from pipeline.io.csv import write_csv
+from pipeline.plugin import ContractViolation, LogTable
 from pipeline.well import WellMetadata
 from tests_support import ROOT, gyropipe_cli
 
@@ -95,3 +97,22 @@ def test_the_las_writer_refuses_a_log_indexed_by_text(tmp_path: Path) -> None:
     with pytest.raises(gp.GyropipeError, match=r"the first column 'DEPT' is text"):
         gp.write(table, path)
     assert not path.exists()
+
+
+def _null_over_infinity() -> pa.Array:
+    """[1.0, null, 3.0] whose null's slot holds the bits of +inf (a writer may leave any)."""
+    validity = pa.py_buffer(np.packbits([1, 0, 1], bitorder="little").tobytes())
+    values = pa.py_buffer(np.array([1.0, math.inf, 3.0]).tobytes())
+    return pa.Array.from_buffers(pa.float64(), 3, [validity, values])
+
+
+def test_a_log_curve_is_checked_chunk_by_chunk_its_nulls_not_read_as_values() -> None:
+    """The curve's chunks are checked in place where they hold no null: an infinite value in
+    a later chunk is refused at its row of the whole table, a null whose slot holds inf bits
+    is a null."""
+    md = pa.chunked_array([[0.0, 1.0, 2.0], [3.0, 4.0]])
+    curve = pa.chunked_array([_null_over_infinity(), pa.array([4.0, 5.0])])
+    LogTable.validate_table(pa.table({"md": md, "gr": curve}))
+    curve = pa.chunked_array([_null_over_infinity(), pa.array([4.0, -math.inf])])
+    with pytest.raises(ContractViolation, match=r"column 'gr': finite: .*first: row 4: -inf"):
+        LogTable.validate_table(pa.table({"md": md, "gr": curve}))
