@@ -10,6 +10,7 @@ stat before and after), and checks that ``OUT/<well>`` holds the run once publis
 
 from __future__ import annotations
 
+import gc
 import json
 import os
 import resource
@@ -119,7 +120,15 @@ def worker_init(ref: PipelineRef, batch_pid: int) -> None:
     parallelism, and a worker's BLAS threads spinning on the cores the other workers use
     cost 2 workers on 2 cores 18 % of their time (benchmarks/bench_batch.py). Arrow's
     allocator gives freed memory back (:func:`~pipeline.streams.use_returning_memory_pool`);
-    pandas is loaded only if a stage imports it (:mod:`pipeline.lazy_pandas`)."""
+    pandas is loaded only if a stage imports it (:mod:`pipeline.lazy_pandas`).
+
+    First of all, every object a forked worker inherits is frozen out of the garbage
+    collector (``gc.freeze``): the batch process's garbage — a pool of an earlier batch in
+    the same process, not yet collected — would otherwise be collected here, and
+    ``concurrent.futures``' callback for a collected pool takes that pool's lock, which a
+    thread of the batch process may have held as it forked: the worker hung there for
+    good, and the batch with it (a resumed batch after a full ledger, in one process)."""
+    gc.freeze()
     defer_pandas()
     threadpool_limits(limits=1)
     use_returning_memory_pool()
