@@ -8,6 +8,7 @@ import math
 import os
 import re
 import shutil
+import subprocess
 import sys
 import textwrap
 import warnings
@@ -120,6 +121,20 @@ def pythonpath(*dirs: Path) -> dict[str, str]:
     them (a worktree's ``src``, so a subprocess runs the gyropipe under test)."""
     kept = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return {**os.environ, "PYTHONPATH": os.pathsep.join([*map(str, dirs), *kept])}
+
+
+def faults_of(script: str, *args: object, timeout: float = 120) -> int:
+    """The page-fault count a ``python -c script args…`` prints (a fresh process: a fresh
+    heap, the gyropipe under test on its path)."""
+    found = subprocess.run(
+        [sys.executable, "-c", script, *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=pythonpath(),
+        timeout=timeout,
+        check=True,
+    )
+    return int(found.stdout)
 
 
 def plugin_site(root: Path, plugins: Mapping[str, tuple[str, str]]) -> Path:

@@ -14,7 +14,6 @@ Parquet row group.
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 import textwrap
 from functools import cache
@@ -42,7 +41,7 @@ from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from pipeline.spec import load_spec
 from stream_support import ROWS, Alive, counting_reader, registry_with
-from tests_support import pythonpath
+from tests_support import faults_of
 
 DATA = Path(__file__).parents[1] / "data" / "continuous"
 TOLERANCE = 1e-9  # deg
@@ -249,12 +248,5 @@ def test_a_second_integration_reuses_the_heap_of_the_first() -> None:
     """A chunk's temporaries (≈ 15 MiB here) freed at the top of the heap were handed back
     at a 4 MiB trim threshold and faulted in again, chunk after chunk and well after well
     (1,724 page faults for this run's second integration); kept, the heap is reused."""
-    found = subprocess.run(
-        [sys.executable, "-c", HEAP_FAULTS, str(DATA), str(LAT)],
-        capture_output=True,
-        text=True,
-        env=pythonpath(),
-        timeout=120,
-        check=True,
-    )
-    assert int(found.stdout) < 256, found.stdout
+    faults = faults_of(HEAP_FAULTS, DATA, LAT)
+    assert faults < 256, faults

@@ -32,6 +32,7 @@ from pipeline.tables import Stations, Trajectory
 from pipeline.well import WellMetadata, attach
 from tests_support import (
     ROOT,
+    faults_of,
     gyropipe,
     gyropipe_cli,
     pythonpath,
@@ -162,15 +163,8 @@ def test_hashing_at_the_batch_mmap_threshold_maps_no_block_afresh(tmp_path: Path
     faulted in afresh (11,521 page faults for 47 MB); one reused buffer is not."""
     path = tmp_path / "big.bin"
     path.write_bytes(np.random.default_rng(4).bytes(16 << 20))  # 4,096 pages
-    found = subprocess.run(
-        [sys.executable, "-c", HASH_FAULTS, str(path)],
-        capture_output=True,
-        text=True,
-        env=pythonpath(),
-        timeout=60,
-        check=True,
-    )
-    assert int(found.stdout) < 256, found.stdout
+    faults = faults_of(HASH_FAULTS, path, timeout=60)
+    assert faults < 256, faults
 
 
 def test_cli_overrides_and_well_metadata(tmp_path: Path):

@@ -66,6 +66,18 @@ def with_short_courses(path: Path) -> None:
     path.write_text("\n".join(out) + "\n")
 
 
+def short_well_batch(tmp_path: Path) -> tuple[list[Any], Path]:
+    """The arguments of a batch of the short-course well SHORT through the survey stages
+    without a report, and its output directory."""
+    wells = tmp_path / "in"
+    wells.mkdir()
+    with_short_courses(wells / "SHORT.csv")
+    pipeline = tmp_path / "bare.yaml"
+    pipeline.write_text(pipeline_yaml(survey_stages(), name="bare"))
+    out = tmp_path / "out"
+    return ["batch", pipeline, "--inputs", f"{wells}/*.csv", "--out", out], out
+
+
 def largest(md: list[float], dls: list[float], shortest: float) -> float:
     """The largest DLS over courses at least ``shortest`` m long (the first station ends
     no course)."""
@@ -257,13 +269,7 @@ def test_figures_an_earlier_version_put_in_the_ledger_read_as_computed(
     course): an ``--only-changed`` batch that skips the well from the ledger alone shows
     them, said so."""
     monkeypatch.setattr(filestate, "SETTLED_S", 0.0)
-    wells = tmp_path / "in"
-    wells.mkdir()
-    with_short_courses(wells / "SHORT.csv")
-    pipeline = tmp_path / "bare.yaml"
-    pipeline.write_text(pipeline_yaml(survey_stages(), name="bare"))
-    out = tmp_path / "out"
-    args = ["batch", pipeline, "--inputs", f"{wells}/*.csv", "--out", out]
+    args, out = short_well_batch(tmp_path)
     gyropipe_cli(*args, check=True)
     gyropipe_cli(*args, "--only-changed", check=True)  # a worker looks at the publication
     with contextlib.closing(sqlite3.connect(out / "ledger.sqlite")) as db, db:
@@ -280,13 +286,8 @@ def test_figures_an_earlier_version_put_in_the_ledger_read_as_computed(
 def test_figures_edited_in_batch_json_are_not_shown(tmp_path: Path) -> None:
     """A ``batch.json`` whose figures hold text where numbers belong (edited by hand): the
     page says so and reads the well's tables instead, saying the rule is not the run's own."""
-    wells = tmp_path / "in"
-    wells.mkdir()
-    with_short_courses(wells / "SHORT.csv")
-    pipeline = tmp_path / "bare.yaml"
-    pipeline.write_text(pipeline_yaml(survey_stages(), name="bare"))
-    out = tmp_path / "out"
-    gyropipe_cli("batch", pipeline, "--inputs", f"{wells}/*.csv", "--out", out, check=True)
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
     marker = out / "SHORT" / "batch.json"
     record = json.loads(marker.read_text())
     record["figures"]["max_dls"] = "<b>huge</b>"
