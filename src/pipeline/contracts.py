@@ -288,8 +288,8 @@ class BatchChecker:
 
     def _step_holds(self, last: dict[str, Any], first: dict[str, Any]) -> bool:
         """Whether the step from row ``last`` to row ``first`` plainly keeps every order rule
-        (float columns, no value missing, within one group): the step of two numbers, as
-        :func:`_steps_hold` takes it; else it is checked as a table of the two rows."""
+        (float columns, no value missing, within one group), by :func:`_steps_hold`, the rule
+        a batch's own steps are held to; else it is checked as a table of the two rows."""
         assert self.steps is not None
         group = self.steps.group_by
         if group in first and (first[group] is None or first[group] != last[group]):
@@ -300,9 +300,7 @@ class BatchChecker:
             before, after = last[spec.name], first[spec.name]
             if not (isinstance(before, float) and isinstance(after, float)):
                 return False
-            step = after - before  # IEEE double, as NumPy's
-            floor = 0.0 if spec.min_step is None else spec.min_step
-            if not ((step > 0.0 if spec.monotonic == "strict" else step >= 0.0) and step >= floor):
+            if not _steps_hold(spec, np.array([before, after])):
                 return False
         return True
 
