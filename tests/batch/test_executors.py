@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 import time
 from pathlib import Path
 
@@ -32,6 +33,25 @@ def test_pool_workers_run_blas_single_threaded(survey: Path):
     blas = [lib for lib in libraries if lib["user_api"] == "blas"]
     assert blas, libraries  # numpy's OpenBLAS is loaded in the worker
     assert {lib["num_threads"] for lib in blas} == {1}
+
+
+def test_the_pool_does_not_fork_while_another_thread_runs(survey: Path):
+    """A fork copies every lock another thread holds, held for good in the child (an
+    earlier pool's thread in a notebook or a resumed batch hung a worker so): with another
+    thread running, the workers come from the forkserver, and they run tasks."""
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait, daemon=True)
+    other.start()
+    try:
+        executor = LocalExecutor(1, PipelineRef(str(survey), load_spec(survey).spec))
+    finally:
+        stop.set()
+        other.join()
+    try:
+        assert executor._pool._mp_context.get_start_method() == "forkserver"
+        assert executor._pool.submit(os.getpid).result(timeout=60) != os.getpid()
+    finally:
+        executor.close(cancel=True)
 
 
 def test_the_local_dask_cluster_keeps_glibc_adaptive_malloc(survey: Path):

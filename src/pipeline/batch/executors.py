@@ -8,11 +8,13 @@ batch's :class:`~pipeline.executing.PipelineRef` once, not with every task.
 
 On Linux the local pool forks its workers from the batch process when it is created — before
 the batch opens its ledger or starts any thread — so they start with gyropipe and its plugins
-already imported; elsewhere, and for pools created later, workers come from a ``forkserver``
-that imports gyropipe once. Each worker exits as soon as the batch process is gone, so a
-killed batch leaves no orphan still writing outputs. A worker killed by the OS (out of
-memory, a crash in native code) breaks the pool: the wells that were in it are run again,
-each alone in a one-process pool, so only the well that kills its worker fails.
+already imported. It forks only while the process runs no other thread: a fork copies a lock
+some other thread holds, held for good in the child (a notebook kernel's threads, an earlier
+pool's or a Dask client's). Then, elsewhere, and for pools created later, workers come from a
+``forkserver`` that imports gyropipe once. Each worker exits as soon as the batch process
+is gone, so a killed batch leaves no orphan still writing outputs. A worker killed by the OS
+(out of memory, a crash in native code) breaks the pool: the wells that were in it are run
+again, each alone in a one-process pool, so only the well that kills its worker fails.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import logging
 import multiprocessing
 import os
 import sys
+import threading
 from typing import Any, Protocol
 
 from pipeline.errors import did_you_mean
@@ -62,7 +65,8 @@ class LocalExecutor:
         self._ref = ref
         self._later = multiprocessing.get_context("forkserver")
         self._later.set_forkserver_preload(PRELOAD)
-        early = multiprocessing.get_context("fork") if sys.platform == "linux" else self._later
+        alone = sys.platform == "linux" and threading.active_count() == 1
+        early = multiprocessing.get_context("fork") if alone else self._later
         self._pool = self._new_pool(workers, early)
         self._pool.submit(os.getpid)  # a forking pool starts all its workers on a first task
         self._solo: cf.ProcessPoolExecutor | None = None
