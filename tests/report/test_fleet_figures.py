@@ -26,8 +26,6 @@ from pipeline.batch import filestate
 from tests_support import ROOT, gyropipe_cli, pipeline_yaml, stage, survey_stages
 
 STATIONS = ROOT / "examples" / "stations-j-well.csv"
-CHI2_1_MEDIAN = 0.454936
-"""the median of χ² with one degree of freedom (scipy.stats.chi2(1).median())"""
 
 
 def page_rows(page: Path) -> dict[str, list[str]]:
@@ -203,36 +201,44 @@ def test_a_run_persisted_as_csv_shows_its_figures(tmp_path: Path) -> None:
         assert cell(rows, "PQ", "qc") == "—"
 
 
+def chi2_sample_median_mean(n: int) -> float:
+    """E of the sample median of n χ²₁ values (the mean of the middle two for even n), from
+    the order statistics' laws: X₍ⱼ₎ = F⁻¹(U₍ⱼ₎), U₍ⱼ₎ ~ Beta(j, n + 1 − j)."""
+    from scipy import integrate, stats
+
+    def order(j: int) -> float:
+        law = stats.beta(j, n + 1 - j)
+        return integrate.quad(lambda u: stats.chi2.ppf(u, 1) * law.pdf(u), 0, 1, limit=200)[0]
+
+    return float(np.mean([order(j) for j in sorted({(n + 1) // 2, n // 2 + 1})]))
+
+
 def tie_in_rate(readings: list[dict[str, Any]], tie: int = 0) -> tuple[float, float]:
     """The drift rate (°/h) of a free-gyro survey from its tie station's misclosure and its
     σ, computed here from the readings: the rate's error is that of the two tie readings,
-    √2·σ_r over the time between them; σ_r, the one σ of a reading that makes the median of
-    the in/out differences' d²/Var(d) the median of χ²₁ (no other error in Var(d): the
-    tie-in rate's is carried by the readings), so σ_r² = median(d²/g)/0.4549 with g the
-    sum of squared weights of the readings' errors in d."""
+    √2·σ_r over the time between them. σ_r from the in/out differences d_k of the other
+    stations: a rate error (the tie-in's) adds to d_k in proportion to the time Δτ_k
+    between its readings, so the least-squares line in Δτ is removed, leaving r_k of
+    variance 2σ_r²(1 − h_k), h_k = Δτ_k²/ΣΔτ²; σ_r² = median(r_k²/(2(1 − h_k))) over the
+    expected sample median of as many χ²₁ values (no pair is an outlier: asserted)."""
     time = np.array([r["time"] for r in readings], float)
     azi = np.array([r["azi"] for r in readings], float)
     first = next(i for i, r in enumerate(readings) if r["station"] == tie and r["run"] == "in")
     last = [i for i, r in enumerate(readings) if r["station"] == tie and r["run"] == "out"][-1]
     span_h = (time[last] - time[first]) / 3600.0
     rate = ((azi[last] - azi[first] + 180.0) % 360.0 - 180.0) / span_h
-    tau = (time - time[first]) / 3600.0
-    corrected = azi - rate * tau
-    weights = np.eye(len(readings))  # error of each corrected reading in the readings' errors
-    weights[:, last] -= tau / span_h
-    weights[:, first] += tau / span_h
     runs: dict[str, dict[int, int]] = {"in": {}, "out": {}}
     for i, r in enumerate(readings):
         runs[r["run"]][r["station"]] = i
-    ratios = []
-    for station in sorted(set(runs["in"]) & set(runs["out"])):
-        a, b = runs["in"][station], runs["out"][station]
-        g = float(np.sum((weights[a] - weights[b]) ** 2))
-        if g > 1e-12:
-            d = (corrected[a] - corrected[b] + 180.0) % 360.0 - 180.0
-            ratios.append(d * d / g)
-    sigma_r = math.sqrt(float(np.median(ratios)) / CHI2_1_MEDIAN)
-    return rate, math.sqrt(2.0) * sigma_r / span_h
+    both = sorted((set(runs["in"]) & set(runs["out"])) - {tie})
+    a, b = (np.array([runs[run][s] for s in both]) for run in ("in", "out"))
+    d = (azi[a] - azi[b] + 180.0) % 360.0 - 180.0  # raw: the whole drift is a rate
+    gap = (time[a] - time[b]) / 3600.0
+    residual = d - gap * (gap @ d) / (gap @ gap)
+    ratios = residual**2 / (2.0 * (1.0 - gap**2 / (gap @ gap)))
+    variance = float(np.median(ratios)) / chi2_sample_median_mean(len(ratios))
+    assert ratios.max() < 25.0 * variance  # within 5 σ: none left out
+    return rate, math.sqrt(2.0) * math.sqrt(variance) / span_h
 
 
 def test_a_free_gyro_survey_s_drift_sigma_is_persisted_and_shown(tmp_path: Path) -> None:

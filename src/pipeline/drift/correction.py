@@ -26,8 +26,17 @@ plus the rate error δω (σ_ω): ``err = G·ε + τ·δω`` with τ = t − t0 
 ``Cov = σ_r²·G·Gᵀ + σ_ω²·τ·τᵀ`` exactly (tie-in: G = I − u·(e_last − e_first)ᵀ,
 u = (t − t0)/(t_last − t_first); a reference subtracts e_first from every row). σ_r is the
 ``reading_sigma`` parameter, or estimated robustly from the in/out differences d_k of the
-stations read twice: the σ_r² making ``median(d_k²/Var(d_k)) = 0.4549`` (the median of
-χ²₁), so a few bad stations do not inflate it. Azimuths in degrees, times in seconds.
+stations read twice, the tie-in readings left out. A rate error δω adds δω·Δτ_k to d_k
+(Δτ_k the time between the station's two readings), and so does a tie-in's own error: the
+least-squares line in Δτ is removed from the d_k, leaving residuals r_k independent of the
+rate's error (an estimate that saw it would shrink the stated σ where the error is large).
+σ_r² = median(r_k²/g_k) / m_n, g_k = Var(r_k)/σ_r², m_n the expected sample median of n
+χ²₁ values (order-statistic quadrature, :func:`chi2_median_mean`; 0.4549, the median of
+χ²₁, only as n → ∞), so σ_r² is unbiased for a few dozen pairs. Pairs beyond
+``OUTLIER``·σ̂_r are left out of the line and the median is taken again, so a bad station
+moves neither. The σ's carry σ̂_r as if known (no Student-t widening): with 40–80 pairs
+±1.96 σ holds 94 % of the errors (benchmarks/README.md, study_drift_sigma.py). Azimuths in
+degrees, times in seconds.
 
 QC: each station read on both runs is compared after correction; it fails when
 ``|inc_in − inc_out| > inc_tolerance`` (default 0.23°) or ``|azi_in − azi_out|`` exceeds
@@ -37,7 +46,9 @@ QC: each station read on both runs is compared after correction; it fails when
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -48,8 +59,8 @@ from pipeline.contracts import NORTH_KEY
 from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
 
-CHI2_1_MEDIAN = 0.454936
-"""Median of the χ² distribution with one degree of freedom."""
+OUTLIER = 5.0
+"""A pair whose residual exceeds this many σ of it is left out of σ_r's rate line."""
 
 
 class CorrectionOptions(BaseModel):
@@ -174,6 +185,7 @@ def correct_survey(
     tau = (time - t0) / 3600.0
     mix = np.eye(n)
     span_h: float | None = None  # tie-in: the time between its two readings, h
+    tie: tuple[int, ...] = ()  # tie-in: their rows
     if rate is None:
         if first is None or not len(tie_out) or tie_out[-1] <= first:
             raise ValueError(
@@ -181,7 +193,7 @@ def correct_survey(
                 f"{options.tie_station}; give a calibration or a drift_rate instead"
             )
         last = int(tie_out[-1])
-        span_h = float(tau[last])
+        span_h, tie = float(tau[last]), (first, last)
         rate = DriftRate(float(wrap(azi[last] - azi[first]) / span_h), 0.0, "tie-in misclosure")
         mix[:, last] -= tau / span_h
         mix[:, first] += tau / span_h
@@ -198,7 +210,7 @@ def correct_survey(
     pairs = _pairs(run, station)
     sigma_r = options.reading_sigma
     if sigma_r is None:
-        sigma_r = _reading_sigma(corrected, mix, tau, rate.sigma, pairs)
+        sigma_r = _reading_sigma(corrected, mix, tau, pairs, tie)
     cov = sigma_r**2 * mix @ mix.T + rate.sigma**2 * np.outer(tau, tau)
     if span_h is not None:  # the rate's error is in ``mix``: the two tie-in readings'
         rate = DriftRate(rate.rate, float(np.sqrt(2.0) * sigma_r / span_h), rate.source)
@@ -245,27 +257,71 @@ def _pairs(run: np.ndarray, station: np.ndarray) -> np.ndarray:
     return np.array([[rows_in[s], rows_out[s]] for s in both], dtype=np.int64).reshape(-1, 2)
 
 
+@lru_cache(maxsize=256)
+def chi2_median_mean(n: int) -> float:
+    """Expected sample median of ``n`` independent χ²₁ values: E[X₍ₘ₎] = ∫ x·f₍ₘ₎(x) dx by
+    quadrature, f₍ₘ₎ = Beta(m, m)(F(x))·f(x) the density of the middle of 2m − 1 values; an
+    even n's (the mean of its middle two) is that of n − 1, by the order-statistic
+    recurrence. 1 for n ≤ 2; → 0.4549 (the median of χ²₁) as n grows."""
+    from scipy import integrate  # imported on use: slow to import
+
+    if n < 1:
+        raise ValueError(f"the median of {n} values")
+    m = (n + 1) // 2
+    log_beta = 2 * math.lgamma(m) - math.lgamma(2 * m)
+
+    def density(x: float) -> float:  # x·f₍ₘ₎(x), F(x) = erf(√(x/2)) for χ²₁
+        below, above = math.erf(math.sqrt(x / 2)), math.erfc(math.sqrt(x / 2))
+        if below <= 0.0 or above <= 0.0:
+            return 0.0
+        log_order = (m - 1) * (math.log(below) + math.log(above)) - log_beta
+        return math.exp(log_order - x / 2) * math.sqrt(x / (2 * math.pi))
+
+    return float(integrate.quad(density, 0.0, np.inf, limit=200, epsabs=1e-12)[0])
+
+
 def _reading_sigma(
-    corrected: FloatArray, mix: FloatArray, tau: FloatArray, rate_sigma: float, pairs: np.ndarray
+    corrected: FloatArray,
+    mix: FloatArray,
+    tau: FloatArray,
+    pairs: np.ndarray,
+    tie: tuple[int, ...],
 ) -> float:
-    """Robust σ_r from the in/out differences (module docstring)."""
-    from scipy.optimize import brentq  # imported on use: slow to import
+    """Robust σ_r (deg) from the in/out differences, their rate line removed (module
+    docstring); ``tie``: the tie-in's two rows, whose pairs are left out."""
+    diff = wrap(corrected[pairs[:, 0]] - corrected[pairs[:, 1]])
+    noise = mix[pairs[:, 0]] - mix[pairs[:, 1]]  # d_k's reading errors, apart from the rate
+    gap = tau[pairs[:, 0]] - tau[pairs[:, 1]]
+    rows = np.flatnonzero((np.sum(noise**2, axis=1) > 1e-12) & ~np.isin(pairs, tie).any(axis=1))
+    ratio = _residuals(diff[rows], gap[rows], noise[rows])
+    var = _median_variance(ratio)
+    far = ratio > OUTLIER**2 * var
+    if far.any():
+        rows = rows[~far]
+        var = _median_variance(_residuals(diff[rows], gap[rows], noise[rows]))
+    return float(np.sqrt(var))
 
-    diff = wrap(corrected[pairs[:, 0]] - corrected[pairs[:, 1]]) ** 2
-    gain = np.sum((mix[pairs[:, 0]] - mix[pairs[:, 1]]) ** 2, axis=1)
-    known = rate_sigma**2 * (tau[pairs[:, 0]] - tau[pairs[:, 1]]) ** 2
-    usable = gain > 1e-12
-    if not usable.any():
-        raise ValueError("no station read on both runs: give reading_sigma")
-    diff, gain, known = diff[usable], gain[usable], known[usable]
 
-    def excess(var: float) -> float:
-        return float(np.median(diff / np.maximum(var * gain + known, 1e-300))) - CHI2_1_MEDIAN
+def _residuals(diff: FloatArray, gap: FloatArray, noise: FloatArray) -> FloatArray:
+    """r_k²/g_k: the differences' squared residuals from their least-squares line through
+    the origin in ``gap``, over their variance per unit σ_r² (NaN where that is 0)."""
+    span = float(gap @ gap)
+    if span > 0:
+        diff = diff - gap * (gap @ diff) / span
+        noise = noise - np.outer(gap, gap @ noise) / span
+    gain = np.sum(noise**2, axis=1)
+    out: FloatArray = np.where(gain > 1e-12, diff**2 / np.where(gain > 1e-12, gain, 1.0), np.nan)
+    return out
 
-    if excess(0.0) <= 0:
-        return 0.0
-    upper = float(np.max(diff / gain)) / CHI2_1_MEDIAN + 1e-12
-    return float(np.sqrt(brentq(excess, 0.0, upper, xtol=1e-15, rtol=1e-10)))
+
+def _median_variance(ratio: FloatArray) -> float:
+    """σ_r² from r_k²/g_k: their median over that of as many χ²₁ values (NaNs left out)."""
+    values = ratio[np.isfinite(ratio)]
+    if len(values) < 2:
+        raise ValueError(
+            "fewer than two stations read on both runs (the tie-in aside): give reading_sigma"
+        )
+    return float(np.median(values)) / chi2_median_mean(len(values))
 
 
 def _stations(
