@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -86,10 +87,18 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     doc = _Document()
     doc.open("trajectorys", xmlns=NS, version=VERSION)
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
+    depth = 3  # trajectorys > trajectory > trajectoryStation > the station's numbers
     stations = [
-        (c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in STATION_COLUMNS if c in texts
+        _number_lines(texts[c], e, UNIT_UOM[u], depth) for c, e, u in STATION_COLUMNS if c in texts
     ]
-    covariance = [(c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in COVARIANCE if c in texts]
+    covariance = [
+        _number_lines(texts[c], e, UNIT_UOM[u], depth + 1) for c, e, u in COVARIANCE if c in texts
+    ]
+    full_covariance = (
+        np.logical_and.reduce([np.isfinite(values[c]) for c, _, _ in COVARIANCE]).tolist()
+        if len(covariance) == len(COVARIANCE)
+        else [False] * table.num_rows
+    )
     for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
@@ -126,16 +135,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
             doc.leaf("typeSurveyTool", own)
             if algorithm is not None:
                 doc.leaf("calcAlgorithm", algorithm)
-            for column, element, uom in stations:
-                text = texts[column][row]
-                if text is not None:
-                    doc.leaf_of(element, text, uom)
-            if len(covariance) == len(COVARIANCE) and all(
-                texts[column][row] is not None for column, _, _ in covariance
-            ):
+            doc.lines(lines[row] for lines in stations if lines[row] is not None)
+            if full_covariance[row]:
                 doc.open("matrixCov")
-                for column, element, uom in covariance:
-                    doc.leaf_of(element, texts[column][row], uom)
+                doc.lines(lines[row] for lines in covariance)
                 doc.close()
             doc.close()
         _common_data(doc, well)
@@ -229,6 +232,15 @@ def _numbers(array: np.ndarray) -> list[str | None]:
     return [repr(v) if ok else None for v, ok in zip(array.tolist(), finite, strict=True)]
 
 
+def _number_lines(texts: list[str | None], tag: str, uom: str, depth: int) -> list[str | None]:
+    """Each number of a column (:func:`_numbers`) as its element's line at ``depth`` (None
+    where there is none), as :meth:`_Document.leaf` writes it: a number's shortest
+    round-trip form (digits, ``.``, ``-``, ``e``, ``+``) holds nothing XML escapes."""
+    start = f"{'  ' * depth}<{tag}{_attributes({'uom': uom})}>"
+    end = f"</{tag}>\n"
+    return [None if text is None else start + text + end for text in texts]
+
+
 class _Document:
     """An XML document written as text, as ElementTree serialises it after ``ET.indent``
     (two spaces per level, ``<tag />`` when empty, text and attribute values escaped)."""
@@ -253,16 +265,15 @@ class _Document:
 
     def leaf(self, tag: str, text: str | None, **attrs: str) -> None:
         """An element holding ``text`` alone."""
-        self.leaf_of(tag, text, _attributes(attrs))
-
-    def leaf_of(self, tag: str, text: str | None, attributes: str) -> None:
-        """An element holding ``text`` alone, its attributes as :func:`_attributes` writes
-        them (a column's, the same on every station)."""
-        start = f"{'  ' * len(self._open)}<{tag}{attributes}"
+        start = f"{'  ' * len(self._open)}<{tag}{_attributes(attrs)}"
         if not text:
             self._parts.append(f"{start} />\n")
         else:
             self._parts.append(f"{start}>{_escape(text)}</{tag}>\n")
+
+    def lines(self, lines: Iterable[str]) -> None:
+        """Lines already written, each a whole element at the current depth."""
+        self._parts.extend(lines)
 
     def text(self) -> str:
         """The document, every element closed."""
@@ -285,6 +296,8 @@ def _escape(text: str) -> str:
 
 
 def _attributes(attrs: dict[str, str]) -> str:
+    if not attrs:  # most elements (not a generator and a join each)
+        return ""
     return "".join(f' {k}="{v.translate(_ATTRIBUTE_ESCAPES)}"' for k, v in attrs.items())
 
 
