@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import itertools
 import re
-from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -88,17 +87,21 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     doc.open("trajectorys", xmlns=NS, version=VERSION)
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
     depth = 3  # trajectorys > trajectory > trajectoryStation > the station's numbers
-    stations = [
-        _number_lines(texts[c], e, UNIT_UOM[u], depth) for c, e, u in STATION_COLUMNS if c in texts
-    ]
-    covariance = [
-        _number_lines(texts[c], e, UNIT_UOM[u], depth + 1) for c, e, u in COVARIANCE if c in texts
-    ]
-    full_covariance = (
-        np.logical_and.reduce([np.isfinite(values[c]) for c, _, _ in COVARIANCE]).tolist()
-        if len(covariance) == len(COVARIANCE)
-        else [False] * table.num_rows
+    numbers = _rows(
+        [
+            _number_lines(texts[c], e, UNIT_UOM[u], depth)
+            for c, e, u in STATION_COLUMNS
+            if c in texts
+        ]
     )
+    full_covariance = [False] * table.num_rows
+    if all(c in texts for c, _, _ in COVARIANCE):
+        covariance = _rows(
+            [_number_lines(texts[c], e, UNIT_UOM[u], depth + 1) for c, e, u in COVARIANCE]
+        )
+        full_covariance = np.logical_and.reduce(
+            [np.isfinite(values[c]) for c, _, _ in COVARIANCE]
+        ).tolist()
     for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
@@ -135,10 +138,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
             doc.leaf("typeSurveyTool", own)
             if algorithm is not None:
                 doc.leaf("calcAlgorithm", algorithm)
-            doc.lines(lines[row] for lines in stations if lines[row] is not None)
+            doc.written(numbers[row])
             if full_covariance[row]:
                 doc.open("matrixCov")
-                doc.lines(lines[row] for lines in covariance)
+                doc.written(covariance[row])
                 doc.close()
             doc.close()
         _common_data(doc, well)
@@ -232,13 +235,18 @@ def _numbers(array: np.ndarray) -> list[str | None]:
     return [repr(v) if ok else None for v, ok in zip(array.tolist(), finite, strict=True)]
 
 
-def _number_lines(texts: list[str | None], tag: str, uom: str, depth: int) -> list[str | None]:
-    """Each number of a column (:func:`_numbers`) as its element's line at ``depth`` (None
+def _number_lines(texts: list[str | None], tag: str, uom: str, depth: int) -> list[str]:
+    """Each number of a column (:func:`_numbers`) as its element's line at ``depth`` (empty
     where there is none), as :meth:`_Document.leaf` writes it: a number's shortest
     round-trip form (digits, ``.``, ``-``, ``e``, ``+``) holds nothing XML escapes."""
     start = f"{'  ' * depth}<{tag}{_attributes({'uom': uom})}>"
     end = f"</{tag}>\n"
-    return [None if text is None else start + text + end for text in texts]
+    return ["" if text is None else start + text + end for text in texts]
+
+
+def _rows(columns: list[list[str]]) -> list[str]:
+    """The lines of each row, joined (columns of :func:`_number_lines`)."""
+    return ["".join(lines) for lines in zip(*columns, strict=True)]
 
 
 class _Document:
@@ -271,9 +279,10 @@ class _Document:
         else:
             self._parts.append(f"{start}>{_escape(text)}</{tag}>\n")
 
-    def lines(self, lines: Iterable[str]) -> None:
-        """Lines already written, each a whole element at the current depth."""
-        self._parts.extend(lines)
+    def written(self, text: str) -> None:
+        """Elements already written as text (whole lines at the current depth), if any."""
+        if text:
+            self._parts.append(text)
 
     def text(self) -> str:
         """The document, every element closed."""
