@@ -11,11 +11,12 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import functools
 import os
 import shutil
 import sys
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from pipeline.errors import file_errors
@@ -62,6 +63,53 @@ def write_synced(path: Path, data: bytes) -> None:
 def fsync_file(path: Path) -> None:
     with open(path, "rb") as fh:
         os.fsync(fh.fileno())
+
+
+def fsync_files(paths: Sequence[Path], named: Callable[[Path], Path]) -> None:
+    """fsync each of ``paths``, a failure a :class:`~pipeline.errors.FileSystemError`
+    "cannot write ``named(path)``". Where the OS can (Linux ``sync_file_range``), the
+    writeback of them all is started first, so that their fsyncs wait on it together rather
+    than each start its own: a continuous well's 15 files took 15–30 % less CPU time
+    (benchmarks/README.md). Every file is still fsynced: the start is a hint only."""
+    _start_writeback(paths)
+    for path in paths:
+        with file_errors("write", named(path)):
+            fsync_file(path)
+
+
+def _start_writeback(paths: Sequence[Path]) -> None:
+    """Start writing the files' dirty pages to disk without waiting (errors ignored: the
+    fsync that follows reports them)."""
+    start = _sync_file_range()
+    if start is None:
+        return
+    for path in paths:
+        try:
+            fd = os.open(path, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            start(fd, 0, 0, _SYNC_FILE_RANGE_WRITE)
+        finally:
+            os.close(fd)
+
+
+_SYNC_FILE_RANGE_WRITE = 2
+"""``sync_file_range``'s flag: start writeback of the range's dirty pages, do not wait"""
+
+
+@functools.cache
+def _sync_file_range() -> Callable[[int, int, int, int], int] | None:
+    """Linux's ``sync_file_range`` (from 0 to the end with lengths 0), None elsewhere."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        call = ctypes.CDLL(None, use_errno=True).sync_file_range
+    except AttributeError:
+        return None
+    call.argtypes = [ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_uint]
+    call.restype = ctypes.c_int
+    return call
 
 
 def fsync_dir(path: Path) -> None:

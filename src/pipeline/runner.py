@@ -27,7 +27,7 @@ from typing import Any, TypeAlias, TypeVar
 
 import pyarrow as pa
 
-from pipeline.atomic import atomic_write_bytes, discard, fsync_file, replace_dir, write_synced
+from pipeline.atomic import atomic_write_bytes, discard, fsync_files, replace_dir, write_synced
 from pipeline.contracts import SOURCE_KEY
 from pipeline.errors import (
     ContractViolation,
@@ -288,9 +288,7 @@ def run_plan(
         )
         if clashes:
             raise RunInputError(f"several outputs would be written as {sorted(clashes)}")
-        for path in written:
-            with file_errors("write", out_dir / path.name):
-                fsync_file(path)
+        fsync_files(written, lambda path: out_dir / path.name)
         final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = _manifest(

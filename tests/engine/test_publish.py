@@ -4,6 +4,7 @@ publish leaves either the complete previous run or the complete new one, never a
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import math
@@ -16,6 +17,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
+from pipeline import atomic
+from pipeline.errors import FileSystemError
 from tests_support import ROOT, gyropipe_cli, stage, survey_stages, write_pipeline
 
 SAMPLE = ROOT / "examples" / "stations-j-well.csv"
@@ -114,3 +117,36 @@ def test_a_directory_holding_other_files_is_not_replaced(tmp_path: Path) -> None
     assert done.returncode == 2
     assert "holds files that are not a previous run's (notes.txt)" in done.stderr
     assert (out / "notes.txt").read_text() == "mine"
+
+
+def test_every_file_is_fsynced_once_the_writeback_of_all_was_started(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """fsync_files fsyncs each file (the writeback started for them all first is a hint
+    only), and names a failing one as the caller publishes it."""
+    paths = [tmp_path / f"{name}.bin" for name in "abc"]
+    for path in paths:
+        path.write_bytes(b"x" * 5000)
+    events: list[tuple[str, str]] = []
+    real_fsync = os.fsync
+
+    def fsync(fd: int) -> None:
+        events.append(("fsync", os.readlink(f"/proc/self/fd/{fd}")))
+        real_fsync(fd)
+
+    def start(fd: int, offset: int, length: int, flags: int) -> int:
+        events.append(("start", os.readlink(f"/proc/self/fd/{fd}")))
+        return 0
+
+    monkeypatch.setattr(atomic, "_sync_file_range", lambda: start)
+    monkeypatch.setattr(os, "fsync", fsync)
+    atomic.fsync_files(paths, lambda path: path)
+    names = [str(path) for path in paths]
+    assert events == [("start", name) for name in names] + [("fsync", name) for name in names]
+
+    def no_space(fd: int) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", no_space)
+    with pytest.raises(FileSystemError, match=r"cannot write .*published\.bin"):
+        atomic.fsync_files(paths, lambda path: tmp_path / "out" / "published.bin")

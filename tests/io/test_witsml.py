@@ -231,6 +231,28 @@ def test_the_document_is_what_elementtree_writes_of_it(exports_run: RunResult, t
     assert [t.name for t in schema_parse(path).trajectory] == ["a&b", 'c"d']
 
 
+def test_a_station_lacks_only_the_numbers_it_lacks(trajectory: pa.Table, tmp_path: Path):
+    """A station with a value not finite lacks that element alone; one with a covariance
+    entry not finite lacks its matrixCov, the others keep theirs; the text is still
+    ElementTree's serialisation of the elements."""
+
+    def with_nan(table: pa.Table, name: str, row: int) -> pa.Table:
+        values = column(table, name).copy()
+        values[row] = np.nan
+        index = table.schema.get_field_index(name)
+        return table.set_column(index, table.schema.field(name), pa.array(values))
+
+    table = with_nan(with_nan(trajectory, "dls", 5), "cov_ev", 3)
+    path = tmp_path / "gaps.xml"
+    WRITER.write(table, path, well_of(trajectory) or WellMetadata())
+    assert path.read_bytes() == _elementtree_text(path)
+    stations = schema_parse(path).trajectory[0].trajectoryStation
+    assert [i for i, s in enumerate(stations) if s.matrixCov is None] == [3]
+    assert [i for i, s in enumerate(stations) if s.dls is None] == [5]
+    assert stations[4].matrixCov.varianceEVert.value() == column(trajectory, "cov_ev")[4]
+    assert stations[3].dls.value() == column(trajectory, "dls")[3]
+
+
 @pytest.mark.parametrize(
     ("tool_type", "expected"),
     [

@@ -86,10 +86,22 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     doc = _Document()
     doc.open("trajectorys", xmlns=NS, version=VERSION)
     labels = table.column("survey").to_pylist() if "survey" in table.column_names else None
-    stations = [
-        (c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in STATION_COLUMNS if c in texts
-    ]
-    covariance = [(c, e, _attributes({"uom": UNIT_UOM[u]})) for c, e, u in COVARIANCE if c in texts]
+    depth = 3  # trajectorys > trajectory > trajectoryStation > the station's numbers
+    numbers = _rows(
+        [
+            _number_lines(texts[c], e, UNIT_UOM[u], depth)
+            for c, e, u in STATION_COLUMNS
+            if c in texts
+        ]
+    )
+    full_covariance = [False] * table.num_rows
+    if all(c in texts for c, _, _ in COVARIANCE):
+        covariance = _rows(
+            [_number_lines(texts[c], e, UNIT_UOM[u], depth + 1) for c, e, u in COVARIANCE]
+        )
+        full_covariance = np.logical_and.reduce(
+            [np.isfinite(values[c]) for c, _, _ in COVARIANCE]
+        ).tolist()
     for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
@@ -126,16 +138,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
             doc.leaf("typeSurveyTool", own)
             if algorithm is not None:
                 doc.leaf("calcAlgorithm", algorithm)
-            for column, element, uom in stations:
-                text = texts[column][row]
-                if text is not None:
-                    doc.leaf_of(element, text, uom)
-            if len(covariance) == len(COVARIANCE) and all(
-                texts[column][row] is not None for column, _, _ in covariance
-            ):
+            doc.written(numbers[row])
+            if full_covariance[row]:
                 doc.open("matrixCov")
-                for column, element, uom in covariance:
-                    doc.leaf_of(element, texts[column][row], uom)
+                doc.written(covariance[row])
                 doc.close()
             doc.close()
         _common_data(doc, well)
@@ -229,6 +235,20 @@ def _numbers(array: np.ndarray) -> list[str | None]:
     return [repr(v) if ok else None for v, ok in zip(array.tolist(), finite, strict=True)]
 
 
+def _number_lines(texts: list[str | None], tag: str, uom: str, depth: int) -> list[str]:
+    """Each number of a column (:func:`_numbers`) as its element's line at ``depth`` (empty
+    where there is none), as :meth:`_Document.leaf` writes it: a number's shortest
+    round-trip form (digits, ``.``, ``-``, ``e``, ``+``) holds nothing XML escapes."""
+    start = f"{'  ' * depth}<{tag}{_attributes({'uom': uom})}>"
+    end = f"</{tag}>\n"
+    return ["" if text is None else start + text + end for text in texts]
+
+
+def _rows(columns: list[list[str]]) -> list[str]:
+    """The lines of each row, joined (columns of :func:`_number_lines`)."""
+    return ["".join(lines) for lines in zip(*columns, strict=True)]
+
+
 class _Document:
     """An XML document written as text, as ElementTree serialises it after ``ET.indent``
     (two spaces per level, ``<tag />`` when empty, text and attribute values escaped)."""
@@ -253,16 +273,16 @@ class _Document:
 
     def leaf(self, tag: str, text: str | None, **attrs: str) -> None:
         """An element holding ``text`` alone."""
-        self.leaf_of(tag, text, _attributes(attrs))
-
-    def leaf_of(self, tag: str, text: str | None, attributes: str) -> None:
-        """An element holding ``text`` alone, its attributes as :func:`_attributes` writes
-        them (a column's, the same on every station)."""
-        start = f"{'  ' * len(self._open)}<{tag}{attributes}"
+        start = f"{'  ' * len(self._open)}<{tag}{_attributes(attrs)}"
         if not text:
             self._parts.append(f"{start} />\n")
         else:
             self._parts.append(f"{start}>{_escape(text)}</{tag}>\n")
+
+    def written(self, text: str) -> None:
+        """Elements already written as text (whole lines at the current depth), if any."""
+        if text:
+            self._parts.append(text)
 
     def text(self) -> str:
         """The document, every element closed."""
@@ -285,6 +305,8 @@ def _escape(text: str) -> str:
 
 
 def _attributes(attrs: dict[str, str]) -> str:
+    if not attrs:  # most elements (not a generator and a join each)
+        return ""
     return "".join(f' {k}="{v.translate(_ATTRIBUTE_ESCAPES)}"' for k, v in attrs.items())
 
 
