@@ -168,8 +168,8 @@ def odometer_fit(store: ColumnStore, begin: int, end: int, window: float, rows: 
         if fitted:
             wlo, whi = savgol_span(lo, hi, a, b, points)
             wide = store.floats("md", wlo, whi)
-            fit = {
-                name: savgol_range(wide, wlo, a, b, points, 3, d, dt)
+            fit = {  # direct sums: the MD's magnitude would round an FFT's acceleration
+                name: savgol_range(wide, wlo, a, b, points, 3, d, dt, direct=True)
                 for d, name in enumerate(("md", "speed", "accel"))
             }
         else:
