@@ -288,11 +288,13 @@ def _inclination_toolface(
     it v·(İ·hs + sin I·Ȧ·rs) from ``across``: the speed (m/s) and the current İ and Ȧ
     (rad/s; None: zero)."""
     axial = gz + accel
-    tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
-    if across is not None:
+    if across is None:
+        tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
+    else:  # the first estimate's toolface and inclination: their sines and cosines only
         speed, inc_rate, azi_rate = across
+        sin_tf, cos_tf, transverse = _unit(gy, -gx)
         cross_h = speed * inc_rate
-        cross_r = speed * _polar(transverse, axial)[1] * azi_rate
+        cross_r = speed * _unit(transverse, axial)[0] * azi_rate
         cx = gx + cross_h * cos_tf + cross_r * sin_tf
         cy = gy - cross_h * sin_tf + cross_r * cos_tf
         tf, sin_tf, cos_tf, transverse = _polar(cy, -cx)
@@ -301,17 +303,22 @@ def _inclination_toolface(
 
 
 def _polar(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """``arctan2(y, x)``, its sine and cosine, and ``r = √(x² + y²)``: the sine and cosine as
-    y/r and x/r (the trig functions' values to an ulp or two, at a tenth of their cost; by
-    the trig functions where r is 0, not finite or NaN)."""
+    """``arctan2(y, x)`` and :func:`_unit`'s sine, cosine and radius."""
+    return np.arctan2(y, x), *_unit(y, x)
+
+
+def _unit(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The sine and cosine of ``arctan2(y, x)`` and ``r = √(x² + y²)``: the sine and cosine
+    as y/r and x/r (the trig functions' values to an ulp or two, at a tenth of their cost;
+    by the trig functions where r is 0, not finite or NaN)."""
     r = np.sqrt(x * x + y * y)
-    angle = np.arctan2(y, x)
     with np.errstate(invalid="ignore", divide="ignore"):
         sin, cos = y / r, x / r
     odd = np.flatnonzero(~((r > 0) & (r < np.inf)))
     if odd.size:
-        sin[odd], cos[odd] = np.sin(angle[odd]), np.cos(angle[odd])
-    return angle, sin, cos, r
+        angle = np.arctan2(y[odd], x[odd])
+        sin[odd], cos[odd] = np.sin(angle), np.cos(angle)
+    return sin, cos, r
 
 
 def _integrate(

@@ -92,6 +92,21 @@ class StoredRun:
     def read(self, lo: int, hi: int, held: tuple[int, int] | None) -> RunPart:
         """Time (s), odometer MD (m), inc, closed azimuth, toolface (rad) and flags of run
         samples ``lo``…``hi − 1``; ``held``: :meth:`held_span`."""
+        t, inc, azi, flags = self.angles(lo, hi, held)
+        return RunPart(
+            time=t,
+            md=self.odometer.reading(lo, hi),
+            inc=inc,
+            azi=azi,
+            toolface=self.odometer.store.floats("toolface", lo, hi),
+            flags=flags,
+        )
+
+    def angles(
+        self, lo: int, hi: int, held: tuple[int, int] | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.int64]]:
+        """Time (s), inc, closed azimuth (rad) and flags of run samples ``lo``…``hi − 1``
+        (:meth:`read` less the MD and toolface)."""
         store, t = self.odometer.store, self.odometer.time(lo, hi)
         azi = store.floats(self.azi_column, lo, hi)
         if self.shift:
@@ -106,25 +121,18 @@ class StoredRun:
             after = index <= held[1] if self.backward else index >= held[0]
             after &= store.read("held", lo, hi) == 0
             np.bitwise_or(flags, FLAG_AFTER_VERTICAL, out=flags, where=after)
-        return RunPart(
-            time=t,
-            md=self.odometer.reading(lo, hi),
-            inc=store.floats("inc", lo, hi),
-            azi=azi,
-            toolface=store.floats("toolface", lo, hi),
-            flags=flags,
-        )
+        return t, store.floats("inc", lo, hi), azi, flags
 
     def slice(self, lo: int, hi: int) -> RunGeometry:
         """Samples ``lo``…``hi − 1`` as the budget reads them (flags without the run-wide
         ones, which do not change what is integrated)."""
-        part = self.read(lo, hi, None)
+        t, inc, azi, flags = self.angles(lo, hi, None)
         return RunGeometry(
-            time=part.time,
-            inc=part.inc,
-            azi=part.azi,
+            time=t,
+            inc=inc,
+            azi=azi,
             misalignment=self.odometer.store.floats("misalignment", lo, hi),
-            usable=(part.flags & _NOT_INTEGRATED) == 0,
+            usable=(flags & _NOT_INTEGRATED) == 0,
             latitude=self.latitude,
             closure=self.closure,
             backward=self.backward,
