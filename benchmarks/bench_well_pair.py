@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve()
-STAGES = ("readings", "report")
+STAGES = ("readings", "continuous", "report")
 COLUMNS = ("floor", "worker", *STAGES)
 
 

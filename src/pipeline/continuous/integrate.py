@@ -362,10 +362,14 @@ def _integrate(
     def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
         sin_a, cos_a = sin_cos(a)
-        return (
-            const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
-            by_sin[k] * cos_a - by_cos[k] * sin_a,
-        )
+        # in place, the operations of const + by_cos·cos A + by_sin·sin A, by_sin·cos A −
+        # by_cos·sin A in their order (the same bits): fewer temporaries, a tenth less CPU
+        slope = by_sin[k] * cos_a
+        slope -= np.multiply(by_cos[k], sin_a)
+        value = np.multiply(by_cos[k], cos_a, out=cos_a)
+        value += const[k]
+        value += np.multiply(by_sin[k], sin_a, out=sin_a)
+        return value, slope
 
     start = np.full(t.size, azi0) if guess is None else guess.copy()
     start[0] = azi0
@@ -405,13 +409,24 @@ def _heun_series(
     growth = reach * float(np.exp(min(reach, 700.0)))
     for _ in range(_NEWTON_ITERATIONS):
         f, df = rate(azi, slice(None))
-        predicted = azi[:-1] + step * f[:-1]
+        predicted = step * f[:-1]
+        predicted += azi[:-1]
         f_next, df_next = rate(predicted, slice(1, None))
-        residual = azi[:-1] + half * (f[:-1] + f_next) - azi[1:]
-        gain = 1.0 + half * (df[:-1] + df_next * (1.0 + step * df[:-1]))
+        # in place (the same operations in the same order, commuted at most): residual
+        # A_k + Δt/2·(f_k + f_next) − A_{k+1}, gain 1 + Δt/2·(df_k + df_next·(1 + Δt·df_k))
+        residual = np.add(f[:-1], f_next, out=f_next)
+        residual *= half
+        residual += azi[:-1]
+        residual -= azi[1:]
+        gain = np.multiply(step, df[:-1], out=predicted)
+        gain += 1.0
+        gain *= df_next
+        gain += df[:-1]
+        gain *= half
+        gain += 1.0
         correction = _affine_recursion(gain, residual)
         azi[1:] += correction
-        largest = float(np.max(np.abs(correction)))
+        largest = float(np.max(np.abs(correction, out=correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
     raise ContinuousError(
@@ -436,6 +451,9 @@ def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
     for lo, hi in zip([0, *cuts], [*cuts, gain.size], strict=True):
         if hi > lo:
             product = np.cumprod(gain[lo:hi])
-            out[lo:hi] = product * (carry + np.cumsum(forcing[lo:hi] / product))
+            running = np.divide(forcing[lo:hi], product)
+            np.cumsum(running, out=running)
+            running += carry
+            np.multiply(product, running, out=out[lo:hi])
             carry = float(out[hi - 1])
     return out
