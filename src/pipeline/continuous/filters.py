@@ -51,7 +51,7 @@ def convolve_same(values: FloatArray, kernel: FloatArray, direct: bool = False) 
             return summed
         return _blocked(values, kernel)
     size = 1 << (n + m - 2).bit_length()  # a power of two ≥ n + m − 1
-    full = np.fft.irfft(np.fft.rfft(values, size) * np.fft.rfft(kernel, size), size)
+    full = np.fft.irfft(np.fft.rfft(values, size) * _spectrum(kernel, size), size)
     out: FloatArray = full[..., m // 2 : m // 2 + n]
     return out
 
@@ -80,7 +80,7 @@ def _blocked(values: FloatArray, kernel: FloatArray) -> FloatArray:
     padded = np.zeros(count * step)
     padded[:n] = values
     spectrum = np.fft.rfft(padded.reshape(count, step), size)
-    spectrum *= _kernel_spectrum(np.ascontiguousarray(kernel, np.float64).tobytes(), size)
+    spectrum *= _spectrum(kernel, size)
     blocks = np.fft.irfft(spectrum, size)
     full = np.zeros((count + 1) * step)
     full[: count * step] = blocks[:, :step].ravel()
@@ -88,6 +88,11 @@ def _blocked(values: FloatArray, kernel: FloatArray) -> FloatArray:
     tails[:, : m - 1] += blocks[:, step:]
     out: FloatArray = full[m // 2 : m // 2 + n]
     return out
+
+
+def _spectrum(kernel: FloatArray, size: int) -> NDArray[np.complex128]:
+    """The real FFT of length ``size`` of ``kernel`` (computed once per kernel and size)."""
+    return _kernel_spectrum(np.ascontiguousarray(kernel, np.float64).tobytes(), size)
 
 
 @functools.lru_cache(maxsize=16)

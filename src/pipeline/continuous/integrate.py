@@ -124,7 +124,6 @@ def _strapdown(
     sd = strapdown_run(table, ends, (begin, end), latitude, options)
     for name, values in (("inc", sd.inc), ("azi", sd.azi), ("toolface", sd.toolface)):
         store.write(name, 0, values)
-    store.write("misalignment", 0, np.zeros(odometer.size))
     store.write("flags", 0, sd.flags)
     store.write("held", 0, np.zeros(odometer.size, dtype=np.int8))
     # I carries the stops' accelerometer bias, no per-sample noise (gyro-driven)
@@ -185,7 +184,6 @@ def _apsidal_run(
                 zeros = np.zeros(hi - lo)
                 attitude = angles._replace(tf=zeros, sin_tf=zeros, cos_tf=np.ones(hi - lo))
                 inc_rate = _previous(store, "inc_rate", previous, sa, sb)
-            delta = attitude.tf
             order = slice(None, None, -1) if backward else slice(None)
             guess = None if previous is None else store.floats(f"azi{previous}", sa, sb)[order]
             index = np.arange(sa, sb)
@@ -216,7 +214,6 @@ def _apsidal_run(
                 for name, values in (
                     ("inc", inc[seg]),
                     ("toolface", tf[seg]),
-                    ("misalignment", delta[seg]),
                     ("flags", flags),
                     ("held", held.astype(np.int8)),
                 ):
@@ -236,7 +233,15 @@ def _apsidal_run(
     )
     shift = misclosure if options.closure and not backward else 0.0
     return StoredRun(
-        odometer, latitude, options.closure, backward, noise, azi_column, misclosure, shift
+        odometer,
+        latitude,
+        options.closure,
+        backward,
+        noise,
+        azi_column,
+        misclosure,
+        shift,
+        misaligned=not two_axis,  # δ = ψ, the toolface column
     )
 
 

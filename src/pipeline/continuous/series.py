@@ -50,8 +50,9 @@ class RunPart:
 @dataclass(frozen=True)
 class StoredRun:
     """An integrated run in the odometer's store, run sample 0 at row 0 of the columns
-    ``inc``, ``toolface``, ``misalignment`` (δ), ``flags``, ``held`` and the azimuth column
-    ``azi_column`` (before closure), all rad."""
+    ``inc``, ``toolface``, ``flags``, ``held`` and the azimuth column ``azi_column`` (before
+    closure), all rad; the gyro's misalignment δ from the high side is the toolface (a
+    single-axis tool, ``misaligned``) or 0."""
 
     odometer: Odometer
     latitude: float
@@ -66,6 +67,8 @@ class StoredRun:
     """integrated minus end-stop azimuth before correction, rad (NaN: no closure)"""
     shift: float = 0.0
     """misclosure removed linearly in time as the azimuth is read, rad"""
+    misaligned: bool = False
+    """δ is the toolface (the servo keeps a single-axis gyro near the high side), else 0"""
 
     @property
     def size(self) -> int:
@@ -131,7 +134,11 @@ class StoredRun:
             time=t,
             inc=inc,
             azi=azi,
-            misalignment=self.odometer.store.floats("misalignment", lo, hi),
+            misalignment=(
+                self.odometer.store.floats("toolface", lo, hi)
+                if self.misaligned
+                else np.zeros(t.size)
+            ),
             usable=(flags & _NOT_INTEGRATED) == 0,
             latitude=self.latitude,
             closure=self.closure,
