@@ -120,9 +120,9 @@ class NoiseSums:
                 for x in (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
             )
             inside = (np.abs(self.offsets) <= self.near) & (columns >= 0) & (columns < self.size)
-            # the row before the station's sample; the one from it on is the station-free row
-            # less it (the rows are linear in p), inside the neighbourhood, where both are
-            # the free rows' samples (halo: the filters' reach of them)
+            # the row of the samples before the station's (p = step there, 0 from it on); the
+            # row from it on is the station-free row less that one (the rows are linear in p):
+            # inside the neighbourhood the free rows see the same p (the filters reach < halo)
             p = step_n * before_mask
             q = p * d_inc_n + convolve_same(p * d_rate_n, self.d1)
             odo = convolve_same(q * sin_n, self.d2)
