@@ -207,10 +207,11 @@ def _apsidal_run(
             own = slice(a - sa, b - sa)  # the chunk's samples within the segment
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
-            if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
-                inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
-            store.write(f"inc_rate{n % 2}", a, inc_rate[own])
-            if n == options.passes - 1:
+            if n < options.passes - 1:  # İ for the next pass (the budget takes its own)
+                if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
+                    inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
+                store.write(f"inc_rate{n % 2}", a, inc_rate[own])
+            else:
                 for name, values in (
                     ("inc", inc[seg]),
                     ("toolface", tf[seg]),
