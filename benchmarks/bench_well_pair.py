@@ -7,8 +7,9 @@ this tree's, the other's, the other's, this tree's, … — each its floor first
 (:data:`bench_well_floor.FLOORS`, in its own process). A slow spell falls on both alike, so
 the median of the pairs' differences shows a change that the spread of either tree's wells
 would hide. Prints the load, each tree's least and median of the floor, the worker, the
-readings and the report stage (CPU ms), the medians of the differences, and each tree's
-ratio to the floor (the least and the median of both trees' floors: the same code).
+readings, continuous and report stages (CPU ms; 0 for a pipeline without one), the medians
+of the differences, and each tree's ratio to the floor (the least and the median of both
+trees' floors: the same code).
 
     python benchmarks/bench_well_pair.py OTHER_TREE [--pipeline point-gyro] [--pairs 30]
 """
@@ -24,7 +25,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve()
-STAGES = ("readings", "report")
+STAGES = ("readings", "continuous", "report")
 COLUMNS = ("floor", "worker", *STAGES)
 
 

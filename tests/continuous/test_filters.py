@@ -41,6 +41,22 @@ def test_convolve_same_matches_scipy_rows_and_series() -> None:
     np.testing.assert_allclose(convolve_same(rows, kernel), want, atol=1e-12)
 
 
+@pytest.mark.parametrize("taps", [101, 201])
+def test_long_series_by_blocks_matches_scipy_and_direct_is_numpys(taps: int) -> None:
+    """A series of many FFT blocks (the last one partial) by overlap-add: SciPy's to the
+    FFT's rounding (1e-16 of the values' magnitude, 1000 here); ``direct``: np.convolve's
+    own sums, to the bit."""
+    rng = np.random.default_rng(taps)
+    kernel = rng.normal(size=taps)
+    series = 1000.0 + np.cumsum(rng.normal(size=40_003))
+    want = signal.oaconvolve(series, kernel, mode="same")
+    got = convolve_same(series, kernel)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(series).max())
+    direct = np.convolve(series, kernel, mode="full")[taps // 2 : taps // 2 + series.size]
+    assert np.array_equal(convolve_same(series, kernel, direct=True), direct)
+    assert not np.array_equal(got, direct)  # by FFT
+
+
 @pytest.mark.parametrize("uniform", [True, False])
 def test_time_gradient_is_numpys_gradient_to_the_bit(uniform: bool) -> None:
     rng = np.random.default_rng(7)

@@ -14,6 +14,7 @@ import functools
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pipeline.earth.frames import FloatArray
 
@@ -35,18 +36,72 @@ def savgol_coeffs(points: int, order: int, deriv: int = 0, delta: float = 1.0) -
     return coeffs
 
 
-def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
+def convolve_same(values: FloatArray, kernel: FloatArray, direct: bool = False) -> FloatArray:
     """``values`` (1-D, or each row of a 2-D array) convolved with the odd-length ``kernel``,
     centred, zero beyond the ends: ``out[i] = Σ_j kernel[j]·values[i + h − j]`` (rows by
-    FFT, as ``scipy.signal.oaconvolve(mode="same")``)."""
+    FFT, as ``scipy.signal.oaconvolve(mode="same")``; a long series by FFTs of blocks,
+    :func:`_blocked`, a short one or a short kernel directly). ``direct``: each sum taken
+    directly whatever the lengths — its rounding relative to its own products, where the
+    FFT's is ≈ 1e-16 of the series' largest value (too coarse for the second derivative of
+    an odometer's MD of a kilometre and more)."""
     n, m = values.shape[-1], kernel.size
-    if values.ndim == 1:  # one series: direct (as quick as an FFT for these kernels)
-        direct: FloatArray = np.convolve(values, kernel, mode="full")[m // 2 : m // 2 + n]
-        return direct
+    if values.ndim == 1:
+        if direct or m < _FFT_TAPS or n < _BLOCKS * _block_size(m):
+            summed: FloatArray = np.convolve(values, kernel, mode="full")[m // 2 : m // 2 + n]
+            return summed
+        return _blocked(values, kernel)
     size = 1 << (n + m - 2).bit_length()  # a power of two ≥ n + m − 1
-    full = np.fft.irfft(np.fft.rfft(values, size) * np.fft.rfft(kernel, size), size)
+    full = np.fft.irfft(np.fft.rfft(values, size) * _spectrum(kernel, size), size)
     out: FloatArray = full[..., m // 2 : m // 2 + n]
     return out
+
+
+_FFT_TAPS = 64
+"""Kernels this long and longer are applied to a long series by FFT (direct below)."""
+_BLOCKS = 4
+"""Fewest blocks of a series convolved by FFT."""
+
+
+def _block_size(taps: int) -> int:
+    """FFT length of the blocks for a kernel of ``taps``: the power of two above 8× the
+    kernel's span (the quickest here for 101 and 201 taps: 1024 and 2048)."""
+    return 1 << (8 * (taps - 1)).bit_length()
+
+
+def _blocked(values: FloatArray, kernel: FloatArray) -> FloatArray:
+    """:func:`convolve_same` of a long 1-D series by overlap-add: the series cut into blocks
+    of ``size − m + 1`` samples, each convolved by one FFT of ``size`` (all blocks at once),
+    each block's tail of ``m − 1`` added to the next block's start (rounding: ≈ 1e-16 of
+    the values' largest magnitude)."""
+    n, m = values.size, kernel.size
+    size = _block_size(m)
+    step = size - m + 1
+    count = -(-n // step)
+    padded = np.zeros(count * step)
+    padded[:n] = values
+    spectrum = np.fft.rfft(padded.reshape(count, step), size)
+    spectrum *= _spectrum(kernel, size)
+    blocks = np.fft.irfft(spectrum, size)
+    full = np.zeros((count + 1) * step)
+    full[: count * step] = blocks[:, :step].ravel()
+    tails = full[step:].reshape(count, step)
+    tails[:, : m - 1] += blocks[:, step:]
+    out: FloatArray = full[m // 2 : m // 2 + n]
+    return out
+
+
+def _spectrum(kernel: FloatArray, size: int) -> NDArray[np.complex128]:
+    """The real FFT of length ``size`` of ``kernel`` (computed once per kernel and size)."""
+    return _kernel_spectrum(np.ascontiguousarray(kernel, np.float64).tobytes(), size)
+
+
+@functools.lru_cache(maxsize=16)
+def _kernel_spectrum(kernel: bytes, size: int) -> NDArray[np.complex128]:
+    """The real FFT of length ``size`` of a kernel (its float64 bytes), kept for the chunks
+    and passes that reuse it."""
+    spectrum = np.fft.rfft(np.frombuffer(kernel, dtype=np.float64), size)
+    spectrum.setflags(write=False)
+    return spectrum
 
 
 def savgol_filter(
@@ -56,15 +111,17 @@ def savgol_filter(
     deriv: int = 0,
     delta: float = 1.0,
     ends: tuple[bool, bool] = (True, True),
+    direct: bool = False,
 ) -> FloatArray:
     """The Savitzky–Golay fit (its ``deriv``-th derivative) at every sample: the kernel of
     :func:`savgol_coeffs` inside, and within half a window of either end the polynomial
     fitted to the first or last ``points`` samples (SciPy's mode ``interp``); ``ends``: the
     (first, last) half windows fitted so (not: left as the convolution's, which treats the
-    samples beyond as zeros — for a caller that discards them)."""
+    samples beyond as zeros — for a caller that discards them); ``direct``: as
+    :func:`convolve_same`'s."""
     if values.size < points:
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
-    out = convolve_same(values, savgol_coeffs(points, order, deriv, delta))
+    out = convolve_same(values, savgol_coeffs(points, order, deriv, delta), direct)
     half = points // 2
     position = np.arange(points, dtype=np.float64)
     fits = ((slice(0, points), slice(0, half)), (slice(-points, None), None))

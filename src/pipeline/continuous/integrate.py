@@ -124,7 +124,6 @@ def _strapdown(
     sd = strapdown_run(table, ends, (begin, end), latitude, options)
     for name, values in (("inc", sd.inc), ("azi", sd.azi), ("toolface", sd.toolface)):
         store.write(name, 0, values)
-    store.write("misalignment", 0, np.zeros(odometer.size))
     store.write("flags", 0, sd.flags)
     store.write("held", 0, np.zeros(odometer.size, dtype=np.int8))
     # I carries the stops' accelerometer bias, no per-sample noise (gyro-driven)
@@ -174,8 +173,8 @@ def _apsidal_run(
             seg = slice(sa - lo, sb - lo)
             if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
                 high, attitude = y, angles
-                inc_rate = (
-                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
+                inc_rate = (  # direct sums: by FFT the toolface would move by 1e-13°
+                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt, direct=True)
                     if smooth
                     else np.gradient(inc, t)[seg]
                 )
@@ -185,7 +184,6 @@ def _apsidal_run(
                 zeros = np.zeros(hi - lo)
                 attitude = angles._replace(tf=zeros, sin_tf=zeros, cos_tf=np.ones(hi - lo))
                 inc_rate = _previous(store, "inc_rate", previous, sa, sb)
-            delta = attitude.tf
             order = slice(None, None, -1) if backward else slice(None)
             guess = None if previous is None else store.floats(f"azi{previous}", sa, sb)[order]
             index = np.arange(sa, sb)
@@ -209,14 +207,14 @@ def _apsidal_run(
             own = slice(a - sa, b - sa)  # the chunk's samples within the segment
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
-            if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
-                inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
-            store.write(f"inc_rate{n % 2}", a, inc_rate[own])
-            if n == options.passes - 1:
+            if n < options.passes - 1:  # İ for the next pass (the budget takes its own)
+                if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
+                    inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
+                store.write(f"inc_rate{n % 2}", a, inc_rate[own])
+            else:
                 for name, values in (
                     ("inc", inc[seg]),
                     ("toolface", tf[seg]),
-                    ("misalignment", delta[seg]),
                     ("flags", flags),
                     ("held", held.astype(np.int8)),
                 ):
@@ -236,7 +234,15 @@ def _apsidal_run(
     )
     shift = misclosure if options.closure and not backward else 0.0
     return StoredRun(
-        odometer, latitude, options.closure, backward, noise, azi_column, misclosure, shift
+        odometer,
+        latitude,
+        options.closure,
+        backward,
+        noise,
+        azi_column,
+        misclosure,
+        shift,
+        misaligned=not two_axis,  # δ = ψ, the toolface column
     )
 
 
@@ -288,11 +294,13 @@ def _inclination_toolface(
     it v·(İ·hs + sin I·Ȧ·rs) from ``across``: the speed (m/s) and the current İ and Ȧ
     (rad/s; None: zero)."""
     axial = gz + accel
-    tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
-    if across is not None:
+    if across is None:
+        tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
+    else:  # the first estimate's toolface and inclination: their sines and cosines only
         speed, inc_rate, azi_rate = across
+        sin_tf, cos_tf, transverse = _unit(gy, -gx)
         cross_h = speed * inc_rate
-        cross_r = speed * _polar(transverse, axial)[1] * azi_rate
+        cross_r = speed * _unit(transverse, axial)[0] * azi_rate
         cx = gx + cross_h * cos_tf + cross_r * sin_tf
         cy = gy - cross_h * sin_tf + cross_r * cos_tf
         tf, sin_tf, cos_tf, transverse = _polar(cy, -cx)
@@ -301,17 +309,22 @@ def _inclination_toolface(
 
 
 def _polar(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """``arctan2(y, x)``, its sine and cosine, and ``r = √(x² + y²)``: the sine and cosine as
-    y/r and x/r (the trig functions' values to an ulp or two, at a tenth of their cost; by
-    the trig functions where r is 0, not finite or NaN)."""
+    """``arctan2(y, x)`` and :func:`_unit`'s sine, cosine and radius."""
+    return np.arctan2(y, x), *_unit(y, x)
+
+
+def _unit(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The sine and cosine of ``arctan2(y, x)`` and ``r = √(x² + y²)``: the sine and cosine
+    as y/r and x/r (the trig functions' values to an ulp or two, at a tenth of their cost;
+    by the trig functions where r is 0, not finite or NaN)."""
     r = np.sqrt(x * x + y * y)
-    angle = np.arctan2(y, x)
     with np.errstate(invalid="ignore", divide="ignore"):
         sin, cos = y / r, x / r
     odd = np.flatnonzero(~((r > 0) & (r < np.inf)))
     if odd.size:
-        sin[odd], cos[odd] = np.sin(angle[odd]), np.cos(angle[odd])
-    return angle, sin, cos, r
+        angle = np.arctan2(y[odd], x[odd])
+        sin[odd], cos[odd] = np.sin(angle), np.cos(angle)
+    return sin, cos, r
 
 
 def _integrate(
@@ -355,10 +368,14 @@ def _integrate(
     def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
         sin_a, cos_a = sin_cos(a)
-        return (
-            const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
-            by_sin[k] * cos_a - by_cos[k] * sin_a,
-        )
+        # in place, the operations of const + by_cos·cos A + by_sin·sin A, by_sin·cos A −
+        # by_cos·sin A in their order (the same bits): fewer temporaries, a tenth less CPU
+        slope = by_sin[k] * cos_a
+        slope -= np.multiply(by_cos[k], sin_a)
+        value = np.multiply(by_cos[k], cos_a, out=cos_a)
+        value += const[k]
+        value += np.multiply(by_sin[k], sin_a, out=sin_a)
+        return value, slope
 
     start = np.full(t.size, azi0) if guess is None else guess.copy()
     start[0] = azi0
@@ -398,13 +415,24 @@ def _heun_series(
     growth = reach * float(np.exp(min(reach, 700.0)))
     for _ in range(_NEWTON_ITERATIONS):
         f, df = rate(azi, slice(None))
-        predicted = azi[:-1] + step * f[:-1]
+        predicted = step * f[:-1]
+        predicted += azi[:-1]
         f_next, df_next = rate(predicted, slice(1, None))
-        residual = azi[:-1] + half * (f[:-1] + f_next) - azi[1:]
-        gain = 1.0 + half * (df[:-1] + df_next * (1.0 + step * df[:-1]))
+        # in place (the same operations in the same order, commuted at most): residual
+        # A_k + Δt/2·(f_k + f_next) − A_{k+1}, gain 1 + Δt/2·(df_k + df_next·(1 + Δt·df_k))
+        residual = np.add(f[:-1], f_next, out=f_next)
+        residual *= half
+        residual += azi[:-1]
+        residual -= azi[1:]
+        gain = np.multiply(step, df[:-1], out=predicted)
+        gain += 1.0
+        gain *= df_next
+        gain += df[:-1]
+        gain *= half
+        gain += 1.0
         correction = _affine_recursion(gain, residual)
         azi[1:] += correction
-        largest = float(np.max(np.abs(correction)))
+        largest = float(np.max(np.abs(correction, out=correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
     raise ContinuousError(
@@ -429,6 +457,9 @@ def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
     for lo, hi in zip([0, *cuts], [*cuts, gain.size], strict=True):
         if hi > lo:
             product = np.cumprod(gain[lo:hi])
-            out[lo:hi] = product * (carry + np.cumsum(forcing[lo:hi] / product))
+            running = np.divide(forcing[lo:hi], product)
+            np.cumsum(running, out=running)
+            running += carry
+            np.multiply(product, running, out=out[lo:hi])
             carry = float(out[hi - 1])
     return out

@@ -50,8 +50,9 @@ class RunPart:
 @dataclass(frozen=True)
 class StoredRun:
     """An integrated run in the odometer's store, run sample 0 at row 0 of the columns
-    ``inc``, ``toolface``, ``misalignment`` (δ), ``flags``, ``held`` and the azimuth column
-    ``azi_column`` (before closure), all rad."""
+    ``inc``, ``toolface``, ``flags``, ``held`` and the azimuth column ``azi_column`` (before
+    closure), all rad; the gyro's misalignment δ from the high side is the toolface (a
+    single-axis tool, ``misaligned``) or 0."""
 
     odometer: Odometer
     latitude: float
@@ -66,6 +67,8 @@ class StoredRun:
     """integrated minus end-stop azimuth before correction, rad (NaN: no closure)"""
     shift: float = 0.0
     """misclosure removed linearly in time as the azimuth is read, rad"""
+    misaligned: bool = False
+    """δ is the toolface (the servo keeps a single-axis gyro near the high side), else 0"""
 
     @property
     def size(self) -> int:
@@ -92,6 +95,21 @@ class StoredRun:
     def read(self, lo: int, hi: int, held: tuple[int, int] | None) -> RunPart:
         """Time (s), odometer MD (m), inc, closed azimuth, toolface (rad) and flags of run
         samples ``lo``…``hi − 1``; ``held``: :meth:`held_span`."""
+        t, inc, azi, flags = self.angles(lo, hi, held)
+        return RunPart(
+            time=t,
+            md=self.odometer.reading(lo, hi),
+            inc=inc,
+            azi=azi,
+            toolface=self.odometer.store.floats("toolface", lo, hi),
+            flags=flags,
+        )
+
+    def angles(
+        self, lo: int, hi: int, held: tuple[int, int] | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.int64]]:
+        """Time (s), inc, closed azimuth (rad) and flags of run samples ``lo``…``hi − 1``
+        (:meth:`read` less the MD and toolface)."""
         store, t = self.odometer.store, self.odometer.time(lo, hi)
         azi = store.floats(self.azi_column, lo, hi)
         if self.shift:
@@ -106,25 +124,22 @@ class StoredRun:
             after = index <= held[1] if self.backward else index >= held[0]
             after &= store.read("held", lo, hi) == 0
             np.bitwise_or(flags, FLAG_AFTER_VERTICAL, out=flags, where=after)
-        return RunPart(
-            time=t,
-            md=self.odometer.reading(lo, hi),
-            inc=store.floats("inc", lo, hi),
-            azi=azi,
-            toolface=store.floats("toolface", lo, hi),
-            flags=flags,
-        )
+        return t, store.floats("inc", lo, hi), azi, flags
 
     def slice(self, lo: int, hi: int) -> RunGeometry:
         """Samples ``lo``…``hi − 1`` as the budget reads them (flags without the run-wide
         ones, which do not change what is integrated)."""
-        part = self.read(lo, hi, None)
+        t, inc, azi, flags = self.angles(lo, hi, None)
         return RunGeometry(
-            time=part.time,
-            inc=part.inc,
-            azi=part.azi,
-            misalignment=self.odometer.store.floats("misalignment", lo, hi),
-            usable=(part.flags & _NOT_INTEGRATED) == 0,
+            time=t,
+            inc=inc,
+            azi=azi,
+            misalignment=(
+                self.odometer.store.floats("toolface", lo, hi)
+                if self.misaligned
+                else np.zeros(t.size)
+            ),
+            usable=(flags & _NOT_INTEGRATED) == 0,
             latitude=self.latitude,
             closure=self.closure,
             backward=self.backward,

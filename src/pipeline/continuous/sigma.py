@@ -452,7 +452,8 @@ class _Integrals:
         sens: dict[str, FloatArray], elapsed: FloatArray, transition: FloatArray
     ) -> list[FloatArray]:
         """Each error's rate divided by Φ (:data:`_INTEGRANDS`; the ARW's is (gain/Φ)²)."""
-        gain, d_tf = sens["gain"], sens["d_tf"]
+        gain = sens["gain"] / transition
+        d_tf = sens["d_tf"] / transition
         safe = np.where(sens["sin"] > 0, sens["sin"], 1.0)
         rates = {
             "gain": gain,
@@ -462,13 +463,13 @@ class _Integrals:
             "gain_cos": gain * sens["sin"] * sens["cot"],
             "gain_rate_y": gain * sens["rate_y"],
             "gain_rate_z": gain * sens["rate_z"],
-            "d_inc": sens["d_inc"],
+            "d_inc": sens["d_inc"] / transition,
             "tf_bias": d_tf / safe,
             "tf_tilt": d_tf * sens["cot"],
             "tf_twist": d_tf,
+            "gain_squared": gain**2,
         }
-        out = [rates[name] / transition for name in _INTEGRANDS[:-1]]
-        return [*out, (gain / transition) ** 2]
+        return [rates[name] for name in _INTEGRANDS]
 
 
 _INTEGRANDS = (

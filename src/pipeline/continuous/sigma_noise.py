@@ -107,22 +107,27 @@ class NoiseSums:
             self.prefix[row, keys] = running[self.keys[keys] - lo - 1]
             self.carry[row] = running[-1]
         stations = np.flatnonzero((self.index >= lo) & (self.index < hi))
-        pad = np.zeros(self.halo)
-        padded = [np.concatenate([pad, x, pad]) for x in (step, d_inc, d_inc_rate, sin_i)]
+        length = step.size
         before_mask = self.offsets < 0
         for b in range(0, stations.size, self.block):
             which = stations[b : b + self.block]
             columns = self.index[which, None] + self.offsets[None, :]  # sample index
-            # the pads stand for samples beyond the run only: start is 0 or ≤ lo − halo
-            step_n, d_inc_n, d_rate_n, sin_n = (x[columns - start + self.halo] for x in padded)
+            # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
+            given = (columns >= start) & (columns < start + length)
+            at = np.clip(columns - start, 0, length - 1)
+            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = (
+                np.where(given, x[at], 0.0)
+                for x in (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
+            )
             inside = (np.abs(self.offsets) <= self.near) & (columns >= 0) & (columns < self.size)
-            rows = []
-            for mask in (before_mask, ~before_mask):
-                p = step_n * mask
-                q = p * d_inc_n + convolve_same(p * d_rate_n, self.d1)
-                odo = convolve_same(q * sin_n, self.d2)
-                rows.append((np.where(inside, q, 0.0), np.where(inside, odo, 0.0)))
-            (qb, ob), (qa, oa) = rows
+            # the row of the samples before the station's (p = step there, 0 from it on); the
+            # row from it on is the station-free row less that one (the rows are linear in p):
+            # inside the neighbourhood the free rows see the same p (the filters reach < halo)
+            p = step_n * before_mask
+            q = p * d_inc_n + convolve_same(p * d_rate_n, self.d1)
+            odo = convolve_same(q * sin_n, self.d2)
+            qb, ob = np.where(inside, q, 0.0), np.where(inside, odo, 0.0)
+            qa, oa = np.where(inside, q_n - q, 0.0), np.where(inside, odo_n - odo, 0.0)
             self.quadratic[which] = np.stack(
                 [
                     np.sum(qb * qb, axis=1),

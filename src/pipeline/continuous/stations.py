@@ -153,12 +153,11 @@ def _at_stations(
     done = 0
     unwrap = CarriedUnwrap()  # np.unwrap of the whole series
     for a, b in chunks(0, run.size, run.rows):
-        part = run.read(a, b, held)
-        t = part.time
-        values.feed(t, part.inc, unwrap(part.azi))
+        t, inc, azi, part_flags = run.angles(a, b, held)
+        values.feed(t, inc, unwrap(azi))
         here = int(np.searchsorted(times, t[-1], side="right"))
-        flags[done:here] = part.flags[np.searchsorted(t, times[done:here], side="left")]
+        flags[done:here] = part_flags[np.searchsorted(t, times[done:here], side="left")]
         done = here
-    flags[done:] = part.flags[-1]
+    flags[done:] = part_flags[-1]
     inc, azi = values.result()
     return inc, azi, flags

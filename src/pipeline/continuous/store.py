@@ -179,15 +179,24 @@ def savgol_span(lo: int, hi: int, a: int, b: int, points: int) -> tuple[int, int
 
 
 def savgol_range(
-    values: FloatArray, wlo: int, a: int, b: int, points: int, order: int, deriv: int, dt: float
+    values: FloatArray,
+    wlo: int,
+    a: int,
+    b: int,
+    points: int,
+    order: int,
+    deriv: int,
+    dt: float,
+    direct: bool = False,
 ) -> FloatArray:
     """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same dot product with the same samples, and the edge
-    polynomial is fitted to the same first or last ``points`` samples."""
+    polynomial is fitted to the same first or last ``points`` samples (``direct``:
+    :func:`~.filters.convolve_same`'s)."""
     half = points // 2
     ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
-    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
+    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends, direct=direct)
     out: FloatArray = fit[a - wlo : b - wlo]
     return out
 
