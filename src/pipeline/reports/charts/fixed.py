@@ -72,7 +72,7 @@ def _digits(
         field[..., column] = digit + ord("0")
         if place > decimals:  # a leading zero is no character
             field[..., column] *= units >= 10**place
-    return chars[:, index].tobytes().replace(b"\0", b"").decode("ascii")
+    return chars[:, index].tobytes().translate(None, b"\0").decode("ascii")  # NULs dropped
 
 
 @cache
