@@ -373,9 +373,7 @@ def _placed(values: list[float], s: Scale) -> list[float | None]:
     return [s.at(v) if lo - slack <= v <= hi + slack else None for v in values]
 
 
-def _segments(
-    at: list[float], span: tuple[float, float], *, vertical: bool
-) -> tuple[Points, ...]:
+def _segments(at: list[float], span: tuple[float, float], *, vertical: bool) -> tuple[Points, ...]:
     """A line across ``span`` (points) at each of ``at``: vertical (x = a, y over the span)
     or horizontal; each a 2 × 2 view into one array made for them all."""
     lines = np.empty((len(at), 2, 2))
