@@ -259,11 +259,10 @@ def _artist(
     if isinstance(a, Bars):
         left, right = sx(a.left), sx(a.left + a.width)
         base, top = sy(np.zeros_like(a.height)), sy(a.height)
-        rects = tuple(
-            np.array([[lx, b], [rx, b], [rx, t], [lx, t]])
-            for lx, rx, b, t in zip(left, right, base, top, strict=True)
-            if np.isfinite([lx, rx, b, t]).all()
-        )
+        corners = np.empty((len(left), 4, 2))  # bottom left, bottom right, top right, top left
+        corners[:, :, 0] = np.column_stack([left, right, right, left])
+        corners[:, :, 1] = np.column_stack([base, base, top, top])
+        rects = tuple(corners[np.isfinite(corners).all(axis=(1, 2))])
         return [Path(rects, Stroke(a.colour, a.line), a.fill, closed=True)] if rects else []
     if isinstance(a, ErrorBars):
         return _error_bars(a, sx, sy)
