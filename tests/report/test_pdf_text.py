@@ -63,3 +63,15 @@ def test_fonts_leave_no_file_open(tmp_path: Path):
     if fds.is_dir():
         open_files = [os.path.realpath(fds / fd) for fd in os.listdir(fds)]
         assert not [f for f in open_files if f.startswith(str(FONTS))]
+
+
+def test_glyph_ids_are_written_as_four_hex_digits_each():
+    """A text's glyph ids in a PDF string: each character's id as four capital hex digits,
+    over the whole 16-bit range (ids in the surrogates' range too)."""
+    from pipeline.reports.pdf_canvas import _glyph_hex
+
+    ids = [0, 1, 0x41, 0xFF, 0x100, 0xD7FF, 0xD800, 0xDBFF, 0xDC00, 0xDFFF, 0xE000, 0xFFFF]
+    text = "".join(chr(0x400 + k) for k in range(len(ids))) + "a"
+    codes = {0x400 + k: chr(g) for k, g in enumerate(ids)} | {ord("a"): chr(0x2A)}
+    assert _glyph_hex(text, codes) == "".join(f"{g:04X}" for g in [*ids, 0x2A])
+    assert _glyph_hex("", codes) == ""

@@ -11,10 +11,20 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from report_support import figure_svg, inspect, pdf_pages, svg_texts
 
 import pipeline as gp
-from pipeline.reports.numbers import fmt_azimuth, fmt_inches, fmt_measured, fmt_sigma
+from pipeline.reports.numbers import (
+    fmt,
+    fmt_azimuth,
+    fmt_each,
+    fmt_inches,
+    fmt_measured,
+    fmt_sigma,
+)
 
 
 @pytest.mark.parametrize(
@@ -117,3 +127,15 @@ def test_due_north_well_prints_no_azimuth_of_360(browser: Any, tmp_path: Path):
 
     words = " ".join(w[0] for p in pdf_pages(pdf, tmp_path) for w in p.words)
     assert "0.00° true north" in words and not re.search(r"360\.0", words)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
+    st.integers(0, 3),
+)  # fmt: skip
+def test_numbers_printed_together_read_as_each_printed_alone(values: np.ndarray, decimals: int):
+    """``fmt_each`` (one ``%`` of a column) writes each number as ``fmt`` does: NaN, ±∞,
+    negatives, −0 and the values that round to −0 among them."""
+    values = np.concatenate([values, [-0.0, -0.004, -1e-300, np.nan, -np.inf, 2.675, 0.125]])
+    assert fmt_each(values, decimals) == [fmt(v, decimals) for v in values.tolist()]

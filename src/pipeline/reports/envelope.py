@@ -145,20 +145,22 @@ def fold(envelopes: Sequence[Envelope], x: FloatArray, ys: Sequence[FloatArray])
     shared: tuple[tuple[int, float, float], NDArray[np.bool_], float, float, _Binned] | None
     shared = None
     for envelope, y in zip(envelopes, ys, strict=True):
+        y = np.asarray(y, float)
         keep = finite & np.isfinite(y)
+        every = bool(keep.all())  # as a rule: then no sample is copied to leave none out
         state = (envelope.columns, envelope.origin, envelope.width)
         if shared is not None and shared[0] == state and np.array_equal(shared[1], keep):
             lo, hi, binned = shared[2:]
             envelope._place(lo, hi)
         else:
-            kept = x[keep]
+            kept = x if every else x[keep]
             if not len(kept):
                 continue
             lo, hi = float(kept.min()), float(kept.max())
             envelope._place(lo, hi)
             binned = _binned(envelope, kept)
             shared = state, keep, lo, hi, binned
-        envelope._fold(binned, np.asarray(y, float)[keep])
+        envelope._fold(binned, y if every else y[keep])
 
 
 def _extremes(

@@ -182,20 +182,23 @@ def _table(table: Table) -> str:
     flagged: dict[int, set[int]] = {}
     for i, j in table.cells:
         flagged.setdefault(i, set()).add(j)
-    plain = "".join(f'<td class="{k}">{{}}</td>' for k in classes)  # a row with no flag
+    formats: dict[frozenset[int], str] = {}  # a row's cells by its flagged columns
 
-    def cells(i: int, row: tuple[str, ...]) -> str:
-        marks = flagged.get(i)
-        if marks is None and len(row) == len(classes):
-            return plain.format(*map(escape, row))
-        return "".join(  # (a row of another length fails here)
-            f'<td class="{k}{" flag" if j in (marks or ()) else ""}">{escape(v)}</td>'
-            for j, (k, v) in enumerate(zip(classes, row, strict=True))
-        )
+    def cells(i: int, row: list[str]) -> str:
+        if len(row) != len(classes):
+            raise ValueError(f"row {i} of {table.title!r}: {len(row)} cells, not {len(classes)}")
+        marks = frozenset(flagged.get(i, ()))
+        found = formats.get(marks)
+        if found is None:
+            found = formats[marks] = "".join(
+                f'<td class="{k}{" flag" if j in marks else ""}">{{}}</td>'
+                for j, k in enumerate(classes)
+            )
+        return found.format(*row)
 
     body = "\n".join(
         ('<tr class="marked">' if i in table.marked else "<tr>") + cells(i, row) + "</tr>"
-        for i, row in enumerate(table.rows)
+        for i, row in enumerate(_escaped(table.rows))
     )
     compact = "" if len(table.columns) > 4 or table.kind == "listing" else " compact"
     title = f"<h3>{escape(table.title)}</h3>" if table.title else ""
@@ -204,6 +207,25 @@ def _table(table: Table) -> str:
         f'{title}<table class="{escape(table.kind)}{compact}">'
         f"<thead><tr>{head}</tr></thead><tbody>\n{body}\n</tbody></table>{note}"
     )
+
+
+NUL = chr(0)
+"""What :func:`_escaped` joins cells by: a character :func:`~html.escape` leaves as it is and
+no report text holds (``chr``: the report code's literals are what the fonts must map)."""
+
+
+def _escaped(rows: tuple[tuple[str, ...], ...]) -> list[list[str]]:
+    """Each row's cells escaped for HTML, by one :func:`~html.escape` of all the cells
+    joined by :data:`NUL` where no cell holds one."""
+    joined = NUL.join(v for row in rows for v in row)
+    if joined.count(NUL) != sum(map(len, rows)) - 1:  # a NUL in a cell (or no cell)
+        return [list(map(escape, row)) for row in rows]
+    texts = escape(joined).split(NUL)
+    out, start = [], 0
+    for row in rows:
+        out.append(texts[start : start + len(row)])
+        start += len(row)
+    return out
 
 
 def _figure(plot: Plot, number: int, drawn: Figures) -> str:

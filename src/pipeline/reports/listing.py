@@ -11,9 +11,9 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.reports import plots
-from pipeline.reports.document import Column, Table, fmt, fmt_azimuth, fmt_sigma
+from pipeline.reports.document import Column, Table, fmt_azimuth, fmt_sigma
 from pipeline.reports.flags import AZI, SIGMA_AZI, Flag
-from pipeline.reports.numbers import UNDEFINED
+from pipeline.reports.numbers import UNDEFINED, fmt_each
 from pipeline.reports.sections import north_label, unit_label
 from pipeline.survey.courses import course_lengths
 
@@ -79,8 +79,8 @@ def listing(
     vs_unit = f"m @ {fmt_azimuth(vs_azimuth, 1)}°" if vs_azimuth is not None else "m"
     spec: dict[str, tuple[Column, list[str]]] = {}
 
-    def num(name: str, decimals: int = 2) -> list[str]:  # Python floats: faster to format
-        return [fmt(v, decimals) for v in col(traj, name).tolist()]
+    def num(name: str, decimals: int = 2) -> list[str]:
+        return fmt_each(col(traj, name), decimals)
 
     def azimuths(name: str, decimals: int = 2) -> list[str]:
         return [fmt_azimuth(v, decimals) for v in col(traj, name).tolist()]

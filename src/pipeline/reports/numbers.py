@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+from numpy.typing import NDArray
+
 UNDEFINED = "undefined"
 """What an uncertainty prints as when it does not exist (infinite or NaN)."""
 SIGMA_DIGITS = 2
@@ -30,6 +33,17 @@ def fmt(value: float | None, decimals: int = 2) -> str:
     if text[0] != "-":  # the only place a minus can be
         return text
     return _minus(text) if text.strip("-0. ") else text[1:]
+
+
+def fmt_each(values: NDArray[np.float64], decimals: int = 2) -> list[str]:
+    """:func:`fmt` of each of ``values``: those that print as they are (finite, sign bit
+    clear) by one ``%`` of them all — ``"%.2f"`` writes a float as ``f"{v:.2f}"`` does —
+    the others (NaN, ±∞, negative, −0) by :func:`fmt`."""
+    plain = values.tolist()  # Python floats: faster to format than NumPy's
+    texts = (f"%.{decimals}f\n" * len(plain) % tuple(plain)).split("\n")[:-1]
+    for i in np.flatnonzero(~np.isfinite(values) | np.signbit(values)).tolist():
+        texts[i] = fmt(plain[i], decimals)
+    return texts
 
 
 def fmt_sig(value: float | None, digits: int = 3) -> str:

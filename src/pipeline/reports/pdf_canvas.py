@@ -148,8 +148,10 @@ class _Embedded:
 
     name: str
     codes: dict[int, str]
-    """character (code point) → its glyph's id (four hex digits), for the file's characters
-    (a ``str.translate`` table)"""
+    """character (code point) → its glyph's id as one character (``chr(id)``), for the
+    file's characters (a ``str.translate`` table: a text translated and written as
+    UTF-16BE hex is its glyph ids' four hex digits each — one translation to single
+    characters, which ``str.translate`` does fast, not to four-character strings)"""
     font: PdfFont
     runs: dict[str, str] = field(default_factory=dict)
     """text → its glyph runs (the ``TJ`` operand), for the texts shown so far"""
@@ -278,7 +280,7 @@ def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[
         f"<< /Type /Font /Subtype /Type0 /BaseFont /{base} /Encoding /Identity-H "
         f"/DescendantFonts [{cid} 0 R] /ToUnicode {unicode} 0 R >>"
     )
-    codes = {ord(c): program.codes.get(font.glyph(c), "0000") for c in chars}
+    codes = {ord(c): chr(int(program.codes.get(font.glyph(c), "0000"), 16)) for c in chars}
     return number, _Embedded(name, codes, font)
 
 
@@ -296,17 +298,24 @@ def _show(op: _Text, embedded: _Embedded) -> str:
 
 def _runs(content: str, embedded: _Embedded) -> str:
     """The glyph runs of ``content``, split where kerning moves a glyph."""
+    ids = _glyph_hex(content, embedded.codes)  # four hex digits a character
     if not embedded.font.kerned:  # one run (the table rows: no layout to work out)
-        return f"<{content.translate(embedded.codes)}>"
+        return f"<{ids}>"
     kerns = embedded.font.layout(content)[1]
-    codes, upem = embedded.codes, embedded.font.upem
+    upem = embedded.font.upem
     parts: list[str] = []
     start = 0
     for k in itertools.compress(range(len(kerns)), kerns):  # never the first glyph
-        parts.append(f"<{content[start:k].translate(codes)}> {_num(-kerns[k] * 1000 / upem)}")
+        parts.append(f"<{ids[4 * start : 4 * k]}> {_num(-kerns[k] * 1000 / upem)}")
         start = k
-    parts.append(f"<{content[start:].translate(codes)}>")
+    parts.append(f"<{ids[4 * start :]}>")
     return " ".join(parts)
+
+
+def _glyph_hex(content: str, codes: dict[int, str]) -> str:
+    """The glyph ids of ``content``'s characters (``codes``: :attr:`_Embedded.codes`), four
+    hex digits each (a glyph id in the surrogates' range written as its two bytes too)."""
+    return content.translate(codes).encode("utf-16-be", "surrogatepass").hex().upper()
 
 
 def write_pdf(pages: list[Page], path: Path, title: str, creator: str) -> None:

@@ -78,6 +78,13 @@ class PdfFont:
         """text → its layout, for the texts measured so far (a report repeats most of its
         labels, units and numbers on every page)"""
         self._tops: dict[str, int] = {}
+        self._glyphs: dict[str, str] = {}
+        """character → its glyph's name, for the characters met so far (kept when the whole
+        font is read, as :attr:`_char_tops` is)"""
+        self._char_tops: dict[str, int] = {}
+        """character → its glyph's top (font units), for the characters met so far (what the
+        repertoire's index says of a character is what the whole font says: kept when the
+        whole font is read)"""
 
     def _whole(self) -> TTFont:
         """The font's own tables: every glyph's cmap entry, advance, kerning and top."""
@@ -104,8 +111,7 @@ class PdfFont:
         advance (font units); measured once per text."""
         found = self._layouts.get(text)
         if found is None:
-            names = {c: self.glyph(c) for c in set(text)}  # may read the whole font
-            glyphs = tuple(map(names.__getitem__, text))
+            glyphs = self._glyph_names(text)
             if self._kern and glyphs:
                 pairs = itertools.pairwise(glyphs)
                 kerns = (0, *map(self._kern.get, pairs, itertools.repeat(0)))
@@ -115,6 +121,16 @@ class PdfFont:
             if len(self._layouts) < MEASURED:
                 self._layouts[text] = found
         return found
+
+    def _glyph_names(self, text: str) -> tuple[str, ...]:
+        """The glyph names of ``text``'s characters (each character looked up once)."""
+        known = self._glyphs
+        try:
+            return tuple(map(known.__getitem__, text))
+        except KeyError:
+            for c in set(text) - known.keys():
+                known[c] = self.glyph(c)  # may read the whole font
+            return tuple(map(known.__getitem__, text))
 
     @property
     def kerned(self) -> bool:
@@ -132,11 +148,13 @@ class PdfFont:
         best = self._tops.get(text)
         if best is not None:
             return best
-        best = 0
-        for name in {self.glyph(c) for c in {*text, "l"}}:
+        chars, tops = {*text, "l"}, self._char_tops
+        for c in chars - tops.keys():  # each character's top looked up once
+            name = self._glyph_names(c)[0]
             if name not in self._top:
                 self._top[name] = _glyph_top(self._whole(), name)
-            best = max(best, self._top[name])
+            tops[c] = self._top[name]
+        best = max(0, *map(tops.__getitem__, chars))
         if len(self._tops) < MEASURED:
             self._tops[text] = best
         return best

@@ -127,11 +127,15 @@ def _setting(table: Table) -> _Setting:
         if not wraps:
             rows.append([line(*row)])
             continue
-        cells: list[tuple[str, ...]] = [(v,) for v in row]
-        for j in wraps:
-            cells[j] = _wrapped(row[j], widths[j])
-        depth = max(map(len, cells))
-        rows.append([line(*(c[i] if i < len(c) else "" for c in cells)) for i in range(depth)])
+        wrapped = {j: _wrapped(row[j], widths[j]) for j in wraps}
+        depth = max(map(len, wrapped.values()))
+        printed = []
+        for i in range(depth):  # the wrapped cells' i-th lines, the others' first line only
+            cells = list(row) if i == 0 else [""] * len(row)
+            for j, found in wrapped.items():
+                cells[j] = found[i] if i < len(found) else ""
+            printed.append(line(*cells))
+        rows.append(printed)
     return _Setting(size, widths, gaps, header, unit, rows)
 
 

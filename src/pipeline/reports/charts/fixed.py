@@ -69,10 +69,11 @@ def _digits(
     for place in range(digits):  # from the last decimal leftwards
         column = width - 1 - place - (point if place >= decimals else 0)
         rest, digit = np.divmod(rest, np.uint32(10))
-        field[..., column] = digit + ord("0")
+        digit += np.uint32(ord("0"))
         if place > decimals:  # a leading zero is no character
-            field[..., column] *= units >= 10**place
-    return chars[:, index].tobytes().replace(b"\0", b"").decode("ascii")
+            digit *= units >= 10**place
+        field[..., column] = digit
+    return chars[:, index].tobytes().translate(None, b"\0").decode("ascii")  # NULs dropped
 
 
 @cache

@@ -259,11 +259,10 @@ def _artist(
     if isinstance(a, Bars):
         left, right = sx(a.left), sx(a.left + a.width)
         base, top = sy(np.zeros_like(a.height)), sy(a.height)
-        rects = tuple(
-            np.array([[lx, b], [rx, b], [rx, t], [lx, t]])
-            for lx, rx, b, t in zip(left, right, base, top, strict=True)
-            if np.isfinite([lx, rx, b, t]).all()
-        )
+        corners = np.empty((len(left), 4, 2))  # bottom left, bottom right, top right, top left
+        corners[:, :, 0] = np.column_stack([left, right, right, left])
+        corners[:, :, 1] = np.column_stack([base, base, top, top])
+        rects = tuple(corners[np.isfinite(corners).all(axis=(1, 2))])
         return [Path(rects, Stroke(a.colour, a.line), a.fill, closed=True)] if rects else []
     if isinstance(a, ErrorBars):
         return _error_bars(a, sx, sy)
@@ -365,11 +364,21 @@ def _clear(
     return min((placed(right, up) for right, up in CORNERS), key=cost)
 
 
-def _inside(v: float, s: Scale) -> bool:
-    """True if ``v`` lies within the limits of ``s`` (to rounding)."""
+def _placed(values: list[float], s: Scale) -> list[float | None]:
+    """Each of ``values`` mapped to points by ``s``, None where it lies outside the limits
+    (to rounding)."""
     lo, hi = sorted((s.lo, s.hi))
     slack = 1e-9 * (hi - lo)
-    return lo - slack <= v <= hi + slack
+    return [s.at(v) if lo - slack <= v <= hi + slack else None for v in values]
+
+
+def _segments(at: list[float], span: tuple[float, float], *, vertical: bool) -> tuple[Points, ...]:
+    """A line across ``span`` (points) at each of ``at``: vertical (x = a, y over the span)
+    or horizontal; each a 2 × 2 view into one array made for them all."""
+    lines = np.empty((len(at), 2, 2))
+    lines[:, :, 0 if vertical else 1] = np.asarray(at)[:, None]
+    lines[:, :, 1 if vertical else 0] = span
+    return tuple(lines)
 
 
 def _axes(
@@ -380,16 +389,13 @@ def _axes(
     under, over = Group(), Group()
     xt, xl, xminor, x_note = _ticks(panel.x, sx, True)
     yt, yl, yminor, y_note = _ticks(panel.y, sy, False)
-    for values, stroke, axis_on in ((xminor, MINOR_GRID, True), (xt, GRID, True)):
-        parts = tuple(
-            np.array([[sx.at(v), y0], [sx.at(v), y0 + h]]) for v in values if _inside(v, sx)
-        )
-        if parts and panel.x.grid and axis_on:
+    xs, ys = _placed(xt, sx), _placed(yt, sy)  # the major ticks' points (None: outside)
+    for at, stroke in ((_placed(xminor, sx), MINOR_GRID), (xs, GRID)):
+        parts = _segments([v for v in at if v is not None], (y0, y0 + h), vertical=True)
+        if parts and panel.x.grid:
             under.add(Path(parts, stroke))
-    for values, stroke in ((yminor, MINOR_GRID), (yt, GRID)):
-        parts = tuple(
-            np.array([[x0, sy.at(v)], [x0 + w, sy.at(v)]]) for v in values if _inside(v, sy)
-        )
+    for at, stroke in ((_placed(yminor, sy), MINOR_GRID), (ys, GRID)):
+        parts = _segments([v for v in at if v is not None], (x0, x0 + w), vertical=False)
         if parts and panel.y.grid:
             under.add(Path(parts, stroke))
     over.add(
@@ -399,22 +405,18 @@ def _axes(
     )
     tick = Stroke(EDGE.colour, 0.6)
     bottom = y0 + h + TICK_LENGTH + TICK_PAD
-    for v, text in zip(xt, xl, strict=True):
-        if not _inside(v, sx):
-            continue
-        x = sx.at(v)
-        items: list[Item | Group] = [
-            Path((np.array([[x, y0 + h], [x, y0 + h + TICK_LENGTH]]),), tick)
-        ]
+    x_ticks = [(x, t) for x, t in zip(xs, xl, strict=True) if x is not None]
+    x_marks = _segments([x for x, _ in x_ticks], (y0 + h, y0 + h + TICK_LENGTH), vertical=True)
+    for (x, text), mark in zip(x_ticks, x_marks, strict=True):
+        items: list[Item | Group] = [Path((mark,), tick)]
         if panel.x.tick_labels:
             items.append(anchored(x, bottom, text, panel.x.tick_size, TICK_COLOUR, "center", "top"))
         over.add(Group(items, kind="xtick"))
     widest = 0.0
-    for v, text in zip(yt, yl, strict=True):
-        if not _inside(v, sy):
-            continue
-        y = sy.at(v)
-        items = [Path((np.array([[x0 - TICK_LENGTH, y], [x0, y]]),), tick)]
+    y_ticks = [(y, t) for y, t in zip(ys, yl, strict=True) if y is not None]
+    y_marks = _segments([y for y, _ in y_ticks], (x0 - TICK_LENGTH, x0), vertical=False)
+    for (y, text), mark in zip(y_ticks, y_marks, strict=True):
+        items = [Path((mark,), tick)]
         if panel.y.tick_labels:
             lab = anchored(
                 x0 - TICK_LENGTH - TICK_PAD,

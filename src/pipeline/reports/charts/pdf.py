@@ -5,6 +5,7 @@ scene's y-down points mapped onto the page and scaled."""
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from pathlib import Path as FilePath
 
 import numpy as np
@@ -60,10 +61,17 @@ def _line(points: Points, closed: bool) -> str:
     return (text[:-1] if len(points) > 1 else text) + (" h" if closed else "")
 
 
-def _stroke(p: Path, s: float) -> str:
-    assert p.stroke is not None
-    dash = " ".join(_n(d * s) for d in p.stroke.dash)
-    return f"{stroke_colour(p.stroke.colour)} {_n(p.stroke.width * s)} w [{dash}] 0 d"
+STROKES = 256
+"""Most strokes (colour, width, dash, scale) whose operators a process keeps (a figure's
+grid, frame, ticks and lines share a few, the same in every report)."""
+
+
+@lru_cache(maxsize=STROKES)
+def _stroke(colour: str, width: float, dashes: tuple[float, ...], s: float) -> str:
+    """The operators setting a stroke of ``width`` and ``dashes`` (scene points) scaled by
+    ``s`` onto the page."""
+    dash = " ".join(_n(d * s) for d in dashes)
+    return f"{stroke_colour(colour)} {_n(width * s)} w [{dash}] 0 d"
 
 
 def _path(p: Path, at: _Placed) -> str:
@@ -79,7 +87,7 @@ def _path(p: Path, at: _Placed) -> str:
     if p.fill:
         style.append(fill_colour(p.fill))
     if p.stroke is not None:
-        style.append(_stroke(p, at.s))
+        style.append(_stroke(p.stroke.colour, p.stroke.width, p.stroke.dash, at.s))
     paint = "B" if p.fill and p.stroke else "f" if p.fill else "S"
     return f"{' '.join(style)} {body} {paint}"
 
