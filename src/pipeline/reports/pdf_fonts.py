@@ -199,6 +199,11 @@ class PdfFont:
         return "".join(chr(65 + b % 26) for b in digest[:6])
 
 
+TEXTS = 4096
+"""Most texts whose width a process keeps: a batch worker meets new well names, numbers and
+dates in every report, so a cache of every text ever measured would grow with the batch."""
+
+
 @cache
 def repertoire_tag() -> str:
     """:meth:`PdfFont.tag` of the :data:`REPERTOIRE` (worked out once)."""

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from functools import cache
+from functools import lru_cache
 
 from pipeline.reports.pdf_canvas import MONO, PT, SANS, Page
-from pipeline.reports.pdf_fonts import pdf_font
+from pipeline.reports.pdf_fonts import TEXTS, pdf_font
 from pipeline.reports.plots import INK
 
 __all__ = ["MONO", "SANS", "Page"]
@@ -24,7 +24,7 @@ Draw = Callable[[Page, float], None]
 """Draws one piece onto a page with its top at the given height (inches)."""
 
 
-@cache
+@lru_cache(maxsize=TEXTS)
 def text_width(text: str, size: float, bold: bool = False, family: str = SANS) -> float:
     """Width of ``text`` in inches at ``size`` points (the font's advances and kerning)."""
     return pdf_font(family, bold).width(text, size) / PT

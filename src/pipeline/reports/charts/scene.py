@@ -6,13 +6,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, lru_cache
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from pipeline.reports.pdf_fonts import pdf_font
+from pipeline.reports.pdf_fonts import TEXTS, pdf_font
 
 Points = NDArray[np.float64]
 """(n, 2) x, y in points"""
@@ -39,7 +39,7 @@ def faded(colour: str, alpha: float) -> str:
     return "#" + "".join(f"{round(255 * c):02x}" for c in mixed)
 
 
-@cache
+@lru_cache(maxsize=TEXTS)
 def text_width(text: str, size: float, bold: bool = False) -> float:
     """Advance of ``text`` at ``size`` points in the report's sans font, points."""
     return pdf_font(SANS, bold).width(text, size)
