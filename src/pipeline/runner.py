@@ -9,7 +9,6 @@ killed run changes nothing, and the output directory holds one complete run.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import datetime as dt
 import hashlib
 import json
@@ -20,7 +19,7 @@ import tempfile
 import time
 import uuid
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any, TypeAlias, TypeVar
@@ -217,6 +216,7 @@ def run_plan(
     out_dir: Path | None,
     well: WellMetadata | None = None,
     publish_as: Path | None = None,
+    known_sha256: Mapping[str, str] | None = None,
 ) -> RunResult:
     """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
     what the stages report (the headers of the inputs they read, a simulation's site:
@@ -234,6 +234,7 @@ def run_plan(
     With ``publish_as``, ``out_dir`` is a new private directory (a batch worker's staging)
     that the caller publishes as ``publish_as`` (:func:`~pipeline.atomic.replace_dir`): the
     run writes into it, each file fsynced, ``run.json`` naming them at ``publish_as``.
+    ``known_sha256``: input name → its SHA-256 known without reading it (a batch worker's).
 
     Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`.
     """
@@ -244,7 +245,7 @@ def run_plan(
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
-    provenance = _provenance(plan, registry, files, start_time())
+    provenance = _provenance(plan, registry, files, start_time(), known_sha256 or {})
     t_run = time.perf_counter()
     with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
@@ -576,8 +577,8 @@ def _persist(
 
 
 def _provenance(
-    plan: Plan, registry: Registry, files: dict[str, Path], started: dt.datetime
-) -> Provenance:
+    plan: Plan, registry: Registry, files: dict[str, Path], at: dt.datetime, sha: Mapping[str, str]
+) -> Provenance:  # fmt: skip
     return Provenance(
         pipeline=plan.spec.name,
         pipeline_version=plan.spec.version,
@@ -585,8 +586,8 @@ def _provenance(
         pipeline_sha256=plan.digest,
         gyropipe=__version__,
         plugins={n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
-        inputs={n: _input_entry(source) for n, source in files.items()},
-        started=started,
+        inputs={n: _input_entry(source, sha.get(n)) for n, source in files.items()},
+        started=at,
         stages=tuple(
             StageSetup(
                 st.id, st.uses, registry.plugin_label(st.plugin), st.params.model_dump(mode="json")
@@ -620,8 +621,8 @@ def _manifest(
         "started": provenance.started.isoformat(),
         "wall_time_s": round(wall, 6),
         "plugins": dict(provenance.plugins),
-        "inputs": {n: dataclasses.asdict(f) for n, f in provenance.inputs.items()},
-        "parameter_inputs": [dataclasses.asdict(f) for f in provenance.read],
+        "inputs": {n: asdict(f) for n, f in provenance.inputs.items()},
+        "parameter_inputs": [asdict(f) for f in provenance.read],
         "well": well.model_dump(mode="json", exclude_none=True),
         "stages": [
             {
@@ -667,15 +668,16 @@ def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[s
     return rows
 
 
-def _file_entry(path: Path) -> dict[str, Any]:
+def _file_entry(path: Path, sha256: str | None = None) -> dict[str, Any]:
     with file_errors("read", path):  # e.g. an input deleted since the run began
-        return {"path": str(path), "sha256": sha256_file(path), "bytes": path.stat().st_size}
+        digest = sha256 or sha256_file(path)
+        return {"path": str(path), "sha256": digest, "bytes": path.stat().st_size}
 
 
-def _input_entry(source: Source) -> InputFile:
-    """A file's path, hash and size; a table given in memory: its Arrow IPC stream's."""
+def _input_entry(source: Source, sha256: str | None) -> InputFile:
+    """A file's path, hash (``sha256`` where known) and size; a table: its IPC stream's."""
     if isinstance(source, Path):
-        return InputFile(**_file_entry(source))
+        return InputFile(**_file_entry(source, sha256))
     sink = pa.BufferOutputStream()
     with pa.ipc.new_stream(sink, source.schema) as writer:
         writer.write_table(source)

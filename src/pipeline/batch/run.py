@@ -46,7 +46,7 @@ from pipeline.runner import MANIFEST
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
-from .filestate import Seen, key_after, look
+from .filestate import FileKey, Seen, key_after, look
 from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
 from .fleet import WellFigures, figures_json, figures_of_json
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob
@@ -430,7 +430,18 @@ class _Batch:
             str(self.out),
             flight.fingerprint.to_json(),
             None if check is None else _check_paths(job, check),
+            {} if check is not None else self._settled_hashes(flight),
         )
+
+    def _settled_hashes(self, flight: _Flight) -> dict[str, tuple[FileKey, str]]:
+        """Input path → (the key the batch process saw, the hash the ledger holds for it)."""
+        found = {}
+        for path in map(str, flight.job.inputs.values()):
+            key = flight.seen[path].key if path in flight.seen else None
+            digest = self.ledger.known_hash(key) if key is not None else None
+            if key is not None and digest is not None:
+                found[path] = (key, digest)
+        return found
 
     def _settle(self, outcome: WellOutcome, turn: _Turn) -> None:
         """Record what came back of a task (inside a turn)."""

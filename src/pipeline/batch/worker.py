@@ -3,8 +3,10 @@ whole to ``OUT/<well>``. It never raises: any failure comes back as a failed
 :class:`WellOutcome`. It never touches the ledger (only the batch process does), so it can
 run on any machine that sees the input and output files.
 
-The worker is where files are read: it hashes the inputs (``run.json``) and the files a
-check names (:attr:`WellTask.check`), fails a run whose input changed while it ran (its
+The worker is where files are read: it hashes the inputs (``run.json``) — but an input
+whose stat key is the one the batch process saw and holds a settled hash for
+(:attr:`WellTask.known`), which it takes as is, unread — and the files a check names
+(:attr:`WellTask.check`); it fails a run whose input changed while it ran (its
 stat before and after), and checks that ``OUT/<well>`` holds the run once published.
 """
 
@@ -39,7 +41,7 @@ from pipeline.runner import RunResult, check_out_dir, run_plan
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
-from .filestate import key_after
+from .filestate import FileKey, key_after
 from .fingerprint import completed_json, hashed
 from .fleet import WellFigures, figures_record, run_figures, well_figures
 from .publish import MARKER, Publication, read_published, staging_dir, write_marker
@@ -69,6 +71,9 @@ class WellTask:
     """the claim's fingerprint (JSON), recorded in ``batch.json`` with the run's hashes"""
     check: list[str] | None = None
     """a check, not a run: the files (absolute paths) to hash; nothing is run or written"""
+    known: dict[str, tuple[FileKey, str]] = field(default_factory=dict)
+    """input path → the stat key the batch process saw and the SHA-256 the ledger holds for
+    it (settled entries only): used for ``run.json`` where the worker's own key is the same"""
 
 
 @dataclass(frozen=True)
@@ -192,6 +197,11 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             out_dir=staging,
             well=WellMetadata.model_validate(task.well),
             publish_as=final,
+            known_sha256={
+                name: task.known[path][1]
+                for name, path in task.inputs.items()
+                if path in task.known and before[name] == task.known[path][0]
+            },
         )
         run_time = time.perf_counter() - t_run
         manifest = result.manifest
