@@ -279,8 +279,8 @@ def test_a_pool_broken_between_waits_still_takes_new_wells(tmp_path: Path, surve
     ref = PipelineRef(str(survey), plan.spec)
     executor = LocalExecutor(2, ref)
     try:
-        pool = executor._pool
-        wait_for(lambda: len(pool._processes or {}) == 2)
+        pool = executor._pool  # forked: both workers start; from the forkserver: one, on demand
+        wait_for(lambda: len(pool._processes or {}) >= 1)
         os.kill(next(iter(pool._processes or {})), signal.SIGKILL)
         wait_for(lambda: bool(pool._broken))
         inputs = {"stations": str(tmp_path / "in" / "W.csv")}
