@@ -435,12 +435,12 @@ class _Batch:
 
     def _settled_hashes(self, flight: _Flight) -> dict[str, tuple[FileKey, str]]:
         """Input path → (the key the batch process saw, the hash the ledger holds for it)."""
+        keys = {path: seen.key for path, seen in flight.seen.items() if seen.key is not None}
         found = {}
         for path in map(str, flight.job.inputs.values()):
-            key = flight.seen[path].key if path in flight.seen else None
-            digest = self.ledger.known_hash(key) if key is not None else None
-            if key is not None and digest is not None:
-                found[path] = (key, digest)
+            digest = self.ledger.known_hash(keys[path]) if path in keys else None
+            if digest is not None:
+                found[path] = (keys[path], digest)
         return found
 
     def _settle(self, outcome: WellOutcome, turn: _Turn) -> None:
