@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pipeline as gp
 from pipeline.batch.fleet_page import Fleet, FleetWell, fleet_html
-from pipeline.runner import MANIFEST
+from pipeline.manifest import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "clearance"

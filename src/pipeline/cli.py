@@ -138,8 +138,9 @@ def run(
     defer_pandas()
     from pipeline.api.run import execute
     from pipeline.cli_run import qc_lines, verdict_line, warnings_echoed
+    from pipeline.manifest import REJECTED
     from pipeline.qc.gates import acceptance_lines
-    from pipeline.runner import REJECTED, RunInputError
+    from pipeline.runner import RunInputError
     from pipeline.streams import use_returning_memory_pool
 
     use_returning_memory_pool()

@@ -14,8 +14,8 @@ import pyarrow as pa
 
 from pipeline.api.run import RunResult
 from pipeline.graph import Plan
+from pipeline.manifest import REJECTED
 from pipeline.qc.gates import failed_gates
-from pipeline.runner import REJECTED
 
 
 @contextlib.contextmanager

@@ -14,7 +14,7 @@ from typing import Annotated
 
 from pydantic import AfterValidator, Field
 
-from pipeline.runner import MANIFEST
+from pipeline.manifest import MANIFEST
 
 MAX_LENGTH = 200
 """Longest output file name (file systems allow 255 bytes; report stages add ``.html``)."""

@@ -10,16 +10,14 @@ from __future__ import annotations
 
 import contextlib
 import datetime as dt
-import hashlib
 import json
-import math
 import os
 import shutil
 import tempfile
 import time
 import uuid
 from collections.abc import Iterator, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any, TypeAlias, TypeVar
@@ -38,48 +36,27 @@ from pipeline.errors import (
 from pipeline.graph import Plan, PlannedStage
 from pipeline.hashing import sha256_file
 from pipeline.inputfiles import parameter_paths
+from pipeline.manifest import MANIFEST, StageRecord, acceptance, provenance_of, run_manifest
 from pipeline.ports import CheckedTables, Tables, UpstreamError, counted, settled, write_port
 from pipeline.processes import owner_alive
 from pipeline.provenance import ParameterFile
 from pipeline.registry import (
     CheckDef,
-    InputFile,
     PluginInfo,
     Provenance,
     Registry,
-    StageSetup,
     WriterDef,
 )
 from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream, as_stream, as_table
-from pipeline.version import __version__
 from pipeline.well import WellMetadata, well_of
 
 T = TypeVar("T")
-MANIFEST = "run.json"
-REJECTED = "rejected"
-"""``run.json``'s ``status`` of a run that succeeded but failed an acceptance gate"""
 STAGING_PREFIX = ".gyropipe-staging-"
 
 
 class RunInputError(GyropipeError):
     """The files given for a run do not match the pipeline's declared inputs."""
-
-
-@dataclass
-class StageRecord:
-    """What one stage did: timing and row counts per port."""
-
-    id: str
-    uses: str
-    plugin: str
-    wall_time_s: float = 0.0
-    rows_in: dict[str, int] = field(default_factory=dict)
-    rows_out: dict[str, int] = field(default_factory=dict)
-    status: str = "pending"
-    acceptance: list[dict[str, Any]] = field(default_factory=list)
-    """the rows of its outputs that decide the run's acceptance
-    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`)"""
 
 
 @dataclass
@@ -245,7 +222,7 @@ def run_plan(
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
-    provenance = _provenance(plan, registry, files, start_time(), known_sha256 or {})
+    provenance = provenance_of(plan, registry, files, start_time(), known_sha256 or {})
     t_run = time.perf_counter()
     with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
@@ -267,7 +244,7 @@ def run_plan(
             tables = {p: t for p, t in outs.items() if isinstance(t, pa.Table)}
             _check_ports(plan, st, tables, "output", checked)
             record.rows_out.update({p: t.num_rows for p, t in tables.items()})
-            record.acceptance = _acceptance(st, tables)
+            record.acceptance = acceptance(st, tables)
             for header in ctx.found:
                 from_files = from_files.merged(header)
             for port, value in outs.items():
@@ -279,7 +256,7 @@ def run_plan(
         if out_dir is None:
             result = Tables(ports)
             settled(lambda: [result[key] for key in result])  # the API returns tables
-            manifest = _manifest(provenance, current, records, [], time.perf_counter() - t_run)
+            manifest = run_manifest(provenance, current, records, [], time.perf_counter() - t_run)
             return RunResult(None, manifest, result, current, [])
         persisted = settled(lambda: _persist(plan, registry, ports, current, staging, out_dir))
         settled(lambda: _drain(plan, ports, records))
@@ -292,7 +269,7 @@ def run_plan(
         fsync_files(written, lambda path: out_dir / path.name)
         final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
-        manifest = _manifest(
+        manifest = run_manifest(
             provenance, current, records, list(zip(written, final, strict=True)), wall
         )
         write = atomic_write_bytes if publish_as is None else write_synced
@@ -574,115 +551,6 @@ def _persist(
                 write_port(writer, ports[(st.id, port)], path, well)
             paths.append(path)
     return paths
-
-
-def _provenance(
-    plan: Plan, registry: Registry, files: dict[str, Path], at: dt.datetime, sha: Mapping[str, str]
-) -> Provenance:  # fmt: skip
-    return Provenance(
-        pipeline=plan.spec.name,
-        pipeline_version=plan.spec.version,
-        pipeline_file=plan.file,
-        pipeline_sha256=plan.digest,
-        gyropipe=__version__,
-        plugins={n: p.version for n, p in sorted(registry.plugins.items()) if not p.error},
-        inputs={n: _input_entry(source, sha.get(n)) for n, source in files.items()},
-        started=at,
-        stages=tuple(
-            StageSetup(
-                st.id, st.uses, registry.plugin_label(st.plugin), st.params.model_dump(mode="json")
-            )
-            for st in plan.stages
-        ),
-        tool_models=registry.tool_model_files(),
-    )
-
-
-def _manifest(
-    provenance: Provenance,
-    well: WellMetadata,
-    records: list[StageRecord],
-    outputs: list[tuple[Path, Path]],
-    wall: float,
-) -> dict[str, Any]:
-    """``run.json``; ``outputs`` are (file written, its published path) pairs; with the gates
-    of every acceptance-gates table the run produced (``acceptance``: overall ``pass`` unless
-    a gate failed; a failed gate makes the run's ``status`` ``rejected``: it ran, its outputs
-    are the evidence, the survey is not accepted)."""
-    manifest: dict[str, Any] = {
-        "status": "ok",
-        "gyropipe": provenance.gyropipe,
-        "pipeline": {
-            "name": provenance.pipeline,
-            "version": provenance.pipeline_version,
-            "file": provenance.pipeline_file,
-            "sha256": provenance.pipeline_sha256,
-        },
-        "started": provenance.started.isoformat(),
-        "wall_time_s": round(wall, 6),
-        "plugins": dict(provenance.plugins),
-        "inputs": {n: asdict(f) for n, f in provenance.inputs.items()},
-        "parameter_inputs": [asdict(f) for f in provenance.read],
-        "well": well.model_dump(mode="json", exclude_none=True),
-        "stages": [
-            {
-                "id": r.id,
-                "uses": r.uses,
-                "plugin": r.plugin,
-                "status": r.status,
-                "wall_time_s": round(r.wall_time_s, 6),
-                "rows_in": r.rows_in,
-                "rows_out": r.rows_out,
-            }
-            for r in records
-        ],
-        "outputs": [
-            {"file": final.name, **_file_entry(written), "path": str(final)}
-            for written, final in outputs
-        ],
-    }
-    gates = [gate for r in records for gate in r.acceptance]
-    if gates:
-        failed = any(g["status"] == "fail" for g in gates)
-        manifest["acceptance"] = {"status": "fail" if failed else "pass", "gates": gates}
-        if failed:
-            manifest["status"] = REJECTED
-    return manifest
-
-
-def _acceptance(st: PlannedStage, tables: Mapping[str, pa.Table]) -> list[dict[str, Any]]:
-    """The gates of a stage's outputs whose contract decides the run's acceptance
-    (:attr:`~pipeline.contracts.TableContract.decides_acceptance`), as ``run.json`` records
-    them: the contract's columns, a number that is not finite (a gate not evaluated) as null."""
-    rows = []
-    for port, table in tables.items():
-        contract = st.definition.outputs[port]
-        if contract.decides_acceptance:
-            names = [c.name for c in contract.compiled().columns]
-            for row in table.select(names).to_pylist():
-                finite = {
-                    k: None if isinstance(v, float) and not math.isfinite(v) else v
-                    for k, v in row.items()
-                }
-                rows.append({"stage": st.id, "port": port, **finite})
-    return rows
-
-
-def _file_entry(path: Path, sha256: str | None = None) -> dict[str, Any]:
-    with file_errors("read", path):  # e.g. an input deleted since the run began
-        digest = sha256 or sha256_file(path)
-        return {"path": str(path), "sha256": digest, "bytes": path.stat().st_size}
-
-
-def _input_entry(source: Source, sha256: str | None) -> InputFile:
-    """A file's path, hash (``sha256`` where known) and size; a table: its IPC stream's."""
-    if isinstance(source, Path):
-        return InputFile(**_file_entry(source, sha256))
-    sink = pa.BufferOutputStream()
-    with pa.ipc.new_stream(sink, source.schema) as writer:
-        writer.write_table(source)
-    data = sink.getvalue()
-    return InputFile("<table>", hashlib.sha256(data).hexdigest(), data.size)
 
 
 def remove_stale_staging(directory: Path) -> list[Path]:

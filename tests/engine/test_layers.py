@@ -69,6 +69,7 @@ LAYERS: dict[str, int] = {
     "pipeline.spec": 2,
     "pipeline.graph": 2,
     "pipeline.runner": 2,
+    "pipeline.manifest": 2,
     "pipeline.registry": 2,
     "pipeline.read_checks": 2,
     "pipeline.provenance": 2,

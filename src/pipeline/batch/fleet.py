@@ -37,9 +37,9 @@ from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
 from pipeline.graph import Plan
+from pipeline.manifest import MANIFEST
 from pipeline.qc.tables import QcResults
 from pipeline.qc.verdict import QcTally, qc_tally
-from pipeline.runner import MANIFEST
 from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets

@@ -20,8 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, discard, write_synced
+from pipeline.manifest import MANIFEST
 from pipeline.processes import owner_alive
-from pipeline.runner import MANIFEST, remove_stale_staging
+from pipeline.runner import remove_stale_staging
 
 from .filestate import file_key
 

@@ -17,12 +17,11 @@ from typing import Any
 from pydantic import TypeAdapter, ValidationError
 from typing_extensions import TypedDict
 
+from pipeline.manifest import REJECTED
+
 from .fingerprint import Fingerprint
 
 RUN_STATUSES = ("running", "done", "failed", "interrupted")
-REJECTED = "rejected"
-"""a done run (outputs published) whose survey failed an acceptance gate: the ledger keeps
-status ``done`` and says so in the run's note (``rejected: acceptance FAILED (…)``)"""
 BATCH_STATUSES = ("running", "finished", "interrupted")
 
 

@@ -41,8 +41,8 @@ from typing import Any
 from pipeline.errors import file_errors
 from pipeline.executing import ExecutorSetup, PipelineRef
 from pipeline.graph import Plan
+from pipeline.manifest import MANIFEST, REJECTED
 from pipeline.registry import Registry
-from pipeline.runner import MANIFEST
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
@@ -54,7 +54,7 @@ from .ledger import LEASE_S, Busy, Claimed, Ledger, LedgerError, Skipped
 from .policy import Check, Mode, Run, Skip, WellState, decide, why
 from .progress import Reporter
 from .publish import MARKER, WORK_DIR, clean_work_dir, output_on_disk, read_published
-from .records import REJECTED, BatchRow, rejection
+from .records import BatchRow, rejection
 from .summary import WellResult, counts, write_summary
 from .worker import WellOutcome, WellTask
 
