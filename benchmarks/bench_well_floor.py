@@ -34,7 +34,10 @@ bookkeeping (contract checks of whole tables, persisted tables, ``run.json``) an
 worker's (staging, publish); each stage's wall time (``run.json``) beside it. ``--profile``
 prints the top of a cProfile of one more well of each.
 
-    python benchmarks/bench_well_floor.py [--data DIR] [--runs 5] [--profile]
+    python benchmarks/bench_well_floor.py [--data DIR] [--runs 5] [--profile] [--continuous-km KM]
+
+``--continuous-km``: the continuous survey logged over KM km instead of the example's 1.2
+(same speed, rate and tool; the hold lengthened to fit): how the ratio moves with length.
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+import yaml
 from threadpoolctl import threadpool_limits
 
 import pipeline.manifest as manifest
@@ -233,6 +237,20 @@ def checked(outcome: WellOutcome) -> WellOutcome:
     return outcome
 
 
+def longer_continuous(data: Path, km: float) -> str:
+    """``j-well-continuous.yaml`` logged over ``km`` km from its start (300 m) at its speed,
+    the well's hold lengthened to 500 m past the closing stop; written to ``data``, returns
+    its name."""
+    plan = yaml.safe_load((ROOT / "examples" / "plans" / "j-well-continuous.yaml").read_text())
+    end = plan["survey"]["start_md"] + 1000.0 * km
+    plan["survey"]["end_md"] = end
+    plan["well"]["sections"][-1]["to_md"] = max(plan["well"]["sections"][-1]["to_md"], end + 500)
+    plan["name"] = name = f"j-well-continuous-{km:g}km"
+    (data / f"{name}.yaml").parent.mkdir(parents=True, exist_ok=True)
+    (data / f"{name}.yaml").write_text(yaml.safe_dump(plan, sort_keys=False))
+    return name
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -240,11 +258,21 @@ def main() -> int:
     )
     parser.add_argument("--runs", type=int, default=5, help="wells timed per pipeline (least)")
     parser.add_argument("--profile", action="store_true", help="cProfile one more well of each")
+    parser.add_argument(
+        "--continuous-km",
+        type=float,
+        help="the continuous survey logged over this many km from 300 m (the example: 1.2)",
+    )
     args = parser.parse_args()
-    for plan in CASES.values():
+    cases = dict(CASES)
+    if args.continuous_km is not None:
+        cases["continuous-gyro"] = longer_continuous(args.data, args.continuous_km)
+    for plan in cases.values():
         target = args.data / plan / "samples.parquet"
         if not target.is_file():
             plan_file = ROOT / "examples" / "plans" / f"{plan}.yaml"
+            if not plan_file.is_file():
+                plan_file = args.data / f"{plan}.yaml"
             command = [*GYROPIPE, "simulate", str(plan_file), "--seed", "1"]
             subprocess.run([*command, "--out", str(target.parent)], check=True, capture_output=True)
     worker_setup()
@@ -254,7 +282,7 @@ def main() -> int:
     profiles: dict[str, str] = {}
     medians: dict[str, tuple[float, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for i, (name, plan) in enumerate(CASES.items()):
+        for i, (name, plan) in enumerate(cases.items()):
             samples = args.data / plan / "samples.parquet"
             floor_fn = FLOORS[name]
             floor_fn(samples)  # warm-up: page cache, first calls
