@@ -1,9 +1,9 @@
 """Savitzky–Golay filters, short convolutions and derivatives in time, in NumPy alone.
 
 The same filters as SciPy's ``scipy.signal.savgol_coeffs`` / ``savgol_filter`` (mode
-``interp``) and ``oaconvolve(mode="same")`` for odd kernels, written here so that a
-continuous run does not import ``scipy.signal`` (with it most of SciPy: ≈ 80 MiB of the
-process's memory floor, issue #20); convolutions by NumPy's FFT. ``np.gradient`` of
+``interp``; more accurately) and ``oaconvolve(mode="same")`` for odd kernels, written here
+so that a continuous run does not import ``scipy.signal`` (with it most of SciPy: ≈ 80 MiB
+of the process's memory floor, issue #20); convolutions by NumPy's FFT. ``np.gradient`` of
 several series on the same times, to the bit, its weights computed once
 (:class:`TimeGradient`).
 """
@@ -25,28 +25,31 @@ __all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter"]
 def savgol_coeffs(points: int, order: int, deriv: int = 0, delta: float = 1.0) -> FloatArray:
     """Convolution kernel (odd ``points``) of the ``deriv``-th derivative of the local
     least-squares polynomial of degree ``order`` at the window's centre, sample interval
-    ``delta`` (read-only: one array per kernel, kept for the passes that reuse it)."""
+    ``delta`` (read-only: one array per kernel, kept for the passes that reuse it). The
+    positions are scaled to [−1, 1] (SciPy's are not): the powers of positions up to ±100
+    made the least squares ill-conditioned, the taps off by up to 9e-13 relative (201
+    points, order 3), so much that a fit of MD near 1,500 m moved by 3e-9 m; scaled, within
+    5e-15 of the exact taps."""
     half = points // 2
-    x = np.arange(-half, points - half, dtype=np.float64)[::-1]  # reversed: a convolution
+    x = np.arange(-half, points - half, dtype=np.float64)[::-1] / max(half, 1)  # reversed
     design = x ** np.arange(order + 1)[:, None]
     target = np.zeros(order + 1)
-    target[deriv] = math.factorial(deriv) / delta**deriv
+    target[deriv] = math.factorial(deriv) / (delta * max(half, 1)) ** deriv
     coeffs = np.asarray(np.linalg.lstsq(design, target, rcond=None)[0], dtype=np.float64)
     coeffs.setflags(write=False)
     return coeffs
 
 
-def convolve_same(values: FloatArray, kernel: FloatArray, direct: bool = False) -> FloatArray:
+def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
     """``values`` (1-D, or each row of a 2-D array) convolved with the odd-length ``kernel``,
     centred, zero beyond the ends: ``out[i] = Σ_j kernel[j]·values[i + h − j]`` (rows by
     FFT, as ``scipy.signal.oaconvolve(mode="same")``; a long series by FFTs of blocks,
-    :func:`_blocked`, a short one or a short kernel directly). ``direct``: each sum taken
-    directly whatever the lengths — its rounding relative to its own products, where the
-    FFT's is ≈ 1e-16 of the series' largest value (too coarse for the second derivative of
-    an odometer's MD of a kilometre and more)."""
+    :func:`_blocked`, a short one or a short kernel directly). The FFT's rounding is ≈ 1e-16
+    of the series' largest value: a filter of a series far from zero (an odometer's MD of
+    kilometres) goes through its steps instead (:func:`savgol_filter`)."""
     n, m = values.shape[-1], kernel.size
     if values.ndim == 1:
-        if direct or m < _FFT_TAPS or n < _BLOCKS * _block_size(m):
+        if m < _FFT_TAPS or n < _BLOCKS * _block_size(m):
             summed: FloatArray = np.convolve(values, kernel, mode="full")[m // 2 : m // 2 + n]
             return summed
         return _blocked(values, kernel)
@@ -111,17 +114,16 @@ def savgol_filter(
     deriv: int = 0,
     delta: float = 1.0,
     ends: tuple[bool, bool] = (True, True),
-    direct: bool = False,
 ) -> FloatArray:
     """The Savitzky–Golay fit (its ``deriv``-th derivative) at every sample: the kernel of
-    :func:`savgol_coeffs` inside, and within half a window of either end the polynomial
-    fitted to the first or last ``points`` samples (SciPy's mode ``interp``); ``ends``: the
-    (first, last) half windows fitted so (not: left as the convolution's, which treats the
-    samples beyond as zeros — for a caller that discards them); ``direct``: as
-    :func:`convolve_same`'s."""
+    :func:`savgol_coeffs` inside (applied to the steps of ``values``,
+    :func:`_through_steps`), and within half a window of either end the polynomial fitted
+    to the first or last ``points`` samples (SciPy's mode ``interp``); ``ends``: the (first,
+    last) half windows fitted so (not: left as the convolution's, which treats the samples
+    beyond as zeros — for a caller that discards them)."""
     if values.size < points:
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
-    out = convolve_same(values, savgol_coeffs(points, order, deriv, delta), direct)
+    out = _through_steps(values, savgol_coeffs(points, order, deriv, delta), deriv)
     half = points // 2
     position = np.arange(points, dtype=np.float64)
     fits = ((slice(0, points), slice(0, half)), (slice(-points, None), None))
@@ -135,6 +137,31 @@ def savgol_filter(
             out[values.size - half :] = np.polyval(poly, position[points - half :]) / delta**deriv
         else:
             out[where] = np.polyval(poly, position[:half]) / delta**deriv
+    return out
+
+
+def _through_steps(values: FloatArray, kernel: FloatArray, deriv: int) -> FloatArray:
+    """``convolve_same(values, kernel)`` at the samples at least half a kernel from either
+    end (the rest: not that), for a Savitzky–Golay ``kernel`` of the ``deriv``-th derivative,
+    taken from the steps ``Δv[n] = v[n] − v[n−1]`` by parts: with the kernel less the unit
+    impulse at its centre where ``deriv`` is 0, its taps sum to zero (a fit reproduces a
+    constant; its derivatives annihilate it), so ``Σ_j k[j]·v[i+h−j] = Σ_j K[j]·Δv[i+h−j]``
+    with ``K`` their cumulative sums (the last, zero, taken as exactly so), plus ``v[i]``
+    for the fit itself. The convolution's rounding (≈ 1e-16 of the largest step by FFT) is
+    then that of the steps, not of the values: an odometer's MD of kilometres moves ~1 cm a
+    sample, so this is more accurate than the sums of products of the values taken directly
+    (each rounded relative to kilometres) and as fast as an FFT."""
+    taps = np.array(kernel, dtype=np.float64)
+    if deriv == 0:
+        taps[taps.size // 2] -= 1.0
+    cumulative = np.cumsum(taps)
+    cumulative[-1] = 0.0
+    steps = np.empty_like(values, dtype=np.float64)
+    steps[0] = 0.0
+    np.subtract(values[1:], values[:-1], out=steps[1:])
+    out = convolve_same(steps, cumulative)
+    if deriv == 0:
+        out += values
     return out
 
 

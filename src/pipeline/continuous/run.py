@@ -168,10 +168,8 @@ def odometer_fit(store: ColumnStore, begin: int, end: int, window: float, rows: 
         if fitted:
             wlo, whi = savgol_span(lo, hi, a, b, points)
             wide = store.floats("md", wlo, whi)
-            # direct sums: by FFT (rounding 1e-16 of a km of MD) the acceleration would move
-            # the inclination near vertical by 3e-12°
             fit = {
-                name: savgol_range(wide, wlo, a, b, points, 3, d, dt, direct=True)
+                name: savgol_range(wide, wlo, a, b, points, 3, d, dt)
                 for d, name in enumerate(("md", "speed", "accel"))
             }
         else:

@@ -187,16 +187,14 @@ def savgol_range(
     order: int,
     deriv: int,
     dt: float,
-    direct: bool = False,
 ) -> FloatArray:
     """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same dot product with the same samples, and the edge
-    polynomial is fitted to the same first or last ``points`` samples (``direct``:
-    :func:`~.filters.convolve_same`'s)."""
+    polynomial is fitted to the same first or last ``points`` samples."""
     half = points // 2
     ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
-    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends, direct=direct)
+    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
     out: FloatArray = fit[a - wlo : b - wlo]
     return out
 
