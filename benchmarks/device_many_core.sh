@@ -70,7 +70,7 @@ step() { # NAME LIMIT_S COMMAND…: the command's output to $out/NAME.log, kille
     timeout -k 10 "$limit" "$@" 2>&1 | tee "$out/$name.log"
     local rc=${PIPESTATUS[0]}
     [ "$rc" -eq 0 ] || failed=1
-    status+=("$name rc=$rc ${SECONDS} s$([ "$rc" -ge 124 ] && echo ' (time limit)')")
+    status+=("$name rc=$rc ${SECONDS} s$([[ $rc == 124 || $rc == 137 ]] && echo ' (time limit)')")
     echo "== $name: rc=$rc after ${SECONDS} s; load $(cut -d' ' -f1-3 /proc/loadavg)"
 }
 step fleet "${limits[0]}" "$python" benchmarks/bench_fleet.py --data "$data" "${fleet[@]}"
