@@ -99,7 +99,6 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "examples" / "plans" / "j-well.yaml"
 PIPELINE = ROOT / "pipelines" / "point-gyro.yaml"
-GYROPIPE = Path(sys.executable).parent / "gyropipe"
 PREDICT_AT = (4, 8, 16, 32, 64)
 TARGET_WORKERS, TARGET_SPEED_UP = 16, 12.0
 TARGET_DRIVER_MS, TARGET_WELLS = 5.0, 64
@@ -111,6 +110,16 @@ def cpu_s(who: int) -> float:
     """User + system CPU seconds of ``resource.RUSAGE_SELF`` or ``RUSAGE_CHILDREN``."""
     usage = resource.getrusage(who)
     return usage.ru_utime + usage.ru_stime
+
+
+def gyropipe() -> str:
+    """The ``gyropipe`` console script beside this interpreter (its venv's), else the first on
+    ``PATH`` (where gyropipe runs from its sources: ``benchmarks/device_many_core.sh``)."""
+    beside = Path(sys.executable).parent / "gyropipe"
+    found = str(beside) if beside.is_file() else shutil.which("gyropipe")
+    if found is None:
+        raise SystemExit(f"no gyropipe console script beside {sys.executable} nor on PATH")
+    return found
 
 
 def simulated_from_plan(folder: Path) -> bool:
@@ -133,7 +142,7 @@ def simulate(data: Path, seeds: int) -> list[Path]:
         if not simulated_from_plan(target):
             print(f"simulating seed {seed} …", flush=True)
             tmp = Path(tempfile.mkdtemp(prefix=f".seed-{seed}-", dir=data))
-            cmd = [str(GYROPIPE), "simulate", str(PLAN), "--seed", str(seed), "--out", str(tmp)]
+            cmd = [gyropipe(), "simulate", str(PLAN), "--seed", str(seed), "--out", str(tmp)]
             subprocess.run(cmd, check=True, capture_output=True)
             for unused in ("truth.parquet", "stations.parquet"):
                 (tmp / unused).unlink(missing_ok=True)
