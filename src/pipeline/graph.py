@@ -3,7 +3,9 @@ wired, contracts matched and an execution order found — or every problem, loca
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections import Counter
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -12,6 +14,7 @@ from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import TableContract
 from pipeline.errors import Location, Problem, SpecError, did_you_mean
+from pipeline.ports import keeping
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PipelineSpec, StageSpec
 from pipeline.yamlsource import PathKey, SourceMap, validation_problems
@@ -24,6 +27,9 @@ class PlannedStage:
     id: str
     uses: str
     definition: StageDef
+    """the registered stage; where a streamed output of it is read by several (stages whose
+    required input it is, ``persist``), its ``func`` keeps a pass of it for them all
+    (:func:`~pipeline.ports.keeping`)"""
     plugin: str
     params: BaseModel
     wiring: dict[str, tuple[str, str]]
@@ -105,6 +111,12 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     order = _order(wiring, positions, source, problems)
     if problems:
         raise SpecError(problems)
+    readers = Counter(  # the certain readers: an optional input may go unread (validity's
+        src  # samples without magnetometers), so a pass kept for it might be held for nothing
+        for consumer, wired in wiring.items()
+        for port, src in wired.items()
+        if port not in defs[consumer][0].optional_inputs
+    )
     planned = []
     for stage_id in order:
         stage = spec.stages[index[stage_id]]
@@ -116,6 +128,9 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
             if stage.persist
             else ()
         )
+        passes = {p: readers[stage_id, p] + (p in persist) for p in definition.streamed_outputs}
+        if any(n > 1 for n in passes.values()):  # read by several: decoded once, if small
+            definition = dataclasses.replace(definition, func=keeping(definition.func, passes))
         planned.append(
             PlannedStage(
                 stage_id,

@@ -527,7 +527,8 @@ class Registry:
                     raise read_violation(path, kind, chosen, exc) from None
                 yield batch
 
-        return TableStream(stream.schema, checked, frozenset({chosen.kinds[kind]})), found
+        holds = frozenset({chosen.kinds[kind]})
+        return TableStream(stream.schema, checked, holds, stream.nbytes), found
 
     def _reading(self, reader: ReaderDef, call: Callable[[], Any]) -> Any:
         """``call()``, a reader's failure reported as :meth:`read` says."""

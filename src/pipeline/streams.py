@@ -21,6 +21,11 @@ import pyarrow as pa
 
 BATCH_ROWS = 65_536
 """Rows per batch when a whole table is cut into a stream (the generic fallback)."""
+KEEP_BYTES = 32 << 20
+"""The most bytes a stream's pass may decode to for the plan to keep it for the stream's
+other consumers (:meth:`TableStream.kept`, :func:`~pipeline.ports.keeping`): the samples
+of a continuous survey of 163,601 samples × 9 columns, read by the readings stage and then
+the continuous stage, decode to 11.8 MB (≈ 7 ms a pass); a longer survey is read again."""
 
 
 @dataclass(frozen=True)
@@ -36,6 +41,9 @@ class TableStream:
     holds: frozenset[Any] = frozenset()
     """table contracts (classes) every batch of every pass is known to satisfy: a wrapper
     that checks one of them again can pass the stream through unchecked"""
+    nbytes: int | None = None
+    """bytes a pass decodes to, where the source tells before it is read (a Parquet file's
+    footer); None where it does not"""
 
     def __iter__(self) -> Iterator[pa.RecordBatch]:
         return self.passes()
@@ -71,7 +79,37 @@ class TableStream:
         """The same stream with other schema metadata (on every batch too); the columns and
         their metadata are unchanged, so it holds the same contracts."""
         relabelled = TableStream.of_batches(self.schema.with_metadata(metadata or {}), self.passes)
-        return TableStream(relabelled.schema, relabelled.passes, self.holds)
+        return TableStream(relabelled.schema, relabelled.passes, self.holds, self.nbytes)
+
+    def kept(self, passes: int) -> TableStream:
+        """The same stream, its source read once for ``passes`` passes: the first pass run
+        to its end keeps its batches, and the ``passes − 1`` passes after it yield them
+        instead of reading the source again, the last of them letting each go as it passes
+        on. Passes after those read the source again, as every pass does while none has run
+        to its end. What is held is one pass, from its first consumer to its last."""
+        held: list[pa.RecordBatch] | None = None
+        left = passes - 1  # passes still to be given the kept batches
+
+        def each() -> Iterator[pa.RecordBatch]:
+            nonlocal held, left
+            if held is not None:
+                left -= 1
+                if left:
+                    yield from held
+                    return
+                batches, held = held[::-1], None
+                while batches:
+                    yield batches.pop()
+                return
+            batches = []
+            for batch in self.passes():
+                if left:
+                    batches.append(batch)
+                yield batch
+            if left:
+                held = batches
+
+        return TableStream(self.schema, each, self.holds, self.nbytes)
 
     def read_all(self) -> pa.Table:
         """One pass concatenated into a table (for a consumer that needs it whole)."""

@@ -5,6 +5,7 @@ checked batch by batch and errors name the row counted from the start of the str
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -14,11 +15,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from pipeline import ports
 from pipeline.errors import ContractViolation, InputFileError, StageError
 from pipeline.gyrocompass.readings import position_readings
-from pipeline.registry import StageContext, StageDef
+from pipeline.registry import ReaderDef, StageContext, StageDef
 from pipeline.streams import TableStream
 from pipeline.tables import RawSamples
+from pipeline.well import WellMetadata
 from stream_support import PIPELINE, ROWS, Alive, counting_reader, registry_with, run, survey
 
 
@@ -161,3 +164,92 @@ def test_the_samples_a_stage_streams_hold_their_contract(tmp_path: Path) -> None
     )
     run(tmp_path, registry_with(counting_reader(Alive()), stage), text, source)
     assert seen and RawSamples in seen[0]
+
+
+def test_a_kept_stream_reads_its_source_once_for_its_passes() -> None:
+    """``TableStream.kept(3)``: the two passes after one run to its end yield that pass's
+    batches without reading the source, the last letting each go as it passes; the passes
+    after them read the source. A pass left unfinished keeps nothing."""
+    samples = survey()
+    reads = [0]
+
+    def source() -> Iterator[pa.RecordBatch]:
+        reads[0] += 1
+        yield from TableStream.from_table(samples, ROWS)
+
+    stream = TableStream(samples.schema, source).kept(3)
+    next(iter(stream))  # unfinished: nothing kept
+    first = list(stream)
+    assert reads == [2] and len(first) > 40
+    for _ in range(2):
+        again = list(stream)
+        assert reads == [2] and all(a is b for a, b in zip(first, again, strict=True))
+    for n in (3, 4):
+        assert pa.Table.from_batches(list(stream)).equals(samples) and reads == [n]
+
+    alive = Alive()
+    tracked = TableStream(samples.schema, lambda: map(alive.track, source())).kept(2)
+    list(tracked)  # kept: every batch of the pass alive
+    assert alive.now == alive.made == len(first)
+    for n, batch in enumerate(tracked):  # the last kept pass lets them go in turn
+        assert (alive.now, alive.made) == (len(first) - n, len(first))
+        del batch
+    assert alive.now == 0 and reads == [5]
+
+
+def sized(reader: ReaderDef, nbytes: int) -> ReaderDef:
+    """``reader`` whose streams say a pass decodes to ``nbytes``."""
+    opener = reader.stream
+    assert opener is not None
+
+    def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
+        found, well = opener(path, kind, options)
+        return dataclasses.replace(found, nbytes=nbytes), well
+
+    return dataclasses.replace(reader, stream=stream)
+
+
+SHARED = PIPELINE.split("  - id: validity")[0] + "  - id: copy" + PIPELINE.split("  - id: copy")[1]
+"""read (samples persisted) → readings, copy: three readers of the samples"""
+ALONE = PIPELINE.split("  - id: validity")[0].replace("    persist: [samples]\n", "")
+"""read → readings: one reader"""
+OPTIONAL = PIPELINE.split("  - id: copy")[0].replace("    persist: [samples]\n", "")
+"""read → readings, validity (whose samples are an optional input): one certain reader"""
+
+
+@pytest.mark.parametrize(
+    ("text", "larger", "reads"),
+    [(SHARED, False, 1), (SHARED, True, 3), (ALONE, False, 1), (OPTIONAL, False, 2)],
+    ids=["three-readers", "three-readers-too-large", "one-reader", "an-optional-reader"],
+)
+def test_the_plan_keeps_a_pass_for_the_stages_that_read_it_again(
+    tmp_path: Path, text: str, larger: bool, reads: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A streamed output read by several (readings, a copy, persisted) is read from its
+    source once where it says it decodes to at most KEEP_BYTES (the pass held from the first
+    reader to the last, which lets it go), else once per reader; one with a single certain
+    reader is not kept (its batches go as they pass; validity, reading its optional samples,
+    reads them again)."""
+    samples = survey()
+    source = tmp_path / "samples.parquet"
+    pq.write_table(samples, source)
+    alive = Alive()
+    if larger:
+        monkeypatch.setattr(ports, "KEEP_BYTES", samples.nbytes - 1)
+    reader = sized(counting_reader(alive), samples.nbytes)
+    result = run(tmp_path, registry_with(reader), text, source)
+    batches = -(-samples.num_rows // ROWS)
+    assert alive.made == reads * batches
+    held = text == SHARED and not larger
+    assert alive.peak == batches if held else alive.peak <= 3
+    assert alive.now == 0 and result.manifest["stages"][0]["rows_out"] == {
+        "samples": samples.num_rows
+    }
+    whole = position_readings(samples)
+    readings = pq.read_table(tmp_path / "out" / "readings.readings.parquet")
+    assert readings.select(whole.column_names).equals(whole)
+    for name in ("read.samples.parquet", "copy.parquet"):
+        if text == SHARED:
+            assert (
+                pq.read_table(tmp_path / "out" / name).select(samples.column_names).equals(samples)
+            )

@@ -14,6 +14,7 @@ threads when the readers have more than one (:func:`~pipeline.io.threads.reader_
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -83,9 +84,10 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
 def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
     """:func:`read` as a stream: the schema and well metadata from the file's footer, the
     rows in batches of at most :data:`BATCH_ROWS` rows, row group after row group, the
-    column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole)."""
+    column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole); its
+    ``nbytes`` the decoded size the footer gives (:func:`_check_bounds`)."""
     try:
-        _check_bounds(path)
+        decoded = _check_bounds(path)
         schema = pq.read_schema(path)
     except (OSError, pa.ArrowException) as exc:
         raise _unreadable(path, exc) from exc
@@ -100,13 +102,15 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
         except (OSError, pa.ArrowException) as exc:
             raise _unreadable(path, exc) from exc
 
-    return TableStream.of_batches(schema, batches), _well(path, schema)
+    stream = TableStream.of_batches(schema, batches)
+    return dataclasses.replace(stream, nbytes=decoded), _well(path, schema)
 
 
-def _check_bounds(path: Path) -> None:
+def _check_bounds(path: Path) -> int:
     """Refuse a file of more than :data:`MAX_COLUMNS` columns, or one that would decode to
-    more than its budget (module docstring), before anything is decoded. (The footer is
-    read through a dataset fragment: ``pq.read_metadata`` decodes the column names.)"""
+    more than its budget (module docstring), before anything is decoded; the bytes it
+    decodes to. (The footer is read through a dataset fragment: ``pq.read_metadata``
+    decodes the column names.)"""
     meta = next(ds.dataset(str(path), format="parquet").get_fragments()).metadata
     if meta.num_columns > MAX_COLUMNS:
         raise InputFileError(
@@ -125,6 +129,7 @@ def _check_bounds(path: Path) -> None:
             f"{decoded:,} bytes, more than {budget:,} ({MAX_INFLATION} times the file's "
             f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
         )
+    return decoded
 
 
 def _unreadable(path: Path, exc: Exception) -> InputFileError:
