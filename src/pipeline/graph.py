@@ -3,18 +3,16 @@ wired, contracts matched and an execution order found — or every problem, loca
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections import Counter
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import TableContract
 from pipeline.errors import Location, Problem, SpecError, did_you_mean
-from pipeline.ports import keeping
 from pipeline.registry import PIPELINE_INPUT, Registry, StageDef
 from pipeline.spec import LoadedSpec, PipelineSpec, StageSpec
 from pipeline.yamlsource import PathKey, SourceMap, validation_problems
@@ -27,14 +25,15 @@ class PlannedStage:
     id: str
     uses: str
     definition: StageDef
-    """the registered stage; where a streamed output of it is read by several (stages whose
-    required input it is, ``persist``), its ``func`` keeps a pass of it for them all
-    (:func:`~pipeline.ports.keeping`)"""
     plugin: str
     params: BaseModel
     wiring: dict[str, tuple[str, str]]
     """input port → (upstream stage id, output port)"""
     persist: tuple[str, ...]
+    passes: Mapping[str, int] = field(default_factory=dict)
+    """the certain passes over each streamed output: the stages whose required input it is,
+    and ``persist`` (an optional input may go unread — validity's samples without
+    magnetometers); the runner keeps a pass read by several (:func:`~pipeline.ports.kept`)"""
 
 
 @dataclass(frozen=True)
@@ -111,8 +110,8 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     order = _order(wiring, positions, source, problems)
     if problems:
         raise SpecError(problems)
-    readers = Counter(  # the certain readers: an optional input may go unread (validity's
-        src  # samples without magnetometers), so a pass kept for it might be held for nothing
+    readers = Counter(
+        src
         for consumer, wired in wiring.items()
         for port, src in wired.items()
         if port not in defs[consumer][0].optional_inputs
@@ -129,8 +128,6 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
             else ()
         )
         passes = {p: readers[stage_id, p] + (p in persist) for p in definition.streamed_outputs}
-        if any(n > 1 for n in passes.values()):  # read by several: decoded once, if small
-            definition = dataclasses.replace(definition, func=keeping(definition.func, passes))
         planned.append(
             PlannedStage(
                 stage_id,
@@ -140,6 +137,7 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
                 params[stage_id],
                 wiring[stage_id],
                 persist,
+                passes,
             )
         )
     return Plan(spec, source.file, tuple(planned))

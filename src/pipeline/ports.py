@@ -7,12 +7,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from typing import Any, Generic, TypeVar
+from typing import Generic, TypeVar
 
 import pyarrow as pa
 
 from pipeline.contracts import TableContract
-from pipeline.registry import StageContext, StageFunc, WriterDef
+from pipeline.registry import WriterDef
 from pipeline.streams import KEEP_BYTES, Port, TableStream, as_table
 from pipeline.well import WellMetadata, attach, attached
 
@@ -75,25 +75,13 @@ def counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream
     return TableStream(stream.schema, counting, stream.holds)
 
 
-def keeping(func: StageFunc, passes: Mapping[str, int]) -> StageFunc:
-    """The stage function ``func`` whose streamed output ``port`` is read from its source
-    once for its ``passes[port]`` consumers (:meth:`TableStream.kept`) where the stream
-    says a pass decodes to at most :data:`~pipeline.streams.KEEP_BYTES` (a stream that does
-    not say, or a larger one, is read again by each)."""
-
-    def call(inputs: Mapping[str, Any], params: Any, ctx: StageContext) -> Mapping[str, Port]:
-        outs = func(inputs, params, ctx)
-        if not isinstance(outs, Mapping):
-            return outs  # the runner says what is wrong with it
-        return {port: _kept(value, passes.get(port, 1)) for port, value in outs.items()}
-
-    return call
-
-
-def _kept(value: Any, passes: int) -> Any:
-    if isinstance(value, TableStream) and passes > 1 and value.nbytes is not None:
-        return value.kept(passes) if value.nbytes <= KEEP_BYTES else value
-    return value
+def kept(stream: TableStream, passes: int, nbytes: int | None) -> TableStream:
+    """``stream`` read from its source once for its ``passes`` consumers
+    (:meth:`TableStream.kept`) where its source says a pass decodes to ``nbytes``, at most
+    :data:`~pipeline.streams.KEEP_BYTES`; else as it is (each consumer reads it again)."""
+    if passes > 1 and nbytes is not None and nbytes <= KEEP_BYTES:
+        return stream.kept(passes)
+    return stream
 
 
 def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -> None:

@@ -37,7 +37,15 @@ from pipeline.graph import Plan, PlannedStage
 from pipeline.hashing import sha256_file
 from pipeline.inputfiles import parameter_paths
 from pipeline.manifest import MANIFEST, StageRecord, acceptance, provenance_of, run_manifest
-from pipeline.ports import CheckedTables, Tables, UpstreamError, counted, settled, write_port
+from pipeline.ports import (
+    CheckedTables,
+    Tables,
+    UpstreamError,
+    counted,
+    kept,
+    settled,
+    write_port,
+)
 from pipeline.processes import owner_alive
 from pipeline.provenance import ParameterFile
 from pipeline.registry import (
@@ -248,8 +256,9 @@ def run_plan(
             for header in ctx.found:
                 from_files = from_files.merged(header)
             for port, value in outs.items():
-                if isinstance(value, TableStream):
-                    value = _produced(plan, st, port, value, registry, record)
+                if isinstance(value, TableStream):  # read by several: decoded once if small
+                    produced = _produced(plan, st, port, value, registry, record)
+                    value = kept(produced, st.passes.get(port, 1), value.nbytes)
                 ports[(st.id, port)] = value
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"

@@ -23,7 +23,7 @@ BATCH_ROWS = 65_536
 """Rows per batch when a whole table is cut into a stream (the generic fallback)."""
 KEEP_BYTES = 32 << 20
 """The most bytes a stream's pass may decode to for the plan to keep it for the stream's
-other consumers (:meth:`TableStream.kept`, :func:`~pipeline.ports.keeping`): the samples
+other consumers (:meth:`TableStream.kept`, :func:`~pipeline.ports.kept`): the samples
 of a continuous survey of 163,601 samples × 9 columns, read by the readings stage and then
 the continuous stage, decode to 11.8 MB (≈ 7 ms a pass); a longer survey is read again."""
 
