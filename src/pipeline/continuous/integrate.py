@@ -173,8 +173,8 @@ def _apsidal_run(
             seg = slice(sa - lo, sb - lo)
             if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
                 high, attitude = y, angles
-                inc_rate = (  # direct sums: by FFT the toolface would move by 1e-13°
-                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt, direct=True)
+                inc_rate = (  # by FFT: rounding ≈ 1e-16 of the chunk's largest |I| (rad)
+                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
                     if smooth
                     else np.gradient(inc, t)[seg]
                 )
