@@ -6,11 +6,11 @@ the raw columns it needs are written once to a :class:`ColumnStore` (held in mem
 :data:`SPOOL_BYTES` in all, past that one unnamed temporary file per column, read with
 ``pread``, so the operating system's page cache holds them, not the process), and each pass
 of the integration reads the rows of one chunk plus the few rows of overlap its filters
-need, and writes its per-sample results back. Memory is a few chunks whatever the survey's
-length. Chunking does not change the numbers: filters read
-their whole window (:func:`savgol_range`), running sums carry the last value
-(:func:`carried_cumsum`, :class:`RunningIntegrals`) and interpolations at given points see
-the same two samples (:class:`Interpolation`) as over the whole series.
+need, and writes its per-sample results back. Memory is a few chunks (and at most
+:data:`SPOOL_BYTES` of store) whatever the survey's length. Chunking does not change the
+numbers: filters read their whole window (:func:`savgol_range`), running sums carry the last
+value (:func:`carried_cumsum`, :class:`RunningIntegrals`) and interpolations at given points
+see the same two samples (:class:`Interpolation`) as over the whole series.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ CHUNK_ROWS = 65_536
 SPOOL_BYTES = 24 << 20
 """bytes: a :class:`ColumnStore` holds its columns in memory up to this much in all (a 1×
 well's 18 MiB: the files' creation, writes and closing ≈ 4–8 ms of its CPU), and moves them
-all to files when a write would take it past (a day's survey stays a few chunks in memory)."""
+all to files when a write would take it past (a day's survey: ≈ 1.2 GB of columns)."""
 
 
 @dataclass
