@@ -140,7 +140,9 @@ def test_a_continuous_run_gives_the_same_bits_whichever_way_its_store_holds_them
         monkeypatch.setattr(store_module, "SPOOL_BYTES", spool)
         files.clear()
         out = tmp_path / how
-        gyropipe_cli("run", tmp_path / "pipeline.yaml", "--input", samples, "--out", out, check=True)
+        gyropipe_cli(
+            "run", tmp_path / "pipeline.yaml", "--input", samples, "--out", out, check=True
+        )
         made[how] = len(files)
     assert made["memory"] == 0 and made["disk"] > 10 and made["midway"] == made["disk"]
     for table in ("continuous.stations.parquet", "continuous.series.parquet"):
