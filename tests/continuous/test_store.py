@@ -37,6 +37,9 @@ def written(store: ColumnStore) -> list[bool]:
     rng = np.random.default_rng(7)
     special = np.array([-0.0, np.nan, np.inf, -np.inf, 5e-324])
     steps: list[bool] = []
+    for a in (120_000, 80_000, 40_000, 0):  # longer than a chunk, written from the end
+        store.write("long", a, rng.normal(size=40_000))
+        steps.append(store.on_disk)
     for a in (900, 600, 300, 0):  # reversed chunks of 300 rows
         store.write("azi", a, rng.normal(size=300))
         steps.append(store.on_disk)
@@ -54,6 +57,9 @@ def expected() -> dict[str, np.ndarray]:
     """The columns :func:`written` leaves, made by slicing NumPy arrays."""
     rng = np.random.default_rng(7)
     special = np.array([-0.0, np.nan, np.inf, -np.inf, 5e-324])
+    long = np.zeros(160_000)
+    for a in (120_000, 80_000, 40_000, 0):
+        long[a : a + 40_000] = rng.normal(size=40_000)
     azi = np.zeros(1200)
     for a in (900, 600, 300, 0):
         azi[a : a + 300] = rng.normal(size=300)
@@ -63,25 +69,27 @@ def expected() -> dict[str, np.ndarray]:
         time.append(rng.uniform(size=250))
         held.append(rng.integers(-128, 128, size=250).astype(np.int8))
     late = np.concatenate([np.zeros(40), np.arange(3.0)])
-    return {"azi": azi, "time": np.concatenate(time), "held": np.concatenate(held), "late": late}
+    columns = {"time": np.concatenate(time), "held": np.concatenate(held), "late": late}
+    return {"azi": azi, **columns, "long": long}
 
 
 def test_the_same_bits_in_memory_on_disk_and_spilled_midway() -> None:
-    total = 8 * 1200 + 8 * 1500 + 1500 + 8 * 43  # bytes of the columns written
+    total = 8 * 1200 + 8 * 1500 + 1500 + 8 * 43 + 8 * 160_000  # bytes of the columns written
     stores = {
         "memory": ColumnStore(spool_bytes=total),
         "disk": ColumnStore(spool_bytes=0),
-        "midway": ColumnStore(spool_bytes=total // 2),
+        "midway": ColumnStore(spool_bytes=8 * 160_000 + 100),  # spilled with "long" held
     }
     steps = {name: written(store) for name, store in stores.items()}
     assert not any(steps["memory"]) and all(steps["disk"])
-    assert steps["midway"][0] is False and steps["midway"][-1] is True
+    assert steps["midway"][:4] == [False] * 4 and steps["midway"][-1] is True
     for name, want in expected().items():
         for how, store in stores.items():
             got = store.read(name, 0, store.rows(name))
             assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), (how, name)
-            part = store.read(name, 97, 1013)  # a range across chunks and the store's end
-            assert part.tobytes() == want[97:1013].tobytes(), (how, name)
+            for lo, hi in ((97, 1013), (65_000, 140_000)):  # across writes and the end
+                part = store.read(name, lo, hi)
+                assert part.tobytes() == want[lo:hi].tobytes(), (how, name, lo)
 
 
 PLAN = """
