@@ -258,6 +258,23 @@ def test_ellipse_closed_forms() -> None:
     c = a**2 * np.outer(u, u) + b**2 * np.outer(v, v)
     r = ellipses(c[0, 0], c[0, 1], c[1, 1], 1.0)
     np.testing.assert_allclose([r.semi_major, r.semi_minor, r.azimuth], [a, b, th])
+    # rank one, v vᵀ rounded (a continuous run's tie station: nn·ee = ne² to 3e-16 relative):
+    # minor 0, not √ of the rounding of mean − radius (1.3e-12 m here); a resolved small one
+    # (λ ratio 1e-10, far above ε; to the subtraction's rounding, ε/1e-10) kept; NaN (outside
+    # validity) stays NaN
+    tie = ellipses(
+        [1.1585816078318577e-08, 1.0, 4.0, np.nan],
+        [1.0041834708255498e-08, 0.0, 0.0, np.nan],
+        [8.703611694357162e-09, 1e-10, 1.0, np.nan],
+        1.0,
+    )
+    assert tie.semi_minor[0] == 0.0
+    assert tie.semi_major[0] == pytest.approx(
+        np.sqrt(1.1585816078318577e-08 + 8.703611694357162e-09)
+    )
+    assert tie.semi_minor[1] == pytest.approx(1e-5, rel=1e-5)
+    assert tie.semi_minor[2] == pytest.approx(1.0)
+    assert np.isnan(tie.semi_minor[3])
     # χ²(2): P(r² ≤ k²) = 1 − exp(−k²/2); 39.35 % at 1σ, k = 2.4477 at 95 %
     assert horizontal_scale(1 - np.exp(-0.5)) == pytest.approx(1.0)
     assert horizontal_scale(0.95) == pytest.approx(2.447746830680816)

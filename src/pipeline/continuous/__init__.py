@@ -9,11 +9,12 @@ full-rate series stream), ``stations`` (resampled stations), ``multiaxis`` and
 dispatch by tool).
 
 Any survey length in bounded memory (issue #20): the samples (a table or a stream of record
-batches) are written once to a disk-backed store, and every pass — odometer fit, the
-integration's passes, station extraction, the σ budget — reads a chunk of rows plus the
-overlap its filters need, carrying running sums, the last azimuth and the Newton solver's
-first guess from chunk to chunk; the results equal those of the whole series in one chunk
-(tests/continuous/test_chunks.py). A three-axis (strapdown) run still reads its span whole.
+batches) are written once to a column store (on disk past 24 MiB), and every pass —
+odometer fit, the integration's passes, station extraction, the σ budget — reads a chunk of
+rows plus the overlap its filters need, carrying running sums, the last azimuth and the
+Newton solver's first guess from chunk to chunk; the results equal those of the whole series
+in one chunk (tests/continuous/test_chunks.py). A three-axis (strapdown) run still reads its
+span whole.
 
 The names below load their module on first use, so that importing a submodule (as the
 stage plugin does to register) does not load the integration.

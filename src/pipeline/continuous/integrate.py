@@ -87,8 +87,9 @@ def integrate_continuous(
 ) -> ContinuousResult:
     """Integrate the azimuth of the moving run between its two compassed stops (x and xy
     tools here; xyz: :mod:`pipeline.continuous.strapdown`). The samples (a table or a stream
-    of record batches) are read once into a disk-backed store and integrated ``rows`` at a
-    time; the full-rate series comes back as a stream read from that store."""
+    of record batches) are read once into a column store (on disk past 24 MiB) and
+    integrated ``rows`` at a time; the full-rate series comes back as a stream read from
+    that store."""
     stream = as_stream(samples)
     axes = resolve_gyro_axes(stream.column_names, options.gyro_axes)
     if "md" not in stream.column_names:

@@ -2,14 +2,15 @@
 helpers that let the integration work chunk by chunk with carried state.
 
 A survey of any length goes through :mod:`pipeline.continuous` a chunk of rows at a time:
-the raw columns it needs are written once to a :class:`ColumnStore` (one unnamed temporary
-file per column, read with ``pread``, so the operating system's page cache holds them, not
-the process), and each pass of the integration reads the rows of one chunk plus the few
-rows of overlap its filters need, and writes its per-sample results back. Memory is a few
-chunks whatever the survey's length. Chunking does not change the numbers: filters read
-their whole window (:func:`savgol_range`), running sums carry the last value
-(:func:`carried_cumsum`, :class:`RunningIntegrals`) and interpolations at given points see
-the same two samples (:class:`Interpolation`) as over the whole series.
+the raw columns it needs are written once to a :class:`ColumnStore` (held in memory up to
+:data:`SPOOL_BYTES` in all, past that one unnamed temporary file per column, read with
+``pread``, so the operating system's page cache holds them, not the process), and each pass
+of the integration reads the rows of one chunk plus the few rows of overlap its filters
+need, and writes its per-sample results back. Memory is a few chunks (and at most
+:data:`SPOOL_BYTES` of store) whatever the survey's length. Chunking does not change the
+numbers: filters read their whole window (:func:`savgol_range`), running sums carry the last
+value (:func:`carried_cumsum`, :class:`RunningIntegrals`) and interpolations at given points
+see the same two samples (:class:`Interpolation`) as over the whole series.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from pipeline.earth.frames import FloatArray
 
 __all__ = [
     "CHUNK_ROWS",
+    "SPOOL_BYTES",
     "CarriedUnwrap",
     "ColumnStore",
     "Interpolation",
@@ -45,43 +47,82 @@ CHUNK_ROWS = 65_536
 """Rows a pass of the integration handles at a time."""
 
 
+SPOOL_BYTES = 24 << 20
+"""bytes: a :class:`ColumnStore` holds its columns in memory up to this much in all (a 1×
+well's 18 MiB: the files' creation, writes and closing ≈ 4–8 ms of its CPU), and moves them
+all to files when a write would take it past (a day's survey: ≈ 1.2 GB of columns)."""
+
+
 @dataclass
 class _Column:
-    file: IO[bytes]
     dtype: np.dtype[np.generic]
     rows: int
+    data: bytearray
+    """the column's bytes while the store is in memory (empty once on disk)"""
+    file: IO[bytes] | None = None
 
     @property
     def fd(self) -> int:
+        assert self.file is not None
         return self.file.fileno()
 
 
 class ColumnStore:
-    """Columns of numbers on disk: temporary files without a name where the system has them
-    (``tempfile.TemporaryFile``: no directory entry made and removed per column, ≈ 4 ms of
-    a well's CPU for its 22 columns), closed and gone when the store is garbage collected
-    (when the last stream reading it is dropped)."""
+    """Columns of numbers, in memory while they hold at most ``spool_bytes`` in all (default
+    :data:`SPOOL_BYTES`), past that on disk: temporary files without a name where the system
+    has them (``tempfile.TemporaryFile``: no directory entry made and removed per column),
+    closed and gone when the store is garbage collected (when the last stream reading it is
+    dropped). The same bits either way."""
 
-    def __init__(self) -> None:
+    def __init__(self, spool_bytes: int | None = None) -> None:
         self._columns: dict[str, _Column] = {}
+        self._spool = SPOOL_BYTES if spool_bytes is None else spool_bytes
+        self._held = 0  # bytes in memory (0 once on disk)
+        self._on_disk = False
         weakref.finalize(self, _close, self._columns)
 
     def __contains__(self, name: str) -> bool:
         return name in self._columns
+
+    @property
+    def on_disk(self) -> bool:
+        """Whether the columns are in files (past ``spool_bytes``), not in memory."""
+        return self._on_disk
 
     def rows(self, name: str) -> int:
         """Rows written to column ``name``."""
         return self._columns[name].rows
 
     def write(self, name: str, start: int, values: NDArray[np.generic]) -> None:
-        """Write ``values`` at rows ``start``… of column ``name`` (created with their type)."""
+        """Write ``values`` at rows ``start``… of column ``name`` (created with their type;
+        rows skipped read as zeros)."""
         column = self._columns.get(name)
         if column is None:
-            file = tempfile.TemporaryFile(prefix="gyropipe-continuous-")  # noqa: SIM115 (_close)
-            column = self._columns[name] = _Column(file, values.dtype, 0)
+            column = self._columns[name] = _Column(values.dtype, 0, bytearray())
+            if self._on_disk:
+                column.file = _column_file()
         data = np.ascontiguousarray(values, dtype=column.dtype)
-        os.pwrite(column.fd, data.data, start * column.dtype.itemsize)
+        offset = start * column.dtype.itemsize
+        if not self._on_disk:
+            grown = max(offset + data.nbytes - len(column.data), 0)
+            if self._held + grown > self._spool:
+                self._spill()
+        if self._on_disk:
+            os.pwrite(column.fd, data.data, offset)
+        else:
+            if offset > len(column.data):  # a gap reads as zeros, as a file's hole
+                column.data.extend(bytes(offset - len(column.data)))
+            column.data[offset : offset + data.nbytes] = data.data.cast("B")
+            self._held += grown
         column.rows = max(column.rows, start + data.size)
+
+    def _spill(self) -> None:
+        """Move every column to its own file."""
+        for column in self._columns.values():
+            column.file = _column_file()
+            os.pwrite(column.fd, column.data, 0)
+            column.data = bytearray()
+        self._held, self._on_disk = 0, True
 
     def append(self, name: str, values: NDArray[np.generic]) -> None:
         """Write ``values`` after the rows of column ``name`` (created if new)."""
@@ -92,7 +133,11 @@ class ColumnStore:
         column = self._columns[name]
         lo, hi = max(lo, 0), min(hi, column.rows)
         out = np.empty(max(hi - lo, 0), dtype=column.dtype)
-        if out.size and os.preadv(column.fd, [out.data], lo * column.dtype.itemsize) != out.nbytes:
+        if not out.size:
+            return out
+        if not self._on_disk:
+            out[:] = np.frombuffer(column.data, column.dtype, out.size, lo * column.dtype.itemsize)
+        elif os.preadv(column.fd, [out.data], lo * column.dtype.itemsize) != out.nbytes:
             raise OSError(f"short read of column {name!r} of a continuous run's store")
         return out
 
@@ -119,9 +164,15 @@ class ColumnStore:
         return int(batch.num_rows)
 
 
+def _column_file() -> IO[bytes]:
+    """An unnamed temporary file for a column (closed by :func:`_close`)."""
+    return tempfile.TemporaryFile(prefix="gyropipe-continuous-")
+
+
 def _close(columns: dict[str, _Column]) -> None:
     for column in columns.values():
-        column.file.close()
+        if column.file is not None:
+            column.file.close()
     columns.clear()
 
 

@@ -25,7 +25,7 @@ def continuous_stage(
     inputs: Mapping[str, Port], params: ContinuousParams, ctx: StageContext
 ) -> dict[str, Port]:
     """Integrate the azimuth of the moving run; close it on the end stop. The samples stream
-    in (read once into a disk-backed store), the full-rate series streams out."""
+    in (read once into a column store, on disk past 24 MiB), the full-rate series streams out."""
     if as_table(inputs["stops"]).num_rows == 0:
         raise EmptyTableError("stops", "the run starts and closes on compassed stops")
     from pipeline.continuous.integrate import integrate_continuous  # on use: numerical code

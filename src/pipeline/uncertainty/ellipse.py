@@ -2,7 +2,11 @@
 
 For the horizontal block C = [[nn, ne], [ne, ee]] the semi-axes at 1σ are √λ of its
 eigenvalues λ = (nn + ee)/2 ± √(((nn − ee)/2)² + ne²), and the major axis points at azimuth
-θ = ½·atan2(2·ne, nn − ee) clockwise from north (folded to [0°, 180°)). An ellipse containing
+θ = ½·atan2(2·ne, nn − ee) clockwise from north (folded to [0°, 180°)). The smaller λ of a
+block of rounded entries is known only to a few ε of the larger (Weyl: an entry's rounding
+moves it that much); below :data:`_RANK_ONE` of it the block is rank one within its rounding
+and the minor axis is 0 (the value there would be rounding noise, ≤ √(8ε) ≈ 4e-8 of the
+major axis, whether clamped or not). An ellipse containing
 the position with probability p scales both axes by k₂ = √(χ²₂(p)) = √(−2 ln(1 − p)); the
 vertical interval uses the two-sided normal quantile k₁ = Φ⁻¹((1 + p)/2).
 """
@@ -18,6 +22,10 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = ["Ellipses", "ellipses", "hla_sigma", "horizontal_scale", "vertical_scale"]
 
 FloatArray = NDArray[np.float64]
+
+_RANK_ONE = 8.0 * float(np.finfo(np.float64).eps)
+"""Smaller over larger eigenvalue of a horizontal block at or below which it is taken as rank
+one (the rounding of the entries and of ``mean − radius`` below: a few ε)."""
 
 
 def horizontal_scale(confidence: float) -> float:
@@ -54,7 +62,8 @@ def ellipses(
     mean = 0.5 * (nn + ee)
     radius = np.hypot(0.5 * (nn - ee), ne)
     major = np.sqrt(np.clip(mean + radius, 0.0, None))
-    minor = np.sqrt(np.clip(mean - radius, 0.0, None))
+    low = mean - radius
+    minor = np.sqrt(np.clip(np.where(low <= _RANK_ONE * (mean + radius), 0.0, low), 0.0, None))
     azimuth = np.mod(0.5 * np.arctan2(2.0 * ne, nn - ee), np.pi)
     sigma_v = np.sqrt(np.clip(np.asarray(cov_vv, dtype=np.float64), 0.0, None))
     return Ellipses(semi_major=major, semi_minor=minor, azimuth=azimuth, sigma_v=sigma_v)
