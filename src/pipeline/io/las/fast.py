@@ -55,6 +55,10 @@ Layout = tuple[int, tuple[int, ...]]
 
 BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
+KEEP = 4
+"""Block buffers kept between reads (:data:`BLOCK` × 2 bytes each, of which a block's are
+touched): a fresh one costs the zeroing of its pages as a read first writes them."""
+_KEPT: list[Bytes] = []
 SAMPLE = 4096
 """Lines of a block whose columns find a layout (checked on every line)."""
 TILE = 32 << 10
@@ -101,10 +105,13 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
     if end - start <= BLOCK or threads < 2:
         buffer = _buffer(0)
         layout: Layout | None = None
-        for first, last in spans:
-            block, found, buffer = parser.read(first, last, buffer, layout)
-            layout = found or layout
-            yield block
+        try:
+            for first, last in spans:
+                block, found, buffer = parser.read(first, last, buffer, layout)
+                layout = found or layout
+                yield block
+        finally:
+            _keep([buffer])
         return
     yield from _ahead(parser, spans, threads)
 
@@ -114,22 +121,27 @@ def _ahead(
 ) -> Iterator[Block | Declined]:
     """:meth:`_Parser.read` of each span in order, ``ahead`` blocks read by as many other
     threads while this one's block is used (each read in flight has its own buffer)."""
-    with ThreadPoolExecutor(ahead, thread_name_prefix="las-block") as pool:
-        free: list[Bytes] = []
-        layout: Layout | None = None
-        pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
-        for first, last in spans:
-            done = None
-            if len(pending) == ahead:
+    free: list[Bytes] = []  # buffers no thread uses
+    try:
+        with ThreadPoolExecutor(ahead, thread_name_prefix="las-block") as pool:
+            layout: Layout | None = None
+            pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
+            for first, last in spans:
+                done = None
+                if len(pending) == ahead:
+                    done = pending.popleft().result()
+                    layout = done[1] or layout
+                    free.append(done[2])
+                buffer = free.pop() if free else _buffer(0)
+                pending.append(pool.submit(parser.read, first, last, buffer, layout))
+                if done is not None:
+                    yield done[0]
+            while pending:
                 done = pending.popleft().result()
-                layout = done[1] or layout
                 free.append(done[2])
-            buffer = free.pop() if free else _buffer(0)
-            pending.append(pool.submit(parser.read, first, last, buffer, layout))
-            if done is not None:
                 yield done[0]
-        while pending:
-            yield pending.popleft().result()[0]
+    finally:  # after the pool's threads are done
+        _keep(free)
 
 
 def fast_values(raw: Text, start: int, n: int, wanted: list[int]) -> list[Block] | None:
@@ -169,8 +181,21 @@ def _spans(text: Text, begin: int, end: int) -> Iterator[tuple[int, int]]:
 
 
 def _buffer(size: int) -> Bytes:
-    """A buffer for blocks of ``size`` bytes (at least twice :data:`BLOCK`)."""
-    return np.empty(max(size, 2 * BLOCK), np.uint8)
+    """A buffer for blocks of ``size`` bytes (at least twice :data:`BLOCK`): one kept from
+    a read before where one is as large."""
+    need = max(size, 2 * BLOCK)
+    try:
+        kept = _KEPT.pop()  # atomic: reads on other threads take others
+    except IndexError:
+        return np.empty(need, np.uint8)
+    return kept if kept.size >= need else np.empty(need, np.uint8)
+
+
+def _keep(buffers: list[Bytes]) -> None:
+    """Keep ``buffers`` (no longer used) for the next reads, up to :data:`KEEP`."""
+    for buffer in buffers:
+        if len(_KEPT) < KEEP and buffer.size == 2 * BLOCK:
+            _KEPT.append(buffer)
 
 
 class _Parser:
