@@ -22,6 +22,7 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError, WrongKindError
 from pipeline.io import las as las_plugin
+from pipeline.io import threads as io_threads
 from pipeline.io.las import fast as las_fast
 from pipeline.io.las import header as las_header
 from pipeline.io.las import rows as las_rows
@@ -961,6 +962,25 @@ def test_lost_row(tmp_path: Path) -> None:
     err = failure(put(tmp_path, text))
     assert "STEP is 100 but the index steps by 200" in str(err)
     assert err.line == data_line(text) + 2
+
+
+@pytest.mark.parametrize("threads", [1, 2], ids=["one thread", "read ahead"])
+def test_a_row_lost_at_or_between_block_borders_is_found(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, threads: int
+) -> None:
+    """STEP is checked across the fast path's blocks (three rows each here): a row lost
+    anywhere, next to a block's first or last row or within one, is reported at the row
+    after the gap."""
+    monkeypatch.setattr(las_fast, "BLOCK", 64)
+    monkeypatch.setattr(io_threads, "reader_threads", lambda: threads)
+    rows = [f"{10.0 * i:8.1f}{1.5:6.2f}{45.0:7.1f}" for i in range(30)]
+    well = " STRT.M 0 : start\n STOP.M 290 : stop\n STEP.M 10 : step\n"
+    assert read(put(tmp_path, las(data="\n".join(rows) + "\n", well=well)))[0].num_rows == 30
+    for lost in range(1, 29):
+        text = las(data="\n".join(rows[:lost] + rows[lost + 1 :]) + "\n", well=well)
+        err = failure(put(tmp_path, text))
+        assert "STEP is 10 but the index steps by 20" in str(err)
+        assert err.line == data_line(text) + lost
 
 
 def test_index_range_in_other_units_and_rounded(tmp_path: Path) -> None:

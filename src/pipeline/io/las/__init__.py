@@ -126,7 +126,7 @@ class _Rows:
             if data.lines.size == 0:
                 continue
             masks = {
-                i: null_mask(values, angle_nulls if i in angles else nulls)
+                i: null_mask(values, angle_nulls if i in angles else nulls, data.ranges.get(i))
                 for i, values in data.values.items()
             }
             check_index(path, header, data, masks, [0, self.chosen[spec.key]])

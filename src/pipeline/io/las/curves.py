@@ -275,9 +275,19 @@ def columns(
             columns[name] = _labels(values, mask)
         else:
             scaled = values * factors[name] if factors[name] != 1.0 else values
-            columns[name] = pa.array(scaled, mask=mask if mask.any() else None)
+            columns[name] = _with_nulls(scaled, mask)
     columns[SOURCE_LINE] = pa.array(data.lines)
     return columns
+
+
+def _with_nulls(values: Floats, mask: Mask) -> pa.Array:
+    """float64 ``values`` (no copy) with nulls where ``mask``; the validity bitmap packed by
+    numpy (``pa.array(values, mask=mask)`` packs it ~15× slower: 0.15 ms a block)."""
+    if not mask.any():
+        return pa.array(values)
+    valid = np.packbits(~mask, bitorder="little")
+    data = np.ascontiguousarray(values, np.float64)
+    return pa.Array.from_buffers(pa.float64(), data.size, [pa.py_buffer(valid), pa.py_buffer(data)])
 
 
 def _integers(path: Path, values: Floats, mask: Mask, lines: Lines, curve: Item) -> pa.Array:

@@ -3,16 +3,17 @@ numbers parsed by ``pyarrow.csv`` block by block, up to the first block it canno
 reads as the careful path would (the careful path reads from there and locates any error).
 
 The data section is copied one block of lines (about :data:`BLOCK` bytes) at a time into a
-reused buffer, and each block is rewritten there while it is in the processor's cache so
-that a comma separates the values of each line, then parsed from it in one chunk (the
-file's text is never copied whole):
+reused buffer, rewritten so that a comma separates the values of each line, and parsed
+from there in one chunk while it is in the processor's cache (the file's text is never
+copied whole):
 
 * a block of fixed-width lines (every line as long; columns blank on every line split it
   into one group of columns per curve, as LAS writers lay values out) keeps its bytes: the
-  first column after each group, a space on every line, becomes a comma (by an XOR that
-  makes a comma of a space only, so the layout found in one block is tried on the next
-  without a check: where it does not fit, a line has a value too few), and
-  ``pyarrow.csv`` trims the padding of each value (spaces and tabs; CRLF ends a line);
+  first column after each group, a space on every line, becomes a comma by an XOR that
+  makes a comma of a space only. The layout found in one block is applied to the next as
+  it is copied (one pass over its bytes; no check: where it does not fit, a line has a
+  value too few, which the parse refuses), and ``pyarrow.csv`` trims the padding of each
+  value (spaces and tabs; CRLF ends a line);
 * any other block has tabs made spaces and CRLF made LF, each run of spaces made one comma
   and the spaces at line starts and ends dropped (a vectorised pass).
 
@@ -21,8 +22,8 @@ A block holding a comma is left to the careful path, which splits lines at blank
 (correctly rounded, as Python's ``float``): a cell that is not exactly one number (a blank
 line, a wrong value count, a token like ``1-2``, text, a control byte other than a tab)
 fails the parse, and a row count other than the line count (a lone CR) or a non-finite
-value (``1e999``; looked for value by value only when the sum of the block's values is not
-finite) declines, so the careful path reports it with its line.
+value (``1e999``, ``nan``; found by each curve's smallest and largest value, which the
+null check then uses) declines, so the careful path reports it with its line.
 
 With more than one reader thread (:func:`~pipeline.io.threads.reader_threads`), that many
 threads read (copy, rewrite, parse) the next blocks while the caller uses one, each with its
@@ -54,6 +55,14 @@ Layout = tuple[int, tuple[int, ...]]
 
 BLOCK = 4 << 20
 """Bytes of lines rewritten at a time."""
+KEEP = 4
+"""Block buffers kept between reads (:data:`BLOCK` × 2 bytes each, of which a block's are
+touched): a fresh one costs the zeroing of its pages as a read first writes them."""
+_KEPT: list[Bytes] = []
+SAMPLE = 4096
+"""Lines of a block whose columns find a layout (checked on every line)."""
+TILE = 32 << 10
+"""Bytes of lines (about) of the separators' XOR pattern laid over a block at a time."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
 FLIP = SPACE ^ COMMA
 """XOR making a space a comma and any other byte no comma (nor a tab, LF or CR)."""
@@ -63,10 +72,12 @@ _BLANK = b" \t\r\n"
 
 @dataclass(frozen=True)
 class Block:
-    """The values of one block of rows (by curve position) and their count."""
+    """The values of one block of rows (by curve position), their count and the smallest
+    and largest value of each curve."""
 
     values: dict[int, Floats]
     rows: int
+    ranges: dict[int, tuple[float, float]]
 
 
 @dataclass(frozen=True)
@@ -94,10 +105,13 @@ def fast_blocks(raw: Text, start: int, n: int, wanted: list[int]) -> Iterator[Bl
     if end - start <= BLOCK or threads < 2:
         buffer = _buffer(0)
         layout: Layout | None = None
-        for first, last in spans:
-            block, found, buffer = parser.read(first, last, buffer, layout)
-            layout = found or layout
-            yield block
+        try:
+            for first, last in spans:
+                block, found, buffer = parser.read(first, last, buffer, layout)
+                layout = found or layout
+                yield block
+        finally:
+            _keep([buffer])
         return
     yield from _ahead(parser, spans, threads)
 
@@ -107,22 +121,27 @@ def _ahead(
 ) -> Iterator[Block | Declined]:
     """:meth:`_Parser.read` of each span in order, ``ahead`` blocks read by as many other
     threads while this one's block is used (each read in flight has its own buffer)."""
-    with ThreadPoolExecutor(ahead, thread_name_prefix="las-block") as pool:
-        free: list[Bytes] = []
-        layout: Layout | None = None
-        pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
-        for first, last in spans:
-            done = None
-            if len(pending) == ahead:
+    free: list[Bytes] = []  # buffers no thread uses
+    try:
+        with ThreadPoolExecutor(ahead, thread_name_prefix="las-block") as pool:
+            layout: Layout | None = None
+            pending: deque[Future[tuple[Block | Declined, Layout | None, Bytes]]] = deque()
+            for first, last in spans:
+                done = None
+                if len(pending) == ahead:
+                    done = pending.popleft().result()
+                    layout = done[1] or layout
+                    free.append(done[2])
+                buffer = free.pop() if free else _buffer(0)
+                pending.append(pool.submit(parser.read, first, last, buffer, layout))
+                if done is not None:
+                    yield done[0]
+            while pending:
                 done = pending.popleft().result()
-                layout = done[1] or layout
                 free.append(done[2])
-            buffer = free.pop() if free else _buffer(0)
-            pending.append(pool.submit(parser.read, first, last, buffer, layout))
-            if done is not None:
                 yield done[0]
-        while pending:
-            yield pending.popleft().result()[0]
+    finally:  # after the pool's threads are done
+        _keep(free)
 
 
 def fast_values(raw: Text, start: int, n: int, wanted: list[int]) -> list[Block] | None:
@@ -162,8 +181,21 @@ def _spans(text: Text, begin: int, end: int) -> Iterator[tuple[int, int]]:
 
 
 def _buffer(size: int) -> Bytes:
-    """A buffer for blocks of ``size`` bytes (at least twice :data:`BLOCK`)."""
-    return np.empty(max(size, 2 * BLOCK), np.uint8)
+    """A buffer for blocks of ``size`` bytes (at least twice :data:`BLOCK`): one kept from
+    a read before where one is as large."""
+    need = max(size, 2 * BLOCK)
+    try:
+        kept = _KEPT.pop()  # atomic: reads on other threads take others
+    except IndexError:
+        return np.empty(need, np.uint8)
+    return kept if kept.size >= need else np.empty(need, np.uint8)
+
+
+def _keep(buffers: list[Bytes]) -> None:
+    """Keep ``buffers`` (no longer used) for the next reads, up to :data:`KEEP`."""
+    for buffer in buffers:
+        if len(_KEPT) < KEEP and buffer.size == 2 * BLOCK:
+            _KEPT.append(buffer)
 
 
 class _Parser:
@@ -207,20 +239,22 @@ class _Parser:
         block = buffer[: size + (text[last - 1] != NEWLINE)]
         block[-1] = NEWLINE  # the last line's (a no-op elsewhere)
         width = width if width > 0 else block.size  # the last line, without its LF
-        tried = None
-        for guess in (known, None) if known is not None else (None,):
-            block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
-            layout = _fixed_width(block, width, self.n, guess)
-            if layout is None or layout == tried:
-                continue
-            grid = block.reshape(-1, width)
-            for column in layout[1]:
-                grid[:, column] ^= FLIP
-            parsed = self._parsed(block, block.size // width)
+        source = np.frombuffer(text, np.uint8, count=size, offset=first)
+        rows = block.size // width
+        if known is not None and known[0] == width:
+            _flipped(source, block, known)  # copied with the commas: one pass
+            if _same_width(block, width):
+                parsed = self._parsed(block, rows)
+                if parsed is not None:
+                    return parsed, known
+        block[:size] = source
+        layout = _fixed_width(block, width, self.n)
+        if layout is not None and layout != known:  # new, or a layout that changed
+            _flipped(block[:size], block, layout)
+            parsed = self._parsed(block, rows)
             if parsed is not None:
                 return parsed, layout
-            tried = layout  # a layout that changed (or bad cells: packing fails them too)
-        block[:size] = np.frombuffer(text, np.uint8, count=size, offset=first)
+            block[:size] = source  # bad cells (packing fails them too) or lines
         if np.count_nonzero(block < SPACE) != np.count_nonzero(block == NEWLINE):
             spaced = _spaced(block.tobytes())  # tabs or CRs
             if spaced is None:
@@ -246,11 +280,10 @@ class _Parser:
         if table.num_rows != rows:
             return None
         values = {i: _floats(table.column(self.names[i])) for i in self.wanted}
-        with np.errstate(over="ignore", invalid="ignore"):
-            total = sum(float(v.sum()) for v in values.values())
-        if not np.isfinite(total) and not all(np.isfinite(v).all() for v in values.values()):
-            return None  # a NaN or infinity (a sum past the float range alone is not)
-        return Block(values, rows)
+        ranges = {i: (float(v.min()), float(v.max())) for i, v in values.items()}
+        if not np.isfinite(list(ranges.values())).all():
+            return None  # a NaN (numpy's min and max carry it) or an infinity
+        return Block(values, rows, ranges)
 
 
 def _spaced(lines: bytes) -> Bytes | None:
@@ -260,23 +293,18 @@ def _spaced(lines: bytes) -> Bytes | None:
     return np.frombuffer(lines.translate(_TAB_TO_SPACE, b"\r"), np.uint8)
 
 
-def _fixed_width(block: Bytes, width: int, n: int, known: Layout | None) -> Layout | None:
-    """The layout of a block of lines all ``width`` bytes long (with their LF): the
-    ``known`` layout of a block before when it is as wide, else the first column after
-    each of the ``n`` groups of columns holding values but the last, where it is a space
-    on every line; None when the lines differ in length or have another number of groups.
-    Tabs and CRs count as blanks (``pyarrow.csv`` trims tabs around a value and ends a
-    line at CRLF; a lone CR makes a row too many, declined). A known layout is not checked
-    here: :data:`FLIP` makes a comma of a space only, so a line whose separator column holds
-    anything else has a value too few, which the parse refuses (the block holds no comma)."""
-    if width < 2 or block.size % width:
+def _fixed_width(block: Bytes, width: int, n: int) -> Layout | None:
+    """The layout of a block of lines all ``width`` bytes long (with their LF): the first
+    column after each of the ``n`` groups of columns holding values (on the first
+    :data:`SAMPLE` lines) but the last, where it is a space on every line; None when the
+    lines differ in length or have another number of groups. Tabs and CRs count as blanks
+    (``pyarrow.csv`` trims tabs around a value and ends a line at CRLF; a lone CR makes a
+    row too many, declined). The values read do not depend on the layout: a line parses
+    only where each of its separator columns was a space (see :data:`FLIP`)."""
+    if not _same_width(block, width):
         return None
     grid = block.reshape(-1, width)
-    if not (grid[:, -1] == NEWLINE).all():
-        return None  # lines of other lengths
-    if known is not None:
-        return known if known[0] == width else None
-    filled = np.concatenate(([False], _column_max(grid[:, :-1]) > SPACE, [False]))
+    filled = np.concatenate(([False], _column_max(grid[:SAMPLE, :-1]) > SPACE, [False]))
     edges = np.flatnonzero(filled[1:] != filled[:-1])  # where each group starts and ends
     if edges.size != 2 * n:
         return None
@@ -284,6 +312,34 @@ def _fixed_width(block: Bytes, width: int, n: int, known: Layout | None) -> Layo
     if not (grid[:, separators] == SPACE).all():
         return None
     return width, tuple(int(column) for column in separators)
+
+
+def _same_width(block: Bytes, width: int) -> bool:
+    """Whether ``block`` is lines all ``width`` bytes long (with their LF)."""
+    if width < 2 or block.size % width:
+        return False
+    ends = block[width - 1 :: width].tobytes()  # a gather and a memcmp: ~40 % less than ==
+    return ends == b"\n" * len(ends)
+
+
+def _flipped(source: Bytes, out: Bytes, layout: Layout) -> None:
+    """``out[:source.size]``: the lines ``source`` (whole lines from a line start; the last
+    may lack its LF) with the layout's separator columns XORed by :data:`FLIP`, a space
+    made a comma and any other byte no comma (``source`` may be ``out``'s own bytes). One
+    vectorised pass: the XOR pattern of :data:`TILE` bytes of lines is laid over the lines
+    a tile at a time (a separate XOR per column strides through every line, 3× slower)."""
+    width, separators = layout
+    lines = max(1, TILE // width)
+    tile = np.zeros((lines, width), np.uint8)
+    tile[:, list(separators)] = FLIP
+    pattern = tile.reshape(-1)
+    whole = source.size // pattern.size * pattern.size
+    np.bitwise_xor(
+        source[:whole].reshape(-1, pattern.size),
+        pattern,
+        out=out[:whole].reshape(-1, pattern.size),
+    )
+    np.bitwise_xor(source[whole:], pattern[: source.size - whole], out=out[whole : source.size])
 
 
 def _column_max(grid: Bytes) -> Bytes:

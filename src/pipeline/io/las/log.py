@@ -82,7 +82,10 @@ def read_log(path: Path, source: Source, header: Header, opts: LasOptions) -> pa
     arrays: list[pa.Array | pa.ChunkedArray]
     if isinstance(data, list):  # blocks of numbers
         arrays = [
-            pa.chunked_array([_floats(d.values[i], nulls, i == 0) for d in data], pa.float64())
+            pa.chunked_array(
+                [_floats(d.values[i], nulls, i == 0, d.ranges.get(i)) for d in data],
+                pa.float64(),
+            )
             for i in range(len(header.curves))
         ]
         index = [(d.values[0], d.lines) for d in data]
@@ -116,9 +119,14 @@ def _curve(header: Header, i: int) -> Item | None:
     return header.curves[i] if i < len(header.curves) else None
 
 
-def _floats(values: np.ndarray, nulls: list[float], index: bool) -> pa.Array:
+def _floats(
+    values: np.ndarray,
+    nulls: list[float],
+    index: bool,
+    extremes: tuple[float, float] | None = None,
+) -> pa.Array:
     if not index and nulls:
-        null = null_mask(values, nulls)
+        null = null_mask(values, nulls, extremes)
         if null.any():
             values = np.where(null, np.nan, values)
     return pa.array(values, pa.float64())

@@ -22,7 +22,7 @@ from __future__ import annotations
 import csv as stdcsv
 import re
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
@@ -55,10 +55,12 @@ Bytes = NDArray[np.uint8]
 
 @dataclass(frozen=True)
 class Data:
-    """Values of the curves read (by ~Curve position) and the file line of each row."""
+    """Values of the curves read (by ~Curve position), the file line of each row and,
+    where known (the fast path), the smallest and largest value of each curve."""
 
     values: dict[int, Floats]
     lines: Lines
+    ranges: dict[int, tuple[float, float]] = field(default_factory=dict)
 
 
 # ------------------------------------------------------------------------------ data
@@ -76,7 +78,8 @@ def data_blocks(path: Path, source: Source, header: Header, wanted: list[int]) -
                 yield _slow_values(path, header, lines, source.title_line, wanted, first=line)
                 line += len(lines) - 1  # a block ends with its last line's LF
             else:
-                yield Data(block.values, np.arange(line, line + block.rows, dtype=np.int64))
+                rows = np.arange(line, line + block.rows, dtype=np.int64)
+                yield Data(block.values, rows, block.ranges)
                 line += block.rows
         return
     text = decode(path, source.raw[source.start :], line)
@@ -124,7 +127,8 @@ def read_all(path: Path, source: Source, header: Header) -> list[Data] | Cells:
         if blocks is not None:
             line, data = source.title_line + 1, []
             for block in blocks:
-                data.append(Data(block.values, np.arange(line, line + block.rows, dtype=np.int64)))
+                rows = np.arange(line, line + block.rows, dtype=np.int64)
+                data.append(Data(block.values, rows, block.ranges))
                 line += block.rows
             return data
     return read_cells(path, source, header)
@@ -368,12 +372,14 @@ def null_values(path: Path, header: Header, opts: LasOptions) -> list[float]:
     return found + [m for m in NULL_MARKERS if m not in found]
 
 
-def null_mask(values: Floats, nulls: list[float]) -> Mask:
+def null_mask(
+    values: Floats, nulls: list[float], extremes: tuple[float, float] | None = None
+) -> Mask:
     """Where ``values`` equal any of ``nulls`` (a comparison each of those within the
-    values' range: a list is short, and most columns hold none)."""
+    values' range, ``extremes`` when known: a list is short, and most columns hold none)."""
     mask = np.zeros(values.shape, dtype=bool)
     if values.size:
-        low, high = float(values.min()), float(values.max())
+        low, high = extremes or (float(values.min()), float(values.max()))
         if np.isfinite(low) and np.isfinite(high):
             nulls = [null for null in nulls if low <= null <= high]
     for null in nulls:
@@ -422,18 +428,30 @@ class IndexRange:
         """The next rows' index values and file lines."""
         if index.size == 0:
             return
-        if self.last is None:
+        previous, self.last = self.last, (float(index[-1]), int(lines[-1]))
+        if previous is None:
             self._bound("STRT", float(index[0]), int(lines[0]))
-        else:
-            index = np.concatenate(([self.last[0]], index))
-            lines = np.concatenate(([self.last[1]], lines))
-        self.last = float(index[-1]), int(lines[-1])
         step, tolerance, _ = self.declared.get("STEP", (0.0, 0.0, 0))
-        if step == 0 or index.size < 2 or self.step_error is not None:
+        if step == 0 or self.step_error is not None:
             return
+        limit = max(tolerance, 0.01 * abs(step))
+        if previous is not None:  # the step from the rows before
+            self._steps(
+                np.array([previous[0], index[0]]), [previous[1], int(lines[0])], step, limit
+            )
+        if index.size > 1 and self.step_error is None:
+            self._steps(index, lines, step, limit)
+
+    def _steps(self, index: Floats, lines: Lines | list[int], step: float, limit: float) -> None:
+        """The first step of ``index`` (rows on file ``lines``) more than ``limit`` off
+        ``step``, kept as the error. The smallest and largest step bound every other
+        (rounding keeps their order), so only where they are off is each step compared."""
         with np.errstate(over="ignore", invalid="ignore"):  # a step past the float range
             steps = np.diff(index)  # is ±inf, unequal to any STEP: reported
-            bad = np.flatnonzero(np.abs(steps - step) > max(tolerance, 0.01 * abs(step)))
+            low, high = float(steps.min()), float(steps.max())
+            if abs(low - step) <= limit and abs(high - step) <= limit:
+                return  # (a NaN fails both: compared)
+            bad = np.flatnonzero(np.abs(steps - step) > limit)
         if bad.size:
             k = int(bad[0])
             by = f"{steps[k]:g}" if np.isfinite(steps[k]) else "more than the float range"
