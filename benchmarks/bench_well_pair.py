@@ -7,9 +7,9 @@ this tree's, the other's, the other's, this tree's, … — each its floor first
 (:data:`bench_well_floor.FLOORS`, in its own process). A slow spell falls on both alike, so
 the median of the pairs' differences shows a change that the spread of either tree's wells
 would hide. Prints the load, each tree's least and median of the floor, the worker, the
-readings, continuous and report stages (CPU ms; 0 for a pipeline without one), the medians
-of the differences, and each tree's ratio to the floor (the least and the median of both
-trees' floors: the same code).
+readings, continuous, MCAP export and report stages (CPU ms; 0 for a pipeline without one),
+the medians of the differences, and each tree's ratio to the floor (the least and the median
+of both trees' floors: the same code).
 
     python benchmarks/bench_well_pair.py OTHER_TREE [--pipeline point-gyro] [--pairs 30]
 """
@@ -25,7 +25,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve()
-STAGES = ("readings", "continuous", "report")
+STAGES = ("readings", "continuous", "export_mcap", "report")
 COLUMNS = ("floor", "worker", *STAGES)
 
 
@@ -108,7 +108,7 @@ def main() -> int:
         this, other = ([row[k] for row in got[label]] for label in ("this", "other"))
         change = statistics.median(t - o for t, o in zip(this, other, strict=True))
         print(
-            f"  {column:8} this {min(this):6.1f} ({statistics.median(this):6.1f})   other "
+            f"  {column:11} this {min(this):6.1f} ({statistics.median(this):6.1f})   other "
             f"{min(other):6.1f} ({statistics.median(other):6.1f})   median change {change:+6.1f}"
         )
     floors = [row[0] for label in trees for row in got[label]]  # the same code in both

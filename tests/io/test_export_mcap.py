@@ -5,6 +5,7 @@ reader, batching and log times of a long series, and refusals."""
 from __future__ import annotations
 
 import json
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from mcap.reader import make_reader
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError
 from pipeline.io.mcap.arrow import BATCH_ROWS, write_samples
+from pipeline.io.mcap.crc import crc32_combine
 from pipeline.io.mcap.tables import read_tables, write_tables
 from pipeline.registry import Provenance
 from pipeline.runner import RunResult
@@ -114,6 +116,48 @@ def test_a_full_rate_series_goes_in_chunks_below_the_mmap_threshold(tmp_path: Pa
     assert all(c.uncompressed_size < MMAP_THRESHOLD for c in chunks)
     tables, _ = read_tables(path)
     assert _ipc(tables["series"]) == _ipc(series)
+
+
+def _data_section(path: Path) -> tuple[bytes, int]:
+    """The bytes of the file's data section (its start to the DataEnd record) and the CRC
+    its DataEnd record holds, found from the footer (the summary starts after DataEnd)."""
+    data = path.read_bytes()
+    footer = data[-8 - 29 : -8]
+    assert footer[0] == 0x02  # Footer: opcode, length, summary start, …
+    summary_start = int.from_bytes(footer[9:17], "little")
+    end = summary_start - 13
+    assert data[end] == 0x0F and int.from_bytes(data[end + 1 : end + 9], "little") == 4
+    return data[:end], int.from_bytes(data[end + 9 : end + 13], "little")
+
+
+def test_the_data_section_crc_covers_every_byte_of_it(tmp_path: Path):
+    """The DataEnd record's CRC is CRC-32 of the whole data section (the chunks' messages
+    are CRC'd once, for their chunk, and the data CRC carried over them): tables of several
+    chunks, a stream, and a samples file in larger chunks."""
+    n = 6 * BATCH_ROWS + 123
+    rng = np.random.default_rng(6)
+    series = pa.table({"time": 10.0 + 0.01 * np.arange(n), "a": rng.normal(size=n)})
+    small = pa.table({"md": [1.0, 2.0], "inc": [0.5, 0.7]})
+    tables = tmp_path / "t.mcap"
+    stream = TableStream(series.schema, lambda: iter(series.to_batches(max_chunksize=9_000)))
+    write_tables(
+        {"series": stream, "trajectory": small}, tables, WellMetadata(well="T"), _provenance()
+    )
+    samples = tmp_path / "s.mcap"
+    write_samples(series, samples, WellMetadata(well="S"))
+    for path in (tables, samples):
+        data, crc = _data_section(path)
+        assert crc != 0 and crc == zlib.crc32(data), path.name
+    read, _ = read_tables(tables)  # the reader checks every CRC
+    assert _ipc(read["series"]) == _ipc(series)
+
+
+@pytest.mark.parametrize("length", [0, 1, 7, 4096, 524_288 + 49])
+def test_crc32_combine_is_zlibs_crc_carried_over(length: int):
+    rng = np.random.default_rng(length)
+    data = rng.integers(0, 256, length, dtype=np.uint8).tobytes()
+    for start in (0, 1, 0xFFFFFFFF, 0x1234ABCD):
+        assert crc32_combine(start, zlib.crc32(data), length) == zlib.crc32(data, start)
 
 
 def _counted_stream(table: pa.Table, passes: list[int]) -> TableStream:

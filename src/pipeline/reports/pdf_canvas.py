@@ -153,6 +153,8 @@ class _Embedded:
     UTF-16BE hex is its glyph ids' four hex digits each — one translation to single
     characters, which ``str.translate`` does fast, not to four-character strings)"""
     font: PdfFont
+    kept: dict[str, tuple[tuple[int, ...], str]]
+    """the subset's :attr:`_Program.runs` (kept across files)"""
     runs: dict[str, str] = field(default_factory=dict)
     """text → its glyph runs (the ``TJ`` operand), for the texts shown so far"""
 
@@ -213,12 +215,20 @@ class _Program:
     to_unicode: bytes
     codes: dict[str, str]
     """glyph name → its glyph id as the four hex digits a text string shows"""
+    runs: dict[str, tuple[tuple[int, ...], str]] = field(default_factory=dict, compare=False)
+    """kerned text → the kerning it was laid out with and its glyph runs, for the first
+    :data:`RUNS` texts shown in this subset (a subset's glyph ids are the same in every
+    file: a batch's labels, units, headings and tick labels recur in every report)"""
 
 
 _PROGRAMS: dict[tuple[str, str], _Program] = {}
 """(font file, subset tag) → the subset's embedded form, for the first :data:`PROGRAMS`"""
 PROGRAMS = 16
 """Most font subsets whose embedded form a process keeps (most reports share a few)."""
+RUNS = 4096
+"""Most kerned texts whose glyph runs a kept font subset keeps (:attr:`_Program.runs`:
+some 160 a continuous report, 150 of them in the next well's too; its numbers mostly are
+not, so the runs of every text ever shown would grow with the batch)."""
 
 
 def _program(font: PdfFont, chars: set[str]) -> _Program:
@@ -281,19 +291,36 @@ def _embed_font(w: _Writer, font: PdfFont, chars: set[str], name: str) -> tuple[
         f"/DescendantFonts [{cid} 0 R] /ToUnicode {unicode} 0 R >>"
     )
     codes = {ord(c): chr(int(program.codes.get(font.glyph(c), "0000"), 16)) for c in chars}
-    return number, _Embedded(name, codes, font)
+    return number, _Embedded(name, codes, font, program.runs)
 
 
 def _show(op: _Text, embedded: _Embedded) -> str:
     """The text operators of ``op``."""
     runs = embedded.runs.get(op.content)
     if runs is None:
-        runs = embedded.runs[op.content] = _runs(op.content, embedded)
+        runs = embedded.runs[op.content] = _kept_runs(op.content, embedded)
     matrix = "0 1 -1 0" if op.angle == 90 else "1 0 0 1"
     return (
         f"BT /{embedded.name} {_num(op.size)} Tf {_rgb(op.colour)} rg {matrix} {_num(op.x)} "
         f"{_num(op.y)} Tm [{runs}] TJ ET"
     )
+
+
+def _kept_runs(content: str, embedded: _Embedded) -> str:
+    """:func:`_runs` of ``content``, kept by the font subset for a kerned font (where the
+    text is laid out with the kerning it was kept with: a font's kerning is read again
+    from its own tables when a text leaves the repertoire)."""
+    font = embedded.font
+    if not font.kerned:  # one run, no layout: as cheap as looking it up
+        return _runs(content, embedded)
+    kerns = font.layout(content)[1]
+    found = embedded.kept.get(content)
+    if found is not None and found[0] == kerns:
+        return found[1]
+    runs = _runs(content, embedded)
+    if len(embedded.kept) < RUNS:
+        embedded.kept[content] = (kerns, runs)
+    return runs
 
 
 def _runs(content: str, embedded: _Embedded) -> str:

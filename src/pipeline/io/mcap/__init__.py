@@ -3,7 +3,8 @@
 **Writer** ``mcap``: gyropipe's own batched, columnar layout — Arrow IPC record batches on
 ``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
 column units in metadata records, uncompressed chunks with CRCs
-(:mod:`pipeline.io.mcap.arrow`). Time series only: other tables are refused. Through the
+(:mod:`pipeline.io.mcap.arrow`; the data section's CRC carried over each chunk's messages
+from the chunk's own: :mod:`pipeline.io.mcap.crc`). Time series only: other tables are refused. Through the
 ``export`` stage it writes several processed tables, each on its own topic
 (:mod:`pipeline.io.mcap.tables`).
 

@@ -35,7 +35,7 @@ import math
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import IO, Any, cast
 
 import numpy as np
 import pyarrow as pa
@@ -45,6 +45,7 @@ from pydantic import ValidationError
 
 from pipeline import jsontext
 from pipeline.contracts import UNIT_KEY
+from pipeline.io.mcap.crc import DataSection
 from pipeline.io.mcap.records import (
     McapFile,
     Messages,
@@ -91,7 +92,8 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
     data = table.drop_columns(markers)
     path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
     with path.open("wb") as fh:
-        writer = start_writer(fh)
+        section = DataSection(fh)
+        writer = start_writer(section)
         add_arrow_channel(
             writer, SAMPLES_TOPIC, SAMPLES_SCHEMA, data, table.schema.with_metadata(meta), times
         )
@@ -108,17 +110,20 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
         writer.add_metadata(WELL_RECORD, well_strings(well))
         writer.add_metadata(UNITS_RECORD, units_of(table))
         writer.finish()  # type: ignore[no-untyped-call]
+        section.seal()
 
 
-def start_writer(fh: BinaryIO, chunk_bytes: int | None = None) -> Writer:
-    """An MCAP writer of gyropipe's profile: uncompressed chunks (closed past ``chunk_bytes``
-    of messages, by default :data:`CHUNK_BYTES`) with CRCs, started."""
+def start_writer(section: DataSection, chunk_bytes: int | None = None) -> Writer:
+    """An MCAP writer of gyropipe's profile into ``section`` (its file; after the writer's
+    ``finish``, :meth:`~pipeline.io.mcap.crc.DataSection.seal` writes the data section's
+    CRC): uncompressed chunks (closed past ``chunk_bytes`` of messages, by default
+    :data:`CHUNK_BYTES`) with CRCs, started."""
     writer = Writer(
-        fh,
+        cast(IO[bytes], section),  # what the writer calls: write, tell, flush
         chunk_size=CHUNK_BYTES if chunk_bytes is None else chunk_bytes,
         compression=CompressionType.NONE,
         enable_crcs=True,
-        enable_data_crcs=True,
+        enable_data_crcs=False,  # the section's own (each chunk's messages read once)
     )
     writer.start(profile=PROFILE, library=f"gyropipe {__version__}")
     return writer
