@@ -4,9 +4,9 @@
 ``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
 column units in metadata records, uncompressed chunks with CRCs
 (:mod:`pipeline.io.mcap.arrow`; the data section's CRC carried over each chunk's messages
-from the chunk's own: :mod:`pipeline.io.mcap.crc`). Time series only: other tables are refused. Through the
-``export`` stage it writes several processed tables, each on its own topic
-(:mod:`pipeline.io.mcap.tables`).
+from the chunk's own: :mod:`pipeline.io.mcap.crc`). Time series only: other tables are
+refused. Through the ``export`` stage it writes several processed tables, each on its own
+topic (:mod:`pipeline.io.mcap.tables`).
 
 **Reader** ``mcap`` (kind ``samples``; files starting with the MCAP magic
 ``\\x89MCAP0\\r\\n``; options: :mod:`pipeline.io.mcap.options`):
