@@ -423,9 +423,13 @@ def _heun_series(
     half = step / 2
     reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
     growth = reach * float(np.exp(min(reach, 700.0)))
-    # the azimuths' sines and cosines: once by the trig functions, then turned by each
-    # predictor step and Newton correction (turned_sin_cos, within 2.3e-16 of sin_cos's)
-    sin_a, cos_a = sin_cos(azi)
+    # the azimuths' sines and cosines: once by the trig functions (a constant first guess:
+    # of one value), then turned by each predictor step and Newton correction
+    # (turned_sin_cos, within 2.3e-16 of sin_cos's)
+    if azi.size and bool(np.all(azi == azi[0])):
+        sin_a, cos_a = (np.full(azi.size, x[0]) for x in sin_cos(azi[:1]))
+    else:
+        sin_a, cos_a = sin_cos(azi)
     for _ in range(_NEWTON_ITERATIONS):
         f, df = rate(sin_a, cos_a, slice(None))
         lead = step * f[:-1]

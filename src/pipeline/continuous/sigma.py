@@ -296,8 +296,7 @@ def azimuth_budget(
     rank_one("gyro_misalignment_y", mis, rows.linear(cells["gain_rate_y"]))
     rank_one("gyro_misalignment_z", mis, rows.linear(cells["gain_rate_z"]))
     if gyro.bias_instability > 0:
-        tau = gyro.correlation_time
-        markov = rows.quadratic(cells["gain"], mid, lambda x, y: np.exp(-np.abs(x - y) / tau))
+        markov = rows.quadratic(cells["gain"], mid, _markov_kernel(gyro.correlation_time))
         add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * markov)
     if gyro.rate_random_walk > 0:
         q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
@@ -385,6 +384,18 @@ class _StationRows:
 _KERNEL_ROWS = 256
 
 
+def _markov_kernel(tau: float) -> Callable[[FloatArray, FloatArray], FloatArray]:
+    """``exp(−|x − y|/τ)`` (τ s), evaluated in place."""
+
+    def kernel(x: FloatArray, y: FloatArray) -> FloatArray:
+        out: FloatArray = np.subtract(x, y)
+        np.abs(out, out=out)
+        np.divide(out, -tau, out=out)
+        return np.exp(out, out=out)
+
+    return kernel
+
+
 def _running(values: FloatArray) -> FloatArray:
     """0 and the running sums of ``values``."""
     out = np.zeros(values.size + 1)
@@ -399,7 +410,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
     sin_d, cos_d = sin_cos(run.misalignment)
-    tan_d = np.tan(run.misalignment)
+    tan_d = sin_d / cos_d  # (np.tan costs a sine and cosine more)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
     azi_rate = grad(CarriedUnwrap()(run.azi))
