@@ -336,11 +336,11 @@ class _StationRows:
         return out
 
     def diagonal(self, d: FloatArray) -> FloatArray:
-        """``a·diag(d)·aᵀ`` (``d`` per cell): its block sums are D(min(n_k, n_l)) and the
-        like, D the running sum of d."""
-        total = _running(d)
-        at = np.append(self.before, self.cells)
-        return self._form(total[np.minimum.outer(at, at)])
+        """``a·diag(d)·aᵀ`` (``d ≥ 0`` per cell): its block sums are D(min(n_k, n_l)) and
+        the like, D the running sum of d — the lesser of D(n_k) and D(n_l), D not
+        decreasing."""
+        at = _running(d)[np.append(self.before, self.cells)]
+        return self._form(np.minimum.outer(at, at))
 
     def quadratic(
         self,
@@ -374,10 +374,12 @@ class _StationRows:
         """The form from its block sums ``table[k, l]`` over cells before ``at_k`` and
         ``at_l`` (the last at: all cells): ``ΦΦᵀ∘P − Φ(c∘P(·, all))ᵀ − … + ccᵀ·P(all, all)``."""
         inner, edge, whole = table[:-1, :-1], table[:-1, -1], table[-1, -1]
-        out: FloatArray = np.outer(self.phi, self.phi) * inner
-        out -= np.outer(self.phi * edge, self.closure)
-        out -= np.outer(self.closure, self.phi * table[-1, :-1])
-        out += np.outer(whole * self.closure, self.closure)
+        out: FloatArray = np.multiply.outer(self.phi, self.phi)
+        out *= inner
+        term = np.multiply.outer(self.phi * edge, self.closure)
+        out -= term
+        out -= np.multiply.outer(self.closure, self.phi * table[-1, :-1], out=term)
+        out += np.multiply.outer(whole * self.closure, self.closure, out=term)
         return out
 
 
