@@ -114,10 +114,10 @@ def test_heun_series_matches_the_step_by_step_recursion(direction: float) -> Non
     held = (np.arange(n) > 5000) & (np.arange(n) < 6000)
     const[held] = by_cos[held] = by_sin[held] = 0.0
 
-    def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
+    def rate(sin_a: FloatArray, cos_a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         return (
-            const[k] + by_cos[k] * np.cos(a) + by_sin[k] * np.sin(a),
-            by_sin[k] * np.cos(a) - by_cos[k] * np.sin(a),
+            const[k] + by_cos[k] * cos_a + by_sin[k] * sin_a,
+            by_sin[k] * cos_a - by_cos[k] * sin_a,
         )
 
     def scalar(a: float, k: int) -> float:

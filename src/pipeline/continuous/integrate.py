@@ -68,7 +68,7 @@ from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
 from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
 from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
-from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
+from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos, turned_sin_cos
 from pipeline.errors import EmptyTableError
 from pipeline.streams import Port, as_stream
 
@@ -161,6 +161,9 @@ def _apsidal_run(
     tie = float(np.radians((finish if backward else start)["azi"]))
     for n in range(options.passes):
         previous = None if n == 0 else str((n - 1) % 2)
+        last = n == options.passes - 1
+        # İ from the inclination (x) or from r (xy), h from the toolface (xy); both stored last
+        wanted = (last or not two_axis, last or two_axis)
         carry = tie  # azimuth of the sample integrated last
         for a, b in chunks(0, size, odometer.rows, reverse=backward):
             # the chunk, and the sample integrated before it (first chunk: none)
@@ -168,7 +171,7 @@ def _apsidal_run(
             lo, hi = savgol_span(0, size, sa, sb, window) if smooth else (sa - 1, sb + 1)
             lo, hi = max(lo, 0), min(hi, size)
             t = odometer.time(lo, hi)
-            angles = _pass_angles(odometer, lo, hi, previous, t)
+            angles = _pass_angles(odometer, lo, hi, previous, wanted)
             inc, tf = angles.inc, angles.tf
             y = store.floats("gyro_x", odometer.begin + lo, odometer.begin + hi) * DEG_H
             seg = slice(sa - lo, sb - lo)
@@ -208,7 +211,7 @@ def _apsidal_run(
             own = slice(a - sa, b - sa)  # the chunk's samples within the segment
             carry = float(azi[own][0] if backward else azi[own][-1])
             store.write(f"azi{n % 2}", a, azi[own])
-            if n < options.passes - 1:  # İ for the next pass (the budget takes its own)
+            if not last:  # İ for the next pass (the budget takes its own)
                 if two_axis:  # İ = r + Ω cos φ sin A, measured, not differentiated
                     inc_rate = right[seg] + oc * sin_cos(azi.astype(np.float64, copy=False))[0]
                 store.write(f"inc_rate{n % 2}", a, inc_rate[own])
@@ -224,8 +227,8 @@ def _apsidal_run(
     if backward:  # one usable tie only: no closure, and the start stop's azimuth is not used
         misclosure = float("nan")
     else:
-        last = store.floats(azi_column, size - 1, size)
-        misclosure = float(wrap_angle(last[0] - np.radians(finish["azi"])))
+        end_azi = store.floats(azi_column, size - 1, size)
+        misclosure = float(wrap_angle(end_azi[0] - np.radians(finish["azi"])))
     noise = InclinationNoise(
         dt=dt,
         accel=options.acc_noise / (60.0 * np.sqrt(dt)),  # (m/s)/√h → per sample
@@ -254,7 +257,8 @@ def _previous(store: ColumnStore, name: str, previous: str | None, lo: int, hi: 
 
 
 class _Angles(NamedTuple):
-    """Inclination and toolface (rad) of run samples, and their sines and cosines."""
+    """Inclination and toolface (rad) of run samples (empty where a pass does not need the
+    angle), and their sines and cosines."""
 
     inc: FloatArray
     tf: FloatArray
@@ -265,22 +269,24 @@ class _Angles(NamedTuple):
 
 
 def _pass_angles(
-    odometer: Odometer, lo: int, hi: int, previous: str | None, t: FloatArray
+    odometer: Odometer, lo: int, hi: int, previous: str | None, wanted: tuple[bool, bool]
 ) -> _Angles:
     """Inclination and toolface (rad) at run samples ``lo``…``hi − 1`` with the tool's
-    acceleration removed, from the previous pass's İ and Ȧ (none before the first)."""
+    acceleration removed, from the previous pass's İ and Ȧ (none before the first);
+    ``wanted``: whether the inclination and the toolface angles are needed (each costs an
+    arctan2: their sines and cosines come without)."""
     store, begin = odometer.store, odometer.begin
     gx, gy, gz = (store.floats(f"acc_{a}", begin + lo, begin + hi) for a in "xyz")
     accel = odometer.column("accel", lo, hi)
     if previous is None:  # nothing across the axis to remove yet
-        return _inclination_toolface(gx, gy, gz, accel)
+        return _inclination_toolface(gx, gy, gz, accel, wanted)
     inc_rate = store.floats(f"inc_rate{previous}", lo, hi)
     # the gradient at the range's ends needs one sample beyond it
     wlo, whi = max(lo - 1, 0), min(hi + 1, odometer.size)
     wide = np.gradient(store.floats(f"azi{previous}", wlo, whi), odometer.time(wlo, whi))
     azi_rate = wide[lo - wlo : lo - wlo + hi - lo]
     speed = odometer.column("speed", lo, hi)
-    return _inclination_toolface(gx, gy, gz, accel, (speed, inc_rate, azi_rate))
+    return _inclination_toolface(gx, gy, gz, accel, wanted, (speed, inc_rate, azi_rate))
 
 
 def _inclination_toolface(
@@ -288,15 +294,16 @@ def _inclination_toolface(
     gy: FloatArray,
     gz: FloatArray,
     accel: FloatArray,
+    wanted: tuple[bool, bool],
     across: tuple[FloatArray, FloatArray, FloatArray] | None = None,
 ) -> _Angles:
-    """Inclination and gravity toolface of frame x (rad) from the accelerometers (m/s²) with
-    the tool's acceleration removed: along the axis the odometer's ``accel`` (m/s²), across
-    it v·(İ·hs + sin I·Ȧ·rs) from ``across``: the speed (m/s) and the current İ and Ȧ
-    (rad/s; None: zero)."""
+    """Inclination and gravity toolface of frame x (rad; ``wanted``: :func:`_pass_angles`)
+    from the accelerometers (m/s²) with the tool's acceleration removed: along the axis the
+    odometer's ``accel`` (m/s²), across it v·(İ·hs + sin I·Ȧ·rs) from ``across``: the speed
+    (m/s) and the current İ and Ȧ (rad/s; None: zero)."""
     axial = gz + accel
     if across is None:
-        tf, sin_tf, cos_tf, transverse = _polar(gy, -gx)
+        tf, sin_tf, cos_tf, transverse = _polar(gy, -gx, wanted[1])
     else:  # the first estimate's toolface and inclination: their sines and cosines only
         speed, inc_rate, azi_rate = across
         sin_tf, cos_tf, transverse = _unit(gy, -gx)
@@ -304,14 +311,16 @@ def _inclination_toolface(
         cross_r = speed * _unit(transverse, axial)[0] * azi_rate
         cx = gx + cross_h * cos_tf + cross_r * sin_tf
         cy = gy - cross_h * sin_tf + cross_r * cos_tf
-        tf, sin_tf, cos_tf, transverse = _polar(cy, -cx)
-    inc, sin_i, cos_i, _ = _polar(transverse, axial)
+        tf, sin_tf, cos_tf, transverse = _polar(cy, -cx, wanted[1])
+    inc, sin_i, cos_i, _ = _polar(transverse, axial, wanted[0])
     return _Angles(inc, tf, sin_i, cos_i, sin_tf, cos_tf)
 
 
-def _polar(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """``arctan2(y, x)`` and :func:`_unit`'s sine, cosine and radius."""
-    return np.arctan2(y, x), *_unit(y, x)
+def _polar(
+    y: FloatArray, x: FloatArray, angle: bool
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``arctan2(y, x)`` (``angle``; else empty) and :func:`_unit`'s sine, cosine and radius."""
+    return np.arctan2(y, x) if angle else np.empty(0), *_unit(y, x)
 
 
 def _unit(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -366,16 +375,17 @@ def _integrate(
     by_cos = np.where(usable, oc * cos_i / sin_u, 0.0)
     by_sin = np.where(usable, -oc * sin_d / cos_u / sin_u, 0.0)
 
-    def rate(a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
-        """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths ``a`` (0 where held)."""
-        sin_a, cos_a = sin_cos(a)
+    def rate(sin_a: FloatArray, cos_a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
+        """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths of sine ``sin_a`` and
+        cosine ``cos_a`` (0 where held)."""
         # in place, the operations of const + by_cos·cos A + by_sin·sin A, by_sin·cos A −
-        # by_cos·sin A in their order (the same bits): fewer temporaries, a tenth less CPU
+        # by_cos·sin A in their order: fewer temporaries, a tenth less CPU
         slope = by_sin[k] * cos_a
-        slope -= np.multiply(by_cos[k], sin_a)
-        value = np.multiply(by_cos[k], cos_a, out=cos_a)
+        product = np.multiply(by_cos[k], sin_a)
+        slope -= product
+        value = by_cos[k] * cos_a
         value += const[k]
-        value += np.multiply(by_sin[k], sin_a, out=sin_a)
+        value += np.multiply(by_sin[k], sin_a, out=product)
         return value, slope
 
     start = np.full(t.size, azi0) if guess is None else guess.copy()
@@ -384,8 +394,8 @@ def _integrate(
     return _heun_series(np.diff(t), rate, feedback, start, tolerance), flags, held
 
 
-RateFunction = Callable[[FloatArray, slice], tuple[FloatArray, FloatArray]]
-"""Ȧ and ∂Ȧ/∂A of a slice of the samples at given azimuths."""
+RateFunction = Callable[[FloatArray, FloatArray, slice], tuple[FloatArray, FloatArray]]
+"""Ȧ and ∂Ȧ/∂A of a slice of the samples at azimuths of given sines and cosines."""
 
 _NEWTON_TOLERANCE = 1e-12
 """rad: bound of the error left in a converged series."""
@@ -414,11 +424,20 @@ def _heun_series(
     half = step / 2
     reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
     growth = reach * float(np.exp(min(reach, 700.0)))
+    # the azimuths' sines and cosines: once by the trig functions (a constant first guess:
+    # of one value), then turned by each predictor step and Newton correction
+    # (turned_sin_cos, within 2.3e-16 of sin_cos's)
+    if azi.size and bool(np.all(azi == azi[0])):
+        sin_a, cos_a = (np.full(azi.size, x[0]) for x in sin_cos(azi[:1]))
+    else:
+        sin_a, cos_a = sin_cos(azi)
     for _ in range(_NEWTON_ITERATIONS):
-        f, df = rate(azi, slice(None))
-        predicted = step * f[:-1]
-        predicted += azi[:-1]
-        f_next, df_next = rate(predicted, slice(1, None))
+        f, df = rate(sin_a, cos_a, slice(None))
+        lead = step * f[:-1]
+        predicted = lead + azi[:-1]
+        f_next, df_next = rate(
+            *turned_sin_cos(sin_a[:-1], cos_a[:-1], lead, predicted), slice(1, None)
+        )
         # in place (the same operations in the same order, commuted at most): residual
         # A_k + Δt/2·(f_k + f_next) − A_{k+1}, gain 1 + Δt/2·(df_k + df_next·(1 + Δt·df_k))
         residual = np.add(f[:-1], f_next, out=f_next)
@@ -433,9 +452,10 @@ def _heun_series(
         gain += 1.0
         correction = _affine_recursion(gain, residual)
         azi[1:] += correction
-        largest = float(np.max(np.abs(correction, out=correction)))
+        largest = float(max(np.max(correction), -np.min(correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
+        sin_a[1:], cos_a[1:] = turned_sin_cos(sin_a[1:], cos_a[1:], correction, azi[1:])
     raise ContinuousError(
         f"the azimuth integration did not converge in {_NEWTON_ITERATIONS} Newton iterations "
         f"(last correction {largest:.3g} rad)"

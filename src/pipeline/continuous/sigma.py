@@ -263,67 +263,146 @@ def azimuth_budget(
     sums = _Integrals(run, edges, st_elapsed, (t_first, t_last))
     cells = sums.cells
 
-    phi_k, phi_t = sums.phi_k, sums.phi_t
     w = st_elapsed / duration if closure and duration > 0 else np.zeros_like(st_elapsed)
-    before = edges[1:][None, :] <= st_elapsed[:, None] * (1 + 1e-12) + 1e-12
-    a = phi_k[:, None] * before - (w * phi_t)[:, None]  # (stations, cells)
+    # the stations' rows over the cells: Φ_k before the station, less the closure's w_k·Φ_T
+    before = np.searchsorted(edges[1:], st_elapsed * (1 + 1e-12) + 1e-12, side="right")
+    rows = _StationRows(sums.phi_k, w * sums.phi_t, before, mid.size)
 
     parts: dict[str, FloatArray] = {}
-    cov = np.zeros((st.size, st.size))
+    columns: list[FloatArray] = []  # σ times each rank-one source's row sums
+    quadratic = np.zeros((st.size, st.size))
 
     def add(name: str, part: FloatArray) -> None:
-        nonlocal cov
-        cov = cov + part
+        nonlocal quadratic
+        quadratic += part
         parts[name] = np.diag(part).copy()
 
     def rank_one(name: str, sigma: float, column: FloatArray) -> None:
-        add(name, np.outer(sigma * column, sigma * column))
+        columns.append(sigma * column)
+        parts[name] = columns[-1] * columns[-1]
 
-    rank_one("tie_stop", tie_sigma, phi_k - w * phi_t)
+    rank_one("tie_stop", tie_sigma, rows.phi - rows.closure)
     if closure:
         rank_one("end_stop", sigma_end, w)
     arw = gyro.arw * np.pi / 180.0 / 60.0  # deg/√h → rad/√s
-    add("arw", arw**2 * (a * cells["gain_squared"]) @ a.T)
-    rank_one("bias", gyro.bias * DEG_H, a @ cells["gain"])
-    rank_one("bias_trend", gyro.bias_trend * DEG_H / 3600.0, a @ cells["gain_elapsed"])
-    rank_one("gyro_scale_factor", gyro.scale_factor * 1e-6, a @ cells["gain_rate_x"])
+    add("arw", arw**2 * rows.diagonal(cells["gain_squared"]))
+    rank_one("bias", gyro.bias * DEG_H, rows.linear(cells["gain"]))
+    rank_one("bias_trend", gyro.bias_trend * DEG_H / 3600.0, rows.linear(cells["gain_elapsed"]))
+    rank_one("gyro_scale_factor", gyro.scale_factor * 1e-6, rows.linear(cells["gain_rate_x"]))
     g_dep = gyro.g_sensitivity * DEG_H
-    rank_one("gyro_g_high_side", g_dep, a @ cells["gain_sin"])
-    rank_one("gyro_g_axial", g_dep, a @ cells["gain_cos"])
+    rank_one("gyro_g_high_side", g_dep, rows.linear(cells["gain_sin"]))
+    rank_one("gyro_g_axial", g_dep, rows.linear(cells["gain_cos"]))
     mis = gyro.misalignment * 1e-3
-    rank_one("gyro_misalignment_y", mis, a @ cells["gain_rate_y"])
-    rank_one("gyro_misalignment_z", mis, a @ cells["gain_rate_z"])
-    m = a * cells["gain"]
+    rank_one("gyro_misalignment_y", mis, rows.linear(cells["gain_rate_y"]))
+    rank_one("gyro_misalignment_z", mis, rows.linear(cells["gain_rate_z"]))
     if gyro.bias_instability > 0:
-        tau = gyro.correlation_time
-        markov = _quadratic(m, mid, lambda x, y: np.exp(-np.abs(x - y) / tau))
+        markov = rows.quadratic(cells["gain"], mid, _markov_kernel(gyro.correlation_time))
         add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * markov)
     if gyro.rate_random_walk > 0:
         q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
-        add("rate_random_walk", q**2 * _quadratic(m, mid, np.minimum))
-    rank_one("acc_inclination", acc.inclination, a @ cells["d_inc"])
-    rank_one("acc_bias_toolface", acc.bias / acc.gravity, a @ cells["tf_bias"])
-    rank_one("acc_tilt_toolface", acc.misalignment, a @ cells["tf_tilt"])
-    rank_one("acc_twist_toolface", acc.misalignment, a @ cells["tf_twist"])
+        add("rate_random_walk", q**2 * rows.quadratic(cells["gain"], mid, np.minimum))
+    rank_one("acc_inclination", acc.inclination, rows.linear(cells["d_inc"]))
+    rank_one("acc_bias_toolface", acc.bias / acc.gravity, rows.linear(cells["tf_bias"]))
+    rank_one("acc_tilt_toolface", acc.misalignment, rows.linear(cells["tf_tilt"]))
+    rank_one("acc_twist_toolface", acc.misalignment, rows.linear(cells["tf_twist"]))
     if sums.noise is not None:
-        noise = sums.noise.variance(phi_k - w * phi_t, -w * phi_t)
-        add("inclination_noise", np.diag(noise))
-    return AzimuthBudget(covariance=cov, parts=parts)
+        noise = sums.noise.variance(rows.phi - rows.closure, -rows.closure)
+        quadratic[np.diag_indices(st.size)] += noise
+        parts["inclination_noise"] = noise
+    stacked = np.stack(columns, axis=1)
+    return AzimuthBudget(covariance=stacked @ stacked.T + quadratic, parts=parts)
 
 
-def _quadratic(
-    m: FloatArray, mid: FloatArray, kernel: Callable[[FloatArray, FloatArray], FloatArray]
-) -> FloatArray:
-    """``m @ K @ m.T`` with ``K[i, j] = kernel(mid[i], mid[j])`` built a block of rows at a
-    time (K of a day-long run has millions of cells)."""
-    out = np.zeros((m.shape[0], m.shape[0]))
-    for lo in range(0, mid.size, _KERNEL_ROWS):
-        rows = slice(lo, lo + _KERNEL_ROWS)
-        out += m[:, rows] @ (kernel(mid[rows, None], mid[None, :]) @ m.T)
-    return out
+@dataclass(frozen=True)
+class _StationRows:
+    """The stations' rows over the budget's cells, ``a[k, j] = Φ_k·[j < n_k] − c_k``: a
+    rate error's integral up to station k (its ``n_k`` cells before it) less the closure's
+    share ``c_k = w_k·Φ_T`` of the whole. Its products with cell vectors and its quadratic
+    forms by prefix sums over the cells: O(cells + stations²), the (stations, cells) matrix
+    never made."""
+
+    phi: FloatArray
+    """Φ at each station"""
+    closure: FloatArray
+    """w·Φ_T at each station (0: no closure)"""
+    before: NDArray[np.intp]
+    """cells before each station"""
+    cells: int
+
+    def linear(self, g: FloatArray) -> FloatArray:
+        """``a @ g``: ``Φ_k·G(n_k) − c_k·G(all)`` with G the running sum of ``g`` (per cell)."""
+        total = _running(g)
+        out: FloatArray = self.phi * total[self.before] - self.closure * total[-1]
+        return out
+
+    def diagonal(self, d: FloatArray) -> FloatArray:
+        """``a·diag(d)·aᵀ`` (``d ≥ 0`` per cell): its block sums are D(min(n_k, n_l)) and
+        the like, D the running sum of d — the lesser of D(n_k) and D(n_l), D not
+        decreasing."""
+        at = _running(d)[np.append(self.before, self.cells)]
+        return self._form(np.minimum.outer(at, at))
+
+    def quadratic(
+        self,
+        g: FloatArray,
+        mid: FloatArray,
+        kernel: Callable[[FloatArray, FloatArray], FloatArray],
+    ) -> FloatArray:
+        """``a·diag(g)·K·diag(g)·aᵀ`` with ``K[i, j] = kernel(mid[i], mid[j])`` (``g`` and
+        ``mid`` per cell): the sums of ``g_i K_ij g_j`` over the cells before each pair of
+        stations, K made a block of rows at a time (a day-long run has millions of cells)
+        and summed along its rows, then down its columns."""
+        at = np.append(self.before, self.cells)
+        table = np.zeros((at.size, at.size))  # [k, l]: Σ over i < at_k, j < at_l
+        along = np.zeros((_KERNEL_ROWS, self.cells + 1))  # [i, j]: Σ over j' < j
+        down = np.empty((_KERNEL_ROWS + 1, at.size))  # [r, l]: Σ over i < lo + r, j < at_l
+        down[0] = 0.0
+        for lo in range(0, self.cells, _KERNEL_ROWS):
+            hi = min(lo + _KERNEL_ROWS, self.cells)
+            block = kernel(mid[lo:hi, None], mid[None, :])
+            block *= g[lo:hi, None]
+            block *= g[None, :]
+            np.cumsum(block, axis=1, out=along[: hi - lo, 1:])
+            np.cumsum(along[: hi - lo, at], axis=0, out=down[1 : hi - lo + 1])
+            down[1 : hi - lo + 1] += down[0]
+            here = np.flatnonzero((at >= lo) & (at <= hi))
+            table[here] = down[at[here] - lo]
+            down[0] = down[hi - lo]
+        return self._form(table)
+
+    def _form(self, table: FloatArray) -> FloatArray:
+        """The form from its block sums ``table[k, l]`` over cells before ``at_k`` and
+        ``at_l`` (the last at: all cells): ``ΦΦᵀ∘P − Φ(c∘P(·, all))ᵀ − … + ccᵀ·P(all, all)``."""
+        inner, edge, whole = table[:-1, :-1], table[:-1, -1], table[-1, -1]
+        out: FloatArray = np.multiply.outer(self.phi, self.phi)
+        out *= inner
+        term = np.multiply.outer(self.phi * edge, self.closure)
+        out -= term
+        out -= np.multiply.outer(self.closure, self.phi * table[-1, :-1], out=term)
+        out += np.multiply.outer(whole * self.closure, self.closure, out=term)
+        return out
 
 
 _KERNEL_ROWS = 256
+
+
+def _markov_kernel(tau: float) -> Callable[[FloatArray, FloatArray], FloatArray]:
+    """``exp(−|x − y|/τ)`` (τ s), evaluated in place."""
+
+    def kernel(x: FloatArray, y: FloatArray) -> FloatArray:
+        out: FloatArray = np.subtract(x, y)
+        np.abs(out, out=out)
+        np.divide(out, -tau, out=out)
+        return np.exp(out, out=out)
+
+    return kernel
+
+
+def _running(values: FloatArray) -> FloatArray:
+    """0 and the running sums of ``values``."""
+    out = np.zeros(values.size + 1)
+    np.cumsum(values, out=out[1:])
+    return out
 
 
 def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatArray]:
@@ -333,7 +412,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
     sin_d, cos_d = sin_cos(run.misalignment)
-    tan_d = np.tan(run.misalignment)
+    tan_d = sin_d / cos_d  # (np.tan costs a sine and cosine more)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
     azi_rate = grad(CarriedUnwrap()(run.azi))

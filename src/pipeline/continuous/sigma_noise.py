@@ -101,10 +101,13 @@ class NoiseSums:
         q_free = step * d_inc + convolve_same(step * d_inc_rate, self.d1)
         odo_free = convolve_same(q_free * sin_i, self.d2)
         own = slice(lo - start, hi - start)
+        keys = np.flatnonzero((self.keys > lo) & (self.keys <= hi))
+        ends = self.keys[keys] - lo  # the sums to each key: over [0, end) of the chunk
+        cuts = np.concatenate([[0], ends[ends < hi - lo]])
         for row, free in enumerate((q_free, odo_free)):
-            running = carried_cumsum(free[own] ** 2, float(self.carry[row]))
-            keys = (self.keys > lo) & (self.keys <= hi)
-            self.prefix[row, keys] = running[self.keys[keys] - lo - 1]
+            # the squares summed between the keys, then those sums run (not every sample's)
+            running = carried_cumsum(np.add.reduceat(free[own] ** 2, cuts), float(self.carry[row]))
+            self.prefix[row, keys] = running[: ends.size]
             self.carry[row] = running[-1]
         stations = np.flatnonzero((self.index >= lo) & (self.index < hi))
         length = step.size

@@ -9,6 +9,8 @@ radians.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -34,6 +36,51 @@ def sin_cos(angle: FloatArray) -> tuple[FloatArray, FloatArray]:
     cos: FloatArray = np.subtract(1.0, square, out=square)
     cos *= scale
     return sin, cos
+
+
+TURN_REACH = 0.1
+"""rad: the largest turn :func:`turned_sin_cos` takes by its series (beyond: :func:`sin_cos`)."""
+_TURN_REMAINDER = 2.0**-60
+"""bound of the series' truncation error, absolute (a 2,300th of an ulp of 1)."""
+
+
+def turned_sin_cos(
+    sin: FloatArray, cos: FloatArray, turn: FloatArray, angle: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Sine and cosine of ``angle`` = a + ``turn`` (rad) from those of a, rotated by the turn:
+    ``sin(a + d) = sin a + (cos a·sin d − sin a·(1 − cos d))`` and likewise the cosine, with
+    sin d and 1 − cos d by their Taylor series in d², as many terms as the largest |d| needs
+    for a truncation error under 2⁻⁶⁰ (one or two for the Newton corrections and predictor
+    steps of an azimuth integration) — a quarter of :func:`sin_cos`'s CPU; the rounding adds
+    ≤ 2.3e-16 (absolute) to that of ``sin`` and ``cos``. A turn beyond :data:`TURN_REACH`
+    (or not finite) takes :func:`sin_cos` of ``angle`` instead."""
+    largest = float(np.max(np.abs(turn))) if turn.size else 0.0
+    if not largest <= TURN_REACH:
+        return sin_cos(angle)
+    square = np.multiply(turn, turn)
+    terms = 0  # sin d = d·Σ (−d²)ʲ/(2j + 1)!, 1 − cos d = d²·Σ (−d²)ʲ/(2j + 2)!, j ≤ terms
+    while largest ** (2 * terms + 3) / math.factorial(2 * terms + 3) > _TURN_REMAINDER:
+        terms += 1
+    # Horner in d²: v ← d²·(1/(2j + 2)! − v) from j = terms down to 0, likewise the sine's
+    versine = np.multiply(square, 1.0 / math.factorial(2 * terms + 2))
+    for j in range(terms - 1, -1, -1):
+        np.subtract(1.0 / math.factorial(2 * j + 2), versine, out=versine)
+        versine *= square
+    sine = turn
+    if terms:
+        odd = np.multiply(square, 1.0 / math.factorial(2 * terms + 1))
+        for j in range(terms - 1, 0, -1):
+            np.subtract(1.0 / math.factorial(2 * j + 1), odd, out=odd)
+            odd *= square
+        np.subtract(1.0, odd, out=odd)
+        sine = np.multiply(odd, turn, out=odd)
+    new_sin = np.multiply(cos, sine)
+    new_sin -= np.multiply(sin, versine, out=square)
+    new_sin += sin
+    new_cos = np.multiply(sin, sine, out=square)
+    new_cos += np.multiply(cos, versine, out=versine)
+    np.subtract(cos, new_cos, out=new_cos)
+    return new_sin, new_cos
 
 
 def rot_z(angle: ArrayLike) -> FloatArray:
