@@ -13,7 +13,8 @@ batches) are written once to a column store (on disk past 24 MiB), and every pas
 odometer fit, the integration's passes, station extraction, the σ budget — reads a chunk of
 rows plus the overlap its filters need, carrying running sums, the last azimuth and the
 Newton solver's first guess from chunk to chunk; the results equal those of the whole series
-in one chunk (tests/continuous/test_chunks.py). A three-axis (strapdown) run still reads its
+in one chunk within the rounding of its FFT blocks and segment sums (1e-9° checked,
+tests/continuous/test_chunks.py). A three-axis (strapdown) run still reads its
 span whole.
 
 The names below load their module on first use, so that importing a submodule (as the

@@ -119,8 +119,9 @@ def savgol_filter(
     :func:`savgol_coeffs` inside (applied to the steps of ``values``,
     :func:`_through_steps`), and within half a window of either end the polynomial fitted
     to the first or last ``points`` samples (SciPy's mode ``interp``); ``ends``: the (first,
-    last) half windows fitted so (not: left as the convolution's, which treats the samples
-    beyond as zeros — for a caller that discards them)."""
+    last) half windows fitted so (not: left invalid, for a caller that discards them). A
+    non-finite value spreads over a whole FFT block (2,048 samples for 201 taps), not only
+    the taps' span: the samples reach a filter finite (their contract)."""
     if values.size < points:
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
     out = _through_steps(values, savgol_coeffs(points, order, deriv, delta), deriv)
@@ -142,15 +143,16 @@ def savgol_filter(
 
 def _through_steps(values: FloatArray, kernel: FloatArray, deriv: int) -> FloatArray:
     """``convolve_same(values, kernel)`` at the samples at least half a kernel from either
-    end (the rest: not that), for a Savitzky–Golay ``kernel`` of the ``deriv``-th derivative,
-    taken from the steps ``Δv[n] = v[n] − v[n−1]`` by parts: with the kernel less the unit
-    impulse at its centre where ``deriv`` is 0, its taps sum to zero (a fit reproduces a
-    constant; its derivatives annihilate it), so ``Σ_j k[j]·v[i+h−j] = Σ_j K[j]·Δv[i+h−j]``
-    with ``K`` their cumulative sums (the last, zero, taken as exactly so), plus ``v[i]``
-    for the fit itself. The convolution's rounding (≈ 1e-16 of the largest step by FFT) is
-    then that of the steps, not of the values: an odometer's MD of kilometres moves ~1 cm a
-    sample, so this is more accurate than the sums of products of the values taken directly
-    (each rounded relative to kilometres) and as fast as an FFT."""
+    end (the first and last half kernel: not valid), for a Savitzky–Golay ``kernel`` of the
+    ``deriv``-th derivative, taken from the steps ``Δv[n] = v[n] − v[n−1]`` by parts: with
+    the kernel less the unit impulse at its centre where ``deriv`` is 0, its taps sum to
+    zero (a fit reproduces a constant; its derivatives annihilate it), so
+    ``Σ_j k[j]·v[i+h−j] = Σ_j K[j]·Δv[i+h−j]`` with ``K`` their cumulative sums (the last,
+    zero, taken as exactly so), plus ``v[i]`` for the fit itself. The convolution's
+    rounding (≈ 1e-16 of the largest step by FFT) is then that of the steps, not of the
+    values: an odometer's MD of kilometres moves ~1 cm a sample, so this is more accurate
+    than the sums of products of the values taken directly (each rounded relative to
+    kilometres) and as fast as an FFT."""
     taps = np.array(kernel, dtype=np.float64)
     if deriv == 0:
         taps[taps.size // 2] -= 1.0

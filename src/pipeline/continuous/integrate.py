@@ -426,7 +426,8 @@ def _heun_series(
     growth = reach * float(np.exp(min(reach, 700.0)))
     # the azimuths' sines and cosines: once by the trig functions (a constant first guess:
     # of one value), then turned by each predictor step and Newton correction
-    # (turned_sin_cos, within 2.3e-16 of sin_cos's)
+    # (turned_sin_cos, within 2.3e-16 a turn: against sin and cos of the stored azimuth,
+    # rounded at each turn, ≈ 2.5e-15 after the iterations' seven turns, measured)
     if azi.size and bool(np.all(azi == azi[0])):
         sin_a, cos_a = (np.full(azi.size, x[0]) for x in sin_cos(azi[:1]))
     else:

@@ -50,7 +50,8 @@ CHUNK_ROWS = 65_536
 SPOOL_BYTES = 24 << 20
 """bytes: a :class:`ColumnStore` holds its columns in memory up to this much in all (a 1×
 well's 18 MiB: the files' creation, writes and closing ≈ 4–8 ms of its CPU), and moves them
-all to files when a write would take it past (a day's survey: ≈ 1.2 GB of columns)."""
+all to files when a write would take it past (a day's survey: ≈ 1.2 GB of columns). The
+bytes counted are those written; a growing column's buffer may hold up to ~1/8 more."""
 
 
 @dataclass
@@ -102,6 +103,8 @@ class ColumnStore:
             if self._on_disk:
                 column.file = _column_file()
         data = np.ascontiguousarray(values, dtype=column.dtype)
+        if not data.size:  # nothing written: the column's rows as they were (a file's too)
+            return
         offset = start * column.dtype.itemsize
         if not self._on_disk:
             grown = max(offset + data.nbytes - len(column.data), 0)
@@ -241,8 +244,9 @@ def savgol_range(
 ) -> FloatArray:
     """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
-    inside the series each value is the same dot product with the same samples, and the edge
-    polynomial is fitted to the same first or last ``points`` samples."""
+    inside the series each value is the same filter of the same samples (within its
+    rounding: the FFT's blocks fall elsewhere in a chunk), and the edge polynomial is fitted
+    to the same first or last ``points`` samples."""
     half = points // 2
     ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
     fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
