@@ -86,7 +86,8 @@ class TableStream:
         to its end keeps its batches, and the ``passes − 1`` passes after it yield them
         instead of reading the source again, the last of them letting each go as it passes
         on. Passes after those read the source again, as every pass does while none has run
-        to its end. What is held is one pass, from its first consumer to its last."""
+        to its end. What is held is one pass, from its first consumer to its last. Its
+        passes are read one after another (a run's stages, on one thread), not at once."""
         held: list[pa.RecordBatch] | None = None
         left = passes - 1  # passes still to be given the kept batches
 

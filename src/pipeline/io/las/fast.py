@@ -7,9 +7,11 @@ reused buffer, rewritten so that a comma separates the values of each line, and 
 from there in one chunk while it is in the processor's cache (the file's text is never
 copied whole):
 
-* a block of fixed-width lines (every line as long; columns blank on every line split it
-  into one group of columns per curve, as LAS writers lay values out) keeps its bytes: the
-  first column after each group, a space on every line, becomes a comma by an XOR that
+* a block of fixed-width lines (every line as long; columns blank on its first
+  :data:`SAMPLE` lines split it into one group of columns per curve, as LAS writers lay
+  values out; the lines after are guarded by the parse, where a line parses only with
+  each separator column a space) keeps its bytes: the first column after each group, a
+  space on every line, becomes a comma by an XOR that
   makes a comma of a space only. The layout found in one block is applied to the next as
   it is copied (one pass over its bytes; no check: where it does not fit, a line has a
   value too few, which the parse refuses), and ``pyarrow.csv`` trims the padding of each
@@ -60,7 +62,7 @@ KEEP = 4
 touched): a fresh one costs the zeroing of its pages as a read first writes them."""
 _KEPT: list[Bytes] = []
 SAMPLE = 4096
-"""Lines of a block whose columns find a layout (checked on every line)."""
+"""Lines of a block whose columns find a layout (the lines after guarded by the parse)."""
 TILE = 32 << 10
 """Bytes of lines (about) of the separators' XOR pattern laid over a block at a time."""
 SPACE, COMMA, NEWLINE = 32, 44, 10
@@ -188,7 +190,10 @@ def _buffer(size: int) -> Bytes:
         kept = _KEPT.pop()  # atomic: reads on other threads take others
     except IndexError:
         return np.empty(need, np.uint8)
-    return kept if kept.size >= need else np.empty(need, np.uint8)
+    if kept.size >= need:
+        return kept
+    _KEPT.append(kept)  # too small for this read: kept for another
+    return np.empty(need, np.uint8)
 
 
 def _keep(buffers: list[Bytes]) -> None:
@@ -296,7 +301,7 @@ def _spaced(lines: bytes) -> Bytes | None:
 def _fixed_width(block: Bytes, width: int, n: int) -> Layout | None:
     """The layout of a block of lines all ``width`` bytes long (with their LF): the first
     column after each of the ``n`` groups of columns holding values (on the first
-    :data:`SAMPLE` lines) but the last, where it is a space on every line; None when the
+    :data:`SAMPLE` lines) but the last, where it is a space on every one of them; None when the
     lines differ in length or have another number of groups. Tabs and CRs count as blanks
     (``pyarrow.csv`` trims tabs around a value and ends a line at CRLF; a lone CR makes a
     row too many, declined). The values read do not depend on the layout: a line parses

@@ -91,7 +91,8 @@ class DataSection:
         head = _CHUNK_HEAD.size
         if len(data) > head and data[0] == CHUNK:
             _, length, _, _, size, crc, name, records = _CHUNK_HEAD.unpack(data[:head])
-            if name == 0 and records == size and length + 9 == len(data) == head + records:
+            whole = name == 0 and records == size and length + 9 == len(data) == head + records
+            if whole and crc != 0:  # 0: the chunk's CRC not computed (or truly 0): run it
                 return crc32_combine(zlib.crc32(data[:head], self.crc), crc, records)
         return zlib.crc32(data, self.crc)
 
