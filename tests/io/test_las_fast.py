@@ -245,3 +245,39 @@ def test_lines_of_other_lengths_adding_up_to_whole_lines_are_read_fast(
     assert rows == len(lines) * 3
     for i in range(n):
         assert values[i].tolist() == [float(line.split()[i]) for line in lines * 3]
+
+
+@pytest.mark.parametrize(
+    "odd",
+    [
+        f"{9.5:8.4f}{8.25:14.4f}{7.125:12.4f}",  # the same width, values laid out elsewhere
+        f"{9.5:10.4f} {1234567.25:12.4f}{7.125:11.4f}",  # a value over a separator column
+        f"{'9.50001238.2500':>18}{7.125:16.4f}",  # two values run together over it
+    ],
+)
+def test_a_line_laid_out_otherwise_after_the_sampled_lines_is_read_as_written_or_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, odd: str
+) -> None:
+    """The layout comes from a block's first SAMPLE lines; a line after them as long but
+    laid out otherwise is read as its whitespace-separated numbers say, or the block goes
+    to the careful path, which reads it so or names its line: never another number."""
+    monkeypatch.setattr(las_fast, "SAMPLE", 4)
+    good = [f"{i:11.4f}{2 * i:12.4f}{3 * i:11.4f}" for i in range(8)]
+    assert all(len(line) == len(odd) for line in good)
+    lines = [*good[:6], odd, *good[6:]]
+    path = _file(tmp_path, lines, 3)
+    cells = [line.split() for line in lines]
+    if any(len(row) != 3 for row in cells):  # not three numbers: refused at its line
+        source = las_header.load(path)
+        header = las_header.parse_header(path, source.header)
+        first = path.read_text().splitlines().index("~A") + 2
+        with pytest.raises(InputFileError) as info:
+            list(las_rows.data_blocks(path, source, header, [0, 1, 2]))
+        assert info.value.line == first + 6
+        return
+    fast, slow = _paths(path)
+    expected = np.array([[float(cell) for cell in row] for row in cells])
+    for i in range(3):
+        assert np.array_equal(slow.values[i], expected[:, i])
+        if fast is not None:
+            assert np.array_equal(fast[0][i], expected[:, i])
