@@ -75,11 +75,12 @@ def counted(stream: TableStream, rows: dict[str, int], port: str) -> TableStream
     return TableStream(stream.schema, counting, stream.holds)
 
 
-def kept(stream: TableStream, passes: int, nbytes: int | None) -> TableStream:
+def kept(stream: TableStream, passes: int, nbytes: int | None, held: int) -> TableStream:
     """``stream`` read from its source once for its ``passes`` consumers
     (:meth:`TableStream.kept`) where its source says a pass decodes to ``nbytes``, at most
-    :data:`~pipeline.streams.KEEP_BYTES`; else as it is (each consumer reads it again)."""
-    if passes > 1 and nbytes is not None and nbytes <= KEEP_BYTES:
+    :data:`~pipeline.streams.KEEP_BYTES` with the ``held`` bytes of the passes the run
+    keeps already; else as it is (each consumer reads it again)."""
+    if passes > 1 and nbytes is not None and held + nbytes <= KEEP_BYTES:
         return stream.kept(passes)
     return stream
 

@@ -235,6 +235,7 @@ def run_plan(
     with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
         ports: dict[tuple[str, str], Port] = {}
+        held = 0  # bytes of the passes kept (ports.kept: at most KEEP_BYTES a run)
         checked = CheckedTables()
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
@@ -258,7 +259,10 @@ def run_plan(
             for port, value in outs.items():
                 if isinstance(value, TableStream):  # read by several: decoded once if small
                     produced = _produced(plan, st, port, value, registry, record)
-                    value = kept(produced, st.passes.get(port, 1), value.nbytes)
+                    nbytes = value.nbytes or 0
+                    value = kept(produced, st.passes.get(port, 1), value.nbytes, held)
+                    if value is not produced:
+                        held += nbytes
                 ports[(st.id, port)] = value
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"

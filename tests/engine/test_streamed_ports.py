@@ -253,3 +253,25 @@ def test_the_plan_keeps_a_pass_for_the_stages_that_read_it_again(
             assert (
                 pq.read_table(tmp_path / "out" / name).select(samples.column_names).equals(samples)
             )
+
+
+def test_the_passes_a_run_keeps_are_bounded_together(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ports.kept`` keeps a pass only while it and the passes the run keeps already fit in
+    KEEP_BYTES together: a second stream that would take the run past it is read again by
+    each of its consumers."""
+    samples = survey()
+    reads = [0]
+
+    def source() -> Iterator[pa.RecordBatch]:
+        reads[0] += 1
+        yield from TableStream.from_table(samples, ROWS)
+
+    monkeypatch.setattr(ports, "KEEP_BYTES", 1000)
+    stream = TableStream(samples.schema, source)
+    for held, once in ((0, True), (400, True), (401, False)):
+        reads[0] = 0
+        given = ports.kept(stream, 2, 600, held)
+        list(given), list(given)
+        assert (given is not stream) == once and reads == [1 if once else 2]
+    assert ports.kept(stream, 1, 10, 0) is stream  # one consumer: nothing to keep
+    assert ports.kept(stream, 2, None, 0) is stream  # a size not known
