@@ -67,9 +67,10 @@ def exact_savgol(points: int, order: int, deriv: int, delta: float) -> np.ndarra
 @pytest.mark.parametrize(("points", "order", "deriv"), [(201, 3, 0), (201, 3, 1), (201, 3, 2)])
 def test_savgol_of_a_km_odometer_is_the_exact_filter(points: int, order: int, deriv: int) -> None:
     """The odometer's fit (MD, speed, acceleration) of MD near 1,500 m against the exact
-    Savitzky–Golay filter (rational taps, long-double sums): within 1e-14 relative taps and
-    2e-12 of the fit (m, m/s, m/s²). SciPy's taps, and sums of products of the MD itself,
-    were off by 9e-13 and 3e-9."""
+    Savitzky–Golay filter (rational taps, long-double sums) inside and the exact
+    least-squares polynomials of the first and last windows at the ends: within 1e-14
+    relative taps and 2e-12 of the fit (m, m/s, m/s²). SciPy's taps, and sums of products of
+    the MD itself, were off by 9e-13 and 3e-9; its end fits by up to 1.5e-11."""
     rng = np.random.default_rng(deriv)
     dt, n = 0.01, 30_000
     speed = 1.0 + 0.5 * np.sin(np.arange(n) * dt / 30.0)
@@ -83,6 +84,35 @@ def test_savgol_of_a_km_odometer_is_the_exact_filter(points: int, order: int, de
     at = np.arange(half, n - half, 89)
     want = np.array([np.dot(exact, wide[i - half : i + half + 1][::-1]) for i in at])
     assert np.abs(got[at] - want).max() <= 2e-12
+    for window, where in ((slice(0, points), slice(0, half)), (slice(-points, None), None)):
+        edge = exact_polyfit(md[window], order, deriv, dt)
+        rows = np.arange(points)[where] if where else np.arange(points - half, points)
+        fitted = got[window][rows]
+        assert np.abs(fitted - edge[rows]).max() <= 2e-12  # SciPy's: off by up to 1.5e-11
+
+
+def exact_polyfit(values: np.ndarray, order: int, deriv: int, delta: float) -> np.ndarray:
+    """The ``deriv``-th derivative (sample interval ``delta``) of the least-squares
+    polynomial of degree ``order`` through ``values`` at their positions 0, 1, …, solved in
+    exact rational arithmetic, at each position (as floats)."""
+    xs = [Fraction(x) for x in range(values.size)]
+    ys = [Fraction(float(y)) for y in values]
+    size = order + 1
+    rows = [[sum(x ** (i + j) for x in xs) for j in range(size)] for i in range(size)]
+    for i in range(size):
+        rows[i].append(sum(y * x**i for x, y in zip(xs, ys, strict=True)))
+    for c in range(size):
+        for r in range(size):
+            if r != c:
+                f = rows[r][c] / rows[c][c]
+                rows[r] = [a - f * b for a, b in zip(rows[r], rows[c], strict=True)]
+    coeffs = [rows[i][size] / rows[i][i] for i in range(size)]
+    scale = Fraction(delta) ** deriv
+    out = [
+        sum(coeffs[i] * math.perm(i, deriv) * x ** (i - deriv) for i in range(deriv, size)) / scale
+        for x in xs
+    ]
+    return np.array([float(v) for v in out])
 
 
 @pytest.mark.parametrize("taps", [101, 201])

@@ -126,18 +126,20 @@ def savgol_filter(
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
     out = _through_steps(values, savgol_coeffs(points, order, deriv, delta), deriv)
     half = points // 2
-    position = np.arange(points, dtype=np.float64)
-    fits = ((slice(0, points), slice(0, half)), (slice(-points, None), None))
-    for (window, where), fitted in zip(fits, ends, strict=True):
+    scale = max(half, 1)
+    position = (np.arange(points, dtype=np.float64) - half) / scale  # [−1, 1], as the taps
+    fits = ((slice(0, points), slice(0, half)), (slice(-points, None), slice(points - half, None)))
+    for (window, at), fitted in zip(fits, ends, strict=True):
         if not fitted:
             continue
-        poly = np.asarray(np.polyfit(position, values[window], order), dtype=np.float64)
+        # about the window's middle value: a fit of kilometres of MD rounded relative to
+        # their variation, not to kilometres
+        centre = float(values[window][half])
+        poly = np.asarray(np.polyfit(position, values[window] - centre, order), np.float64)
         if deriv:
             poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)
-        if where is None:  # the last half window
-            out[values.size - half :] = np.polyval(poly, position[points - half :]) / delta**deriv
-        else:
-            out[where] = np.polyval(poly, position[:half]) / delta**deriv
+        fit = np.polyval(poly, position[at]) / (delta * scale) ** deriv
+        out[window][at] = fit + centre if deriv == 0 else fit
     return out
 
 
