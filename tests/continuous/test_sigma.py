@@ -13,6 +13,8 @@ from pipeline.continuous.sigma import (
     GyroNoise,
     InclinationNoise,
     RunGeometry,
+    _markov_kernel,
+    _StationRows,
     azimuth_budget,
     inclination_sigma,
 )
@@ -131,3 +133,51 @@ def test_inclination_sigma_matches_filtered_noise() -> None:
     accel = savgol_filter(rng.normal(0.0, sigma_odo, 400_000), points, 3, deriv=2, delta=dt)
     measured = np.std(accel[points:-points]) / noise.gravity  # δI = sin I·δa/g at I = 90°
     assert measured == pytest.approx(predicted, rel=0.02)
+
+
+@pytest.mark.skipif(
+    np.finfo(np.longdouble).eps == np.finfo(np.float64).eps,
+    reason="the reference needs a long double wider than float64",
+)
+@pytest.mark.parametrize("closed", [True, False], ids=["closure", "free"])
+def test_station_rows_forms_equal_the_explicit_matrices_near_the_closing_stop(
+    closed: bool,
+) -> None:
+    """The rows' products and forms (linear, ARW's diagonal, the Markov kernel's quadratic)
+    against the (stations, cells) matrix a[k, j] = Φ_k − c_k before station k, −c_k after,
+    multiplied out in long double: within 1e-15 of each form's largest entry, and each
+    station's variance within 5e-15 relative (1e-12 for the kernel's) — also a cell before
+    the closing stop, where Φ_k ≈ c_k, and where sums of the whole less those before a
+    station cancelled to 2e-13, 1e-13 and 5e-11 of its variance."""
+    rng = np.random.default_rng(5)
+    cells = 700
+    mid = np.sort(rng.uniform(0.0, 1000.0, cells))
+    g, d = rng.normal(1.0, 0.3, cells), rng.uniform(0.5, 1.5, cells)
+    before = np.array([0, 3, 100, 350, 350, 690, 699, 700])
+    phi_t = 2.0
+    phi = phi_t * before / cells + rng.normal(0.0, 1e-3, before.size)
+    phi[-1] = phi_t
+    closure = phi_t * before / cells if closed else np.zeros(before.size)
+    rows = _StationRows(phi, closure, before, cells)
+    wide = np.longdouble
+    a = np.zeros((before.size, cells), dtype=wide)
+    for k, n in enumerate(before):
+        a[k, :n] = wide(phi[k]) - wide(closure[k])
+        a[k, n:] = -wide(closure[k])
+    kernel = np.exp(-np.abs(mid[:, None].astype(wide) - mid[None, :].astype(wide)) / wide(50.0))
+    gw = g.astype(wide)
+    cases = [
+        (rows.linear(g), a @ gw, 5e-15),
+        (rows.diagonal(d), (a * d.astype(wide)) @ a.T, 5e-15),
+        (
+            rows.quadratic(g, mid, _markov_kernel(50.0)),
+            a @ (gw[:, None] * kernel * gw) @ a.T,
+            1e-12,
+        ),
+    ]
+    for got, want, bound in cases:
+        want = np.asarray(want)
+        assert np.abs(got - want).max() <= 1e-15 * np.abs(want).max()
+        variance = (np.diag(got), np.diag(want)) if want.ndim == 2 else (got, want)
+        error = np.abs(variance[0] - variance[1])
+        assert (error <= bound * np.abs(variance[1])).all()

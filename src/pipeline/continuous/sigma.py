@@ -315,11 +315,14 @@ def azimuth_budget(
 
 @dataclass(frozen=True)
 class _StationRows:
-    """The stations' rows over the budget's cells, ``a[k, j] = Φ_k·[j < n_k] − c_k``: a
-    rate error's integral up to station k (its ``n_k`` cells before it) less the closure's
-    share ``c_k = w_k·Φ_T`` of the whole. Its products with cell vectors and its quadratic
-    forms by prefix sums over the cells: O(cells + stations²) (the quadratic forms O(cells² +
-    cells·stations)), the (stations, cells) matrix never made."""
+    """The stations' rows over the budget's cells, ``a[k, j] = u_k = Φ_k − c_k`` before the
+    station (its ``n_k`` cells) and ``v_k = −c_k`` after it: a rate error's integral up to
+    station k less the closure's share ``c_k = w_k·Φ_T`` of the whole. Its products with
+    cell vectors and its quadratic forms by sums over the cells before and after each
+    station: O(cells + stations²) (the quadratic forms O(cells² + cells·stations)), the
+    (stations, cells) matrix never made. The sums after a station are taken as such (from
+    the end), not as the whole less those before: near the closing stop (Φ_k ≈ c_k, few
+    cells after) a difference of the whole's sums would cancel to a few ε of them."""
 
     phi: FloatArray
     """Φ at each station"""
@@ -329,18 +332,29 @@ class _StationRows:
     """cells before each station"""
     cells: int
 
+    @property
+    def _u(self) -> FloatArray:
+        return self.phi - self.closure
+
     def linear(self, g: FloatArray) -> FloatArray:
-        """``a @ g``: ``Φ_k·G(n_k) − c_k·G(all)`` with G the running sum of ``g`` (per cell)."""
-        total = _running(g)
-        out: FloatArray = self.phi * total[self.before] - self.closure * total[-1]
+        """``a @ g``: ``u_k·G(before n_k) + v_k·G(from n_k)``, the running sums of ``g``
+        (per cell) from the start and from the end."""
+        head, tail = _running(g), _running(g[::-1])[::-1]
+        out: FloatArray = self._u * head[self.before] - self.closure * tail[self.before]
         return out
 
     def diagonal(self, d: FloatArray) -> FloatArray:
-        """``a·diag(d)·aᵀ`` (``d ≥ 0`` per cell): its block sums are D(min(n_k, n_l)) and
-        the like, D the running sum of d — the lesser of D(n_k) and D(n_l), D not
-        decreasing."""
-        at = _running(d)[np.append(self.before, self.cells)]
-        return self._form(np.minimum.outer(at, at))
+        """``a·diag(d)·aᵀ`` (``d ≥ 0`` per cell): the block sums over the cells before both
+        stations, D(min(n_k, n_l)), after both, T(max(n_k, n_l)), and between them (before
+        k, after l), D(n_k) − D(n_l) where n_k > n_l — D and T the running sums of d from
+        the start and from the end."""
+        head = _running(d)[self.before]
+        tail = _running(d[::-1])[::-1][self.before]
+        between = np.subtract.outer(head, head)
+        np.maximum(between, 0.0, out=between)
+        # D not decreasing, T not increasing: D(min(n_k, n_l)) and T(max(n_k, n_l)) are
+        # the lesser of each pair
+        return self._form(np.minimum.outer(head, head), between, np.minimum.outer(tail, tail))
 
     def quadratic(
         self,
@@ -349,42 +363,60 @@ class _StationRows:
         kernel: Callable[[FloatArray, FloatArray], FloatArray],
     ) -> FloatArray:
         """``a·diag(g)·K·diag(g)·aᵀ`` with ``K[i, j] = kernel(mid[i], mid[j])`` (``g`` and
-        ``mid`` per cell): the sums of ``g_i K_ij g_j`` over the cells before each pair of
-        stations, K made a block of rows at a time (a day-long run has millions of cells)
-        and summed along its rows, then down its columns."""
+        ``mid`` per cell; K symmetric): the sums of ``g_i K_ij g_j`` over the cells before
+        each pair of stations (:func:`_before_sums`), and after them — the same sums over
+        the cells in reverse order."""
         at = np.append(self.before, self.cells)
-        table = np.zeros((at.size, at.size))  # [k, l]: Σ over i < at_k, j < at_l
-        along = np.zeros((_KERNEL_ROWS, self.cells + 1))  # [i, j]: Σ over j' < j
-        down = np.empty((_KERNEL_ROWS + 1, at.size))  # [r, l]: Σ over i < lo + r, j < at_l
-        down[0] = 0.0
-        for lo in range(0, self.cells, _KERNEL_ROWS):
-            hi = min(lo + _KERNEL_ROWS, self.cells)
-            block = kernel(mid[lo:hi, None], mid[None, :])
-            block *= g[lo:hi, None]
-            block *= g[None, :]
-            np.cumsum(block, axis=1, out=along[: hi - lo, 1:])
-            np.cumsum(along[: hi - lo, at], axis=0, out=down[1 : hi - lo + 1])
-            down[1 : hi - lo + 1] += down[0]
-            here = np.flatnonzero((at >= lo) & (at <= hi))
-            table[here] = down[at[here] - lo]
-            down[0] = down[hi - lo]
-        return self._form(table)
+        before = _before_sums(g, mid, kernel, at)
+        backward = np.ascontiguousarray(g[::-1]), np.ascontiguousarray(mid[::-1])
+        after = _before_sums(*backward, kernel, self.cells - at[:-1])
+        between = before[:-1, -1:] - before[:-1, :-1]  # before k, after l
+        return self._form(before[:-1, :-1], between, after)
 
-    def _form(self, table: FloatArray) -> FloatArray:
-        """The form from its block sums ``table[k, l]`` over cells before ``at_k`` and
-        ``at_l`` (the last at: all cells): ``ΦΦᵀ∘P − Φ(c∘P(·, all))ᵀ − … + ccᵀ·P(all, all)``.
-        Near the closing stop (Φ_k ≈ c_k) its terms cancel: an entry is within ≈ 4ε of the
-        part's largest term (a part's variance at the last station −6e-16 of its largest
-        where it is 0; the matrix rows (Φ_k − c_k) formed first did not cancel) — far below
-        the end stop's own variance, which dominates there."""
-        inner, edge, whole = table[:-1, :-1], table[:-1, -1], table[-1, -1]
-        out: FloatArray = np.multiply.outer(self.phi, self.phi)
-        out *= inner
-        term = np.multiply.outer(self.phi * edge, self.closure)
-        out -= term
-        out -= np.multiply.outer(self.closure, self.phi * table[-1, :-1], out=term)
-        out += np.multiply.outer(whole * self.closure, self.closure, out=term)
+    def _form(self, before: FloatArray, between: FloatArray, after: FloatArray) -> FloatArray:
+        """The form from its block sums over the cells before stations k and l
+        (``before[k, l]``), before k and after l (``between[k, l]``; after k and before l is
+        its transpose, K symmetric), and after both (``after[k, l]``):
+        ``uuᵀ∘before + uvᵀ∘between + (uvᵀ∘between)ᵀ + vvᵀ∘after``, v = −c."""
+        u = self._u
+        out: FloatArray = np.multiply.outer(u, u)
+        out *= before
+        cross = np.multiply.outer(u, -self.closure)
+        cross *= between
+        out += cross
+        out += cross.T
+        cross = np.multiply.outer(self.closure, self.closure, out=cross)
+        cross *= after
+        out += cross
         return out
+
+
+def _before_sums(
+    g: FloatArray,
+    mid: FloatArray,
+    kernel: Callable[[FloatArray, FloatArray], FloatArray],
+    at: NDArray[np.intp],
+) -> FloatArray:
+    """``[k, l]``: the sum of ``g_i K_ij g_j`` over the cells ``i < at_k``, ``j < at_l``
+    (``at`` not decreasing), K made a block of rows at a time (a day-long run has millions
+    of cells) and summed along its rows, then down its columns."""
+    cells = g.size
+    table = np.zeros((at.size, at.size))
+    along = np.zeros((_KERNEL_ROWS, cells + 1))  # [i, j]: Σ over j' < j
+    down = np.empty((_KERNEL_ROWS + 1, at.size))  # [r, l]: Σ over i < lo + r, j < at_l
+    down[0] = 0.0
+    for lo in range(0, cells, _KERNEL_ROWS):
+        hi = min(lo + _KERNEL_ROWS, cells)
+        block = kernel(mid[lo:hi, None], mid[None, :])
+        block *= g[lo:hi, None]
+        block *= g[None, :]
+        np.cumsum(block, axis=1, out=along[: hi - lo, 1:])
+        np.cumsum(along[: hi - lo, at], axis=0, out=down[1 : hi - lo + 1])
+        down[1 : hi - lo + 1] += down[0]
+        here = np.flatnonzero((at >= lo) & (at <= hi))
+        table[here] = down[at[here] - lo]
+        down[0] = down[hi - lo]
+    return table
 
 
 _KERNEL_ROWS = 256
