@@ -91,7 +91,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -391,11 +391,18 @@ def verdict(runs: list[Run]) -> str:
     )
 
 
-def only_changed(
-    manifest: Path, out: Path, workers: int, passes: int, log: Path, wells: int
-) -> list[Run]:
-    """A full batch, then ``passes`` ``--only-changed`` batches of the unchanged wells into
-    the same ``out`` (module docstring), each printed; returns the ``--only-changed`` runs."""
+def after_full(
+    manifest: Path,
+    out: Path,
+    workers: int,
+    passes: int,
+    log: Path,
+    flags: Callable[[int], list[str]],
+    expect: tuple[str, ...] = ("done", "rejected"),
+) -> tuple[Run, list[Run]]:
+    """A full batch, then ``passes`` batches with ``flags(k)`` (k = 1…) into the same
+    ``out``, each after the files settled (their keys and hashes can be remembered) and
+    printed; returns the full batch and the passes."""
     from pipeline.batch.filestate import SETTLED_S
 
     full = batch(manifest, out, workers, log)
@@ -403,9 +410,20 @@ def only_changed(
     print(row(full, None, "full"), flush=True)
     runs = []
     for k in range(1, passes + 1):
-        time.sleep(SETTLED_S + 0.5)  # the files settled: their keys can be remembered
-        runs.append(batch(manifest, out, workers, log, ["--only-changed"], ("skipped",)))
+        time.sleep(SETTLED_S + 0.5)
+        runs.append(batch(manifest, out, workers, log, flags(k), expect))
         print(row(runs[-1], None, str(k)), flush=True)
+    return full, runs
+
+
+def only_changed(
+    manifest: Path, out: Path, workers: int, passes: int, log: Path, wells: int
+) -> list[Run]:
+    """A full batch, then ``passes`` ``--only-changed`` batches of the unchanged wells into
+    the same ``out`` (module docstring), each printed; returns the ``--only-changed`` runs."""
+    _, runs = after_full(
+        manifest, out, workers, passes, log, lambda k: ["--only-changed"], ("skipped",)
+    )
     if any(r.wells != wells for r in runs):
         raise SystemExit(f"not every well was skipped as unchanged (its log: {log})")
     stat_only = [r.driver_cpu_s / r.wells * 1e3 for r in runs[1:]] or [
@@ -438,17 +456,14 @@ def reprocess(manifest: Path, out: Path, workers: int, passes: int, log: Path) -
     runs again, its inputs unchanged) into the same ``out``, each printed; returns them. The
     workers of a reprocessing batch take each input's SHA-256 from the ledger (its stat key
     unchanged) instead of reading the file again."""
-    from pipeline.batch.filestate import SETTLED_S
-
-    full = batch(manifest, out, workers, log)
-    print(HEADER.replace("workers", "   pass", 1), flush=True)
-    print(row(full, None, "full"), flush=True)
-    runs = []
-    for k in range(1, passes + 1):
-        time.sleep(SETTLED_S + 0.5)  # the files settled: their hashes can be trusted
-        flags = ["--only-changed", "--set", f"trajectory.vs_azimuth={10.0 * k}"]
-        runs.append(batch(manifest, out, workers, log, flags))
-        print(row(runs[-1], None, str(k)), flush=True)
+    full, runs = after_full(
+        manifest,
+        out,
+        workers,
+        passes,
+        log,
+        lambda k: ["--only-changed", "--set", f"trajectory.vs_azimuth={10.0 * k}"],
+    )
     per_well = [r.worker_cpu_s / r.wells * 1e3 for r in runs]
     first = full.worker_cpu_s / full.wells * 1e3
     print(
