@@ -44,21 +44,28 @@ def test_convolve_same_matches_scipy_rows_and_series() -> None:
     np.testing.assert_allclose(convolve_same(rows, kernel), want, atol=1e-12)
 
 
+def normal_solution(xs: list[Fraction], order: int, rhs: list[Fraction]) -> list[Fraction]:
+    """The solution of the normal equations of a polynomial of degree ``order`` at the
+    positions ``xs`` (Σ x^(i+j)) for the right-hand side ``rhs``, by Gauss–Jordan in exact
+    rational arithmetic (the equations are positive definite)."""
+    size = order + 1
+    rows = [[sum(x ** (i + j) for x in xs) for j in range(size)] + [rhs[i]] for i in range(size)]
+    for c in range(size):
+        for r in range(size):
+            if r != c:
+                f = rows[r][c] / rows[c][c]
+                rows[r] = [a - f * b for a, b in zip(rows[r], rows[c], strict=True)]
+    return [rows[i][size] / rows[i][i] for i in range(size)]
+
+
 def exact_savgol(points: int, order: int, deriv: int, delta: float) -> np.ndarray:
     """The Savitzky–Golay taps (reversed, as a convolution's) in exact rational arithmetic,
     then as long doubles."""
     half = points // 2
     xs = [Fraction(x) for x in range(half, half - points, -1)]
     size = order + 1
-    rows = [[sum(x ** (i + j) for x in xs) for j in range(size)] for i in range(size)]
-    for i in range(size):
-        rows[i].append(Fraction(math.factorial(deriv)) if i == deriv else Fraction(0))
-    for c in range(size):  # Gauss–Jordan: the normal equations are positive definite
-        for r in range(size):
-            if r != c:
-                f = rows[r][c] / rows[c][c]
-                rows[r] = [a - f * b for a, b in zip(rows[r], rows[c], strict=True)]
-    a = [rows[i][size] / rows[i][i] for i in range(size)]
+    rhs = [Fraction(math.factorial(deriv)) if i == deriv else Fraction(0) for i in range(size)]
+    a = normal_solution(xs, order, rhs)
     taps = [sum(a[i] * x**i for i in range(size)) for x in xs]
     exact = [np.longdouble(t.numerator) / np.longdouble(t.denominator) for t in taps]
     return np.array(exact, dtype=np.longdouble) / np.longdouble(delta) ** deriv
@@ -98,15 +105,8 @@ def exact_polyfit(values: np.ndarray, order: int, deriv: int, delta: float) -> n
     xs = [Fraction(x) for x in range(values.size)]
     ys = [Fraction(float(y)) for y in values]
     size = order + 1
-    rows = [[sum(x ** (i + j) for x in xs) for j in range(size)] for i in range(size)]
-    for i in range(size):
-        rows[i].append(sum(y * x**i for x, y in zip(xs, ys, strict=True)))
-    for c in range(size):
-        for r in range(size):
-            if r != c:
-                f = rows[r][c] / rows[c][c]
-                rows[r] = [a - f * b for a, b in zip(rows[r], rows[c], strict=True)]
-    coeffs = [rows[i][size] / rows[i][i] for i in range(size)]
+    rhs = [sum(y * x**i for x, y in zip(xs, ys, strict=True)) for i in range(size)]
+    coeffs = normal_solution(xs, order, rhs)
     scale = Fraction(delta) ** deriv
     out = [
         sum(coeffs[i] * math.perm(i, deriv) * x ** (i - deriv) for i in range(deriv, size)) / scale
