@@ -31,9 +31,10 @@ class PlannedStage:
     """input port → (upstream stage id, output port)"""
     persist: tuple[str, ...]
     passes: Mapping[str, int] = field(default_factory=dict)
-    """the certain passes over each streamed output: the stages whose required input it is,
-    and ``persist`` (an optional input may go unread — validity's samples without
-    magnetometers); the runner keeps a pass read by several (:func:`~pipeline.ports.kept`)"""
+    """the passes over each streamed output: the stages wired to it and ``persist``; the
+    runner keeps a pass read by several (:func:`~pipeline.ports.kept`), and lets it go after
+    its last reader even where one made no pass (an optional input may go unread —
+    validity's samples without magnetometers)"""
 
 
 @dataclass(frozen=True)
@@ -110,12 +111,7 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     order = _order(wiring, positions, source, problems)
     if problems:
         raise SpecError(problems)
-    readers = Counter(
-        src
-        for consumer, wired in wiring.items()
-        for port, src in wired.items()
-        if port not in defs[consumer][0].optional_inputs
-    )
+    readers = Counter(src for wired in wiring.values() for src in wired.values())
     planned = []
     for stage_id in order:
         stage = spec.stages[index[stage_id]]

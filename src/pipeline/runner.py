@@ -56,7 +56,7 @@ from pipeline.registry import (
     WriterDef,
 )
 from pipeline.reporting import ReportDef
-from pipeline.streams import Port, TableStream, as_stream, as_table
+from pipeline.streams import Port, TableStream, as_stream, as_table, release
 from pipeline.well import WellMetadata, well_of
 
 T = TypeVar("T")
@@ -236,12 +236,15 @@ def run_plan(
         staged: list[Path] = []
         ports: dict[tuple[str, str], Port] = {}
         held = 0  # bytes of the passes kept (ports.kept: at most KEEP_BYTES a run)
+        last_readers = _last_readers(plan)
         checked = CheckedTables()
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
             if out_dir is None and not st.definition.outputs:
                 record.status = "skipped"  # it only writes files
+                for key in last_readers.get(st.id, ()):
+                    release(ports[key])
                 continue
             ins = _stage_inputs(plan, st, ports, record, checked)
             ctx = _Context(
@@ -264,6 +267,8 @@ def run_plan(
                     if value is not produced:
                         held += nbytes
                 ports[(st.id, port)] = value
+            for key in last_readers.get(st.id, ()):  # its pass kept for no later stage
+                release(ports[key])
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"
         if out_dir is None:
@@ -273,6 +278,8 @@ def run_plan(
             return RunResult(None, manifest, result, current, [])
         persisted = settled(lambda: _persist(plan, registry, ports, current, staging, out_dir))
         settled(lambda: _drain(plan, ports, records))
+        for value in ports.values():
+            release(value)
         written = staged + persisted
         clashes = {p.name for p in written if written.count(p) > 1} | (
             {MANIFEST} & {p.name for p in written}
@@ -520,6 +527,27 @@ def _check_contracts(
             raise exc.located(
                 pipeline=pipeline, stage=st.id, port=port, direction=direction
             ) from None
+
+
+def _last_readers(plan: Plan) -> dict[str, list[tuple[str, str]]]:
+    """Stage id → the streamed outputs (stage id, port) not persisted whose last reader it
+    is: a pass kept for them (:func:`~pipeline.ports.kept`) is let go once it has run (an
+    optional input may go unread, so the pass is not let go by the count of passes)."""
+    last: dict[tuple[str, str], str] = {}
+    for st in plan.stages:
+        for src in st.wiring.values():
+            last[src] = st.id
+    streamed = {
+        (st.id, port)
+        for st in plan.stages
+        for port in st.definition.streamed_outputs
+        if port not in st.persist
+    }
+    found: dict[str, list[tuple[str, str]]] = {}
+    for key, reader in last.items():
+        if key in streamed:
+            found.setdefault(reader, []).append(key)
+    return found
 
 
 def _checked_upstream(plan: Plan, st: PlannedStage, port: str) -> bool:

@@ -86,35 +86,53 @@ class TableStream:
         to its end keeps its batches, and the ``passes − 1`` passes after it yield them
         instead of reading the source again, the last of them letting each go as it passes
         on. Passes after those read the source again, as every pass does while none has run
-        to its end. What is held is one pass, from its first consumer to its last. Its
-        passes are read one after another (a run's stages, on one thread), not at once."""
-        held: list[pa.RecordBatch] | None = None
-        left = passes - 1  # passes still to be given the kept batches
-
-        def each() -> Iterator[pa.RecordBatch]:
-            nonlocal held, left
-            if held is not None:
-                left -= 1
-                if left:
-                    yield from held
-                    return
-                batches, held = held[::-1], None
-                while batches:
-                    yield batches.pop()
-                return
-            batches = []
-            for batch in self.passes():
-                if left:
-                    batches.append(batch)
-                yield batch
-            if left:
-                held = batches
-
-        return TableStream(self.schema, each, self.holds, self.nbytes)
+        to its end. What is held is one pass, from its first consumer to its last, or until
+        :func:`release` lets it go (a reader that made no pass). Its passes are read one
+        after another (a run's stages, on one thread), not at once."""
+        return TableStream(self.schema, KeptPasses(self.passes, passes), self.holds, self.nbytes)
 
     def read_all(self) -> pa.Table:
         """One pass concatenated into a table (for a consumer that needs it whole)."""
         return pa.Table.from_batches(list(self), schema=self.schema)
+
+
+class KeptPasses:
+    """The passes of a kept stream (:meth:`TableStream.kept`): ``source`` read once for
+    ``passes`` passes."""
+
+    def __init__(self, source: Callable[[], Iterator[pa.RecordBatch]], passes: int) -> None:
+        self.source = source
+        self.held: list[pa.RecordBatch] | None = None
+        self.left = passes - 1
+        """passes still to be given the kept batches"""
+
+    def __call__(self) -> Iterator[pa.RecordBatch]:
+        if self.held is not None:
+            self.left -= 1
+            if self.left:
+                yield from self.held
+                return
+            batches, self.held = self.held[::-1], None
+            while batches:
+                yield batches.pop()
+            return
+        batches = []
+        for batch in self.source():
+            if self.left:
+                batches.append(batch)
+            yield batch
+        if self.left:
+            self.held = batches
+
+    def release(self) -> None:
+        """Let the kept batches go: every later pass reads the source again."""
+        self.held, self.left = None, 0
+
+
+def release(value: Port) -> None:
+    """Let a kept stream's held batches go (:meth:`TableStream.kept`; others: nothing)."""
+    if isinstance(value, TableStream) and isinstance(value.passes, KeptPasses):
+        value.passes.release()
 
 
 Port: TypeAlias = "pa.Table | TableStream"
