@@ -149,7 +149,8 @@ class StoredRun:
 
 def series_stream(run: StoredRun) -> TableStream:
     """The full-rate series (:class:`ContinuousSeries`, degrees) read from the store a chunk
-    at a time on every pass."""
+    at a time on every pass; its ``nbytes`` the bytes a pass decodes to (fixed-width
+    columns), so that the runner keeps a pass read by several where it is small."""
     contract = ContinuousSeries.compiled()
     empty = {f.name: pa.array([], type=f.type) for f in contract.schema()}
     schema = contract.make_table(empty, north_reference="true").schema
@@ -171,7 +172,8 @@ def series_stream(run: StoredRun) -> TableStream:
             )
             yield from table.to_batches()
 
-    return TableStream(schema, batches)
+    row_bytes = sum(f.type.byte_width for f in schema)
+    return TableStream(schema, batches, nbytes=run.size * row_bytes)
 
 
 def azimuth_degrees(azi: FloatArray) -> FloatArray:
