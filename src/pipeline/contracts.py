@@ -316,6 +316,63 @@ class BatchChecker:
             raise ContractViolation(exc.contract, failures, source=exc.source) from None
 
 
+@cache
+def implies(stronger: type[TableContract], weaker: type[TableContract]) -> bool:
+    """Whether every table that passes ``stronger`` passes ``weaker``, told by their rules:
+    each of ``weaker``'s columns is one of ``stronger``'s, of its type, unit and north
+    reference, required and complete where ``weaker`` needs it, held to the same or
+    narrower rules (finite, bounds, order within the same groups or the whole table). A
+    contract with checks of its own (a ``validate_table`` of its own) implies and is
+    implied by itself only."""
+    if stronger is weaker:
+        return True
+    own = TableContract.validate_table.__func__  # type: ignore[attr-defined]
+    if {stronger.validate_table.__func__, weaker.validate_table.__func__} != {own}:  # type: ignore[attr-defined]
+        return False
+    strong, weak = stronger.compiled(), weaker.compiled()
+    by_name = {c.name: c for c in strong.columns}
+    ordered = any(c.monotonic for c in weak.columns)
+    if ordered and strong.group_by not in (None, weak.group_by):
+        return False
+    return all(w.name in by_name and _column_implies(by_name[w.name], w) for w in weak.columns)
+
+
+def _column_implies(s: ColumnSpec, w: ColumnSpec) -> bool:
+    """Whether a column that keeps ``s``'s rules keeps ``w``'s (:func:`implies`)."""
+    if s.type != w.type or (w.unit is not None and s.unit != w.unit):
+        return False
+    if (w.required and not s.required) or (s.nullable and not w.nullable):
+        return False
+    if w.north_reference and not s.north_reference:
+        return False
+    if w.finite and not s.finite:
+        return False
+    if s.undefined_at_vertical and not w.undefined_at_vertical:
+        return False
+    if w.ge is not None and not (
+        (s.ge is not None and s.ge >= w.ge) or (s.gt is not None and s.gt >= w.ge)
+    ):
+        return False
+    if w.gt is not None and not (
+        (s.gt is not None and s.gt >= w.gt) or (s.ge is not None and s.ge > w.gt)
+    ):
+        return False
+    if w.le is not None and not (
+        (s.le is not None and s.le <= w.le) or (s.lt is not None and s.lt <= w.le)
+    ):
+        return False
+    if w.lt is not None and not (
+        (s.lt is not None and s.lt <= w.lt) or (s.le is not None and s.le < w.lt)
+    ):
+        return False
+    if w.monotonic is not None:
+        if s.monotonic is None or (w.monotonic == "strict" and s.monotonic != "strict"):
+            return False
+        if w.min_step is not None and (s.min_step is None or s.min_step < w.min_step):
+            return False
+    return True
+
+
 def _check_column(
     spec: ColumnSpec, table: pa.Table, groups: pa.ChunkedArray | None
 ) -> list[RuleFailure]:

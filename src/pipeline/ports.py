@@ -11,7 +11,7 @@ from typing import Generic, TypeVar
 
 import pyarrow as pa
 
-from pipeline.contracts import TableContract
+from pipeline.contracts import TableContract, implies
 from pipeline.registry import WriterDef
 from pipeline.streams import KEEP_BYTES, Port, TableStream, as_table
 from pipeline.well import WellMetadata, attach, attached
@@ -96,18 +96,21 @@ def write_port(writer: WriterDef, value: Port, path: Path, well: WellMetadata) -
 
 class CheckedTables:
     """The tables of a run already checked, and the contracts each passed: a table is
-    immutable, so checking it again against the same contract (for its next consumer, or
-    its producer's output contract as a consumer's input) proves nothing."""
+    immutable, so checking it again against the same contract, or one the contracts it
+    passed imply (for its next consumer, or its producer's output contract as a consumer's
+    input), proves nothing."""
 
     def __init__(self) -> None:
         self._passed: dict[int, tuple[pa.Table, set[type[TableContract]]]] = {}
         """id → the table (held, so that its id is not reused) and its contracts"""
 
     def first(self, table: pa.Table, contract: type[TableContract]) -> bool:
-        """True the first time ``table`` is checked against ``contract``: it is then
-        counted as checked (a failing check ends the run)."""
+        """True the first time ``table`` is checked against ``contract`` or a contract it
+        implies (:func:`~pipeline.contracts.implies`: a trajectory with its uncertainty
+        passes the trajectory's rules): it is then counted as checked (a failing check ends
+        the run)."""
         _, passed = self._passed.setdefault(id(table), (table, set()))
-        if contract in passed:
+        if any(implies(held, contract) for held in passed):
             return False
         passed.add(contract)
         return True

@@ -10,10 +10,19 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from pipeline.contracts import TableContract, column
+from pipeline.contracts import TableContract, column, implies
 from pipeline.errors import ContractViolation, RuleFailure
+from pipeline.ports import CheckedTables
 from pipeline.streams import TableStream
-from pipeline.tables import MIN_COURSE_M, RawSamples, Stations, Trajectory
+from pipeline.tables import (
+    MIN_COURSE_M,
+    AnyTable,
+    LogTable,
+    PositionReadings,
+    RawSamples,
+    Stations,
+    Trajectory,
+)
 from tests_support import ROOT, gyropipe_cli
 
 
@@ -350,3 +359,62 @@ def test_a_step_across_batches_is_refused_at_its_row_and_line(step: float, rule:
         list(RawSamples.validate_stream(TableStream.from_table(samples, 3)))
     (f,) = info.value.failures
     assert (f.column, f.rule, f.examples[0][0], f.lines) == ("time", rule, 3, (13,))
+
+
+class Narrower(Sample):
+    """Sample's rules, narrower: inc ≤ 90, gap complete, md by at least 1 m, an extra
+    column."""
+
+    inc: float = column(unit="deg", ge=0, le=90, description="inclination")
+    gap: float = column(unit="m", gt=0, description="complete")
+    md: float = column(unit="m", ge=0, monotonic="strict", min_step=1.0, description="depth")
+    extra: float = column(unit="m", description="not Sample's")
+
+
+class Looser(Sample):
+    inc: float = column(unit="deg", ge=0, le=360, description="inclination")
+
+
+class Ungrouped(Narrower):
+    group_by = "other"
+
+
+def test_a_contract_implies_another_whose_rules_its_own_imply() -> None:
+    """``implies``: each of the weaker contract's columns in the stronger one with the same
+    type, unit and north reference and the same or narrower rules; a table that passes the
+    stronger passes the weaker (checked here), not the other way round."""
+    assert implies(Narrower, Sample) and implies(Sample, Sample)
+    assert not implies(Sample, Narrower)  # wider range, gap nullable, no extra column
+    assert not implies(Looser, Sample)  # inc up to 360
+    assert not implies(Ungrouped, Sample)  # order within other groups than Sample's
+    assert implies(Trajectory, Stations) and not implies(Stations, Trajectory)
+    assert not implies(RawSamples, Stations)
+    good = Narrower.compiled().make_table(
+        {**{k: v for k, v in table().to_pydict().items() if k != "gap"}, "gap": [1.0] * 4,
+         "extra": [0.0] * 4},
+        north_reference="true",
+    )  # fmt: skip
+    Narrower.validate_table(good)
+    Sample.validate_table(good)
+
+
+def test_a_contract_with_checks_of_its_own_implies_only_itself() -> None:
+    """LogTable checks more than its columns' rules (``validate_table`` of its own): no
+    other contract implies it, and it implies no other."""
+
+    class Log(LogTable):
+        pass
+
+    assert implies(LogTable, LogTable)
+    assert not implies(Log, LogTable) and not implies(LogTable, AnyTable)
+
+
+def test_a_table_is_not_checked_again_against_a_contract_its_checks_imply() -> None:
+    """The runner's checked tables: a table that passed Trajectory counts as checked for
+    Stations, not for a contract it has not passed (PositionReadings)."""
+    checked = CheckedTables()
+    t = table()
+    assert checked.first(t, Trajectory)
+    assert not checked.first(t, Trajectory) and not checked.first(t, Stations)
+    assert checked.first(t, PositionReadings)
+    assert checked.first(table(), Stations)  # another table
