@@ -31,10 +31,10 @@ class PlannedStage:
     """input port → (upstream stage id, output port)"""
     persist: tuple[str, ...]
     passes: Mapping[str, int] = field(default_factory=dict)
-    """the passes over each streamed output: the stages wired to it and ``persist``; the
-    runner keeps a pass read by several (:func:`~pipeline.ports.kept`), and lets it go after
-    its last reader even where one made no pass (an optional input may go unread —
-    validity's samples without magnetometers)"""
+    """the passes over each streamed output: the stages wired to it (but where it is one of
+    their ``unread_inputs`` — validity's samples, read only with magnetometers) and
+    ``persist``; the runner keeps a pass read by several (:func:`~pipeline.ports.kept`),
+    and lets it go after the last stage wired to it even where that made no pass"""
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,12 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
     order = _order(wiring, positions, source, problems)
     if problems:
         raise SpecError(problems)
-    readers = Counter(src for wired in wiring.values() for src in wired.values())
+    readers = Counter(
+        src
+        for consumer, wired in wiring.items()
+        for port, src in wired.items()
+        if port not in defs[consumer][0].unread_inputs
+    )
     planned = []
     for stage_id in order:
         stage = spec.stages[index[stage_id]]

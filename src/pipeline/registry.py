@@ -182,6 +182,10 @@ class StageDef:
     optional_inputs: frozenset[str] = frozenset()
     streamed_inputs: frozenset[str] = frozenset()
     streamed_outputs: frozenset[str] = frozenset()
+    unread_inputs: frozenset[str] = frozenset()
+    """streamed inputs the stage may leave unread though wired (validity's samples, read
+    only with magnetometers): the plan does not count them as a pass to keep
+    (:attr:`~pipeline.graph.PlannedStage.passes`)"""
 
 
 class Claim(enum.IntEnum):
@@ -622,6 +626,7 @@ def _validate(item: object, expected: type) -> tuple[str, str]:
             ("optional inputs", item.optional_inputs, item.inputs),
             ("streamed inputs", item.streamed_inputs, item.inputs),
             ("streamed outputs", item.streamed_outputs, item.outputs),
+            ("unread inputs", item.unread_inputs, item.inputs),
         ):
             unknown = set(ports) - set(declared)
             if unknown:

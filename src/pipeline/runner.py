@@ -531,8 +531,8 @@ def _check_contracts(
 
 def _last_readers(plan: Plan) -> dict[str, list[tuple[str, str]]]:
     """Stage id → the streamed outputs (stage id, port) not persisted whose last reader it
-    is: a pass kept for them (:func:`~pipeline.ports.kept`) is let go once it has run (an
-    optional input may go unread, so the pass is not let go by the count of passes)."""
+    is: a pass kept for them (:func:`~pipeline.ports.kept`) is let go once it has run (a
+    stage may leave an input unread that the plan counted as a pass)."""
     last: dict[tuple[str, str], str] = {}
     for st in plan.stages:
         for src in st.wiring.values():

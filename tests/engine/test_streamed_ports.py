@@ -14,6 +14,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from pydantic import BaseModel
 
 from pipeline import ports
 from pipeline.errors import ContractViolation, InputFileError, StageError
@@ -214,23 +215,22 @@ SHARED = PIPELINE.split("  - id: validity")[0] + "  - id: copy" + PIPELINE.split
 ALONE = PIPELINE.split("  - id: validity")[0].replace("    persist: [samples]\n", "")
 """read → readings: one reader"""
 OPTIONAL = PIPELINE.split("  - id: copy")[0].replace("    persist: [samples]\n", "")
-"""read → readings, validity (whose samples are an optional input, read when it is wired):
-two readers"""
+"""read → readings, validity (whose samples it may leave unread: not counted): one reader"""
 
 
 @pytest.mark.parametrize(
     ("text", "larger", "reads"),
-    [(SHARED, False, 1), (SHARED, True, 3), (ALONE, False, 1), (OPTIONAL, False, 1)],
-    ids=["three-readers", "three-readers-too-large", "one-reader", "an-optional-reader"],
+    [(SHARED, False, 1), (SHARED, True, 3), (ALONE, False, 1), (OPTIONAL, False, 2)],
+    ids=["three-readers", "three-readers-too-large", "one-reader", "an-unread-input"],
 )
 def test_the_plan_keeps_a_pass_for_the_stages_that_read_it_again(
     tmp_path: Path, text: str, larger: bool, reads: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A streamed output read by several (readings, a copy, persisted; validity, whose
-    samples are an optional input) is read from its source once where it says it decodes to
-    at most KEEP_BYTES (the pass held from the first reader to the last, which lets it go),
-    else once per reader; one with a single reader is not kept (its batches go as they
-    pass)."""
+    """A streamed output read by several (readings, a copy, persisted) is read from its
+    source once where it says it decodes to at most KEEP_BYTES (the pass held from the first
+    reader to the last, which lets it go), else once per reader; one with a single reader
+    is not kept (its batches go as they pass; validity, which may leave its samples unread,
+    is no reader the plan counts: reading them, it reads them again)."""
     samples = survey()
     source = tmp_path / "samples.parquet"
     pq.write_table(samples, source)
@@ -241,7 +241,7 @@ def test_the_plan_keeps_a_pass_for_the_stages_that_read_it_again(
     result = run(tmp_path, registry_with(reader), text, source)
     batches = -(-samples.num_rows // ROWS)
     assert alive.made == reads * batches
-    held = text in (SHARED, OPTIONAL) and not larger
+    held = text == SHARED and not larger
     assert alive.peak == batches if held else alive.peak <= 3
     assert alive.now == 0 and result.manifest["stages"][0]["rows_out"] == {
         "samples": samples.num_rows
@@ -257,36 +257,63 @@ def test_the_plan_keeps_a_pass_for_the_stages_that_read_it_again(
 
 
 def test_a_kept_pass_goes_after_its_last_reader_though_it_made_no_pass(tmp_path: Path) -> None:
-    """Samples without magnetometers: validity, the last stage wired to them (an optional
-    input), reads none of them; the pass kept for it is let go once validity has run, not
-    held to the end of the run (a stage after it sees no batch alive)."""
-    samples = survey().drop_columns(["mag_x", "mag_y", "mag_z"])
+    """The samples wired to readings and to a stage that takes them as an optional input
+    (counted as a pass) but reads none of them: the pass kept after readings is let go once
+    that stage has run, not held to the end of the run (a stage after it sees no batch
+    alive); an optional input the stage reads is read from the kept pass (the MCAP export's
+    and the report's series)."""
+    samples = survey()
     source = tmp_path / "samples.parquet"
     pq.write_table(samples, source)
     alive = Alive()
     seen: list[int] = []
 
+    def ignoring(inputs: Mapping[str, Any], params: Any, ctx: StageContext) -> dict[str, Any]:
+        if params.reads:
+            list(inputs["samples"])
+        return {}
+
     def probe(inputs: Mapping[str, pa.Table], params: Any, ctx: StageContext) -> dict[str, Any]:
         seen.append(alive.now)
         return {}
 
-    stage = StageDef(
-        name="counting.probe",
-        func=probe,
-        description="records the batches alive",
-        inputs={"readings": AnyTable},
-    )
-    text = OPTIONAL + (
-        "  - id: probe\n    uses: counting.probe\n    inputs: {readings: readings.readings}\n"
-    )
-    reader = sized(counting_reader(alive), samples.nbytes)
-    run(tmp_path, registry_with(reader, stage), text, source)
+    class Reads(BaseModel):
+        reads: bool
+
+    stages = [
+        StageDef(
+            name="counting.ignoring",
+            func=ignoring,
+            description="may read its optional samples",
+            inputs={"samples": RawSamples},
+            optional_inputs=frozenset({"samples"}),
+            streamed_inputs=frozenset({"samples"}),
+            params=Reads,
+        ),
+        StageDef(
+            name="counting.probe",
+            func=probe,
+            description="records the batches alive",
+            inputs={"readings": AnyTable},
+        ),
+    ]
     batches = -(-samples.num_rows // ROWS)
-    assert alive.made == batches and alive.peak == batches  # one pass, kept after readings
-    assert seen == [0] and alive.now == 0
-    whole = position_readings(samples)
-    readings = pq.read_table(tmp_path / "out" / "readings.readings.parquet")
-    assert readings.select(whole.column_names).equals(whole)
+    for reads in (False, True):
+        alive, seen[:] = Alive(), []
+        text = ALONE + (
+            "  - id: ignoring\n    uses: counting.ignoring\n    inputs: {samples: read.samples}\n"
+            f"    with: {{reads: {str(reads).lower()}}}\n"
+            "  - id: probe\n    uses: counting.probe\n    inputs: {readings: readings.readings}\n"
+        )
+        reader = sized(counting_reader(alive), samples.nbytes)
+        out = tmp_path / str(reads)
+        out.mkdir()
+        run(out, registry_with(reader, *stages), text, source)
+        assert alive.made == batches and alive.peak == batches  # one pass, kept
+        assert seen == [0] and alive.now == 0
+        whole = position_readings(samples)
+        readings = pq.read_table(out / "out" / "readings.readings.parquet")
+        assert readings.select(whole.column_names).equals(whole)
 
 
 def test_the_passes_a_run_keeps_are_bounded_together(monkeypatch: pytest.MonkeyPatch) -> None:

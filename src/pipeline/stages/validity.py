@@ -99,6 +99,7 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             inputs={"readings": PositionReadings, "samples": RawSamples},
             optional_inputs=frozenset({"samples"}),
             streamed_inputs=frozenset({"samples"}),
+            unread_inputs=frozenset({"samples"}),  # read only with magnetometers
             outputs={"qc": QcResults, "summary": QcSummary, "readings": PositionReadings},
             params=QcOptions,
         )
