@@ -178,7 +178,7 @@ def _apsidal_run(
             if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
                 high, attitude = y, angles
                 inc_rate = (
-                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
+                    savgol_range(inc, lo, sa, sb, window, 2, (1,), dt)[0]
                     if smooth
                     else np.gradient(inc, t)[seg]
                 )

@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import tempfile
 import weakref
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import IO
 
@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
 
-from pipeline.continuous.filters import savgol_filter
+from pipeline.continuous.filters import savgol_filters
 from pipeline.earth.frames import FloatArray
 
 __all__ = [
@@ -239,19 +239,18 @@ def savgol_range(
     b: int,
     points: int,
     order: int,
-    deriv: int,
+    derivs: Sequence[int],
     dt: float,
-) -> FloatArray:
-    """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
+) -> list[FloatArray]:
+    """The Savitzky–Golay fit (each ``derivs``-th derivative, sample interval ``dt``) at rows
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same filter of the same samples (within its
     rounding: the FFT's blocks fall elsewhere in a chunk), and the edge polynomial is fitted
     to the same first or last ``points`` samples."""
     half = points // 2
     ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
-    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
-    out: FloatArray = fit[a - wlo : b - wlo]
-    return out
+    fits = savgol_filters(values, points, order, derivs, delta=dt, ends=ends)
+    return [fit[a - wlo : b - wlo] for fit in fits]
 
 
 class Interpolation:
