@@ -113,9 +113,7 @@ class ColumnStore:
         if self._on_disk:
             os.pwrite(column.fd, data.data, offset)
         else:
-            if offset > len(column.data):  # a gap reads as zeros, as a file's hole
-                column.data.extend(bytes(offset - len(column.data)))
-            column.data[offset : offset + data.nbytes] = data.data.cast("B")
+            _put(column.data, offset, data)
             self._held += grown
         column.rows = max(column.rows, start + data.size)
 
@@ -165,6 +163,20 @@ class ColumnStore:
             array = batch.column(batch.schema.get_field_index(name))
             self.append(name, np.asarray(array.to_numpy(zero_copy_only=False), np.float64))
         return int(batch.num_rows)
+
+
+def _put(buffer: bytearray, offset: int, data: NDArray[np.generic]) -> None:
+    """Copy ``data`` (contiguous) into ``buffer`` at byte ``offset``, the buffer extended
+    as needed (a gap reads as zeros, as a file's hole): one copy of the bytes (a slice
+    assignment from an array would copy them twice: to a bytearray, then in)."""
+    inside = min(max(len(buffer) - offset, 0), data.nbytes)  # bytes over existing ones
+    raw = data.reshape(-1).view(np.uint8)
+    if inside:
+        np.frombuffer(buffer, np.uint8, inside, offset)[:] = raw[:inside]
+    if inside < data.nbytes:
+        if offset > len(buffer):
+            buffer.extend(bytes(offset - len(buffer)))
+        buffer.extend(raw[inside:])
 
 
 def _column_file() -> IO[bytes]:
