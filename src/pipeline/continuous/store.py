@@ -371,8 +371,9 @@ def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> f
         for a, b in chunks(lo, hi - 1, rows):
             yield np.diff(store.floats(name, a, b + 1))
 
-    low = min(float(s.min()) for s in steps())
-    high = max(float(s.max()) for s in steps())
+    bounds = [(float(s.min()), float(s.max())) for s in steps()]  # one pass for both
+    low = min(b[0] for b in bounds)
+    high = max(b[1] for b in bounds)
     if not low < high:
         return low
     n_bins = 4096
