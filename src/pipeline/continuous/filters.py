@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from pipeline.earth.frames import FloatArray
 
-__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter"]
+__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter", "savgol_filters"]
 
 
 @functools.lru_cache(maxsize=64)
@@ -49,14 +50,21 @@ def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
     kilometres) goes through its steps instead (:func:`savgol_filter`)."""
     n, m = values.shape[-1], kernel.size
     if values.ndim == 1:
-        if m < _FFT_TAPS or n < _BLOCKS * _block_size(m):
-            summed: FloatArray = np.convolve(values, kernel, mode="full")[m // 2 : m // 2 + n]
-            return summed
-        return _blocked(values, kernel)
+        return _convolve_series(values, (kernel,))[0]
     size = 1 << (n + m - 2).bit_length()  # a power of two ≥ n + m − 1
     full = np.fft.irfft(np.fft.rfft(values, size) * _spectrum(kernel, size), size)
     out: FloatArray = full[..., m // 2 : m // 2 + n]
     return out
+
+
+def _convolve_series(values: FloatArray, kernels: Sequence[FloatArray]) -> list[FloatArray]:
+    """:func:`convolve_same` of a 1-D series with each of ``kernels`` (odd, all of one
+    length): by FFTs of blocks (the series' spectrum taken once for them all) where the
+    series is long and the kernels are too, else directly."""
+    n, m = values.size, kernels[0].size
+    if m < _FFT_TAPS or n < _BLOCKS * _block_size(m):
+        return [np.convolve(values, k, mode="full")[m // 2 : m // 2 + n] for k in kernels]
+    return _blocked(values, kernels)
 
 
 _FFT_TAPS = 64
@@ -71,26 +79,29 @@ def _block_size(taps: int) -> int:
     return 1 << (8 * (taps - 1)).bit_length()
 
 
-def _blocked(values: FloatArray, kernel: FloatArray) -> FloatArray:
-    """:func:`convolve_same` of a long 1-D series by overlap-add: the series cut into blocks
-    of ``size − m + 1`` samples, each convolved by one FFT of ``size`` (all blocks at once),
-    each block's tail of ``m − 1`` added to the next block's start (rounding: ≈ 1e-16 of
-    the values' largest magnitude)."""
-    n, m = values.size, kernel.size
+def _blocked(values: FloatArray, kernels: Sequence[FloatArray]) -> list[FloatArray]:
+    """:func:`convolve_same` of a long 1-D series with each of ``kernels`` (of one length
+    ``m``) by overlap-add: the series cut into blocks of ``size − m + 1`` samples, each
+    convolved by one FFT of ``size`` (all blocks at once; their spectrum shared by the
+    kernels), each block's tail of ``m − 1`` added to the next block's start (rounding:
+    ≈ 1e-16 of the values' largest magnitude)."""
+    n, m = values.size, kernels[0].size
     size = _block_size(m)
     step = size - m + 1
     count = -(-n // step)
     padded = np.zeros(count * step)
     padded[:n] = values
     spectrum = np.fft.rfft(padded.reshape(count, step), size)
-    spectrum *= _spectrum(kernel, size)
-    blocks = np.fft.irfft(spectrum, size)
-    full = np.zeros((count + 1) * step)
-    full[: count * step] = blocks[:, :step].ravel()
-    tails = full[step:].reshape(count, step)
-    tails[:, : m - 1] += blocks[:, step:]
-    out: FloatArray = full[m // 2 : m // 2 + n]
-    return out
+    outs = []
+    for kernel in kernels:
+        blocks = np.fft.irfft(spectrum * _spectrum(kernel, size), size)
+        full = np.empty((count + 1) * step)
+        full[: count * step].reshape(count, step)[...] = blocks[:, :step]
+        full[count * step :] = 0.0
+        tails = full[step:].reshape(count, step)
+        tails[:, : m - 1] += blocks[:, step:]
+        outs.append(full[m // 2 : m // 2 + n])
+    return outs
 
 
 def _spectrum(kernel: FloatArray, size: int) -> NDArray[np.complex128]:
@@ -122,9 +133,23 @@ def savgol_filter(
     last) half windows fitted so (not: left invalid, for a caller that discards them). A
     non-finite value spreads over a whole FFT block (2,048 samples for 201 taps), not only
     the taps' span: the samples reach a filter finite (their contract)."""
+    return savgol_filters(values, points, order, (deriv,), delta, ends)[0]
+
+
+def savgol_filters(
+    values: FloatArray,
+    points: int,
+    order: int,
+    derivs: Sequence[int],
+    delta: float = 1.0,
+    ends: tuple[bool, bool] = (True, True),
+) -> list[FloatArray]:
+    """:func:`savgol_filter` of one series for each derivative of ``derivs``, each to the bit
+    as alone: the steps, their spectrum and the end fits are taken once for them all."""
     if values.size < points:
         raise ValueError(f"{values.size} samples: the filter needs at least {points}")
-    out = _through_steps(values, savgol_coeffs(points, order, deriv, delta), deriv)
+    kernels = [savgol_coeffs(points, order, d, delta) for d in derivs]
+    outs = _through_steps(values, kernels, derivs)
     half = points // 2
     scale = max(half, 1)
     position = (np.arange(points, dtype=np.float64) - half) / scale  # [−1, 1], as the taps
@@ -135,38 +160,46 @@ def savgol_filter(
         # about the window's middle value: a fit of kilometres of MD rounded relative to
         # their variation, not to kilometres
         centre = float(values[window][half])
-        poly = np.asarray(np.polyfit(position, values[window] - centre, order), np.float64)
-        if deriv:
-            poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)
-        fit = np.polyval(poly, position[at]) / (delta * scale) ** deriv
-        out[window][at] = fit + centre if deriv == 0 else fit
-    return out
+        fitted_poly = np.asarray(np.polyfit(position, values[window] - centre, order), np.float64)
+        for out, deriv in zip(outs, derivs, strict=True):
+            poly = fitted_poly
+            if deriv:
+                poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)
+            fit = np.polyval(poly, position[at]) / (delta * scale) ** deriv
+            out[window][at] = fit + centre if deriv == 0 else fit
+    return outs
 
 
-def _through_steps(values: FloatArray, kernel: FloatArray, deriv: int) -> FloatArray:
-    """``convolve_same(values, kernel)`` at the samples at least half a kernel from either
-    end (the first and last half kernel: not valid), for a Savitzky–Golay ``kernel`` of the
-    ``deriv``-th derivative, taken from the steps ``Δv[n] = v[n] − v[n−1]`` by parts: with
-    the kernel less the unit impulse at its centre where ``deriv`` is 0, its taps sum to
-    zero (a fit reproduces a constant; its derivatives annihilate it), so
-    ``Σ_j k[j]·v[i+h−j] = Σ_j K[j]·Δv[i+h−j]`` with ``K`` their cumulative sums (the last,
-    zero, taken as exactly so), plus ``v[i]`` for the fit itself. The convolution's
-    rounding (≈ 1e-16 of the largest step by FFT) is then that of the steps, not of the
-    values: an odometer's MD of kilometres moves ~1 cm a sample, so this is more accurate
-    than the sums of products of the values taken directly (each rounded relative to
-    kilometres) and as fast as an FFT."""
-    taps = np.array(kernel, dtype=np.float64)
-    if deriv == 0:
-        taps[taps.size // 2] -= 1.0
-    cumulative = np.cumsum(taps)
-    cumulative[-1] = 0.0
+def _through_steps(
+    values: FloatArray, kernels: Sequence[FloatArray], derivs: Sequence[int]
+) -> list[FloatArray]:
+    """``convolve_same(values, kernel)`` for each Savitzky–Golay kernel of ``kernels`` (of
+    the derivatives ``derivs``; one length) at the samples at least half a kernel from
+    either end (the first and last half kernel: not valid), taken from the steps
+    ``Δv[n] = v[n] − v[n−1]`` by parts: with the kernel less the unit impulse at its centre
+    where the derivative is 0, its taps sum to zero (a fit reproduces a constant; its
+    derivatives annihilate it), so ``Σ_j k[j]·v[i+h−j] = Σ_j K[j]·Δv[i+h−j]`` with ``K``
+    their cumulative sums (the last, zero, taken as exactly so), plus ``v[i]`` for the fit
+    itself. The convolution's rounding (≈ 1e-16 of the largest step by FFT) is then that of
+    the steps, not of the values: an odometer's MD of kilometres moves ~1 cm a sample, so
+    this is more accurate than the sums of products of the values taken directly (each
+    rounded relative to kilometres) and as fast as an FFT."""
+    cumulative = []
+    for kernel, deriv in zip(kernels, derivs, strict=True):
+        taps = np.array(kernel, dtype=np.float64)
+        if deriv == 0:
+            taps[taps.size // 2] -= 1.0
+        summed = np.cumsum(taps)
+        summed[-1] = 0.0
+        cumulative.append(summed)
     steps = np.empty_like(values, dtype=np.float64)
     steps[0] = 0.0
     np.subtract(values[1:], values[:-1], out=steps[1:])
-    out = convolve_same(steps, cumulative)
-    if deriv == 0:
-        out += values
-    return out
+    outs = _convolve_series(steps, cumulative)
+    for out, deriv in zip(outs, derivs, strict=True):
+        if deriv == 0:
+            out += values
+    return outs
 
 
 class TimeGradient:

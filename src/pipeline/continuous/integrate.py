@@ -178,7 +178,7 @@ def _apsidal_run(
             if not two_axis:  # single axis: h from the gyro at misalignment δ = ψ, and İ
                 high, attitude = y, angles
                 inc_rate = (
-                    savgol_range(inc, lo, sa, sb, window, 2, 1, dt)
+                    savgol_range(inc, lo, sa, sb, window, 2, (1,), dt)[0]
                     if smooth
                     else np.gradient(inc, t)[seg]
                 )
@@ -330,6 +330,8 @@ def _unit(y: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatAr
     r = np.sqrt(x * x + y * y)
     with np.errstate(invalid="ignore", divide="ignore"):
         sin, cos = y / r, x / r
+    if r.size and float(r.min()) > 0 and float(r.max()) < np.inf:  # (NaN: neither)
+        return sin, cos, r
     odd = np.flatnonzero(~((r > 0) & (r < np.inf)))
     if odd.size:
         angle = np.arctan2(y[odd], x[odd])
@@ -369,11 +371,19 @@ def _integrate(
     held = vertical | misaligned
     held[rest] = False  # the stops themselves: tool at rest
     usable = ~held & ~vertical  # a stop at rest is not held, but Ȧ is still singular there
-    # Ȧ = const + by_cos·cos A + by_sin·sin A, from h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ
-    sin_u, cos_u = np.where(usable, sin_i, 1.0), np.where(usable, cos_d, 1.0)
-    const = np.where(usable, (os_ * sin_i - (y - inc_rate * sin_d) / cos_u) / sin_u, 0.0)
-    by_cos = np.where(usable, oc * cos_i / sin_u, 0.0)
-    by_sin = np.where(usable, -oc * sin_d / cos_u / sin_u, 0.0)
+    # Ȧ = const + by_cos·cos A + by_sin·sin A, from h = (y − r sin δ)/cos δ, r = −Ω cos φ sin A + İ;
+    # 0 where not usable (there sin I and cos δ taken as 1: finite, then zeroed)
+    off = ~usable
+    some_off = bool(off.any())
+    sin_u, cos_u = np.ascontiguousarray(sin_i), np.ascontiguousarray(cos_d)  # quicker divisors
+    if some_off:
+        sin_u, cos_u = np.array(sin_i), np.array(cos_d)
+        sin_u[off] = cos_u[off] = 1.0
+    const = (os_ * sin_i - (y - inc_rate * sin_d) / cos_u) / sin_u
+    by_cos = oc * cos_i / sin_u
+    by_sin = -oc * sin_d / cos_u / sin_u
+    if some_off:
+        const[off] = by_cos[off] = by_sin[off] = 0.0
 
     def rate(sin_a: FloatArray, cos_a: FloatArray, k: slice) -> tuple[FloatArray, FloatArray]:
         """Ȧ and ∂Ȧ/∂A (rad/s, 1/s) of the samples ``k`` at azimuths of sine ``sin_a`` and
@@ -423,6 +433,10 @@ def _heun_series(
     ``tolerance`` (rad)."""
     half = step / 2
     reach = float(np.sum(np.abs(step) * np.maximum(feedback[:-1], feedback[1:])))
+    # each gain 1 + Δt/2·(∂Ȧ_k + ∂Ȧ_next·(1 + Δt·∂Ȧ_k)) is within Δt·F·(1 + Δt·F/2) of 1 (F:
+    # the larger feedback of the step), so ∑|ln gain| < 2·reach: below a segment's span
+    # when reach is small (its every term too), and the gains' scan is not needed
+    bounded = reach < _SCAN_SPAN / 64
     growth = reach * float(np.exp(min(reach, 700.0)))
     # the azimuths' sines and cosines: once by the trig functions (a constant first guess:
     # of one value), then turned by each predictor step and Newton correction
@@ -451,7 +465,7 @@ def _heun_series(
         gain += df[:-1]
         gain *= half
         gain += 1.0
-        correction = _affine_recursion(gain, residual)
+        correction = _affine_recursion(gain, residual, bounded)
         azi[1:] += correction
         largest = float(max(np.max(correction), -np.min(correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
@@ -463,12 +477,17 @@ def _heun_series(
     )
 
 
-def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
+def _affine_recursion(gain: FloatArray, forcing: FloatArray, bounded: bool = False) -> FloatArray:
     """``x_1 … x_n`` of ``x_{k+1} = gain_k·x_k + forcing_k`` from ``x_0 = 0``: within a
     segment ``x = P·(x_start + cumsum(forcing/P))`` with P the running product of the gains,
-    segments cut where the gains' log-variation reaches ``_SCAN_SPAN`` (P stays in range)."""
-    least, most = float(np.min(gain)), float(np.max(gain))
-    if least > 0 and gain.size * max(np.log(most), -np.log(least)) < _SCAN_SPAN / 2:
+    segments cut where the gains' log-variation reaches ``_SCAN_SPAN`` (P stays in range;
+    ``bounded``: the gains positive and their log-variation known to be below that, one
+    segment without a scan)."""
+    if bounded:
+        cuts = np.empty(0, dtype=np.intp)
+    elif (least := float(np.min(gain))) > 0 and gain.size * max(
+        np.log(float(np.max(gain))), -np.log(least)
+    ) < _SCAN_SPAN / 2:
         cuts = np.empty(0, dtype=np.intp)  # the whole variation is below one segment's
     else:
         with np.errstate(divide="ignore"):
@@ -481,7 +500,8 @@ def _affine_recursion(gain: FloatArray, forcing: FloatArray) -> FloatArray:
             product = np.cumprod(gain[lo:hi])
             running = np.divide(forcing[lo:hi], product)
             np.cumsum(running, out=running)
-            running += carry
+            if carry:  # (the first segment's 0: nothing to add)
+                running += carry
             np.multiply(product, running, out=out[lo:hi])
             carry = float(out[hi - 1])
     return out

@@ -168,10 +168,8 @@ def odometer_fit(store: ColumnStore, begin: int, end: int, window: float, rows: 
         if fitted:
             wlo, whi = savgol_span(lo, hi, a, b, points)
             wide = store.floats("md", wlo, whi)
-            fit = {
-                name: savgol_range(wide, wlo, a, b, points, 3, d, dt)
-                for d, name in enumerate(("md", "speed", "accel"))
-            }
+            fits = savgol_range(wide, wlo, a, b, points, 3, (0, 1, 2), dt)
+            fit = dict(zip(("md", "speed", "accel"), fits, strict=True))
         else:
             fit = {name: values[a - begin : b - begin] for name, values in whole.items()}
         # the first and last samples are the stops', at rest: the fit, which cannot follow

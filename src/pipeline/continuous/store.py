@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import tempfile
 import weakref
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import IO
 
@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 from numpy.typing import NDArray
 
-from pipeline.continuous.filters import savgol_filter
+from pipeline.continuous.filters import savgol_filters
 from pipeline.earth.frames import FloatArray
 
 __all__ = [
@@ -113,9 +113,7 @@ class ColumnStore:
         if self._on_disk:
             os.pwrite(column.fd, data.data, offset)
         else:
-            if offset > len(column.data):  # a gap reads as zeros, as a file's hole
-                column.data.extend(bytes(offset - len(column.data)))
-            column.data[offset : offset + data.nbytes] = data.data.cast("B")
+            _put(column.data, offset, data)
             self._held += grown
         column.rows = max(column.rows, start + data.size)
 
@@ -165,6 +163,20 @@ class ColumnStore:
             array = batch.column(batch.schema.get_field_index(name))
             self.append(name, np.asarray(array.to_numpy(zero_copy_only=False), np.float64))
         return int(batch.num_rows)
+
+
+def _put(buffer: bytearray, offset: int, data: NDArray[np.generic]) -> None:
+    """Copy ``data`` (contiguous) into ``buffer`` at byte ``offset``, the buffer extended
+    as needed (a gap reads as zeros, as a file's hole): one copy of the bytes (a slice
+    assignment from an array would copy them twice: to a bytearray, then in)."""
+    inside = min(max(len(buffer) - offset, 0), data.nbytes)  # bytes over existing ones
+    raw = data.reshape(-1).view(np.uint8)
+    if inside:
+        np.frombuffer(buffer, np.uint8, inside, offset)[:] = raw[:inside]
+    if inside < data.nbytes:
+        if offset > len(buffer):
+            buffer.extend(bytes(offset - len(buffer)))
+        buffer.extend(raw[inside:])
 
 
 def _column_file() -> IO[bytes]:
@@ -239,19 +251,18 @@ def savgol_range(
     b: int,
     points: int,
     order: int,
-    deriv: int,
+    derivs: Sequence[int],
     dt: float,
-) -> FloatArray:
-    """The Savitzky–Golay fit (``deriv``-th derivative, sample interval ``dt``) at rows
+) -> list[FloatArray]:
+    """The Savitzky–Golay fit (each ``derivs``-th derivative, sample interval ``dt``) at rows
     ``[a, b)`` from ``values`` over the rows :func:`savgol_span` gave, starting at ``wlo``:
     inside the series each value is the same filter of the same samples (within its
     rounding: the FFT's blocks fall elsewhere in a chunk), and the edge polynomial is fitted
     to the same first or last ``points`` samples."""
     half = points // 2
     ends = (a - wlo < half, b - wlo > values.size - half)  # the series' own edge windows
-    fit = savgol_filter(values, points, order, deriv=deriv, delta=dt, ends=ends)
-    out: FloatArray = fit[a - wlo : b - wlo]
-    return out
+    fits = savgol_filters(values, points, order, derivs, delta=dt, ends=ends)
+    return [fit[a - wlo : b - wlo] for fit in fits]
 
 
 class Interpolation:
@@ -360,8 +371,9 @@ def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> f
         for a, b in chunks(lo, hi - 1, rows):
             yield np.diff(store.floats(name, a, b + 1))
 
-    low = min(float(s.min()) for s in steps())
-    high = max(float(s.max()) for s in steps())
+    bounds = [(float(s.min()), float(s.max())) for s in steps()]  # one pass for both
+    low = min(b[0] for b in bounds)
+    high = max(b[1] for b in bounds)
     if not low < high:
         return low
     n_bins = 4096
