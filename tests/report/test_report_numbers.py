@@ -20,10 +20,12 @@ import pipeline as gp
 from pipeline.reports.numbers import (
     fmt,
     fmt_azimuth,
+    fmt_azimuths,
     fmt_each,
     fmt_inches,
     fmt_measured,
     fmt_sigma,
+    fmt_sigmas,
 )
 
 
@@ -139,3 +141,30 @@ def test_numbers_printed_together_read_as_each_printed_alone(values: np.ndarray,
     negatives, −0 and the values that round to −0 among them."""
     values = np.concatenate([values, [-0.0, -0.004, -1e-300, np.nan, -np.inf, 2.675, 0.125]])
     assert fmt_each(values, decimals) == [fmt(v, decimals) for v in values.tolist()]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
+)  # fmt: skip
+def test_sigmas_printed_together_read_as_each_printed_alone(values: np.ndarray):
+    """``fmt_sigmas`` (one ``%`` of a column, then one per count of decimals) writes each σ
+    as ``fmt_sigma`` does: both notations, the roundings that carry into the next decade
+    (9.96e−5 → 1.0e−4 prints fixed), zero, negatives, NaN and ±∞."""
+    edges = [0.0, -0.0, 9.95e-5, 9.96e-5, 1e-4, 0.0996, 0.95, 9.96, 99.5, -2.0, -3e-6, 5e-324]
+    values = np.concatenate([values, edges, [np.nan, np.inf, -np.inf]])
+    assert fmt_sigmas(values) == [fmt_sigma(v) for v in values.tolist()]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
+    st.integers(0, 3),
+)  # fmt: skip
+def test_azimuths_printed_together_read_as_each_printed_alone(values: np.ndarray, decimals: int):
+    """``fmt_azimuths`` (a column wrapped and printed at once) writes each azimuth as
+    ``fmt_azimuth`` does: wrapped into [0, 360), never 360 nor −0 (359.996 and −1e−13 print
+    as 0), NaN as undefined, ±∞ as themselves."""
+    edges = [0.0, -0.0, -1e-13, 359.995, 359.9949999, 359.95, 359.96, 360.0, 720.0, -360.0]
+    values = np.concatenate([values, edges, [1e300, -1e300, np.nan, np.inf, -np.inf]])
+    assert fmt_azimuths(values, decimals) == [fmt_azimuth(v, decimals) for v in values.tolist()]

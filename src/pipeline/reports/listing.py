@@ -11,9 +11,9 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.reports import plots
-from pipeline.reports.document import Column, Table, fmt_azimuth, fmt_sigma
+from pipeline.reports.document import Column, Table, fmt_azimuth
 from pipeline.reports.flags import AZI, SIGMA_AZI, Flag
-from pipeline.reports.numbers import UNDEFINED, fmt_each
+from pipeline.reports.numbers import UNDEFINED, fmt_azimuths, fmt_each, fmt_sigmas
 from pipeline.reports.sections import north_label, unit_label
 from pipeline.survey.courses import course_lengths
 
@@ -83,7 +83,7 @@ def listing(
         return fmt_each(col(traj, name), decimals)
 
     def azimuths(name: str, decimals: int = 2) -> list[str]:
-        return [fmt_azimuth(v, decimals) for v in col(traj, name).tolist()]
+        return fmt_azimuths(col(traj, name), decimals)
 
     if "survey" in traj.column_names and len(set(traj.column("survey").to_pylist())) > 1:
         surveys = [str(s) for s in traj.column("survey").to_pylist()]
@@ -163,7 +163,7 @@ def _station_sigmas(traj: pa.Table, st: pa.Table | None) -> list[tuple[str, str,
     out = []
     for name, header in (("sigma_inc", "σ INC"), (SIGMA_AZI, "σ AZI")):
         if name in st.column_names:
-            values = col(st, name)[index].tolist()
-            cells = [fmt_sigma(v) if ok else "" for v, ok in zip(values, found, strict=True)]
+            sigmas = fmt_sigmas(col(st, name)[index])
+            cells = [text if ok else "" for text, ok in zip(sigmas, found.tolist(), strict=True)]
             out.append((name, header, cells))
     return out

@@ -72,6 +72,32 @@ def fmt_sigma(value: float | None) -> str:
     return _minus(f"{value:.{sigma_decimals(value)}f}")
 
 
+def fmt_sigmas(values: NDArray[np.float64]) -> list[str]:
+    """:func:`fmt_sigma` of each of ``values``: their ``%.1e`` texts (which give the
+    exponents) by one ``%`` of them all, then the fixed ones of each count of decimals (a
+    column has a few) by one ``%`` each — the same format specifications, so the same text."""
+    plain = values.tolist()
+    scientific = (f"%.{SIGMA_DIGITS - 1}e\n" * len(plain) % tuple(plain)).split("\n")
+    texts = [UNDEFINED] * len(plain)
+    fixed: dict[int, list[int]] = {}  # decimals → the values printed with them
+    for i, value in enumerate(plain):
+        if value == 0:
+            texts[i] = "0"
+        elif math.isfinite(value):
+            mantissa, exponent = scientific[i].split("e")
+            power = int(exponent)
+            if power < SIGMA_FIXED_BELOW:
+                texts[i] = _minus(f"{mantissa}e{power}")
+            else:
+                decimals = max(SIGMA_DIGITS - 1 - power, 0) if value > 0 else 0  # as sigma_decimals
+                fixed.setdefault(decimals, []).append(i)
+    for decimals, chosen in fixed.items():
+        made = f"%.{decimals}f\n" * len(chosen) % tuple(plain[i] for i in chosen)
+        for i, text in zip(chosen, made.split("\n"), strict=False):
+            texts[i] = _minus(text)
+    return texts
+
+
 def sigma_decimals(sigma: float) -> int:
     """Decimals down to the last of :data:`SIGMA_DIGITS` significant digits of ``sigma``
     (0 for a σ of 10 or more, or one that is zero or not finite)."""
@@ -105,6 +131,20 @@ def fmt_azimuth(value: float | None, decimals: int = 2) -> str:
     if value is None or not math.isfinite(value):
         return fmt(value, decimals)
     return fmt(azimuth_value(value, decimals), decimals)
+
+
+def fmt_azimuths(values: NDArray[np.float64], decimals: int = 2) -> list[str]:
+    """:func:`fmt_azimuth` of each of ``values``: wrapped into [0, 360) at once (NumPy's
+    remainder is Python's ``%``), those that may round to 360 by :func:`azimuth_value`,
+    then all printed by :func:`fmt_each`; NaN as :data:`UNDEFINED`."""
+    with np.errstate(invalid="ignore"):  # ±∞: NaN, printed from the value itself
+        wrapped = np.remainder(values, 360.0)
+    for i in np.flatnonzero(wrapped >= 360.0 - 10.0**-decimals).tolist():  # round() ≥ 360?
+        wrapped[i] = azimuth_value(float(values[i]), decimals)
+    texts = fmt_each(np.where(np.isinf(values), values, wrapped), decimals)
+    for i in np.flatnonzero(np.isnan(values)).tolist():
+        texts[i] = UNDEFINED
+    return texts
 
 
 INCH = 0.0254
