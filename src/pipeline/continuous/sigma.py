@@ -643,25 +643,26 @@ class _Integrals:
     def _integrands(
         sens: dict[str, FloatArray], elapsed: FloatArray, transition: FloatArray
     ) -> list[FloatArray]:
-        """Each error's rate divided by Φ (:data:`_INTEGRANDS`; the ARW's is (gain/Φ)²)."""
-        gain = sens["gain"] / transition
-        d_tf = sens["d_tf"] / transition
-        safe = np.where(sens["sin"] > 0, sens["sin"], 1.0)
-        rates = {
-            "gain": gain,
-            "gain_elapsed": gain * elapsed,
-            "gain_rate_x": gain * sens["rate_x"],
-            "gain_sin": gain * sens["sin"],
-            "gain_cos": gain * sens["sin"] * sens["cot"],
-            "gain_rate_y": gain * sens["rate_y"],
-            "gain_rate_z": gain * sens["rate_z"],
-            "d_inc": sens["d_inc"] / transition,
-            "tf_bias": d_tf / safe,
-            "tf_tilt": d_tf * sens["cot"],
-            "tf_twist": d_tf,
-            "gain_squared": gain**2,
-        }
-        return [rates[name] for name in _INTEGRANDS]
+        """Each error's rate divided by Φ, in the order of :data:`_INTEGRANDS` (the ARW's is
+        (gain/Φ)²), each made in its own array (not rows of one: past glibc's mmap threshold,
+        :data:`pipeline.streams.MMAP_THRESHOLD`, that would be mapped and faulted in afresh
+        for each chunk)."""
+        y = [np.empty(transition.size) for _ in _INTEGRANDS]
+        gain, gain_elapsed, rate_x, gain_sin, gain_cos, rate_y, rate_z, d_inc, *tf, squared = y
+        tf_bias, tf_tilt, tf_twist = tf
+        np.divide(sens["gain"], transition, out=gain)
+        np.multiply(gain, elapsed, out=gain_elapsed)
+        np.multiply(gain, sens["rate_x"], out=rate_x)
+        np.multiply(gain, sens["sin"], out=gain_sin)
+        np.multiply(gain_sin, sens["cot"], out=gain_cos)
+        np.multiply(gain, sens["rate_y"], out=rate_y)
+        np.multiply(gain, sens["rate_z"], out=rate_z)
+        np.divide(sens["d_inc"], transition, out=d_inc)
+        np.divide(sens["d_tf"], transition, out=tf_twist)
+        np.divide(tf_twist, np.where(sens["sin"] > 0, sens["sin"], 1.0), out=tf_bias)
+        np.multiply(tf_twist, sens["cot"], out=tf_tilt)
+        np.square(gain, out=squared)
+        return y
 
 
 _INTEGRANDS = (

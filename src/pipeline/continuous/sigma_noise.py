@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
 from pipeline.continuous.filters import convolve_same, savgol_coeffs
@@ -115,13 +116,15 @@ class NoiseSums:
         for b in range(0, stations.size, self.block):
             which = stations[b : b + self.block]
             columns = self.index[which, None] + self.offsets[None, :]  # sample index
-            # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
-            given = (columns >= start) & (columns < start + length)
-            at = np.clip(columns - start, 0, length - 1)
-            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = (
-                np.where(given, x[at], 0.0)
-                for x in (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
-            )
+            arrays = (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
+            first = columns[:, 0] - start
+            if first.min() >= 0 and first.max() + self.offsets.size <= length:  # rows inside
+                near = [sliding_window_view(x, self.offsets.size)[first] for x in arrays]
+            else:  # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
+                given = (columns >= start) & (columns < start + length)
+                at = np.clip(columns - start, 0, length - 1)
+                near = [np.where(given, x[at], 0.0) for x in arrays]
+            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = near
             inside = (np.abs(self.offsets) <= self.near) & (columns >= 0) & (columns < self.size)
             # the row of the samples before the station's (p = step there, 0 from it on); the
             # row from it on is the station-free row less that one (the rows are linear in p):
