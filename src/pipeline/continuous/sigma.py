@@ -524,7 +524,11 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     grad = TimeGradient(run.time)
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
-    sin_d, cos_d = sin_cos(run.misalignment)
+    if run.misalignment.any():
+        sin_d, cos_d = sin_cos(run.misalignment)
+        turn_rate = grad(CarriedUnwrap()(run.misalignment))
+    else:  # δ = 0 (a tool whose h needs no 1/cos δ): the same numbers, without trig functions
+        sin_d, cos_d, turn_rate = np.zeros(run.size), np.ones(run.size), np.zeros(run.size)
     tan_d = sin_d / cos_d  # (np.tan costs a sine and cosine more)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
@@ -540,10 +544,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
         "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
-        "rate_z": grad(CarriedUnwrap()(run.misalignment))
-        + azi_rate * cos_i
-        + oc * sin_i * cos_a
-        - os_ * cos_i,
+        "rate_z": turn_rate + azi_rate * cos_i + oc * sin_i * cos_a - os_ * cos_i,
         "cot": cos_i / safe_sin,
     }
     outside = np.flatnonzero(~ok)  # each array is new: zeroed in place where not integrated
