@@ -300,7 +300,7 @@ def azimuth_budget(
         add("bias_instability", (gyro.bias_instability * DEG_H) ** 2 * markov)
     if gyro.rate_random_walk > 0:
         q = gyro.rate_random_walk * DEG_H / 60.0  # (deg/h)/√h → rad/s/√s
-        add("rate_random_walk", q**2 * rows.quadratic(cells["gain"], mid, np.minimum))
+        add("rate_random_walk", q**2 * rows.quadratic(cells["gain"], mid, _Evaluated(np.minimum)))
     rank_one("acc_inclination", acc.inclination, rows.linear(cells["d_inc"]))
     rank_one("acc_bias_toolface", acc.bias / acc.gravity, rows.linear(cells["tf_bias"]))
     rank_one("acc_tilt_toolface", acc.misalignment, rows.linear(cells["tf_tilt"]))
@@ -356,20 +356,15 @@ class _StationRows:
         # the lesser of each pair
         return self._form(np.minimum.outer(head, head), between, np.minimum.outer(tail, tail))
 
-    def quadratic(
-        self,
-        g: FloatArray,
-        mid: FloatArray,
-        kernel: Callable[[FloatArray, FloatArray], FloatArray],
-    ) -> FloatArray:
-        """``a·diag(g)·K·diag(g)·aᵀ`` with ``K[i, j] = kernel(mid[i], mid[j])`` (``g`` and
-        ``mid`` per cell; K symmetric): the sums of ``g_i K_ij g_j`` over the cells before
-        each pair of stations (:func:`_before_sums`), and after them — the same sums over
-        the cells in reverse order."""
+    def quadratic(self, g: FloatArray, mid: FloatArray, kernel: _Kernel) -> FloatArray:
+        """``a·diag(g)·K·diag(g)·aᵀ`` with ``K[i, j] = K(mid[i], mid[j])`` (``g`` and ``mid``
+        per cell; K symmetric): the sums of ``g_i K_ij g_j`` over the cells before each pair
+        of stations (``kernel.before_sums``), and after them — the same sums over the cells
+        in reverse order."""
         at = np.append(self.before, self.cells)
-        before = _before_sums(g, mid, kernel, at)
+        before = kernel.before_sums(g, mid, at)
         backward = np.ascontiguousarray(g[::-1]), np.ascontiguousarray(mid[::-1])
-        after = _before_sums(*backward, kernel, self.cells - at[:-1])
+        after = kernel.before_sums(*backward, self.cells - at[:-1])
         between = before[:-1, -1:] - before[:-1, :-1]  # before k, after l
         return self._form(before[:-1, :-1], between, after)
 
@@ -422,16 +417,98 @@ def _before_sums(
 _KERNEL_ROWS = 256
 
 
-def _markov_kernel(tau: float) -> Callable[[FloatArray, FloatArray], FloatArray]:
-    """``exp(−|x − y|/τ)`` (τ s), evaluated in place."""
+class _Kernel(Protocol):
+    """A covariance kernel K(x, y) of cells at their mid times (s), by its sums
+    ``[k, l] = Σ g_i K_ij g_j`` over the cells ``i < at_k``, ``j < at_l`` (``mid``
+    monotone, either way)."""
 
-    def kernel(x: FloatArray, y: FloatArray) -> FloatArray:
-        out: FloatArray = np.subtract(x, y)
-        np.abs(out, out=out)
-        np.divide(out, -tau, out=out)
-        return np.exp(out, out=out)
+    def before_sums(self, g: FloatArray, mid: FloatArray, at: NDArray[np.intp]) -> FloatArray: ...
 
-    return kernel
+
+@dataclass(frozen=True)
+class _Evaluated:
+    """Any kernel, evaluated cell by cell (:func:`_before_sums`; O(cells²))."""
+
+    function: Callable[[FloatArray, FloatArray], FloatArray]
+
+    def before_sums(self, g: FloatArray, mid: FloatArray, at: NDArray[np.intp]) -> FloatArray:
+        return _before_sums(g, mid, self.function, at)
+
+
+@dataclass(frozen=True)
+class _Exponential:
+    """``exp(−|x − y|/τ)`` (τ s, a first-order Gauss–Markov process), by its semi-separable
+    form (O(cells + cuts²), no cell-by-cell matrix): for ``i < p ≤ j``,
+    ``e^(−(s_j − s_i)/τ) = e^(−(s_p−1 − s_i)/τ)·e^(−(s_j − s_p−1)/τ)``, so
+
+        [k, l] = D(p) + F(p)·Σ_{p ≤ j < q} g_j e^(−(s_j − s_p−1)/τ)    (p = at_k ≤ q = at_l)
+
+    with D(p) the sums over ``i, j < p`` and F(p) = Σ_{i<p} g_i e^(−(s_p−1 − s_i)/τ), the
+    last sum over the cuts' blocks, each relative to its first cell. Every exponent is of a
+    distance (≥ 0, or bounded within a segment: :func:`_decayed`) and, where ``g ≥ 0``,
+    every sum of terms ≥ 0: within a few ε of the explicit sums (test_sigma)."""
+
+    tau: float
+
+    def before_sums(self, g: FloatArray, mid: FloatArray, at: NDArray[np.intp]) -> FloatArray:
+        cells, tau = g.size, self.tau
+        s = mid if mid[0] <= mid[-1] else -mid  # increasing, the same distances
+        below = _decayed(g, s, tau)  # L_j = Σ_{i<j} g_i e^(−(s_j − s_i)/τ)
+        diagonal = _running(g * (g + 2.0 * below))  # D(p) = Σ_{j<p} g_j (g_j + 2 L_j)
+        order = np.argsort(at, kind="stable")
+        cut = at[order]
+        back = np.maximum(cut - 1, 0)
+        reach = np.where(cut > 0, below[back] + g[back], 0.0)  # F(p) = L_(p−1) + g_(p−1)
+        # each cell's block: from the last cut at or before it (cells before the first: none)
+        owner = np.searchsorted(cut, np.arange(cells), side="right") - 1
+        first = np.minimum(cut[np.maximum(owner, 0)], cells - 1)
+        lift = np.minimum(s[first] - s, 0.0)  # (cells before the first cut: 0, not kept)
+        terms = g * np.exp(np.divide(lift, tau, out=lift), out=lift)
+        kept = owner >= 0
+        block = np.bincount(owner[kept], weights=terms[kept], minlength=cut.size)
+        # [k, m]: block m's sum decayed to the cell before cut k (m ≥ k; else 0)
+        ahead = np.subtract.outer(s[back], s[np.minimum(cut, cells - 1)])
+        np.minimum(ahead, 0.0, out=ahead)
+        decay = np.exp(np.divide(ahead, tau, out=ahead), out=ahead)
+        decay *= block
+        decay = np.triu(decay)
+        upper = np.zeros((cut.size, cut.size))
+        np.cumsum(decay[:, :-1], axis=1, out=upper[:, 1:])  # Σ over the blocks k … l − 1
+        upper *= reach[:, None]
+        upper += diagonal[cut][:, None]
+        upper = np.triu(upper)
+        out = np.empty_like(upper)
+        out[np.ix_(order, order)] = upper + np.triu(upper, 1).T
+        return out
+
+
+_SPAN = 32.0
+"""Correlation times a segment of :func:`_decayed` spans (its factors within e^±32)."""
+
+
+def _decayed(g: FloatArray, s: FloatArray, tau: float) -> FloatArray:
+    """``L_j = Σ_{i<j} g_i e^(−(s_j − s_i)/τ)`` (``s`` increasing): per segment of under
+    :data:`_SPAN`·τ from its first cell r, ``e^(−(s_j − r)/τ)·(L_r + Σ_{r ≤ i < j} g_i
+    e^((s_i − r)/τ))``, summed in sequence."""
+    cells = g.size
+    cuts = (np.flatnonzero(np.diff(np.floor((s - s[0]) / (_SPAN * tau)))) + 1).tolist()
+    out = np.empty(cells)
+    carry = 0.0  # L at the segment's first cell
+    for lo, hi in zip([0, *cuts], [*cuts, cells], strict=True):
+        lift = (s[lo:hi] - s[lo]) / tau
+        running = np.empty(hi - lo + 1)
+        running[0] = carry
+        np.multiply(g[lo:hi], np.exp(lift), out=running[1:])
+        np.cumsum(running, out=running)
+        out[lo:hi] = running[:-1] * np.exp(-lift)
+        if hi < cells:
+            carry = float(running[-1] * np.exp(-(s[hi] - s[lo]) / tau))
+    return out
+
+
+def _markov_kernel(tau: float) -> _Kernel:
+    """The first-order Gauss–Markov bias's kernel ``exp(−|x − y|/τ)`` (τ s)."""
+    return _Exponential(tau)
 
 
 def _running(values: FloatArray) -> FloatArray:
@@ -447,7 +524,11 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     grad = TimeGradient(run.time)
     sin_i, cos_i = sin_cos(run.inc)
     sin_a, cos_a = sin_cos(run.azi)
-    sin_d, cos_d = sin_cos(run.misalignment)
+    if run.misalignment.any():
+        sin_d, cos_d = sin_cos(run.misalignment)
+        turn_rate = grad(CarriedUnwrap()(run.misalignment))
+    else:  # δ = 0 (a tool whose h needs no 1/cos δ): the same numbers, without trig functions
+        sin_d, cos_d, turn_rate = np.zeros(run.size), np.ones(run.size), np.zeros(run.size)
     tan_d = sin_d / cos_d  # (np.tan costs a sine and cosine more)
     ok = run.usable & (np.abs(sin_i) > 0)
     safe_sin = np.where(ok, sin_i, 1.0)
@@ -463,10 +544,7 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         # body rates the gyro's errors scale: its own axis, y (≈ r) and z (about the axis)
         "rate_x": h * cos_d + r * sin_d,
         "rate_y": r,
-        "rate_z": grad(CarriedUnwrap()(run.misalignment))
-        + azi_rate * cos_i
-        + oc * sin_i * cos_a
-        - os_ * cos_i,
+        "rate_z": turn_rate + azi_rate * cos_i + oc * sin_i * cos_a - os_ * cos_i,
         "cot": cos_i / safe_sin,
     }
     outside = np.flatnonzero(~ok)  # each array is new: zeroed in place where not integrated
@@ -566,25 +644,26 @@ class _Integrals:
     def _integrands(
         sens: dict[str, FloatArray], elapsed: FloatArray, transition: FloatArray
     ) -> list[FloatArray]:
-        """Each error's rate divided by Φ (:data:`_INTEGRANDS`; the ARW's is (gain/Φ)²)."""
-        gain = sens["gain"] / transition
-        d_tf = sens["d_tf"] / transition
-        safe = np.where(sens["sin"] > 0, sens["sin"], 1.0)
-        rates = {
-            "gain": gain,
-            "gain_elapsed": gain * elapsed,
-            "gain_rate_x": gain * sens["rate_x"],
-            "gain_sin": gain * sens["sin"],
-            "gain_cos": gain * sens["sin"] * sens["cot"],
-            "gain_rate_y": gain * sens["rate_y"],
-            "gain_rate_z": gain * sens["rate_z"],
-            "d_inc": sens["d_inc"] / transition,
-            "tf_bias": d_tf / safe,
-            "tf_tilt": d_tf * sens["cot"],
-            "tf_twist": d_tf,
-            "gain_squared": gain**2,
-        }
-        return [rates[name] for name in _INTEGRANDS]
+        """Each error's rate divided by Φ, in the order of :data:`_INTEGRANDS` (the ARW's is
+        (gain/Φ)²), each made in its own array (not rows of one: past glibc's mmap threshold,
+        :data:`pipeline.streams.MMAP_THRESHOLD`, that would be mapped and faulted in afresh
+        for each chunk)."""
+        y = [np.empty(transition.size) for _ in _INTEGRANDS]
+        gain, gain_elapsed, rate_x, gain_sin, gain_cos, rate_y, rate_z, d_inc, *tf, squared = y
+        tf_bias, tf_tilt, tf_twist = tf
+        np.divide(sens["gain"], transition, out=gain)
+        np.multiply(gain, elapsed, out=gain_elapsed)
+        np.multiply(gain, sens["rate_x"], out=rate_x)
+        np.multiply(gain, sens["sin"], out=gain_sin)
+        np.multiply(gain_sin, sens["cot"], out=gain_cos)
+        np.multiply(gain, sens["rate_y"], out=rate_y)
+        np.multiply(gain, sens["rate_z"], out=rate_z)
+        np.divide(sens["d_inc"], transition, out=d_inc)
+        np.divide(sens["d_tf"], transition, out=tf_twist)
+        np.divide(tf_twist, np.where(sens["sin"] > 0, sens["sin"], 1.0), out=tf_bias)
+        np.multiply(tf_twist, sens["cot"], out=tf_tilt)
+        np.square(gain, out=squared)
+        return y
 
 
 _INTEGRANDS = (

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
 from pipeline.continuous.filters import convolve_same, savgol_coeffs
@@ -111,26 +112,24 @@ class NoiseSums:
             self.carry[row] = running[-1]
         stations = np.flatnonzero((self.index >= lo) & (self.index < hi))
         length = step.size
-        before_mask = self.offsets < 0
         for b in range(0, stations.size, self.block):
             which = stations[b : b + self.block]
             columns = self.index[which, None] + self.offsets[None, :]  # sample index
-            # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
-            given = (columns >= start) & (columns < start + length)
-            at = np.clip(columns - start, 0, length - 1)
-            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = (
-                np.where(given, x[at], 0.0)
-                for x in (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
-            )
-            inside = (np.abs(self.offsets) <= self.near) & (columns >= 0) & (columns < self.size)
-            # the row of the samples before the station's (p = step there, 0 from it on); the
-            # row from it on is the station-free row less that one (the rows are linear in p):
-            # inside the neighbourhood the free rows see the same p (the filters reach < halo)
-            p = step_n * before_mask
-            q = p * d_inc_n + convolve_same(p * d_rate_n, self.d1)
-            odo = convolve_same(q * sin_n, self.d2)
-            qb, ob = np.where(inside, q, 0.0), np.where(inside, odo, 0.0)
-            qa, oa = np.where(inside, q_n - q, 0.0), np.where(inside, odo_n - odo, 0.0)
+            arrays = (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
+            first = columns[:, 0] - start
+            if first.min() >= 0 and first.max() + self.offsets.size <= length:  # rows inside
+                near = [sliding_window_view(x, self.offsets.size)[first] for x in arrays]
+            else:  # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
+                given = (columns >= start) & (columns < start + length)
+                at = np.clip(columns - start, 0, length - 1)
+                near = [np.where(given, x[at], 0.0) for x in arrays]
+            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = near
+            qb, ob = self._station_rows(step_n, d_inc_n, d_rate_n, sin_n)
+            window = slice(self.halo - self.near, self.halo + self.near + 1)  # |offset| ≤ near
+            qa, oa = q_n[:, window] - qb, odo_n[:, window] - ob
+            within = (columns[:, window] >= 0) & (columns[:, window] < self.size)
+            if not within.all():  # a neighbourhood past the run's ends
+                qb, ob, qa, oa = (np.where(within, x, 0.0) for x in (qb, ob, qa, oa))
             self.quadratic[which] = np.stack(
                 [
                     np.sum(qb * qb, axis=1),
@@ -142,6 +141,29 @@ class NoiseSums:
                 ],
                 axis=1,
             )
+
+    def _station_rows(
+        self, step: FloatArray, d_inc: FloatArray, d_inc_rate: FloatArray, sin_i: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The rows q and odo (accelerometer, odometer) of the samples before each station's
+        (p = step there, 0 from it on) at offsets −near … near from it, from the per-sample
+        values at offsets −halo … halo (rows: stations). The rows from the station on are
+        the station-free rows less these (the rows are linear in p; inside the neighbourhood
+        the free rows see the same p: the filters reach < halo). Each filter is applied by
+        full convolution to the part of its input that is not zero and reaches the offsets
+        wanted (p before the station; q from −near − h₂): an FFT of half the neighbourhood's
+        length."""
+        h1, h2, halo, near = self.d1.size // 2, self.d2.size // 2, self.halo, self.near
+        p = step[:, :halo]  # offsets −halo … −1
+        q = _full_convolution(p * d_inc_rate[:, :halo], self.d1)[:, h1:]  # −halo … h1 − 1
+        q[:, :halo] += p * d_inc[:, :halo]
+        # odo from q at −near − h₂ … h1 − 1 (q is 0 past h1 − 1): at −near … near − 2
+        odo = _full_convolution(q[:, h1:] * sin_i[:, h1 : halo + h1], self.d2)[:, 2 * h2 :]
+        width = 2 * near + 1
+        qb, ob = np.zeros((step.shape[0], width)), np.zeros((step.shape[0], width))
+        qb[:, : near + h1] = q[:, halo - near :]
+        ob[:, : odo.shape[1]] = odo
+        return qb, ob
 
     def variance(self, before: FloatArray, after: FloatArray) -> FloatArray:
         """Variance (rad²) at each station, with ``before``/``after`` the row's constants
@@ -162,3 +184,13 @@ class NoiseSums:
             self.noise.odometer / self.noise.gravity
         ) ** 2 * (far[1] + near_o)
         return out
+
+
+def _full_convolution(rows: FloatArray, kernel: FloatArray) -> FloatArray:
+    """Each row's full convolution with ``kernel`` (``n + m − 1`` values:
+    ``out[i] = Σ_j kernel[j]·rows[i − j]``), by real FFTs of the power of two above."""
+    n, m = rows.shape[-1], kernel.size
+    size = 1 << (n + m - 2).bit_length()
+    spectrum = np.fft.rfft(rows, size) * np.fft.rfft(kernel, size)
+    out: FloatArray = np.fft.irfft(spectrum, size)[..., : n + m - 1]
+    return out

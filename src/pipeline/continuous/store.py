@@ -220,15 +220,18 @@ class CarriedUnwrap:
         """The next chunk's angles unwrapped (a new array)."""
         if angle.size == 0:
             return angle.copy()
-        step = np.diff(np.concatenate([[angle[0] if self._last is None else self._last], angle]))
-        if (np.abs(step) < np.pi).all():
-            corrections = np.full(step.size, self._correction + 0.0)
-        else:
-            fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
-            fix[(fix == -np.pi) & (step > 0)] = np.pi
-            fix = fix - step
-            fix[np.abs(step) < np.pi] = 0.0
-            corrections = carried_cumsum(fix, self._correction)
+        step = np.empty(angle.size)  # from the last angle of the chunk before
+        step[0] = angle[0] - (angle[0] if self._last is None else self._last)
+        np.subtract(angle[1:], angle[:-1], out=step[1:])
+        if (np.abs(step) < np.pi).all():  # one correction throughout: added as a scalar
+            self._last, self._correction = float(angle[-1]), self._correction + 0.0
+            same: FloatArray = angle + self._correction
+            return same
+        fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
+        fix[(fix == -np.pi) & (step > 0)] = np.pi
+        fix = fix - step
+        fix[np.abs(step) < np.pi] = 0.0
+        corrections = carried_cumsum(fix, self._correction)
         self._last, self._correction = float(angle[-1]), float(corrections[-1])
         out: FloatArray = angle + corrections
         return out
@@ -341,8 +344,11 @@ class RunningIntegrals:
         starts = np.unique(np.concatenate([[0], j]))  # cells: from each point's step
         at = np.searchsorted(starts, j)
         width = np.diff(xp)
+        steps = np.empty(width.size)
         for row, f in enumerate(values):
-            steps = width * (f[1:] + f[:-1]) / 2
+            np.add(f[1:], f[:-1], out=steps)  # width·(f[1:] + f[:-1])/2, in place
+            steps *= width
+            steps /= 2
             cells = np.add.reduceat(steps, starts) if steps.size else np.zeros(0)
             before = self._total[row] + np.concatenate([[0.0], np.cumsum(cells)])
             out = np.where(step < 0, 0.0, before[-1])
