@@ -13,11 +13,10 @@ from pipeline.continuous.sigma import (
     GyroNoise,
     InclinationNoise,
     RunGeometry,
-    _markov_kernel,
-    _StationRows,
     azimuth_budget,
     inclination_sigma,
 )
+from pipeline.continuous.sigma_forms import StationRows, markov_kernel
 
 FloatArray = NDArray[np.float64]
 T = 400.0  # s
@@ -158,7 +157,7 @@ def test_station_rows_forms_equal_the_explicit_matrices_near_the_closing_stop(
     phi = phi_t * before / cells + rng.normal(0.0, 1e-3, before.size)
     phi[-1] = phi_t
     closure = phi_t * before / cells if closed else np.zeros(before.size)
-    rows = _StationRows(phi, closure, before, cells)
+    rows = StationRows(phi, closure, before, cells)
     wide = np.longdouble
     a = np.zeros((before.size, cells), dtype=wide)
     for k, n in enumerate(before):
@@ -170,7 +169,7 @@ def test_station_rows_forms_equal_the_explicit_matrices_near_the_closing_stop(
         (rows.linear(g), a @ gw, 5e-15),
         (rows.diagonal(d), (a * d.astype(wide)) @ a.T, 5e-15),
         (
-            rows.quadratic(g, mid, _markov_kernel(50.0)),
+            rows.quadratic(g, mid, markov_kernel(50.0)),
             a @ (gw[:, None] * kernel * gw) @ a.T,
             1e-12,
         ),
@@ -207,5 +206,5 @@ def test_markov_kernel_sums_over_many_correlation_times(reverse: bool) -> None:
     running = np.zeros((mid.size + 1, mid.size + 1), dtype=wide)
     running[1:, 1:] = terms.cumsum(axis=0).cumsum(axis=1)
     want = np.asarray(running[np.ix_(at, at)], dtype=np.float64)
-    got = _markov_kernel(tau).before_sums(g, mid, at)
+    got = markov_kernel(tau).before_sums(g, mid, at)
     np.testing.assert_allclose(got, want, rtol=4e-15, atol=0.0)
