@@ -131,11 +131,14 @@ def test_due_north_well_prints_no_azimuth_of_360(browser: Any, tmp_path: Path):
     assert "0.00° true north" in words and not re.search(r"360\.0", words)
 
 
+FLOAT_COLUMNS = arrays(
+    np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)
+)
+"""Columns of up to 300 doubles of any value: NaN, ±∞, subnormals and −0 included."""
+
+
 @settings(max_examples=200, deadline=None)
-@given(
-    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
-    st.integers(0, 3),
-)  # fmt: skip
+@given(FLOAT_COLUMNS, st.integers(0, 3))
 def test_numbers_printed_together_read_as_each_printed_alone(values: np.ndarray, decimals: int):
     """``fmt_each`` (one ``%`` of a column) writes each number as ``fmt`` does: NaN, ±∞,
     negatives, −0 and the values that round to −0 among them."""
@@ -144,9 +147,7 @@ def test_numbers_printed_together_read_as_each_printed_alone(values: np.ndarray,
 
 
 @settings(max_examples=200, deadline=None)
-@given(
-    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
-)  # fmt: skip
+@given(FLOAT_COLUMNS)
 def test_sigmas_printed_together_read_as_each_printed_alone(values: np.ndarray):
     """``fmt_sigmas`` (one ``%`` of a column, then one per count of decimals) writes each σ
     as ``fmt_sigma`` does: both notations, the roundings that carry into the next decade
@@ -157,10 +158,7 @@ def test_sigmas_printed_together_read_as_each_printed_alone(values: np.ndarray):
 
 
 @settings(max_examples=200, deadline=None)
-@given(
-    arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=True, allow_infinity=True)),
-    st.integers(0, 3),
-)  # fmt: skip
+@given(FLOAT_COLUMNS, st.integers(0, 3))
 def test_azimuths_printed_together_read_as_each_printed_alone(values: np.ndarray, decimals: int):
     """``fmt_azimuths`` (a column wrapped and printed at once) writes each azimuth as
     ``fmt_azimuth`` does: wrapped into [0, 360), never 360 nor −0 (359.996 and −1e−13 print
