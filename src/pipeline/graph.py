@@ -33,8 +33,11 @@ class PlannedStage:
     passes: Mapping[str, int] = field(default_factory=dict)
     """the passes over each streamed output: the stages wired to it (but where it is one of
     their ``unread_inputs`` — validity's samples, read only with magnetometers) and
-    ``persist``; the runner keeps a pass read by several (:func:`~pipeline.ports.kept`),
-    and lets it go after the last stage wired to it even where that made no pass"""
+    ``persist``; the runner keeps a pass read by several (:func:`~pipeline.ports.kept`)"""
+    releases: tuple[tuple[str, str], ...] = ()
+    """the streamed outputs (stage id, port), not persisted, whose last stage wired to them
+    this is: the runner lets a pass kept for them go once it has run, even where it made no
+    pass (an input it may leave unread)"""
 
 
 @dataclass(frozen=True)
@@ -117,17 +120,17 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
         for port, src in wired.items()
         if port not in defs[consumer][0].unread_inputs
     )
+    persists = {sid: _persisted(spec.stages[index[sid]].persist, defs[sid][0]) for sid in order}
+    last_wired = {src: consumer for consumer in order for src in wiring[consumer].values()}
+    releases: dict[str, list[tuple[str, str]]] = {}
+    for (producer, port), consumer in last_wired.items():
+        if port in defs[producer][0].streamed_outputs and port not in persists[producer]:
+            releases.setdefault(consumer, []).append((producer, port))
     planned = []
     for stage_id in order:
         stage = spec.stages[index[stage_id]]
         definition, plugin = defs[stage_id]
-        persist = (
-            tuple(definition.outputs)
-            if stage.persist is True
-            else tuple(stage.persist)
-            if stage.persist
-            else ()
-        )
+        persist = persists[stage_id]
         passes = {p: readers[stage_id, p] + (p in persist) for p in definition.streamed_outputs}
         planned.append(
             PlannedStage(
@@ -139,9 +142,17 @@ def build_plan(loaded: LoadedSpec, registry: Registry) -> Plan:
                 wiring[stage_id],
                 persist,
                 passes,
+                tuple(releases.get(stage_id, ())),
             )
         )
     return Plan(spec, source.file, tuple(planned))
+
+
+def _persisted(persist: list[str] | bool, definition: StageDef) -> tuple[str, ...]:
+    """The output ports a stage persists: all (``persist: true``), those listed, or none."""
+    if persist is True:
+        return tuple(definition.outputs)
+    return tuple(persist) if persist else ()
 
 
 def _unknown_stage(name: str, registry: Registry) -> str:

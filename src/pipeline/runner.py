@@ -236,14 +236,13 @@ def run_plan(
         staged: list[Path] = []
         ports: dict[tuple[str, str], Port] = {}
         held = 0  # bytes of the passes kept (ports.kept: at most KEEP_BYTES a run)
-        last_readers = _last_readers(plan)
         checked = CheckedTables()
         for st in plan.stages:
             record = StageRecord(st.id, st.uses, registry.plugin_label(st.plugin))
             records.append(record)
             if out_dir is None and not st.definition.outputs:
                 record.status = "skipped"  # it only writes files
-                for key in last_readers.get(st.id, ()):
+                for key in st.releases:
                     release(ports[key])
                 continue
             ins = _stage_inputs(plan, st, ports, record, checked)
@@ -267,7 +266,7 @@ def run_plan(
                     if value is not produced:
                         held += nbytes
                 ports[(st.id, port)] = value
-            for key in last_readers.get(st.id, ()):  # its pass kept for no later stage
+            for key in st.releases:  # its pass kept for no later stage
                 release(ports[key])
             current = plan.spec.well.merged(from_files).merged(overrides)
             record.status = "ok"
@@ -527,27 +526,6 @@ def _check_contracts(
             raise exc.located(
                 pipeline=pipeline, stage=st.id, port=port, direction=direction
             ) from None
-
-
-def _last_readers(plan: Plan) -> dict[str, list[tuple[str, str]]]:
-    """Stage id → the streamed outputs (stage id, port) not persisted whose last reader it
-    is: a pass kept for them (:func:`~pipeline.ports.kept`) is let go once it has run (a
-    stage may leave an input unread that the plan counted as a pass)."""
-    last: dict[tuple[str, str], str] = {}
-    for st in plan.stages:
-        for src in st.wiring.values():
-            last[src] = st.id
-    streamed = {
-        (st.id, port)
-        for st in plan.stages
-        for port in st.definition.streamed_outputs
-        if port not in st.persist
-    }
-    found: dict[str, list[tuple[str, str]]] = {}
-    for key, reader in last.items():
-        if key in streamed:
-            found.setdefault(reader, []).append(key)
-    return found
 
 
 def _checked_upstream(plan: Plan, st: PlannedStage, port: str) -> bool:
