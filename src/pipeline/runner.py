@@ -25,7 +25,7 @@ from typing import Any, TypeAlias, TypeVar
 import pyarrow as pa
 
 from pipeline.atomic import atomic_write_bytes, discard, fsync_files, replace_dir, write_synced
-from pipeline.contracts import SOURCE_KEY
+from pipeline.contracts import SOURCE_KEY, implies
 from pipeline.errors import (
     ContractViolation,
     FileSystemError,
@@ -529,11 +529,12 @@ def _check_contracts(
 
 
 def _checked_upstream(plan: Plan, st: PlannedStage, port: str) -> bool:
-    """True if the table on ``port`` was already checked against the very same contract as
-    the upstream stage's output (tables are immutable, so checking again proves nothing)."""
+    """True if the value on ``port`` was already checked as the upstream stage's output
+    against a contract that implies the input's (:func:`~pipeline.contracts.implies`; the
+    value is immutable, so checking it again proves nothing)."""
     upstream, out_port = st.wiring[port]
     producer = next(s for s in plan.stages if s.id == upstream)
-    return producer.definition.outputs[out_port] is st.definition.inputs[port]
+    return implies(producer.definition.outputs[out_port], st.definition.inputs[port])
 
 
 def _check_inputs(plan: Plan, given: Mapping[str, Source]) -> dict[str, Source]:
