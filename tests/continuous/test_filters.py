@@ -13,6 +13,7 @@ from scipy import signal
 
 from pipeline.continuous.filters import (
     TimeGradient,
+    convolve_full,
     convolve_same,
     savgol_coeffs,
     savgol_filter,
@@ -42,6 +43,10 @@ def test_convolve_same_matches_scipy_rows_and_series() -> None:
     np.testing.assert_allclose(convolve_same(series, kernel), want, atol=1e-12)
     want = signal.oaconvolve(rows, kernel[None, :], mode="same", axes=1)
     np.testing.assert_allclose(convolve_same(rows, kernel), want, atol=1e-12)
+    want = signal.oaconvolve(rows, kernel[None, :], mode="full", axes=1)
+    got = convolve_full(rows, kernel)
+    assert got.shape == (4, 61 + 31 - 1)
+    np.testing.assert_allclose(got, want, atol=1e-12)
 
 
 def normal_solution(xs: list[Fraction], order: int, rhs: list[Fraction]) -> list[Fraction]:

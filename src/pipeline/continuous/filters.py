@@ -19,7 +19,14 @@ from numpy.typing import NDArray
 
 from pipeline.earth.frames import FloatArray
 
-__all__ = ["TimeGradient", "convolve_same", "savgol_coeffs", "savgol_filter", "savgol_filters"]
+__all__ = [
+    "TimeGradient",
+    "convolve_full",
+    "convolve_same",
+    "savgol_coeffs",
+    "savgol_filter",
+    "savgol_filters",
+]
 
 
 @functools.lru_cache(maxsize=64)
@@ -51,9 +58,18 @@ def convolve_same(values: FloatArray, kernel: FloatArray) -> FloatArray:
     n, m = values.shape[-1], kernel.size
     if values.ndim == 1:
         return _convolve_series(values, (kernel,))[0]
-    size = 1 << (n + m - 2).bit_length()  # a power of two ≥ n + m − 1
-    full = np.fft.irfft(np.fft.rfft(values, size) * _spectrum(kernel, size), size)
-    out: FloatArray = full[..., m // 2 : m // 2 + n]
+    out: FloatArray = convolve_full(values, kernel)[..., m // 2 : m // 2 + n]
+    return out
+
+
+def convolve_full(rows: FloatArray, kernel: FloatArray) -> FloatArray:
+    """Each row's full convolution with ``kernel`` (``n + m − 1`` values:
+    ``out[i] = Σ_j kernel[j]·rows[i − j]``), by real FFTs of the power of two ≥ n + m − 1
+    (rounding ≈ 1e-16 of the rows' largest value)."""
+    n, m = rows.shape[-1], kernel.size
+    size = 1 << (n + m - 2).bit_length()
+    full = np.fft.irfft(np.fft.rfft(rows, size) * _spectrum(kernel, size), size)
+    out: FloatArray = full[..., : n + m - 1]
     return out
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
-from pipeline.continuous.filters import convolve_same, savgol_coeffs
+from pipeline.continuous.filters import convolve_full, convolve_same, savgol_coeffs
 from pipeline.continuous.store import carried_cumsum
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
@@ -155,10 +155,10 @@ class NoiseSums:
         length."""
         h1, h2, halo, near = self.d1.size // 2, self.d2.size // 2, self.halo, self.near
         p = step[:, :halo]  # offsets −halo … −1
-        q = _full_convolution(p * d_inc_rate[:, :halo], self.d1)[:, h1:]  # −halo … h1 − 1
+        q = convolve_full(p * d_inc_rate[:, :halo], self.d1)[:, h1:]  # −halo … h1 − 1
         q[:, :halo] += p * d_inc[:, :halo]
         # odo from q at −near − h₂ … h1 − 1 (q is 0 past h1 − 1): at −near … near − 2
-        odo = _full_convolution(q[:, h1:] * sin_i[:, h1 : halo + h1], self.d2)[:, 2 * h2 :]
+        odo = convolve_full(q[:, h1:] * sin_i[:, h1 : halo + h1], self.d2)[:, 2 * h2 :]
         width = 2 * near + 1
         qb, ob = np.zeros((step.shape[0], width)), np.zeros((step.shape[0], width))
         qb[:, : near + h1] = q[:, halo - near :]
@@ -184,13 +184,3 @@ class NoiseSums:
             self.noise.odometer / self.noise.gravity
         ) ** 2 * (far[1] + near_o)
         return out
-
-
-def _full_convolution(rows: FloatArray, kernel: FloatArray) -> FloatArray:
-    """Each row's full convolution with ``kernel`` (``n + m − 1`` values:
-    ``out[i] = Σ_j kernel[j]·rows[i − j]``), by real FFTs of the power of two above."""
-    n, m = rows.shape[-1], kernel.size
-    size = 1 << (n + m - 2).bit_length()
-    spectrum = np.fft.rfft(rows, size) * np.fft.rfft(kernel, size)
-    out: FloatArray = np.fft.irfft(spectrum, size)[..., : n + m - 1]
-    return out
