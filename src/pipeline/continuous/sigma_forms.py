@@ -203,13 +203,13 @@ def decayed(g: FloatArray, s: FloatArray, tau: float) -> FloatArray:
     carry = 0.0  # L at the segment's first cell
     for lo, hi in zip([0, *cuts], [*cuts, cells], strict=True):
         lift = (s[lo:hi] - s[lo]) / tau
-        running = np.empty(hi - lo + 1)
-        running[0] = carry
-        np.multiply(g[lo:hi], np.exp(lift), out=running[1:])
-        np.cumsum(running, out=running)
-        out[lo:hi] = running[:-1] * np.exp(-lift)
+        sums = np.empty(hi - lo + 1)
+        sums[0] = carry
+        np.multiply(g[lo:hi], np.exp(lift), out=sums[1:])
+        np.cumsum(sums, out=sums)
+        out[lo:hi] = sums[:-1] * np.exp(-lift)
         if hi < cells:
-            carry = float(running[-1] * np.exp(-(s[hi] - s[lo]) / tau))
+            carry = float(sums[-1] * np.exp(-(s[hi] - s[lo]) / tau))
     return out
 
 
