@@ -65,11 +65,19 @@ def fmt_sigma(value: float | None) -> str:
         return UNDEFINED
     if value == 0:
         return "0"
-    mantissa, exponent = f"{value:.{SIGMA_DIGITS - 1}e}".split("e")
+    form = _sigma_form(value, f"{value:.{SIGMA_DIGITS - 1}e}")
+    return form if isinstance(form, str) else _minus(f"{value:.{form}f}")
+
+
+def _sigma_form(value: float, scientific: str) -> str | int:
+    """How :func:`fmt_sigma` prints a finite, non-zero ``value`` whose ``%.1e`` text is
+    ``scientific``: that text (below 1e−4), else the decimals to print it fixed with (as
+    :func:`sigma_decimals`)."""
+    mantissa, exponent = scientific.split("e")
     power = int(exponent)
     if power < SIGMA_FIXED_BELOW:
         return _minus(f"{mantissa}e{power}")
-    return _minus(f"{value:.{sigma_decimals(value)}f}")
+    return max(SIGMA_DIGITS - 1 - power, 0) if value > 0 else 0
 
 
 def fmt_sigmas(values: NDArray[np.float64]) -> list[str]:
@@ -84,13 +92,11 @@ def fmt_sigmas(values: NDArray[np.float64]) -> list[str]:
         if value == 0:
             texts[i] = "0"
         elif math.isfinite(value):
-            mantissa, exponent = scientific[i].split("e")
-            power = int(exponent)
-            if power < SIGMA_FIXED_BELOW:
-                texts[i] = _minus(f"{mantissa}e{power}")
+            form = _sigma_form(value, scientific[i])
+            if isinstance(form, str):
+                texts[i] = form
             else:
-                decimals = max(SIGMA_DIGITS - 1 - power, 0) if value > 0 else 0  # as sigma_decimals
-                fixed.setdefault(decimals, []).append(i)
+                fixed.setdefault(form, []).append(i)
     for decimals, chosen in fixed.items():
         made = f"%.{decimals}f\n" * len(chosen) % tuple(plain[i] for i in chosen)
         for i, text in zip(chosen, made.split("\n"), strict=False):
