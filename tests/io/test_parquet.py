@@ -120,3 +120,23 @@ def test_field_metadata_that_is_not_text_is_a_contract_violation(
     assert str(caught.value) == (
         f"{path}: not valid as stations (reader 'parquet'): column 'azi': {problem}"
     )
+
+
+@pytest.mark.parametrize("whole", [True, False], ids=["read-whole", "buffered"])
+def test_a_stream_gives_the_files_rows_read_whole_or_through_a_buffer(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, whole: bool
+):
+    """Row groups of at most READ_WHOLE bytes are read whole, larger ones through the
+    buffer: either way the stream's batches are the file's rows, its schema and well."""
+    table = Stations.compiled().make_table(
+        {"md": [30.0 * i for i in range(5000)], "inc": [0.5] * 5000, "azi": [10.0] * 5000},
+        north_reference="true",
+    )
+    table = attach(table, WellMetadata(well="P-1"))
+    path = tmp_path / "rows.parquet"
+    pq.write_table(table, path, row_group_size=1200)
+    if not whole:
+        monkeypatch.setattr(parquet_plugin, "READ_WHOLE", 1000)  # < a row group's bytes
+    stream, well = READER.stream(path, "stations", None)
+    read = pa.Table.from_batches(list(stream), schema=stream.schema)
+    assert read.equals(table, check_metadata=True) and well == WellMetadata(well="P-1")

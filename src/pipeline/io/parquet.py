@@ -36,7 +36,13 @@ from pipeline.well import WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
 READ_BUFFER = 1 << 20
-"""Bytes read from the file at a time when streaming."""
+"""Bytes read from the file at a time when streaming row groups larger than
+:data:`READ_WHOLE`."""
+READ_WHOLE = 16 << 20
+"""The most bytes a row group may hold in the file (compressed) for its column chunks to be
+read whole when streaming (gyropipe's row groups of :data:`~pipeline.streams.BATCH_ROWS`
+rows hold ~0.5 MB a float column): a buffered read copies every page out of the buffer,
+~5 % of the CPU of decoding such a file (paired timing of the j-well samples)."""
 MAX_COLUMNS = 1_000
 """Most (leaf) columns a Parquet input may have (a survey table has tens)."""
 MAX_INFLATION = 100
@@ -82,20 +88,23 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
 
 
 def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
-    """:func:`read` as a stream: the schema and well metadata from the file's footer, the
-    rows in batches of at most :data:`BATCH_ROWS` rows, row group after row group, the
-    column chunks read through a buffer of :data:`READ_BUFFER` bytes (not whole); its
-    ``nbytes`` the decoded size the footer gives (:func:`_check_bounds`)."""
+    """:func:`read` as a stream: the schema and well metadata from the file's footer (read
+    once), the rows in batches of at most :data:`BATCH_ROWS` rows, row group after row
+    group, the column chunks of a row group read whole when it holds at most
+    :data:`READ_WHOLE` bytes of the file, else through a buffer of :data:`READ_BUFFER`
+    bytes (a foreign file's row groups may hold millions of rows); its ``nbytes`` the
+    decoded size the footer gives (:func:`_check_bounds`)."""
     try:
-        decoded = _check_bounds(path)
-        schema = pq.read_schema(path)
+        meta, decoded = _check_bounds(path)
+        schema = meta.schema.to_arrow_schema()
     except (OSError, pa.ArrowException) as exc:
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, schema)
+    buffer = 0 if _largest_group(meta) <= READ_WHOLE else READ_BUFFER
 
     def batches() -> Iterator[pa.RecordBatch]:
-        try:  # buffered reads, not the whole row group at once (they hold ~1 M rows)
-            with pq.ParquetFile(path, pre_buffer=False, buffer_size=READ_BUFFER) as file:
+        try:
+            with pq.ParquetFile(path, metadata=meta, pre_buffer=False, buffer_size=buffer) as file:
                 yield from file.iter_batches(
                     batch_size=BATCH_ROWS, use_threads=reader_threads() > 1
                 )
@@ -106,11 +115,22 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     return dataclasses.replace(stream, nbytes=decoded), _well(path, schema)
 
 
-def _check_bounds(path: Path) -> int:
+def _largest_group(meta: pq.FileMetaData) -> int:
+    """The most bytes (compressed, in the file) that one row group's column chunks hold."""
+    return max(
+        (
+            sum(group.column(j).total_compressed_size for j in range(group.num_columns))
+            for group in map(meta.row_group, range(meta.num_row_groups))
+        ),
+        default=0,
+    )
+
+
+def _check_bounds(path: Path) -> tuple[pq.FileMetaData, int]:
     """Refuse a file of more than :data:`MAX_COLUMNS` columns, or one that would decode to
-    more than its budget (module docstring), before anything is decoded; the bytes it
-    decodes to. (The footer is read through a dataset fragment: ``pq.read_metadata``
-    decodes the column names.)"""
+    more than its budget (module docstring), before anything is decoded; the footer and
+    the bytes the file decodes to. (The footer is read through a dataset fragment:
+    ``pq.read_metadata`` decodes the column names.)"""
     meta = next(ds.dataset(str(path), format="parquet").get_fragments()).metadata
     if meta.num_columns > MAX_COLUMNS:
         raise InputFileError(
@@ -129,7 +149,7 @@ def _check_bounds(path: Path) -> int:
             f"{decoded:,} bytes, more than {budget:,} ({MAX_INFLATION} times the file's "
             f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
         )
-    return decoded
+    return meta, decoded
 
 
 def _unreadable(path: Path, exc: Exception) -> InputFileError:
