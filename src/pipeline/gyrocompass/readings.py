@@ -386,21 +386,16 @@ def reading_stats(
     ``angle`` is given), the mean and sample standard deviation of each signal and its
     sample count ``n``, over the samples [a, b) of the columns (the readings in order, none
     overlapping: ``b[i]`` ≤ ``a[i + 1]``, each of at least 2 samples). A reading's numbers
-    do not depend on its neighbours: the frame angle is reduced in place (the samples
-    between readings passed over and dropped), each signal in a buffer of the readings'
-    samples alone (:class:`_Packed`: the gaps are not gone over)."""
-    cuts = np.stack([a, b], axis=1).ravel()[:-1] - a[0]
-    """reading starts and ends (even: a reading, odd: a gap) within [a[0], b[-1])"""
-    span = slice(int(a[0]), int(b[-1]))
+    do not depend on its neighbours: each column is reduced in a buffer of the readings'
+    samples alone (:class:`_Packed`: the samples between readings are not gone over)."""
     n = b - a
     columns: dict[str, np.ndarray] = {"t": (time[a] + time[b - 1]) / 2}
+    packed = _Packed(a, b)
     if angle is not None:
-        columns["frame_angle"] = _circular_mean(angle[span], cuts)
+        columns["frame_angle"] = _circular_mean(packed.gather(angle), packed.starts)
     stds: dict[str, FloatArray] = {}
-    if signals:
-        packed = _Packed(a, b)
-        for name, values in signals.items():
-            columns[name], stds[f"{name}_std"] = packed.mean_std(values)
+    for name, values in signals.items():
+        columns[name], stds[f"{name}_std"] = packed.mean_std(values)
     return columns | stds | {"n": n}
 
 
@@ -420,6 +415,13 @@ class _Packed:
         """(samples in the signal, the same samples in the buffer) of each reading"""
         self.dev: FloatArray = np.empty(int(self.n.sum()))
 
+    def gather(self, x: FloatArray) -> FloatArray:
+        """The readings' samples of ``x`` end to end (the buffer: overwritten by the next
+        call of either method)."""
+        for signal, packed in self.pieces:
+            self.dev[packed] = x[signal]
+        return self.dev
+
     def mean_std(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Mean and sample standard deviation (ddof = 1) of each reading's samples of ``x``,
         taken about the reading's first sample so that constant signals average exactly."""
@@ -434,9 +436,10 @@ class _Packed:
         return first + shift, np.sqrt(var)
 
 
-def _circular_mean(degrees: FloatArray, cuts: IndexArray) -> FloatArray:
-    """Circular mean (deg, [0, 360)) of the angles of each even segment (split at ``cuts``)."""
-    sin, cos = (np.add.reduceat(v, cuts)[::2] for v in _sin_cos(degrees))
+def _circular_mean(degrees: FloatArray, starts: IndexArray) -> FloatArray:
+    """Circular mean (deg, [0, 360)) of the angles of each segment (from each of ``starts``
+    to the next)."""
+    sin, cos = (np.add.reduceat(v, starts) for v in _sin_cos(degrees))
     mean = np.degrees(np.arctan2(sin, cos)) % 360.0
     wrapped: FloatArray = np.where(mean < 360.0, mean, 0.0)  # −tiny % 360 rounds to 360
     return wrapped
@@ -480,7 +483,7 @@ def exact_median(pieces: list[FloatArray]) -> float:
     sample = np.sort(values[:: n // 512])
     lo, hi = sample[int(0.4 * sample.size)], sample[int(0.6 * sample.size)]
     below = int(np.count_nonzero(values < lo))
-    near = values[(values >= lo) & (values <= hi)]
+    near = np.compress((values >= lo) & (values <= hi), values)  # (half the time of values[mask])
     above = int(np.count_nonzero(values > hi))
     middle = ((n - 1) // 2 - below, n // 2 - below)  # of the near values, in order
     if below + near.size + above != n or middle[0] < 0 or middle[1] >= near.size:
