@@ -36,13 +36,7 @@ from pipeline.well import WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
 READ_BUFFER = 1 << 20
-"""Bytes read from the file at a time when streaming row groups larger than
-:data:`READ_WHOLE`."""
-READ_WHOLE = 16 << 20
-"""The most bytes a row group may hold in the file (compressed) for its column chunks to be
-read whole when streaming (gyropipe's row groups of :data:`~pipeline.streams.BATCH_ROWS`
-rows hold ~0.5 MB a float column): a buffered read copies every page out of the buffer,
-~5 % of the CPU of decoding such a file (paired timing of the j-well samples)."""
+"""Bytes read from the file at a time when streaming."""
 MAX_COLUMNS = 1_000
 """Most (leaf) columns a Parquet input may have (a survey table has tens)."""
 MAX_INFLATION = 100
@@ -85,6 +79,14 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, table.schema)
     return table, _well(path, table.schema)
+
+
+READ_WHOLE = 16 << 20
+"""The most bytes a row group may hold in the file (compressed) for :func:`stream` to read
+its column chunks whole, not through a buffer of :data:`READ_BUFFER` bytes (gyropipe's row
+groups of :data:`~pipeline.streams.BATCH_ROWS` rows hold ~0.5 MB a float column): a
+buffered read copies every page out of the buffer, ~5 % of the CPU of decoding such a file
+(paired timing of the j-well samples)."""
 
 
 def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetadata]:
