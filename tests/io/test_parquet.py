@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -12,6 +13,7 @@ import pytest
 from pipeline.errors import InputFileError
 from pipeline.io import parquet as parquet_plugin
 from pipeline.plugins import load_registry
+from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import Stations
 from pipeline.well import WELL_KEY, WellMetadata, attach
 from tests_support import plugin_io
@@ -74,6 +76,27 @@ def test_writer_round_trip(tmp_path: Path):
     table = pa.table({"md": pa.array([1.0])})
     WRITER.write(table, tmp_path / "t.parquet", WellMetadata())
     assert pq.read_table(tmp_path / "t.parquet").equals(table)
+
+
+def test_the_buffered_writes_are_pyarrows_own_bytes(tmp_path: Path):
+    """Through its write buffer a table, and a stream of several row groups (more bytes than
+    the buffer holds), are written byte for byte as pyarrow writes them to a path."""
+    rng = np.random.default_rng(1)
+    n = 200_000  # 3.2 MB of floats: past WRITE_BUFFER, the buffer flushed mid-file
+    table = pa.table({"t": rng.random(n), "k": pa.array(np.arange(n) % 7)})
+    assert table.nbytes > parquet_plugin.WRITE_BUFFER
+    plain = dict(use_dictionary=["k"])
+    WRITER.write(table, tmp_path / "w.parquet", WellMetadata())
+    pq.write_table(table, tmp_path / "p.parquet", row_group_size=BATCH_ROWS, **plain)
+    assert (tmp_path / "w.parquet").read_bytes() == (tmp_path / "p.parquet").read_bytes()
+    stream = TableStream.from_table(table)
+    WRITER.write_stream(stream, tmp_path / "ws.parquet", WellMetadata())
+    with pq.ParquetWriter(tmp_path / "ps.parquet", table.schema, **plain) as writer:
+        for batch in stream:
+            writer.write_batch(batch)
+    assert (tmp_path / "ws.parquet").read_bytes() == (tmp_path / "ps.parquet").read_bytes()
+    assert pq.ParquetFile(tmp_path / "ws.parquet").num_row_groups == 4
+    assert pq.read_table(tmp_path / "ws.parquet").equals(table)
 
 
 def test_a_column_name_that_is_not_text_is_located(tmp_path: Path):

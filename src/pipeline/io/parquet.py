@@ -37,6 +37,8 @@ from pipeline.well import WELL_KEY, WellMetadata, well_of
 MAGIC = b"PAR1"
 READ_BUFFER = 1 << 20
 """Bytes read from the file at a time when streaming."""
+WRITE_BUFFER = 1 << 20
+"""Bytes gathered before a write to the file (:func:`_sink`)."""
 MAX_COLUMNS = 1_000
 """Most (leaf) columns a Parquet input may have (a survey table has tens)."""
 MAX_INFLATION = 100
@@ -216,19 +218,31 @@ def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
     :data:`~pipeline.streams.BATCH_ROWS` rows: a streamed read decodes a row group at a
     time, so its memory is bounded by the row group, not by the survey. Float columns are
     stored plain (:func:`dictionary_columns`)."""
-    pq.write_table(
-        table, path, row_group_size=BATCH_ROWS, use_dictionary=dictionary_columns(table.schema)
-    )
+    with _sink(path) as sink:
+        pq.write_table(
+            table, sink, row_group_size=BATCH_ROWS, use_dictionary=dictionary_columns(table.schema)
+        )
 
 
 def write_stream(stream: TableStream, path: Path, well: WellMetadata) -> None:
     """Write one pass of ``stream`` as Parquet, a row group per batch (the schema, with its
     field and schema metadata, as :func:`write` keeps it)."""
-    with pq.ParquetWriter(
-        path, stream.schema, use_dictionary=dictionary_columns(stream.schema)
-    ) as writer:
+    with (
+        _sink(path) as sink,
+        pq.ParquetWriter(
+            sink, stream.schema, use_dictionary=dictionary_columns(stream.schema)
+        ) as writer,
+    ):
         for batch in stream:
             writer.write_batch(batch)
+
+
+def _sink(path: Path) -> pa.BufferedOutputStream:
+    """``path`` opened for writing through a buffer of :data:`WRITE_BUFFER` bytes: the
+    Parquet writer writes each page header, page and footer part on its own (a 24-column
+    table of 122 rows: ~80 writes), each a system call when it writes to the file itself
+    (0.1 ms of the 0.8 a table cost; the bytes are the same)."""
+    return pa.BufferedOutputStream(pa.OSFile(str(path), "wb"), WRITE_BUFFER)
 
 
 def dictionary_columns(schema: pa.Schema) -> list[str]:
