@@ -365,13 +365,21 @@ class RunningIntegrals:
         return out
 
 
+_WHOLE_CHUNKS = 2
+"""Chunks of steps that :func:`median_step` reads at once (a 65,536-row chunk: 512 KiB)."""
+
+
 def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> float:
     """Median of the steps ``x[k+1] − x[k]`` of column ``name`` over rows ``[lo, hi)``, exactly
     as ``np.median(np.diff(x))``: a histogram pass finds the bins holding the middle steps,
-    a second pass collects the steps in them."""
+    a second pass collects the steps in them. Steps of up to :data:`_WHOLE_CHUNKS` chunks are
+    read whole and given to ``np.median`` itself (a 120,000-sample run: 0.4 ms, against 2 ms
+    by the passes, most of it their histograms)."""
     count = hi - lo - 1
     if count < 1:
         return float("nan")
+    if count <= _WHOLE_CHUNKS * rows:
+        return float(np.median(np.diff(store.floats(name, lo, hi))))
 
     def steps() -> Iterator[FloatArray]:
         for a, b in chunks(lo, hi - 1, rows):
