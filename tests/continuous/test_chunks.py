@@ -145,6 +145,19 @@ def test_median_step_in_chunks_is_the_median_of_the_whole_diff(rows: int) -> Non
             assert got == want or (np.isnan(got) and np.isnan(want)), (name, lo)
 
 
+@pytest.mark.parametrize("extra", [-1, 0, 1])
+def test_median_step_read_whole_or_by_passes_at_its_bound(extra: int) -> None:
+    """Steps of up to two chunks are read whole, one more goes through the histogram passes:
+    either way np.median's number, for a clock of a few distinct steps around 0.01 s."""
+    rows = 50
+    steps = 100 + extra  # two chunks of steps, one fewer, one more
+    clock = 300.0 + np.arange(steps + 1) * 0.01  # the steps rounded a few ways
+    store = ColumnStore()
+    store.write("time", 0, clock)
+    assert np.unique(np.diff(clock)).size > 1
+    assert median_step(store, "time", 0, clock.size, rows) == np.median(np.diff(clock))
+
+
 @pytest.mark.parametrize("rows", [1, 13, 5000])
 def test_carried_unwrap_in_chunks_is_np_unwrap_of_the_whole_series(rows: int) -> None:
     rng = np.random.default_rng(rows)

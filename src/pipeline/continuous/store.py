@@ -343,12 +343,14 @@ class RunningIntegrals:
         part = (self._x[here][inside] - xp[j]) / (xp[j + 1] - xp[j])
         starts = np.unique(np.concatenate([[0], j]))  # cells: from each point's step
         at = np.searchsorted(starts, j)
-        width = np.diff(xp)
-        steps = np.empty(width.size)
+        # width·(f[1:] + f[:-1])/2 as (f[1:] + f[:-1])·(width/2), in place: the same numbers
+        # (halving is exact and commutes with the rounding of the product but for subnormals)
+        half_width = np.diff(xp)
+        half_width *= 0.5
+        steps = np.empty(half_width.size)
         for row, f in enumerate(values):
-            np.add(f[1:], f[:-1], out=steps)  # width·(f[1:] + f[:-1])/2, in place
-            steps *= width
-            steps /= 2
+            np.add(f[1:], f[:-1], out=steps)
+            steps *= half_width
             cells = np.add.reduceat(steps, starts) if steps.size else np.zeros(0)
             before = self._total[row] + np.concatenate([[0.0], np.cumsum(cells)])
             out = np.where(step < 0, 0.0, before[-1])
@@ -365,13 +367,21 @@ class RunningIntegrals:
         return out
 
 
+_WHOLE_CHUNKS = 2
+"""Chunks of steps that :func:`median_step` reads at once (a 65,536-row chunk: 512 KiB)."""
+
+
 def median_step(store: ColumnStore, name: str, lo: int, hi: int, rows: int) -> float:
     """Median of the steps ``x[k+1] − x[k]`` of column ``name`` over rows ``[lo, hi)``, exactly
     as ``np.median(np.diff(x))``: a histogram pass finds the bins holding the middle steps,
-    a second pass collects the steps in them."""
+    a second pass collects the steps in them. Steps of up to :data:`_WHOLE_CHUNKS` chunks are
+    read whole and given to ``np.median`` itself (a 120,000-sample run: 0.4 ms, against 2 ms
+    by the passes, most of it their histograms)."""
     count = hi - lo - 1
     if count < 1:
         return float("nan")
+    if count <= _WHOLE_CHUNKS * rows:
+        return float(np.median(np.diff(store.floats(name, lo, hi))))
 
     def steps() -> Iterator[FloatArray]:
         for a, b in chunks(lo, hi - 1, rows):
