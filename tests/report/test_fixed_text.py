@@ -4,6 +4,8 @@ values that round to zero from below, NaN, and large and tiny magnitudes."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -11,10 +13,12 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from pipeline.reports.charts.fixed import BULK, point_texts, rows
+from pipeline.reports.charts.pdf import CIRCLE
 
 
 def python(template: str, values: np.ndarray, decimals: int) -> str:
-    each = template.replace("{}", f"{{:.{decimals}f}}")
+    """``str.format`` of each row (its fields ``{}`` or numbered ``{j}``)."""
+    each = re.sub(r"\{(\d*)\}", rf"{{\1:.{decimals}f}}", template)
     return "".join(each.format(*row) for row in values.tolist())
 
 
@@ -78,6 +82,19 @@ def test_many_columns_between_texts_of_any_length_read_as_python_writes_them(dec
     template = "".join(f"{{}}{' ' * (j % 3)}{'c' * (j % 2)}" for j in range(13))
     assert values.size >= BULK and not template.startswith(" ")
     assert rows(template, values, decimals) == python(template, values, decimals)
+
+
+@pytest.mark.parametrize("count", [BULK, 3])
+@pytest.mark.parametrize("decimals", [0, 2])
+def test_numbered_fields_write_their_column_wherever_they_appear(count: int, decimals: int):
+    """``{j}`` fields (a circle's 26 numbers from its 10 columns, the PDF's template), in
+    bulk and by Python: each as ``str.format`` writes it, a column left unwritten too."""
+    values = np.random.default_rng(7).uniform(-700.0, 700.0, (count, 10))
+    values[1, 3], values[2, 9] = -0.0, -0.004
+    assert rows(CIRCLE, values, decimals) == python(CIRCLE, values, decimals)
+    assert rows("{2}|{0}|{2}\n", values[:, :3], decimals) == python(
+        "{2}|{0}|{2}\n", values[:, :3], decimals
+    )
 
 
 def test_a_percent_sign_in_the_template_is_text_in_the_few_numbers_path():

@@ -5,6 +5,7 @@ operations, not a formatted string per number)."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from functools import cache
 
@@ -23,14 +24,19 @@ is formatted by Python (round half to even on the exact value)."""
 
 
 def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
-    """Each row of ``values`` (n × k) written into ``template`` (k ``{}``, plain text
-    otherwise) with ``decimals`` decimals, the rows one after the other."""
+    """Each row of ``values`` (n × k) written into ``template`` with ``decimals`` decimals,
+    the rows one after the other. The template's fields are its k columns in order
+    (``{}``) or numbered as ``str.format``'s (``{j}``: column j, written wherever it
+    appears, each column's digits made once); plain text otherwise."""
     if values.size >= BULK:
         scaled = np.abs(values) * 10.0**decimals
         off_tie = np.abs(scaled - np.floor(scaled) - 0.5) > TIE  # False for NaN
         if off_tie.all() and scaled.max() < LIMIT:
             return _digits(template, values, scaled, decimals)
-    return _printf(template, decimals) * len(values) % tuple(values.ravel().tolist())
+    printf, fields = _printf(template, decimals)
+    if fields is not None:
+        values = values[:, fields]
+    return printf * len(values) % tuple(values.ravel().tolist())
 
 
 def point_texts(
@@ -81,25 +87,48 @@ def _digits(
     return planes[index].T.tobytes().translate(None, b"\0").decode("ascii")  # NULs dropped
 
 
+FIELD = re.compile(r"\{(\d*)\}")
+"""A template's field: ``{}`` (the next column) or ``{j}`` (column j)."""
+
+
 @cache
-def _printf(template: str, decimals: int) -> str:
-    """``template`` as a ``%`` format of its ``{}`` with ``decimals`` decimals (``"%.2f"``
+def _fields(template: str) -> tuple[list[str], tuple[int, ...]]:
+    """``template``'s text between its fields (one more piece than fields) and the column
+    each field writes."""
+    parts = FIELD.split(template)
+    numbers = parts[1::2]
+    if all(numbers):
+        fields = tuple(map(int, numbers))
+    else:
+        assert not any(numbers), "fields all numbered or none"
+        fields = tuple(range(len(numbers)))
+    return parts[::2], fields
+
+
+@cache
+def _printf(template: str, decimals: int) -> tuple[str, list[int] | None]:
+    """``template`` as a ``%`` format of its fields with ``decimals`` decimals (``"%.2f"``
     prints a float as ``f"{v:.2f}"`` does, NaN, infinities and −0 alike; one ``%`` of all the
-    rows at once costs half a ``str.format`` call per row)."""
-    return template.replace("%", "%%").replace("{}", f"%.{decimals}f")
+    rows at once costs half a ``str.format`` call per row), and the column of each field
+    (None: the columns in order)."""
+    pieces, fields = _fields(template)
+    ordered = fields == tuple(range(len(fields)))
+    return f"%.{decimals}f".join(p.replace("%", "%%") for p in pieces), (
+        None if ordered else list(fields)
+    )
 
 
 @cache
 def _layout(template: str, k: int, width: int) -> tuple[NDArray[np.intp], bytes]:
     """A row of ``template`` as the character columns it is gathered from, of ``k`` fields
-    of ``width`` characters followed by the template's text (``k`` ``{}`` in it)."""
-    pieces = template.split("{}")
-    assert len(pieces) == k + 1, "one {} per column"
+    of ``width`` characters (one a column) followed by the template's text."""
+    pieces, fields = _fields(template)
+    assert all(f < k for f in fields), "a field of each column"
     index: list[int] = []
     at = k * width
     for j, piece in enumerate(pieces):
         index.extend(range(at, at + len(piece)))
         at += len(piece)
-        if j < k:
-            index.extend(range(j * width, (j + 1) * width))
+        if j < len(fields):
+            index.extend(range(fields[j] * width, (fields[j] + 1) * width))
     return np.array(index, np.intp), "".join(pieces).encode("ascii")

@@ -4,7 +4,6 @@ scene's y-down points mapped onto the page and scaled."""
 
 from __future__ import annotations
 
-import re
 from functools import lru_cache
 from pathlib import Path as FilePath
 
@@ -97,16 +96,14 @@ CIRCLE = (
     "{5} {9} c {3} {9} {0} {8} {0} {1} c h "
 )
 """A circle of four Bézier quarters from x + r, y + r·κ, x + r·κ, x, y + r, x − r·κ, x − r,
-y − r·κ, y − r (arguments 0…9)."""
-_CIRCLE_ORDER = [int(k) for k in re.findall(r"\{(\d)\}", CIRCLE)]
-_CIRCLE_TEMPLATE = re.sub(r"\{\d\}", "{}", CIRCLE)
+y − r·κ, y − r (columns 0…9: each written where it appears, its digits made once)."""
 
 
 def _circles(centres: Points, r: float) -> str:
     k = KAPPA * r
     x, y = centres[:, 0], centres[:, 1]
     columns = np.column_stack((x + r, y, y + k, x + k, y + r, x, x - k, x - r, y - k, y - r))
-    return rows(_CIRCLE_TEMPLATE, columns[:, _CIRCLE_ORDER], 2)[:-1]
+    return rows(CIRCLE, columns, 2)[:-1]
 
 
 def _marks(m: Marks, at: _Placed) -> str:
