@@ -12,8 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.reports.charts.fixed import BULK, point_texts, rows
+from pipeline.reports.charts.fixed import BULK, few_point_texts, point_texts, rows
 from pipeline.reports.charts.pdf import CIRCLE
+from pipeline.reports.charts.scene import Path
 
 
 def python(template: str, values: np.ndarray, decimals: int) -> str:
@@ -103,3 +104,27 @@ def test_a_percent_sign_in_the_template_is_text_in_the_few_numbers_path():
     values = np.array([[1.005, -0.0], [np.inf, 250.5]])
     assert values.size < BULK
     assert rows("{}% of {}%%\n", values, 2) == "1.00% of -0.00%%\ninf% of 250.50%%\n"
+
+
+def test_few_point_texts_write_each_short_path_as_python_writes_each_point():
+    """The short paths of a scene written in one call: each subpath's points as Python
+    writes them (mapped first), empty subpaths left out, a path of many numbers left to
+    be written alone; many short paths together are written in bulk, rounding ties too."""
+    rng = np.random.default_rng(8)
+    short = Path((rng.uniform(0, 500, (2, 2)), np.zeros((0, 2)), rng.uniform(0, 500, (5, 2))))
+    single = Path((np.array([[18.125, -0.0]]),))  # mapped: a rounding tie, and −0
+    empty = Path((np.zeros((0, 2)),))
+    long = Path((rng.uniform(0, 500, (BULK // 2, 2)),))
+    ticks = [Path((np.array([[k + 0.125, 0.875], [k + 0.375, -k - 0.625]]),)) for k in range(200)]
+    found = few_point_texts([short, long, single, empty], 1, ",", lambda p: p * 2.0)
+    assert set(found) == {id(short), id(single), id(empty)}
+    assert found[id(short)] == [
+        [f"{2 * x:.1f},{2 * y:.1f}" for x, y in part.tolist()] for part in short.parts[::2]
+    ]
+    assert found[id(single)] == [["36.2,-0.0"]]
+    assert found[id(empty)] == []
+    assert 4 * len(ticks) >= BULK
+    found = few_point_texts(ticks, 1, " ", lambda p: p * 2.0)
+    assert [found[id(t)] for t in ticks] == [
+        [[f"{2 * x:.1f} {2 * y:.1f}" for x, y in t.parts[0].tolist()]] for t in ticks
+    ]
