@@ -4,17 +4,22 @@ values that round to zero from below, NaN, and large and tiny magnitudes."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.reports.charts.fixed import BULK, point_texts, rows
+from pipeline.reports.charts.fixed import BULK, few_point_texts, point_texts, rows
+from pipeline.reports.charts.pdf import CIRCLE
+from pipeline.reports.charts.scene import Path
 
 
 def python(template: str, values: np.ndarray, decimals: int) -> str:
-    each = template.replace("{}", f"{{:.{decimals}f}}")
+    """``str.format`` of each row (its fields ``{}`` or numbered ``{j}``)."""
+    each = re.sub(r"\{(\d*)\}", rf"{{\1:.{decimals}f}}", template)
     return "".join(each.format(*row) for row in values.tolist())
 
 
@@ -80,9 +85,46 @@ def test_many_columns_between_texts_of_any_length_read_as_python_writes_them(dec
     assert rows(template, values, decimals) == python(template, values, decimals)
 
 
+@pytest.mark.parametrize("count", [BULK, 3])
+@pytest.mark.parametrize("decimals", [0, 2])
+def test_numbered_fields_write_their_column_wherever_they_appear(count: int, decimals: int):
+    """``{j}`` fields (a circle's 26 numbers from its 10 columns, the PDF's template), in
+    bulk and by Python: each as ``str.format`` writes it, a column left unwritten too."""
+    values = np.random.default_rng(7).uniform(-700.0, 700.0, (count, 10))
+    values[1, 3], values[2, 9] = -0.0, -0.004
+    assert rows(CIRCLE, values, decimals) == python(CIRCLE, values, decimals)
+    assert rows("{2}|{0}|{2}\n", values[:, :3], decimals) == python(
+        "{2}|{0}|{2}\n", values[:, :3], decimals
+    )
+
+
 def test_a_percent_sign_in_the_template_is_text_in_the_few_numbers_path():
     """Fewer numbers than :data:`BULK` are written by Python's ``%``: a ``%`` of the
     template stays a character."""
     values = np.array([[1.005, -0.0], [np.inf, 250.5]])
     assert values.size < BULK
     assert rows("{}% of {}%%\n", values, 2) == "1.00% of -0.00%%\ninf% of 250.50%%\n"
+
+
+def test_few_point_texts_write_each_short_path_as_python_writes_each_point():
+    """The short paths of a scene written in one call: each subpath's points as Python
+    writes them (mapped first), empty subpaths left out, a path of many numbers left to
+    be written alone; many short paths together are written in bulk, rounding ties too."""
+    rng = np.random.default_rng(8)
+    short = Path((rng.uniform(0, 500, (2, 2)), np.zeros((0, 2)), rng.uniform(0, 500, (5, 2))))
+    single = Path((np.array([[18.125, -0.0]]),))  # mapped: a rounding tie, and −0
+    empty = Path((np.zeros((0, 2)),))
+    long = Path((rng.uniform(0, 500, (BULK // 2, 2)),))
+    ticks = [Path((np.array([[k + 0.125, 0.875], [k + 0.375, -k - 0.625]]),)) for k in range(200)]
+    found = few_point_texts([short, long, single, empty], 1, ",", lambda p: p * 2.0)
+    assert set(found) == {id(short), id(single), id(empty)}
+    assert found[id(short)] == [
+        [f"{2 * x:.1f},{2 * y:.1f}" for x, y in part.tolist()] for part in short.parts[::2]
+    ]
+    assert found[id(single)] == [["36.2,-0.0"]]
+    assert found[id(empty)] == []
+    assert 4 * len(ticks) >= BULK
+    found = few_point_texts(ticks, 1, " ", lambda p: p * 2.0)
+    assert [found[id(t)] for t in ticks] == [
+        [[f"{2 * x:.1f} {2 * y:.1f}" for x, y in t.parts[0].tolist()]] for t in ticks
+    ]

@@ -4,13 +4,12 @@ scene's y-down points mapped onto the page and scaled."""
 
 from __future__ import annotations
 
-import re
 from functools import lru_cache
 from pathlib import Path as FilePath
 
 import numpy as np
 
-from pipeline.reports.charts.fixed import point_texts, rows
+from pipeline.reports.charts.fixed import Few, few_point_texts, point_texts, rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -20,6 +19,7 @@ from pipeline.reports.charts.scene import (
     Scene,
     outline,
     outline_runs,
+    paths,
 )
 from pipeline.reports.pdf_canvas import PT, Page, fill_colour, stroke_colour, write_pdf
 
@@ -74,15 +74,22 @@ def _stroke(colour: str, width: float, dashes: tuple[float, ...], s: float) -> s
     return f"{stroke_colour(colour)} {_n(width * s)} w [{dash}] 0 d"
 
 
-def _path(p: Path, at: _Placed) -> str:
-    parts = [part for part in p.parts if len(part)]
-    if not parts:
+def _body(p: Path, at: _Placed, few: Few) -> str:
+    """The subpaths of ``p`` placed by ``at``: its texts in ``few``, or (a path of many
+    points) its own."""
+    runs = few.get(id(p))
+    if runs is None:
+        parts = [part for part in p.parts if len(part)]
+        if len(parts) == 1:
+            return _line(at.xy(parts[0]), p.closed)
+        runs = point_texts(at.xy(np.concatenate(parts)), [len(part) for part in parts], 2, " ")
+    return " ".join(_polyline(points, p.closed) for points in runs)
+
+
+def _path(p: Path, at: _Placed, few: Few) -> str:
+    body = _body(p, at, few)
+    if not body:
         return ""
-    if len(parts) == 1:
-        body = _line(at.xy(parts[0]), p.closed)
-    else:
-        texts = point_texts(at.xy(np.concatenate(parts)), [len(part) for part in parts], 2, " ")
-        body = " ".join(_polyline(points, p.closed) for points in texts)
     style = []
     if p.fill:
         style.append(fill_colour(p.fill))
@@ -97,16 +104,14 @@ CIRCLE = (
     "{5} {9} c {3} {9} {0} {8} {0} {1} c h "
 )
 """A circle of four Bézier quarters from x + r, y + r·κ, x + r·κ, x, y + r, x − r·κ, x − r,
-y − r·κ, y − r (arguments 0…9)."""
-_CIRCLE_ORDER = [int(k) for k in re.findall(r"\{(\d)\}", CIRCLE)]
-_CIRCLE_TEMPLATE = re.sub(r"\{\d\}", "{}", CIRCLE)
+y − r·κ, y − r (columns 0…9: each written where it appears, its digits made once)."""
 
 
 def _circles(centres: Points, r: float) -> str:
     k = KAPPA * r
     x, y = centres[:, 0], centres[:, 1]
     columns = np.column_stack((x + r, y, y + k, x + k, y + r, x, x - k, x - r, y - k, y - r))
-    return rows(_CIRCLE_TEMPLATE, columns[:, _CIRCLE_ORDER], 2)[:-1]
+    return rows(CIRCLE, columns, 2)[:-1]
 
 
 def _marks(m: Marks, at: _Placed) -> str:
@@ -146,18 +151,18 @@ def _label(page: Page, t: Label, at: _Placed) -> None:
     page.glyphs(px, py, t.text, t.size * at.s, t.colour, bold=t.bold, angle=t.angle)
 
 
-def _group(page: Page, g: Group, at: _Placed) -> None:
+def _group(page: Page, g: Group, at: _Placed, few: Few) -> None:
     if g.clip is not None:
         x, y, w, h = g.clip
         cx, cy = at.point(x, y + h)
         page.raw(f"q {_n(cx)} {_n(cy)} {_n(w * at.s)} {_n(h * at.s)} re W n")
     for item in g.items:
         if isinstance(item, Group):
-            _group(page, item, at)
+            _group(page, item, at, few)
         elif isinstance(item, Label):
             _label(page, item, at)
         else:
-            ops = _path(item, at) if isinstance(item, Path) else _marks(item, at)
+            ops = _path(item, at, few) if isinstance(item, Path) else _marks(item, at)
             if ops:
                 page.raw(ops)
     if g.clip is not None:
@@ -168,7 +173,8 @@ def draw(page: Page, scene: Scene, left: float, top: float, width: float) -> Non
     """``scene`` on ``page`` with its top-left corner at (left, top) inches from the
     page's bottom-left, scaled to ``width`` inches."""
     page.raw("q 1 j 0 J")
-    _group(page, scene.root, _Placed(left * PT, top * PT, width * PT / scene.width))
+    at = _Placed(left * PT, top * PT, width * PT / scene.width)
+    _group(page, scene.root, at, few_point_texts(paths(scene.root), 2, " ", at.xy))
     page.raw("Q")
 
 

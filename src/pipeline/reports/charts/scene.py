@@ -133,6 +133,19 @@ def points(group: Group) -> Points:
     return np.concatenate(found)
 
 
+def paths(group: Group) -> list[Path]:
+    """Every path drawn in ``group`` (not in drawing order: a group's before those of the
+    groups in it)."""
+    found, groups = [], [group]
+    for outer in groups:  # the groups met so far, the list growing as they are met
+        for item in outer.items:
+            if isinstance(item, Group):
+                groups.append(item)
+            elif isinstance(item, Path):
+                found.append(item)
+    return found
+
+
 def covered(xy: Points, box: tuple[float, float, float, float]) -> int:
     """How many of the points ``xy`` lie in ``box`` (x0, y0, x1, y1)."""
     x0, y0, x1, y1 = box
