@@ -492,12 +492,7 @@ def fit_positions(
             "use more positions or trend: false"
         )
     normal = a.T @ (a * w[:, None])
-    # np.linalg.cond's number, s_max / s_min (0/0, no matrix here, would be its inf), less
-    # cond's wrapping of the SVD: a third of the fit's time
-    singular = np.linalg.svd(normal, compute_uv=False)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ill_conditioned = not singular[0] / singular[-1] <= 1e10
-    if ill_conditioned:
+    if np.linalg.cond(normal) > 1e10:
         raise StationReject("the frame positions do not span the circle (ill-conditioned fit)")
     cov = np.asarray(np.linalg.inv(normal), dtype=np.float64)
     params = cov @ (a.T @ (w * y))
