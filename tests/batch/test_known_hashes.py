@@ -140,3 +140,30 @@ def test_a_fresh_input_is_hashed_again_and_a_task_s_stale_key_is_not_trusted(
     assert outcome.status == "done", outcome.error
     assert outcome.manifest["inputs"]["stations"]["sha256"] == digest
     assert hashed.paths.count(str(a)) == 1
+
+
+def test_a_failed_run_hashes_its_input_once_and_takes_a_known_hash_unread(
+    tmp_path: Path, survey: Path, hashed: Hashed
+):
+    (a,) = make_wells(tmp_path / "in", ["A"])
+    pattern, out = tmp_path / "in" / "*.csv", tmp_path / "out"
+    batch(pattern, out, survey)
+    last = hashed.tasks[-1]
+
+    # the input damaged: the run fails in a stage, the file read for its hash once only
+    a.write_text(a.read_text().replace("\n1", "\nnot-a-number", 1))
+    hashed.paths.clear()
+    outcome = run_well(dataclasses.replace(last, run_id=last.run_id + 1), hashed.ref)
+    assert outcome.status == "failed"
+    assert outcome.hashes == {str(a): hashlib.sha256(a.read_bytes()).hexdigest()}
+    assert hashed.paths.count(str(a)) == 1
+
+    # failed before anything ran (a stranger's file in OUT/A): the task's settled hash for
+    # the file's key is taken as is, unread
+    (out / "A" / "notes.txt").write_text("mine")
+    known = {str(a): (filestate.file_key(a), "0" * 64)}
+    hashed.paths.clear()
+    outcome = run_well(dataclasses.replace(last, run_id=last.run_id + 2, known=known), hashed.ref)
+    assert outcome.status == "failed" and "notes.txt" in outcome.error
+    assert outcome.hashes == {str(a): "0" * 64}
+    assert hashed.paths == []

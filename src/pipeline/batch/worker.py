@@ -3,9 +3,10 @@ whole to ``OUT/<well>``. It never raises: any failure comes back as a failed
 :class:`WellOutcome`. It never touches the ledger (only the batch process does), so it can
 run on any machine that sees the input and output files.
 
-The worker is where files are read: it hashes the inputs (``run.json``) — but an input
-whose stat key is the one the batch process saw and holds a settled hash for
-(:attr:`WellTask.known`), which it takes as is, unread — and the files a check names
+The worker is where files are read: it hashes each input once (``run.json``, and a failed
+run's outcome) — but an input whose stat key is the one the batch process saw and holds a
+settled hash for (:attr:`WellTask.known`), which it takes as is, unread — and the files a
+check names
 (:attr:`WellTask.check`); it fails a run whose input changed while it ran (its
 stat before and after), and checks that ``OUT/<well>`` holds the run once published.
 """
@@ -42,7 +43,7 @@ from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
 from .filestate import FileKey, key_after
-from .fingerprint import completed_json, hashed
+from .fingerprint import UNREADABLE, completed_json, hashed
 from .fleet import WellFigures, figures_record, run_figures, well_figures
 from .publish import MARKER, Publication, read_published, staging_dir, write_marker
 
@@ -183,12 +184,15 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
         )
     set_reader_threads(1)
     staging = staging_dir(Path(task.out_root), task.well_id, task.run_id)
+    digests: dict[str, str] = {}  # input path → SHA-256, each input hashed at most once
     try:
         check_out_dir(final, OWN)  # early: a well that cannot be published is not run
         plan, registry = _plan(_given(task, ref))
         shutil.rmtree(staging, ignore_errors=True)
         staging.mkdir(parents=True)
         before = {name: key_after(path) for name, path in task.inputs.items()}
+        for name, path in task.inputs.items():
+            digests[path] = _digest(task, path, before[name])
         t_run = time.perf_counter()
         result = run_plan(
             plan,
@@ -198,9 +202,9 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             well=WellMetadata.model_validate(task.well),
             publish_as=final,
             known_sha256={
-                name: task.known[path][1]
+                name: digests[path]
                 for name, path in task.inputs.items()
-                if path in task.known and before[name] == task.known[path][0]
+                if digests[path] != UNREADABLE  # run.json names the file's error instead
             },
         )
         run_time = time.perf_counter() - t_run
@@ -253,11 +257,24 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             wall_time_s=time.perf_counter() - t0,
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
-            hashes={path: hashed(path) for path in task.inputs.values()},
+            hashes={
+                path: digests.get(path) or _digest(task, path, key_after(path))
+                for path in task.inputs.values()
+            },
             published_run=held_run,
         )
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _digest(task: WellTask, path: str, key: FileKey | None) -> str:
+    """The SHA-256 of the input ``path`` whose stat key is ``key`` now: the settled hash
+    the batch process sent for that key (:attr:`WellTask.known`), else read and hashed
+    (:data:`~pipeline.batch.fingerprint.UNREADABLE` if it cannot be read)."""
+    known = task.known.get(path)
+    if known is not None and key is not None and known[0] == key:
+        return known[1]
+    return hashed(path)
 
 
 class Inconsistent(GyropipeError):
