@@ -201,6 +201,37 @@ def test_a_run_persisted_as_csv_shows_its_figures(tmp_path: Path) -> None:
         assert cell(rows, "PQ", "qc") == "—"
 
 
+def test_an_earlier_version_s_csv_tables_are_not_guessed_from(tmp_path: Path) -> None:
+    """A well published before figures were recorded (no figures in its ``batch.json``)
+    whose tables were persisted as CSV: CSV keeps no table metadata (a clearance rule, a
+    file-position check), so the page shows no figure read from them and says why; the
+    same well persisted as Parquet has its figures read back from its tables."""
+    for well in ("PQ", "CSV"):
+        (tmp_path / well).mkdir()
+        shutil.copyfile(STATIONS, tmp_path / well / f"{well}.csv")
+    parquet = tmp_path / "as-parquet.yaml"
+    parquet.write_text(pipeline_yaml(survey_stages(), name="as-parquet"))
+    out = tmp_path / "out"
+    for well, pipeline in (("PQ", parquet), ("CSV", csv_pipeline(tmp_path))):
+        args = ["batch", pipeline, "--inputs", f"{tmp_path / well}/*.csv", "--out", out]
+        gyropipe_cli(*args, check=True)
+        marker = out / well / "batch.json"
+        record = json.loads(marker.read_text())
+        del record["figures"]  # as an earlier version wrote it
+        marker.write_text(json.dumps(record))
+    gyropipe_cli("status", out, "--html", check=True)
+    rows = page_rows(out / "fleet.html")
+    assert (
+        "Output: figures not recorded by the version that ran it, and its tables are CSV, "
+        "which keep no table metadata (a clearance rule, a file-position check): not read "
+        "(trajectory.trajectory.csv, dls.results.csv); run the well again to show them"
+    ) in cell(rows, "CSV", "status")
+    assert [cell(rows, "CSV", h) for h in ("qc", "td_md", "td_tvd", "dls")] == ["—"] * 4
+    pq_traj = pq.read_table(out / "PQ" / "trajectory.trajectory.parquet")
+    assert cell(rows, "PQ", "td_md") == f"{pq_traj['md'].to_pylist()[-1]:.1f}"
+    assert "Output:" not in cell(rows, "PQ", "status")
+
+
 def chi2_sample_median_mean(n: int) -> float:
     """E of the sample median of n χ²₁ values (the mean of the middle two for even n), from
     the order statistics' laws: X₍ⱼ₎ = F⁻¹(U₍ⱼ₎), U₍ⱼ₎ ~ Beta(j, n + 1 − j)."""

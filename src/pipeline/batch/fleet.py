@@ -10,8 +10,10 @@ those of the trajectory the run's survey report states, by its own rule
 (:func:`pipeline.survey.courses.max_dls` over its ``min_course_length``); a run without a
 survey report gives the last persisted trajectory's by the report's default rule. A well
 published before figures were recorded has them read back from its persisted Parquet tables
-(a table's footer, then only the few columns a figure needs). A figure the well has no table
-for is None; a file that cannot be read is named in ``problems`` and its figure stays None.
+(a table's footer, then only the few columns a figure needs); tables persisted as CSV keep
+no table metadata (a clearance rule, a file-position check), so figures are not guessed from
+them: ``problems`` says so. A figure the well has no table for is None; a file that cannot
+be read is named in ``problems`` and its figure stays None.
 Tables are in the canonical units of their contracts (m, deg, deg/30m, deg/h).
 """
 
@@ -260,6 +262,12 @@ def well_figures(
     for name in _outputs(manifest):
         if name.endswith(".parquet"):
             reader.read(well_dir, name)
+    if unread := _persisted_csv(manifest):
+        problems.append(
+            f"figures not recorded by the version that ran it, and its tables are CSV, "
+            f"which keep no table metadata (a clearance rule, a file-position check): not "
+            f"read ({', '.join(unread)}); run the well again to show them"
+        )
     return reader.figures(manifest, well_dir)
 
 
@@ -435,6 +443,16 @@ def _outputs(manifest: Mapping[str, Any]) -> list[str]:
     """The names of the files ``run.json`` lists in the well's directory."""
     names = (e.get("file") if isinstance(e, Mapping) else None for e in manifest["outputs"])
     return [n for n in names if isinstance(n, str) and "/" not in n]
+
+
+def _persisted_csv(manifest: Mapping[str, Any]) -> list[str]:
+    """The outputs ``run.json`` lists that are stage tables persisted as CSV: named
+    ``<stage>.<port>.csv`` for a port the stage's record counts rows of."""
+    ports = set()
+    for record in manifest.get("stages", []):
+        if isinstance(record, Mapping) and isinstance(record.get("rows_out"), Mapping):
+            ports |= {f"{record.get('id')}.{port}.csv" for port in record["rows_out"]}
+    return [name for name in _outputs(manifest) if name in ports]
 
 
 def _not_as_run(well_dir: Path, manifest: Mapping[str, Any]) -> list[str]:
