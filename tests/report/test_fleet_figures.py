@@ -13,6 +13,7 @@ import math
 import re
 import shutil
 import sqlite3
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -164,21 +165,28 @@ def csv_table(path: Path) -> dict[str, list[str]]:
     return {name.split("[")[0]: [r[name] for r in rows] for name in rows[0]}
 
 
+def parquet_and_csv_batches(directory: Path, out: Path) -> Iterator[str]:
+    """The J well as well PQ, then as well CSV, each batched into ``out`` (the survey
+    stages, persisted as Parquet, then the CSV pipeline's): each well's name once its
+    batch is done."""
+    for well in ("PQ", "CSV"):
+        (directory / well).mkdir()
+        shutil.copyfile(STATIONS, directory / well / f"{well}.csv")
+    parquet = directory / "as-parquet.yaml"
+    parquet.write_text(pipeline_yaml(survey_stages(), name="as-parquet"))
+    for well, pipeline in (("PQ", parquet), ("CSV", csv_pipeline(directory))):
+        args = ["batch", pipeline, "--inputs", f"{directory / well}/*.csv", "--out", out]
+        gyropipe_cli(*args, check=True)
+        yield well
+
+
 def test_a_run_persisted_as_csv_shows_its_figures(tmp_path: Path) -> None:
     """Two wells in one output directory, one persisted as Parquet, one as CSV: the page of
     ``gyropipe status --html`` (and ``gp.fleet_page``) and of each batch show both wells'
     figures, as the test reads them from each well's own tables."""
-    for well in ("PQ", "CSV"):
-        (tmp_path / well).mkdir()
-        shutil.copyfile(STATIONS, tmp_path / well / f"{well}.csv")
-    parquet = tmp_path / "as-parquet.yaml"
-    parquet.write_text(pipeline_yaml(survey_stages(), name="as-parquet"))
     out = tmp_path / "out"
-    for well, pipeline in (("PQ", parquet), ("CSV", csv_pipeline(tmp_path))):
-        args = ["batch", pipeline, "--inputs", f"{tmp_path / well}/*.csv", "--out", out]
-        gyropipe_cli(*args, check=True)
-        batch_page = page_rows(out / "fleet.html")
-        assert cell(batch_page, well, "td_md") == "2520.0"
+    for well in parquet_and_csv_batches(tmp_path, out):
+        assert cell(page_rows(out / "fleet.html"), well, "td_md") == "2520.0"
     csv_traj = csv_table(out / "CSV" / "trajectory.trajectory.csv")
     checks = csv_table(out / "CSV" / "dls.results.csv")
     failed = checks["passed"].count("false")
@@ -206,15 +214,8 @@ def test_an_earlier_version_s_csv_tables_are_not_guessed_from(tmp_path: Path) ->
     whose tables were persisted as CSV: CSV keeps no table metadata (a clearance rule, a
     file-position check), so the page shows no figure read from them and says why; the
     same well persisted as Parquet has its figures read back from its tables."""
-    for well in ("PQ", "CSV"):
-        (tmp_path / well).mkdir()
-        shutil.copyfile(STATIONS, tmp_path / well / f"{well}.csv")
-    parquet = tmp_path / "as-parquet.yaml"
-    parquet.write_text(pipeline_yaml(survey_stages(), name="as-parquet"))
     out = tmp_path / "out"
-    for well, pipeline in (("PQ", parquet), ("CSV", csv_pipeline(tmp_path))):
-        args = ["batch", pipeline, "--inputs", f"{tmp_path / well}/*.csv", "--out", out]
-        gyropipe_cli(*args, check=True)
+    for well in parquet_and_csv_batches(tmp_path, out):
         marker = out / well / "batch.json"
         record = json.loads(marker.read_text())
         del record["figures"]  # as an earlier version wrote it
