@@ -12,13 +12,10 @@ import pyarrow as pa
 import pytest
 from scipy.spatial.transform import Rotation
 
+from pipeline.gyrocompass.fit import Fit, design, fit_all
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
-from pipeline.gyrocompass.solve import (
-    compass,
-    fit_positions,
-    five_position_closed_form,
-)
+from pipeline.gyrocompass.solve import compass, five_position_closed_form
 from pipeline.sim.simulate import simulate
 from pipeline.sim.spec import SimulationSpec
 from tests_support import read_stations
@@ -163,14 +160,19 @@ def test_noise_free_recovery_over_the_grid(tmp_path: Path, axes: str, latitude: 
 
 def test_closed_form_agrees_with_least_squares_on_equal_steps():
     rng = np.random.default_rng(3)
+    cases = []
     for _ in range(50):
         h, r, b, d = [*rng.normal(0, 10, 2).tolist(), rng.normal(0, 5), rng.normal(0, 0.01)]
         psi0 = rng.uniform(0, 2 * np.pi)
         alpha = psi0 + np.radians([0, 90, 180, 270, 360])
         t = 100.0 + np.arange(5) * 43.0
         y = h * np.cos(alpha) + r * np.sin(alpha) + b + d * (t - t.mean())
+        cases.append((psi0, y, design(alpha, t, y[:, None], np.ones((5, 1)), 2)))
+    fits = fit_all([problem for *_, problem in cases])  # the 50 stations fitted at once
+    for (psi0, y, _), fit in zip(cases, fits, strict=True):
+        assert isinstance(fit, Fit)
         w1, w2 = five_position_closed_form(y)
-        u, v = fit_positions(alpha, t, y[:, None], np.ones((5, 1)), 2).uv
+        u, v = fit.uv
         assert w1 == pytest.approx(u * np.cos(psi0) + v * np.sin(psi0), abs=1e-9)
         assert w2 == pytest.approx(-u * np.sin(psi0) + v * np.cos(psi0), abs=1e-9)
 

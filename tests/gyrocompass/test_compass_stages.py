@@ -147,6 +147,24 @@ def test_positions_not_spanning_the_circle_are_rejected():
     assert "do not span the circle" in rejects.column("reason")[0].as_py()
 
 
+def test_stations_rejected_among_solved_ones_keep_their_reasons():
+    """The stations' fits are made together: one not spanning the circle beside solved ones
+    of its shape, and one with too few positions, are rejected as alone; the others solve."""
+    alphas = [[0, 90, 180, 270, 0], [0, 2, 4, 6, 8], [0, 90, 180], [10, 100, 190, 280, 10]]
+    tables = []
+    for i, angles in enumerate(alphas):
+        one = readings_table(angles)
+        one = one.set_column(0, "station", pa.array(np.full(one.num_rows, i)))
+        tables.append(one.set_column(3, "t", pa.array(one.column("t").to_numpy() + 1000.0 * i)))
+    stations, rejects = compass(pa.concat_tables(tables), 61.25, OPTIONS)
+    assert stations.column("station").to_pylist() == [0, 3]
+    np.testing.assert_allclose(stations.column("azi").to_numpy(), 37.0, atol=1e-6)
+    assert rejects.column("station").to_pylist() == [1, 2]
+    reasons = rejects.column("reason").to_pylist()
+    assert "do not span the circle" in reasons[0]
+    assert "3 position(s) cannot resolve 4 unknowns" in reasons[1]
+
+
 def test_frame_angle_disagreeing_with_accelerometers_is_flagged():
     good = readings_table([10, 100, 190, 280, 10], frame=np.array([0, 90, 180, 270, 0]))
     stations, _ = compass(good, 61.25, OPTIONS)

@@ -8,8 +8,9 @@ Per station (DOMAIN.md §5), from the frame positions k:
    the accelerometer toolface ψ_k in an inclined hole, the frame-angle sensor θ_k near
    vertical (where ψ is ill-defined) — with a bias and a linear trend per gyro axis:
    ``x_k = u cos α_k + v sin α_k + b_x + d_x·(t_k − t̄)``,
-   ``y_k = −u sin α_k + v cos α_k + b_y + d_y·(t_k − t̄)``.
-   Inclined: (u, v) = (h, r), the high-side and right-side Earth rate; the azimuth follows
+   ``y_k = −u sin α_k + v cos α_k + b_y + d_y·(t_k − t̄)``
+   (:mod:`pipeline.gyrocompass.fit`: every station's fit at once). Inclined: (u, v) =
+   (h, r), the high-side and right-side Earth rate; the azimuth follows
    (:mod:`pipeline.gyrocompass.azimuth`). Near vertical the vertical Earth rate that leaks into
    the transverse gyros through the tilt is removed first (x_k + Ω sin φ·g_x,k/|g|, likewise
    y), leaving (u, v) = Ω cos φ·(n_x, n_y) of the north direction in the reference frame:
@@ -49,6 +50,7 @@ from pipeline.gyrocompass.earth_rate import (
     earth_rate_reason,
     failure_hint,
 )
+from pipeline.gyrocompass.fit import Design, Fit, design, fit_all
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.gyrocompass.systematic import (
@@ -137,6 +139,10 @@ class _Pending:
     sigma_psi: float
 
 
+_Solved = tuple[_Row | _Pending, list[EarthRate]]
+"""A station solved (or pending the azimuth solve) and its Earth-rate checks."""
+
+
 def compass(
     readings: pa.Table, latitude: float, options: CompassOptions
 ) -> tuple[pa.Table, pa.Table]:
@@ -151,15 +157,14 @@ def compass(
     rejected: list[tuple[int, float, str]] = []
     implausible: dict[int, list[EarthRate]] = {}  # index in rejected → the failed checks
     good: list[tuple[_Station, _Row | _Pending, list[EarthRate]]] = []
-    for st in _stations(readings, axes, options):
-        try:
-            solved, checks = _solve(st, lat, options, tool)
-        except StationReject as exc:
-            if isinstance(exc, EarthRateReject):
-                implausible[len(rejected)] = exc.checks
-            rejected.append((st.station, st.md, str(exc)))
-            continue
-        good.append((st, solved, checks))
+    stations = _stations(readings, axes, options)
+    for st, outcome in zip(stations, _solve_all(stations, lat, options, tool), strict=True):
+        if isinstance(outcome, StationReject):
+            if isinstance(outcome, EarthRateReject):
+                implausible[len(rejected)] = outcome.checks
+            rejected.append((st.station, st.md, str(outcome)))
+        else:
+            good.append((st, *outcome))
     checked = len(implausible) + sum(1 for *_, checks in good if checks)
     failed = [c for checks in implausible.values() for c in checks if not c.ok]
     if implausible and (2 * len(implausible) > checked or any(c.looks_like() for c in failed)):
@@ -311,11 +316,51 @@ def _gravity(acc: FloatArray, acc_sigma: FloatArray) -> _Gravity:
     return _Gravity(g, transverse, inc_k, psi, 1.0 / var_k, grad_inc, across, grad_psi)
 
 
-def _solve(
-    st: _Station, lat: float, options: CompassOptions, tool: ToolErrors
-) -> tuple[_Row | _Pending, list[EarthRate]]:
-    """One station, solved (or pending the azimuth solve), and its Earth-rate checks; a
-    :class:`StationReject` when it cannot be solved."""
+def _solve_all(
+    stations: list[_Station], lat: float, options: CompassOptions, tool: ToolErrors
+) -> list[_Solved | StationReject]:
+    """Each station solved (or pending the azimuth solve) with its Earth-rate checks, or the
+    :class:`StationReject` saying why it cannot be: each station's gyro fit set up alone,
+    the fits made together (:func:`pipeline.gyrocompass.fit.fit_all`)."""
+    prepared: list[_Prepared | StationReject] = []
+    for st in stations:
+        try:
+            prepared.append(_prepare(st, lat, options, tool))
+        except StationReject as exc:
+            prepared.append(exc)
+    fits = iter(fit_all([p.design for p in prepared if isinstance(p, _Prepared)]))
+    outcomes: list[_Solved | StationReject] = []
+    for p in prepared:
+        if isinstance(p, StationReject):
+            outcomes.append(p)
+            continue
+        fit = next(fits)
+        if isinstance(fit, StationReject):
+            outcomes.append(fit)
+            continue
+        try:
+            outcomes.append(_solve(p, fit, lat, options, tool))
+        except StationReject as exc:
+            outcomes.append(exc)
+    return outcomes
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """A station up to its gyro fit: what the accelerometers give, the frame angles the fit
+    is referenced to, and the fit's problem."""
+
+    st: _Station
+    tilt: _Tilt
+    near_vertical: bool
+    alpha: FloatArray
+    design: Design
+    flags: list[str]
+
+
+def _prepare(st: _Station, lat: float, options: CompassOptions, tool: ToolErrors) -> _Prepared:
+    """A station's tilt and the problem of its gyro fit; a :class:`StationReject` when it
+    cannot be solved."""
     flags: list[str] = []
     tilt = _inclination(st, tool, options.tilt_detection)
     inc, psi = tilt.inc, tilt.psi
@@ -336,7 +381,17 @@ def _solve(
         flags.append("bias_not_removed")
     else:
         terms = 2 if options.trend else 1
-    fit = fit_positions(alpha, st.t, gyro, st.gyro_sigma, terms)
+    problem = design(alpha, st.t, gyro, st.gyro_sigma, terms)
+    return _Prepared(st, tilt, near_vertical, alpha, problem, flags)
+
+
+def _solve(
+    p: _Prepared, fit: Fit, lat: float, options: CompassOptions, tool: ToolErrors
+) -> _Solved:
+    """A prepared station from its gyro fit, solved (or pending the azimuth solve), and its
+    Earth-rate checks; a :class:`StationReject` when it cannot be solved."""
+    st, tilt, near_vertical, alpha, flags = p.st, p.tilt, p.near_vertical, p.alpha, p.flags
+    inc, psi = tilt.inc, tilt.psi
     if fit.dof > 0 and chi2_sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
     row = _Row(
@@ -450,62 +505,6 @@ def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
         np.hypot(noise, accelerometer_sigma(gravity.grad_psi, st.acc, np.ones_like(psi), tool))
     )
     return _Tilt(inc, sigma_inc, psi, sigma_psi, bool(sigma_psi * detection < 1.0))
-
-
-@dataclass(frozen=True)
-class _Fit:
-    uv: FloatArray
-    cov: FloatArray
-    bias: float
-    trend: float
-    rms: float
-    chi2: float
-    dof: int
-
-
-def fit_positions(
-    alpha: FloatArray, t: FloatArray, gyro: FloatArray, sigma: FloatArray, terms: int
-) -> _Fit:
-    """Weighted least squares of the gyro readings (see the module docstring) with
-    ``terms`` extra unknowns per transverse axis: 0 none, 1 a bias, 2 a bias and a trend."""
-    n, m = gyro.shape
-    if not (sigma > 0).all():
-        raise StationReject("a position's gyro σ is zero (noise-free data?): set noise_floor")
-    tau = t - t.mean()
-    c, s = np.cos(alpha), np.sin(alpha)
-    axes = min(m, 2)
-    columns = 2 + terms * axes
-    a = np.zeros((n * axes, columns))
-    for axis in range(axes):
-        block = a[axis * n : (axis + 1) * n]
-        block[:, 0], block[:, 1] = (c, s) if axis == 0 else (-s, c)
-        if terms:
-            block[:, 2 + terms * axis] = 1.0
-        if terms == 2:
-            block[:, 3 + terms * axis] = tau
-    y = gyro[:, :axes].T.ravel()
-    w = 1.0 / sigma[:, :axes].T.ravel() ** 2
-    if len(y) < columns:
-        what = ("Earth rate", "bias", "trend")[: 1 + terms]
-        raise StationReject(
-            f"{n} position(s) cannot resolve {columns} unknowns ({', '.join(what)}); "
-            "use more positions or trend: false"
-        )
-    normal = a.T @ (a * w[:, None])
-    if np.linalg.cond(normal) > 1e10:
-        raise StationReject("the frame positions do not span the circle (ill-conditioned fit)")
-    cov = np.asarray(np.linalg.inv(normal), dtype=np.float64)
-    params = cov @ (a.T @ (w * y))
-    res = y - a @ params
-    return _Fit(
-        uv=params[:2],
-        cov=cov,
-        bias=float(params[2]) if terms else 0.0,
-        trend=float(params[3]) if terms == 2 else 0.0,
-        rms=float(np.sqrt((res**2).mean())),
-        chi2=float((w * res**2).sum()),
-        dof=len(y) - columns,
-    )
 
 
 def general_azimuth(rate: FloatArray, accel: FloatArray) -> float:

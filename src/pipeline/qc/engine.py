@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.site import Site
 from pipeline.gyrocompass.earth_rate import StationReject
-from pipeline.gyrocompass.solve import fit_positions
+from pipeline.gyrocompass.fit import Design, design, fit_all
 from pipeline.qc.faults import Equation, Finding, isolate
 from pipeline.qc.magnetic import diagnose_magnetic
 from pipeline.qc.options import CHECKS, DEFAULTS, QcOptions, QcStop
@@ -100,6 +100,8 @@ def fit_checks(
     s = len(starts)
     measured, sig = np.full(s, np.nan), np.full(s, np.nan)
     detail = np.full(s, "", dtype=object)
+    fitted: list[tuple[int, float, bool]] = []  # station index, I, near vertical
+    designs: list[Design] = []
     for i, (a, b) in enumerate(zip(starts, ends, strict=True)):
         inc = float(inc_k[a:b].mean())
         near = min(inc, np.pi - inc) < np.radians(options.vertical_below)
@@ -117,10 +119,16 @@ def fit_checks(
         n_obs = (b - a) * m
         terms = 2 if options.fit_trend and n_obs >= 2 + 2 * m else 1
         try:
-            fit = fit_positions(alpha, t[a:b], gyro[a:b], sigma[a:b], terms)
+            designs.append(design(alpha, t[a:b], gyro[a:b], sigma[a:b], terms))
         except StationReject as exc:
             detail[i] = f"skipped: {exc}"
             continue
+        fitted.append((i, inc, near))
+    for (i, inc, near), fit in zip(fitted, fit_all(designs), strict=True):
+        if isinstance(fit, StationReject):
+            detail[i] = f"skipped: {fit}"
+            continue
+        a, b = starts[i], ends[i]
         u, v = fit.uv
         c = 1.0 if near else np.cos(inc)
         k = np.hypot(u / c, v)
