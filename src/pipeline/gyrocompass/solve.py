@@ -33,7 +33,7 @@ Rates in °/h, accelerations in m/s², angles in radians internally, degrees in 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
@@ -52,6 +52,7 @@ from pipeline.gyrocompass.earth_rate import (
 )
 from pipeline.gyrocompass.fit import Design, Fit, design, fit_all
 from pipeline.gyrocompass.options import CompassOptions
+from pipeline.gyrocompass.positions import IntArray, stacks
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.gyrocompass.systematic import (
     ToolErrors,
@@ -66,7 +67,8 @@ MICRO_G = STANDARD_GRAVITY * 1e-6
 
 @dataclass
 class _Station:
-    """One station's readings as arrays (positions in time order)."""
+    """One station's readings as arrays (positions in time order) and what its
+    accelerometers give (:func:`_tilts`)."""
 
     station: int
     md: float
@@ -75,13 +77,13 @@ class _Station:
     gyro: FloatArray  # (n, axes)
     gyro_sigma: FloatArray  # (n, axes)
     acc: FloatArray  # (n, 3)
-    gravity: _Gravity
+    tilt: _Tilt | StationReject
 
 
 @dataclass(frozen=True)
 class _Gravity:
-    """What each position's accelerometer reading (m/s²) gives alone, for the positions of
-    a station (or of all of them: :func:`_gravity`; angles rad)."""
+    """What each position's accelerometer reading (m/s²) gives alone, for every position
+    (:func:`_gravity`; angles rad)."""
 
     g: FloatArray
     """|a|, m/s²"""
@@ -99,9 +101,6 @@ class _Gravity:
     """σ(ψ_k) of the noise and resolution"""
     grad_psi: FloatArray
     """(n, 3): ∂ψ_k/∂a"""
-
-    def __getitem__(self, rows: slice) -> _Gravity:
-        return _Gravity(*(getattr(self, f.name)[rows] for f in fields(self)))
 
 
 @dataclass
@@ -157,7 +156,7 @@ def compass(
     rejected: list[tuple[int, float, str]] = []
     implausible: dict[int, list[EarthRate]] = {}  # index in rejected → the failed checks
     good: list[tuple[_Station, _Row | _Pending, list[EarthRate]]] = []
-    stations = _stations(readings, axes, options)
+    stations = _stations(readings, axes, options, tool)
     for st, outcome in zip(stations, _solve_all(stations, lat, options, tool), strict=True):
         if isinstance(outcome, StationReject):
             if isinstance(outcome, EarthRateReject):
@@ -261,7 +260,9 @@ def _sigmas(readings: pa.Table, names: list[str], fallback: float | None, what: 
     return np.full((readings.num_rows, len(names)), fallback)
 
 
-def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_Station]:
+def _stations(
+    readings: pa.Table, axes: str, options: CompassOptions, tool: ToolErrors
+) -> list[_Station]:
     gyro_names = [f"gyro_{a}" for a in axes]
     acc_names = ["acc_x", "acc_y", "acc_z"]
     gyro = np.stack([readings.column(n).to_numpy() for n in gyro_names], axis=-1)
@@ -276,21 +277,22 @@ def _stations(readings: pa.Table, axes: str, options: CompassOptions) -> list[_S
     frame = _column(readings, "frame_angle")
     t = readings.column("t").to_numpy()
     md = readings.column("md").to_numpy()
+    frame = None if frame is None else np.radians(frame)
     starts = np.flatnonzero(np.r_[True, station[1:] != station[:-1]])
     ends = np.r_[starts[1:], len(station)]
-    gravity = _gravity(acc, acc_sigma)
+    tilts = _tilts(_gravity(acc, acc_sigma), acc, frame, starts, ends - starts, tool, options)
     return [
         _Station(
             int(station[a]),
             float(md[a]),
             t[a:b],
-            None if frame is None else np.radians(frame[a:b]),
+            None if frame is None else frame[a:b],
             gyro[a:b],
             gyro_sigma[a:b],
             acc[a:b],
-            gravity[a:b],
+            tilt,
         )
-        for a, b in zip(starts, ends, strict=True)
+        for a, b, tilt in zip(starts, ends, tilts, strict=True)
     ]
 
 
@@ -324,8 +326,11 @@ def _solve_all(
     the fits made together (:func:`pipeline.gyrocompass.fit.fit_all`)."""
     prepared: list[_Prepared | StationReject] = []
     for st in stations:
+        if isinstance(st.tilt, StationReject):
+            prepared.append(st.tilt)
+            continue
         try:
-            prepared.append(_prepare(st, lat, options, tool))
+            prepared.append(_prepare(st, st.tilt, lat, options))
         except StationReject as exc:
             prepared.append(exc)
     fits = iter(fit_all([p.design for p in prepared if isinstance(p, _Prepared)]))
@@ -352,37 +357,29 @@ class _Prepared:
 
     st: _Station
     tilt: _Tilt
-    near_vertical: bool
     alpha: FloatArray
     design: Design
     flags: list[str]
 
 
-def _prepare(st: _Station, lat: float, options: CompassOptions, tool: ToolErrors) -> _Prepared:
-    """A station's tilt and the problem of its gyro fit; a :class:`StationReject` when it
-    cannot be solved."""
-    flags: list[str] = []
-    tilt = _inclination(st, tool, options.tilt_detection)
-    inc, psi = tilt.inc, tilt.psi
-    near_vertical = min(inc, np.pi - inc) < np.radians(options.vertical_below)
-    if st.frame is not None:
-        offset = _wrap(psi - st.frame)
-        spread = np.abs(_wrap(offset - _circmean(offset)))
-        if not near_vertical and np.degrees(spread.max()) > options.frame_tolerance:
-            flags.append("frame_mismatch")
+def _prepare(st: _Station, tilt: _Tilt, lat: float, options: CompassOptions) -> _Prepared:
+    """A station's problem of its gyro fit from its ``tilt``; a :class:`StationReject` when
+    it cannot be solved."""
+    flags = ["frame_mismatch"] if tilt.frame_mismatch else []
+    psi, near_vertical = tilt.psi, tilt.near_vertical
     use_frame = near_vertical and st.frame is not None
     alpha = st.frame if use_frame and st.frame is not None else psi
-    gyro = st.gyro.copy()
+    gyro = st.gyro
     if near_vertical:  # remove the vertical Earth rate leaking in through the tilt
         down = st.acc / np.linalg.norm(st.acc, axis=1, keepdims=True)
-        gyro += OMEGA_DEG_H * np.sin(lat) * down[:, : gyro.shape[1]]
+        gyro = gyro + OMEGA_DEG_H * np.sin(lat) * down[:, : gyro.shape[1]]
     if len(st.t) == 1 and gyro.shape[1] >= 2:
         terms = 0  # one position of a multi-axis tool: the general formula, biases stay
         flags.append("bias_not_removed")
     else:
         terms = 2 if options.trend else 1
     problem = design(alpha, st.t, gyro, st.gyro_sigma, terms)
-    return _Prepared(st, tilt, near_vertical, alpha, problem, flags)
+    return _Prepared(st, tilt, alpha, problem, flags)
 
 
 def _solve(
@@ -390,7 +387,8 @@ def _solve(
 ) -> _Solved:
     """A prepared station from its gyro fit, solved (or pending the azimuth solve), and its
     Earth-rate checks; a :class:`StationReject` when it cannot be solved."""
-    st, tilt, near_vertical, alpha, flags = p.st, p.tilt, p.near_vertical, p.alpha, p.flags
+    st, tilt, alpha, flags = p.st, p.tilt, p.alpha, p.flags
+    near_vertical = tilt.near_vertical
     inc, psi = tilt.inc, tilt.psi
     if fit.dof > 0 and chi2_sf(fit.chi2, fit.dof) < options.consistency:
         flags.append("inconsistent")
@@ -477,34 +475,90 @@ class _Tilt:
     """σ of the mean frame-to-high-side offset: noise, resolution and accelerometer errors"""
     defined: bool
     """whether the measured horizontal gravity exceeds ``tilt_detection`` times its σ"""
+    near_vertical: bool
+    """whether I (or 180° − I) is below ``vertical_below``"""
+    frame_mismatch: bool
+    """whether, inclined, a frame angle departs from its ψ_k by more than ``frame_tolerance``
+    beyond their mean offset"""
 
 
-def _inclination(st: _Station, tool: ToolErrors, detection: float) -> _Tilt:
+def _tilts(
+    gravity: _Gravity,
+    acc: FloatArray,
+    frame: FloatArray | None,
+    starts: IntArray,
+    sizes: IntArray,
+    tool: ToolErrors,
+    options: CompassOptions,
+) -> list[_Tilt | StationReject]:
+    """Each station's :class:`_Tilt` (or why it has none), from its positions (``sizes``
+    from ``starts``) of every position's ``gravity``, accelerations (m/s²) and frame angles
+    (rad): the stations of a size together (:func:`~pipeline.gyrocompass.positions.stacks`,
+    :func:`_inclination`)."""
+    tilts: dict[int, _Tilt | StationReject] = {}
+    for members, rows in stacks(starts, sizes):
+        solved = _inclination(gravity, acc, frame, rows, tool, options)
+        tilts.update(zip(members.tolist(), solved, strict=True))
+    return [tilts[i] for i in range(len(starts))]
+
+
+def _inclination(
+    gravity: _Gravity,
+    acc: FloatArray,
+    frame: FloatArray | None,
+    rows: IntArray,
+    tool: ToolErrors,
+    options: CompassOptions,
+) -> list[_Tilt | StationReject]:
     """Inclination and gravity toolfaces with their σ (noise and the tool's accelerometer
-    errors, :mod:`pipeline.gyrocompass.systematic`)."""
-    gravity = st.gravity
-    g = gravity.g
-    if (np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY).any():
-        raise StationReject(
-            f"accelerometers read |g| = {g.min():.3g}…{g.max():.3g} m/s², not gravity: "
-            "check units and the sign convention"
+    errors, :mod:`pipeline.gyrocompass.systematic`) of the stations whose positions are
+    ``rows`` (stations, n): each station's numbers as alone."""
+    g, psi, weight = gravity.g[rows], gravity.psi[rows], gravity.weight[rows]
+    wrong = np.any(np.abs(g - STANDARD_GRAVITY) > 0.5 * STANDARD_GRAVITY, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a rejected or vertical station's
+        inc = (weight * gravity.inc[rows]).sum(axis=1) / weight.sum(axis=1)
+        acc_k = acc[rows]
+        sigma_inc = np.hypot(
+            np.sqrt(1.0 / weight.sum(axis=1)),
+            accelerometer_sigma(gravity.grad_inc[rows], acc_k, weight, tool),
         )
-    inc_k, psi, weight = gravity.inc, gravity.psi, gravity.weight
-    inc = float((weight * inc_k).sum() / weight.sum())
-    if not np.isfinite(inc) or len(inc_k) == 0:
-        raise StationReject("accelerometer readings give no inclination")
-    sigma_inc = float(
-        np.hypot(
-            np.sqrt(1.0 / weight.sum()), accelerometer_sigma(gravity.grad_inc, st.acc, weight, tool)
+        # exactly vertical: no horizontal gravity at all
+        vertical = (gravity.transverse[rows] <= 0).any(axis=1)
+        noise = np.sqrt((gravity.across[rows] ** 2).sum(axis=1)) / rows.shape[1]
+        sigma_psi = np.hypot(
+            noise, accelerometer_sigma(gravity.grad_psi[rows], acc_k, np.ones_like(psi), tool)
         )
-    )
-    if (gravity.transverse <= 0).any():  # exactly vertical: no horizontal gravity at all
-        return _Tilt(inc, sigma_inc, psi, float("inf"), False)
-    noise = float(np.sqrt((gravity.across**2).sum()) / len(psi))
-    sigma_psi = float(
-        np.hypot(noise, accelerometer_sigma(gravity.grad_psi, st.acc, np.ones_like(psi), tool))
-    )
-    return _Tilt(inc, sigma_inc, psi, sigma_psi, bool(sigma_psi * detection < 1.0))
+    sigma_psi[vertical] = np.inf
+    near_vertical = np.minimum(inc, np.pi - inc) < np.radians(options.vertical_below)
+    mismatch = np.zeros(len(rows), dtype=bool)
+    if frame is not None:
+        offset = _wrap(psi - frame[rows])
+        spread = np.abs(_wrap(offset - _circmean(offset)[:, None])).max(axis=1)
+        mismatch = ~near_vertical & (np.degrees(spread) > options.frame_tolerance)
+    tilts: list[_Tilt | StationReject] = []
+    for j in range(len(rows)):
+        if wrong[j]:
+            tilts.append(
+                StationReject(
+                    f"accelerometers read |g| = {g[j].min():.3g}…{g[j].max():.3g} m/s², not "
+                    "gravity: check units and the sign convention"
+                )
+            )
+        elif not np.isfinite(inc[j]):
+            tilts.append(StationReject("accelerometer readings give no inclination"))
+        else:
+            tilts.append(
+                _Tilt(
+                    float(inc[j]),
+                    float(sigma_inc[j]),
+                    psi[j],
+                    float(sigma_psi[j]),
+                    bool(sigma_psi[j] * options.tilt_detection < 1.0),
+                    bool(near_vertical[j]),
+                    bool(mismatch[j]),
+                )
+            )
+    return tilts
 
 
 def general_azimuth(rate: FloatArray, accel: FloatArray) -> float:
@@ -538,8 +592,10 @@ def _wrap(angle: FloatArray | float) -> FloatArray:
     return np.mod(np.asarray(angle) + np.pi, 2 * np.pi) - np.pi
 
 
-def _circmean(angle: FloatArray) -> float:
-    return float(np.arctan2(np.sin(angle).mean(), np.cos(angle).mean()))
+def _circmean(angle: FloatArray) -> FloatArray:
+    """Circular mean (rad) along the last axis."""
+    mean: FloatArray = np.arctan2(np.sin(angle).mean(axis=-1), np.cos(angle).mean(axis=-1))
+    return mean
 
 
 def five_position_closed_form(y: FloatArray) -> tuple[float, float]:

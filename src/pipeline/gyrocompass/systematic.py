@@ -57,16 +57,19 @@ _OFF_DIAGONAL = ~np.eye(3, dtype=bool)
 
 def accelerometer_sigma(
     gradient: FloatArray, acc: FloatArray, weights: FloatArray, errors: ToolErrors
-) -> float:
+) -> FloatArray:
     """1σ of ``Σ_k w_k f(a_k) / Σ_k w_k`` from the accelerometer errors common to the
-    positions (module docstring): ``gradient`` (n, 3) = ∇f at each position's acceleration
-    ``acc`` (n, 3, m/s²), in f's unit per m/s²; ``weights`` (n,)."""
-    w = weights / weights.sum()
-    d_bias = w @ gradient
-    d_gain = np.einsum("k,ki,kj->ij", w, gradient, acc)
+    positions (module docstring): ``gradient`` (..., n, 3) = ∇f at each position's
+    acceleration ``acc`` (..., n, 3, m/s²), in f's unit per m/s²; ``weights`` (..., n). A
+    stack of stations (leading axes) at once: each station's numbers as alone."""
+    w = weights / weights.sum(axis=-1, keepdims=True)
+    d_bias = w[..., None, :] @ gradient  # (..., 1, 3)
+    d_gain = np.einsum("...k,...ki,...kj->...ij", w, gradient, acc)
     var = (
-        errors.acc_bias**2 * float(d_bias @ d_bias)
-        + (errors.acc_misalignment * 1e-3) ** 2 * float((d_gain[_OFF_DIAGONAL] ** 2).sum())
-        + (errors.acc_scale_factor * 1e-6) ** 2 * float((d_gain.diagonal() ** 2).sum())
+        errors.acc_bias**2 * (d_bias @ d_bias.mT)[..., 0, 0]
+        + (errors.acc_misalignment * 1e-3) ** 2 * (d_gain[..., _OFF_DIAGONAL] ** 2).sum(axis=-1)
+        + (errors.acc_scale_factor * 1e-6) ** 2
+        * (np.diagonal(d_gain, axis1=-2, axis2=-1) ** 2).sum(axis=-1)
     )
-    return float(np.sqrt(var))
+    sigma: FloatArray = np.sqrt(var)
+    return sigma

@@ -144,5 +144,5 @@ def _accel_sigma(inc: float, theta: FloatArray, g: float, errors: ToolErrors) ->
             )
             / g
         )
-        worst = max(worst, accelerometer_sigma(grad, acc, np.ones_like(psi), errors))
+        worst = max(worst, float(accelerometer_sigma(grad, acc, np.ones_like(psi), errors)))
     return worst
