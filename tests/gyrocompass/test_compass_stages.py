@@ -81,6 +81,33 @@ def test_pipeline_from_pre_averaged_readings(simulated: Path, tmp_path: Path):
     np.testing.assert_allclose(a.column("azi").to_numpy(), b.column("azi").to_numpy())
 
 
+def test_a_near_vertical_station_without_a_frame_angle_is_rejected_alone(
+    simulated: Path, tmp_path: Path
+):
+    """A frame-angle sensor's dropout (a null frame angle) at one position of a near-vertical
+    station, whose fit the frame angle references: that station is rejected, saying why, and
+    the run goes on (it stopped with "SVD did not converge")."""
+    first = run("point-gyro.yaml", simulated / "samples.parquet", tmp_path / "a")
+    assert first.returncode == 0, first.stderr
+    readings = pq.read_table(tmp_path / "a" / "readings.readings.parquet")
+    solved = pq.read_table(tmp_path / "a" / "compass.stations.parquet")
+    vertical = solved.column("station")[0].as_py()
+    assert solved.column("inc")[0].as_py() < 3.0  # near vertical (vertical_below: 3°)
+    frame = readings.column("frame_angle").to_pylist()
+    frame[readings.column("station").to_pylist().index(vertical) + 1] = None
+    index = readings.schema.get_field_index("frame_angle")
+    dropped = readings.set_column(index, readings.schema.field(index), pa.array(frame))
+    pq.write_table(dropped, tmp_path / "dropout.parquet")
+    result = run("point-gyro-readings.yaml", tmp_path / "dropout.parquet", tmp_path / "b")
+    assert result.returncode == 0, result.output
+    rejects = pq.read_table(tmp_path / "b" / "compass.rejects.parquet").to_pylist()
+    assert [(r["station"], r["reason"]) for r in rejects] == [
+        (vertical, "near vertical and a position without a frame angle to reference the fit")
+    ]
+    others = pq.read_table(tmp_path / "b" / "compass.stations.parquet")
+    assert others.column("station").to_pylist() == solved.column("station").to_pylist()[1:]
+
+
 def test_bundled_readings_csv_runs_through_the_readings_pipeline(tmp_path: Path):
     result = run(
         "point-gyro-readings.yaml", ROOT / "examples" / "readings-j-well.csv", tmp_path / "out"

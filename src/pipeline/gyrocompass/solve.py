@@ -369,6 +369,10 @@ def _prepare(st: _Station, tilt: _Tilt, lat: float, options: CompassOptions) -> 
     psi, near_vertical = tilt.psi, tilt.near_vertical
     use_frame = near_vertical and st.frame is not None
     alpha = st.frame if use_frame and st.frame is not None else psi
+    if use_frame and np.isnan(alpha).any():  # a null frame angle (the sensor's dropout)
+        raise StationReject(
+            "near vertical and a position without a frame angle to reference the fit"
+        )
     gyro = st.gyro
     if near_vertical:  # remove the vertical Earth rate leaking in through the tilt
         down = st.acc / np.linalg.norm(st.acc, axis=1, keepdims=True)
