@@ -225,6 +225,8 @@ class CompiledContract:
 
     def validate(self, table: pa.Table) -> None:
         """Raise :class:`ContractViolation` listing every failed rule (all columns)."""
+        if self._holds(table):
+            return
         failures: list[RuleFailure] = []
         groups = self._group_keys(table)
         present = set(table.column_names)
@@ -244,8 +246,39 @@ class CompiledContract:
                 ]
             raise ContractViolation(self.name, failures, source=source)
 
+    def _holds(self, table: pa.Table) -> bool:
+        """Whether ``table`` plainly keeps every rule, told by the column reductions the rules
+        need and little more (:func:`_float_holds`, any other column's numbers
+        :func:`_check_numbers`); False where one may be broken: :meth:`validate` then looks
+        at every column to name the failures (or finds none)."""
+        schema = table.schema
+        names = schema.names
+        if len(where := {name: i for i, name in enumerate(names)}) < len(names):  # a name twice
+            return False
+        groups = self._group_keys(table)
+        for spec in self.columns:
+            if (i := where.get(spec.name)) is None:
+                if spec.required:
+                    return False
+                continue
+            field = schema.field(i)
+            if not _same_type(field.type, spec.type) or _metadata_failures(spec, field):
+                return False
+            col = table.column(i)
+            if col.null_count and not spec.nullable:
+                return False
+            is_float = pa.types.is_floating(spec.type)
+            if not (is_float or pa.types.is_integer(spec.type)) or not table.num_rows:
+                continue
+            if not is_float or col.null_count or spec.undefined_at_vertical:
+                if _check_numbers(spec, col, groups, _undefined_at_vertical(spec, table)):
+                    return False
+            elif not _float_holds(spec, col.to_numpy()):
+                return False
+        return True
+
     def _group_keys(self, table: pa.Table) -> pa.ChunkedArray | None:
-        if self.group_by is None or self.group_by not in table.column_names:
+        if self.group_by is None or self.group_by not in table.schema.names:
             return None
         keys: pa.ChunkedArray = table.column(self.group_by)
         return keys
@@ -277,7 +310,7 @@ class BatchChecker:
         if self.steps is not None and batch.num_rows:
             group = [self.steps.group_by] if self.steps.group_by else []
             names = [*(c.name for c in self.steps.columns), *group, SOURCE_LINE]
-            present = set(table.column_names)  # (a list built afresh on each access)
+            present = set(table.schema.names)  # (column_names: ~6 µs more)
             ordered = table.select([n for n in names if n in present])
             first = {name: ordered.column(name)[0].as_py() for name in ordered.column_names}
             if self.last is not None and not self._step_holds(self.last, first):
@@ -378,9 +411,20 @@ def _check_column(
 ) -> list[RuleFailure]:
     field = table.schema.field(spec.name)
     col = table.column(spec.name)
-    failures: list[RuleFailure] = []
     if not _same_type(field.type, spec.type):
         return [RuleFailure(spec.name, "type", str(spec.type) + f", got {field.type}")]
+    failures = _metadata_failures(spec, field)
+    if not spec.nullable and col.null_count:
+        mask = pc.is_null(col).to_numpy(zero_copy_only=False)
+        failures.append(rule_failure(spec.name, "not null", "no missing values", mask, col))
+    if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
+        failures.extend(_check_numbers(spec, col, groups, _undefined_at_vertical(spec, table)))
+    return failures
+
+
+def _metadata_failures(spec: ColumnSpec, field: pa.Field) -> list[RuleFailure]:
+    """The rules the metadata of the column's Arrow field breaks: unit, north reference."""
+    failures: list[RuleFailure] = []
     meta = field.metadata or {}
     if spec.unit is not None and meta.get(UNIT_KEY) != spec.unit.encode():
         got = meta.get(UNIT_KEY)
@@ -396,18 +440,13 @@ def _check_column(
         failures.append(
             RuleFailure(spec.name, "north reference", f"one of {', '.join(NORTH_REFERENCES)}")
         )
-    if not spec.nullable and col.null_count:
-        mask = pc.is_null(col).to_numpy(zero_copy_only=False)
-        failures.append(rule_failure(spec.name, "not null", "no missing values", mask, col))
-    if pa.types.is_floating(spec.type) or pa.types.is_integer(spec.type):
-        failures.extend(_check_numbers(spec, col, groups, _undefined_at_vertical(spec, table)))
     return failures
 
 
 def _undefined_at_vertical(spec: ColumnSpec, table: pa.Table) -> np.ndarray | None:
     """Rows where ``spec``'s column may be NaN: the column allows it, the value is NaN and
     the row's inclination is within :data:`VERTICAL_TOLERANCE` of vertical (else None)."""
-    if not spec.undefined_at_vertical or "inc" not in table.column_names:
+    if not spec.undefined_at_vertical or "inc" not in table.schema.names:
         return None
     values = table.column(spec.name).to_numpy(zero_copy_only=False).astype(float)
     inc = table.column("inc").to_numpy(zero_copy_only=False).astype(float)
@@ -491,6 +530,26 @@ def _check_numbers(
     return failures
 
 
+def _float_holds(spec: ColumnSpec, values: np.ndarray) -> bool:
+    """Whether a float column, no value missing, plainly keeps its rules: what
+    :func:`_check_numbers` finds no failure in, its steps in order (across groups too)."""
+    ordered = spec.monotonic is not None and len(values) > 1
+    if ordered and not _steps_hold(spec, values):
+        return False
+    lo, hi, finite = _extremes(spec, values, ordered)
+    return (finite or not spec.finite) and _within(spec, lo, hi)
+
+
+def _within(spec: ColumnSpec, lo: Any, hi: Any) -> bool:
+    """Whether the extremes ``lo`` and ``hi`` of a column keep ``spec``'s bounds."""
+    return not (
+        (spec.ge is not None and lo < spec.ge)
+        or (spec.le is not None and hi > spec.le)
+        or (spec.gt is not None and lo <= spec.gt)
+        or (spec.lt is not None and hi >= spec.lt)
+    )
+
+
 def _extremes(spec: ColumnSpec, values: np.ndarray, in_order: bool) -> tuple[Any, Any, bool]:
     """The smallest and largest of ``values`` (no missing ones among them) and whether they
     are all finite, in as few passes as the column's rules need: a column whose steps hold
@@ -521,14 +580,7 @@ def _integers_in_range(spec: ColumnSpec, col: pa.ChunkedArray) -> bool:
         return False
     extremes = pc.min_max(col)
     lo, hi = extremes["min"].as_py(), extremes["max"].as_py()
-    if lo is None:  # every value missing
-        return True
-    return not (
-        (spec.ge is not None and lo < spec.ge)
-        or (spec.le is not None and hi > spec.le)
-        or (spec.gt is not None and lo <= spec.gt)
-        or (spec.lt is not None and hi >= spec.lt)
-    )
+    return lo is None or _within(spec, lo, hi)  # None: every value missing
 
 
 def _steps_hold(spec: ColumnSpec, values: np.ndarray) -> bool:

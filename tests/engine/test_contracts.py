@@ -299,6 +299,60 @@ def test_an_unbounded_column_whose_sum_overflows_is_not_refused():
     assert [i for i, _ in f.examples] == [0, 2]
 
 
+def rows_of(n: int, **changes: tuple[int, float]) -> pa.Table:
+    """A good :class:`Sample` table of ``n`` rows, ``column=(row, value)`` changed."""
+    data: dict[str, object] = {
+        "md": np.arange(n) * 10.0,
+        "inc": np.linspace(0.0, 3.0, n),
+        "azi": np.full(n, 10.0),
+        "t": 1.0 + np.arange(n) * (8.0 / n),
+        "gap": [None if i % 2 else 1.0 for i in range(n)],
+        "n": np.arange(n) + 1,
+    }
+    for name, (row, value) in changes.items():
+        values = list(data[name])  # type: ignore[call-overload]
+        values[row] = value
+        data[name] = values
+    return table(**data)
+
+
+@pytest.mark.parametrize(
+    ("change", "refused"),
+    [
+        ({"inc": (5, math.nan)}, {("inc", "finite")}),
+        ({"azi": (6, math.inf)}, {("azi", "finite")}),
+        ({"md": (0, -math.inf)}, {("md", "finite"), ("md", "range")}),
+        ({"inc": (3, 180.5)}, {("inc", "range")}),
+        ({"t": (0, 0.0)}, {("t", "range")}),
+        ({"md": (4, 30.0)}, {("md", "monotonic")}),
+        ({"t": (2, 1.0)}, {("t", "monotonic")}),
+        ({"gap": (1, -2.0)}, {("gap", "range")}),
+    ],
+)
+def test_a_bad_value_is_refused_by_each_rule_it_breaks_at_its_row(change: dict, refused: set):
+    """A table that plainly keeps every rule is passed on its columns' reductions alone;
+    one bad value makes it checked column by column, and refused by each rule it breaks."""
+    Sample.validate_table(rows_of(40))
+    found = failures(rows_of(40, **change))
+    assert {(f.column, f.rule) for f in found} == refused
+    assert {f.examples[0][0] for f in found} == {row for row, _ in change.values()}
+
+
+class Loose(TableContract):
+    x: float = column(unit=None, ge=0, finite=False, description="NaN allowed")
+
+
+def test_a_column_that_allows_nan_is_still_range_checked():
+    values = np.ones(8)
+    values[3] = math.nan
+    Loose.validate_table(Loose.compiled().make_table({"x": values}))
+    values[3] = -1.0
+    with pytest.raises(ContractViolation) as info:
+        Loose.validate_table(Loose.compiled().make_table({"x": values}))
+    (failure,) = info.value.failures
+    assert (failure.rule, failure.examples) == ("range", ((3, -1.0),))
+
+
 def raw_samples(rows: int) -> pa.Table:
     return RawSamples.compiled().make_table(
         {
