@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from pathlib import Path
@@ -10,7 +11,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from pipeline.contracts import TableContract, column, implies
+from pipeline.contracts import ColumnSpec, TableContract, column, implies
 from pipeline.errors import ContractViolation, RuleFailure
 from pipeline.ports import CheckedTables
 from pipeline.streams import TableStream
@@ -336,6 +337,29 @@ def test_a_bad_value_is_refused_by_each_rule_it_breaks_at_its_row(change: dict, 
     found = failures(rows_of(40, **change))
     assert {(f.column, f.rule) for f in found} == refused
     assert {f.examples[0][0] for f in found} == {row for row, _ in change.values()}
+
+
+def test_the_plain_pass_knows_every_rule_a_column_may_have():
+    """A table is passed on its columns' reductions alone (``CompiledContract._holds``)
+    before anything is checked column by column: a rule added to :class:`ColumnSpec` must be
+    taught to that pass too, or a table breaking it would pass unseen — this list says
+    which rules it knows."""
+    assert {f.name for f in dataclasses.fields(ColumnSpec)} == {
+        "name",
+        "type",
+        "unit",
+        "nullable",
+        "required",
+        "finite",
+        "ge",
+        "le",
+        "gt",
+        "lt",
+        "monotonic",
+        "north_reference",
+        "undefined_at_vertical",
+        "min_step",
+    }
 
 
 class Loose(TableContract):
