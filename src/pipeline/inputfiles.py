@@ -13,6 +13,7 @@ fingerprint, so ``--only-changed`` runs a well again when one of them changes.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from functools import cache
 from pathlib import Path
 from typing import Annotated, Any, get_args, get_origin
 
@@ -39,9 +40,10 @@ def parameter_paths(params: BaseModel, prefix: str = "") -> Iterator[tuple[str, 
     """(dotted parameter name, path) of every :data:`InputPath` value set in ``params``,
     nested models and lists of paths (``files.0``) included, and of the files a model lists
     in its ``parameter_files()``."""
-    for name, info in type(params).model_fields.items():
+    paths = _path_fields(type(params))
+    for name in type(params).model_fields:
         value = getattr(params, name)
-        marked = CHECK in info.metadata or _marked(info.annotation)
+        marked = name in paths
         if isinstance(value, Path) and marked:
             yield f"{prefix}{name}", value
         elif isinstance(value, list | tuple) and marked:
@@ -52,6 +54,17 @@ def parameter_paths(params: BaseModel, prefix: str = "") -> Iterator[tuple[str, 
     if callable(own):
         for name, path in own():
             yield f"{prefix}{name}", path
+
+
+@cache
+def _path_fields(model: type[BaseModel]) -> frozenset[str]:
+    """The fields of ``model`` declared :data:`InputPath` (alone, optional or in a list):
+    told once per model (looking at a stage's annotations took ~40 µs a stage and run)."""
+    return frozenset(
+        name
+        for name, info in model.model_fields.items()
+        if CHECK in info.metadata or _marked(info.annotation)
+    )
 
 
 def _marked(annotation: Any) -> bool:
