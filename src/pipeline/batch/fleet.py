@@ -179,17 +179,33 @@ def figures_of_record(record: Any) -> WellFigures | None:
 
 
 def _well_typed(figures: WellFigures) -> bool:
-    """Whether the numbers of ``figures`` are numbers and its file names and problems text
-    (a record read from a file could hold anything)."""
+    """Whether the numbers of ``figures`` are numbers, its texts text, its clearance level
+    one of the rule's and its reports plain file names of the well's directory (a record
+    read from a file could hold anything: the page shows these, and links the reports)."""
     numbers: list[object] = [figures.td_md, figures.td_tvd, figures.max_dls]
+    texts: list[object] = [*figures.reports, *figures.problems]
+    optional: list[object] = [figures.pipeline, figures.missing]
     if figures.clearance is not None:
         numbers += [figures.clearance.sf, figures.clearance.md]
+        texts += [figures.clearance.offset, figures.clearance.level]
     numbers += [x for d in figures.drift or () for x in (d.rate_deg_h, d.sigma_deg_h)]
+    optional += [d.instrument for d in figures.drift or ()]
+    texts += [t for g in figures.gates or () for t in (g.name, g.status, g.description)]
     if figures.qc is not None:
         numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
-    return all(
-        n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers
-    ) and all(isinstance(t, str) for t in (*figures.reports, *figures.problems))
+        texts += list(figures.qc.failed)
+    return (
+        all(n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers)
+        and all(isinstance(t, str) for t in texts)
+        and all(t is None or isinstance(t, str) for t in optional)
+        and (figures.clearance is None or figures.clearance.level in LEVELS)
+        and all(_report_name(name) for name in figures.reports)
+    )
+
+
+def _report_name(name: str) -> bool:
+    """Whether ``name`` is a report file's name in a well's directory (not a path)."""
+    return name.endswith(REPORT_SUFFIXES) and "/" not in name and "\\" not in name
 
 
 def required(contract: type[TableContract]) -> frozenset[str]:
