@@ -379,3 +379,24 @@ def test_figures_of_the_wrong_kinds_in_batch_json_are_not_shown(tmp_path: Path) 
         assert "<script>" not in page and "<i>" not in page, what
         assert "href=" not in page, what  # the well has no report: nothing is linked
         assert cell(rows, "SHORT", "clearance") == "—", what
+
+
+def test_a_damaged_run_json_of_a_well_without_recorded_figures_is_shown(
+    tmp_path: Path,
+) -> None:
+    """A well published before figures were recorded whose ``run.json`` lists its stages as
+    something other than a list (damaged): the page is written, the figures read back from
+    the well's Parquet tables."""
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
+    marker, manifest = out / "SHORT" / "batch.json", out / "SHORT" / "run.json"
+    record = json.loads(marker.read_text())
+    del record["figures"]  # as an earlier version wrote it
+    marker.write_text(json.dumps(record))
+    run = json.loads(manifest.read_text())
+    run["stages"] = 5
+    manifest.write_text(json.dumps(run))
+    gyropipe_cli("status", out, "--html", check=True)
+    trajectory = pq.read_table(out / "SHORT" / "trajectory.trajectory.parquet")
+    rows = page_rows(out / "fleet.html")
+    assert cell(rows, "SHORT", "td_md") == f"{trajectory['md'].to_pylist()[-1]:.1f}"

@@ -464,8 +464,9 @@ def _outputs(manifest: Mapping[str, Any]) -> list[str]:
 def _persisted_csv(manifest: Mapping[str, Any]) -> list[str]:
     """The outputs ``run.json`` lists that are stage tables persisted as CSV: named
     ``<stage>.<port>.csv`` for a port the stage's record counts rows of."""
+    stages = manifest.get("stages")
     ports = set()
-    for record in manifest.get("stages", []):
+    for record in stages if isinstance(stages, list) else ():
         if isinstance(record, Mapping) and isinstance(record.get("rows_out"), Mapping):
             ports |= {f"{record.get('id')}.{port}.csv" for port in record["rows_out"]}
     return [name for name in _outputs(manifest) if name in ports]
