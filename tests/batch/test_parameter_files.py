@@ -11,15 +11,20 @@ import json
 import os
 from pathlib import Path
 
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 from batch_support import STATIONS, change_one_azimuth, runs, summary
 from pydantic import BaseModel, ValidationError
 
 import pipeline as gp
+from pipeline.api import stages
 from pipeline.batch.fingerprint import Fingerprint, changes, hashed
 from pipeline.errors import SpecError
 from pipeline.inputfiles import InputPath, parameter_paths
+from pipeline.stages import toolmodels
+from pipeline.stages.clearance import offset_tables
+from pipeline.well import WellMetadata
 from tests_support import gyropipe_cli, stage, write_pipeline
 
 MANIFEST_HEADER = "well_id,file,model,hole_diameter (in),north (m),east (m)\n"
@@ -175,6 +180,28 @@ def test_a_tool_model_file_changed_changes_the_numbers_of_the_next_batch_in_the_
     assert (base.stat().st_size, base.stat().st_mtime_ns) == (before.st_size, before.st_mtime_ns)
     assert batch(tmp_path, pipeline, "--only-changed") == {"W1": rerun, "W2": rerun}
     assert major_at_td() > second
+
+
+def test_an_offset_file_changed_after_its_read_is_recorded_as_it_was_read(tmp_path: Path):
+    """An operator rewrites an offset well's file just after the clearance stage read it:
+    the hash recorded (``run.json``, the fingerprint) is that of the bytes the stage read,
+    so the next ``--only-changed`` batch sees the change and runs the well again, rather
+    than the new file's hash recorded beside the old file's clearance."""
+    make_fleet(tmp_path)
+    offset = tmp_path / "offsets" / "a.csv"
+    read_bytes = []
+
+    def read_then_rewritten(path: Path) -> tuple[pa.Table, WellMetadata]:
+        read_bytes.append(path.read_bytes())
+        found = stages.registry().read(path, "stations", well=WellMetadata())
+        change_one_azimuth(path)
+        return found
+
+    wells, _ = offset_tables(
+        tmp_path / "wa.csv", read_then_rewritten, WellMetadata(), toolmodels.of_registry(None)
+    )
+    assert len(read_bytes) == 1 and offset.read_bytes() != read_bytes[0]
+    assert wells["sha256"].to_pylist() == [hashlib.sha256(read_bytes[0]).hexdigest()]
 
 
 def test_validate_refuses_a_missing_profile_at_its_line(tmp_path: Path):
