@@ -39,6 +39,7 @@ from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
 from pipeline.graph import Plan
+from pipeline.hashing import open_regular, regular_bytes
 from pipeline.manifest import MANIFEST
 from pipeline.qc.tables import QcResults
 from pipeline.qc.verdict import QcTally, qc_tally
@@ -327,7 +328,8 @@ class _Tables:
     def read(self, well_dir: Path, name: str) -> None:
         """A persisted Parquet table: its footer, then the columns its figure needs."""
         try:
-            with pq.ParquetFile(well_dir / name) as file:  # closed here, not at GC
+            # opened only if a regular file (a FIFO would block); closed here, not at GC
+            with open_regular(well_dir / name) as fh, pq.ParquetFile(fh) as file:
                 self.take(set(file.schema_arrow.names), lambda c: file.read(columns=c))
         except FileNotFoundError:
             self.problems.append(f"{name} is missing")
@@ -412,7 +414,7 @@ def _manifest(well_dir: Path) -> tuple[dict[str, Any] | None, str | None]:
     """The well's ``run.json``, or why there is none to read."""
     path = well_dir / MANIFEST
     try:
-        manifest = jsontext.loads(path.read_bytes())
+        manifest = jsontext.loads(regular_bytes(path))
     except FileNotFoundError:
         return None, f"no published outputs ({MANIFEST} missing)"
     except OSError as exc:
@@ -427,7 +429,7 @@ def _manifest(well_dir: Path) -> tuple[dict[str, Any] | None, str | None]:
 def _marker(well_dir: Path) -> dict[str, Any]:
     """The well's ``batch.json`` ({} where it cannot be read or is not an object)."""
     try:
-        marker = jsontext.loads((well_dir / MARKER).read_bytes())
+        marker = jsontext.loads(regular_bytes(well_dir / MARKER))
     except (OSError, ValueError):
         return {}
     return marker if isinstance(marker, dict) else {}
