@@ -34,7 +34,7 @@ from pipeline.errors import (
     file_errors,
 )
 from pipeline.graph import Plan, PlannedStage
-from pipeline.hashing import sha256_file
+from pipeline.hashing import regular_bytes, sha256_file
 from pipeline.inputfiles import parameter_paths
 from pipeline.manifest import MANIFEST, StageRecord, acceptance, provenance_of, run_manifest
 from pipeline.ports import (
@@ -421,7 +421,7 @@ def check_out_dir(out_dir: Path, own: frozenset[str] = frozenset()) -> None:
     if not entries:
         return
     try:
-        previous = json.loads((out_dir / MANIFEST).read_text())
+        previous = json.loads(regular_bytes(out_dir / MANIFEST))  # a FIFO would block
         known = {MANIFEST, *own} | {entry["file"] for entry in previous["outputs"]}
     except (OSError, ValueError, KeyError, TypeError):
         known = set()

@@ -6,12 +6,13 @@ ledgers are real SQLite files damaged with plain ``sqlite3`` (issue 32 item 8)."
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sqlite3
 from pathlib import Path
 
 import pytest
-from batch_support import make_wells, runs, summary, survey_pipeline
+from batch_support import make_wells, runs, spawn, summary, survey_pipeline
 
 from tests_support import gyropipe_cli
 
@@ -167,3 +168,40 @@ def test_a_damaged_published_marker_makes_its_well_run_again(damaged: tuple[Path
     else:
         assert again.returncode == 0, again.output
         assert last["C2"]["status"] == "done" and last["C2"]["detail"] == "outputs missing"
+
+
+@pytest.mark.parametrize("name", ["run.json", "batch.json"])
+def test_a_fifo_in_place_of_a_published_file_is_named_not_waited_on(
+    damaged: tuple[Path, Path], name: str
+):
+    """A FIFO where a well's ``run.json`` or ``batch.json`` belongs (a hostile user, a
+    broken copy): ``status --html`` writes the page, naming it, and the batch ends —
+    neither waits for good on a FIFO no one writes to (real processes, stopped after
+    60 s). Without a readable ``run.json`` which files are the run's is unknown: the well
+    fails, its directory kept; a ``batch.json`` is the batch's own: the well runs again."""
+    survey, out = damaged
+    (out / "C2" / name).unlink()
+    os.mkfifo(out / "C2" / name)
+    inputs = out.parent / "in"
+    make_wells(inputs, WELLS)
+    for args in (["status", out, "--html"], ["batch", survey, "--inputs", inputs / "*.csv",
+                 "--out", out, "--only-changed", "--quiet"]):  # fmt: skip
+        process = spawn(*args, stderr=out.parent / "stderr.txt")
+        try:
+            process.wait(60)
+        finally:
+            process.kill()
+        assert process.returncode == (0 if args[0] == "status" or name == "batch.json" else 1)
+        if args[0] == "status" and name == "run.json":
+            page = (out / "fleet.html").read_text(encoding="utf-8")
+            assert "run.json cannot be read (not a regular file (a FIFO))" in page
+    last = summary(out)
+    assert last["C1"]["status"] == "skipped"
+    if name == "run.json":
+        assert last["C2"]["status"] == "failed"
+        assert "holds files that are not a previous run's" in last["C2"]["detail"]
+        assert (out / "C2" / name).is_fifo()
+    else:
+        assert (last["C2"]["status"], last["C2"]["detail"]) == ("done", "outputs missing")
+        newest = max(int(r["id"]) for r in runs(out / "ledger.sqlite") if r["well"] == "C2")
+        assert json.loads((out / "C2" / name).read_text())["run_id"] == newest

@@ -223,3 +223,38 @@ def test_a_choice_that_turns_on_a_pending_hash_is_a_check():
     # the reasons of a run come from its own hashes
     changed = replaced(inputs={"stations": "b" * 64})
     assert why(state, changed, published=False) == ["input changed: stations", "outputs missing"]
+
+
+def test_a_run_of_another_ledger_published_over_the_well_is_not_taken_for_its_own(
+    tmp_path: Path, survey: Path
+):
+    """Two ledgers (``--ledger``) publishing into one OUT number their runs alike: the
+    second's run 1 of W1, from other stations, published over the first's run 1. The first
+    ledger's ``--only-changed`` batch runs W1 again (its outputs are not its run's) rather
+    than skipping it as unchanged with the other stations' trajectory in OUT/W1."""
+    (mine,) = make_wells(tmp_path / "in", ["W1"])
+    (theirs,) = make_wells(tmp_path / "other", ["W1"])
+    change_one_azimuth(theirs)
+    out = tmp_path / "out"
+
+    def batch(inputs: Path, ledger: str, *flags: str) -> dict[str, tuple[str, str]]:
+        result = gyropipe_cli(
+            "batch", survey, "--inputs", inputs / "*.csv", "--out", out,
+            "--ledger", tmp_path / ledger, *flags,
+        )  # fmt: skip
+        assert result.returncode == 0, result.output
+        return {w: (r["status"], r["detail"]) for w, r in summary(out).items()}
+
+    assert batch(tmp_path / "in", "first.sqlite") == {"W1": ("done", "new well")}
+    ours = (out / "W1" / "trajectory.csv").read_bytes()
+    assert batch(tmp_path / "other", "second.sqlite") == {"W1": ("done", "new well")}
+    assert json.loads((out / "W1" / "batch.json").read_text())["run_id"] == 1
+    assert (out / "W1" / "trajectory.csv").read_bytes() != ours
+
+    assert batch(tmp_path / "in", "first.sqlite", "--only-changed") == {
+        "W1": ("done", "outputs missing")
+    }
+    assert (out / "W1" / "trajectory.csv").read_bytes() == ours
+    assert json.loads((out / "W1" / "run.json").read_text())["inputs"]["stations"]["path"] == (
+        str(mine)
+    )

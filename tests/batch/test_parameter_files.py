@@ -8,16 +8,23 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from batch_support import STATIONS, change_one_azimuth, runs, summary
 from pydantic import BaseModel, ValidationError
 
 import pipeline as gp
+from pipeline.api import stages
 from pipeline.batch.fingerprint import Fingerprint, changes, hashed
 from pipeline.errors import SpecError
 from pipeline.inputfiles import InputPath, parameter_paths
+from pipeline.stages import toolmodels
+from pipeline.stages.clearance import offset_tables
+from pipeline.well import WellMetadata
 from tests_support import gyropipe_cli, stage, write_pipeline
 
 MANIFEST_HEADER = "well_id,file,model,hole_diameter (in),north (m),east (m)\n"
@@ -138,6 +145,63 @@ def test_only_changed_reruns_the_wells_whose_parameter_files_changed(tmp_path: P
     assert [r["well"] for r in runs(tmp_path / "out" / "ledger.sqlite")] == [
         "W1", "W2", "W2", "W1", "W2",
     ]  # fmt: skip
+
+
+def test_a_tool_model_file_changed_changes_the_numbers_of_the_next_batch_in_the_process(
+    tmp_path: Path,
+):
+    """Batches one after the other in one process (the API, a notebook; a pool's workers are
+    forked from it): the base file a tool-model file extends edited, then replaced by one of
+    the same size and times — each time the wells run again and their position σ is the new
+    model's (its gyro compassing noise larger: the ellipses grow), not a model kept from the
+    file's earlier bytes while ``run.json`` records the new file's hash."""
+    make_fleet(tmp_path)
+    pipeline = clearance_pipeline(tmp_path)
+    base = tmp_path / "models" / "base.yaml"
+
+    def major_at_td() -> float:
+        table = pq.read_table(tmp_path / "out" / "W1" / "uncertainty.trajectory.parquet")
+        return float(table["ellipse_major"][-1].as_py())
+
+    batch(tmp_path, pipeline)
+    first = major_at_td()
+
+    base.write_text(base.read_text().replace("GXY-RN: 0.25", "GXY-RN: 0.5"))
+    rerun = ("done", "tool-model file models/base.yaml changed")
+    assert batch(tmp_path, pipeline, "--only-changed") == {"W1": rerun, "W2": rerun}
+    second = major_at_td()
+    assert second > first
+
+    before = base.stat()
+    swapped = base.with_name("swapped.yaml")
+    swapped.write_text(base.read_text().replace("GXY-RN: 0.5", "GXY-RN: 0.9"))
+    os.utime(swapped, ns=(before.st_atime_ns, before.st_mtime_ns))
+    os.replace(swapped, base)
+    assert (base.stat().st_size, base.stat().st_mtime_ns) == (before.st_size, before.st_mtime_ns)
+    assert batch(tmp_path, pipeline, "--only-changed") == {"W1": rerun, "W2": rerun}
+    assert major_at_td() > second
+
+
+def test_an_offset_file_changed_after_its_read_is_recorded_as_it_was_read(tmp_path: Path):
+    """An operator rewrites an offset well's file just after the clearance stage read it:
+    the hash recorded (``run.json``, the fingerprint) is that of the bytes the stage read,
+    so the next ``--only-changed`` batch sees the change and runs the well again, rather
+    than the new file's hash recorded beside the old file's clearance."""
+    make_fleet(tmp_path)
+    offset = tmp_path / "offsets" / "a.csv"
+    read_bytes = []
+
+    def read_then_rewritten(path: Path) -> tuple[pa.Table, WellMetadata]:
+        read_bytes.append(path.read_bytes())
+        found = stages.registry().read(path, "stations", well=WellMetadata())
+        change_one_azimuth(path)
+        return found
+
+    wells, _ = offset_tables(
+        tmp_path / "wa.csv", read_then_rewritten, WellMetadata(), toolmodels.of_registry(None)
+    )
+    assert len(read_bytes) == 1 and offset.read_bytes() != read_bytes[0]
+    assert wells["sha256"].to_pylist() == [hashlib.sha256(read_bytes[0]).hexdigest()]
 
 
 def test_validate_refuses_a_missing_profile_at_its_line(tmp_path: Path):

@@ -341,3 +341,62 @@ def test_figures_edited_in_batch_json_are_not_shown(tmp_path: Path) -> None:
         f"{largest(md, dls, 10.0):.2f} | courses ≥ 10 m (the report's default: the run's own "
         "not recorded)"
     )
+
+
+EDITED_FIGURES = {
+    "a clearance level of markup": {
+        "clearance": {"sf": 1.0, "offset": "X", "md": 1.0, "level": "<script>x</script>"}
+    },
+    "a report outside the well": {"reports": ["../../../elsewhere/report.html"]},
+    "a report by an absolute path": {"reports": ["/tmp/report.html"]},
+    "a gate named by a number": {"gates": [{"name": 5, "status": "fail", "description": ""}]},
+    "a clearance level not text": {
+        "clearance": {"sf": 1.0, "offset": "X", "md": 1.0, "level": ["fail"]}
+    },
+    "a pipeline not text": {"pipeline": {"name": "bare"}},
+    "an instrument not text": {
+        "drift": [{"rate_deg_h": 0.1, "sigma_deg_h": 0.01, "instrument": ["<i>g</i>"]}]
+    },
+}
+
+
+def test_figures_of_the_wrong_kinds_in_batch_json_are_not_shown(tmp_path: Path) -> None:
+    """A ``batch.json`` whose figures hold markup or a path where the page shows a word or
+    links a report, or a value of the wrong kind (edited by hand): the page is written, says
+    the figures are damaged and shows none of them (no markup, no link out of OUT)."""
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
+    marker = out / "SHORT" / "batch.json"
+    text = marker.read_text()
+    for what, edit in EDITED_FIGURES.items():
+        record = json.loads(text)
+        record["figures"].update(edit)
+        marker.write_text(json.dumps(record))
+        gyropipe_cli("status", out, "--html", check=True)
+        page = (out / "fleet.html").read_text(encoding="utf-8")
+        rows = page_rows(out / "fleet.html")
+        assert "the figures recorded are damaged" in cell(rows, "SHORT", "status"), what
+        assert "<script>" not in page and "<i>" not in page, what
+        assert "href=" not in page, what  # the well has no report: nothing is linked
+        assert cell(rows, "SHORT", "clearance") == "—", what
+
+
+def test_a_damaged_run_json_of_a_well_without_recorded_figures_is_shown(
+    tmp_path: Path,
+) -> None:
+    """A well published before figures were recorded whose ``run.json`` lists its stages as
+    something other than a list (damaged): the page is written, the figures read back from
+    the well's Parquet tables."""
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
+    marker, manifest = out / "SHORT" / "batch.json", out / "SHORT" / "run.json"
+    record = json.loads(marker.read_text())
+    del record["figures"]  # as an earlier version wrote it
+    marker.write_text(json.dumps(record))
+    run = json.loads(manifest.read_text())
+    run["stages"] = 5
+    manifest.write_text(json.dumps(run))
+    gyropipe_cli("status", out, "--html", check=True)
+    trajectory = pq.read_table(out / "SHORT" / "trajectory.trajectory.parquet")
+    rows = page_rows(out / "fleet.html")
+    assert cell(rows, "SHORT", "td_md") == f"{trajectory['md'].to_pylist()[-1]:.1f}"

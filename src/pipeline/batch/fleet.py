@@ -39,6 +39,7 @@ from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
 from pipeline.graph import Plan
+from pipeline.hashing import open_regular, regular_bytes
 from pipeline.manifest import MANIFEST
 from pipeline.qc.tables import QcResults
 from pipeline.qc.verdict import QcTally, qc_tally
@@ -179,17 +180,33 @@ def figures_of_record(record: Any) -> WellFigures | None:
 
 
 def _well_typed(figures: WellFigures) -> bool:
-    """Whether the numbers of ``figures`` are numbers and its file names and problems text
-    (a record read from a file could hold anything)."""
+    """Whether the numbers of ``figures`` are numbers, its texts text, its clearance level
+    one of the rule's and its reports plain file names of the well's directory (a record
+    read from a file could hold anything: the page shows these, and links the reports)."""
     numbers: list[object] = [figures.td_md, figures.td_tvd, figures.max_dls]
+    texts: list[object] = [*figures.reports, *figures.problems]
+    optional: list[object] = [figures.pipeline, figures.missing]
     if figures.clearance is not None:
         numbers += [figures.clearance.sf, figures.clearance.md]
+        texts += [figures.clearance.offset, figures.clearance.level]
     numbers += [x for d in figures.drift or () for x in (d.rate_deg_h, d.sigma_deg_h)]
+    optional += [d.instrument for d in figures.drift or ()]
+    texts += [t for g in figures.gates or () for t in (g.name, g.status, g.description)]
     if figures.qc is not None:
         numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
-    return all(
-        n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers
-    ) and all(isinstance(t, str) for t in (*figures.reports, *figures.problems))
+        texts += list(figures.qc.failed)
+    return (
+        all(n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers)
+        and all(isinstance(t, str) for t in texts)
+        and all(t is None or isinstance(t, str) for t in optional)
+        and (figures.clearance is None or figures.clearance.level in LEVELS)
+        and all(_report_name(name) for name in figures.reports)
+    )
+
+
+def _report_name(name: str) -> bool:
+    """Whether ``name`` is a report file's name in a well's directory (not a path)."""
+    return name.endswith(REPORT_SUFFIXES) and "/" not in name and "\\" not in name
 
 
 def required(contract: type[TableContract]) -> frozenset[str]:
@@ -311,7 +328,8 @@ class _Tables:
     def read(self, well_dir: Path, name: str) -> None:
         """A persisted Parquet table: its footer, then the columns its figure needs."""
         try:
-            with pq.ParquetFile(well_dir / name) as file:  # closed here, not at GC
+            # opened only if a regular file (a FIFO would block); closed here, not at GC
+            with open_regular(well_dir / name) as fh, pq.ParquetFile(fh) as file:
                 self.take(set(file.schema_arrow.names), lambda c: file.read(columns=c))
         except FileNotFoundError:
             self.problems.append(f"{name} is missing")
@@ -396,7 +414,7 @@ def _manifest(well_dir: Path) -> tuple[dict[str, Any] | None, str | None]:
     """The well's ``run.json``, or why there is none to read."""
     path = well_dir / MANIFEST
     try:
-        manifest = jsontext.loads(path.read_bytes())
+        manifest = jsontext.loads(regular_bytes(path))
     except FileNotFoundError:
         return None, f"no published outputs ({MANIFEST} missing)"
     except OSError as exc:
@@ -411,7 +429,7 @@ def _manifest(well_dir: Path) -> tuple[dict[str, Any] | None, str | None]:
 def _marker(well_dir: Path) -> dict[str, Any]:
     """The well's ``batch.json`` ({} where it cannot be read or is not an object)."""
     try:
-        marker = jsontext.loads((well_dir / MARKER).read_bytes())
+        marker = jsontext.loads(regular_bytes(well_dir / MARKER))
     except (OSError, ValueError):
         return {}
     return marker if isinstance(marker, dict) else {}
@@ -448,8 +466,9 @@ def _outputs(manifest: Mapping[str, Any]) -> list[str]:
 def _persisted_csv(manifest: Mapping[str, Any]) -> list[str]:
     """The outputs ``run.json`` lists that are stage tables persisted as CSV: named
     ``<stage>.<port>.csv`` for a port the stage's record counts rows of."""
+    stages = manifest.get("stages")
     ports = set()
-    for record in manifest.get("stages", []):
+    for record in stages if isinstance(stages, list) else ():
         if isinstance(record, Mapping) and isinstance(record.get("rows_out"), Mapping):
             ports |= {f"{record.get('id')}.{port}.csv" for port in record["rows_out"]}
     return [name for name in _outputs(manifest) if name in ports]

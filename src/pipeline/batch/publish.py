@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, discard, write_synced
+from pipeline.hashing import regular_bytes
 from pipeline.manifest import MANIFEST
 from pipeline.processes import owner_alive
 from pipeline.runner import remove_stale_staging
@@ -90,8 +91,8 @@ def read_published(well_dir: Path) -> PublishedRun | None:
     The hashes of the two files' bytes as read come with it: the batch process knows the
     publication again by them (:mod:`pipeline.batch.filestate`) without reading a file."""
     try:
-        marker_bytes = (well_dir / MARKER).read_bytes()
-        manifest_bytes = (well_dir / MANIFEST).read_bytes()
+        marker_bytes = regular_bytes(well_dir / MARKER)
+        manifest_bytes = regular_bytes(well_dir / MANIFEST)
         marker = json.loads(marker_bytes)
         manifest = json.loads(manifest_bytes)
         run_id = marker["run_id"]

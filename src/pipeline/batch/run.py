@@ -462,7 +462,7 @@ class _Batch:
         inputs = {name: known[str(path)] for name, path in job.inputs.items()}
         fingerprint = self.identity.fingerprint(job, inputs)
         files = state.last_done.fingerprint.files if state.last_done is not None else {}
-        published = outcome.published_run == flight.check.previous
+        published = _held_last_done(state, outcome)
         if published:
             self._publication(flight, outcome)
         decision = self._decide(
@@ -495,9 +495,7 @@ class _Batch:
             fingerprint = flight.fingerprint.completed(outcome.manifest).with_inputs(
                 {name: read[str(path)] for name, path in job.inputs.items() if str(path) in read}
             )
-            done = flight.state.last_done
-            published = done is not None and outcome.published_run == done.id
-            reasons = why(flight.state, fingerprint, published)
+            reasons = why(flight.state, fingerprint, _held_last_done(flight.state, outcome))
             self._learn(flight, read)
         self.ledger.finish(outcome, error, fingerprint, reasons)
         if outcome.status == "done" and error is None:
@@ -634,6 +632,20 @@ def _input_bytes(job: WellJob) -> int:
             found = path.stat()
             total += found.st_size if stat.S_ISREG(found.st_mode) else 0
     return total
+
+
+def _held_last_done(state: WellState, outcome: WellOutcome) -> bool:
+    """Whether ``OUT/<well>`` held the well's last done run as the task began: its run id,
+    and its ``batch.json`` as published where the ledger holds its hash — another ledger on
+    the same OUT numbers its runs alike, and its marker names another batch and fingerprint
+    (``run.json`` may be edited: it is the run's as long as its outputs are)."""
+    done, held, known = state.last_done, outcome.held, state.publication
+    return (
+        done is not None
+        and held is not None
+        and held.run_id == done.id
+        and (known is None or known.marker_sha256 == held.marker_sha256)
+    )
 
 
 def _check_paths(job: WellJob, check: Check) -> list[str]:

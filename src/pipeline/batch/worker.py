@@ -101,8 +101,9 @@ class WellOutcome:
     hashes: dict[str, str] = field(default_factory=dict)
     """path → SHA-256 (``unreadable`` where it cannot be read) of a check's files, or of a
     failed run's inputs (a done run's are in its manifest)"""
-    published_run: int | None = None
-    """the run whose outputs ``OUT/<well>`` held when the task began (None: none whole)"""
+    held: Publication | None = None
+    """the run whose outputs ``OUT/<well>`` held when the task began, by the hashes of its
+    ``batch.json`` and ``run.json`` (None: none whole)"""
     publication: Publication | None = None
     """the run ``OUT/<well>`` holds as the task ends (a check: the one it held; a done run:
     itself), by the hashes of its ``batch.json`` and ``run.json``"""
@@ -168,7 +169,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
     worker = f"{socket.gethostname()}:{os.getpid()}"
     final = Path(task.out_root) / task.well_id
     held = read_published(final)
-    held_run = held.run_id if held is not None else None
+    found = held.publication if held is not None else None
     if task.check is not None:
         hashes = {path: hashed(path) for path in task.check}
         return WellOutcome(
@@ -178,8 +179,8 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             wall_time_s=time.perf_counter() - t0,
             worker=worker,
             hashes=hashes,
-            published_run=held_run,
-            publication=held.publication if held is not None else None,
+            held=found,
+            publication=found,
             figures=well_figures(final, manifest=held.manifest) if held is not None else None,
         )
     set_reader_threads(1)
@@ -243,7 +244,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             process_time_s=sum(s["wall_time_s"] for s in manifest["stages"]),
             peak_rss_bytes=peak_rss_bytes(),
             worker=worker,
-            published_run=held_run,
+            held=found,
             publication=published.publication,
             figures=figures,
         )
@@ -261,7 +262,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
                 path: digests.get(path) or _digest(task, path, key_after(path))
                 for path in task.inputs.values()
             },
-            published_run=held_run,
+            held=found,
         )
     finally:
         shutil.rmtree(staging, ignore_errors=True)

@@ -169,15 +169,19 @@ def offset_tables(
     models among ``catalogue``'s) and their stations, read by ``read``, every azimuth
     referred to the first file's north (each file's own header, else ``well``, gives the
     corrections); each file's ``sha256`` by ``hash_file`` (a stage's records it:
-    :meth:`StageContext.record_file`)."""
+    :meth:`StageContext.record_file`), taken before the file is read."""
     from pipeline.io.offset_manifest import read_offset_manifest
 
     entries = read_offset_manifest(manifest, functools.partial(resolve_model, catalogue=catalogue))
     tables = []
+    digests = []
     north: str | None = None
     for entry in entries:
         if not entry.file.is_file():
             raise InputFileError(manifest, f"no stations file {entry.file}", entry.line, "file")
+        # hashed before it is read: a file changed after its read is recorded as it was
+        # read (a change the next batch sees), not as the outputs never saw it
+        digests.append(hash_file(entry.file))
         table, header = read(entry.file)
         if table.num_rows < 2:
             raise InputFileError(
@@ -216,7 +220,7 @@ def offset_tables(
             "parent": [e.parent for e in entries],
             "kickoff_md": [e.kickoff_md for e in entries],
             "source": [str(e.file) for e in entries],
-            "sha256": [hash_file(e.file) for e in entries],
+            "sha256": digests,
         }
     )
     return wells, stations

@@ -18,6 +18,7 @@ finite number is not a result when the linear model no longer holds.
 from __future__ import annotations
 
 import functools
+import threading
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -125,27 +126,54 @@ def _named(files: Mapping[str, Path], key: str) -> Path | None:
     return next((p for n, p in files.items() if n.upper() == key.upper()), None)
 
 
-_READING: list[Path] = []
-"""Files being read (outermost first): a file met again extends itself."""
+class _Reading(threading.local):
+    """The files this thread is reading (outermost first: a file met again extends itself)
+    and, per file, the bytes of the files its model is made of (Dask runs wells in threads)."""
+
+    def __init__(self) -> None:
+        self.files: list[Path] = []
+        self.sources: list[dict[Path, bytes]] = []
+
+
+_READING = _Reading()
+_MODELS: dict[tuple[Path, ModelCatalogue], tuple[dict[Path, bytes], ToolModel]] = {}
+"""(file, catalogue) → the bytes of every file its model was read from, and the model."""
 
 
 def _read(path: Path, catalogue: ModelCatalogue) -> ToolModel:
-    """The model of a file, read once per version of it (path, size and mtime) and
-    catalogue its ``extends:`` is resolved in."""
+    """The model of a file and catalogue its ``extends:`` is resolved in, read again only
+    when the bytes of that file, or of a file it extends, are not those it was read from (a
+    file replaced by one of the same size and times, or a base file edited, is read anew)."""
     try:
-        stat = path.stat()
+        data = path.read_bytes()
     except OSError:  # reports the file as unreadable
         return read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
-    _READING.append(path)
+    cached = _MODELS.get((path, catalogue))
+    if cached is not None and all(
+        (data if file == path else _bytes(file)) == read for file, read in cached[0].items()
+    ):
+        sources, model = cached
+    else:
+        sources = {path: data}  # taken before it is parsed: a change meanwhile reads anew
+        _READING.files.append(path)
+        _READING.sources.append(sources)
+        try:
+            model = read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
+        finally:
+            _READING.files.pop()
+            _READING.sources.pop()
+        _MODELS[(path, catalogue)] = (sources, model)
+    if _READING.sources:  # the file being read extends this one: made of these too
+        _READING.sources[-1].update(sources)
+    return model
+
+
+def _bytes(path: Path) -> bytes | None:
+    """The bytes of ``path``; None if it cannot be read."""
     try:
-        return _read_version(path, stat.st_size, stat.st_mtime_ns, catalogue)
-    finally:
-        _READING.pop()
-
-
-@functools.lru_cache(maxsize=256)
-def _read_version(path: Path, size: int, mtime_ns: int, catalogue: ModelCatalogue) -> ToolModel:
-    return read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
+        return path.read_bytes()
+    except OSError:
+        return None
 
 
 def _base(name: str, where: Location, *, catalogue: ModelCatalogue) -> ToolModel:
@@ -155,8 +183,8 @@ def _base(name: str, where: Location, *, catalogue: ModelCatalogue) -> ToolModel
     if path.suffix.lower() in (".yaml", ".yml") and not path.is_absolute():
         path = Path(where.file).parent / path
         name = str(path)
-    if path.suffix.lower() in (".yaml", ".yml") and path.resolve() in _READING:
-        chain = " → ".join(p.name for p in _READING)
+    if path.suffix.lower() in (".yaml", ".yml") and path.resolve() in _READING.files:
+        chain = " → ".join(p.name for p in _READING.files)
         raise ToolModelError([Problem(where, f"{name} extends itself ({chain} → {path.name})")])
     try:
         return find_model(name, catalogue)
