@@ -147,6 +147,47 @@ def test_only_changed_reruns_the_wells_whose_parameter_files_changed(tmp_path: P
     ]  # fmt: skip
 
 
+def test_a_batch_from_another_directory_reruns_wells_whose_parameters_name_files_there(
+    tmp_path: Path,
+):
+    """One pipeline whose profile and tool-model file are given by relative paths, batched
+    into one OUT from a/, then from b/ (the same fleet, b's base tool model noisier): the
+    same parameters now name b's files, so ``--only-changed`` runs every well again, saying
+    why, and their σ is b's model's (it said "skipped, unchanged", OUT holding a's)."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    for root in (a, b):
+        root.mkdir()
+        make_fleet(root)
+    base = b / "models" / "base.yaml"
+    base.write_text(base.read_text().replace("GXY-RN: 0.25", "GXY-RN: 0.5"))
+    pipeline = clearance_pipeline(tmp_path)
+    out = tmp_path / "out"
+
+    def batch_from(root: Path, *flags: str) -> dict[str, tuple[str, str]]:
+        args = ["batch", pipeline, "--manifest", "wells.csv", "--out", out, "--workers", "1"]
+        result = gyropipe_cli(*args, *flags, cwd=root)
+        assert result.returncode == 0, result.output
+        return {well: (row["status"], row["detail"]) for well, row in summary(out).items()}
+
+    def major_at_td() -> float:
+        table = pq.read_table(out / "W1" / "uncertainty.trajectory.parquet")
+        return float(table["ellipse_major"][-1].as_py())
+
+    assert batch_from(a) == {"W1": ("done", "new well"), "W2": ("done", "new well")}
+    from_a = major_at_td()
+    moved = (
+        "done",
+        f"working directory changed: {a}→{b} (read.options.profile, uncertainty.model name "
+        "files relative to it)",
+    )
+    assert batch_from(b, "--only-changed") == {"W1": moved, "W2": moved}
+    assert major_at_td() > from_a
+    recorded = json.loads((out / "W1" / "run.json").read_text())["parameter_inputs"]
+    assert str(base) in [entry["path"] for entry in recorded]
+    unchanged = ("skipped", "unchanged")
+    assert batch_from(b, "--only-changed") == {"W1": unchanged, "W2": unchanged}
+
+
 def test_a_tool_model_file_changed_changes_the_numbers_of_the_next_batch_in_the_process(
     tmp_path: Path,
 ):

@@ -8,9 +8,11 @@ the SHA-256 of every file the run read through a parameter (``run.json``'s
 are is known once the run has read them: a well's last run records them
 (:meth:`Fingerprint.completed`) and the next batch compares the same files again
 (:meth:`Fingerprint.reading`) — the set changes only with the pipeline, its inputs or
-params, or one of those files, each of which is a reason already. Two runs with equal
-fingerprints produce the same outputs; :func:`changes` says in words what differs ("input
-changed: stations", "plugin acme 1.2→1.3", "offset file offsets/w3.csv changed").
+params, or one of those files, each of which is a reason already — and with the working
+directory where a parameter names a file by a relative path (the same parameters then name
+another file: the fingerprint keeps the directory, :attr:`Fingerprint.cwd`). Two runs with
+equal fingerprints produce the same outputs; :func:`changes` says in words what differs
+("input changed: stations", "plugin acme 1.2→1.3", "offset file offsets/w3.csv changed").
 
 The batch process reads no file: a hash it does not know from the file's stat
 (:mod:`pipeline.batch.filestate`) is :data:`PENDING` until a worker has hashed the file
@@ -58,6 +60,9 @@ class Fingerprint:
     files: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
     """absolute path → ``{"sha256", "what"}`` of every file the run read through a
     parameter (:mod:`pipeline.inputfiles`)"""
+    cwd: str = ""
+    """the working directory a parameter's relative path is read from (empty: not
+    recorded, an earlier version's fingerprint)"""
 
     def reading(
         self, files: Mapping[str, Mapping[str, str]], digests: Mapping[str, str]
@@ -120,6 +125,7 @@ class PlanIdentity:
     params: Mapping[str, Mapping[str, Any]]
     gyropipe: str
     plugins: Mapping[str, str]
+    cwd: str
 
     @classmethod
     def of(cls, plan: Plan, registry: Registry) -> PlanIdentity:
@@ -137,6 +143,7 @@ class PlanIdentity:
                 for name, info in sorted(registry.plugins.items())
                 if not info.builtin and not info.error
             },
+            cwd=os.getcwd(),
         )
 
     def fingerprint(self, job: WellJob, inputs: Mapping[str, str]) -> Fingerprint:
@@ -149,6 +156,7 @@ class PlanIdentity:
             gyropipe=self.gyropipe,
             plugins=self.plugins,
             well=well_overrides(job.well),
+            cwd=self.cwd,
         )
 
 
@@ -193,6 +201,13 @@ def changes(old: Fingerprint, new: Fingerprint) -> list[str]:
     if old.pipeline != new.pipeline:
         reasons.append("pipeline changed")
     reasons += _diff("params changed", _flatten(old.params), _flatten(new.params))
+    if old.cwd and new.cwd and old.cwd != new.cwd:
+        named = _relative_files(_flatten(new.params), (old.cwd, new.cwd))
+        if named:
+            reasons.append(
+                f"working directory changed: {old.cwd}→{new.cwd} ({', '.join(named)} "
+                "name files relative to it)"
+            )
     if old.gyropipe != new.gyropipe:
         reasons.append(f"gyropipe {old.gyropipe}→{new.gyropipe}")
     for name in sorted(set(old.plugins) | set(new.plugins)):
@@ -222,6 +237,26 @@ def _shown(path: str) -> str:
     """``path`` relative to the current directory when it lies below it."""
     relative = os.path.relpath(path)
     return path if relative.startswith("..") else relative
+
+
+def _relative_files(params: Mapping[str, Any], directories: tuple[str, ...]) -> list[str]:
+    """The (dotted) parameters, nested values included, whose value is a relative path of a
+    regular file in one of ``directories`` — a file that the same parameters name another
+    of when the working directory changes (a profile, a tool-model file given by path)."""
+    found = []
+    for name, value in params.items():
+        if isinstance(value, Mapping):
+            found += _relative_files({f"{name}.{k}": v for k, v in value.items()}, directories)
+        elif isinstance(value, list | tuple):
+            found += _relative_files({f"{name}.{i}": v for i, v in enumerate(value)}, directories)
+        elif (
+            isinstance(value, str)
+            and value
+            and not os.path.isabs(value)
+            and any(os.path.isfile(os.path.join(d, value)) for d in directories)
+        ):
+            found.append(name)
+    return found
 
 
 def _flatten(params: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
