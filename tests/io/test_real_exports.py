@@ -37,6 +37,7 @@ from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
 GRID = {"id": "grid", "uses": "north_reference", "with": {"target": "grid", "crs": CRS}}
+GRID_APPLIED = '<gridCorUsed uom="dega">{}</gridCorUsed>'
 WELL_ARGS = ["--well", f"latitude={SITE['latitude']}", "--well", f"longitude={SITE['longitude']}"]
 
 
@@ -181,6 +182,21 @@ def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path:
     assert result.returncode == 0, result.output
     trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
     assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.1, abs=1e-9)
+
+
+def test_trajectories_applying_different_corrections_are_refused(tmp_path: Path):
+    source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=GRID_APPLIED.format(-0.9))
+    text = source.read_text()
+    block = text[text.index("  <trajectory ") : text.index("</trajectorys>")]
+    second = block.replace('uid="DEF-GYRO"', 'uid="DEF-GYRO-2"').replace("survey<", "survey 2<")
+    source.write_text(text.replace("</trajectorys>", second + "</trajectorys>"))
+    assert gp.read(source, kind="stations").attrs["well"]["grid_convergence_applied"] == -0.9
+    other = second.replace(GRID_APPLIED.format(-0.9), GRID_APPLIED.format(1.2))
+    source.write_text(text.replace("</trajectorys>", other + "</trajectorys>"))
+    line = source.read_text().splitlines().index(f"    {GRID_APPLIED.format(1.2)}") + 1
+    with pytest.raises(InputFileError, match=r"1\.2° differs from the -0\.9°") as caught:
+        gp.read(source, kind="stations")  # one value in the metadata, wrong for one of them
+    assert (caught.value.line, caught.value.column) == (line, "gridCorUsed")
 
 
 def test_grid_north_exports_keep_their_applied_convergence_for_magnetic_models(tmp_path: Path):

@@ -51,7 +51,8 @@ nameWellbore, serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or
 gridConUsed) as the corrections *applied*, ``declination_applied`` and
 ``grid_convergence_applied`` — never the site's: a gridCorUsed of 0 on true-north
 azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDeclUsed /
-stnGridCorUsed must agree with them and with each other; a non-zero grid correction on
+stnGridCorUsed must agree with them and with each other, and every trajectory's with
+the first's (the metadata hold one value for all the azimuths); a non-zero grid correction on
 true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
 contradiction), and the tool: the first station's ``typeSurveyTool`` naming one (a tie-in
 point names none). Every problem is an :class:`~pipeline.errors.InputFileError` naming the

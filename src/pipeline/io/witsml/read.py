@@ -386,7 +386,7 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
             if value is not None:
                 found[name] = (value, node.line)
     for traj in trajectories:
-        _station_corrections(path, traj, found)
+        _corrections(path, traj, found)
     _applied_agrees(path, north, found)
     start = first.get("dTimTrajStart")
     if start is not None:
@@ -409,27 +409,31 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
 
 
-def _station_corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
-    """The corrections each station says were applied to it (``corUsed``; null markers are
-    no value) must be one value per trajectory, the trajectory's own when it states one."""
+def _corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
+    """The corrections a trajectory and each of its stations say were applied (``…Used``,
+    ``corUsed``; null markers are no value) must be one value for the whole file, as
+    the first trajectory states it: the well metadata hold one, applied to every azimuth."""
+    used = [(traj, element, name) for name, element, q in WELL_ELEMENTS if q == "angle"]
     for station in traj.all("trajectoryStation"):
-        used = station.get("corUsed")
-        for element, name in STATION_CORRECTIONS.items():
-            node = used.get(element) if used is not None else None
-            value = _measure(path, node, "angle") if node is not None else None
-            if value is None or node is None:
-                continue
-            if name not in found:
-                found[name] = (value, node.line)
-            elif not math.isclose(value, found[name][0], rel_tol=0.0, abs_tol=1e-9):
-                raise InputFileError(
-                    path,
-                    f"<{element}> {value!r}° differs from the {found[name][0]!r}° stated at "
-                    f"line {found[name][1]}: a correction varying along the trajectory is not "
-                    "supported (it would be applied as one value)",
-                    line=node.line,
-                    column=element,
-                )
+        holder = station.get("corUsed")
+        if holder is not None:
+            used += [(holder, element, name) for element, name in STATION_CORRECTIONS.items()]
+    for holder, element, name in used:
+        node = holder.get(element)
+        value = _measure(path, node, "angle") if node is not None else None
+        if value is None or node is None:
+            continue
+        if name not in found:
+            found[name] = (value, node.line)
+        elif not math.isclose(value, found[name][0], rel_tol=0.0, abs_tol=1e-9):
+            raise InputFileError(
+                path,
+                f"<{element}> {value!r}° differs from the {found[name][0]!r}° stated at "
+                f"line {found[name][1]}: a correction varying along a trajectory or between "
+                "trajectories is not supported (it would be applied as one value)",
+                line=node.line,
+                column=element,
+            )
 
 
 def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[Any, int]]) -> None:
