@@ -45,7 +45,8 @@ station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A
 marker (:mod:`pipeline.io.nulls`: ``-999.25``… in the element's own unit) is no value: a
 station without md, incl or azi (azi may be missing only at vertical) is an error at its
 line, or left out with a warning under the option ``null_stations: drop``. The north
-reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``). Well
+reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``, which a
+trajectory without one needs beside others with one: it never takes theirs). Well
 metadata: the gyropipe extension values, overridden by the standard elements (nameWell,
 nameWellbore, serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or
 gridConUsed) as the corrections *applied*, ``declination_applied`` and

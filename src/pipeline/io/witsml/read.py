@@ -244,12 +244,15 @@ def _labels(trajectories: list[Node]) -> list[str]:
 
 
 def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthReference:
-    """The one north reference of the azimuths (aziRef, else the options')."""
+    """The one north reference of the azimuths (aziRef, else the options'; a trajectory
+    without one never takes another's)."""
     found: set[NorthReference] = set()
+    unstated: Node | None = None
     for traj in trajectories:
         node = traj.get("aziRef")
         text = " ".join(node.text.split()) if node is not None else "unknown"
         if text == "unknown":
+            unstated = unstated or traj
             continue
         if text not in _NORTH:
             raise InputFileError(
@@ -268,7 +271,15 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
         raise InputFileError(
             path, f"trajectories have different aziRef {sorted(found)}: read one (trajectory:)"
         )
-    north = found.pop() if found else opts.north_reference or opts.default_north_reference
+    stated = found.pop() if found else None
+    if stated is not None and unstated is not None and opts.north_reference is None:
+        raise InputFileError(
+            path,
+            f"aziRef is absent or 'unknown' here but {AZI_REF[stated]!r} in another "
+            "trajectory: set the reader option north_reference, or read one (trajectory:)",
+            line=unstated.line,
+        )
+    north = stated or opts.north_reference or opts.default_north_reference
     if north is None:
         raise InputFileError(
             path,
