@@ -58,6 +58,9 @@ def test_reads_wells_with_units_converted(tmp_path: Path):
         (HEADER, ["A,a.csv,GYRO-NS,12,,5,"], 3, "north is empty or a null marker: expected"),
         (HEADER, ["A,a.csv,GYRO-NS,12,5,-9999.25,"], 3, "east is empty or a null marker"),
         (HEADER, ["A,a.csv,GYRO-NS,-999.25,5,5,"], 3, "hole_diameter must be given"),
+        # once joined into the well 'AB' of file 'a.csv', the next rows' lines miscounted
+        (HEADER, ['"A\nB",a.csv,GYRO-NS,12,0,0,'], 3, "a line break in 'A\\nB'"),
+        (HEADER, ['A,"a.\ncsv",GYRO-NS,12,0,0,'], 3, "(a quoted cell spans lines)"),
         (
             "well_id,file,model,hole_diameter (in)",
             ["A,a.csv,GYRO-NS,12"],

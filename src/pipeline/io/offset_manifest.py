@@ -26,8 +26,9 @@ A null marker in any length column is no value, as an empty cell. Every problem 
 from __future__ import annotations
 
 import csv
+import io
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -95,6 +96,23 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
     return found
 
 
+def _records(path: Path, text: str) -> Iterator[tuple[int, list[str]]]:
+    """The CSV records, each with the line it starts on; a quoted cell spanning lines is
+    refused at its line (split into lines first, its parts were joined into one name)."""
+    reader = csv.reader(io.StringIO(text, newline=""))
+    start = 1
+    for cells in reader:
+        broken = next((cell for cell in cells if "\n" in cell or "\r" in cell), None)
+        if broken is not None:
+            raise InputFileError(
+                path,
+                f"a line break in {broken!r} (a quoted cell spans lines): a cell is one line",
+                start,
+            )
+        yield start, cells
+        start = reader.line_num + 1
+
+
 def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[OffsetEntry]:
     """The offset wells a manifest lists (module docstring); ``resolve`` gives the canonical
     name of a tool model (ValueError: unknown)."""
@@ -104,7 +122,7 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
         raise InputFileError(path, f"cannot read the manifest: {exc}") from None
     rows = [
         (number, cells)
-        for number, cells in enumerate(csv.reader(text.splitlines()), 1)
+        for number, cells in _records(path, text)
         if cells and any(c.strip() for c in cells) and not cells[0].lstrip().startswith("#")
     ]
     if not rows:
