@@ -12,6 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 from scipy import stats
 
+import pipeline as gp
 from pipeline.drift.calibration import (
     LINEAR,
     NON_LINEAR,
@@ -20,7 +21,7 @@ from pipeline.drift.calibration import (
     calibrate,
 )
 from pipeline.drift.tables import CalibrationReadings
-from pipeline.errors import InputFileError
+from pipeline.errors import GyropipeError, InputFileError
 from pipeline.graph import build_plan
 from pipeline.io import drift_tables
 from pipeline.plugins import load_registry
@@ -269,3 +270,15 @@ def test_per_series_variances_give_honest_sigma():
     for values in z.values():
         assert 0.9 < np.std(values) < 1.2 and abs(np.mean(values)) < 0.15
     assert len(set(series.column("residual_std").to_pylist())) == 4  # one σ per series
+
+
+@pytest.mark.parametrize("marker", ["-999.25", "999.25", "-9999.25", ""])
+def test_a_null_marker_reading_is_no_reading(tmp_path: Path, marker: str):
+    lines = (ROOT / "examples" / "calibration-ig50.csv").read_text().splitlines()
+    assert lines[7] == "1,30,27.8,1.5"  # the reading at set azimuth 30°, left unread
+    path = tmp_path / "cal.csv"
+    path.write_text("\n".join([*lines[:7], f"1,30,{marker},1.5", *lines[8:]]) + "\n")
+    readings = gp.read(path, kind="calibration")
+    assert readings["measured_azimuth"].isna().tolist()[:3] == [False, True, False]
+    with pytest.raises(GyropipeError, match="row 1: give azimuth_error or measured_azimuth"):
+        gp.calibrate_drift(readings)  # once fitted with a measured azimuth of -999.25°
