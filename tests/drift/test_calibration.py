@@ -250,6 +250,11 @@ def test_csv_reader_names_the_problem(tmp_path: Path):
             InputFileError, match=r"cal.csv:2 \(column 'azimuth_error'\): not a finite number"
         ):
             drift_tables.read_drift_table(path, "calibration", None)
+    path.write_text("series,set_azimuth[deg],azimuth_error[deg],azimuth_error[rad]\n1,0,2,0.1\n")
+    with pytest.raises(  # once the last of them was read, whatever its header said
+        InputFileError, match=r"cal.csv:1 \(column 'azimuth_error\[rad\]'\).*appears twice"
+    ):
+        gp.read(path, kind="calibration")
     path.write_text("series,set_azimuth[rad],azimuth_error[deg],extra\n1,3.14159265358979,2,z\n")
     table, _ = drift_tables.read_drift_table(path, "calibration", None)
     assert table.column("set_azimuth")[0].as_py() == pytest.approx(180.0)

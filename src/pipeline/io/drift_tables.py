@@ -146,6 +146,8 @@ def _columns(
         spec = specs.get(match.group(1)) if match else None
         if match is None or spec is None:
             continue
+        if any(known is spec for known, _, _ in found):
+            raise InputFileError(path, f"column {spec.name!r} appears twice", line, cell)
         unit = match.group(2)
         factor = 1.0
         if spec.unit is not None:
