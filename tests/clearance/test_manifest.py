@@ -28,14 +28,16 @@ def test_reads_wells_with_units_converted(tmp_path: Path):
         tmp_path,
         "A-1,a.csv,iscwsa-mwd-rev4,12.25,10,100,",
         "A-2,sub/b.csv,GYRO-NS,8.5,-5,0,3.5",
+        "A-3,c.csv,GYRO-NS,8.5,-5,0,-999.25",
     )
-    first, second = read_offset_manifest(path, resolve_model)
+    first, second, third = read_offset_manifest(path, resolve_model)
     assert (first.well_id, first.model, first.line) == ("A-1", "ISCWSA-MWD-REV4", 3)
     assert first.file == (tmp_path / "a.csv").resolve()
     assert first.hole_diameter == pytest.approx(12.25 * 0.0254)
     assert (first.north, first.east, first.tvd) == (10.0, pytest.approx(30.48), None)
     assert second.file == (tmp_path / "sub" / "b.csv").resolve()
     assert (second.north, second.east, second.tvd) == (-5.0, 0.0, 3.5)
+    assert third.tvd is None  # a null marker: no value, the first station's MD
 
 
 @pytest.mark.parametrize(
@@ -53,8 +55,12 @@ def test_reads_wells_with_units_converted(tmp_path: Path):
         ("well_id,file,model,hole (in)", ["A,a.csv,GYRO-NS,12"], 2, "unknown column 'hole (in)'"),
         ("well_id,model,hole_diameter (in)", ["A,GYRO-NS,12"], 2, "missing column(s) file"),
         (HEADER, [], 2, "no offset wells listed"),
-        (HEADER, ["A,a.csv,GYRO-NS,12,,5,"], 3, "north is empty: expected the slot's north"),
-        (HEADER, ["A,a.csv,GYRO-NS,12,5,,"], 3, "east is empty: expected the slot's east"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,,5,"], 3, "north is empty or a null marker: expected"),
+        (HEADER, ["A,a.csv,GYRO-NS,12,5,-9999.25,"], 3, "east is empty or a null marker"),
+        (HEADER, ["A,a.csv,GYRO-NS,-999.25,5,5,"], 3, "hole_diameter must be given"),
+        # once joined into the well 'AB' of file 'a.csv', the next rows' lines miscounted
+        (HEADER, ['"A\nB",a.csv,GYRO-NS,12,0,0,'], 3, "a line break in 'A\\nB'"),
+        (HEADER, ['A,"a.\ncsv",GYRO-NS,12,0,0,'], 3, "(a quoted cell spans lines)"),
         (
             "well_id,file,model,hole_diameter (in)",
             ["A,a.csv,GYRO-NS,12"],
@@ -88,8 +94,13 @@ def test_well_on_the_reference_slot_says_so_with_zero(tmp_path: Path):
         # an empty slot once placed the well at the reference wellhead and the run said ok
         (
             "offsets/offset-02.csv,ISCWSA-MWD-REV4,24,,,",
-            "(column 'north'): north is empty: expected the slot's north from the reference "
-            "wellhead (a length; 0,0 for a well on the reference's own slot)",
+            "(column 'north'): north is empty or a null marker: expected the slot's north from "
+            "the reference wellhead (a length; 0,0 for a well on the reference's own slot)",
+        ),
+        # a database export's null: the well was placed 999.25 m south and the scan said ok
+        (
+            "offsets/offset-02.csv,ISCWSA-MWD-REV4,24,-999.25,0,",
+            "(column 'north'): north is empty or a null marker",
         ),
     ],
 )

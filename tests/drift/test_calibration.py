@@ -12,6 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 from scipy import stats
 
+import pipeline as gp
 from pipeline.drift.calibration import (
     LINEAR,
     NON_LINEAR,
@@ -20,7 +21,7 @@ from pipeline.drift.calibration import (
     calibrate,
 )
 from pipeline.drift.tables import CalibrationReadings
-from pipeline.errors import InputFileError
+from pipeline.errors import GyropipeError, InputFileError
 from pipeline.graph import build_plan
 from pipeline.io import drift_tables
 from pipeline.plugins import load_registry
@@ -249,6 +250,11 @@ def test_csv_reader_names_the_problem(tmp_path: Path):
             InputFileError, match=r"cal.csv:2 \(column 'azimuth_error'\): not a finite number"
         ):
             drift_tables.read_drift_table(path, "calibration", None)
+    path.write_text("series,set_azimuth[deg],azimuth_error[deg],azimuth_error[rad]\n1,0,2,0.1\n")
+    with pytest.raises(  # once the last of them was read, whatever its header said
+        InputFileError, match=r"cal.csv:1 \(column 'azimuth_error\[rad\]'\).*appears twice"
+    ):
+        gp.read(path, kind="calibration")
     path.write_text("series,set_azimuth[rad],azimuth_error[deg],extra\n1,3.14159265358979,2,z\n")
     table, _ = drift_tables.read_drift_table(path, "calibration", None)
     assert table.column("set_azimuth")[0].as_py() == pytest.approx(180.0)
@@ -269,3 +275,15 @@ def test_per_series_variances_give_honest_sigma():
     for values in z.values():
         assert 0.9 < np.std(values) < 1.2 and abs(np.mean(values)) < 0.15
     assert len(set(series.column("residual_std").to_pylist())) == 4  # one σ per series
+
+
+@pytest.mark.parametrize("marker", ["-999.25", "999.25", "-9999.25", ""])
+def test_a_null_marker_reading_is_no_reading(tmp_path: Path, marker: str):
+    lines = (ROOT / "examples" / "calibration-ig50.csv").read_text().splitlines()
+    assert lines[7] == "1,30,27.8,1.5"  # the reading at set azimuth 30°, left unread
+    path = tmp_path / "cal.csv"
+    path.write_text("\n".join([*lines[:7], f"1,30,{marker},1.5", *lines[8:]]) + "\n")
+    readings = gp.read(path, kind="calibration")
+    assert readings["measured_azimuth"].isna().tolist()[:3] == [False, True, False]
+    with pytest.raises(GyropipeError, match="row 1: give azimuth_error or measured_azimuth"):
+        gp.calibrate_drift(readings)  # once fitted with a measured azimuth of -999.25°

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import pipeline as gp
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io import csv as csv_plugin
@@ -670,3 +671,21 @@ def test_fuzz_mutations_raise_typed_errors_only(
         return
     assert table.num_rows >= 1
     assert table.column_names[-4:] == ["md", "inc", "azi", "source_line"]
+
+
+def test_map_northing_and_easting_are_not_displacements(tmp_path: Path) -> None:
+    listing = (  # as survey software lists a well: local displacements, then map coordinates
+        "MD [m],Inc [deg],Azi True [deg],TVD [m],+N/-S [m],+E/-W [m],Northing [m],Easting [m]\n"
+        "0,0,0,0,0,0,6478512.25,431250.50\n"
+        "100,10,45,99.49,6.15,6.15,6478518.40,431256.65\n"
+    )
+    frame = gp.read(put(tmp_path, listing), kind="stations")
+    assert frame["north"].tolist() == [0.0, 6.15]
+    assert frame["east"].tolist() == [0.0, 6.15]
+    only_map = (
+        "MD [m],Inc [deg],Azi True [deg],TVD [m],Northing [m],Easting [m]\n"
+        "0,0,0,0,6478512.25,431250.50\n"
+        "100,10,45,99.49,6478518.40,431256.65\n"
+    )
+    frame = gp.read(put(tmp_path, only_map), kind="stations")
+    assert "north" not in frame.columns and "east" not in frame.columns

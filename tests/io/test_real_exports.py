@@ -37,6 +37,7 @@ from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
 GRID = {"id": "grid", "uses": "north_reference", "with": {"target": "grid", "crs": CRS}}
+GRID_APPLIED = '<gridCorUsed uom="dega">{}</gridCorUsed>'
 WELL_ARGS = ["--well", f"latitude={SITE['latitude']}", "--well", f"longitude={SITE['longitude']}"]
 
 
@@ -181,6 +182,39 @@ def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path:
     assert result.returncode == 0, result.output
     trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
     assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.1, abs=1e-9)
+
+
+def second_trajectory(source: Path, old: str = "", new: str = "") -> int:
+    """Append to the vendor's file a copy of its trajectory (another uid and name) with
+    ``old`` replaced by ``new``; the line of the copy's opening tag."""
+    text = source.read_text()
+    block = text[text.index("  <trajectory ") : text.index("</trajectorys>")]
+    second = block.replace('uid="DEF-GYRO"', 'uid="DEF-GYRO-2"').replace("survey<", "survey 2<")
+    source.write_text(text.replace("</trajectorys>", second.replace(old, new) + "</trajectorys>"))
+    return text.count("\n")
+
+
+def test_trajectories_applying_different_corrections_are_refused(tmp_path: Path):
+    source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=GRID_APPLIED.format(-0.9))
+    original = source.read_text()
+    second_trajectory(source)
+    assert gp.read(source, kind="stations").attrs["well"]["grid_convergence_applied"] == -0.9
+    source.write_text(original)
+    start = second_trajectory(source, GRID_APPLIED.format(-0.9), GRID_APPLIED.format(1.2))
+    with pytest.raises(InputFileError, match=r"1\.2° differs from the -0\.9°") as caught:
+        gp.read(source, kind="stations")  # one value in the metadata, wrong for one of them
+    assert (caught.value.line, caught.value.column) == (start + 6, "gridCorUsed")
+
+
+def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):
+    source = witsml(tmp_path / "two.xml", azi_ref="grid north")
+    start = second_trajectory(source, "<aziRef>grid north</aziRef>", "")
+    with pytest.raises(InputFileError, match="absent or 'unknown' here but 'grid north'") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == start
+    stations = gp.read(source, kind="stations", north_reference="grid")
+    assert stations.attrs["north_reference"] == "grid"
+    assert stations["survey"].nunique() == 2
 
 
 def test_grid_north_exports_keep_their_applied_convergence_for_magnetic_models(tmp_path: Path):

@@ -8,7 +8,8 @@ the schema) or from CSV in the layout gyropipe's CSV writer produces: optional `
 above the header (``# well.<field>=<value>`` fill the well metadata, ``# north_reference=``
 names the azimuths' north), a header of column names with units in brackets or parentheses
 (``time[min]``, ``set_azimuth (deg)``; any unit :mod:`pipeline.units` converts), then the
-rows. Columns the contract does not know are ignored; numeric columns need a unit. The
+rows. Columns the contract does not know are ignored; numeric columns need a unit; an
+empty cell or a null marker (:mod:`pipeline.io.nulls`: ``-999.25``…) is a null. The
 stages ``read_calibration``, ``read_calibration_result`` and ``read_free_gyro``
 (:mod:`pipeline.stages.drift`) read a pipeline input through it (one stage per kind, because
 a stage's output contract is fixed).
@@ -31,6 +32,7 @@ from pipeline.drift.tables import CalibrationReadings, CalibrationResult
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
+from pipeline.io.nulls import is_null_marker
 from pipeline.registry import Claim, ReaderDef
 from pipeline.tables import FreeGyroReadings
 from pipeline.units import QUANTITIES, conversion_factor
@@ -144,6 +146,8 @@ def _columns(
         spec = specs.get(match.group(1)) if match else None
         if match is None or spec is None:
             continue
+        if any(known is spec for known, _, _ in found):
+            raise InputFileError(path, f"column {spec.name!r} appears twice", line, cell)
         unit = match.group(2)
         factor = 1.0
         if spec.unit is not None:
@@ -176,7 +180,11 @@ def _value(path: Path, spec: ColumnSpec, cell: str, factor: float, line: int) ->
         return None
     try:
         if pa.types.is_floating(spec.type):
-            value = float(text) * factor
+            number = float(text)
+            angle = QUANTITY_OF.get(spec.unit or "") in ("angle", "dogleg_severity")
+            if is_null_marker(number, angle=angle):  # in the file's unit: no value
+                return None
+            value = number * factor
             if spec.finite and not math.isfinite(value):
                 raise InputFileError(path, f"not a finite number: {text!r}", line, spec.name)
             return value

@@ -7,8 +7,10 @@ letter or digit removed, so ``+N/-S`` → ``NS``, ``Measured Depth`` → ``MEASU
 (plugins do it at import time) or per file with a reader's ``columns`` option.
 
 Deliberately absent: ambiguous short names such as ``AZ`` (azimuth or accelerometer z?) or
-``TF`` without context. ``GX/GY/GZ`` are accelerometer (gravity) components, as in the MWD
-convention; ``BX/BY/BZ`` magnetometers; gyro rates are ``WX/WY/WZ`` or ``GYRO X`` etc.
+``TF`` without context, and ``NORTHING``/``EASTING``: the map coordinates in the CRS that
+listings give beside ``+N/-S``/``+E/-W`` (as the well's ``northing``/``easting``), never
+displacements from the wellhead. ``GX/GY/GZ`` are accelerometer (gravity) components, as in
+the MWD convention; ``BX/BY/BZ`` magnetometers; gyro rates are ``WX/WY/WZ`` or ``GYRO X`` etc.
 """
 
 from __future__ import annotations
@@ -73,13 +75,13 @@ CURVES: dict[str, Curve] = {
         Curve(
             "north",
             "length",
-            ("NORTH", "NORTHING", "+N/-S", "N/S", "NS", "N-S", "DNS", "LAT DISP"),
+            ("NORTH", "+N/-S", "N/S", "NS", "N-S", "DNS", "LAT DISP"),
             "displacement north (+) / south (-)",
         ),
         Curve(
             "east",
             "length",
-            ("EAST", "EASTING", "+E/-W", "E/W", "EW", "E-W", "DEW", "DEP DISP"),
+            ("EAST", "+E/-W", "E/W", "EW", "E-W", "DEW", "DEP DISP"),
             "displacement east (+) / west (-)",
         ),
         Curve("dls", "dogleg_severity", ("DLS", "DOGLEG SEVERITY", "DOGLEG"), "dogleg severity"),

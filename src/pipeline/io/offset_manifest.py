@@ -9,7 +9,8 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
 - ``hole_diameter`` — hole or casing diameter (a length);
 - ``north``, ``east`` — its slot: its first station's position relative to the reference
   well's wellhead, in the north of the reference's azimuths (lengths; required on every
-  row: an empty cell is an error, never the reference's wellhead; a well on the
+  row: an empty cell or a null marker (``-999.25``…, :mod:`pipeline.io.nulls`) is an
+  error, never the reference's wellhead or a slot 999.25 away; a well on the
   reference's own slot, a sidetrack or re-entry, says so with ``0,0``);
 - ``tvd`` — its first station's TVD below the reference's depth datum (a length; default:
   the first station's MD);
@@ -18,18 +19,21 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
   naming it names the parent). Without them a well whose first station lies on the reference
   path is found to share its hole there.
 
-Every problem is an :class:`~pipeline.errors.InputFileError` naming the file and line.
+A null marker in any length column is no value, as an empty cell. Every problem is an
+:class:`~pipeline.errors.InputFileError` naming the file and line.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from pipeline.errors import InputFileError, UnitError
+from pipeline.io.nulls import is_null_marker
 from pipeline.units import conversion_factor
 
 __all__ = ["LENGTHS", "OffsetEntry", "read_offset_manifest"]
@@ -92,6 +96,23 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
     return found
 
 
+def _records(path: Path, text: str) -> Iterator[tuple[int, list[str]]]:
+    """The CSV records, each with the line it starts on; a quoted cell spanning lines is
+    refused at its line (split into lines first, its parts were joined into one name)."""
+    reader = csv.reader(io.StringIO(text, newline=""))
+    start = 1
+    for cells in reader:
+        broken = next((cell for cell in cells if "\n" in cell or "\r" in cell), None)
+        if broken is not None:
+            raise InputFileError(
+                path,
+                f"a line break in {broken!r} (a quoted cell spans lines): a cell is one line",
+                start,
+            )
+        yield start, cells
+        start = reader.line_num + 1
+
+
 def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[OffsetEntry]:
     """The offset wells a manifest lists (module docstring); ``resolve`` gives the canonical
     name of a tool model (ValueError: unknown)."""
@@ -101,7 +122,7 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
         raise InputFileError(path, f"cannot read the manifest: {exc}") from None
     rows = [
         (number, cells)
-        for number, cells in enumerate(csv.reader(text.splitlines()), 1)
+        for number, cells in _records(path, text)
         if cells and any(c.strip() for c in cells) and not cells[0].lstrip().startswith("#")
     ]
     if not rows:
@@ -133,9 +154,13 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
                 lengths[name] = None
                 continue
             try:
-                value = float(raw) * columns[name][1]
+                number = float(raw)
             except ValueError:
                 raise InputFileError(path, f"{name}: not a number: {raw!r}", line, name) from None
+            if is_null_marker(number, angle=False):  # in the file's unit: no value
+                lengths[name] = None
+                continue
+            value = number * columns[name][1]
             if value != value or abs(value) == float("inf"):
                 raise InputFileError(path, f"{name}: not a finite number: {raw!r}", line, name)
             lengths[name] = value
@@ -149,7 +174,8 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
             name = "north" if north is None else "east"
             raise InputFileError(
                 path,
-                f"{name} is empty: expected the slot's {name} from the reference wellhead "
+                f"{name} is empty or a null marker: expected the slot's {name} from the "
+                "reference wellhead "
                 "(a length; 0,0 for a well on the reference's own slot)",
                 line,
                 name,

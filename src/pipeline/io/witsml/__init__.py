@@ -45,13 +45,15 @@ station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A
 marker (:mod:`pipeline.io.nulls`: ``-999.25``… in the element's own unit) is no value: a
 station without md, incl or azi (azi may be missing only at vertical) is an error at its
 line, or left out with a warning under the option ``null_stations: drop``. The north
-reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``). Well
+reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``, which a
+trajectory without one needs beside others with one: it never takes theirs). Well
 metadata: the gyropipe extension values, overridden by the standard elements (nameWell,
 nameWellbore, serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or
 gridConUsed) as the corrections *applied*, ``declination_applied`` and
 ``grid_convergence_applied`` — never the site's: a gridCorUsed of 0 on true-north
 azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDeclUsed /
-stnGridCorUsed must agree with them and with each other; a non-zero grid correction on
+stnGridCorUsed must agree with them and with each other, and every trajectory's with
+the first's (the metadata hold one value for all the azimuths); a non-zero grid correction on
 true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
 contradiction), and the tool: the first station's ``typeSurveyTool`` naming one (a tie-in
 point names none). Every problem is an :class:`~pipeline.errors.InputFileError` naming the

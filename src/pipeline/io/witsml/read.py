@@ -244,12 +244,15 @@ def _labels(trajectories: list[Node]) -> list[str]:
 
 
 def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthReference:
-    """The one north reference of the azimuths (aziRef, else the options')."""
+    """The one north reference of the azimuths (aziRef, else the options'; a trajectory
+    without one never takes another's)."""
     found: set[NorthReference] = set()
+    unstated: Node | None = None
     for traj in trajectories:
         node = traj.get("aziRef")
         text = " ".join(node.text.split()) if node is not None else "unknown"
         if text == "unknown":
+            unstated = unstated or traj
             continue
         if text not in _NORTH:
             raise InputFileError(
@@ -268,7 +271,15 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
         raise InputFileError(
             path, f"trajectories have different aziRef {sorted(found)}: read one (trajectory:)"
         )
-    north = found.pop() if found else opts.north_reference or opts.default_north_reference
+    stated = found.pop() if found else None
+    if stated is not None and unstated is not None and opts.north_reference is None:
+        raise InputFileError(
+            path,
+            f"aziRef is absent or 'unknown' here but {AZI_REF[stated]!r} in another "
+            "trajectory: set the reader option north_reference, or read one (trajectory:)",
+            line=unstated.line,
+        )
+    north = stated or opts.north_reference or opts.default_north_reference
     if north is None:
         raise InputFileError(
             path,
@@ -386,7 +397,7 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
             if value is not None:
                 found[name] = (value, node.line)
     for traj in trajectories:
-        _station_corrections(path, traj, found)
+        _corrections(path, traj, found)
     _applied_agrees(path, north, found)
     start = first.get("dTimTrajStart")
     if start is not None:
@@ -409,27 +420,31 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
 
 
-def _station_corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
-    """The corrections each station says were applied to it (``corUsed``; null markers are
-    no value) must be one value per trajectory, the trajectory's own when it states one."""
+def _corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
+    """The corrections a trajectory and each of its stations say were applied (``…Used``,
+    ``corUsed``; null markers are no value) must be one value for the whole file, as
+    the first trajectory states it: the well metadata hold one, applied to every azimuth."""
+    used = [(traj, element, name) for name, element, q in WELL_ELEMENTS if q == "angle"]
     for station in traj.all("trajectoryStation"):
-        used = station.get("corUsed")
-        for element, name in STATION_CORRECTIONS.items():
-            node = used.get(element) if used is not None else None
-            value = _measure(path, node, "angle") if node is not None else None
-            if value is None or node is None:
-                continue
-            if name not in found:
-                found[name] = (value, node.line)
-            elif not math.isclose(value, found[name][0], rel_tol=0.0, abs_tol=1e-9):
-                raise InputFileError(
-                    path,
-                    f"<{element}> {value!r}° differs from the {found[name][0]!r}° stated at "
-                    f"line {found[name][1]}: a correction varying along the trajectory is not "
-                    "supported (it would be applied as one value)",
-                    line=node.line,
-                    column=element,
-                )
+        holder = station.get("corUsed")
+        if holder is not None:
+            used += [(holder, element, name) for element, name in STATION_CORRECTIONS.items()]
+    for holder, element, name in used:
+        node = holder.get(element)
+        value = _measure(path, node, "angle") if node is not None else None
+        if value is None or node is None:
+            continue
+        if name not in found:
+            found[name] = (value, node.line)
+        elif not math.isclose(value, found[name][0], rel_tol=0.0, abs_tol=1e-9):
+            raise InputFileError(
+                path,
+                f"<{element}> {value!r}° differs from the {found[name][0]!r}° stated at "
+                f"line {found[name][1]}: a correction varying along a trajectory or between "
+                "trajectories is not supported (it would be applied as one value)",
+                line=node.line,
+                column=element,
+            )
 
 
 def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[Any, int]]) -> None:
