@@ -138,6 +138,20 @@ class WellMetadata(BaseModel):
         return self.model_copy(update=update)
 
 
+APPLIED_REFUSED: dict[str, tuple[NorthReference, ...]] = {
+    "grid_convergence_applied": ("true", "magnetic"),
+    "declination_applied": ("magnetic",),
+}
+"""A correction applied to azimuths → the north references whose azimuths carry none: true-
+and magnetic-north azimuths no grid correction, magnetic ones no declination."""
+
+
+def contradicts_north(north: NorthReference | None, name: str, value: float) -> bool:
+    """Whether a correction ``name`` of ``value`` deg said to be applied to azimuths referred
+    to ``north`` north contradicts it (:data:`APPLIED_REFUSED`; 0 is none applied)."""
+    return value != 0.0 and north in APPLIED_REFUSED.get(name, ())
+
+
 def attach(table: pa.Table, well: WellMetadata) -> pa.Table:
     """The table with ``well`` stored in its schema metadata."""
     return table.replace_schema_metadata(attached(table.schema, well))

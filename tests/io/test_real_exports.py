@@ -170,6 +170,31 @@ def test_a_correction_the_reference_cannot_carry_is_refused(tmp_path: Path):
     assert caught.value.line == line
 
 
+@pytest.mark.parametrize(
+    ("nref", "item", "words"),
+    [
+        ("TRUE", "GRIDUSED.DEG  -0.95", "GRIDUSED -0.95°: a grid convergence applied contradicts"),
+        ("MAGNETIC", "DECLUSED.DEG  2.5", "DECLUSED 2.5°: a declination applied contradicts"),
+    ],
+)
+def test_a_las_correction_the_reference_cannot_carry_is_refused(
+    tmp_path: Path, nref: str, item: str, words: str
+):
+    source = tmp_path / "vendor.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        f"~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n NREF. {nref} :\n"
+        f" {item} : correction applied to the azimuths\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.raises(InputFileError, match=re.escape(words)) as caught:
+        gp.read(source, kind="stations")  # once read, and exported as applied to them
+    assert caught.value.line == 10
+    source.write_text(source.read_text().replace(item, item.split()[0] + "  0"))
+    assert gp.read(source, kind="stations")["azi"].tolist() == [0.0, 45.0, 45.0]  # 0: none
+
+
 def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path: Path):
     head = '<gridCorUsed uom="dega">-0.9</gridCorUsed>'
     source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=head)

@@ -9,8 +9,9 @@ from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF�
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
 error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR), the site's,
 and DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or
-the item's angle unit. ``north_reference`` is the one the file names (an option's is not
-the file's).
+the item's angle unit (non-zero ones the file's north cannot carry are refused, as in
+WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED on magnetic ones).
+``north_reference`` is the one the file names (an option's is not the file's).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from pydantic import ValidationError
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.las.header import NUMBER, Header, Item, header_number
 from pipeline.units import conversion_factor
-from pipeline.well import NorthReference, WellMetadata
+from pipeline.well import NorthReference, WellMetadata, contradicts_north
 
 TEXT_ITEMS: dict[str, tuple[str, ...]] = {
     "well": ("WELL",),
@@ -71,8 +72,9 @@ _MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name
 def well_metadata(
     path: Path, header: Header, north: NorthReference | None, *, strict: bool = True
 ) -> WellMetadata:
-    """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's. Not
-    ``strict`` (a log), an item that cannot be read is left out with a warning."""
+    """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's (a
+    correction applied that its azimuths cannot carry is refused). Not ``strict`` (a log),
+    an item that cannot be read is left out with a warning."""
     found: dict[str, tuple[Any, Item]] = {}
 
     def take(name: str, read: Callable[[], tuple[Any, Item] | None]) -> None:
@@ -128,6 +130,14 @@ def well_metadata(
         elevation, reference = None, None
     take("elevation", lambda: elevation)
     take("depth_reference", lambda: reference)
+    for name, (value, item) in found.items():
+        if contradicts_north(north, name, value):
+            raise InputFileError(
+                path,
+                f"{item.mnemonic} {value!r}°: a {name.replace('_', ' ')} contradicts the "
+                f"azimuths' {north} north (azimuths referred to it carry no such correction)",
+                line=item.line,
+            )
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
 
 

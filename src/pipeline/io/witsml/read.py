@@ -28,7 +28,7 @@ from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.plausibility import AngleUnitConfirmed, NullStations
-from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata
+from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata, contradicts_north
 
 SNIFF_BYTES = 4096
 STATION_MEASURES = (
@@ -448,15 +448,10 @@ def _corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> N
 
 
 def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[Any, int]]) -> None:
-    """A correction applied to the azimuths must fit their north reference: true- and
-    magnetic-north azimuths carry no grid correction, magnetic ones no declination."""
-    refused = {
-        "grid_convergence_applied": ("true", "magnetic"),
-        "declination_applied": ("magnetic",),
-    }
-    for name, references in refused.items():
-        if name in found and north in references and found[name][0] != 0.0:
-            value, line = found[name]
+    """A correction applied to the azimuths must fit their north reference
+    (:data:`~pipeline.well.APPLIED_REFUSED`)."""
+    for name, (value, line) in found.items():
+        if contradicts_north(north, name, value):
             raise InputFileError(
                 path,
                 f"{name.replace('_', ' ')} {value!r}° contradicts aziRef {AZI_REF[north]!r}: "
