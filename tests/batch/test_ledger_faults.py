@@ -10,6 +10,7 @@ real small tmpfs."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sqlite3
 from pathlib import Path
@@ -18,6 +19,7 @@ import pytest
 from batch_support import assert_complete, batches, make_wells, runs, summary
 
 from pipeline.batch import ledger as ledger_module
+from pipeline.batch import ledger_file
 from pipeline.batch.ledger import Ledger, LedgerError
 from tests_support import gyropipe_cli
 
@@ -73,6 +75,119 @@ def test_a_file_that_is_not_a_ledger_is_named_with_what_to_do(tmp_path: Path):
         "(SQLITE_NOTADB); the file is not a gyropipe ledger: give the right --ledger, or move "
         "the file away (a new ledger starts an empty run history)\n"
     )
+
+
+def _another_applications_database(path: Path) -> None:
+    db = sqlite3.connect(path, isolation_level=None)
+    db.execute("CREATE TABLE contacts (name TEXT, phone TEXT)")
+    db.execute("INSERT INTO contacts VALUES ('Ann', '555-0100')")
+    db.close()
+
+
+def _newer_ledger(path: Path) -> None:
+    Ledger(path).close()
+    db = sqlite3.connect(path, isolation_level=None)
+    db.execute("PRAGMA user_version = 2")
+    db.close()
+
+
+NOT_A_LEDGER = (
+    "the file is not a gyropipe ledger: give the right --ledger, or move the file away (a new "
+    "ledger starts an empty run history)"
+)
+DAMAGED_LEDGERS = {
+    "empty (truncated)": (
+        lambda path: path.write_bytes(b""),
+        "the file is empty (0 bytes: truncated?), so the run history and the fingerprints it "
+        "held are lost; restore it from a copy, or remove it to start a new ledger (every well "
+        "then runs again)",
+    ),
+    "a short text file": (
+        lambda path: path.write_bytes(b"notes\n"),
+        f"file is not a database (SQLITE_NOTADB); {NOT_A_LEDGER}",
+    ),
+    "another application's SQLite database": (
+        _another_applications_database,
+        f"it is an SQLite database, not a gyropipe ledger (no tables batches and runs); "
+        f"{NOT_A_LEDGER}",
+    ),
+    "a ledger of a newer schema": (
+        _newer_ledger,
+        "its schema is version 2, made by a newer gyropipe; this one reads version 1: use "
+        "that gyropipe (or give another --ledger)",
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", DAMAGED_LEDGERS)
+def test_an_existing_file_that_is_no_ledger_is_refused_never_taken_for_a_new_one(
+    tmp_path: Path, survey: Path, kind: str
+):
+    """A truncated ledger opened as a new, empty one would lose the run history and the
+    fingerprints without a word, and run every well again: each such file is one line
+    naming it and what to do; the batch runs nothing and leaves the file as it was."""
+    make_wells(tmp_path / "in", ["W1"])
+    out = tmp_path / "out"
+    out.mkdir()
+    path = out / "ledger.sqlite"
+    make, reason = DAMAGED_LEDGERS[kind]
+    make(path)
+    before = path.read_bytes()
+    batch = gyropipe_cli("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    assert batch.returncode == 1, batch.output
+    assert batch.stderr.splitlines()[-1] == f"error: ledger {path}: cannot open it: {reason}"
+    assert not (out / "W1").exists()
+    status = gyropipe_cli("status", out)
+    assert status.returncode == 2
+    assert status.stderr == f"error: ledger {path}: cannot open it: {reason}\n"
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in out.iterdir()) == ["ledger.sqlite"]  # nothing made aside
+
+
+def test_a_new_ledger_is_made_aside_and_one_made_there_meanwhile_is_kept(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """A missing ledger is made aside and linked in place whole: no other batch finds a file
+    there without its tables (it would refuse it as truncated); one that another batch made
+    there meanwhile is the ledger, its runs kept."""
+    path = tmp_path / "ledger.sqlite"
+    theirs = tmp_path / "theirs.sqlite"
+    Ledger(theirs).close()
+    db = sqlite3.connect(theirs, isolation_level=None)
+    db.execute(
+        "INSERT INTO batches (key, status, pipeline_file, pipeline_sha256, out_dir, options, "
+        "host, pid, started, heartbeat) VALUES ('k', 'finished', 'p', 's', 'o', '{}', 'h', 1, "
+        "0, 0)"
+    )
+    db.close()
+    made = ledger_file.migrate
+
+    def meanwhile(db: sqlite3.Connection) -> None:
+        assert not path.exists()  # nothing at its place while it is made
+        os.link(theirs, path)  # another batch's ledger appears there
+        made(db)
+
+    monkeypatch.setattr(ledger_file, "migrate", meanwhile)
+    ledger = Ledger(path)
+    try:
+        assert [b.key for b in ledger.batches()] == ["k"]
+    finally:
+        ledger.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ledger.sqlite", "theirs.sqlite"]
+
+
+def test_a_new_ledger_is_renamed_in_place_where_the_file_system_has_no_hard_links(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    def no_links(source: object, target: object) -> None:
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(ledger_file.os, "link", no_links)
+    path = tmp_path / "ledger.sqlite"
+    Ledger(path).close()
+    assert [p.name for p in tmp_path.iterdir()] == ["ledger.sqlite"]
+    with contextlib.closing(sqlite3.connect(path)) as db:
+        assert db.execute("SELECT count(*) FROM runs").fetchone()[0] == 0
 
 
 def test_a_damaged_ledger_whose_message_is_not_text_is_named(tmp_path: Path):

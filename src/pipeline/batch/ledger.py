@@ -32,7 +32,8 @@ Only the batch process opens the ledger; workers never do.
 
 Every failure of the ledger itself — its file system full or read-only, locked beyond the
 busy timeout, not a database or damaged, removed or replaced while in use — is a
-:class:`LedgerError` naming the ledger, what was being done and what to do. A failed change
+:class:`LedgerError` naming the ledger, what was being done and what to do; an existing file
+is never taken for a new ledger (:mod:`~pipeline.batch.ledger_file`). A failed change
 is rolled back whole, so the ledger stays as it was and the same command run again resumes.
 A row that does not parse (:func:`~pipeline.batch.records.run_row`) is left out and told in
 :attr:`Ledger.problems`; a well whose latest rows are unreadable runs again.
@@ -52,124 +53,26 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
 
-from pipeline.errors import GyropipeError, file_errors
+from pipeline.errors import file_errors
 from pipeline.processes import process_alive
 
-from . import filestate
 from .filestate import FileKey, HashCache
 from .fingerprint import Fingerprint, completed_json
-from .jobs import BatchConfigError
+from .ledger_file import BUSY_TIMEOUT_MS, GONE, check, make_ledger, migrate
+from .ledger_file import LedgerError as LedgerError  # where it has always been imported from
 from .policy import Check, Run, Skip, WellState
 from .publish import MARKER, Publication, read_published
 from .records import BadRow, BatchRow, RunRow, batch_row, decode_text, rejection, run_row
 from .worker import WellOutcome
 
-SCHEMA_VERSION = 1
 LEASE_S = 60.0
 """A batch whose heartbeat is older than this is presumed dead (heartbeat every LEASE_S/6)."""
-BUSY_TIMEOUT_MS = 60_000
 CHECKING = "checking: its files are hashed to decide whether it runs"
 """the note of a claim that is a check (module docstring)"""
-
-SCHEMA = """
-CREATE TABLE IF NOT EXISTS batches (
-    id INTEGER PRIMARY KEY,
-    key TEXT NOT NULL,
-    status TEXT NOT NULL CHECK (status IN ('running', 'finished', 'interrupted')),
-    pipeline_file TEXT NOT NULL,
-    pipeline_sha256 TEXT NOT NULL,
-    out_dir TEXT NOT NULL,
-    options TEXT NOT NULL,
-    host TEXT NOT NULL,
-    pid INTEGER NOT NULL,
-    started REAL NOT NULL,
-    heartbeat REAL NOT NULL,
-    finished REAL,
-    counts TEXT NOT NULL DEFAULT '{}'
-);
-CREATE TABLE IF NOT EXISTS runs (
-    id INTEGER PRIMARY KEY,
-    well TEXT NOT NULL,
-    batch INTEGER NOT NULL REFERENCES batches(id),
-    status TEXT NOT NULL CHECK (status IN ('running', 'done', 'failed', 'interrupted')),
-    reasons TEXT NOT NULL,
-    fingerprint TEXT NOT NULL,
-    versions TEXT NOT NULL,
-    out_dir TEXT NOT NULL,
-    started REAL NOT NULL,
-    finished REAL,
-    inputs TEXT NOT NULL DEFAULT '{}',
-    outputs TEXT NOT NULL DEFAULT '[]',
-    calibration TEXT NOT NULL DEFAULT '[]',
-    error TEXT,
-    note TEXT,
-    wall_time_s REAL,
-    run_time_s REAL,
-    process_time_s REAL,
-    peak_rss_bytes INTEGER,
-    worker TEXT
-);
-CREATE UNIQUE INDEX IF NOT EXISTS one_running_run_per_well ON runs (well)
-    WHERE status = 'running';
-CREATE INDEX IF NOT EXISTS runs_by_well ON runs (well, id);
-CREATE INDEX IF NOT EXISTS batches_by_key ON batches (key, id);
-CREATE TABLE IF NOT EXISTS publications (
-    run INTEGER PRIMARY KEY,
-    marker_sha256 TEXT NOT NULL,
-    manifest_sha256 TEXT NOT NULL,
-    figures TEXT
-);
-"""
 
 P = ParamSpec("P")
 R = TypeVar("R")
 T = TypeVar("T")
-ADVICE = {
-    "SQLITE_FULL": "its file system is full: free space there (or give --ledger on another "
-    "file system), then run the same command again: it resumes",
-    "SQLITE_READONLY": "it cannot be written: make the file and its directory writable (or "
-    "give --ledger elsewhere)",
-    "SQLITE_CANTOPEN": "it cannot be opened: check that its directory exists and is writable",
-    "SQLITE_PERM": "permission denied: make the file and its directory writable",
-    "SQLITE_BUSY": f"another process held it locked for more than {BUSY_TIMEOUT_MS // 1000} s: "
-    "run again once that process is done",
-    "SQLITE_LOCKED": "it is locked by another connection: run again once that is done",
-    "SQLITE_NOTADB": "the file is not a gyropipe ledger: give the right --ledger, or move the "
-    "file away (a new ledger starts an empty run history)",
-    "SQLITE_CORRUPT": "the file is damaged: restore it from a copy, or move it away (a new "
-    "ledger starts an empty run history)",
-    "SQLITE_IOERR_SHMSIZE": "its file system is full: free space there, then run the same "
-    "command again: it resumes",
-    "SQLITE_IOERR": "an I/O error writing it (its file system full or failing?): free space or "
-    "check the disk, then run the same command again: it resumes",
-}
-"""What to do, by SQLite's primary result code (``sqlite3.Error.sqlite_errorname``)."""
-GONE = (
-    "the file was removed or replaced since it was opened; the runs recorded since are lost: "
-    "restore it (or start again with a new --out)"
-)
-
-
-class LedgerError(GyropipeError):
-    """The ledger cannot be read or written (module docstring): names the ledger file, what
-    was being done, SQLite's reason and what to do."""
-
-    def __init__(
-        self, path: Path, doing: str, cause: sqlite3.Error | OSError | UnicodeDecodeError | str
-    ) -> None:
-        self.path = path
-        if isinstance(cause, str):
-            reason = cause
-        elif isinstance(cause, UnicodeDecodeError):  # SQLite quoting a damaged name
-            reason = (
-                f"SQLite's message is not text (the file is damaged?); {ADVICE['SQLITE_CORRUPT']}"
-            )
-        else:
-            name = getattr(cause, "sqlite_errorname", None) or ""
-            primary = "_".join(name.split("_")[:2])
-            advice = ADVICE.get(name) or ADVICE.get(primary, "check the file and its file system")
-            reason = f"{cause}{f' ({name})' if name else ''}; {advice}"
-        super().__init__(f"ledger {path}: cannot {doing}: {reason}")
 
 
 Method: TypeAlias = "Callable[Concatenate[Ledger, P], R]"
@@ -228,6 +131,7 @@ class Ledger:
         """open :meth:`_write` blocks (more than one inside :meth:`group`)"""
         with file_errors("create the ledger's directory", path.parent):
             path.parent.mkdir(parents=True, exist_ok=True)
+        make_ledger(path)
         try:
             self._db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_MS / 1000, isolation_level=None)
         except sqlite3.Error as exc:
@@ -243,21 +147,13 @@ class Ledger:
     @_guarded("open it")
     def _open(self) -> None:
         self._db.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        check(self._db, self.path)
         self._db.execute("PRAGMA journal_mode = WAL")
         self._db.execute("PRAGMA synchronous = FULL")
         self._db.execute("PRAGMA foreign_keys = ON")
         self._identity = _identity(self.path)
         with self._write():
-            version = self._db.execute("PRAGMA user_version").fetchone()[0]
-            if version not in (0, SCHEMA_VERSION):
-                raise BatchConfigError(
-                    f"{self.path}: ledger schema version {version}, this gyropipe uses "
-                    f"{SCHEMA_VERSION}"
-                )
-            for statement in (SCHEMA + ";" + filestate.SCHEMA).split(";"):
-                if statement.strip():
-                    self._db.execute(statement)
-            self._db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            migrate(self._db)
         self._hashes = HashCache(self._db)
 
     def close(self) -> None:
