@@ -162,10 +162,10 @@ def test_a_new_ledger_is_made_aside_and_one_made_there_meanwhile_is_kept(
     db.close()
     made = ledger_file.migrate
 
-    def meanwhile(db: sqlite3.Connection) -> None:
+    def meanwhile(db: sqlite3.Connection, at: Path) -> None:
         assert not path.exists()  # nothing at its place while it is made
         os.link(theirs, path)  # another batch's ledger appears there
-        made(db)
+        made(db, at)
 
     monkeypatch.setattr(ledger_file, "migrate", meanwhile)
     ledger = Ledger(path)

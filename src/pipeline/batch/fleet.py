@@ -251,13 +251,17 @@ def run_figures(
 
 
 def well_figures(
-    well_dir: Path, run_id: int | None = None, manifest: Mapping[str, Any] | None = None
+    well_dir: Path,
+    run_id: int | None = None,
+    manifest: Mapping[str, Any] | None = None,
+    ledger_id: str | None = None,
 ) -> WellFigures:
     """The figures of the run published in ``well_dir`` (module docstring): those its worker
     recorded (an output no longer on disk as the run wrote it told in ``problems``), else
     read from its persisted Parquet tables; with ``run_id``, a published run of another id
-    is told in ``problems``. ``manifest``: the published run's ``run.json``
-    where the caller holds it, else it is read."""
+    — or, with ``ledger_id``, another ledger's run of that id (a ``batch.json`` naming no
+    ledger is known by its run id alone) — is told in ``problems``. ``manifest``: the
+    published run's ``run.json`` where the caller holds it, else it is read."""
     problems: list[str] = []
     if manifest is None:
         manifest, missing = _manifest(well_dir)
@@ -267,8 +271,14 @@ def well_figures(
     if run_id is not None:
         marked = marker.get("run_id")
         marked = marked if isinstance(marked, int) else None
+        ledger = marker.get("ledger_id")
         if marked != run_id:
             problems.append(f"the outputs published are of run {marked}, not run {run_id}")
+        elif ledger_id is not None and ledger not in (None, ledger_id):
+            problems.append(
+                f"the outputs published are of run {marked} of another ledger ({ledger}), "
+                f"not this ledger's run {run_id}"
+            )
     recorded = figures_of_record(marker.get("figures"))
     if recorded is not None:
         problems += _not_as_run(well_dir, manifest)

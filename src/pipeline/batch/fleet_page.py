@@ -83,6 +83,8 @@ class Fleet:
     """wells of the batch it never came to"""
     ended: float | None = None
     """when the batch ended, POSIX s (its page is written before the ledger row says so)"""
+    ledger_id: str | None = None
+    """the identity of the ledger whose runs the wells' ``run_id`` are"""
 
 
 def fleet_title(out_dir: Path) -> str:
@@ -102,7 +104,7 @@ def write_fleet_page(fleet: Fleet, path: Path) -> Path:
 def fleet_html(fleet: Fleet, page_dir: Path) -> str:
     """The page (module docstring); report links relative to ``page_dir``."""
     rows = sorted(fleet.wells, key=lambda w: (_rank(w.status), w.well))
-    figures = [_figures(w) for w in rows]
+    figures = [_figures(w, fleet.ledger_id) for w in rows]
     tally = Counter(w.status for w in fleet.wells)
     tally["not run"] += fleet.not_run
     body = "\n".join(_row(w, f, page_dir) for w, f in zip(rows, figures, strict=True))
@@ -139,11 +141,14 @@ HEADS = (
 )
 
 
-def _figures(well: FleetWell) -> WellFigures:
-    """A well's figures: the worker's, else read from its published outputs."""
+def _figures(well: FleetWell, ledger_id: str | None) -> WellFigures:
+    """A well's figures: the worker's, else read from its published outputs (run
+    ``well.run_id`` of ledger ``ledger_id``)."""
     if well.figures is not None:
         return well.figures
-    return well_figures(well.well_dir, well.run_id) if well.status in PUBLISHED else WellFigures()
+    if well.status not in PUBLISHED:
+        return WellFigures()
+    return well_figures(well.well_dir, well.run_id, ledger_id=ledger_id)
 
 
 def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:

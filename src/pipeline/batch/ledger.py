@@ -14,8 +14,8 @@ Consistency with several batches on one ledger (processes on one or more machine
 - a claim belongs to its batch process, which refreshes a heartbeat; a claim whose batch
   process is gone (same host: its pid no longer exists; any host: no heartbeat for
   :data:`LEASE_S`) is settled by the next batch that meets it: ``done`` if the run had
-  published its complete outputs before the process died (``batch.json`` names the run),
-  else ``interrupted``;
+  published its complete outputs before the process died (``batch.json`` names the ledger
+  and the run), else ``interrupted``;
 - a claim whose choice turns on files whose hash the batch process does not know is a
   *check* (note :data:`CHECKING`): its worker only hashes the files, and the claim is then
   dropped (the well is skipped) or made a run, in one commit, before the run is handed
@@ -153,7 +153,8 @@ class Ledger:
         self._db.execute("PRAGMA foreign_keys = ON")
         self._identity = _identity(self.path)
         with self._write():
-            migrate(self._db)
+            self.ledger_id = migrate(self._db, self.path)
+            """the ledger's identity (:mod:`~pipeline.batch.ledger_file`)"""
         self._hashes = HashCache(self._db)
 
     def close(self) -> None:
@@ -494,8 +495,9 @@ class Ledger:
 
     def _settle_runs(self, batch_id: int) -> None:
         """The runs batch ``batch_id`` still claims, its process gone: done if the run had
-        published (read from the row's id and out_dir only, so a damaged row is settled
-        too), else interrupted; a check (which publishes nothing) is dropped."""
+        published (``batch.json`` names this ledger and the row's id; read from the row's id
+        and out_dir only, so a damaged row is settled too), else interrupted; a check (which
+        publishes nothing) is dropped."""
         self._db.execute(
             "DELETE FROM runs WHERE batch = ? AND status = 'running' AND note = ?",
             (batch_id, CHECKING),
@@ -506,7 +508,7 @@ class Ledger:
         ).fetchall():
             out_dir = row["out_dir"]
             published = read_published(Path(out_dir)) if isinstance(out_dir, str) else None
-            if published is not None and published.run_id == row["id"]:
+            if published is not None and published.publication.is_run(self.ledger_id, row["id"]):
                 self._recover(int(row["id"]), Path(out_dir), published.manifest, row["fingerprint"])
                 self.published(published.publication, None)
             else:

@@ -1,11 +1,15 @@
-"""The ledger's file (:mod:`pipeline.batch.ledger`): its schema, how a new one is made and
-an existing one is told to be a ledger, and the errors of both.
+"""The ledger's file (:mod:`pipeline.batch.ledger`): its schema and identity, how a new one
+is made and an existing one is told to be a ledger, and the errors of both.
 
 A new ledger is made whole beside its place and hard-linked there, so that no process ever
 sees a ledger file without its tables: an existing file that is empty (truncated, ``>
 ledger.sqlite``), not SQLite, another application's SQLite database or a ledger of a newer
 schema is refused with a :class:`LedgerError` saying what to do, never taken for a new
 ledger (its history and fingerprints would be lost, and every well run again unsaid).
+
+Each ledger has an identity, a random UUID made with it (a ledger of an earlier version gets
+one when it is first opened): a run is known by (ledger id, run id), as run ids are each
+ledger's own row ids and two ledgers may publish into one output directory.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sqlite3
+import uuid
 from pathlib import Path
 
 from pipeline.errors import GyropipeError
@@ -69,6 +74,10 @@ CREATE TABLE IF NOT EXISTS publications (
     marker_sha256 TEXT NOT NULL,
     manifest_sha256 TEXT NOT NULL,
     figures TEXT
+);
+CREATE TABLE IF NOT EXISTS ledger (
+    one INTEGER PRIMARY KEY CHECK (one = 1),
+    id TEXT NOT NULL
 );
 """
 LEDGER_TABLES = frozenset({"batches", "runs"})
@@ -145,7 +154,7 @@ def make_ledger(path: Path) -> None:
         with contextlib.closing(sqlite3.connect(aside, isolation_level=None)) as db:
             db.execute("PRAGMA journal_mode = WAL")
             db.execute("BEGIN IMMEDIATE")
-            migrate(db)
+            migrate(db, path)
             db.execute("COMMIT")
         _put_in_place(aside, path)
     except (sqlite3.Error, OSError) as exc:
@@ -191,10 +200,16 @@ def check(db: sqlite3.Connection, path: Path) -> None:
         )
 
 
-def migrate(db: sqlite3.Connection) -> None:
-    """Bring the ledger open in ``db`` (inside a write transaction) to this version's
-    schema: the tables and indexes an earlier version did not have are made."""
+def migrate(db: sqlite3.Connection, path: Path) -> str:
+    """Bring the ledger ``path`` open in ``db`` (inside a write transaction) to this
+    version's schema — the tables and indexes an earlier version did not have are made, and
+    its identity where it has none — and return its identity."""
     for statement in (SCHEMA + ";" + filestate.SCHEMA).split(";"):
         if statement.strip():
             db.execute(statement)
     db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+    db.execute("INSERT OR IGNORE INTO ledger (one, id) VALUES (1, ?)", (str(uuid.uuid4()),))
+    found = db.execute("SELECT id FROM ledger").fetchone()[0]
+    if not isinstance(found, str) or not found:
+        raise LedgerError(path, "open it", f"its identity is damaged; {ADVICE['SQLITE_CORRUPT']}")
+    return found

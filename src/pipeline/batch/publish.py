@@ -40,6 +40,15 @@ class Publication:
     run_id: int
     marker_sha256: str
     manifest_sha256: str
+    ledger_id: str | None = None
+    """the identity of the ledger whose run it is (None: not known, or a ``batch.json`` of
+    an earlier version, which names none)"""
+
+    def is_run(self, ledger_id: str | None, run_id: int) -> bool:
+        """Whether this is run ``run_id`` of ledger ``ledger_id``: run ids are each ledger's
+        own, so another ledger publishing into the same OUT has its own run of that id; a
+        ``batch.json`` naming no ledger (an earlier version's) is known by its run id alone."""
+        return self.run_id == run_id and self.ledger_id in (None, ledger_id)
 
 
 @dataclass(frozen=True)
@@ -53,10 +62,12 @@ class PublishedRun:
     """SHA-256 of the ``batch.json`` bytes read"""
     manifest_sha256: str
     """SHA-256 of the ``run.json`` bytes read"""
+    ledger_id: str | None = None
+    """the ledger whose run it is, as ``batch.json`` names it (None: it names none)"""
 
     @property
     def publication(self) -> Publication:
-        return Publication(self.run_id, self.marker_sha256, self.manifest_sha256)
+        return Publication(self.run_id, self.marker_sha256, self.manifest_sha256, self.ledger_id)
 
 
 def staging_dir(out_root: Path, well_id: str, run_id: int) -> Path:
@@ -78,26 +89,30 @@ def staging_owner(entry: Path) -> tuple[int, int | None] | None:
 
 
 def write_marker(staging: Path, record: dict[str, Any]) -> None:
-    """Write ``batch.json`` (well, run id, batch id, fingerprint) into the staging dir, on
-    disk (fsync) before the directory is published."""
+    """Write ``batch.json`` (well, run id, ledger id, batch id, fingerprint, figures) into
+    the staging dir, on disk (fsync) before the directory is published."""
     write_synced(staging / MARKER, json.dumps(record, indent=2).encode())
 
 
 def read_published(well_dir: Path) -> PublishedRun | None:
     """The published run in ``well_dir``, if it is complete: marker and manifest present and
-    well formed (``batch.json`` names an integer ``run_id``; ``run.json`` lists its outputs
-    with their file names and sizes) and every output listed on disk with its recorded
-    size. A marker or manifest that is missing, damaged or edited counts as not published.
-    The hashes of the two files' bytes as read come with it: the batch process knows the
-    publication again by them (:mod:`pipeline.batch.filestate`) without reading a file."""
+    well formed (``batch.json`` names an integer ``run_id``, and a text ``ledger_id`` if
+    any; ``run.json`` lists its outputs with their file names and sizes) and every output
+    listed on disk with its recorded size. A marker or manifest that is missing, damaged or
+    edited counts as not published. The hashes of the two files' bytes as read come with
+    it: the batch process knows the publication again by them
+    (:mod:`pipeline.batch.filestate`) without reading a file."""
     try:
         marker_bytes = regular_bytes(well_dir / MARKER)
         manifest_bytes = regular_bytes(well_dir / MANIFEST)
         marker = json.loads(marker_bytes)
         manifest = json.loads(manifest_bytes)
         run_id = marker["run_id"]
+        ledger_id = marker.get("ledger_id")
         outputs = manifest["outputs"]
-        if not isinstance(run_id, int) or not isinstance(outputs, list):
+        if not isinstance(run_id, int) or not isinstance(ledger_id, str | None):
+            return None
+        if not isinstance(outputs, list):
             return None
         if not all(output_on_disk(well_dir, entry) for entry in outputs):
             return None
@@ -108,6 +123,7 @@ def read_published(well_dir: Path) -> PublishedRun | None:
         manifest,
         hashlib.sha256(marker_bytes).hexdigest(),
         hashlib.sha256(manifest_bytes).hexdigest(),
+        ledger_id,
     )
 
 

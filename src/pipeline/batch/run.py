@@ -233,7 +233,7 @@ class _Batch:
         results = [self.results[j.well_id] for j in self.jobs if j.well_id in self.results]
         self.ledger.end_batch(self.batch.id, status, counts(results))
         clean_work_dir(self.out, self.ledger.running_ids())  # a killed batch's late orphans
-        files = write_summary(self.out, self.batch, results, self.figures)
+        files = write_summary(self.out, self.batch, results, self.figures, self.ledger.ledger_id)
         self.reporter.end(self.batch.id, time.perf_counter() - t0)
         return results, files
 
@@ -431,6 +431,7 @@ class _Batch:
             flight.fingerprint.to_json(),
             None if check is None else _check_paths(job, check),
             {} if check is not None else self._settled_hashes(flight),
+            self.ledger.ledger_id,
         )
 
     def _settled_hashes(self, flight: _Flight) -> dict[str, tuple[FileKey, str]]:
@@ -462,7 +463,7 @@ class _Batch:
         inputs = {name: known[str(path)] for name, path in job.inputs.items()}
         fingerprint = self.identity.fingerprint(job, inputs)
         files = state.last_done.fingerprint.files if state.last_done is not None else {}
-        published = _held_last_done(state, outcome)
+        published = _held_last_done(state, outcome, self.ledger.ledger_id)
         if published:
             self._publication(flight, outcome)
         decision = self._decide(
@@ -495,7 +496,11 @@ class _Batch:
             fingerprint = flight.fingerprint.completed(outcome.manifest).with_inputs(
                 {name: read[str(path)] for name, path in job.inputs.items() if str(path) in read}
             )
-            reasons = why(flight.state, fingerprint, _held_last_done(flight.state, outcome))
+            reasons = why(
+                flight.state,
+                fingerprint,
+                _held_last_done(flight.state, outcome, self.ledger.ledger_id),
+            )
             self._learn(flight, read)
         self.ledger.finish(outcome, error, fingerprint, reasons)
         if outcome.status == "done" and error is None:
@@ -561,7 +566,9 @@ class _Batch:
         host = outcome.worker.rpartition(":")[0]
         if host not in self.seeing:
             published = read_published(self.out / outcome.well_id)
-            if published is None or published.run_id != outcome.run_id:
+            if published is None or not published.publication.is_run(
+                self.ledger.ledger_id, outcome.run_id
+            ):
                 return (
                     f"the outputs are not visible at {self.out / outcome.well_id} from the "
                     "batch process (workers must share the output directory)"
@@ -634,16 +641,17 @@ def _input_bytes(job: WellJob) -> int:
     return total
 
 
-def _held_last_done(state: WellState, outcome: WellOutcome) -> bool:
-    """Whether ``OUT/<well>`` held the well's last done run as the task began: its run id,
-    and its ``batch.json`` as published where the ledger holds its hash — another ledger on
-    the same OUT numbers its runs alike, and its marker names another batch and fingerprint
-    (``run.json`` may be edited: it is the run's as long as its outputs are)."""
+def _held_last_done(state: WellState, outcome: WellOutcome, ledger_id: str) -> bool:
+    """Whether ``OUT/<well>`` held the well's last done run (of ledger ``ledger_id``) as the
+    task began: its ledger and run id, and its ``batch.json`` as published where the ledger
+    holds its hash — another ledger on the same OUT numbers its runs alike, and a marker of
+    an earlier version names no ledger (``run.json`` may be edited: it is the run's as long
+    as its outputs are)."""
     done, held, known = state.last_done, outcome.held, state.publication
     return (
         done is not None
         and held is not None
-        and held.run_id == done.id
+        and held.is_run(ledger_id, done.id)
         and (known is None or known.marker_sha256 == held.marker_sha256)
     )
 

@@ -72,10 +72,12 @@ def write_summary(
     batch: BatchRow,
     results: list[WellResult],
     figures: Mapping[str, WellFigures] | None = None,
+    ledger_id: str | None = None,
 ) -> list[Path]:
     """Write ``summary.json`` (batch, counts, rows), ``summary.csv`` (rows) and the fleet
     page ``fleet.html`` (:mod:`pipeline.batch.fleet_page`) atomically; ``figures``: the
-    wells' fleet figures as their workers read them (the others are read from OUT)."""
+    wells' fleet figures as their workers read them (the others are read from OUT, from
+    the runs of ledger ``ledger_id``)."""
     document: dict[str, Any] = {
         "batch": batch.id,
         "pipeline": batch.pipeline_file,
@@ -94,7 +96,7 @@ def write_summary(
     paths = [out_dir / name for name in SUMMARY_FILES]
     atomic_write_bytes(paths[0], json.dumps(document, indent=2).encode())
     atomic_write_bytes(paths[1], text.getvalue().encode())
-    write_fleet_page(batch_fleet(out_dir, batch, results, figures or {}), paths[2])
+    write_fleet_page(batch_fleet(out_dir, batch, results, figures or {}, ledger_id), paths[2])
     return paths
 
 
@@ -103,9 +105,10 @@ def batch_fleet(
     batch: BatchRow,
     results: list[WellResult],
     figures: Mapping[str, WellFigures],
+    ledger_id: str | None = None,
 ) -> Fleet:
-    """The fleet page of one batch: its wells as it left them (``not_run``: the wells it
-    listed and never came to)."""
+    """The fleet page of one batch of ledger ``ledger_id``: its wells as it left them
+    (``not_run``: the wells it listed and never came to)."""
     listed = batch.options.get("wells")
     not_run = max(0, listed - len(results)) if isinstance(listed, int) else 0
     wells = tuple(
@@ -114,4 +117,6 @@ def batch_fleet(
         )
         for r in results
     )
-    return Fleet(f"Batch {batch.id}", (batch,), wells, not_run, ended=time.time())
+    return Fleet(
+        f"Batch {batch.id}", (batch,), wells, not_run, ended=time.time(), ledger_id=ledger_id
+    )

@@ -73,7 +73,7 @@ def status_fleet(ledger: Ledger, title: str) -> Fleet:
         )
         for r in ledger.latest_runs()
     )
-    return Fleet(title, tuple(batches.values()), wells)
+    return Fleet(title, tuple(batches.values()), wells, ledger_id=ledger.ledger_id)
 
 
 def history_text(well: str, runs: list[RunRow]) -> str:

@@ -75,6 +75,9 @@ class WellTask:
     known: dict[str, tuple[FileKey, str]] = field(default_factory=dict)
     """input path → the stat key the batch process saw and the SHA-256 the ledger holds for
     it (settled entries only): used for ``run.json`` where the worker's own key is the same"""
+    ledger_id: str | None = None
+    """the identity of the ledger that claimed the run, written into ``batch.json`` with the
+    run id (None: none written, the run known by its id alone)"""
 
 
 @dataclass(frozen=True)
@@ -216,6 +219,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             {
                 "well_id": task.well_id,
                 "run_id": task.run_id,
+                "ledger_id": task.ledger_id,
                 "batch_id": task.batch_id,
                 "fingerprint": json.loads(str(completed_json(task.fingerprint, manifest))),
                 "figures": figures_record(figures),
@@ -229,7 +233,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
         check_out_dir(final, OWN)  # again: the user may have put files there meanwhile
         replace_dir(staging, final)
         published = read_published(final)
-        if published is None or published.run_id != task.run_id:
+        if published is None or not published.publication.is_run(task.ledger_id, task.run_id):
             raise Inconsistent(
                 f"{final} does not hold this run whole once published (replaced meanwhile?)"
             )
