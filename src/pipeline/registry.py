@@ -139,8 +139,12 @@ class StageContext(Protocol):
         (:meth:`Registry.read`); options marked as well defaults come from the run's well."""
         ...
 
-    def record_file(self, path: Path, param: str, what: str) -> str:
-        """Record a file read through ``param``; its SHA-256 (:mod:`pipeline.inputfiles`)."""
+    def record_file(self, path: Path, param: str, what: str, sha256: str | None = None) -> str:
+        """Record a file read through ``param``; its SHA-256 (:mod:`pipeline.inputfiles`).
+        ``sha256`` (optional, added later: three-argument calls are as before): that of
+        the bytes the stage read and used, where it read them itself, recorded as given
+        (the file is not read again: the hash is of the bytes the run used); None: the file
+        is hashed here."""
         ...
 
     def writer(self, name: str) -> WriterDef: ...

@@ -99,8 +99,9 @@ class _Context:
     out_dir: Path | None = None
     """where the staged files will be published"""
 
-    def record_file(self, path: Path, param: str, what: str) -> str:
-        entry = ParameterFile(str(path.absolute()), sha256_file(path), self.stage_id, param, what)
+    def record_file(self, path: Path, param: str, what: str, sha256: str | None = None) -> str:
+        digest = sha256 or sha256_file(path)
+        entry = ParameterFile(str(path.absolute()), digest, self.stage_id, param, what)
         self.provenance.read.setdefault(entry)
         return entry.sha256
 

@@ -10,6 +10,7 @@ import hashlib
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -24,6 +25,7 @@ from pipeline.errors import SpecError
 from pipeline.inputfiles import InputPath, parameter_paths
 from pipeline.stages import toolmodels
 from pipeline.stages.clearance import offset_tables
+from pipeline.uncertainty import toolmodel
 from pipeline.well import WellMetadata
 from tests_support import gyropipe_cli, stage, write_pipeline
 
@@ -243,6 +245,35 @@ def test_an_offset_file_changed_after_its_read_is_recorded_as_it_was_read(tmp_pa
     )
     assert len(read_bytes) == 1 and offset.read_bytes() != read_bytes[0]
     assert wells["sha256"].to_pylist() == [hashlib.sha256(read_bytes[0]).hexdigest()]
+
+
+def test_a_tool_model_file_edited_after_its_parse_is_recorded_as_it_was_parsed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
+    """An operator edits the base file a tool-model file extends just after each parse of
+    it: the hash recorded (``run.json``) is that of the bytes the run's model was parsed
+    from — so the next ``--only-changed`` batch sees the edit — not the edited file's,
+    which would make a run of the old model pass for one of the new."""
+    make_fleet(tmp_path)
+    pipeline = clearance_pipeline(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    base = tmp_path / "models" / "base.yaml"
+    parsed: list[str] = []
+    parse = toolmodel.parse_tool_model
+
+    def parse_then_edited(text: str, file: str, *args: Any) -> toolmodel.ToolModel:
+        model = parse(text, file, *args)
+        if Path(file) == base:
+            parsed.append(text)
+            with open(base, "a") as fh:
+                fh.write(f"# edited after parse {len(parsed)}\n")
+        return model
+
+    monkeypatch.setattr(toolmodel, "parse_tool_model", parse_then_edited)
+    result = gp.run(pipeline, {"reference": "ref.csv", "offsets": "wa.csv"})
+    (recorded,) = [e for e in result.manifest["parameter_inputs"] if e["path"] == str(base)]
+    assert parsed and base.read_text() != parsed[-1]
+    assert recorded["sha256"] == hashlib.sha256(parsed[-1].encode()).hexdigest()
 
 
 def test_validate_refuses_a_missing_profile_at_its_line(tmp_path: Path):

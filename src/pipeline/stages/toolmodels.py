@@ -60,8 +60,9 @@ def find(model: str, info: ValidationInfo) -> ToolModel:
 
 def record(ctx: StageContext, tool: ToolModel, param: str) -> None:
     """Declare the files of ``tool`` (its own and those it extends) that are not shipped
-    with gyropipe as files the stage read through ``param`` (``run.json``, fingerprint)."""
+    with gyropipe as files the stage read through ``param`` (``run.json``, fingerprint),
+    each by the SHA-256 of the bytes its model was parsed from."""
     for file in tool.files:
         path = Path(file)
         if path.is_file() and not path.resolve().is_relative_to(MODELS_DIR.resolve()):
-            ctx.record_file(path, param, "tool-model file")
+            ctx.record_file(path, param, "tool-model file", tool.file_sha256.get(file))

@@ -158,7 +158,7 @@ def _read(path: Path, catalogue: ModelCatalogue) -> ToolModel:
         _READING.files.append(path)
         _READING.sources.append(sources)
         try:
-            model = read_tool_model(path, base=functools.partial(_base, catalogue=catalogue))
+            model = read_tool_model(path, functools.partial(_base, catalogue=catalogue), data)
         finally:
             _READING.files.pop()
             _READING.sources.pop()

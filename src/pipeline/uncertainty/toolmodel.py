@@ -17,6 +17,7 @@ and column.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -304,6 +305,9 @@ class ToolModel:
     inclination_range_deg: tuple[float, float] = (0.0, 180.0)
     files: tuple[str, ...] = ()
     """the model's file and the files it extends, outermost first"""
+    file_sha256: Mapping[str, str] = field(default_factory=dict)
+    """file of :attr:`files` → SHA-256 of the bytes it was parsed from (a file whose model
+    was parsed from text, :func:`parse_tool_model`, has none)"""
 
     @property
     def needs(self) -> frozenset[str]:
@@ -468,6 +472,7 @@ def _build(
         file=source.file,
         inclination_range_deg=(float(validity[0]), float(validity[1])),
         files=(source.file, *(parent.files if parent else ())),
+        file_sha256=dict(parent.file_sha256) if parent else {},
     )
 
 
@@ -567,14 +572,21 @@ def _formulas(
 
 
 def read_tool_model(
-    path: Path, base: Callable[[str, Location], ToolModel] | None = None
+    path: Path, base: Callable[[str, Location], ToolModel] | None = None, data: bytes | None = None
 ) -> ToolModel:
-    """The model of the tool-model file at ``path``."""
+    """The model of the tool-model file at ``path``, with the SHA-256 of the bytes parsed
+    (:attr:`ToolModel.file_sha256`). ``data``: the file's bytes where the caller has read
+    them, parsed as they are (the file is not read again: the bytes parsed are the bytes
+    hashed); else the file is read here."""
     try:
-        text = path.read_text(encoding="utf-8")
+        if data is None:
+            data = path.read_bytes()
+        text = data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")  # as read_text
     except (OSError, UnicodeDecodeError) as exc:
         raise ToolModelError([Problem(Location(str(path)), f"cannot read: {exc}")]) from None
-    return parse_tool_model(text, str(path), base)
+    model = parse_tool_model(text, str(path), base)
+    digest = hashlib.sha256(data).hexdigest()
+    return replace(model, file_sha256={str(path): digest, **model.file_sha256})
 
 
 def describe(model: ToolModel) -> dict[str, Any]:
