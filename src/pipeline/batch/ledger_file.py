@@ -149,7 +149,7 @@ def make_ledger(path: Path) -> None:
         pass
     except OSError as exc:
         raise LedgerError(path, "open it", exc) from None
-    aside = path.with_name(f".{path.name}.{os.getpid()}.new")
+    aside = path.with_name(f".{path.name}.{uuid.uuid4().hex}.new")  # unique on every host
     try:
         with contextlib.closing(sqlite3.connect(aside, isolation_level=None)) as db:
             db.execute("PRAGMA journal_mode = WAL")
