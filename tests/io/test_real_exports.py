@@ -231,6 +231,40 @@ def test_trajectories_applying_different_corrections_are_refused(tmp_path: Path)
     assert (caught.value.line, caught.value.column) == (start + 6, "gridCorUsed")
 
 
+def test_magnetic_trajectories_of_different_days_are_refused(tmp_path: Path):
+    """An MWD contractor's file of two runs years apart: their magnetic azimuths need each
+    run's declination (one day's, the first run's, turned the other run's azimuths)."""
+    source = witsml(tmp_path / "runs.xml", azi_ref="magnetic north")
+    start = second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    with pytest.raises(InputFileError, match=r"2026-03-02 differs from the 2021-06-14") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (6, "dTimTrajStart")
+    assert f"line {start + 3}" in caught.value.reason and "trajectory:" in caught.value.reason
+    one = gp.read(source, kind="stations", trajectory="DEF-GYRO-2")
+    assert one.attrs["well"]["survey_date"] == "2021-06-14"
+    original = source.read_text()
+    stated = (  # the site's declination stated: the date no longer matters
+        "<commonData><extensionNameValue><name>gyropipe.well.declination</name>"
+        '<value uom="dega">1.5</value></extensionNameValue></commonData>'
+    )
+    source.write_text(original.replace("  </trajectory>", stated + "  </trajectory>", 1))
+    assert gp.read(source, kind="stations").attrs["well"]["declination"] == 1.5
+    source.write_text(
+        original.replace("<dTimTrajStart>2021-06-14T10:00:00.000Z</dTimTrajStart>", "")
+    )
+    with pytest.raises(
+        InputFileError, match="without <dTimTrajStart> beside one started"
+    ) as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == start
+
+
+def test_true_north_trajectories_take_the_day_the_survey_began(tmp_path: Path):
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2021-06-14"
+
+
 def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):
     source = witsml(tmp_path / "two.xml", azi_ref="grid north")
     start = second_trajectory(source, "<aziRef>grid north</aziRef>", "")
