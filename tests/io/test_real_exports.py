@@ -7,10 +7,13 @@ them (:mod:`vendor_exports`):
   conversion to grid north takes γ from the CRS at the wellhead (expected values from
   pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
   was applied;
+* several WITSML trajectories are dated by the earliest ``dTimTrajStart``; magnetic ones
+  of different days with no declination stated are refused (each needs its own day's);
 * ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
   is a located error, or left out when the user asks;
 * implausible angles and radians declared degrees (or the reverse) are located errors;
-* the survey tool of the stations reaches the exports and the report.
+* the survey tool of the stations reaches the exports and the report;
+* a title-block length without a unit is in the file's one length unit, else refused.
 """
 
 from __future__ import annotations
@@ -443,3 +446,44 @@ def test_the_survey_tool_reaches_the_exports_and_the_report(tmp_path: Path):
     tool = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["TOOL"].value
     assert tool == "gyroscopic north seeking"
     assert "gyroscopic north seeking" in (tmp_path / "out" / "report.html").read_text()
+
+
+# ------------------------------------------------------------------- 5. units of the header
+
+
+def title_csv(path: Path, title: str, header: str = "MD (ft),Inc (deg),Azimuth True (deg)") -> Path:
+    """A listing of three stations under ``header`` (an extra column: TVD), below ``title``."""
+    tvd = "TVD" in header
+    rows = [(0, 0, 0, 0), (1000, 5, 45, 300), (2000, 10, 46, 600)]
+    body = "".join(",".join(map(str, row if tvd else row[:3])) + "\n" for row in rows)
+    path.write_text(f"Well: A-7\n{title}\n\n{header}\n{body}")
+    return path
+
+
+def test_a_unitless_elevation_is_in_the_files_length_unit(tmp_path: Path):
+    """A listing in feet writes its elevation in feet without saying so (82 ft, not 82 m
+    above sea level in the report and the exports)."""
+    source = title_csv(tmp_path / "feet.csv", "Elevation: 82")
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    entries = ET.parse(tmp_path / "out" / "trajectory.xml").iter(f"{{{NS['w']}}}extensionNameValue")
+    stated = {e.findtext("w:name", namespaces=NS): e.find("w:value", NS) for e in entries}
+    value = stated["gyropipe.well.elevation"]
+    assert value is not None and value.attrib["uom"] == "m"
+    assert float(value.text or "") == pytest.approx(82 * 0.3048, abs=1e-12)
+    metres = title_csv(tmp_path / "m.csv", "Elevation: 54.3", "MD (m),Inc (deg),Azimuth True (deg)")
+    assert gp.read(metres, kind="stations").attrs["well"]["elevation"] == 54.3
+    ours = title_csv(tmp_path / "ours.csv", "# well.elevation=24.9936")  # gyropipe's field, m
+    assert gp.read(ours, kind="stations").attrs["well"]["elevation"] == 24.9936
+
+
+def test_a_unitless_elevation_beside_two_length_units_is_refused(tmp_path: Path):
+    header = "MD (ft),Inc (deg),Azimuth True (deg),TVD (m)"
+    source = title_csv(tmp_path / "mixed.csv", "Elevation: 82", header)
+    with pytest.raises(
+        InputFileError, match=r"elevation '82': no unit.*'MD \(ft\)' in ft"
+    ) as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 2
+    feet = gp.read(source, kind="stations", units={"tvd": "ft"}).attrs["well"]["elevation"]
+    assert feet == pytest.approx(82 * 0.3048, abs=1e-12)

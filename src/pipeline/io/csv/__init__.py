@@ -23,7 +23,10 @@ File layout, in order:
 
 * **title block** (optional): lines before the header — free text, ``key: value`` or
   ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
-  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference;
+  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
+  number may carry its unit (``Elevation: 82 ft``), else an angle is in degrees and a length
+  in the file's length unit, the one unit of its length columns (``Elevation: 82`` above
+  ``MD [ft]``: 82 ft; none or several: an error), a ``well.<field>`` key in the field's (m);
 * **header row**: line ``header_line`` if that option is set, else the first line (within
   :data:`~pipeline.io.csv.header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
   split by one of ``, ; tab |``, name every required column of the kind. Names are looked up
@@ -86,6 +89,7 @@ from pipeline.io.csv.header import (
     choose,
     factor,
     find_header,
+    length_units,
     north_reference,
     read_title,
 )
@@ -305,7 +309,8 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
         _other_kind(path, text.head, opts, kind, exc)
         raise
 
-    well, declared = read_title(path, text.head[: header.index], header.delimiter)
+    lengths = length_units(header, opts, layout.columns)
+    well, declared = read_title(path, text.head[: header.index], header.delimiter, lengths)
     if opts.north_reference:
         declared.append(("option north_reference", opts.north_reference))
     chosen = {

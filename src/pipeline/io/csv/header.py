@@ -50,7 +50,10 @@ UNIT_FIELDS = {
     "declination": "angle",
     "grid_convergence": "angle",
 }
-"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``)."""
+"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``). Without one,
+an angle is in degrees and a length in the file's length unit, the one unit of its length
+columns (``Elevation: 82`` above ``MD [ft]`` is 82 ft; none or several: an error); a
+``well.<field>`` key spells gyropipe's own field, in its unit (m, deg), as the writer writes it."""
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
 _BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
@@ -279,10 +282,25 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
 # ------------------------------------------------------------------------ title block
 
 
+def length_units(header: Header, opts: CsvOptions, columns: tuple[str, ...]) -> dict[str, str]:
+    """The units of the file's length columns among ``columns``: the options', else the
+    header's (a column cell without one, or of unknown unit, is left out)."""
+    units: dict[str, str] = {}
+    for name in columns:
+        curve = CURVES.get(name)
+        for cell in header.found.get(name, []) if curve and curve.quantity == "length" else []:
+            unit = opts.unit_of(name) or cell.unit
+            if unit is not None and is_unit_of(unit, "length"):
+                units[cell.text] = unit
+    return units
+
+
 def read_title(
-    path: Path, lines: list[str], delimiter: str
+    path: Path, lines: list[str], delimiter: str, lengths: dict[str, str]
 ) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
-    """Well metadata and north-reference declarations of the lines above the header."""
+    """Well metadata and north-reference declarations of the lines above the header;
+    ``lengths``: the units of the file's length columns, by header cell
+    (:func:`length_units`), the unit of a length given without one."""
     fields = {"".join(_words(name)): name for name in WellMetadata.model_fields}
     keys = {k: v for k, v in fields.items() if k != "northreference"} | WELL_ALIASES
     values: dict[str, tuple[Any, int]] = {}
@@ -298,7 +316,7 @@ def read_title(
         if not prefixed and name in NORTH_KEYS:
             north.append((f"line {number}", _north_word(path, value, number)))
         elif field is not None:
-            parsed = _well_value(path, field, value, number)
+            parsed = _well_value(path, field, value, number, None if prefixed else lengths)
             if field in values and values[field][0] != parsed:
                 raise InputFileError(
                     path,
@@ -331,19 +349,39 @@ def _north_word(path: Path, value: str, line: int) -> NorthReference:
     )
 
 
-def _well_value(path: Path, field: str, value: str, line: int) -> Any:
-    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS."""
+def _well_value(
+    path: Path, field: str, value: str, line: int, lengths: dict[str, str] | None
+) -> Any:
+    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS
+    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
     try:
         if quantity and number:
-            scale = conversion_factor(number[2], quantity) if number[2] else 1.0
+            unit = number[2] or (_file_length(value, lengths) if quantity == "length" else None)
+            scale = conversion_factor(unit, quantity) if unit else 1.0
             parsed = float(number[1]) * scale
         return getattr(WellMetadata.model_validate({field: parsed}), field)
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
         reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
         raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None
+
+
+def _file_length(value: str, lengths: dict[str, str] | None) -> str | None:
+    """The unit of a length title value given without one: the file's one length unit
+    (None for a ``well.<field>`` key: m). Raises :class:`UnitError` when it has none or
+    several."""
+    if lengths is None:
+        return None
+    factors = {conversion_factor(unit, "length") for unit in lengths.values()}
+    if len(factors) == 1:
+        return next(iter(lengths.values()))
+    found = ", ".join(f"{text!r} in {unit}" for text, unit in lengths.items())
+    raise UnitError(
+        f"no unit, and the file's length columns ({found or 'none with a unit'}) do not "
+        f"say one: write it (e.g. '{value} m' or '{value} ft')"
+    )
 
 
 def is_footer(cells: list[str], width: int, required: list[int]) -> bool:
