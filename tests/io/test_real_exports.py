@@ -6,7 +6,7 @@ them (:mod:`vendor_exports`):
   corrections applied to the azimuths, never the site's convergence or declination: a
   conversion to grid north takes γ from the CRS at the wellhead (expected values from
   pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
-  was applied;
+  was applied; a LAS ``GRIDCORR`` (a vendor's correction, of no agreed sign) is neither γ;
 * several WITSML trajectories are dated by the earliest ``dTimTrajStart``; magnetic ones
   of different days with no declination stated are refused (each needs its own day's);
 * ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
@@ -196,6 +196,27 @@ def test_a_las_correction_the_reference_cannot_carry_is_refused(
     assert caught.value.line == 10
     source.write_text(source.read_text().replace(item, item.split()[0] + "  0"))
     assert gp.read(source, kind="stations")["azi"].tolist() == [0.0, 45.0, 45.0]  # 0: none
+
+
+def test_a_las_grid_correction_is_not_taken_for_the_convergence(tmp_path: Path):
+    """A vendor's LAS of grid azimuths states the correction it added to the true ones
+    (GRIDCORR +0.95° = −γ at this site): read as γ, it turned them 1.9° the wrong way."""
+    source = tmp_path / "grid.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n NREF. GRID :\n"
+        "~Parameter\n GRIDCORR.DEG  0.95 : grid correction\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.warns(InputFileWarning, match=r"grid\.las:11: GRIDCORR '0\.95' left out"):
+        stations = gp.read(source, kind="stations")
+    assert "grid_convergence" not in stations.attrs["well"]
+    to_true = {"id": "true", "uses": "north_reference", "with": {"target": "true", "crs": CRS}}
+    result = run(survey_pipeline(tmp_path, to_true), source, tmp_path / "out", *WELL_ARGS)
+    assert result.returncode == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(45.0 + gamma(), abs=1e-9)
 
 
 def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path: Path):

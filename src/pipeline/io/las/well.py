@@ -7,10 +7,12 @@ LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes a
 the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
-error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR), the site's,
-and DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or
-the item's angle unit (non-zero ones the file's north cannot carry are refused, as in
-WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED on magnetic ones).
+error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE), the site's, and
+DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or the
+item's angle unit (non-zero ones the file's north cannot carry are refused, as in WITSML: a
+GRIDUSED on true- or magnetic-north azimuths, a DECLUSED on magnetic ones). A GRIDCORR is
+left out with a warning: a vendor's grid correction is what was applied to azimuths, added
+by some (−γ) and subtracted by others (γ), never the site's convergence as such.
 ``north_reference`` is the one the file names (an option's is not the file's).
 """
 
@@ -43,11 +45,13 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
 """Well metadata text fields and the mnemonics holding them, preferred first."""
 ANGLE_ITEMS = {
     "declination": ("DECL", "MAGDEC", "DECLINATION"),
-    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE", "GRIDCORR"),
+    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE"),
     "declination_applied": ("DECLUSED",),
     "grid_convergence_applied": ("GRIDUSED",),
 }
 """Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
+UNREAD_CORRECTION = "GRIDCORR"
+"""A vendor's grid correction, of no agreed sign: not read as either grid convergence."""
 COORDINATE_ITEMS = {
     "latitude": (("LAT", "LATI", "LATITUDE"), "NS"),
     "longitude": (("LON", "LONG", "LONGITUDE"), "EW"),
@@ -121,6 +125,14 @@ def well_metadata(
     for name, mnemonics in ANGLE_ITEMS.items():
         take(name, partial(angle, mnemonics))
     take("survey_date", date)
+    if (unread := header.find(path, UNREAD_CORRECTION)) is not None:
+        warn_input(
+            path,
+            f"{UNREAD_CORRECTION} {unread.value!r} left out: a grid correction's sign is the "
+            "vendor's (added to the azimuths or subtracted); state it as GRIDCONV (the site's "
+            "convergence, grid north east of true north +) or GRIDUSED (the one applied)",
+            unread.line,
+        )
     try:
         elevation, reference = _elevation(path, header)
     except InputFileError as exc:
