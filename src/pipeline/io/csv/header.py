@@ -2,7 +2,8 @@
 
 Header cells name canonical columns through :mod:`pipeline.io.mnemonics` (the ``aliases``
 option is consulted first), carry units in brackets (``MD [ft]``, ``Rate X (deg/h)``) and,
-for azimuths, their north reference as a word (``Azimuth True``, ``AZI (GN)``).
+for azimuths, their north reference as a word (``Azimuth True``, ``AZI (GN)``,
+``Azimuth (Grid North)``).
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def _parse_cell(index: int, text: str, aliases: dict[str, str]) -> tuple[Cell, s
     units: list[str] = []
     north: list[NorthReference] = []
     for inner in _BRACKETS.findall(text):
-        ref = NORTH_WORDS.get("".join(_words(inner)))
+        ref = NORTH_WORDS.get("".join(w for w in _words(inner) if w != "north"))
         if ref:
             north.append(ref)
         elif inner.strip():
