@@ -13,7 +13,8 @@ them (:mod:`vendor_exports`):
   is a located error, or left out when the user asks;
 * implausible angles and radians declared degrees (or the reverse) are located errors;
 * the survey tool of the stations reaches the exports and the report;
-* a title-block length without a unit is in the file's one length unit, else refused.
+* a header length without a unit (a CSV title's, a LAS elevation) is in the file's one
+  length unit, else refused.
 """
 
 from __future__ import annotations
@@ -508,3 +509,20 @@ def test_a_unitless_elevation_beside_two_length_units_is_refused(tmp_path: Path)
     assert caught.value.line == 2
     feet = gp.read(source, kind="stations", units={"tvd": "ft"}).attrs["well"]["elevation"]
     assert feet == pytest.approx(82 * 0.3048, abs=1e-12)
+
+
+def test_a_unitless_las_elevation_is_in_the_files_depth_unit(tmp_path: Path):
+    source = tmp_path / "feet.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.F 0 :\n STOP.F 2000 :\n STEP.F 1000 :\n NULL. -999.25 :\n NREF. TRUE :\n"
+        " EKB.  82 : kelly bushing elevation\n"
+        "~Curve\n DEPT.F : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n1000 10 45\n2000 20 45\n"
+    )
+    well = gp.read(source, kind="stations").attrs["well"]
+    assert (well["elevation"], well["depth_reference"]) == (pytest.approx(82 * 0.3048), "KB")
+    source.write_text(source.read_text().replace(" STEP.F", " STEP.M"))
+    with pytest.raises(InputFileError, match="EKB: no unit, and the depths") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 10

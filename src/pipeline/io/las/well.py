@@ -7,12 +7,14 @@ LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes a
 the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
-error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE), the site's, and
-DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or the
-item's angle unit (non-zero ones the file's north cannot carry are refused, as in WITSML: a
-GRIDUSED on true- or magnetic-north azimuths, a DECLUSED on magnetic ones). A GRIDCORR is
-left out with a warning: a vendor's grid correction is what was applied to azimuths, added
-by some (−γ) and subtracted by others (γ), never the site's convergence as such.
+error), in its unit, else in the file's depth unit, as a CSV title's (STRT, STOP, STEP and
+the index curve agreeing on one; else an error); DECL (MAGDEC, DECLINATION) and GRIDCONV
+(CONV, CONVERGENCE), the site's, and DECLUSED and GRIDUSED, the corrections already applied
+to the azimuths, in degrees or the item's angle unit (non-zero ones the file's north cannot
+carry are refused, as in WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED
+on magnetic ones). A GRIDCORR is left out with a warning: a vendor's grid correction is what
+was applied to azimuths, added by some (−γ) and subtracted by others (γ), never the site's
+convergence as such.
 ``north_reference`` is the one the file names (an option's is not the file's).
 """
 
@@ -289,9 +291,25 @@ def _elevation(
     if item is None:
         return None, depth
     try:
-        if not item.unit:
-            raise UnitError(f"no unit: write e.g. '{item.mnemonic}.M  {item.value}'")
-        factor = conversion_factor(item.unit, "length")
+        unit = item.unit or _depth_unit(header)
+        if not unit:
+            raise UnitError(
+                "no unit, and the depths (STRT, STOP, STEP, the index curve) give none or "
+                f"several: write e.g. '{item.mnemonic}.M  {item.value}'"
+            )
+        factor = conversion_factor(unit, "length")
     except UnitError as exc:
         raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
     return (header_number(path, item) * factor, item), depth
+
+
+def _depth_unit(header: Header) -> str | None:
+    """The file's one depth unit: that of STRT, STOP, STEP and the index curve, where those
+    that state one agree (None: none states one, or they differ or are no length)."""
+    items = [i for i in header.well if i.mnemonic in ("STRT", "STOP", "STEP")] + header.curves[:1]
+    units = [i.unit for i in items if i.unit]
+    try:
+        factors = {conversion_factor(unit, "length") for unit in units}
+    except UnitError:
+        return None
+    return units[0] if len(factors) == 1 else None
