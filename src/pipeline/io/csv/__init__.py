@@ -50,7 +50,8 @@ required column's value contains a dot. Units come from the header or the option
 an unknown unit is an :class:`~pipeline.errors.InputFileError` naming it. The azimuth north
 reference comes from the header, a ``north_reference`` title line or the option, which must
 agree. Options may come from a vendor profile (``profile: vendor.yaml``, see
-:mod:`pipeline.io.csv.options`).
+:mod:`pipeline.io.csv.options`), whose units fill in the ones headers lack: a header
+stating another is refused.
 
 Every problem of the file (or profile) is an InputFileError naming the file, the line and,
 for a cell, its column: wrong cell counts, non-numeric or empty cells, unknown units,
@@ -93,7 +94,7 @@ from pipeline.io.csv.header import (
     north_reference,
     read_title,
 )
-from pipeline.io.csv.options import CsvOptions
+from pipeline.io.csv.options import CsvOptions, profile_units
 from pipeline.io.csv.rows import (
     Rows,
     data_rows,
@@ -301,7 +302,8 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     layout = LAYOUTS.get(kind)
     if layout is None:
         raise ValueError(f"the csv reader reads kinds {', '.join(LAYOUTS)}, not {kind!r}")
-    opts = (options or CsvOptions()).resolved()
+    given = options or CsvOptions()
+    opts = given.resolved()
     text = load(path, max(HEADER_SEARCH_LINES, opts.header_line or 0))
     try:
         header = find_header(path, text.head, opts, layout.required)
@@ -322,8 +324,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     north = None
     if "azi" in chosen:
         north = _azimuth_reference(path, header, chosen["azi"], declared, opts)
+    profiled = profile_units(given)
     factors = {
-        name: factor(path, header, cell, name, opts)
+        name: factor(path, header, cell, name, opts, profiled)
         for name, cell in chosen.items()
         if CURVES[name].quantity is not None
     }

@@ -250,15 +250,20 @@ def north_reference(
     return refs[0] if refs else None
 
 
-def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) -> float:
+def factor(
+    path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions, profiled: frozenset[str]
+) -> float:
     """Factor from the unit of column ``name`` (declared in the options, else the header's)
-    to its canonical unit."""
+    to its canonical unit; ``profiled``: the columns whose declared unit is a profile's, which
+    a header stating another contradicts."""
     quantity = CURVES[name].quantity
     assert quantity is not None, name
     shorthand = next((opt for opt, names in SHORTHANDS.items() if name in names), None)
     example = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))[-1]
     option = f"units: {{{name}: {example}}}" + (f" or {shorthand}: {example}" if shorthand else "")
     unit = opts.unit_of(name) or cell.unit
+    if name in profiled and cell.unit is not None and unit is not None:
+        _agreeing(path, header, cell, unit, quantity)
     if unit is None:
         one, *other = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))
         spelled = f"'{cell.text} [{one}]'" + (f" or '{cell.text} ({other[0]})'" if other else "")
@@ -278,6 +283,25 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
             line=header.index + 1,
             column=cell.text,
         ) from None
+
+
+def _agreeing(path: Path, header: Header, cell: Cell, unit: str, quantity: str) -> None:
+    """Refuse a header unit that differs from the profile's ``unit`` for its column (text in
+    brackets that is no unit of it, ``Depth (MD)``, leaves the profile's)."""
+    assert cell.unit is not None
+    try:
+        stated = conversion_factor(cell.unit, quantity)
+    except UnitError:
+        return
+    if stated != conversion_factor(unit, quantity):
+        raise InputFileError(
+            path,
+            f"the header says {cell.unit!r}, the profile's unit for this column is {unit!r}: "
+            "a profile gives the units its files' headers lack, not one they state (set the "
+            "unit as a reader option to override the header)",
+            line=header.index + 1,
+            column=cell.text,
+        )
 
 
 # ------------------------------------------------------------------------ title block
