@@ -526,3 +526,12 @@ def test_a_unitless_las_elevation_is_in_the_files_depth_unit(tmp_path: Path):
     with pytest.raises(InputFileError, match="EKB: no unit, and the depths") as caught:
         gp.read(source, kind="stations")
     assert caught.value.line == 10
+
+
+def test_us_survey_feet_in_the_energistics_spelling_are_read(tmp_path: Path):
+    """Petrel and other Energistics-minded tools write the US survey foot as ftUS."""
+    header = "MD (ftUS),Inc (deg),Azimuth True (deg)"
+    source = title_csv(tmp_path / "usft.csv", "Elevation: 82", header)
+    stations = gp.read(source, kind="stations")
+    assert stations["md"].tolist() == [0.0, 1000 * 1200 / 3937, 2000 * 1200 / 3937]
+    assert stations.attrs["well"]["elevation"] == pytest.approx(82 * 1200 / 3937, abs=1e-12)
