@@ -535,3 +535,10 @@ def test_us_survey_feet_in_the_energistics_spelling_are_read(tmp_path: Path):
     stations = gp.read(source, kind="stations")
     assert stations["md"].tolist() == [0.0, 1000 * 1200 / 3937, 2000 * 1200 / 3937]
     assert stations.attrs["well"]["elevation"] == pytest.approx(82 * 1200 / 3937, abs=1e-12)
+
+
+@pytest.mark.parametrize("date", ["21-Nov-2026", "Nov 21, 2026", "21/11/2026", "20261121"])
+def test_a_csv_title_date_is_read_as_a_las_date_is(tmp_path: Path, date: str):
+    """Vendors' listings date the survey as their LAS files do, not only in ISO form."""
+    source = title_csv(tmp_path / "dated.csv", f"Survey Date: {date}")
+    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2026-11-21"

@@ -18,6 +18,7 @@ from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv.options import SHORTHANDS, CsvOptions
+from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
@@ -378,7 +379,8 @@ def _well_value(
     path: Path, field: str, value: str, line: int, lengths: dict[str, str] | None
 ) -> Any:
     """The validated value of one well field; a number may carry a unit for UNIT_FIELDS
-    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m)."""
+    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m); the
+    survey date is read as a LAS DATE is (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
@@ -387,6 +389,8 @@ def _well_value(
             unit = number[2] or (_file_length(value, lengths) if quantity == "length" else None)
             scale = conversion_factor(unit, quantity) if unit else 1.0
             parsed = float(number[1]) * scale
+        elif field == "survey_date":
+            parsed = header_date(value)
         return getattr(WellMetadata.model_validate({field: parsed}), field)
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
         reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)

@@ -3,8 +3,8 @@
 WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN; LAT/LATI/LATITUDE and
 LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds
 (``61 15 00.5 N``, ``73°24'30"E``); DATE as ISO or another unambiguous form
-(``13-DEC-1986``, ``Dec 13, 1986``, ``13/12/1986``; a two-digit year after a month name is
-the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
+(``13-DEC-1986``, ``13/12/1986``; ``05/06/2024`` is refused as ambiguous:
+:mod:`pipeline.io.dates`, as a CSV title's date); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
 error), in its unit, else in the file's depth unit, as a CSV title's (STRT, STOP, STEP and
@@ -20,7 +20,6 @@ convergence as such.
 
 from __future__ import annotations
 
-import calendar
 import datetime as dt
 import re
 from collections.abc import Callable
@@ -31,6 +30,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.io.dates import header_date
 from pipeline.io.las.header import NUMBER, Header, Item, header_number
 from pipeline.units import conversion_factor
 from pipeline.well import NorthReference, WellMetadata, contradicts_north
@@ -72,7 +72,6 @@ REFERENCE_ELEVATION = {"KB": "EKB", "RKB": "EKB", "DF": "EDF", "RDF": "EDF", "GL
 
 _DMS_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
-_MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name}
 
 
 def well_metadata(
@@ -205,62 +204,13 @@ def _dms(text: str) -> float:
 
 
 def _date(path: Path, item: Item) -> dt.date:
-    """The date of a DATE item (a time of day after it is ignored)."""
-    text = re.sub(
-        r"[T\s]+\d{1,2}:\d{2}(:\d{2}(\.\d*)?)?\s*(Z|UTC|GMT|[+-]\d{2}:?\d{2})?$",
-        "",
-        item.value.strip(),
-        flags=re.IGNORECASE,
-    )
+    """The date of a DATE item (:func:`pipeline.io.dates.header_date`)."""
     try:
-        return _parse_date(text)
-    except (ValueError, OverflowError) as exc:  # OverflowError: a day past C long
+        return header_date(item.value)
+    except ValueError as exc:
         raise InputFileError(
             path, f"DATE {item.value!r}: {exc}; write it as YYYY-MM-DD", line=item.line
         ) from None
-
-
-def _parse_date(text: str) -> dt.date:
-    """ISO and other unambiguous dates; see the module docstring."""
-    if re.fullmatch(r"\d{8}", text):
-        return dt.date(int(text[:4]), int(text[4:6]), int(text[6:]))
-    tokens = re.findall(r"[A-Za-z]+|\d+", text)
-    words = [t for t in tokens if t.isalpha()]
-    numbers = [t for t in tokens if t.isdigit()]
-    if not re.fullmatch(r"[A-Za-z0-9\s,./-]+", text) or len(tokens) != 3 or len(words) > 1:
-        raise ValueError("not a date")
-    if words:
-        where = tokens.index(words[0])
-        if where == 2:
-            raise ValueError("not a date")
-        year, day = numbers if where == 1 and len(numbers[0]) == 4 else numbers[::-1]
-        return dt.date(_year(year), _month(words[0]), int(day))
-    if len(numbers[0]) == 4:
-        return dt.date(int(numbers[0]), int(numbers[1]), int(numbers[2]))
-    if len(numbers[2]) != 4:
-        raise ValueError("ambiguous order of day, month and a two-digit year")
-    a, b = int(numbers[0]), int(numbers[1])
-    if a != b and a <= 12 and b <= 12:
-        raise ValueError(f"ambiguous: day {a} of month {b}, or day {b} of month {a}")
-    day, month = (a, b) if a > 12 or a == b else (b, a)
-    return dt.date(int(numbers[2]), month, day)
-
-
-def _month(word: str) -> int:
-    matches = [i for name, i in _MONTHS.items() if len(word) >= 3 and name.startswith(word.upper())]
-    if len(matches) != 1:
-        raise ValueError(f"{word!r} is not a month")
-    return matches[0]
-
-
-def _year(text: str) -> int:
-    """A four-digit year, or a two-digit one as the latest such year not after today."""
-    if len(text) not in (2, 4):
-        raise ValueError(f"year {text!r}")
-    if len(text) == 4:
-        return int(text)
-    this_year = dt.date.today().year
-    return this_year - (this_year - int(text)) % 100
 
 
 def _elevation(
