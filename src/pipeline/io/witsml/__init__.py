@@ -59,8 +59,8 @@ contradiction), the survey date: the earliest ``dTimTrajStart``, the day the sur
 (on magnetic-north azimuths with no declination stated, whose declination follows from the
 date, trajectories started on different days, or one undated beside a dated one, are
 refused: read one at a time), and the tool: the first station's ``typeSurveyTool`` naming
-one (a tie-in point names none). Every problem is an :class:`~pipeline.errors.InputFileError` naming the
-file and the element's line.
+one (a tie-in point names none). Every problem is an
+:class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 """
 
 from __future__ import annotations
