@@ -542,3 +542,35 @@ def test_a_csv_title_date_is_read_as_a_las_date_is(tmp_path: Path, date: str):
     """Vendors' listings date the survey as their LAS files do, not only in ISO form."""
     source = title_csv(tmp_path / "dated.csv", f"Survey Date: {date}")
     assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2026-11-21"
+
+
+@pytest.mark.parametrize(
+    ("item", "field"),
+    [
+        ("EKB.F  -999.25 : kelly bushing elevation", "elevation"),
+        ("EKB.F  -9999 : kelly bushing elevation", "elevation"),  # the file's NULL
+        ("LATI.DEG  -999.25 : latitude", "latitude"),
+        ("DECL.DEG  999.25 : declination", "declination"),
+    ],
+)
+def test_a_null_in_a_las_header_item_is_no_value(tmp_path: Path, item: str, field: str):
+    """Vendors fill the header items they do not know with the file's NULL, as in the data:
+    an elevation of -999.25 m went into the report and the exports."""
+    source = tmp_path / "nulls.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -9999 :\n NREF. TRUE :\n"
+        f" {item}\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    entries = ET.parse(tmp_path / "out" / "trajectory.xml").iter(f"{{{NS['w']}}}extensionNameValue")
+    assert f"gyropipe.well.{field}" not in {e.findtext("w:name", namespaces=NS) for e in entries}
+    assert field not in gp.read(source, kind="stations").attrs["well"]
+
+
+def test_a_null_in_a_csv_title_is_no_value(tmp_path: Path):
+    source = title_csv(tmp_path / "nulls.csv", "Elevation: -999.25\nDeclination: -999.25 deg")
+    assert gp.read(source, kind="stations").attrs["well"] == {"well": "A-7"}

@@ -28,6 +28,7 @@ File layout, in order:
   in the file's length unit, the one unit of its length columns (``Elevation: 82`` above
   ``MD [ft]``: 82 ft; none or several: an error), a ``well.<field>`` key in the field's (m);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
+  a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
   :data:`~pipeline.io.csv.header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
   split by one of ``, ; tab |``, name every required column of the kind. Names are looked up

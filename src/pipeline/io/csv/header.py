@@ -20,6 +20,7 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv.options import SHORTHANDS, CsvOptions
 from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.io.nulls import is_null_marker
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
@@ -343,6 +344,8 @@ def read_title(
             north.append((f"line {number}", _north_word(path, value, number)))
         elif field is not None:
             parsed = _well_value(path, field, value, number, None if prefixed else lengths)
+            if parsed is None:  # a null marker: no value
+                continue
             if field in values and values[field][0] != parsed:
                 raise InputFileError(
                     path,
@@ -379,12 +382,15 @@ def _well_value(
     path: Path, field: str, value: str, line: int, lengths: dict[str, str] | None
 ) -> Any:
     """The validated value of one well field; a number may carry a unit for UNIT_FIELDS
-    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m); the
-    survey date is read as a LAS DATE is (:func:`pipeline.io.dates.header_date`)."""
+    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m), None
+    for a null marker (:mod:`pipeline.io.nulls`, in its unit); the survey date is read as a
+    LAS DATE is (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
     try:
+        if quantity and number and is_null_marker(float(number[1]), angle=quantity == "angle"):
+            return None
         if quantity and number:
             unit = number[2] or (_file_length(value, lengths) if quantity == "length" else None)
             scale = conversion_factor(unit, quantity) if unit else 1.0

@@ -15,7 +15,9 @@ carry are refused, as in WITSML: a GRIDUSED on true- or magnetic-north azimuths,
 on magnetic ones). A GRIDCORR is left out with a warning: a vendor's grid correction is what
 was applied to azimuths, added by some (−γ) and subtracted by others (γ), never the site's
 convergence as such.
-``north_reference`` is the one the file names (an option's is not the file's).
+A number item holding the file's NULL or a null marker (``-999.25``…, in its unit) is no
+value, as in the data. ``north_reference`` is the one the file names (an option's is not the
+file's).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from pydantic import ValidationError
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.dates import header_date
 from pipeline.io.las.header import NUMBER, Header, Item, header_number
+from pipeline.io.nulls import is_null_marker
 from pipeline.units import conversion_factor
 from pipeline.well import NorthReference, WellMetadata, contradicts_north
 
@@ -107,11 +110,13 @@ def well_metadata(
 
     def coordinate(mnemonics: tuple[str, ...], hemispheres: str) -> tuple[Any, Item] | None:
         item = header.find(path, *mnemonics)
-        return None if item is None else (_coordinate(path, item, hemispheres), item)
+        if item is None or _null(header, item, angle=True):
+            return None
+        return _coordinate(path, item, hemispheres), item
 
     def angle(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
         item = header.find(path, *mnemonics)
-        if item is None:
+        if item is None or _null(header, item, angle=True):
             return None
         return header_number(path, item) * _angle_factor(path, item), item
 
@@ -152,6 +157,18 @@ def well_metadata(
                 line=item.line,
             )
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _null(header: Header, item: Item, *, angle: bool) -> bool:
+    """Whether a number item holds a null: the file's NULL or a null marker
+    (:mod:`pipeline.io.nulls`), in its own unit: no value, as in the data."""
+    if not re.fullmatch(NUMBER, item.value):
+        return False
+    value = float(item.value)
+    nulls = (i.value for i in header.well + header.parameters if i.mnemonic == "NULL")
+    return is_null_marker(value, angle=angle) or any(
+        re.fullmatch(NUMBER, null) and float(null) == value for null in nulls
+    )
 
 
 def _angle_factor(path: Path, item: Item) -> float:
@@ -238,7 +255,7 @@ def _elevation(
         depth = (reference.value, reference)
     elif item is not None and (implied := ELEVATION_ITEMS[item.mnemonic]) is not None:
         depth = (implied, item)
-    if item is None:
+    if item is None or _null(header, item, angle=False):
         return None, depth
     try:
         unit = item.unit or _depth_unit(header)
