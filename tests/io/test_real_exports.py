@@ -14,7 +14,9 @@ them (:mod:`vendor_exports`):
 * implausible angles and radians declared degrees (or the reverse) are located errors;
 * the survey tool of the stations reaches the exports and the report;
 * a header length without a unit (a CSV title's, a LAS elevation) is in the file's one
-  length unit, else refused.
+  length unit, else refused; a header null is no value;
+* a LAS azimuth description's words about corrections (``mag dec applied``, ``not grid
+  corrected``) name no north reference.
 """
 
 from __future__ import annotations
@@ -574,3 +576,24 @@ def test_a_null_in_a_las_header_item_is_no_value(tmp_path: Path, item: str, fiel
 def test_a_null_in_a_csv_title_is_no_value(tmp_path: Path):
     source = title_csv(tmp_path / "nulls.csv", "Elevation: -999.25\nDeclination: -999.25 deg")
     assert gp.read(source, kind="stations").attrs["well"] == {"well": "A-7"}
+
+
+@pytest.mark.parametrize(
+    "description",
+    ["Azimuth, not grid corrected", "Azimuth, mag dec applied", "Azimuth (no grid correction)"],
+)
+def test_a_las_description_naming_a_correction_names_no_north(tmp_path: Path, description: str):
+    """A vendor's words about what was (not) applied are no north reference: read as one,
+    these were grid and magnetic azimuths, wrong by the convergence or the declination."""
+    source = tmp_path / "said.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n"
+        f"~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : {description}\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.raises(InputFileError, match="no north reference for the azimuths") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (12, "AZI")
+    source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
+    assert gp.read(source, kind="stations").attrs["north_reference"] == "true"
