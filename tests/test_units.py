@@ -29,6 +29,7 @@ EXPECTED: dict[str, tuple[str, float]] = {
     "FOOT": ("length", FT),
     "USFT": ("length", US_FT),
     "US-FT": ("length", US_FT),
+    "ftUS": ("length", US_FT),
     "IN": ("length", 0.0254),
     "INCH": ("length", 0.0254),
     "INCHES": ("length", 0.0254),

@@ -35,6 +35,7 @@ ALIASES: dict[str, str] = {
     "foot": "foot",
     "usft": "survey_foot",  # US survey foot, 1200/3937 m
     "us-ft": "survey_foot",
+    "ftus": "survey_foot",  # the Energistics symbol (WITSML, RESQML exports)
     "in": "inch",  # hole and casing sizes
     "inch": "inch",
     "inches": "inch",

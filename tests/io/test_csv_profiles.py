@@ -198,6 +198,25 @@ def test_profile_path_is_relative_to_the_current_directory(
     assert column(table, "md") == [0.0, 304.8]
 
 
+def test_a_header_unit_the_profile_contradicts_is_refused(tmp_path: Path) -> None:
+    """Acme's later exports state DEPTH [m]: the profile's md: ft (for headers without a
+    unit) read them 3.28 times too deep."""
+    path = put(tmp_path, GYRO_LOG.replace(",DEPTH,", ",DEPTH [m],"), "log.csv")
+    with pytest.raises(
+        InputFileError, match=r"header says 'm', the profile's unit .* 'ft'"
+    ) as info:
+        read(path, "samples", profile=ACME_GYRO)
+    assert (info.value.line, info.value.column) == (7, "DEPTH [m]")
+    table, _ = read(path, "samples", profile=ACME_GYRO, md_unit="m")  # explicit: the user's
+    assert column(table, "md") == [5000.0, 5000.5]
+    feet = put(tmp_path, GYRO_LOG.replace(",DEPTH,", ",DEPTH (feet),"), "feet.csv")
+    table, _ = read(feet, "samples", profile=ACME_GYRO)  # the same unit, spelled otherwise
+    assert column(table, "md") == [5000 * 0.3048, 5000.5 * 0.3048]
+    noted = put(tmp_path, GYRO_LOG.replace(",DEPTH,", ",DEPTH (MD),"), "noted.csv")
+    table, _ = read(noted, "samples", profile=ACME_GYRO)  # no unit in the brackets
+    assert column(table, "md") == [5000 * 0.3048, 5000.5 * 0.3048]
+
+
 def test_explicit_options_win_over_the_profile(tmp_path: Path) -> None:
     text = GYRO_LOG.replace(",DEPTH,", ",TIEFE,")
     options = {

@@ -74,6 +74,8 @@ def test_registration() -> None:
         ("Meas. Depth [m],Deviation [deg],Azimuth Magnetic [deg]", "magnetic"),
         ("md [m],inc [deg],Grid Azimuth [deg]", "grid"),
         ("MD [m],INC [deg],AZI (GN) [deg]", "grid"),
+        ("MD [m],INC [deg],Azimuth (Grid North) [deg]", "grid"),
+        ("MD [m],INC [deg],AZI [deg] (True North)", "true"),
         ("MD [m],INC [deg],AZI_MN [deg]", "magnetic"),
         ("MD [m],INC [deg],Azimuth True North [deg]", "true"),
         ("MD [m],INC [deg],AZI TN [deg],Comment", "true"),

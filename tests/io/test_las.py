@@ -329,6 +329,7 @@ def test_invalid_dates(tmp_path: Path, value: str, message: str) -> None:
         (" EKB.M 1 : kb\n EDF.M 2 : df\n DMF. RDF : drilling measured from\n", 2.0, "RDF"),
         (" ELEV.M 5 : elevation\n", 5.0, None),
         (" LMF. DF : log measured from\n EKB.M 24 : kb\n", None, "DF"),
+        (" EKB. 24.5 : kb\n", 24.5, "KB"),  # in the depths' unit (DEPT.M)
     ],
 )
 def test_elevation(
@@ -343,7 +344,7 @@ def test_elevation(
     ("items", "message"),
     [
         (" EKB.M 1 : kb\n EDF.M 2 : df\n", "no DREF, LMF or DMF"),
-        (" EKB. 24 : kb\n", "no unit"),
+        (" STRT.F 0 :\n EKB. 24 : kb\n", "no unit, and the depths"),  # DEPT.M: which?
         (" EKB.DEG 24 : kb\n", "expected a length"),
         (" EKB.M high : kb\n", "'high' is not a number"),
     ],

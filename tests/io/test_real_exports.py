@@ -6,11 +6,17 @@ them (:mod:`vendor_exports`):
   corrections applied to the azimuths, never the site's convergence or declination: a
   conversion to grid north takes γ from the CRS at the wellhead (expected values from
   pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
-  was applied;
+  was applied; a LAS ``GRIDCORR`` (a vendor's correction, of no agreed sign) is neither γ;
+* several WITSML trajectories are dated by the earliest ``dTimTrajStart``; magnetic ones
+  of different days with no declination stated are refused (each needs its own day's);
 * ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
   is a located error, or left out when the user asks;
 * implausible angles and radians declared degrees (or the reverse) are located errors;
-* the survey tool of the stations reaches the exports and the report.
+* the survey tool of the stations reaches the exports and the report;
+* a header length without a unit (a CSV title's, a LAS elevation) is in the file's one
+  length unit, else refused; a header null is no value;
+* a LAS azimuth description's words about corrections (``mag dec applied``, ``not grid
+  corrected``) name no north reference.
 """
 
 from __future__ import annotations
@@ -195,6 +201,27 @@ def test_a_las_correction_the_reference_cannot_carry_is_refused(
     assert gp.read(source, kind="stations")["azi"].tolist() == [0.0, 45.0, 45.0]  # 0: none
 
 
+def test_a_las_grid_correction_is_not_taken_for_the_convergence(tmp_path: Path):
+    """A vendor's LAS of grid azimuths states the correction it added to the true ones
+    (GRIDCORR +0.95° = −γ at this site): read as γ, it turned them 1.9° the wrong way."""
+    source = tmp_path / "grid.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n NREF. GRID :\n"
+        "~Parameter\n GRIDCORR.DEG  0.95 : grid correction\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.warns(InputFileWarning, match=r"grid\.las:11: GRIDCORR '0\.95' left out"):
+        stations = gp.read(source, kind="stations")
+    assert "grid_convergence" not in stations.attrs["well"]
+    to_true = {"id": "true", "uses": "north_reference", "with": {"target": "true", "crs": CRS}}
+    result = run(survey_pipeline(tmp_path, to_true), source, tmp_path / "out", *WELL_ARGS)
+    assert result.returncode == 0, result.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(45.0 + gamma(), abs=1e-9)
+
+
 def test_grid_azimuths_go_back_to_true_only_by_the_convergence_applied(tmp_path: Path):
     head = '<gridCorUsed uom="dega">-0.9</gridCorUsed>'
     source = witsml(tmp_path / "grid.xml", azi_ref="grid north", head=head)
@@ -229,6 +256,40 @@ def test_trajectories_applying_different_corrections_are_refused(tmp_path: Path)
     with pytest.raises(InputFileError, match=r"1\.2° differs from the -0\.9°") as caught:
         gp.read(source, kind="stations")  # one value in the metadata, wrong for one of them
     assert (caught.value.line, caught.value.column) == (start + 6, "gridCorUsed")
+
+
+def test_magnetic_trajectories_of_different_days_are_refused(tmp_path: Path):
+    """An MWD contractor's file of two runs years apart: their magnetic azimuths need each
+    run's declination (one day's, the first run's, turned the other run's azimuths)."""
+    source = witsml(tmp_path / "runs.xml", azi_ref="magnetic north")
+    start = second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    with pytest.raises(InputFileError, match=r"2026-03-02 differs from the 2021-06-14") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (6, "dTimTrajStart")
+    assert f"line {start + 3}" in caught.value.reason and "trajectory:" in caught.value.reason
+    one = gp.read(source, kind="stations", trajectory="DEF-GYRO-2")
+    assert one.attrs["well"]["survey_date"] == "2021-06-14"
+    original = source.read_text()
+    stated = (  # the site's declination stated: the date no longer matters
+        "<commonData><extensionNameValue><name>gyropipe.well.declination</name>"
+        '<value uom="dega">1.5</value></extensionNameValue></commonData>'
+    )
+    source.write_text(original.replace("  </trajectory>", stated + "  </trajectory>", 1))
+    assert gp.read(source, kind="stations").attrs["well"]["declination"] == 1.5
+    source.write_text(
+        original.replace("<dTimTrajStart>2021-06-14T10:00:00.000Z</dTimTrajStart>", "")
+    )
+    with pytest.raises(
+        InputFileError, match="without <dTimTrajStart> beside one started"
+    ) as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == start
+
+
+def test_true_north_trajectories_take_the_day_the_survey_began(tmp_path: Path):
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2021-06-14"
 
 
 def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):
@@ -409,3 +470,130 @@ def test_the_survey_tool_reaches_the_exports_and_the_report(tmp_path: Path):
     tool = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["TOOL"].value
     assert tool == "gyroscopic north seeking"
     assert "gyroscopic north seeking" in (tmp_path / "out" / "report.html").read_text()
+
+
+# ------------------------------------------------------------------- 5. units of the header
+
+
+def title_csv(path: Path, title: str, header: str = "MD (ft),Inc (deg),Azimuth True (deg)") -> Path:
+    """A listing of three stations under ``header`` (an extra column: TVD), below ``title``."""
+    tvd = "TVD" in header
+    rows = [(0, 0, 0, 0), (1000, 5, 45, 300), (2000, 10, 46, 600)]
+    body = "".join(",".join(map(str, row if tvd else row[:3])) + "\n" for row in rows)
+    path.write_text(f"Well: A-7\n{title}\n\n{header}\n{body}")
+    return path
+
+
+def test_a_unitless_elevation_is_in_the_files_length_unit(tmp_path: Path):
+    """A listing in feet writes its elevation in feet without saying so (82 ft, not 82 m
+    above sea level in the report and the exports)."""
+    source = title_csv(tmp_path / "feet.csv", "Elevation: 82")
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    entries = ET.parse(tmp_path / "out" / "trajectory.xml").iter(f"{{{NS['w']}}}extensionNameValue")
+    stated = {e.findtext("w:name", namespaces=NS): e.find("w:value", NS) for e in entries}
+    value = stated["gyropipe.well.elevation"]
+    assert value is not None and value.attrib["uom"] == "m"
+    assert float(value.text or "") == pytest.approx(82 * 0.3048, abs=1e-12)
+    metres = title_csv(tmp_path / "m.csv", "Elevation: 54.3", "MD (m),Inc (deg),Azimuth True (deg)")
+    assert gp.read(metres, kind="stations").attrs["well"]["elevation"] == 54.3
+    ours = title_csv(tmp_path / "ours.csv", "# well.elevation=24.9936")  # gyropipe's field, m
+    assert gp.read(ours, kind="stations").attrs["well"]["elevation"] == 24.9936
+
+
+def test_a_unitless_elevation_beside_two_length_units_is_refused(tmp_path: Path):
+    header = "MD (ft),Inc (deg),Azimuth True (deg),TVD (m)"
+    source = title_csv(tmp_path / "mixed.csv", "Elevation: 82", header)
+    with pytest.raises(
+        InputFileError, match=r"elevation '82': no unit.*'MD \(ft\)' in ft"
+    ) as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 2
+    feet = gp.read(source, kind="stations", units={"tvd": "ft"}).attrs["well"]["elevation"]
+    assert feet == pytest.approx(82 * 0.3048, abs=1e-12)
+
+
+def test_a_unitless_las_elevation_is_in_the_files_depth_unit(tmp_path: Path):
+    source = tmp_path / "feet.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.F 0 :\n STOP.F 2000 :\n STEP.F 1000 :\n NULL. -999.25 :\n NREF. TRUE :\n"
+        " EKB.  82 : kelly bushing elevation\n"
+        "~Curve\n DEPT.F : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n1000 10 45\n2000 20 45\n"
+    )
+    well = gp.read(source, kind="stations").attrs["well"]
+    assert (well["elevation"], well["depth_reference"]) == (pytest.approx(82 * 0.3048), "KB")
+    source.write_text(source.read_text().replace(" STEP.F", " STEP.M"))
+    with pytest.raises(InputFileError, match="EKB: no unit, and the depths") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 10
+
+
+def test_us_survey_feet_in_the_energistics_spelling_are_read(tmp_path: Path):
+    """Petrel and other Energistics-minded tools write the US survey foot as ftUS."""
+    header = "MD (ftUS),Inc (deg),Azimuth True (deg)"
+    source = title_csv(tmp_path / "usft.csv", "Elevation: 82", header)
+    stations = gp.read(source, kind="stations")
+    assert stations["md"].tolist() == [0.0, 1000 * 1200 / 3937, 2000 * 1200 / 3937]
+    assert stations.attrs["well"]["elevation"] == pytest.approx(82 * 1200 / 3937, abs=1e-12)
+
+
+@pytest.mark.parametrize("date", ["21-Nov-2026", "Nov 21, 2026", "21/11/2026", "20261121"])
+def test_a_csv_title_date_is_read_as_a_las_date_is(tmp_path: Path, date: str):
+    """Vendors' listings date the survey as their LAS files do, not only in ISO form."""
+    source = title_csv(tmp_path / "dated.csv", f"Survey Date: {date}")
+    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2026-11-21"
+
+
+@pytest.mark.parametrize(
+    ("item", "field"),
+    [
+        ("EKB.F  -999.25 : kelly bushing elevation", "elevation"),
+        ("EKB.F  -9999 : kelly bushing elevation", "elevation"),  # the file's NULL
+        ("LATI.DEG  -999.25 : latitude", "latitude"),
+        ("DECL.DEG  999.25 : declination", "declination"),
+    ],
+)
+def test_a_null_in_a_las_header_item_is_no_value(tmp_path: Path, item: str, field: str):
+    """Vendors fill the header items they do not know with the file's NULL, as in the data:
+    an elevation of -999.25 m went into the report and the exports."""
+    source = tmp_path / "nulls.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -9999 :\n NREF. TRUE :\n"
+        f" {item}\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    entries = ET.parse(tmp_path / "out" / "trajectory.xml").iter(f"{{{NS['w']}}}extensionNameValue")
+    assert f"gyropipe.well.{field}" not in {e.findtext("w:name", namespaces=NS) for e in entries}
+    assert field not in gp.read(source, kind="stations").attrs["well"]
+
+
+def test_a_null_in_a_csv_title_is_no_value(tmp_path: Path):
+    source = title_csv(tmp_path / "nulls.csv", "Elevation: -999.25\nDeclination: -999.25 deg")
+    assert gp.read(source, kind="stations").attrs["well"] == {"well": "A-7"}
+
+
+@pytest.mark.parametrize(
+    "description",
+    ["Azimuth, not grid corrected", "Azimuth, mag dec applied", "Azimuth (no grid correction)"],
+)
+def test_a_las_description_naming_a_correction_names_no_north(tmp_path: Path, description: str):
+    """A vendor's words about what was (not) applied are no north reference: read as one,
+    these were grid and magnetic azimuths, wrong by the convergence or the declination."""
+    source = tmp_path / "said.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n"
+        f"~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : {description}\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.raises(InputFileError, match="no north reference for the azimuths") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (12, "AZI")
+    source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
+    assert gp.read(source, kind="stations").attrs["north_reference"] == "true"

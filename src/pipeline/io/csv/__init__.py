@@ -23,7 +23,12 @@ File layout, in order:
 
 * **title block** (optional): lines before the header — free text, ``key: value`` or
   ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
-  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference;
+  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
+  number may carry its unit (``Elevation: 82 ft``), else an angle is in degrees and a length
+  in the file's length unit, the one unit of its length columns (``Elevation: 82`` above
+  ``MD [ft]``: 82 ft; none or several: an error), a ``well.<field>`` key in the field's (m);
+  a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
+  a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
   :data:`~pipeline.io.csv.header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
   split by one of ``, ; tab |``, name every required column of the kind. Names are looked up
@@ -47,7 +52,8 @@ required column's value contains a dot. Units come from the header or the option
 an unknown unit is an :class:`~pipeline.errors.InputFileError` naming it. The azimuth north
 reference comes from the header, a ``north_reference`` title line or the option, which must
 agree. Options may come from a vendor profile (``profile: vendor.yaml``, see
-:mod:`pipeline.io.csv.options`).
+:mod:`pipeline.io.csv.options`), whose units fill in the ones headers lack: a header
+stating another is refused.
 
 Every problem of the file (or profile) is an InputFileError naming the file, the line and,
 for a cell, its column: wrong cell counts, non-numeric or empty cells, unknown units,
@@ -86,10 +92,11 @@ from pipeline.io.csv.header import (
     choose,
     factor,
     find_header,
+    length_units,
     north_reference,
     read_title,
 )
-from pipeline.io.csv.options import CsvOptions
+from pipeline.io.csv.options import CsvOptions, profile_units
 from pipeline.io.csv.rows import (
     Rows,
     data_rows,
@@ -297,7 +304,8 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     layout = LAYOUTS.get(kind)
     if layout is None:
         raise ValueError(f"the csv reader reads kinds {', '.join(LAYOUTS)}, not {kind!r}")
-    opts = (options or CsvOptions()).resolved()
+    given = options or CsvOptions()
+    opts = given.resolved()
     text = load(path, max(HEADER_SEARCH_LINES, opts.header_line or 0))
     try:
         header = find_header(path, text.head, opts, layout.required)
@@ -305,7 +313,8 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
         _other_kind(path, text.head, opts, kind, exc)
         raise
 
-    well, declared = read_title(path, text.head[: header.index], header.delimiter)
+    lengths = length_units(header, opts, layout.columns)
+    well, declared = read_title(path, text.head[: header.index], header.delimiter, lengths)
     if opts.north_reference:
         declared.append(("option north_reference", opts.north_reference))
     chosen = {
@@ -317,8 +326,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     north = None
     if "azi" in chosen:
         north = _azimuth_reference(path, header, chosen["azi"], declared, opts)
+    profiled = profile_units(given)
     factors = {
-        name: factor(path, header, cell, name, opts)
+        name: factor(path, header, cell, name, opts, profiled)
         for name, cell in chosen.items()
         if CURVES[name].quantity is not None
     }

@@ -2,7 +2,8 @@
 
 Header cells name canonical columns through :mod:`pipeline.io.mnemonics` (the ``aliases``
 option is consulted first), carry units in brackets (``MD [ft]``, ``Rate X (deg/h)``) and,
-for azimuths, their north reference as a word (``Azimuth True``, ``AZI (GN)``).
+for azimuths, their north reference as a word (``Azimuth True``, ``AZI (GN)``,
+``Azimuth (Grid North)``).
 """
 
 from __future__ import annotations
@@ -17,7 +18,9 @@ from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.csv.options import SHORTHANDS, CsvOptions
+from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.io.nulls import is_null_marker
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
 
@@ -50,7 +53,10 @@ UNIT_FIELDS = {
     "declination": "angle",
     "grid_convergence": "angle",
 }
-"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``)."""
+"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``). Without one,
+an angle is in degrees and a length in the file's length unit, the one unit of its length
+columns (``Elevation: 82`` above ``MD [ft]`` is 82 ft; none or several: an error); a
+``well.<field>`` key spells gyropipe's own field, in its unit (m, deg), as the writer writes it."""
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
 _BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
@@ -102,7 +108,7 @@ def _parse_cell(index: int, text: str, aliases: dict[str, str]) -> tuple[Cell, s
     units: list[str] = []
     north: list[NorthReference] = []
     for inner in _BRACKETS.findall(text):
-        ref = NORTH_WORDS.get("".join(_words(inner)))
+        ref = NORTH_WORDS.get("".join(w for w in _words(inner) if w != "north"))
         if ref:
             north.append(ref)
         elif inner.strip():
@@ -246,15 +252,20 @@ def north_reference(
     return refs[0] if refs else None
 
 
-def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) -> float:
+def factor(
+    path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions, profiled: frozenset[str]
+) -> float:
     """Factor from the unit of column ``name`` (declared in the options, else the header's)
-    to its canonical unit."""
+    to its canonical unit; ``profiled``: the columns whose declared unit is a profile's, which
+    a header stating another contradicts."""
     quantity = CURVES[name].quantity
     assert quantity is not None, name
     shorthand = next((opt for opt, names in SHORTHANDS.items() if name in names), None)
     example = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))[-1]
     option = f"units: {{{name}: {example}}}" + (f" or {shorthand}: {example}" if shorthand else "")
     unit = opts.unit_of(name) or cell.unit
+    if name in profiled and cell.unit is not None and unit is not None:
+        _agreeing(path, header, cell, unit, quantity)
     if unit is None:
         one, *other = UNIT_HINTS.get(quantity, (canonical_unit(quantity),))
         spelled = f"'{cell.text} [{one}]'" + (f" or '{cell.text} ({other[0]})'" if other else "")
@@ -276,13 +287,47 @@ def factor(path: Path, header: Header, cell: Cell, name: str, opts: CsvOptions) 
         ) from None
 
 
+def _agreeing(path: Path, header: Header, cell: Cell, unit: str, quantity: str) -> None:
+    """Refuse a header unit that differs from the profile's ``unit`` for its column (text in
+    brackets that is no unit of it, ``Depth (MD)``, leaves the profile's)."""
+    assert cell.unit is not None
+    try:
+        stated = conversion_factor(cell.unit, quantity)
+    except UnitError:
+        return
+    if stated != conversion_factor(unit, quantity):
+        raise InputFileError(
+            path,
+            f"the header says {cell.unit!r}, the profile's unit for this column is {unit!r}: "
+            "a profile gives the units its files' headers lack, not one they state (set the "
+            "unit as a reader option to override the header)",
+            line=header.index + 1,
+            column=cell.text,
+        )
+
+
 # ------------------------------------------------------------------------ title block
 
 
+def length_units(header: Header, opts: CsvOptions, columns: tuple[str, ...]) -> dict[str, str]:
+    """The units of the file's length columns among ``columns``: the options', else the
+    header's (a column cell without one, or of unknown unit, is left out)."""
+    units: dict[str, str] = {}
+    for name in columns:
+        curve = CURVES.get(name)
+        for cell in header.found.get(name, []) if curve and curve.quantity == "length" else []:
+            unit = opts.unit_of(name) or cell.unit
+            if unit is not None and is_unit_of(unit, "length"):
+                units[cell.text] = unit
+    return units
+
+
 def read_title(
-    path: Path, lines: list[str], delimiter: str
+    path: Path, lines: list[str], delimiter: str, lengths: dict[str, str]
 ) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
-    """Well metadata and north-reference declarations of the lines above the header."""
+    """Well metadata and north-reference declarations of the lines above the header;
+    ``lengths``: the units of the file's length columns, by header cell
+    (:func:`length_units`), the unit of a length given without one."""
     fields = {"".join(_words(name)): name for name in WellMetadata.model_fields}
     keys = {k: v for k, v in fields.items() if k != "northreference"} | WELL_ALIASES
     values: dict[str, tuple[Any, int]] = {}
@@ -298,7 +343,9 @@ def read_title(
         if not prefixed and name in NORTH_KEYS:
             north.append((f"line {number}", _north_word(path, value, number)))
         elif field is not None:
-            parsed = _well_value(path, field, value, number)
+            parsed = _well_value(path, field, value, number, None if prefixed else lengths)
+            if parsed is None:  # a null marker: no value
+                continue
             if field in values and values[field][0] != parsed:
                 raise InputFileError(
                     path,
@@ -331,19 +378,45 @@ def _north_word(path: Path, value: str, line: int) -> NorthReference:
     )
 
 
-def _well_value(path: Path, field: str, value: str, line: int) -> Any:
-    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS."""
+def _well_value(
+    path: Path, field: str, value: str, line: int, lengths: dict[str, str] | None
+) -> Any:
+    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS
+    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m), None
+    for a null marker (:mod:`pipeline.io.nulls`, in its unit); the survey date is read as a
+    LAS DATE is (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
     try:
+        if quantity and number and is_null_marker(float(number[1]), angle=quantity == "angle"):
+            return None
         if quantity and number:
-            scale = conversion_factor(number[2], quantity) if number[2] else 1.0
+            unit = number[2] or (_file_length(value, lengths) if quantity == "length" else None)
+            scale = conversion_factor(unit, quantity) if unit else 1.0
             parsed = float(number[1]) * scale
+        elif field == "survey_date":
+            parsed = header_date(value)
         return getattr(WellMetadata.model_validate({field: parsed}), field)
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
         reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
         raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None
+
+
+def _file_length(value: str, lengths: dict[str, str] | None) -> str | None:
+    """The unit of a length title value given without one: the file's one length unit
+    (None for a ``well.<field>`` key: m). Raises :class:`UnitError` when it has none or
+    several."""
+    if lengths is None:
+        return None
+    factors = {conversion_factor(unit, "length") for unit in lengths.values()}
+    if len(factors) == 1:
+        return next(iter(lengths.values()))
+    found = ", ".join(f"{text!r} in {unit}" for text, unit in lengths.items())
+    raise UnitError(
+        f"no unit, and the file's length columns ({found or 'none with a unit'}) do not "
+        f"say one: write it (e.g. '{value} m' or '{value} ft')"
+    )
 
 
 def is_footer(cells: list[str], width: int, required: list[int]) -> bool:

@@ -4,7 +4,9 @@ A profile (``profile: path/to/vendor.yaml``, relative to the current directory) 
 option but ``profile`` and ``default_north_reference``, plus a free-text ``description``.
 It is merged *under* the explicit options: an option given explicitly wins, mappings
 (``columns``, ``aliases``, ``units``, ``conventions``) are merged key by key, and an explicit
-``md_unit``/``angle_unit`` also replaces the profile's ``units`` of those columns.
+``md_unit``/``angle_unit`` also replaces the profile's ``units`` of those columns. A
+profile's unit is for a header cell without one: a header stating another unit is refused
+(the profile was written for files without it; an explicit option may still override it).
 
 An invalid profile (unknown key, bad value, duplicate key, malformed YAML) raises
 :class:`~pipeline.errors.InputFileError` naming the profile file and the line of the first
@@ -169,6 +171,16 @@ class CsvOptions(CsvSettings):
             raise InputFileError(
                 self.profile, f"the reader options conflict with this profile: {reasons}"
             ) from None
+
+
+def profile_units(options: CsvOptions) -> frozenset[str]:
+    """The columns whose unit comes from the profile (the explicit options give none): a
+    profile fills in the units its vendor's headers lack, it never overrides one a header
+    states (:func:`pipeline.io.csv.header.factor` refuses that)."""
+    if options.profile is None:
+        return frozenset()
+    profile = load_profile(options.profile)
+    return frozenset(n for n in CURVES if profile.unit_of(n) and options.unit_of(n) is None)
 
 
 def load_profile(path: Path) -> CsvProfile:

@@ -10,15 +10,18 @@ values in canonical units.
   with :func:`pipeline.units.conversion_factor`; a needed curve without a known unit is an
   error saying how to declare it.
 * **North reference** (stations) — named by the azimuth mnemonic, a word of its description
-  (``Azimuth (true north)``, ``Grid azimuth``, ``MN``), an ``NREF`` item (or ``NORTHREF``,
-  ``AZIREF``, ``AZREF``) in ``~W``/``~P``, or the option ``north_reference``: all must
-  agree; ``default_north_reference`` applies when none names one.
+  (``Azimuth (true north)``, ``Grid azimuth``, ``MN``; not one before a correction,
+  ``mag dec applied``, nor any in a description with a negation, ``not grid corrected``),
+  an ``NREF`` item (or ``NORTHREF``, ``AZIREF``, ``AZREF``) in ``~W``/``~P``, or the option
+  ``north_reference``: all must agree; ``default_north_reference`` applies when none names
+  one.
 """
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +41,11 @@ from pipeline.well import NORTH_WORDS, NorthReference
 NORTH_SUFFIXES: dict[str, NorthReference] = {"TN": "true", "GN": "grid", "MN": "magnetic"}
 """Endings of an azimuth mnemonic naming its north reference."""
 NORTH_ITEMS = ("NREF", "NORTHREF", "AZIREF", "AZREF")
+NEGATIONS = frozenset({"not", "no", "non", "without"})
+"""Words making a description's north words no reference (``Azimuth, not grid corrected``)."""
+CORRECTIONS = frozenset({"dec", "decl", "declination", "conv", "convergence", "corr", "correction"})
+"""Words after which a north word names a correction, not the reference (``mag dec applied``:
+true north)."""
 
 
 @dataclass(frozen=True)
@@ -209,9 +217,16 @@ def declared_north(path: Path, header: Header) -> list[tuple[str, NorthReference
 
 
 def _curve_north(item: Item) -> set[NorthReference]:
-    """North references an azimuth curve names by its mnemonic's ending or description."""
-    words = re.split(r"[^0-9a-z]+", item.descr.casefold())
-    refs = {NORTH_WORDS[w] for w in words if w in NORTH_WORDS}
+    """North references an azimuth curve names by its mnemonic's ending or description
+    (:data:`NEGATIONS` and :data:`CORRECTIONS`: where the description names none)."""
+    words = [w for w in re.split(r"[^0-9a-z]+", item.descr.casefold()) if w]
+    refs = set()
+    if not NEGATIONS & set(words):
+        refs = {
+            NORTH_WORDS[w]
+            for w, after in pairwise([*words, ""])
+            if w in NORTH_WORDS and after not in CORRECTIONS
+        }
     suffix = _suffix_north(item.mnemonic)
     return refs | {suffix} if suffix else refs
 

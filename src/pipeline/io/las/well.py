@@ -3,20 +3,25 @@
 WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN; LAT/LATI/LATITUDE and
 LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds
 (``61 15 00.5 N``, ``73°24'30"E``); DATE as ISO or another unambiguous form
-(``13-DEC-1986``, ``Dec 13, 1986``, ``13/12/1986``; a two-digit year after a month name is
-the latest such year not after today; ``05/06/2024`` is refused as ambiguous); elevation
+(``13-DEC-1986``, ``13/12/1986``; ``05/06/2024`` is refused as ambiguous:
+:mod:`pipeline.io.dates`, as a CSV title's date); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
-error); DECL (MAGDEC, DECLINATION) and GRIDCONV (CONV, CONVERGENCE, GRIDCORR), the site's,
-and DECLUSED and GRIDUSED, the corrections already applied to the azimuths, in degrees or
-the item's angle unit (non-zero ones the file's north cannot carry are refused, as in
-WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED on magnetic ones).
-``north_reference`` is the one the file names (an option's is not the file's).
+error), in its unit, else in the file's depth unit, as a CSV title's (STRT, STOP, STEP and
+the index curve agreeing on one; else an error); DECL (MAGDEC, DECLINATION) and GRIDCONV
+(CONV, CONVERGENCE), the site's, and DECLUSED and GRIDUSED, the corrections already applied
+to the azimuths, in degrees or the item's angle unit (non-zero ones the file's north cannot
+carry are refused, as in WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED
+on magnetic ones). A GRIDCORR is left out with a warning: a vendor's grid correction is what
+was applied to azimuths, added by some (−γ) and subtracted by others (γ), never the site's
+convergence as such.
+A number item holding the file's NULL or a null marker (``-999.25``…, in its unit) is no
+value, as in the data. ``north_reference`` is the one the file names (an option's is not the
+file's).
 """
 
 from __future__ import annotations
 
-import calendar
 import datetime as dt
 import re
 from collections.abc import Callable
@@ -27,7 +32,9 @@ from typing import Any
 from pydantic import ValidationError
 
 from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.io.dates import header_date
 from pipeline.io.las.header import NUMBER, Header, Item, header_number
+from pipeline.io.nulls import is_null_marker
 from pipeline.units import conversion_factor
 from pipeline.well import NorthReference, WellMetadata, contradicts_north
 
@@ -43,11 +50,13 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
 """Well metadata text fields and the mnemonics holding them, preferred first."""
 ANGLE_ITEMS = {
     "declination": ("DECL", "MAGDEC", "DECLINATION"),
-    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE", "GRIDCORR"),
+    "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE"),
     "declination_applied": ("DECLUSED",),
     "grid_convergence_applied": ("GRIDUSED",),
 }
 """Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
+UNREAD_CORRECTION = "GRIDCORR"
+"""A vendor's grid correction, of no agreed sign: not read as either grid convergence."""
 COORDINATE_ITEMS = {
     "latitude": (("LAT", "LATI", "LATITUDE"), "NS"),
     "longitude": (("LON", "LONG", "LONGITUDE"), "EW"),
@@ -66,7 +75,6 @@ REFERENCE_ELEVATION = {"KB": "EKB", "RKB": "EKB", "DF": "EDF", "RDF": "EDF", "GL
 
 _DMS_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
-_MONTHS = {name.upper(): i for i, name in enumerate(calendar.month_name) if name}
 
 
 def well_metadata(
@@ -102,11 +110,13 @@ def well_metadata(
 
     def coordinate(mnemonics: tuple[str, ...], hemispheres: str) -> tuple[Any, Item] | None:
         item = header.find(path, *mnemonics)
-        return None if item is None else (_coordinate(path, item, hemispheres), item)
+        if item is None or _null(header, item, angle=True):
+            return None
+        return _coordinate(path, item, hemispheres), item
 
     def angle(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
         item = header.find(path, *mnemonics)
-        if item is None:
+        if item is None or _null(header, item, angle=True):
             return None
         return header_number(path, item) * _angle_factor(path, item), item
 
@@ -121,6 +131,14 @@ def well_metadata(
     for name, mnemonics in ANGLE_ITEMS.items():
         take(name, partial(angle, mnemonics))
     take("survey_date", date)
+    if (unread := header.find(path, UNREAD_CORRECTION)) is not None:
+        warn_input(
+            path,
+            f"{UNREAD_CORRECTION} {unread.value!r} left out: a grid correction's sign is the "
+            "vendor's (added to the azimuths or subtracted); state it as GRIDCONV (the site's "
+            "convergence, grid north east of true north +) or GRIDUSED (the one applied)",
+            unread.line,
+        )
     try:
         elevation, reference = _elevation(path, header)
     except InputFileError as exc:
@@ -139,6 +157,18 @@ def well_metadata(
                 line=item.line,
             )
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _null(header: Header, item: Item, *, angle: bool) -> bool:
+    """Whether a number item holds a null: the file's NULL or a null marker
+    (:mod:`pipeline.io.nulls`), in its own unit: no value, as in the data."""
+    if not re.fullmatch(NUMBER, item.value):
+        return False
+    value = float(item.value)
+    nulls = (i.value for i in header.well + header.parameters if i.mnemonic == "NULL")
+    return is_null_marker(value, angle=angle) or any(
+        re.fullmatch(NUMBER, null) and float(null) == value for null in nulls
+    )
 
 
 def _angle_factor(path: Path, item: Item) -> float:
@@ -191,62 +221,13 @@ def _dms(text: str) -> float:
 
 
 def _date(path: Path, item: Item) -> dt.date:
-    """The date of a DATE item (a time of day after it is ignored)."""
-    text = re.sub(
-        r"[T\s]+\d{1,2}:\d{2}(:\d{2}(\.\d*)?)?\s*(Z|UTC|GMT|[+-]\d{2}:?\d{2})?$",
-        "",
-        item.value.strip(),
-        flags=re.IGNORECASE,
-    )
+    """The date of a DATE item (:func:`pipeline.io.dates.header_date`)."""
     try:
-        return _parse_date(text)
-    except (ValueError, OverflowError) as exc:  # OverflowError: a day past C long
+        return header_date(item.value)
+    except ValueError as exc:
         raise InputFileError(
             path, f"DATE {item.value!r}: {exc}; write it as YYYY-MM-DD", line=item.line
         ) from None
-
-
-def _parse_date(text: str) -> dt.date:
-    """ISO and other unambiguous dates; see the module docstring."""
-    if re.fullmatch(r"\d{8}", text):
-        return dt.date(int(text[:4]), int(text[4:6]), int(text[6:]))
-    tokens = re.findall(r"[A-Za-z]+|\d+", text)
-    words = [t for t in tokens if t.isalpha()]
-    numbers = [t for t in tokens if t.isdigit()]
-    if not re.fullmatch(r"[A-Za-z0-9\s,./-]+", text) or len(tokens) != 3 or len(words) > 1:
-        raise ValueError("not a date")
-    if words:
-        where = tokens.index(words[0])
-        if where == 2:
-            raise ValueError("not a date")
-        year, day = numbers if where == 1 and len(numbers[0]) == 4 else numbers[::-1]
-        return dt.date(_year(year), _month(words[0]), int(day))
-    if len(numbers[0]) == 4:
-        return dt.date(int(numbers[0]), int(numbers[1]), int(numbers[2]))
-    if len(numbers[2]) != 4:
-        raise ValueError("ambiguous order of day, month and a two-digit year")
-    a, b = int(numbers[0]), int(numbers[1])
-    if a != b and a <= 12 and b <= 12:
-        raise ValueError(f"ambiguous: day {a} of month {b}, or day {b} of month {a}")
-    day, month = (a, b) if a > 12 or a == b else (b, a)
-    return dt.date(int(numbers[2]), month, day)
-
-
-def _month(word: str) -> int:
-    matches = [i for name, i in _MONTHS.items() if len(word) >= 3 and name.startswith(word.upper())]
-    if len(matches) != 1:
-        raise ValueError(f"{word!r} is not a month")
-    return matches[0]
-
-
-def _year(text: str) -> int:
-    """A four-digit year, or a two-digit one as the latest such year not after today."""
-    if len(text) not in (2, 4):
-        raise ValueError(f"year {text!r}")
-    if len(text) == 4:
-        return int(text)
-    this_year = dt.date.today().year
-    return this_year - (this_year - int(text)) % 100
 
 
 def _elevation(
@@ -274,12 +255,28 @@ def _elevation(
         depth = (reference.value, reference)
     elif item is not None and (implied := ELEVATION_ITEMS[item.mnemonic]) is not None:
         depth = (implied, item)
-    if item is None:
+    if item is None or _null(header, item, angle=False):
         return None, depth
     try:
-        if not item.unit:
-            raise UnitError(f"no unit: write e.g. '{item.mnemonic}.M  {item.value}'")
-        factor = conversion_factor(item.unit, "length")
+        unit = item.unit or _depth_unit(header)
+        if not unit:
+            raise UnitError(
+                "no unit, and the depths (STRT, STOP, STEP, the index curve) give none or "
+                f"several: write e.g. '{item.mnemonic}.M  {item.value}'"
+            )
+        factor = conversion_factor(unit, "length")
     except UnitError as exc:
         raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
     return (header_number(path, item) * factor, item), depth
+
+
+def _depth_unit(header: Header) -> str | None:
+    """The file's one depth unit: that of STRT, STOP, STEP and the index curve, where those
+    that state one agree (None: none states one, or they differ or are no length)."""
+    items = [i for i in header.well if i.mnemonic in ("STRT", "STOP", "STEP")] + header.curves[:1]
+    units = [i.unit for i in items if i.unit]
+    try:
+        factors = {conversion_factor(unit, "length") for unit in units}
+    except UnitError:
+        return None
+    return units[0] if len(factors) == 1 else None

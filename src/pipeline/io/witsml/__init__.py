@@ -55,9 +55,12 @@ azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDe
 stnGridCorUsed must agree with them and with each other, and every trajectory's with
 the first's (the metadata hold one value for all the azimuths); a non-zero grid correction on
 true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
-contradiction), and the tool: the first station's ``typeSurveyTool`` naming one (a tie-in
-point names none). Every problem is an :class:`~pipeline.errors.InputFileError` naming the
-file and the element's line.
+contradiction), the survey date: the earliest ``dTimTrajStart``, the day the survey began
+(on magnetic-north azimuths with no declination stated, whose declination follows from the
+date, trajectories started on different days, or one undated beside a dated one, are
+refused: read one at a time), and the tool: the first station's ``typeSurveyTool`` naming
+one (a tie-in point names none). Every problem is an
+:class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 """
 
 from __future__ import annotations

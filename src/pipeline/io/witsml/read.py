@@ -399,9 +399,7 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
     for traj in trajectories:
         _corrections(path, traj, found)
     _applied_agrees(path, north, found)
-    start = first.get("dTimTrajStart")
-    if start is not None:
-        found["survey_date"] = (_date(path, start), start.line)
+    _survey_date(path, trajectories, north, found)
     tools = (  # the tie-in point names no tool: the first station that names one
         (tool, station.line)
         for traj in trajectories
@@ -458,6 +456,47 @@ def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[An
                 f"azimuths referred to {north} north carry no such correction",
                 line=line,
             )
+
+
+def _survey_date(
+    path: Path, trajectories: list[Node], north: NorthReference, found: dict[str, tuple[Any, int]]
+) -> None:
+    """The survey date: the earliest ``dTimTrajStart``, the day the survey began. Magnetic-north
+    azimuths without a stated declination take theirs from that date downstream (a declination
+    drifts by up to tenths of a degree a year): trajectories started on different days, or
+    one undated beside a dated one, are refused there, not given one day's declination."""
+    starts = [(traj, traj.get("dTimTrajStart")) for traj in trajectories]
+    dated = [(node, _date(path, node)) for _, node in starts if node is not None]
+    if not dated:
+        return
+    earliest, day = min(dated, key=lambda entry: entry[1])
+    found["survey_date"] = (day, earliest.line)
+    if north != "magnetic" or "declination" in found:
+        return
+    later = next(((node, other) for node, other in dated if other != day), None)
+    undated = next((traj for traj, node in starts if node is None), None)
+    if later is not None:
+        line = later[0].line
+        what = (
+            f"<dTimTrajStart> {later[1].isoformat()} differs from the {day.isoformat()} at "
+            f"line {earliest.line}"
+        )
+    elif undated is not None:
+        line = undated.line
+        what = (
+            f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} "
+            f"(line {earliest.line})"
+        )
+    else:
+        return
+    raise InputFileError(
+        path,
+        f"{what}: the declination of these magnetic-north azimuths (none stated, none "
+        "applied) depends on each survey's date; read one trajectory at a time (reader "
+        "option trajectory: its uid or name)",
+        line=line,
+        column="dTimTrajStart",
+    )
 
 
 def _date(path: Path, node: Node) -> dt.date:
