@@ -138,7 +138,7 @@ def calibration_document(
 def _reading_owner(readings: pa.Table, instruments: list[str]) -> np.ndarray:
     """Instrument of each reading; rows without one belong to the result's instrument that
     no named row claims (as calibration assigned them)."""
-    if "instrument" in readings.column_names:
+    if "instrument" in readings.schema.names:
         names = readings.column("instrument").to_pylist()
     else:
         names = [None] * readings.num_rows

@@ -216,9 +216,9 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
     levels = table.column("level").to_pylist()
     offset_md, names = col(table, "offset_md"), table.column("offset").to_pylist()
     wells = rule.get("wells", {})
-    between = col(table, "sf_between") if "sf_between" in table.column_names else col(table, "sf")
+    between = col(table, "sf_between") if "sf_between" in table.schema.names else col(table, "sf")
     md_between = (
-        col(table, "md_between") if "md_between" in table.column_names else col(table, "md")
+        col(table, "md_between") if "md_between" in table.schema.names else col(table, "md")
     )
     on_course = rule.get("level_on", "course") == "course"
     rows, marked = [], set()

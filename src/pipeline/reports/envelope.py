@@ -53,19 +53,16 @@ class Envelope:
             self.width = max(hi - lo, abs(lo) * 1e-9, 1e-9) / (self.columns - 1)
         self._cover(lo, hi)
 
-    def _fold(self, binned: _Binned, y: FloatArray) -> None:
-        """Fold in the kept samples' y (in the samples' order) binned as ``binned``."""
-        if binned.order is not None:
-            y = y[binned.order]
-        bins = binned.bins
-        for reduce, best, beats, at in (
-            (np.minimum, self.low, np.less, self.x_low),
-            (np.maximum, self.high, np.greater, self.x_high),
+    def _fold(self, bins: NDArray[np.intp], x: FloatArray, y: FloatArray) -> None:
+        """Fold in the kept samples (x, y) in ``bins`` (:func:`_bins`)."""
+        for reduce, empty, best, beats, at in (
+            (np.minimum, np.inf, self.low, np.less, self.x_low),
+            (np.maximum, -np.inf, self.high, np.greater, self.x_high),
         ):
-            values, first = _extremes(reduce, y, binned.starts)
-            better = beats(values, best[bins])
-            best[bins[better]] = values[better]
-            at[bins[better]] = binned.x[first[better]]
+            values, first = _extremes(reduce, empty, y, bins, self.columns)
+            better = beats(values, best)  # never a bin without samples (±inf)
+            best[better] = values[better]
+            at[better] = x[first[better]]
         self.samples += len(y)
 
     def _cover(self, lo: float, hi: float) -> None:
@@ -83,19 +80,14 @@ class Envelope:
             return
         target = (np.arange(self.columns) + shift) // factor
         filled = np.flatnonzero(np.isfinite(self.low) & (target < self.columns))
-        low, high = np.full(self.columns, np.inf), np.full(self.columns, -np.inf)
-        x_low, x_high = np.zeros(self.columns), np.zeros(self.columns)
-        if len(filled):
-            merged = target[filled]  # in order: the old bins merge in runs
-            starts = np.flatnonzero(np.r_[True, merged[1:] != merged[:-1]])
-            bins = merged[starts]
-            for reduce, old, x_old, new, x_new in (
-                (np.minimum, self.low, self.x_low, low, x_low),
-                (np.maximum, self.high, self.x_high, high, x_high),
-            ):
-                new[bins], first = _extremes(reduce, old[filled], starts)
-                x_new[bins] = x_old[filled][first]
-        self.low, self.high, self.x_low, self.x_high = low, high, x_low, x_high
+        merged = []
+        for reduce, empty, old, x_old in (
+            (np.minimum, np.inf, self.low, self.x_low),
+            (np.maximum, -np.inf, self.high, self.x_high),
+        ):
+            new, first = _extremes(reduce, empty, old[filled], target[filled], self.columns)
+            merged += [new, np.append(x_old[filled], 0.0)[first]]  # x 0 in a bin left empty
+        self.low, self.x_low, self.high, self.x_high = merged
         self.origin, self.width = origin, self.width * factor
 
     def points(self) -> tuple[FloatArray, FloatArray]:
@@ -111,38 +103,24 @@ class Envelope:
         return x.ravel()[keep], y.ravel()[keep]
 
 
-@dataclass(frozen=True)
-class _Binned:
-    """Kept samples binned: their x and bins in bin order (stable: x order within a bin),
-    ``order`` the samples' permutation into it (None: in order already), and the first
-    sample of each bin (``starts``, ``bins``)."""
-
-    x: FloatArray
-    order: NDArray[np.intp] | None
-    starts: NDArray[np.intp]
-    bins: NDArray[np.int64]
-
-
-def _binned(envelope: Envelope, x: FloatArray) -> _Binned:
-    """The samples at ``x`` in ``envelope``'s bins (which cover them)."""
-    index = np.minimum(
-        ((x - envelope.origin) / envelope.width).astype(np.int64), envelope.columns - 1
-    )
-    order = None
-    if np.any(index[1:] < index[:-1]):  # x not in order (a stable sort keeps ties')
-        order = np.argsort(index, kind="stable")
-        index, x = index[order], x[order]
-    starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
-    return _Binned(x, order, starts, index[starts])
+def _bins(envelope: Envelope, x: FloatArray) -> NDArray[np.intp]:
+    """The bin of each sample at ``x`` in ``envelope``'s bins (which cover them)."""
+    index = ((x - envelope.origin) / envelope.width).astype(np.intp)
+    return np.minimum(index, envelope.columns - 1, out=index)
 
 
 def fold(envelopes: Sequence[Envelope], x: FloatArray, ys: Sequence[FloatArray]) -> None:
     """Fold the samples (x, y) of each of ``ys`` into the envelope beside it, non-finite ones
     left out. Envelopes in the same bins keeping the same samples (the columns of one
-    series, as a rule) share the samples' binning and x order, made once."""
+    series, as a rule) share the samples' binning, made once."""
     x = np.asarray(x, float)
     finite = np.isfinite(x)
-    shared: tuple[tuple[int, float, float], NDArray[np.bool_], float, float, _Binned] | None
+    shared: (
+        tuple[
+            tuple[int, float, float], NDArray[np.bool_], float, float, FloatArray, NDArray[np.intp]
+        ]
+        | None
+    )
     shared = None
     for envelope, y in zip(envelopes, ys, strict=True):
         y = np.asarray(y, float)
@@ -150,7 +128,7 @@ def fold(envelopes: Sequence[Envelope], x: FloatArray, ys: Sequence[FloatArray])
         every = bool(keep.all())  # as a rule: then no sample is copied to leave none out
         state = (envelope.columns, envelope.origin, envelope.width)
         if shared is not None and shared[0] == state and np.array_equal(shared[1], keep):
-            lo, hi, binned = shared[2:]
+            lo, hi, kept, bins = shared[2:]
             envelope._place(lo, hi)
         else:
             kept = x if every else x[keep]
@@ -158,20 +136,23 @@ def fold(envelopes: Sequence[Envelope], x: FloatArray, ys: Sequence[FloatArray])
                 continue
             lo, hi = float(kept.min()), float(kept.max())
             envelope._place(lo, hi)
-            binned = _binned(envelope, kept)
-            shared = state, keep, lo, hi, binned
-        envelope._fold(binned, y if every else y[keep])
+            bins = _bins(envelope, kept)
+            shared = state, keep, lo, hi, kept, bins
+        envelope._fold(bins, kept, y if every else y[keep])
 
 
 def _extremes(
-    reduce: np.ufunc, values: FloatArray, starts: NDArray[np.intp]
+    reduce: np.ufunc, empty: float, values: FloatArray, bins: NDArray[np.intp], columns: int
 ) -> tuple[FloatArray, NDArray[np.intp]]:
-    """Each run's extreme (``reduce``: ``np.minimum`` or ``np.maximum``) of ``values``,
-    the runs starting at ``starts``, and the index of the run's first value at it."""
-    extreme = reduce.reduceat(values, starts)
-    counts = np.diff(np.r_[starts, len(values)])
-    hits = np.flatnonzero(values == np.repeat(extreme, counts))
-    return extreme, hits[np.searchsorted(hits, starts)]
+    """Each of ``columns`` bins' extreme (``reduce``: ``np.minimum`` or ``np.maximum``;
+    ``empty`` for a bin without values) of ``values`` in ``bins`` (in any order: nothing is
+    sorted), and the index of the bin's first value at it (``len(values)`` in an empty bin)."""
+    extreme = np.full(columns, empty)
+    reduce.at(extreme, bins, values)
+    hits = np.flatnonzero(values == extreme[bins])
+    first = np.full(columns, len(values))
+    np.minimum.at(first, bins[hits], hits)
+    return extreme, first
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,7 @@ class Course:
 
 def confidence(traj: pa.Table) -> str:
     """The probability content of the *_conf ellipses, from their ratio to the 1σ ones."""
-    if "ellipse_major" not in traj.column_names:
+    if "ellipse_major" not in traj.schema.names:
         return "confidence level"
     major, conf = col(traj, "ellipse_major"), col(traj, "ellipse_major_conf")
     ok = major > 0
@@ -85,10 +85,10 @@ def listing(
     def azimuths(name: str, decimals: int = 2) -> list[str]:
         return fmt_azimuths(col(traj, name), decimals)
 
-    if "survey" in traj.column_names and len(set(traj.column("survey").to_pylist())) > 1:
+    if "survey" in traj.schema.names and len(set(traj.column("survey").to_pylist())) > 1:
         surveys = [str(s) for s in traj.column("survey").to_pylist()]
         spec["survey"] = (Column("Survey", align="left"), surveys)
-    if "run" in traj.column_names and len(set(traj.column("run").to_pylist())) > 1:
+    if "run" in traj.schema.names and len(set(traj.column("run").to_pylist())) > 1:
         spec["run"] = (
             Column("Run", align="left"),
             [str(r) for r in traj.column("run").to_pylist()],
@@ -104,7 +104,7 @@ def listing(
     sigmas = _station_sigmas(traj, stations)
     for name, header, values in sigmas:
         spec[name] = (Column(header, "°"), values)
-    if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
+    if all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         conf = confidence(traj)
         spec["major"] = (Column("Semi-major", f"m, {conf}"), num("ellipse_major_conf"))
         spec["minor"] = (Column("Semi-minor", f"m, {conf}"), num("ellipse_minor_conf"))
@@ -162,7 +162,7 @@ def _station_sigmas(traj: pa.Table, st: pa.Table | None) -> list[tuple[str, str,
     found = np.abs(st_md[index] - md) <= 1e-3 if len(st_md) else np.zeros(len(md), bool)
     out = []
     for name, header in (("sigma_inc", "σ INC"), (SIGMA_AZI, "σ AZI")):
-        if name in st.column_names:
+        if name in st.schema.names:
             sigmas = fmt_sigmas(col(st, name)[index])
             cells = [text if ok else "" for text, ok in zip(sigmas, found.tolist(), strict=True)]
             out.append((name, header, cells))

@@ -16,7 +16,7 @@ PROVENANCE = ("run", "tool_model", "source", "section")
 
 def program_section(trajectory: pa.Table) -> Section | None:
     """The survey program (None: the trajectory is not a definitive survey)."""
-    if not all(c in trajectory.column_names for c in PROVENANCE):
+    if not all(c in trajectory.schema.names for c in PROVENANCE):
         return None
     section = trajectory.column("section").to_numpy()
     md = trajectory.column("md").to_numpy()

@@ -94,7 +94,7 @@ def check_series(checks: pa.Table) -> list[QcSeries]:
     """One series per generic check: the value with the band from 0 (or −limit for signed
     quantities) up to the limit."""
     names = checks.column("check").to_pylist()
-    md = _floats(checks, "md") if "md" in checks.column_names else np.full(checks.num_rows, np.nan)
+    md = _floats(checks, "md") if "md" in checks.schema.names else np.full(checks.num_rows, np.nan)
     x = np.where(np.isnan(md), _floats(checks, "row"), md)
     value, limit = _floats(checks, "value"), _floats(checks, "limit")
     passed = np.array(checks.column("passed").to_pylist(), dtype=bool)
@@ -210,7 +210,7 @@ def station_flags(md: FloatArray, src: QcSources) -> list[list[Flag]]:
                 for s, f in zip(status, failed, strict=True)
             ],
         )
-    if src.checks is not None and "md" in src.checks.column_names:
+    if src.checks is not None and "md" in src.checks.schema.names:
         passed = src.checks.column("passed").to_pylist()
         names = src.checks.column("check").to_pylist()
         md_checks = _floats(src.checks, "md")
@@ -228,7 +228,7 @@ def station_flags(md: FloatArray, src: QcSources) -> list[list[Flag]]:
             _floats(table, "md"),
             [[] if p else [failed_check("in/out")] for p in table.column("passed").to_pylist()],
         )
-    if src.stations is not None and "flags" in src.stations.column_names:
+    if src.stations is not None and "flags" in src.stations.schema.names:
         at(
             _floats(src.stations, "md"),
             [_station_flags(f) for f in src.stations.column("flags").to_pylist()],

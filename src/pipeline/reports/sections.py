@@ -120,7 +120,7 @@ def survey_tool(traj: pa.Table, well: WellMetadata) -> str | None:
     """The survey tool of ``traj``: each run's (``GYRO-1: gyro; MWD-1: MWD``) when its
     stations come from several runs (``several; see the program`` when a run names more
     than one), else the well's ``tool_type``."""
-    names = traj.column_names
+    names = traj.schema.names
     runs = traj.column("run").to_pylist() if "run" in names else []
     if len(set(runs)) < 2 or "tool_type" not in names:
         return well.tool_type

@@ -200,7 +200,7 @@ def survey_document(
     program = program_section(traj)
     if program is not None:
         sections.insert(3, program)
-    if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
+    if all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(shown, shown_path))
     groups = all_series(src)
     explained = flag_table(flags or [])
@@ -233,7 +233,7 @@ def survey_document(
 def _ellipse_note(traj: pa.Table, provenance: Provenance, parts: Parts) -> list[Paragraph]:
     """What the listing's ellipse columns are: their axes, confidence level and the error
     model (by its title) of the run's position-uncertainty stage; none without ellipses."""
-    if not all(c in traj.column_names for c in ELLIPSE_COLUMNS):
+    if not all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         return []
     names = [str(s.params["model"]) for s in provenance.stages if s.uses == "position_uncertainty"]
     titles = " and ".join(dict.fromkeys(parts.error_model(n)[0] for n in names))
@@ -266,7 +266,7 @@ def _own_flags(
 
 
 def _has(table: pa.Table | None, column: str) -> bool:
-    return table is not None and column in table.column_names
+    return table is not None and column in table.schema.names
 
 
 def _max_dls(traj: pa.Table, path: plots.Path3, course: Course) -> str:
@@ -338,7 +338,7 @@ def _summary(
     ]
     if vs_azimuth is not None:
         results.append(("Vertical section at TD", f"{fmt(col(traj, 'vertical_section')[-1])} m"))
-    if all(c in traj.column_names for c in ELLIPSE_COLUMNS):
+    if all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         results.append(
             (
                 f"Ellipse semi-axes at TD ({confidence(traj)})",
@@ -550,7 +550,7 @@ def _rows(table: pa.Table | None) -> int:
 def _rate(drift: pa.Table) -> str:
     """The drift rate a survey was corrected with and its σ; of a table written before
     they were recorded, the slope of its correction."""
-    if "sigma_drift_rate" in drift.column_names:
+    if "sigma_drift_rate" in drift.schema.names:
         rate, sigma = (float(col(drift, c)[0]) for c in ("drift_rate", "sigma_drift_rate"))
         return f"drift rate {fmt_measured(rate, sigma, 3)} °/h, σ {fmt_sigma(sigma)} °/h"
     rate = correction_rate(col(drift, "time"), col(drift, "correction"))
@@ -621,7 +621,7 @@ def _allan(allan: pa.Table, noise: pa.Table | None) -> Section:
     axes = [
         a
         for a in ("gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
-        if a in allan.column_names and allan.column(a).null_count < allan.num_rows
+        if a in allan.schema.names and allan.column(a).null_count < allan.num_rows
     ]
     curves = {a: col(allan, a) for a in axes}
     units = {a: unit_label(allan, a) for a in axes}

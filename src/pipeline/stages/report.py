@@ -82,8 +82,7 @@ def _write(doc: Document, params: ReportParams, ctx: StageContext) -> None:
     name = params.filename or ctx.stage_id
     drawn = Figures()
     if "html" in params.formats:
-        html = render_html(doc, drawn)
-        ctx.output_path(f"{name}.html").write_text(html, encoding="utf-8")
+        ctx.output_path(f"{name}.html").write_bytes(render_html(doc, drawn))
     if "pdf" in params.formats:
         render_pdf(doc, ctx.output_path(f"{name}.pdf"), drawn)
 

@@ -114,12 +114,12 @@ def legend(
     elif panel.legend == "best":
         drawn = points(data)
 
-        def cost(loc: str) -> int:
-            lx, ty = corner(loc)
-            area = (lx, ty, lx + width, ty + height)
-            return covered(drawn, area) + 1000 * sum(_meet(area, other) for other in avoid)
-
-        left, top = corner(min(ORDER, key=cost))
+        areas = [(lx, ty, lx + width, ty + height) for lx, ty in map(corner, ORDER)]
+        costs = [
+            int(n) + 1000 * sum(_meet(area, other) for other in avoid)
+            for n, area in zip(covered(drawn, areas), areas, strict=True)
+        ]
+        left, top = areas[costs.index(min(costs))][:2]
     else:
         left, top = corner(str(panel.legend))
     group = Group(kind="legend")

@@ -146,11 +146,14 @@ def paths(group: Group) -> list[Path]:
     return found
 
 
-def covered(xy: Points, box: tuple[float, float, float, float]) -> int:
-    """How many of the points ``xy`` lie in ``box`` (x0, y0, x1, y1)."""
-    x0, y0, x1, y1 = box
-    inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
-    return int(inside.sum())
+def covered(xy: Points, boxes: list[tuple[float, float, float, float]]) -> NDArray[np.intp]:
+    """How many of the points ``xy`` lie in each of ``boxes`` (x0, y0, x1, y1), counted
+    for all the boxes at once."""
+    b = np.array(boxes)
+    x, y = xy[:, 0], xy[:, 1]
+    inside = (x >= b[:, 0:1]) & (x <= b[:, 2:3]) & (y >= b[:, 1:2]) & (y <= b[:, 3:4])
+    counts: NDArray[np.intp] = np.count_nonzero(inside, axis=1)
+    return counts
 
 
 @dataclass
