@@ -65,7 +65,7 @@ def turned_sin_cos(
     steps of an azimuth integration) — a quarter of :func:`sin_cos`'s CPU; the rounding adds
     ≤ 2.3e-16 (absolute) to that of ``sin`` and ``cos``. A turn beyond :data:`TURN_REACH`
     (or not finite) takes :func:`sin_cos` of ``angle`` instead."""
-    largest = float(np.max(np.abs(turn))) if turn.size else 0.0
+    largest = float(max(np.max(turn), -np.min(turn))) if turn.size else 0.0  # (NaN: NaN)
     if not largest <= TURN_REACH:
         return sin_cos(angle)
     square = np.multiply(turn, turn)
