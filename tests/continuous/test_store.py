@@ -30,6 +30,30 @@ def test_the_store_moves_to_files_one_byte_past_its_threshold() -> None:
     assert store.read("flag", 0, 21).dtype == np.int8
 
 
+def test_floats_are_read_only_views_that_keep_their_rows_when_a_column_grows() -> None:
+    """In memory a float64 column's rows come without a copy, read-only; the column still
+    grows while such a view lives (the view keeps the rows it had, and shows a write to
+    them made before it grew), and on disk or of another type they are copies, read-only
+    too."""
+    store = ColumnStore()
+    store.write("x", 0, np.arange(4.0))
+    store.write("flag", 0, np.arange(4, dtype=np.int8))
+    view = store.floats("x", 1, 3)
+    np.testing.assert_array_equal(view, [1.0, 2.0])
+    with pytest.raises(ValueError, match="read-only"):
+        view[0] = 9.0
+    store.write("x", 1, np.array([-1.0]))  # within the column: the view shows it
+    store.append("x", np.arange(3.0))  # past its end while the view lives
+    np.testing.assert_array_equal(view, [-1.0, 2.0])
+    np.testing.assert_array_equal(store.floats("x", 0, 7), [0.0, -1.0, 2.0, 3.0, 0.0, 1.0, 2.0])
+    assert store.floats("x", 5, 5).size == 0
+    flags = store.floats("flag", 0, 4)
+    assert flags.dtype == np.float64 and not flags.flags.writeable
+    spilled = ColumnStore(spool_bytes=8)
+    spilled.write("x", 0, np.arange(4.0))
+    assert spilled.on_disk and not spilled.floats("x", 0, 4).flags.writeable
+
+
 def written(store: ColumnStore) -> list[bool]:
     """A backward run's writes (chunks from the end, a gap read as zeros before it is
     filled), overwrites, appends, an int8 column and payloads a value comparison would not

@@ -104,13 +104,16 @@ def _blocked(values: FloatArray, kernels: Sequence[FloatArray]) -> list[FloatArr
     n, m = values.size, kernels[0].size
     size = _block_size(m)
     step = size - m + 1
-    count = -(-n // step)
-    padded = np.zeros(count * step)
-    padded[:n] = values
-    spectrum = np.fft.rfft(padded.reshape(count, step), size)
+    whole, rest = divmod(n, step)
+    count = whole + (rest > 0)
+    padded = np.zeros((count, size))  # each block zero-padded to the FFT's length
+    padded[:whole, :step] = values[: whole * step].reshape(whole, step)
+    padded[whole:, :rest] = values[whole * step :]
+    spectrum = np.fft.rfft(padded)
+    product = np.empty_like(spectrum)
     outs = []
     for kernel in kernels:
-        blocks = np.fft.irfft(spectrum * _spectrum(kernel, size), size)
+        blocks = np.fft.irfft(np.multiply(spectrum, _spectrum(kernel, size), out=product), size)
         full = np.empty((count + 1) * step)
         full[: count * step].reshape(count, step)[...] = blocks[:, :step]
         full[count * step :] = 0.0

@@ -69,6 +69,9 @@ class StoredRun:
     """misclosure removed linearly in time as the azimuth is read, rad"""
     misaligned: bool = False
     """δ is the toolface (the servo keeps a single-axis gyro near the high side), else 0"""
+    halves: bool = False
+    """the store holds tan(I/2) (column ``inc_half``) and, where misaligned, tan(δ/2)
+    (``toolface_half``) as the integration had them"""
 
     @property
     def size(self) -> int:
@@ -130,14 +133,17 @@ class StoredRun:
         """Samples ``lo``…``hi − 1`` as the budget reads them (flags without the run-wide
         ones, which do not change what is integrated)."""
         t, inc, azi, flags = self.angles(lo, hi, None)
+        store = self.odometer.store
         return RunGeometry(
             time=t,
             inc=inc,
             azi=azi,
             misalignment=(
-                self.odometer.store.floats("toolface", lo, hi)
-                if self.misaligned
-                else np.zeros(t.size)
+                store.floats("toolface", lo, hi) if self.misaligned else np.zeros(t.size)
+            ),
+            inc_half=store.floats("inc_half", lo, hi) if self.halves else None,
+            misalignment_half=(
+                store.floats("toolface_half", lo, hi) if self.halves and self.misaligned else None
             ),
             usable=(flags & _NOT_INTEGRATED) == 0,
             latitude=self.latitude,

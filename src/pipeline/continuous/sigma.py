@@ -67,7 +67,7 @@ from pipeline.continuous.store import (
     carried_cumsum,
     chunks,
 )
-from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos
+from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos, tangent_sin_cos
 from pipeline.earth.gravity import STANDARD_GRAVITY
 
 __all__ = [
@@ -131,6 +131,11 @@ class RunGeometry:
     """integrated back in time from the end stop (no closure)"""
     inc_noise: InclinationNoise | None = None
     """per-sample inclination noise (None: not modelled)"""
+    inc_half: FloatArray | None = None
+    """tan(I/2) as the integration had it, whose sine and cosine need no trig function
+    (None: from ``inc``)"""
+    misalignment_half: FloatArray | None = None
+    """tan(δ/2) likewise (None: from ``misalignment``)"""
 
     @property
     def size(self) -> int:
@@ -156,6 +161,10 @@ class RunGeometry:
             azi=self.azi[part],
             misalignment=self.misalignment[part],
             usable=self.usable[part],
+            inc_half=None if self.inc_half is None else self.inc_half[part],
+            misalignment_half=(
+                None if self.misalignment_half is None else self.misalignment_half[part]
+            ),
         )
 
 
@@ -317,10 +326,10 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
     """Rate sensitivities per sample (time order) of a run's samples; the gradients at the
     ends are one-sided (read one sample beyond a range to have them central)."""
     grad = TimeGradient(run.time)
-    sin_i, cos_i = sin_cos(run.inc)
+    sin_i, cos_i = _sin_cos(run.inc, run.inc_half)
     sin_a, cos_a = sin_cos(run.azi)
     if run.misalignment.any():
-        sin_d, cos_d = sin_cos(run.misalignment)
+        sin_d, cos_d = _sin_cos(run.misalignment, run.misalignment_half)
         turn_rate = grad(CarriedUnwrap()(run.misalignment))
     else:  # δ = 0 (a tool whose h needs no 1/cos δ): the same numbers, without trig functions
         sin_d, cos_d, turn_rate = np.zeros(run.size), np.ones(run.size), np.zeros(run.size)
@@ -347,6 +356,11 @@ def _sensitivities(run: RunGeometry, oc: float, os_: float) -> dict[str, FloatAr
         values[outside] = 0.0
     sens["sin"] = np.abs(sin_i)
     return sens
+
+
+def _sin_cos(angle: FloatArray, half: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    """Sine and cosine of ``angle`` (rad), from the tangent of its ``half`` where given."""
+    return sin_cos(angle) if half is None else tangent_sin_cos(half)
 
 
 class _Integrals:

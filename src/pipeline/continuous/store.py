@@ -113,7 +113,11 @@ class ColumnStore:
         if self._on_disk:
             os.pwrite(column.fd, data.data, offset)
         else:
-            _put(column.data, offset, data)
+            try:
+                _put(column.data, offset, data)
+            except BufferError:  # grown while a view of it (floats) lives: the view keeps those
+                column.data = bytearray(column.data)
+                _put(column.data, offset, data)
             self._held += grown
         column.rows = max(column.rows, start + data.size)
 
@@ -143,8 +147,15 @@ class ColumnStore:
         return out
 
     def floats(self, name: str, lo: int, hi: int) -> FloatArray:
-        """:meth:`read` as float64."""
-        out: FloatArray = self.read(name, lo, hi).astype(np.float64, copy=False)
+        """:meth:`read` as float64, read-only; of a float64 column in memory the store's own
+        bytes (no copy: a view, which shows a later write to its rows)."""
+        column = self._columns[name]
+        lo, hi = max(lo, 0), min(hi, column.rows)
+        if self._on_disk or column.dtype != np.float64 or hi <= lo:
+            out: FloatArray = self.read(name, lo, hi).astype(np.float64, copy=False)
+        else:
+            out = np.frombuffer(column.data, np.float64, hi - lo, lo * 8)
+        out.flags.writeable = False
         return out
 
     def ints(self, name: str, lo: int, hi: int) -> NDArray[np.int64]:

@@ -27,6 +27,17 @@ def sin_cos(angle: FloatArray) -> tuple[FloatArray, FloatArray]:
     where NumPy's tangent is vectorised and its sine and cosine are not (float64)."""
     t = np.multiply(angle, 0.5, out=np.empty(np.shape(angle)))
     np.tan(t, out=t)
+    return _from_tangent(t)
+
+
+def tangent_sin_cos(tangent: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Sine and cosine of the angles whose half-angle tangents are ``tangent`` (tan(a/2),
+    a in rad), by :func:`sin_cos`'s formulas: no trig function at all."""
+    return _from_tangent(np.array(tangent, dtype=np.float64))
+
+
+def _from_tangent(t: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`sin_cos` from the half-angle tangents ``t`` (overwritten: the sine)."""
     square = np.multiply(t, t, out=np.empty_like(t))
     scale = np.add(square, 1.0, out=np.empty_like(t))
     np.divide(1.0, scale, out=scale)
@@ -54,7 +65,7 @@ def turned_sin_cos(
     steps of an azimuth integration) — a quarter of :func:`sin_cos`'s CPU; the rounding adds
     ≤ 2.3e-16 (absolute) to that of ``sin`` and ``cos``. A turn beyond :data:`TURN_REACH`
     (or not finite) takes :func:`sin_cos` of ``angle`` instead."""
-    largest = float(np.max(np.abs(turn))) if turn.size else 0.0
+    largest = float(max(np.max(turn), -np.min(turn))) if turn.size else 0.0  # (NaN: NaN)
     if not largest <= TURN_REACH:
         return sin_cos(angle)
     square = np.multiply(turn, turn)
