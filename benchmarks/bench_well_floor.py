@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import gc
 import io
 import os
 import pstats
@@ -215,6 +216,7 @@ def timed(fn: Callable[[], object]) -> float:
 
 def worker_setup() -> None:
     """This process as :func:`~pipeline.batch.worker.worker_init` sets a pool worker up."""
+    gc.freeze()
     defer_pandas()
     threadpool_limits(limits=1)
     use_returning_memory_pool()
