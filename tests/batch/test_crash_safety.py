@@ -238,16 +238,44 @@ def test_a_run_published_before_its_batch_died_is_recovered_not_recomputed(
     assert [r["id"] for r in runs(out / "ledger.sqlite")] == [run_id]
 
 
+def _wait_until_open(procs: list[subprocess.Popen[str]], path: Path) -> None:
+    """Until every process in ``procs`` holds ``path`` open (Linux ``/proc/PID/fd``)."""
+    deadline = time.monotonic() + TIMEOUT_S
+    waiting = list(procs)
+    while waiting and time.monotonic() < deadline:
+        for proc in list(waiting):
+            fds = Path(f"/proc/{proc.pid}/fd")
+            if proc.poll() is not None or any(_links_to(fd, path) for fd in fds.iterdir()):
+                waiting.remove(proc)
+        time.sleep(0.02)
+    assert not waiting, "a batch process never opened the ledger"
+
+
+def _links_to(fd: Path, path: Path) -> bool:
+    try:
+        return os.readlink(fd) == str(path)
+    except OSError:  # closed meanwhile
+        return False
+
+
 @pytest.mark.process("two batch processes share one ledger at once")
 def test_two_batches_on_one_ledger_run_each_well_once(tmp_path: Path, survey: Path):
     names = [f"W{i:02d}" for i in range(12)]
     make_wells(tmp_path / "in", names)
     out = tmp_path / "out"
+    out.mkdir()
+    ledger_path = out / "ledger.sqlite"
+    Ledger(ledger_path).close()
+    hold = sqlite3.connect(ledger_path, isolation_level=None)
+    hold.execute("BEGIN IMMEDIATE")  # each batch waits on it at its first write: they start
     args = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
     procs = [
         spawn(*args, "--workers", "1", "--only-changed", "--quiet", stderr=tmp_path / f"b{i}.log")
         for i in range(2)
     ]
+    _wait_until_open(procs, ledger_path)  # together however slowly a loaded machine starts them
+    hold.execute("COMMIT")
+    hold.close()
     codes = [p.wait(TIMEOUT_S) for p in procs]
     assert codes == [0, 0], [(tmp_path / f"b{i}.log").read_text() for i in range(2)]
 
