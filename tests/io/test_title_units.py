@@ -1,9 +1,12 @@
 """Units of a CSV title block, as operators' and vendors' listings write them: map coordinates
 in the unit the file states (``Easting (usft):``, ``Northing: … ft``), never a foot taken for
-a metre or one foot for the other; a unit in brackets after the key (``Elevation (ft):``)."""
+a metre or one foot for the other; a unit in brackets after the key (``Elevation (ft):``); a
+datum's elevation (``KB Elevation``, ``RKB``, ``Ground Level``), the depth reference choosing
+among several."""
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -89,3 +92,46 @@ def test_brackets_holding_no_unit_leave_the_line_unread(tmp_path: Path):
 def test_a_unit_in_brackets_after_the_key_is_read(tmp_path: Path):
     """``Elevation (ft): 82`` was no key (skipped, the elevation lost)."""
     assert well(listing(tmp_path / "ft.csv", "Elevation (ft): 82"))["elevation"] == 82 * 0.3048
+
+
+@pytest.mark.parametrize(
+    ("title", "elevation", "reference"),
+    [
+        ("Elevation (ft): 82", 82 * 0.3048, None),
+        ("KB Elevation: 82", 82 * 0.3048, "KB"),
+        ("KB Elevation (m): 25", 25.0, "KB"),
+        ("RKB: 82 ft", 82 * 0.3048, "KB"),
+        ("Elev. DF: 80", 80 * 0.3048, "DF"),
+        ("Ground Level: 60", 60 * 0.3048, "GL"),
+        ("Depth Reference: RKB\nKB Elevation: 82\nGround Level: 60", 82 * 0.3048, "RKB"),
+        ("Ground Level: 60\nDepth Reference: GL\nRKB: 82", 60 * 0.3048, "GL"),
+        ("Elevation: 90\nKB Elevation: 82\nGround Level: 60", 90 * 0.3048, None),
+    ],
+)
+def test_a_datums_elevation_is_read(
+    tmp_path: Path, title: str, elevation: float, reference: str | None
+):
+    """Vendors name the elevation by its datum or state its unit beside the key: those lines
+    were skipped, the elevation lost; among several, the depth reference's is the one."""
+    found = well(listing(tmp_path / "datum.csv", title))
+    assert found["elevation"] == pytest.approx(elevation, rel=1e-15)
+    assert found.get("depth_reference") == reference
+
+
+@pytest.mark.parametrize(
+    ("title", "said"),
+    [
+        ("KB Elevation: 82\nGround Level: 60", "KB (line 3), GL (line 4) are not of the depth"),
+        ("Depth Reference: MSL\nGround Level: 60", "GL (line 4) are not of the depth reference"),
+    ],
+)
+def test_an_elevation_of_no_known_depth_reference_is_left_out(
+    tmp_path: Path, title: str, said: str
+):
+    """A ground level is not the elevation depths measured from the kelly bushing are below."""
+    source = listing(tmp_path / "which.csv", title)
+    with pytest.warns(
+        InputFileWarning, match=re.escape(f"elevation left out: the elevations of {said}")
+    ):
+        found = well(source)
+    assert "elevation" not in found

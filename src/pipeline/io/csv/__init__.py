@@ -30,6 +30,9 @@ File layout, in order:
   columns (``Elevation: 82`` above ``MD [ft]``: 82 ft; none or several: an error), a map
   coordinate (``Easting``, ``Northing``, in its CRS's unit) only where that is m (beside
   feet: an error, US survey or international), a ``well.<field>`` key in the field's (m);
+  a datum's elevation (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where
+  no ``Elevation`` is given: the depth reference's, else the only one (implying the depth
+  reference; several and none named: left out, warned);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
   a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within

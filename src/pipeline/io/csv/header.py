@@ -65,6 +65,19 @@ MAP_FIELDS = ("easting", "northing")
 """Map coordinates: in their CRS's unit, which a file's lengths in feet do not tell (US survey
 or international feet, 2 ppm apart: 4 ft at an easting of 2,000,000 ft), so one without a
 unit beside lengths in feet is refused."""
+DATUM_WORDS = {
+    "kb": "KB",
+    "rkb": "KB",
+    "kellybushing": "KB",
+    "df": "DF",
+    "rdf": "DF",
+    "derrickfloor": "DF",
+    "gl": "GL",
+    "groundlevel": "GL",
+}
+"""Words naming a datum in a title key (``KB Elevation``, ``RKB``, ``Ground Level``) or a
+depth reference (``RKB``), and the datum they name."""
+ELEVATION_WORDS = ("elevation", "elev")
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
 _BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
@@ -335,10 +348,13 @@ def read_title(
 ) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
     """Well metadata and north-reference declarations of the lines above the header;
     ``lengths``: the units of the file's length columns, by header cell
-    (:func:`length_units`), the unit of a length given without one."""
+    (:func:`length_units`), the unit of a length given without one. A datum's elevation
+    (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where no ``Elevation`` is
+    given: the depth reference's, else the one given (implying the depth reference)."""
     fields = {"".join(_words(name)): name for name in WellMetadata.model_fields}
     keys = {k: v for k, v in fields.items() if k != "northreference"} | WELL_ALIASES
     values: dict[str, tuple[Any, int]] = {}
+    datums: dict[str, tuple[Any, int]] = {}
     north: list[tuple[str, NorthReference]] = []
     for number, line in enumerate(lines, start=1):
         entry = _key_value(line, delimiter)
@@ -348,7 +364,8 @@ def read_title(
         prefixed = key[:5].casefold() == "well."
         words = _words(_BRACKETS.sub(" ", key[5:] if prefixed else key))
         name = "".join(words)
-        field = fields.get(name) if prefixed else keys.get(name)
+        datum = None if prefixed else _datum(words)
+        field = "elevation" if datum else fields.get(name) if prefixed else keys.get(name)
         if not prefixed and name in NORTH_KEYS:
             north.append((f"line {number}", _north_word(path, value, number)))
         elif field is not None:
@@ -358,15 +375,24 @@ def read_title(
             parsed = _well_value(path, field, value, number, None if prefixed else lengths, unit)
             if parsed is None:  # a null marker: no value
                 continue
-            if field in values and values[field][0] != parsed:
+            found = datums if datum else values
+            label = datum or field
+            if label in found and found[label][0] != parsed:
                 raise InputFileError(
                     path,
-                    f"{field} is given twice with different values (also on line "
-                    f"{values[field][1]})",
+                    f"{label if datum is None else label + ' elevation'} is given twice with "
+                    f"different values (also on line {found[label][1]})",
                     line=number,
                 )
-            values[field] = (parsed, number)
+            found[label] = (parsed, number)
+    if "elevation" not in values and datums:
+        values |= _datum_elevation(path, datums, values.get("depth_reference"))
     return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+
+
+def _datum(words: list[str]) -> str | None:
+    """The datum whose elevation a title key names (``KB Elevation``, ``RKB``), if any."""
+    return DATUM_WORDS.get("".join(w for w in words if w not in ELEVATION_WORDS))
 
 
 def _key_unit(path: Path, key: str, field: str, line: int) -> str | None:
@@ -380,6 +406,31 @@ def _key_unit(path: Path, key: str, field: str, line: int) -> str | None:
         return unit
     warn_input(path, f"{key!r} not read: {unit!r} is no unit of {field}", line)
     return ""
+
+
+def _datum_elevation(
+    path: Path, datums: dict[str, tuple[Any, int]], reference: tuple[Any, int] | None
+) -> dict[str, tuple[Any, int]]:
+    """The elevation among the datums' (and the depth reference the one given implies): the
+    depth reference's, else the only one; none, with a warning, when neither says which."""
+    if reference is None and len(datums) == 1:
+        ((datum, entry),) = datums.items()
+        return {"elevation": entry, "depth_reference": (datum, entry[1])}
+    wanted = None if reference is None else DATUM_WORDS.get("".join(_words(reference[0])))
+    if wanted in datums:
+        return {"elevation": datums[wanted]}
+    given = ", ".join(f"{d} (line {line})" for d, (_, line) in datums.items())
+    warn_input(
+        path,
+        f"elevation left out: the elevations of {given} are not of the depth reference "
+        + (
+            "(none is given: add e.g. 'Depth reference: RKB')"
+            if reference is None
+            else f"{reference[0]!r} (line {reference[1]})"
+        ),
+        max(line for _, line in datums.values()),
+    )
+    return {}
 
 
 def _key_value(line: str, delimiter: str) -> tuple[str, str] | None:
