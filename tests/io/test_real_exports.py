@@ -530,6 +530,27 @@ def test_a_unitless_las_elevation_is_in_the_files_depth_unit(tmp_path: Path):
     assert caught.value.line == 10
 
 
+def test_a_unitless_las_elevation_follows_the_units_option(tmp_path: Path):
+    """A file mislabelled DEPT.M whose depths are feet (``units: {md: ft}``): its bare EKB is
+    in the same feet, not in the metres of the label (82 m above sea level in the exports);
+    depths with no unit but the option's give it too (the EKB was refused)."""
+    source = tmp_path / "mislabelled.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 2000 :\n STEP.M 1000 :\n NULL. -999.25 :\n NREF. TRUE :\n"
+        " EKB.  82 : kelly bushing elevation\n"
+        "~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : azimuth\n"
+        "~A\n0 0 0\n1000 10 45\n2000 20 45\n"
+    )
+    stations = gp.read(source, kind="stations", units={"md": "ft"})
+    assert stations["md"].tolist() == [0.0, 304.8, 609.6]
+    assert stations.attrs["well"]["elevation"] == pytest.approx(82 * 0.3048, abs=1e-12)
+    assert gp.read(source, kind="stations").attrs["well"]["elevation"] == 82.0
+    source.write_text(source.read_text().replace(".M ", ". "))  # no depth unit but the option's
+    feet = gp.read(source, kind="stations", units={"md": "ft"}).attrs["well"]["elevation"]
+    assert feet == pytest.approx(82 * 0.3048, abs=1e-12)
+
+
 def test_us_survey_feet_in_the_energistics_spelling_are_read(tmp_path: Path):
     """Petrel and other Energistics-minded tools write the US survey foot as ftUS."""
     header = "MD (ftUS),Inc (deg),Azimuth True (deg)"

@@ -24,9 +24,15 @@ File layout, in order:
 * **title block** (optional): lines before the header — free text, ``key: value`` or
   ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
   returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
-  number may carry its unit (``Elevation: 82 ft``), else an angle is in degrees and a length
-  in the file's length unit, the one unit of its length columns (``Elevation: 82`` above
-  ``MD [ft]``: 82 ft; none or several: an error), a ``well.<field>`` key in the field's (m);
+  number may carry its unit, after it or in brackets after the key (``Elevation: 82 ft``,
+  ``Easting (usft): 2300000``; brackets holding no unit leave the line unread, warned), else
+  an angle is in degrees and a length in the file's length unit, the one unit of its length
+  columns (``Elevation: 82`` above ``MD [ft]``: 82 ft; none or several: an error), a map
+  coordinate (``Easting``, ``Northing``, in its CRS's unit) only where that is m (beside
+  feet: an error, US survey or international), a ``well.<field>`` key in the field's (m);
+  a datum's elevation (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where
+  no ``Elevation`` is given: the depth reference's, else the only one (implying the depth
+  reference; several and none named: left out, warned);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
   a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within

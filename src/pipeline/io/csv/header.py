@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv.options import SHORTHANDS, CsvOptions
 from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
@@ -50,17 +50,38 @@ UNIT_FIELDS = {
     "latitude": "angle",
     "longitude": "angle",
     "elevation": "length",
+    "easting": "length",
+    "northing": "length",
     "declination": "angle",
     "grid_convergence": "angle",
 }
-"""Well fields whose title-block value may carry a unit (``Elevation: 82 ft``). Without one,
-an angle is in degrees and a length in the file's length unit, the one unit of its length
-columns (``Elevation: 82`` above ``MD [ft]`` is 82 ft; none or several: an error); a
-``well.<field>`` key spells gyropipe's own field, in its unit (m, deg), as the writer writes it."""
+"""Well fields whose title-block value may carry a unit, after it or in brackets after the
+key (``Elevation: 82 ft``, ``Easting (usft): 1640000``). Without one, an angle is in degrees
+and a length in the file's length unit, the one unit of its length columns (``Elevation:
+82`` above ``MD [ft]`` is 82 ft; none or several: an error), a map coordinate only where that
+is metres (:data:`MAP_FIELDS`); a ``well.<field>`` key spells gyropipe's own field, in its
+unit (m, deg), as the writer writes it."""
+MAP_FIELDS = ("easting", "northing")
+"""Map coordinates: in their CRS's unit, which a file's lengths in feet do not tell (US survey
+or international feet, 2 ppm apart: 4 ft at an easting of 2,000,000 ft), so one without a
+unit beside lengths in feet is refused."""
+DATUM_WORDS = {
+    "kb": "KB",
+    "rkb": "KB",
+    "kellybushing": "KB",
+    "df": "DF",
+    "rdf": "DF",
+    "derrickfloor": "DF",
+    "gl": "GL",
+    "groundlevel": "GL",
+}
+"""Words naming a datum in a title key (``KB Elevation``, ``RKB``, ``Ground Level``) or a
+depth reference (``RKB``), and the datum they name."""
+ELEVATION_WORDS = ("elevation", "elev")
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
 _BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
-_TITLE_KEY = re.compile(r"[A-Za-z][\w .\-/]*")
+_TITLE_KEY = re.compile(r"[A-Za-z][\w .\-/]*(?:[\[(][^\[\]()]*[\])])?")
 _TITLE_SEPARATOR = re.compile(r"[:=]")
 
 
@@ -327,10 +348,13 @@ def read_title(
 ) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
     """Well metadata and north-reference declarations of the lines above the header;
     ``lengths``: the units of the file's length columns, by header cell
-    (:func:`length_units`), the unit of a length given without one."""
+    (:func:`length_units`), the unit of a length given without one. A datum's elevation
+    (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where no ``Elevation`` is
+    given: the depth reference's, else the one given (implying the depth reference)."""
     fields = {"".join(_words(name)): name for name in WellMetadata.model_fields}
     keys = {k: v for k, v in fields.items() if k != "northreference"} | WELL_ALIASES
     values: dict[str, tuple[Any, int]] = {}
+    datums: dict[str, tuple[Any, int]] = {}
     north: list[tuple[str, NorthReference]] = []
     for number, line in enumerate(lines, start=1):
         entry = _key_value(line, delimiter)
@@ -338,23 +362,75 @@ def read_title(
             continue
         key, value = entry
         prefixed = key[:5].casefold() == "well."
-        name = "".join(_words(key[5:] if prefixed else key))
-        field = fields.get(name) if prefixed else keys.get(name)
+        words = _words(_BRACKETS.sub(" ", key[5:] if prefixed else key))
+        name = "".join(words)
+        datum = None if prefixed else _datum(words)
+        field = "elevation" if datum else fields.get(name) if prefixed else keys.get(name)
         if not prefixed and name in NORTH_KEYS:
             north.append((f"line {number}", _north_word(path, value, number)))
         elif field is not None:
-            parsed = _well_value(path, field, value, number, None if prefixed else lengths)
+            unit = _key_unit(path, key, field, number)
+            if unit == "":  # brackets holding no unit of the field: the line is not read
+                continue
+            parsed = _well_value(path, field, value, number, None if prefixed else lengths, unit)
             if parsed is None:  # a null marker: no value
                 continue
-            if field in values and values[field][0] != parsed:
+            found = datums if datum else values
+            label = datum or field
+            if label in found and found[label][0] != parsed:
                 raise InputFileError(
                     path,
-                    f"{field} is given twice with different values (also on line "
-                    f"{values[field][1]})",
+                    f"{label if datum is None else label + ' elevation'} is given twice with "
+                    f"different values (also on line {found[label][1]})",
                     line=number,
                 )
-            values[field] = (parsed, number)
+            found[label] = (parsed, number)
+    if "elevation" not in values and datums:
+        values |= _datum_elevation(path, datums, values.get("depth_reference"))
     return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+
+
+def _datum(words: list[str]) -> str | None:
+    """The datum whose elevation a title key names (``KB Elevation``, ``RKB``), if any."""
+    return DATUM_WORDS.get("".join(w for w in words if w not in ELEVATION_WORDS))
+
+
+def _key_unit(path: Path, key: str, field: str, line: int) -> str | None:
+    """The unit in brackets after a title key (``Elevation (ft)``): None without brackets;
+    ``""``, with a warning, for brackets holding no unit of the field (``Latitude (WGS84)``)."""
+    stated = _BRACKETS.search(key)
+    if stated is None:
+        return None
+    unit, quantity = stated[1].strip(), UNIT_FIELDS.get(field)
+    if quantity is not None and is_unit_of(unit, quantity):
+        return unit
+    warn_input(path, f"{key!r} not read: {unit!r} is no unit of {field}", line)
+    return ""
+
+
+def _datum_elevation(
+    path: Path, datums: dict[str, tuple[Any, int]], reference: tuple[Any, int] | None
+) -> dict[str, tuple[Any, int]]:
+    """The elevation among the datums' (and the depth reference the one given implies): the
+    depth reference's, else the only one; none, with a warning, when neither says which."""
+    if reference is None and len(datums) == 1:
+        ((datum, entry),) = datums.items()
+        return {"elevation": entry, "depth_reference": (datum, entry[1])}
+    wanted = None if reference is None else DATUM_WORDS.get("".join(_words(reference[0])))
+    if wanted in datums:
+        return {"elevation": datums[wanted]}
+    given = ", ".join(f"{d} (line {line})" for d, (_, line) in datums.items())
+    warn_input(
+        path,
+        f"elevation left out: the elevations of {given} are not of the depth reference "
+        + (
+            "(none is given: add e.g. 'Depth reference: RKB')"
+            if reference is None
+            else f"{reference[0]!r} (line {reference[1]})"
+        ),
+        max(line for _, line in datums.values()),
+    )
+    return {}
 
 
 def _key_value(line: str, delimiter: str) -> tuple[str, str] | None:
@@ -379,12 +455,18 @@ def _north_word(path: Path, value: str, line: int) -> NorthReference:
 
 
 def _well_value(
-    path: Path, field: str, value: str, line: int, lengths: dict[str, str] | None
+    path: Path,
+    field: str,
+    value: str,
+    line: int,
+    lengths: dict[str, str] | None,
+    unit: str | None = None,
 ) -> Any:
-    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS
-    (without one: :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m), None
-    for a null marker (:mod:`pipeline.io.nulls`, in its unit); the survey date is read as a
-    LAS DATE is (:func:`pipeline.io.dates.header_date`)."""
+    """The validated value of one well field; a number may carry a unit for UNIT_FIELDS,
+    after it or ``unit`` (the key's, in brackets), which must agree (without one:
+    :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m), None for a null
+    marker (:mod:`pipeline.io.nulls`, in its unit); the survey date is read as a LAS DATE is
+    (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
@@ -392,8 +474,7 @@ def _well_value(
         if quantity and number and is_null_marker(float(number[1]), angle=quantity == "angle"):
             return None
         if quantity and number:
-            unit = number[2] or (_file_length(value, lengths) if quantity == "length" else None)
-            scale = conversion_factor(unit, quantity) if unit else 1.0
+            scale = _scale(field, value, quantity, [u for u in (unit, number[2]) if u], lengths)
             parsed = float(number[1]) * scale
         elif field == "survey_date":
             parsed = header_date(value)
@@ -403,15 +484,37 @@ def _well_value(
         raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None
 
 
-def _file_length(value: str, lengths: dict[str, str] | None) -> str | None:
-    """The unit of a length title value given without one: the file's one length unit
-    (None for a ``well.<field>`` key: m). Raises :class:`UnitError` when it has none or
-    several."""
+def _scale(
+    field: str, value: str, quantity: str, stated: list[str], lengths: dict[str, str] | None
+) -> float:
+    """Factor to the field's unit from the ``stated`` units of its value (the key's and the
+    value's, which must agree), else from the file's (:func:`_file_length`)."""
+    factors = {conversion_factor(unit, quantity) for unit in stated}
+    if len(factors) > 1:
+        raise UnitError(f"the key says {stated[0]!r}, the value {stated[1]!r}")
+    if factors:
+        return factors.pop()
+    unit = _file_length(field, value, lengths) if quantity == "length" else None
+    return conversion_factor(unit, quantity) if unit else 1.0
+
+
+def _file_length(field: str, value: str, lengths: dict[str, str] | None) -> str | None:
+    """The unit of a length title value given without one: the file's one length unit,
+    for a map coordinate only metres (:data:`MAP_FIELDS`); None for a ``well.<field>`` key
+    (m). Raises :class:`UnitError` when it has none or several, or feet for a map
+    coordinate."""
     if lengths is None:
         return None
     factors = {conversion_factor(unit, "length") for unit in lengths.values()}
+    unit = next(iter(lengths.values()), None)
+    if len(factors) == 1 and (factors == {1.0} or field not in MAP_FIELDS):
+        return unit
     if len(factors) == 1:
-        return next(iter(lengths.values()))
+        raise UnitError(
+            f"no unit, and a map coordinate is in its CRS's unit, which lengths in {unit} do "
+            f"not tell (US survey or international feet): write it (e.g. '{value} usft' or "
+            f"'{value} ft')"
+        )
     found = ", ".join(f"{text!r} in {unit}" for text, unit in lengths.items())
     raise UnitError(
         f"no unit, and the file's length columns ({found or 'none with a unit'}) do not "

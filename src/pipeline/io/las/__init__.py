@@ -175,7 +175,7 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
         north, file_north = azimuth_north(path, header.curves[chosen["azi"]], declared, opts)
     rows = _Rows(path, kind, source, header, chosen, factors, north, opts)
     rows.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
-    return rows, well_metadata(path, header, file_north)
+    return rows, well_metadata(path, header, file_north, depth_unit=opts.units.get("md"))
 
 
 _TITLES = (b"~V", b"~W", b"~C", b"~A")

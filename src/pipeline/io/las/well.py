@@ -7,8 +7,9 @@ LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes a
 :mod:`pipeline.io.dates`, as a CSV title's date); elevation
 from EREF, else the item of the depth reference (DREF, LMF or DMF: KB→EKB, DF→EDF, GL→EGL,
 else ELEV), else the only one of EKB/EDF/EGL/ELEV (several and no reference item: an
-error), in its unit, else in the file's depth unit, as a CSV title's (STRT, STOP, STEP and
-the index curve agreeing on one; else an error); DECL (MAGDEC, DECLINATION) and GRIDCONV
+error), in its unit, else in the file's depth unit, as a CSV title's: md's in the reader
+option ``units`` (which says what the depths are in), else that of STRT, STOP, STEP and the
+index curve where they agree on one (else an error); DECL (MAGDEC, DECLINATION) and GRIDCONV
 (CONV, CONVERGENCE), the site's, and DECLUSED and GRIDUSED, the corrections already applied
 to the azimuths, in degrees or the item's angle unit (non-zero ones the file's north cannot
 carry are refused, as in WITSML: a GRIDUSED on true- or magnetic-north azimuths, a DECLUSED
@@ -78,11 +79,17 @@ _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
 
 
 def well_metadata(
-    path: Path, header: Header, north: NorthReference | None, *, strict: bool = True
+    path: Path,
+    header: Header,
+    north: NorthReference | None,
+    *,
+    strict: bool = True,
+    depth_unit: str | None = None,
 ) -> WellMetadata:
     """Well metadata from ~Well, then ~Parameter items; ``north`` is the file's (a
-    correction applied that its azimuths cannot carry is refused). Not ``strict`` (a log),
-    an item that cannot be read is left out with a warning."""
+    correction applied that its azimuths cannot carry is refused); ``depth_unit``: the
+    depths' unit an option states (else the file's). Not ``strict`` (a log), an item that
+    cannot be read is left out with a warning."""
     found: dict[str, tuple[Any, Item]] = {}
 
     def take(name: str, read: Callable[[], tuple[Any, Item] | None]) -> None:
@@ -140,7 +147,7 @@ def well_metadata(
             unread.line,
         )
     try:
-        elevation, reference = _elevation(path, header)
+        elevation, reference = _elevation(path, header, depth_unit)
     except InputFileError as exc:
         if strict:
             raise
@@ -231,9 +238,10 @@ def _date(path: Path, item: Item) -> dt.date:
 
 
 def _elevation(
-    path: Path, header: Header
+    path: Path, header: Header, depth_unit: str | None
 ) -> tuple[tuple[float, Item] | None, tuple[str, Item] | None]:
-    """(elevation m, its item) and (depth reference, its item), each when known."""
+    """(elevation m, its item) and (depth reference, its item), each when known; an item
+    without a unit is in ``depth_unit`` if given, else the file's depth unit."""
     reference = header.find(path, *REFERENCE_ITEMS)
     present = {m: i for m in ELEVATION_ITEMS if (i := header.find(path, m)) is not None}
     item = present.get("EREF")
@@ -258,7 +266,7 @@ def _elevation(
     if item is None or _null(header, item, angle=False):
         return None, depth
     try:
-        unit = item.unit or _depth_unit(header)
+        unit = item.unit or depth_unit or _depth_unit(header)
         if not unit:
             raise UnitError(
                 "no unit, and the depths (STRT, STOP, STEP, the index curve) give none or "
