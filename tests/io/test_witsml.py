@@ -19,8 +19,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from komle.bindings.v1411.write import witsml as wml
 
+import pipeline as gp
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileError, InputFileWarning
 from pipeline.io import witsml as witsml_plugin
 from pipeline.io.witsml.terms import survey_tool
 from pipeline.runner import RunResult
@@ -546,3 +547,19 @@ def test_mutated_files_raise_typed_errors_or_read_what_expat_reads(
         return
     root = ET.fromstring(data)  # an independent parser accepts what we read
     assert table.num_rows == len(root.findall(f".//{{{NS}}}trajectoryStation")) >= 1
+
+
+def test_tvd_from_another_datum_than_md_is_left_out_with_a_warning(tmp_path: Path):
+    # an operator's store: MDs from the KB (25 m above MSL), TVDs below sea level (TVDSS)
+    stations = [
+        f'    <trajectoryStation uid="s{md}"><md uom="m" datum="KB">{md}</md>'
+        f'<tvd uom="m" datum="{datum}">{tvd}</tvd><incl uom="dega">0</incl>'
+        '<azi uom="dega">0</azi></trajectoryStation>'
+        for md, tvd, datum in ((0, -25, "MSL"), (100, 75, "MSL"), (200, 200, "KB"))
+    ]
+    path = put(tmp_path, document(stations, "<aziRef>true north</aziRef>"))
+    with pytest.warns(InputFileWarning, match=r"t\.xml:\d+: <tvd> of 2 station\(s\) left out"):
+        table = gp.read(path, kind="stations")
+    assert table["md"].tolist() == [0.0, 100.0, 200.0]
+    assert table["tvd"].isna().tolist() == [True, True, False]
+    assert table["tvd"].iloc[2] == 200.0  # the station whose datums agree keeps its TVD

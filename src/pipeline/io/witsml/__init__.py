@@ -38,7 +38,9 @@ validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings
 
 The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one
 named by the option ``trajectory``) as stations in canonical units — md, inc, azi required
-per station; tvd, north, east, dls kept when present; ``tool_type`` and ``station_type``
+per station; tvd, north, east, dls kept when present (a ``tvd`` whose ``datum`` attribute
+names another datum than its ``md``'s, e.g. a TVDSS beside depths from the KB, is left
+out with a warning: the trajectory gives no offset between them); ``tool_type`` and ``station_type``
 (``typeSurveyTool``, ``typeTrajStation``; ``unknown`` is none) — sorted by MD, with a
 ``survey`` column (the names) when there are several and the ``source_line`` of each
 station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A null

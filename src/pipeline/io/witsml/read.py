@@ -22,7 +22,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
@@ -201,6 +201,7 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
         rows = [_station(path, node, opts) for node in nodes]
+        _tvd_of_md_datum(path, nodes, rows)
         rows.sort(key=lambda row: row["md"])
         for row in rows:
             for name in data:
@@ -323,6 +324,28 @@ def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
         text = _text(node, element)
         row[column] = text if text != "unknown" else None
     return row
+
+
+def _tvd_of_md_datum(path: Path, nodes: list[Node], rows: list[dict[str, Any]]) -> None:
+    """Leave out, with one warning, the tvd of the stations whose ``tvd`` names another
+    ``datum`` than their ``md`` (a TVDSS, below sea level, beside depths from the KB): a
+    trajectory does not say how far apart the datums are, and stations' TVD is below the
+    depths' reference."""
+    other: list[tuple[int, str, str]] = []
+    for node, row in zip(nodes, rows, strict=True):
+        elements = (node.get("md"), node.get("tvd"))
+        md, tvd = (e.attrs.get("datum", "") if e is not None else "" for e in elements)
+        if row.get("tvd") is not None and md and tvd and md != tvd:
+            other.append((node.line, md, tvd))
+            row.pop("tvd")
+    if other:
+        line, md_datum, tvd_datum = other[0]
+        warn_input(
+            path,
+            f"<tvd> of {len(other)} station(s) left out, the first: its datum {tvd_datum!r} is "
+            f"not that of <md>, {md_datum!r} (the trajectory gives no offset between them)",
+            line,
+        )
 
 
 def _vertical(inc: float | None) -> bool:
