@@ -48,6 +48,18 @@ NORTH_WORDS: dict[str, NorthReference] = {
     "mn": "magnetic",
 }
 """Words naming a north reference in file headers (``Azimuth Grid``, ``AZI (MN)``, NREF)."""
+DATUM_WORDS = {
+    "kb": "KB",
+    "rkb": "KB",
+    "kellybushing": "KB",
+    "df": "DF",
+    "rdf": "DF",
+    "derrickfloor": "DF",
+    "gl": "GL",
+    "groundlevel": "GL",
+}
+"""Words (lower case, run together) naming a depth datum in file headers (``RKB``, ``Kelly
+Bushing``, LAS DREF), and the datum they name: KB, DF or GL."""
 
 
 def _angle(description: str) -> Any:

@@ -22,7 +22,7 @@ from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.io.nulls import is_null_marker
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
-from pipeline.well import NORTH_WORDS, NorthReference, WellMetadata
+from pipeline.well import DATUM_WORDS, NORTH_WORDS, NorthReference, WellMetadata
 
 DELIMITERS = (",", ";", "\t", "|")
 _NUMBERISH = re.compile(r"^[+-]?([0-9]+([.,][0-9]*)?|[.,][0-9]+)([eE][+-]?[0-9]+)?$")
@@ -65,18 +65,6 @@ MAP_FIELDS = ("easting", "northing")
 """Map coordinates: in their CRS's unit, which a file's lengths in feet do not tell (US survey
 or international feet, 2 ppm apart: 4 ft at an easting of 2,000,000 ft), so one without a
 unit beside lengths in feet is refused."""
-DATUM_WORDS = {
-    "kb": "KB",
-    "rkb": "KB",
-    "kellybushing": "KB",
-    "df": "DF",
-    "rdf": "DF",
-    "derrickfloor": "DF",
-    "gl": "GL",
-    "groundlevel": "GL",
-}
-"""Words naming a datum in a title key (``KB Elevation``, ``RKB``, ``Ground Level``) or a
-depth reference (``RKB``), and the datum they name."""
 ELEVATION_WORDS = ("elevation", "elev")
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 

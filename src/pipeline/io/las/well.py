@@ -37,7 +37,7 @@ from pipeline.io.dates import header_date
 from pipeline.io.las.header import NUMBER, Header, Item, header_number
 from pipeline.io.nulls import is_null_marker
 from pipeline.units import conversion_factor
-from pipeline.well import NorthReference, WellMetadata, contradicts_north
+from pipeline.well import DATUM_WORDS, NorthReference, WellMetadata, contradicts_north
 
 TEXT_ITEMS: dict[str, tuple[str, ...]] = {
     "well": ("WELL",),
@@ -72,7 +72,6 @@ ELEVATION_ITEMS: dict[str, str | None] = {
     "ELEV": None,
 }
 """Elevation items and the depth reference each implies."""
-REFERENCE_ELEVATION = {"KB": "EKB", "RKB": "EKB", "DF": "EDF", "RDF": "EDF", "GL": "EGL"}
 
 _DMS_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 _DMS_MARKS = re.compile(r"[°º'′\"″:\s]|DEG")
@@ -246,9 +245,9 @@ def _elevation(
     present = {m: i for m in ELEVATION_ITEMS if (i := header.find(path, m)) is not None}
     item = present.get("EREF")
     if item is None and reference is not None:
-        item = present.get(
-            REFERENCE_ELEVATION.get(reference.value.upper(), ""), present.get("ELEV")
-        )
+        datum = DATUM_WORDS.get("".join(reference.value.casefold().split()))
+        of_datum = (i for m, i in present.items() if datum and ELEVATION_ITEMS[m] == datum)
+        item = next(of_datum, present.get("ELEV"))
     elif item is None and len(present) > 1:
         raise InputFileError(
             path,
