@@ -35,6 +35,7 @@ import pyarrow.parquet as pq
 from pipeline import jsontext
 from pipeline.anticollision.rule import LEVELS
 from pipeline.anticollision.tables import Clearance, rule_of
+from pipeline.batch.publish import of_ledger
 from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
@@ -274,7 +275,7 @@ def well_figures(
         ledger = marker.get("ledger_id")
         if marked != run_id:
             problems.append(f"the outputs published are of run {marked}, not run {run_id}")
-        elif ledger_id is not None and ledger not in (None, ledger_id):
+        elif ledger_id is not None and not of_ledger(ledger, ledger_id):
             problems.append(
                 f"the outputs published are of run {marked} of another ledger ({ledger}), "
                 f"not this ledger's run {run_id}"

@@ -48,7 +48,13 @@ class Publication:
         """Whether this is run ``run_id`` of ledger ``ledger_id``: run ids are each ledger's
         own, so another ledger publishing into the same OUT has its own run of that id; a
         ``batch.json`` naming no ledger (an earlier version's) is known by its run id alone."""
-        return self.run_id == run_id and self.ledger_id in (None, ledger_id)
+        return self.run_id == run_id and of_ledger(self.ledger_id, ledger_id)
+
+
+def of_ledger(named: object, ledger_id: str | None) -> bool:
+    """Whether a ``batch.json`` naming ledger ``named`` holds a run of ledger ``ledger_id``:
+    one naming none (an earlier version's) is taken as the ledger's."""
+    return named is None or named == ledger_id
 
 
 @dataclass(frozen=True)
