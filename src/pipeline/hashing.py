@@ -1,5 +1,5 @@
-"""SHA-256 and bytes of a regular file, refusing devices, FIFOs and sockets before reading
-them."""
+"""SHA-256, bytes and stat key of a regular file, refusing devices, FIFOs and sockets before
+reading them."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import os
 import stat
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 
 def sha256_file(path: Path) -> str:
@@ -40,6 +41,44 @@ def open_regular(path: Path) -> Iterator[io.BufferedReader]:
     with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
         _require_regular(path, os.fstat(fh.fileno()).st_mode)
         yield fh
+
+
+class FileKey(NamedTuple):
+    """A regular file as ``stat`` sees it (times in ns since the epoch; size in bytes). It
+    stands for the file's content while it holds: writing a file moves its ``ctime``, which
+    no program can set back."""
+
+    dev: int
+    ino: int
+    size: int
+    mtime_ns: int
+    ctime_ns: int
+
+
+def file_key(path: Path | str) -> FileKey:
+    """The key of a regular file; ``OSError`` if it cannot be stat'ed or is not a regular
+    file (a device, FIFO, socket or directory: "not a regular file (a FIFO)")."""
+    found = os.stat(path)
+    if not stat.S_ISREG(found.st_mode):
+        kind = file_kind(found.st_mode)
+        raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
+    # opened (nothing read) and stat'ed through the descriptor: an NFS client checks a file's
+    # attributes with the server on open (close-to-open), where a plain stat may answer from
+    # its attribute cache for up to a minute and miss another machine's write
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        found = os.fstat(fd)
+    finally:
+        os.close(fd)
+    return FileKey(found.st_dev, found.st_ino, found.st_size, found.st_mtime_ns, found.st_ctime_ns)
+
+
+def key_after(path: Path | str) -> FileKey | None:
+    """The key of ``path`` now; None where it has none."""
+    try:
+        return file_key(path)
+    except OSError:
+        return None
 
 
 _KINDS = {

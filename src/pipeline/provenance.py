@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pipeline.hashing import FileKey, key_after
+
 
 @dataclass(frozen=True)
 class InputFile:
@@ -66,6 +68,18 @@ class Provenance:
     read: dict[ParameterFile, None] = field(default_factory=dict)
     """the files the stages so far read through parameters, in order (an ordered set, filled
     as the run goes on: :meth:`~pipeline.registry.StageContext.record_file`)"""
+    seen: dict[str, FileKey | None] = field(default_factory=dict)
+    """each file the run hashed, or was given the hash of (absolute path) → its stat key
+    before (None: it had none); :meth:`changed` compares them with the files as they are"""
     tool_models: Mapping[str, Path] = field(default_factory=dict)
     """the tool-model files the run's plugins registered, by model name (what a stage's
     ``model:`` may name besides the shipped models; :meth:`Registry.tool_model_files`)"""
+
+    def see(self, path: Path) -> None:
+        """Note ``path``'s stat key, before the run hashes it (the first time only)."""
+        self.seen.setdefault(str(path.absolute()), key_after(path))
+
+    def changed(self) -> list[str]:
+        """The files the run hashed that have changed since (their stat keys differ): their
+        recorded SHA-256 may not be that of the bytes the run read."""
+        return [path for path, key in self.seen.items() if key_after(path) != key]

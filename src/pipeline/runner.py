@@ -34,7 +34,7 @@ from pipeline.errors import (
     file_errors,
 )
 from pipeline.graph import Plan, PlannedStage
-from pipeline.hashing import regular_bytes, sha256_file
+from pipeline.hashing import key_after, regular_bytes, sha256_file
 from pipeline.inputfiles import parameter_paths
 from pipeline.manifest import MANIFEST, StageRecord, acceptance, provenance_of, run_manifest
 from pipeline.ports import (
@@ -65,6 +65,18 @@ STAGING_PREFIX = ".gyropipe-staging-"
 
 class RunInputError(GyropipeError):
     """The files given for a run do not match the pipeline's declared inputs."""
+
+
+class InputChangedError(GyropipeError):
+    """A file the run read changed while it ran: ``run.json`` could not say which bytes the
+    outputs come from, so nothing is published."""
+
+    def __init__(self, paths: list[str]) -> None:
+        self.paths = paths
+        super().__init__(
+            f"changed while the run read it: {', '.join(paths)}; nothing was published "
+            "(run it again once the file is complete)"
+        )
 
 
 @dataclass
@@ -100,6 +112,7 @@ class _Context:
     """where the staged files will be published"""
 
     def record_file(self, path: Path, param: str, what: str, sha256: str | None = None) -> str:
+        self.provenance.see(path)
         digest = sha256 or sha256_file(path)
         entry = ParameterFile(str(path.absolute()), digest, self.stage_id, param, what)
         self.provenance.read.setdefault(entry)
@@ -231,7 +244,9 @@ def run_plan(
     from_files = WellMetadata()
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
+    seen = {str(p.absolute()): key_after(p) for p in files.values() if isinstance(p, Path)}
     provenance = provenance_of(plan, registry, files, start_time(), known_sha256 or {})
+    provenance.seen.update(seen)  # each input's key before it was hashed
     t_run = time.perf_counter()
     with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []
@@ -275,6 +290,7 @@ def run_plan(
         if out_dir is None:
             result = Tables(ports)
             settled(lambda: [result[key] for key in result])  # the API returns tables
+            _check_unchanged(provenance)
             manifest = run_manifest(provenance, current, records, [], time.perf_counter() - t_run)
             return RunResult(None, manifest, result, current, [])
         persisted = settled(lambda: _persist(plan, registry, ports, current, staging, out_dir))
@@ -288,6 +304,7 @@ def run_plan(
         if clashes:
             raise RunInputError(f"several outputs would be written as {sorted(clashes)}")
         fsync_files(written, lambda path: out_dir / path.name)
+        _check_unchanged(provenance)
         final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = run_manifest(
@@ -298,6 +315,13 @@ def run_plan(
         if publish_as is None:
             replace_dir(staging, out_dir)
     return RunResult(out_dir, manifest, Tables(ports), current, final)
+
+
+def _check_unchanged(provenance: Provenance) -> None:
+    """Raise :class:`InputChangedError` if a file the run hashed has changed since."""
+    changed = provenance.changed()
+    if changed:
+        raise InputChangedError(changed)
 
 
 def _stage_inputs(

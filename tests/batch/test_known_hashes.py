@@ -21,6 +21,7 @@ from batch_support import InProcess, make_wells, summary
 from pipeline.batch import filestate
 from pipeline.batch.worker import WellOutcome, WellTask, run_well
 from pipeline.executing import ExecutorDef
+from pipeline.hashing import file_key
 from pipeline.plugins import shared_registry
 from tests_support import gyropipe_cli
 
@@ -130,7 +131,7 @@ def test_a_fresh_input_is_hashed_again_and_a_task_s_stale_key_is_not_trusted(
     assert hashed.tasks[-1].known == {}
 
     # a task whose key is not the file's: its hash is not taken
-    key = filestate.file_key(a)
+    key = file_key(a)
     stale = key._replace(ctime_ns=key.ctime_ns - 1)
     task = dataclasses.replace(
         hashed.tasks[-1], run_id=hashed.tasks[-1].run_id + 1, known={str(a): (stale, "0" * 64)}
@@ -161,7 +162,7 @@ def test_a_failed_run_hashes_its_input_once_and_takes_a_known_hash_unread(
     # failed before anything ran (a stranger's file in OUT/A): the task's settled hash for
     # the file's key is taken as is, unread
     (out / "A" / "notes.txt").write_text("mine")
-    known = {str(a): (filestate.file_key(a), "0" * 64)}
+    known = {str(a): (file_key(a), "0" * 64)}
     hashed.paths.clear()
     outcome = run_well(dataclasses.replace(last, run_id=last.run_id + 2, known=known), hashed.ref)
     assert outcome.status == "failed" and "notes.txt" in outcome.error

@@ -18,15 +18,17 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from pydantic import BaseModel
 
 import pipeline.runner as runner
 from pipeline.contracts import implies
 from pipeline.errors import ContractViolation, StageError
 from pipeline.graph import PlannedStage, build_plan
 from pipeline.hashing import sha256_file
+from pipeline.inputfiles import InputPath
 from pipeline.plugins import load_registry
 from pipeline.registry import StageContext, StageDef
-from pipeline.runner import RunInputError, run_plan
+from pipeline.runner import InputChangedError, RunInputError, run_plan
 from pipeline.spec import load_spec
 from pipeline.stages.exports import QcTable
 from pipeline.survey.mincurve import minimum_curvature
@@ -147,6 +149,7 @@ HASH_FAULTS = """
 import resource, sys
 from pathlib import Path
 from pipeline.hashing import sha256_file
+from pipeline.inputfiles import InputPath
 from pipeline.streams import use_returning_memory_pool
 
 use_returning_memory_pool()
@@ -491,3 +494,69 @@ def test_a_table_is_checked_once_per_contract_whatever_its_consumers(
     assert implies(CheckResults, QcTable)
     assert [name for name, table in checks if table == results] == ["CheckResults"]
     assert (tmp_path / "out" / "summary_b.json").is_file()
+
+
+class NoteParams(BaseModel):
+    note: InputPath
+    """a file the stage reads; the stage then appends to it (or to ``also``), as another
+    program writing it while the run goes on would"""
+    also: Path | None = None
+
+
+def test_a_file_changed_while_the_run_read_it_publishes_nothing(
+    write_yaml, registry, add_stage, tmp_path: Path
+):
+    """A parameter file or an input written to between its hash and the end of the run:
+    ``run.json`` could not say which bytes the outputs come from, so the run fails naming
+    the file, and the previous run in ``out_dir`` stays whole."""
+
+    def edits(inputs: Mapping[str, pa.Table], params: NoteParams, ctx: StageContext):
+        params.note.read_bytes()
+        with open(params.also or params.note, "ab") as fh:
+            fh.write(b"\n")
+        return {"stations": inputs["stations"]}
+
+    add_stage(
+        StageDef(
+            "tests.edits",
+            edits,
+            "reads a file, then changes it or another",
+            inputs={"stations": Stations},
+            outputs={"stations": Stations},
+            params=NoteParams,
+        )
+    )
+    src = tmp_path / "st.parquet"
+    pq.write_table(stations_table(), src)
+    note = tmp_path / "note.txt"
+    note.write_text("a profile\n")
+    untouched = tmp_path / "other.txt"
+    untouched.write_text("x")
+    out_dir = tmp_path / "out"
+
+    def run(also: Path | None) -> None:
+        plan = make_plan(
+            write_yaml,
+            registry,
+            f"""
+          - id: read
+            uses: read_stations
+          - id: edit
+            uses: tests.edits
+            inputs: {{stations: read}}
+            with: {{note: {note}, also: {also or "null"}}}
+            persist: true
+        """,
+        )
+        run_plan(plan, registry, inputs={"stations": src}, out_dir=out_dir)
+
+    run(untouched)  # another file changed: not one the run read, published
+    before = {p.name: p.read_bytes() for p in out_dir.iterdir()}
+    manifest = json.loads(before["run.json"])
+    assert [p["path"] for p in manifest["parameter_inputs"]] == [str(note)]
+    for changed, also in [(note, None), (src, src)]:
+        with pytest.raises(InputChangedError) as info:
+            run(also)
+        assert info.value.paths == [str(changed)]
+        assert f"changed while the run read it: {changed};" in str(info.value)
+        assert {p.name: p.read_bytes() for p in out_dir.iterdir()} == before

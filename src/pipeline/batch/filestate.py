@@ -1,16 +1,16 @@
 """What the batch process knows of a file without reading it: its stat key, and the SHA-256
 the ledger remembers for that key.
 
-A file's :class:`FileKey` — device, inode, size, modification and status-change times in
-nanoseconds — stands for its content while it holds: writing a file moves its ``ctime``,
-which no program can set back. The batch process never reads an input: it stats it (O(1)),
-and a worker hashes it; the ledger's ``file_hashes`` table (:class:`HashCache`) keeps the
-hash a worker found for the key the batch process saw, so the next batch knows the hash of
-an untouched file from its stat alone. Hard links share an inode, hence one entry. The key
-is read through a descriptor opened for it (nothing is read): on NFS, opening a file makes
-the client check its attributes with the server (close-to-open consistency), where a plain
-``stat`` may answer from the attribute cache (``acregmax``, 60 s by default) and miss a
-write made on another machine meanwhile.
+A file's :class:`~pipeline.hashing.FileKey` — device, inode, size, modification and
+status-change times in nanoseconds — stands for its content while it holds: writing a file
+moves its ``ctime``, which no program can set back. The batch process never reads an input:
+it stats it (O(1)), and a worker hashes it; the ledger's ``file_hashes`` table
+(:class:`HashCache`) keeps the hash a worker found for the key the batch process saw, so the
+next batch knows the hash of an untouched file from its stat alone. Hard links share an
+inode, hence one entry. The key is read through a descriptor opened for it (nothing is
+read): on NFS, opening a file makes the client check its attributes with the server
+(close-to-open consistency), where a plain ``stat`` may answer from the attribute cache
+(``acregmax``, 60 s by default) and miss a write made on another machine meanwhile.
 
 A hash is remembered only when the batch process saw the same key before the worker hashed
 the file and after its result came back, and the file's last change lay at least
@@ -21,18 +21,14 @@ when they are unknown or differ: the file is then hashed again, in a worker.
 
 from __future__ import annotations
 
-import errno
-import os
 import re
 import sqlite3
-import stat
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
-from pipeline.hashing import file_kind
+from pipeline.hashing import FileKey, file_key
 
 SETTLED_S = 2.0
 """a file whose ``ctime`` is younger than this when first seen is hashed again next time"""
@@ -51,16 +47,6 @@ CREATE TABLE IF NOT EXISTS file_hashes (
     PRIMARY KEY (dev, ino)
 )
 """
-
-
-class FileKey(NamedTuple):
-    """A regular file as ``stat`` sees it (times in ns since the epoch; size in bytes)."""
-
-    dev: int
-    ino: int
-    size: int
-    mtime_ns: int
-    ctime_ns: int
 
 
 @dataclass(frozen=True)
@@ -85,24 +71,6 @@ class Seen:
         )
 
 
-def file_key(path: Path | str) -> FileKey:
-    """The key of a regular file; ``OSError`` if it cannot be stat'ed or is not a regular
-    file (a device, FIFO, socket or directory: "not a regular file (a FIFO)")."""
-    found = os.stat(path)
-    if not stat.S_ISREG(found.st_mode):
-        kind = file_kind(found.st_mode)
-        raise OSError(errno.EINVAL, f"not a regular file ({kind})", str(path))
-    # opened (nothing read) and stat'ed through the descriptor: an NFS client checks a file's
-    # attributes with the server on open (close-to-open), where a plain stat may answer from
-    # its attribute cache for up to a minute and miss another machine's write
-    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
-    try:
-        found = os.fstat(fd)
-    finally:
-        os.close(fd)
-    return FileKey(found.st_dev, found.st_ino, found.st_size, found.st_mtime_ns, found.st_ctime_ns)
-
-
 def look(path: Path | str) -> tuple[Seen, OSError | None]:
     """``path`` as seen now, and why it cannot be read if it cannot (from its stat alone)."""
     now = time.time()
@@ -110,14 +78,6 @@ def look(path: Path | str) -> tuple[Seen, OSError | None]:
         return Seen(str(path), file_key(path), now), None
     except OSError as exc:
         return Seen(str(path), None, now), exc
-
-
-def key_after(path: str) -> FileKey | None:
-    """The key of ``path`` now; None where it has none."""
-    try:
-        return file_key(path)
-    except OSError:
-        return None
 
 
 class HashCache:

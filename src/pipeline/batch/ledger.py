@@ -54,9 +54,10 @@ from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, TypeAlias, TypeVar
 
 from pipeline.errors import file_errors
+from pipeline.hashing import FileKey
 from pipeline.processes import process_alive
 
-from .filestate import FileKey, HashCache
+from .filestate import HashCache
 from .fingerprint import Fingerprint, completed_json
 from .ledger_file import BUSY_TIMEOUT_MS, GONE, check, make_ledger, migrate
 from .ledger_file import LedgerError as LedgerError  # where it has always been imported from

@@ -20,12 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.atomic import TRASH_SUFFIX, discard, write_synced
-from pipeline.hashing import regular_bytes
+from pipeline.hashing import file_key, regular_bytes
 from pipeline.manifest import MANIFEST
 from pipeline.processes import owner_alive
 from pipeline.runner import remove_stale_staging
-
-from .filestate import file_key
 
 WORK_DIR = ".gyropipe-batch"
 MARKER = "batch.json"
@@ -136,7 +134,7 @@ def read_published(well_dir: Path) -> PublishedRun | None:
 def output_on_disk(well_dir: Path, entry: Any) -> bool:
     """Whether an output ``run.json`` lists (``{"file", "bytes"}``) is a regular file of
     that size directly in ``well_dir``, its status read through a descriptor
-    (:func:`~pipeline.batch.filestate.file_key`: fresh on NFS too)."""
+    (:func:`~pipeline.hashing.file_key`: fresh on NFS too)."""
     try:
         path = well_dir / entry["file"]
         return bool(path.parent == well_dir and file_key(path).size == entry["bytes"])

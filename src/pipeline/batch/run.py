@@ -41,12 +41,13 @@ from typing import Any
 from pipeline.errors import file_errors
 from pipeline.executing import ExecutorSetup, PipelineRef
 from pipeline.graph import Plan
+from pipeline.hashing import FileKey, key_after
 from pipeline.manifest import MANIFEST, REJECTED
 from pipeline.registry import Registry
 from pipeline.version import __version__
 
 from .executors import Executor, open_executor
-from .filestate import FileKey, Seen, key_after, look
+from .filestate import Seen, look
 from .fingerprint import PENDING, UNREADABLE, Fingerprint, PlanIdentity
 from .fleet import WellFigures, figures_json, figures_of_json
 from .jobs import LEDGER, LEDGER_SIDECARS, SUMMARY_FILES, BatchConfigError, WellJob

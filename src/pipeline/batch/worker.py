@@ -33,6 +33,7 @@ from pipeline.atomic import replace_dir
 from pipeline.errors import GyropipeError
 from pipeline.executing import PipelineRef
 from pipeline.graph import Plan, build_plan
+from pipeline.hashing import FileKey, key_after
 from pipeline.io.threads import set_reader_threads
 from pipeline.lazy_pandas import defer_pandas
 from pipeline.plugins import shared_registry
@@ -42,7 +43,6 @@ from pipeline.runner import RunResult, check_out_dir, run_plan
 from pipeline.streams import use_returning_memory_pool
 from pipeline.well import WellMetadata
 
-from .filestate import FileKey, key_after
 from .fingerprint import UNREADABLE, completed_json, hashed
 from .fleet import WellFigures, figures_record, run_figures, well_figures
 from .publish import MARKER, Publication, read_published, staging_dir, write_marker
