@@ -95,7 +95,15 @@ class WellMetadata(BaseModel):
     depth_reference: str | None = Field(
         None, description="depth reference point (RKB, DF, GL, MSL…)"
     )
-    survey_date: dt.date | None = Field(None, description="date of the survey run")
+    survey_date: dt.date | None = Field(
+        None, description="date of the survey run (of several trajectories: the first's)"
+    )
+    survey_date_last: dt.date | None = Field(
+        None,
+        description="the day the last of the survey's trajectories began, when they began on "
+        "several days (survey_date: the first): no one date's geomagnetic field is every "
+        "station's",
+    )
     tool_type: str | None = Field(None, description="survey tool type")
     tool_preset: str | None = Field(
         None,
@@ -139,6 +147,27 @@ class WellMetadata(BaseModel):
         if reference == "grid" and self.grid_convergence_applied is not None:
             return self.grid_convergence_applied
         return self.grid_convergence
+
+    def model_date(self, ways: str) -> dt.date | None:
+        """The survey date at which a geomagnetic model gives every station's field and
+        declination. Raises ``ValueError`` for a survey of trajectories begun on several
+        days (``survey_date_last``), naming ``ways``: how to give what the model would."""
+        if self.survey_date_last is not None:
+            raise ValueError(
+                f"the survey's trajectories began on several days ({self.survey_dates()}): "
+                f"one date's geomagnetic field and declination are not every station's; "
+                f"{ways}, or read one trajectory at a time (the witsml reader's option "
+                "trajectory)"
+            )
+        return self.survey_date
+
+    def survey_dates(self) -> str | None:
+        """The survey date as a report states it: ``2026-03-02``, or for trajectories
+        begun on several days ``2021-06-14 to 2026-03-02 (several trajectories)``."""
+        if self.survey_date_last is None:
+            return self.survey_date.isoformat() if self.survey_date else None
+        first = self.survey_date.isoformat() if self.survey_date else "?"
+        return f"{first} to {self.survey_date_last.isoformat()} (several trajectories)"
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

@@ -8,7 +8,9 @@ them (:mod:`vendor_exports`):
   pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
   was applied; a LAS ``GRIDCORR`` (a vendor's correction, of no agreed sign) is neither γ;
 * several WITSML trajectories are dated by the earliest ``dTimTrajStart``; magnetic ones
-  of different days with no declination stated are refused (each needs its own day's);
+  of different days with no declination stated are refused (each needs its own day's), and
+  of other ones a declination or field at one date (a conversion to magnetic north, an MWD
+  model) is refused; reports and exports state the range;
 * ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
   is a located error, or left out when the user asks;
 * implausible angles and radians declared degrees (or the reverse) are located errors;
@@ -288,8 +290,58 @@ def test_magnetic_trajectories_of_different_days_are_refused(tmp_path: Path):
 
 def test_true_north_trajectories_take_the_day_the_survey_began(tmp_path: Path):
     source = witsml(tmp_path / "runs.xml")
-    second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
-    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2021-06-14"
+    start = second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    well = gp.read(source, kind="stations").attrs["well"]
+    assert (well["survey_date"], well["survey_date_last"]) == ("2021-06-14", "2026-03-02")
+    source.write_text(source.read_text().replace("2021-06-14T10:00", "2026-03-02T22:00"))
+    assert "survey_date_last" not in gp.read(source, kind="stations").attrs["well"]
+    lines = source.read_text().splitlines()
+    del lines[start + 2]  # the second trajectory's dTimTrajStart
+    source.write_text("\n".join(lines))
+    assert "survey_date_last" not in gp.read(source, kind="stations").attrs["well"]
+
+
+MAGNETIC = {"id": "mag", "uses": "north_reference", "with": {"target": "magnetic"}}
+
+
+def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tmp_path: Path):
+    """Two runs a year apart turned to magnetic north: the declination of the first
+    run's day (the model's at the site, 2025) is not the second's (2026); refused, not
+    applied to both, unless the declination is given. The report and the exports state
+    the range, not the first day."""
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2025-02-10T10:00")
+    pipe = survey_pipeline(tmp_path, MAGNETIC, report=True)
+    refused = run(pipe, source, tmp_path / "refused", *WELL_ARGS)
+    assert refused.returncode != 0
+    assert "began on several days (2025-02-10 to 2026-03-02" in refused.output
+    assert "give `declination` or `date`" in refused.output
+    given = run(pipe, source, tmp_path / "out", *WELL_ARGS, "--set", "mag.declination=0.5")
+    assert given.returncode == 0, given.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.5, abs=1e-9)
+    report = (tmp_path / "out" / "report.html").read_text()
+    assert "2025-02-10 to 2026-03-02" in report
+    traj = ET.parse(tmp_path / "out" / "trajectory.xml").getroot().findall("w:trajectory", NS)
+    assert len(traj) == 2 and not any(t.find("w:dTimTrajStart", NS) is not None for t in traj)
+    back = gp.read(tmp_path / "out" / "trajectory.xml", kind="stations").attrs["well"]
+    assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
+
+
+def test_a_magnetic_tool_model_takes_no_one_days_field_for_several_days(tmp_path: Path):
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2025-02-10T10:00")
+    mwd = {"id": "mwd", "uses": "position_uncertainty", "with": {"model": "ISCWSA-MWD-REV5"}}
+    pipe = survey_pipeline(tmp_path)
+    spec = yaml.safe_load(pipe.read_text())
+    spec["stages"].append({**mwd, "inputs": {"trajectory": "trajectory.trajectory"}})
+    pipe.write_text(yaml.safe_dump(spec, sort_keys=False))
+    with pytest.raises(gp.GyropipeError, match="began on several days") as caught:
+        gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "refused")
+    assert "`magnetic_field`, `magnetic_dip` and `declination`" in str(caught.value)
+    field = {"magnetic_field": 50_000.0, "magnetic_dip": 71.0, "declination": 0.5}
+    result = gp.run(pipe, {"stations": source}, well=SITE | field, out=tmp_path / "out")
+    assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
 
 
 def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):

@@ -9,7 +9,9 @@ trajectory's name and uid), holding
   ``wellbore``, else its name), ``name`` (the survey id, else ``survey <date>``);
   ``uidWell`` is the UWI (else the well name), ``uidWellbore`` the wellbore name, spaces
   as ``_``. Names and uids longer than WITSML's 64 characters are refused, never cut;
-* ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day);
+* ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day; left
+  out for a survey of trajectories begun on several days, ``survey_date_last`` set: which
+  began when is not known per trajectory, the extension values state the range);
   ``mdMn``/``mdMx``; ``serviceCompany``;
 * ``magDeclUsed`` and ``gridCorUsed`` — the corrections applied to the azimuths, the
   well's ``declination_applied`` and ``grid_convergence_applied`` (recorded by the reader
@@ -57,11 +59,14 @@ azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDe
 stnGridCorUsed must agree with them and with each other, and every trajectory's with
 the first's (the metadata hold one value for all the azimuths); a non-zero grid correction on
 true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
-contradiction), the survey date: the earliest ``dTimTrajStart``, the day the survey began
-(on magnetic-north azimuths with no declination stated, whose declination follows from the
-date, trajectories started on different days, or one undated beside a dated one, are
-refused: read one at a time), and the tool: the first station's ``typeSurveyTool`` naming
-one (a tie-in point names none). Every problem is an
+contradiction), the survey date: the earliest ``dTimTrajStart``, the day the survey began,
+and of trajectories begun on several days the latest as ``survey_date_last`` (downstream, a
+geomagnetic model is then evaluated at no one date for all the stations: a conversion to or
+from magnetic north, or a tool model's field, needs the declination or field given; reports
+state the range; on magnetic-north azimuths with no declination stated, whose declination
+follows from the date, trajectories started on different days, or one undated beside a
+dated one, are refused at the line: read one at a time), and the tool: the first
+station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is an
 :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 """
 

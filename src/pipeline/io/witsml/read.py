@@ -484,16 +484,22 @@ def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[An
 def _survey_date(
     path: Path, trajectories: list[Node], north: NorthReference, found: dict[str, tuple[Any, int]]
 ) -> None:
-    """The survey date: the earliest ``dTimTrajStart``, the day the survey began. Magnetic-north
-    azimuths without a stated declination take theirs from that date downstream (a declination
-    drifts by up to tenths of a degree a year): trajectories started on different days, or
-    one undated beside a dated one, are refused there, not given one day's declination."""
+    """The survey date: the earliest ``dTimTrajStart``, the day the survey began, and of
+    trajectories begun on several days the latest as ``survey_date_last`` (no one date's
+    declination is then applied to every station downstream). Magnetic-north azimuths
+    without a stated declination take theirs from the date downstream (a declination drifts
+    by up to tenths of a degree a year): trajectories started on different days, or one
+    undated beside a dated one, are refused here, at the line, not given one day's."""
     starts = [(traj, traj.get("dTimTrajStart")) for traj in trajectories]
     dated = [(node, _date(path, node)) for _, node in starts if node is not None]
     if not dated:
         return
     earliest, day = min(dated, key=lambda entry: entry[1])
+    latest, last = max(dated, key=lambda entry: entry[1])
     found["survey_date"] = (day, earliest.line)
+    found.pop("survey_date_last", None)  # the trajectories' own dates, not an extension's
+    if last != day:
+        found["survey_date_last"] = (last, latest.line)
     if north != "magnetic" or "declination" in found:
         return
     later = next(((node, other) for node, other in dated if other != day), None)
