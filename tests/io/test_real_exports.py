@@ -344,6 +344,19 @@ def test_a_magnetic_tool_model_takes_no_one_days_field_for_several_days(tmp_path
     assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
 
 
+def test_trajectories_measured_from_two_datums_are_refused(tmp_path: Path):
+    """An operator's store: the drilling rig's trajectory from its DF, a later run from the
+    workover rig's KB, metres apart: one survey of them is offset by the difference."""
+    source = witsml(tmp_path / "rigs.xml")
+    source.write_text(source.read_text().replace('<md uom="m">', '<md uom="m" datum="DF">'))
+    start = second_trajectory(source, 'datum="DF"', 'datum="KB"')
+    with pytest.raises(InputFileError, match="datum 'KB' differs from the 'DF' at line 11") as e:
+        gp.read(source, kind="stations")
+    assert (e.value.line, e.value.column) == (start + 8, "md")  # the copy's first station
+    one = gp.read(source, kind="stations", trajectory="DEF-GYRO-2")
+    assert one["md"].iloc[-1] == Survey().md[-1]
+
+
 def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):
     source = witsml(tmp_path / "two.xml", azi_ref="grid north")
     start = second_trajectory(source, "<aziRef>grid north</aziRef>", "")
