@@ -324,8 +324,11 @@ def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tm
     assert "2025-02-10 to 2026-03-02" in report
     traj = ET.parse(tmp_path / "out" / "trajectory.xml").getroot().findall("w:trajectory", NS)
     assert len(traj) == 2 and not any(t.find("w:dTimTrajStart", NS) is not None for t in traj)
-    back = gp.read(tmp_path / "out" / "trajectory.xml", kind="stations").attrs["well"]
-    assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
+    for export in ("trajectory.xml", "trajectory.csv"):
+        back = gp.read(tmp_path / "out" / export, kind="stations").attrs["well"]
+        assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
+    date = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["DATE"]
+    assert date.value == "2025-02-10" and "the last began 2026-03-02" in date.descr
 
 
 def test_a_magnetic_tool_model_takes_no_one_days_field_for_several_days(tmp_path: Path):
