@@ -70,7 +70,8 @@ geomagnetic model is then evaluated at no one date for all the stations: a conve
 from magnetic north, or a tool model's field, needs the declination or field given; reports
 state the range; on magnetic-north azimuths with no declination stated, whose declination
 follows from the date, trajectories started on different days, or one undated beside a dated
-one, are refused at the line: read one at a time), and the tool: the first station's
+one, are refused at the line: read one at a time; of other azimuths, an undated one beside a
+dated one is warned of), and the tool: the first station's
 ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is an
 :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 """

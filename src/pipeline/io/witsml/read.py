@@ -585,7 +585,8 @@ def _survey_date(
     declination is then applied to every station downstream). Magnetic-north azimuths
     without a stated declination take theirs from the date downstream (a declination drifts
     by up to tenths of a degree a year): trajectories started on different days, or one
-    undated beside a dated one, are refused here, at the line, not given one day's."""
+    undated beside a dated one, are refused here, at the line, not given one day's; of other
+    azimuths, an undated one beside a dated one is warned of at its line."""
     starts = [(traj, traj.get("dTimTrajStart")) for traj in trajectories]
     dated = [(node, _date(path, node)) for _, node in starts if node is not None]
     if not dated:
@@ -596,32 +597,37 @@ def _survey_date(
     found.pop("survey_date_last", None)  # the trajectories' own dates, not an extension's
     if last != day:
         found["survey_date_last"] = (last, latest.line)
-    if north != "magnetic" or "declination" in found:
-        return
     later = next(((node, other) for node, other in dated if other != day), None)
     undated = next((traj for traj, node in starts if node is None), None)
-    if later is not None:
-        line = later[0].line
-        what = (
-            f"<dTimTrajStart> {later[1].isoformat()} differs from the {day.isoformat()} at "
-            f"line {earliest.line}"
+    if north == "magnetic" and "declination" not in found and (later or undated):
+        if later is not None:
+            line = later[0].line
+            what = (
+                f"<dTimTrajStart> {later[1].isoformat()} differs from the {day.isoformat()} "
+                f"at line {earliest.line}"
+            )
+        else:
+            line = undated.line if undated is not None else 0
+            what = (
+                f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} "
+                f"(line {earliest.line})"
+            )
+        raise InputFileError(
+            path,
+            f"{what}: the declination of these magnetic-north azimuths (none stated, none "
+            "applied) depends on each survey's date; read one trajectory at a time (reader "
+            "option trajectory: its uid or name)",
+            line=line,
+            column="dTimTrajStart",
         )
-    elif undated is not None:
-        line = undated.line
-        what = (
-            f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} "
-            f"(line {earliest.line})"
+    if undated is not None:
+        warn_input(
+            path,
+            f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} (line "
+            f"{earliest.line}): when it began is not known; the survey date is the dated "
+            "ones' (a geomagnetic field or declination from it applies to its stations too)",
+            undated.line,
         )
-    else:
-        return
-    raise InputFileError(
-        path,
-        f"{what}: the declination of these magnetic-north azimuths (none stated, none "
-        "applied) depends on each survey's date; read one trajectory at a time (reader "
-        "option trajectory: its uid or name)",
-        line=line,
-        column="dTimTrajStart",
-    )
 
 
 def _date(path: Path, node: Node) -> dt.date:
