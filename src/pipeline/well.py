@@ -162,12 +162,12 @@ class WellMetadata(BaseModel):
         return self.survey_date
 
     def survey_dates(self) -> str | None:
-        """The survey date as a report states it: ``2026-03-02``, or for trajectories
-        begun on several days ``2021-06-14 to 2026-03-02 (several trajectories)``."""
+        """The survey date as a report states it: ``2026-03-02``, or of trajectories begun
+        on several days the range, ``2025-02-10 to 2026-03-02``."""
+        first = self.survey_date.isoformat() if self.survey_date else None
         if self.survey_date_last is None:
-            return self.survey_date.isoformat() if self.survey_date else None
-        first = self.survey_date.isoformat() if self.survey_date else "?"
-        return f"{first} to {self.survey_date_last.isoformat()} (several trajectories)"
+            return first
+        return f"{first or '?'} to {self.survey_date_last.isoformat()}"
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

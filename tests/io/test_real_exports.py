@@ -317,7 +317,7 @@ def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tm
     refused = run(pipe, source, tmp_path / "refused", *WELL_ARGS)
     assert refused.returncode != 0
     assert "began on several days (2025-02-10 to 2026-03-02" in refused.output
-    assert "give `declination` or `date`" in refused.output
+    assert "give `declination`, or `date` (one for all)" in refused.output
     given = run(pipe, source, tmp_path / "out", *WELL_ARGS, "--set", "mag.declination=0.5")
     assert given.returncode == 0, given.output
     trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")

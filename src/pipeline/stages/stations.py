@@ -271,7 +271,7 @@ def north_reference_stage(
         used["grid_convergence"] = convergence
         used["grid_convergence_applied"] = convergence if params.target == "grid" else 0.0
     if converting and "magnetic" in refs and declination is None:
-        date = params.date or well.model_date("give `declination` or `date`")
+        date = params.date or well.model_date("give `declination`, or `date` (one for all)")
         if well.latitude is None or well.longitude is None or date is None:
             raise ValueError(
                 "magnetic north needs `declination`, or the well's latitude, longitude "
