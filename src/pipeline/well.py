@@ -10,7 +10,8 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_serializer
+from pydantic_core.core_schema import SerializerFunctionWrapHandler
 
 from pipeline import jsontext
 
@@ -65,6 +66,10 @@ Bushing``, LAS DREF), and the datum they name: KB, DF or GL."""
 def _angle(description: str) -> Any:
     """An optional north correction field, deg in [-180, 180]."""
     return Field(None, ge=-180, le=180, description=description)
+
+
+LATER_FIELDS = ("survey_date_last",)
+"""Well fields added after digests of pipelines were stored, left out of a dump when None."""
 
 
 class WellMetadata(BaseModel):
@@ -139,6 +144,17 @@ class WellMetadata(BaseModel):
         "grid convergence already applied to the azimuths, deg (WITSML gridCorUsed: true "
         "azimuths were referred to grid north by it; 0: none applied)"
     )
+
+    @model_serializer(mode="wrap")
+    def _dumped(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """Every field, but those of :data:`LATER_FIELDS` only when set: the pipeline digest
+        (a batch's fingerprint) and the summaries of the wells that lack them stay what they
+        were (else every well of a batch would run again, unchanged)."""
+        dumped: dict[str, Any] = handler(self)
+        for name in LATER_FIELDS:
+            if dumped.get(name, 0) is None:
+                del dumped[name]
+        return dumped
 
     def convergence_for(self, reference: str) -> float | None:
         """γ (deg) relating azimuths referred to ``reference`` north to true north: for
