@@ -24,6 +24,7 @@ them (:mod:`vendor_exports`):
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import re
 import warnings
@@ -41,6 +42,7 @@ from vendor_exports import CRS, SITE, Survey, survey_pipeline, witsml
 import pipeline as gp
 import pipeline.cli
 from pipeline.errors import InputFileError, InputFileWarning, SurveyCheckWarning
+from pipeline.spec import load_spec
 from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
@@ -331,6 +333,17 @@ def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tm
         assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
     date = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["DATE"]
     assert date.value == "2025-02-10" and "the last began 2026-03-02" in date.descr
+
+
+def test_a_survey_of_one_day_states_no_last_day(tmp_path: Path):
+    """Its summary and pipeline digest hold no ``survey_date_last`` (as before the field)."""
+    source = witsml(tmp_path / "one.xml")
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    well = json.loads((tmp_path / "out" / "summary.json").read_text())["well"]
+    assert well["survey_date"] == "2026-03-02" and "survey_date_last" not in well
+    spec = load_spec(survey_pipeline(tmp_path)).spec  # what its digest is of
+    assert "survey_date_last" not in spec.model_dump(mode="json")["well"]
 
 
 def test_a_magnetic_tool_model_takes_no_one_days_field_for_several_days(tmp_path: Path):
