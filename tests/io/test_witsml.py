@@ -610,6 +610,18 @@ def test_a_station_outside_the_range_warns_at_its_line(tmp_path: Path):
         gp.read(_ranged(tmp_path, 0, 150), kind="stations")
 
 
+def test_an_unreadable_range_is_warned_of_and_the_stations_read(tmp_path: Path):
+    head = '<mdMn uom="m"></mdMn><mdMx>300</mdMx><aziRef>true north</aziRef>'
+    with pytest.warns(InputFileWarning) as caught:
+        table = gp.read(put(tmp_path, document(head=head)), kind="stations")
+    assert table["md"].tolist() == [0.0, 100.0, 200.0]
+    told = sorted(str(w.message).split(": ", 1)[1] for w in caught)
+    assert told == [
+        "<mdMn> '' is not a number; the stations are not checked against it",
+        "<mdMx> has no uom; the stations are not checked against it",
+    ]
+
+
 def test_a_range_in_its_own_unit_or_on_another_datum_does_not_warn(tmp_path: Path):
     with warnings.catch_warnings():
         warnings.simplefilter("error", InputFileWarning)

@@ -392,13 +392,18 @@ def _md_range(
     """Warn where the stations (sorted by md, m) and the trajectory's ``mdMn``/``mdMx`` (in
     their own uom; not compared when on another datum than the stations') disagree: a station
     outside the range, or a range reaching past the stations — stations missing from the
-    file (a truncated export, or a store's answer to a query for part of the trajectory)."""
+    file (a truncated export, or a store's answer to a query for part of the trajectory) —
+    and a bound that cannot be read (no uom, not a number)."""
     named = datum[0] if datum else None
     for element, row, sign in (("mdMn", rows[0], 1.0), ("mdMx", rows[-1], -1.0)):
         node = traj.get(element)
         if node is None or node.attrs.get("datum", named) != named:
             continue
-        bound = _measure(path, node, "length")
+        try:
+            bound = _measure(path, node, "length")
+        except InputFileError as exc:  # an element only checked: the stations still read
+            warn_input(path, f"{exc.reason}; the stations are not checked against it", node.line)
+            continue
         if bound is None:
             continue
         past = sign * (bound - row["md"])
