@@ -10,7 +10,8 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_serializer
+from pydantic_core.core_schema import SerializerFunctionWrapHandler
 
 from pipeline import jsontext
 
@@ -67,6 +68,10 @@ def _angle(description: str) -> Any:
     return Field(None, ge=-180, le=180, description=description)
 
 
+LATER_FIELDS = ("survey_date_last",)
+"""Well fields added after digests of pipelines were stored, left out of a dump when None."""
+
+
 class WellMetadata(BaseModel):
     """Header of one well and survey run. Angles in degrees, lengths in metres."""
 
@@ -95,7 +100,15 @@ class WellMetadata(BaseModel):
     depth_reference: str | None = Field(
         None, description="depth reference point (RKB, DF, GL, MSL…)"
     )
-    survey_date: dt.date | None = Field(None, description="date of the survey run")
+    survey_date: dt.date | None = Field(
+        None, description="date of the survey run (of several trajectories: the first's)"
+    )
+    survey_date_last: dt.date | None = Field(
+        None,
+        description="the day the last of the survey's trajectories began, when they began on "
+        "several days (survey_date: the first): no one date's geomagnetic field is every "
+        "station's",
+    )
     tool_type: str | None = Field(None, description="survey tool type")
     tool_preset: str | None = Field(
         None,
@@ -132,6 +145,17 @@ class WellMetadata(BaseModel):
         "azimuths were referred to grid north by it; 0: none applied)"
     )
 
+    @model_serializer(mode="wrap")
+    def _dumped(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """Every field, but those of :data:`LATER_FIELDS` only when set: the pipeline digest
+        (a batch's fingerprint) and the summaries of the wells that lack them stay what they
+        were (else every well of a batch would run again, unchanged)."""
+        dumped: dict[str, Any] = handler(self)
+        for name in LATER_FIELDS:
+            if dumped.get(name, 0) is None:
+                del dumped[name]
+        return dumped
+
     def convergence_for(self, reference: str) -> float | None:
         """γ (deg) relating azimuths referred to ``reference`` north to true north: for
         grid-north azimuths the convergence applied to them (a WITSML gridCorUsed), else
@@ -139,6 +163,27 @@ class WellMetadata(BaseModel):
         if reference == "grid" and self.grid_convergence_applied is not None:
             return self.grid_convergence_applied
         return self.grid_convergence
+
+    def model_date(self, ways: str) -> dt.date | None:
+        """The survey date at which a geomagnetic model gives every station's field and
+        declination. Raises ``ValueError`` for a survey of trajectories begun on several
+        days (``survey_date_last``), naming ``ways``: how to give what the model would."""
+        if self.survey_date_last is not None:
+            raise ValueError(
+                f"the survey's trajectories began on several days ({self.survey_dates()}): "
+                f"one date's geomagnetic field and declination are not every station's; "
+                f"{ways}, or read one trajectory at a time (the witsml reader's option "
+                "trajectory)"
+            )
+        return self.survey_date
+
+    def survey_dates(self) -> str | None:
+        """The survey date as a report states it: ``2026-03-02``, or of trajectories begun
+        on several days the range, ``2025-02-10 to 2026-03-02``."""
+        first = self.survey_date.isoformat() if self.survey_date else None
+        if self.survey_date_last is None:
+            return first
+        return f"{first or '?'} to {self.survey_date_last.isoformat()}"
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
         """A copy where every field set in ``other`` overrides this one."""

@@ -378,3 +378,87 @@ def test_a_batch_killed_at_any_step_resumes_with_every_well_done_once(
     last = summary(out)
     assert {w for w, r in last.items() if r["status"] == "skipped"} == set(finished_before)
     assert {r["status"] for w, r in last.items() if w not in finished_before} == {"done"}
+
+
+# --------------------------------------------------------- a ledger half made when killed
+
+MAKING_LEDGER = """
+import os, signal, sys
+from pathlib import Path
+from pipeline.batch import ledger_file
+
+put_in_place = ledger_file._put_in_place
+def at_the_link(aside, path):
+    if sys.argv[2] == "die":
+        os.kill(os.getpid(), signal.SIGKILL)  # made beside its place, never linked
+    print(aside, flush=True)
+    sys.stdin.readline()  # held half made while the test opens the ledger
+    put_in_place(aside, path)
+ledger_file._put_in_place = at_the_link
+ledger_file.make_ledger(Path(sys.argv[1]))
+"""
+
+
+def making_ledger(path: Path, how: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-c", MAKING_LEDGER, str(path), how],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+
+
+def beside(path: Path) -> list[str]:
+    return sorted(p.name for p in path.parent.iterdir() if p.name.startswith(f".{path.name}."))
+
+
+@pytest.mark.process("the batch is SIGKILLed while it makes the ledger")
+def test_a_ledger_half_made_by_a_killed_batch_is_removed_by_the_next(tmp_path: Path, survey: Path):
+    out = tmp_path / "out"
+    out.mkdir()
+    dying = making_ledger(out / "ledger.sqlite", "die")
+    assert dying.wait(TIMEOUT_S) == -signal.SIGKILL
+    (left, *_) = beside(out / "ledger.sqlite")
+    assert left.startswith(f".ledger.sqlite.{dying.pid}.") and left.endswith(".new")
+    assert not (out / "ledger.sqlite").exists()
+    make_wells(tmp_path / "in", ["W"])
+    pattern = str(tmp_path / "in" / "*.csv")
+    result = gyropipe_cli("batch", survey, "--inputs", pattern, "--out", out)
+    assert result.returncode == 0, result.output
+    assert beside(out / "ledger.sqlite") == []
+    assert runs(out / "ledger.sqlite")[0]["status"] == "done"
+
+
+@pytest.mark.process("another process is making the ledger meanwhile")
+def test_a_ledger_being_made_by_a_live_process_is_left_to_it(tmp_path: Path):
+    path = tmp_path / "ledger.sqlite"
+    maker = making_ledger(path, "hold")
+    assert maker.stdout is not None and maker.stdin is not None
+    aside = Path(maker.stdout.readline().strip())
+    Ledger(path).close()  # the ledger made here; the other one's file is its own
+    assert aside.exists()
+    maker.stdin.write("\n")
+    maker.stdin.close()
+    assert maker.wait(TIMEOUT_S) == 0
+    assert beside(path) == [] and runs(path) == []
+
+
+def test_a_ledger_half_made_elsewhere_is_removed_once_old(tmp_path: Path):
+    """Made on another host (its process cannot be asked) or by an earlier version (no pid
+    in the name): removed only once older than a ledger takes to make, by far."""
+    path = tmp_path / "ledger.sqlite"
+    names = [
+        f".ledger.sqlite.{os.getpid() + 1}.other-host.example.{'a' * 32}.new",
+        f".ledger.sqlite.{os.getpid() + 1}.other-host.example.{'a' * 32}.new-wal",
+        f".ledger.sqlite.{'b' * 32}.new",
+    ]
+    for name in names:
+        (tmp_path / name).write_bytes(b"SQLite format 3\0")
+    (tmp_path / ".ledger.sqlite.notes.newer").write_text("not the ledger's")
+    Ledger(path).close()
+    assert beside(path) == sorted([*names, ".ledger.sqlite.notes.newer"])
+    old = time.time() - 2 * 3600
+    for name in names:
+        os.utime(tmp_path / name, (old, old))
+    Ledger(path).close()
+    assert beside(path) == [".ledger.sqlite.notes.newer"]

@@ -8,7 +8,9 @@ them (:mod:`vendor_exports`):
   pyproj directly), a user's γ is not "contradicted" by an applied 0, exports state what
   was applied; a LAS ``GRIDCORR`` (a vendor's correction, of no agreed sign) is neither γ;
 * several WITSML trajectories are dated by the earliest ``dTimTrajStart``; magnetic ones
-  of different days with no declination stated are refused (each needs its own day's);
+  of different days with no declination stated are refused (each needs its own day's), and
+  of other ones a declination or field at one date (a conversion to magnetic north, an MWD
+  model) is refused; reports and exports state the range;
 * ``-999.25``-family null markers are nulls in every reader; a station without an azimuth
   is a located error, or left out when the user asks;
 * implausible angles and radians declared degrees (or the reverse) are located errors;
@@ -22,6 +24,7 @@ them (:mod:`vendor_exports`):
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import re
 import warnings
@@ -39,6 +42,7 @@ from vendor_exports import CRS, SITE, Survey, survey_pipeline, witsml
 import pipeline as gp
 import pipeline.cli
 from pipeline.errors import InputFileError, InputFileWarning, SurveyCheckWarning
+from pipeline.spec import load_spec
 from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
@@ -288,8 +292,87 @@ def test_magnetic_trajectories_of_different_days_are_refused(tmp_path: Path):
 
 def test_true_north_trajectories_take_the_day_the_survey_began(tmp_path: Path):
     source = witsml(tmp_path / "runs.xml")
-    second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
-    assert gp.read(source, kind="stations").attrs["well"]["survey_date"] == "2021-06-14"
+    start = second_trajectory(source, "2026-03-02T08:15", "2021-06-14T10:00")
+    well = gp.read(source, kind="stations").attrs["well"]
+    assert (well["survey_date"], well["survey_date_last"]) == ("2021-06-14", "2026-03-02")
+    source.write_text(source.read_text().replace("2021-06-14T10:00", "2026-03-02T22:00"))
+    assert "survey_date_last" not in gp.read(source, kind="stations").attrs["well"]
+    lines = source.read_text().splitlines()
+    del lines[start + 2]  # the second trajectory's dTimTrajStart
+    source.write_text("\n".join(lines))
+    with pytest.warns(InputFileWarning, match=rf"runs\.xml:{start}: trajectory without <dTim"):
+        well = gp.read(source, kind="stations").attrs["well"]
+    assert well["survey_date"] == "2026-03-02" and "survey_date_last" not in well
+
+
+MAGNETIC = {"id": "mag", "uses": "north_reference", "with": {"target": "magnetic"}}
+
+
+def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tmp_path: Path):
+    """Two runs a year apart turned to magnetic north: the declination of the first
+    run's day (the model's at the site, 2025) is not the second's (2026); refused, not
+    applied to both, unless the declination is given. The report and the exports state
+    the range, not the first day."""
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2025-02-10T10:00")
+    pipe = survey_pipeline(tmp_path, MAGNETIC, report=True)
+    refused = run(pipe, source, tmp_path / "refused", *WELL_ARGS)
+    assert refused.returncode != 0
+    assert "began on several days (2025-02-10 to 2026-03-02" in refused.output
+    assert "give `declination`, or `date` (one for all)" in refused.output
+    given = run(pipe, source, tmp_path / "out", *WELL_ARGS, "--set", "mag.declination=0.5")
+    assert given.returncode == 0, given.output
+    trajectory = pq.read_table(tmp_path / "out" / "trajectory.trajectory.parquet")
+    assert trajectory.column("azi").to_numpy()[-1] == pytest.approx(44.5, abs=1e-9)
+    report = (tmp_path / "out" / "report.html").read_text()
+    assert "2025-02-10 to 2026-03-02" in report
+    traj = ET.parse(tmp_path / "out" / "trajectory.xml").getroot().findall("w:trajectory", NS)
+    assert len(traj) == 2 and not any(t.find("w:dTimTrajStart", NS) is not None for t in traj)
+    for export in ("trajectory.xml", "trajectory.csv"):
+        back = gp.read(tmp_path / "out" / export, kind="stations").attrs["well"]
+        assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
+    date = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["DATE"]
+    assert date.value == "2025-02-10" and "the last began 2026-03-02" in date.descr
+
+
+def test_a_survey_of_one_day_states_no_last_day(tmp_path: Path):
+    """Its summary and pipeline digest hold no ``survey_date_last`` (as before the field)."""
+    source = witsml(tmp_path / "one.xml")
+    result = run(survey_pipeline(tmp_path), source, tmp_path / "out")
+    assert result.returncode == 0, result.output
+    well = json.loads((tmp_path / "out" / "summary.json").read_text())["well"]
+    assert well["survey_date"] == "2026-03-02" and "survey_date_last" not in well
+    spec = load_spec(survey_pipeline(tmp_path)).spec  # what its digest is of
+    assert "survey_date_last" not in spec.model_dump(mode="json")["well"]
+
+
+def test_a_magnetic_tool_model_takes_no_one_days_field_for_several_days(tmp_path: Path):
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", "2025-02-10T10:00")
+    mwd = {"id": "mwd", "uses": "position_uncertainty", "with": {"model": "ISCWSA-MWD-REV5"}}
+    pipe = survey_pipeline(tmp_path)
+    spec = yaml.safe_load(pipe.read_text())
+    spec["stages"].append({**mwd, "inputs": {"trajectory": "trajectory.trajectory"}})
+    pipe.write_text(yaml.safe_dump(spec, sort_keys=False))
+    with pytest.raises(gp.GyropipeError, match="began on several days") as caught:
+        gp.run(pipe, {"stations": source}, well=SITE, out=tmp_path / "refused")
+    assert "`magnetic_field`, `magnetic_dip` and `declination`" in str(caught.value)
+    field = {"magnetic_field": 50_000.0, "magnetic_dip": 71.0, "declination": 0.5}
+    result = gp.run(pipe, {"stations": source}, well=SITE | field, out=tmp_path / "out")
+    assert result.tables["mwd.trajectory"].column("ellipse_major").to_numpy()[-1] > 1.0
+
+
+def test_trajectories_measured_from_two_datums_are_refused(tmp_path: Path):
+    """An operator's store: the drilling rig's trajectory from its DF, a later run from the
+    workover rig's KB, metres apart: one survey of them is offset by the difference."""
+    source = witsml(tmp_path / "rigs.xml")
+    source.write_text(source.read_text().replace('<md uom="m">', '<md uom="m" datum="DF">'))
+    start = second_trajectory(source, 'datum="DF"', 'datum="KB"')
+    with pytest.raises(InputFileError, match="datum 'KB' differs from the 'DF' at line 11") as e:
+        gp.read(source, kind="stations")
+    assert (e.value.line, e.value.column) == (start + 8, "md")  # the copy's first station
+    one = gp.read(source, kind="stations", trajectory="DEF-GYRO-2")
+    assert one["md"].iloc[-1] == Survey().md[-1]
 
 
 def test_a_trajectory_without_azimuth_reference_does_not_take_anothers(tmp_path: Path):

@@ -7,6 +7,7 @@ with their lines, and a mutation fuzz test of the reader."""
 from __future__ import annotations
 
 import datetime as dt
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -563,3 +564,84 @@ def test_tvd_from_another_datum_than_md_is_left_out_with_a_warning(tmp_path: Pat
     assert table["md"].tolist() == [0.0, 100.0, 200.0]
     assert table["tvd"].isna().tolist() == [True, True, False]
     assert table["tvd"].iloc[2] == 200.0  # the station whose datums agree keeps its TVD
+
+
+def _stations_on(datums: tuple[str, ...]) -> list[str]:
+    """Stations at md 0, 100, 200 m, each ``md`` naming a datum ('' none) as stores write it."""
+    return [
+        f'    <trajectoryStation uid="s{k}"><md uom="m"{f" datum={d!r}" if d else ""}>{100 * k}'
+        f'</md><incl uom="dega">{1.5 * k}</incl><azi uom="dega">45</azi></trajectoryStation>'
+        for k, d in enumerate(datums)
+    ]
+
+
+def test_md_from_two_datums_is_refused_at_the_line(tmp_path: Path):
+    path = put(tmp_path, document(_stations_on(("KB", "", "DF"))))  # wellDatum uids
+    with pytest.raises(
+        InputFileError, match="datum 'DF' differs from the 'KB' at line 8"
+    ) as caught:
+        gp.read(path, kind="stations")
+    assert (caught.value.line, caught.value.column) == (10, "md")
+    same = put(tmp_path, document(_stations_on(("KB", "", "KB"))))  # none named: the default
+    assert gp.read(same, kind="stations").shape[0] == 3
+
+
+RANGE = '<mdMn uom="{uom}"{datum}>{low}</mdMn><mdMx uom="{uom}"{datum}>{high}</mdMx>'
+
+
+def _ranged(tmp_path: Path, low: float, high: float, uom: str = "m", datum: str = "") -> Path:
+    """Stations at md 0 to 200 m under a trajectory stating mdMn/mdMx (line 7)."""
+    head = RANGE.format(uom=uom, datum=datum, low=low, high=high) + "<aziRef>true north</aziRef>"
+    return put(tmp_path, document(head=head))
+
+
+def test_a_range_reaching_past_the_stations_warns_of_missing_stations(tmp_path: Path):
+    # a store's export cut short: mdMx says the trajectory goes on to 3000 m
+    with pytest.warns(InputFileWarning, match=r"t\.xml:7: mdMx 3000\.0 m reaches past the last"):
+        assert gp.read(_ranged(tmp_path, 0, 3000), kind="stations")["md"].max() == 200.0
+    with pytest.warns(InputFileWarning, match=r"t\.xml:7: mdMn -50\.0 m reaches past the first"):
+        gp.read(_ranged(tmp_path, -50, 200), kind="stations")
+
+
+def test_a_station_outside_the_range_warns_at_its_line(tmp_path: Path):
+    with pytest.warns(InputFileWarning, match=r"t\.xml:8: station md 0\.0 m lies outside .* mdMn"):
+        gp.read(_ranged(tmp_path, 50, 200), kind="stations")
+    with pytest.warns(InputFileWarning, match=r"t\.xml:10: station md 200\.0 m .* mdMx 150\.0"):
+        gp.read(_ranged(tmp_path, 0, 150), kind="stations")
+
+
+def test_an_unreadable_range_is_warned_of_and_the_stations_read(tmp_path: Path):
+    head = '<mdMn uom="m"></mdMn><mdMx>300</mdMx><aziRef>true north</aziRef>'
+    with pytest.warns(InputFileWarning) as caught:
+        table = gp.read(put(tmp_path, document(head=head)), kind="stations")
+    assert table["md"].tolist() == [0.0, 100.0, 200.0]
+    told = sorted(str(w.message).split(": ", 1)[1] for w in caught)
+    assert told == [
+        "<mdMn> '' is not a number; the stations are not checked against it",
+        "<mdMx> has no uom; the stations are not checked against it",
+    ]
+
+
+def test_a_range_in_its_own_unit_or_on_another_datum_does_not_warn(tmp_path: Path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        gp.read(_ranged(tmp_path, 0, 656.168, uom="ft"), kind="stations")  # 200.0000064 m
+        gp.read(_ranged(tmp_path, 0, 3000, datum=' datum="MSL"'), kind="stations")  # not KB's
+
+
+DEPTH_REFERENCE = (
+    "<commonData><extensionNameValue><name>gyropipe.well.depth_reference</name>"
+    "<value>{}</value></extensionNameValue></commonData><aziRef>true north</aziRef>"
+)
+
+
+def test_md_on_another_datum_than_the_depth_reference_is_refused(tmp_path: Path):
+    stations = _stations_on(("DF", "DF", "DF"))
+    path = put(tmp_path, document(stations, DEPTH_REFERENCE.format("RKB")))
+    with pytest.raises(InputFileError, match="datum 'DF' is not the depth reference 'RKB'") as e:
+        gp.read(path, kind="stations")
+    assert (e.value.line, e.value.column) == (8, "md")
+    path = put(tmp_path, document(_stations_on(("KB",) * 3), DEPTH_REFERENCE.format("RKB")))
+    assert gp.read(path, kind="stations").attrs["well"]["depth_reference"] == "RKB"
+    path = put(tmp_path, document(_stations_on(("wd-1",) * 3), DEPTH_REFERENCE.format("RKB")))
+    assert gp.read(path, kind="stations").shape[0] == 3  # a uid naming no datum: unknown

@@ -5,7 +5,11 @@ A new ledger is made whole beside its place and hard-linked there, so that no pr
 sees a ledger file without its tables: an existing file that is empty (truncated, ``>
 ledger.sqlite``), not SQLite, another application's SQLite database or a ledger of a newer
 schema is refused with a :class:`LedgerError` saying what to do, never taken for a new
-ledger (its history and fingerprints would be lost, and every well run again unsaid).
+ledger (its history and fingerprints would be lost, and every well run again unsaid). The
+file made beside it, ``.ledger.sqlite.<pid>.<host>.<hex>.new``, is removed once linked; one a
+batch killed meanwhile left is removed by the next opening of the ledger once provably dead:
+its process, on this host, no longer runs (:func:`pipeline.processes.owner_alive`), or, made
+on another host (or unnamed, by an earlier version), it is older than :data:`LEFTOVER_AGE_S`.
 
 Each ledger has an identity, a random UUID made with it (a ledger of an earlier version gets
 one when it is first opened): a run is known by (ledger id, run id), as run ids are each
@@ -15,17 +19,26 @@ ledger's own row ids and two ledgers may publish into one output directory.
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
+import socket
 import sqlite3
+import time
 import uuid
 from pathlib import Path
 
 from pipeline.errors import GyropipeError
+from pipeline.processes import owner_alive
 
 from . import filestate
 
 SCHEMA_VERSION = 1
 BUSY_TIMEOUT_MS = 60_000
+LEFTOVER_AGE_S = 3600.0
+"""Age, s, past which a ledger half made by a process on another host is dead (one is
+made in milliseconds; a process elsewhere cannot be asked whether it runs)."""
+ASIDE_SUFFIXES = (".new", ".new-wal", ".new-shm", ".new-journal")
+"""The endings of the files of a ledger made beside its place (SQLite's beside its own)."""
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS batches (
@@ -139,8 +152,9 @@ class LedgerError(GyropipeError):
 
 def make_ledger(path: Path) -> None:
     """Make a new ledger at ``path`` if there is no file there (module docstring); one made
-    there meanwhile by another process is left as it is. Raises :class:`LedgerError` if an
-    existing file there is empty."""
+    there meanwhile by another process is left as it is, the ones killed batches left half
+    made beside it removed. Raises :class:`LedgerError` if an existing file there is empty."""
+    remove_leftovers(path)
     try:
         if path.stat().st_size == 0:
             raise LedgerError(path, "open it", EMPTY)
@@ -149,7 +163,9 @@ def make_ledger(path: Path) -> None:
         pass
     except OSError as exc:
         raise LedgerError(path, "open it", exc) from None
-    aside = path.with_name(f".{path.name}.{uuid.uuid4().hex}.new")  # unique on every host
+    aside = path.with_name(  # unique on every host
+        f".{path.name}.{os.getpid()}.{socket.gethostname()}.{uuid.uuid4().hex}.new"
+    )
     try:
         with contextlib.closing(sqlite3.connect(aside, isolation_level=None)) as db:
             db.execute("PRAGMA journal_mode = WAL")
@@ -163,6 +179,28 @@ def make_ledger(path: Path) -> None:
         for leftover in (aside, *(aside.with_name(aside.name + s) for s in ("-wal", "-shm"))):
             with contextlib.suppress(OSError):
                 leftover.unlink()
+
+
+def remove_leftovers(path: Path) -> list[Path]:
+    """Remove the files of ledgers made beside ``path`` whose maker is provably dead (module
+    docstring); returns them. A file that cannot be removed is left."""
+    removed = []
+    prefix = f".{path.name}."
+    for entry in path.parent.glob(glob.escape(prefix) + "*.new*"):
+        stem = next((entry.name[: -len(s)] for s in ASIDE_SUFFIXES if entry.name.endswith(s)), "")
+        pid, _, rest = stem[len(prefix) :].partition(".")
+        host = rest.rpartition(".")[0]
+        try:
+            if pid.isdigit() and host == socket.gethostname():
+                dead = not owner_alive(int(pid), entry)
+            else:
+                dead = time.time() - entry.stat().st_mtime > LEFTOVER_AGE_S
+            if stem and dead:
+                entry.unlink()
+                removed.append(entry)
+        except OSError:
+            continue
+    return removed
 
 
 def _put_in_place(aside: Path, path: Path) -> None:

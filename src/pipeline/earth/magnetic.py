@@ -48,7 +48,9 @@ def applied_magnetic(
     well's ``magnetic_field`` and ``magnetic_dip`` when both are set, else ``model`` at the
     well's latitude, longitude, elevation and survey date; the well's ``declination`` when
     set, else the model's. Raises :class:`~pipeline.errors.MissingSiteError` naming the
-    stage and every way to give what is missing."""
+    stage and every way to give what is missing, a ``ValueError`` where the model would be
+    evaluated for trajectories begun on several days
+    (:meth:`~pipeline.well.WellMetadata.model_date`)."""
     if given is not None:
         source = f"given in the pipeline ({stage}.{param})"
         return AppliedMagnetic(reference=given, field_source=source, declination_source=source)
@@ -60,23 +62,27 @@ def applied_magnetic(
     declination = well.declination
     field_source = declination_source = GIVEN_IN_WELL
     if field is None or declination is None:
+        date = well.model_date(
+            f"give the well's `magnetic_field`, `magnetic_dip` and `declination`, or the "
+            f"{stage} stage's `{param}`"
+        )
         missing = [
             name
             for name, value in (
                 ("latitude", well.latitude),
                 ("longitude", well.longitude),
-                ("survey_date", well.survey_date),
+                ("survey_date", date),
             )
             if value is None
         ]
-        if missing or well.latitude is None or well.longitude is None or not well.survey_date:
+        if missing or well.latitude is None or well.longitude is None or not date:
             raise MissingMagneticError(stage, missing, param)
         site = reference_field(
-            well.latitude, well.longitude, well.elevation or 0.0, well.survey_date, model=model
+            well.latitude, well.longitude, well.elevation or 0.0, date, model=model
         ).reference()
         where = (
             f"{field_model(model).name} at {_signed(well.latitude, 'NS')} "
-            f"{_signed(well.longitude, 'EW')}, {well.survey_date.isoformat()}"
+            f"{_signed(well.longitude, 'EW')}, {date.isoformat()}"
         )
         if field is None:
             field, field_source = (site.total_field, site.dip), where

@@ -108,7 +108,7 @@ def tool_fields(well: WellMetadata, provenance: Provenance, extra: list[tuple[st
                 ("Tool serial", well.tool_serial),
                 ("Run number", well.run_number),
                 ("Job number", well.job_number),
-                ("Survey date", well.survey_date.isoformat() if well.survey_date else None),
+                ("Survey date", well.survey_dates()),
                 *extra,
                 ("Processed", run_time(provenance)),
             ]

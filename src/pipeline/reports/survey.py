@@ -223,7 +223,7 @@ def survey_document(
         title=title,
         subject=well.well or "unnamed well",
         subtitle=subtitle,
-        issued=f"Survey date {well.survey_date or 'not stated'} · "
+        issued=f"Survey date {well.survey_dates() or 'not stated'} · "
         f"processed {provenance.started:%Y-%m-%d}",
         footer=footer(provenance),
         sections=tuple(sections),

@@ -224,7 +224,8 @@ class NorthReferenceParams(BaseModel):
     the well's ``grid_convergence`` and ``declination`` (the site's), else derived from the
     well header: γ of grid-north azimuths from the grid convergence applied to them
     (``grid_convergence_applied``, a WITSML gridCorUsed), else from ``crs`` at the wellhead;
-    D from the geomagnetic ``model`` at the wellhead on ``date`` (default: the survey date).
+    D from the geomagnetic ``model`` at the wellhead on ``date`` (default: the survey date;
+    refused for trajectories begun on several days, whose stations need each its own D).
     A correction applied to the azimuths is never taken for the site's: a gridCorUsed of 0 on
     true-north azimuths says no grid correction was applied, not that γ is 0. The output's
     well metadata records the new north reference, the corrections used and the ones now
@@ -270,7 +271,7 @@ def north_reference_stage(
         used["grid_convergence"] = convergence
         used["grid_convergence_applied"] = convergence if params.target == "grid" else 0.0
     if converting and "magnetic" in refs and declination is None:
-        date = params.date or well.survey_date
+        date = params.date or well.model_date("give `declination`, or `date` (one for all)")
         if well.latitude is None or well.longitude is None or date is None:
             raise ValueError(
                 "magnetic north needs `declination`, or the well's latitude, longitude "

@@ -1,7 +1,8 @@
 """The LAS writer: any table as a LAS 2.0 file.
 
 LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless all steps are
-exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE,
+exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE
+(of trajectories begun on several days the first's, the description naming the last's),
 UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
 the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
 well's magnetic declination and grid convergence, deg, east of true north positive),
@@ -246,7 +247,7 @@ def _header_text(
         _line("FLD", "", meta["field"], "field"),
         _line("LOC", "", _location(well), "location"),
         _line("SRVC", "", meta["service_company"], "service company"),
-        _line("DATE", "", meta["survey_date"], "survey date"),
+        _line("DATE", "", meta["survey_date"], _date_description(well)),
         _line("UWI", "", meta["uwi"], "unique well identifier"),
         _line("API", "", _api(well.uwi), "API number"),
         _line("LATI", "deg", meta["latitude"], "latitude (WGS84)"),
@@ -309,6 +310,14 @@ def _api(uwi: str | None) -> str | None:
     if uwi is None or not _API.fullmatch(uwi):
         return None
     return uwi
+
+
+def _date_description(well: WellMetadata) -> str:
+    """DATE's description: of trajectories begun on several days it says so (LAS has one
+    DATE, the first day's)."""
+    if well.survey_date_last is None:
+        return "survey date"
+    return f"survey date of the first trajectory; the last began {well.survey_date_last}"
 
 
 def _line(mnemonic: str, unit: str, value: object, descr: str) -> str:

@@ -9,7 +9,9 @@ trajectory's name and uid), holding
   ``wellbore``, else its name), ``name`` (the survey id, else ``survey <date>``);
   ``uidWell`` is the UWI (else the well name), ``uidWellbore`` the wellbore name, spaces
   as ``_``. Names and uids longer than WITSML's 64 characters are refused, never cut;
-* ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day);
+* ``dTimTrajStart`` — the survey date at 00:00 UTC (the header holds no time of day; left
+  out for a survey of trajectories begun on several days, ``survey_date_last`` set: which
+  began when is not known per trajectory, the extension values state the range);
   ``mdMn``/``mdMx``; ``serviceCompany``;
 * ``magDeclUsed`` and ``gridCorUsed`` — the corrections applied to the azimuths, the
   well's ``declination_applied`` and ``grid_convergence_applied`` (recorded by the reader
@@ -39,30 +41,39 @@ validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings
 The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one
 named by the option ``trajectory``) as stations in canonical units — md, inc, azi required
 per station; tvd, north, east, dls kept when present (a ``tvd`` whose ``datum`` attribute
-names another datum than its ``md``'s, e.g. a TVDSS beside depths from the KB, is left
-out with a warning: the trajectory gives no offset between them); ``tool_type`` and ``station_type``
+names another datum than its ``md``'s, e.g. a TVDSS beside depths from the KB, is left out
+with a warning: the trajectory gives no offset between them; the ``md`` of every station
+must name one ``datum``, a wellDatum uid, or none, and one naming KB, DF, GL… the depth
+reference the file states: else refused at the line); ``tool_type`` and ``station_type``
 (``typeSurveyTool``, ``typeTrajStation``; ``unknown`` is none) — sorted by MD, with a
 ``survey`` column (the names) when there are several and the ``source_line`` of each
-station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A null
-marker (:mod:`pipeline.io.nulls`: ``-999.25``… in the element's own unit) is no value: a
-station without md, incl or azi (azi may be missing only at vertical) is an error at its
-line, or left out with a warning under the option ``null_stations: drop``. The north
-reference is ``aziRef`` (``unknown`` or absent: the option ``north_reference``, which a
-trajectory without one needs beside others with one: it never takes theirs). Well
-metadata: the gyropipe extension values, overridden by the standard elements (nameWell,
-nameWellbore, serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or
-gridConUsed) as the corrections *applied*, ``declination_applied`` and
-``grid_convergence_applied`` — never the site's: a gridCorUsed of 0 on true-north
-azimuths says no grid correction was applied; the stations' ``corUsed`` stnMagDeclUsed /
-stnGridCorUsed must agree with them and with each other, and every trajectory's with
-the first's (the metadata hold one value for all the azimuths); a non-zero grid correction on
-true- or magnetic-north azimuths, or a declination on magnetic ones, is refused as a
-contradiction), the survey date: the earliest ``dTimTrajStart``, the day the survey began
-(on magnetic-north azimuths with no declination stated, whose declination follows from the
-date, trajectories started on different days, or one undated beside a dated one, are
-refused: read one at a time), and the tool: the first station's ``typeSurveyTool`` naming
-one (a tie-in point names none). Every problem is an
-:class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A
+trajectory's ``mdMn``/``mdMx`` (in their own uom, on the stations' datum) that leave a
+station outside, or reach past the first or last station by more than 5 cm (stations
+missing: a truncated export, a store's answer to a query for a depth range), are warned of
+at the line, as is one that cannot be read (no uom, not a number). A null marker
+(:mod:`pipeline.io.nulls`: ``-999.25``… in the element's own unit) is no value: a station
+without md, incl or azi (azi may be missing only at vertical) is an error at its line, or
+left out with a warning under the option ``null_stations: drop``. The north reference is
+``aziRef`` (``unknown`` or absent: the option ``north_reference``, which a trajectory
+without one needs beside others with one: it never takes theirs). Well metadata: the
+gyropipe extension values, overridden by the standard elements (nameWell, nameWellbore,
+serviceCompany, dTimTrajStart; magDeclUsed and gridCorUsed (or gridConUsed) as the
+corrections *applied*, ``declination_applied`` and ``grid_convergence_applied`` — never the
+site's: a gridCorUsed of 0 on true-north azimuths says no grid correction was applied; the
+stations' ``corUsed`` stnMagDeclUsed / stnGridCorUsed must agree with them and with each
+other, and every trajectory's with the first's (the metadata hold one value for all the
+azimuths); a non-zero grid correction on true- or magnetic-north azimuths, or a declination
+on magnetic ones, is refused as a contradiction), the survey date: the earliest
+``dTimTrajStart``, the day the survey began, and of trajectories begun on several days the
+latest as ``survey_date_last`` (downstream, a geomagnetic model is then evaluated at no one
+date for all the stations: a conversion to or from magnetic north, or a tool model's field,
+needs the declination or field given; reports state the range; on magnetic-north azimuths
+with no declination stated, whose declination follows from the date, trajectories started on
+different days, or one undated beside a dated one, are refused at the line: read one at a
+time; of other azimuths, an undated one beside a dated one is warned of), and the tool: the
+first station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is
+an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 """
 
 from __future__ import annotations

@@ -28,7 +28,13 @@ from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.plausibility import AngleUnitConfirmed, NullStations
-from pipeline.well import DefaultNorthReference, NorthReference, WellMetadata, contradicts_north
+from pipeline.well import (
+    DATUM_WORDS,
+    DefaultNorthReference,
+    NorthReference,
+    WellMetadata,
+    contradicts_north,
+)
 
 SNIFF_BYTES = 4096
 STATION_MEASURES = (
@@ -196,13 +202,16 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
     data.update({name: [] for name, _ in STATION_TEXT})
     data[SOURCE_LINE] = []
     survey: list[str] = []
+    datum: tuple[str, int] | None = None
     for index, traj in enumerate(trajectories):
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
         rows = [_station(path, node, opts) for node in nodes]
         _tvd_of_md_datum(path, nodes, rows)
+        datum = _md_datum(path, nodes, datum)
         rows.sort(key=lambda row: row["md"])
+        _md_range(path, traj, rows, datum)
         for row in rows:
             for name in data:
                 data[name].append(row.get(name))
@@ -219,7 +228,7 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
             columns[name] = pa.array(data[name], pa.string())
     columns[SOURCE_LINE] = pa.array(data[SOURCE_LINE], pa.int64())
     table = LAYOUTS["stations"].table(columns, north)
-    return table, _well(path, trajectories, north)
+    return table, _well(path, trajectories, north, datum)
 
 
 def _chosen(path: Path, root: Node, wanted: str | None) -> list[Node]:
@@ -348,6 +357,74 @@ def _tvd_of_md_datum(path: Path, nodes: list[Node], rows: list[dict[str, Any]]) 
         )
 
 
+def _md_datum(
+    path: Path, nodes: list[Node], seen: tuple[str, int] | None
+) -> tuple[str, int] | None:
+    """The ``datum`` the stations' ``md`` name (a WITSML wellDatum uid; none named: the
+    well's default one) and its line, given ``seen``, the one named before: depths from two
+    datums (a DF and a KB lie metres apart) are refused at the line."""
+    for node in nodes:
+        md = node.get("md")
+        datum = md.attrs.get("datum") if md is not None else None
+        if md is None or not datum:
+            continue
+        if seen is None:
+            seen = (datum, md.line)
+        elif datum != seen[0]:
+            raise InputFileError(
+                path,
+                f"<md> datum {datum!r} differs from the {seen[0]!r} at line {seen[1]}: depths "
+                "from two datums are not one survey's (the file gives no offset between them); "
+                "read one trajectory at a time (reader option trajectory)",
+                line=md.line,
+                column="md",
+            )
+    return seen
+
+
+MD_RANGE_TOLERANCE = 0.05
+"""How far, m, a station may lie outside its trajectory's mdMn/mdMx (a range rounded)."""
+
+
+def _md_range(
+    path: Path, traj: Node, rows: list[dict[str, Any]], datum: tuple[str, int] | None
+) -> None:
+    """Warn where the stations (sorted by md, m) and the trajectory's ``mdMn``/``mdMx`` (in
+    their own uom; not compared when on another datum than the stations') disagree: a station
+    outside the range, or a range reaching past the stations — stations missing from the
+    file (a truncated export, or a store's answer to a query for part of the trajectory) —
+    and a bound that cannot be read (no uom, not a number)."""
+    named = datum[0] if datum else None
+    for element, row, sign in (("mdMn", rows[0], 1.0), ("mdMx", rows[-1], -1.0)):
+        node = traj.get(element)
+        if node is None or node.attrs.get("datum", named) != named:
+            continue
+        try:
+            bound = _measure(path, node, "length")
+        except InputFileError as exc:  # an element only checked: the stations still read
+            warn_input(path, f"{exc.reason}; the stations are not checked against it", node.line)
+            continue
+        if bound is None:
+            continue
+        past = sign * (bound - row["md"])
+        if past > MD_RANGE_TOLERANCE:
+            warn_input(
+                path,
+                f"station md {row['md']!r} m lies outside the trajectory's {element} "
+                f"{bound!r} m (line {node.line}): the range or the depths are wrong",
+                row[SOURCE_LINE],
+            )
+        elif past < -MD_RANGE_TOLERANCE:
+            end = "first" if element == "mdMn" else "last"
+            warn_input(
+                path,
+                f"{element} {bound!r} m reaches past the {end} station, at {row['md']!r} m "
+                f"(line {row[SOURCE_LINE]}): stations may be missing from the file (a "
+                "truncated export, or a store's answer to a query for part of the trajectory)",
+                node.line,
+            )
+
+
 def _vertical(inc: float | None) -> bool:
     """Whether an inclination (deg) is vertical enough to leave the azimuth undefined."""
     return inc is not None and min(abs(inc), abs(180.0 - inc)) <= VERTICAL_TOLERANCE
@@ -388,8 +465,11 @@ def _text(node: Node, name: str) -> str | None:
     return " ".join(child.text.split()) or None if child is not None else None
 
 
-def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMetadata:
-    """Well metadata: gyropipe's extension values, then the WITSML elements (which win)."""
+def _well(
+    path: Path, trajectories: list[Node], north: NorthReference, datum: tuple[str, int] | None
+) -> WellMetadata:
+    """Well metadata: gyropipe's extension values, then the WITSML elements (which win);
+    ``datum``: the one the stations' md name, which must be the depth reference's."""
     first = trajectories[0]
     found: dict[str, tuple[Any, int]] = {}
     common = first.get("commonData")
@@ -405,6 +485,7 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
         value = _measure(path, holder, quantity) if quantity else holder.text.strip()
         if value is not None:
             found[field_name] = (value, holder.line)
+    _depth_reference_agrees(path, datum, found.get("depth_reference"))
     names = {_text(t, "nameWell") for t in trajectories}
     if len(names) > 1:
         raise InputFileError(path, f"trajectories of several wells {sorted(map(str, names))}")
@@ -439,6 +520,26 @@ def _well(path: Path, trajectories: list[Node], north: NorthReference) -> WellMe
                 path, f"{name} {value!r}: {exc.errors()[0]['msg']}", line=line
             ) from None
     return WellMetadata(north_reference=north, **{n: v for n, (v, _) in found.items()})
+
+
+def _depth_reference_agrees(
+    path: Path, datum: tuple[str, int] | None, reference: tuple[Any, int] | None
+) -> None:
+    """A datum the stations' md name (KB, RKB, DF, GL… by :data:`~pipeline.well.DATUM_WORDS`)
+    must be the depth reference the file states, whose elevation it may state too."""
+    if datum is None or reference is None:
+        return
+    named, stated = (
+        DATUM_WORDS.get("".join(str(t).casefold().split())) for t in (datum[0], reference[0])
+    )
+    if named is not None and stated is not None and named != stated:
+        raise InputFileError(
+            path,
+            f"<md> datum {datum[0]!r} is not the depth reference {reference[0]!r} stated at "
+            f"line {reference[1]}: the depths and the well's elevation would be of two datums",
+            line=datum[1],
+            column="md",
+        )
 
 
 def _corrections(path: Path, traj: Node, found: dict[str, tuple[Any, int]]) -> None:
@@ -484,42 +585,54 @@ def _applied_agrees(path: Path, north: NorthReference, found: dict[str, tuple[An
 def _survey_date(
     path: Path, trajectories: list[Node], north: NorthReference, found: dict[str, tuple[Any, int]]
 ) -> None:
-    """The survey date: the earliest ``dTimTrajStart``, the day the survey began. Magnetic-north
-    azimuths without a stated declination take theirs from that date downstream (a declination
-    drifts by up to tenths of a degree a year): trajectories started on different days, or
-    one undated beside a dated one, are refused there, not given one day's declination."""
+    """The survey date: the earliest ``dTimTrajStart``, the day the survey began, and of
+    trajectories begun on several days the latest as ``survey_date_last`` (no one date's
+    declination is then applied to every station downstream). Magnetic-north azimuths
+    without a stated declination take theirs from the date downstream (a declination drifts
+    by up to tenths of a degree a year): trajectories started on different days, or one
+    undated beside a dated one, are refused here, at the line, not given one day's; of other
+    azimuths, an undated one beside a dated one is warned of at its line."""
     starts = [(traj, traj.get("dTimTrajStart")) for traj in trajectories]
     dated = [(node, _date(path, node)) for _, node in starts if node is not None]
     if not dated:
         return
     earliest, day = min(dated, key=lambda entry: entry[1])
+    latest, last = max(dated, key=lambda entry: entry[1])
     found["survey_date"] = (day, earliest.line)
-    if north != "magnetic" or "declination" in found:
-        return
+    found.pop("survey_date_last", None)  # the trajectories' own dates, not an extension's
+    if last != day:
+        found["survey_date_last"] = (last, latest.line)
     later = next(((node, other) for node, other in dated if other != day), None)
     undated = next((traj for traj, node in starts if node is None), None)
-    if later is not None:
-        line = later[0].line
-        what = (
-            f"<dTimTrajStart> {later[1].isoformat()} differs from the {day.isoformat()} at "
-            f"line {earliest.line}"
+    if north == "magnetic" and "declination" not in found and (later or undated):
+        if later is not None:
+            line = later[0].line
+            what = (
+                f"<dTimTrajStart> {later[1].isoformat()} differs from the {day.isoformat()} "
+                f"at line {earliest.line}"
+            )
+        else:
+            line = undated.line if undated is not None else 0
+            what = (
+                f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} "
+                f"(line {earliest.line})"
+            )
+        raise InputFileError(
+            path,
+            f"{what}: the declination of these magnetic-north azimuths (none stated, none "
+            "applied) depends on each survey's date; read one trajectory at a time (reader "
+            "option trajectory: its uid or name)",
+            line=line,
+            column="dTimTrajStart",
         )
-    elif undated is not None:
-        line = undated.line
-        what = (
-            f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} "
-            f"(line {earliest.line})"
+    if undated is not None:
+        warn_input(
+            path,
+            f"trajectory without <dTimTrajStart> beside one started {day.isoformat()} (line "
+            f"{earliest.line}): when it began is not known; the survey date is the dated "
+            "ones' (a geomagnetic field or declination from it applies to its stations too)",
+            undated.line,
         )
-    else:
-        return
-    raise InputFileError(
-        path,
-        f"{what}: the declination of these magnetic-north azimuths (none stated, none "
-        "applied) depends on each survey's date; read one trajectory at a time (reader "
-        "option trajectory: its uid or name)",
-        line=line,
-        column="dTimTrajStart",
-    )
 
 
 def _date(path: Path, node: Node) -> dt.date:

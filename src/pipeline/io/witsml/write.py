@@ -114,7 +114,7 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
         doc.leaf("nameWell", well_name)
         doc.leaf("nameWellbore", wellbore_name)
         doc.leaf("name", name)
-        if well.survey_date is not None:
+        if well.survey_date is not None and well.survey_date_last is None:
             doc.leaf("dTimTrajStart", f"{well.survey_date.isoformat()}T00:00:00Z")
         doc.leaf("mdMn", texts["md"][lo], uom="m")
         doc.leaf("mdMx", texts["md"][hi - 1], uom="m")
@@ -329,7 +329,7 @@ def _common_data(doc: _Document, well: WellMetadata) -> None:
             kind = "double"
         else:
             doc.leaf("value", _checked(str(value), f"well {field}", None))
-            kind = "date" if field == "survey_date" else "string"
+            kind = "date" if field in ("survey_date", "survey_date_last") else "string"
         doc.leaf("dataType", kind)
         doc.close()
     doc.close()
