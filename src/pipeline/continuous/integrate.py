@@ -163,14 +163,14 @@ def _apsidal_run(
         previous = None if n == 0 else str((n - 1) % 2)
         last = n == options.passes - 1
         # İ from the inclination (x) or from r (xy), h from the toolface (xy); both stored
-        # last, with their half-angle tangents for the budget (an x tool's toolface, stored
-        # only, from its tangent)
+        # last, with their half-angle tangents for the budget (the inclination, and an x
+        # tool's toolface, stored only, from their tangents)
         wanted: tuple[_Wanted, _Wanted] = (
-            ("both", "angle" if two_axis else "half")
+            ("half", "angle" if two_axis else "half")
             if last
             else ("", "angle")
             if two_axis
-            else ("angle", "")
+            else ("half", "")
         )
         carry = tie  # azimuth of the sample integrated last
         for a, b in chunks(0, size, odometer.rows, reverse=backward):
@@ -267,11 +267,10 @@ def _previous(store: ColumnStore, name: str, previous: str | None, lo: int, hi: 
     return np.zeros(hi - lo) if previous is None else store.floats(f"{name}{previous}", lo, hi)
 
 
-_Wanted = Literal["", "angle", "both", "half"]
+_Wanted = Literal["", "angle", "half"]
 """What :func:`_polar` gives of an angle: nothing (its sine and cosine only), the angle
-(arctan2), the angle and the tangent of its half, or that tangent and the angle from it
-(``2·atan``: within 2 ulp of arctan2, at half its CPU — NumPy's float64 arctan is
-vectorised here, arctan2 not)."""
+(arctan2), or the tangent of its half and the angle from it (``2·atan``: within 2 ulp of
+arctan2, at half its CPU — NumPy's float64 arctan is vectorised here, arctan2 not)."""
 
 
 class _Angles(NamedTuple):
@@ -346,26 +345,23 @@ its rounding (the tangent of the rounded π/2 is 1.6e16), and its square would o
 def _polar(
     y: FloatArray, x: FloatArray, wanted: _Wanted
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """The angle ``arctan2(y, x)`` and the tangent of its half as ``wanted`` (else empty),
-    and :func:`_unit`'s sine, cosine and radius. The tangent from the radius in hand,
+    """The angle ``arctan2(y, x)`` and the tangent of its half as ``wanted`` (:data:`_Wanted`;
+    else empty), and :func:`_unit`'s sine, cosine and radius. The tangent from the radius in hand,
     ``y/(r + x)`` (x ≥ 0) or ``(r − x)/y`` (x < 0; neither form cancels); beyond
     :data:`_HALF_REACH` or NaN (r 0, not finite or NaN; an angle of ±π) from the angle, there
     by arctan2."""
     sin, cos, r = _unit(y, x)
-    angle = np.arctan2(y, x) if wanted in ("angle", "both") else np.empty(0)
-    if wanted not in ("both", "half"):
-        return angle, np.empty(0), sin, cos, r
+    if wanted != "half":
+        return np.arctan2(y, x) if wanted else np.empty(0), np.empty(0), sin, cos, r
     with np.errstate(invalid="ignore", divide="ignore"):
         half = np.divide(y, np.add(r, x))
         back = np.flatnonzero(x < 0)
         half[back] = (r[back] - x[back]) / y[back]
-    if wanted == "half":
-        angle = np.arctan(half)
-        angle *= 2.0
+    angle = np.arctan(half)
+    angle *= 2.0
     if half.size and not max(float(half.max()), -float(half.min())) <= _HALF_REACH:  # NaN: not
         odd = np.flatnonzero(~(np.abs(half) <= _HALF_REACH))
-        if wanted == "half":
-            angle[odd] = np.arctan2(y[odd], x[odd])
+        angle[odd] = np.arctan2(y[odd], x[odd])
         half[odd] = np.tan(angle[odd] / 2)
     return angle, half, sin, cos, r
 
