@@ -18,7 +18,7 @@ import yaml
 
 import pipeline as gp
 from pipeline.gyrocompass.azimuth import OMEGA_DEG_H, mirror_probability
-from tests_support import simulate_and_run
+from tests_support import gyropipe_cli, simulate_and_run
 
 SITE = {
     "latitude": 61.25,
@@ -65,6 +65,24 @@ def test_a_north_lateral_at_88_degrees_is_not_compassed_to_its_mirror(tmp_path: 
     assert rejects.reason.str.contains("cannot be told from its mirror").all()
     trajectory = pd.read_parquet(out / "uncertainty.trajectory.parquet")
     assert trajectory.dls.max() < 40.0  # the plan's 30°/30 m, not a reversal
+
+
+def test_the_budget_says_the_lateral_is_ambiguous_before_the_job(tmp_path: Path):
+    """``gyropipe budget`` predicted σ 1.96° at the 88° stations the compass stage rejects."""
+    plan_file = tmp_path / "plan.yaml"
+    plan_file.write_text(yaml.safe_dump(plan(0.0, {"preset": "mems-vrg"}, seed=1)))
+    out = tmp_path / "budget.csv"
+    done = gyropipe_cli("budget", str(plan_file), "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    budget = pd.read_csv(out, comment="#")
+    budget.columns = [c.split("[")[0] for c in budget.columns]
+    horizontal = budget.inc > 87.0
+    assert horizontal.sum() == 4 and budget.sigma_azi[horizontal].isna().all()
+    assert (budget.mirror[horizontal] > 0.01).all()
+    assert budget.sigma_azi[~horizontal].between(1.0, 3.0).all()
+    assert (budget.mirror[~horizontal] < 1e-6).all()
+    rows = done.stdout.splitlines()[2 : 2 + len(budget)]  # after the title and header
+    assert [("azimuth ambiguous" in row) for row in rows] == list(horizontal)
 
 
 @pytest.mark.parametrize("azi", [90.0, 270.0])
