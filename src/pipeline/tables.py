@@ -249,6 +249,14 @@ class ErrorBudget(TableContract):
     sigma_azi_accel: float = column(
         unit="deg", ge=0, finite=False, description="azimuth σ from the accelerometers"
     )
+    mirror: float = column(
+        unit=None,
+        ge=0,
+        le=1,
+        description="probability that the planned readings put the azimuth across east–west "
+        "(180° − A); above the compass stage's ambiguity it rejects the station, and the σ "
+        "columns are NaN",
+    )
 
 
 class PositionReadings(TableContract):

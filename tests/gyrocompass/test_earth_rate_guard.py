@@ -193,6 +193,23 @@ def test_earth_rate_check_finds_the_earths_rate_in_noise_free_components(latitud
     assert check.fitted == pytest.approx(k) and check.ok
 
 
+def test_a_fit_near_horizontal_within_its_noise_of_the_earths_rate_passes():
+    """At 88°, A = 0°, σ 0.23 °/h: a fit 2.1 σ from the Earth's own (h, r), its along-hole
+    share ((h − Ω sin φ sin I)/cos I, σ 6.6 °/h) at zero, was rejected as 0.058× the Earth
+    rate (are the gyro rates in °/h?): the first-order σ of |(along, r)| at the fit saw only
+    r's. Rates in rad/s at the same geometry are still refused."""
+    lat, inc = np.radians(LATITUDE), np.radians(88.0)
+    up = OMEGA_DEG_H * np.sin(lat)
+    truth = model(np.array(0.0), np.array(inc), lat, 2)
+    fit = np.array([up * np.sin(inc), 0.42])  # along = 0
+    cov = np.eye(2) * 0.23**2
+    assert np.sqrt((fit - truth) @ np.linalg.inv(cov) @ (fit - truth)) < 2.2
+    (check,) = earth_rate_check(fit, cov, inc, lat, 0.2)
+    assert check.ok and check.ratio < 0.06
+    (wrong,) = earth_rate_check(truth * UNITS["rad/s"], cov, inc, lat, 0.2)
+    assert not wrong.ok
+
+
 def test_the_reason_names_the_ratio_and_the_unit():
     check = EarthRate("horizontal", 0.000035, K, 0.2 * K)
     assert not check.ok

@@ -10,7 +10,8 @@ Estimators, vectorised over stations (angles in radians, rates in °/h):
 - ``ml``: the maximum-likelihood A fitting all observed components with their covariance
   (h, r, and z when a three-axis tool gives it) — a 1-D search (5° grid, then Newton); its
   σ is the Cramér–Rao bound, never worse than either closed form. At I = 90° a transverse
-  pair cannot tell A from 180° − A (h carries no cos A): the σ shows it (→ ∞) unless z helps.
+  pair cannot tell A from 180° − A (h carries no cos A), and toward it the σ at either
+  answer stays small: :func:`mirror_probability` says how likely the other one is.
 """
 
 from __future__ import annotations
@@ -26,6 +27,12 @@ from pipeline.gyrocompass.precision import OMEGA_DEG_H
 Method = Literal["ml", "auto", "sine", "atan2"]
 GRID = np.radians(np.arange(0.0, 360.0, 5.0))
 TINY = 1e-12
+MIRROR_STEP = np.radians(1.0)
+MIRROR_GRID = np.arange(360) * MIRROR_STEP
+"""Azimuths (rad) searched for the misfit's minima on the other side of east–west (each
+refined by the parabola through its grid neighbours)."""
+MIRROR_SIGMAS = 3.0
+"""A mirror azimuth nearer than this many σ of the solution is within its stated error."""
 
 
 @dataclass(frozen=True)
@@ -132,6 +139,75 @@ def _maximum_likelihood(
         step = np.where(hess > 0, grad / np.where(hess > 0, hess, 1.0), 0.0)
         a = a - np.clip(step, -0.2, 0.2)
     out: FloatArray = a
+    return out
+
+
+def mirror_probability(
+    obs: FloatArray,
+    cov: FloatArray,
+    azimuth: FloatArray,
+    sigma: FloatArray,
+    inclination: FloatArray,
+    latitude: float,
+    floor: float,
+) -> FloatArray:
+    """Probability, for equal priors, that each station's azimuth lies on the other side of
+    east–west from its solution ``azimuth`` (rad, σ ``sigma`` rad), given observations
+    (n, m) with covariance (n, m, m). Only h (through cos I) and z (through sin I) see the
+    sign of cos A, so toward horizontal a transverse gyro's readings fit A and its mirror
+    180° − A almost alike. 1/(1 + exp(Δχ²/2)), Δχ² the excess of the least misfit of a
+    minimum on the other side (:data:`MIRROR_GRID`) over A's; 0 where the other side
+    holds no minimum or it is within :data:`MIRROR_SIGMAS` σ of A (the doubt σ states),
+    and where it cannot reach ``floor``."""
+    m = obs.shape[1]
+    k = OMEGA_DEG_H * np.cos(latitude)
+    # the model is the offset plus basis·(cos A, sin A): the misfit a quadratic in them
+    basis = np.zeros((len(obs), m, 2))
+    basis[:, 0, 0], basis[:, 1, 1] = k * np.cos(inclination), -k
+    if m == 3:
+        basis[:, 2, 0] = k * np.sin(inclination)
+    weight = np.linalg.inv(cov)
+    res = obs - model_offset(inclination, latitude, m)
+    weighted = (weight @ res[..., None])[..., 0]
+    across = basis.transpose(0, 2, 1)
+    linear, quad = (across @ weighted[..., None])[..., 0], across @ weight @ basis
+    cos_a = np.cos(azimuth)
+    own_part = _quadratic(quad, linear, cos_a, np.sin(azimuth))
+    own = np.maximum(np.sum(res * weighted, axis=1) + own_part, 0.0)
+    # a model across east–west differs from A's by ≥ |cos A| in cos, which sin cannot take
+    # up: its misfit is ≥ (reach − √own)², the triangle inequality in the weighted norm
+    schur = np.maximum(quad[:, 0, 0] - quad[:, 0, 1] ** 2 / quad[:, 1, 1], 0.0)
+    reach = np.abs(cos_a) * np.sqrt(schur)
+    near = np.flatnonzero(np.maximum(reach - np.sqrt(own), 0.0) ** 2 - own < -2 * np.log(floor))
+    probability: FloatArray = np.zeros(len(obs))
+    if near.size == 0:
+        return probability
+    quad, linear, cos_a = quad[near], linear[near], cos_a[near]
+    cos_g, sin_g = np.cos(MIRROR_GRID), np.sin(MIRROR_GRID)
+    misfit = _quadratic(quad[..., None], linear[..., None], cos_g, sin_g)
+    before, after = np.roll(misfit, 1, axis=1), np.roll(misfit, -1, axis=1)
+    other = (misfit < before) & (misfit < after) & (cos_g * cos_a[:, None] <= 0)
+    rows, best = np.arange(near.size), np.argmin(np.where(other, misfit, np.inf), axis=1)
+    f0, fb, fa = misfit[rows, best], before[rows, best], after[rows, best]
+    curve = np.maximum(fa - 2 * f0 + fb, TINY)  # the parabola through the three
+    lowest = f0 - (fa - fb) ** 2 / (8 * curve)
+    where = MIRROR_GRID[best] + MIRROR_STEP * (fb - fa) / (2 * curve)
+    excess = np.where(other[rows, best], np.maximum(lowest - own_part[near], 0.0), np.inf)
+    apart = np.abs(np.angle(np.exp(1j * (where - azimuth[near])))) > MIRROR_SIGMAS * sigma[near]
+    probability[near] = np.where(apart, np.exp(-np.logaddexp(0.0, excess / 2)), 0.0)
+    return probability
+
+
+def _quadratic(
+    quad: FloatArray, linear: FloatArray, cos_a: FloatArray, sin_a: FloatArray
+) -> FloatArray:
+    """qᵀ·quad·q − 2·linearᵀ·q for q = (cos A, sin A): the misfit less its constant."""
+    out: FloatArray = (
+        quad[:, 0, 0] * cos_a**2
+        + 2 * quad[:, 0, 1] * (cos_a * sin_a)
+        + quad[:, 1, 1] * sin_a**2
+        - 2 * (linear[:, 0] * cos_a + linear[:, 1] * sin_a)
+    )
     return out
 
 

@@ -73,6 +73,8 @@ class EarthRate:
         return ""
 
 
+CIRCLE = np.radians(np.arange(0.0, 360.0, 2.0))
+"""Directions (rad) searched for the Earth-rate point nearest a fit."""
 HINT = "are the gyro rates in °/h?"
 
 
@@ -133,7 +135,9 @@ def earth_rate_check(
       cos I → 0 leaves it undetermined.
 
     Each component may depart from its expected value by
-    ``√((tolerance·expected)² + (4σ)²)``, σ propagated from ``cov`` (first order).
+    ``√((tolerance·expected)² + (4σ)²)``, σ propagated from ``cov`` (first order) — from
+    (h, r), where that fails, the larger of it and σ at the Earth-rate point nearest the fit
+    (toward horizontal a noisy along near zero leaves the gradient at the fit r's σ alone).
     """
     k = OMEGA_DEG_H * np.cos(latitude)
     up = OMEGA_DEG_H * np.sin(latitude)
@@ -153,10 +157,34 @@ def earth_rate_check(
         h, r = obs[:2]
         along = (h - up * si) / ci
         value = float(np.hypot(along, r))
-        parts.append(("horizontal", value, np.array([along / ci, r]) / (value or 1.0), k))
-    checks = []
-    for component, value, grad, expected in parts:
-        sigma = float(np.sqrt(grad @ cov[: len(grad), : len(grad)] @ grad))
-        limit = float(np.hypot(tolerance * abs(expected), EARTH_RATE_SIGMAS * sigma))
-        checks.append(EarthRate(component, value, float(expected), limit))
-    return checks
+        grad = np.array([along / ci, r]) / (value or 1.0)
+        if abs(value - k) > _limit(grad, cov, k, tolerance):
+            # near horizontal along's σ grows as 1/cos I: where its noise leaves it near zero
+            # the gradient at the fit sees only r's σ; the Earth-rate point nearest the fit
+            # sees along's too (the larger σ of the two is taken)
+            toward = _nearest_on_circle(np.array([along, r]), cov[:2, :2], ci, k) / [ci, 1.0]
+            grad = max(grad, toward, key=lambda g: float(g @ cov[:2, :2] @ g))
+        parts.append(("horizontal", value, grad, k))
+    return [
+        EarthRate(component, value, float(expected), _limit(grad, cov, expected, tolerance))
+        for component, value, grad, expected in parts
+    ]
+
+
+def _limit(grad: FloatArray, cov: FloatArray, expected: float, tolerance: float) -> float:
+    """The largest allowed |fitted − expected|: the tolerance and 4 σ (first order, ``grad``
+    of the fitted value) in quadrature."""
+    sigma = float(np.sqrt(grad @ cov[: len(grad), : len(grad)] @ grad))
+    return float(np.hypot(tolerance * abs(expected), EARTH_RATE_SIGMAS * sigma))
+
+
+def _nearest_on_circle(point: FloatArray, cov: FloatArray, ci: float, k: float) -> FloatArray:
+    """Unit direction of the point of the circle of radius ``k`` nearest ``point`` (along, r)
+    in the metric of (h, r) covariance ``cov`` (along = (h − Ω sin φ sin I)/cos I)."""
+    scale = np.array([1.0 / ci, 1.0])
+    weight = np.linalg.inv(cov * np.outer(scale, scale))
+    unit = np.stack([np.cos(CIRCLE), np.sin(CIRCLE)])
+    gap = point[:, None] - k * unit
+    best = int(np.argmin(np.einsum("ic,ij,jc->c", gap, weight, gap)))
+    out: FloatArray = unit[:, best]
+    return out

@@ -90,6 +90,14 @@ class CompassOptions(AccelerometerOptions):
         description="σ_azi, deg, above which a station is flagged poor_azimuth (σ includes "
         "the tool errors compassing cannot remove, e.g. a gyro's g-sensitivity)",
     )
+    ambiguity: float = Field(
+        1e-3,
+        gt=0,
+        lt=1,
+        description="probability (equal priors) of the mirror azimuth 180° − A above which a "
+        "station is rejected: toward horizontal a transverse gyro's high-side component "
+        "carries little cos A, so A and 180° − A fit its readings almost alike",
+    )
     z_bias_sigma: float | None = Field(
         None,
         gt=0,

@@ -20,6 +20,9 @@ Per station (DOMAIN.md §5), from the frame positions k:
 4. The Earth rate the fit found must be the Earth's (:mod:`pipeline.gyrocompass.earth_rate`);
    a station outside is rejected, never solved, and when most stations fail, or any fails by
    a ratio only a rate unit explains, the record's units are wrong and every station is.
+   Toward horizontal h carries cos A only through cos I: a station whose mirror azimuth
+   180° − A fits about as well (:func:`~pipeline.gyrocompass.azimuth.mirror_probability`
+   above ``ambiguity``) is rejected too.
 5. σ holds the measured noise and the tool errors the frame positions cannot remove
    (:mod:`pipeline.gyrocompass.systematic`): the gyro's g-dependent bias, the accelerometers'
    bias, misalignment and scale factor.
@@ -40,7 +43,7 @@ import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
-from pipeline.gyrocompass.azimuth import solve_azimuth
+from pipeline.gyrocompass.azimuth import mirror_probability, solve_azimuth
 from pipeline.gyrocompass.consistency import chi2_sf
 from pipeline.gyrocompass.earth_rate import (
     EarthRate,
@@ -187,17 +190,19 @@ def compass(
     for m in (2, 3):  # one vectorised azimuth solve per observation size
         group = [p for p in pending if len(p.obs) == m]
         if group:
-            solution = solve_azimuth(
-                np.stack([p.obs for p in group]),
-                np.stack([p.cov for p in group]),
-                np.array([p.row.inc for p in group]),
-                lat,
-                options.azimuth_method,
+            obs, cov = np.stack([p.obs for p in group]), np.stack([p.cov for p in group])
+            inc = np.array([p.row.inc for p in group])
+            solution = solve_azimuth(obs, cov, inc, lat, options.azimuth_method)
+            mirrored = mirror_probability(
+                obs, cov, solution.azimuth, solution.sigma, inc, lat, options.ambiguity
             )
-            for p, azi, sigma, method in zip(
-                group, solution.azimuth, solution.sigma, solution.method, strict=True
+            for p, azi, sigma, method, odds in zip(
+                group, solution.azimuth, solution.sigma, solution.method, mirrored, strict=True
             ):
-                rows.append(_finish(p, float(azi), float(sigma), str(method), lat))
+                if odds > options.ambiguity:
+                    rejected.append((p.row.station, p.row.md, _ambiguous(azi, p.row.inc, odds)))
+                else:
+                    rows.append(_finish(p, float(azi), float(sigma), str(method), lat))
     rows.sort(key=lambda row: row.station)
     rejected.sort(key=lambda reject: reject[0])
     rejects = {
@@ -206,6 +211,17 @@ def compass(
         "reason": [r[2] for r in rejected],
     }
     return _table(rows, options), CompassRejects.compiled().make_table(rejects)
+
+
+def _ambiguous(azimuth: float, inclination: float, probability: float) -> str:
+    """Why a station whose azimuth (rad) cannot be told from its mirror is rejected."""
+    a = np.degrees(azimuth) % 360.0
+    return (
+        f"azimuth {a:.1f}° cannot be told from its mirror {(180.0 - a) % 360.0:.1f}° "
+        f"(180° − A) at inclination {np.degrees(inclination):.2f}°: the high-side gyro sees "
+        f"too little of cos A so near horizontal (mirror probability {probability:.2g}); a "
+        "third gyro axis in the fit (z_bias_sigma) or a lower inclination resolves it"
+    )
 
 
 def _table(rows: list[_Row], options: CompassOptions) -> pa.Table:

@@ -16,7 +16,10 @@ Per station, for the frame positions and dwell of the plan:
 Gyro biases and linear drift are removed by the multi-position scheme and do not appear. Where
 the planned horizontal gravity is not ``tilt_detection`` times its σ (σ_I and the accelerometer
 resolution, the compass stage's defaults) above zero the azimuth is undefined, as the compass
-stage will declare it: the azimuth σ columns are NaN there. The
+stage will declare it: the azimuth σ columns are NaN there. They are NaN too where the
+planned readings fit the mirror azimuth 180° − A about as well
+(:func:`pipeline.gyrocompass.azimuth.mirror_probability` above the stage's ``ambiguity``,
+least favourable starting toolface): near horizontal the stage rejects the station. The
 tool's error magnitudes are its 1σ values as :func:`pipeline.sim.sensors.compass_errors`
 takes them — the same the compass stage uses for a simulated tool.
 """
@@ -27,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
-from pipeline.gyrocompass.azimuth import cramer_rao
+from pipeline.gyrocompass.azimuth import cramer_rao, mirror_probability, model
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import hr_covariance
 from pipeline.gyrocompass.systematic import ToolErrors, accelerometer_sigma
@@ -85,8 +88,18 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     defaults = CompassOptions()
     sigma_tilt = np.hypot(sigma_inc, defaults.acc_resolution * 1e-6)
     undefined = np.abs(np.sin(state.inc)) <= defaults.tilt_detection * sigma_tilt
+    planned = model(state.azi, state.inc, lat, 2)
+    mirror = np.max(
+        [
+            mirror_probability(
+                planned, c + g_cov, state.azi, sigma_fit, state.inc, lat, defaults.ambiguity
+            )
+            for c in covs
+        ],
+        axis=0,
+    )
     for sigma in (sigma_fit, sigma_gyro, sigma_g, sigma_accel):
-        sigma[undefined] = np.nan
+        sigma[undefined | (mirror > defaults.ambiguity)] = np.nan
     return ErrorBudget.compiled().make_table(
         {
             "md": mds,
@@ -97,6 +110,7 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
             "sigma_azi_gyro": np.degrees(sigma_gyro),
             "sigma_azi_g": np.degrees(sigma_g),
             "sigma_azi_accel": np.degrees(sigma_accel),
+            "mirror": mirror,
         },
         north_reference="true",
     )
@@ -104,16 +118,19 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
 
 def budget_lines(table: pa.Table) -> list[str]:
     """The budget as text: a header and one line per station (degrees); a station without an
-    azimuth says so in words."""
+    azimuth says why in words."""
     lines = [
         f"{'MD m':>9} {'INC°':>7} {'AZI°':>7} {'σI°':>7} {'σA°':>7} {'gyro':>7} {'g-sens':>7} "
         f"{'acc':>7}"
     ]
+    ambiguity = CompassOptions().ambiguity
     for row in table.to_pylist():
         azimuth = (
             f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
             f"{row['sigma_azi_accel']:7.3f}"
             if np.isfinite(row["sigma_azi"])
+            else f"  azimuth ambiguous (180° − A fits alike, probability {row['mirror']:.2g})"
+            if row["mirror"] > ambiguity
             else "  azimuth undefined (vertical within the accelerometers' resolution)"
         )
         lines.append(
