@@ -5,6 +5,7 @@ values that round to zero from below, NaN, and large and tiny magnitudes."""
 from __future__ import annotations
 
 import re
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.reports.charts.fixed import BULK, few_point_texts, point_texts, rows
+from pipeline.reports.charts.fixed import BULK, path_texts, rows, runs
 from pipeline.reports.charts.pdf import CIRCLE
 from pipeline.reports.charts.scene import Path
 
@@ -60,18 +61,24 @@ def test_any_coordinates_read_as_python_writes_them(values: np.ndarray, decimals
     assert rows(template, values, decimals) == python(template, values, decimals)
 
 
-def test_point_texts_cut_one_call_into_subpaths_as_python_writes_each_point():
-    """The points of several subpaths written in one call (in bulk when there are many)
-    and cut back into the subpaths: each point as Python writes it, single points too."""
-    values = CASES["three decimals"][:150].copy()
+@pytest.mark.parametrize("count", [300, 40])
+def test_runs_cut_one_call_into_subpaths_as_python_writes_each_point(count: int):
+    """The points of several subpaths written in one call (in bulk for many numbers, by
+    Python's ``%`` for few) and cut back into the subpaths: each point as Python writes it,
+    single points and empty runs too."""
+    values = CASES["three decimals"][:count].copy()
     values[0, 0] = -0.0
-    lengths = [1, 2, 60, 1, 86]
-    runs = point_texts(values, lengths, 2, " ")
-    assert [len(run) for run in runs] == lengths
-    assert [text for run in runs for text in run] == [
-        f"{x:.2f} {y:.2f}" for x, y in values.tolist()
+    lengths = [1, 2, 0, count - 5, 1, 1]
+    assert (values.size >= BULK) == (count == 300)
+    found = runs("{} {} l ", values, 2, lengths)
+    starts = np.cumsum([0, *lengths])
+    assert found == [
+        "".join(f"{x:.2f} {y:.2f} l " for x, y in values[a:b].tolist())
+        for a, b in pairwise(starts.tolist())
     ]
-    assert point_texts(values[:3], [3], 1, ",") == [[f"{x:.1f},{y:.1f}" for x, y in values[:3]]]
+    assert runs("{},{} ", values[:3], 1, [3]) == [
+        "".join(f"{x:.1f},{y:.1f} " for x, y in values[:3])
+    ]
 
 
 @pytest.mark.parametrize("decimals", [0, 1, 2, 3])
@@ -106,25 +113,21 @@ def test_a_percent_sign_in_the_template_is_text_in_the_few_numbers_path():
     assert rows("{}% of {}%%\n", values, 2) == "1.00% of -0.00%%\ninf% of 250.50%%\n"
 
 
-def test_few_point_texts_write_each_short_path_as_python_writes_each_point():
-    """The short paths of a scene written in one call: each subpath's points as Python
-    writes them (mapped first), empty subpaths left out, a path of many numbers left to
-    be written alone; many short paths together are written in bulk, rounding ties too."""
+def test_path_texts_write_each_path_as_python_writes_each_point():
+    """The paths of a scene written in one call: each subpath's points as Python writes
+    them (mapped first), empty subpaths left out; the short paths in bulk with a long one,
+    rounding ties too, and by Python's ``%`` when all are short."""
     rng = np.random.default_rng(8)
     short = Path((rng.uniform(0, 500, (2, 2)), np.zeros((0, 2)), rng.uniform(0, 500, (5, 2))))
     single = Path((np.array([[18.125, -0.0]]),))  # mapped: a rounding tie, and −0
     empty = Path((np.zeros((0, 2)),))
     long = Path((rng.uniform(0, 500, (BULK // 2, 2)),))
-    ticks = [Path((np.array([[k + 0.125, 0.875], [k + 0.375, -k - 0.625]]),)) for k in range(200)]
-    found = few_point_texts([short, long, single, empty], 1, ",", lambda p: p * 2.0)
-    assert set(found) == {id(short), id(single), id(empty)}
-    assert found[id(short)] == [
-        [f"{2 * x:.1f},{2 * y:.1f}" for x, y in part.tolist()] for part in short.parts[::2]
-    ]
-    assert found[id(single)] == [["36.2,-0.0"]]
-    assert found[id(empty)] == []
-    assert 4 * len(ticks) >= BULK
-    found = few_point_texts(ticks, 1, " ", lambda p: p * 2.0)
-    assert [found[id(t)] for t in ticks] == [
-        [[f"{2 * x:.1f} {2 * y:.1f}" for x, y in t.parts[0].tolist()]] for t in ticks
-    ]
+
+    def python(path: Path) -> list[str]:
+        parts = [part for part in path.parts if len(part)]
+        return ["".join(f"{2 * x:.1f},{2 * y:.1f} " for x, y in part.tolist()) for part in parts]
+
+    for paths in ([short, long, single, empty], [short, single, empty]):
+        found = path_texts(paths, "{},{} ", 1, lambda p: p * 2.0)
+        assert found == {id(path): python(path) for path in paths}
+    assert path_texts([empty], "{} {} l ", 2) == {id(empty): []}

@@ -8,6 +8,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Iterable, Sequence
 from functools import cache
+from itertools import accumulate, pairwise
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,69 +31,81 @@ def rows(template: str, values: NDArray[np.float64], decimals: int) -> str:
     the rows one after the other. The template's fields are its k columns in order
     (``{}``) or numbered as ``str.format``'s (``{j}``: column j, written wherever it
     appears, each column's digits made once); plain text otherwise."""
-    if values.size >= BULK:
-        scaled = np.abs(values) * 10.0**decimals
-        if scaled.max() < LIMIT:  # False for NaN
-            units = np.rint(scaled)
-            for i in np.flatnonzero(np.abs(scaled - np.floor(scaled) - 0.5) <= TIE).tolist():
-                units.flat[i] = float(f"{abs(values.flat[i]):.{decimals}f}".replace(".", ""))
-            return _digits(template, values, units, decimals)
+    units = _units(values, decimals)
+    if units is not None:
+        return _text(_digits(template, values, units, decimals))
     printf, fields = _printf(template, decimals)
     if fields is not None:
         values = values[:, fields]
     return printf * len(values) % tuple(values.ravel().tolist())
 
 
-def point_texts(
-    points: NDArray[np.float64], lengths: Sequence[int], decimals: int, sep: str
-) -> list[list[str]]:
-    """The rows (x, y) of ``points`` as ``f"{x:.2f}{sep}{y:.2f}"`` (``decimals`` decimals:
-    :func:`rows`' text), in one call for all of them, cut into runs of ``lengths`` rows
-    (the subpaths of a path laid end to end)."""
-    texts = rows(f"{{}}{sep}{{}}\n", points, decimals).split("\n")
-    runs, start = [], 0
-    for length in lengths:
-        runs.append(texts[start : start + length])
-        start += length
-    return runs
+def runs(
+    template: str, values: NDArray[np.float64], decimals: int, lengths: Sequence[int]
+) -> list[str]:
+    """:func:`rows`' text of ``values`` cut into runs of ``lengths`` rows (laid end to end),
+    in one call for all of them: each run the text of its rows, one after the other."""
+    bounds = list(accumulate(lengths, initial=0))
+    units = _units(values, decimals)
+    if units is None:
+        printf, fields = _printf(template, decimals)
+        numbers = (values if fields is None else values[:, fields]).ravel().tolist()
+        k = len(numbers) // len(values) if len(values) else 0  # numbers a row
+        return [printf * (b - a) % tuple(numbers[k * a : k * b]) for a, b in pairwise(bounds)]
+    chars = _digits(template, values, units, decimals)
+    ends = np.concatenate([[0], np.cumsum(np.count_nonzero(chars, axis=0))])  # row by row
+    text = _text(chars)
+    return [text[a:b] for a, b in pairwise(ends[bounds].tolist())]
 
 
-Few = dict[int, list[list[str]]]
-"""The point texts of a scene's short paths' subpaths, by the path's ``id``."""
-
-
-def few_point_texts(
+def path_texts(
     paths: Iterable[Path],
+    template: str,
     decimals: int,
-    sep: str,
     mapped: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None,
-) -> Few:
-    """:func:`point_texts` of the subpaths of each of ``paths`` with fewer than :data:`BULK`
-    numbers (by ``id`` of the path; empty subpaths left out; ``mapped`` applied to the points
-    first, row by row), in one call for all: a figure's many short paths (ticks, grid lines,
-    frames) cost one formatting of all their numbers — in bulk — not a call each."""
-    few = [
-        (id(path), parts)
-        for path in paths
-        if 2 * sum(map(len, parts := [part for part in path.parts if len(part)])) < BULK
-    ]
-    lengths = [len(part) for _, parts in few for part in parts]
+) -> dict[int, list[str]]:
+    """The text of each of ``paths``' subpaths (its points as :func:`rows` writes them into
+    ``template``; empty subpaths left out; ``mapped`` applied to the points first, row by
+    row), by ``id`` of the path, in one call for all: a figure's lines and its many short
+    paths (ticks, grid lines, frames) cost one formatting of all their numbers, in bulk."""
+    found = [(id(path), [part for part in path.parts if len(part)]) for path in paths]
+    lengths = [len(part) for _, parts in found for part in parts]
     if not lengths:
-        return {key: [] for key, _ in few}
-    points = np.concatenate([part for _, parts in few for part in parts])
-    runs = iter(point_texts(mapped(points) if mapped else points, lengths, decimals, sep))
-    return {key: [next(runs) for _ in parts] for key, parts in few}
+        return {key: [] for key, _ in found}
+    points = np.concatenate([part for _, parts in found for part in parts])
+    texts = iter(runs(template, mapped(points) if mapped else points, decimals, lengths))
+    return {key: [next(texts) for _ in parts] for key, parts in found}
+
+
+def _units(values: NDArray[np.float64], decimals: int) -> NDArray[np.float64] | None:
+    """|values| × 10^decimals rounded to whole numbers as Python rounds them, for
+    :func:`_digits`; None where Python writes them (fewer than :data:`BULK`, NaN, a
+    magnitude of :data:`LIMIT` or more)."""
+    if values.size < BULK:
+        return None
+    scaled = np.abs(values) * 10.0**decimals
+    if not scaled.max() < LIMIT:  # NaN too
+        return None
+    units = np.rint(scaled)
+    for i in np.flatnonzero(np.abs(scaled - np.floor(scaled) - 0.5) <= TIE).tolist():
+        units.flat[i] = float(f"{abs(values.flat[i]):.{decimals}f}".replace(".", ""))
+    return units
+
+
+def _text(chars: NDArray[np.uint8]) -> str:
+    """The rows of :func:`_digits`' characters one after the other, NULs dropped."""
+    return chars.T.tobytes().translate(None, b"\0").decode("ascii")
 
 
 def _digits(
     template: str, values: NDArray[np.float64], rounded: NDArray[np.float64], decimals: int
-) -> str:
-    """:func:`rows` from the digits of ``rounded`` (|values| × 10^decimals rounded to whole
-    numbers as Python rounds them, each below :data:`LIMIT`): each number's characters in
-    a field of one width (NUL where it has none), the template's text beside them, gathered
-    into the rows. The characters are made a column of the fields at a time, each column one
-    contiguous row of ``planes`` (a strided store of bytes costs some 2 ns each, a contiguous
-    one a tenth of that), and the rows transposed once at the end."""
+) -> NDArray[np.uint8]:
+    """The characters of :func:`rows` from the digits of ``rounded`` (:func:`_units`), a
+    column a row (NUL where a field has no character): each number's characters in a
+    field of one width, the template's text beside them, gathered into the rows. The
+    characters are made a column of the fields at a time, each column one contiguous row
+    of ``planes`` (a strided store of bytes costs some 2 ns each, a contiguous one a tenth
+    of that); :func:`_text` transposes the rows once at the end."""
     n, k = values.shape
     units = rounded.T.astype(np.uint32, order="C")  # < LIMIT < 2³²; (k, n)
     digits = max(len(str(int(units.max()))), decimals + 1)  # one at least before the point
@@ -115,7 +128,7 @@ def _digits(
             digit *= units >= 10**place
         field[:, column] = digit
         rest = quotient
-    return planes[index].T.tobytes().translate(None, b"\0").decode("ascii")  # NULs dropped
+    return planes[index]
 
 
 FIELD = re.compile(r"\{(\d*)\}")

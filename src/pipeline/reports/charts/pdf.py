@@ -9,7 +9,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from pipeline.reports.charts.fixed import Few, few_point_texts, point_texts, rows
+from pipeline.reports.charts.fixed import path_texts, rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -48,17 +48,15 @@ class _Placed:
         return self.ox + self.s * x, self.oy - self.s * y
 
 
-def _polyline(points: list[str], closed: bool) -> str:
-    """A subpath through ``points`` (each "x y", page points)."""
-    rest = " l ".join(points[1:]) + (" l" if len(points) > 1 else "")
-    return f"{points[0]} m {rest}" + (" h" if closed else "")
+POINT = "{} {} l "
+"""A path's point in its operators (:func:`~.fixed.path_texts`' template): each a line to
+it, the first of a subpath made a move."""
 
 
-def _line(points: Points, closed: bool) -> str:
-    """The subpath through ``points`` (page points) as :func:`_polyline` writes it, from one
-    text of all its points (no text per point)."""
-    text = rows("{} {} l ", points, 2).replace(" l ", " m ", 1)  # no number holds an "l"
-    return (text[:-1] if len(points) > 1 else text) + (" h" if closed else "")
+def _subpath(text: str, points: int, closed: bool) -> str:
+    """The subpath of ``points`` points written in ``text`` (:data:`POINT` each)."""
+    moved = text.replace(" l ", " m ", 1)  # no number holds an "l"
+    return (moved[:-1] if points > 1 else moved) + (" h" if closed else "")
 
 
 STROKES = 256
@@ -74,20 +72,16 @@ def _stroke(colour: str, width: float, dashes: tuple[float, ...], s: float) -> s
     return f"{stroke_colour(colour)} {_n(width * s)} w [{dash}] 0 d"
 
 
-def _body(p: Path, at: _Placed, few: Few) -> str:
-    """The subpaths of ``p`` placed by ``at``: its texts in ``few``, or (a path of many
-    points) its own."""
-    runs = few.get(id(p))
-    if runs is None:
-        parts = [part for part in p.parts if len(part)]
-        if len(parts) == 1:
-            return _line(at.xy(parts[0]), p.closed)
-        runs = point_texts(at.xy(np.concatenate(parts)), [len(part) for part in parts], 2, " ")
-    return " ".join(_polyline(points, p.closed) for points in runs)
+def _body(p: Path, texts: dict[int, list[str]]) -> str:
+    """The subpaths of ``p``, their points written in ``texts`` (page points)."""
+    parts = (len(part) for part in p.parts if len(part))
+    return " ".join(
+        _subpath(text, n, p.closed) for text, n in zip(texts[id(p)], parts, strict=True)
+    )
 
 
-def _path(p: Path, at: _Placed, few: Few) -> str:
-    body = _body(p, at, few)
+def _path(p: Path, at: _Placed, texts: dict[int, list[str]]) -> str:
+    body = _body(p, texts)
     if not body:
         return ""
     style = []
@@ -151,18 +145,18 @@ def _label(page: Page, t: Label, at: _Placed) -> None:
     page.glyphs(px, py, t.text, t.size * at.s, t.colour, bold=t.bold, angle=t.angle)
 
 
-def _group(page: Page, g: Group, at: _Placed, few: Few) -> None:
+def _group(page: Page, g: Group, at: _Placed, texts: dict[int, list[str]]) -> None:
     if g.clip is not None:
         x, y, w, h = g.clip
         cx, cy = at.point(x, y + h)
         page.raw(f"q {_n(cx)} {_n(cy)} {_n(w * at.s)} {_n(h * at.s)} re W n")
     for item in g.items:
         if isinstance(item, Group):
-            _group(page, item, at, few)
+            _group(page, item, at, texts)
         elif isinstance(item, Label):
             _label(page, item, at)
         else:
-            ops = _path(item, at, few) if isinstance(item, Path) else _marks(item, at)
+            ops = _path(item, at, texts) if isinstance(item, Path) else _marks(item, at)
             if ops:
                 page.raw(ops)
     if g.clip is not None:
@@ -174,7 +168,7 @@ def draw(page: Page, scene: Scene, left: float, top: float, width: float) -> Non
     page's bottom-left, scaled to ``width`` inches."""
     page.raw("q 1 j 0 J")
     at = _Placed(left * PT, top * PT, width * PT / scene.width)
-    _group(page, scene.root, at, few_point_texts(paths(scene.root), 2, " ", at.xy))
+    _group(page, scene.root, at, path_texts(paths(scene.root), POINT, 2, at.xy))
     page.raw("Q")
 
 

@@ -5,9 +5,7 @@ from __future__ import annotations
 
 from html import escape
 
-import numpy as np
-
-from pipeline.reports.charts.fixed import point_texts, rows
+from pipeline.reports.charts.fixed import path_texts, rows
 from pipeline.reports.charts.scene import (
     Group,
     Label,
@@ -16,6 +14,7 @@ from pipeline.reports.charts.scene import (
     Scene,
     outline,
     outline_runs,
+    paths,
 )
 from pipeline.reports.web_fonts import FAMILY
 
@@ -30,20 +29,15 @@ def _n(value: float) -> str:
     return "0" if out == "-0" else out
 
 
-def _polyline(points: list[str], closed: bool) -> str:
-    """A subpath through ``points`` (each "x,y")."""
-    rest = f"L{' '.join(points[1:])}" if len(points) > 1 else ""
-    return f"M{points[0]}{rest}" + ("Z" if closed else "")
+POINT = "{},{} "
+"""A path's point in its ``d`` (:func:`~.fixed.path_texts`' template)."""
 
 
-def _path(p: Path) -> str:
-    parts = [part for part in p.parts if len(part)]
-    d = ""
-    if len(parts) == 1:  # from one text of all its points (no text per point)
-        d = f"M{rows('{},{} ', parts[0], 1)[:-1].replace(' ', 'L', 1)}" + ("Z" if p.closed else "")
-    elif parts:
-        texts = point_texts(np.concatenate(parts), [len(part) for part in parts], 1, ",")
-        d = "".join(_polyline(run, p.closed) for run in texts)
+def _path(p: Path, texts: dict[int, list[str]]) -> str:
+    """``p`` as a ``path`` element, its subpaths' points written in ``texts``
+    (:func:`~.fixed.path_texts` of :data:`POINT`)."""
+    close = "Z" if p.closed else ""
+    d = "".join(f"M{text[:-1].replace(' ', 'L', 1)}{close}" for text in texts[id(p)])
     attrs = [f'd="{d}"', f'fill="{p.fill or "none"}"']
     if p.stroke is not None:
         attrs.append(f'stroke="{p.stroke.colour}" stroke-width="{p.stroke.width:g}"')
@@ -90,11 +84,11 @@ def _label(t: Label) -> str:
     return f"{box}<text {' '.join(attrs)}>{escape(t.text, quote=False)}</text>"
 
 
-def _group(g: Group, prefix: str, clips: list[int]) -> str:
+def _group(g: Group, prefix: str, clips: list[int], texts: dict[int, list[str]]) -> str:
     body = "".join(
-        _group(i, prefix, clips)
+        _group(i, prefix, clips, texts)
         if isinstance(i, Group)
-        else _path(i)
+        else _path(i, texts)
         if isinstance(i, Path)
         else _marks(i)
         if isinstance(i, Marks)
@@ -126,5 +120,5 @@ def to_svg(scene: Scene, id_prefix: str = "", title: str = "", style: str = "") 
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}pt" height="{h}pt" '
         f'viewBox="0 0 {w} {h}" font-family="{FONT}" stroke-linejoin="round" role="img">'
         f'{named}{styled}<rect width="{w}" height="{h}" fill="#ffffff"/>'
-        f"{_group(scene.root, id_prefix, [])}</svg>"
+        f"{_group(scene.root, id_prefix, [], path_texts(paths(scene.root), POINT, 1))}</svg>"
     )
