@@ -1,0 +1,59 @@
+"""Surveys written by gyropipe and read back by it: the same numbers in the same units, the
+same north reference, whatever way the table came to the writer (a hand-made DataFrame, an
+Arrow table whose well names the north)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pytest
+
+import pipeline as gp
+from pipeline.contracts import UNIT_KEY
+from pipeline.well import WellMetadata, attach
+
+EXTENSIONS = ("las", "csv", "xml", "parquet")
+
+
+def _stations() -> pd.DataFrame:
+    return pd.DataFrame(
+        {"md": [0.0, 150.0, 300.0], "inc": [0.0, 4.5, 9.0], "azi": [0.0, 212.0, 214.5]}
+    )
+
+
+@pytest.mark.parametrize("ext", EXTENSIONS)
+def test_a_frames_north_reference_and_canonical_units_are_written(tmp_path: Path, ext: str) -> None:
+    """The API's own rule for a DataFrame (attrs['north_reference'] names the azimuths'
+    north, a column declaring no unit is in its canonical one) is what the file states: the
+    north was dropped (a LAS with an empty NREF, a CSV with none) and inc/azi written
+    without a unit ('INC .', 'inc,azi')."""
+    frame = _stations()
+    frame.attrs = {"north_reference": "grid", "well": {"well": "A-7"}}
+    path = gp.write(frame, tmp_path / f"survey.{ext}")
+    back = gp.read(path, kind="stations")
+    assert back.attrs["north_reference"] == "grid"
+    assert back.attrs["units"]["inc"] == back.attrs["units"]["azi"] == "deg"
+    assert back.attrs["units"]["md"] == "m"
+    assert back["azi"].tolist() == [0.0, 212.0, 214.5]
+
+
+def test_an_arrow_tables_azimuths_take_the_wells_north(tmp_path: Path) -> None:
+    """An Arrow table whose azimuths carry no north of their own but whose well names one,
+    written to CSV: its north_reference line states it (only well.north_reference was
+    written, which the reader rightly does not take for the azimuths')."""
+    unit = {UNIT_KEY: b"m"}
+    table = pa.table(
+        {"md": [0.0, 150.0, 300.0], "inc": [0.0, 4.5, 9.0], "azi": [0.0, 212.0, 214.5]}
+    )
+    fields = [table.schema.field("md").with_metadata(unit)] + [
+        table.schema.field(n).with_metadata({UNIT_KEY: b"deg"}) for n in ("inc", "azi")
+    ]
+    table = attach(
+        pa.Table.from_arrays(table.columns, schema=pa.schema(fields)),
+        WellMetadata(well="A-7", north_reference="true"),
+    )
+    path = gp.write(table, tmp_path / "survey.csv")
+    assert "# north_reference=true\n" in path.read_text()
+    assert gp.read(path, kind="stations").attrs["north_reference"] == "true"
