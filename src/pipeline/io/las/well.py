@@ -1,4 +1,5 @@
-"""Well metadata of a LAS file, from its ~Well, then ~Parameter items.
+"""Well metadata of a LAS file, from its ~Well, then ~Parameter items (an item in both with
+another value is refused: a ~Parameter item does not override the ~Well's).
 
 WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN; LAT/LATI/LATITUDE and
 LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds

@@ -1,0 +1,46 @@
+"""What vendors' LAS and CSV survey listings do that the standards do not forbid, read through
+the command line as a user runs it: each a number or label read as the file means it, or a
+typed error naming the file and line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tests_support import gyropipe_cli
+
+MAGNETIC_LAS = """~Version Information
+ VERS.            2.0 : CWLS LOG ASCII STANDARD - VERSION 2.0
+ WRAP.             NO : ONE LINE PER DEPTH STEP
+~Well Information
+ STRT.M       0.0000 : START DEPTH
+ STOP.M     300.0000 : STOP DEPTH
+ STEP.M       0.0000 : STEP
+ NULL.     -999.2500 : NULL VALUE
+ WELL.          B-14 : WELL
+ DATE.    2026-11-21 : SURVEY DATE
+ DECL.DEG       0.00 : MAGNETIC DECLINATION
+~Parameter Information
+ NREF.      MAGNETIC : AZIMUTH REFERENCE
+ DECL.DEG      14.82 : MAGNETIC DECLINATION
+~Curve Information
+ DEPT.M              : MEASURED DEPTH
+ INCL.DEG            : INCLINATION
+ AZIM.DEG            : AZIMUTH
+~A  DEPT      INCL      AZIM
+   0.000     0.000     0.000
+ 150.000     4.500   212.000
+ 300.000     9.000   214.500
+"""
+
+
+def test_las_item_in_well_and_parameter_sections_with_different_values(tmp_path: Path) -> None:
+    """A ~Well DECL 0.00 (a template's) and a ~Parameter DECL 14.82: the ~Well's was read
+    silently, a declination of 0° on magnetic azimuths, which turned to true north would be
+    14.82° off. Refused at the second, naming both."""
+    path = tmp_path / "B-14.las"
+    path.write_text(MAGNETIC_LAS)
+    result = gyropipe_cli("convert", path, tmp_path / "B-14.csv", "--kind", "stations")
+    assert result.returncode != 0
+    assert f"{path}:14: DECL is given twice with different values ('0.00' on line 11" in (
+        result.stderr
+    )
