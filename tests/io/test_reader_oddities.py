@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pipeline as gp
 from tests_support import gyropipe_cli
 
 MAGNETIC_LAS = """~Version Information
@@ -44,3 +45,25 @@ def test_las_item_in_well_and_parameter_sections_with_different_values(tmp_path:
     assert f"{path}:14: DECL is given twice with different values ('0.00' on line 11" in (
         result.stderr
     )
+
+
+LISTING_BODY = """MD (m),Inc (deg),Azi (deg)
+0.00,0.00,0.00
+150.00,4.50,212.00
+300.00,9.00,214.50
+"""
+
+
+def test_csv_title_magnetic_declination_and_convergence_are_read(tmp_path: Path) -> None:
+    """'Magnetic Declination:', 'Mag Dec:' and 'Convergence:' (as survey listings title
+    them) were no keys: the lines were skipped without a word and magnetic azimuths left
+    without the declination their vendor stated."""
+    path = tmp_path / "B-14.csv"
+    path.write_text(
+        "Well: B-14\nNorth Reference: Magnetic\nMagnetic Declination: 14.82°\n"
+        "Convergence: -0.95°\n" + LISTING_BODY
+    )
+    well = gp.read(path).attrs["well"]
+    assert (well["declination"], well["grid_convergence"]) == (14.82, -0.95)
+    path.write_text("Well: B-14\nNorth Reference: Magnetic\nMag Dec: 14.82\n" + LISTING_BODY)
+    assert gp.read(path).attrs["well"]["declination"] == 14.82

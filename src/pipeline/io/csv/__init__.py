@@ -22,8 +22,9 @@ contract and the angles' plausibility, :mod:`pipeline.plausibility`).
 File layout, in order:
 
 * **title block** (optional): lines before the header — free text, ``key: value`` or
-  ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
-  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
+  ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields (or as
+  :data:`~pipeline.io.csv.header.WELL_ALIASES`: ``Magnetic Declination``, ``Convergence``)
+  fill the returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
   number may carry its unit, after it or in brackets after the key (``Elevation: 82 ft``,
   ``Easting (usft): 2300000``; brackets holding no unit leave the line unread, warned), else
   an angle is in degrees and a length in the file's length unit, the one unit of its length

@@ -41,8 +41,15 @@ WELL_ALIASES = {
     "date": "survey_date",
     "tool": "tool_type",
     "serial": "tool_serial",
+    "magneticdeclination": "declination",
+    "magdeclination": "declination",
+    "magdec": "declination",
+    "convergence": "grid_convergence",
+    "gridconv": "grid_convergence",
 }
-"""Title-block keys naming WellMetadata fields besides the field names themselves."""
+"""Title-block keys naming WellMetadata fields besides the field names themselves (the
+site's declination as vendors title it, ``Magnetic Declination:``, ``Mag Dec:``, and
+convergence, ``Convergence:``, as LAS MAGDEC and CONV)."""
 NORTH_KEYS = ("northreference", "azimuthreference")
 """Title-block keys declaring the azimuths' north reference (``north_reference: grid``);
 ``well.north_reference`` is well metadata instead."""
