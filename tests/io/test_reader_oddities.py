@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 import pipeline as gp
 from tests_support import gyropipe_cli
 
@@ -67,3 +69,20 @@ def test_csv_title_magnetic_declination_and_convergence_are_read(tmp_path: Path)
     assert (well["declination"], well["grid_convergence"]) == (14.82, -0.95)
     path.write_text("Well: B-14\nNorth Reference: Magnetic\nMag Dec: 14.82\n" + LISTING_BODY)
     assert gp.read(path).attrs["well"]["declination"] == 14.82
+
+
+def test_csv_title_angles_with_a_hemisphere_letter(tmp_path: Path) -> None:
+    """'Magnetic Declination: 2.5° W' (−2.5°, east of true north positive), 'Grid
+    Convergence: 0.95 W', 'Latitude: 33.5 S' as listings write them were refused as an
+    unknown unit 'W'/'S'; a sign beside the letter stays refused, at its line."""
+    path = tmp_path / "C-3.csv"
+    path.write_text(
+        "Well: C-3\nNorth Reference: Magnetic\nMagnetic Declination: 2.5° W\n"
+        "Grid Convergence: 0.95 W\nLatitude: 33.5 S\nLongitude: 151.2 E\n" + LISTING_BODY
+    )
+    well = gp.read(path).attrs["well"]
+    assert (well["declination"], well["grid_convergence"]) == (-2.5, -0.95)
+    assert (well["latitude"], well["longitude"]) == (-33.5, 151.2)
+    path.write_text("Well: C-3\nNorth Reference: Magnetic\nDeclination: -2.5 W\n" + LISTING_BODY)
+    with pytest.raises(gp.GyropipeError, match=r"C-3.csv:3: invalid declination '-2.5 W'"):
+        gp.read(path)

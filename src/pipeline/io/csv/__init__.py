@@ -34,6 +34,8 @@ File layout, in order:
   a datum's elevation (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where
   no ``Elevation`` is given: the depth reference's, else the only one (implying the depth
   reference; several and none named: left out, warned);
+  a latitude, longitude, declination or convergence may end in its hemisphere letter
+  (``33.5 S``, ``2.5° W``: negative);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
   a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
