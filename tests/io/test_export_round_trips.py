@@ -57,3 +57,28 @@ def test_an_arrow_tables_azimuths_take_the_wells_north(tmp_path: Path) -> None:
     path = gp.write(table, tmp_path / "survey.csv")
     assert "# north_reference=true\n" in path.read_text()
     assert gp.read(path, kind="stations").attrs["north_reference"] == "true"
+
+
+def test_a_las_keeps_the_tool_preset_and_the_geomagnetic_reference(tmp_path: Path) -> None:
+    """Raw samples converted to LAS and read back keep the well's tool_preset (the tool
+    catalogue entry whose error magnitudes compassing takes: without it σ_azi came from the
+    undeclared tool's model) and its geomagnetic field and dip (the magnetometer checks'
+    reference): all three were lost."""
+    well = WellMetadata(
+        well="A-7",
+        latitude=61.25,
+        tool_preset="mems-vrg",
+        magnetic_field=59731.0,
+        magnetic_dip=78.29,
+    )
+    units = {"time": b"s", "gyro_x": b"deg/h", "acc_x": b"m/s2", "acc_y": b"m/s2", "acc_z": b"m/s2"}
+    table = pa.table({name: [0.0, 0.01, 0.02] for name in units})
+    fields = [table.schema.field(n).with_metadata({UNIT_KEY: u}) for n, u in units.items()]
+    samples = attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
+    path = gp.write(samples, tmp_path / "samples.las")
+    back = gp.read(path, kind="samples").attrs["well"]
+    assert (back["tool_preset"], back["magnetic_field"], back["magnetic_dip"]) == (
+        "mems-vrg",
+        59731.0,
+        78.29,
+    )

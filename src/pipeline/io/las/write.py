@@ -2,10 +2,12 @@
 
 LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless all steps are
 exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE,
-UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
-the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
+UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN,
+TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes; items the
+well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
 well's magnetic declination and grid convergence, deg, east of true north positive),
-DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths),
+DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths), MAGFIELD
+(nT) and MAGDIP (deg) (the geomagnetic reference the magnetometer checks take),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
@@ -255,6 +257,7 @@ def _header_text(
         _line("EREF", "m", meta["elevation"], "elevation of the depth reference above MSL"),
         _line("TOOL", "", meta["tool_type"], "survey tool type"),
         _line("TOOLSN", "", meta["tool_serial"], "survey tool serial number"),
+        _line("TOOLPRESET", "", meta["tool_preset"], "tool catalogue entry of the survey tool"),
         "~Parameter Information",
         _line("NREF", "", north, "north reference of the azimuths"),
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
@@ -265,6 +268,8 @@ def _header_text(
         _line(
             "GRIDUSED", "deg", meta["grid_convergence_applied"], "convergence applied to azimuths"
         ),
+        _line("MAGFIELD", "nT", meta["magnetic_field"], "geomagnetic total field"),
+        _line("MAGDIP", "deg", meta["magnetic_dip"], "geomagnetic dip, down +"),
         _line(
             "METHOD", "", calculation and calculation.method.replace("_", " "), "survey calculation"
         ),
