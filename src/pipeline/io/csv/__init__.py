@@ -115,7 +115,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import null_markers, value_range
+from pipeline.io.nulls import null_markers, refuse_null_markers, value_range
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -442,7 +442,8 @@ def sniff(path: Path) -> Claim:
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
     then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
-    ±inf as an empty cell)."""
+    ±inf as an empty cell; a value that is a null marker, -999.25…, is refused, as in LAS:
+    every reader would read it back as no value)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -466,11 +467,13 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
         ]
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
+    rounded = for_export(table)
+    refuse_null_markers(
+        {f.name: rounded.column(i).combine_chunks() for i, f in enumerate(rounded.schema)}
+    )
     with path.open("wb") as fh:
         fh.write(("\n".join(comments) + "\n" + head.getvalue()).encode())
-        pacsv.write_csv(
-            _nan_as_null(for_export(table)), fh, pacsv.WriteOptions(include_header=False)
-        )
+        pacsv.write_csv(_nan_as_null(rounded), fh, pacsv.WriteOptions(include_header=False))
 
 
 def _nan_as_null(table: pa.Table) -> pa.Table:

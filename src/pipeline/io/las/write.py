@@ -43,8 +43,8 @@ import pyarrow.csv as pacsv
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, marked_rows
-from pipeline.io.precision import DECIMALS, blocks, for_export
+from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
+from pipeline.io.precision import DECIMALS, for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -77,7 +77,7 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     values = {f.name: _writable(table.column(f.name), f.name) for f in written}
     if values[index].null_count:
         raise ValueError(f"index column {index!r} has missing values")
-    _refuse_null_markers(values)
+    refuse_null_markers(values)
     null = NULL
     north = _written_north(numeric, well)
     text = _header_text(table, written, values[index], null, north, well, curve_lines)
@@ -178,28 +178,6 @@ def _text_cells(values: pa.Array) -> pa.Array:
         else:
             cells.append(f"'{value}'" if '"' in value else f'"{value}"')
     return pa.array(cells, pa.string())
-
-
-def _refuse_null_markers(values: dict[str, pa.Array]) -> None:
-    """A value every reader takes for no value (:mod:`pipeline.io.nulls`: -999.25…, and
-    ±999.25 in an angle) cannot be written: it would read back as a null. The float
-    columns are looked at a block of them at a time (:func:`~pipeline.io.precision.blocks`)."""
-    floats = [name for name, array in values.items() if pa.types.is_floating(array.type)]
-    rows = len(values[floats[0]]) if floats else 0
-    for block in blocks(floats, rows):
-        stacked = np.stack([values[name].to_numpy(zero_copy_only=False) for name in block])
-        angle = np.array([_is_angle(name) for name in block], dtype=bool)
-        for name, marked, is_angle in zip(block, marked_rows(stacked, angle), angle, strict=True):
-            if marked:
-                markers = ANGLE_NULL_MARKERS if is_angle else NULL_MARKERS
-                raise ValueError(
-                    f"column {name!r} holds a null marker {markers}: every reader would read "
-                    "it back as no value"
-                )
-
-
-def _is_angle(name: str) -> bool:
-    return name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
 
 
 def _written_north(fields: list[pa.Field], well: WellMetadata) -> str | None:
