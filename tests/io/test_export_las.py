@@ -70,6 +70,8 @@ def test_las_header_is_complete_for_lasio(exports_run: RunResult, trajectory: pa
         "GRIDCONV": (1.25, "deg"),
         "DECLUSED": ("", "deg"),  # the site's declination was not applied to gyro azimuths
         "GRIDUSED": (1.25, "deg"),
+        "MAGFIELD": ("", "nT"),  # a gyro run's well states no geomagnetic reference
+        "MAGDIP": ("", "deg"),
         "METHOD": ("minimum curvature", ""),
         "VSAZ": (30.0, "deg"),
     }

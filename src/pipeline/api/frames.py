@@ -31,7 +31,8 @@ from pydantic import ValidationError
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
-from pipeline.units import QUANTITIES, conversion_factor
+from pipeline.io.mnemonics import CURVES
+from pipeline.units import QUANTITIES, canonical_unit, conversion_factor
 from pipeline.well import WellMetadata, attach, well_of
 
 if TYPE_CHECKING:
@@ -209,6 +210,24 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
     if north is not None and not norths and well.north_reference is None:
         well = well.merged(WellMetadata(north_reference=north))  # the azimuths' default
     return attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
+
+
+def as_stated(table: pa.Table) -> pa.Table:
+    """``table`` stating what the API takes it to mean, for a writer: a canonical column
+    declaring no unit (``inc``, ``md``…) in its canonical unit (deg, m…), an ``azi`` naming
+    no north reference in the well's (a DataFrame's ``attrs['north_reference']``)."""
+    well = well_of(table)
+    north = well.north_reference if well is not None else None
+    fields = []
+    for f in table.schema:
+        meta = dict(f.metadata or {})
+        quantity = CURVES[f.name].quantity if f.name in CURVES else None
+        if quantity is not None and UNIT_KEY not in meta:
+            meta[UNIT_KEY] = canonical_unit(quantity).encode()
+        if f.name == "azi" and north is not None and NORTH_KEY not in meta:
+            meta[NORTH_KEY] = north.encode()
+        fields.append(f.with_metadata(meta) if meta else f)
+    return pa.Table.from_arrays(table.columns, schema=pa.schema(fields, table.schema.metadata))
 
 
 def like(template: TableLike, table: pa.Table) -> TableLike:

@@ -25,6 +25,7 @@ from pipeline.api import stages
 from pipeline.api.frames import (
     TableLike,
     WellLike,
+    as_stated,
     describe,
     like,
     to_frame,
@@ -113,8 +114,9 @@ def read_table(
 
 def write(data: TableLike, path: str | Path, *, writer: str | None = None) -> Path:
     """Write a table to ``path`` atomically, with the writer named or the one whose
-    extension ``path`` has (``.parquet``, ``.csv``, ``.las``, ``.xml``, ``.mcap``…); units,
-    north reference and well metadata go with it."""
+    extension ``path`` has (``.parquet``, ``.csv``, ``.las``, ``.xml``, ``.mcap``…); units
+    (a canonical column declaring none: its canonical unit), north reference (a DataFrame's
+    ``attrs['north_reference']``: its ``azi``'s) and well metadata go with it."""
     target = Path(path)
     reg = stages.registry()
     if writer is None:
@@ -126,8 +128,8 @@ def write(data: TableLike, path: str | Path, *, writer: str | None = None) -> Pa
         chosen = reg.writers[writer][0]
     else:
         raise ParameterError(f"no writer named {writer!r} (installed: {', '.join(reg.writers)})")
-    table = to_table(data, what="table to write")
-    well = well_of_data(data)
+    table = as_stated(to_table(data, what="table to write"))
+    well = well_of_data(table)  # with a frame's attrs["north_reference"]
     try:
         with atomic_path(target) as tmp:
             chosen.write(attach(table, well), tmp, well)

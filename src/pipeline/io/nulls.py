@@ -5,7 +5,8 @@ WITSML exports copy the habit, in angles with either sign (a ``stnGridCorUsed`` 
 ``999.25`` rad on every station). Every reader takes these numbers, in the file's own unit
 (before any conversion), as 'no value', never as a measurement: the negative ones in every
 column, the positive ones in angles (and angle rates) only — an MD, TVD or displacement of
-999.25 m is a real one.
+999.25 m is a real one. So a writer never writes one as a value (:func:`refuse_null_markers`:
+the LAS and CSV writers).
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
+
+from pipeline.io.mnemonics import CURVES
+from pipeline.io.precision import blocks
 
 NULL_MARKERS: tuple[float, ...] = (-999.25, -9999.25)
 """Numbers that mean 'no value' in every column of every reader, whatever the header says."""
@@ -73,3 +77,27 @@ def marked_rows(values: np.ndarray, angle: np.ndarray) -> np.ndarray:
         markers = ANGLE_NULL_MARKERS if angle[row] else NULL_MARKERS
         found[row] = bool(np.isin(values[row], markers).any())
     return found
+
+
+def refuse_null_markers(values: dict[str, pa.Array]) -> None:
+    """A value every reader takes for no value (-999.25…, and ±999.25 in an angle, a
+    canonical column of an angle or a dogleg severity) cannot be written: it would read back
+    as a null. A ValueError names the first column of ``values`` (by name; the float ones
+    are looked at) holding one, a block of columns at a time
+    (:func:`~pipeline.io.precision.blocks`)."""
+    floats = [name for name, array in values.items() if pa.types.is_floating(array.type)]
+    rows = len(values[floats[0]]) if floats else 0
+    for block in blocks(floats, rows):
+        stacked = np.stack([values[name].to_numpy(zero_copy_only=False) for name in block])
+        angle = np.array([_is_angle(name) for name in block], dtype=bool)
+        for name, marked, is_angle in zip(block, marked_rows(stacked, angle), angle, strict=True):
+            if marked:
+                markers = ANGLE_NULL_MARKERS if is_angle else NULL_MARKERS
+                raise ValueError(
+                    f"column {name!r} holds a null marker {markers}: every reader would read "
+                    "it back as no value"
+                )
+
+
+def _is_angle(name: str) -> bool:
+    return name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")

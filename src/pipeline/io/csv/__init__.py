@@ -22,8 +22,9 @@ contract and the angles' plausibility, :mod:`pipeline.plausibility`).
 File layout, in order:
 
 * **title block** (optional): lines before the header — free text, ``key: value`` or
-  ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields fill the
-  returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
+  ``key=value`` lines (optionally behind ``#``); keys naming well metadata fields (or as
+  :data:`~pipeline.io.csv.header.WELL_ALIASES`: ``Magnetic Declination``, ``Convergence``)
+  fill the returned :class:`WellMetadata`, ``north_reference`` declares the azimuth reference; a
   number may carry its unit, after it or in brackets after the key (``Elevation: 82 ft``,
   ``Easting (usft): 2300000``; brackets holding no unit leave the line unread, warned), else
   an angle is in degrees and a length in the file's length unit, the one unit of its length
@@ -33,6 +34,8 @@ File layout, in order:
   a datum's elevation (``KB Elevation``, ``RKB``, ``Ground Level``) is the elevation where
   no ``Elevation`` is given: the depth reference's, else the only one (implying the depth
   reference; several and none named: left out, warned);
+  a latitude, longitude, declination or convergence may end in its hemisphere letter
+  (``33.5 S``, ``2.5° W``: negative);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
   a null marker (``Elevation: -999.25``) is no value;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
@@ -112,7 +115,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import null_markers, value_range
+from pipeline.io.nulls import null_markers, refuse_null_markers, value_range
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
@@ -439,7 +442,8 @@ def sniff(path: Path) -> Claim:
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
     then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
-    ±inf as an empty cell)."""
+    ±inf as an empty cell; a value that is a null marker, -999.25…, is refused, as in LAS:
+    every reader would read it back as no value)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -463,11 +467,13 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
         ]
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
+    rounded = for_export(table)
+    refuse_null_markers(
+        {f.name: rounded.column(i).combine_chunks() for i, f in enumerate(rounded.schema)}
+    )
     with path.open("wb") as fh:
         fh.write(("\n".join(comments) + "\n" + head.getvalue()).encode())
-        pacsv.write_csv(
-            _nan_as_null(for_export(table)), fh, pacsv.WriteOptions(include_header=False)
-        )
+        pacsv.write_csv(_nan_as_null(rounded), fh, pacsv.WriteOptions(include_header=False))
 
 
 def _nan_as_null(table: pa.Table) -> pa.Table:

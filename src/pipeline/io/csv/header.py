@@ -41,8 +41,15 @@ WELL_ALIASES = {
     "date": "survey_date",
     "tool": "tool_type",
     "serial": "tool_serial",
+    "magneticdeclination": "declination",
+    "magdeclination": "declination",
+    "magdec": "declination",
+    "convergence": "grid_convergence",
+    "gridconv": "grid_convergence",
 }
-"""Title-block keys naming WellMetadata fields besides the field names themselves."""
+"""Title-block keys naming WellMetadata fields besides the field names themselves (the
+site's declination as vendors title it, ``Magnetic Declination:``, ``Mag Dec:``, and
+convergence, ``Convergence:``, as LAS MAGDEC and CONV)."""
 NORTH_KEYS = ("northreference", "azimuthreference")
 """Title-block keys declaring the azimuths' north reference (``north_reference: grid``);
 ``well.north_reference`` is well metadata instead."""
@@ -65,6 +72,10 @@ MAP_FIELDS = ("easting", "northing")
 """Map coordinates: in their CRS's unit, which a file's lengths in feet do not tell (US survey
 or international feet, 2 ppm apart: 4 ft at an easting of 2,000,000 ft), so one without a
 unit beside lengths in feet is refused."""
+HEMISPHERES = {"latitude": "NS", "longitude": "EW", "declination": "EW", "grid_convergence": "EW"}
+"""Well fields whose title value may end in a hemisphere letter (positive, negative), as
+vendors write them: ``Latitude: 33.5 S``, ``Magnetic Declination: 2.5° W`` (−2.5°: east of
+true north is positive); a value with both a sign and a letter is refused."""
 ELEVATION_WORDS = ("elevation", "elev")
 UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity": ("deg/30m",)}
 
@@ -457,19 +468,32 @@ def _well_value(
     (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
-    number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", value)
     try:
+        plain, sign = _hemisphere(field, value)
+        number = re.match(r"^([+-]?[0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(\S.*)?$", plain)
         if quantity and number and is_null_marker(float(number[1]), angle=quantity == "angle"):
             return None
         if quantity and number:
-            scale = _scale(field, value, quantity, [u for u in (unit, number[2]) if u], lengths)
-            parsed = float(number[1]) * scale
+            scale = _scale(field, plain, quantity, [u for u in (unit, number[2]) if u], lengths)
+            parsed = sign * float(number[1]) * scale
         elif field == "survey_date":
             parsed = header_date(value)
         return getattr(WellMetadata.model_validate({field: parsed}), field)
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError
         reason = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
         raise InputFileError(path, f"invalid {field} {value!r}: {reason}", line=line) from None
+
+
+def _hemisphere(field: str, value: str) -> tuple[str, float]:
+    """``value`` less a hemisphere letter it ends in (:data:`HEMISPHERES`), and the sign
+    the letter gives (1 without one)."""
+    letters = HEMISPHERES.get(field)
+    found = re.fullmatch(rf"(.*[0-9.°\s])([{letters}])", value.strip(), re.I) if letters else None
+    if letters is None or found is None:
+        return value, 1.0
+    if found[1].lstrip().startswith(("-", "+")):
+        raise ValueError("both a sign and a hemisphere letter")
+    return found[1].strip(), -1.0 if found[2].upper() == letters[1] else 1.0
 
 
 def _scale(

@@ -79,19 +79,23 @@ class Header:
 
     def find(self, path: Path, *mnemonics: str) -> Item | None:
         """The first item with a value among ``mnemonics`` (preferred first), in ~Well then
-        ~Parameter. One mnemonic given twice with different values is an error."""
+        ~Parameter. One mnemonic given twice with different values, in one section or one
+        in each (a ~Parameter item does not override the ~Well's), is an error."""
+        for mnemonic in mnemonics:
+            items = [i for i in self.well + self.parameters if i.mnemonic == mnemonic and i.value]
+            other = next((i for i in items if i.value != items[0].value), None)
+            if other is not None:
+                raise InputFileError(
+                    path,
+                    f"{mnemonic} is given twice with different values "
+                    f"({items[0].value!r} on line {items[0].line}, {other.value!r})",
+                    line=other.line,
+                )
         for section in (self.well, self.parameters):
             for mnemonic in mnemonics:
-                items = [i for i in section if i.mnemonic == mnemonic and i.value]
-                if len({i.value for i in items}) > 1:
-                    raise InputFileError(
-                        path,
-                        f"{mnemonic} is given twice with different values "
-                        f"({items[0].value!r} on line {items[0].line}, {items[1].value!r})",
-                        line=items[1].line,
-                    )
-                if items:
-                    return items[0]
+                found = next((i for i in section if i.mnemonic == mnemonic and i.value), None)
+                if found is not None:
+                    return found
         return None
 
 

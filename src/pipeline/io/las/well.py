@@ -1,6 +1,8 @@
-"""Well metadata of a LAS file, from its ~Well, then ~Parameter items.
+"""Well metadata of a LAS file, from its ~Well, then ~Parameter items (an item in both with
+another value is refused: a ~Parameter item does not override the ~Well's).
 
-WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN; LAT/LATI/LATITUDE and
+WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN, TOOLPRESET (the tool catalogue's
+entry, as gyropipe writes it); MAGFIELD (in its unit) and MAGDIP; LAT/LATI/LATITUDE and
 LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds
 (``61 15 00.5 N``, ``73°24'30"E``); DATE as ISO or another unambiguous form
 (``13-DEC-1986``, ``13/12/1986``; ``05/06/2024`` is refused as ambiguous:
@@ -47,6 +49,7 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
     "service_company": ("SRVC",),
     "tool_type": ("TOOL",),
     "tool_serial": ("TOOLSN",),
+    "tool_preset": ("TOOLPRESET",),
 }
 """Well metadata text fields and the mnemonics holding them, preferred first."""
 ANGLE_ITEMS = {
@@ -54,8 +57,11 @@ ANGLE_ITEMS = {
     "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE"),
     "declination_applied": ("DECLUSED",),
     "grid_convergence_applied": ("GRIDUSED",),
+    "magnetic_dip": ("MAGDIP",),
 }
 """Well metadata angles (deg, in the item's unit) and the mnemonics holding them."""
+FIELD_ITEM = "MAGFIELD"
+"""The geomagnetic total field (in the item's unit, which it must state; nT)."""
 UNREAD_CORRECTION = "GRIDCORR"
 """A vendor's grid correction, of no agreed sign: not read as either grid convergence."""
 COORDINATE_ITEMS = {
@@ -126,6 +132,16 @@ def well_metadata(
             return None
         return header_number(path, item) * _angle_factor(path, item), item
 
+    def field_strength() -> tuple[Any, Item] | None:
+        item = header.find(path, FIELD_ITEM)
+        if item is None or _null(header, item, angle=False):
+            return None
+        try:
+            factor = conversion_factor(item.unit, "magnetic_field")
+        except UnitError as exc:
+            raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
+        return header_number(path, item) * factor, item
+
     def date() -> tuple[Any, Item] | None:
         item = header.find(path, "DATE")
         return None if item is None else (_date(path, item), item)
@@ -136,6 +152,7 @@ def well_metadata(
         take(name, partial(coordinate, mnemonics, hemispheres))
     for name, mnemonics in ANGLE_ITEMS.items():
         take(name, partial(angle, mnemonics))
+    take("magnetic_field", field_strength)
     take("survey_date", date)
     if (unread := header.find(path, UNREAD_CORRECTION)) is not None:
         warn_input(

@@ -3,10 +3,12 @@
 LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless all steps are
 exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE
 (of trajectories begun on several days the first's, the description naming the last's),
-UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN (items
-the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
+UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN,
+TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes; items the
+well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
 well's magnetic declination and grid convergence, deg, east of true north positive),
-DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths),
+DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths), MAGFIELD
+(nT) and MAGDIP (deg) (the geomagnetic reference the magnetometer checks take),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
@@ -42,8 +44,8 @@ import pyarrow.csv as pacsv
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
-from pipeline.io.nulls import ANGLE_NULL_MARKERS, NULL_MARKERS, marked_rows
-from pipeline.io.precision import DECIMALS, blocks, for_export
+from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
+from pipeline.io.precision import DECIMALS, for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
@@ -76,7 +78,7 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     values = {f.name: _writable(table.column(f.name), f.name) for f in written}
     if values[index].null_count:
         raise ValueError(f"index column {index!r} has missing values")
-    _refuse_null_markers(values)
+    refuse_null_markers(values)
     null = NULL
     north = _written_north(numeric, well)
     text = _header_text(table, written, values[index], null, north, well, curve_lines)
@@ -179,28 +181,6 @@ def _text_cells(values: pa.Array) -> pa.Array:
     return pa.array(cells, pa.string())
 
 
-def _refuse_null_markers(values: dict[str, pa.Array]) -> None:
-    """A value every reader takes for no value (:mod:`pipeline.io.nulls`: -999.25…, and
-    ±999.25 in an angle) cannot be written: it would read back as a null. The float
-    columns are looked at a block of them at a time (:func:`~pipeline.io.precision.blocks`)."""
-    floats = [name for name, array in values.items() if pa.types.is_floating(array.type)]
-    rows = len(values[floats[0]]) if floats else 0
-    for block in blocks(floats, rows):
-        stacked = np.stack([values[name].to_numpy(zero_copy_only=False) for name in block])
-        angle = np.array([_is_angle(name) for name in block], dtype=bool)
-        for name, marked, is_angle in zip(block, marked_rows(stacked, angle), angle, strict=True):
-            if marked:
-                markers = ANGLE_NULL_MARKERS if is_angle else NULL_MARKERS
-                raise ValueError(
-                    f"column {name!r} holds a null marker {markers}: every reader would read "
-                    "it back as no value"
-                )
-
-
-def _is_angle(name: str) -> bool:
-    return name in CURVES and CURVES[name].quantity in ("angle", "dogleg_severity")
-
-
 def _written_north(fields: list[pa.Field], well: WellMetadata) -> str | None:
     refs = {f.metadata[NORTH_KEY].decode() for f in fields if NORTH_KEY in (f.metadata or {})}
     if len(refs) > 1:
@@ -256,6 +236,7 @@ def _header_text(
         _line("EREF", "m", meta["elevation"], "elevation of the depth reference above MSL"),
         _line("TOOL", "", meta["tool_type"], "survey tool type"),
         _line("TOOLSN", "", meta["tool_serial"], "survey tool serial number"),
+        _line("TOOLPRESET", "", meta["tool_preset"], "tool catalogue entry of the survey tool"),
         "~Parameter Information",
         _line("NREF", "", north, "north reference of the azimuths"),
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
@@ -266,6 +247,8 @@ def _header_text(
         _line(
             "GRIDUSED", "deg", meta["grid_convergence_applied"], "convergence applied to azimuths"
         ),
+        _line("MAGFIELD", "nT", meta["magnetic_field"], "geomagnetic total field"),
+        _line("MAGDIP", "deg", meta["magnetic_dip"], "geomagnetic dip, down +"),
         _line(
             "METHOD", "", calculation and calculation.method.replace("_", " "), "survey calculation"
         ),
