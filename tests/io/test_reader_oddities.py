@@ -47,6 +47,11 @@ def test_las_item_in_well_and_parameter_sections_with_different_values(tmp_path:
     assert f"{path}:14: DECL is given twice with different values ('0.00' on line 11" in (
         result.stderr
     )
+    # the same number written twice, as templates do, is one value
+    path.write_text(MAGNETIC_LAS.replace(" DECL.DEG       0.00", " DECL.deg      14.820"))
+    result = gyropipe_cli("convert", path, tmp_path / "B-14.csv", "--kind", "stations")
+    assert result.returncode == 0, result.stderr
+    assert "# well.declination=14.82\n" in (tmp_path / "B-14.csv").read_text()
 
 
 LISTING_BODY = """MD (m),Inc (deg),Azi (deg)

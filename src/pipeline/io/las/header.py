@@ -79,11 +79,12 @@ class Header:
 
     def find(self, path: Path, *mnemonics: str) -> Item | None:
         """The first item with a value among ``mnemonics`` (preferred first), in ~Well then
-        ~Parameter. One mnemonic given twice with different values, in one section or one
-        in each (a ~Parameter item does not override the ~Well's), is an error."""
+        ~Parameter. One mnemonic given twice with different values (:func:`_same`), in one
+        section or one in each (a ~Parameter item does not override the ~Well's), is an
+        error."""
         for mnemonic in mnemonics:
             items = [i for i in self.well + self.parameters if i.mnemonic == mnemonic and i.value]
-            other = next((i for i in items if i.value != items[0].value), None)
+            other = next((i for i in items if not _same(i, items[0])), None)
             if other is not None:
                 raise InputFileError(
                     path,
@@ -97,6 +98,17 @@ class Header:
                 if found is not None:
                     return found
         return None
+
+
+def _same(a: Item, b: Item) -> bool:
+    """Whether two items of one mnemonic say the same: the same text, or the same number in
+    the same unit (``0`` and ``0.00 DEG``)."""
+    if a.value == b.value:
+        return True
+    try:
+        return float(a.value) == float(b.value) and a.unit.upper() == b.unit.upper()
+    except ValueError:
+        return False
 
 
 @dataclass(frozen=True)
