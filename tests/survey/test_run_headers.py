@@ -13,6 +13,7 @@ import pyarrow.parquet as pq
 import pytest
 from test_magnetic_reference import method_text
 
+import pipeline as gp
 from pipeline.earth.geomagnetic import reference_field
 from pipeline.stages.uncertainty import magnetic_of
 from tests_support import ROOT, gyropipe_cli
@@ -170,3 +171,21 @@ def test_the_shipped_example_states_each_runs_tool_not_the_last_read(tmp_path: P
     assert "well.tool_type" not in (out / "definitive.csv").read_text()
     tools = pq.read_table(out / "definitive.survey.parquet").column("tool_type").to_pylist()
     assert set(tools) == {"north-seeking gyro (example)", "MWD (example)"}
+
+
+def test_the_api_takes_each_runs_own_header_in_either_order(runs: tuple[Path, Path]) -> None:
+    """gp.definitive_survey: the runs' order (the MWD's header given first or last) changes
+    nothing: the MWD run's ellipses are those of its own field, given in its file."""
+    gyro, mwd = (gp.read(path) for path in runs)
+    options = {"mwd": {"model": "ISCWSA-MWD-REV5"}}
+    first = gp.definitive_survey({"mwd": mwd, "gyro": gyro}, run_options=options)["survey"]
+    last = gp.definitive_survey({"gyro": gyro, "mwd": mwd}, run_options=options)["survey"]
+    given = gp.definitive_survey(
+        {"gyro": gyro, "mwd": mwd},
+        run_options=options,
+        magnetic={"total_field": 58000, "dip": 78.0, "declination": 12.5},
+    )["survey"]
+    for survey in (first, last):
+        assert survey["ellipse_major"].to_numpy() == pytest.approx(
+            given["ellipse_major"].to_numpy(), rel=1e-12
+        )
