@@ -285,9 +285,16 @@ def run_plan(
                 continue
             ins = _stage_inputs(plan, st, ports, record, checked)
             ctx = _Context(
-                st.id, current, registry, files, staging, staged, provenance, out_dir=out_dir,
+                st.id,
+                current,
+                registry,
+                files,
+                staging,
+                staged,
+                provenance,
+                out_dir=out_dir,
                 own=(plan.spec.well, overrides),
-            )  # fmt: skip
+            )
             t0 = time.perf_counter()
             outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
             record.wall_time_s = time.perf_counter() - t0
