@@ -15,7 +15,7 @@ import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
+from types import ModuleType, SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -28,6 +28,7 @@ from pipeline.cli import main
 from pipeline.io.las.log import TEXT_NULL
 from pipeline.plugins import forget_shared_registries
 from pipeline.registry import ReaderDef, WriterDef
+from pipeline.well import WellMetadata
 
 ROOT = Path(__file__).resolve().parents[1]
 TEXT_NULLS = re.compile(TEXT_NULL, re.IGNORECASE)
@@ -43,6 +44,16 @@ class CliResult:
     stderr: str
     output: str
     """stdout and stderr interleaved as a terminal shows them."""
+
+
+def stage_context(well: WellMetadata, **attrs: Any) -> Any:
+    """A stand-in StageContext of a run whose well is ``well`` (no overrides): a table's
+    own header over it (``well_for``), ``attrs`` beside (``provenance``, ``update_well``)."""
+
+    def well_for(header: WellMetadata | None) -> WellMetadata:
+        return well if header is None else well.merged(header)
+
+    return SimpleNamespace(well=well, well_for=well_for, **attrs)
 
 
 def gyropipe_cli(

@@ -75,11 +75,14 @@ def run_manifest(
     records: list[StageRecord],
     outputs: list[tuple[Path, Path]],
     wall: float,
+    differ: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """``run.json``; ``outputs`` are (file written, its published path) pairs; with the gates
     of every acceptance-gates table the run produced (``acceptance``: overall ``pass`` unless
     a gate failed; a failed gate makes the run's ``status`` ``rejected``: it ran, its outputs
-    are the evidence, the survey is not accepted)."""
+    are the evidence, the survey is not accepted). ``differ``: the fields the headers of the
+    run's input files state differently (:func:`~pipeline.well.agreed`), each input's value,
+    as ``well_differs`` (the run's ``well`` states none of them; survey dates their range)."""
     manifest: dict[str, Any] = {
         "status": "ok",
         "gyropipe": provenance.gyropipe,
@@ -95,6 +98,7 @@ def run_manifest(
         "inputs": {n: asdict(f) for n, f in provenance.inputs.items()},
         "parameter_inputs": [asdict(f) for f in provenance.read],
         "well": well.model_dump(mode="json", exclude_none=True),
+        **({"well_differs": {k: dict(v) for k, v in differ.items()}} if differ else {}),
         "stages": [
             {
                 "id": r.id,

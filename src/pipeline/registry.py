@@ -79,7 +79,16 @@ class StageContext(Protocol):
     @property
     def well(self) -> WellMetadata:
         """The run's well metadata as it stands: the pipeline's, updated by the stages before
-        this one (:meth:`update_well`), under the run's overrides."""
+        this one (:meth:`update_well`), under the run's overrides; a field the input files'
+        headers state differently is left unstated (a table's own: :meth:`well_for`)."""
+        ...
+
+    def well_for(self, header: WellMetadata | None) -> WellMetadata:
+        """The well metadata that applies to a table carrying ``header`` (its own file's,
+        :func:`~pipeline.well.well_of`): the header, where it is silent the pipeline's
+        ``well:``, under the run's overrides — never another input file's header (its survey
+        date, declination, convergence, tool, depth reference). ``None`` (a table that
+        carries none): :attr:`well`."""
         ...
 
     def update_well(self, found: WellMetadata) -> None:

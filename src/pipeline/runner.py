@@ -57,7 +57,7 @@ from pipeline.registry import (
 )
 from pipeline.reporting import ReportDef
 from pipeline.streams import Port, TableStream, as_stream, as_table, release
-from pipeline.well import WellMetadata, well_of
+from pipeline.well import WellMetadata, agreed, well_of
 
 T = TypeVar("T")
 STAGING_PREFIX = ".gyropipe-staging-"
@@ -108,8 +108,19 @@ class _Context:
     provenance: Provenance
     found: list[WellMetadata] = field(default_factory=list)
     """well metadata the stage reported (:meth:`update_well`, the headers of inputs it read)"""
+    headers: dict[str, WellMetadata] = field(default_factory=dict)
+    """the headers of the inputs it read, by input name"""
     out_dir: Path | None = None
     """where the staged files will be published"""
+    own: tuple[WellMetadata, WellMetadata] = (WellMetadata(), WellMetadata())
+    """the pipeline's ``well:`` and the run's overrides: a table's own header goes between
+    them (:meth:`well_for`)"""
+
+    def well_for(self, header: WellMetadata | None) -> WellMetadata:
+        if header is None:
+            return self.well
+        pipeline, overrides = self.own
+        return pipeline.merged(header).merged(overrides)
 
     def record_file(self, path: Path, param: str, what: str, sha256: str | None = None) -> str:
         self.provenance.see(path)
@@ -120,6 +131,11 @@ class _Context:
 
     def update_well(self, found: WellMetadata) -> None:
         self.found.append(found)
+
+    def found_header(self, name: str, header: WellMetadata) -> None:
+        """The header of the input ``name``, read: into the run's well."""
+        self.headers[name] = header
+        self.update_well(header)
 
     def published(self, path: Path) -> Path:
         """Where a file of the staging directory will be once published (others: itself)."""
@@ -144,10 +160,10 @@ class _Context:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
             header = well_of(given) or WellMetadata()
-            self.update_well(header)
+            self.found_header(name, header)
             return given, header
         table, header = self.read_file(given, kind, reader=reader, options=options)
-        self.update_well(header)
+        self.found_header(name, header)
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
@@ -162,12 +178,12 @@ class _Context:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
             header = well_of(given) or WellMetadata()
-            self.update_well(header)
+            self.found_header(name, header)
             return TableStream.from_table(given), header
         stream, header = self.registry.read_stream(
-            given, kind, reader=reader, options=options, well=self.well
+            given, kind, reader=reader, options=options, well=self.well_for(WellMetadata())
         )
-        self.update_well(header)
+        self.found_header(name, header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
 
@@ -186,7 +202,8 @@ class _Context:
         reader: str = "auto",
         options: Mapping[str, Any] | None = None,
     ) -> tuple[pa.Table, WellMetadata]:
-        return self.registry.read(path, kind, reader=reader, options=options, well=self.well)
+        run = self.well_for(WellMetadata())  # the run's, not another file's header
+        return self.registry.read(path, kind, reader=reader, options=options, well=run)
 
     def writer(self, name: str) -> WriterDef:
         return _lookup(self.registry.writers, name, "writer")
@@ -219,8 +236,11 @@ def run_plan(
 ) -> RunResult:
     """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
     what the stages report (the headers of the inputs they read, a simulation's site:
-    :meth:`~pipeline.registry.StageContext.update_well`), under ``well`` (overrides); each
-    stage gets it as it stands (``ctx.well``), ``run.json`` records it at the end.
+    :meth:`~pipeline.registry.StageContext.update_well`), under ``well`` (overrides), a field
+    the inputs' headers state differently left unstated (survey dates: their range;
+    :func:`~pipeline.well.agreed`, ``run.json``'s ``well_differs``); each stage gets it as it
+    stands (``ctx.well``), ``run.json`` records it at the end. A table's own header is
+    :meth:`~pipeline.registry.StageContext.well_for`'s.
 
     With ``out_dir``, the run's files (stage outputs, persisted tables, ``run.json``) are
     written into a private staging directory beside it, and ``out_dir`` is replaced by it in
@@ -242,6 +262,8 @@ def run_plan(
         check_out_dir(out_dir)
     overrides = well or WellMetadata()
     from_files = WellMetadata()
+    headers: dict[str, WellMetadata] = {}  # of the inputs read, by name
+    differ: dict[str, dict[str, Any]] = {}  # field → input → value, where they differ
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
     seen = {str(p.absolute()): key_after(p) for p in files.values() if isinstance(p, Path)}
@@ -263,7 +285,15 @@ def run_plan(
                 continue
             ins = _stage_inputs(plan, st, ports, record, checked)
             ctx = _Context(
-                st.id, current, registry, files, staging, staged, provenance, out_dir=out_dir
+                st.id,
+                current,
+                registry,
+                files,
+                staging,
+                staged,
+                provenance,
+                out_dir=out_dir,
+                own=(plan.spec.well, overrides),
             )
             t0 = time.perf_counter()
             outs = settled(lambda: _call(st, ins, ctx, registry))  # noqa: B023 (called here)
@@ -274,6 +304,10 @@ def run_plan(
             record.acceptance = acceptance(st, tables)
             for header in ctx.found:
                 from_files = from_files.merged(header)
+            if ctx.headers:  # where the inputs' headers differ no one of them is the run's
+                headers.update(ctx.headers)
+                update, differ = agreed(headers)
+                from_files = from_files.merged(update)
             for port, value in outs.items():
                 if isinstance(value, TableStream):  # read by several: decoded once if small
                     produced = _produced(plan, st, port, value, registry, record)
@@ -291,7 +325,8 @@ def run_plan(
             result = Tables(ports)
             settled(lambda: [result[key] for key in result])  # the API returns tables
             _check_unchanged(provenance)
-            manifest = run_manifest(provenance, current, records, [], time.perf_counter() - t_run)
+            wall = time.perf_counter() - t_run
+            manifest = run_manifest(provenance, current, records, [], wall, differ)
             return RunResult(None, manifest, result, current, [])
         persisted = settled(lambda: _persist(plan, registry, ports, current, staging, out_dir))
         settled(lambda: _drain(plan, ports, records))
@@ -308,7 +343,7 @@ def run_plan(
         final = [(publish_as or out_dir) / p.name for p in written]
         wall = time.perf_counter() - t_run
         manifest = run_manifest(
-            provenance, current, records, list(zip(written, final, strict=True)), wall
+            provenance, current, records, list(zip(written, final, strict=True)), wall, differ
         )
         write = atomic_write_bytes if publish_as is None else write_synced
         write(staging / MANIFEST, json.dumps(manifest, indent=2).encode())
@@ -474,14 +509,20 @@ def run_stage(
     *,
     registry: Registry,
     well: WellMetadata,
+    overrides: WellMetadata,
     provenance: Provenance,
     out_dir: Path,
 ) -> tuple[dict[str, pa.Table], list[Path]]:
     """Run one stage outside a plan (the Python API): its input and output tables checked
     against the stage's contracts, a failure inside it a :class:`StageError`; it writes its
-    files (if any) into ``out_dir``. Returns its output tables and the files written."""
+    files (if any) into ``out_dir``. ``well``: the inputs' headers merged under
+    ``overrides`` (the caller's), which a table's own header is under
+    (:meth:`~pipeline.registry.StageContext.well_for`). Returns its output tables and the
+    files written."""
     _check_contracts("", stage, inputs, "input")
-    ctx = _Context(stage.id, well, registry, {}, out_dir, [], provenance)
+    ctx = _Context(
+        stage.id, well, registry, {}, out_dir, [], provenance, own=(WellMetadata(), overrides)
+    )
     given: dict[str, Port] = {
         port: TableStream.from_table(table) if port in stage.definition.streamed_inputs else table
         for port, table in inputs.items()

@@ -7,6 +7,7 @@ Parquet files and stage boundaries.
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
@@ -193,6 +194,26 @@ class WellMetadata(BaseModel):
             else WellMetadata.model_validate(other).model_dump(exclude_unset=True)
         )
         return self.model_copy(update=update)
+
+
+def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str, dict[str, Any]]]:
+    """What the headers of several input files (by input name) say of the run as one: the
+    fields where they differ — each input's value, and the update stating the run's well
+    (over the headers merged): survey dates as their range (``survey_date`` the first,
+    ``survey_date_last`` the last), any other field left unstated (no one file's value is
+    the run's: each table keeps its own, :meth:`~pipeline.registry.StageContext.well_for`).
+    Values as JSON (dates ISO)."""
+    dumped = {k: h.model_dump(mode="json", exclude_none=True) for k, h in headers.items()}
+    differ: dict[str, dict[str, Any]] = {}
+    for name in WellMetadata.model_fields:
+        stated = {k: d[name] for k, d in dumped.items() if name in d}
+        if len(set(stated.values())) > 1:
+            differ[name] = stated
+    update: dict[str, Any] = {name: None for name in differ}
+    if "survey_date" in differ or "survey_date_last" in differ:
+        days = [d for h in headers.values() for d in (h.survey_date, h.survey_date_last) if d]
+        update["survey_date"], update["survey_date_last"] = min(days), max(days)
+    return WellMetadata().model_copy(update=update), differ
 
 
 APPLIED_REFUSED: dict[str, tuple[NorthReference, ...]] = {

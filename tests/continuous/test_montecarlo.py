@@ -35,6 +35,7 @@ from pipeline.stages.survey import MinCurveParams, min_curve
 from pipeline.stages.uncertainty import UncertaintyParams, position_uncertainty
 from pipeline.uncertainty import horizontal_scale
 from pipeline.well import WellMetadata
+from tests_support import stage_context
 
 FloatArray = NDArray[np.float64]
 N_RUNS = 60
@@ -131,9 +132,7 @@ def _positions(sim: Simulation, stations: pa.Table, stops: pa.Table) -> tuple[An
         axis=-1,
     )
     # a stage context as the runner gives it: the well, and a run whose plugins add no models
-    ctx: Any = SimpleNamespace(
-        well=WellMetadata(latitude=LAT), provenance=SimpleNamespace(tool_models={})
-    )
+    ctx: Any = stage_context(WellMetadata(latitude=LAT), provenance=SimpleNamespace(tool_models={}))
     tie = MinCurveParams(tie_north=truth[0, 0], tie_east=truth[0, 1], tie_tvd=truth[0, 2])
     traj = min_curve({"stations": stations}, tie, ctx)
     out = position_uncertainty(traj, _ct_params(stops), ctx)["trajectory"]

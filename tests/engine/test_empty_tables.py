@@ -78,6 +78,9 @@ class Context:
     def update_well(self, found: WellMetadata) -> None:
         pass
 
+    def well_for(self, header: WellMetadata | None) -> WellMetadata:
+        return self.well if header is None else self.well.merged(header)
+
     def read(self, *args: Any, **kwargs: Any) -> Any:
         raise AssertionError("no stage with inputs reads files")
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import datetime as dt
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -13,6 +12,7 @@ from pipeline.stages.stations import NorthReferenceParams, north_reference_stage
 from pipeline.survey.north import convert_azimuth, convert_table
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata
+from tests_support import stage_context
 
 
 def test_declination_sign() -> None:
@@ -85,7 +85,7 @@ def test_convert_table_turns_the_files_own_positions() -> None:
 
 def test_stage_given_declination() -> None:
     reported: list[WellMetadata] = []
-    ctx: Any = SimpleNamespace(well=WellMetadata(), update_well=reported.append)
+    ctx: Any = stage_context(WellMetadata(), update_well=reported.append)
     params = NorthReferenceParams(target="true", declination=17.0)
     out = north_reference_stage({"stations": stations("magnetic")}, params, ctx)["stations"]
     np.testing.assert_allclose(out.column("azi").to_numpy(), [27.0, 7.0])
@@ -101,7 +101,7 @@ def test_stage_from_well_header() -> None:
     from pipeline.earth.grid import grid_convergence
 
     well = WellMetadata(latitude=55.0, longitude=75.0, survey_date=dt.date(2026, 3, 1))
-    ctx: Any = SimpleNamespace(well=well, update_well=lambda found: None)
+    ctx: Any = stage_context(well, update_well=lambda found: None)
     params = NorthReferenceParams(target="grid", crs="EPSG:32643")
     out = north_reference_stage({"stations": stations("magnetic")}, params, ctx)["stations"]
     d = float(reference_field(55.0, 75.0, 0.0, dt.date(2026, 3, 1)).declination)
@@ -113,7 +113,7 @@ def test_stage_from_well_header() -> None:
 
 
 def test_stage_needs_a_source_for_corrections() -> None:
-    ctx: Any = SimpleNamespace(well=WellMetadata(), update_well=lambda found: None)
+    ctx: Any = stage_context(WellMetadata(), update_well=lambda found: None)
     with pytest.raises(ValueError, match="declination"):
         north_reference_stage(
             {"stations": stations("magnetic")}, NorthReferenceParams(target="true"), ctx

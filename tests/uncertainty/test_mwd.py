@@ -41,6 +41,7 @@ from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import WellMetadata
+from tests_support import stage_context
 
 RUN = SimpleNamespace(tool_models={})
 """The provenance a stage reads its run's tool models from (here: no plugin's)."""
@@ -318,7 +319,7 @@ def test_agreement_with_welleng_iscwsa_mwd_rev5_11(vertical_azimuth: float) -> N
 
 
 def _trajectory(md: Floats, inc: Floats, azi: Floats, north: str, well: WellMetadata) -> Any:
-    ctx: Any = SimpleNamespace(well=well, provenance=RUN)
+    ctx: Any = stage_context(well, provenance=RUN)
     stations: pa.Table = Stations.compiled().make_table(
         {"md": md, "inc": inc, "azi": azi}, north_reference=north
     )

@@ -35,6 +35,7 @@ from pipeline.uncertainty import (
 )
 from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.well import WellMetadata
+from tests_support import stage_context
 
 RUN = SimpleNamespace(tool_models={})
 """The provenance a stage reads its run's tool models from (here: no plugin's)."""
@@ -308,7 +309,7 @@ def _stations(md: Any, inc: Any, azi: Any) -> pa.Table:
 def test_stage_outputs_contract_and_matches_library() -> None:
     md = np.arange(0.0, 1501.0, 30.0)
     inc, azi = _profile(md)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
+    ctx: Any = stage_context(WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     out = position_uncertainty(traj, UncertaintyParams(confidence=0.95), ctx)["trajectory"]
     PositionUncertainty.validate_table(out)
@@ -323,7 +324,7 @@ def test_stage_outputs_contract_and_matches_library() -> None:
 def test_stage_gyro_ns_ct_with_tool_magnitudes() -> None:
     md = np.arange(0.0, 1501.0, 30.0)
     inc, azi = _profile(md, kickoff=0.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
+    ctx: Any = stage_context(WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     params = UncertaintyParams(
         model="GYRO-NS-CT", init_sigma_azi=1.5, tool={"gxy_gd": 2.0, "running_speed": 3600.0}
@@ -342,7 +343,7 @@ def test_stage_gyro_ns_ct_with_tool_magnitudes() -> None:
 def test_stage_ties_a_continuous_model_to_the_start_stops_sigma() -> None:
     md = np.arange(300.0, 1501.0, 30.0)
     inc, azi = _profile(md, kickoff=0.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata(latitude=LAT), provenance=RUN)
+    ctx: Any = stage_context(WellMetadata(latitude=LAT), provenance=RUN)
     traj = min_curve({"stations": _stations(md, inc, azi)}, MinCurveParams(tie_tvd=0.0), ctx)
     # the stop nearest the first station (300 m) is the run's tie
     stops = pa.table({"md": [1500.0, 300.2], "inc": [50.0, 30.0], "sigma_azi": [3.0, 0.7]})
@@ -382,7 +383,7 @@ def test_stage_ties_a_continuous_model_to_the_start_stops_sigma() -> None:
 
 def test_stage_needs_latitude() -> None:
     md = np.arange(0.0, 91.0, 30.0)
-    ctx: Any = SimpleNamespace(well=WellMetadata(), provenance=RUN)
+    ctx: Any = stage_context(WellMetadata(), provenance=RUN)
     traj = min_curve({"stations": _stations(md, [0, 1, 2, 3], [0, 0, 0, 0])}, MinCurveParams(), ctx)
     with pytest.raises(MissingSiteError, match="position_uncertainty stage's `latitude`"):
         position_uncertainty(traj, UncertaintyParams(), ctx)

@@ -28,7 +28,7 @@ from pipeline.plugins import shared_registry
 from pipeline.registry import Provenance, Registry, StageSetup
 from pipeline.runner import run_stage, start_time
 from pipeline.version import __version__
-from pipeline.well import WellMetadata, attach
+from pipeline.well import WellMetadata, agreed, attach
 
 
 def registry() -> Registry:
@@ -46,13 +46,17 @@ def call(
     out_dir: Path | None = None,
 ) -> tuple[dict[str, pa.Table], WellMetadata, list[Path]]:
     """Run the registered stage ``uses`` on ``inputs`` (None: an optional input left out)
-    with ``params``; the well metadata is the inputs' merged with ``well``. Returns the
+    with ``params``; the well metadata is the inputs' merged (where they differ: none of
+    them, survey dates their range, :func:`~pipeline.well.agreed`) under ``well``. Returns the
     output tables (carrying that well metadata), the well metadata and the files it wrote
     into ``out_dir``."""
     reg = registry()
     definition, plugin = reg.stages[uses]
     given = {port: data for port, data in inputs.items() if data is not None}
-    merged = well_metadata(*(well_of_data(d) for d in given.values()), well)
+    overrides = well_metadata(well)
+    headers = {port: well_of_data(d) for port, d in given.items()}
+    update, _ = agreed(headers)  # where the inputs' headers differ, no one of them is theirs
+    merged = well_metadata(*headers.values(), update, overrides)
     try:
         parsed = definition.params.model_validate(dict(params), context={"registry": reg})
     except ValidationError as exc:
@@ -84,6 +88,7 @@ def call(
             tables,
             registry=reg,
             well=merged,
+            overrides=overrides,
             provenance=provenance,
             out_dir=out_dir or Path("."),
         )

@@ -50,7 +50,7 @@ from pipeline.uncertainty.engine import (
     OutsideValidityError,
     find_model,
 )
-from pipeline.well import Latitude, WellMetadata
+from pipeline.well import Latitude, WellMetadata, well_of
 
 STAGE = "clearance"
 
@@ -454,8 +454,9 @@ def clearance(
     for model in sorted(models):  # the reference's and the manifest's (the wells' model)
         param = "reference_model" if model == params.reference_model else "wells.model"
         toolmodels.record(ctx, find_model(model, catalogue), param)
-    site, applied = _site(params, ctx.well, models, catalogue)
-    frame = _Frame(north_reference_of(reference, "azi"), ctx.well, site.magnetic, catalogue)
+    well = ctx.well_for(well_of(reference))  # the reference file's header, not another's
+    site, applied = _site(params, well, models, catalogue)
+    frame = _Frame(north_reference_of(reference, "azi"), well, site.magnetic, catalogue)
     make = _Survey(
         frame,
         site,
@@ -487,7 +488,7 @@ def clearance(
         arrays = _arrays(block, frame)
         start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
         offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
-        kick = _kickoff(w, ref, offset, params, ctx.well.well)
+        kick = _kickoff(w, ref, offset, params, well.well)
         if kick is None:
             pairs.append(Pair(ref, offset))
             continue

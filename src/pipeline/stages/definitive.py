@@ -229,24 +229,22 @@ def definitive_survey(
     tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
     for port, tool in tools.items():
         toolmodels.record(ctx, tool, f"runs.{port}.model")
-    applied = _magnetic(params, tools, ctx.well, [inputs[p] for p in ports])
-    magnetic = None if applied is None else applied.reference
-    runs = [_read(p, inputs[p], specs[p], north, magnetic, ctx.well) for p in ports]
+    wells = {p: ctx.well_for(well_of(inputs[p])) for p in ports}  # each run's own header
+    applied = {
+        p: applied_magnetic(params.magnetic, wells[p], stage="definitive_survey")
+        for p in ports
+        if _needs_magnetic(tools[p], inputs[p], north)
+    }
+    sites = {p: _site(params, tools[p], wells[p], applied.get(p)) for p in ports}
+    runs = [_read(p, inputs[p], specs[p], north, sites[p].magnetic, wells[p]) for p in ports]
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ValueError(f"run names must differ; got {names}")
+    _one_datum(runs, wells)
     stations = [
         RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
     ]
     sections = plan_sections(stations, params.overlap, params.min_length)
-    site = ModelSite(magnetic=magnetic)
-    if any("latitude" in tool.needs for tool in tools.values()):
-        site = replace(
-            site,
-            latitude=resolve_site(
-                ctx.well, stage="definitive_survey", latitude=params.latitude, north_seeking=True
-            ).latitude,
-        )
     listed = [(sec, runs[sec.run]) for sec in sections]
     md = np.concatenate([run.md[sec.listed] for sec, run in listed])
     inc_deg = np.concatenate([run.inc[sec.listed] for sec, run in listed])
@@ -259,7 +257,7 @@ def definitive_survey(
     )
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
     survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
-    cov = _valid_covariance(survey, listed, bounds, tools, site, params)
+    cov = _valid_covariance(survey, listed, bounds, tools, sites, params)
     parts = {
         "md": md,
         "inc": inc_deg,
@@ -273,7 +271,8 @@ def definitive_survey(
         "tool_type": [run.tool[k] for sec, run in listed for k in sec.listed],
         "section": np.repeat(np.arange(len(sections)), np.diff(bounds)),
     }
-    survey_table = with_magnetic(_survey_table(parts, cov, params, north), applied)
+    by_run = {run.name: applied[run.port] for run in runs if run.port in applied}
+    survey_table = with_magnetic(_survey_table(parts, cov, params, north), by_run)
     return {
         "survey": survey_table,
         "overlap": _overlap(runs, stations, sections, survey_table, north),
@@ -312,20 +311,41 @@ def _read(
     return _Run(port, spec, md, inc, azi_out, azi_true, source, tool)
 
 
-def _magnetic(
+def _needs_magnetic(tool: ToolModel, table: pa.Table, north: str) -> bool:
+    """Whether a run needs the geomagnetic reference: an MWD model, or magnetic azimuths
+    to convert (its own or the survey's)."""
+    return "magnetic" in tool.needs or "magnetic" in (north_reference_of(table, "azi"), north)
+
+
+def _site(
     params: DefinitiveParams,
-    tools: Mapping[str, ToolModel],
+    tool: ToolModel,
     well: WellMetadata,
-    tables: list[pa.Table],
-) -> AppliedMagnetic | None:
-    """The geomagnetic reference applied when an MWD model (``tools``: each run's) or a
-    magnetic azimuth needs it (None: nothing needs one)."""
-    needed = any("magnetic" in tool.needs for tool in tools.values()) or any(
-        "magnetic" in (north_reference_of(t, "azi"), params.north_reference) for t in tables
-    )
-    if not needed:
-        return None
-    return applied_magnetic(params.magnetic, well, stage="definitive_survey")
+    applied: AppliedMagnetic | None,
+) -> ModelSite:
+    """A run's site as its error model needs it, from its own well metadata: the latitude
+    (gyro models) and the geomagnetic reference applied to it (MWD models)."""
+    site = ModelSite(magnetic=None if applied is None else applied.reference)
+    if "latitude" not in tool.needs:
+        return site
+    latitude = resolve_site(
+        well, stage="definitive_survey", latitude=params.latitude, north_seeking=True
+    ).latitude
+    return replace(site, latitude=latitude)
+
+
+def _one_datum(runs: list[_Run], wells: Mapping[str, WellMetadata]) -> None:
+    """Refuse runs whose headers state different depth references or datum elevations:
+    their MDs are not from one zero (shift one run's to the other's datum first)."""
+    for name in ("depth_reference", "elevation"):
+        stated = {run.name: getattr(wells[run.port], name) for run in runs}
+        values = {v for v in stated.values() if v is not None}
+        if len(values) > 1:
+            each = ", ".join(f"{run} {value}" for run, value in stated.items() if value is not None)
+            raise ValueError(
+                f"the runs' {name} differ ({each}): their MDs are not from one datum; refer "
+                "every run to one datum before the definitive survey"
+            )
 
 
 def _valid_covariance(
@@ -333,7 +353,7 @@ def _valid_covariance(
     listed: list[tuple[Any, Any]],
     bounds: np.ndarray,
     tools: Mapping[str, ToolModel],
-    site: ModelSite,
+    sites: Mapping[str, ModelSite],
     params: DefinitiveParams,
 ) -> np.ndarray:
     """The listed stations' covariance (n, 3, 3), m², each run's errors from its own model;
@@ -350,7 +370,9 @@ def _valid_covariance(
             n = int(lo) + inside
             break
     sections = [
-        CovSection(run.name, int(lo), int(min(hi, n)), model_terms(tools[run.port], site))
+        CovSection(
+            run.name, int(lo), int(min(hi, n)), model_terms(tools[run.port], sites[run.port])
+        )
         for (_, run), lo, hi in zip(listed, bounds[:-1], bounds[1:], strict=True)
         if lo < n
     ]

@@ -262,7 +262,7 @@ def north_reference_stage(
     sources = _sources(stations)
     refs = sources | {params.target}
     converting = len(refs) > 1
-    well = ctx.well
+    well = ctx.well_for(well_of(stations))  # their own file's header, not another input's
     convergence = _correction("convergence", params.convergence, well.grid_convergence)
     declination = _correction("declination", params.declination, well.declination)
     used: dict[str, object] = {"north_reference": params.target}

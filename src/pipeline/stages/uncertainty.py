@@ -29,7 +29,7 @@ from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude
+from pipeline.well import Latitude, well_of
 
 AREA = "m2"
 
@@ -172,22 +172,23 @@ def position_uncertainty(
     azi_deg = table.column("azi").to_numpy()
     tool = configure(params.model, params.tool, toolmodels.of_run(ctx))
     toolmodels.record(ctx, tool, "model")
+    well = ctx.well_for(well_of(table))  # its own file's header, not another input's
     site = ModelSite()
     applied = None
     if "magnetic" in tool.needs:
-        applied = applied_magnetic(params.magnetic, ctx.well, stage="position_uncertainty")
+        applied = applied_magnetic(params.magnetic, well, stage="position_uncertainty")
         site = replace(site, magnetic=applied.reference)
         north = north_reference_of(table, "azi")
         azi_deg, _ = convert_azimuth(
             azi_deg,
             north,
             "true",
-            convergence_deg=ctx.well.convergence_for(north),
+            convergence_deg=well.convergence_for(north),
             declination_deg=applied.reference.declination,
         )
     if "latitude" in tool.needs:
         latitude = resolve_site(
-            ctx.well, stage="position_uncertainty", latitude=params.latitude, north_seeking=True
+            well, stage="position_uncertainty", latitude=params.latitude, north_seeking=True
         ).latitude
         site = replace(site, latitude=latitude)
         tool = _measured(tool, params, latitude, _start_stop_sigma(inputs.get("stops"), table))
@@ -279,22 +280,44 @@ def _measured(
 
 
 MAGNETIC_KEY = b"gyropipe.magnetic_reference"
+RUN_MAGNETIC_KEY = b"gyropipe.magnetic_reference_by_run"
 
 
-def with_magnetic(table: pa.Table, applied: AppliedMagnetic | None) -> pa.Table:
-    """``table`` with the geomagnetic reference a stage applied in its schema metadata."""
+class RunMagnetic(BaseModel):
+    """The geomagnetic references applied to the runs of one survey, by run id, where they
+    differ (runs of different dates or sites: each run's its own)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    runs: dict[str, AppliedMagnetic]
+
+
+def with_magnetic(
+    table: pa.Table, applied: AppliedMagnetic | Mapping[str, AppliedMagnetic] | None
+) -> pa.Table:
+    """``table`` with the geomagnetic reference a stage applied in its schema metadata: one,
+    or by run id (a definitive survey's): one when every run's is the same."""
+    if isinstance(applied, Mapping):
+        distinct = list(dict.fromkeys(applied.values()))
+        if len(distinct) > 1:
+            return with_record(table, RUN_MAGNETIC_KEY, RunMagnetic(runs=dict(applied)))
+        applied = distinct[0] if distinct else None
     return table if applied is None else with_record(table, MAGNETIC_KEY, applied)
 
 
 def magnetic_of(table: pa.Table | None) -> AppliedMagnetic | None:
-    """The geomagnetic reference recorded in a table's schema metadata, if any."""
+    """The one geomagnetic reference recorded in a table's schema metadata, if any."""
     return None if table is None else record_of(table, MAGNETIC_KEY, AppliedMagnetic)
 
 
 def magnetic_words(ctx: ReportContext, port: str = "trajectory") -> str:
     """ "; geomagnetic reference: total field …, dip …, declination … (source)" of the
-    report's ``port`` table ('' when it records none)."""
-    applied = magnetic_of(ctx.tables.get(port))
+    report's ``port`` table, each run's where they differ ('' when it records none)."""
+    table = ctx.tables.get(port)
+    by_run = None if table is None else record_of(table, RUN_MAGNETIC_KEY, RunMagnetic)
+    if by_run is not None:
+        each = "; ".join(f"run {run}: {applied.words()}" for run, applied in by_run.runs.items())
+        return f"; geomagnetic references: {each}"
+    applied = magnetic_of(table)
     return "" if applied is None else f"; geomagnetic reference: {applied.words()}"
 
 
