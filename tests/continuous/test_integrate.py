@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pytest
 from continuous_support import LAT, SITE, azimuth_error, compassed, position_error
 
@@ -146,3 +147,26 @@ def test_run_starting_near_vertical_is_tied_to_the_end_stop() -> None:
     assert np.all(flags & FLAG_NO_CLOSURE)
     err = usable_azimuth_error(result, sim)
     assert np.abs(err).max() < 0.01
+
+
+def test_a_run_whose_end_stop_was_rejected_is_integrated_from_the_start_stop() -> None:
+    """Compassing rejected the end stop (an ambiguous azimuth, say): the run is integrated
+    forward from the start stop as without closure, and flagged so."""
+    bias = 2.0  # deg/h: a drift the closure would have removed
+    sim, stops = run(bias)
+    last = int(np.max(stops.column("station").to_numpy()))
+    kept = pc.not_equal(stops.column("station"), last)
+    options = ContinuousOptions(spacing=5.0, odometer_window=0.07)
+    result = integrate_continuous(sim.samples, stops.filter(kept), LAT, options)
+    unclosed = integrate(bias, closure=False)
+    assert np.isnan(result.misclosure) and not np.isnan(unclosed.misclosure)
+    for name in ("md", "inc", "azi", "sigma_azi"):
+        np.testing.assert_array_equal(
+            result.stations.column(name).to_numpy(), unclosed.stations.column(name).to_numpy()
+        )
+    assert np.all(result.stations.column("flags").to_numpy() & FLAG_NO_CLOSURE)
+    assert np.all(result.series.read_all().column("flags").to_numpy() & FLAG_NO_CLOSURE)
+    # the drift stays, within the stated σ of the last station (seed 4: −0.28° against 0.80°)
+    err = usable_azimuth_error(result, sim)
+    sigma_end = result.stations.column("sigma_azi").to_numpy()[-1]
+    assert 0.05 < abs(err[-1]) < 3 * sigma_end

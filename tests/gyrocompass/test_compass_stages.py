@@ -133,6 +133,29 @@ def test_missing_latitude_is_a_clear_error(simulated: Path, tmp_path: Path):
     assert ok.returncode == 0, ok.stderr
 
 
+@pytest.mark.parametrize("gap", ["30 s lost", "half the rate"])
+def test_a_time_gap_is_named_where_it_is(simulated: Path, tmp_path: Path, gap: str):
+    table = pq.read_table(simulated / "samples.parquet")
+    t = table.column("time").to_numpy()  # 100 Hz
+    i0 = 2 * len(t) // 3  # two thirds of the way in
+    rows = np.arange(len(t))
+    if gap == "30 s lost":  # rows i0 … i0 + 2999 dropped: a step of 30.01 s after row i0 − 1
+        keep = (rows < i0) | (rows >= i0 + 3000)
+        after, step, count = i0 - 1, "30.01", 1
+    else:  # every other row from i0 on: steps of 0.02 s after row i0
+        keep = (rows < i0) | ((rows - i0) % 2 == 0)
+        after, step, count = i0, "0.02", int(keep[i0:].sum()) - 1
+    samples = tmp_path / "samples.parquet"
+    pq.write_table(table.filter(pa.array(keep)), samples)
+    result = run("point-gyro.yaml", samples, tmp_path / "out")
+    assert result.returncode != 0 and "Traceback" not in result.stderr
+    expected = (
+        f"the usual step is 0.01 s, but the step at t = {t[after]:g} s is {step} s "
+        f"(after row {after}; {count} step(s) off the usual"
+    )
+    assert expected in result.stderr, result.stderr
+
+
 def readings_table(alphas_deg, *, frame=None, axes="x") -> pa.Table:
     """Noise-free readings of one inclined station (A = 37°, I = 40°, 61.25° N)."""
     k, s = 15.041067 * np.cos(np.radians(61.25)), 15.041067 * np.sin(np.radians(61.25))

@@ -22,7 +22,9 @@ stop's compassed azimuth is the misclosure; it is distributed linearly in time o
 and removed, which cancels a constant gyro bias exactly (its azimuth error grows linearly in
 time at constant inclination). The misclosure is reported. A run starting near vertical
 (where the start stop's azimuth means nothing) is integrated backward from the end stop
-instead, with no closure (misclosure reported as NaN, flag ``FLAG_NO_CLOSURE``).
+instead, with no closure (misclosure reported as NaN, flag ``FLAG_NO_CLOSURE``); so is a
+run whose end stop compassing rejected (an ambiguous azimuth near horizontal, say), forward
+from the start stop (x and xy tools; a triad's rotation closure needs both stops).
 
 Near vertical (``sin I < sin(vertical_below)``) Ȧ is singular: those samples are flagged,
 the azimuth is held (Ȧ = 0) through them and integration resumes after; flagged stations get
@@ -59,8 +61,10 @@ from pipeline.continuous.run import (
     Odometer,
     RunStops,
     compassed_stop,
+    is_compassed,
     odometer_fit,
     run_bounds,
+    uncompassed_stop,
     wrap_angle,
 )
 from pipeline.continuous.series import StoredRun
@@ -103,10 +107,17 @@ def integrate_continuous(
     if store.add_batches(stream, names) == 0:
         raise EmptyTableError("samples", "a continuous run needs samples")
     begin, end, first_id, last_id = run_bounds(store, rows)
-    ends = compassed_stop(stops, first_id), compassed_stop(stops, last_id)
+    # an x or xy run whose end stop compassing rejected is integrated from the start alone
+    open_end = axes != "xyz" and not is_compassed(stops, last_id)
+    finish = (
+        uncompassed_stop(float(store.floats("md", end, end + 1)[0]))
+        if open_end
+        else compassed_stop(stops, last_id)
+    )
+    ends = compassed_stop(stops, first_id), finish
     odometer = odometer_fit(store, begin, end, options.odometer_window, rows)
     if axes != "xyz":
-        run = _apsidal_run(odometer, axes == "xy", ends, latitude, options)
+        run = _apsidal_run(odometer, axes == "xy", ends, open_end, latitude, options)
     else:
         run = _strapdown(odometer, ends, end, latitude, options)
     return run_result(run, ends, options)
@@ -139,11 +150,13 @@ def _apsidal_run(
     odometer: Odometer,
     two_axis: bool,
     ends: RunStops,
+    open_end: bool,
     latitude: float,
     options: ContinuousOptions,
 ) -> StoredRun:
     """Ȧ from the high-side rate of a single-axis (x) or two-axis (xy) tool over the run,
-    closed on the end stop or integrated back from it, a chunk of ``odometer.rows`` samples
+    closed on the end stop, integrated back from it, or (``open_end``: the end stop not
+    compassed) from the start stop with no closure, a chunk of ``odometer.rows`` samples
     at a time: each pass reads the previous pass's azimuth and İ from the store (with the
     overlap its filters need) and integrates from the azimuth the chunk before ended on."""
     store, size, dt = odometer.store, odometer.size, odometer.dt
@@ -153,7 +166,7 @@ def _apsidal_run(
     phi = np.radians(latitude)
     oc, os_ = OMEGA_EARTH * np.cos(phi), OMEGA_EARTH * np.sin(phi)
     vertical_stop = np.sin(np.radians(options.vertical_below))
-    backward = bool(
+    backward = not open_end and bool(
         np.sin(np.radians(start["inc"])) < vertical_stop
         and np.sin(np.radians(finish["inc"])) >= vertical_stop
     )
@@ -234,7 +247,7 @@ def _apsidal_run(
                 ):
                     store.write(name, a, values[own])
     azi_column = f"azi{(options.passes - 1) % 2}"
-    if backward:  # one usable tie only: no closure, and the start stop's azimuth is not used
+    if backward or open_end:  # one usable tie only: no closure
         misclosure = float("nan")
     else:
         end_azi = store.floats(azi_column, size - 1, size)
@@ -246,17 +259,18 @@ def _apsidal_run(
         odometer_points=odometer.points,
         inc_rate_points=window if smooth else None,
     )
-    shift = misclosure if options.closure and not backward else 0.0
+    shift = misclosure if options.closure and not (backward or open_end) else 0.0
     return StoredRun(
         odometer,
         latitude,
-        options.closure,
+        options.closure and not open_end,
         backward,
         noise,
         azi_column,
         misclosure,
         shift,
         misaligned=not two_axis,  # δ = ψ, the toolface column
+        open_end=open_end,
         halves=True,
     )
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
+from numpy.typing import NDArray
 
 from pipeline.continuous.store import ColumnStore, chunks, median_step, savgol_range, savgol_span
 from pipeline.earth.frames import FloatArray
@@ -22,9 +23,11 @@ __all__ = [
     "RunStops",
     "compassed_stop",
     "float_column",
+    "is_compassed",
     "odometer_fit",
     "odometer_points",
     "run_bounds",
+    "uncompassed_stop",
     "wrap_angle",
 ]
 
@@ -86,8 +89,7 @@ def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
     the compassed stop ``station``. A stop whose azimuth is undefined (vertical) keeps NaN
     and takes the gyro toolface's σ as its azimuth σ: a run is tied there through that
     toolface (A + ψ at I = 0)."""
-    ids = np.asarray(stops.column("station").to_numpy(zero_copy_only=False))
-    rows = np.flatnonzero(ids == station)
+    rows = _stop_rows(stops, station)
     if rows.size == 0:
         raise ContinuousError(
             f"stop {station} is not among the compassed stops (rejected by compassing?)"
@@ -109,6 +111,24 @@ def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
     if np.isnan(stop["azi"]):  # vertical: tied through the gyro toolface, and its σ
         stop["sigma_azi"] = stop["sigma_toolface"]
     return stop
+
+
+def is_compassed(stops: pa.Table, station: int) -> bool:
+    """Whether ``stops`` has a compassed row for stop ``station``."""
+    return bool(_stop_rows(stops, station).size)
+
+
+def uncompassed_stop(md: float) -> dict[str, float]:
+    """The end stop of a run as :func:`compassed_stop` gives it where compassing rejected
+    it: its MD (m) only, the rest NaN — the run is integrated from the start stop with no
+    closure."""
+    names = ("azi", "inc", "sigma_azi", "sigma_inc", "highside_toolface", "gyro_toolface")
+    return {"md": md, "sigma_toolface": float("nan")} | dict.fromkeys(names, float("nan"))
+
+
+def _stop_rows(stops: pa.Table, station: int) -> NDArray[np.intp]:
+    ids = np.asarray(stops.column("station").to_numpy(zero_copy_only=False))
+    return np.flatnonzero(ids == station)
 
 
 def odometer_points(window: float, dt: float) -> int:

@@ -69,6 +69,8 @@ class StoredRun:
     """misclosure removed linearly in time as the azimuth is read, rad"""
     misaligned: bool = False
     """δ is the toolface (the servo keeps a single-axis gyro near the high side), else 0"""
+    open_end: bool = False
+    """the end stop was not compassed: integrated from the start stop, no closure"""
     halves: bool = False
     """the store holds tan(I/2) (column ``inc_half``) and, where misaligned, tan(δ/2)
     (``toolface_half``) as the integration had them"""
@@ -120,7 +122,7 @@ class StoredRun:
             t_end = float(self.odometer.time(self.size - 1, self.size)[0])
             azi = azi - self.shift * ((t - t0) / (t_end - t0))
         flags = store.ints("flags", lo, hi)
-        if self.backward:
+        if self.backward or self.open_end:
             flags |= FLAG_NO_CLOSURE
         if held is not None:  # integrated after a held section (back in time: before it)
             index = np.arange(lo, hi)

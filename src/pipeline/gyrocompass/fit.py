@@ -18,6 +18,7 @@ import numpy as np
 
 from pipeline.earth.frames import FloatArray
 from pipeline.gyrocompass.earth_rate import StationReject
+from pipeline.gyrocompass.precision import position_design
 
 MAX_CONDITION = 1e10
 """The largest condition number (2-norm) of a fit's normal matrix that is solved."""
@@ -61,18 +62,9 @@ def design(
     n, m = gyro.shape
     if not (sigma > 0).all():
         raise StationReject("a position's gyro σ is zero (noise-free data?): set noise_floor")
-    tau = t - t.mean()
-    c, s = np.cos(alpha), np.sin(alpha)
     axes = min(m, 2)
-    columns = 2 + terms * axes
-    a = np.zeros((n * axes, columns))
-    for axis in range(axes):
-        block = a[axis * n : (axis + 1) * n]
-        block[:, 0], block[:, 1] = (c, s) if axis == 0 else (-s, c)
-        if terms:
-            block[:, 2 + terms * axis] = 1.0
-        if terms == 2:
-            block[:, 3 + terms * axis] = tau
+    a = position_design(alpha, t, axes, terms)
+    columns = a.shape[1]
     y = gyro[:, :axes].T.ravel()
     w = 1.0 / sigma[:, :axes].T.ravel() ** 2
     if len(y) < columns:

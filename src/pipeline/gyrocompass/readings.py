@@ -153,11 +153,8 @@ def _sample_rate(time: FloatArray) -> float:
     if time.size < 2:
         raise ValueError(too_few(time.size))
     dt = float(time[-1] - time[0]) / (time.size - 1)
-    steps = np.diff(time)
-    off = np.abs(steps - dt) > UNIFORM_RTOL * dt
-    if off.any():
-        i = int(np.argmax(off))
-        raise ValueError(not_uniform(dt, float(time[i]), float(steps[i]), int(off.sum())))
+    if np.any(np.abs(np.diff(time) - dt) > UNIFORM_RTOL * dt):
+        raise ValueError(not_uniform(time))
     return 1.0 / dt
 
 
@@ -165,11 +162,21 @@ def too_few(n: int) -> str:
     return f"need at least 2 samples to know the sample rate, got {n}"
 
 
-def not_uniform(dt: float, t: float, step: float, count: int) -> str:
-    """The message of non-uniform time: mean step ``dt``, the first step off (at ``t``, s)."""
+def not_uniform(time: FloatArray) -> str:
+    """The message of non-uniform ``time`` (s): the usual (median) step, the first step off
+    it by more than :data:`UNIFORM_RTOL` (its time and row; where none is, the one farthest
+    off) and how many are."""
+    steps = np.diff(time)
+    middle = (len(steps) - 1) // 2
+    usual = float(np.partition(steps, middle)[middle])  # a median that is one of the steps
+    deviation = np.abs(steps - usual)
+    off = deviation > UNIFORM_RTOL * usual
+    i = int(np.argmax(off)) if off.any() else int(np.argmax(deviation))
+    count = max(int(off.sum()), 1)
     return (
-        f"time is not uniformly sampled: mean step {dt:g} s, but the step at "
-        f"t = {t:g} s is {step:g} s ({count} such steps; samples dropped or doubled?)"
+        f"time is not uniformly sampled: the usual step is {usual:g} s, but the step at "
+        f"t = {time[i]:g} s is {steps[i]:g} s (after row {i}; {count} step(s) off the usual: "
+        "samples dropped or doubled, a gap, or a change of sample rate?)"
     )
 
 

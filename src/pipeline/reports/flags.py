@@ -60,7 +60,8 @@ CONTINUOUS: dict[int, Flag] = {
     FLAG_NO_CLOSURE: Flag(
         FLAG_NAMES[FLAG_NO_CLOSURE],
         "the run was integrated from one stop only (it started near vertical, where a stop "
-        "gives no azimuth), so its azimuth drift was not removed by an end-stop closure; "
+        "gives no azimuth, or compassing rejected its end stop), so its azimuth drift was not "
+        "removed by an end-stop closure; "
         "azimuths and positions carry the drift's uncertainty.",
     ),
     FLAG_AZIMUTH_UNDEFINED: Flag(

@@ -4,8 +4,10 @@ tool preset will deliver at each station of a plan (DOMAIN.md §5, seed 004 Eqs.
 Per station, for the frame positions and dwell of the plan:
 - gyro: white noise averaged over each dwell (σ = 60·ARW/√τ °/h) plus the bias
   instability taken as an independent per-position error (conservative: the trend term
-  absorbs its slow part), propagated through the (h, r, bias, trend) least squares and the
-  maximum-likelihood azimuth; reported for the least favourable starting toolface;
+  absorbs its slow part), propagated through the least squares of h, r and a bias and trend
+  per transverse gyro (one for a single-axis tool, two for an XY or three-axis one, as the
+  compass stage fits them) and the maximum-likelihood azimuth; reported for the least
+  favourable starting toolface;
 - gyro g-dependent bias: turning with the frame like the Earth rate, compassing cannot remove
   it — σ ``g_sensitivity · sin I`` °/h on h and r (:mod:`pipeline.gyrocompass.systematic`),
   ≈ sin I · K / (Ω cos φ) in azimuth;
@@ -40,6 +42,8 @@ from pipeline.sim.spec import PointSurvey, SimulationSpec
 from pipeline.tables import ErrorBudget
 
 OFFSETS = np.radians(np.arange(0.0, 360.0, 10.0))
+UNOBSERVABLE = 180.0
+"""A predicted σ_azi (°) from which the text says the azimuth is unobservable."""
 
 
 def error_budget(spec: SimulationSpec) -> pa.Table:
@@ -61,7 +65,8 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
         60.0 * per_axis(tool.gyro.noise_density)[0] / np.sqrt(survey.dwell),
         per_axis(tool.gyro.bias_instability)[0],
     )
-    covs = [hr_covariance(theta + off, times, gyro_sigma) for off in OFFSETS]
+    axes = min(len(tool.gyro_axes), 2)  # the compass stage fits the transverse gyros
+    covs = [hr_covariance(theta + off, times, gyro_sigma, axes) for off in OFFSETS]
 
     stop = len(theta) * survey.dwell
     accel_noise = per_axis(tool.accelerometer.noise_density) / (60.0 * np.sqrt(stop))
@@ -128,6 +133,9 @@ def budget_lines(table: pa.Table) -> list[str]:
         azimuth = (
             f"{row['sigma_azi']:7.3f} {row['sigma_azi_gyro']:7.3f} {row['sigma_azi_g']:7.3f} "
             f"{row['sigma_azi_accel']:7.3f}"
+            if np.isfinite(row["sigma_azi"]) and row["sigma_azi"] < UNOBSERVABLE
+            else "  azimuth unobservable (east–west near horizontal: the transverse gyros carry "
+            "no azimuth)"
             if np.isfinite(row["sigma_azi"])
             else f"  azimuth ambiguous (180° − A fits alike, probability {row['mirror']:.2g})"
             if row["mirror"] > ambiguity
