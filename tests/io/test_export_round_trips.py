@@ -84,11 +84,12 @@ def test_a_las_keeps_the_tool_preset_and_the_geomagnetic_reference(tmp_path: Pat
     )
 
 
-def test_a_csv_refuses_a_value_that_reads_back_as_no_value(tmp_path: Path) -> None:
-    """A displacement of -999.25 m written to CSV read back as a null (every reader takes
-    the marker for no value): refused, as the LAS writer refuses it."""
+@pytest.mark.parametrize("ext", ["csv", "xml"])
+def test_a_writer_refuses_a_value_that_reads_back_as_no_value(tmp_path: Path, ext: str) -> None:
+    """A displacement of -999.25 m written to CSV or WITSML read back as a null (every
+    reader takes the marker for no value): refused, as the LAS writer refuses it."""
     frame = _stations().assign(north=[0.0, -500.0, -999.25])
     frame.attrs = {"north_reference": "true"}
     with pytest.raises(gp.GyropipeError, match=r"column 'north' holds a null marker"):
-        gp.write(frame, tmp_path / "survey.csv")
-    assert not (tmp_path / "survey.csv").exists()
+        gp.write(frame, tmp_path / f"survey.{ext}")
+    assert not (tmp_path / f"survey.{ext}").exists()
