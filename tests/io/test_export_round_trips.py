@@ -93,3 +93,21 @@ def test_a_writer_refuses_a_value_that_reads_back_as_no_value(tmp_path: Path, ex
     with pytest.raises(gp.GyropipeError, match=r"column 'north' holds a null marker"):
         gp.write(frame, tmp_path / f"survey.{ext}")
     assert not (tmp_path / f"survey.{ext}").exists()
+
+
+@pytest.mark.parametrize("ext", ["csv", "las"])
+def test_a_read_files_line_numbers_are_not_written(tmp_path: Path, ext: str) -> None:
+    """A survey read from a CSV (its rows from line 3 on) written again: the copy held a
+    ``source_line`` column of the first file's lines (CSV), a number that means nothing in
+    it; LAS left it out. Neither writes it; the copy's own lines are read back."""
+    source = tmp_path / "report.csv"
+    source.write_text(
+        "# north_reference=true\nmd[m],inc[deg],azi[deg]\n0,0,0\n150,4.5,212\n300,9,214.5\n"
+    )
+    read = gp.read(source, kind="stations")
+    assert read["source_line"].tolist() == [3, 4, 5]
+    path = gp.write(read, tmp_path / f"copy.{ext}")
+    assert "source_line" not in path.read_text().lower()
+    back = gp.read(path, kind="stations")
+    assert back["md"].tolist() == [0.0, 150.0, 300.0]
+    assert back["source_line"].tolist() != [3, 4, 5]

@@ -41,7 +41,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
-from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
@@ -63,7 +63,7 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as LAS 2.0 (see the module docstring); floats at their unit's
     precision (:mod:`pipeline.io.precision`)."""
     table = for_export(table)
-    written = [f for f in table.schema if f.name != SOURCE_LINE and _writable_type(f)]
+    written = [f for f in table.schema if _writable_type(f)]
     numeric = [f for f in written if not pa.types.is_string(f.type)]
     if not numeric:
         raise ValueError("no numeric column to write: a LAS file needs a numeric index")
@@ -263,9 +263,7 @@ def _header_text(
         "~Other",
         f"Written by gyropipe {__version__}.",
     ]
-    dropped = [
-        f"{f.name} ({f.type})" for f in table.schema if f not in written and f.name != SOURCE_LINE
-    ]
+    dropped = [f"{f.name} ({f.type})" for f in table.schema if f not in written]
     if dropped:
         lines.append("Columns not written: " + ", ".join(dropped))
     lines.append("~ASCII " + " ".join(_mnemonic(f.name) for f in written))
