@@ -4,9 +4,10 @@ LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless a
 exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE
 (of trajectories begun on several days the first's, the description naming the last's),
 UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN,
-TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes; items the
-well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
-well's magnetic declination and grid convergence, deg, east of true north positive),
+TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes), TOOLNAME,
+WELLBORE, RUN, JOB, HZCS, X and Y (the wellhead's map coordinates, m, as LAS 3.0 names
+them; items the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and
+GRIDCONV (the well's magnetic declination and grid convergence, deg, east of true north positive),
 DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths), MAGFIELD
 (nT) and MAGDIP (deg) (the geomagnetic reference the magnetometer checks take),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
@@ -237,6 +238,13 @@ def _header_text(
         _line("TOOL", "", meta["tool_type"], "survey tool type"),
         _line("TOOLSN", "", meta["tool_serial"], "survey tool serial number"),
         _line("TOOLPRESET", "", meta["tool_preset"], "tool catalogue entry of the survey tool"),
+        _line("TOOLNAME", "", meta["tool_name"], "survey tool name"),
+        _line("WELLBORE", "", meta["wellbore"], "wellbore"),
+        _line("RUN", "", meta["run_number"], "survey run number"),
+        _line("JOB", "", meta["job_number"], "service company's job number"),
+        _line("HZCS", "", meta["crs"], "horizontal coordinate reference system"),
+        _line("X", "m", meta["easting"], "wellhead easting in HZCS"),
+        _line("Y", "m", meta["northing"], "wellhead northing in HZCS"),
         "~Parameter Information",
         _line("NREF", "", north, "north reference of the azimuths"),
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
