@@ -91,8 +91,8 @@ def test_las_round_trips_through_our_reader(exports_run: RunResult, trajectory: 
     assert table.schema.field("azi").metadata[NORTH_KEY] == b"grid"
     original = well_of(trajectory)
     assert original is not None
-    # every header field LAS has an item for comes back; it has none for the wellbore
-    assert well == original.model_copy(update={"wellbore": None})
+    # every header field comes back (the wellbore, map coordinates and crs included)
+    assert well == original
 
 
 def test_las_location_api_and_absent_fields(tmp_path: Path, trajectory: pa.Table):

@@ -12,6 +12,7 @@ import pytest
 
 import pipeline as gp
 from pipeline.contracts import UNIT_KEY
+from pipeline.errors import InputFileError
 from pipeline.well import WellMetadata, attach
 
 EXTENSIONS = ("las", "csv", "xml", "parquet")
@@ -84,11 +85,79 @@ def test_a_las_keeps_the_tool_preset_and_the_geomagnetic_reference(tmp_path: Pat
     )
 
 
-def test_a_csv_refuses_a_value_that_reads_back_as_no_value(tmp_path: Path) -> None:
-    """A displacement of -999.25 m written to CSV read back as a null (every reader takes
-    the marker for no value): refused, as the LAS writer refuses it."""
+@pytest.mark.parametrize("ext", ["csv", "xml"])
+def test_a_writer_refuses_a_value_that_reads_back_as_no_value(tmp_path: Path, ext: str) -> None:
+    """A displacement of -999.25 m written to CSV or WITSML read back as a null (every
+    reader takes the marker for no value): refused, as the LAS writer refuses it."""
     frame = _stations().assign(north=[0.0, -500.0, -999.25])
     frame.attrs = {"north_reference": "true"}
     with pytest.raises(gp.GyropipeError, match=r"column 'north' holds a null marker"):
-        gp.write(frame, tmp_path / "survey.csv")
-    assert not (tmp_path / "survey.csv").exists()
+        gp.write(frame, tmp_path / f"survey.{ext}")
+    assert not (tmp_path / f"survey.{ext}").exists()
+
+
+@pytest.mark.parametrize("ext", ["csv", "las"])
+def test_a_read_files_line_numbers_are_not_written(tmp_path: Path, ext: str) -> None:
+    """A survey read from a CSV (its rows from line 3 on) written again: the copy held a
+    ``source_line`` column of the first file's lines (CSV), a number that means nothing in
+    it; LAS left it out. Neither writes it; the copy's own lines are read back."""
+    source = tmp_path / "report.csv"
+    source.write_text(
+        "# north_reference=true\nmd[m],inc[deg],azi[deg]\n0,0,0\n150,4.5,212\n300,9,214.5\n"
+    )
+    read = gp.read(source, kind="stations")
+    assert read["source_line"].tolist() == [3, 4, 5]
+    path = gp.write(read, tmp_path / f"copy.{ext}")
+    assert "source_line" not in path.read_text().lower()
+    back = gp.read(path, kind="stations")
+    assert back["md"].tolist() == [0.0, 150.0, 300.0]
+    assert back["source_line"].tolist() != [3, 4, 5]
+
+
+def test_a_las_keeps_the_wellheads_map_coordinates_and_text_fields(tmp_path: Path) -> None:
+    """A LAS lost the wellhead's map coordinates, CRS, wellbore, tool name, run and job
+    numbers that CSV and WITSML keep: a report from a LAS input had none of them."""
+    frame = _stations()
+    given = {
+        "well": "A-7",
+        "wellbore": "A-7 ST1",
+        "crs": "EPSG:23031",
+        "easting": 512345.25,
+        "northing": 6712345.5,
+        "tool_name": "Gyro-X 2",
+        "run_number": "3",
+        "job_number": "J-1024",
+    }
+    frame.attrs = {"north_reference": "grid", "well": given}
+    back = gp.read(gp.write(frame, tmp_path / "survey.las"), kind="stations")
+    assert {k: back.attrs["well"].get(k) for k in given} == given
+
+
+@pytest.mark.parametrize(
+    ("item", "easting"),
+    [("XCOORD.FT  1640000", 1640000 * 0.3048), ("EASTING.M  512345.25", 512345.25)],
+)
+def test_a_las_map_coordinate_is_read_in_its_unit(tmp_path: Path, item: str, easting: float):
+    source = tmp_path / "survey.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        f"~Well\n STRT.FT 0 :\n STOP.FT 200 :\n STEP.FT 100 :\n NULL. -999.25 :\n {item} :\n"
+        "~Curve\n DEPT.FT : measured depth\n INC.DEG : inclination\n AZI.DEG : grid azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    assert gp.read(source, kind="stations").attrs["well"]["easting"] == pytest.approx(easting)
+
+
+def test_a_las_map_coordinate_without_a_unit_beside_feet_is_refused(tmp_path: Path) -> None:
+    """Depths in feet do not tell a unitless easting's unit (US survey or international
+    feet, 4 ft apart at 2,000,000 ft): refused at its line, not guessed."""
+    source = tmp_path / "survey.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.FT 0 :\n STOP.FT 200 :\n STEP.FT 100 :\n NULL. -999.25 :\n X.  2000000 :\n"
+        "~Curve\n DEPT.FT : measured depth\n INC.DEG : inclination\n AZI.DEG : grid azimuth\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.raises(InputFileError, match="US survey or international feet") as caught:
+        gp.read(source, kind="stations")
+    assert caught.value.line == 9

@@ -701,3 +701,24 @@ def test_a_las_description_naming_a_correction_names_no_north(tmp_path: Path, de
     assert (caught.value.line, caught.value.column) == (12, "AZI")
     source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
     assert gp.read(source, kind="stations").attrs["north_reference"] == "true"
+
+
+@pytest.mark.parametrize("description", ["Azimuth (mag corrected)", "Magnetic corrected azimuth"])
+def test_a_las_azimuth_magnetic_corrected_is_ambiguous(tmp_path: Path, description: str):
+    """'mag corrected' was read as magnetic north; vendors write it of azimuths turned to
+    true north (declination applied) and of magnetic ones corrected for drillstring
+    interference: refused at the curve's line, read once NREF (or the option) names it."""
+    source = tmp_path / "said.las"
+    source.write_text(
+        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
+        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n"
+        f"~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : {description}\n"
+        "~A\n0 0 0\n100 10 45\n200 20 45\n"
+    )
+    with pytest.raises(InputFileError, match="ambiguous north reference") as caught:
+        gp.read(source, kind="stations")
+    assert (caught.value.line, caught.value.column) == (12, "AZI")
+    read = gp.read(source, kind="stations", north_reference="magnetic")
+    assert read.attrs["north_reference"] == "magnetic"
+    source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
+    assert gp.read(source, kind="stations").attrs["north_reference"] == "true"

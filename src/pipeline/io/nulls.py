@@ -6,7 +6,7 @@ WITSML exports copy the habit, in angles with either sign (a ``stnGridCorUsed`` 
 (before any conversion), as 'no value', never as a measurement: the negative ones in every
 column, the positive ones in angles (and angle rates) only — an MD, TVD or displacement of
 999.25 m is a real one. So a writer never writes one as a value (:func:`refuse_null_markers`:
-the LAS and CSV writers).
+the LAS, CSV and WITSML writers).
 """
 
 from __future__ import annotations

@@ -5,6 +5,8 @@ Every step is finer than any survey measurement resolves (0.1 mm, 0.000001°, 1 
 0.1 ng…), so a value read back differs from the computed one by at most half a step of
 its unit (``0.5 * 10**-DECIMALS[unit]``, plus the float's own rounding); columns whose unit
 is not listed (and integer or text columns) keep their full, shortest round-trip, precision.
+``source_line`` (the lines of a file read, an internal column of a read table) is never
+written: :func:`for_export` leaves it out, for every text export (CSV, LAS).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import TypeVar
 import numpy as np
 import pyarrow as pa
 
-from pipeline.contracts import UNIT_KEY
+from pipeline.contracts import SOURCE_LINE, UNIT_KEY
 
 DECIMALS: dict[str, int] = {
     "m": 4,  # 0.1 mm
@@ -42,11 +44,14 @@ T = TypeVar("T")
 
 
 def for_export(table: pa.Table) -> pa.Table:
-    """``table`` with every float column of a listed unit rounded to its decimals (half to
-    even; −0 written as 0; NaN, ±inf and nulls as they are; an angle below 360° stays below
-    it, one step under, :data:`FULL_TURN`). The columns of one rounding are rounded
-    together, as rows of one array (:func:`blocks`; the same numbers: every step is
-    elementwise)."""
+    """``table`` as an export writes it: without ``source_line`` (the line numbers of the
+    file it was read from mean nothing in another file), every float column of a listed
+    unit rounded to its decimals (half to even; −0 written as 0; NaN, ±inf and nulls as
+    they are; an angle below 360° stays below it, one step under, :data:`FULL_TURN`). The
+    columns of one rounding are rounded together, as rows of one array (:func:`blocks`; the
+    same numbers: every step is elementwise)."""
+    if SOURCE_LINE in table.column_names:
+        table = table.drop_columns([SOURCE_LINE])
     columns = list(table.columns)
     rounding: dict[tuple[int, float | None], list[int]] = {}
     for i, field in enumerate(table.schema):

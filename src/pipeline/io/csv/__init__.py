@@ -443,7 +443,8 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
     then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
     ±inf as an empty cell; a value that is a null marker, -999.25…, is refused, as in LAS:
-    every reader would read it back as no value)."""
+    every reader would read it back as no value); ``source_line`` is not written, as in LAS
+    (:func:`~pipeline.io.precision.for_export`)."""
     refs = sorted(
         {
             f.metadata[NORTH_KEY].decode()
@@ -465,9 +466,9 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
             f"# survey_method={calculation.method}",
             f"# vs_azimuth={calculation.vs_azimuth!r} deg",
         ]
-    head = io.StringIO()
-    stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in table.schema])
     rounded = for_export(table)
+    head = io.StringIO()
+    stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in rounded.schema])
     refuse_null_markers(
         {f.name: rounded.column(i).combine_chunks() for i, f in enumerate(rounded.schema)}
     )

@@ -14,7 +14,9 @@ values in canonical units.
   ``mag dec applied``, nor any in a description with a negation, ``not grid corrected``),
   an ``NREF`` item (or ``NORTHREF``, ``AZIREF``, ``AZREF``) in ``~W``/``~P``, or the option
   ``north_reference``: all must agree; ``default_north_reference`` applies when none names
-  one.
+  one. ``mag corrected`` names none and is ambiguous (true north, declination applied, or
+  magnetic, interference corrected): refused at its line unless an NREF item or the option
+  names the north.
 """
 
 from __future__ import annotations
@@ -46,6 +48,10 @@ NEGATIONS = frozenset({"not", "no", "non", "without"})
 CORRECTIONS = frozenset({"dec", "decl", "declination", "conv", "convergence", "corr", "correction"})
 """Words after which a north word names a correction, not the reference (``mag dec applied``:
 true north)."""
+AMBIGUOUS = "corrected"
+"""The word after which magnetic north names no reference (``mag corrected``): vendors write
+it of azimuths turned to true north (declination applied) and of magnetic ones corrected
+for drillstring interference."""
 
 
 @dataclass(frozen=True)
@@ -218,17 +224,26 @@ def declared_north(path: Path, header: Header) -> list[tuple[str, NorthReference
 
 def _curve_north(item: Item) -> set[NorthReference]:
     """North references an azimuth curve names by its mnemonic's ending or description
-    (:data:`NEGATIONS` and :data:`CORRECTIONS`: where the description names none)."""
-    words = [w for w in re.split(r"[^0-9a-z]+", item.descr.casefold()) if w]
+    (:data:`NEGATIONS`, :data:`CORRECTIONS` and :data:`AMBIGUOUS`: where the description
+    names none)."""
+    words = _words(item)
     refs = set()
     if not NEGATIONS & set(words):
         refs = {
             NORTH_WORDS[w]
             for w, after in pairwise([*words, ""])
-            if w in NORTH_WORDS and after not in CORRECTIONS
+            if w in NORTH_WORDS and after not in CORRECTIONS and not _ambiguous(w, after)
         }
     suffix = _suffix_north(item.mnemonic)
     return refs | {suffix} if suffix else refs
+
+
+def _words(item: Item) -> list[str]:
+    return [w for w in re.split(r"[^0-9a-z]+", item.descr.casefold()) if w]
+
+
+def _ambiguous(word: str, after: str) -> bool:
+    return after == AMBIGUOUS and NORTH_WORDS.get(word) == "magnetic"
 
 
 def one_north(
@@ -253,6 +268,17 @@ def azimuth_north(
     in_file = [(f"curve {azi.mnemonic} on line {azi.line}", r) for r in _curve_north(azi)]
     in_file += declared
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
+    words = _words(azi)
+    if not in_file + option and any(_ambiguous(*pair) for pair in pairwise(words)):
+        raise InputFileError(
+            path,
+            f"curve {azi.mnemonic} {azi.descr!r}: ambiguous north reference (magnetic "
+            "corrected: turned to true north, or magnetic with interference corrected?): "
+            "add a ~Well line 'NREF.  true : north reference' or set the option "
+            "north_reference",
+            azi.line,
+            azi.mnemonic,
+        )
     north = one_north(path, in_file + option, azi) or opts.default_north_reference
     if north is None:
         raise InputFileError(

@@ -2,7 +2,10 @@
 another value is refused: a ~Parameter item does not override the ~Well's).
 
 WELL, UWI (else API), FLD, COMP, SRVC, TOOL, TOOLSN, TOOLPRESET (the tool catalogue's
-entry, as gyropipe writes it); MAGFIELD (in its unit) and MAGDIP; LAT/LATI/LATITUDE and
+entry, as gyropipe writes it), TOOLNAME, WELLBORE, RUN, JOB, HZCS (else CRS, PROJ); the
+wellhead's map coordinates X/EASTING/XCOORD and Y/NORTHING/YCOORD in the item's unit, a
+unitless one only beside depths in metres (feet do not tell US survey from international
+ones: refused at its line); MAGFIELD (in its unit) and MAGDIP; LAT/LATI/LATITUDE and
 LON/LONG/LONGITUDE in decimal degrees (in the item's unit) or degrees, minutes and seconds
 (``61 15 00.5 N``, ``73°24'30"E``); DATE as ISO or another unambiguous form
 (``13-DEC-1986``, ``13/12/1986``; ``05/06/2024`` is refused as ambiguous:
@@ -50,8 +53,20 @@ TEXT_ITEMS: dict[str, tuple[str, ...]] = {
     "tool_type": ("TOOL",),
     "tool_serial": ("TOOLSN",),
     "tool_preset": ("TOOLPRESET",),
+    "tool_name": ("TOOLNAME",),
+    "wellbore": ("WELLBORE",),
+    "run_number": ("RUN",),
+    "job_number": ("JOB",),
+    "crs": ("HZCS", "CRS", "PROJ"),
 }
 """Well metadata text fields and the mnemonics holding them, preferred first."""
+MAP_ITEMS = {
+    "easting": ("EASTING", "XCOORD", "X"),
+    "northing": ("NORTHING", "YCOORD", "Y"),
+}
+"""The wellhead's map coordinates (LAS 3.0 X and Y; vendors' EASTING/NORTHING, XCOORD/YCOORD):
+in the item's unit, else only where the depths are in metres (feet do not tell US survey
+from international ones, 2 ppm apart)."""
 ANGLE_ITEMS = {
     "declination": ("DECL", "MAGDEC", "DECLINATION"),
     "grid_convergence": ("GRIDCONV", "CONV", "CONVERGENCE"),
@@ -126,6 +141,12 @@ def well_metadata(
             return None
         return _coordinate(path, item, hemispheres), item
 
+    def map_coordinate(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
+        item = header.find(path, *mnemonics)
+        if item is None or _null(header, item, angle=False):
+            return None
+        return header_number(path, item) * _map_factor(path, header, item, depth_unit), item
+
     def angle(mnemonics: tuple[str, ...]) -> tuple[Any, Item] | None:
         item = header.find(path, *mnemonics)
         if item is None or _null(header, item, angle=True):
@@ -153,6 +174,8 @@ def well_metadata(
     for name, mnemonics in ANGLE_ITEMS.items():
         take(name, partial(angle, mnemonics))
     take("magnetic_field", field_strength)
+    for name, mnemonics in MAP_ITEMS.items():
+        take(name, partial(map_coordinate, mnemonics))
     take("survey_date", date)
     if (unread := header.find(path, UNREAD_CORRECTION)) is not None:
         warn_input(
@@ -292,6 +315,26 @@ def _elevation(
     except UnitError as exc:
         raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
     return (header_number(path, item) * factor, item), depth
+
+
+def _map_factor(path: Path, header: Header, item: Item, depth_unit: str | None) -> float:
+    """Factor to metres of a map coordinate item (:data:`MAP_ITEMS`): its unit's, else 1
+    where the depths are in metres; else an :class:`InputFileError` at its line."""
+    try:
+        if item.unit:
+            return conversion_factor(item.unit, "length")
+        unit = depth_unit or _depth_unit(header)
+        if unit and conversion_factor(unit, "length") == 1.0:
+            return 1.0
+    except UnitError as exc:
+        raise InputFileError(path, f"{item.mnemonic}: {exc}", line=item.line) from None
+    raise InputFileError(
+        path,
+        f"{item.mnemonic}: no unit, and a map coordinate is in its CRS's unit, which depths in "
+        f"{unit or 'no one unit'} do not tell (US survey or international feet): write e.g. "
+        f"'{item.mnemonic}.USFT  {item.value}'",
+        line=item.line,
+    )
 
 
 def _depth_unit(header: Header) -> str | None:

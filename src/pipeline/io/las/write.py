@@ -4,9 +4,10 @@ LAS 2.0, unwrapped: ``~Version``; ``~Well`` with STRT/STOP/STEP (STEP 0 unless a
 exactly equal), NULL, COMP, WELL, FLD, LOC (the wellhead's coordinates as text), SRVC, DATE
 (of trajectories begun on several days the first's, the description naming the last's),
 UWI, API (the UWI when it is a US API number), LATI, LONG, DREF, EREF, TOOL, TOOLSN,
-TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes; items the
-well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and GRIDCONV (the
-well's magnetic declination and grid convergence, deg, east of true north positive),
+TOOLPRESET (the tool catalogue's entry, whose error magnitudes compassing takes), TOOLNAME,
+WELLBORE, RUN, JOB, HZCS, X and Y (the wellhead's map coordinates, m, as LAS 3.0 names
+them; items the well metadata lacks are written empty); ``~Parameter`` with NREF, DECL and
+GRIDCONV (the well's magnetic declination and grid convergence, deg, east of true north positive),
 DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths), MAGFIELD
 (nT) and MAGDIP (deg) (the geomagnetic reference the magnetometer checks take),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
@@ -41,7 +42,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
-from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
@@ -63,7 +64,7 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as LAS 2.0 (see the module docstring); floats at their unit's
     precision (:mod:`pipeline.io.precision`)."""
     table = for_export(table)
-    written = [f for f in table.schema if f.name != SOURCE_LINE and _writable_type(f)]
+    written = [f for f in table.schema if _writable_type(f)]
     numeric = [f for f in written if not pa.types.is_string(f.type)]
     if not numeric:
         raise ValueError("no numeric column to write: a LAS file needs a numeric index")
@@ -237,6 +238,13 @@ def _header_text(
         _line("TOOL", "", meta["tool_type"], "survey tool type"),
         _line("TOOLSN", "", meta["tool_serial"], "survey tool serial number"),
         _line("TOOLPRESET", "", meta["tool_preset"], "tool catalogue entry of the survey tool"),
+        _line("TOOLNAME", "", meta["tool_name"], "survey tool name"),
+        _line("WELLBORE", "", meta["wellbore"], "wellbore"),
+        _line("RUN", "", meta["run_number"], "survey run number"),
+        _line("JOB", "", meta["job_number"], "service company's job number"),
+        _line("HZCS", "", meta["crs"], "horizontal coordinate reference system"),
+        _line("X", "m", meta["easting"], "wellhead easting in HZCS"),
+        _line("Y", "m", meta["northing"], "wellhead northing in HZCS"),
         "~Parameter Information",
         _line("NREF", "", north, "north reference of the azimuths"),
         _line("DECL", "deg", meta["declination"], "magnetic declination, east of true north +"),
@@ -263,9 +271,7 @@ def _header_text(
         "~Other",
         f"Written by gyropipe {__version__}.",
     ]
-    dropped = [
-        f"{f.name} ({f.type})" for f in table.schema if f not in written and f.name != SOURCE_LINE
-    ]
+    dropped = [f"{f.name} ({f.type})" for f in table.schema if f not in written]
     if dropped:
         lines.append("Columns not written: " + ", ".join(dropped))
     lines.append("~ASCII " + " ".join(_mnemonic(f.name) for f in written))

@@ -35,7 +35,8 @@ trajectory's name and uid), holding
   ``extensionNameValue`` named ``gyropipe.well.<field>`` so gyropipe reads the whole header
   back.
 
-Numbers are written in shortest round-trip form, so they read back bit for bit. Documents
+Numbers are written in shortest round-trip form, so they read back bit for bit; one that
+is a null marker (``-999.25``…, which the reader takes for no value) is refused. Documents
 validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings of it).
 
 The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one

@@ -12,6 +12,7 @@ import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY, VERTICAL_TOLERANCE
 from pipeline.errors import EmptyTableError
+from pipeline.io.nulls import refuse_null_markers
 from pipeline.io.witsml.terms import (
     AZI_REF,
     CALC_ALGORITHM,
@@ -72,10 +73,12 @@ _XML_CHARS = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]"
 def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` (md, inc, azi and any of the trajectory columns) as a WITSML 1.4.1.1
     ``trajectorys`` document; raises ``ValueError`` for what WITSML cannot hold (a
-    trajectory without stations among it)."""
+    trajectory without stations among it) or a reader would not read back (a value that is
+    a null marker, :func:`~pipeline.io.nulls.refuse_null_markers`)."""
     if table.num_rows == 0:
         raise EmptyTableError("trajectory", "a WITSML trajectory needs at least one station")
     values = _station_values(table)
+    refuse_null_markers({column: pa.array(array) for column, array in values.items()})
     texts = {column: _numbers(array) for column, array in values.items()}
     north = _north(table)
     well_name = _name(well.well or UNNAMED, "well name")
