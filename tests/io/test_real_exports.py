@@ -682,13 +682,28 @@ def test_a_null_in_a_csv_title_is_no_value(tmp_path: Path):
     assert gp.read(source, kind="stations").attrs["well"] == {"well": "A-7"}
 
 
+NO_NORTH = "no north reference for the azimuths"
+AMBIGUOUS = "ambiguous north reference"
+
+
 @pytest.mark.parametrize(
-    "description",
-    ["Azimuth, not grid corrected", "Azimuth, mag dec applied", "Azimuth (no grid correction)"],
+    ("description", "refusal"),
+    [
+        ("Azimuth, not grid corrected", NO_NORTH),
+        ("Azimuth, mag dec applied", NO_NORTH),
+        ("Azimuth (no grid correction)", NO_NORTH),
+        ("Azimuth (mag corrected)", AMBIGUOUS),
+        ("Magnetic corrected azimuth", AMBIGUOUS),
+    ],
 )
-def test_a_las_description_naming_a_correction_names_no_north(tmp_path: Path, description: str):
+def test_a_las_description_naming_a_correction_names_no_north(
+    tmp_path: Path, description: str, refusal: str
+):
     """A vendor's words about what was (not) applied are no north reference: read as one,
-    these were grid and magnetic azimuths, wrong by the convergence or the declination."""
+    these were grid and magnetic azimuths, wrong by the convergence or the declination.
+    'mag corrected' was read as magnetic north; vendors write it of azimuths turned to true
+    north (declination applied) and of magnetic ones corrected for drillstring
+    interference. Refused at the curve's line; read once NREF or the option names it."""
     source = tmp_path / "said.las"
     source.write_text(
         "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
@@ -696,29 +711,12 @@ def test_a_las_description_naming_a_correction_names_no_north(tmp_path: Path, de
         f"~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : {description}\n"
         "~A\n0 0 0\n100 10 45\n200 20 45\n"
     )
-    with pytest.raises(InputFileError, match="no north reference for the azimuths") as caught:
-        gp.read(source, kind="stations")
-    assert (caught.value.line, caught.value.column) == (12, "AZI")
-    source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
-    assert gp.read(source, kind="stations").attrs["north_reference"] == "true"
-
-
-@pytest.mark.parametrize("description", ["Azimuth (mag corrected)", "Magnetic corrected azimuth"])
-def test_a_las_azimuth_magnetic_corrected_is_ambiguous(tmp_path: Path, description: str):
-    """'mag corrected' was read as magnetic north; vendors write it of azimuths turned to
-    true north (declination applied) and of magnetic ones corrected for drillstring
-    interference: refused at the curve's line, read once NREF (or the option) names it."""
-    source = tmp_path / "said.las"
-    source.write_text(
-        "~Version\n VERS.  2.0 : LAS\n WRAP.  NO :\n"
-        "~Well\n STRT.M 0 :\n STOP.M 200 :\n STEP.M 100 :\n NULL. -999.25 :\n"
-        f"~Curve\n DEPT.M : measured depth\n INC.DEG : inclination\n AZI.DEG : {description}\n"
-        "~A\n0 0 0\n100 10 45\n200 20 45\n"
-    )
-    with pytest.raises(InputFileError, match="ambiguous north reference") as caught:
+    with pytest.raises(InputFileError, match=refusal) as caught:
         gp.read(source, kind="stations")
     assert (caught.value.line, caught.value.column) == (12, "AZI")
     read = gp.read(source, kind="stations", north_reference="magnetic")
     assert read.attrs["north_reference"] == "magnetic"
+    source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
+    assert gp.read(source, kind="stations").attrs["north_reference"] == "true"
     source.write_text(source.read_text().replace(" NULL.", " NREF. TRUE :\n NULL."))
     assert gp.read(source, kind="stations").attrs["north_reference"] == "true"
