@@ -57,6 +57,12 @@ def test_unusable_pandas_metadata_is_an_input_file_error(
     assert gp.read_table(path, kind=kind).num_rows == table.num_rows
 
 
+def _with_attrs(frame: pd.DataFrame, **attrs: Any) -> pd.DataFrame:
+    """``frame`` with ``attrs`` set (a ValueError, or pydantic's, escaped before)."""
+    frame.attrs.update(attrs)
+    return frame
+
+
 BAD_CALLS: dict[str, Callable[[], Any]] = {
     "a well that is no mapping": lambda: gp.read(STATIONS, well=5),
     "a well field of the wrong type": lambda: gp.read(STATIONS, well={"latitude": "x"}),
@@ -70,6 +76,15 @@ BAD_CALLS: dict[str, Callable[[], Any]] = {
     ),
     "an infinite parameter": lambda: gp.minimum_curvature(_frame(), vs_azimuth=float("inf")),
     "a NaN parameter": lambda: gp.minimum_curvature(_frame(), vs_azimuth=float("nan")),
+    "attrs['units'] that is no mapping": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, units="deg")
+    ),
+    "attrs['north_references'] that is no mapping": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, north_references="true")
+    ),
+    "an unknown attrs['north_reference']": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, north_reference="sideways")
+    ),
     "an extension no writer has": lambda: gp.write(_frame(), "x.bogus"),
     "a plan that does not validate": lambda: gp.simulate({"bogus": 1}),
     "runs that are no mapping": lambda: gp.definitive_survey("nope"),  # type: ignore[arg-type]

@@ -29,7 +29,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from pydantic import ValidationError
 
-from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
+from pipeline.contracts import NORTH_KEY, NORTH_REFERENCES, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
 from pipeline.units import QUANTITIES, conversion_factor
 from pipeline.well import WellMetadata, attach, well_of
@@ -194,8 +194,8 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
         for _, column in data.items()
     ]
     table = pa.Table.from_arrays(arrays, names=[str(name) for name in data.columns])
-    units = dict(data.attrs.get("units") or {})
-    norths = dict(data.attrs.get("north_references") or {})
+    units = _attr_mapping(data, "units")
+    norths = _attr_mapping(data, "north_references")
     fields = []
     for f in table.schema:
         meta = {**(f.metadata or {})}
@@ -206,9 +206,21 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
         fields.append(f.with_metadata(meta) if meta else f)
     well = well_of_data(data)
     north = data.attrs.get("north_reference")
+    if north is not None and north not in NORTH_REFERENCES:
+        raise ParameterError(
+            f"attrs['north_reference'] is {north!r}: expected one of {', '.join(NORTH_REFERENCES)}"
+        )
     if north is not None and not norths and well.north_reference is None:
         well = well.merged(WellMetadata(north_reference=north))  # the azimuths' default
     return attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
+
+
+def _attr_mapping(data: pd.DataFrame, key: str) -> dict[str, Any]:
+    """``data.attrs[key]`` (none: empty), which must map column names to text."""
+    value = data.attrs.get(key) or {}
+    if not isinstance(value, Mapping):
+        raise ParameterError(f"attrs[{key!r}]: expected a mapping of column names, got {value!r}")
+    return dict(value)
 
 
 def like(template: TableLike, table: pa.Table) -> TableLike:
