@@ -32,7 +32,7 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, NORTH_REFERENCES, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
 from pipeline.units import QUANTITIES, conversion_factor
-from pipeline.well import WellMetadata, attach, well_of
+from pipeline.well import WELL_KEY, WellMetadata, attach, well_of
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -78,7 +78,20 @@ def well_of_data(data: TableLike) -> WellMetadata:
         return well_metadata(data.attrs.get("well"))
     if not isinstance(data, pa.Table):
         raise ParameterError(f"expected a pandas DataFrame or a pyarrow Table, got {data!r}")
-    return well_of(data) or WellMetadata()
+    return _stored_well(data) or WellMetadata()
+
+
+def _stored_well(table: pa.Table) -> WellMetadata | None:
+    """The well metadata stored in ``table``'s schema, if any; a :class:`ParameterError` if
+    it is not JSON of valid fields (a table made or edited by hand)."""
+    try:
+        return well_of(table)
+    except ValueError as exc:  # not JSON (or too deep), or not WellMetadata's fields
+        detail = describe(exc) if isinstance(exc, ValidationError) else str(exc)
+        raise ParameterError(
+            f"the table's well metadata (schema metadata {WELL_KEY.decode()!r}) cannot be "
+            f"used: {detail}"
+        ) from None
 
 
 def to_table(
@@ -164,7 +177,7 @@ def to_frame(table: pa.Table) -> pd.DataFrame:
         frame.attrs["north_references"] = norths
     if len(set(norths.values())) == 1:
         frame.attrs["north_reference"] = next(iter(norths.values()))
-    well = well_of(table)
+    well = _stored_well(table)
     if well is not None:
         frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
     return frame
