@@ -14,6 +14,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from pipeline.errors import Location, Problem, SpecError
+from pipeline.hashing import regular_bytes
 from pipeline.well import WellMetadata
 from pipeline.yamlsource import SourceMap, load_mapping, load_value, validation_problems
 
@@ -124,7 +125,7 @@ def load_spec(path: str | Path, overrides: list[str] | None = None) -> LoadedSpe
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = regular_bytes(path).decode("utf-8")  # a FIFO is refused, never waited on
     except (OSError, UnicodeDecodeError) as exc:
         raise SpecError([Problem(Location(str(path)), f"cannot read pipeline: {exc}")]) from exc
     return parse_spec(text, str(path), overrides)

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
@@ -57,6 +58,19 @@ def test_unusable_pandas_metadata_is_an_input_file_error(
     assert gp.read_table(path, kind=kind).num_rows == table.num_rows
 
 
+def _with_attrs(frame: pd.DataFrame, **attrs: Any) -> pd.DataFrame:
+    """``frame`` with ``attrs`` set (a ValueError, or pydantic's, escaped before)."""
+    frame.attrs.update(attrs)
+    return frame
+
+
+def _arrow_with_well(raw: bytes) -> pa.Table:
+    """An Arrow table of stations whose schema metadata holds ``raw`` as the well metadata
+    (a JSONDecodeError, or pydantic's ValidationError, escaped before)."""
+    table = gp.to_table(_frame())
+    return table.replace_schema_metadata({b"gyropipe.well": raw})
+
+
 BAD_CALLS: dict[str, Callable[[], Any]] = {
     "a well that is no mapping": lambda: gp.read(STATIONS, well=5),
     "a well field of the wrong type": lambda: gp.read(STATIONS, well={"latitude": "x"}),
@@ -70,6 +84,24 @@ BAD_CALLS: dict[str, Callable[[], Any]] = {
     ),
     "an infinite parameter": lambda: gp.minimum_curvature(_frame(), vs_azimuth=float("inf")),
     "a NaN parameter": lambda: gp.minimum_curvature(_frame(), vs_azimuth=float("nan")),
+    "attrs['units'] that is no mapping": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, units="deg")
+    ),
+    "attrs['north_references'] that is no mapping": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, north_references="true")
+    ),
+    "an unknown attrs['north_reference']": lambda: gp.minimum_curvature(
+        _frame().pipe(_with_attrs, north_reference="sideways")
+    ),
+    "an Arrow table whose well metadata is not JSON": lambda: gp.minimum_curvature(
+        _arrow_with_well(b"{not json"), well={"north_reference": "true"}
+    ),
+    "an Arrow table whose well metadata is invalid": lambda: gp.minimum_curvature(
+        _arrow_with_well(b'{"latitude": 100}'), well={"north_reference": "true"}
+    ),
+    "to_frame of a table whose well metadata is invalid": lambda: gp.to_frame(
+        _arrow_with_well(b'{"latitude": 100}')
+    ),
     "an extension no writer has": lambda: gp.write(_frame(), "x.bogus"),
     "a plan that does not validate": lambda: gp.simulate({"bogus": 1}),
     "runs that are no mapping": lambda: gp.definitive_survey("nope"),  # type: ignore[arg-type]

@@ -3,6 +3,7 @@ problems, never a traceback."""
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -381,3 +382,25 @@ def test_a_bad_date_and_a_merge_key_in_a_simulation_plan_are_located(tmp_path: P
     found = [str(p) for p in info.value.problems]
     assert f"{path}:2:47: '2026-13-45' is not a valid YAML timestamp" in found[0]
     assert any(p.startswith(f"{path}:5:10: YAML merge keys") for p in found), found
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+@pytest.mark.parametrize(
+    ("command", "what"),
+    [("validate", "pipeline"), ("run", "pipeline"), ("simulate", "plan"), ("budget", "plan")],
+)
+def test_a_fifo_as_pipeline_or_plan_is_refused_without_blocking(
+    tmp_path: Path, command: str, what: str
+):
+    """Adversarial pass: ``gyropipe validate fifo.yaml`` (and run, simulate, budget) blocked
+    for good on the FIFO's read, waiting for a writer."""
+    path = tmp_path / "fifo.yaml"
+    os.mkfifo(path)
+    extra = {
+        "run": ["--input", f"s={path}", "--out", str(tmp_path / "out")],
+        "simulate": ["--out", str(tmp_path / "out")],
+    }.get(command, [])
+    result = gyropipe_cli(command, str(path), *extra)
+    assert result.returncode == 2, result.stderr
+    assert f"{path}: cannot read {what}: " in result.stderr
+    assert "not a regular file (a FIFO)" in result.stderr

@@ -29,11 +29,11 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from pydantic import ValidationError
 
-from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
+from pipeline.contracts import NORTH_KEY, NORTH_REFERENCES, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
 from pipeline.io.mnemonics import CURVES
 from pipeline.units import QUANTITIES, canonical_unit, conversion_factor
-from pipeline.well import WellMetadata, attach, well_of
+from pipeline.well import WELL_KEY, WellMetadata, attach, well_of
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -79,7 +79,20 @@ def well_of_data(data: TableLike) -> WellMetadata:
         return well_metadata(data.attrs.get("well"))
     if not isinstance(data, pa.Table):
         raise ParameterError(f"expected a pandas DataFrame or a pyarrow Table, got {data!r}")
-    return well_of(data) or WellMetadata()
+    return _stored_well(data) or WellMetadata()
+
+
+def _stored_well(table: pa.Table) -> WellMetadata | None:
+    """The well metadata stored in ``table``'s schema, if any; a :class:`ParameterError` if
+    it is not JSON of valid fields (a table made or edited by hand)."""
+    try:
+        return well_of(table)
+    except ValueError as exc:  # not JSON (or too deep), or not WellMetadata's fields
+        detail = describe(exc) if isinstance(exc, ValidationError) else str(exc)
+        raise ParameterError(
+            f"the table's well metadata (schema metadata {WELL_KEY.decode()!r}) cannot be "
+            f"used: {detail}"
+        ) from None
 
 
 def to_table(
@@ -165,7 +178,7 @@ def to_frame(table: pa.Table) -> pd.DataFrame:
         frame.attrs["north_references"] = norths
     if len(set(norths.values())) == 1:
         frame.attrs["north_reference"] = next(iter(norths.values()))
-    well = well_of(table)
+    well = _stored_well(table)
     if well is not None:
         frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
     return frame
@@ -195,8 +208,8 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
         for _, column in data.items()
     ]
     table = pa.Table.from_arrays(arrays, names=[str(name) for name in data.columns])
-    units = dict(data.attrs.get("units") or {})
-    norths = dict(data.attrs.get("north_references") or {})
+    units = _attr_mapping(data, "units")
+    norths = _attr_mapping(data, "north_references")
     fields = []
     for f in table.schema:
         meta = {**(f.metadata or {})}
@@ -207,6 +220,10 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
         fields.append(f.with_metadata(meta) if meta else f)
     well = well_of_data(data)
     north = data.attrs.get("north_reference")
+    if north is not None and north not in NORTH_REFERENCES:
+        raise ParameterError(
+            f"attrs['north_reference'] is {north!r}: expected one of {', '.join(NORTH_REFERENCES)}"
+        )
     if north is not None and not norths and well.north_reference is None:
         well = well.merged(WellMetadata(north_reference=north))  # the azimuths' default
     return attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
@@ -228,6 +245,14 @@ def as_stated(table: pa.Table) -> pa.Table:
             meta[NORTH_KEY] = north.encode()
         fields.append(f.with_metadata(meta) if meta else f)
     return pa.Table.from_arrays(table.columns, schema=pa.schema(fields, table.schema.metadata))
+
+
+def _attr_mapping(data: pd.DataFrame, key: str) -> dict[str, Any]:
+    """``data.attrs[key]`` (none: empty), which must map column names to text."""
+    value = data.attrs.get(key) or {}
+    if not isinstance(value, Mapping):
+        raise ParameterError(f"attrs[{key!r}]: expected a mapping of column names, got {value!r}")
+    return dict(value)
 
 
 def like(template: TableLike, table: pa.Table) -> TableLike:

@@ -26,6 +26,7 @@ from pipeline.contracts import SOURCE_LINE
 from pipeline.earth.site import Site
 from pipeline.errors import GyropipeError, Location, Problem, SpecError
 from pipeline.gyrocompass.positions import DEFAULT_POSITIONS
+from pipeline.hashing import regular_bytes
 from pipeline.sim.plan import StationProblem, WellPath, WellPlan, build_path
 from pipeline.sim.sensors import PRESETS, ToolSensors, tool_preset
 from pipeline.yamlsource import load_mapping, validate_located
@@ -247,7 +248,7 @@ def load_simulation(
     whose well is a stations file needs ``read_stations`` to read it."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = regular_bytes(path).decode("utf-8")  # a FIFO is refused, never waited on
     except (OSError, UnicodeDecodeError) as exc:
         raise SpecError([Problem(Location(str(path)), f"cannot read plan: {exc}")]) from exc
     raw, source, problems = load_mapping(
