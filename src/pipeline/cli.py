@@ -692,3 +692,7 @@ def _plan_errors(plan_file: str) -> Iterator[None]:
     except (GyropipeError, ValueError) as exc:
         click.echo(f"error: {plan_file}: {exc}", err=True)
         sys.exit(EXIT_CONFIG)
+
+
+if __name__ == "__main__":  # python -m pipeline.cli, as the gyropipe command
+    main()

@@ -135,3 +135,16 @@ def test_run_with_its_report_imports_no_matplotlib(tmp_path: Path):
     assert "pipeline.reports.charts.svg" in modules and "pipeline.reports.charts.pdf" in modules
     for package in ("matplotlib", "PIL", "fontTools.subset", "pandas"):
         assert not loaded(modules, package), package
+
+
+def test_python_m_pipeline_cli_is_the_command(tmp_path: Path):
+    """``python -m pipeline.cli`` runs the command (it printed nothing and exited 0)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "pipeline.cli", "validate", str(tmp_path / "none.yaml")],
+        env=pythonpath(ROOT / "src"),
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 2
+    assert "none.yaml" in done.stderr
