@@ -33,6 +33,18 @@ MIRROR_GRID = np.arange(360) * MIRROR_STEP
 refined by the parabola through its grid neighbours)."""
 MIRROR_SIGMAS = 3.0
 """A mirror azimuth nearer than this many σ of the solution is within its stated error."""
+TAIL_LEVEL = 9.0
+"""Δχ² bounding the region whose reach is 3σ (:func:`tail_sigma`)."""
+TAIL_SLACK = 0.1
+"""How far (fraction) that reach may exceed 3·σ_CR before σ_CR gives way: observed
+curvature alone spreads it ±7 % (99.9 %) about 3·σ_CR at well-conditioned stations."""
+TAIL_SLACK_REACH = MIRROR_SIGMAS * (1 + TAIL_SLACK)
+TAIL_BOUNDS = 129
+"""Edges of the geometric intervals, slack reach to 180°, of :func:`tail_sigma`'s floor."""
+TAIL_STEP = np.radians(0.1)
+TAIL_HALF = 1800
+TAIL_OFFSETS = np.arange(-TAIL_HALF, TAIL_HALF + 1) * TAIL_STEP
+"""Offsets (rad) from the solution searched for the reach, −180° to 180°."""
 
 
 @dataclass(frozen=True)
@@ -113,6 +125,62 @@ def cramer_rao(
     return sigma
 
 
+def tail_sigma(
+    obs: FloatArray,
+    cov: FloatArray,
+    azimuth: FloatArray,
+    sigma: FloatArray,
+    inclination: FloatArray,
+    latitude: float,
+) -> FloatArray:
+    """σ (rad) of each maximum-likelihood ``azimuth`` (rad) that its likelihood bears out:
+    ``sigma`` (the Cramér–Rao bound, rad), or r/3 where the region of Δχ² ≤ 9 about the
+    solution reaches r > 3·(1 + :data:`TAIL_SLACK`)·``sigma`` — toward east–west at high
+    inclination the misfit is far from its parabola and the bound understates the tail.
+    Observations (n, m) in °/h with covariance (n, m, m).
+
+    At an offset δ the excess misfit is exactly 4 sin²(δ/2)·(uᵀ·quad·u − μ), u the unit
+    tangent at A + δ/2 and μ the misfit's gradient along (cos A, sin A) at the solution; a
+    floor of it over :data:`TAIL_BOUNDS` intervals past the slack reach spares the search
+    (:data:`TAIL_STEP`, the crossing interpolated) to stations whose floor drops to 9."""
+    quad, linear, _ = _misfit_form(obs, cov, inclination, latitude)
+    cos_a, sin_a = np.cos(azimuth), np.sin(azimuth)
+    mu = _quadratic(quad, linear, cos_a, sin_a) + linear[:, 0] * cos_a + linear[:, 1] * sin_a
+    # uᵀ·quad·u − μ at A + δ/2 is mean − a·cos δ + b·sin δ, a sinusoid of amplitude `spread`:
+    # ≥ max(mean − spread, its value at A − spread·|δ|)
+    half, cross = 0.5 * (quad[:, 0, 0] - quad[:, 1, 1]), quad[:, 0, 1]
+    mean = 0.5 * (quad[:, 0, 0] + quad[:, 1, 1]) - mu
+    cos_2a, sin_2a = np.cos(2 * azimuth), np.sin(2 * azimuth)
+    a, b = half * cos_2a + cross * sin_2a, half * sin_2a - cross * cos_2a
+    spread = np.hypot(half, cross)
+    edges = np.geomspace(np.minimum(TAIL_SLACK_REACH * sigma, np.pi), np.pi, TAIL_BOUNDS).T
+    lowest = np.maximum(
+        (mean - spread)[:, None], (mean - a)[:, None] - spread[:, None] * edges[:, 1:]
+    )
+    floor = 2 * (1 - np.cos(edges[:, :-1])) * lowest
+    # the excess clears Δχ² = 9 everywhere past the slack reach unless some interval's
+    # floor does not: only those stations are searched
+    near = np.flatnonzero(np.any(floor <= TAIL_LEVEL, axis=1))
+    out: FloatArray = sigma.copy()
+    if near.size == 0:
+        return out
+    cos_d, sin_d = np.cos(TAIL_OFFSETS), np.sin(TAIL_OFFSETS)
+    along = mean[near, None] - a[near, None] * cos_d + b[near, None] * sin_d
+    excess = 2 * (1 - cos_d) * along
+    reach = np.zeros(near.size)
+    for side in (excess[:, TAIL_HALF:], excess[:, TAIL_HALF::-1]):  # δ ≥ 0, δ ≤ 0
+        inside = side <= TAIL_LEVEL
+        last = TAIL_HALF - np.argmax(inside[:, ::-1], axis=1)
+        nxt = np.minimum(last + 1, TAIL_HALF)
+        rows = np.arange(near.size)
+        f0, f1 = side[rows, last], side[rows, nxt]
+        frac = np.where(nxt > last, (TAIL_LEVEL - f0) / np.maximum(f1 - f0, TINY), 0.0)
+        reach = np.maximum(reach, TAIL_STEP * (last + np.clip(frac, 0.0, 1.0)))
+    wide = reach > TAIL_SLACK_REACH * sigma[near]
+    out[near[wide]] = reach[wide] / MIRROR_SIGMAS
+    return out
+
+
 def _maximum_likelihood(
     obs: FloatArray,
     cov: FloatArray,
@@ -159,21 +227,10 @@ def mirror_probability(
     minimum on the other side (:data:`MIRROR_GRID`) over A's; 0 where the other side
     holds no minimum or it is within :data:`MIRROR_SIGMAS` σ of A (the doubt σ states),
     and where it cannot reach ``floor``."""
-    m = obs.shape[1]
-    k = OMEGA_DEG_H * np.cos(latitude)
-    # the model is the offset plus basis·(cos A, sin A): the misfit a quadratic in them
-    basis = np.zeros((len(obs), m, 2))
-    basis[:, 0, 0], basis[:, 1, 1] = k * np.cos(inclination), -k
-    if m == 3:
-        basis[:, 2, 0] = k * np.sin(inclination)
-    weight = np.linalg.inv(cov)
-    res = obs - model_offset(inclination, latitude, m)
-    weighted = (weight @ res[..., None])[..., 0]
-    across = basis.transpose(0, 2, 1)
-    linear, quad = (across @ weighted[..., None])[..., 0], across @ weight @ basis
+    quad, linear, constant = _misfit_form(obs, cov, inclination, latitude)
     cos_a = np.cos(azimuth)
     own_part = _quadratic(quad, linear, cos_a, np.sin(azimuth))
-    own = np.maximum(np.sum(res * weighted, axis=1) + own_part, 0.0)
+    own = np.maximum(constant + own_part, 0.0)
     # a model across east–west differs from A's by ≥ |cos A| in cos, which sin cannot take
     # up: its misfit is ≥ (reach − √own)², the triangle inequality in the weighted norm
     schur = np.maximum(quad[:, 0, 0] - quad[:, 0, 1] ** 2 / quad[:, 1, 1], 0.0)
@@ -196,6 +253,27 @@ def mirror_probability(
     apart = np.abs(np.angle(np.exp(1j * (where - azimuth[near])))) > MIRROR_SIGMAS * sigma[near]
     probability[near] = np.where(apart, np.exp(-np.logaddexp(0.0, excess / 2)), 0.0)
     return probability
+
+
+def _misfit_form(
+    obs: FloatArray, cov: FloatArray, inclination: FloatArray, latitude: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(quad (n, 2, 2), linear (n, 2), constant (n,)) of each station's misfit vs A,
+    ``constant + qᵀ·quad·q − 2·linearᵀ·q`` for q = (cos A, sin A)."""
+    m = obs.shape[1]
+    k = OMEGA_DEG_H * np.cos(latitude)
+    # the model is the offset plus basis·(cos A, sin A): the misfit a quadratic in them
+    basis = np.zeros((len(obs), m, 2))
+    basis[:, 0, 0], basis[:, 1, 1] = k * np.cos(inclination), -k
+    if m == 3:
+        basis[:, 2, 0] = k * np.sin(inclination)
+    weight = np.linalg.inv(cov)
+    res = obs - model_offset(inclination, latitude, m)
+    weighted = (weight @ res[..., None])[..., 0]
+    across = basis.transpose(0, 2, 1)
+    linear, quad = (across @ weighted[..., None])[..., 0], across @ weight @ basis
+    constant: FloatArray = np.sum(res * weighted, axis=1)
+    return quad, linear, constant
 
 
 def _quadratic(

@@ -43,7 +43,7 @@ import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
 from pipeline.earth.gravity import STANDARD_GRAVITY
-from pipeline.gyrocompass.azimuth import mirror_probability, solve_azimuth
+from pipeline.gyrocompass.azimuth import mirror_probability, solve_azimuth, tail_sigma
 from pipeline.gyrocompass.consistency import chi2_sf
 from pipeline.gyrocompass.earth_rate import (
     EarthRate,
@@ -196,8 +196,11 @@ def compass(
             mirrored = mirror_probability(
                 obs, cov, solution.azimuth, solution.sigma, inc, lat, options.ambiguity
             )
+            sigmas = solution.sigma
+            if options.azimuth_method == "ml":  # the bound understates a non-linear tail
+                sigmas = tail_sigma(obs, cov, solution.azimuth, sigmas, inc, lat)
             for p, azi, sigma, method, odds in zip(
-                group, solution.azimuth, solution.sigma, solution.method, mirrored, strict=True
+                group, solution.azimuth, sigmas, solution.method, mirrored, strict=True
             ):
                 if odds > options.ambiguity:
                     rejected.append((p.row.station, p.row.md, _ambiguous(azi, p.row.inc, odds)))

@@ -32,10 +32,11 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
-from pipeline.gyrocompass.azimuth import cramer_rao, mirror_probability, model
+from pipeline.gyrocompass.azimuth import cramer_rao, mirror_probability, model, tail_sigma
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.precision import hr_covariance
 from pipeline.gyrocompass.systematic import ToolErrors, accelerometer_sigma
+from pipeline.sim.plan import PathState
 from pipeline.sim.sensors import compass_errors, per_axis
 from pipeline.sim.simulate import station_mds
 from pipeline.sim.spec import PointSurvey, SimulationSpec
@@ -77,12 +78,12 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     g_var = (errors.g_sensitivity * np.sin(state.inc)) ** 2
     g_cov = g_var[:, None, None] * np.eye(2)
     n = len(mds)
+    planned = model(state.azi, state.inc, lat, 2)
+    # the compass stage weighs the mirror against the bound, states the tail's σ
+    bound_fit = np.max([cramer_rao(state.azi, state.inc, lat, c + g_cov) for c in covs], axis=0)
     sigma_gyro, sigma_fit = (
         np.max(
-            [
-                cramer_rao(state.azi, state.inc, lat, np.broadcast_to(c, (n, 2, 2)) + extra)
-                for c in covs
-            ],
+            [_fit_sigma(planned, np.broadcast_to(c, (n, 2, 2)) + extra, state, lat) for c in covs],
             axis=0,
         )
         for extra in (np.zeros((n, 2, 2)), g_cov)
@@ -93,11 +94,10 @@ def error_budget(spec: SimulationSpec) -> pa.Table:
     defaults = CompassOptions()
     sigma_tilt = np.hypot(sigma_inc, defaults.acc_resolution * 1e-6)
     undefined = np.abs(np.sin(state.inc)) <= defaults.tilt_detection * sigma_tilt
-    planned = model(state.azi, state.inc, lat, 2)
     mirror = np.max(
         [
             mirror_probability(
-                planned, c + g_cov, state.azi, sigma_fit, state.inc, lat, defaults.ambiguity
+                planned, c + g_cov, state.azi, bound_fit, state.inc, lat, defaults.ambiguity
             )
             for c in covs
         ],
@@ -146,6 +146,13 @@ def budget_lines(table: pa.Table) -> list[str]:
             + azimuth
         )
     return lines
+
+
+def _fit_sigma(planned: FloatArray, cov: FloatArray, state: PathState, lat: float) -> FloatArray:
+    """The compass stage's σ_azi (rad) for the planned readings (n, 2) in °/h with
+    covariance (n, 2, 2), at the path's azimuths and inclinations, latitude ``lat`` (rad)."""
+    bound = cramer_rao(state.azi, state.inc, lat, cov)
+    return tail_sigma(planned, cov, state.azi, bound, state.inc, lat)
 
 
 def _accel_sigma(inc: float, theta: FloatArray, g: float, errors: ToolErrors) -> float:
