@@ -11,7 +11,9 @@ Estimators, vectorised over stations (angles in radians, rates in °/h):
   (h, r, and z when a three-axis tool gives it) — a 1-D search (5° grid, then Newton); its
   σ is the Cramér–Rao bound, never worse than either closed form. At I = 90° a transverse
   pair cannot tell A from 180° − A (h carries no cos A), and toward it the σ at either
-  answer stays small: :func:`mirror_probability` says how likely the other one is.
+  answer stays small: :func:`mirror_probability` says how likely the other one is. Toward
+  east–west at high inclination the misfit is far from its parabola and the bound
+  understates the tail: :func:`tail_sigma` gives the σ the compass stage states.
 """
 
 from __future__ import annotations

@@ -6,8 +6,9 @@ Per station, for the frame positions and dwell of the plan:
   instability taken as an independent per-position error (conservative: the trend term
   absorbs its slow part), propagated through the least squares of h, r and a bias and trend
   per transverse gyro (one for a single-axis tool, two for an XY or three-axis one, as the
-  compass stage fits them) and the maximum-likelihood azimuth; reported for the least
-  favourable starting toolface;
+  compass stage fits them) and the maximum-likelihood azimuth, its σ the stage's
+  (:func:`pipeline.gyrocompass.azimuth.tail_sigma` of the planned readings); reported for
+  the least favourable starting toolface;
 - gyro g-dependent bias: turning with the frame like the Earth rate, compassing cannot remove
   it — σ ``g_sensitivity · sin I`` °/h on h and r (:mod:`pipeline.gyrocompass.systematic`),
   ≈ sin I · K / (Ω cos φ) in azimuth;
