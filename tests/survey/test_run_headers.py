@@ -134,6 +134,13 @@ def test_runs_from_two_datums_are_refused(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "the runs' elevation differ (GYRO-1 54.3, MWD-1 50.1)" in result.stderr
     assert not (tmp_path / "out").exists()
+    # the gyro run's 54.3 m written in feet (178.15 ft = 54.30012 m) is the same datum
+    mwd = with_header(RUNS / "mwd-run.csv", tmp_path / "mwd", Elevation="178.15 ft")
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "definitive.yaml", "--input", f"gyro={RUNS / 'gyro-run.csv'}",
+        "--input", f"mwd={mwd}", "--out", tmp_path / "out",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
 
 
 def test_the_runs_well_states_only_what_the_files_agree_on(

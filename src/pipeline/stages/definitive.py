@@ -334,13 +334,24 @@ def _site(
     return replace(site, latitude=latitude)
 
 
+DATUM_TOLERANCE_M = 0.01
+"""Datum elevations (m) of two runs this close are one datum (an elevation written in ft
+and read back in m, rounded to 0.01 ft, differs by up to 2 mm)."""
+
+
 def _one_datum(runs: list[_Run], wells: Mapping[str, WellMetadata]) -> None:
-    """Refuse runs whose headers state different depth references or datum elevations:
-    their MDs are not from one zero (shift one run's to the other's datum first)."""
+    """Refuse runs whose headers state different depth references, or datum elevations
+    more than :data:`DATUM_TOLERANCE_M` apart: their MDs are not from one zero (shift one
+    run's to the other's datum first). One elevation written in ft and in m is one."""
     for name in ("depth_reference", "elevation"):
         stated = {run.name: getattr(wells[run.port], name) for run in runs}
-        values = {v for v in stated.values() if v is not None}
-        if len(values) > 1:
+        values = [v for v in stated.values() if v is not None]
+        apart = (
+            max(values) - min(values) > DATUM_TOLERANCE_M
+            if name == "elevation" and values
+            else len({str(v).casefold() for v in values}) > 1
+        )
+        if apart:
             each = ", ".join(f"{run} {value}" for run, value in stated.items() if value is not None)
             raise ValueError(
                 f"the runs' {name} differ ({each}): their MDs are not from one datum; refer "
