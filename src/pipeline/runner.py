@@ -34,7 +34,7 @@ from pipeline.errors import (
     file_errors,
 )
 from pipeline.graph import Plan, PlannedStage
-from pipeline.hashing import key_after, regular_bytes, sha256_file
+from pipeline.hashing import FileKey, key_after, regular_bytes, sha256_file
 from pipeline.inputfiles import parameter_paths
 from pipeline.manifest import MANIFEST, StageRecord, acceptance, provenance_of, run_manifest
 from pipeline.ports import (
@@ -232,7 +232,7 @@ def run_plan(
     out_dir: Path | None,
     well: WellMetadata | None = None,
     publish_as: Path | None = None,
-    known_sha256: Mapping[str, str] | None = None,
+    known_inputs: Mapping[str, tuple[str, FileKey | None]] | None = None,
 ) -> RunResult:
     """Run ``plan`` for one well. Its well metadata is the pipeline's ``well:``, updated by
     what the stages report (the headers of the inputs they read, a simulation's site:
@@ -253,7 +253,9 @@ def run_plan(
     With ``publish_as``, ``out_dir`` is a new private directory (a batch worker's staging)
     that the caller publishes as ``publish_as`` (:func:`~pipeline.atomic.replace_dir`): the
     run writes into it, each file fsynced, ``run.json`` naming them at ``publish_as``.
-    ``known_sha256``: input name → its SHA-256 known without reading it (a batch worker's).
+    ``known_inputs``: input name → its SHA-256 known without reading it (a batch worker's),
+    with the file's stat key before it was hashed (None: it had none); each input file's key
+    is checked again before ``run.json`` is written (:class:`InputChangedError`).
 
     Raises :class:`RunInputError`, :class:`ContractViolation` or :class:`StageError`.
     """
@@ -266,9 +268,15 @@ def run_plan(
     differ: dict[str, dict[str, Any]] = {}  # field → input → value, where they differ
     current = plan.spec.well.merged(from_files).merged(overrides)
     records: list[StageRecord] = []
-    seen = {str(p.absolute()): key_after(p) for p in files.values() if isinstance(p, Path)}
-    provenance = provenance_of(plan, registry, files, start_time(), known_sha256 or {})
-    provenance.seen.update(seen)  # each input's key before it was hashed
+    known = known_inputs or {}
+    seen = {  # each input's key before it was hashed
+        str(p.absolute()): known[n][1] if n in known else key_after(p)
+        for n, p in files.items()
+        if isinstance(p, Path)
+    }
+    digests = {n: digest for n, (digest, _) in known.items()}
+    provenance = provenance_of(plan, registry, files, start_time(), digests)
+    provenance.seen.update(seen)
     t_run = time.perf_counter()
     with _staging(out_dir, private=publish_as is not None) as staging:
         staged: list[Path] = []

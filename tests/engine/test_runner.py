@@ -24,7 +24,7 @@ import pipeline.runner as runner
 from pipeline.contracts import implies
 from pipeline.errors import ContractViolation, StageError
 from pipeline.graph import PlannedStage, build_plan
-from pipeline.hashing import sha256_file
+from pipeline.hashing import file_key, sha256_file
 from pipeline.inputfiles import InputPath
 from pipeline.plugins import load_registry
 from pipeline.registry import StageContext, StageDef
@@ -148,7 +148,7 @@ def test_a_file_longer_than_the_hash_buffer_hashes_whole(tmp_path: Path):
 HASH_FAULTS = """
 import resource, sys
 from pathlib import Path
-from pipeline.hashing import sha256_file
+from pipeline.hashing import file_key, sha256_file
 from pipeline.inputfiles import InputPath
 from pipeline.streams import use_returning_memory_pool
 
@@ -560,3 +560,35 @@ def test_a_file_changed_while_the_run_read_it_publishes_nothing(
         assert info.value.paths == [str(changed)]
         assert f"changed while the run read it: {changed};" in str(info.value)
         assert {p.name: p.read_bytes() for p in out_dir.iterdir()} == before
+
+
+def test_an_input_changed_after_its_known_hash_was_taken_publishes_nothing(
+    write_yaml, registry, tmp_path: Path
+):
+    """A batch worker hashes an input before the run and gives the runner its hash with the
+    file's stat key from before the hash: a write in between fails the run, naming the
+    file, though the file is unchanged while the run itself reads it."""
+    src = tmp_path / "st.parquet"
+    pq.write_table(stations_table(), src)
+    key, digest = file_key(src), sha256_file(src)
+    pq.write_table(stations_table().slice(0, 2), src)  # rewritten after its hash
+    plan = make_plan(write_yaml, registry, "  - id: read\n    uses: read_stations\n")
+    out_dir = tmp_path / "out"
+    with pytest.raises(InputChangedError) as info:
+        run_plan(
+            plan,
+            registry,
+            inputs={"stations": src},
+            out_dir=out_dir,
+            known_inputs={"stations": (digest, key)},
+        )
+    assert info.value.paths == [str(src)]
+    assert not out_dir.exists()
+    run_plan(  # the key of the file as it is: published
+        plan,
+        registry,
+        inputs={"stations": src},
+        out_dir=out_dir,
+        known_inputs={"stations": (sha256_file(src), file_key(src))},
+    )
+    assert (out_dir / "run.json").exists()

@@ -7,8 +7,10 @@ The worker is where files are read: it hashes each input once (``run.json``, and
 run's outcome) — but an input whose stat key is the one the batch process saw and holds a
 settled hash for (:attr:`WellTask.known`), which it takes as is, unread — and the files a
 check names
-(:attr:`WellTask.check`); it fails a run whose input changed while it ran (its
-stat before and after), and checks that ``OUT/<well>`` holds the run once published.
+(:attr:`WellTask.check`). A run whose input changed while it ran (its stat key before the
+hash, given to the runner, and at the end) fails with the runner's
+:class:`~pipeline.runner.InputChangedError`; the worker checks that ``OUT/<well>`` holds the
+run once published.
 """
 
 from __future__ import annotations
@@ -205,8 +207,8 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             out_dir=staging,
             well=WellMetadata.model_validate(task.well),
             publish_as=final,
-            known_sha256={
-                name: digests[path]
+            known_inputs={
+                name: (digests[path], before[name])
                 for name, path in task.inputs.items()
                 if digests[path] != UNREADABLE  # run.json names the file's error instead
             },
@@ -225,11 +227,6 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
                 "figures": figures_record(figures),
             },
         )
-        changed = [n for n, key in before.items() if key_after(task.inputs[n]) != key]
-        if changed:
-            raise Inconsistent(
-                f"input changed while the well ran: {', '.join(changed)}; run it again"
-            )
         check_out_dir(final, OWN)  # again: the user may have put files there meanwhile
         replace_dir(staging, final)
         published = read_published(final)
@@ -283,8 +280,8 @@ def _digest(task: WellTask, path: str, key: FileKey | None) -> str:
 
 
 class Inconsistent(GyropipeError):
-    """A run whose outputs cannot be taken as done: an input changed while it ran, or
-    ``OUT/<well>`` does not hold it once published."""
+    """A run whose outputs cannot be taken as done: ``OUT/<well>`` does not hold it once
+    published."""
 
 
 class NoPipeline(GyropipeError):
