@@ -5,6 +5,7 @@ writer → reader round trips and a mutation fuzz test."""
 from __future__ import annotations
 
 import datetime as dt
+import json
 import random
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,7 @@ from hypothesis import strategies as st
 
 import pipeline as gp
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
-from pipeline.errors import InputFileError, UnitError
+from pipeline.errors import InputFileError, InputFileWarning, UnitError
 from pipeline.io import csv as csv_plugin
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.well import WellMetadata
@@ -93,7 +94,7 @@ def test_header_spellings(tmp_path: Path, header: str, ref: str | None) -> None:
     assert column(table, "azi") == [0.0, 45.0, 46.5]
     assert column(table, "source_line") == [2, 3, 4]
     assert north(table) == (ref or "grid")
-    assert well == WellMetadata()
+    assert well == WellMetadata(north_reference=ref)  # the header's; the option's is not
     Stations.validate_table(table)
 
 
@@ -242,6 +243,7 @@ def test_title_block_well_metadata(tmp_path: Path) -> None:
         tool_type="GWD",
         tool_serial="SN-7",
         depth_reference="RKB",
+        north_reference="grid",
     )
     assert north(table) == "grid"
 
@@ -591,7 +593,7 @@ def test_round_trip(tmp_path: Path, rows: list[tuple[float, float, float]], ref:
     path = tmp_path / "out.csv"
     WRITER.write(table, path, WELL)
     back, well = read(path)
-    assert well == WELL
+    assert well == WELL.merged({"north_reference": ref})  # the azimuths' north is the well's
     assert back.schema.field("azi").metadata == table.schema.field("azi").metadata
     for name in ("md", "inc", "azi"):
         assert back.schema.field(name).metadata == table.schema.field(name).metadata
@@ -691,3 +693,38 @@ def test_map_northing_and_easting_are_not_displacements(tmp_path: Path) -> None:
     )
     frame = gp.read(put(tmp_path, only_map), kind="stations")
     assert "north" not in frame.columns and "east" not in frame.columns
+
+
+GRID_LISTING = "Well: TEST-1\nMD (ft),Inc (deg),Azi Grid (deg)\n0,0,0\n1000,5,45\n2000,10,47\n"
+
+
+def test_azimuths_named_grid_make_the_well_grid(tmp_path: Path) -> None:
+    """A listing whose azimuth column says grid north, run through a pipeline whose ``well:``
+    says true north (survey.yaml): the run's well and every file written state grid — the
+    azimuths' own north, as an LAS NREF would — never the pipeline's true beside grid
+    azimuths."""
+    from tests_support import gyropipe_cli
+
+    listing = put(tmp_path, GRID_LISTING)
+    out = tmp_path / "out"
+    gyropipe_cli(
+        "run", "pipelines/survey.yaml", "--input", f"stations={listing}", "--out", out, check=True
+    )
+    assert json.loads((out / "run.json").read_text())["well"]["north_reference"] == "grid"
+    text = (out / "trajectory.csv").read_text()
+    assert "# well.north_reference=grid\n" in text and "north_reference=true" not in text
+    for name in ("trajectory.csv", "trajectory.xml", "trajectory.las"):
+        frame = gp.read(out / name)
+        assert frame.attrs["well"]["north_reference"] == "grid", name
+        assert frame.attrs["north_reference"] == "grid", name
+
+
+def test_well_north_reference_contradicting_the_azimuths_is_overruled(tmp_path: Path) -> None:
+    """A ``well.north_reference`` title line saying true above azimuths declared grid (as
+    gyropipe's CSV writer wrote them before): the azimuths' north is the well's, with a
+    warning at the header line."""
+    text = "# north_reference=grid\n# well.north_reference=true\nMD[m],INC[deg],AZI[deg]\n1,2,3\n"
+    path = put(tmp_path, text)
+    with pytest.warns(InputFileWarning, match=r"survey\.csv:3: well\.north_reference 'true'"):
+        table, well = read(path)
+    assert well.north_reference == "grid" and north(table) == "grid"

@@ -679,7 +679,10 @@ def test_a_null_in_a_las_header_item_is_no_value(tmp_path: Path, item: str, fiel
 
 def test_a_null_in_a_csv_title_is_no_value(tmp_path: Path):
     source = title_csv(tmp_path / "nulls.csv", "Elevation: -999.25\nDeclination: -999.25 deg")
-    assert gp.read(source, kind="stations").attrs["well"] == {"well": "A-7"}
+    assert gp.read(source, kind="stations").attrs["well"] == {
+        "well": "A-7",
+        "north_reference": "true",
+    }
 
 
 NO_NORTH = "no north reference for the azimuths"

@@ -60,9 +60,11 @@ required column's value contains a dot. Units come from the header or the option
 ``units``/``md_unit``/``angle_unit`` (which win), never assumed: a read column with no or
 an unknown unit is an :class:`~pipeline.errors.InputFileError` naming it. The azimuth north
 reference comes from the header, a ``north_reference`` title line or the option, which must
-agree. Options may come from a vendor profile (``profile: vendor.yaml``, see
-:mod:`pipeline.io.csv.options`), whose units fill in the ones headers lack: a header
-stating another is refused.
+agree; the one the file names (header or title line, not the option) is also the returned
+well metadata's ``north_reference``, as LAS's NREF is (a ``well.north_reference`` line
+saying another is overruled, warned: the azimuths' own is what they are). Options may
+come from a vendor profile (``profile: vendor.yaml``, see :mod:`pipeline.io.csv.options`),
+whose units fill in the ones headers lack: a header stating another is refused.
 
 Every problem of the file (or profile) is an InputFileError naming the file, the line and,
 for a cell, its column: wrong cell counts, non-numeric or empty cells, unknown units,
@@ -91,7 +93,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract
-from pipeline.errors import InputFileError, WrongKindError
+from pipeline.errors import InputFileError, WrongKindError, warn_input
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import to_canonical
 from pipeline.io.csv.header import (
@@ -323,9 +325,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
         raise
 
     lengths = length_units(header, opts, layout.columns)
-    well, declared = read_title(path, text.head[: header.index], header.delimiter, lengths)
-    if opts.north_reference:
-        declared.append(("option north_reference", opts.north_reference))
+    well, in_file = read_title(path, text.head[: header.index], header.delimiter, lengths)
+    option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
+    declared = in_file + option
     chosen = {
         name: choose(path, header, name, declared)
         for name in layout.columns
@@ -335,6 +337,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     north = None
     if "azi" in chosen:
         north = _azimuth_reference(path, header, chosen["azi"], declared, opts)
+        well = _stated_north(
+            path, header, well, north_reference(path, header, chosen["azi"], in_file)
+        )
     profiled = profile_units(given)
     factors = {
         name: factor(path, header, cell, name, opts, profiled)
@@ -361,6 +366,25 @@ def _one_name_per_cell(path: Path, header: Header, chosen: dict[str, Cell]) -> N
                 line=header.index + 1,
                 column=cell.text,
             )
+
+
+def _stated_north(
+    path: Path, header: Header, well: WellMetadata, stated: NorthReference | None
+) -> WellMetadata:
+    """The title block's well metadata with the north the file names for its azimuths (a
+    header cell such as ``Azi Grid``, a ``north_reference:`` line) as its north reference,
+    as LAS's NREF is: the well's north reference is its azimuths'. A ``well.north_reference``
+    line saying otherwise is overruled with a warning (the azimuths' own is what they are)."""
+    if stated is None or well.north_reference == stated:
+        return well
+    if well.north_reference is not None:
+        warn_input(
+            path,
+            f"well.north_reference {well.north_reference!r} contradicts the azimuths' "
+            f"{stated} north: the azimuths' is the well's",
+            header.index + 1,
+        )
+    return well.merged({"north_reference": stated})
 
 
 def _azimuth_reference(
