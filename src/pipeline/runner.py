@@ -183,6 +183,7 @@ class _Context:
         stream, header = self.registry.read_stream(
             given, kind, reader=reader, options=options, well=self.well_for(WellMetadata())
         )
+        self._north_agrees(given, header)
         self.found_header(name, header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
@@ -203,7 +204,22 @@ class _Context:
         options: Mapping[str, Any] | None = None,
     ) -> tuple[pa.Table, WellMetadata]:
         run = self.well_for(WellMetadata())  # the run's, not another file's header
-        return self.registry.read(path, kind, reader=reader, options=options, well=run)
+        table, header = self.registry.read(path, kind, reader=reader, options=options, well=run)
+        self._north_agrees(path, header)
+        return table, header
+
+    def _north_agrees(self, path: Path, header: WellMetadata) -> None:
+        """Refuse a run's override of the north reference that contradicts the one a file
+        names for its azimuths: the override is the azimuths' north only where the file
+        names none (the readers' default), so over a file naming another it would state a
+        north its azimuths are not in."""
+        wanted, named = self.own[1].north_reference, header.north_reference
+        if wanted is not None and named is not None and named != wanted:
+            raise RunInputError(
+                f"{path}: the file names {named} north for its azimuths; the run's well "
+                f"override north_reference={wanted} contradicts it (an override states the "
+                "north of azimuths whose file names none; drop it, or correct the file)"
+            )
 
     def writer(self, name: str) -> WriterDef:
         return _lookup(self.registry.writers, name, "writer")

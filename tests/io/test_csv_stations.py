@@ -728,3 +728,25 @@ def test_well_north_reference_contradicting_the_azimuths_is_overruled(tmp_path: 
     with pytest.warns(InputFileWarning, match=r"survey\.csv:3: well\.north_reference 'true'"):
         table, well = read(path)
     assert well.north_reference == "grid" and north(table) == "grid"
+
+
+def test_a_north_override_contradicting_the_file_is_refused(tmp_path: Path) -> None:
+    """``--well north_reference=true`` over a listing whose azimuths say grid would state a
+    north the azimuths are not in (the override is the readers' default only): refused,
+    naming the file; over a listing naming no north it is the azimuths' north."""
+    from tests_support import gyropipe_cli
+
+    listing = put(tmp_path, GRID_LISTING)
+    run = ("run", "pipelines/survey.yaml", "--input", f"stations={listing}")
+    refused = gyropipe_cli(*run, "--well", "north_reference=true", "--out", tmp_path / "a")
+    assert refused.returncode != 0 and not (tmp_path / "a").exists()
+    assert f"{listing}: the file names grid north for its azimuths" in refused.stderr
+    assert "override north_reference=true contradicts it" in refused.stderr
+    silent = put(tmp_path, GRID_LISTING.replace("Azi Grid", "Azi"), "silent.csv")
+    out = tmp_path / "b"
+    gyropipe_cli(
+        "run", "pipelines/survey.yaml", "--input", f"stations={silent}",
+        "--well", "north_reference=grid", "--out", out, check=True,
+    )  # fmt: skip
+    assert gp.read(out / "trajectory.csv").attrs["north_reference"] == "grid"
+    assert json.loads((out / "run.json").read_text())["well"]["north_reference"] == "grid"
