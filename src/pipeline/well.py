@@ -11,10 +11,18 @@ from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_serializer
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    model_serializer,
+    model_validator,
+)
 from pydantic_core.core_schema import SerializerFunctionWrapHandler
 
 from pipeline import jsontext
+from pipeline.errors import ParameterError
 
 WELL_KEY = b"gyropipe.well"
 
@@ -146,6 +154,17 @@ class WellMetadata(BaseModel):
         "azimuths were referred to grid north by it; 0: none applied)"
     )
 
+    @model_validator(mode="after")
+    def _dates_in_order(self) -> WellMetadata:
+        """Refuse a ``survey_date_last`` before the ``survey_date``."""
+        first, last = self.survey_date, self.survey_date_last
+        if first is not None and last is not None and last < first:
+            raise ValueError(
+                f"survey_date_last {last} is before survey_date {first}: the survey's "
+                "trajectories began from survey_date to survey_date_last"
+            )
+        return self
+
     @model_serializer(mode="wrap")
     def _dumped(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
         """Every field, but those of :data:`LATER_FIELDS` only when set: the pipeline digest
@@ -187,21 +206,30 @@ class WellMetadata(BaseModel):
         return f"{first or '?'} to {self.survey_date_last.isoformat()}"
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
-        """A copy where every field set in ``other`` overrides this one."""
+        """A copy where every field set in ``other`` overrides this one; a ``survey_date``
+        set without a ``survey_date_last`` is the one date (this one's last day cleared).
+        Raises :class:`~pipeline.errors.ParameterError`: the dates out of order."""
         update = (
             other.model_dump(exclude_unset=True)
             if isinstance(other, WellMetadata)
             else WellMetadata.model_validate(other).model_dump(exclude_unset=True)
         )
-        return self.model_copy(update=update)
+        if "survey_date" in update:
+            update.setdefault("survey_date_last", None)
+        try:
+            return self.model_copy(update=update)._dates_in_order()
+        except ValueError as exc:
+            raise ParameterError(f"well metadata: {exc}") from None
 
 
 def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str, dict[str, Any]]]:
     """What the headers of several input files (by input name) say of the run as one: the
     fields where they differ — each input's value, and the update stating the run's well
-    (over the headers merged): survey dates as their range (``survey_date`` the first,
-    ``survey_date_last`` the last), any other field left unstated (no one file's value is
-    the run's: each table keeps its own, :meth:`~pipeline.registry.StageContext.well_for`).
+    (over the headers merged): survey dates, where they differ or one header states a range,
+    as their range (``survey_date`` the first, ``survey_date_last`` the last: a header of
+    the first day alone merged last ends no range), any other field left unstated (no one
+    file's value is the run's: each table keeps its own,
+    :meth:`~pipeline.registry.StageContext.well_for`).
     Values as JSON (dates ISO)."""
     dumped = {k: h.model_dump(mode="json", exclude_none=True) for k, h in headers.items()}
     differ: dict[str, dict[str, Any]] = {}
@@ -210,7 +238,7 @@ def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str,
         if len(set(stated.values())) > 1:
             differ[name] = stated
     update: dict[str, Any] = {name: None for name in differ}
-    if "survey_date" in differ or "survey_date_last" in differ:
+    if "survey_date" in differ or any(h.survey_date_last for h in headers.values()):
         days = [d for h in headers.values() for d in (h.survey_date, h.survey_date_last) if d]
         update["survey_date"], update["survey_date_last"] = min(days), max(days)
     return WellMetadata().model_copy(update=update), differ
