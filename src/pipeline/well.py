@@ -155,8 +155,12 @@ class WellMetadata(BaseModel):
     )
 
     @model_validator(mode="after")
+    def _validated_dates(self) -> WellMetadata:
+        """Refuse survey dates out of order (:meth:`_dates_in_order`)."""
+        return self._dates_in_order()
+
     def _dates_in_order(self) -> WellMetadata:
-        """Refuse a ``survey_date_last`` before the ``survey_date``."""
+        """This metadata; ``ValueError``: a ``survey_date_last`` before the ``survey_date``."""
         first, last = self.survey_date, self.survey_date_last
         if first is not None and last is not None and last < first:
             raise ValueError(
