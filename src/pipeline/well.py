@@ -226,9 +226,36 @@ class WellMetadata(BaseModel):
             raise ParameterError(f"well metadata: {exc}") from None
 
 
+_ANGLE, _LENGTH = 1e-6, 1e-3  # deg; m
+AGREEING: dict[str, float] = {
+    "latitude": _ANGLE,
+    "longitude": _ANGLE,
+    "easting": _LENGTH,
+    "northing": _LENGTH,
+    "elevation": _LENGTH,
+    "declination": _ANGLE,
+    "grid_convergence": _ANGLE,
+    "magnetic_field": 0.01,  # nT
+    "magnetic_dip": _ANGLE,
+    "declination_applied": _ANGLE,
+    "grid_convergence_applied": _ANGLE,
+}
+"""Number fields → the spread (in the field's unit: deg, m, nT) within which several
+headers state one value (:func:`agreed`: a latitude 61.25 beside 61.2500001 is the same
+wellhead); text and dates agree only when equal."""
+
+
+def _agree(name: str, values: list[Any]) -> bool:
+    """Whether the values of field ``name`` stated by several headers are one value."""
+    if name in AGREEING:
+        return bool(max(values) - min(values) <= AGREEING[name])
+    return len(set(values)) == 1
+
+
 def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str, dict[str, Any]]]:
     """What the headers of several input files (by input name) say of the run as one: the
-    fields where they differ — each input's value, and the update stating the run's well
+    fields where they differ (numbers by more than :data:`AGREEING` allows) — each input's
+    value, and the update stating the run's well
     (over the headers merged): survey dates, where they differ or one header states a range,
     as their range (``survey_date`` the first, ``survey_date_last`` the last: a header of
     the first day alone merged last ends no range), any other field left unstated (no one
@@ -239,7 +266,7 @@ def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str,
     differ: dict[str, dict[str, Any]] = {}
     for name in WellMetadata.model_fields:
         stated = {k: d[name] for k, d in dumped.items() if name in d}
-        if len(set(stated.values())) > 1:
+        if stated and not _agree(name, list(stated.values())):
             differ[name] = stated
     update: dict[str, Any] = {name: None for name in differ}
     if "survey_date" in differ or any(h.survey_date_last for h in headers.values()):

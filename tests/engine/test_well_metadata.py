@@ -10,7 +10,7 @@ import itertools
 import pytest
 
 from pipeline.errors import ParameterError
-from pipeline.well import WellMetadata, agreed
+from pipeline.well import AGREEING, WellMetadata, agreed
 
 FIRST, LAST = dt.date(2025, 2, 10), dt.date(2026, 3, 2)
 RANGE = WellMetadata(survey_date=FIRST, survey_date_last=LAST)  # a WITSML of several days
@@ -47,3 +47,25 @@ def test_headers_of_the_range_s_first_day_keep_the_range():
         update, differ = agreed(headers)
         assert merged.merged(update).survey_dates() == "2025-02-10 to 2026-03-02"
         assert differ == {}  # one file states a last day: no difference
+
+
+def test_numbers_agree_within_their_field_s_tolerance():
+    """A latitude 1e-7° apart, a field 0.009 nT, an elevation 0.9 mm: one value; a field
+    0.02 nT apart and names differing in case differ; dates compare exactly."""
+    a = WellMetadata(well="J-12", latitude=61.25, magnetic_field=50000.0, elevation=54.3)
+    b = WellMetadata(well="j-12", latitude=61.2500001, magnetic_field=50000.009, elevation=54.3009)
+    update, differ = agreed({"a": a, "b": b})
+    assert differ == {"well": {"a": "J-12", "b": "j-12"}}
+    assert update.model_dump(exclude_unset=True) == {"well": None}
+    c = b.model_copy(update={"magnetic_field": 50000.02, "survey_date": FIRST})
+    _, differ = agreed({"a": a.model_copy(update={"survey_date": LAST}), "c": c})
+    assert set(differ) == {"well", "magnetic_field", "survey_date"}
+
+
+def test_every_number_field_has_a_tolerance():
+    numbers = {
+        name
+        for name, field in WellMetadata.model_fields.items()
+        if "float" in str(field.annotation)
+    }
+    assert numbers == set(AGREEING)
