@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 import pipeline as gp
-from pipeline.errors import InputFileError, InputFileWarning, StageError
+from pipeline.errors import InputFileError, InputFileWarning, ParameterError, StageError
 from tests_support import ROOT, gyropipe_cli
 
 EXAMPLE = ROOT / "examples" / "clearance"
@@ -263,6 +263,31 @@ def test_gyropipe_run_refuses_and_warns_naming_the_offset(tmp_path: Path):
     assert result.returncode != 0
     assert (
         "offset well 'offset-03': its grid-north azimuths took the reference well's grid "
-        "convergence (0.0°), but the reference's azimuths are true north: give its own in the "
-        "manifest's convergence column"
+        "convergence (0.0°), but the reference's azimuths are true north: give its own grid "
+        "convergence"
     ) in result.stderr
+
+
+def test_offsets_given_by_id_take_their_own_corrections(
+    tmp_path: Path, in_true_north: dict[str, np.ndarray]
+):
+    """``gp.clearance`` with offset files or tables by well id: each well's own declination
+    and convergence (once the reference's: 3° off), the norths may differ; a magnetic one
+    without its own is refused naming it."""
+    magnetic = tmp_path / csv_file(tmp_path, "offset-03", "Magnetic", 3.0, Declination=3.0)
+    grid = tmp_path / csv_file(tmp_path, "offset-04", "Grid", -1.5, Grid_Convergence=-1.5)
+    options = {
+        "offset_model": "ISCWSA-MWD-REV4",
+        "offset_hole_diameter": 24 * 0.0254,
+        "offset_position": {w: tuple(map(float, at.split(","))) for w, at in SLOTS.items()},
+        **RULE,
+    }
+    for offsets in (
+        {"offset-03": magnetic, "offset-04": grid},
+        {"offset-03": gp.read(magnetic), "offset-04": gp.read_table(grid)},
+    ):
+        frame = gp.clearance(str(EXAMPLE / "reference.csv"), offsets, **options)
+        same({w: frame[frame.offset == w].sf.to_numpy() for w in SLOTS}, in_true_north)
+    silent = tmp_path / csv_file(tmp_path, "offset-04", "Magnetic", 3.0)
+    with pytest.raises(ParameterError, match="offset well 'offset-04': magnetic-north azimuths"):
+        gp.clearance(str(EXAMPLE / "reference.csv"), {"offset-04": silent}, **options)

@@ -26,6 +26,11 @@ from pipeline.anticollision.models import (
     term_effects_of,
 )
 from pipeline.anticollision.models import well_covariance as model_covariance
+from pipeline.anticollision.offset_north import (
+    on_the_reference_grid,
+    taken_words,
+    true_azimuths,
+)
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
 from pipeline.anticollision.scan import Pair, Well, scan_pairs
 from pipeline.anticollision.shared import SharedErrors
@@ -183,52 +188,34 @@ def _true_azimuths(
     header: WellMetadata,
     reference: WellMetadata,
 ) -> tuple[np.ndarray, float | None]:
-    """An offset well's azimuths (deg) referred to true north by its own corrections (its
-    file's ``header``, of grid azimuths the convergence applied to them first, or the
-    manifest's; both given must agree), and the ``reference`` well's grid convergence where
-    it took that one (else None). Magnetic azimuths without a declination of their own are
-    refused; grid ones without a convergence take the reference's (the same grid assumed,
-    with a warning; the clearance stage refuses them unless the reference is on grid north
-    by that convergence), refused where the reference states none or another north."""
-    own = north_reference_of(table, "azi")
+    """An offset well's azimuths referred to true north by its own corrections, its file's
+    (``header``) or the manifest's, which must agree (:func:`true_azimuths`; refused naming
+    the manifest line, the reference's grid convergence taken with a warning)."""
+    north = north_reference_of(table, "azi")
+    column = {"magnetic": "declination", "grid": "convergence"}.get(north, "")
+    own = header
+    if column:
+        stated = header.declination if north == "magnetic" else header.convergence_for("grid")
+        value = _agreed(manifest, entry, column, stated)
+        field = "declination" if north == "magnetic" else "grid_convergence"
+        own = header.merged({field: value}) if value is not None else header
     where = f"offset well {entry.well_id!r} ({entry.file.name})"
-    declination = convergence = taken = None
-    if own == "magnetic":
-        declination = _agreed(manifest, entry, "declination", header.declination)
-    if own == "grid":
-        convergence = _agreed(manifest, entry, "convergence", header.convergence_for("grid"))
-    if own == "magnetic" and declination is None:
+    try:
+        true, taken = true_azimuths(table, own, reference)
+    except ValueError as exc:
         raise InputFileError(
             manifest,
-            f"{where}: magnetic-north azimuths and no declination of its own (its file states "
-            "none; another well's, of another site or date, is not its): give it in the "
-            "manifest's declination column (deg, east positive)",
+            f"{where}: {exc}: give it in the manifest's {column} column (deg, east positive)",
             entry.line,
-            "declination",
-        )
-    if own == "grid" and convergence is None:
-        taken = convergence = reference.convergence_for("grid")
-        if convergence is None or reference.north_reference not in (None, "grid"):
-            raise InputFileError(
-                manifest,
-                f"{where}: grid-north azimuths and no grid convergence of its own (its file "
-                "states none, nor the reference well on grid north one): give it in the "
-                "manifest's convergence column (deg, east positive)",
-                entry.line,
-                "convergence",
-            )
+            column,
+        ) from None
+    if taken is not None:
         warn_input(
             manifest,
-            f"{where}: grid-north azimuths and no grid convergence of its own: the reference "
-            f"well's grid convergence ({convergence}°) taken: the same grid assumed (else give "
-            "the manifest's convergence column)",
+            f"{where}: {taken_words(taken)} (else give the manifest's convergence column)",
             entry.line,
         )
-    azi = table.column("azi").to_numpy(zero_copy_only=False)
-    true, _ = convert_azimuth(
-        azi, own, "true", convergence_deg=convergence, declination_deg=declination
-    )
-    return np.where(np.isnan(azi), np.nan, true), taken
+    return true, taken
 
 
 def offset_tables(
@@ -471,19 +458,6 @@ def _shared(
     return Pair(pair.reference, pair.offset, relative)
 
 
-def _on_the_reference_grid(w: dict[str, Any], frame: _Frame) -> None:
-    """Refuse an offset well whose grid azimuths took the reference well's convergence
-    (:func:`_true_azimuths`) unless the reference is on grid north by that convergence."""
-    taken = w.get("reference_convergence")
-    if taken is not None and (frame.north != "grid" or frame.convergence != taken):
-        raise ValueError(
-            f"offset well {w['offset']!r}: its grid-north azimuths took the reference well's "
-            f"grid convergence ({taken}°), but the reference's azimuths are {frame.north} north"
-            + (f" by {frame.convergence}°" if frame.north == "grid" else "")
-            + ": give its own in the manifest's convergence column (deg, east positive)"
-        )
-
-
 def _kickoff(
     w: dict[str, Any],
     reference: Well,
@@ -563,7 +537,9 @@ def clearance(
                 f"offset well {w['offset']!r}: {'no' if block is None else 'fewer than 2'} "
                 "stations in the offsets table"
             )
-        _on_the_reference_grid(w, frame)
+        on_the_reference_grid(
+            w["offset"], w.get("reference_convergence"), frame.north, frame.convergence
+        )
         arrays = _arrays(block, frame)
         start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
         offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
