@@ -259,6 +259,10 @@ def test_gyropipe_run_refuses_and_warns_naming_the_offset(tmp_path: Path):
     assert f"warning: {grid}:2: offset well 'offset-03'" in result.stderr
     table = pd.read_parquet(out / "clearance.clearance.parquet")
     assert np.isfinite(table.sf).all()
+    assert (
+        "offset-03: grid azimuths stating no grid convergence of their own; the reference "
+        "well&#x27;s (0.0°) applied, the same grid assumed."
+    ) in (out / "report.html").read_text()
     result = run(true_reference(tmp_path, convergence=True), grid)
     assert result.returncode != 0
     assert (
