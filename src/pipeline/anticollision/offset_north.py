@@ -24,7 +24,7 @@ def true_azimuths(
     reference is on grid north by it: :func:`on_the_reference_grid`).
 
     Raises ``ValueError``: magnetic azimuths without a declination, grid ones without a
-    convergence where the reference states none or is on another north."""
+    convergence where the reference states none."""
     north = north_reference_of(table, "azi")
     declination = own.declination if north == "magnetic" else None
     convergence = own.convergence_for("grid") if north == "grid" else None
@@ -36,10 +36,9 @@ def true_azimuths(
         )
     if north == "grid" and convergence is None:
         taken = convergence = reference.convergence_for("grid")
-        if convergence is None or reference.north_reference not in (None, "grid"):
+        if convergence is None:
             raise ValueError(
-                "grid-north azimuths and no grid convergence of its own, nor a reference "
-                "well on grid north stating one"
+                "grid-north azimuths and no grid convergence of its own, nor the reference well's"
             )
     azi = table.column("azi").to_numpy(zero_copy_only=False)
     true, _ = convert_azimuth(
