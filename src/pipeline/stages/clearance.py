@@ -181,6 +181,13 @@ def _agreed(manifest: Path, entry: OffsetEntry, name: str, own: float | None) ->
     return given if given is not None else own
 
 
+_CORRECTIONS = {
+    "magnetic": ("declination", "declination"),
+    "grid": ("convergence", "grid_convergence"),
+}
+"""North reference → the manifest column and the well field of its correction to true north."""
+
+
 def _true_azimuths(
     manifest: Path,
     entry: OffsetEntry,
@@ -192,12 +199,11 @@ def _true_azimuths(
     (``header``) or the manifest's, which must agree (:func:`true_azimuths`; refused naming
     the manifest line, the reference's grid convergence taken with a warning)."""
     north = north_reference_of(table, "azi")
-    column = {"magnetic": "declination", "grid": "convergence"}.get(north, "")
+    column, field = _CORRECTIONS.get(north, ("", ""))
     own = header
-    if column:
+    if column:  # magnetic or grid azimuths: the correction to true north they need
         stated = header.declination if north == "magnetic" else header.convergence_for("grid")
         value = _agreed(manifest, entry, column, stated)
-        field = "declination" if north == "magnetic" else "grid_convergence"
         own = header.merged({field: value}) if value is not None else header
     where = f"offset well {entry.well_id!r} ({entry.file.name})"
     try:
