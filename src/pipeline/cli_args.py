@@ -83,7 +83,7 @@ def well_overrides(items: tuple[str, ...]) -> WellMetadata:
         problems = []
         for err in exc.errors():
             field = str(err["loc"][0]) if err["loc"] else ""
-            where = f"--well {given.get(field, field)}"
+            where = f"--well {given[field]}" if field in given else "--well"  # a model-level error
             if err["type"] == "extra_forbidden":
                 problems.append(f"{where}: unknown field {field!r}{did_you_mean(field, fields)}")
             else:

@@ -11,10 +11,18 @@ from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 import pyarrow as pa
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_serializer
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    model_serializer,
+    model_validator,
+)
 from pydantic_core.core_schema import SerializerFunctionWrapHandler
 
 from pipeline import jsontext
+from pipeline.errors import ParameterError
 
 WELL_KEY = b"gyropipe.well"
 
@@ -146,6 +154,21 @@ class WellMetadata(BaseModel):
         "azimuths were referred to grid north by it; 0: none applied)"
     )
 
+    @model_validator(mode="after")
+    def _validated_dates(self) -> WellMetadata:
+        """Refuse survey dates out of order (:meth:`_dates_in_order`)."""
+        return self._dates_in_order()
+
+    def _dates_in_order(self) -> WellMetadata:
+        """This metadata; ``ValueError``: a ``survey_date_last`` before the ``survey_date``."""
+        first, last = self.survey_date, self.survey_date_last
+        if first is not None and last is not None and last < first:
+            raise ValueError(
+                f"survey_date_last {last} is before survey_date {first}: the survey's "
+                "trajectories began from survey_date to survey_date_last"
+            )
+        return self
+
     @model_serializer(mode="wrap")
     def _dumped(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
         """Every field, but those of :data:`LATER_FIELDS` only when set: the pipeline digest
@@ -187,30 +210,66 @@ class WellMetadata(BaseModel):
         return f"{first or '?'} to {self.survey_date_last.isoformat()}"
 
     def merged(self, other: WellMetadata | dict[str, Any]) -> WellMetadata:
-        """A copy where every field set in ``other`` overrides this one."""
+        """A copy where every field set in ``other`` overrides this one; a ``survey_date``
+        set without a ``survey_date_last`` is the one date (this one's last day cleared).
+        Raises :class:`~pipeline.errors.ParameterError`: the dates out of order."""
         update = (
             other.model_dump(exclude_unset=True)
             if isinstance(other, WellMetadata)
             else WellMetadata.model_validate(other).model_dump(exclude_unset=True)
         )
-        return self.model_copy(update=update)
+        if "survey_date" in update:
+            update.setdefault("survey_date_last", None)
+        try:
+            return self.model_copy(update=update)._dates_in_order()
+        except ValueError as exc:
+            raise ParameterError(f"well metadata: {exc}") from None
+
+
+_ANGLE, _LENGTH = 1e-6, 1e-3  # deg; m
+AGREEING: dict[str, float] = {
+    "latitude": _ANGLE,
+    "longitude": _ANGLE,
+    "easting": _LENGTH,
+    "northing": _LENGTH,
+    "elevation": _LENGTH,
+    "declination": _ANGLE,
+    "grid_convergence": _ANGLE,
+    "magnetic_field": 0.01,  # nT
+    "magnetic_dip": _ANGLE,
+    "declination_applied": _ANGLE,
+    "grid_convergence_applied": _ANGLE,
+}
+"""Number fields → the spread (in the field's unit: deg, m, nT) within which several
+headers state one value (:func:`agreed`: a latitude 61.25 beside 61.2500001 is the same
+wellhead); text and dates agree only when equal."""
+
+
+def _agree(name: str, values: list[Any]) -> bool:
+    """Whether the values of field ``name`` stated by several headers are one value."""
+    if name in AGREEING:
+        return bool(max(values) - min(values) <= AGREEING[name])
+    return len(set(values)) == 1
 
 
 def agreed(headers: Mapping[str, WellMetadata]) -> tuple[WellMetadata, dict[str, dict[str, Any]]]:
     """What the headers of several input files (by input name) say of the run as one: the
-    fields where they differ — each input's value, and the update stating the run's well
-    (over the headers merged): survey dates as their range (``survey_date`` the first,
-    ``survey_date_last`` the last), any other field left unstated (no one file's value is
-    the run's: each table keeps its own, :meth:`~pipeline.registry.StageContext.well_for`).
+    fields where they differ (numbers by more than :data:`AGREEING` allows) — each input's
+    value, and the update stating the run's well
+    (over the headers merged): survey dates, where they differ or one header states a range,
+    as their range (``survey_date`` the first, ``survey_date_last`` the last: a header of
+    the first day alone merged last ends no range), any other field left unstated (no one
+    file's value is the run's: each table keeps its own,
+    :meth:`~pipeline.registry.StageContext.well_for`).
     Values as JSON (dates ISO)."""
     dumped = {k: h.model_dump(mode="json", exclude_none=True) for k, h in headers.items()}
     differ: dict[str, dict[str, Any]] = {}
     for name in WellMetadata.model_fields:
         stated = {k: d[name] for k, d in dumped.items() if name in d}
-        if len(set(stated.values())) > 1:
+        if stated and not _agree(name, list(stated.values())):
             differ[name] = stated
     update: dict[str, Any] = {name: None for name in differ}
-    if "survey_date" in differ or "survey_date_last" in differ:
+    if "survey_date" in differ or any(h.survey_date_last for h in headers.values()):
         days = [d for h in headers.values() for d in (h.survey_date, h.survey_date_last) if d]
         update["survey_date"], update["survey_date_last"] = min(days), max(days)
     return WellMetadata().model_copy(update=update), differ

@@ -53,10 +53,12 @@ def rounding_band(
 
 
 def stations(name: str) -> pd.DataFrame:
-    """A well's stations (MD m, inclination and grid azimuth deg)."""
+    """A well's stations (MD m, inclination and grid azimuth deg), with the set's grid
+    convergence in its well metadata."""
     w = data()["wells"][name]
     frame = pd.DataFrame({"md": w["MD"], "inc": w["IncDeg"], "azi": w["AziDeg"]})
     frame.attrs["north_reference"] = "grid"
+    frame.attrs["well"] = {"grid_convergence": site()["grid_convergence"]}
     return frame
 
 

@@ -154,3 +154,31 @@ def test_bad_sidetrack_fails_the_run_naming_the_well(tmp_path: Path, cells: str,
     assert result.returncode != 0
     assert words in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_reads_the_declination_and_convergence_columns(tmp_path: Path):
+    """Angles, deg east positive (an angle unit in the header optional); empty or a null
+    marker (of an angle: either sign) is no value."""
+    path = manifest(
+        tmp_path,
+        "A,a.csv,GYRO-NS,8.5,0,0,,2.5,-0.75",
+        "B,b.csv,GYRO-NS,8.5,5,0,,,999.25",
+        header=f"{HEADER},declination,convergence (rad)",
+    )
+    a, b = read_offset_manifest(path, resolve_model)
+    assert (a.declination, a.convergence) == (2.5, pytest.approx(-42.971834635))
+    assert (b.declination, b.convergence) == (None, None)
+
+
+@pytest.mark.parametrize(
+    ("column", "cell", "words"),
+    [
+        ("declination (m)", "2", "column 'declination': unit 'm' is a length"),
+        ("declination", "east", "declination: not a number: 'east'"),
+        ("convergence (deg)", "181", "convergence: 181 is not within ±180°"),
+    ],
+)
+def test_bad_angle_column_is_located(tmp_path: Path, column: str, cell: str, words: str):
+    path = manifest(tmp_path, f"A,a.csv,GYRO-NS,8.5,0,0,,{cell}", header=f"{HEADER},{column}")
+    with pytest.raises(InputFileError, match=words):
+        read_offset_manifest(path, resolve_model)

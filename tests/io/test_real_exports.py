@@ -43,6 +43,7 @@ import pipeline as gp
 import pipeline.cli
 from pipeline.errors import InputFileError, InputFileWarning, SurveyCheckWarning
 from pipeline.spec import load_spec
+from pipeline.survey.north import declination_at
 from tests_support import CliResult, gyropipe_cli
 
 NS = {"w": "http://www.witsml.org/schemas/1series"}
@@ -333,6 +334,42 @@ def test_true_north_trajectories_of_several_days_take_no_one_days_declination(tm
         assert (back["survey_date"], back["survey_date_last"]) == ("2025-02-10", "2026-03-02")
     date = lasio.read(str(tmp_path / "out" / "trajectory.las")).well["DATE"]
     assert date.value == "2025-02-10" and "the last began 2026-03-02" in date.descr
+
+
+FIRST = "2025-02-10"
+
+
+def test_a_survey_date_given_is_the_one_date(tmp_path: Path):
+    """``--well survey_date=X`` over trajectories begun on several days states the one date
+    to use: the file's last day goes with the file's first (once the range X…last, even
+    with X after last, and no declination for it); a last day before the first is refused."""
+    source = witsml(tmp_path / "runs.xml")
+    second_trajectory(source, "2026-03-02T08:15", f"{FIRST}T10:00")
+    pipe = survey_pipeline(tmp_path, MAGNETIC)
+    for day in ("2026-03-02", "2026-06-01"):
+        out = tmp_path / f"out-{day}"
+        given = run(pipe, source, out, *WELL_ARGS, "--well", f"survey_date={day}")
+        assert given.returncode == 0, given.output
+        well = json.loads((out / "run.json").read_text())["well"]
+        assert well["survey_date"] == day and "survey_date_last" not in well
+        # WMM2025 at the site on that day, not on the first trajectory's (2025-02-10)
+        on = {d: declination_at(*SITE.values(), dt.date.fromisoformat(d)) for d in (day, FIRST)}
+        assert well["declination"] == pytest.approx(on[day], abs=1e-12) != on[FIRST]
+    for args, words in [
+        (["--well", "survey_date_last=2024-12-31"], "survey_date_last 2024-12-31 is before"),
+        (
+            ["--well", "survey_date=2026-03-02", "--well", "survey_date_last=2026-03-01"],
+            "error: --well: value error, survey_date_last 2026-03-01 is before survey_date",
+        ),
+    ]:
+        refused = run(pipe, source, tmp_path / "refused", *WELL_ARGS, *args)
+        assert refused.returncode != 0
+        assert words in refused.output and "Traceback" not in refused.output
+    read = gp.read(source, kind="stations", well={"survey_date": "2026-06-01"})
+    assert read.attrs["well"]["survey_date"] == "2026-06-01"
+    assert "survey_date_last" not in read.attrs["well"]
+    with pytest.raises(ValueError, match="survey_date_last 2025-01-01 is before survey_date"):
+        gp.WellMetadata(survey_date=dt.date(2025, 2, 10), survey_date_last=dt.date(2025, 1, 1))
 
 
 def test_a_survey_of_one_day_states_no_last_day(tmp_path: Path):

@@ -196,3 +196,29 @@ def test_the_api_takes_each_runs_own_header_in_either_order(runs: tuple[Path, Pa
         assert survey["ellipse_major"].to_numpy() == pytest.approx(
             given["ellipse_major"].to_numpy(), rel=1e-12
         )
+
+
+def test_headers_within_a_field_s_tolerance_agree(tmp_path: Path) -> None:
+    """Two runs' headers stating a latitude 61.25 and 61.2500001, an elevation 54.3 and
+    54.3004 m, a declination 11.9 and 11.9000004° state one value each (once unstated and
+    in ``well_differs``); a longitude 1e-5° apart still differs."""
+    (tmp_path / "gyro").mkdir()
+    (tmp_path / "mwd").mkdir()
+    gyro = with_header(RUNS / "gyro-run.csv", tmp_path / "gyro", Declination="11.9")
+    mwd = with_header(
+        RUNS / "mwd-run.csv",
+        tmp_path / "mwd",
+        Latitude="61.2500001",
+        Longitude="73.40001",
+        Elevation="54.3004",
+        Declination="11.9000004",
+    )
+    out = run(ROOT / "pipelines" / "definitive.yaml", tmp_path / "out", gyro, mwd)
+    manifest = json.loads((out / "run.json").read_text())
+    assert set(manifest["well_differs"]) == {"tool_type", "longitude"}
+    assert manifest["well_differs"]["longitude"] == {"gyro": 73.4, "mwd": 73.40001}
+    well = manifest["well"]
+    assert well["latitude"] == pytest.approx(61.25, abs=1e-6)
+    assert well["elevation"] == pytest.approx(54.3, abs=1e-3)
+    assert well["declination"] == pytest.approx(11.9, abs=1e-6)
+    assert "longitude" not in well

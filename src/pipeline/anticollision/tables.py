@@ -55,6 +55,12 @@ class OffsetWells(TableContract):
     )
     source: str | None = column(unit=None, description="the stations file", default=None)
     sha256: str | None = column(unit=None, description="SHA-256 of the stations file", default=None)
+    reference_convergence: float | None = column(
+        unit="deg",
+        description="the reference well's grid convergence its grid-north azimuths were "
+        "referred to true north by, its own not stated: the same grid assumed (null: its own)",
+        default=None,
+    )
 
 
 class Clearance(TableContract):

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pyarrow as pa
 
+from pipeline.anticollision.offset_north import taken_words, true_azimuths
 from pipeline.anticollision.tables import OffsetWells
 from pipeline.api import stages
 from pipeline.api.frames import (
@@ -22,7 +25,6 @@ from pipeline.api.frames import (
 from pipeline.errors import ParameterError
 from pipeline.stages import toolmodels
 from pipeline.stages.clearance import offset_tables
-from pipeline.survey.stations import north_reference_of
 from pipeline.tables import Stations
 from pipeline.well import WellMetadata
 
@@ -54,7 +56,10 @@ def clearance(
     reference wellhead, default (0, 0) and TVD = first MD) give each well's, as one value or
     by well id; ``offset_kickoff`` names sidetracks of the reference, well id → kick-off MD
     on the reference (m) (a well whose first station lies on the reference path is found
-    without it; the manifest's ``parent`` and ``kickoff_md`` columns). ``params``: the
+    without it; the manifest's ``parent`` and ``kickoff_md`` columns). Each offset's
+    azimuths are referred to true north by its own declination or grid convergence (its
+    file's or well metadata's, not ``well``'s; a grid one stating none takes the
+    reference's, with a warning). ``params``: the
     stage's (``reference_model``, ``reference_hole_diameter`` m, ``k``, ``sigma_pa`` m,
     ``surface_margin`` m, ``stop``, ``caution``, ``level_on``, ``first_station_exact``,
     ``vertical_azimuth``, ``common_tolerance`` m, ``latitude``, ``magnetic``,
@@ -114,34 +119,34 @@ def _offsets(
         raise ParameterError(f"clearance: offset_kickoff names no offset well: {unknown}")
     reg = stages.registry()
     tables: dict[str, pa.Table] = {}
+    true: dict[str, np.ndarray] = {}
+    taken: dict[str, float | None] = {}
     for name, data in named.items():
         if isinstance(data, str | Path):
-            tables[name] = reg.read(Path(data), "stations", well=well)[0]
+            tables[name], header = reg.read(Path(data), "stations", well=well)
         else:
-            own = well.merged(well_of_data(data))
+            header = well_of_data(data)
+            own = well.merged(header)
             tables[name] = to_table(data, Stations, what=f"offset well {name!r}", well=own)
-    norths = {north_reference_of(t, "azi") for t in tables.values()}
-    if len(norths) > 1:
-        raise ParameterError(
-            "clearance: the offset wells' azimuths name different north references; give "
-            "them in one (or use a manifest, which converts them)"
-        )
-    stations = pa.concat_tables(
-        [
-            pa.table(
-                {
-                    "survey": [name] * t.num_rows,
-                    "md": t.column("md"),
-                    "inc": t.column("inc"),
-                    "azi": t.column("azi"),
-                }
+        try:
+            true[name], convergence = true_azimuths(tables[name], header, well)
+        except ValueError as exc:
+            raise ParameterError(
+                f"clearance: offset well {name!r}: {exc}: state it in its well metadata"
+            ) from None
+        if convergence is not None:
+            warnings.warn(
+                f"clearance: offset well {name!r}: {taken_words(convergence)}", stacklevel=3
             )
-            for name, t in tables.items()
-        ]
-    )
+        taken[name] = convergence
     stations = Stations.compiled().make_table(
-        {c: stations.column(c) for c in stations.column_names},
-        north_reference=norths.pop(),
+        {
+            "survey": [name for name, t in tables.items() for _ in range(t.num_rows)],
+            "md": np.concatenate([t.column("md").to_numpy() for t in tables.values()]),
+            "inc": np.concatenate([t.column("inc").to_numpy() for t in tables.values()]),
+            "azi": np.concatenate(list(true.values())),
+        },
+        north_reference="true",
     )
     rows = []
     for name in tables:
@@ -158,6 +163,7 @@ def _offsets(
                 "tvd": float(at[2]) if len(at) == 3 else None,
                 "parent": "reference" if kickoff and name in kickoff else None,
                 "kickoff_md": float(kickoff[name]) if kickoff and name in kickoff else None,
+                "reference_convergence": taken[name],
             }
         )
     wells = OffsetWells.compiled().make_table({k: [r[k] for r in rows] for k in rows[0]})

@@ -17,7 +17,12 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
 - ``parent`` — optional: ``reference`` (or the reference well's name) for a sidetrack of the
   reference well; ``kickoff_md`` — optional: its kick-off MD on the reference (a length;
   naming it names the parent). Without them a well whose first station lies on the reference
-  path is found to share its hole there.
+  path is found to share its hole there;
+- ``declination``, ``convergence`` — optional: the well's magnetic declination and grid
+  convergence (deg, east of true north positive; an angle unit in the header optional),
+  where its stations file cannot state them (a WITSML trajectory has no element for the
+  site's declination): a magnetic-north well's azimuths are referred to true north by its
+  own declination, a grid-north well's by its own convergence, never by another file's.
 
 A null marker in any length column is no value, as an empty cell. Every problem is an
 :class:`~pipeline.errors.InputFileError` naming the file and line.
@@ -36,10 +41,12 @@ from pipeline.errors import InputFileError, UnitError
 from pipeline.io.nulls import is_null_marker
 from pipeline.units import conversion_factor
 
-__all__ = ["LENGTHS", "OffsetEntry", "read_offset_manifest"]
+__all__ = ["ANGLES", "LENGTHS", "OffsetEntry", "read_offset_manifest"]
 
 LENGTHS = ("hole_diameter", "north", "east", "tvd", "kickoff_md")
 """The length columns, each with its unit in the header."""
+ANGLES = ("declination", "convergence")
+"""The angle columns (deg unless the header names another angle unit), within ±180°."""
 _TEXT = ("well_id", "file", "model")
 _OPTIONAL_TEXT = ("parent",)
 _REQUIRED = ("hole_diameter", "north", "east")
@@ -48,7 +55,8 @@ _HEADER = re.compile(r"^\s*([A-Za-z_]+)\s*(?:[\(\[]\s*([^\)\]]*?)\s*[\)\]])?\s*$
 
 @dataclass(frozen=True)
 class OffsetEntry:
-    """One offset well of a manifest; lengths in metres (``tvd`` None: the first MD)."""
+    """One offset well of a manifest; lengths in metres (``tvd`` None: the first MD), angles
+    in degrees (None: not given)."""
 
     well_id: str
     file: Path
@@ -60,16 +68,18 @@ class OffsetEntry:
     line: int
     parent: str | None = None
     kickoff_md: float | None = None
+    declination: float | None = None
+    convergence: float | None = None
 
 
 def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, float]]:
-    """Column name → (index, factor to m) of a header row."""
+    """Column name → (index, factor to m or deg) of a header row."""
     found: dict[str, tuple[int, float]] = {}
     for index, cell in enumerate(cells):
         match = _HEADER.match(cell)
         name = match.group(1).lower() if match else cell.strip()
-        if name not in (*_TEXT, *_OPTIONAL_TEXT, *LENGTHS):
-            known = ", ".join((*_TEXT, *_OPTIONAL_TEXT, *LENGTHS))
+        if name not in (*_TEXT, *_OPTIONAL_TEXT, *LENGTHS, *ANGLES):
+            known = ", ".join((*_TEXT, *_OPTIONAL_TEXT, *LENGTHS, *ANGLES))
             raise InputFileError(
                 path,
                 f"unknown column {cell.strip()!r}; expected {known}",
@@ -78,17 +88,16 @@ def _columns(path: Path, line: int, cells: list[str]) -> dict[str, tuple[int, fl
         if name in found:
             raise InputFileError(path, f"column {name!r} appears twice", line)
         unit = match.group(2) if match else None
-        if name in LENGTHS:
-            if not unit:
-                raise InputFileError(
-                    path, f"column {name!r} needs its unit in the header, e.g. '{name} (m)'", line
-                )
+        if name in LENGTHS and not unit:
+            raise InputFileError(
+                path, f"column {name!r} needs its unit in the header, e.g. '{name} (m)'", line
+            )
+        factor = 1.0
+        if unit and name in (*LENGTHS, *ANGLES):
             try:
-                factor = conversion_factor(unit, "length")
+                factor = conversion_factor(unit, "length" if name in LENGTHS else "angle")
             except UnitError as exc:
                 raise InputFileError(path, f"column {name!r}: {exc}", line) from None
-        else:
-            factor = 1.0
         found[name] = (index, factor)
     missing = [c for c in (*_TEXT, *_REQUIRED) if c not in found]
     if missing:
@@ -147,29 +156,31 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
             model = resolve(model)
         except ValueError as exc:
             raise InputFileError(path, str(exc), line, "model") from None
-        lengths: dict[str, float | None] = {}
-        for name in LENGTHS:
+        numbers: dict[str, float | None] = {}
+        for name in (*LENGTHS, *ANGLES):
             raw = cell.get(name, "")
             if not raw:
-                lengths[name] = None
+                numbers[name] = None
                 continue
             try:
                 number = float(raw)
             except ValueError:
                 raise InputFileError(path, f"{name}: not a number: {raw!r}", line, name) from None
-            if is_null_marker(number, angle=False):  # in the file's unit: no value
-                lengths[name] = None
+            if is_null_marker(number, angle=name in ANGLES):  # in the file's unit: no value
+                numbers[name] = None
                 continue
             value = number * columns[name][1]
             if value != value or abs(value) == float("inf"):
                 raise InputFileError(path, f"{name}: not a finite number: {raw!r}", line, name)
-            lengths[name] = value
-        diameter = lengths["hole_diameter"]
+            if name in ANGLES and abs(value) > 180.0:
+                raise InputFileError(path, f"{name}: {raw} is not within ±180°", line, name)
+            numbers[name] = value
+        diameter = numbers["hole_diameter"]
         if diameter is None or diameter <= 0:
             raise InputFileError(
                 path, "hole_diameter must be given and positive", line, "hole_diameter"
             )
-        north, east = lengths["north"], lengths["east"]
+        north, east = numbers["north"], numbers["east"]
         if north is None or east is None:
             name = "north" if north is None else "east"
             raise InputFileError(
@@ -188,11 +199,13 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
                 hole_diameter=diameter,
                 north=north,
                 east=east,
-                tvd=lengths["tvd"],
+                tvd=numbers["tvd"],
                 line=line,
                 parent=cell.get("parent")
-                or ("reference" if lengths["kickoff_md"] is not None else None),
-                kickoff_md=lengths["kickoff_md"],
+                or ("reference" if numbers["kickoff_md"] is not None else None),
+                kickoff_md=numbers["kickoff_md"],
+                declination=numbers["declination"],
+                convergence=numbers["convergence"],
             )
         )
     if not entries:

@@ -175,6 +175,11 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
         "north": 0.0,
         "east": 0.0,
     }
+    assumed = {  # offsets whose grid azimuths took the reference's convergence
+        name: well["reference_convergence"]
+        for name, well in rule.get("wells", {}).items()
+        if well.get("reference_convergence") is not None
+    }
     rows = []
     for name, well in {"Reference well": reference, **rule.get("wells", {})}.items():
         hole, tvd, model = well.get("hole_diameter"), well.get("tvd"), str(well.get("model"))
@@ -203,7 +208,14 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
         tuple(rows),
         kind="clearance-wells",
         note="Slot: the first station's position from the reference wellhead, in the north "
-        "of the reference's azimuths.",
+        "of the reference's azimuths."
+        + (
+            f" {', '.join(assumed)}: grid azimuths stating no grid convergence of their own; "
+            f"the reference well's ({next(iter(assumed.values()))}°) applied, the same grid "
+            "assumed."
+            if assumed
+            else ""
+        ),
     )
 
 

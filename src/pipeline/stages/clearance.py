@@ -9,7 +9,7 @@ import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pyarrow as pa
@@ -26,6 +26,11 @@ from pipeline.anticollision.models import (
     term_effects_of,
 )
 from pipeline.anticollision.models import well_covariance as model_covariance
+from pipeline.anticollision.offset_north import (
+    on_the_reference_grid,
+    taken_words,
+    true_azimuths,
+)
 from pipeline.anticollision.rule import RuleLimits, SeparationRule
 from pipeline.anticollision.scan import Pair, Well, scan_pairs
 from pipeline.anticollision.shared import SharedErrors
@@ -33,7 +38,7 @@ from pipeline.anticollision.sidetrack import Kickoff, common_point, cut, named_k
 from pipeline.anticollision.tables import Clearance, OffsetWells, rule_of, with_rule
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference
-from pipeline.errors import EmptyTableError, InputFileError
+from pipeline.errors import EmptyTableError, InputFileError, warn_input
 from pipeline.hashing import sha256_file
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
@@ -51,6 +56,9 @@ from pipeline.uncertainty.engine import (
     find_model,
 )
 from pipeline.well import Latitude, WellMetadata, well_of
+
+if TYPE_CHECKING:
+    from pipeline.io.offset_manifest import OffsetEntry
 
 STAGE = "clearance"
 
@@ -158,24 +166,83 @@ def read_offsets(
     return {"wells": wells, "stations": stations}
 
 
+def _agreed(manifest: Path, entry: OffsetEntry, name: str, own: float | None) -> float | None:
+    """An offset well's correction ``name`` (deg): its file's (``own``) or the manifest's;
+    both given must agree."""
+    given: float | None = getattr(entry, name)
+    if given is not None and own is not None and given != own:
+        raise InputFileError(
+            manifest,
+            f"offset well {entry.well_id!r}: the manifest's {name} {given} contradicts the "
+            f"file's {own} ({entry.file.name}): give one of them",
+            entry.line,
+            name,
+        )
+    return given if given is not None else own
+
+
+_CORRECTIONS = {
+    "magnetic": ("declination", "declination"),
+    "grid": ("convergence", "grid_convergence"),
+}
+"""North reference → the manifest column and the well field of its correction to true north."""
+
+
+def _true_azimuths(
+    manifest: Path,
+    entry: OffsetEntry,
+    table: pa.Table,
+    header: WellMetadata,
+    reference: WellMetadata,
+) -> tuple[np.ndarray, float | None]:
+    """An offset well's azimuths referred to true north by its own corrections, its file's
+    (``header``) or the manifest's, which must agree (:func:`true_azimuths`; refused naming
+    the manifest line, the reference's grid convergence taken with a warning)."""
+    north = north_reference_of(table, "azi")
+    column, field = _CORRECTIONS.get(north, ("", ""))
+    own = header
+    if column:  # magnetic or grid azimuths: the correction to true north they need
+        stated = header.declination if north == "magnetic" else header.convergence_for("grid")
+        value = _agreed(manifest, entry, column, stated)
+        own = header.merged({field: value}) if value is not None else header
+    where = f"offset well {entry.well_id!r} ({entry.file.name})"
+    try:
+        true, taken = true_azimuths(table, own, reference)
+    except ValueError as exc:
+        raise InputFileError(
+            manifest,
+            f"{where}: {exc}: give it in the manifest's {column} column (deg, east positive)",
+            entry.line,
+            column,
+        ) from None
+    if taken is not None:
+        warn_input(
+            manifest,
+            f"{where}: {taken_words(taken)} (else give the manifest's convergence column)",
+            entry.line,
+        )
+    return true, taken
+
+
 def offset_tables(
     manifest: Path,
     read: Callable[[Path], tuple[pa.Table, WellMetadata]],
-    well: WellMetadata,
+    reference: WellMetadata,
     catalogue: ModelCatalogue,
     hash_file: Callable[[Path], str] = sha256_file,
 ) -> tuple[pa.Table, pa.Table]:
     """The offset wells a manifest lists (:mod:`pipeline.io.offset_manifest`; their tool
     models among ``catalogue``'s) and their stations, read by ``read``, every azimuth
-    referred to the first file's north (each file's own header, else ``well``, gives the
-    corrections); each file's ``sha256`` by ``hash_file`` (a stage's records it:
-    :meth:`StageContext.record_file`), taken before the file is read."""
+    referred to true north by its own well's corrections (:func:`_true_azimuths`;
+    ``reference``: the reference well's metadata); each file's ``sha256`` by ``hash_file``
+    (a stage's records it: :meth:`StageContext.record_file`), taken before the file is
+    read."""
     from pipeline.io.offset_manifest import read_offset_manifest
 
     entries = read_offset_manifest(manifest, functools.partial(resolve_model, catalogue=catalogue))
     tables = []
     digests = []
-    north: str | None = None
+    taken: list[float | None] = []  # the reference's grid convergence, where taken
     for entry in entries:
         if not entry.file.is_file():
             raise InputFileError(manifest, f"no stations file {entry.file}", entry.line, "file")
@@ -187,19 +254,9 @@ def offset_tables(
             raise InputFileError(
                 entry.file, f"offset well {entry.well_id!r}: fewer than 2 stations"
             )
-        azi = table.column("azi").to_numpy(zero_copy_only=False)
-        own = north_reference_of(table, "azi")
-        north = north or own
-        known = well.merged(header)
-        converted, _ = convert_azimuth(
-            azi,
-            own,
-            north,  # type: ignore[arg-type]
-            convergence_deg=known.convergence_for(own),
-            declination_deg=known.declination,
-        )
-        tables.append((entry.well_id, table, np.where(np.isnan(azi), np.nan, converted)))
-    assert north is not None
+        true, convergence = _true_azimuths(manifest, entry, table, header, reference)
+        tables.append((entry.well_id, table, true))
+        taken.append(convergence)
     stations = Stations.compiled().make_table(
         {
             "survey": [w for w, t, _ in tables for _ in range(t.num_rows)],
@@ -207,7 +264,7 @@ def offset_tables(
             "inc": np.concatenate([t.column("inc").to_numpy() for _, t, _ in tables]),
             "azi": np.concatenate([a for _, _, a in tables]),
         },
-        north_reference=north,
+        north_reference="true",
     )
     wells = OffsetWells.compiled().make_table(
         {
@@ -221,6 +278,7 @@ def offset_tables(
             "kickoff_md": [e.kickoff_md for e in entries],
             "source": [str(e.file) for e in entries],
             "sha256": digests,
+            "reference_convergence": taken,
         }
     )
     return wells, stations
@@ -485,6 +543,9 @@ def clearance(
                 f"offset well {w['offset']!r}: {'no' if block is None else 'fewer than 2'} "
                 "stations in the offsets table"
             )
+        on_the_reference_grid(
+            w["offset"], w.get("reference_convergence"), frame.north, frame.convergence
+        )
         arrays = _arrays(block, frame)
         start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
         offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
@@ -537,6 +598,11 @@ def clearance(
             w["offset"]: {
                 **{k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)},
                 **{k: w[k] for k in ("north", "east", "tvd")},  # the slot and datum (tvd null)
+                **(
+                    {"reference_convergence": w["reference_convergence"]}
+                    if w.get("reference_convergence") is not None
+                    else {}
+                ),
                 **(
                     {"kickoff": dataclasses.asdict(kickoffs[w["offset"]])}
                     if w["offset"] in kickoffs

@@ -1,0 +1,70 @@
+"""An offset well's azimuths referred to true north by its own corrections, never another
+well's: a declination is of a site and a date (secular change is tenths of a degree a year),
+a grid convergence of a grid and a place. Angles in degrees, east of true north positive."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.survey.north import convert_azimuth
+from pipeline.survey.stations import north_reference_of
+from pipeline.well import WellMetadata
+
+__all__ = ["on_the_reference_grid", "taken_words", "true_azimuths"]
+
+
+def true_azimuths(
+    table: pa.Table, own: WellMetadata, reference: WellMetadata
+) -> tuple[np.ndarray, float | None]:
+    """A stations table's azimuths (deg, NaN kept) referred to true north by ``own`` (its
+    well's metadata: its declination; of grid azimuths the convergence applied to them,
+    else its grid convergence), and the ``reference`` well's grid convergence where grid
+    azimuths took it, stating none of their own (else None; the scan refuses it unless the
+    reference is on grid north by it: :func:`on_the_reference_grid`).
+
+    Raises ``ValueError``: magnetic azimuths without a declination, grid ones without a
+    convergence where the reference states none."""
+    north = north_reference_of(table, "azi")
+    declination = own.declination if north == "magnetic" else None
+    convergence = own.convergence_for("grid") if north == "grid" else None
+    taken = None
+    if north == "magnetic" and declination is None:
+        raise ValueError(
+            "magnetic-north azimuths and no declination of its own (another well's, of "
+            "another site or date, is not its)"
+        )
+    if north == "grid" and convergence is None:
+        taken = convergence = reference.convergence_for("grid")
+        if convergence is None:
+            raise ValueError(
+                "grid-north azimuths and no grid convergence of its own, nor the reference well's"
+            )
+    azi = table.column("azi").to_numpy(zero_copy_only=False)
+    true, _ = convert_azimuth(
+        azi, north, "true", convergence_deg=convergence, declination_deg=declination
+    )
+    return np.where(np.isnan(azi), np.nan, true), taken
+
+
+def taken_words(convergence: float) -> str:
+    """What a warning says of grid azimuths that took the reference's ``convergence``."""
+    return (
+        "grid-north azimuths and no grid convergence of its own: the reference well's grid "
+        f"convergence ({convergence}°) taken: the same grid assumed"
+    )
+
+
+def on_the_reference_grid(
+    name: str, taken: float | None, north: str, convergence: float | None
+) -> None:
+    """Refuse offset well ``name`` whose grid azimuths took the reference's convergence
+    ``taken`` (:func:`true_azimuths`) unless the reference's azimuths are on ``north`` =
+    grid by that ``convergence``."""
+    if taken is not None and (north != "grid" or convergence != taken):
+        raise ValueError(
+            f"offset well {name!r}: its grid-north azimuths took the reference well's grid "
+            f"convergence ({taken}°), but the reference's azimuths are {north} north"
+            + (f" by {convergence}°" if north == "grid" else "")
+            + ": give its own grid convergence"
+        )
