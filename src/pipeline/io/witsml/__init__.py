@@ -75,6 +75,15 @@ different days, or one undated beside a dated one, are refused at the line: read
 time; of other azimuths, an undated one beside a dated one is warned of), and the tool: the
 first station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is
 an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+
+What a store says of its stations decides which are the survey's (reader option
+``stations``: ``survey``, the default; ``all`` reads every station as it is): a
+``statusTrajStation`` ``rejected`` (quality not ok) or ``open`` (not yet validated) — by the
+schema neither enters the positions of the stations below it — is left out with a warning at
+its line naming its md and status (none left: refused); ``position`` and ``unknown`` are
+read; a value outside the schema's closed enumeration (1.3.1's ``valid``…) is refused at its
+line. A station's ``rawData`` (raw sensor values), ``valid`` (field values computed for its
+QC) and ``corUsed`` (the corrections applied, above) mark no station good or bad.
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
+from pipeline.io.witsml.kinds import StationsRead, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.well import (
@@ -92,6 +93,7 @@ class WitsmlOptions(BaseModel):
     )
     default_north_reference: DefaultNorthReference = None
     null_stations: NullStations = "error"
+    stations: StationsRead = "survey"
     angle_unit_confirmed: AngleUnitConfirmed = False
 
 
@@ -207,11 +209,12 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
-        rows = [_station(path, node, opts) for node in nodes]
+        reasons = [left_out(path, node) if opts.stations == "survey" else None for node in nodes]
+        nodes, rows, dropped = _survey_stations(path, traj, nodes, reasons, opts)
         _tvd_of_md_datum(path, nodes, rows)
         datum = _md_datum(path, nodes, datum)
         rows.sort(key=lambda row: row["md"])
-        _md_range(path, traj, rows, datum)
+        _md_range(path, traj, sorted(rows + dropped, key=lambda row: row["md"]), datum)
         for row in rows:
             for name in data:
                 data[name].append(row.get(name))
@@ -298,6 +301,36 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
             line=trajectories[0].line,
         )
     return north
+
+
+def _survey_stations(
+    path: Path, traj: Node, nodes: list[Node], reasons: list[str | None], opts: WitsmlOptions
+) -> tuple[list[Node], list[dict[str, Any]], list[dict[str, Any]]]:
+    """The stations of ``nodes`` whose ``reasons`` are None and their rows; each other one
+    is left out with a warning at its line naming its md (m) and the reason, its md and line
+    kept for the check of the trajectory's range. None left: refused at the trajectory."""
+    kept = [node for node, reason in zip(nodes, reasons, strict=True) if reason is None]
+    if not kept:
+        raise InputFileError(
+            path,
+            f"trajectory has no survey station: {len(nodes)} left out, the first for its "
+            f"{reasons[0]} (line {nodes[0].line}); the reader option stations: all reads them",
+            line=traj.line,
+        )
+    dropped = []
+    for node, reason in zip(nodes, reasons, strict=True):
+        md_node = node.get("md")
+        md = _measure(path, md_node, "length") if md_node is not None and reason else None
+        if reason is not None:
+            where = f"at md {md!r} m " if md is not None else ""
+            warn_input(
+                path,
+                f"station {where}left out: {reason}; the reader option stations: all reads it",
+                node.line,
+            )
+        if md is not None:
+            dropped.append({"md": md, SOURCE_LINE: node.line})
+    return kept, [_station(path, node, opts) for node in kept], dropped
 
 
 def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:

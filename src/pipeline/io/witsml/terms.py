@@ -69,6 +69,10 @@ STATION_TYPES = frozenset(
 )
 """``typeTrajStation`` values a station read from a file keeps when written (the measured
 and marker kinds of the closed enumeration)."""
+STATION_STATUS = frozenset({"open", "rejected", "position", "unknown"})
+"""``statusTrajStation`` (closed): ``open`` not yet validated, ``rejected`` of a quality not
+ok — by the schema neither enters the positions of the stations below it —, ``position``
+validated and used."""
 
 UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
 """Canonical column unit → WITSML uom (what the writer writes)."""

@@ -1,0 +1,152 @@
+"""What an operator's store says about its trajectories and stations, read for what the
+WITSML 1.4.1.1 schema makes it mean (documents as a store returns them: namespace, uids,
+elements in schema order, uoms, ``commonData``; each validated by the schema bindings):
+
+* ``statusTrajStation`` ``rejected`` (quality not ok) and ``open`` (not yet validated):
+  neither enters the positions of the stations below it, by the standard; left out with a
+  warning at the station's line naming its MD and status (reader option ``stations: all``
+  keeps them); a value outside the closed enumeration is refused at its line;
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import pytest
+from komle.bindings.v1411.write import witsml as wml
+from vendor_exports import survey_pipeline
+
+import pipeline as gp
+from pipeline.errors import InputFileError, InputFileWarning
+from tests_support import gyropipe_cli
+
+NS = "http://www.witsml.org/schemas/1series"
+SURVEY = [(0.0, 0.0, 0.0), (300.0, 0.0, 0.0), (330.0, 1.5, 45.0), (360.0, 3.0, 45.0)]
+"""md (m), incl, azi (deg) of a J-well's first stations: vertical to 300 m, then building."""
+FIRST_STATION_LINE = 14
+"""The line of the first ``trajectoryStation`` of :func:`store_document`."""
+
+
+def station(
+    k: int,
+    md: float,
+    inc: float,
+    azi: float,
+    *,
+    kind: str | None = None,
+    status: str | None = None,
+) -> str:
+    """One ``trajectoryStation`` on one line, elements in schema order (uom m, dega)."""
+    kind = kind or ("tie in point" if k == 0 else "gyro north seeking")
+    tool = (
+        ""
+        if kind == "tie in point"
+        else "<typeSurveyTool>gyroscopic north seeking</typeSurveyTool>"
+    )
+    status_element = f"<statusTrajStation>{status}</statusTrajStation>" if status else ""
+    return (
+        f'    <trajectoryStation uid="stn-{k:03d}">'
+        f"<dTimStn>2026-03-02T{8 + k // 60:02d}:{k % 60:02d}:00Z</dTimStn>"
+        f"<typeTrajStation>{kind}</typeTrajStation>{tool}"
+        f'<md uom="m">{md!r}</md><incl uom="dega">{inc!r}</incl><azi uom="dega">{azi!r}</azi>'
+        f"{status_element}</trajectoryStation>"
+    )
+
+
+def store_document(stations: list[str], *, head: str = "", state: str = "actual") -> str:
+    """A store's answer to a trajectory query: ``head`` goes between ``name`` and
+    ``dTimTrajStart`` (schema order), stations from :data:`FIRST_STATION_LINE`, one a line."""
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<trajectorys xmlns="{NS}" version="1.4.1.1">',
+            '  <trajectory uidWell="W-58" uidWellbore="W-58-1" uid="TRJ-0007">',
+            "    <nameWell>58/1-A1</nameWell>",
+            "    <nameWellbore>58/1-A1</nameWellbore>",
+            "    <name>Gyro survey 0-360 m</name>",
+            f"    {head}",
+            "    <dTimTrajStart>2026-03-02T08:00:00Z</dTimTrajStart>",
+            '    <mdMn uom="m">0</mdMn>',
+            f'    <mdMx uom="m">{SURVEY[-1][0]!r}</mdMx>',
+            "    <serviceCompany>North Gyro Services</serviceCompany>",
+            '    <magDeclUsed uom="dega">0</magDeclUsed>',
+            "    <aziRef>true north</aziRef>",
+            *stations,
+            "    <commonData>",
+            "      <sourceName>Store A</sourceName>",
+            "      <dTimCreation>2026-03-02T12:00:00Z</dTimCreation>",
+            f"      <itemState>{state}</itemState>",
+            "    </commonData>",
+            "  </trajectory>",
+            "</trajectorys>",
+            "",
+        ]
+    )
+
+
+def put(tmp_path: Path, text: str) -> Path:
+    """The document on disk, after checking that the WITSML 1.4.1.1 schema accepts it."""
+    wml.CreateFromDocument(text.encode())
+    path = tmp_path / "store.xml"
+    path.write_text(text)
+    return path
+
+
+def surveyed(**marks: dict[str, str]) -> list[str]:
+    """:data:`SURVEY`'s stations, station ``k`` given the keywords ``marks[f"s{k}"]``."""
+    return [station(k, *row, **marks.get(f"s{k}", {})) for k, row in enumerate(SURVEY)]
+
+
+def test_a_rejected_station_is_left_out_with_a_warning_at_its_line(tmp_path: Path):
+    path = put(tmp_path, store_document(surveyed(s2={"status": "rejected"})))
+    with pytest.warns(InputFileWarning) as caught:
+        table = gp.read(path, kind="stations")
+    assert table["md"].tolist() == [0.0, 300.0, 360.0]
+    (warning,) = [w for w in caught if "left out" in str(w.message)]
+    assert str(warning.message).startswith(
+        f"{path}:{FIRST_STATION_LINE + 2}: station at md 330.0 m"
+    )
+    assert "statusTrajStation 'rejected'" in str(warning.message)
+    kept = gp.read(path, kind="stations", stations="all")
+    assert kept["md"].tolist() == [0.0, 300.0, 330.0, 360.0]
+
+
+def test_an_open_station_is_not_validated_and_left_out(tmp_path: Path):
+    path = put(tmp_path, store_document(surveyed(s3={"status": "open"})))
+    with pytest.warns(InputFileWarning, match=r"md 360\.0 m left out: statusTrajStation 'open'"):
+        assert gp.read(path, kind="stations")["md"].tolist() == [0.0, 300.0, 330.0]
+
+
+def test_validated_and_unknown_stations_are_read_without_a_warning(tmp_path: Path):
+    marks = {"s1": {"status": "position"}, "s2": {"status": "unknown"}}
+    path = put(tmp_path, store_document(surveyed(**marks)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        assert gp.read(path, kind="stations")["md"].tolist() == [s[0] for s in SURVEY]
+
+
+def test_a_status_outside_the_enumeration_is_refused_at_its_line(tmp_path: Path):
+    path = tmp_path / "store.xml"  # 'valid' is WITSML 1.3.1's: not in 1.4.1.1's schema
+    path.write_text(store_document(surveyed(s2={"status": "valid"})))
+    with pytest.raises(InputFileError, match="statusTrajStation 'valid'") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == FIRST_STATION_LINE + 2
+
+
+def test_a_survey_of_rejected_stations_only_is_refused(tmp_path: Path):
+    marks = {f"s{k}": {"status": "rejected"} for k in range(len(SURVEY))}
+    path = put(tmp_path, store_document(surveyed(**marks)))
+    with pytest.raises(InputFileError, match="no survey station: 4 left out") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == 3
+
+
+def test_the_cli_leaves_a_rejected_station_out_of_the_survey(tmp_path: Path):
+    path = put(tmp_path, store_document(surveyed(s2={"status": "rejected"})))
+    out = tmp_path / "out"
+    spec = survey_pipeline(tmp_path)
+    result = gyropipe_cli("run", spec, "--input", f"stations={path}", "--out", out, check=True)
+    assert f"{path}:{FIRST_STATION_LINE + 2}: station at md 330.0 m left out" in result.stderr
+    listed = gp.read(out / "trajectory.csv", kind="stations")
+    assert listed["md"].tolist() == [0.0, 300.0, 360.0]
