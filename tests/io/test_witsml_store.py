@@ -6,6 +6,10 @@ elements in schema order, uoms, ``commonData``; each validated by the schema bin
   neither enters the positions of the stations below it, by the standard; left out with a
   warning at the station's line naming its MD and status (reader option ``stations: all``
   keeps them); a value outside the closed enumeration is refused at its line;
+* ``commonData/itemState`` ``plan`` or ``model``: a well plan or a what-if, not a survey —
+  the trajectory refused unless ``stations: all`` asks for it, a station of an actual one
+  left out; ``finalTraj`` false (preliminary) and ``objectGrowing`` true (still drilling)
+  warned of; a sidetrack's ``parentTrajectory`` warned of when its tie-in lists no position;
 """
 
 from __future__ import annotations
@@ -36,8 +40,11 @@ def station(
     *,
     kind: str | None = None,
     status: str | None = None,
+    state: str | None = None,
+    position: tuple[float, float, float] | None = None,
 ) -> str:
-    """One ``trajectoryStation`` on one line, elements in schema order (uom m, dega)."""
+    """One ``trajectoryStation`` on one line, elements in schema order (uom m, dega):
+    ``state`` its own ``commonData/itemState``, ``position`` its tvd, dispNs, dispEw (m)."""
     kind = kind or ("tie in point" if k == 0 else "gyro north seeking")
     tool = (
         ""
@@ -45,18 +52,32 @@ def station(
         else "<typeSurveyTool>gyroscopic north seeking</typeSurveyTool>"
     )
     status_element = f"<statusTrajStation>{status}</statusTrajStation>" if status else ""
+    common = f"<commonData><itemState>{state}</itemState></commonData>" if state else ""
+    tvd, placed = "", ""
+    if position is not None:
+        tvd = f'<tvd uom="m">{position[0]!r}</tvd>'
+        placed = f'<dispNs uom="m">{position[1]!r}</dispNs><dispEw uom="m">{position[2]!r}</dispEw>'
     return (
         f'    <trajectoryStation uid="stn-{k:03d}">'
         f"<dTimStn>2026-03-02T{8 + k // 60:02d}:{k % 60:02d}:00Z</dTimStn>"
         f"<typeTrajStation>{kind}</typeTrajStation>{tool}"
-        f'<md uom="m">{md!r}</md><incl uom="dega">{inc!r}</incl><azi uom="dega">{azi!r}</azi>'
-        f"{status_element}</trajectoryStation>"
+        f'<md uom="m">{md!r}</md>{tvd}<incl uom="dega">{inc!r}</incl><azi uom="dega">{azi!r}</azi>'
+        f"{placed}{status_element}{common}</trajectoryStation>"
     )
 
 
-def store_document(stations: list[str], *, head: str = "", state: str = "actual") -> str:
+def store_document(
+    stations: list[str],
+    *,
+    head: str = "",
+    flags: str = "",
+    state: str = "actual",
+    md_min: float = 0.0,
+) -> str:
     """A store's answer to a trajectory query: ``head`` goes between ``name`` and
-    ``dTimTrajStart`` (schema order), stations from :data:`FIRST_STATION_LINE`, one a line."""
+    ``dTimTrajStart``, ``flags`` before ``aziRef`` (schema order), stations from
+    :data:`FIRST_STATION_LINE`, one a line; ``state`` its ``commonData/itemState``, ``md_min``
+    its ``mdMn`` (m)."""
     return "\n".join(
         [
             '<?xml version="1.0" encoding="UTF-8"?>',
@@ -67,11 +88,11 @@ def store_document(stations: list[str], *, head: str = "", state: str = "actual"
             "    <name>Gyro survey 0-360 m</name>",
             f"    {head}",
             "    <dTimTrajStart>2026-03-02T08:00:00Z</dTimTrajStart>",
-            '    <mdMn uom="m">0</mdMn>',
+            f'    <mdMn uom="m">{md_min!r}</mdMn>',
             f'    <mdMx uom="m">{SURVEY[-1][0]!r}</mdMx>',
             "    <serviceCompany>North Gyro Services</serviceCompany>",
             '    <magDeclUsed uom="dega">0</magDeclUsed>',
-            "    <aziRef>true north</aziRef>",
+            f"    {flags}<aziRef>true north</aziRef>",
             *stations,
             "    <commonData>",
             "      <sourceName>Store A</sourceName>",
@@ -150,3 +171,107 @@ def test_the_cli_leaves_a_rejected_station_out_of_the_survey(tmp_path: Path):
     assert f"{path}:{FIRST_STATION_LINE + 2}: station at md 330.0 m left out" in result.stderr
     listed = gp.read(out / "trajectory.csv", kind="stations")
     assert listed["md"].tolist() == [0.0, 300.0, 360.0]
+
+
+def item_state_line(stations: list[str]) -> int:
+    """The line of the trajectory's ``commonData/itemState`` in :func:`store_document`."""
+    return FIRST_STATION_LINE + len(stations) + 3
+
+
+@pytest.mark.parametrize("state", ["plan", "model"])
+def test_a_plan_is_not_read_as_a_survey(tmp_path: Path, state: str):
+    stations = surveyed()
+    path = put(tmp_path, store_document(stations, state=state))
+    with pytest.raises(InputFileError, match=f"itemState '{state}'") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == item_state_line(stations)
+    assert "stations: all" in str(caught.value)
+    plan = gp.read(path, kind="stations", stations="all")  # asked for: the plan's stations
+    assert plan["md"].tolist() == [s[0] for s in SURVEY]
+
+
+def test_the_cli_refuses_a_plan_given_as_the_survey(tmp_path: Path):
+    stations = surveyed()
+    path = put(tmp_path, store_document(stations, state="plan"))
+    spec = survey_pipeline(tmp_path)
+    result = gyropipe_cli("run", spec, "--input", f"stations={path}", "--out", tmp_path / "out")
+    assert result.returncode != 0
+    assert f"{path}:{item_state_line(stations)}" in result.output
+    assert not (tmp_path / "out" / "trajectory.csv").exists()
+
+
+@pytest.mark.parametrize("state", ["actual", "unknown"])
+def test_an_actual_trajectory_is_a_survey(tmp_path: Path, state: str):
+    path = put(tmp_path, store_document(surveyed(), state=state))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        assert gp.read(path, kind="stations").shape[0] == len(SURVEY)
+
+
+def test_a_planned_station_of_an_actual_trajectory_is_left_out(tmp_path: Path):
+    path = put(tmp_path, store_document(surveyed(s3={"state": "plan"})))
+    with pytest.warns(InputFileWarning, match=r"md 360\.0 m left out: commonData/itemState 'plan'"):
+        assert gp.read(path, kind="stations")["md"].tolist() == [0.0, 300.0, 330.0]
+
+
+def test_an_item_state_outside_the_enumeration_is_refused(tmp_path: Path):
+    path = tmp_path / "store.xml"
+    path.write_text(store_document(surveyed(), state="proposal"))
+    with pytest.raises(InputFileError, match="itemState 'proposal'") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == item_state_line(surveyed())
+
+
+def test_a_preliminary_or_growing_trajectory_is_warned_of(tmp_path: Path):
+    text = store_document(
+        surveyed(),
+        head="<objectGrowing>true</objectGrowing>",
+        flags="<definitive>false</definitive><memory>0</memory><finalTraj>0</finalTraj>",
+    )
+    with pytest.warns(InputFileWarning) as caught:
+        gp.read(put(tmp_path, text), kind="stations")
+    told = sorted(str(w.message).split(": ", 1)[1] for w in caught)
+    assert len(told) == 2
+    assert told[0].startswith("finalTraj 0: the store marks the trajectory preliminary")
+    assert told[1].startswith("objectGrowing true: the store was still adding stations")
+    final = store_document(
+        surveyed(),
+        head="<objectGrowing>false</objectGrowing>",
+        flags="<definitive>1</definitive><memory>true</memory><finalTraj>true</finalTraj>",
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        gp.read(put(tmp_path, final), kind="stations")
+
+
+def test_a_flag_that_is_no_boolean_is_refused_at_its_line(tmp_path: Path):
+    path = tmp_path / "store.xml"
+    path.write_text(store_document(surveyed(), flags="<finalTraj>yes</finalTraj>"))
+    with pytest.raises(InputFileError, match="finalTraj 'yes' is not a boolean") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == FIRST_STATION_LINE - 1
+
+
+PARENT = (
+    "<parentTrajectory><trajectoryReference uidRef='TRJ-0001'>Main bore survey"
+    "</trajectoryReference><wellboreParent uidRef='W-58-0'>58/1-A1</wellboreParent>"
+    "</parentTrajectory>"
+)
+
+
+def test_a_sidetrack_tied_in_without_a_position_is_warned_of(tmp_path: Path):
+    # a sidetrack's survey from the kick-off at 300 m, tied into the main bore's
+    below = [station(k, *SURVEY[k]) for k in range(2, len(SURVEY))]
+    stations = [station(1, *SURVEY[1], kind="tie in point"), *below]
+    path = put(tmp_path, store_document(stations, head=PARENT, md_min=300.0))
+    with pytest.warns(InputFileWarning, match="parentTrajectory 'Main bore survey'") as caught:
+        gp.read(path, kind="stations")
+    assert str(caught[0].message).startswith(f"{path}:7: ")
+    assert "tie_tvd" in str(caught[0].message)
+    tie = station(1, *SURVEY[1], kind="tie in point", position=(299.5, 1.25, -0.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        table = gp.read(
+            put(tmp_path, store_document([tie, *below], head=PARENT, md_min=300.0)), kind="stations"
+        )
+    assert table["tvd"].iloc[0] == 299.5  # the survey stage checks its tie against this

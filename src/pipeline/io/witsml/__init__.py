@@ -76,14 +76,25 @@ time; of other azimuths, an undated one beside a dated one is warned of), and th
 first station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is
 an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 
-What a store says of its stations decides which are the survey's (reader option
-``stations``: ``survey``, the default; ``all`` reads every station as it is): a
-``statusTrajStation`` ``rejected`` (quality not ok) or ``open`` (not yet validated) — by the
-schema neither enters the positions of the stations below it — is left out with a warning at
-its line naming its md and status (none left: refused); ``position`` and ``unknown`` are
-read; a value outside the schema's closed enumeration (1.3.1's ``valid``…) is refused at its
-line. A station's ``rawData`` (raw sensor values), ``valid`` (field values computed for its
-QC) and ``corUsed`` (the corrections applied, above) mark no station good or bad.
+What a store says of its trajectories and stations decides which are a survey's (reader
+option ``stations``: ``survey``, the default; ``all`` reads every trajectory and station as
+it is). A trajectory whose ``commonData/itemState`` is ``plan`` (a well plan, often in the
+same store) or ``model`` (a what-if) is refused at that line; ``actual``, ``unknown`` or none
+is a survey. A station is left out, with a warning at its line naming its md and why (none
+left: refused), when its ``statusTrajStation`` is ``rejected`` (quality not ok) or ``open``
+(not yet validated) — by the schema neither enters the positions of the stations below it —
+or its own ``itemState`` is ``plan`` or ``model``; ``position`` and ``unknown`` are read. A
+status or state outside the schema's closed enumerations (1.3.1's ``valid``…) is refused at
+its line. A station's ``rawData`` (raw sensor values), ``valid`` (field values computed for
+its QC) and ``corUsed`` (the corrections applied, above) mark no station good or bad. Of the
+trajectory's flags, ``finalTraj`` false (preliminary or intermediate) and ``objectGrowing``
+true (the store was still adding stations: deeper ones may follow) are warned of at their
+line; ``definitive`` (the store's one trajectory for the wellbore) and ``memory`` (from a
+tool's memory, not real time) change nothing the stations say and are not read; a flag that
+is no ``xs:boolean`` is refused. ``parentTrajectory`` (a sidetrack's survey tied into its
+main bore's) is not followed: when the first station lists no tvd, dispNs and dispEw it is
+warned of (that station lies where the parent's put it, which the survey stage's ``tie_…``
+must give; a position listed there, the stage checks its tie against).
 """
 
 from __future__ import annotations

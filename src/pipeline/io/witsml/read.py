@@ -26,7 +26,7 @@ from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
-from pipeline.io.witsml.kinds import StationsRead, left_out
+from pipeline.io.witsml.kinds import StationsRead, check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.plausibility import AngleUnitConfirmed, NullStations
 from pipeline.well import (
@@ -209,11 +209,13 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
+        check_trajectory(path, traj, opts.stations)
         reasons = [left_out(path, node) if opts.stations == "survey" else None for node in nodes]
         nodes, rows, dropped = _survey_stations(path, traj, nodes, reasons, opts)
         _tvd_of_md_datum(path, nodes, rows)
         datum = _md_datum(path, nodes, datum)
         rows.sort(key=lambda row: row["md"])
+        check_tie_in(path, traj, rows[0])
         _md_range(path, traj, sorted(rows + dropped, key=lambda row: row["md"]), datum)
         for row in rows:
             for name in data:

@@ -73,6 +73,9 @@ STATION_STATUS = frozenset({"open", "rejected", "position", "unknown"})
 """``statusTrajStation`` (closed): ``open`` not yet validated, ``rejected`` of a quality not
 ok — by the schema neither enters the positions of the stations below it —, ``position``
 validated and used."""
+ITEM_STATES = frozenset({"actual", "model", "plan", "unknown"})
+"""``commonData/itemState`` (closed): ``actual`` measured or entered at the well site, ``plan``
+to be executed in the future, ``model`` for what-if calculations."""
 
 UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
 """Canonical column unit → WITSML uom (what the writer writes)."""
