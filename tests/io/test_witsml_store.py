@@ -5,11 +5,15 @@ elements in schema order, uoms, ``commonData``; each validated by the schema bin
 * ``statusTrajStation`` ``rejected`` (quality not ok) and ``open`` (not yet validated):
   neither enters the positions of the stations below it, by the standard; left out with a
   warning at the station's line naming its MD and status (reader option ``stations: all``
-  keeps them); a value outside the closed enumeration is refused at its line;
+  keeps them), as one of a value outside the closed enumeration;
 * ``commonData/itemState`` ``plan`` or ``model``: a well plan or a what-if, not a survey —
   the trajectory refused unless ``stations: all`` asks for it, a station of an actual one
   left out; ``finalTraj`` false (preliminary) and ``objectGrowing`` true (still drilling)
   warned of; a sidetrack's ``parentTrajectory`` warned of when its tie-in lists no position;
+* ``typeTrajStation``: a marker (casing, formation… at a named depth: interpolated), a
+  target or a plan's section is no measurement, nor is a value outside the closed
+  enumeration ('projected to bit'…): left out with a warning; an inclination-only shot
+  (no azimuth) is never read as azimuth 0.
 """
 
 from __future__ import annotations
@@ -23,6 +27,12 @@ from vendor_exports import survey_pipeline
 
 import pipeline as gp
 from pipeline.errors import InputFileError, InputFileWarning
+from pipeline.io.witsml.terms import (
+    MARKER_TYPES,
+    PLAN_SECTION_TYPES,
+    SURVEY_STATION_TYPES,
+    TARGET_TYPES,
+)
 from tests_support import gyropipe_cli
 
 NS = "http://www.witsml.org/schemas/1series"
@@ -147,12 +157,12 @@ def test_validated_and_unknown_stations_are_read_without_a_warning(tmp_path: Pat
         assert gp.read(path, kind="stations")["md"].tolist() == [s[0] for s in SURVEY]
 
 
-def test_a_status_outside_the_enumeration_is_refused_at_its_line(tmp_path: Path):
+def test_a_status_outside_the_enumeration_is_not_taken_for_validated(tmp_path: Path):
     path = tmp_path / "store.xml"  # 'valid' is WITSML 1.3.1's: not in 1.4.1.1's schema
     path.write_text(store_document(surveyed(s2={"status": "valid"})))
-    with pytest.raises(InputFileError, match="statusTrajStation 'valid'") as caught:
-        gp.read(path, kind="stations")
-    assert caught.value.line == FIRST_STATION_LINE + 2
+    with pytest.warns(InputFileWarning, match="left out: statusTrajStation 'valid'") as caught:
+        assert gp.read(path, kind="stations")["md"].tolist() == [0.0, 300.0, 360.0]
+    assert str(caught[0].message).startswith(f"{path}:{FIRST_STATION_LINE + 2}: ")
 
 
 def test_a_survey_of_rejected_stations_only_is_refused(tmp_path: Path):
@@ -275,3 +285,72 @@ def test_a_sidetrack_tied_in_without_a_position_is_warned_of(tmp_path: Path):
             put(tmp_path, store_document([tie, *below], head=PARENT, md_min=300.0)), kind="stations"
         )
     assert table["tvd"].iloc[0] == 299.5  # the survey stage checks its tie against this
+
+
+def test_the_station_types_are_the_schemas_closed_enumeration():
+    enumeration = {e.value() for e in wml.TrajStationType._CF_enumeration.items()}
+    kinds = (SURVEY_STATION_TYPES, MARKER_TYPES, TARGET_TYPES, PLAN_SECTION_TYPES)
+    assert set().union(*kinds) == enumeration
+    assert sum(len(k) for k in kinds) == len(enumeration) == 50  # each value in one kind
+
+
+def test_a_marker_between_the_stations_is_left_out(tmp_path: Path):
+    # a casing point a store inserted among the survey's stations, interpolated at 345 m
+    stations = surveyed()
+    stations.insert(3, station(9, 345.0, 2.25, 45.0, kind="casing MD"))
+    path = put(tmp_path, store_document(stations))
+    with pytest.warns(InputFileWarning, match="md 345.0 m left out: typeTrajStation 'casing MD'"):
+        table = gp.read(path, kind="stations")
+    assert table["md"].tolist() == [0.0, 300.0, 330.0, 360.0]
+    assert set(table["station_type"]) == {"tie in point", "gyro north seeking"}
+    every = gp.read(path, kind="stations", stations="all")
+    assert every["station_type"].tolist()[3] == "casing MD"
+
+
+@pytest.mark.parametrize("kind", ["projected to bit", "projection to TD", "interpolated"])
+def test_a_projection_below_the_last_survey_station_is_left_out(tmp_path: Path, kind: str):
+    # a vendor's projection to the bit, 20 m below the deepest survey station, under a type
+    # of its own (none of WITSML 1.4.1.1's)
+    stations = [*surveyed(), station(4, 380.0, 4.5, 45.0, kind=kind)]
+    path = tmp_path / "store.xml"
+    path.write_text(store_document(stations).replace(">360.0</mdMx>", ">380.0</mdMx>"))
+    with pytest.warns(InputFileWarning, match=f"md 380.0 m left out: typeTrajStation '{kind}'"):
+        assert gp.read(path, kind="stations")["md"].max() == 360.0
+
+
+def test_a_plan_without_an_item_state_is_no_survey_either(tmp_path: Path):
+    plan = [
+        station(0, 0.0, 0.0, 0.0),
+        station(1, 300.0, 0.0, 0.0, kind="hold to MD"),
+        station(2, 360.0, 3.0, 45.0, kind="buildrate to MD"),
+        station(3, 420.0, 6.0, 45.0, kind="target center"),
+    ]
+    path = tmp_path / "store.xml"
+    text = store_document(plan).replace("<itemState>actual</itemState>", "")
+    path.write_text(text.replace(">360.0</mdMx>", ">420.0</mdMx>"))
+    with pytest.warns(InputFileWarning) as caught:
+        assert gp.read(path, kind="stations")["md"].tolist() == [0.0]  # the tie-in alone
+    told = [str(w.message).split(": ", 2)[2] for w in caught]
+    assert [t.split(" (")[0] for t in told] == [
+        "typeTrajStation 'hold to MD'",
+        "typeTrajStation 'buildrate to MD'",
+        "typeTrajStation 'target center'",
+    ]
+
+
+def test_an_inclination_only_shot_is_never_azimuth_zero(tmp_path: Path):
+    shot = station(2, 330.0, 1.5, 45.0).replace('<azi uom="dega">45.0</azi>', "")
+    stations = surveyed()
+    stations[2] = shot
+    path = put(tmp_path, store_document(stations))
+    with pytest.raises(InputFileError, match="trajectoryStation has no <azi>") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == FIRST_STATION_LINE + 2
+    with pytest.warns(InputFileWarning):
+        dropped = gp.read(path, kind="stations", null_stations="drop")
+    assert 330.0 not in dropped["md"].tolist()
+    named = stations.copy()  # a vendor's own type for it: no measurement of WITSML's
+    named[2] = shot.replace("gyro north seeking", "inclination only")
+    path.write_text(store_document(named))
+    with pytest.warns(InputFileWarning, match="typeTrajStation 'inclination only'"):
+        assert 330.0 not in gp.read(path, kind="stations")["md"].tolist()

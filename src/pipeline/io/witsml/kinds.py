@@ -9,18 +9,26 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 from pydantic import Field
 
 from pipeline.errors import InputFileError, warn_input
-from pipeline.io.witsml.terms import ITEM_STATES, STATION_STATUS
+from pipeline.io.witsml.terms import (
+    ITEM_STATES,
+    MARKER_TYPES,
+    PLAN_SECTION_TYPES,
+    STATION_STATUS,
+    SURVEY_STATION_TYPES,
+    TARGET_TYPES,
+)
 
 if TYPE_CHECKING:
-    from pipeline.io.witsml.read import Node
+    from pipeline.io.witsml.tree import Node
 
 StationsRead = Annotated[
     Literal["survey", "all"],
     Field(
         description="'survey' (default): refuse a trajectory a store marks a plan or a "
-        "model, and leave out, with a warning at each one's line, the stations it marks "
-        "open (not validated), rejected, planned or modelled; 'all': read every trajectory "
-        "and station as it is"
+        "model, and leave out, with a warning at each one's line, the stations that are no "
+        "measurement (a marker, a target, a plan's section, a projection) or that it marks "
+        "open (not validated), rejected or planned; 'all': read every trajectory and station "
+        "as it is"
     ),
 ]
 """A reader option: which trajectories and stations are read."""
@@ -32,6 +40,7 @@ LEFT_OUT_STATUS = {
 the stations below them, and what each says."""
 NOT_ACTUAL = {"plan": "a plan, to be drilled", "model": "a model, for what-if calculations"}
 """``commonData/itemState`` values of what is not a survey, and what each says."""
+OUTSIDE = "none of WITSML 1.4.1.1's values"
 _BOOLEAN = {"true": True, "1": True, "false": False, "0": False}
 """``xs:boolean`` text."""
 
@@ -85,34 +94,45 @@ def check_tie_in(path: Path, traj: Node, first: dict[str, Any]) -> None:
     )
 
 
-def left_out(path: Path, station: Node) -> str | None:
-    """Why ``station`` is not one of the survey's (None: it is): its ``statusTrajStation``
-    or its own ``commonData/itemState``. A value outside the schema's closed enumeration is
-    refused at its line."""
-    node = station.get("statusTrajStation")
-    status = " ".join(node.text.split()) if node is not None else ""
-    if node is not None and status and status not in STATION_STATUS:
-        raise InputFileError(
-            path,
-            f"statusTrajStation {status!r}: expected one of {', '.join(sorted(STATION_STATUS))} "
-            "(WITSML 1.4.1.1); a status this reader cannot read may mark a bad station",
-            line=node.line,
-            column="statusTrajStation",
-        )
+def left_out(station: Node) -> str | None:
+    """Why ``station`` is not one of the survey's (None: it is): its ``typeTrajStation``
+    names no measurement, its ``statusTrajStation`` no validated one, or its own
+    ``commonData/itemState`` no actual one — a value outside the schema's closed
+    enumeration is none either."""
+    kind = station.text_of("typeTrajStation")
+    if kind is not None and kind not in SURVEY_STATION_TYPES:
+        return f"typeTrajStation {kind!r} ({_not_measured(kind)})"
+    status = station.text_of("statusTrajStation")
     if status in LEFT_OUT_STATUS:
         return (
             f"statusTrajStation {status!r} ({LEFT_OUT_STATUS[status]}: by the standard it "
             "enters no position of the stations below it)"
         )
-    state = _item_state(path, station)
-    if state is not None and state[0] in NOT_ACTUAL:
-        return f"commonData/itemState {state[0]!r} ({NOT_ACTUAL[state[0]]}, not a measurement)"
+    if status is not None and status not in STATION_STATUS:
+        return f"statusTrajStation {status!r} ({OUTSIDE}: not taken for validated)"
+    common = station.get("commonData")
+    state = common.text_of("itemState") if common is not None else None
+    if state in NOT_ACTUAL:
+        return f"commonData/itemState {state!r} ({NOT_ACTUAL[state]}, not a measurement)"
+    if state is not None and state not in ITEM_STATES:
+        return f"commonData/itemState {state!r} ({OUTSIDE}: not taken for actual)"
     return None
 
 
+def _not_measured(kind: str) -> str:
+    """What a ``typeTrajStation`` value outside :data:`SURVEY_STATION_TYPES` names."""
+    if kind in MARKER_TYPES:
+        return "a point at a named depth, interpolated between the survey's stations"
+    if kind in TARGET_TYPES:
+        return "a target's position"
+    if kind in PLAN_SECTION_TYPES:
+        return "the end of a plan's section"
+    return f"{OUTSIDE}: not taken for a measurement, as a projection or an interpolation is none"
+
+
 def _item_state(path: Path, holder: Node) -> tuple[str, Node] | None:
-    """The ``commonData/itemState`` of a trajectory or station and its element (None: not
-    stated); one outside the schema's closed enumeration is refused at its line."""
+    """The ``commonData/itemState`` of a trajectory and its element (None: not stated); one
+    outside the schema's closed enumeration is refused at its line."""
     common = holder.get("commonData")
     node = common.get("itemState") if common is not None else None
     state = " ".join(node.text.split()) if node is not None else ""
