@@ -4,9 +4,7 @@ makes their elements mean (the rules in :mod:`pipeline.io.witsml`)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Literal
-
-from pydantic import Field
+from typing import TYPE_CHECKING, Any
 
 from pipeline.errors import InputFileError, warn_input
 from pipeline.io.witsml.terms import (
@@ -21,17 +19,6 @@ from pipeline.io.witsml.terms import (
 if TYPE_CHECKING:
     from pipeline.io.witsml.tree import Node
 
-StationsRead = Annotated[
-    Literal["survey", "all"],
-    Field(
-        description="'survey' (default): refuse a trajectory a store marks a plan or a "
-        "model, and leave out, with a warning at each one's line, the stations that are no "
-        "measurement (a marker, a target, a plan's section, a projection) or that it marks "
-        "open (not validated), rejected or planned; 'all': read every trajectory and station "
-        "as it is"
-    ),
-]
-"""A reader option: which trajectories and stations are read."""
 LEFT_OUT_STATUS = {
     "open": "not yet validated",
     "rejected": "its quality is not ok",

@@ -18,10 +18,10 @@ from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
-from pipeline.io.witsml.kinds import StationsRead, check_tie_in, check_trajectory, left_out
+from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.io.witsml.tree import Node, parse
-from pipeline.plausibility import AngleUnitConfirmed, NullStations
+from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
 from pipeline.well import (
     DATUM_WORDS,
     DefaultNorthReference,
@@ -86,7 +86,7 @@ class WitsmlOptions(BaseModel):
     )
     default_north_reference: DefaultNorthReference = None
     null_stations: NullStations = "error"
-    stations: StationsRead = "survey"
+    stations: SurveyStations = "survey"
     angle_unit_confirmed: AngleUnitConfirmed = False
 
 
