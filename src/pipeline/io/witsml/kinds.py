@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from pipeline.contracts import SOURCE_LINE
 from pipeline.errors import InputFileError, warn_input
 from pipeline.io.witsml.terms import (
     ITEM_STATES,
@@ -70,11 +71,12 @@ def check_tie_in(path: Path, traj: Node, first: dict[str, Any]) -> None:
     if parent is None or all(first.get(k) is not None for k in ("tvd", "north", "east")):
         return
     reference = parent.get("trajectoryReference")
-    name = " ".join(reference.text.split()) or reference.attrs.get("uidRef") if reference else ""
+    uid = reference.attrs.get("uidRef") if reference is not None else None
+    name = parent.text_of("trajectoryReference") or uid
     warn_input(
         path,
         f"parentTrajectory {name!r}: the trajectory is tied into another, but its first "
-        f"station, at md {first['md']!r} m (line {first['source_line']}), lists no tvd, dispNs "
+        f"station, at md {first['md']!r} m (line {first[SOURCE_LINE]}), lists no tvd, dispNs "
         "and dispEw: it lies where the parent's stations put it, not below a vertical hole "
         "(give the survey stage its tie_tvd, tie_north and tie_east)",
         parent.line,
