@@ -9,6 +9,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
+import lasio
 import pytest
 from vendor_exports import survey_pipeline
 
@@ -77,3 +78,6 @@ def test_the_cli_integrates_no_projection(tmp_path: Path):
     assert f"{path}:11: station at md 380.0 m left out" in result.stderr
     trajectory = gp.read(out / "trajectory.csv", kind="stations")
     assert trajectory["md"].max() == 360.0
+    assert trajectory["station_type"].tolist() == ["Tie-In", *["Gyro NS"] * 3]
+    las = lasio.read(str(out / "trajectory.las"))  # the LAS deliverable keeps them as text
+    assert las["STATION_TYPE"].tolist() == ["Tie-In", *["Gyro NS"] * 3]

@@ -126,7 +126,7 @@ CURVES: dict[str, Curve] = {
             "station_type",
             None,
             ("STATION TYPE", "STN TYPE", "SURVEY TYPE", "TYPE", "COMMENT", "COMMENTS", "REMARKS"),
-            "what the station is, as the file says it (Tie-In, Projection to TD…)",
+            "station type, as the file names it (Tie-In, Projection to TD)",
         ),
     ]
 }
