@@ -61,6 +61,17 @@ NullStations = Annotated[
     ),
 ]
 """A reader option: what a station missing an angle is ."""
+SurveyStations = Annotated[
+    Literal["survey", "all"],
+    Field(
+        description="'survey' (default): read the survey's stations only — a station the "
+        "file marks as none (a projection, an interpolation, a marker, a rejected or planned "
+        "one: the reader's documentation lists the marks it reads) is left out with a warning "
+        "at its line, a trajectory it marks as a plan refused; 'all': read every station as "
+        "it is"
+    ),
+]
+"""A reader option: whether the stations a file marks as none of the survey's are read."""
 
 
 def check_angles(path: Path, table: pa.Table, *, confirmed: bool = False) -> None:

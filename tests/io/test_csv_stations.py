@@ -88,7 +88,8 @@ def test_header_spellings(tmp_path: Path, header: str, ref: str | None) -> None:
     body = "".join(line + extra + "\n" for line in BODY.splitlines())
     options = {} if ref else {"north_reference": "grid"}
     table, well = read(put(tmp_path, header + "\n" + body), **options)
-    assert table.column_names == ["md", "inc", "azi", "source_line"]
+    kinds = ["station_type"] if "Comment" in header else []  # what the row is, as text
+    assert table.column_names == ["md", "inc", "azi", *kinds, "source_line"]
     assert column(table, "md") == [0.0, 100.0, 200.0]
     assert column(table, "inc") == [0.0, 1.5, 3.0]
     assert column(table, "azi") == [0.0, 45.0, 46.5]
@@ -290,9 +291,10 @@ End of report
 def test_wellpath_report_with_mixed_units(tmp_path: Path) -> None:
     table, well = read(put(tmp_path, WELLPATH_REPORT))
     assert table.column_names == [
-        *("md", "inc", "azi", "tvd", "north", "east", "dls"),
+        *("md", "inc", "azi", "station_type", "tvd", "north", "east", "dls"),
         "source_line",
     ]
+    assert column(table, "station_type") == ["tie-in", None, None]  # the Comment column
     assert column(table, "md") == [0.0, 30.48, 60.96]  # ft → m
     assert column(table, "tvd") == [0.0, 30.48, 60.94]  # already m
     assert column(table, "north") == [0.0, 0.19, 0.94]

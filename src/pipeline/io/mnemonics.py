@@ -122,6 +122,12 @@ CURVES: dict[str, Curve] = {
         Curve("station", None, ("STATION", "STN", "STATION ID"), "station index"),
         Curve("position", None, ("POSITION", "POS", "FRAME POSITION"), "frame position index"),
         Curve("survey", None, ("SURVEY", "SURVEY ID"), "survey id"),
+        Curve(
+            "station_type",
+            None,
+            ("STATION TYPE", "STN TYPE", "SURVEY TYPE", "TYPE", "COMMENT", "COMMENTS", "REMARKS"),
+            "station type, as the file names it (Tie-In, Projection to TD)",
+        ),
     ]
 }
 

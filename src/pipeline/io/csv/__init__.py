@@ -5,7 +5,13 @@ Kinds read (``read(path, kind, options)``):
 
 * ``stations`` → :class:`~pipeline.tables.Stations`: md (m), inc and azi (deg), optional
   survey id, plus any of tvd, north (+N/−S), east (+E/−W) in m and dls in deg/30m found in
-  the file (a wellpath report; empty cells of these are null), and ``source_line``;
+  the file (a wellpath report; empty cells of these are null), what each row is as the file
+  says it (``station_type``: a ``Station Type``, ``Survey Type``, ``Type`` or ``Comment``
+  column), and ``source_line``. A row whose ``station_type`` names a projection or an
+  interpolation (:data:`NOT_MEASURED`: ``Projection to TD``, ``PTB``, ``Interpolated``…) is
+  no survey station: left out with a warning at its line naming its md (the option
+  ``stations: all`` reads it); a tie-in row (``Tie-In``, ``Tie On``) is the survey's first
+  station and read. A file without such a column says nothing of its rows: each is read;
 * ``samples`` → :class:`~pipeline.tables.RawSamples`: time (s) and the gyro (deg/h),
   accelerometer (m/s²) and optional magnetometer (nT) triads, optional md (m),
   frame_angle (deg), station and position (integers), and ``source_line``; empty cells of
@@ -173,6 +179,10 @@ def _unit_of(name: str) -> str:
 
 
 STATION_EXTRAS = ("tvd", "north", "east", "dls")
+NOT_MEASURED = r"\b(proj\w*|ptb|ptd|interp\w*|extrap\w*)\b"
+"""Words of a ``station_type`` cell (compared ignoring case) naming a projection (``Projection
+to TD``, ``Proj. to Bit``, ``PTB``, ``PTD``) or an inter- or extrapolation: not a survey
+station."""
 LAYOUTS = {
     # an empty azimuth is undefined (NaN), allowed by the contract only at vertical
     "stations": Layout(Stations, extras=STATION_EXTRAS, blanks=frozenset({*STATION_EXTRAS, "azi"})),
@@ -239,7 +249,7 @@ class _Rows:
         )
         for values, rows in blocks:
             lines = rows.source_lines(len(values[self.layout.required[0]]))
-            yield self._table(self._without_markers(values, lines), lines)
+            yield self._measured(self._table(self._without_markers(values, lines), lines))
 
     def batches(self) -> Iterator[pa.RecordBatch]:
         for table in self.tables():
@@ -266,6 +276,29 @@ class _Rows:
                 )
             values[name] = pc.if_else(pa.array(found), pa.scalar(None, array.type), array)
         return values
+
+    def _measured(self, table: pa.Table) -> pa.Table:
+        """``table`` without the stations its ``station_type`` column names a projection or
+        an interpolation (:data:`NOT_MEASURED`; option ``stations: survey``), each left out
+        with a warning at its line naming its md."""
+        if "station_type" not in table.column_names or self.opts.stations == "all":
+            return table
+        kinds = table.column("station_type")
+        named = pc.fill_null(pc.match_substring_regex(kinds, NOT_MEASURED, ignore_case=True), False)
+        if not pc.any(named).as_py():
+            return table
+        left = table.filter(named)
+        for md, kind, line in zip(
+            *(left.column(c).to_pylist() for c in ("md", "station_type", SOURCE_LINE)), strict=True
+        ):
+            warn_input(
+                self.path,
+                f"station at md {md!r} m left out: {kind!r} in column "
+                f"{self.chosen['station_type'].text!r} names a projection or an interpolation, "
+                "not a measurement; the reader option stations: all reads it",
+                line,
+            )
+        return table.filter(pc.invert(named))
 
     def _blanks(self) -> frozenset[str]:
         """Columns whose cells may be empty: the layout's, and a station's inclination under

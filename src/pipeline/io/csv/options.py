@@ -33,7 +33,7 @@ from pipeline.errors import InputFileError, SpecError, UnitError
 from pipeline.inputfiles import InputPath
 from pipeline.io.conventions import Conventions
 from pipeline.io.mnemonics import CURVES
-from pipeline.plausibility import AngleUnitConfirmed, NullStations
+from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
 from pipeline.units import conversion_factor
 from pipeline.well import DefaultNorthReference, NorthReference
 from pipeline.yamlsource import load_mapping, validate_located
@@ -93,6 +93,7 @@ class CsvSettings(BaseModel):
     )
     angle_unit_confirmed: AngleUnitConfirmed = False
     null_stations: NullStations = "error"
+    stations: SurveyStations = "survey"
     north_reference: NorthReference | None = Field(
         None, description="north reference of the azimuths (true, grid or magnetic)"
     )

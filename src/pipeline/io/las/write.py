@@ -21,8 +21,8 @@ depth: only their time increases), else ``md``, else the first numeric column (a
 index). NULL is -999.25; NaN is written as NULL, and a value that is a null marker of
 :mod:`pipeline.io.nulls` (-999.25, -9999.25; ±999.25… in an angle) is refused: every reader
 would read it back as no value. Text columns are written as text (in double quotes when a
-value holds a space, as lasio and gyropipe read them; a null as NULL), except a canonical
-column the survey readers read as numbers (``survey``); those and boolean columns are left
+value holds a space, as lasio and gyropipe read them; a null as NULL), except a column the
+LAS readers read, all as numbers (``survey``); those and boolean columns are left
 out and named in ``~Other``; ``source_line`` (a line of the file read) is not written. A column
 named ``NAME:2`` (how readers tell apart curves of one mnemonic) is written as ``NAME``. A
 file holds one north reference: the azimuth columns' (else the well's), in NREF and in each
@@ -43,6 +43,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.io.las.curves import KINDS
 from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
@@ -53,6 +54,9 @@ from pipeline.well import WellMetadata
 
 NULL = NULL_MARKERS[0]
 """The NULL value written (-999.25)."""
+READ_AS_NUMBERS = frozenset(name for kind in KINDS.values() for name in kind.columns)
+"""The columns the LAS readers read, each as numbers (a survey id from a numeric curve): a
+text column of one of these names is not written."""
 
 _MNEMONIC = re.compile(r"[^\s.:~#][^\s.:]*")
 _REPEATED = re.compile(r"(.+):[0-9]+")
@@ -105,12 +109,11 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
 
 
 def _writable_type(f: pa.Field) -> bool:
-    """Numbers, and text unless a canonical column (the survey readers read those as
-    numbers)."""
+    """Numbers, and text unless a column the LAS readers read (as numbers)."""
     if pa.types.is_floating(f.type) or pa.types.is_integer(f.type):
         return True
     return (pa.types.is_string(f.type) or pa.types.is_large_string(f.type)) and (
-        f.name not in CURVES
+        f.name not in READ_AS_NUMBERS
     )
 
 

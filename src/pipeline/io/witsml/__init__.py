@@ -75,6 +75,35 @@ different days, or one undated beside a dated one, are refused at the line: read
 time; of other azimuths, an undated one beside a dated one is warned of), and the tool: the
 first station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is
 an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+
+What a store says of its trajectories and stations decides which are a survey's (reader
+option ``stations``: ``survey``, the default; ``all`` reads every trajectory and station as
+it is). A trajectory whose ``commonData/itemState`` is ``plan`` (a well plan, often in the
+same store) or ``model`` (a what-if) is refused at that line, as is a value outside the
+schema's closed enumeration; ``actual``, ``unknown`` or none is a survey. A station is left
+out, with a warning at its line naming its md and why (none left: refused), unless what it
+states is a survey station's, in the closed enumerations of WITSML 1.4.1.1: its
+``typeTrajStation`` a tool's measurement (``gyro north seeking``…), ``tie in point`` or
+``unknown`` — not a marker (``casing MD``, ``formation TVD``…: a point at a named depth,
+interpolated among the survey's stations), a target (``target center``…), the end of a
+plan's section (``hold to MD``, ``buildrate to INCL``…) nor a value of no enumeration (a
+vendor's ``projected to bit``, ``interpolated``, ``inclination only``…); its
+``statusTrajStation`` ``position``, ``unknown`` or none — not ``rejected`` (quality not ok)
+nor ``open`` (not yet validated), by the schema in no position of the stations below them,
+nor 1.3.1's ``valid``…; its own ``itemState`` not ``plan`` or ``model``. So the stations the
+reader passes on are measurements and their tie-in: no stage downstream reads
+``station_type``, which is kept as the file names it. A station without an azimuth away from
+vertical (an inclination-only shot) is never azimuth 0 (above). A station's ``rawData``
+(raw sensor values), ``valid`` (field values computed for its QC) and ``corUsed`` (the
+corrections applied, above) mark no station good or bad. Of the
+trajectory's flags, ``finalTraj`` false (preliminary or intermediate) and ``objectGrowing``
+true (the store was still adding stations: deeper ones may follow) are warned of at their
+line; ``definitive`` (the store's one trajectory for the wellbore) and ``memory`` (from a
+tool's memory, not real time) change nothing the stations say and are not read; a flag that
+is no ``xs:boolean`` is refused. ``parentTrajectory`` (a sidetrack's survey tied into its
+main bore's) is not followed: when the first station lists no tvd, dispNs and dispEw it is
+warned of (that station lies where the parent's put it, which the survey stage's ``tie_…``
+must give; a position listed there, the stage checks its tie against).
 """
 
 from __future__ import annotations

@@ -1,21 +1,13 @@
-"""WITSML 1.4.1.x ``trajectory`` reader (kind ``stations``; layout in :mod:`pipeline.io.witsml`).
-
-Parsed with expat in one call over the whole file, each element's text joined once (linear
-time: fed in chunks, expat rescans a token split by every chunk, and appending to a string
-per chunk copies it), keeping each element's line so every problem names it; a DOCTYPE or an
-entity declaration is refused (a WITSML document needs neither, and they are how XML
-documents attack their readers).
-"""
+"""WITSML 1.4.1.x ``trajectory`` reader (kind ``stations``; layout in :mod:`pipeline.io.witsml`;
+the document parsed by :mod:`pipeline.io.witsml.tree`)."""
 
 from __future__ import annotations
 
 import datetime as dt
 import math
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from xml.parsers import expat
 
 import numpy as np
 import pyarrow as pa
@@ -26,8 +18,10 @@ from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.sniffing import file_head
+from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
-from pipeline.plausibility import AngleUnitConfirmed, NullStations
+from pipeline.io.witsml.tree import Node, parse
+from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
 from pipeline.well import (
     DATUM_WORDS,
     DefaultNorthReference,
@@ -92,87 +86,14 @@ class WitsmlOptions(BaseModel):
     )
     default_north_reference: DefaultNorthReference = None
     null_stations: NullStations = "error"
+    stations: SurveyStations = "survey"
     angle_unit_confirmed: AngleUnitConfirmed = False
-
-
-@dataclass
-class Node:
-    """One XML element: local name, namespace, attributes, text, children and its line."""
-
-    name: str
-    namespace: str
-    attrs: dict[str, str]
-    line: int
-    children: list[Node] = field(default_factory=list)
-    text: str = ""
-
-    def all(self, name: str) -> list[Node]:
-        """Children of this local name in the WITSML namespace."""
-        return [c for c in self.children if c.name == name and c.namespace == NS]
-
-    def get(self, name: str) -> Node | None:
-        found = self.all(name)
-        return found[0] if found else None
-
-
-class _Refused(Exception):
-    """Something the parser refuses to read."""
 
 
 def sniff(path: Path) -> bool:
     """By content: the first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
     head = file_head(path, SNIFF_BYTES)
     return head is not None and bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
-
-
-def parse(path: Path) -> Node:
-    """The document's root element, with lines; malformed XML is an InputFileError."""
-    parser = expat.ParserCreate(namespace_separator=" ")
-    parser.buffer_text = True
-    stack: list[Node] = []
-    pieces: list[list[str]] = []  # the text pieces of each open element, joined at its end
-    roots: list[Node] = []
-
-    def start(name: str, attrs: dict[str, str]) -> None:
-        namespace, _, local = name.rpartition(" ")
-        node = Node(local, namespace, attrs, parser.CurrentLineNumber)
-        (stack[-1].children if stack else roots).append(node)
-        stack.append(node)
-        pieces.append([])
-
-    def end(name: str) -> None:
-        stack.pop().text = "".join(pieces.pop())
-
-    def text(data: str) -> None:
-        if stack:
-            pieces[-1].append(data)
-
-    def refuse(*args: Any) -> None:
-        raise _Refused("DOCTYPE and entity declarations are not accepted in WITSML")
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.CharacterDataHandler = text
-    parser.StartDoctypeDeclHandler = refuse
-    parser.EntityDeclHandler = refuse
-    try:  # one Parse call: fed in chunks, expat rescans a token cut by each chunk boundary
-        parser.Parse(path.read_bytes(), True)  # (a 30 MB attribute: minutes, not 0.05 s)
-    except expat.ExpatError as exc:
-        raise InputFileError(
-            path,
-            f"not well-formed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})",
-            line=exc.lineno,
-        ) from None
-    except _Refused as exc:
-        raise InputFileError(path, str(exc), line=parser.CurrentLineNumber) from None
-    except (LookupError, ValueError) as exc:  # UnicodeError is a ValueError
-        # the encoding the XML declaration names is unknown, not text, or multi-byte
-        raise InputFileError(
-            path, f"unusable encoding in the XML declaration: {exc}", line=parser.CurrentLineNumber
-        ) from None
-    except OSError as exc:
-        raise InputFileError(path, f"cannot read the file: {exc}") from None
-    return roots[0]
 
 
 def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
@@ -207,11 +128,14 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
-        rows = [_station(path, node, opts) for node in nodes]
+        check_trajectory(path, traj, opts.stations)
+        reasons = [left_out(node) if opts.stations == "survey" else None for node in nodes]
+        nodes, rows, dropped = _survey_stations(path, traj, nodes, reasons, opts)
         _tvd_of_md_datum(path, nodes, rows)
         datum = _md_datum(path, nodes, datum)
         rows.sort(key=lambda row: row["md"])
-        _md_range(path, traj, rows, datum)
+        check_tie_in(path, traj, rows[0])
+        _md_range(path, traj, sorted(rows + dropped, key=lambda row: row["md"]), datum)
         for row in rows:
             for name in data:
                 data[name].append(row.get(name))
@@ -237,17 +161,17 @@ def _chosen(path: Path, root: Node, wanted: str | None) -> list[Node]:
         raise InputFileError(path, "no <trajectory> element", line=root.line)
     if wanted is None:
         return trajectories
-    found = [t for t in trajectories if wanted in (t.attrs.get("uid"), _text(t, "name"))]
+    found = [t for t in trajectories if wanted in (t.attrs.get("uid"), t.text_of("name"))]
     if not found:
-        known = [t.attrs.get("uid") or _text(t, "name") for t in trajectories]
+        known = [t.attrs.get("uid") or t.text_of("name") for t in trajectories]
         raise InputFileError(path, f"no trajectory with uid or name {wanted!r} (found {known})")
     return found[:1]
 
 
 def _labels(trajectories: list[Node]) -> list[str]:
     """Survey ids: the trajectories' names, or their uids when names repeat."""
-    for key in (lambda t: _text(t, "name"), lambda t: t.attrs.get("uid")):
-        labels = [key(t) for t in trajectories]
+    names = [t.text_of("name") for t in trajectories]
+    for labels in (names, [t.attrs.get("uid") for t in trajectories]):
         if all(labels) and len(set(labels)) == len(labels):
             return [str(label) for label in labels]
     return [f"trajectory {i + 1}" for i in range(len(trajectories))]
@@ -300,6 +224,36 @@ def _north(path: Path, trajectories: list[Node], opts: WitsmlOptions) -> NorthRe
     return north
 
 
+def _survey_stations(
+    path: Path, traj: Node, nodes: list[Node], reasons: list[str | None], opts: WitsmlOptions
+) -> tuple[list[Node], list[dict[str, Any]], list[dict[str, Any]]]:
+    """The stations of ``nodes`` whose ``reasons`` are None and their rows; each other one
+    is left out with a warning at its line naming its md (m) and the reason, its md and line
+    kept for the check of the trajectory's range. None left: refused at the trajectory."""
+    kept = [node for node, reason in zip(nodes, reasons, strict=True) if reason is None]
+    if not kept:
+        raise InputFileError(
+            path,
+            f"trajectory has no survey station: {len(nodes)} left out, the first for its "
+            f"{reasons[0]} (line {nodes[0].line}); the reader option stations: all reads them",
+            line=traj.line,
+        )
+    dropped = []
+    for node, reason in zip(nodes, reasons, strict=True):
+        md_node = node.get("md")
+        md = _measure(path, md_node, "length") if md_node is not None and reason else None
+        if reason is not None:
+            where = f"at md {md!r} m " if md is not None else ""
+            warn_input(
+                path,
+                f"station {where}left out: {reason}; the reader option stations: all reads it",
+                node.line,
+            )
+        if md is not None:
+            dropped.append({"md": md, SOURCE_LINE: node.line})
+    return kept, [_station(path, node, opts) for node in kept], dropped
+
+
 def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
     """One station's values; a null marker is no value (a missing incl or azi is NaN under
     the option ``null_stations: drop``: the engine leaves the station out)."""
@@ -330,7 +284,7 @@ def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
             continue
         row[column] = value
     for column, element in STATION_TEXT:
-        text = _text(node, element)
+        text = node.text_of(element)
         row[column] = text if text != "unknown" else None
     return row
 
@@ -460,11 +414,6 @@ def _measure(path: Path, node: Node, quantity: str) -> float | None:
         raise InputFileError(path, f"<{node.name}>: {exc}", line=node.line) from None
 
 
-def _text(node: Node, name: str) -> str | None:
-    child = node.get(name)
-    return " ".join(child.text.split()) or None if child is not None else None
-
-
 def _well(
     path: Path, trajectories: list[Node], north: NorthReference, datum: tuple[str, int] | None
 ) -> WellMetadata:
@@ -474,7 +423,7 @@ def _well(
     found: dict[str, tuple[Any, int]] = {}
     common = first.get("commonData")
     for entry in common.all("extensionNameValue") if common is not None else []:
-        name = _text(entry, "name") or ""
+        name = entry.text_of("name") or ""
         holder = entry.get("value")
         field_name = name[len(EXTENSION_PREFIX) :]
         if not name.startswith(EXTENSION_PREFIX) or holder is None:
@@ -486,12 +435,12 @@ def _well(
         if value is not None:
             found[field_name] = (value, holder.line)
     _depth_reference_agrees(path, datum, found.get("depth_reference"))
-    names = {_text(t, "nameWell") for t in trajectories}
+    names = {t.text_of("nameWell") for t in trajectories}
     if len(names) > 1:
         raise InputFileError(path, f"trajectories of several wells {sorted(map(str, names))}")
-    if (well := _text(first, "nameWell")) is not None:
+    if (well := first.text_of("nameWell")) is not None:
         found["well"] = (well, first.line)
-    wellbore = _text(first, "nameWellbore")
+    wellbore = first.text_of("nameWellbore")
     if wellbore is not None and wellbore != well:
         found["wellbore"] = (wellbore, first.line)
     for name, element, quantity in WELL_ELEMENTS:
@@ -508,7 +457,7 @@ def _well(
         (tool, station.line)
         for traj in trajectories
         for station in traj.all("trajectoryStation")
-        if (tool := _text(station, "typeSurveyTool")) and survey_tool(tool) != "unknown"
+        if (tool := station.text_of("typeSurveyTool")) and survey_tool(tool) != "unknown"
     )
     if "tool_type" not in found and (tool_found := next(tools, None)) is not None:
         found["tool_type"] = tool_found

@@ -53,22 +53,66 @@ SURVEY_TOOLS: dict[str, str] = {
 }
 """``typeSurveyTool`` → the ``typeTrajStation`` of the stations it measures."""
 TIE_IN = "tie in point"
-STATION_TYPES = frozenset(
+SURVEY_STATION_TYPES = frozenset({*SURVEY_TOOLS.values(), TIE_IN})
+"""``typeTrajStation`` values of a survey's stations: a tool's measurement, the tie-in point
+(a known position the survey starts from), ``unknown``."""
+MARKER_TYPES = frozenset(
+    {"casing MD", "casing TVD", "formation MD", "formation TVD", "marker MD", "marker TVD"}
+)
+"""``typeTrajStation`` values of a point at a named depth, inserted among a survey's
+stations (interpolated between them, not measured)."""
+TARGET_TYPES = frozenset({"target center", "target offset"})
+"""``typeTrajStation`` values of a target's position."""
+PLAN_SECTION_TYPES = frozenset(
     {
-        *SURVEY_TOOLS.values(),
-        TIE_IN,
-        "casing MD",
-        "casing TVD",
-        "formation MD",
-        "formation TVD",
-        "marker MD",
-        "marker TVD",
-        "target center",
-        "target offset",
+        "azimuth on plane",
+        "buildrate to delta-MD",
+        "buildrate to INCL",
+        "buildrate to MD",
+        "buildrate and turnrate to AZI",
+        "buildrate and turnrate to delta-MD",
+        "buildrate and turnrate to INCL",
+        "buildrate and turnrate to INCL and AZI",
+        "buildrate and turnrate to MD",
+        "buildrate and turnrate to TVD",
+        "buildrate TVD",
+        "DLS",
+        "DLS to AZI and MD",
+        "DLS to AZI-TVD",
+        "DLS to INCL",
+        "DLS to INCL and AZI",
+        "DLS to INCL and MD",
+        "DLS to INCL and TVD",
+        "DLS to NS, EW and TVD",
+        "DLS and toolface to AZI",
+        "DLS and toolface to delta-MD",
+        "DLS and toolface to INCL",
+        "DLS and toolface to INCL-AZI",
+        "DLS and toolface to MD",
+        "DLS and toolface to TVD",
+        "hold to delta-MD",
+        "hold to MD",
+        "hold to TVD",
+        "INCL, AZI and TVD",
+        "NS, EW and TVD",
+        "turnrate to AZI",
+        "turnrate to delta-MD",
+        "turnrate to MD",
+        "turnrate to TVD",
     }
 )
+"""``typeTrajStation`` values of the end of a plan's section (a build, a hold, a turn… to a
+depth or an angle): the rest of the closed enumeration."""
+STATION_TYPES = SURVEY_STATION_TYPES | MARKER_TYPES | TARGET_TYPES
 """``typeTrajStation`` values a station read from a file keeps when written (the measured
 and marker kinds of the closed enumeration)."""
+STATION_STATUS = frozenset({"open", "rejected", "position", "unknown"})
+"""``statusTrajStation`` (closed): ``open`` not yet validated, ``rejected`` of a quality not
+ok — by the schema neither enters the positions of the stations below it —, ``position``
+validated and used."""
+ITEM_STATES = frozenset({"actual", "model", "plan", "unknown"})
+"""``commonData/itemState`` (closed): ``actual`` measured or entered at the well site, ``plan``
+to be executed in the future, ``model`` for what-if calculations."""
 
 UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
 """Canonical column unit → WITSML uom (what the writer writes)."""
