@@ -137,3 +137,30 @@ def test_grid_north_with_convergence_gives_the_true_north_answer():
     with pytest.warns(UserWarning, match="convergence .2.0°. taken: the same grid assumed"):
         on_grid = run("grid", gamma)  # the offsets state none: the reference's
     assert on_grid == pytest.approx(run("true", 0.0), rel=1e-9)
+
+
+@pytest.mark.parametrize("by", ["manifest", "id"])
+def test_an_offset_naming_no_north_takes_none_from_the_reference(tmp_path, by):  # type: ignore[no-untyped-def]
+    """An offset listing that names no north reference for its azimuths is refused, as the
+    CLI's reader refuses it: it never takes the reference file's (grid here) as its own."""
+    silent = tmp_path / "offset-01.csv"
+    text = (EXAMPLE / "offsets" / "offset-01.csv").read_text()
+    silent.write_text(text.replace("Azimuth Grid (deg)", "Azimuth (deg)"))
+    if by == "manifest":
+        manifest = tmp_path / "manifest.csv"
+        manifest.write_text(
+            "well_id,file,model,hole_diameter (in),north (m),east (m)\n"
+            "offset-01,offset-01.csv,ISCWSA-MWD-REV4,24,0,100\n"
+        )
+        call = {"offsets": manifest}
+    else:
+        call = {
+            "offsets": {"offset-01": silent},
+            "offset_model": "iscwsa-mwd-rev4",
+            "offset_hole_diameter": 24 * 0.0254,
+            "offset_position": {"offset-01": (0.0, 100.0)},
+        }
+    with pytest.raises(GyropipeError, match="no north reference for the azimuths"):
+        gp.clearance(str(REFERENCE), **call, **RULE)
+    stated = gp.clearance(str(REFERENCE), **call, **RULE, well={"north_reference": "grid"})
+    assert np.isfinite(stated.sf).all()

@@ -78,13 +78,19 @@ def clearance(
     if isinstance(offsets, str | Path):
         wells, stations = offset_tables(
             Path(offsets),
-            lambda p: reg.read(p, "stations", well=ref_well),
+            lambda p: reg.read(p, "stations", well=given),  # the caller's, not the reference's
             ref_well,
             toolmodels.of_registry(reg),
         )
     else:
         wells, stations = _offsets(
-            offsets, offset_model, offset_hole_diameter, offset_position, offset_kickoff, ref_well
+            offsets,
+            offset_model,
+            offset_hole_diameter,
+            offset_position,
+            offset_kickoff,
+            given,
+            ref_well,
         )
     inputs = {"reference": ref, "offsets": stations, "wells": wells}
     outs, _, _ = stages.call("clearance", inputs, params, well=ref_well)
@@ -106,9 +112,13 @@ def _offsets(
     diameter: float | Mapping[str, float] | None,
     position: Mapping[str, Sequence[float]] | None,
     kickoff: Mapping[str, float] | None,
+    given: WellMetadata,
     well: WellMetadata,
 ) -> tuple[pa.Table, pa.Table]:
-    """The wells and stations tables of offsets given one by one."""
+    """The wells and stations tables of offsets given one by one: each read (or a table
+    taken) with the caller's ``given`` well metadata as its defaults — never the reference
+    file's header (its north) — and referred to true north by its own corrections, else the
+    reference ``well``'s grid convergence (:func:`true_azimuths`)."""
     if diameter is None:
         raise ParameterError("clearance: give offset_hole_diameter (m) or a manifest")
     named = offsets if isinstance(offsets, Mapping) else _named(offsets)
@@ -123,10 +133,10 @@ def _offsets(
     taken: dict[str, float | None] = {}
     for name, data in named.items():
         if isinstance(data, str | Path):
-            tables[name], header = reg.read(Path(data), "stations", well=well)
+            tables[name], header = reg.read(Path(data), "stations", well=given)
         else:
             header = well_of_data(data)
-            own = well.merged(header)
+            own = given.merged(header)
             tables[name] = to_table(data, Stations, what=f"offset well {name!r}", well=own)
         try:
             true[name], convergence = true_azimuths(tables[name], header, well)
