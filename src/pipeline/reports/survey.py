@@ -58,6 +58,7 @@ from pipeline.reports.qc import (
     summary_rows,
 )
 from pipeline.reports.sections import (
+    bearing,
     footer,
     north_label,
     provenance_section,
@@ -369,6 +370,8 @@ def _method(
     )
     survey = [
         ("Azimuth reference", path.north_label),
+        ("Declination applied to azimuths", bearing(parts.well.declination_applied)),
+        ("Convergence applied to azimuths", bearing(parts.well.grid_convergence_applied)),
         ("Vertical section azimuth", plane),
         (
             "Tie-in (first station)",
