@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -19,6 +20,7 @@ from pipeline.drift.correction import (
     correct_survey,
 )
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
+from pipeline.errors import InputFileError
 from pipeline.graph import build_plan
 from pipeline.io import drift_tables
 from pipeline.io.csv import write_csv
@@ -31,7 +33,7 @@ from pipeline.sim.spec import Drift, SimulationSpec
 from pipeline.spec import load_spec
 from pipeline.stages import drift as drift_plugin
 from pipeline.well import WellMetadata
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 NOISE = 0.2  # deg, σ of an azimuth reading
 RATE = 3.0  # deg/h
@@ -342,3 +344,34 @@ def test_free_gyro_pipeline(tmp_path: Path, fmt: str):
     truth = readings.filter(pa.compute.equal(readings.column("run"), "in"))
     err = trajectory.column("azi").to_numpy() - truth.column("true_azi").to_numpy() - offset
     assert np.all(np.abs((err[inclined] + 180) % 360 - 180) < 4 * NOISE)
+
+
+def test_a_readings_csv_naming_its_north_is_the_runs_well_north(tmp_path: Path):
+    # '# north_reference=grid' above the header: the azimuths were grid, yet free-gyro.yaml's
+    # well (true) stood in run.json and the trajectory's well beside them
+    readings = simulate_free_gyro(spec(8))
+    path = tmp_path / "readings.csv"
+    write_csv(readings, path, WellMetadata(well="free"))
+    text = path.read_text()
+    assert "# north_reference=true\n" in text and "well.north_reference" not in text
+    path.write_text(text.replace("# north_reference=true\n", "# north_reference=grid\n"))
+    table, well = drift_tables.read_drift_table(path, "free_gyro", None)
+    assert table.schema.field("azi").metadata[b"north_reference"] == b"grid"
+    assert well.north_reference == "grid"
+    out = tmp_path / "out"
+    result = gyropipe_cli(
+        "run",
+        ROOT / "pipelines" / "free-gyro.yaml",
+        "--input",
+        path,
+        "--out",
+        out,
+        "--set",
+        "report.formats=[html]",
+    )
+    assert result.returncode == 0, result.stderr
+    assert json.loads((out / "run.json").read_text())["well"]["north_reference"] == "grid"
+    both = "# north_reference=grid\n# well.north_reference=true\n"
+    path.write_text(text.replace("# north_reference=true\n", both))  # refused: which is it?
+    with pytest.raises(InputFileError, match=r"well\.north_reference 'true' contradicts"):
+        drift_tables.read_drift_table(path, "free_gyro", None)

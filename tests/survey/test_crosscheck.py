@@ -5,6 +5,7 @@ station flags), and courses longer than a tolerance flagged beside the short one
 from __future__ import annotations
 
 import html
+import json
 import math
 import re
 import warnings
@@ -198,3 +199,32 @@ def test_a_file_tied_elsewhere_is_told_to_set_the_tie_in(tmp_path: Path) -> None
     with warnings.catch_warnings():
         warnings.simplefilter("error", SurveyCheckWarning)
         gp.run(SURVEY, listing, set=tie)
+
+
+def test_the_summary_counts_the_file_positions_check_the_run_and_report_state(
+    tmp_path: Path,
+) -> None:
+    # the command line and the report said 11 of 21 stations failed; summary.json said
+    # "failed": 0, its one check (dls_limit) all passed
+    out = tmp_path / "out"
+    assert run(hold_listing(tmp_path, turned_md=300.0), out).returncode == 0
+    qc = json.loads((out / "summary.json").read_text())["qc"]
+    assert [c["check"] for c in qc["checks"]] == ["dls_limit", "file_positions"]
+    assert qc["checks"][1] == {
+        "check": "file_positions",
+        "evaluated": 21,
+        "passed": 10,
+        "failed": 11,
+        "not_evaluated": 0,
+    }
+    assert qc["failed"] == 11
+    agreed = tmp_path / "agreed"
+    assert run(hold_listing(tmp_path), agreed).returncode == 0
+    checks = json.loads((agreed / "summary.json").read_text())["qc"]["checks"]
+    assert checks[1] == {
+        "check": "file_positions",
+        "evaluated": 21,
+        "passed": 21,
+        "failed": 0,
+        "not_evaluated": 0,
+    }

@@ -66,7 +66,23 @@ def read_drift_table(path: Path, kind: str, options: Any) -> tuple[pa.Table, Wel
     if parquet.sniff(path):
         return parquet.read(path, kind, options)
     default = options.default_north_reference if options is not None else None
-    return _read_csv(path, contract, default)
+    table, well, stated = _read_csv(path, contract, default)
+    return table, _stated_north(path, well, stated)
+
+
+def _stated_north(path: Path, well: WellMetadata, stated: NorthReference | None) -> WellMetadata:
+    """The well metadata with the north the file names for its azimuths (a
+    ``# north_reference=`` line) as its north reference, as the CSV stations reader and
+    LAS's NREF state it; a ``# well.north_reference=`` line naming another is an error."""
+    if stated is None or well.north_reference == stated:
+        return well
+    if well.north_reference is not None:
+        raise InputFileError(
+            path,
+            f"well.north_reference {well.north_reference!r} contradicts the azimuths' "
+            f"{stated} north (# north_reference={stated}): the azimuths' is the well's",
+        )
+    return well.merged({"north_reference": stated})
 
 
 def sniff(path: Path) -> Claim:
@@ -78,7 +94,10 @@ def sniff(path: Path) -> Claim:
 
 def _read_csv(
     path: Path, contract: type[TableContract], north: NorthReference | None
-) -> tuple[pa.Table, WellMetadata]:
+) -> tuple[pa.Table, WellMetadata, NorthReference | None]:
+    """The table, the well metadata of its ``# well.`` lines and the north its
+    ``# north_reference=`` line names (``north``, the option's, where it names none)."""
+    stated = None
     try:
         lines = path.read_text(encoding="utf-8-sig").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
@@ -97,7 +116,7 @@ def _read_csv(
             if header is None and sep and key.startswith("well."):
                 well[key.removeprefix("well.")] = value
             elif header is None and sep and key == "north_reference":
-                north = _north(path, value, number)
+                north = stated = _north(path, value, number)
             continue
         cells = next(csv.reader([line]))
         if header is None:
@@ -125,7 +144,7 @@ def _read_csv(
         metadata = WellMetadata.model_validate(well)
     except ValidationError as exc:
         raise InputFileError(path, f"well metadata lines: {exc}") from None
-    return contract.compiled().make_table(data, north_reference=north), metadata
+    return contract.compiled().make_table(data, north_reference=north), metadata, stated
 
 
 def _north(path: Path, value: str, line: int) -> NorthReference:

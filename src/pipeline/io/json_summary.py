@@ -4,8 +4,10 @@ One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): t
 header, the run's provenance, the azimuths' north reference, the calculation method, and per
 survey the station count, MD range, the final station's position, the largest dogleg
 severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
-then QC counts per check, flagged and rejected stations. Lengths in m, angles in degrees,
-DLS in °/30 m (``units`` says so in the document too).
+then QC counts per check (with ``file_positions``: the stations file's own positions against
+the recomputed ones, when the trajectory records that check), flagged and rejected
+stations. Lengths in m, angles in degrees, DLS in °/30 m (``units`` says so in the document
+too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
 ``stations`` and ``rejects``; through ``write`` one trajectory table.
@@ -30,6 +32,7 @@ from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
+from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
 from pipeline.version import __version__
@@ -157,7 +160,9 @@ class SurveySummary(_Model):
     units: Units = Units()
     station_count: int = Field(ge=0, description="stations over all surveys")
     surveys: list[Survey]
-    qc: Qc | None = Field(None, description="QC counts (null: no QC table given)")
+    qc: Qc | None = Field(
+        None, description="QC counts (null: no QC table given, no position check recorded)"
+    )
 
 
 def summarize(
@@ -179,7 +184,7 @@ def summarize(
         calculation=calculation_of(trajectory),
         station_count=trajectory.num_rows,
         surveys=_surveys(trajectory),
-        qc=_qc(tables) if {"qc", "stations", "rejects"} & set(tables) else None,
+        qc=_qc(tables) if _has_qc(tables) else None,
     )
 
 
@@ -247,8 +252,27 @@ def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
     )
 
 
+def _has_qc(tables: Mapping[str, pa.Table]) -> bool:
+    given = {"qc", "stations", "rejects"} & set(tables)
+    return bool(given) or position_check_of(tables["trajectory"]) is not None
+
+
 def _qc(tables: Mapping[str, pa.Table]) -> Qc:
+    """Counts of the ``qc`` table's checks and of the trajectory's position check, by
+    name, as the run's verdict line counts them; flagged and rejected stations."""
     checks: list[CheckCount] = []
+    positions = position_check_of(tables["trajectory"])
+    if positions is not None:
+        failed = len(positions.beyond_md)
+        checks.append(
+            CheckCount(
+                check="file_positions",
+                evaluated=positions.compared,
+                passed=positions.compared - failed,
+                failed=failed,
+                not_evaluated=tables["trajectory"].num_rows - positions.compared,
+            )
+        )
     if "qc" in tables:
         qc = tables["qc"]
         names = qc.column("check")
@@ -265,6 +289,7 @@ def _qc(tables: Mapping[str, pa.Table]) -> Qc:
                     not_evaluated=rows.null_count,
                 )
             )
+    checks.sort(key=lambda c: c.check)
     stations = tables.get("stations")
     flagged = None
     if stations is not None and "flags" in stations.column_names:

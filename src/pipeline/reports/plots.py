@@ -120,6 +120,22 @@ class Path3:
             self.north_label,
         )
 
+    def surveys(self) -> list[tuple[int, Path3]]:
+        """Each survey's first row and its own path."""
+        found = []
+        for lo, hi in itertools.pairwise(self.offsets):
+            rows = slice(lo, hi)
+            one = Path3(
+                self.md[rows],
+                self.north[rows],
+                self.east[rows],
+                self.tvd[rows],
+                (0, hi - lo),
+                self.north_label,
+            )
+            found.append((lo, one))
+        return found
+
 
 def plan_view(size: Size, path: Path3) -> Chart:
     """Horizontal projection with the closure from the wellhead to the last station."""

@@ -62,6 +62,15 @@ def _angle(value: float | None, positive: str, negative: str) -> str | None:
     return f"{abs(value):.6f}° {positive if value >= 0 else negative}"
 
 
+def bearing(value: float | None) -> str | None:
+    """A correction east (+) or west (−) of true north as a report states it, deg:
+    ``14.50° E``, ``1.80° W``; ``0.00°``."""
+    if value is None:
+        return None
+    text = fmt(abs(value))
+    return f"{text}°" if text == fmt(0.0) else f"{text}° {'E' if value > 0 else 'W'}"
+
+
 def _map_position(well: WellMetadata) -> str | None:
     """The wellhead's map coordinates, m (either given alone is shown alone)."""
     parts = [
@@ -73,7 +82,8 @@ def _map_position(well: WellMetadata) -> str | None:
 
 
 def site_fields(well: WellMetadata) -> Fields:
-    """Well name, identifiers, wellhead position (geodetic and map) and depth datum."""
+    """Well name, identifiers, wellhead position (geodetic and map), depth datum and the
+    site's magnetic declination and grid convergence."""
     elevation = None if well.elevation is None else f"{fmt(well.elevation)} m above MSL"
     return Fields(
         "Well and site",
@@ -90,6 +100,8 @@ def site_fields(well: WellMetadata) -> Fields:
                 ("Wellhead map position", _map_position(well)),
                 ("Depth datum", well.depth_reference),
                 ("Datum elevation", elevation),
+                ("Magnetic declination", bearing(well.declination)),
+                ("Grid convergence", bearing(well.grid_convergence)),
             ]
         ),
     )

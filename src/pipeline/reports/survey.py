@@ -58,6 +58,7 @@ from pipeline.reports.qc import (
     summary_rows,
 )
 from pipeline.reports.sections import (
+    bearing,
     footer,
     north_label,
     provenance_section,
@@ -321,9 +322,36 @@ def _summary(
     course: Course,
     verdicts: list[Verdict],
 ) -> Section:
-    """Results at TD and the verdicts of the QC, the acceptance gates and ``verdicts``
-    (the clearance's, repeated from its section)."""
+    """Results at TD (of each survey, named, when the trajectory holds several) and the
+    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's, repeated
+    from its section)."""
     traj = tables.trajectory
+    names = _survey_names(traj, path.offsets)
+    blocks: list[Block] = []
+    for name, (lo, one) in zip(names, path.surveys(), strict=True):
+        shorter = Course(course.short[lo : lo + len(one.md)], course.min_course)
+        results = _results(traj.slice(lo, len(one.md)), one, vs_azimuth, shorter)
+        blocks.append(Fields(f"Results, survey {name}" if name else "Results", results))
+    if flags is not None:
+        blocks.append(_qc_verdict(flags, path.md))
+    if tables.gates is not None:
+        blocks.append(gates_verdict(tables.gates))
+    return Section("Summary", (*blocks, *verdicts), key="summary")
+
+
+def _survey_names(traj: pa.Table, offsets: tuple[int, ...]) -> list[str | None]:
+    """Each survey's id where the trajectory holds several, else [None]."""
+    if len(offsets) < 3:
+        return [None]
+    surveys = traj.column("survey")
+    return [str(surveys[lo].as_py()) for lo in offsets[:-1]]
+
+
+def _results(
+    traj: pa.Table, path: plots.Path3, vs_azimuth: float | None, course: Course
+) -> tuple[tuple[str, str], ...]:
+    """TD, its position and closure, maximum inclination and DLS, vertical section and
+    ellipse at TD of one survey."""
     inc = col(traj, "inc")
     i_inc = int(np.argmax(inc))
     distance = float(np.hypot(path.north[-1], path.east[-1]))
@@ -347,12 +375,7 @@ def _summary(
                 f"{fmt(col(traj, 'vertical_conf')[-1])} m",
             )
         )
-    blocks: list[Block] = [Fields("Results", tuple(results))]
-    if flags is not None:
-        blocks.append(_qc_verdict(flags, path.md))
-    if tables.gates is not None:
-        blocks.append(gates_verdict(tables.gates))
-    return Section("Summary", (*blocks, *verdicts), key="summary")
+    return tuple(results)
 
 
 def _method(
@@ -369,11 +392,16 @@ def _method(
     )
     survey = [
         ("Azimuth reference", path.north_label),
+        ("Declination applied to azimuths", bearing(parts.well.declination_applied)),
+        ("Convergence applied to azimuths", bearing(parts.well.grid_convergence_applied)),
         ("Vertical section azimuth", plane),
-        (
-            "Tie-in (first station)",
-            f"MD {fmt(path.md[0])} m, TVD {fmt(path.tvd[0])} m, N {fmt(path.north[0])} m, "
-            f"E {fmt(path.east[0])} m",
+        *(
+            (
+                f"Tie-in (first station of survey {name})" if name else "Tie-in (first station)",
+                f"MD {fmt(path.md[lo])} m, TVD {fmt(path.tvd[lo])} m, "
+                f"N {fmt(path.north[lo])} m, E {fmt(path.east[lo])} m",
+            )
+            for name, lo in zip(_survey_names(traj, path.offsets), path.offsets, strict=False)
         ),
         ("Dogleg severity unit", unit_label(traj, "dls")),
         *parts.methods(),

@@ -1,0 +1,237 @@
+"""A run's deliverables say one thing: the bundled survey and point-gyro pipelines, and the
+listings a real job brings (a grid listing with its convergence, a magnetic one corrected
+to true north by its declination, depths and datum elevation in ft in the southern and
+western hemispheres tied on below surface, a listing whose own positions disagree, a
+sidetrack listed beside its main bore), each run once, every deliverable read back and
+compared (:mod:`agreement_support`)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+import yaml
+from agreement_support import (
+    TRAJECTORY_FILES,
+    assert_deliverables_agree,
+    report_blocks,
+    report_fields,
+)
+
+import pipeline as gp
+from tests_support import ROOT, gyropipe_cli
+
+SAMPLE = ROOT / "examples" / "stations-j-well.csv"
+SURVEY = ROOT / "pipelines" / "survey.yaml"
+FT = 0.3048
+
+
+def listing(
+    directory: Path, name: str, header: dict[str, str], columns: str, first: int = 0
+) -> Path:
+    """The bundled sample's stations from row ``first`` under ``header`` (its title lines
+    replaced or added) and ``columns``; depths in ft where the MD column says so."""
+    lines = SAMPLE.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
+    title = dict(line.split(": ", 1) for line in lines[:start] if line)
+    rows = [line.split(",") for line in lines[start + 1 :] if line][first:]
+    if "(ft)" in columns:
+        rows = [[f"{float(r[0]) / FT:.2f}", *r[1:]] for r in rows]
+    text = "\n".join(f"{k}: {v}" for k, v in (title | header).items())
+    path = directory / f"{name}.csv"
+    path.write_text(f"{text}\n\n{columns}\n" + "\n".join(",".join(r) for r in rows) + "\n")
+    return path
+
+
+def to_true(directory: Path) -> Path:
+    """survey.yaml with a north_reference stage converting the azimuths to true north."""
+    spec = yaml.safe_load(SURVEY.read_text())
+    del spec["well"]
+    stages = spec["stages"]
+    stages.insert(1, {"id": "north", "uses": "north_reference", "with": {"target": "true"}})
+    stages[1]["inputs"] = {"stations": "read.stations"}
+    stages[2]["inputs"] = {"stations": "north.stations"}
+    path = directory / "to-true.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
+
+
+def sidetrack(directory: Path) -> Path:
+    """The bundled sample as survey MAIN and, below 1200 m, a sidetrack ST1 turning 1° per
+    10 m from it, in one listing with a Survey column."""
+    lines = SAMPLE.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
+    rows = [line.split(",") for line in lines[start + 1 :] if line]
+    main = [f"{md},{inc},{azi},MAIN" for md, inc, azi in rows]
+    turned = [
+        f"{md},{inc},{(float(azi) + (float(md) - 1200.0) / 10.0) % 360.0:.2f},ST1"
+        for md, inc, azi in rows
+        if float(md) >= 1200.0
+    ]
+    path = directory / "sidetrack.csv"
+    title = "\n".join(lines[:start])
+    path.write_text(f"{title}\n{lines[start]},Survey\n" + "\n".join(main + turned) + "\n")
+    return path
+
+
+def own_positions(directory: Path, run: Path) -> Path:
+    """The bundled sample's trajectory.csv (its own TVD, north, east) with TVD 5 m deeper
+    from 2000 m MD."""
+    lines = (run / "trajectory.csv").read_text().splitlines()
+    for i, line in enumerate(lines):
+        cells = line.split(",")
+        if line[:1].isdigit() and float(cells[0]) >= 2000.0:
+            cells[3] = str(float(cells[3]) + 5.0)
+            lines[i] = ",".join(cells)
+    path = directory / "positions.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
+    """Output directory of each run, made once."""
+    tmp = tmp_path_factory.mktemp("agree")
+    done: dict[str, Path] = {}
+
+    def survey(name: str, stations: Path, pipeline: Path = SURVEY) -> Path:
+        out = tmp / name
+        html = ["--set", "report.formats=[html]"] if name != "survey" else []
+        result = gyropipe_cli("run", pipeline, "--input", stations, "--out", out, *html)
+        assert result.returncode == 0, result.stderr
+        return out
+
+    def point_gyro() -> Path:
+        plan = ROOT / "examples" / "plans" / "short-j-well.yaml"
+        gyropipe_cli("simulate", plan, "--out", tmp / "sim", check=True)
+        return survey(
+            "point-gyro", tmp / "sim" / "samples.parquet", ROOT / "pipelines" / "point-gyro.yaml"
+        )
+
+    made = {
+        "survey": lambda: survey("survey", SAMPLE),
+        "point-gyro": point_gyro,
+        "grid": lambda: survey(
+            "grid",
+            listing(tmp, "grid", {"Grid Convergence": "-1.8"}, "MD (m),Inc (deg),Azi Grid (deg)"),
+        ),
+        "magnetic": lambda: survey(
+            "magnetic",
+            listing(
+                tmp,
+                "magnetic",
+                {"Magnetic Declination": "14.5 E"},
+                "MD (m),Inc (deg),Azi Magnetic (deg)",
+            ),
+            to_true(tmp),
+        ),
+        "ft-south-west": lambda: survey(
+            "ft-south-west",
+            listing(
+                tmp,
+                "ft",
+                {
+                    "Latitude": "33.9 S",
+                    "Longitude": "70.6 W",
+                    "Elevation": "178 ft",
+                    "Depth Reference": "KB",
+                },
+                "MD (ft),Inc (deg),Azimuth True (deg)",
+                first=20,
+            ),
+        ),
+        "positions": lambda: survey("positions", own_positions(tmp, done["survey"])),
+        "sidetrack": lambda: survey("sidetrack", sidetrack(tmp)),
+    }
+
+    def get(name: str) -> Path:
+        if name == "positions":
+            get("survey")
+        if name not in done:
+            done[name] = made[name]()
+        return done[name]
+
+    return get
+
+
+@pytest.mark.parametrize(
+    ("run", "trajectory"),
+    [
+        ("survey", "trajectory.trajectory.parquet"),
+        ("point-gyro", "uncertainty.trajectory.parquet"),
+        ("grid", "trajectory.trajectory.parquet"),
+        ("magnetic", "trajectory.trajectory.parquet"),
+        ("ft-south-west", "trajectory.trajectory.parquet"),
+        ("positions", "trajectory.trajectory.parquet"),
+        ("sidetrack", "trajectory.trajectory.parquet"),
+    ],
+)
+def test_every_deliverable_of_a_run_says_the_same(
+    runs: Callable[[str], Path], run: str, trajectory: str
+) -> None:
+    # a two-survey LAS is one log of both, MD going back at the sidetrack: not read back
+    # (test_a_two_survey_las_reads_back_as_its_surveys)
+    files = TRAJECTORY_FILES if run != "sidetrack" else ("trajectory.csv", "trajectory.xml")
+    assert_deliverables_agree(runs(run), trajectory, files)
+
+
+def test_the_report_states_each_surveys_results_and_tie_in(runs: Callable[[str], Path]) -> None:
+    # the summary gave the last survey's TD, position and closure as the well's, unnamed,
+    # and the method the first survey's tie-in only (ST1 is tied at TVD = MD, N = E = 0)
+    out = runs("sidetrack")
+    blocks = report_blocks(out / "report.html")
+    main, st1 = blocks["Results, survey MAIN"], blocks["Results, survey ST1"]
+    assert main["Total depth (MD)"] == st1["Total depth (MD)"] == "2520.00 m"
+    assert main["TVD at TD"] != st1["TVD at TD"]
+    method = blocks["Method"]
+    assert (
+        method["Tie-in (first station of survey MAIN)"]
+        == "MD 0.00 m, TVD 0.00 m, N 0.00 m, E 0.00 m"
+    )
+    assert (
+        method["Tie-in (first station of survey ST1)"]
+        == "MD 1200.00 m, TVD 1200.00 m, N 0.00 m, E 0.00 m"
+    )
+    assert "Results" in report_blocks(runs("survey") / "report.html")
+
+
+@pytest.mark.xfail(reason="the LAS writer leaves the survey column out", strict=True)
+def test_a_two_survey_las_reads_back_as_its_surveys(runs: Callable[[str], Path]) -> None:
+    back = gp.read(runs("sidetrack") / "trajectory.las")
+    assert list(dict.fromkeys(back["survey"])) == ["MAIN", "ST1"]
+
+
+def test_the_report_states_the_sites_corrections_and_those_applied(
+    runs: Callable[[str], Path],
+) -> None:
+    # the report said "Azimuth reference true north" of azimuths corrected from magnetic by
+    # 14.5°, and grid north of a grid listing, without either angle that the CSV, LAS,
+    # WITSML and summary.json state
+    grid = report_fields(runs("grid") / "report.html")
+    assert grid["Grid convergence"] == "1.80° W"
+    assert grid["Azimuth reference"] == "grid north"
+    magnetic = report_fields(runs("magnetic") / "report.html")
+    assert magnetic["Magnetic declination"] == "14.50° E"
+    assert magnetic["Declination applied to azimuths"] == "14.50° E"
+    assert magnetic["Azimuth reference"] == "true north"
+    plain = report_fields(runs("survey") / "report.html")
+    assert "Magnetic declination" not in plain and "Grid convergence" not in plain
+
+
+def test_the_pdf_states_what_the_html_does(runs: Callable[[str], Path]) -> None:
+    out = runs("survey")
+    text = " ".join(
+        subprocess.run(
+            ["pdftotext", "-layout", out / "report.pdf", "-"], capture_output=True, check=True
+        )
+        .stdout.decode()
+        .split()
+    )
+    fields = report_fields(out / "report.html")
+    for label in ("Closure at TD", "Maximum DLS", "Datum elevation", "Azimuth reference"):
+        assert f"{label} {fields[label]}" in text, label
+    summary = json.loads((out / "summary.json").read_text())
+    assert f"Stations {summary['station_count']} (" in text
