@@ -17,6 +17,7 @@ from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
+from pipeline.io.numbers import file_number
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
@@ -399,7 +400,7 @@ def _measure(path: Path, node: Node, quantity: str) -> float | None:
     if not uom:
         raise InputFileError(path, f"<{node.name}> has no uom", line=node.line, column=node.name)
     try:
-        value = float(node.text.strip())
+        value = file_number(node.text.strip())
     except ValueError:
         raise InputFileError(
             path,
