@@ -174,7 +174,8 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
             if value != value or abs(value) == float("inf"):
                 raise InputFileError(path, f"{name}: not a finite number: {raw!r}", line, name)
             if name in ANGLES and abs(value) > 180.0:
-                raise InputFileError(path, f"{name}: {raw} is not within ±180°", line, name)
+                shown = raw if columns[name][1] == 1.0 else f"{raw} ({value:.6g}°)"
+                raise InputFileError(path, f"{name}: {shown} is not within ±180°", line, name)
             numbers[name] = value
         diameter = numbers["hole_diameter"]
         if diameter is None or diameter <= 0:
