@@ -287,6 +287,18 @@ def test_a_sidetrack_tied_in_without_a_position_is_warned_of(tmp_path: Path):
     assert table["tvd"].iloc[0] == 299.5  # the survey stage checks its tie against this
 
 
+def test_a_parent_trajectory_naming_none_is_warned_of_as_such(tmp_path: Path):
+    """No text nor uidRef in its trajectoryReference: said so, not named 'None'."""
+    stations = [station(1, *SURVEY[1], kind="tie in point"), station(2, *SURVEY[2])]
+    head = "<parentTrajectory><trajectoryReference/></parentTrajectory>"
+    path = tmp_path / "store.xml"
+    path.write_text(store_document(stations, head=head, md_min=300.0))
+    with pytest.warns(InputFileWarning) as caught:
+        gp.read(path, kind="stations")
+    (told,) = [str(w.message) for w in caught if "parentTrajectory" in str(w.message)]
+    assert told.startswith(f"{path}:7: parentTrajectory (naming no trajectory by text or uidRef):")
+
+
 def test_the_station_types_are_the_schemas_closed_enumeration():
     enumeration = {e.value() for e in wml.TrajStationType._CF_enumeration.items()}
     kinds = (SURVEY_STATION_TYPES, MARKER_TYPES, TARGET_TYPES, PLAN_SECTION_TYPES)
