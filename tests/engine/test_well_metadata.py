@@ -11,6 +11,7 @@ import pytest
 
 from pipeline.errors import ParameterError
 from pipeline.well import AGREEING, WellMetadata, agreed
+from tests_support import ROOT, gyropipe_cli
 
 FIRST, LAST = dt.date(2025, 2, 10), dt.date(2026, 3, 2)
 RANGE = WellMetadata(survey_date=FIRST, survey_date_last=LAST)  # a WITSML of several days
@@ -69,3 +70,25 @@ def test_every_number_field_has_a_tolerance():
         if "float" in str(field.annotation)
     }
     assert numbers == set(AGREEING)
+
+
+@pytest.mark.parametrize("value", [0, 86400.0, "0", "1772409600", " 20260302 "])
+def test_a_number_is_no_survey_date(value: object):
+    """Pydantic's lax dates read a number as a Unix time: 0 was 1970-01-01, '1772409600'
+    2026-03-02 (a declination by that date's model); a date is written as one."""
+    for name in ("survey_date", "survey_date_last"):
+        with pytest.raises(ValueError, match=f"{value!r} is a number, not a date"):
+            WellMetadata.model_validate({name: value})
+
+
+def test_the_cli_refuses_a_number_for_a_survey_date(tmp_path):
+    listing = ROOT / "examples" / "stations-j-well.csv"
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "survey.yaml", "--input", f"stations={listing}",
+        "--well", "survey_date_last=0", "--out", tmp_path / "out",
+    )  # fmt: skip
+    assert result.returncode == 2
+    assert "--well survey_date_last=0" in result.stderr
+    assert "'0' is a number, not a date (write it as 2026-03-02)" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "out" / "trajectory.csv").exists()
