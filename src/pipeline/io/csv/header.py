@@ -386,7 +386,12 @@ def read_title(
             found[label] = (parsed, number)
     if "elevation" not in values and datums:
         values |= _datum_elevation(path, datums, values.get("depth_reference"))
-    return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+    try:
+        return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+    except ValidationError as exc:  # each field was read alone: the survey dates' order
+        (error,) = exc.errors()
+        last = values["survey_date_last"][1]
+        raise InputFileError(path, str(error["ctx"]["error"]), line=last) from None
 
 
 def _datum(words: list[str]) -> str | None:
