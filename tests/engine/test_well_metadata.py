@@ -92,3 +92,19 @@ def test_the_cli_refuses_a_number_for_a_survey_date(tmp_path):
     assert "'0' is a number, not a date (write it as 2026-03-02)" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "out" / "trajectory.csv").exists()
+
+
+def test_a_last_day_override_before_the_file_s_date_names_the_file(tmp_path):
+    """``--well survey_date_last=…`` alone, before the survey date the listing states: the
+    run's well would be out of order; refused naming the file and its date."""
+    listing = tmp_path / "survey.csv"
+    listing.write_text("Survey Date: 2026-03-02\nMD[m],INC[deg],AZI TN[deg]\n0,0,0\n100,1,45\n")
+    run = ("run", ROOT / "pipelines" / "survey.yaml", "--input", f"stations={listing}")
+    refused = gyropipe_cli(*run, "--well", "survey_date_last=2026-03-01", "--out", tmp_path / "a")
+    assert refused.returncode != 0 and not (tmp_path / "a").exists()
+    assert f"{listing}: the file states survey_date 2026-03-02" in refused.stderr
+    assert "survey_date_last 2026-03-01 is before survey_date 2026-03-02" in refused.stderr
+    assert "Traceback" not in refused.stderr
+    later = ("--well", "survey_date_last=2026-03-04", "--out", tmp_path / "b")
+    gyropipe_cli(*run, *later, check=True)
+    assert (tmp_path / "b" / "trajectory.csv").exists()
