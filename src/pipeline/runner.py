@@ -30,6 +30,7 @@ from pipeline.errors import (
     ContractViolation,
     FileSystemError,
     GyropipeError,
+    ParameterError,
     StageError,
     file_errors,
 )
@@ -184,6 +185,7 @@ class _Context:
             given, kind, reader=reader, options=options, well=self.well_for(WellMetadata())
         )
         self._north_agrees(given, header)
+        self._dates_agree(given, header)
         self.found_header(name, header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
@@ -206,6 +208,7 @@ class _Context:
         run = self.well_for(WellMetadata())  # the run's, not another file's header
         table, header = self.registry.read(path, kind, reader=reader, options=options, well=run)
         self._north_agrees(path, header)
+        self._dates_agree(path, header)
         return table, header
 
     def _north_agrees(self, path: Path, header: WellMetadata) -> None:
@@ -220,6 +223,17 @@ class _Context:
                 f"override north_reference={wanted} contradicts it (an override states the "
                 "north of azimuths whose file names none; drop it, or correct the file)"
             )
+
+    def _dates_agree(self, path: Path, header: WellMetadata) -> None:
+        """Refuse a run's override of the survey's last day (``survey_date_last`` alone)
+        before the survey date a file states: the run's well would be out of order."""
+        try:
+            header.merged(self.own[1])
+        except ParameterError as exc:
+            raise RunInputError(
+                f"{path}: the file states survey_date {header.survey_date}; the run's well "
+                f"override contradicts it: {exc}"
+            ) from None
 
     def writer(self, name: str) -> WriterDef:
         return _lookup(self.registry.writers, name, "writer")

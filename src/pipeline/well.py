@@ -7,6 +7,7 @@ Parquet files and stage boundaries.
 from __future__ import annotations
 
 import datetime as dt
+import re
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
@@ -32,6 +33,17 @@ def _yaml_true(value: Any) -> Any:
     return "true" if value is True else value
 
 
+def _no_number(value: Any) -> Any:
+    """A date is not a number: pydantic's lax dates read one as a Unix time (``0`` as
+    1970-01-01, ``'1772409600'`` as 2026-03-02)."""
+    numeric = isinstance(value, str) and re.fullmatch(r"\s*[+-]?\d+(\.\d*)?\s*", value)
+    if numeric or (isinstance(value, int | float) and not isinstance(value, bool)):
+        raise ValueError(f"{value!r} is a number, not a date (write it as 2026-03-02)")
+    return value
+
+
+SurveyDate = Annotated[dt.date | None, BeforeValidator(_no_number)]
+"""A survey date field: a date, never a number read as a Unix time."""
 Latitude = Annotated[float, Field(ge=-90, le=90, allow_inf_nan=False)]
 """A geodetic latitude (WGS84), deg, north positive, −90 to 90: the one type of every
 latitude (well metadata, site, stage parameters)."""
@@ -109,10 +121,10 @@ class WellMetadata(BaseModel):
     depth_reference: str | None = Field(
         None, description="depth reference point (RKB, DF, GL, MSL…)"
     )
-    survey_date: dt.date | None = Field(
+    survey_date: SurveyDate = Field(
         None, description="date of the survey run (of several trajectories: the first's)"
     )
-    survey_date_last: dt.date | None = Field(
+    survey_date_last: SurveyDate = Field(
         None,
         description="the day the last of the survey's trajectories began, when they began on "
         "several days (survey_date: the first): no one date's geomagnetic field is every "

@@ -175,6 +175,8 @@ def test_reads_the_declination_and_convergence_columns(tmp_path: Path):
     [
         ("declination (m)", "2", "column 'declination': unit 'm' is a length"),
         ("declination", "east", "declination: not a number: 'east'"),
+        ("declination", "1_5", "declination: not a number: '1_5'"),  # Python's 15
+        ("convergence (rad)", "3.2", r"convergence: 3.2 \(183.346°\) is not within ±180°"),
         ("convergence (deg)", "181", "convergence: 181 is not within ±180°"),
     ],
 )

@@ -189,6 +189,18 @@ def test_a_manifest_declination_contradicting_the_file_is_refused(tmp_path: Path
         gp.clearance(str(EXAMPLE / "reference.csv"), path, **RULE)
 
 
+def test_a_manifest_declination_in_radians_agrees_with_the_file_s_degrees(
+    tmp_path: Path, in_true_north: dict[str, np.ndarray]
+):
+    """The file's 3° given again by the manifest in rad (3.0000000000000004° converted):
+    one value within well.AGREEING's 1e-6°, as headers agree, not a contradiction."""
+    magnetic = csv_file(tmp_path, "offset-03", "Magnetic", 3.0, Declination=3.0)
+    true = csv_file(tmp_path, "offset-04", "True", 0.0)
+    rows = [("offset-03", magnetic, repr(math.radians(3.0))), ("offset-04", true, "")]
+    path = manifest(tmp_path, *rows, columns=",declination (rad)")
+    same(sf(EXAMPLE / "reference.csv", path), in_true_north)
+
+
 def true_reference(folder: Path, *, convergence: bool = False) -> Path:
     """The example's reference well stated in true north (its grid convergence is 0: kept
     in its header with ``convergence``)."""

@@ -11,6 +11,7 @@ import pytest
 
 from pipeline.errors import ParameterError
 from pipeline.well import AGREEING, WellMetadata, agreed
+from tests_support import ROOT, gyropipe_cli
 
 FIRST, LAST = dt.date(2025, 2, 10), dt.date(2026, 3, 2)
 RANGE = WellMetadata(survey_date=FIRST, survey_date_last=LAST)  # a WITSML of several days
@@ -69,3 +70,41 @@ def test_every_number_field_has_a_tolerance():
         if "float" in str(field.annotation)
     }
     assert numbers == set(AGREEING)
+
+
+@pytest.mark.parametrize("value", [0, 86400.0, "0", "1772409600", " 20260302 "])
+def test_a_number_is_no_survey_date(value: object):
+    """Pydantic's lax dates read a number as a Unix time: 0 was 1970-01-01, '1772409600'
+    2026-03-02 (a declination by that date's model); a date is written as one."""
+    for name in ("survey_date", "survey_date_last"):
+        with pytest.raises(ValueError, match=f"{value!r} is a number, not a date"):
+            WellMetadata.model_validate({name: value})
+
+
+def test_the_cli_refuses_a_number_for_a_survey_date(tmp_path):
+    listing = ROOT / "examples" / "stations-j-well.csv"
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "survey.yaml", "--input", f"stations={listing}",
+        "--well", "survey_date_last=0", "--out", tmp_path / "out",
+    )  # fmt: skip
+    assert result.returncode == 2
+    assert "--well survey_date_last=0" in result.stderr
+    assert "'0' is a number, not a date (write it as 2026-03-02)" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "out" / "trajectory.csv").exists()
+
+
+def test_a_last_day_override_before_the_file_s_date_names_the_file(tmp_path):
+    """``--well survey_date_last=…`` alone, before the survey date the listing states: the
+    run's well would be out of order; refused naming the file and its date."""
+    listing = tmp_path / "survey.csv"
+    listing.write_text("Survey Date: 2026-03-02\nMD[m],INC[deg],AZI TN[deg]\n0,0,0\n100,1,45\n")
+    run = ("run", ROOT / "pipelines" / "survey.yaml", "--input", f"stations={listing}")
+    refused = gyropipe_cli(*run, "--well", "survey_date_last=2026-03-01", "--out", tmp_path / "a")
+    assert refused.returncode != 0 and not (tmp_path / "a").exists()
+    assert f"{listing}: the file states survey_date 2026-03-02" in refused.stderr
+    assert "survey_date_last 2026-03-01 is before survey_date 2026-03-02" in refused.stderr
+    assert "Traceback" not in refused.stderr
+    later = ("--well", "survey_date_last=2026-03-04", "--out", tmp_path / "b")
+    gyropipe_cli(*run, *later, check=True)
+    assert (tmp_path / "b" / "trajectory.csv").exists()

@@ -14,7 +14,7 @@ import pytest
 from vendor_exports import survey_pipeline
 
 import pipeline as gp
-from pipeline.errors import InputFileWarning
+from pipeline.errors import InputFileError, InputFileWarning
 from tests_support import gyropipe_cli
 
 LISTING = """\
@@ -81,3 +81,21 @@ def test_the_cli_integrates_no_projection(tmp_path: Path):
     assert trajectory["station_type"].tolist() == ["Tie-In", *["Gyro NS"] * 3]
     las = lasio.read(str(out / "trajectory.las"))  # the LAS deliverable keeps them as text
     assert las["STATION_TYPE"].tolist() == ["Tie-In", *["Gyro NS"] * 3]
+
+
+def test_a_listing_of_projections_only_is_refused_naming_the_column(tmp_path: Path):
+    """Every row left out: no survey, refused at the file's column (was an empty table, the
+    run failing later at a writer: 'the trajectory table has no rows'); stations: all reads
+    them."""
+    path = listing(tmp_path, "Survey Type", "PTB", "Projection to TD", "Interpolated")
+    with pytest.warns(InputFileWarning), pytest.raises(InputFileError) as caught:
+        gp.read(path, kind="stations")
+    assert (caught.value.line, caught.value.column) == (6, "Survey Type")
+    assert "no survey station: each of the 5 rows" in str(caught.value)
+    assert "the reader option stations: all reads them" in str(caught.value)
+    assert len(gp.read(path, kind="stations", stations="all")) == 5
+    out = tmp_path / "out"
+    result = gyropipe_cli("run", survey_pipeline(tmp_path), "--input", f"stations={path}",
+                          "--out", out)  # fmt: skip
+    assert result.returncode != 0 and not out.exists()
+    assert f"{path}:6 (column 'Survey Type'): no survey station" in result.stderr

@@ -265,6 +265,23 @@ def test_invalid_title_values(tmp_path: Path, line: str, message: str) -> None:
     assert message in str(err)
 
 
+def test_title_survey_dates_out_of_order(tmp_path: Path) -> None:
+    """The validator's refusal is the file's error at the last day's line (was the reader's
+    crash, a pydantic ValidationError)."""
+    title = "Survey Date: 2026-03-05\nwell.survey_date_last: 2026-03-01\n"
+    err = failure(put(tmp_path, f"{title}MD[m],INC[deg],AZI TN[deg]\n1,2,3\n"))
+    assert err.line == 2
+    assert "survey_date_last 2026-03-01 is before survey_date 2026-03-05" in str(err)
+
+
+def test_title_survey_dates_read_alike(tmp_path: Path) -> None:
+    """A last day is read as the survey date is (:func:`pipeline.io.dates.header_date`:
+    '05-MAR-2026'), not by pydantic's ISO-only rule."""
+    title = "Survey Date: 02-MAR-2026\nwell.survey_date_last: 05-MAR-2026\n"
+    _, well = read(put(tmp_path, f"{title}MD[m],INC[deg],AZI TN[deg]\n1,2,3\n"))
+    assert well.survey_dates() == "2026-03-02 to 2026-03-05"
+
+
 def test_title_value_given_twice(tmp_path: Path) -> None:
     text = "Well: A\nWell Name: B\nMD[m],INC[deg],AZI TN[deg]\n1,2,3\n"
     err = failure(put(tmp_path, text))

@@ -676,6 +676,20 @@ def test_bad_well_metadata_names_the_record(tmp_path: Path) -> None:
         read(path)
 
 
+def test_well_records_whose_dates_contradict_name_the_record(tmp_path: Path) -> None:
+    """A later record's last day before an earlier one's survey date: the file's error, at
+    the later record (was a ParameterError naming no file)."""
+    path = tmp_path / "w.mcap"
+    with path.open("wb") as fh:
+        writer = Writer(fh)
+        writer.start()
+        writer.add_metadata("gyropipe.well", {"survey_date": "2026-03-05"})
+        writer.add_metadata("gyropipe.well", {"survey_date_last": "2026-03-01"})
+        writer.finish()
+    with pytest.raises(InputFileError, match=r"gyropipe.well at byte \d+: .*survey_date_last"):
+        read(path)
+
+
 def test_options_are_validated() -> None:
     with pytest.raises(ValidationError, match="unknown columns"):
         McapOptions(columns={"gyro_w": "x"})

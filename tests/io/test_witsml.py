@@ -424,6 +424,7 @@ def _bad_station(**replace: str) -> list[str]:
         ),
         (document(root=f'trajectorys xmlns="{NS}" version="1.3.1.1"'), {}, "version '1.3.1.1'", 2),
         (document(_bad_station(inc="abc")), {}, "<incl> 'abc' is not a number", 8),
+        (document(_bad_station(azi="4_5")), {}, "<azi> '4_5' is not a number", 8),  # not 45
         (document(_bad_station(azi="-1e999")), {}, "<azi> '-1e999' is not a finite number", 8),
         (document(_bad_station(md="inf")), {}, "<md> 'inf' is not a finite number", 8),
         (document(_bad_station(md_uom="furlong")), {}, "uom 'furlong' is not supported", 8),

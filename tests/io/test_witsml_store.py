@@ -287,6 +287,18 @@ def test_a_sidetrack_tied_in_without_a_position_is_warned_of(tmp_path: Path):
     assert table["tvd"].iloc[0] == 299.5  # the survey stage checks its tie against this
 
 
+def test_a_parent_trajectory_naming_none_is_warned_of_as_such(tmp_path: Path):
+    """No text nor uidRef in its trajectoryReference: said so, not named 'None'."""
+    stations = [station(1, *SURVEY[1], kind="tie in point"), station(2, *SURVEY[2])]
+    head = "<parentTrajectory><trajectoryReference/></parentTrajectory>"
+    path = tmp_path / "store.xml"
+    path.write_text(store_document(stations, head=head, md_min=300.0))
+    with pytest.warns(InputFileWarning) as caught:
+        gp.read(path, kind="stations")
+    (told,) = [str(w.message) for w in caught if "parentTrajectory" in str(w.message)]
+    assert told.startswith(f"{path}:7: parentTrajectory (naming no trajectory by text or uidRef):")
+
+
 def test_the_station_types_are_the_schemas_closed_enumeration():
     enumeration = {e.value() for e in wml.TrajStationType._CF_enumeration.items()}
     kinds = (SURVEY_STATION_TYPES, MARKER_TYPES, TARGET_TYPES, PLAN_SECTION_TYPES)
@@ -354,3 +366,31 @@ def test_an_inclination_only_shot_is_never_azimuth_zero(tmp_path: Path):
     path.write_text(store_document(named))
     with pytest.warns(InputFileWarning, match="typeTrajStation 'inclination only'"):
         assert 330.0 not in gp.read(path, kind="stations")["md"].tolist()
+
+
+@pytest.mark.parametrize(
+    ("element", "second", "line"),
+    [  # each the schema allows once: the second contradicts the first, never silently read
+        ("statusTrajStation", "<statusTrajStation>rejected</statusTrajStation>", 16),
+        ("typeTrajStation", "<typeTrajStation>casing MD</typeTrajStation>", 16),
+        ("md", '<md uom="ft">330.0</md>', 16),
+        ("finalTraj", "<finalTraj>false</finalTraj>", 13),
+        ("itemState", "<itemState>plan</itemState>", 22),
+    ],
+)
+def test_an_element_the_schema_allows_once_is_refused_twice(
+    tmp_path: Path, element: str, second: str, line: int
+):
+    """Station 2's element (line 16), or the trajectory's: its flags (line 13), its
+    commonData's itemState (line 22: an actual one, then a plan's)."""
+    stations = surveyed(s2={"status": "position"})
+    end = f"</{element}>"
+    stations[2] = stations[2].replace(end, end + second, 1)
+    text = store_document(stations, flags="<finalTraj>true</finalTraj>")
+    if element in ("finalTraj", "itemState"):
+        text = text.replace(end, end + ("\n      " if element == "itemState" else "") + second)
+    path = tmp_path / "store.xml"
+    path.write_text(text)
+    with pytest.raises(InputFileError, match=f"<{element}> appears twice") as caught:
+        gp.read(path, kind="stations")
+    assert caught.value.line == line

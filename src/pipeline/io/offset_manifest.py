@@ -39,6 +39,7 @@ from pathlib import Path
 
 from pipeline.errors import InputFileError, UnitError
 from pipeline.io.nulls import is_null_marker
+from pipeline.io.numbers import file_number
 from pipeline.units import conversion_factor
 
 __all__ = ["ANGLES", "LENGTHS", "OffsetEntry", "read_offset_manifest"]
@@ -163,7 +164,7 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
                 numbers[name] = None
                 continue
             try:
-                number = float(raw)
+                number = file_number(raw)
             except ValueError:
                 raise InputFileError(path, f"{name}: not a number: {raw!r}", line, name) from None
             if is_null_marker(number, angle=name in ANGLES):  # in the file's unit: no value
@@ -173,7 +174,8 @@ def read_offset_manifest(path: Path, resolve: Callable[[str], str]) -> list[Offs
             if value != value or abs(value) == float("inf"):
                 raise InputFileError(path, f"{name}: not a finite number: {raw!r}", line, name)
             if name in ANGLES and abs(value) > 180.0:
-                raise InputFileError(path, f"{name}: {raw} is not within ±180°", line, name)
+                shown = raw if columns[name][1] == 1.0 else f"{raw} ({value:.6g}°)"
+                raise InputFileError(path, f"{name}: {shown} is not within ±180°", line, name)
             numbers[name] = value
         diameter = numbers["hole_diameter"]
         if diameter is None or diameter <= 0:

@@ -55,7 +55,7 @@ from pipeline.uncertainty.engine import (
     OutsideValidityError,
     find_model,
 )
-from pipeline.well import Latitude, WellMetadata, well_of
+from pipeline.well import AGREEING, Latitude, WellMetadata, well_of
 
 if TYPE_CHECKING:
     from pipeline.io.offset_manifest import OffsetEntry
@@ -166,11 +166,14 @@ def read_offsets(
     return {"wells": wells, "stations": stations}
 
 
-def _agreed(manifest: Path, entry: OffsetEntry, name: str, own: float | None) -> float | None:
-    """An offset well's correction ``name`` (deg): its file's (``own``) or the manifest's;
-    both given must agree."""
+def _agreed(
+    manifest: Path, entry: OffsetEntry, name: str, field: str, own: float | None
+) -> float | None:
+    """An offset well's correction ``name`` (deg; well ``field``): its file's (``own``) or
+    the manifest's; both given must agree, within :data:`~pipeline.well.AGREEING`'s spread
+    for ``field`` (the same 3° in rad and in deg)."""
     given: float | None = getattr(entry, name)
-    if given is not None and own is not None and given != own:
+    if given is not None and own is not None and abs(given - own) > AGREEING[field]:
         raise InputFileError(
             manifest,
             f"offset well {entry.well_id!r}: the manifest's {name} {given} contradicts the "
@@ -203,7 +206,7 @@ def _true_azimuths(
     own = header
     if column:  # magnetic or grid azimuths: the correction to true north they need
         stated = header.declination if north == "magnetic" else header.convergence_for("grid")
-        value = _agreed(manifest, entry, column, stated)
+        value = _agreed(manifest, entry, column, field, stated)
         own = header.merged({field: value}) if value is not None else header
     where = f"offset well {entry.well_id!r} ({entry.file.name})"
     try:

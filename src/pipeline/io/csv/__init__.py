@@ -237,7 +237,8 @@ class _Rows:
         return self._table(empty, np.empty(0, np.int64)).schema
 
     def tables(self) -> Iterator[pa.Table]:
-        """The table of each block of rows."""
+        """The table of each block of rows; rows all left out (:meth:`_measured`) are no
+        survey: refused at the station_type column once every block is read."""
         blocks = parse_blocks(
             self.path,
             self.rows,
@@ -247,9 +248,23 @@ class _Rows:
             self._blanks(),
             self.decimal,
         )
+        read = kept = 0
         for values, rows in blocks:
             lines = rows.source_lines(len(values[self.layout.required[0]]))
-            yield self._measured(self._table(self._without_markers(values, lines), lines))
+            table = self._table(self._without_markers(values, lines), lines)
+            measured = self._measured(table)
+            read, kept = read + table.num_rows, kept + measured.num_rows
+            yield measured
+        if read and not kept:
+            column = self.chosen["station_type"].text
+            raise InputFileError(
+                self.path,
+                f"no survey station: each of the {read} rows is left out, its {column!r} "
+                "naming a projection or an interpolation; the reader option stations: all "
+                "reads them",
+                self.header.index + 1,
+                column,
+            )
 
     def batches(self) -> Iterator[pa.RecordBatch]:
         for table in self.tables():

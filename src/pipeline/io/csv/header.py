@@ -386,7 +386,12 @@ def read_title(
             found[label] = (parsed, number)
     if "elevation" not in values and datums:
         values |= _datum_elevation(path, datums, values.get("depth_reference"))
-    return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+    try:
+        return WellMetadata(**{f: v for f, (v, _) in values.items()}), north
+    except ValidationError as exc:  # each field was read alone: the survey dates' order
+        (error,) = exc.errors()
+        last = values["survey_date_last"][1]
+        raise InputFileError(path, str(error["ctx"]["error"]), line=last) from None
 
 
 def _datum(words: list[str]) -> str | None:
@@ -464,8 +469,8 @@ def _well_value(
     """The validated value of one well field; a number may carry a unit for UNIT_FIELDS,
     after it or ``unit`` (the key's, in brackets), which must agree (without one:
     :data:`UNIT_FIELDS`; ``lengths`` None: a ``well.<field>`` key, in m), None for a null
-    marker (:mod:`pipeline.io.nulls`, in its unit); the survey date is read as a LAS DATE is
-    (:func:`pipeline.io.dates.header_date`)."""
+    marker (:mod:`pipeline.io.nulls`, in its unit); the survey dates are read as a LAS DATE
+    is (:func:`pipeline.io.dates.header_date`)."""
     parsed: Any = value
     quantity = UNIT_FIELDS.get(field)
     try:
@@ -476,7 +481,7 @@ def _well_value(
         if quantity and number:
             scale = _scale(field, plain, quantity, [u for u in (unit, number[2]) if u], lengths)
             parsed = sign * float(number[1]) * scale
-        elif field == "survey_date":
+        elif field in ("survey_date", "survey_date_last"):
             parsed = header_date(value)
         return getattr(WellMetadata.model_validate({field: parsed}), field)
     except (ValueError, UnitError) as exc:  # pydantic's ValidationError is a ValueError

@@ -45,6 +45,7 @@ from pydantic import ValidationError
 
 from pipeline import jsontext
 from pipeline.contracts import UNIT_KEY
+from pipeline.errors import ParameterError
 from pipeline.io.mcap.crc import DataSection
 from pipeline.io.mcap.records import (
     McapFile,
@@ -263,6 +264,8 @@ def read_well(file: McapFile) -> WellMetadata:
         except ValidationError as exc:
             problem = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
             raise file.fail(f"metadata record {WELL_RECORD} at byte {offset}: {problem}") from None
+        except ParameterError as exc:  # its survey dates and an earlier record's out of order
+            raise file.fail(f"metadata record {WELL_RECORD} at byte {offset}: {exc}") from None
     return well
 
 

@@ -73,9 +73,10 @@ def check_tie_in(path: Path, traj: Node, first: dict[str, Any]) -> None:
     reference = parent.get("trajectoryReference")
     uid = reference.attrs.get("uidRef") if reference is not None else None
     name = parent.text_of("trajectoryReference") or uid
+    named = repr(name) if name else "(naming no trajectory by text or uidRef)"
     warn_input(
         path,
-        f"parentTrajectory {name!r}: the trajectory is tied into another, but its first "
+        f"parentTrajectory {named}: the trajectory is tied into another, but its first "
         f"station, at md {first['md']!r} m (line {first[SOURCE_LINE]}), lists no tvd, dispNs "
         "and dispEw: it lies where the parent's stations put it, not below a vertical hole "
         "(give the survey stage its tie_tvd, tie_north and tie_east)",

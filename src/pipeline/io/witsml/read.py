@@ -17,10 +17,11 @@ from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
+from pipeline.io.numbers import file_number
 from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
-from pipeline.io.witsml.tree import Node, parse
+from pipeline.io.witsml.tree import Node, RepeatedElement, parse
 from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
 from pipeline.well import (
     DATUM_WORDS,
@@ -103,6 +104,14 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
     if kind != "stations":
         raise ValueError(f"the witsml reader reads kind 'stations', not {kind!r}")
     opts: WitsmlOptions = options or WitsmlOptions()
+    try:
+        return _read(path, opts)
+    except RepeatedElement as exc:
+        raise InputFileError(path, str(exc), line=exc.line) from None
+
+
+def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
+    """:func:`read_witsml`'s table and well metadata."""
     root = parse(path)
     if root.name != "trajectorys" or root.namespace != NS:
         raise InputFileError(
@@ -391,7 +400,7 @@ def _measure(path: Path, node: Node, quantity: str) -> float | None:
     if not uom:
         raise InputFileError(path, f"<{node.name}> has no uom", line=node.line, column=node.name)
     try:
-        value = float(node.text.strip())
+        value = file_number(node.text.strip())
     except ValueError:
         raise InputFileError(
             path,

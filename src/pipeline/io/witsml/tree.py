@@ -31,7 +31,11 @@ class Node:
         return [c for c in self.children if c.name == name and c.namespace == NS]
 
     def get(self, name: str) -> Node | None:
+        """The child of this local name (None: none); :class:`RepeatedElement`: several (each
+        element read by name is one the schema allows once in its parent)."""
         found = self.all(name)
+        if len(found) > 1:
+            raise RepeatedElement(self, found[1])
         return found[0] if found else None
 
     def text_of(self, name: str) -> str | None:
@@ -39,6 +43,18 @@ class Node:
         or no text)."""
         child = self.get(name)
         return " ".join(child.text.split()) or None if child is not None else None
+
+
+class RepeatedElement(Exception):
+    """A second child of a name the schema allows once: which one the file means is unknown
+    (``line``: the second's)."""
+
+    def __init__(self, parent: Node, second: Node) -> None:
+        super().__init__(
+            f"<{second.name}> appears twice in <{parent.name}> (line {parent.line}): WITSML "
+            "1.4.1.1 allows one, and which the file means is unknown"
+        )
+        self.line = second.line
 
 
 class _Refused(Exception):
