@@ -6,13 +6,13 @@ The ``drift_tables`` reader reads three kinds — ``calibration``
 (:class:`~pipeline.tables.FreeGyroReadings`) — from Parquet (as gyropipe writes it, units in
 the schema) or from CSV in the layout gyropipe's CSV writer produces: optional ``#`` lines
 above the header (``# well.<field>=<value>`` fill the well metadata, ``# north_reference=``
-names the azimuths' north), a header of column names with units in brackets or parentheses
-(``time[min]``, ``set_azimuth (deg)``; any unit :mod:`pipeline.units` converts), then the
-rows. Columns the contract does not know are ignored; numeric columns need a unit; an
-empty cell or a null marker (:mod:`pipeline.io.nulls`: ``-999.25``…) is a null. The
-stages ``read_calibration``, ``read_calibration_result`` and ``read_free_gyro``
-(:mod:`pipeline.stages.drift`) read a pipeline input through it (one stage per kind, because
-a stage's output contract is fixed).
+names the azimuths' north, the well's north reference too), a header of column names with
+units in brackets or parentheses (``time[min]``, ``set_azimuth (deg)``; any unit
+:mod:`pipeline.units` converts), then the rows. Columns the contract does not know are
+ignored; numeric columns need a unit; an empty cell or a null marker
+(:mod:`pipeline.io.nulls`: ``-999.25``…) is a null. The stages ``read_calibration``,
+``read_calibration_result`` and ``read_free_gyro`` (:mod:`pipeline.stages.drift`) read a
+pipeline input through it (one stage per kind, because a stage's output contract is fixed).
 """
 
 from __future__ import annotations
