@@ -20,7 +20,7 @@ from pipeline.drift.correction import (
     correct_survey,
 )
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileWarning
 from pipeline.graph import build_plan
 from pipeline.io import drift_tables
 from pipeline.io.csv import write_csv
@@ -372,6 +372,7 @@ def test_a_readings_csv_naming_its_north_is_the_runs_well_north(tmp_path: Path):
     assert result.returncode == 0, result.stderr
     assert json.loads((out / "run.json").read_text())["well"]["north_reference"] == "grid"
     both = "# north_reference=grid\n# well.north_reference=true\n"
-    path.write_text(text.replace("# north_reference=true\n", both))  # refused: which is it?
-    with pytest.raises(InputFileError, match=r"well\.north_reference 'true' contradicts"):
-        drift_tables.read_drift_table(path, "free_gyro", None)
+    path.write_text(text.replace("# north_reference=true\n", both))  # the azimuths' wins
+    with pytest.warns(InputFileWarning, match=r"well\.north_reference 'true' contradicts"):
+        _, well = drift_tables.read_drift_table(path, "free_gyro", None)
+    assert well.north_reference == "grid"

@@ -3,6 +3,7 @@ reader crash."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -10,13 +11,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.errors import InputFileError
+from pipeline.errors import InputFileError, InputFileWarning
 from pipeline.io import parquet as parquet_plugin
 from pipeline.plugins import load_registry
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import Stations
 from pipeline.well import WELL_KEY, WellMetadata, attach
-from tests_support import plugin_io
+from tests_support import ROOT, gyropipe_cli, plugin_io
 
 READER, WRITER = plugin_io(parquet_plugin)
 
@@ -58,7 +59,8 @@ def test_unreadable_well_metadata_is_the_files_fault(tmp_path: Path, stored: byt
 
 def test_a_readable_file_keeps_its_well(tmp_path: Path):
     table, well = load_registry().read(stations(tmp_path), "stations")
-    assert well == WellMetadata(well="P-1") and table.num_rows == 2
+    # the azimuths' north is the well's
+    assert well == WellMetadata(well="P-1", north_reference="true") and table.num_rows == 2
 
 
 def test_an_unreadable_file_is_one_line(tmp_path: Path):
@@ -162,4 +164,27 @@ def test_a_stream_gives_the_files_rows_read_whole_or_through_a_buffer(
         monkeypatch.setattr(parquet_plugin, "READ_WHOLE", 1000)  # < a row group's bytes
     stream, well = READER.stream(path, "stations", None)
     read = pa.Table.from_batches(list(stream), schema=stream.schema)
-    assert read.equals(table, check_metadata=True) and well == WellMetadata(well="P-1")
+    assert read.equals(table, check_metadata=True)
+    assert well == WellMetadata(well="P-1", north_reference="true")
+
+
+def test_the_north_the_azimuth_column_names_is_the_wells(tmp_path: Path) -> None:
+    # azimuths naming grid beside well metadata naming none (or true) read as a well of
+    # survey.yaml's true north: run.json and trajectory.csv stated true beside grid azimuths
+    table = Stations.compiled().make_table(
+        {"md": [0.0, 30.0], "inc": [0.0, 1.0], "azi": [0.0, 10.0]}, north_reference="grid"
+    )
+    path = tmp_path / "grid.parquet"
+    pq.write_table(attach(table, WellMetadata(well="P-1")), path)
+    assert READER.read(path, "stations", None)[1].north_reference == "grid"
+    out = tmp_path / "out"
+    survey = ROOT / "pipelines" / "survey.yaml"
+    result = gyropipe_cli(
+        "run", survey, "--input", path, "--out", out, "--set", "report.formats=[html]"
+    )
+    assert result.returncode == 0, result.stderr
+    assert json.loads((out / "run.json").read_text())["well"]["north_reference"] == "grid"
+    assert "# well.north_reference=grid\n" in (out / "trajectory.csv").read_text()
+    pq.write_table(attach(table, WellMetadata(well="P-1", north_reference="true")), path)
+    with pytest.warns(InputFileWarning, match="well.north_reference 'true' contradicts"):
+        assert READER.read(path, "stations", None)[1].north_reference == "grid"

@@ -2,8 +2,8 @@
 listings a real job brings (a grid listing with its convergence, a magnetic one corrected
 to true north by its declination, depths and datum elevation in ft in the southern and
 western hemispheres tied on below surface, a listing whose own positions disagree, a
-sidetrack listed beside its main bore), each run once, every deliverable read back and
-compared (:mod:`agreement_support`)."""
+sidetrack listed beside its main bore, grid stations in Parquet whose well names no north),
+each run once, every deliverable read back and compared (:mod:`agreement_support`)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import subprocess
 from collections.abc import Callable
 from pathlib import Path
 
+import pyarrow.parquet as pq
 import pytest
 import yaml
 from agreement_support import (
@@ -74,6 +75,17 @@ def sidetrack(directory: Path) -> Path:
     path = directory / "sidetrack.csv"
     title = "\n".join(lines[:start])
     path.write_text(f"{title}\n{lines[start]},Survey\n" + "\n".join(main + turned) + "\n")
+    return path
+
+
+def without_north(directory: Path, run: Path) -> Path:
+    """A run's persisted trajectory as stations whose well metadata names no north (their
+    azimuth column's names it)."""
+    table = pq.read_table(run / "trajectory.trajectory.parquet").select(["md", "inc", "azi"])
+    well = json.loads(table.schema.metadata[b"gyropipe.well"])
+    del well["north_reference"]
+    path = directory / "no-well-north.parquet"
+    pq.write_table(table.replace_schema_metadata({b"gyropipe.well": json.dumps(well)}), path)
     return path
 
 
@@ -145,6 +157,7 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
         ),
         "positions": lambda: survey("positions", own_positions(tmp, done["survey"])),
         "sidetrack": lambda: survey("sidetrack", sidetrack(tmp)),
+        "grid-parquet": lambda: survey("grid-parquet", without_north(tmp, get("grid"))),
     }
 
     def get(name: str) -> Path:
@@ -167,6 +180,7 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
         ("ft-south-west", "trajectory.trajectory.parquet"),
         ("positions", "trajectory.trajectory.parquet"),
         ("sidetrack", "trajectory.trajectory.parquet"),
+        ("grid-parquet", "trajectory.trajectory.parquet"),
     ],
 )
 def test_every_deliverable_of_a_run_says_the_same(

@@ -6,13 +6,13 @@ The ``drift_tables`` reader reads three kinds — ``calibration``
 (:class:`~pipeline.tables.FreeGyroReadings`) — from Parquet (as gyropipe writes it, units in
 the schema) or from CSV in the layout gyropipe's CSV writer produces: optional ``#`` lines
 above the header (``# well.<field>=<value>`` fill the well metadata, ``# north_reference=``
-names the azimuths' north), a header of column names with units in brackets or parentheses
-(``time[min]``, ``set_azimuth (deg)``; any unit :mod:`pipeline.units` converts), then the
-rows. Columns the contract does not know are ignored; numeric columns need a unit; an
-empty cell or a null marker (:mod:`pipeline.io.nulls`: ``-999.25``…) is a null. The
-stages ``read_calibration``, ``read_calibration_result`` and ``read_free_gyro``
-(:mod:`pipeline.stages.drift`) read a pipeline input through it (one stage per kind, because
-a stage's output contract is fixed).
+names the azimuths' north, the well's north reference too), a header of column names with
+units in brackets or parentheses (``time[min]``, ``set_azimuth (deg)``; any unit
+:mod:`pipeline.units` converts), then the rows. Columns the contract does not know are
+ignored; numeric columns need a unit; an empty cell or a null marker
+(:mod:`pipeline.io.nulls`: ``-999.25``…) is a null. The stages ``read_calibration``,
+``read_calibration_result`` and ``read_free_gyro`` (:mod:`pipeline.stages.drift`) read a
+pipeline input through it (one stage per kind, because a stage's output contract is fixed).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from pipeline.drift.tables import CalibrationReadings, CalibrationResult
 from pipeline.errors import InputFileError, UnitError
 from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
+from pipeline.io.north import stated_north
 from pipeline.io.nulls import is_null_marker
 from pipeline.registry import Claim, ReaderDef
 from pipeline.tables import FreeGyroReadings
@@ -67,22 +68,7 @@ def read_drift_table(path: Path, kind: str, options: Any) -> tuple[pa.Table, Wel
         return parquet.read(path, kind, options)
     default = options.default_north_reference if options is not None else None
     table, well, stated = _read_csv(path, contract, default)
-    return table, _stated_north(path, well, stated)
-
-
-def _stated_north(path: Path, well: WellMetadata, stated: NorthReference | None) -> WellMetadata:
-    """The well metadata with the north the file names for its azimuths (a
-    ``# north_reference=`` line) as its north reference, as the CSV stations reader and
-    LAS's NREF state it; a ``# well.north_reference=`` line naming another is an error."""
-    if stated is None or well.north_reference == stated:
-        return well
-    if well.north_reference is not None:
-        raise InputFileError(
-            path,
-            f"well.north_reference {well.north_reference!r} contradicts the azimuths' "
-            f"{stated} north (# north_reference={stated}): the azimuths' is the well's",
-        )
-    return well.merged({"north_reference": stated})
+    return table, stated_north(path, well, stated)
 
 
 def sniff(path: Path) -> Claim:

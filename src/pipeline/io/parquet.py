@@ -1,6 +1,7 @@
 """Built-in plugin: Parquet reader (tables gyropipe wrote) and writer.
 
-Parquet keeps the Arrow schema, so units, north references and well metadata round-trip.
+Parquet keeps the Arrow schema, so units, north references and well metadata round-trip;
+the north the ``azi`` column names is the well's north reference the reader returns.
 Both stream: the reader reads a row group at a time (:func:`stream`), the writer writes a
 row group per batch (:func:`write_stream`).
 
@@ -25,14 +26,15 @@ import pyarrow.parquet as pq
 from pydantic import ValidationError
 
 from pipeline import jsontext
-from pipeline.contracts import TableContract
+from pipeline.contracts import NORTH_KEY, TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
+from pipeline.io.north import stated_north
 from pipeline.io.threads import reader_threads
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
-from pipeline.well import WELL_KEY, WellMetadata, well_of
+from pipeline.well import NORTH_WORDS, WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
 READ_BUFFER = 1 << 20
@@ -190,10 +192,14 @@ def _check_names(path: Path, schema: pa.Schema) -> None:
 
 
 def _well(path: Path, schema: pa.Schema) -> WellMetadata:
-    """The well metadata stored in the table's schema (none: empty); metadata that is not
-    a JSON object of well fields is the file's fault."""
+    """The well metadata stored in the table's schema (none: empty), with the north its
+    ``azi`` column names as its north reference (:func:`~pipeline.io.north.stated_north`);
+    metadata that is not a JSON object of well fields is the file's fault."""
     try:
-        return well_of(schema) or WellMetadata()
+        well = well_of(schema) or WellMetadata()
+        azi = (schema.field("azi").metadata or {}) if "azi" in schema.names else {}
+        stated = NORTH_WORDS.get(azi.get(NORTH_KEY, b"").decode(errors="replace"))
+        return stated_north(path, well, stated)
     except ValidationError as exc:
         problems = "; ".join(
             f"{'.'.join(map(str, e['loc'])) or 'value'}: {e['msg']}" for e in exc.errors()
