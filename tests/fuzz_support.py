@@ -315,6 +315,60 @@ STATIONS_PLAN = (
 )
 
 
+STORE_TRAJECTORY = b"""<?xml version="1.0" encoding="UTF-8"?>
+<trajectorys xmlns="http://www.witsml.org/schemas/1series" version="1.4.1.1">
+  <trajectory uidWell="W-58" uidWellbore="W-58-1" uid="TRJ-7">
+    <nameWell>58/1-A1</nameWell><nameWellbore>58/1-A1</nameWellbore><name>Gyro 0-360 m</name>
+    <objectGrowing>true</objectGrowing>
+    <parentTrajectory><trajectoryReference uidRef="TRJ-1">Main bore</trajectoryReference>
+    </parentTrajectory>
+    <dTimTrajStart>2026-03-02T08:00:00Z</dTimTrajStart>
+    <mdMn uom="m">0</mdMn><mdMx uom="m">390</mdMx>
+    <magDeclUsed uom="dega">0</magDeclUsed>
+    <finalTraj>false</finalTraj><aziRef>true north</aziRef>
+    <trajectoryStation uid="s0"><typeTrajStation>tie in point</typeTrajStation>
+      <md uom="m">0</md><incl uom="dega">0</incl><azi uom="dega">0</azi></trajectoryStation>
+    <trajectoryStation uid="s1"><typeTrajStation>gyro north seeking</typeTrajStation>
+      <typeSurveyTool>gyroscopic north seeking</typeSurveyTool><md uom="m">300</md>
+      <incl uom="dega">0.5</incl><azi uom="dega">45</azi>
+      <statusTrajStation>position</statusTrajStation></trajectoryStation>
+    <trajectoryStation uid="s2"><typeTrajStation>gyro north seeking</typeTrajStation>
+      <md uom="m">330</md><incl uom="dega">1.5</incl><azi uom="dega">45</azi>
+      <statusTrajStation>rejected</statusTrajStation></trajectoryStation>
+    <trajectoryStation uid="s3"><typeTrajStation>casing MD</typeTrajStation>
+      <md uom="m">340</md><incl uom="dega">1.8</incl><azi uom="dega">45</azi></trajectoryStation>
+    <trajectoryStation uid="s4"><typeTrajStation>gyro north seeking</typeTrajStation>
+      <md uom="m">360</md><incl uom="dega">3</incl><azi uom="dega">45</azi>
+      <commonData><itemState>actual</itemState></commonData></trajectoryStation>
+    <trajectoryStation uid="s5"><typeTrajStation>gyro north seeking</typeTrajStation>
+      <md uom="m">390</md><incl uom="dega">4</incl><azi uom="dega">46</azi>
+      <commonData><itemState>plan</itemState></commonData></trajectoryStation>
+    <commonData><sourceName>Store A</sourceName><itemState>actual</itemState></commonData>
+  </trajectory>
+</trajectorys>
+"""
+"""A store's answer: a sidetrack's growing, preliminary trajectory (its tie-in listing no
+position: warned of) whose stations the store marks validated, rejected, a marker, actual
+and planned."""
+LISTING = b"""Company: Example Operator
+Well: 58/1-A1
+Survey Date: 2026-03-02
+well.survey_date_last: 2026-03-04
+North Reference: grid
+Grid Convergence: 0.75
+
+MD (m),Inc (deg),Azi (deg),TVD (m),Survey Type
+0.00,0.00,0.00,0.00,Tie-In
+300.00,0.00,0.00,300.00,Gyro NS
+330.00,1.50,45.00,329.99,Gyro NS
+345.00,2.20,45.00,344.97,Interpolated
+360.00,3.00,45.00,359.94,Gyro NS
+380.00,4.00,45.00,379.88,Projection to TD
+"""
+"""A vendor's listing whose Survey Type column names its tie-in, an interpolation and the
+projection to TD, its north grid, its survey two days."""
+
+
 INPUT_KIND_NAMES = (
     "las-stations",
     "las-samples",
@@ -385,6 +439,7 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             (
                 Seed("example", stations_csv),
                 Seed("sim", _written(registry, "csv", stations, work, "s.csv")),
+                Seed("listing", LISTING),
             ),
         ),
         InputKind(
@@ -428,7 +483,10 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             ".xml",
             "text",
             "stations",
-            (Seed("sim", _written(registry, "witsml", stations, work, "s.xml")),),
+            (
+                Seed("sim", _written(registry, "witsml", stations, work, "s.xml")),
+                Seed("store", STORE_TRAJECTORY),
+            ),
         ),
         InputKind(
             "pipeline",

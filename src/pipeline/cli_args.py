@@ -5,11 +5,13 @@ reader options and ``--well FIELD=VALUE`` header overrides, each refused with a
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import click
 
 from pipeline.errors import SpecError, did_you_mean
+
+T = TypeVar("T")
 
 if TYPE_CHECKING:
     from pipeline.graph import Plan
@@ -30,15 +32,27 @@ def reader_options(items: tuple[str, ...]) -> dict[str, object]:
     from pipeline.yamlsource import load_value
 
     values: dict[str, object] = {}
+    given: dict[str, str] = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise click.BadParameter(f"--option {item!r}: expected KEY=VALUE")
         try:
-            values[key.strip()] = load_value(value, f"--option {item}")
+            parsed = load_value(value, f"--option {item}")
         except SpecError as exc:
             raise click.BadParameter("; ".join(map(str, exc.problems))) from None
+        _once("--option", key.strip(), parsed, values, given, item)
     return values
+
+
+def _once(
+    flag: str, key: str, value: T, values: dict[str, T], given: dict[str, str], item: str
+) -> None:
+    """``values[key] = value``, refused when ``key`` was given before with another value
+    (``given``: each key's item, for the message)."""
+    if key in values and values[key] != value:
+        raise click.BadParameter(f"{flag} {item}: {key} given twice (also {flag} {given[key]})")
+    values[key], given[key] = value, item
 
 
 def input_files(plan: Plan, items: tuple[str, ...]) -> dict[str, Path]:
@@ -75,8 +89,8 @@ def well_overrides(items: tuple[str, ...]) -> WellMetadata:
         key, sep, value = item.partition("=")
         if not sep:
             raise click.BadParameter(f"--well {item!r}: expected FIELD=VALUE")
-        values[key.strip()] = value.strip() or None  # pydantic converts text to the field type
-        given[key.strip()] = item
+        # pydantic converts text to the field type
+        _once("--well", key.strip(), value.strip() or None, values, given, item)
     try:
         return WellMetadata.model_validate(values)
     except ValidationError as exc:

@@ -31,6 +31,11 @@ def run(tmp_path: Path, *extra: str) -> CliResult:
             ["north_reference=tru"],
             "error: --well north_reference=tru: input should be 'true', 'grid' or 'magnetic'",
         ),
+        (  # contradictory: was the last, silently
+            ["survey_date=2026-03-02", "survey_date=2026-03-05"],
+            "error: --well survey_date=2026-03-05: survey_date given twice (also "
+            "--well survey_date=2026-03-02)",
+        ),
     ],
 )
 def test_well_overrides(tmp_path: Path, items: list[str], expected: str) -> None:
@@ -39,6 +44,17 @@ def test_well_overrides(tmp_path: Path, items: list[str], expected: str) -> None
     assert result.stderr.startswith(expected), result.stderr
     assert "pydantic" not in result.stderr and "https://" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_reader_option_given_twice_is_refused(tmp_path: Path) -> None:
+    args = ["--option", "stations=all", "--option", "stations=survey"]
+    result = gyropipe_cli("convert", SAMPLE, *args, "--out", tmp_path / "o.csv")
+    assert result.returncode == 2 and not (tmp_path / "o.csv").exists()
+    assert "--option stations=survey: stations given twice (also --option stations=all)" in (
+        result.stderr
+    )
+    same = ["--option", "stations=all", "--option", "stations=all"]  # one value: no conflict
+    gyropipe_cli("convert", SAMPLE, *same, "--out", tmp_path / "o.csv", check=True)
 
 
 TINY = {

@@ -200,6 +200,23 @@ def test_a_plan_is_not_read_as_a_survey(tmp_path: Path, state: str):
     assert plan["md"].tolist() == [s[0] for s in SURVEY]
 
 
+def test_a_plan_beside_the_survey_names_the_trajectory_to_read(tmp_path: Path):
+    """A store's answer holding the survey and its plan: refused at the plan, naming the
+    survey by the option ``trajectory`` (stations: all would read the plan's stations as a
+    second survey)."""
+    survey = store_document(surveyed())
+    plan = store_document(surveyed(), state="plan").replace('uid="TRJ-0007"', 'uid="PLAN-3"')
+    second = plan.split('version="1.4.1.1">\n', 1)[1]
+    path = tmp_path / "store.xml"
+    path.write_text(survey.replace("</trajectorys>\n", second))
+    with pytest.raises(InputFileError, match="itemState 'plan'") as caught:
+        gp.read(path, kind="stations")
+    assert "the option trajectory: 'TRJ-0007' reads the file's other alone" in str(caught.value)
+    assert gp.read(path, kind="stations", trajectory="TRJ-0007")["md"].tolist() == [
+        s[0] for s in SURVEY
+    ]
+
+
 def test_the_cli_refuses_a_plan_given_as_the_survey(tmp_path: Path):
     stations = surveyed()
     path = put(tmp_path, store_document(stations, state="plan"))

@@ -10,8 +10,9 @@ Kinds read (``read(path, kind, options)``):
   column), and ``source_line``. A row whose ``station_type`` names a projection or an
   interpolation (:data:`NOT_MEASURED`: ``Projection to TD``, ``PTB``, ``Interpolated``…) is
   no survey station: left out with a warning at its line naming its md (the option
-  ``stations: all`` reads it); a tie-in row (``Tie-In``, ``Tie On``) is the survey's first
-  station and read. A file without such a column says nothing of its rows: each is read;
+  ``stations: all`` reads it; every row left out: refused at the column); a tie-in row
+  (``Tie-In``, ``Tie On``) is the survey's first station and read. A file without such a
+  column says nothing of its rows: each is read;
 * ``samples`` → :class:`~pipeline.tables.RawSamples`: time (s) and the gyro (deg/h),
   accelerometer (m/s²) and optional magnetometer (nT) triads, optional md (m),
   frame_angle (deg), station and position (integers), and ``source_line``; empty cells of

@@ -73,8 +73,10 @@ needs the declination or field given; reports state the range; on magnetic-north
 with no declination stated, whose declination follows from the date, trajectories started on
 different days, or one undated beside a dated one, are refused at the line: read one at a
 time; of other azimuths, an undated one beside a dated one is warned of), and the tool: the
-first station's ``typeSurveyTool`` naming one (a tie-in point names none). Every problem is
-an :class:`~pipeline.errors.InputFileError` naming the file and the element's line.
+first station's ``typeSurveyTool`` naming one (a tie-in point names none). An element the
+schema allows once in its parent (a station's ``md``, ``statusTrajStation``, a trajectory's
+``commonData``…) given twice is refused at the second. Every problem is an
+:class:`~pipeline.errors.InputFileError` naming the file and the element's line.
 
 What a store says of its trajectories and stations decides which are a survey's (reader
 option ``stations``: ``survey``, the default; ``all`` reads every trajectory and station as

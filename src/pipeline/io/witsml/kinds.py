@@ -33,16 +33,20 @@ _BOOLEAN = {"true": True, "1": True, "false": False, "0": False}
 """``xs:boolean`` text."""
 
 
-def check_trajectory(path: Path, traj: Node, stations: str) -> None:
+def check_trajectory(path: Path, traj: Node, stations: str, others: list[str]) -> None:
     """Refuse (``stations: survey``) a trajectory whose ``commonData/itemState`` is ``plan``
-    or ``model``; warn of one the store marks preliminary (``finalTraj`` false) or still
-    growing (``objectGrowing`` true: stations deeper than its last may follow)."""
+    or ``model``, naming the ``others`` of the file (uids, else names) the option
+    ``trajectory`` reads alone; warn of one the store marks preliminary (``finalTraj``
+    false) or still growing (``objectGrowing`` true: stations deeper than its last may
+    follow)."""
     state = _item_state(path, traj)
     if state is not None and state[0] in NOT_ACTUAL and stations == "survey":
+        named = " or ".join(map(repr, others))
+        alone = f"the option trajectory: {named} reads the file's other alone, " if others else ""
         raise InputFileError(
             path,
             f"commonData/itemState {state[0]!r}: the trajectory is {NOT_ACTUAL[state[0]]}, "
-            "not a survey; the reader option stations: all reads its stations",
+            f"not a survey; {alone}the reader option stations: all reads its stations",
             line=state[1].line,
             column="itemState",
         )

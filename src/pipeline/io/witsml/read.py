@@ -137,7 +137,8 @@ def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
         nodes = traj.all("trajectoryStation")
         if not nodes:
             raise InputFileError(path, "trajectory has no trajectoryStation", line=traj.line)
-        check_trajectory(path, traj, opts.stations)
+        others = [t.attrs.get("uid") or t.text_of("name") for t in trajectories if t is not traj]
+        check_trajectory(path, traj, opts.stations, [o for o in others if o])
         reasons = [left_out(node) if opts.stations == "survey" else None for node in nodes]
         nodes, rows, dropped = _survey_stations(path, traj, nodes, reasons, opts)
         _tvd_of_md_datum(path, nodes, rows)
