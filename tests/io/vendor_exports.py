@@ -122,11 +122,19 @@ def witsml(
     return path
 
 
-def survey_pipeline(directory: Path, *stages: dict[str, object], report: bool = False) -> Path:
+def survey_pipeline(
+    directory: Path, *stages: dict[str, object], report: bool = False, las: bool = True
+) -> Path:
     """``pipelines/survey.yaml`` with ``stages`` inserted after ``read`` (the first takes
-    ``read.stations``, the trajectory the last one's), without its report unless ``report``."""
+    ``read.stations``, the trajectory the last one's), without its report unless ``report``,
+    without its LAS export unless ``las`` (a LAS file is one path: the writer refuses
+    surveys whose depths run back, a re-survey from surface)."""
     spec = yaml.safe_load((ROOT / "pipelines" / "survey.yaml").read_text())
-    kept = [s for s in spec["stages"] if report or s["uses"] != "report"]
+    kept = [
+        s
+        for s in spec["stages"]
+        if (report or s["uses"] != "report") and (las or s["id"] != "export_las")
+    ]
     source = "read.stations"
     added = []
     for stage in stages:

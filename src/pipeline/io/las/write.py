@@ -18,7 +18,9 @@ the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field
 shortest round-trip form). The first (index) column is ``md``
 for a stations-like table (md, inc and azi present), else ``time`` (raw samples dwell at one
 depth: only their time increases), else ``md``, else the first numeric column (a log's
-index). NULL is -999.25; NaN is written as NULL, and a value that is a null marker of
+index); an index that turns back (a trajectory of several surveys: a sidetrack beside its
+main bore, a re-survey from surface) is refused — a LAS file is one log along one path.
+NULL is -999.25; NaN is written as NULL, and a value that is a null marker of
 :mod:`pipeline.io.nulls` (-999.25, -9999.25; ±999.25… in an angle) is refused: every reader
 would read it back as no value. Text columns are written as text (in double quotes when a
 value holds a space, as lasio and gyropipe read them; a null as NULL), except a column the
@@ -83,6 +85,7 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
     values = {f.name: _writable(table.column(f.name), f.name) for f in written}
     if values[index].null_count:
         raise ValueError(f"index column {index!r} has missing values")
+    _one_path(table, index, values[index])
     refuse_null_markers(values)
     null = NULL
     north = _written_north(numeric, well)
@@ -106,6 +109,28 @@ def write_las(table: pa.Table, path: Path, well: WellMetadata) -> None:
         ]
         lines = pc.binary_join_element_wise(*cells, " ").to_pylist()
         fh.write("".join(f"{line}\n" for line in lines).encode())
+
+
+def _one_path(table: pa.Table, index: str, values: pa.ChunkedArray) -> None:
+    """Refuse an index that turns back (up a log logged down, or down one logged up): a LAS
+    file is one log along one path, and one of a trajectory of several surveys (a sidetrack
+    beside its main bore, a re-survey from surface) would read as one path whose depth goes
+    back (the survey column is not written)."""
+    x = values.to_numpy(zero_copy_only=False)
+    steps = (x[1:] > x[:-1]).astype(np.int8) - (x[1:] < x[:-1])  # no overflow of 1e308 steps
+    moving = steps[steps != 0]
+    back = np.flatnonzero(steps == -moving[0]) if moving.size else moving
+    if not back.size:
+        return
+    row = int(back[0]) + 1
+    where = f"{index} runs back from {x[row - 1]:g} to {x[row]:g} at row {row}"
+    if "survey" in table.column_names:
+        surveys = table.column("survey").to_pylist()
+        where += f" (survey {surveys[row - 1]!r} to {surveys[row]!r})"
+    raise ValueError(
+        f"{where}: a LAS file is one log along one path; write each survey on its own, or "
+        "as CSV, WITSML or Parquet, which keep the survey column"
+    )
 
 
 def _writable_type(f: pa.Field) -> bool:
