@@ -287,3 +287,26 @@ def test_a_null_marker_reading_is_no_reading(tmp_path: Path, marker: str):
     assert readings["measured_azimuth"].isna().tolist()[:3] == [False, True, False]
     with pytest.raises(GyropipeError, match="row 1: give azimuth_error or measured_azimuth"):
         gp.calibrate_drift(readings)  # once fitted with a measured azimuth of -999.25°
+
+
+@pytest.mark.parametrize(("cell", "replaced"), [("27.8", "2_7.8"), ("1,30", "1_0,30")])
+def test_digit_grouping_is_no_number_in_a_calibration_file(
+    tmp_path: Path, cell: str, replaced: str
+) -> None:
+    """Python's float and int read '2_7.8' as 27.8 and '1_0' as 10; no export writes one: a
+    mistyped cell, refused at its line and column."""
+    from tests_support import gyropipe_cli
+
+    source = ROOT / "examples" / "calibration-ig50.csv"
+    lines = source.read_text().splitlines()
+    row = next(i for i, line in enumerate(lines) if line.startswith("1,30,"))
+    lines[row] = lines[row].replace(cell, replaced, 1)
+    bad = tmp_path / "calibration.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    pipeline = ROOT / "pipelines" / "calibration.yaml"
+    result = gyropipe_cli("run", pipeline, "--input", bad, "--out", tmp_path / "out")
+    assert result.returncode != 0 and not (tmp_path / "out").exists()
+    assert (
+        f"{bad}:{row + 1}" in result.stderr
+        and f"not a number: {replaced.split(',')[0]!r}" in result.stderr
+    )

@@ -34,6 +34,7 @@ from pipeline.hookspecs import hookimpl
 from pipeline.io import parquet
 from pipeline.io.north import stated_north
 from pipeline.io.nulls import is_null_marker
+from pipeline.io.numbers import file_integer, file_number
 from pipeline.registry import Claim, ReaderDef
 from pipeline.tables import FreeGyroReadings
 from pipeline.units import QUANTITIES, conversion_factor
@@ -185,7 +186,7 @@ def _value(path: Path, spec: ColumnSpec, cell: str, factor: float, line: int) ->
         return None
     try:
         if pa.types.is_floating(spec.type):
-            number = float(text)
+            number = file_number(text)
             angle = QUANTITY_OF.get(spec.unit or "") in ("angle", "dogleg_severity")
             if is_null_marker(number, angle=angle):  # in the file's unit: no value
                 return None
@@ -194,7 +195,7 @@ def _value(path: Path, spec: ColumnSpec, cell: str, factor: float, line: int) ->
                 raise InputFileError(path, f"not a finite number: {text!r}", line, spec.name)
             return value
         if pa.types.is_integer(spec.type):
-            return int(text)
+            return file_integer(text)
         if pa.types.is_boolean(spec.type):
             return TRUE_WORDS[text.lower()]
     except (ValueError, KeyError):

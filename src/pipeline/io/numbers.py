@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["file_number"]
+__all__ = ["file_integer", "file_number"]
 
 
 def file_number(text: str) -> float:
@@ -11,3 +11,11 @@ def file_number(text: str) -> float:
     if "_" in text:
         raise ValueError(f"not a number: {text!r}")
     return float(text)
+
+
+def file_integer(text: str) -> int:
+    """``text`` as an int by :class:`int`'s syntax, less its digit grouping (as
+    :func:`file_number`). Raises ``ValueError``."""
+    if "_" in text:
+        raise ValueError(f"not an integer: {text!r}")
+    return int(text)
