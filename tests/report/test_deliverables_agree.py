@@ -264,3 +264,33 @@ def test_the_pdf_states_what_the_html_does(runs: Callable[[str], Path]) -> None:
         assert f"{label} {fields[label]}" in text, label
     summary = json.loads((out / "summary.json").read_text())
     assert f"Stations {summary['station_count']} (" in text
+
+
+def test_a_sidetrack_listed_beside_its_main_bore_is_warned_of_as_untied(tmp_path: Path) -> None:
+    """A listing of a main bore and, from 1200 m, its sidetrack: the sidetrack was tied at
+    TVD = MD, N = E = 0 without a word (279 m from the main bore's hole at 1200 m). Warned,
+    naming both surveys and the two positions; a re-survey from surface is not."""
+    out = tmp_path / "out"
+    result = gyropipe_cli(
+        "run", without_las(tmp_path), "--input", sidetrack(tmp_path), "--out", out,
+        "--set", "report.formats=[html]",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert (
+        "warning: stage 'trajectory': survey 'ST1' begins at MD 1200.00 m, where survey 'MAIN' "
+        "puts the hole at about TVD 1125.50 m, N 209.47 m, E 169.12 m, but is tied at "
+        "TVD 1200.00 m, N 0.00 m, E 0.00 m (279.34 m away)"
+    ) in result.stderr
+    resurvey = tmp_path / "resurvey.csv"
+    text = sidetrack(tmp_path).read_text().replace(",ST1", ",RUN2")
+    lines = text.splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("MD (m)"))
+    main = [line for line in lines[header + 1 :] if line.endswith(",MAIN")]
+    rows = [*main, *(m.replace(",MAIN", ",RUN2") for m in main)]
+    resurvey.write_text("\n".join([*lines[: header + 1], *rows]) + "\n")
+    again = gyropipe_cli(
+        "run", without_las(tmp_path), "--input", resurvey, "--out", tmp_path / "again",
+        "--set", "report.formats=[html]",
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    assert "begins at MD" not in again.stderr

@@ -146,7 +146,47 @@ def min_curve(
         trajectory_columns(stations, params), north_reference=north_reference_of(stations, "azi")
     )
     calculation = SurveyCalculation(method="minimum_curvature", vs_azimuth=params.vs_azimuth)
+    warn_detached(table, ctx)
     return {"trajectory": checked(with_calculation(table, calculation), stations, params, ctx)}
+
+
+DETACHED_M = 1.0
+"""Distance (m) between a survey's tie-in and where another survey of the table puts the
+hole at its first MD beyond which :func:`warn_detached` warns (positions interpolated
+linearly between the other's stations: centimetres off along a curve)."""
+
+
+def warn_detached(trajectory: pa.Table, ctx: StageContext) -> None:
+    """Warn of each survey that begins within another survey's depths — a sidetrack listed
+    beside its main bore, a second run continuing the first — yet is tied at the stage's
+    tie-in (default TVD = MD, N = E = 0: a vertical hole above it) more than
+    :data:`DETACHED_M` from where the other survey puts the hole at that MD."""
+    if "survey" not in trajectory.column_names:
+        return
+    offsets = survey_offsets(trajectory)
+    spans = list(zip(offsets[:-1].tolist(), offsets[1:].tolist(), strict=True))
+    md = trajectory.column("md").to_numpy()
+    xyz = np.stack([trajectory.column(c).to_numpy() for c in ("tvd", "north", "east")], axis=1)
+    names = trajectory.column("survey")
+    for lo, _ in spans:
+        other = next(((a, b) for a, b in spans if a != lo and md[a] < md[lo] <= md[b - 1]), None)
+        if other is None:
+            continue
+        a, b = other
+        there = np.array([np.interp(md[lo], md[a:b], xyz[a:b, i]) for i in range(3)])
+        gap = float(np.linalg.norm(there - xyz[lo]))
+        if gap > DETACHED_M:
+            warnings.warn(
+                f"stage {ctx.stage_id!r}: survey {names[lo].as_py()!r} begins at MD "
+                f"{md[lo]:.2f} m, where survey {names[a].as_py()!r} puts the hole at about "
+                f"TVD {there[0]:.2f} m, N {there[1]:.2f} m, E {there[2]:.2f} m, but is tied at "
+                f"TVD {xyz[lo, 0]:.2f} m, N {xyz[lo, 1]:.2f} m, E {xyz[lo, 2]:.2f} m "
+                f"({gap:.2f} m away): its positions are not its hole's. Give its tie-in: "
+                "the stage's tie_tvd, tie_north and tie_east, with a stations file of that "
+                "survey alone",
+                SurveyCheckWarning,
+                stacklevel=2,
+            )
 
 
 class DlsLimitParams(BaseModel):
