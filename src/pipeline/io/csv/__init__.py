@@ -124,6 +124,7 @@ from pipeline.io.csv.rows import (
     split_head,
 )
 from pipeline.io.mnemonics import CURVES
+from pipeline.io.north import stated_north
 from pipeline.io.nulls import null_markers, refuse_null_markers, value_range
 from pipeline.io.precision import for_export
 from pipeline.registry import Claim, ReaderDef, WriterDef
@@ -386,9 +387,8 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     north = None
     if "azi" in chosen:
         north = _azimuth_reference(path, header, chosen["azi"], declared, opts)
-        well = _stated_north(
-            path, header, well, north_reference(path, header, chosen["azi"], in_file)
-        )
+        stated = north_reference(path, header, chosen["azi"], in_file)
+        well = stated_north(path, well, stated, header.index + 1)
     profiled = profile_units(given)
     factors = {
         name: factor(path, header, cell, name, opts, profiled)
@@ -415,25 +415,6 @@ def _one_name_per_cell(path: Path, header: Header, chosen: dict[str, Cell]) -> N
                 line=header.index + 1,
                 column=cell.text,
             )
-
-
-def _stated_north(
-    path: Path, header: Header, well: WellMetadata, stated: NorthReference | None
-) -> WellMetadata:
-    """The title block's well metadata with the north the file names for its azimuths (a
-    header cell such as ``Azi Grid``, a ``north_reference:`` line) as its north reference,
-    as LAS's NREF is: the well's north reference is its azimuths'. A ``well.north_reference``
-    line saying otherwise is overruled with a warning (the azimuths' own is what they are)."""
-    if stated is None or well.north_reference == stated:
-        return well
-    if well.north_reference is not None:
-        warn_input(
-            path,
-            f"well.north_reference {well.north_reference!r} contradicts the azimuths' "
-            f"{stated} north: the azimuths' is the well's",
-            header.index + 1,
-        )
-    return well.merged({"north_reference": stated})
 
 
 def _azimuth_reference(
