@@ -100,6 +100,22 @@ def warn_input(path: str | Path, message: str, line: int = 0) -> None:
     warnings.warn(f"{where}: {message}", InputFileWarning, stacklevel=2)
 
 
+WARNED_EACH = 10
+"""Rows of one kind warned of one by one (:func:`warn_rows`); the rest in one warning."""
+
+
+def warn_rows(path: str | Path, rows: list[tuple[str, int]], what: str) -> None:
+    """Warn of each of the first :data:`WARNED_EACH` ``(message, line)`` at its line, and
+    of the rest (``what`` they are: "stations left out") in one warning counting them from
+    the first's line to the last's: a file of 20,000 such rows is not 20,000 lines."""
+    for message, line in rows[:WARNED_EACH]:
+        warn_input(path, message, line)
+    rest = rows[WARNED_EACH:]
+    if rest:
+        span = f"lines {rest[0][1]} to {rest[-1][1]}" if len(rest) > 1 else f"line {rest[0][1]}"
+        warn_input(path, f"{len(rest)} more {what} likewise ({span})", rest[0][1])
+
+
 class EmptyTableError(GyropipeError, ValueError):
     """A stage (or writer) can compute nothing from a table with no rows. An empty table is a
     legal stage output, so this names the table and says that what produced it gave none."""

@@ -99,3 +99,19 @@ def test_a_listing_of_projections_only_is_refused_naming_the_column(tmp_path: Pa
                           "--out", out)  # fmt: skip
     assert result.returncode != 0 and not out.exists()
     assert f"{path}:6 (column 'Survey Type'): no survey station" in result.stderr
+
+
+def test_many_rows_left_out_are_warned_of_ten_by_one_and_the_rest_in_one(tmp_path: Path):
+    """A listing of 2,000 interpolated rows between its stations printed 2,000 warnings: the
+    first ten are told at their lines, the rest counted in one warning with their lines."""
+    head = "North Reference: true\nMD (m),Inc (deg),Azi (deg),Comment\n0,0,0,Tie-In\n"
+    rows = [f"{300 + k * 0.5:.2f},1.00,45.00,Interpolated" for k in range(2000)]
+    path = tmp_path / "many.csv"
+    path.write_text(head + "\n".join(rows) + "\n1300,2,45,MWD\n")
+    with pytest.warns(InputFileWarning) as caught:
+        table = gp.read(path, kind="stations")
+    assert table["md"].tolist() == [0.0, 1300.0]
+    told = [str(w.message) for w in caught]
+    assert len(told) == 11
+    assert told[0].startswith(f"{path}:4: station at md 300.0 m left out: 'Interpolated'")
+    assert told[-1] == f"{path}:14: 1990 more stations left out likewise (lines 14 to 2003)"

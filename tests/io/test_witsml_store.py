@@ -411,3 +411,23 @@ def test_an_element_the_schema_allows_once_is_refused_twice(
     with pytest.raises(InputFileError, match=f"<{element}> appears twice") as caught:
         gp.read(path, kind="stations")
     assert caught.value.line == line
+
+
+def test_many_stations_left_out_are_warned_of_ten_by_one_and_the_rest_in_one(tmp_path: Path):
+    """A store's 30 rejected stations gave 30 warnings: ten at their lines, the rest in one
+    counting them with their lines."""
+    rejected = [
+        station(k, 300.0 + k, 1.0, 45.0, status="rejected") for k in range(1, 31)
+    ]  # fmt: skip
+    stations = [station(0, 0.0, 0.0, 0.0), *rejected, station(31, 400.0, 3.0, 45.0)]
+    path = put(tmp_path, store_document(stations))
+    with pytest.warns(InputFileWarning) as caught:
+        table = gp.read(path, kind="stations")
+    assert table["md"].tolist() == [0.0, 400.0]
+    told = [str(w.message) for w in caught if "left out" in str(w.message)]
+    assert len(told) == 11
+    assert told[0].startswith(f"{path}:{FIRST_STATION_LINE + 1}: station at md 301.0 m")
+    first, last = FIRST_STATION_LINE + 11, FIRST_STATION_LINE + 30
+    assert told[-1] == (
+        f"{path}:{first}: 20 more stations left out likewise (lines {first} to {last})"
+    )

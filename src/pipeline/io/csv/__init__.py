@@ -100,7 +100,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from pipeline.contracts import NORTH_KEY, SOURCE_LINE, UNIT_KEY, TableContract
-from pipeline.errors import InputFileError, WrongKindError, warn_input
+from pipeline.errors import InputFileError, WrongKindError, warn_rows
 from pipeline.hookspecs import hookimpl
 from pipeline.io.conventions import to_canonical
 from pipeline.io.csv.header import (
@@ -305,16 +305,20 @@ class _Rows:
         if not pc.any(named).as_py():
             return table
         left = table.filter(named)
-        for md, kind, line in zip(
-            *(left.column(c).to_pylist() for c in ("md", "station_type", SOURCE_LINE)), strict=True
-        ):
-            warn_input(
-                self.path,
-                f"station at md {md!r} m left out: {kind!r} in column "
-                f"{self.chosen['station_type'].text!r} names a projection or an interpolation, "
-                "not a measurement; the reader option stations: all reads it",
+        column = self.chosen["station_type"].text
+        rows = [
+            (
+                f"station at md {md!r} m left out: {kind!r} in column {column!r} names a "
+                "projection or an interpolation, not a measurement; the reader option "
+                "stations: all reads it",
                 line,
             )
+            for md, kind, line in zip(
+                *(left.column(c).to_pylist() for c in ("md", "station_type", SOURCE_LINE)),
+                strict=True,
+            )
+        ]
+        warn_rows(self.path, rows, "stations left out")
         return table.filter(pc.invert(named))
 
     def _blanks(self) -> frozenset[str]:

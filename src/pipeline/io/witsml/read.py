@@ -14,7 +14,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from pipeline.contracts import SOURCE_LINE, VERTICAL_TOLERANCE
-from pipeline.errors import InputFileError, UnitError, warn_input
+from pipeline.errors import InputFileError, UnitError, warn_input, warn_rows
 from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.numbers import file_number
@@ -249,18 +249,22 @@ def _survey_stations(
             line=traj.line,
         )
     dropped = []
+    warned = []
     for node, reason in zip(nodes, reasons, strict=True):
         md_node = node.get("md")
         md = _measure(path, md_node, "length") if md_node is not None and reason else None
         if reason is not None:
             where = f"at md {md!r} m " if md is not None else ""
-            warn_input(
-                path,
-                f"station {where}left out: {reason}; the reader option stations: all reads it",
-                node.line,
+            warned.append(
+                (
+                    f"station {where}left out: {reason}; the reader option stations: all "
+                    "reads it",
+                    node.line,
+                )
             )
         if md is not None:
             dropped.append({"md": md, SOURCE_LINE: node.line})
+    warn_rows(path, warned, "stations left out")
     return kept, [_station(path, node, opts) for node in kept], dropped
 
 
