@@ -257,8 +257,7 @@ def _survey_stations(
             where = f"at md {md!r} m " if md is not None else ""
             warned.append(
                 (
-                    f"station {where}left out: {reason}; the reader option stations: all "
-                    "reads it",
+                    f"station {where}left out: {reason}; the reader option stations: all reads it",
                     node.line,
                 )
             )
