@@ -37,6 +37,8 @@ SOURCE_LINE = "source_line"
 """Optional column: the 1-based file line of each row (named in contract violations)."""
 NORTH_KEY = b"north_reference"
 NORTH_REFERENCES = ("true", "grid", "magnetic")
+DESCRIPTION_KEY = b"description"
+"""Field metadata: a column's description (a log curve's, kept by its reader and its writer)."""
 Monotonic = Literal["increasing", "strict"]
 EXAMPLES = 5
 VERTICAL_TOLERANCE = 1.0

@@ -22,11 +22,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.contracts import SOURCE_LINE, UNIT_KEY
+from pipeline.contracts import DESCRIPTION_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.convert import read_kind
 from pipeline.errors import InputFileError, InputFileWarning, WrongKindError
 from pipeline.io import las as las_plugin
-from pipeline.io.las.header import DESCRIPTION_KEY, utf16_codec
+from pipeline.io.las.header import utf16_codec
 from pipeline.io.precision import DECIMALS
 from pipeline.plugins import load_registry
 from pipeline.tables import LogTable

@@ -52,6 +52,7 @@ from pipeline.uncertainty.engine import (
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Section as CovSection
 from pipeline.uncertainty.sections import WellByWell, definitive_covariance
+from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, NorthReference, WellMetadata, well_of
@@ -272,7 +273,12 @@ def definitive_survey(
         "section": np.repeat(np.arange(len(sections)), np.diff(bounds)),
     }
     by_run = {run.name: applied[run.port] for run in runs if run.port in applied}
-    survey_table = with_magnetic(_survey_table(parts, cov, params, north), by_run)
+    listed_tools = [tools[run.port] for _, run in listed]
+    models = ", ".join(dict.fromkeys(model_words(t.name, t.revision) for t in listed_tools))
+    survey_table = with_statements(
+        _survey_table(parts, cov, params, north), params.confidence, models
+    )
+    survey_table = with_magnetic(survey_table, by_run)
     return {
         "survey": survey_table,
         "overlap": _overlap(runs, stations, sections, survey_table, north),

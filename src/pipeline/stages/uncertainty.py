@@ -27,6 +27,7 @@ from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_sc
 from pipeline.uncertainty.engine import OutsideValidity, configure, covariance
 from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
+from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, well_of
@@ -214,9 +215,12 @@ def position_uncertainty(
     out = PositionUncertainty.compiled().make_table(
         columns, north_reference=north_reference_of(table, "azi")
     )
-    return {
-        "trajectory": with_magnetic(out.replace_schema_metadata(table.schema.metadata), applied)
-    }
+    out = with_statements(
+        out.replace_schema_metadata(table.schema.metadata),
+        params.confidence,
+        model_words(tool.name, tool.revision),
+    )
+    return {"trajectory": with_magnetic(out, applied)}
 
 
 def covariance_columns(

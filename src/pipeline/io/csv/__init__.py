@@ -131,6 +131,7 @@ from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
+from pipeline.uncertainty.stated import file_statements
 from pipeline.units import canonical_unit
 from pipeline.well import NorthReference, WellMetadata
 
@@ -498,7 +499,8 @@ def sniff(path: Path) -> Claim:
 
 
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
-    """Write ``table`` as CSV: comment lines (well, north reference), ``name[unit]`` header,
+    """Write ``table`` as CSV: comment lines (well, north reference, survey calculation, the
+    confidence and error model the columns state), ``name[unit]`` header,
     then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
     ±inf as an empty cell; a value that is a null marker, -999.25…, is refused, as in LAS:
     every reader would read it back as no value); ``source_line`` is not written, as in LAS
@@ -524,6 +526,7 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
             f"# survey_method={calculation.method}",
             f"# vs_azimuth={calculation.vs_azimuth!r} deg",
         ]
+    comments += [f"# {key}={value}" for key, value in file_statements(table.schema).items()]
     rounded = for_export(table)
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in rounded.schema])

@@ -28,8 +28,6 @@ from pipeline.errors import InputFileError, WrongKindError
 
 SNIFF_BYTES = 64 * 1024
 BOM = b"\xef\xbb\xbf"
-DESCRIPTION_KEY = b"description"
-"""Field metadata: a curve's description (a log's, kept by its reader and its writer)."""
 UTF16_BOMS = {b"\xff\xfe": "utf-16-le", b"\xfe\xff": "utf-16-be"}
 SHOWN = 8
 

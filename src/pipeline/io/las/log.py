@@ -45,9 +45,9 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from pipeline.contracts import SOURCE_LINE, UNIT_KEY
+from pipeline.contracts import DESCRIPTION_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.errors import ContractViolation, InputFileError, UnitError, warn_input
-from pipeline.io.las.header import DESCRIPTION_KEY, NUMBER, SHOWN, Header, Item, Source
+from pipeline.io.las.header import NUMBER, SHOWN, Header, Item, Source
 from pipeline.io.las.options import LasOptions
 from pipeline.io.las.rows import Cells, Data, IndexRange, null_mask, null_values, read_all
 from pipeline.io.mnemonics import canonical_name

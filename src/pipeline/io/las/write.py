@@ -11,7 +11,9 @@ GRIDCONV (the well's magnetic declination and grid convergence, deg, east of tru
 DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths), MAGFIELD
 (nT) and MAGDIP (deg) (the geomagnetic reference the magnetometer checks take),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
-records, :mod:`pipeline.survey.calculation`); ``~Curve`` (mnemonic = column name, unit =
+records, :mod:`pipeline.survey.calculation`), and CONF and ERRMODEL where the columns
+state them (the confidence of the ``*_conf`` curves, the error model of the uncertainty
+ones, :mod:`pipeline.uncertainty.stated`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
 ``description`` metadata, a log's own, else the canonical column's); ``~Other``;
 ``~ASCII`` with each float at its unit's decimals (:mod:`pipeline.io.precision`; others in
@@ -44,13 +46,13 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
-from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.contracts import DESCRIPTION_KEY, NORTH_KEY, UNIT_KEY
 from pipeline.io.las.curves import KINDS
-from pipeline.io.las.header import DESCRIPTION_KEY
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
 from pipeline.io.precision import DECIMALS, for_export
 from pipeline.survey.calculation import calculation_of
+from pipeline.uncertainty.stated import file_statements
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
@@ -59,6 +61,13 @@ NULL = NULL_MARKERS[0]
 READ_AS_NUMBERS = frozenset(name for kind in KINDS.values() for name in kind.columns)
 """The columns the LAS readers read, each as numbers (a survey id from a numeric curve): a
 text column of one of these names is not written."""
+
+STATED = {
+    "confidence": ("CONF", "confidence of the *_conf curves (probability)"),
+    "error_model": ("ERRMODEL", "error model of the position uncertainty curves"),
+}
+"""~Parameter mnemonic and description of what the columns state once for the file
+(:func:`~pipeline.uncertainty.stated.file_statements`)."""
 
 _MNEMONIC = re.compile(r"[^\s.:~#][^\s.:]*")
 _REPEATED = re.compile(r"(.+):[0-9]+")
@@ -242,6 +251,7 @@ def _header_text(
         step = round(float(step), DECIMALS[unit])
     meta = well.model_dump(mode="json")
     calculation = calculation_of(table)
+    stated = file_statements(table.schema)
     lines = [
         "~Version Information",
         _line("VERS", "", "2.0", "CWLS log ASCII Standard - version 2.0"),
@@ -294,6 +304,7 @@ def _header_text(
             calculation and calculation.vs_azimuth,
             "vertical section azimuth (origin: wellhead)",
         ),
+        *(_line(STATED[key][0], "", value, STATED[key][1]) for key, value in stated.items()),
         "~Curve Information",
         *(curve_lines[f.name] for f in written),
         "~Other",

@@ -31,9 +31,11 @@ trajectory's name and uid), holding
   ``dega``, ``dega/30m``),
   and ``matrixCov`` (varianceNN … varianceVertVert, m², vertical down) from the ``cov_*``
   columns of a position-uncertainty trajectory;
-* ``commonData``: a comment on the frames, and every set well metadata field as an
-  ``extensionNameValue`` named ``gyropipe.well.<field>`` so gyropipe reads the whole header
-  back.
+* ``commonData``: a comment on the frames (and the error model of the covariances, when
+  their columns state it, :mod:`pipeline.uncertainty.stated`; also as an
+  ``extensionNameValue`` named ``gyropipe.error_model``), and every set well metadata field
+  as an ``extensionNameValue`` named ``gyropipe.well.<field>`` so gyropipe reads the whole
+  header back.
 
 Numbers are written in shortest round-trip form, so they read back bit for bit; one that
 is a null marker (``-999.25``…, which the reader takes for no value) is refused. Documents

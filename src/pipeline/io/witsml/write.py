@@ -29,6 +29,7 @@ from pipeline.io.witsml.terms import (
 from pipeline.survey.calculation import calculation_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import STATION_TEXT_COLUMNS
+from pipeline.uncertainty.stated import file_statements
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -67,6 +68,8 @@ WELL_UOM = {
     "grid_convergence_applied": "dega",
 }
 """Units of the numeric well metadata fields written as extension values."""
+ERROR_MODEL_EXTENSION = "gyropipe.error_model"
+"""Name of the extension value stating the error model of the matrixCov covariances."""
 _XML_CHARS = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
 
 
@@ -98,7 +101,10 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
         ]
     )
     full_covariance = [False] * table.num_rows
+    model = None
     if all(c in texts for c, _, _ in COVARIANCE):
+        stated = file_statements(pa.schema([table.schema.field(c) for c, _, _ in COVARIANCE]))
+        model = stated.get("error_model")
         covariance = _rows(
             [_number_lines(texts[c], e, UNIT_UOM[u], depth + 1) for c, e, u in COVARIANCE]
         )
@@ -147,7 +153,7 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
                 doc.written(covariance[row])
                 doc.close()
             doc.close()
-        _common_data(doc, well)
+        _common_data(doc, well, model)
         doc.close()
     doc.close()
     with path.open("wb") as fh:
@@ -313,15 +319,23 @@ def _attributes(attrs: dict[str, str]) -> str:
     return "".join(f' {k}="{v.translate(_ATTRIBUTE_ESCAPES)}"' for k, v in attrs.items())
 
 
-def _common_data(doc: _Document, well: WellMetadata) -> None:
-    """Provenance comment and every set well metadata field as an extension value."""
+def _common_data(doc: _Document, well: WellMetadata, model: str | None) -> None:
+    """Provenance comment, the error model of the covariances (``model``: None when not
+    stated) and every set well metadata field as an extension value."""
     doc.open("commonData")
     comment = (
         f"Written by gyropipe {__version__}. dispNs/dispEw from the wellhead; tvd "
         f"below the depth reference ({well.depth_reference or 'not stated'}); matrixCov: "
-        "position covariance north-east-vertical (vertical down), 1 sigma squared."
+        "position covariance north-east-vertical (vertical down), 1 sigma squared"
+        + (f", error model {model}." if model else ".")
     )
-    doc.leaf("comments", _checked(comment, "depth reference", None))
+    doc.leaf("comments", _checked(comment, "depth reference or error model", None))
+    if model:
+        doc.open("extensionNameValue", uid="error_model")
+        doc.leaf("name", ERROR_MODEL_EXTENSION)
+        doc.leaf("value", _checked(model, "error model", None))
+        doc.leaf("dataType", "string")
+        doc.close()
     for field, value in well.model_dump(exclude_none=True).items():
         if not str(value).strip():
             continue  # WITSML values are never empty
