@@ -60,18 +60,22 @@ def run(pipeline: Path, out: Path, gyro: Path, mwd: Path) -> Path:
 def runs(tmp_path: Path) -> tuple[Path, Path]:
     """A gyro run of 2026-11-21 stating a declination of 11.9°, an MWD run of 2025-06-05
     stating its own field and declination (12.5°)."""
-    (tmp_path / "gyro").mkdir()
-    (tmp_path / "mwd").mkdir()
-    gyro = with_header(RUNS / "gyro-run.csv", tmp_path / "gyro", Declination="11.9")
-    mwd = with_header(
-        RUNS / "mwd-run.csv",
-        tmp_path / "mwd",
+    return two_runs(
+        tmp_path,
         Survey_Date="2025-06-05",
         Declination="12.5",
         Magnetic_Field="58000",
         Magnetic_Dip="78.0",
     )
-    return gyro, mwd
+
+
+def two_runs(directory: Path, **mwd: str) -> tuple[Path, Path]:
+    """The example gyro run stating a declination of 11.9° and the MWD run with the header
+    lines ``mwd`` (``Survey_Date`` → ``Survey Date: …``), in their own folders."""
+    (directory / "gyro").mkdir()
+    (directory / "mwd").mkdir()
+    gyro = with_header(RUNS / "gyro-run.csv", directory / "gyro", Declination="11.9")
+    return gyro, with_header(RUNS / "mwd-run.csv", directory / "mwd", **mwd)
 
 
 def test_each_run_takes_its_own_files_field_in_either_read_order(
@@ -202,12 +206,8 @@ def test_headers_within_a_field_s_tolerance_agree(tmp_path: Path) -> None:
     """Two runs' headers stating a latitude 61.25 and 61.2500001, an elevation 54.3 and
     54.3004 m, a declination 11.9 and 11.9000004° state one value each (once unstated and
     in ``well_differs``); a longitude 1e-5° apart still differs."""
-    (tmp_path / "gyro").mkdir()
-    (tmp_path / "mwd").mkdir()
-    gyro = with_header(RUNS / "gyro-run.csv", tmp_path / "gyro", Declination="11.9")
-    mwd = with_header(
-        RUNS / "mwd-run.csv",
-        tmp_path / "mwd",
+    gyro, mwd = two_runs(
+        tmp_path,
         Latitude="61.2500001",
         Longitude="73.40001",
         Elevation="54.3004",
