@@ -133,3 +133,23 @@ def test_definitive_survey_states_the_models_of_its_runs(tmp_path: Path) -> None
     assert f"# error_model={models}" in comments
     meta = pq.read_schema(tmp_path / "definitive.survey.parquet").field("vertical_conf").metadata
     assert (meta[ERROR_MODEL_KEY], meta[CONFIDENCE_KEY]) == (models.encode(), b"0.95")
+
+
+def test_a_model_the_run_changed_is_stated_with_its_changes(samples: Path, tmp_path: Path) -> None:
+    """Magnitudes given and a measured compassing scatter make ellipses that are not the
+    published model's: the deliverables said 'GYRO-NS rev 5' of them all the same."""
+    out = run(samples, tmp_path, None)
+    changed = tmp_path / "changed"
+    pipeline = tmp_path / "pipeline.yaml"
+    gyropipe_cli(
+        "run", pipeline, "--input", f"samples={samples}", "--out", changed,
+        "--set", "uncertainty.tool={GXY-G1: 0.5}", "--set", "uncertainty.measured_sigma_azi=0.2",
+        check=True,
+    )  # fmt: skip
+    stated = f"{MODEL} with GXY-G1 0.5, GXY-RN from a measured azimuth scatter of 0.2 deg"
+    assert lasio.read(changed / "trajectory.las").params["ERRMODEL"].value == stated
+    assert f"# error_model={stated}" in (changed / "trajectory.csv").read_text()
+    schema = pq.read_schema(changed / "uncertainty.trajectory.parquet")
+    assert schema.field("ellipse_major").metadata[ERROR_MODEL_KEY] == stated.encode()
+    unchanged = pq.read_schema(out / "uncertainty.trajectory.parquet")
+    assert unchanged.field("ellipse_major").metadata[ERROR_MODEL_KEY] == MODEL.encode()

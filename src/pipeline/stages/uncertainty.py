@@ -192,7 +192,11 @@ def position_uncertainty(
             well, stage="position_uncertainty", latitude=params.latitude, north_seeking=True
         ).latitude
         site = replace(site, latitude=latitude)
-        tool = _measured(tool, params, latitude, _start_stop_sigma(inputs.get("stops"), table))
+        tool, init_sigma = _measured(
+            tool, params, latitude, _start_stop_sigma(inputs.get("stops"), table)
+        )
+    else:
+        init_sigma = None
     md = table.column("md").to_numpy()
     inc = np.radians(table.column("inc").to_numpy())
     azi = np.radians(azi_deg)
@@ -218,7 +222,7 @@ def position_uncertainty(
     out = with_statements(
         out.replace_schema_metadata(table.schema.metadata),
         params.confidence,
-        model_words(tool.name, tool.revision),
+        _stated_model(tool, params, init_sigma),
     )
     return {"trajectory": with_magnetic(out, applied)}
 
@@ -266,21 +270,41 @@ def _measured(
     params: UncertaintyParams,
     latitude: float,
     start_stop: tuple[float, float] | None,
-) -> ToolModel:
+) -> tuple[ToolModel, float | None]:
     """A gyro model with what the survey measured: the compassing scatter (GXY-RN) and, for a
     continuous model, the initial azimuth σ from ``params.init_sigma_azi`` or else from the
     wired start stop's σ when that stop is inclined at least the model's static end
     inclination (a near-vertical stop's azimuth does not initialise the run: the model's
-    stationary terms and its inclination gate apply, as without stops)."""
+    stationary terms and its inclination gate apply, as without stops); and that initial σ
+    (deg; None: none taken)."""
     if params.measured_sigma_azi is not None:
         tool = with_measured_noise(tool, params.measured_sigma_azi, latitude)
     init_sigma = params.init_sigma_azi
     gate = tool.parameters.get("static_end_inc")
     if gate is None:
-        return tool
+        return tool, None
     if init_sigma is None and start_stop is not None and np.radians(start_stop[1]) >= gate:
         init_sigma = start_stop[0]
-    return tool if init_sigma is None else with_initial_azimuth(tool, init_sigma)
+    return (
+        (tool, None) if init_sigma is None else (with_initial_azimuth(tool, init_sigma), init_sigma)
+    )
+
+
+def _stated_model(tool: ToolModel, params: UncertaintyParams, init_sigma: float | None) -> str:
+    """The error model as the deliverables state it: its name and revision, and what the run
+    changed of it — magnitudes given (``tool``, in the file's units), the compassing
+    scatter measured, the initial azimuth σ taken — so that no ellipse passes for the
+    published model's when it is not."""
+    changed = [f"{key} {value:g}" for key, value in params.tool.items()]
+    if params.measured_sigma_azi is not None:
+        changed.append(
+            f"GXY-RN from a measured azimuth scatter of {params.measured_sigma_azi:g} deg"
+        )
+    if init_sigma is not None:
+        given = "given" if params.init_sigma_azi is not None else "the start stop's"
+        changed.append(f"initial azimuth sigma {init_sigma:.4g} deg ({given})")
+    stated = model_words(tool.name, tool.revision)
+    return f"{stated} with {', '.join(changed)}" if changed else stated
 
 
 MAGNETIC_KEY = b"gyropipe.magnetic_reference"
