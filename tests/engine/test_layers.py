@@ -19,6 +19,7 @@ Every module must have a layer, so a new module or package is given a home here.
 from __future__ import annotations
 
 import ast
+import functools
 import itertools
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -143,6 +144,18 @@ def modules(src: Path, package: str) -> dict[str, tuple[Path, bool]]:
     return found
 
 
+def _nodes(path: Path) -> tuple[ast.AST, ...]:
+    """Every node of a module's syntax tree, parsed once per version of the file (the
+    checks walk each module three times)."""
+    stat = path.stat()
+    return _parsed(path, stat.st_mtime_ns, stat.st_size)
+
+
+@functools.cache
+def _parsed(path: Path, mtime_ns: int, size: int) -> tuple[ast.AST, ...]:
+    return tuple(ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))))
+
+
 def imports(src: Path, package: str) -> Iterator[Import]:
     """Every import of a module of ``package`` by a module of ``package``, wherever it stands."""
     known = modules(src, package)
@@ -154,8 +167,7 @@ def imports(src: Path, package: str) -> Iterator[Import]:
         return name or None
 
     for importer, (path, is_package) in known.items():
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-        for node in ast.walk(tree):
+        for node in _nodes(path):
             targets: list[str] = []
             how = "import"
             if isinstance(node, ast.Call) and _called(node.func) in BY_NAME:
@@ -197,8 +209,7 @@ def named(src: Path, package: str) -> Iterator[Import]:
     its modules (``"pipeline.plugins"``): a module a later ``import_module(name)`` may load."""
     known = modules(src, package)
     for importer, (path, _) in known.items():
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-        for node in ast.walk(tree):
+        for node in _nodes(path):
             if isinstance(node, ast.Constant) and node.value in known and node.value != importer:
                 yield Import(importer, str(node.value), path, node.lineno, "named")
 
