@@ -161,6 +161,15 @@ def plugin_site(root: Path, plugins: Mapping[str, tuple[str, str]]) -> Path:
     return root
 
 
+EXAMPLE_SITE: dict[str, Any] = {
+    "latitude": 61.25,
+    "longitude": 73.4,
+    "date": "2026-11-21",
+    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
+}
+"""The bundled simulation plans' site (West Siberia; latitude and longitude deg, the IGRF-14
+field of that day: total field nT, dip and declination deg), for a test's own plan."""
+
 TRUE_NORTH = {"north_reference": "true"}
 """A pipeline's well defaults: azimuths are to true north unless the file says otherwise."""
 

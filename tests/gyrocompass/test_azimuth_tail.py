@@ -14,6 +14,7 @@ import pytest
 import pipeline as gp
 from pipeline.gyrocompass.azimuth import model, solve_azimuth, tail_sigma
 from pipeline.gyrocompass.precision import hr_covariance
+from tests_support import EXAMPLE_SITE
 
 LAT = np.radians(61.25)
 FIVE = np.radians([0, 90, 180, 270, 0])
@@ -52,14 +53,6 @@ def test_a_50_degree_station_keeps_the_cramer_rao_bound_bit_for_bit():
     assert abs(np.mean(np.abs(error) > 3 * bound) - EXPECTED) < TOLERANCE
 
 
-SITE = {
-    "latitude": 61.25,
-    "longitude": 73.4,
-    "date": "2026-11-21",
-    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-}
-
-
 @pytest.mark.parametrize(("seed", "station"), [(7, 7), (8, 8)])
 def test_a_far_east_west_station_is_flagged_or_within_3_sigma(seed, station):
     """Build to 75° then 1°/30 m toward 80° at azimuth 80°, single-axis MEMS gyro: on the
@@ -69,7 +62,7 @@ def test_a_far_east_west_station_is_flagged_or_within_3_sigma(seed, station):
         {
             "name": "tail",
             "seed": seed,
-            "site": SITE,
+            "site": EXAMPLE_SITE,
             "well": {
                 "sections": [
                     {"kind": "vertical", "length": 20},

@@ -18,14 +18,8 @@ import yaml
 
 import pipeline as gp
 from pipeline.gyrocompass.azimuth import OMEGA_DEG_H, mirror_probability
-from tests_support import gyropipe_cli, simulate_and_run
+from tests_support import EXAMPLE_SITE, gyropipe_cli, simulate_and_run
 
-SITE = {
-    "latitude": 61.25,
-    "longitude": 73.4,
-    "date": "2026-11-21",
-    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-}
 FIVE = [0, 90, 180, 270, 0]
 
 
@@ -34,7 +28,7 @@ def plan(azi: float, tool: dict[str, Any], seed: int) -> dict[str, Any]:
     return {
         "name": "mirror",
         "seed": seed,
-        "site": SITE,
+        "site": EXAMPLE_SITE,
         "well": {
             "sections": [
                 {"kind": "vertical", "length": 20},
@@ -90,7 +84,7 @@ def test_an_east_west_lateral_has_no_mirror_to_reject(azi: float):
     """At A = 90° the mirror is A itself: the σ, not a rejection, states the doubt."""
     sim = gp.simulate(plan(azi, {"preset": "mems-vrg"}, seed=2))
     readings = gp.position_readings(sim["samples"], trim_start=1.0)
-    solved = gp.compass(readings, latitude=SITE["latitude"])
+    solved = gp.compass(readings, latitude=EXAMPLE_SITE["latitude"])
     assert len(solved["rejects"]) == 0
     stations = solved["stations"].set_index("station")
     error = wrapped(stations.azi - sim["stations"].set_index("station").azi[stations.index])
@@ -100,7 +94,7 @@ def test_an_east_west_lateral_has_no_mirror_to_reject(azi: float):
 def test_the_axial_gyro_in_the_fit_resolves_the_mirror():
     sim = gp.simulate(plan(0.0, {"preset": "nav-grade"}, seed=1))
     readings = gp.position_readings(sim["samples"], trim_start=1.0)
-    solved = gp.compass(readings, latitude=SITE["latitude"], z_bias_sigma=0.05)
+    solved = gp.compass(readings, latitude=EXAMPLE_SITE["latitude"], z_bias_sigma=0.05)
     assert len(solved["rejects"]) == 0
     stations = solved["stations"].set_index("station")
     error = wrapped(stations.azi - sim["stations"].set_index("station").azi[stations.index])

@@ -16,16 +16,11 @@ import yaml
 
 import pipeline as gp
 from pipeline.errors import StageError
-from tests_support import gyropipe_cli
+from tests_support import EXAMPLE_SITE, gyropipe_cli
 
 PLAN: dict[str, Any] = {
     "name": "short-hold",
-    "site": {
-        "latitude": 61.25,
-        "longitude": 73.4,
-        "date": "2026-11-21",
-        "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-    },
+    "site": EXAMPLE_SITE,
     "well": {
         "sections": [
             {"kind": "vertical", "length": 20},

@@ -18,14 +18,8 @@ import yaml
 
 import pipeline as gp
 from pipeline.errors import InputFileError
-from tests_support import simulate_and_run
+from tests_support import EXAMPLE_SITE, simulate_and_run
 
-SITE = {
-    "latitude": 61.25,
-    "longitude": 73.4,
-    "date": "2026-11-21",
-    "magnetic": {"total_field": 59731.0, "dip": 78.29, "declination": 17.0},
-}
 SECTIONS = [
     {"kind": "vertical", "length": 60},
     {"kind": "build", "dls": 6.0, "inc": 20, "azi": 37},
@@ -40,7 +34,7 @@ def plan(tool: dict[str, Any], seed: int = 5) -> dict[str, Any]:
     return {
         "name": "vertical-top",
         "seed": seed,
-        "site": SITE,
+        "site": EXAMPLE_SITE,
         "well": {"sections": SECTIONS},
         "tool": tool,
         "survey": SURVEY,
