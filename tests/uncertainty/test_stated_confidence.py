@@ -146,7 +146,7 @@ def test_a_model_the_run_changed_is_stated_with_its_changes(samples: Path, tmp_p
         "--set", "uncertainty.tool={GXY-G1: 0.5}", "--set", "uncertainty.measured_sigma_azi=0.2",
         check=True,
     )  # fmt: skip
-    stated = f"{MODEL} with GXY-G1 0.5, GXY-RN from a measured azimuth scatter of 0.2 deg"
+    stated = f"{MODEL} with GXY-G1 0.5 deg/h/g, GXY-RN from a measured azimuth scatter of 0.2 deg"
     assert lasio.read(changed / "trajectory.las").params["ERRMODEL"].value == stated
     assert f"# error_model={stated}" in (changed / "trajectory.csv").read_text()
     schema = pq.read_schema(changed / "uncertainty.trajectory.parquet")

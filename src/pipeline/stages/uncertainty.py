@@ -24,7 +24,13 @@ from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
-from pipeline.uncertainty.engine import OutsideValidity, configure, covariance
+from pipeline.uncertainty.engine import (
+    PARAMETER_ALIASES,
+    OutsideValidity,
+    configure,
+    covariance,
+    term_for,
+)
 from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.stated import model_words, with_statements
@@ -171,7 +177,7 @@ def position_uncertainty(
     """Trajectory → trajectory with NEV covariance and error ellipses per station."""
     table = inputs["trajectory"]
     azi_deg = table.column("azi").to_numpy()
-    tool = configure(params.model, params.tool, toolmodels.of_run(ctx))
+    tool = configured = configure(params.model, params.tool, toolmodels.of_run(ctx))
     toolmodels.record(ctx, tool, "model")
     well = ctx.well_for(well_of(table))  # its own file's header, not another input's
     site = ModelSite()
@@ -222,7 +228,7 @@ def position_uncertainty(
     out = with_statements(
         out.replace_schema_metadata(table.schema.metadata),
         params.confidence,
-        _stated_model(tool, params, init_sigma),
+        _stated_model(configured, params, init_sigma),
     )
     return {"trajectory": with_magnetic(out, applied)}
 
@@ -292,10 +298,19 @@ def _measured(
 
 def _stated_model(tool: ToolModel, params: UncertaintyParams, init_sigma: float | None) -> str:
     """The error model as the deliverables state it: its name and revision, and what the run
-    changed of it — magnitudes given (``tool``, in the file's units), the compassing
-    scatter measured, the initial azimuth σ taken — so that no ellipse passes for the
-    published model's when it is not."""
-    changed = [f"{key} {value:g}" for key, value in params.tool.items()]
+    changed of it — magnitudes given (``params.tool``: a term's with its unit, a model
+    parameter's in the model file's), the compassing scatter measured, the initial azimuth
+    σ taken — so that no ellipse passes for the published model's when it is not.
+    ``tool``: the model as configured, before what the survey measured replaced terms."""
+    units = {t.name: t.unit for t in tool.terms}
+    changed = []
+    for key, value in params.tool.items():
+        param = PARAMETER_ALIASES.get(key, key)
+        if param in tool.parameters:
+            changed.append(f"{param} {value:g} (the model file's unit)")
+        else:
+            name = term_for(tool, key)
+            changed.append(f"{name} {value:g} {units[name]}")
     if params.measured_sigma_azi is not None:
         changed.append(
             f"GXY-RN from a measured azimuth scatter of {params.measured_sigma_azi:g} deg"
