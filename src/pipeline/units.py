@@ -143,6 +143,13 @@ def is_unit_of(unit: str, quantity: str) -> bool:
     return entry is not None and entry[0] == quantity
 
 
+def quantity_of(unit: str) -> str | None:
+    """The quantity ``unit`` is an accepted spelling of (``"ft"`` → ``"length"``); None if
+    it is none."""
+    entry = _table().get(_key(unit))
+    return None if entry is None else entry[0]
+
+
 def _key(unit: str) -> str:
     return "".join(unit.split()).casefold()
 

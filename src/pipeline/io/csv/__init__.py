@@ -113,6 +113,7 @@ from pipeline.io.csv.header import (
     length_units,
     north_reference,
     read_title,
+    with_units_row,
 )
 from pipeline.io.csv.options import CsvOptions, profile_units
 from pipeline.io.csv.rows import (
@@ -378,7 +379,7 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     except InputFileError as exc:
         _other_kind(path, text.head, opts, kind, exc)
         raise
-
+    header = with_units_row(path, text.head, header)
     lengths = length_units(header, opts, layout.columns)
     well, in_file = read_title(path, text.head[: header.index], header.delimiter, lengths)
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import csv as stdcsv
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +21,7 @@ from pipeline.io.csv.options import SHORTHANDS, CsvOptions
 from pipeline.io.dates import header_date
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.io.nulls import is_null_marker
-from pipeline.units import canonical_unit, conversion_factor, is_unit_of
+from pipeline.units import canonical_unit, conversion_factor, is_unit_of, quantity_of
 from pipeline.well import DATUM_WORDS, NORTH_WORDS, NorthReference, WellMetadata
 
 DELIMITERS = (",", ";", "\t", "|")
@@ -97,12 +97,19 @@ class Cell:
 @dataclass(frozen=True)
 class Header:
     """The header row: 0-based line index, delimiter, cells and the cells naming each
-    canonical column."""
+    canonical column; ``units_line``: the 0-based index of a units row or rule line under it
+    (:func:`with_units_row`), None if the data follow the header."""
 
     index: int
     delimiter: str
     cells: list[Cell]
     found: dict[str, list[Cell]]
+    units_line: int | None = None
+
+    @property
+    def last_line(self) -> int:
+        """0-based index of the header's last line (the data begin after it)."""
+        return self.index if self.units_line is None else self.units_line
 
 
 def cells_of(line: str, delimiter: str) -> list[str]:
@@ -225,6 +232,54 @@ def find_header(
         f"{', '.join(repr(c.text) for c in best.cells)}; accepted names: {accepted}",
         line=best.index + 1,
     )
+
+
+_RULE = re.compile(r"^[-=_~*]+$")
+
+
+def with_units_row(path: Path, lines: list[str], header: Header) -> Header:
+    """``header`` with the line under it read as its units row (``MD,Inc,Azi`` over
+    ``m,deg,deg`` or ``(m),(deg),(deg)``, as survey programs export) or passed over as a
+    rule (``-----,-----``); unchanged where that line holds a number or no known unit. A
+    column's unit there that its header cell contradicts, or that is no unit of a
+    recognised column's quantity, is refused at that line."""
+    at = header.index + 1
+    raw = [c.strip() for c in cells_of(lines[at], header.delimiter)] if at < len(lines) else []
+    filled = [c for c in raw if c]
+    if not filled or any(_NUMBERISH.match(c) for c in filled):
+        return header
+    if all(_RULE.match(c) for c in filled):
+        return replace(header, units_line=at)
+    stated = [_BRACKETS.sub(r"\1", c).strip() for c in raw]
+    if not any(quantity_of(u) for u in stated if u):
+        return header
+    names = {cell.index: name for name, cells in header.found.items() for cell in cells}
+    cells = [
+        _with_unit(path, cell, stated[cell.index] if cell.index < len(stated) else "", names, at)
+        for cell in header.cells
+    ]
+    found = {name: [cells[c.index] for c in found] for name, found in header.found.items()}
+    return Header(header.index, header.delimiter, cells, found, units_line=at)
+
+
+def _with_unit(path: Path, cell: Cell, unit: str, names: dict[int, str], at: int) -> Cell:
+    quantity = CURVES[names[cell.index]].quantity if cell.index in names else None
+    if not unit or _RULE.match(unit) or quantity is None:
+        return cell
+    try:
+        given = conversion_factor(unit, quantity)
+    except UnitError as exc:
+        raise InputFileError(path, f"units row: {exc}", line=at + 1, column=cell.text) from None
+    if cell.unit is not None and is_unit_of(cell.unit, quantity):
+        if conversion_factor(cell.unit, quantity) != given:
+            raise InputFileError(
+                path,
+                f"the header says {cell.unit!r}, the units row under it {unit!r}",
+                line=at + 1,
+                column=cell.text,
+            )
+        return cell
+    return replace(cell, unit=unit)
 
 
 def _score(header: Header | None, required: tuple[str, ...]) -> int:

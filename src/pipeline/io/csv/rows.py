@@ -256,7 +256,7 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
     lines, :func:`~pipeline.io.csv.header.is_footer`, told in a warning), blank and comment
     lines left out. ``required`` are the indices of the cells a data row must fill."""
     data = text.data
-    after = data.find(b"\n", text.starts[header.index])
+    after = data.find(b"\n", text.starts[header.last_line])
     start = len(data) if after < 0 else after + 1
     end = None
     footer: list[tuple[int, bytes]] = []  # (start, line), last line first
@@ -282,7 +282,7 @@ def data_rows(path: Path, text: Text, header: Header, required: list[int]) -> Ro
         message = f"{lines} after the last data row read as a footer (text, no number where a"
         message += f" row has one) and left out, the first: {shown!r}"
         warn_input(path, message, line=_line_ends(data, 0, at) + 1)
-    first_line = header.index + 2
+    first_line = header.last_line + 2
     while _skipped(data[start : (nl := _line_end(data, start, end))]):
         start, first_line = nl + 1, first_line + 1
     return Rows(data, start, end, first_line)
