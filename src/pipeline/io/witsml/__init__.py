@@ -41,16 +41,17 @@ Numbers are written in shortest round-trip form, so they read back bit for bit; 
 is a null marker (``-999.25``…, which the reader takes for no value) is refused. Documents
 validate against the WITSML 1.4.1.1 write schema (tested with the komle bindings of it).
 
-The reader takes any WITSML 1.4.1.x ``trajectorys`` document: every trajectory (or the one
-named by the option ``trajectory``) as stations in canonical units — md, inc, azi required
-per station; tvd, north, east, dls kept when present (a ``tvd`` whose ``datum`` attribute
-names another datum than its ``md``'s, e.g. a TVDSS beside depths from the KB, is left out
-with a warning: the trajectory gives no offset between them; the ``md`` of every station
-must name one ``datum``, a wellDatum uid, or none, and one naming KB, DF, GL… the depth
-reference the file states: else refused at the line); ``tool_type`` and ``station_type``
-(``typeSurveyTool``, ``typeTrajStation``; ``unknown`` is none) — sorted by MD, with a
-``survey`` column (the names) when there are several and the ``source_line`` of each
-station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A
+The reader takes any WITSML 1.4.1.x ``trajectorys`` document (and a WITSML 2.0
+``Trajectory``, read as its 1.4.1.1 tree: :mod:`pipeline.io.witsml.v2`): every trajectory
+(or the one named by the option ``trajectory``) as stations in canonical units — md, inc,
+azi required per station; tvd, north, east, dls kept when present (a ``tvd`` whose ``datum``
+attribute names another datum than its ``md``'s, e.g. a TVDSS beside depths from the KB, is
+left out with a warning: the trajectory gives no offset between them; the ``md`` of every
+station must name one ``datum``, a wellDatum uid, or none, and one naming KB, DF, GL… the
+depth reference the file states: else refused at the line); ``tool_type`` and
+``station_type`` (``typeSurveyTool``, ``typeTrajStation``; ``unknown`` is none) — sorted by
+MD, with a ``survey`` column (the names) when there are several and the ``source_line`` of
+each station; ``uom`` converted (m, ft, ftUS; dega, rad; angle per length for DLS). A
 trajectory's ``mdMn``/``mdMx`` (in their own uom, on the stations' datum) that leave a
 station outside, or reach past the first or last station by more than 5 cm (stations
 missing: a truncated export, a store's answer to a query for a depth range), are warned of

@@ -11,6 +11,7 @@ from pipeline.errors import InputFileError, warn_input
 from pipeline.io.witsml.terms import (
     ITEM_STATES,
     MARKER_TYPES,
+    NOT_MEASURED_2,
     PLAN_SECTION_TYPES,
     STATION_STATUS,
     SURVEY_STATION_TYPES,
@@ -121,6 +122,8 @@ def _not_measured(kind: str) -> str:
         return "a target's position"
     if kind in PLAN_SECTION_TYPES:
         return "the end of a plan's section"
+    if kind in NOT_MEASURED_2:
+        return NOT_MEASURED_2[kind]
     return f"{OUTSIDE}: not taken for a measurement, as a projection or an interpolation is none"
 
 

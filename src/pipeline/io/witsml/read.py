@@ -1,5 +1,6 @@
 """WITSML 1.4.1.x ``trajectory`` reader (kind ``stations``; layout in :mod:`pipeline.io.witsml`;
-the document parsed by :mod:`pipeline.io.witsml.tree`)."""
+the document parsed by :mod:`pipeline.io.witsml.tree`; a WITSML 2.0 ``Trajectory`` read as
+its 1.4.1.1 tree, :mod:`pipeline.io.witsml.v2`)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from pipeline.io.sniffing import file_head
 from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
 from pipeline.io.witsml.tree import Node, RepeatedElement, parse
+from pipeline.io.witsml.v2 import NS_2, as_1series
 from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
 from pipeline.well import (
     DATUM_WORDS,
@@ -70,6 +72,7 @@ EXTENSION_QUANTITY = {
 }
 _NORTH = {text: ref for ref, text in AZI_REF.items()}
 _ROOT = re.compile(rb"<(?:[A-Za-z_][\w.-]*:)?trajectorys[\s>/]")
+_ROOT_2 = re.compile(rb"<(?:[A-Za-z_][\w.-]*:)?Trajectory[\s>/]")
 
 
 class WitsmlOptions(BaseModel):
@@ -92,9 +95,14 @@ class WitsmlOptions(BaseModel):
 
 
 def sniff(path: Path) -> bool:
-    """By content: the first 4 KiB open a ``trajectorys`` element of WITSML 1.x."""
+    """By content: the first 4 KiB open a ``trajectorys`` element of WITSML 1.x or a
+    ``Trajectory`` of WITSML 2."""
     head = file_head(path, SNIFF_BYTES)
-    return head is not None and bool(_ROOT.search(head)) and b"witsml.org/schemas/1series" in head
+    if head is None:
+        return False
+    if _ROOT.search(head) and b"witsml.org/schemas/1series" in head:
+        return True
+    return bool(_ROOT_2.search(head)) and NS_2.encode() in head
 
 
 def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
@@ -113,11 +121,14 @@ def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMeta
 def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
     """:func:`read_witsml`'s table and well metadata."""
     root = parse(path)
+    if root.namespace == NS_2:
+        root = as_1series(path, root)
     if root.name != "trajectorys" or root.namespace != NS:
         raise InputFileError(
             path,
             f"root element is <{root.name}> in namespace {root.namespace or 'none'!r}; "
-            f"expected <trajectorys> in {NS!r} (WITSML 1.4.1.x)",
+            f"expected <trajectorys> in {NS!r} (WITSML 1.4.1.x) or <Trajectory> in {NS_2!r} "
+            "(WITSML 2.0)",
             line=root.line,
         )
     version = root.attrs.get("version", "")

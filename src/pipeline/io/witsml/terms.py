@@ -103,6 +103,16 @@ PLAN_SECTION_TYPES = frozenset(
 )
 """``typeTrajStation`` values of the end of a plan's section (a build, a hold, a turn… to a
 depth or an angle): the rest of the closed enumeration."""
+NOT_MEASURED_2 = {
+    "MD and INCL": "an inclination-only survey (a drift indicator's): no azimuth",
+    "interpolated": "interpolated between stations",
+    "INCL AZI and TVD": "a point of a computed trajectory",
+    "N E and TVD": "a point of a computed trajectory",
+    "NS EW and TVD": "a point of a computed trajectory",
+}
+"""``TypeTrajStation`` values WITSML 2.0 added, of no measured direction, and what they
+name (its ``MD INCL and AZI``, a normal survey station, is read as its tool's station type:
+:mod:`pipeline.io.witsml.v2`)."""
 STATION_TYPES = SURVEY_STATION_TYPES | MARKER_TYPES | TARGET_TYPES
 """``typeTrajStation`` values a station read from a file keeps when written (the measured
 and marker kinds of the closed enumeration)."""
