@@ -13,7 +13,8 @@ def lazy_names(
 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """The module-level ``__getattr__`` and ``__dir__`` of ``package``: each name of
     ``homes`` (module → the names it defines) is imported from its module on first use and
-    kept in ``namespace`` (the package's ``globals()``)."""
+    kept in ``namespace`` (the package's ``globals()``); ``dir()`` lists the package's
+    ``__all__`` (else the names of ``homes``) and its dunders, as tab completion should."""
     home_of = {name: module for module, names in homes.items() for name in names}
 
     def getattr_(name: str) -> Any:
@@ -25,6 +26,9 @@ def lazy_names(
         return value
 
     def dir_() -> list[str]:
-        return sorted(set(namespace) | set(home_of))
+        # the curated names (``__all__``, else every lazy one) and the dunders: not what the
+        # package's own imports leave in its namespace (TYPE_CHECKING, annotations, modules)
+        public = namespace.get("__all__", home_of)
+        return sorted({*public, *(n for n in namespace if n.startswith("__"))})
 
     return getattr_, dir_

@@ -33,10 +33,16 @@ class Tables(Mapping[K, pa.Table], Generic[K]):
         return Tables({key(k): v for k, v in self._ports.items()})
 
     def __getitem__(self, key: K) -> pa.Table:
+        if key not in self._ports:
+            known = ", ".join(sorted(map(str, self._ports))) or "none"
+            raise KeyError(f"{key!r} is not an output of this run (its outputs: {known})")
         value = self._ports[key]
         if isinstance(value, TableStream):
             value = self._ports[key] = settled(value.read_all)
         return value
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._ports
 
     def __iter__(self) -> Iterator[K]:
         return iter(self._ports)

@@ -278,6 +278,10 @@ def test_run_in_memory_equals_the_command_line(
         pd.testing.assert_frame_equal(ours.to_pandas(), table.to_pandas(), check_exact=True)
     frame = result.frame("compass.stations")
     assert frame.attrs["units"]["azi"] == "deg"
+    # a name that is no output says which are (a stage id alone is not one)
+    with pytest.raises(KeyError, match=r"'compass' is not an output .*compass\.stations"):
+        result.frame("compass")
+    assert "compass" not in result.tables and "compass.stations" in result.tables
     # a table given in memory runs the same
     again = gp.run(ROOT / "pipelines" / "point-gyro.yaml", simulation.samples)
     pd.testing.assert_frame_equal(  # NaN (undefined azimuths at vertical) equal to NaN
