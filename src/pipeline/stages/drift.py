@@ -8,6 +8,7 @@ contract is fixed).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 
 import pyarrow as pa
@@ -19,6 +20,7 @@ from pipeline.drift.correction import (
     DriftRate,
     calibration_rate,
     correct_survey,
+    survey_serial,
 )
 from pipeline.drift.tables import (
     AllanResult,
@@ -32,13 +34,18 @@ from pipeline.drift.tables import (
     NoiseParameters,
 )
 from pipeline.earth.site import SiteParams, resolve_site
-from pipeline.errors import EmptyTableError
+from pipeline.errors import EmptyTableError, SurveyCheckWarning
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages.files import read_stage_def
 from pipeline.tables import FreeGyroReadings, RawSamples
+from pipeline.well import WellMetadata, well_of
+
+NO_WELL = WellMetadata()
+"""An empty header: ``ctx.well_for(NO_WELL)`` is the well the pipeline and the run state,
+no input file's header merged in (another input's, a calibration's, is not the survey's)."""
 
 
 def calibrate_stage(
@@ -72,10 +79,27 @@ def correct_stage(
     if source == "calibration":
         if "calibration" not in inputs:
             raise ValueError("source calibration: wire a calibration result to `calibration`")
-        serial = params.instrument or ctx.well.tool_serial
+        serial = survey_serial(
+            {
+                "the readings' own tool serial": (
+                    well_of(inputs["readings"]) or NO_WELL
+                ).tool_serial,
+                "the stage's instrument": params.instrument,
+                "the well's tool_serial": ctx.well_for(NO_WELL).tool_serial,
+            }
+        )
         rate = calibration_rate(
             inputs["calibration"], serial, params.estimate, params.allow_nonlinear
         )
+        if serial is None:
+            warnings.warn(
+                f"stage {ctx.stage_id!r}: the survey's tool serial is stated nowhere (the "
+                "readings' header, the well's tool_serial, the stage's instrument): the drift "
+                f"calibration's one instrument, {rate.instrument!r}, was taken for the survey's "
+                "tool; state the tool serial to have it checked",
+                SurveyCheckWarning,
+                stacklevel=2,
+            )
     elif source == "given":
         if params.drift_rate is None:
             raise ValueError("source given: set drift_rate (°/h)")
