@@ -45,6 +45,7 @@ Rates are computed in deg/s and reported in °/min and °/h.
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import dataclass
 from typing import Literal
 
@@ -54,6 +55,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.drift.tables import CalibrationResult, CalibrationSeries
+from pipeline.well import SurveyDate
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -82,6 +84,11 @@ class CalibrationOptions(BaseModel):
     )
     use: Literal["fit", "mean", "grouped"] = Field(
         "fit", description="estimate marked `selected` (grouped needs ≥ 4 series, else fit)"
+    )
+    date: SurveyDate = Field(
+        None,
+        description="day the calibration was recorded (default: the survey_date the "
+        "calibration readings' header states)",
     )
 
 
@@ -361,11 +368,14 @@ def reading_times(readings: pa.Table, series: NDArray[np.int64]) -> FloatArray:
 
 
 def calibrate(
-    readings: pa.Table, options: CalibrationOptions, tool_serial: str | None = None
+    readings: pa.Table,
+    options: CalibrationOptions,
+    tool_serial: str | None = None,
+    date: dt.date | None = None,
 ) -> tuple[pa.Table, pa.Table]:
     """:class:`CalibrationResult` and :class:`CalibrationSeries` tables of every instrument
     in a :class:`CalibrationReadings` table (rows without a serial: ``options.instrument``,
-    else ``tool_serial``, else "unknown")."""
+    else ``tool_serial``, else "unknown"), recorded on ``options.date``, else ``date``."""
     if readings.num_rows == 0:
         raise ValueError("no calibration readings")
     fallback = options.instrument or tool_serial or UNKNOWN_INSTRUMENT
@@ -388,7 +398,7 @@ def calibrate(
             )
         except ValueError as exc:
             raise ValueError(f"instrument {name}: {exc}") from None
-        results.append(_result_columns(str(name), cal))
+        results.append(_result_columns(str(name), cal, options.date or date))
         series_rows.append(_series_columns(str(name), cal.series))
     return (
         CalibrationResult.compiled().make_table(_concat(results)),
@@ -396,7 +406,9 @@ def calibrate(
     )
 
 
-def _result_columns(instrument: str, cal: Calibration) -> dict[str, list[object]]:
+def _result_columns(
+    instrument: str, cal: Calibration, date: dt.date | None
+) -> dict[str, list[object]]:
     est, lin = cal.estimates, cal.linearity
     count = len(est)
     return {
@@ -416,6 +428,7 @@ def _result_columns(instrument: str, cal: Calibration) -> dict[str, list[object]
         "dof": [lin.dof] * count,
         "p_value": [lin.p_value] * count,
         "verdict": [lin.verdict] * count,
+        "calibration_date": [date.isoformat() if date else None] * count,
     }
 
 

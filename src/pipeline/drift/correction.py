@@ -61,6 +61,7 @@ from pipeline.contracts import NORTH_KEY
 from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
 from pipeline.errors import GyropipeError
+from pipeline.survey.calculation import record_of, with_record
 
 OUTLIER = 5.0
 """A pair whose residual exceeds this many σ of it is left out of σ_r's rate line."""
@@ -104,17 +105,31 @@ class CorrectionOptions(BaseModel):
     low_inclination: float = Field(10.0, ge=0, description="…this mean inclination")
 
 
-@dataclass(frozen=True)
-class DriftRate:
-    """A drift rate (°/h), its σ and where it came from. The σ of a tie-in misclosure's
-    rate is √2·σ_r / (t_last − t_first) (h), σ_r that of one reading: known once the
-    survey is corrected (:attr:`CorrectedSurvey.rate`), 0 before."""
+DRIFT_RATE_KEY = b"gyropipe.drift_rate"
+"""Schema metadata of corrected readings: the :class:`DriftRate` they were corrected with."""
 
-    rate: float
-    sigma: float
-    source: str
-    instrument: str | None = None
-    """the calibrated instrument whose rate it is"""
+
+class DriftRate(BaseModel):
+    """A drift rate (°/h), its σ and where it came from: a calibration (which estimate of
+    which instrument, recorded when, and its linearity verdict), a given rate or the tie-in
+    misclosure. The σ of a tie-in misclosure's rate is √2·σ_r / (t_last − t_first) (h),
+    σ_r that of one reading: known once the survey is corrected
+    (:attr:`CorrectedSurvey.rate`), 0 before."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    rate: float = Field(description="drift rate, °/h")
+    sigma: float = Field(ge=0, description="σ of the rate, °/h")
+    source: Literal["calibration", "given", "tie_in"]
+    instrument: str | None = Field(None, description="the calibrated instrument's serial")
+    method: str | None = Field(None, description="the calibration estimate (fit, mean…)")
+    label: str | None = Field(None, description="the series or readings it compares")
+    calibration_date: str | None = Field(None, description="day of the calibration, ISO 8601")
+    verdict: str | None = Field(None, description="the calibration's linearity verdict")
+
+
+def drift_rate_of(table: pa.Table) -> DriftRate | None:
+    """The drift rate corrected readings record (None: a table written before they did)."""
+    return record_of(table, DRIFT_RATE_KEY, DriftRate)
 
 
 @dataclass(frozen=True)
@@ -202,10 +217,14 @@ def calibration_rate(
             f"(p = {row['p_value']:.3g}); set allow_nonlinear to correct anyway"
         )
     return DriftRate(
-        float(row["drift_deg_h"]),
-        float(row["sigma_deg_h"]),
-        f"calibration {serial} {row['method']} {row['label']}",
-        serial,
+        rate=float(row["drift_deg_h"]),
+        sigma=float(row["sigma_deg_h"]),
+        source="calibration",
+        instrument=serial,
+        method=row["method"],
+        label=row["label"],
+        calibration_date=row.get("calibration_date"),
+        verdict=row["verdict"],
     )
 
 
@@ -235,7 +254,9 @@ def correct_survey(
             )
         last = int(tie_out[-1])
         span_h, tie = float(tau[last]), (first, last)
-        rate = DriftRate(float(wrap(azi[last] - azi[first]) / span_h), 0.0, "tie-in misclosure")
+        rate = DriftRate(
+            rate=float(wrap(azi[last] - azi[first]) / span_h), sigma=0.0, source="tie_in"
+        )
         mix[:, last] -= tau / span_h
         mix[:, first] += tau / span_h
     correction = rate.rate * tau
@@ -254,7 +275,7 @@ def correct_survey(
         sigma_r = _reading_sigma(corrected, mix, tau, pairs, tie)
     cov = sigma_r**2 * mix @ mix.T + rate.sigma**2 * np.outer(tau, tau)
     if span_h is not None:  # the rate's error is in ``mix``: the two tie-in readings'
-        rate = DriftRate(rate.rate, float(np.sqrt(2.0) * sigma_r / span_h), rate.source)
+        rate = rate.model_copy(update={"sigma": float(np.sqrt(2.0) * sigma_r / span_h)})
     north = (readings.schema.field("azi").metadata or {}).get(NORTH_KEY, b"true").decode()
     table = readings
     for name, values in (
@@ -273,7 +294,7 @@ def correct_survey(
         else:
             table = table.append_column(field, array)
     return CorrectedSurvey(
-        readings=table,
+        readings=with_record(table, DRIFT_RATE_KEY, rate),
         stations=_stations(readings, corrected, cov, run, station, options, north),
         qc=_in_out(readings, corrected, cov, pairs, options),
         rate=rate,

@@ -94,6 +94,11 @@ class CalibrationResult(TableContract):
         description="p-value of the linearity test (NaN: fewer than 3 series)",
     )
     verdict: str = column(unit=None, description="linear, non-linear: … or untested: …")
+    calibration_date: str | None = column(
+        unit=None,
+        description="day the calibration was recorded, ISO 8601 (2026-05-12); null: not stated",
+        default=None,
+    )
 
     @classmethod
     def ledger_entry(cls, table: pa.Table) -> dict[str, Any]:

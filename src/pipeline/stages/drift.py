@@ -20,6 +20,7 @@ from pipeline.drift.correction import (
     DriftRate,
     calibration_rate,
     correct_survey,
+    drift_rate_of,
     survey_serial,
 )
 from pipeline.drift.tables import (
@@ -54,7 +55,8 @@ def calibrate_stage(
     """Calibration readings → drift estimates and series means per instrument."""
     if inputs["readings"].num_rows == 0:
         raise EmptyTableError("calibration readings", "a drift calibration needs readings")
-    result, series = calibrate(inputs["readings"], params, ctx.well.tool_serial)
+    header = ctx.well_for(well_of(inputs["readings"]))  # the calibration file's own
+    result, series = calibrate(inputs["readings"], params, header.tool_serial, header.survey_date)
     return {"result": result, "series": series}
 
 
@@ -103,7 +105,7 @@ def correct_stage(
     elif source == "given":
         if params.drift_rate is None:
             raise ValueError("source given: set drift_rate (°/h)")
-        rate = DriftRate(params.drift_rate, params.drift_sigma, "given")
+        rate = DriftRate(rate=params.drift_rate, sigma=params.drift_sigma, source="given")
     survey = correct_survey(inputs["readings"], params, rate)
     return {"readings": survey.readings, "stations": survey.stations, "qc": survey.qc}
 
@@ -213,8 +215,10 @@ DRIFT_SOURCES = {
 
 
 def correction_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
-    """The drift correction in the report: the model and where its rate comes from."""
-    source = str(stage.params.get("source", "?"))
+    """The drift correction in the report: the model and where its rate came from (as the
+    corrected readings record it, else as the stage was told)."""
+    applied = drift_rate_of(ctx.tables["drift"]) if "drift" in ctx.tables else None
+    source = applied.source if applied is not None else str(stage.params.get("source", "?"))
     return MethodNote(
         "Drift correction", f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}"
     )

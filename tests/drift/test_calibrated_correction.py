@@ -1,11 +1,12 @@
 """A calibrated drift correction applies the calibration of the tool that read the survey:
 the readings' own tool serial (their file's header) picks the calibration's row, a well or
 stage serial that contradicts it is refused, and so is a calibration that holds no row of
-it — driven through ``gyropipe run`` and ``gp.run`` with files written to a temporary
-directory."""
+it; the survey report states the estimate applied — driven through ``gyropipe run`` and
+``gp.run`` with files written to a temporary directory."""
 
 from __future__ import annotations
 
+import datetime as dt
 from pathlib import Path
 
 import pyarrow as pa
@@ -19,7 +20,7 @@ from pipeline.sim.calibration import CalibrationPlan, simulate_calibration
 from pipeline.sim.freegyro import simulate_free_gyro
 from pipeline.sim.spec import Drift, SimulationSpec
 from pipeline.well import WellMetadata
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, tables_of
 
 RATES = {"IG50-1": 3.0, "IG50-2": -6.0}  # deg/h: each tool's own drift on the stand
 
@@ -41,7 +42,18 @@ stages:
     inputs: {readings: read.free_gyro, calibration: cal.calibration_result}
     with: {source: calibration, reading_sigma: 0.2}
     persist: [readings]
+  - id: trajectory
+    uses: minimum_curvature
+    inputs: {stations: drift.stations}
+  - id: report
+    uses: report
+    inputs:
+      trajectory: trajectory.trajectory
+      drift: drift.readings
+      calibration: cal.calibration_result
+    with: {formats: [html]}
 """
+CALIBRATED = dt.date(2026, 5, 12)
 
 
 def survey() -> SimulationSpec:
@@ -85,7 +97,8 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         ]
         readings_csv = tmp / f"calibration-{name}.csv"
         table = pa.concat_tables([simulate_calibration(p) for p in plans])
-        write_csv(table, readings_csv, WellMetadata(tool_serial=tools[-1]))
+        header = WellMetadata(tool_serial=tools[-1], survey_date=CALIBRATED)
+        write_csv(table, readings_csv, header)
         out = tmp / f"cal-{name}"
         gyropipe_cli(
             "run",
@@ -186,3 +199,59 @@ def test_a_survey_of_no_stated_serial_is_flagged(files: dict[str, Path], tmp_pat
     )  # fmt: skip
     assert cli.returncode == 0, cli.stderr
     assert "warning: stage 'drift': the survey's tool serial is stated nowhere" in cli.stderr
+
+
+def test_the_report_states_the_calibration_estimate_applied(files: dict[str, Path], tmp_path: Path):
+    """Corrected with IG50-1's ``mean`` estimate, the report's "Drift calibration used"
+    states that one — instrument, estimate, its series, rate and σ in °/h, the day it was
+    recorded, its linearity verdict (it listed the selected ``fit`` rows of both tools the
+    calibration holds, whichever was applied)."""
+    out = tmp_path / "out"
+    result = run(files, "both", out, "--set", "drift.estimate=mean")
+    assert result.returncode == 0, result.stderr
+    rows = pq.read_table(files["both"]).to_pylist()
+    mean = next(r for r in rows if r["instrument"] == "IG50-1" and r["method"] == "mean")
+    assert not mean["selected"]  # the calibration selects fit: the report must not say so
+    header, *used = tables_of(out / "report.html")["calibration"]
+    assert [h.strip() for h in header[:3]] == ["Instrument", "Estimate", "Series / readings"]
+    (row,) = used
+    assert row[0] == "IG50-1"
+    assert row[1].startswith("mean: ") and row[2] == "1…4"
+    assert float(row[3].replace("−", "-")) == pytest.approx(mean["drift_deg_h"], abs=5e-4)
+    assert float(row[4]) == pytest.approx(mean["sigma_deg_h"], rel=0.05)
+    assert row[5] == "2026-05-12" and row[6] == "linear"
+    assert "IG50" not in "".join(header)
+
+
+def test_a_calibration_of_no_stated_date_says_so(files: dict[str, Path], tmp_path: Path):
+    """A calibration whose readings state no day: "not stated", never a date made up."""
+    readings_csv = tmp_path / "calibration.csv"
+    plan = CalibrationPlan(instrument="IG50-1", reading_noise=0.5, drift=Drift(rate=3.0))
+    write_csv(simulate_calibration(plan), readings_csv, WellMetadata())
+    cal = tmp_path / "cal"
+    gyropipe_cli(
+        "run", ROOT / "pipelines" / "calibration.yaml", "--input", readings_csv, "--out", cal,
+        "--set", "report.formats=[html]", check=True,
+    )  # fmt: skip
+    files = {**files, "undated": cal / "drift.result.parquet"}
+    assert pq.read_table(files["undated"]).column("calibration_date").null_count > 0
+    result = run(files, "undated", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    (row,) = tables_of(tmp_path / "out" / "report.html")["calibration"][1:]
+    assert row[0] == "IG50-1" and row[5] == "not stated"
+
+
+def test_a_given_rate_is_stated_as_given(tmp_path: Path):
+    """Corrected with a given rate: the report says where it came from beside the rate."""
+    out = tmp_path / "out"
+    readings = tmp_path / "readings.parquet"
+    pq.write_table(simulate_free_gyro(survey()), readings)
+    gyropipe_cli(
+        "run", ROOT / "pipelines" / "free-gyro.yaml", "--input", readings, "--out", out,
+        "--set", "drift.source=given", "--set", "drift.drift_rate=2.5",
+        "--set", "report.formats=[html]", check=True,
+    )  # fmt: skip
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert "Drift rate applied" in text and "a rate given for the run" in text
+    assert "drift rate 2.500 °/h, σ 0 °/h" in text
+    assert "Drift calibration used" not in text
