@@ -7,8 +7,11 @@ it; the survey report states the estimate applied — driven through ``gyropipe 
 from __future__ import annotations
 
 import datetime as dt
+import re
+from html import unescape
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -54,6 +57,7 @@ stages:
     with: {formats: [html]}
 """
 CALIBRATED = dt.date(2026, 5, 12)
+HEAT = pa.field("temperature", pa.float64(), metadata={"unit": "degC"})
 
 
 def survey() -> SimulationSpec:
@@ -82,9 +86,9 @@ def survey() -> SimulationSpec:
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """The pipeline, free-gyro readings of tool IG50-1 (its serial in the CSV header) and
-    calibration results made by ``pipelines/calibration.yaml``: of both tools, and of
-    IG50-2 alone."""
+    """The pipeline, free-gyro readings of tool IG50-1 (its serial in the CSV header, 1 h
+    long) and calibration results made by ``pipelines/calibration.yaml`` (1.9 h long,
+    recorded on 2026-05-12): of both tools, and of IG50-2 alone."""
     tmp = tmp_path_factory.mktemp("match")
     (tmp / "pipeline.yaml").write_text(PIPELINE)
     readings = tmp / "readings.csv"
@@ -92,7 +96,13 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     made = {"pipeline": tmp / "pipeline.yaml", "readings": readings}
     for name, tools in (("both", ["IG50-1", "IG50-2"]), ("other", ["IG50-2"])):
         plans = [
-            CalibrationPlan(instrument=t, seed=k, reading_noise=0.5, drift=Drift(rate=RATES[t]))
+            CalibrationPlan(
+                instrument=t,
+                seed=k,
+                reading_noise=0.5,
+                drift=Drift(rate=RATES[t]),
+                reading_interval=120.0,  # 1.9 h, the 1 h survey's drift within its span
+            )
             for k, t in enumerate(tools)
         ]
         readings_csv = tmp / f"calibration-{name}.csv"
@@ -198,7 +208,10 @@ def test_a_survey_of_no_stated_serial_is_flagged(files: dict[str, Path], tmp_pat
         f"calibration={files['other']}", "--out", tmp_path / "out",
     )  # fmt: skip
     assert cli.returncode == 0, cli.stderr
-    assert "warning: stage 'drift': the survey's tool serial is stated nowhere" in cli.stderr
+    assert (
+        "warning: stage 'drift': drift calibration: the survey's tool serial is stated nowhere"
+        in cli.stderr
+    )
 
 
 def test_the_report_states_the_calibration_estimate_applied(files: dict[str, Path], tmp_path: Path):
@@ -226,7 +239,9 @@ def test_the_report_states_the_calibration_estimate_applied(files: dict[str, Pat
 def test_a_calibration_of_no_stated_date_says_so(files: dict[str, Path], tmp_path: Path):
     """A calibration whose readings state no day: "not stated", never a date made up."""
     readings_csv = tmp_path / "calibration.csv"
-    plan = CalibrationPlan(instrument="IG50-1", reading_noise=0.5, drift=Drift(rate=3.0))
+    plan = CalibrationPlan(
+        instrument="IG50-1", reading_noise=0.5, drift=Drift(rate=3.0), reading_interval=120.0
+    )
     write_csv(simulate_calibration(plan), readings_csv, WellMetadata())
     cal = tmp_path / "cal"
     gyropipe_cli(
@@ -255,3 +270,140 @@ def test_a_given_rate_is_stated_as_given(tmp_path: Path):
     assert "Drift rate applied" in text and "a rate given for the run" in text
     assert "drift rate 2.500 °/h, σ 0 °/h" in text
     assert "Drift calibration used" not in text
+
+
+def warnings_in(html: Path) -> dict[str, list[str]]:
+    """The warning verdicts of each section of an HTML report, by section id."""
+    text = html.read_text(encoding="utf-8")
+    return {
+        key: [unescape(v) for v in re.findall(r'<p class="verdict warn">(.*?)</p>', body)]
+        for key, body in re.findall(r'<section id="([\w-]+)">(.*?)</section>', text, re.S)
+    }
+
+
+def calibrated(
+    tmp_path: Path, name: str, plan: CalibrationPlan, day: dt.date | None, heat: tuple = ()
+) -> Path:
+    """A calibration result made by ``pipelines/calibration.yaml`` from readings simulated
+    by ``plan``, recorded on ``day``, at temperatures rising evenly over ``heat`` (°C)."""
+    table = simulate_calibration(plan)
+    if heat:
+        table = table.append_column(HEAT, pa.array(np.linspace(*heat, table.num_rows)))
+    readings_csv = tmp_path / f"{name}.csv"
+    write_csv(table, readings_csv, WellMetadata(survey_date=day))
+    gyropipe_cli(
+        "run", ROOT / "pipelines" / "calibration.yaml", "--input", readings_csv,
+        "--out", tmp_path / name, "--set", "report.formats=[html]", check=True,
+    )  # fmt: skip
+    return tmp_path / name / "drift.result.parquet"
+
+
+def surveyed(tmp_path: Path, day: dt.date | None, heat: tuple = ()) -> Path:
+    """Free-gyro readings of IG50-1 (1 h) surveyed on ``day``, at temperatures rising
+    evenly over ``heat`` (°C), as a CSV file."""
+    table = simulate_free_gyro(survey())
+    if heat:
+        table = table.append_column(HEAT, pa.array(np.linspace(*heat, table.num_rows)))
+    path = tmp_path / "readings.csv"
+    write_csv(table, path, WellMetadata(tool_serial="IG50-1", survey_date=day))
+    return path
+
+
+def corrected(files: dict[str, Path], readings: Path, calibration: Path, out: Path, *extra: str):
+    return run({**files, "readings": readings, "given": calibration}, "given", out, *extra)
+
+
+def test_a_survey_longer_than_its_calibration_is_warned(files: dict[str, Path], tmp_path: Path):
+    """A 0.5 h calibration applied to a 1 h survey: the rate is extrapolated in time —
+    warned on the command line, in the drift section and in the summary (it was applied
+    without a word)."""
+    plan = CalibrationPlan(instrument="IG50-1", reading_noise=0.5, reading_interval=30.0)
+    short = calibrated(tmp_path, "short", plan, None)
+    span_h = np.ptp(simulate_calibration(plan).column("time").to_numpy()) / 3600
+    result = corrected(files, files["readings"], short, tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    said = f"the survey's readings span 1.00 h, beyond the {span_h:.2f} h over which the "
+    assert f"warning: stage 'drift': drift calibration: {said}" in result.stderr
+    found = warnings_in(tmp_path / "out" / "report.html")
+    expected = f"Drift calibration: {said}calibration of IG50-1 saw its drift: the drift rate "
+    for section in ("summary", "drift"):
+        (verdict,) = found[section]
+        assert verdict == expected + "is extrapolated in time.", section
+    readings = pq.read_table(tmp_path / "out" / "drift.readings.parquet")
+    assert readings.column("drift_rate")[0].as_py() == selected_rate(short, "IG50-1")
+
+
+def test_a_survey_hotter_than_its_calibration_is_warned(files: dict[str, Path], tmp_path: Path):
+    """Calibrated at 20–25 °C, surveyed at 20–85 °C (both in the CSV files' temperature
+    columns): extrapolated in temperature; surveyed within 21–24 °C: no caveat."""
+    plan = CalibrationPlan(instrument="IG50-1", reading_noise=0.5, reading_interval=120.0)
+    cal = calibrated(tmp_path, "cal", plan, None, heat=(20.0, 25.0))
+    row = pq.read_table(cal).to_pylist()[0]
+    assert (row["temperature_min"], row["temperature_max"]) == (20.0, 25.0)
+    hot = corrected(files, surveyed(tmp_path, None, (20.0, 85.0)), cal, tmp_path / "hot")
+    assert hot.returncode == 0, hot.stderr
+    assert (
+        "drift calibration: the survey read temperatures of 20.0 to 85.0 °C, beyond the 20.0 "
+        "to 25.0 °C of the calibration of IG50-1: the drift rate is extrapolated in temperature"
+    ) in hot.stderr
+    assert len(warnings_in(tmp_path / "hot" / "report.html")["summary"]) == 1
+    mild = corrected(files, surveyed(tmp_path, None, (21.0, 24.0)), cal, tmp_path / "mild")
+    assert mild.returncode == 0, mild.stderr
+    assert "warning" not in mild.stderr
+    assert warnings_in(tmp_path / "mild" / "report.html")["summary"] == []
+
+
+@pytest.mark.parametrize(
+    ("day", "words"),
+    [(dt.date(2026, 11, 21), "193 days before"), (dt.date(2025, 12, 1), "162 days after")],
+)
+def test_an_old_calibration_is_warned(
+    files: dict[str, Path], tmp_path: Path, day: dt.date, words: str
+):
+    """Calibrated 2026-05-12: a survey of 2026-11-21 is 193 days later, beyond the default
+    180; one of 2025-12-01 came 162 days before it, beyond a limit of 150 days, within 180."""
+    readings = surveyed(tmp_path, day)
+    limit = "180" if day.year == 2026 else "150"
+    flagged = corrected(
+        files, readings, files["both"], tmp_path / "old",
+        "--set", f"drift.max_calibration_age_days={limit}",
+    )  # fmt: skip
+    assert flagged.returncode == 0, flagged.stderr
+    assert (
+        f"the calibration of IG50-1 (2026-05-12) was recorded {words} the survey, beyond "
+        f"the {limit} days a calibration is taken to hold"
+    ) in flagged.stderr
+    assert len(warnings_in(tmp_path / "old" / "report.html")["summary"]) == 1
+    quiet = corrected(
+        files, readings, files["both"], tmp_path / "new",
+        "--set", "drift.max_calibration_age_days=200",
+    )  # fmt: skip
+    assert quiet.returncode == 0, quiet.stderr
+    assert "warning" not in quiet.stderr
+
+
+def test_caveats_refuse_when_told(files: dict[str, Path], tmp_path: Path):
+    readings = surveyed(tmp_path, dt.date(2026, 11, 21))
+    result = corrected(
+        files, readings, files["both"], tmp_path / "out", "--set",
+        "drift.calibration_caveats=refuse",
+    )  # fmt: skip
+    assert result.returncode != 0
+    assert "CalibrationRangeError: the drift calibration: the calibration of IG50-1" in (
+        result.stderr
+    )
+    assert "Traceback" not in result.output and not (tmp_path / "out").exists()
+
+
+def test_a_calibration_date_that_is_no_day_is_refused(files: dict[str, Path], tmp_path: Path):
+    table = pq.read_table(files["both"])
+    at = table.column_names.index("calibration_date")
+    bad = table.set_column(
+        at, table.schema.field(at), pa.array(["12/05/2026"] * table.num_rows, pa.string())
+    )
+    pq.write_table(bad, tmp_path / "bad.parquet")
+    readings = surveyed(tmp_path, dt.date(2026, 11, 21))
+    result = corrected(files, readings, tmp_path / "bad.parquet", tmp_path / "out")
+    assert result.returncode != 0
+    assert "states its date as '12/05/2026', not a day (2026-05-12)" in result.stderr
+    assert "Traceback" not in result.output

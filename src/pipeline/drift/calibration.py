@@ -388,6 +388,9 @@ def calibrate(
     set_azimuth = readings.column("set_azimuth").to_numpy().astype(float)
     error = reading_errors(readings)
     time = reading_times(readings, series)
+    heat = np.full(readings.num_rows, np.nan)  # °C, NaN where not stated
+    if "temperature" in readings.column_names:
+        heat = readings.column("temperature").to_numpy(zero_copy_only=False).astype(float)
     results: list[dict[str, list[object]]] = []
     series_rows: list[dict[str, list[object]]] = []
     for name in dict.fromkeys(instrument):
@@ -398,7 +401,8 @@ def calibrate(
             )
         except ValueError as exc:
             raise ValueError(f"instrument {name}: {exc}") from None
-        results.append(_result_columns(str(name), cal, options.date or date))
+        span = float(np.ptp(time[rows]))
+        results.append(_result_columns(str(name), cal, options.date or date, span, heat[rows]))
         series_rows.append(_series_columns(str(name), cal.series))
     return (
         CalibrationResult.compiled().make_table(_concat(results)),
@@ -407,10 +411,14 @@ def calibrate(
 
 
 def _result_columns(
-    instrument: str, cal: Calibration, date: dt.date | None
+    instrument: str, cal: Calibration, date: dt.date | None, span: float, heat: FloatArray
 ) -> dict[str, list[object]]:
+    """The result rows of one instrument: its estimates, recorded on ``date``, from readings
+    ``span`` s long at temperatures ``heat`` (°C, NaN: not stated)."""
     est, lin = cal.estimates, cal.linearity
     count = len(est)
+    stated = heat[np.isfinite(heat)]
+    low, high = (float(stated.min()), float(stated.max())) if len(stated) else (None, None)
     return {
         "instrument": [instrument] * count,
         "method": [e.method for e in est],
@@ -429,6 +437,9 @@ def _result_columns(
         "p_value": [lin.p_value] * count,
         "verdict": [lin.verdict] * count,
         "calibration_date": [date.isoformat() if date else None] * count,
+        "time_span": [span] * count,
+        "temperature_min": [low] * count,
+        "temperature_max": [high] * count,
     }
 
 

@@ -58,6 +58,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.contracts import NORTH_KEY
+from pipeline.drift.applicability import MAX_AGE_DAYS
 from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
 from pipeline.errors import GyropipeError
@@ -88,6 +89,17 @@ class CorrectionOptions(BaseModel):
     )
     allow_nonlinear: bool = Field(
         False, description="use a calibration whose verdict is not linear"
+    )
+    max_calibration_age_days: float = Field(
+        MAX_AGE_DAYS,
+        gt=0,
+        description="days between the calibration and the survey beyond which the "
+        "calibration is old (a caveat)",
+    )
+    calibration_caveats: Literal["warn", "refuse"] = Field(
+        "warn",
+        description="a calibration that does not cover the survey (its time span, "
+        "temperatures, age; the survey's tool serial unstated): warn, or refuse",
     )
     reference_azimuth: float | None = Field(
         None, description="known azimuth at the tie-in station (removes the orientation offset)"
@@ -125,6 +137,9 @@ class DriftRate(BaseModel):
     label: str | None = Field(None, description="the series or readings it compares")
     calibration_date: str | None = Field(None, description="day of the calibration, ISO 8601")
     verdict: str | None = Field(None, description="the calibration's linearity verdict")
+    caveats: tuple[str, ...] = Field(
+        (), description="where the calibration does not cover the survey, one sentence each"
+    )
 
 
 def drift_rate_of(table: pa.Table) -> DriftRate | None:

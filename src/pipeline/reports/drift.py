@@ -19,6 +19,7 @@ from pipeline.reports.document import (
     Plot,
     Section,
     Table,
+    Verdict,
     fmt,
     fmt_sig,
     fmt_sigma,
@@ -51,7 +52,7 @@ def drift_section(drift: pa.Table | None, calibration: pa.Table | None) -> Secti
     applied = drift_rate_of(drift) if drift is not None else None
     blocks: list[Block] = []
     if applied is not None and applied.source == "calibration":
-        blocks.append(calibration_used(applied))
+        blocks += [calibration_used(applied), *caveat_verdicts(drift)]
     elif applied is not None:
         blocks.append(rate_applied(applied))
     elif calibration is not None:
@@ -59,6 +60,15 @@ def drift_section(drift: pa.Table | None, calibration: pa.Table | None) -> Secti
     if drift is not None:
         blocks += _correction(drift)
     return Section("Gyro drift", tuple(blocks), key="drift")
+
+
+def caveat_verdicts(drift: pa.Table | None) -> list[Verdict]:
+    """Where the calibration the survey was corrected with does not cover it (extrapolated
+    in time or temperature, old, the survey's tool unstated): a warning each, for the drift
+    section and the summary."""
+    applied = drift_rate_of(drift) if drift is not None and drift.num_rows else None
+    caveats = applied.caveats if applied is not None else ()
+    return [Verdict("warn", f"Drift calibration: {caveat}.") for caveat in caveats]
 
 
 def calibration_used(rate: DriftRate) -> Table:

@@ -30,7 +30,7 @@ from pipeline.reports.document import (
     fmt_sig,
     items,
 )
-from pipeline.reports.drift import drift_section
+from pipeline.reports.drift import caveat_verdicts, drift_section
 from pipeline.reports.envelope import FullRate
 from pipeline.reports.flags import POSITION_MISMATCH, Flag, long_course
 from pipeline.reports.listing import (
@@ -165,6 +165,7 @@ def survey_document(
     added = parts.sections()  # before the method section's reference list: they may cite
     tool = survey_tool(traj, well)
     verdicts = [b for b in clearance.blocks if isinstance(b, Verdict)] if clearance else []
+    verdicts += caveat_verdicts(tables.drift)
 
     sections = [
         Section(
@@ -322,8 +323,8 @@ def _summary(
     verdicts: list[Verdict],
 ) -> Section:
     """Results at TD (of each survey, named, when the trajectory holds several) and the
-    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's, repeated
-    from its section)."""
+    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's and the drift
+    calibration's caveats, repeated from their sections)."""
     traj = tables.trajectory
     names = _survey_names(traj, path.offsets)
     blocks: list[Block] = []

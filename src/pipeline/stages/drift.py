@@ -14,6 +14,11 @@ from collections.abc import Callable, Mapping
 import pyarrow as pa
 
 from pipeline.drift.allan import AllanOptions, analyse_static
+from pipeline.drift.applicability import (
+    CalibrationRangeError,
+    calibration_caveats,
+    survey_conditions,
+)
 from pipeline.drift.calibration import CalibrationOptions, calibrate
 from pipeline.drift.correction import (
     CorrectionOptions,
@@ -93,21 +98,44 @@ def correct_stage(
         rate = calibration_rate(
             inputs["calibration"], serial, params.estimate, params.allow_nonlinear
         )
-        if serial is None:
-            warnings.warn(
-                f"stage {ctx.stage_id!r}: the survey's tool serial is stated nowhere (the "
-                "readings' header, the well's tool_serial, the stage's instrument): the drift "
-                f"calibration's one instrument, {rate.instrument!r}, was taken for the survey's "
-                "tool; state the tool serial to have it checked",
-                SurveyCheckWarning,
-                stacklevel=2,
-            )
+        rate = with_caveats(rate, serial, inputs, params, ctx)
     elif source == "given":
         if params.drift_rate is None:
             raise ValueError("source given: set drift_rate (°/h)")
         rate = DriftRate(rate=params.drift_rate, sigma=params.drift_sigma, source="given")
     survey = correct_survey(inputs["readings"], params, rate)
     return {"readings": survey.readings, "stations": survey.stations, "qc": survey.qc}
+
+
+def with_caveats(
+    rate: DriftRate,
+    serial: str | None,
+    inputs: Mapping[str, pa.Table],
+    params: CorrectionOptions,
+    ctx: StageContext,
+) -> DriftRate:
+    """``rate`` with the caveats of its calibration (:mod:`pipeline.drift.applicability`;
+    and a survey whose tool serial ``serial`` is stated nowhere), each warned; refused
+    (:class:`CalibrationRangeError`) when the stage is told to."""
+    header = ctx.well_for(well_of(inputs["readings"]) or NO_WELL)  # the survey's, no other's
+    conditions = survey_conditions(inputs["readings"], header.survey_date, header.survey_date_last)
+    assert rate.instrument is not None  # a calibration's rate names its instrument
+    caveats = []
+    if serial is None:
+        caveats.append(
+            "the survey's tool serial is stated nowhere: the calibration's one instrument, "
+            f"{rate.instrument!r}, was taken for the survey's tool"
+        )
+    caveats += calibration_caveats(
+        inputs["calibration"], rate.instrument, conditions, params.max_calibration_age_days
+    )
+    if caveats and params.calibration_caveats == "refuse":
+        raise CalibrationRangeError(f"the drift calibration: {'; '.join(caveats)}")
+    for caveat in caveats:
+        warnings.warn(
+            f"stage {ctx.stage_id!r}: drift calibration: {caveat}", SurveyCheckWarning, stacklevel=2
+        )
+    return rate.model_copy(update={"caveats": tuple(caveats)})
 
 
 class AllanParams(AllanOptions, SiteParams):
