@@ -70,6 +70,9 @@ EXPECTED: dict[str, tuple[str, float]] = {
     "MIN": ("time", 60.0),
     "H": ("time", 3600.0),
     "HR": ("time", 3600.0),
+    "DEGC": ("temperature", 1.0),
+    "°C": ("temperature", 1.0),
+    "CELSIUS": ("temperature", 1.0),
 }
 
 
@@ -105,6 +108,7 @@ def test_canonical_units() -> None:
         "magnetic_field": "nT",
         "time": "s",
         "dogleg_severity": "deg/30m",
+        "temperature": "degC",
     }
     for quantity in QUANTITIES:
         assert conversion_factor(canonical_unit(quantity), quantity) == 1.0

@@ -14,6 +14,7 @@ import textwrap
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from html.parser import HTMLParser
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
 from typing import Any
@@ -406,3 +407,41 @@ def simulate_and_run(tmp_path: Path, plan_text: str, pipeline: str = "point-gyro
     result = gyropipe_cli("run", str(pipeline_file), "--input", str(samples), "--out", str(out))
     assert result.returncode == 0, result.stderr
     return out
+
+
+class _Tables(HTMLParser):
+    """Cell texts of every table in an HTML file, by table class."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.tables: dict[str, list[list[str]]] = {}
+        self._current: str | None = None
+        self._cell: list[str] | None = None
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        if tag == "table":
+            self._current = (dict(attrs).get("class") or "").split()[0]
+            self.tables[self._current] = []
+        elif tag == "tr" and self._current:
+            self.tables[self._current].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag in ("td", "th") and self._cell is not None and self._current:
+            self.tables[self._current][-1].append("".join(self._cell))
+            self._cell = None
+        elif tag == "table":
+            self._current = None
+
+    def handle_data(self, data: str) -> None:
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def tables_of(html: Path) -> dict[str, list[list[str]]]:
+    """The cell texts of every table of an HTML report, by table class (row by row, the
+    header row first)."""
+    parser = _Tables()
+    parser.feed(html.read_text(encoding="utf-8"))
+    return parser.tables

@@ -214,6 +214,9 @@ class FreeGyroReadings(TableContract):
     azi: float = column(
         unit="deg", ge=0, lt=360, north_reference=True, description="azimuth reading (drifts)"
     )
+    temperature: float | None = column(
+        unit="degC", description="tool temperature at the reading", default=None
+    )
     true_inc: float | None = column(
         unit="deg", ge=0, le=180, description="true inclination (simulations)", default=None
     )

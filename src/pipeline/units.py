@@ -82,6 +82,11 @@ ALIASES: dict[str, str] = {
     "min": "minute",
     "h": "hour",
     "hr": "hour",
+    # temperature: Celsius alone — °F and K are offset from it, which no factor converts
+    # (and "F" is a foot here)
+    "degc": "delta_degree_Celsius",
+    "°c": "delta_degree_Celsius",
+    "celsius": "delta_degree_Celsius",
 }
 """Accepted unit spellings (lower case, no whitespace) → pint expression."""
 
@@ -102,6 +107,7 @@ QUANTITIES: dict[str, Quantity] = {
     "magnetic_field": Quantity("nT", "a magnetic field"),
     "time": Quantity("s", "a time"),
     "dogleg_severity": Quantity("deg/30m", "a dogleg severity"),
+    "temperature": Quantity("degC", "a temperature"),
 }
 """Quantity name → canonical unit. Every canonical unit is itself a spelling in ALIASES."""
 

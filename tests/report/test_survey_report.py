@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable
-from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +29,7 @@ from pipeline.registry import Registry, StageDef
 from pipeline.runner import run_plan
 from pipeline.spec import load_spec
 from pipeline.tables import Trajectory
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, tables_of
 
 SAMPLE = "examples/stations-j-well.csv"
 EXAMPLES = ROOT / "examples" / "report"
@@ -163,42 +162,6 @@ def test_failed_check_highlights_the_row_and_is_explained(tmp_path: Path, browse
         ]
     ]
     assert f"QC: {sum(failed)} of {len(failed)} stations failed a check (MD " in page.text
-
-
-class _Tables(HTMLParser):
-    """Cell texts of every table in an HTML file, by table class."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.tables: dict[str, list[list[str]]] = {}
-        self._current: str | None = None
-        self._cell: list[str] | None = None
-
-    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
-        if tag == "table":
-            self._current = (dict(attrs).get("class") or "").split()[0]
-            self.tables[self._current] = []
-        elif tag == "tr" and self._current:
-            self.tables[self._current].append([])
-        elif tag in ("td", "th"):
-            self._cell = []
-
-    def handle_endtag(self, tag: str) -> None:
-        if tag in ("td", "th") and self._cell is not None and self._current:
-            self.tables[self._current][-1].append("".join(self._cell))
-            self._cell = None
-        elif tag == "table":
-            self._current = None
-
-    def handle_data(self, data: str) -> None:
-        if self._cell is not None:
-            self._cell.append(data)
-
-
-def tables_of(html: Path) -> dict[str, list[list[str]]]:
-    parser = _Tables()
-    parser.feed(html.read_text(encoding="utf-8"))
-    return parser.tables
 
 
 @pytest.mark.parametrize("name", sorted(EXAMPLE_RUNS))

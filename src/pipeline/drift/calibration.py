@@ -45,6 +45,7 @@ Rates are computed in deg/s and reported in °/min and °/h.
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import dataclass
 from typing import Literal
 
@@ -54,6 +55,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.drift.tables import CalibrationResult, CalibrationSeries
+from pipeline.well import SurveyDate
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -82,6 +84,11 @@ class CalibrationOptions(BaseModel):
     )
     use: Literal["fit", "mean", "grouped"] = Field(
         "fit", description="estimate marked `selected` (grouped needs ≥ 4 series, else fit)"
+    )
+    date: SurveyDate = Field(
+        None,
+        description="day the calibration was recorded (default: the survey_date the "
+        "calibration readings' header states)",
     )
 
 
@@ -361,11 +368,14 @@ def reading_times(readings: pa.Table, series: NDArray[np.int64]) -> FloatArray:
 
 
 def calibrate(
-    readings: pa.Table, options: CalibrationOptions, tool_serial: str | None = None
+    readings: pa.Table,
+    options: CalibrationOptions,
+    tool_serial: str | None = None,
+    date: dt.date | None = None,
 ) -> tuple[pa.Table, pa.Table]:
     """:class:`CalibrationResult` and :class:`CalibrationSeries` tables of every instrument
     in a :class:`CalibrationReadings` table (rows without a serial: ``options.instrument``,
-    else ``tool_serial``, else "unknown")."""
+    else ``tool_serial``, else "unknown"), recorded on ``options.date``, else ``date``."""
     if readings.num_rows == 0:
         raise ValueError("no calibration readings")
     fallback = options.instrument or tool_serial or UNKNOWN_INSTRUMENT
@@ -378,6 +388,9 @@ def calibrate(
     set_azimuth = readings.column("set_azimuth").to_numpy().astype(float)
     error = reading_errors(readings)
     time = reading_times(readings, series)
+    heat = np.full(readings.num_rows, np.nan)  # °C, NaN where not stated
+    if "temperature" in readings.column_names:
+        heat = readings.column("temperature").to_numpy(zero_copy_only=False).astype(float)
     results: list[dict[str, list[object]]] = []
     series_rows: list[dict[str, list[object]]] = []
     for name in dict.fromkeys(instrument):
@@ -388,7 +401,8 @@ def calibrate(
             )
         except ValueError as exc:
             raise ValueError(f"instrument {name}: {exc}") from None
-        results.append(_result_columns(str(name), cal))
+        span = float(np.ptp(time[rows]))
+        results.append(_result_columns(str(name), cal, options.date or date, span, heat[rows]))
         series_rows.append(_series_columns(str(name), cal.series))
     return (
         CalibrationResult.compiled().make_table(_concat(results)),
@@ -396,9 +410,15 @@ def calibrate(
     )
 
 
-def _result_columns(instrument: str, cal: Calibration) -> dict[str, list[object]]:
+def _result_columns(
+    instrument: str, cal: Calibration, date: dt.date | None, span: float, heat: FloatArray
+) -> dict[str, list[object]]:
+    """The result rows of one instrument: its estimates, recorded on ``date``, from readings
+    ``span`` s long at temperatures ``heat`` (°C, NaN: not stated)."""
     est, lin = cal.estimates, cal.linearity
     count = len(est)
+    stated = heat[np.isfinite(heat)]
+    low, high = (float(stated.min()), float(stated.max())) if len(stated) else (None, None)
     return {
         "instrument": [instrument] * count,
         "method": [e.method for e in est],
@@ -416,6 +436,10 @@ def _result_columns(instrument: str, cal: Calibration) -> dict[str, list[object]
         "dof": [lin.dof] * count,
         "p_value": [lin.p_value] * count,
         "verdict": [lin.verdict] * count,
+        "calibration_date": [date.isoformat() if date else None] * count,
+        "time_span": [span] * count,
+        "temperature_min": [low] * count,
+        "temperature_max": [high] * count,
     }
 
 

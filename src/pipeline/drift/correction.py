@@ -5,8 +5,9 @@ t0 the time of the first in-run reading at the tie-in station (else of the first
 The drift rate ω_d (°/h) is
 
 - ``calibration``: the instrument's calibrated rate (:mod:`pipeline.drift.calibration`),
-  matched by serial (the stage's ``instrument``, else the well's ``tool_serial``; a table of
-  one instrument needs no serial), with its σ;
+  matched by the serial of the tool that read the survey (:func:`survey_serial`: the
+  readings' own, else the stage's ``instrument``, else the well's ``tool_serial``, all that
+  are stated agreeing; a calibration of one instrument needs no serial), with its σ;
 - ``given``: a rate (and σ) named in the parameters;
 - ``tie_in``: the survey's own misclosure at the tie-in station — the first in-run and the
   last out-run readings there see the same azimuth, so ω_d = wrap(A_last − A_first) /
@@ -47,6 +48,7 @@ QC: each station read on both runs is compared after correction; it fails when
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Literal
@@ -56,8 +58,11 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.contracts import NORTH_KEY
+from pipeline.drift.applicability import MAX_AGE_DAYS
 from pipeline.drift.calibration import LINEAR, UNTESTED, FloatArray, wrap
 from pipeline.drift.tables import CorrectedFreeGyroReadings, DriftStations, InOutQc
+from pipeline.errors import GyropipeError
+from pipeline.survey.calculation import record_of, with_record
 
 OUTLIER = 5.0
 """A pair whose residual exceeds this many σ of it is left out of σ_r's rate line."""
@@ -75,13 +80,26 @@ class CorrectionOptions(BaseModel):
     drift_rate: float | None = Field(None, description="given drift rate, °/h")
     drift_sigma: float = Field(0.0, ge=0, description="σ of the given drift rate, °/h")
     instrument: str | None = Field(
-        None, description="serial to look up in the calibration (default: well tool_serial)"
+        None,
+        description="serial of the tool that read the survey, looked up in the calibration "
+        "(default: the readings' own, else the well's tool_serial; each one stated must agree)",
     )
     estimate: str | None = Field(
         None, description="calibration method to use (default: the selected estimate)"
     )
     allow_nonlinear: bool = Field(
         False, description="use a calibration whose verdict is not linear"
+    )
+    max_calibration_age_days: float = Field(
+        MAX_AGE_DAYS,
+        gt=0,
+        description="days between the calibration and the survey beyond which the "
+        "calibration is old (a caveat)",
+    )
+    calibration_caveats: Literal["warn", "refuse"] = Field(
+        "warn",
+        description="a calibration that does not cover the survey (its time span, "
+        "temperatures, age; the survey's tool serial unstated): warn, or refuse",
     )
     reference_azimuth: float | None = Field(
         None, description="known azimuth at the tie-in station (removes the orientation offset)"
@@ -99,15 +117,34 @@ class CorrectionOptions(BaseModel):
     low_inclination: float = Field(10.0, ge=0, description="…this mean inclination")
 
 
-@dataclass(frozen=True)
-class DriftRate:
-    """A drift rate (°/h), its σ and where it came from. The σ of a tie-in misclosure's
-    rate is √2·σ_r / (t_last − t_first) (h), σ_r that of one reading: known once the
-    survey is corrected (:attr:`CorrectedSurvey.rate`), 0 before."""
+DRIFT_RATE_KEY = b"gyropipe.drift_rate"
+"""Schema metadata of corrected readings: the :class:`DriftRate` they were corrected with."""
 
-    rate: float
-    sigma: float
-    source: str
+
+class DriftRate(BaseModel):
+    """A drift rate (°/h), its σ and where it came from: a calibration (which estimate of
+    which instrument, recorded when, and its linearity verdict), a given rate or the tie-in
+    misclosure. The σ of a tie-in misclosure's rate is √2·σ_r / (t_last − t_first) (h),
+    σ_r that of one reading: known once the survey is corrected
+    (:attr:`CorrectedSurvey.rate`), 0 before."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    rate: float = Field(description="drift rate, °/h")
+    sigma: float = Field(ge=0, description="σ of the rate, °/h")
+    source: Literal["calibration", "given", "tie_in"]
+    instrument: str | None = Field(None, description="the calibrated instrument's serial")
+    method: str | None = Field(None, description="the calibration estimate (fit, mean…)")
+    label: str | None = Field(None, description="the series or readings it compares")
+    calibration_date: str | None = Field(None, description="day of the calibration, ISO 8601")
+    verdict: str | None = Field(None, description="the calibration's linearity verdict")
+    caveats: tuple[str, ...] = Field(
+        (), description="where the calibration does not cover the survey, one sentence each"
+    )
+
+
+def drift_rate_of(table: pa.Table) -> DriftRate | None:
+    """The drift rate corrected readings record (None: a table written before they did)."""
+    return record_of(table, DRIFT_RATE_KEY, DriftRate)
 
 
 @dataclass(frozen=True)
@@ -128,19 +165,49 @@ def azimuth360(angle: FloatArray) -> FloatArray:
     return out
 
 
+class CalibrationMatchError(GyropipeError, ValueError):
+    """The calibration cannot be matched to the tool that read the survey: the serials stated
+    for that tool disagree, or the calibration holds no estimate of it."""
+
+
+def survey_serial(stated: Mapping[str, str | None]) -> str | None:
+    """The serial of the tool that read the survey: the first one ``stated`` (what states it
+    → the serial, None where silent; the readings' own first). Raises
+    :class:`CalibrationMatchError` when two stated serials differ — whose calibration
+    applies is then unknown, and applying either could be another tool's."""
+    named = {who: serial for who, serial in stated.items() if serial is not None}
+    if len(set(named.values())) > 1:
+        listed = ", ".join(f"{who} {serial!r}" for who, serial in named.items())
+        raise CalibrationMatchError(
+            f"the tool serials disagree ({listed}): which tool read the survey, and so whose "
+            "drift calibration applies, is unknown; correct the one that is wrong"
+        )
+    return next(iter(named.values()), None)
+
+
 def calibration_rate(
     calibration: pa.Table, serial: str | None, estimate: str | None, allow_nonlinear: bool
 ) -> DriftRate:
-    """The drift rate of instrument ``serial`` from a :class:`CalibrationResult` table: the
-    row of method ``estimate``, else its selected row."""
+    """The drift rate of instrument ``serial`` (the survey's tool, :func:`survey_serial`)
+    from a :class:`CalibrationResult` table: the row of method ``estimate``, else its selected
+    row. Without a serial, the calibration must hold one instrument. Raises
+    :class:`CalibrationMatchError` when it holds no row of the serial (or the estimate)."""
     instruments = calibration.column("instrument").to_pylist()
+    held = ", ".join(map(repr, sorted(set(instruments))))
     if serial is None:
         if len(set(instruments)) != 1:
-            raise ValueError(
-                "the tool serial is unknown (well tool_serial or the stage's `instrument`) and "
-                f"the calibration holds instruments {sorted(set(instruments))}"
+            raise CalibrationMatchError(
+                "the survey's tool serial is stated nowhere (the readings' header, the well's "
+                f"tool_serial, the stage's instrument) and the calibration holds instruments "
+                f"{held}: state the tool serial"
             )
         serial = instruments[0]
+    if serial not in instruments:
+        raise CalibrationMatchError(
+            f"the calibration holds no estimate of instrument {serial!r}, the tool that read "
+            f"the survey (it calibrates {held}): give that tool's calibration, another "
+            "tool's drift is not this one's"
+        )
     methods = calibration.column("method").to_pylist()
     selected = calibration.column("selected").to_pylist()
     rows = [
@@ -149,12 +216,15 @@ def calibration_rate(
         if name == serial and (methods[i] == estimate if estimate else selected[i])
     ]
     if not rows:
-        raise ValueError(
+        found = sorted({m for m, name in zip(methods, instruments, strict=True) if name == serial})
+        raise CalibrationMatchError(
             f"no calibration estimate {estimate or 'selected'!r} of instrument {serial!r} "
-            f"(calibrated: {', '.join(sorted(set(instruments)))})"
+            f"(its estimates: {', '.join(found)})"
         )
     if len(rows) > 1:
-        raise ValueError(f"{len(rows)} calibration rows of {serial!r} match: name one estimate")
+        raise CalibrationMatchError(
+            f"{len(rows)} calibration rows of {serial!r} match: name one estimate"
+        )
     row = calibration.slice(rows[0], 1).to_pylist()[0]
     if row["verdict"] not in (LINEAR, UNTESTED) and not allow_nonlinear:
         raise ValueError(
@@ -162,9 +232,14 @@ def calibration_rate(
             f"(p = {row['p_value']:.3g}); set allow_nonlinear to correct anyway"
         )
     return DriftRate(
-        float(row["drift_deg_h"]),
-        float(row["sigma_deg_h"]),
-        f"calibration {serial} {row['method']} {row['label']}",
+        rate=float(row["drift_deg_h"]),
+        sigma=float(row["sigma_deg_h"]),
+        source="calibration",
+        instrument=serial,
+        method=row["method"],
+        label=row["label"],
+        calibration_date=row.get("calibration_date"),
+        verdict=row["verdict"],
     )
 
 
@@ -194,7 +269,9 @@ def correct_survey(
             )
         last = int(tie_out[-1])
         span_h, tie = float(tau[last]), (first, last)
-        rate = DriftRate(float(wrap(azi[last] - azi[first]) / span_h), 0.0, "tie-in misclosure")
+        rate = DriftRate(
+            rate=float(wrap(azi[last] - azi[first]) / span_h), sigma=0.0, source="tie_in"
+        )
         mix[:, last] -= tau / span_h
         mix[:, first] += tau / span_h
     correction = rate.rate * tau
@@ -213,7 +290,7 @@ def correct_survey(
         sigma_r = _reading_sigma(corrected, mix, tau, pairs, tie)
     cov = sigma_r**2 * mix @ mix.T + rate.sigma**2 * np.outer(tau, tau)
     if span_h is not None:  # the rate's error is in ``mix``: the two tie-in readings'
-        rate = DriftRate(rate.rate, float(np.sqrt(2.0) * sigma_r / span_h), rate.source)
+        rate = rate.model_copy(update={"sigma": float(np.sqrt(2.0) * sigma_r / span_h)})
     north = (readings.schema.field("azi").metadata or {}).get(NORTH_KEY, b"true").decode()
     table = readings
     for name, values in (
@@ -232,7 +309,7 @@ def correct_survey(
         else:
             table = table.append_column(field, array)
     return CorrectedSurvey(
-        readings=table,
+        readings=with_record(table, DRIFT_RATE_KEY, rate),
         stations=_stations(readings, corrected, cov, run, station, options, north),
         qc=_in_out(readings, corrected, cov, pairs, options),
         rate=rate,

@@ -45,6 +45,9 @@ class CalibrationReadings(TableContract):
     series_end: float | None = column(
         unit="s", description="end time of the reading's series", default=None
     )
+    temperature: float | None = column(
+        unit="degC", description="instrument temperature at the reading", default=None
+    )
 
 
 class CalibrationResult(TableContract):
@@ -94,6 +97,28 @@ class CalibrationResult(TableContract):
         description="p-value of the linearity test (NaN: fewer than 3 series)",
     )
     verdict: str = column(unit=None, description="linear, non-linear: … or untested: …")
+    calibration_date: str | None = column(
+        unit=None,
+        description="day the calibration was recorded, ISO 8601 (2026-05-12); null: not stated",
+        default=None,
+    )
+    time_span: float | None = column(
+        unit="s",
+        ge=0,
+        description="time from the instrument's first calibration reading to its last: the "
+        "span its drift was seen over",
+        default=None,
+    )
+    temperature_min: float | None = column(
+        unit="degC",
+        description="lowest temperature of its calibration readings (null: none stated)",
+        default=None,
+    )
+    temperature_max: float | None = column(
+        unit="degC",
+        description="highest temperature of its calibration readings (null: none stated)",
+        default=None,
+    )
 
     @classmethod
     def ledger_entry(cls, table: pa.Table) -> dict[str, Any]:

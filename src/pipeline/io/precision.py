@@ -30,6 +30,7 @@ DECIMALS: dict[str, int] = {
     "m/s2": 9,  # ≈ 0.1 ng
     "nT": 3,
     "s": 6,  # 1 µs
+    "degC": 3,
 }
 """Canonical unit → decimals written."""
 FULL_TURN = 360.0

@@ -11,7 +11,6 @@ from functools import partial
 import numpy as np
 import pyarrow as pa
 
-from pipeline.drift.correction import correction_rate
 from pipeline.errors import GyropipeError
 from pipeline.registry import Provenance
 from pipeline.reports import plots
@@ -29,9 +28,9 @@ from pipeline.reports.document import (
     fmt,
     fmt_azimuth,
     fmt_sig,
-    fmt_sigma,
     items,
 )
+from pipeline.reports.drift import caveat_verdicts, drift_section
 from pipeline.reports.envelope import FullRate
 from pipeline.reports.flags import POSITION_MISMATCH, Flag, long_course
 from pipeline.reports.listing import (
@@ -44,7 +43,6 @@ from pipeline.reports.listing import (
     long_courses,
 )
 from pipeline.reports.literature import Citations
-from pipeline.reports.numbers import fmt_measured
 from pipeline.reports.parts import Parts, Registered
 from pipeline.reports.program import program_section
 from pipeline.reports.qc import (
@@ -167,6 +165,7 @@ def survey_document(
     added = parts.sections()  # before the method section's reference list: they may cite
     tool = survey_tool(traj, well)
     verdicts = [b for b in clearance.blocks if isinstance(b, Verdict)] if clearance else []
+    verdicts += caveat_verdicts(tables.drift)
 
     sections = [
         Section(
@@ -210,8 +209,9 @@ def survey_document(
         sections.append(_qc(groups, explained, diagnosed, src.gates))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
-        calibration = tables.calibration if _rows(tables.calibration) else None
-        sections.append(_drift(dataclasses.replace(tables, drift=drift, calibration=calibration)))
+        sections.append(
+            drift_section(drift, tables.calibration if _rows(tables.calibration) else None)
+        )
     if tables.allan is not None and _rows(tables.allan):
         sections.append(_allan(tables.allan, tables.noise))
     if clearance is not None:
@@ -323,8 +323,8 @@ def _summary(
     verdicts: list[Verdict],
 ) -> Section:
     """Results at TD (of each survey, named, when the trajectory holds several) and the
-    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's, repeated
-    from its section)."""
+    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's and the drift
+    calibration's caveats, repeated from their sections)."""
     traj = tables.trajectory
     names = _survey_names(traj, path.offsets)
     blocks: list[Block] = []
@@ -573,76 +573,6 @@ def _qc(
 def _rows(table: pa.Table | None) -> int:
     """Rows of an optional table (0 when absent): an empty one makes no section."""
     return 0 if table is None else table.num_rows
-
-
-def _rate(drift: pa.Table) -> str:
-    """The drift rate a survey was corrected with and its σ; of a table written before
-    they were recorded, the slope of its correction."""
-    if "sigma_drift_rate" in drift.schema.names:
-        rate, sigma = (float(col(drift, c)[0]) for c in ("drift_rate", "sigma_drift_rate"))
-        return f"drift rate {fmt_measured(rate, sigma, 3)} °/h, σ {fmt_sigma(sigma)} °/h"
-    rate = correction_rate(col(drift, "time"), col(drift, "correction"))
-    return f"the correction grows at {fmt_sig(rate)} °/h (slope of the correction against time)"
-
-
-def _drift(tables: SurveyTables) -> Section:
-    blocks: list[Block] = []
-    cal = tables.calibration
-    if cal is not None:
-        chosen = cal.filter(cal.column("selected"))
-        rows = [
-            (
-                r["instrument"],
-                r["method"],
-                fmt_measured(r["drift_deg_h"], r["sigma_deg_h"], 3),
-                fmt_sigma(r["sigma_deg_h"]),
-                r["verdict"],
-            )
-            for r in chosen.to_pylist()
-        ]
-        blocks.append(
-            Table(
-                "Drift calibration used",
-                (
-                    Column("Instrument", align="left"),
-                    Column("Estimate", align="left"),
-                    Column("Drift", "°/h"),
-                    Column("σ", "°/h"),
-                    Column("Linearity", align="left", wrap=True),
-                ),
-                tuple(rows),
-                kind="calibration",
-            )
-        )
-    drift = tables.drift
-    if drift is not None:
-        time_h = col(drift, "time") / 3600.0
-        correction = col(drift, "correction")
-        outbound = np.array([r == "out" for r in drift.column("run").to_pylist()])
-        span = float(np.ptp(time_h))
-        blocks.append(
-            Paragraph(f"{drift.num_rows} readings corrected over {fmt(span, 2)} h; {_rate(drift)}.")
-        )
-        blocks.append(
-            Plot(
-                "drift",
-                "Drift correction",
-                "Left: correction subtracted from each reading against time. Right: azimuth as "
-                "read (grey) and corrected against MD.",
-                partial(
-                    plots.drift_correction,
-                    time_h=time_h,
-                    correction=correction,
-                    md=col(drift, "md"),
-                    azi_raw=col(drift, "azi_raw"),
-                    azi=col(drift, "azi"),
-                    outbound=outbound,
-                    north_label=north_label(drift, "azi"),
-                ),
-                (6.9, 3.4),
-            )
-        )
-    return Section("Gyro drift", tuple(blocks), key="drift")
 
 
 def _allan(allan: pa.Table, noise: pa.Table | None) -> Section:

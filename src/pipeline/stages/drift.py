@@ -8,17 +8,25 @@ contract is fixed).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 
 import pyarrow as pa
 
 from pipeline.drift.allan import AllanOptions, analyse_static
+from pipeline.drift.applicability import (
+    CalibrationRangeError,
+    calibration_caveats,
+    survey_conditions,
+)
 from pipeline.drift.calibration import CalibrationOptions, calibrate
 from pipeline.drift.correction import (
     CorrectionOptions,
     DriftRate,
     calibration_rate,
     correct_survey,
+    drift_rate_of,
+    survey_serial,
 )
 from pipeline.drift.tables import (
     AllanResult,
@@ -32,13 +40,18 @@ from pipeline.drift.tables import (
     NoiseParameters,
 )
 from pipeline.earth.site import SiteParams, resolve_site
-from pipeline.errors import EmptyTableError
+from pipeline.errors import EmptyTableError, SurveyCheckWarning
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages.files import read_stage_def
 from pipeline.tables import FreeGyroReadings, RawSamples
+from pipeline.well import WellMetadata, well_of
+
+NO_WELL = WellMetadata()
+"""An empty header: ``ctx.well_for(NO_WELL)`` is the well the pipeline and the run state,
+no input file's header merged in (another input's, a calibration's, is not the survey's)."""
 
 
 def calibrate_stage(
@@ -47,7 +60,8 @@ def calibrate_stage(
     """Calibration readings → drift estimates and series means per instrument."""
     if inputs["readings"].num_rows == 0:
         raise EmptyTableError("calibration readings", "a drift calibration needs readings")
-    result, series = calibrate(inputs["readings"], params, ctx.well.tool_serial)
+    header = ctx.well_for(well_of(inputs["readings"]))  # the calibration file's own
+    result, series = calibrate(inputs["readings"], params, header.tool_serial, header.survey_date)
     return {"result": result, "series": series}
 
 
@@ -72,16 +86,56 @@ def correct_stage(
     if source == "calibration":
         if "calibration" not in inputs:
             raise ValueError("source calibration: wire a calibration result to `calibration`")
-        serial = params.instrument or ctx.well.tool_serial
+        serial = survey_serial(
+            {
+                "the readings' own tool serial": (
+                    well_of(inputs["readings"]) or NO_WELL
+                ).tool_serial,
+                "the stage's instrument": params.instrument,
+                "the well's tool_serial": ctx.well_for(NO_WELL).tool_serial,
+            }
+        )
         rate = calibration_rate(
             inputs["calibration"], serial, params.estimate, params.allow_nonlinear
         )
+        rate = with_caveats(rate, serial, inputs, params, ctx)
     elif source == "given":
         if params.drift_rate is None:
             raise ValueError("source given: set drift_rate (°/h)")
-        rate = DriftRate(params.drift_rate, params.drift_sigma, "given")
+        rate = DriftRate(rate=params.drift_rate, sigma=params.drift_sigma, source="given")
     survey = correct_survey(inputs["readings"], params, rate)
     return {"readings": survey.readings, "stations": survey.stations, "qc": survey.qc}
+
+
+def with_caveats(
+    rate: DriftRate,
+    serial: str | None,
+    inputs: Mapping[str, pa.Table],
+    params: CorrectionOptions,
+    ctx: StageContext,
+) -> DriftRate:
+    """``rate`` with the caveats of its calibration (:mod:`pipeline.drift.applicability`;
+    and a survey whose tool serial ``serial`` is stated nowhere), each warned; refused
+    (:class:`CalibrationRangeError`) when the stage is told to."""
+    header = ctx.well_for(well_of(inputs["readings"]) or NO_WELL)  # the survey's, no other's
+    conditions = survey_conditions(inputs["readings"], header.survey_date, header.survey_date_last)
+    assert rate.instrument is not None  # a calibration's rate names its instrument
+    caveats = []
+    if serial is None:
+        caveats.append(
+            "the survey's tool serial is stated nowhere: the calibration's one instrument, "
+            f"{rate.instrument!r}, was taken for the survey's tool"
+        )
+    caveats += calibration_caveats(
+        inputs["calibration"], rate.instrument, conditions, params.max_calibration_age_days
+    )
+    if caveats and params.calibration_caveats == "refuse":
+        raise CalibrationRangeError(f"the drift calibration: {'; '.join(caveats)}")
+    for caveat in caveats:
+        warnings.warn(
+            f"stage {ctx.stage_id!r}: drift calibration: {caveat}", SurveyCheckWarning, stacklevel=2
+        )
+    return rate.model_copy(update={"caveats": tuple(caveats)})
 
 
 class AllanParams(AllanOptions, SiteParams):
@@ -189,8 +243,10 @@ DRIFT_SOURCES = {
 
 
 def correction_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
-    """The drift correction in the report: the model and where its rate comes from."""
-    source = str(stage.params.get("source", "?"))
+    """The drift correction in the report: the model and where its rate came from (as the
+    corrected readings record it, else as the stage was told)."""
+    applied = drift_rate_of(ctx.tables["drift"]) if "drift" in ctx.tables else None
+    source = applied.source if applied is not None else str(stage.params.get("source", "?"))
     return MethodNote(
         "Drift correction", f"A − ω·(t − t₀), rate from {DRIFT_SOURCES.get(source, source)}"
     )
