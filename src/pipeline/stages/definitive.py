@@ -55,7 +55,7 @@ from pipeline.uncertainty.sections import WellByWell, definitive_covariance
 from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude, NorthReference, WellMetadata, well_of
+from pipeline.well import Latitude, NorthReference, WellMetadata, one_well, well_of
 
 MAX_RUNS = 6
 RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
@@ -226,6 +226,9 @@ def definitive_survey(
     ports = [p for p in RUN_PORTS if p in inputs]
     north = params.north_reference or north_reference_of(inputs[ports[0]], "azi")
     specs = {p: params.runs.get(p, RunSpec()) for p in ports}
+    one_well(
+        {p if specs[p].name in (None, p) else f"{p} ({specs[p].name})": inputs[p] for p in ports}
+    )
     catalogue = toolmodels.of_run(ctx)
     tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
     for port, tool in tools.items():

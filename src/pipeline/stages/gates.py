@@ -16,12 +16,14 @@ from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.stations import north_reference_of
 from pipeline.tables import AcceptanceGates, Stations
+from pipeline.well import one_well
 
 
 def gates_stage(
     inputs: Mapping[str, pa.Table], params: GateOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """In-run and out-run stations → the pairs compared and the gates."""
+    """In-run and out-run stations (of one well) → the pairs compared and the gates."""
+    one_well(inputs)
     north_in = north_reference_of(inputs["inrun"], "azi")
     north_out = north_reference_of(inputs["outrun"], "azi")
     if north_in != north_out:
