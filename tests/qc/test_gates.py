@@ -240,3 +240,28 @@ def test_coverage_of_feet_files_is_judged_in_metres(
     assert (by_gate["coverage"]["status"], by_gate["coverage"]["unit"]) == (status, "m")
     assert by_gate["td"]["status"] == "pass"
     assert f"gates.coverage     {status}" in result.stdout
+
+
+def test_a_bad_free_gyro_tie_in_fails_its_check(tmp_path: Path) -> None:
+    """The drift rate from the tie-in misclosure makes the tie-in's two corrected readings
+    equal: its pair is checked against the drift the other stations read twice show. The
+    out-run's closing reading at the tie-in 3° off (the tool knocked at the wellhead) fails
+    it — against the 1° azimuth limit, though the tie-in is vertical (its error shifts every
+    azimuth of the survey); the clean survey's tie-in passes, its difference within 4 σ."""
+    readings = gp.simulate(ROOT / "examples" / "plans" / "j-well-free-gyro.yaml").readings
+    closing = readings.index[(readings["run"] == "out") & (readings["station"] == 0)][-1]
+    bad = readings.copy()
+    bad.loc[closing, "azi"] = (bad.loc[closing, "azi"] + 3.0) % 360
+    (tmp_path / "p.yaml").write_text(FREE_GYRO_PIPELINE)
+    for data, offset, status in ((readings, 0.0, "pass"), (bad, -3.0, "fail")):
+        result = gp.run(tmp_path / "p.yaml", {"readings": data})
+        qc = result.frame("drift.qc")
+        tie = qc[qc["station"] == 0].iloc[0]
+        assert bool(tie["tie_in"]) and qc["tie_in"].sum() == 1
+        assert 0.2 < tie["sigma_azi_diff"] < 0.5  # two readings and the other pairs' rate
+        assert abs(tie["azi_diff"] - offset) < 4 * tie["sigma_azi_diff"]
+        assert (tie["azi_tolerance"], bool(tie["passed"])) == (1.0, status == "pass")
+        gates = result.frame("gates.gates").set_index("gate")
+        assert gates.loc["tie_in", "status"] == status
+        assert gates.loc["tie_in", "value"] == pytest.approx(abs(tie["azi_diff"]))
+        assert gates.loc["tie_in", "limit"] == 1.0

@@ -11,6 +11,8 @@ azimuth (wrapped to ±180°) and the two depths. The gates, each pass, fail or n
     azimuth_low  … and ≤ ``azi_tolerance_low`` (5.0°) below it (undefined azimuths at
                  vertical are not compared)
     depth        every |ΔMD| ≤ ``depth_tolerance`` (0.5 m): the two runs' depths agree
+    tie_in       a free gyro's in/out QC only: |ΔA| of its tie-in pair ≤ ``azi_tolerance``
+                 at any inclination (a tie-in error shifts every corrected azimuth)
     coverage     every MD gap between consecutive stations compared ≤ ``max_gap`` (100 m):
                  a depth left unsurveyed by either run is not accepted
     td           when a total depth ``td`` is stated: the deepest station compared is at
@@ -169,7 +171,8 @@ def _coverage(md: np.ndarray, options: GateOptions) -> list[tuple[Any, ...]]:
 
 def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
     """The gates of a :class:`RunComparison` (or a free gyro's in/out QC, which has no
-    out-run depths: its depth gate is not evaluated) as an :class:`AcceptanceGates` table."""
+    out-run depths: its depth gate is not evaluated; its tie-in pair is the ``tie_in`` gate,
+    not an azimuth one) as an :class:`AcceptanceGates` table."""
     n = comparison.num_rows
     inc_diff = comparison.column("inc_diff").to_numpy(zero_copy_only=False).astype(float)
     azi_diff = comparison.column("azi_diff").to_numpy(zero_copy_only=False).astype(float)
@@ -177,6 +180,11 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
         comparison.column("inc_in").to_numpy(zero_copy_only=False)
         + comparison.column("inc_out").to_numpy(zero_copy_only=False)
     ) / 2
+    tie = (
+        comparison.column("tie_in").to_numpy(zero_copy_only=False).astype(bool)
+        if "tie_in" in comparison.column_names
+        else np.zeros(n, dtype=bool)
+    )
     low = mean_inc < options.low_inclination
     md_diff = (
         comparison.column("md_diff").to_numpy(zero_copy_only=False).astype(float)
@@ -197,14 +205,14 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
         ("inclination", inc_diff, options.inc_tolerance, "deg", "largest |in − out| inclination"),
         (
             "azimuth",
-            azi_diff[~low],
+            azi_diff[~low & ~tie],
             options.azi_tolerance,
             "deg",
             f"largest |in − out| azimuth at inclination ≥ {options.low_inclination:g}°",
         ),
         (
             "azimuth_low",
-            azi_diff[low],
+            azi_diff[low & ~tie],
             options.azi_tolerance_low,
             "deg",
             f"largest |in − out| azimuth at inclination < {options.low_inclination:g}°",
@@ -212,6 +220,9 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
         ("depth", md_diff, options.depth_tolerance, "m", "largest |in − out| depth of a pair"),
     ):
         rows.append(_gate(gate, _worst(values), limit, unit, text))
+    if "tie_in" in comparison.column_names:
+        text = "|in − out| azimuth at the tie-in, at any inclination (it shifts every azimuth)"
+        rows.append(_gate("tie_in", _worst(azi_diff[tie]), options.azi_tolerance, "deg", text))
     md = np.sort(comparison.column("md").to_numpy(zero_copy_only=False).astype(float))
     rows.extend(_coverage(md, options))
     names = ("gate", "value", "limit", "unit", "status", "description")
