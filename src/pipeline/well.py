@@ -23,7 +23,7 @@ from pydantic import (
 from pydantic_core.core_schema import SerializerFunctionWrapHandler
 
 from pipeline import jsontext
-from pipeline.errors import ParameterError
+from pipeline.errors import GyropipeError, ParameterError
 
 WELL_KEY = b"gyropipe.well"
 
@@ -320,3 +320,51 @@ def well_of(table: pa.Table | pa.Schema) -> WellMetadata | None:
     if raw is None:
         return None
     return WellMetadata.model_validate(jsontext.loads(raw))
+
+
+class WellMismatchError(GyropipeError, ValueError):
+    """Tables to be combined (runs of a definitive survey, an in-run and its out-run) name
+    different wells in their headers: names each table's port and the well it names."""
+
+
+IDENTITY_FIELDS = {"well": "well", "uwi": "UWI"}
+"""Well metadata fields naming the well (→ their label in messages); the wellbore is not
+one (a sidetrack's survey lists its parent's stations above the kick-off)."""
+API_WELL_DIGITS = 10
+"""Digits of an API number naming the well: state, county, well (those after them name the
+wellbore and the event: a sidetrack's 12-digit API is its well's)."""
+
+
+def _identity(name: str, value: str) -> str:
+    """``value`` of identity field ``name`` as compared: letters and digits, case folded (J-12,
+    j 12 and J12 are one name); an API number (digits only) by its first ten digits."""
+    key = "".join(c for c in value.casefold() if c.isalnum())
+    if name == "uwi" and key.isdigit() and len(key) > API_WELL_DIGITS:
+        return key[:API_WELL_DIGITS]
+    return key
+
+
+def one_well(tables: Mapping[str, pa.Table | pa.Schema]) -> None:
+    """Check that ``tables`` (by port) are of one well: where two of their headers
+    (:func:`well_of`) both state a well name, or both a UWI/API, these agree (compared as
+    :func:`_identity` says). A table stating neither passes: its well is unknown, not another.
+    Raises :class:`WellMismatchError` naming each port and the well its header names."""
+    headers = {port: well_of(table) or WellMetadata() for port, table in tables.items()}
+    for name in IDENTITY_FIELDS:
+        stated = {p: getattr(h, name) for p, h in headers.items() if getattr(h, name)}
+        if len({_identity(name, v) for v in stated.values()}) > 1:
+            break
+    else:
+        return
+    named = []
+    for port, header in headers.items():
+        parts = [
+            f"{label} {getattr(header, name)!r}"
+            for name, label in IDENTITY_FIELDS.items()
+            if getattr(header, name)
+        ]
+        named.append(f"{port}: {', '.join(parts) or 'no well named'}")
+    raise WellMismatchError(
+        f"the runs are of different wells ({'; '.join(named)}): runs of one well only can "
+        "be combined; give the runs of one well, or correct the header that names the wrong one"
+    )

@@ -4,6 +4,7 @@ gyro whose azimuths err beyond the 1° gate)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ import pytest
 import pipeline as gp
 from inout_support import simulated_runs
 from pipeline.qc.gates import pair_stations
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +30,7 @@ def _status(gates: Any) -> dict[str, str]:
 def test_agreeing_runs_pass_every_gate(runs: dict[str, pd.DataFrame]) -> None:
     result = gp.acceptance_gates(runs["in"], runs["out"])
     assert _status(result.gates) == dict.fromkeys(
-        ("stations", "inclination", "azimuth", "azimuth_low", "depth"), "pass"
+        ("stations", "inclination", "azimuth", "azimuth_low", "depth", "coverage"), "pass"
     )
     comparison = result.comparison
     assert len(comparison) == len(runs["in"]) == 16  # every station paired
@@ -44,7 +45,7 @@ def test_an_out_run_with_an_azimuth_error_fails_the_azimuth_gate(
     status = _status(result.gates)
     assert status["azimuth"] == "fail"
     assert {k: v for k, v in status.items() if k != "azimuth"} == dict.fromkeys(
-        ("stations", "inclination", "azimuth_low", "depth"), "pass"
+        ("stations", "inclination", "azimuth_low", "depth", "coverage"), "pass"
     )
     comparison = result.comparison
     failed = comparison[~comparison["passed"]]
@@ -113,7 +114,14 @@ def test_pipeline_gates_and_definitive_survey(runs: dict[str, pd.DataFrame]) -> 
     acceptance = result.manifest["acceptance"]
     assert acceptance["status"] == "fail"
     by_gate = {g["gate"]: g for g in acceptance["gates"]}
-    assert set(by_gate) == {"stations", "inclination", "azimuth", "azimuth_low", "depth"}
+    assert set(by_gate) == {
+        "stations",
+        "inclination",
+        "azimuth",
+        "azimuth_low",
+        "depth",
+        "coverage",
+    }
     assert by_gate["azimuth"]["status"] == "fail" and by_gate["azimuth"]["limit"] == 1.0
     assert by_gate["inclination"]["status"] == "pass" and by_gate["azimuth"]["stage"] == "gates"
     gates = result.frame("gates.gates").set_index("gate")
@@ -161,4 +169,99 @@ def test_free_gyro_in_out_qc_is_gated(tmp_path: Path) -> None:
     qc = result.frame("drift.qc")
     assert gates.loc["stations", "value"] == len(qc)
     assert gates.loc["inclination", "value"] == pytest.approx(qc["inc_diff"].abs().max())
-    assert result.manifest["acceptance"]["gates"][-1]["value"] is None  # NaN → null in JSON
+    by_gate = {g["gate"]: g for g in result.manifest["acceptance"]["gates"]}
+    assert by_gate["depth"]["value"] is None  # NaN → null in JSON
+
+
+def test_a_gap_in_the_stations_compared_fails_the_coverage_gate(
+    runs: dict[str, pd.DataFrame],
+) -> None:
+    """Two in-run stations left out open a gap of three station intervals (180 m > 100 m);
+    a gap of the out-run alone is a gap of the stations compared too."""
+    assert _status(gp.acceptance_gates(runs["in"], runs["out"]).gates)["coverage"] == "pass"
+    holed = runs["in"].drop(index=[6, 7])
+    above, below = runs["in"]["md"][5], runs["in"]["md"][8]
+    gates = gp.acceptance_gates(holed, runs["out"]).gates.set_index("gate")
+    assert gates.loc["coverage", "status"] == "fail"
+    assert gates.loc["coverage", "value"] == pytest.approx(below - above, abs=1e-9)
+    assert (gates.loc["coverage", "limit"], gates.loc["coverage", "unit"]) == (100.0, "m")
+    assert f"{above:.1f} to {below:.1f} m MD" in gates.loc["coverage", "description"]
+    assert (gates.drop(index="coverage")["status"] != "fail").all()
+    out_holed = gp.acceptance_gates(runs["in"], runs["out"].drop(index=[6, 7])).gates
+    assert _status(out_holed)["coverage"] == "fail"
+    wide = gp.acceptance_gates(holed, runs["out"], max_gap=200.0).gates
+    assert _status(wide)["coverage"] == "pass"
+
+
+def test_a_stated_td_must_be_reached(runs: dict[str, pd.DataFrame]) -> None:
+    """``td`` (m): the deepest station compared within ``td_tolerance`` (0.5 m) of it; no
+    ``td``, no TD gate."""
+    deepest = runs["in"]["md"].max()
+    assert "td" not in _status(gp.acceptance_gates(runs["in"], runs["out"]).gates)
+    reached = gp.acceptance_gates(runs["in"], runs["out"], td=deepest + 0.3).gates
+    assert _status(reached)["td"] == "pass"
+    short = gp.acceptance_gates(runs["in"], runs["out"], td=deepest + 40.0).gates
+    row = short.set_index("gate").loc["td"]
+    assert row["status"] == "fail" and row["value"] == pytest.approx(40.0, abs=1e-9)
+    assert (row["limit"], row["unit"]) == (0.5, "m")
+    assert f"{deepest:.1f} m MD" in row["description"] and "TD" in row["description"]
+    cut = gp.acceptance_gates(runs["in"], runs["out"].iloc[:-1], td=deepest + 0.3).gates
+    assert _status(cut)["td"] == "fail"  # the bottom station of the in-run alone: not compared
+
+
+def _feet_file(path: Path, keep: list[int]) -> Path:
+    """The example J-well stations (every 30 m) at the rows ``keep``, MD written in feet."""
+    lines = (ROOT / "examples" / "stations-j-well.csv").read_text().splitlines()
+    head = lines.index("MD (m),Inc (deg),Azimuth True (deg)")
+    rows = [lines[head + 1 + k].split(",") for k in keep]
+    body = [f"{float(md) / 0.3048:.4f},{inc},{azi}" for md, inc, azi in rows]
+    path.write_text("\n".join([*lines[:head], "MD (ft),Inc (deg),Azimuth True (deg)", *body]))
+    return path
+
+
+@pytest.mark.parametrize(("dropped", "gap", "status"), [(2, 90.0, "pass"), (3, 120.0, "fail")])
+def test_coverage_of_feet_files_is_judged_in_metres(
+    tmp_path: Path, dropped: int, gap: float, status: str
+) -> None:
+    """In-run and out-run files in feet (stations every 98.4 ft): a gap of 295.3 ft is
+    90 m, within the 100 m limit; 393.7 ft is 120 m, beyond it."""
+    keep = [k for k in range(85) if not 40 < k <= 40 + dropped]
+    inrun = _feet_file(tmp_path / "in.csv", keep)
+    outrun = _feet_file(tmp_path / "out.csv", keep)
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "inout-gyro.yaml", "--input", f"inrun={inrun}",
+        "--input", f"outrun={outrun}", "--out", tmp_path / "out",
+        "--set", "report.formats=[html]", "--set", "gates.td=2520",
+    )  # fmt: skip
+    assert result.returncode == {"pass": 0, "fail": 3}[status], result.output  # 3: rejected
+    manifest = json.loads((tmp_path / "out" / "run.json").read_text())
+    by_gate = {g["gate"]: g for g in manifest["acceptance"]["gates"]}
+    assert by_gate["coverage"]["value"] == pytest.approx(gap, abs=1e-3)
+    assert (by_gate["coverage"]["status"], by_gate["coverage"]["unit"]) == (status, "m")
+    assert by_gate["td"]["status"] == "pass"
+    assert f"gates.coverage     {status}" in result.stdout
+
+
+def test_a_bad_free_gyro_tie_in_fails_its_check(tmp_path: Path) -> None:
+    """The drift rate from the tie-in misclosure makes the tie-in's two corrected readings
+    equal: its pair is checked against the drift the other stations read twice show. The
+    out-run's closing reading at the tie-in 3° off (the tool knocked at the wellhead) fails
+    it — against the 1° azimuth limit, though the tie-in is vertical (its error shifts every
+    azimuth of the survey); the clean survey's tie-in passes, its difference within 4 σ."""
+    readings = gp.simulate(ROOT / "examples" / "plans" / "j-well-free-gyro.yaml").readings
+    closing = readings.index[(readings["run"] == "out") & (readings["station"] == 0)][-1]
+    bad = readings.copy()
+    bad.loc[closing, "azi"] = (bad.loc[closing, "azi"] + 3.0) % 360
+    (tmp_path / "p.yaml").write_text(FREE_GYRO_PIPELINE)
+    for data, offset, status in ((readings, 0.0, "pass"), (bad, -3.0, "fail")):
+        result = gp.run(tmp_path / "p.yaml", {"readings": data})
+        qc = result.frame("drift.qc")
+        tie = qc[qc["station"] == 0].iloc[0]
+        assert bool(tie["tie_in"]) and qc["tie_in"].sum() == 1
+        assert 0.2 < tie["sigma_azi_diff"] < 0.5  # two readings and the other pairs' rate
+        assert abs(tie["azi_diff"] - offset) < 4 * tie["sigma_azi_diff"]
+        assert (tie["azi_tolerance"], bool(tie["passed"])) == (1.0, status == "pass")
+        gates = result.frame("gates.gates").set_index("gate")
+        assert gates.loc["tie_in", "status"] == status
+        assert gates.loc["tie_in", "value"] == pytest.approx(abs(tie["azi_diff"]))
+        assert gates.loc["tie_in", "limit"] == 1.0

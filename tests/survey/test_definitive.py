@@ -6,6 +6,7 @@ Carlo: tests/uncertainty/test_definitive_covariance.py."""
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -14,12 +15,13 @@ import pytest
 
 import pipeline as gp
 from pipeline.earth.site import MagneticReference
+from pipeline.errors import SurveyCheckWarning
 from pipeline.sim.plan import Section, WellPlan, build_path
 from pipeline.survey.definitive import RunStations, SurveyGapError, plan_sections, roles
 from pipeline.uncertainty import ModelSite, Survey, find_model, model_terms
 from pipeline.uncertainty.model import propagate_nev
 from pipeline.uncertainty.terms import term_covariance, term_effects
-from tests_support import ROOT
+from tests_support import ROOT, gyropipe_cli
 
 GYRO = np.arange(0.0, 601.0, 30.0)  # 0 … 600
 MWD = np.arange(570.0, 1200.0, 45.0)  # 570, 615, … 1155
@@ -170,3 +172,37 @@ def test_a_gap_fails_the_run_naming_the_runs(tmp_path: Any) -> None:
         gp.definitive_survey(
             {"a": _stations(GYRO)}, run_options={"a": {"model": "GYRO-XX"}}, latitude=61.0
         )
+
+
+def test_a_short_stretch_left_out_at_the_bottom_is_warned_of(tmp_path: Any) -> None:
+    """The out-run's deepest station 0.4 m below the in-run's (shorter than min_length, 1 m):
+    the definitive survey ends at the in-run's 900 m — and says which station it left out,
+    where and how long a stretch; min_length 0 lists it. On the command line: a warning."""
+    md = np.arange(0.0, 901.0, 60.0)
+    inrun, outrun = _stations(md), _stations(np.r_[md[:-1], 900.4])
+    options = {"in": {"priority": 1}}
+    with pytest.warns(SurveyCheckWarning) as caught:
+        survey = gp.definitive_survey(
+            {"in": inrun, "out": outrun}, run_options=options, latitude=61.0
+        )["survey"]
+    assert survey["md"].to_numpy().max() == 900.0
+    (text,) = [str(w.message) for w in caught if w.category is SurveyCheckWarning]
+    assert "run 'out'" in text and "900.40 m MD" in text and "0.40 m below" in text
+    assert "min_length" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SurveyCheckWarning)
+        kept = gp.definitive_survey(
+            {"in": inrun, "out": outrun}, run_options=options, latitude=61.0, min_length=0.0
+        )["survey"]
+    assert kept["md"].to_numpy().max() == pytest.approx(900.4)
+
+    for name, run in (("in", inrun), ("out", outrun)):
+        frame = run.select(["md", "inc", "azi"]).to_pandas()
+        frame.columns = ["MD (m)", "Inc (deg)", "Azimuth True (deg)"]
+        frame.to_csv(tmp_path / f"{name}.csv", index=False)
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "inout-gyro.yaml", "--input", f"inrun={tmp_path / 'in.csv'}",
+        "--input", f"outrun={tmp_path / 'out.csv'}", "--out", tmp_path / "o",
+        "--well", "latitude=61", "--set", "report.formats=[html]",
+    )  # fmt: skip
+    assert "warning:" in result.stderr and "900.40 m MD" in result.stderr, result.output

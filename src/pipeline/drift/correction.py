@@ -42,7 +42,11 @@ degrees, times in seconds.
 QC: each station read on both runs is compared after correction; it fails when
 ``|inc_in − inc_out| > inc_tolerance`` (default 0.23°) or ``|azi_in − azi_out|`` exceeds
 ``azi_tolerance`` (1.0°) at a mean inclination ≥ ``low_inclination`` (10°), or
-``azi_tolerance_low`` (5.0°) below it — industry gyro in/out-run tolerances.
+``azi_tolerance_low`` (5.0°) below it — industry gyro in/out-run tolerances. The tie-in
+station's pair is judged against ``azi_tolerance`` at any inclination (its error shifts every
+corrected azimuth); with the rate from its own misclosure its two corrected readings are
+equal by construction, so it is compared with its out-run reading corrected by the rate the
+other pairs show instead (:func:`_tie_check`).
 """
 
 from __future__ import annotations
@@ -311,7 +315,7 @@ def correct_survey(
     return CorrectedSurvey(
         readings=with_record(table, DRIFT_RATE_KEY, rate),
         stations=_stations(readings, corrected, cov, run, station, options, north),
-        qc=_in_out(readings, corrected, cov, pairs, options),
+        qc=_in_out(readings, corrected, cov, pairs, options, tau, tie, float(sigma_r)),
         rate=rate,
         reading_sigma=float(sigma_r),
     )
@@ -447,26 +451,89 @@ def _in_out(
     cov: FloatArray,
     pairs: np.ndarray,
     options: CorrectionOptions,
+    tau: FloatArray,
+    tie: tuple[int, ...],
+    sigma_r: float,
 ) -> pa.Table:
+    """The in/out QC of the stations read twice; the tie-in station's pair judged against
+    ``azi_tolerance`` whatever its inclination and, when the rate is its own misclosure
+    (``tie``: its two rows), compared as :func:`_tie_check` says (a tie-in it cannot check
+    is left out)."""
     i, o = pairs[:, 0], pairs[:, 1]
+    station = readings.column("station").to_numpy()[i]
     inc = readings.column("inc").to_numpy()
-    inc_diff = inc[i] - inc[o]
+    azi_out = corrected[o]
     azi_diff = wrap(corrected[i] - corrected[o])
-    low = (inc[i] + inc[o]) / 2 < options.low_inclination
+    sigma = np.sqrt(np.maximum(cov[i, i] + cov[o, o] - 2 * cov[i, o], 0.0))
+    tie_in = station == options.tie_station
+    keep = np.ones(len(i), dtype=bool)
+    for k in np.flatnonzero(tie_in if tie else False):  # the rate is its own misclosure
+        checked = _tie_check(corrected, cov, tau, pairs, tie, sigma_r, int(k))
+        if checked is None:
+            keep[k] = False
+        else:
+            azi_out[k], azi_diff[k], sigma[k] = checked
+    inc_diff = inc[i] - inc[o]
+    low = ((inc[i] + inc[o]) / 2 < options.low_inclination) & ~tie_in
     azi_tol = np.where(low, options.azi_tolerance_low, options.azi_tolerance)
     return InOutQc.compiled().make_table(
         {
-            "station": readings.column("station").to_numpy()[i],
-            "md": readings.column("md").to_numpy()[i],
-            "inc_in": inc[i],
-            "inc_out": inc[o],
-            "inc_diff": inc_diff,
-            "azi_in": corrected[i],
-            "azi_out": corrected[o],
-            "azi_diff": azi_diff,
-            "sigma_azi_diff": np.sqrt(np.maximum(cov[i, i] + cov[o, o] - 2 * cov[i, o], 0.0)),
-            "inc_tolerance": np.full(len(i), options.inc_tolerance),
-            "azi_tolerance": azi_tol,
-            "passed": (np.abs(inc_diff) <= options.inc_tolerance) & (np.abs(azi_diff) <= azi_tol),
+            "station": station[keep],
+            "md": readings.column("md").to_numpy()[i][keep],
+            "inc_in": inc[i][keep],
+            "inc_out": inc[o][keep],
+            "inc_diff": inc_diff[keep],
+            "azi_in": corrected[i][keep],
+            "azi_out": azi_out[keep],
+            "azi_diff": azi_diff[keep],
+            "sigma_azi_diff": sigma[keep],
+            "inc_tolerance": np.full(int(keep.sum()), options.inc_tolerance),
+            "azi_tolerance": azi_tol[keep],
+            "tie_in": tie_in[keep],
+            "passed": ((np.abs(inc_diff) <= options.inc_tolerance) & (np.abs(azi_diff) <= azi_tol))[
+                keep
+            ],
         }
     )
+
+
+def _tie_check(
+    corrected: FloatArray,
+    cov: FloatArray,
+    tau: FloatArray,
+    pairs: np.ndarray,
+    tie: tuple[int, ...],
+    sigma_r: float,
+    k: int,
+) -> tuple[float, float, float] | None:
+    """The tie-in pair ``k`` (rows i, o) when the drift rate is its own misclosure, which
+    makes its two corrected readings equal: its out-run reading corrected instead by the
+    rate the other stations read twice show — ``azi_out``, ``azi_diff`` and σ of the
+    difference (deg). That rate exceeds the one applied by b, the least-squares slope
+    through the origin of the other pairs' corrected differences d_j in τ_in − τ_out (h);
+    pairs beyond :data:`OUTLIER` σ of the line (σ of a difference: √2·σ_r) are left out and
+    the line fitted again. Then ``azi_diff`` = d_k + b·(τ_o − τ_i): the tie-in error the
+    rest of the survey sees (a good tie-in's is noise), its σ² = wᵀ·Cov·w for the weights
+    w of that sum over the readings. None: no other pair has time between its readings."""
+    i, o = pairs[:, 0], pairs[:, 1]
+    diff = wrap(corrected[i] - corrected[o])
+    gap = tau[i] - tau[o]
+    rows = np.flatnonzero(~np.isin(pairs, tie).any(axis=1) & (gap != 0))
+    for _ in range(2):  # the line, then the line of the pairs near it
+        span = float(gap[rows] @ gap[rows])
+        if not span > 0:
+            return None
+        slope = float(gap[rows] @ diff[rows]) / span
+        near = np.abs(diff[rows] - slope * gap[rows]) <= OUTLIER * np.sqrt(2.0) * sigma_r
+        if near.all():
+            break
+        rows = rows[near]
+    lever = float(tau[o[k]] - tau[i[k]])
+    weights = np.zeros(len(corrected))
+    weights[i[k]] += 1.0
+    weights[o[k]] -= 1.0
+    np.add.at(weights, i[rows], lever * gap[rows] / span)
+    np.add.at(weights, o[rows], -lever * gap[rows] / span)
+    out = float(azimuth360(np.array(corrected[o[k]] - slope * lever)))
+    sigma = float(np.sqrt(max(float(weights @ cov @ weights), 0.0)))
+    return out, float(wrap(diff[k] + slope * lever)), sigma

@@ -194,6 +194,12 @@ class InOutQc(TableContract):
     sigma_azi_diff: float = column(unit="deg", ge=0, description="predicted σ of azi_diff")
     inc_tolerance: float = column(unit="deg", ge=0, description="allowed |inc_diff|")
     azi_tolerance: float = column(unit="deg", ge=0, description="allowed |azi_diff|")
+    tie_in: bool = column(
+        unit=None,
+        description="the tie-in station: judged against the azimuth tolerance at any "
+        "inclination (its error shifts every azimuth); with the rate from its own misclosure, "
+        "azi_out is its out-run reading corrected by the rate the other stations show",
+    )
     passed: bool = column(unit=None, description="both differences within tolerance")
 
 

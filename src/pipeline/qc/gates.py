@@ -11,6 +11,12 @@ azimuth (wrapped to ±180°) and the two depths. The gates, each pass, fail or n
     azimuth_low  … and ≤ ``azi_tolerance_low`` (5.0°) below it (undefined azimuths at
                  vertical are not compared)
     depth        every |ΔMD| ≤ ``depth_tolerance`` (0.5 m): the two runs' depths agree
+    tie_in       a free gyro's in/out QC only: |ΔA| of its tie-in pair ≤ ``azi_tolerance``
+                 at any inclination (a tie-in error shifts every corrected azimuth)
+    coverage     every MD gap between consecutive stations compared ≤ ``max_gap`` (100 m):
+                 a depth left unsurveyed by either run is not accepted
+    td           when a total depth ``td`` is stated: the deepest station compared is at
+                 most ``td_tolerance`` (0.5 m) above it (no ``td``: no such gate)
 
 The angular defaults are the in-run/out-run tolerances of industry gyro-survey practice;
 every limit is a parameter, so a client's own acceptance criteria are a configuration.
@@ -53,6 +59,15 @@ class GateOptions(BaseModel):
     depth_tolerance: float = Field(0.5, gt=0, description="largest |Δ MD| of a pair, m")
     pair_window: float = Field(
         5.0, gt=0, description="an out-run station this close in MD (m) can pair an in-run one"
+    )
+    max_gap: float = Field(
+        100.0, gt=0, description="largest MD gap between consecutive stations compared, m"
+    )
+    td: float | None = Field(
+        None, gt=0, description="stated (planned) total depth the runs must reach, m MD"
+    )
+    td_tolerance: float = Field(
+        0.5, gt=0, description="the deepest station compared this far above td reaches it, m"
     )
 
 
@@ -127,9 +142,37 @@ def _worst(values: np.ndarray) -> float:
     return float(finite.max()) if finite.size else float("nan")
 
 
+def _gate(gate: str, worst: float, limit: float, unit: str, text: str) -> tuple[Any, ...]:
+    """A gate's row: ``worst`` against ``limit`` (NaN: not evaluated)."""
+    status = NOT_EVALUATED if np.isnan(worst) else PASS if worst <= limit else FAIL
+    return (gate, worst, limit, unit, status, text)
+
+
+def _coverage(md: np.ndarray, options: GateOptions) -> list[tuple[Any, ...]]:
+    """The coverage gate of the stations compared at ``md`` (m, sorted): their largest MD
+    gap and where; and when ``options.td`` states a total depth, the TD gate: how far the
+    deepest of them is above it."""
+    text = "largest MD gap between consecutive stations compared"
+    if md.size < 2:
+        rows = [_gate("coverage", float("nan"), options.max_gap, "m", f"{text} (fewer than two)")]
+    else:
+        k = int(np.argmax(np.diff(md)))
+        where = f"{text}: {md[k]:.1f} to {md[k + 1]:.1f} m MD"
+        rows = [_gate("coverage", float(md[k + 1] - md[k]), options.max_gap, "m", where)]
+    if options.td is not None:
+        text = f"depth short of the stated TD {options.td:g} m MD: deepest station compared"
+        if md.size:
+            short, deepest = max(options.td - float(md[-1]), 0.0), f"{md[-1]:.1f} m MD"
+        else:
+            short, deepest = float("nan"), "none"
+        rows.append(_gate("td", short, options.td_tolerance, "m", f"{text} {deepest}"))
+    return rows
+
+
 def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
     """The gates of a :class:`RunComparison` (or a free gyro's in/out QC, which has no
-    out-run depths: its depth gate is not evaluated) as an :class:`AcceptanceGates` table."""
+    out-run depths: its depth gate is not evaluated; its tie-in pair is the ``tie_in`` gate,
+    not an azimuth one) as an :class:`AcceptanceGates` table."""
     n = comparison.num_rows
     inc_diff = comparison.column("inc_diff").to_numpy(zero_copy_only=False).astype(float)
     azi_diff = comparison.column("azi_diff").to_numpy(zero_copy_only=False).astype(float)
@@ -137,6 +180,11 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
         comparison.column("inc_in").to_numpy(zero_copy_only=False)
         + comparison.column("inc_out").to_numpy(zero_copy_only=False)
     ) / 2
+    tie = (
+        comparison.column("tie_in").to_numpy(zero_copy_only=False).astype(bool)
+        if "tie_in" in comparison.column_names
+        else np.zeros(n, dtype=bool)
+    )
     low = mean_inc < options.low_inclination
     md_diff = (
         comparison.column("md_diff").to_numpy(zero_copy_only=False).astype(float)
@@ -157,23 +205,26 @@ def acceptance_gates(comparison: pa.Table, options: GateOptions) -> pa.Table:
         ("inclination", inc_diff, options.inc_tolerance, "deg", "largest |in − out| inclination"),
         (
             "azimuth",
-            azi_diff[~low],
+            azi_diff[~low & ~tie],
             options.azi_tolerance,
             "deg",
             f"largest |in − out| azimuth at inclination ≥ {options.low_inclination:g}°",
         ),
         (
             "azimuth_low",
-            azi_diff[low],
+            azi_diff[low & ~tie],
             options.azi_tolerance_low,
             "deg",
             f"largest |in − out| azimuth at inclination < {options.low_inclination:g}°",
         ),
         ("depth", md_diff, options.depth_tolerance, "m", "largest |in − out| depth of a pair"),
     ):
-        worst = _worst(values)
-        status = NOT_EVALUATED if np.isnan(worst) else PASS if worst <= limit else FAIL
-        rows.append((gate, worst, limit, unit, status, text))
+        rows.append(_gate(gate, _worst(values), limit, unit, text))
+    if "tie_in" in comparison.column_names:
+        text = "|in − out| azimuth at the tie-in, at any inclination (it shifts every azimuth)"
+        rows.append(_gate("tie_in", _worst(azi_diff[tie]), options.azi_tolerance, "deg", text))
+    md = np.sort(comparison.column("md").to_numpy(zero_copy_only=False).astype(float))
+    rows.extend(_coverage(md, options))
     names = ("gate", "value", "limit", "unit", "status", "description")
     return AcceptanceGates.compiled().make_table(
         {name: [r[k] for r in rows] for k, name in enumerate(names)}

@@ -304,6 +304,9 @@ GATE_LABELS = {
     "azimuth": "Azimuth, in-run − out-run",
     "azimuth_low": "Azimuth at low inclination, in-run − out-run",
     "depth": "Depth, in-run − out-run",
+    "tie_in": "Tie-in closure, in-run − out-run",
+    "coverage": "Depth coverage, largest gap",
+    "td": "Total depth reached",
 }
 """Client-facing names of the built-in acceptance gates (others show their own name)."""
 

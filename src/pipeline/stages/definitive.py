@@ -5,6 +5,7 @@ chooses the stations, :mod:`pipeline.uncertainty.sections` carries the covarianc
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any, Literal
@@ -16,7 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationIn
 from pipeline.contracts import SOURCE_KEY, TableContract, column
 from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
 from pipeline.earth.site import MagneticReference, resolve_site
-from pipeline.errors import EmptyTableError
+from pipeline.errors import EmptyTableError, SurveyCheckWarning
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
@@ -30,7 +31,6 @@ from pipeline.stages.uncertainty import (
     with_magnetic,
 )
 from pipeline.survey.definitive import OverlapRule, RunStations, plan_sections, roles
-from pipeline.survey.definitive import Section as PlannedSection
 from pipeline.survey.interpolate import interpolate_md
 from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
 from pipeline.survey.north import convert_azimuth
@@ -55,7 +55,7 @@ from pipeline.uncertainty.sections import WellByWell, definitive_covariance
 from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude, NorthReference, WellMetadata, well_of
+from pipeline.well import Latitude, NorthReference, WellMetadata, one_well, well_of
 
 MAX_RUNS = 6
 RUN_PORTS = tuple(f"run{k}" for k in range(1, MAX_RUNS + 1))
@@ -79,8 +79,9 @@ class SurveyOverlap(TableContract):
     run: str = column(unit=None, description="run the station comes from")
     role: str = column(
         unit=None,
-        description="overlap (inside another run's section) or excluded (outside its run's "
-        "depth range)",
+        description="overlap (inside another run's section), excluded (outside its run's "
+        "depth range) or left_out (beyond the survey's first or last listed station: a "
+        "stretch at an end shorter than min_length, warned of)",
     )
     md: float = column(unit="m", description="measured depth")
     inc: float = column(unit="deg", ge=0, le=180, description="the run's inclination")
@@ -226,6 +227,9 @@ def definitive_survey(
     ports = [p for p in RUN_PORTS if p in inputs]
     north = params.north_reference or north_reference_of(inputs[ports[0]], "azi")
     specs = {p: params.runs.get(p, RunSpec()) for p in ports}
+    one_well(
+        {p if specs[p].name in (None, p) else f"{p} ({specs[p].name})": inputs[p] for p in ports}
+    )
     catalogue = toolmodels.of_run(ctx)
     tools = {p: configure(spec.model, spec.tool, catalogue) for p, spec in specs.items()}
     for port, tool in tools.items():
@@ -246,6 +250,8 @@ def definitive_survey(
         RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
     ]
     sections = plan_sections(stations, params.overlap, params.min_length)
+    station_roles = roles(stations, sections)
+    _warn_left_out(runs, station_roles, params.min_length, ctx.stage_id)
     listed = [(sec, runs[sec.run]) for sec in sections]
     md = np.concatenate([run.md[sec.listed] for sec, run in listed])
     inc_deg = np.concatenate([run.inc[sec.listed] for sec, run in listed])
@@ -281,7 +287,7 @@ def definitive_survey(
     survey_table = with_magnetic(survey_table, by_run)
     return {
         "survey": survey_table,
-        "overlap": _overlap(runs, stations, sections, survey_table, north),
+        "overlap": _overlap(runs, station_roles, survey_table, north),
     }
 
 
@@ -435,19 +441,46 @@ def _survey_table(
     return DefinitiveSurvey.compiled().make_table(table, north_reference=north)
 
 
+def _warn_left_out(
+    runs: list[_Run], station_roles: list[list[str]], min_length: float, stage: str
+) -> None:
+    """A :class:`~pipeline.errors.SurveyCheckWarning` for each run whose stations at the
+    top or bottom of the survey are left out (role ``left_out``): their MDs and how far
+    beyond the survey's first or last listed station they lie."""
+    listed = np.concatenate(
+        [run.md[np.array(role) == "listed"] for run, role in zip(runs, station_roles, strict=True)]
+    )
+    for run, role in zip(runs, station_roles, strict=True):
+        out = run.md[np.array(role) == "left_out"]
+        for side, end, beyond, word in (
+            ("ends", listed.max(), out[out > listed.max()], "below"),
+            ("starts", listed.min(), out[out < listed.min()], "above"),
+        ):
+            if not beyond.size:
+                continue
+            far = float(np.abs(beyond - end).max())
+            at = ", ".join(f"{md:.2f}" for md in beyond)
+            one = beyond.size == 1
+            what, verb, far_word = ("station", "is", "") if one else ("stations", "are", "up to ")
+            warnings.warn(
+                f"stage {stage!r}: the definitive survey {side} at {end:.2f} m MD; the {what} "
+                f"of run {run.name!r} at {at} m MD, {far_word}{far:.2f} m {word}, {verb} left "
+                f"out (a stretch shorter than min_length {min_length:g} m that no other run "
+                f"covers); set min_length below {far:.2f} m to list it",
+                SurveyCheckWarning,
+                stacklevel=2,
+            )
+
+
 def _overlap(
-    runs: list[_Run],
-    stations: list[RunStations],
-    sections: list[PlannedSection],
-    survey: pa.Table,
-    north: str,
+    runs: list[_Run], station_roles: list[list[str]], survey: pa.Table, north: str
 ) -> pa.Table:
     """Every station not listed, beside the definitive survey interpolated at its MD."""
     md_d = survey.column("md").to_numpy()
     inc_d = np.radians(survey.column("inc").to_numpy())
     azi_d = np.radians(defined_azimuths(survey.column("azi").to_numpy()))
     cols: dict[str, list[Any]] = {k: [] for k in ("run", "role", "md", "inc", "azi", "source")}
-    for run, role in zip(runs, roles(stations, sections), strict=True):
+    for run, role in zip(runs, station_roles, strict=True):
         for k, r in enumerate(role):
             if r != "listed":
                 for name, value in (

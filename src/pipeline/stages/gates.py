@@ -16,12 +16,14 @@ from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.survey.stations import north_reference_of
 from pipeline.tables import AcceptanceGates, Stations
+from pipeline.well import one_well
 
 
 def gates_stage(
     inputs: Mapping[str, pa.Table], params: GateOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """In-run and out-run stations → the pairs compared and the gates."""
+    """In-run and out-run stations (of one well) → the pairs compared and the gates."""
+    one_well(inputs)
     north_in = north_reference_of(inputs["inrun"], "azi")
     north_out = north_reference_of(inputs["outrun"], "azi")
     if north_in != north_out:
@@ -48,7 +50,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             func=gates_stage,
             description="Acceptance gates of a gyro survey, in-run against out-run: stations "
             "compared, inclination, azimuth (above and below a low inclination) and depth "
-            "agreement, each pass or fail against configurable limits.",
+            "agreement, depth coverage (the largest gap) and a stated TD reached, each pass "
+            "or fail against configurable limits.",
             inputs={"inrun": Stations, "outrun": Stations},
             outputs={"comparison": RunComparison, "gates": AcceptanceGates},
             params=GateOptions,
@@ -75,8 +78,14 @@ def gates_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
         f"azimuth within {p.get('azi_tolerance', '?')}° at inclination ≥ "
         f"{p.get('low_inclination', '?')}° and {p.get('azi_tolerance_low', '?')}° below, "
         f"depth within {p.get('depth_tolerance', '?')} m, at least "
-        f"{p.get('min_stations', '?')} stations"
+        f"{p.get('min_stations', '?')} stations, no gap between stations compared over "
+        f"{p.get('max_gap', '?')} m"
     )
+    if p.get("td") is not None:
+        criteria += (
+            f", the deepest station compared within {p.get('td_tolerance', '?')} m of the "
+            f"stated TD {p['td']} m"
+        )
     return MethodNote("Acceptance", criteria)
 
 

@@ -11,8 +11,9 @@ Consecutive depths won by one run are a *section*. A section below the first is 
 section above at the last listed station of that section (its *tie MD*): the survey is one
 list of stations, the section's first course runs from that station. A station on the
 boundary between two sections is listed once, from the section above. Every station not
-listed is kept for QC with its role: ``overlap`` (inside another section's depths) or
-``excluded`` (outside its run's range). MDs in m.
+listed is kept for QC with its role: ``overlap`` (inside another section's depths),
+``excluded`` (outside its run's range) or ``left_out`` (beyond the survey's first or last
+listed station: a stretch at an end shorter than ``min_length``). MDs in m.
 """
 
 from __future__ import annotations
@@ -184,12 +185,24 @@ def plan_sections(
     return sections
 
 
+SAME_DEPTH_M = 0.01
+"""Stations this close in MD (m) are at one depth (an in-run's and an out-run's compassed at
+one stop): one beyond the survey's end by less overlaps its end station."""
+
+
 def roles(runs: Sequence[RunStations], sections: Sequence[Section]) -> list[list[str]]:
-    """Per run, each station's role: ``listed``, ``overlap`` or ``excluded``."""
+    """Per run, each station's role: ``listed``, ``overlap``, ``excluded`` or ``left_out``
+    (inside its run's range but more than :data:`SAME_DEPTH_M` above the survey's first or
+    below its last listed station: a stretch at an end shorter than ``min_length`` that no
+    other run covers)."""
+    listed = np.concatenate([runs[sec.run].md[sec.listed] for sec in sections])
+    top, bottom = listed.min() - SAME_DEPTH_M, listed.max() + SAME_DEPTH_M
     out = []
     for r, run in enumerate(runs):
         lo, hi = run.coverage()
-        role = np.where((run.md >= lo) & (run.md <= hi), "overlap", "excluded").astype(object)
+        inside = (run.md >= lo) & (run.md <= hi)
+        role = np.where(inside, "overlap", "excluded").astype(object)
+        role[inside & ((run.md < top) | (run.md > bottom))] = "left_out"
         for sec in sections:
             if sec.run == r:
                 role[sec.listed] = "listed"
