@@ -41,6 +41,7 @@ from pipeline.continuous.tables import (
     describe_flags,
 )
 from pipeline.earth.frames import OMEGA_EARTH
+from pipeline.io.mcap.tables import read_tables
 from pipeline.reports.flags import COMPASS, CONTINUOUS
 from pipeline.sim.sensors import measure, tool_preset
 from pipeline.tables import RawSamples
@@ -521,7 +522,7 @@ def test_continuous_report_draws_every_sample_from_the_streamed_series(
 ):
     """The report's `series` port is streamed: the full-rate series is reduced batch by
     batch and drawn as one figure whose caption counts every sample of the run."""
-    series = pq.read_table(continuous_run / "continuous.series.parquet")
+    series = read_tables(continuous_run / "processed.mcap")[0]["series"]
     page = inspect(browser, continuous_run / "report.html")
     assert "fig-fullrate" in page.figures
     assert f"the {series.num_rows:,} samples of the run" in page.text
