@@ -115,9 +115,13 @@ class StageContext(Protocol):
         *,
         reader: str = "auto",
         options: Mapping[str, Any] | None = None,
+        into_well: bool = True,
     ) -> tuple[pa.Table, WellMetadata]:
         """The pipeline input ``name`` as a table of ``kind`` and the well metadata it
-        carries: read from its file by :meth:`read_file`, or the table the caller gave."""
+        carries: read from its file by :meth:`read_file`, or the table the caller gave.
+        ``into_well``: its header states the run's well (``False``: another job's record —
+        a stand calibration, whose date and serial are the calibration's — that the table
+        carries as its own, :meth:`well_for`, but the run's well and report do not take)."""
         ...
 
     def read_input_stream(
@@ -127,6 +131,7 @@ class StageContext(Protocol):
         *,
         reader: str = "auto",
         options: Mapping[str, Any] | None = None,
+        into_well: bool = True,
     ) -> tuple[TableStream, WellMetadata]:
         """:meth:`read_input` as a stream of record batches (:meth:`Registry.read_stream`):
         the file is read a batch at a time; a table the caller gave is cut into slices."""

@@ -157,14 +157,17 @@ class _Context:
         *,
         reader: str = "auto",
         options: Mapping[str, Any] | None = None,
+        into_well: bool = True,
     ) -> tuple[pa.Table, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
             header = well_of(given) or WellMetadata()
-            self.found_header(name, header)
+            if into_well:
+                self.found_header(name, header)
             return given, header
         table, header = self.read_file(given, kind, reader=reader, options=options)
-        self.found_header(name, header)
+        if into_well:
+            self.found_header(name, header)
         meta = {**(table.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return table.replace_schema_metadata(meta), header
 
@@ -175,18 +178,21 @@ class _Context:
         *,
         reader: str = "auto",
         options: Mapping[str, Any] | None = None,
+        into_well: bool = True,
     ) -> tuple[TableStream, WellMetadata]:
         given = self.inputs[name]
         if isinstance(given, pa.Table):
             header = well_of(given) or WellMetadata()
-            self.found_header(name, header)
+            if into_well:
+                self.found_header(name, header)
             return TableStream.from_table(given), header
         stream, header = self.registry.read_stream(
             given, kind, reader=reader, options=options, well=self.well_for(WellMetadata())
         )
         self._north_agrees(given, header)
         self._dates_agree(given, header)
-        self.found_header(name, header)
+        if into_well:
+            self.found_header(name, header)
         meta = {**(stream.schema.metadata or {}), SOURCE_KEY: str(given).encode()}
         return stream.replace_schema_metadata(meta), header
 

@@ -7,6 +7,7 @@ it; the survey report states the estimate applied — driven through ``gyropipe 
 from __future__ import annotations
 
 import datetime as dt
+import json
 import re
 from html import unescape
 from pathlib import Path
@@ -234,6 +235,39 @@ def test_the_report_states_the_calibration_estimate_applied(files: dict[str, Pat
     assert float(row[4]) == pytest.approx(mean["sigma_deg_h"], rel=0.05)
     assert row[5] == "2026-05-12" and row[6] == "linear"
     assert "IG50" not in "".join(header)
+
+
+@pytest.mark.parametrize("dated", [False, True], ids=["undated", "dated"])
+def test_the_calibration_header_is_not_the_surveys(
+    files: dict[str, Path], tmp_path: Path, dated: bool
+):
+    """The calibration result's file carries its own header — recorded on the stand on
+    2026-05-12, tool IG50-2 (the last instrument of its run) — which is the calibration's,
+    not the survey's: the run's well, summary and report keep the readings' serial and
+    date (the run's survey date was the calibration's day, or a range from it to the
+    survey's, and the two serials left the run's unstated)."""
+    readings = tmp_path / "readings.csv"
+    header = WellMetadata(
+        tool_serial="IG50-1", survey_date=dt.date(2026, 11, 21) if dated else None
+    )
+    write_csv(simulate_free_gyro(survey()), readings, header)
+    out = tmp_path / "out"
+    result = gyropipe_cli(
+        "run", files["pipeline"], "--input", f"readings={readings}", "--input",
+        f"calibration={files['both']}", "--out", out,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    expected = {"tool_serial": "IG50-1", "north_reference": "true"}
+    if dated:
+        expected["survey_date"] = "2026-11-21"
+    manifest = json.loads((out / "run.json").read_text())
+    assert manifest["well"] == expected
+    assert "well_differs" not in manifest
+    page = unescape((out / "report.html").read_text())
+    survey_date = re.search(r"Survey date</dt><dd>([^<]*)", page)
+    assert (survey_date.group(1) if survey_date else None) == expected.get("survey_date")
+    result = gp.run(files["pipeline"], {"readings": readings, "calibration": files["both"]})
+    assert result.well.tool_serial == "IG50-1" and result.well.survey_date_last is None
 
 
 def test_a_calibration_of_no_stated_date_says_so(files: dict[str, Path], tmp_path: Path):

@@ -156,20 +156,24 @@ def allan_stage(
 
 @hookimpl
 def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
-    for name, kind, contract, description, default_input in (
+    for name, kind, contract, description, default_input, into_well in (
         (
             "read_calibration",
             "calibration",
             CalibrationReadings,
             "Read free-gyro calibration readings (series × set azimuths).",
             "calibration",
+            True,
         ),
         (
             "read_calibration_result",
             "calibration_result",
             CalibrationResult,
-            "Read a drift calibration result written by calibrate_drift.",
+            "Read a drift calibration result written by calibrate_drift (its file's header "
+            "— the calibration's date, tool serial — is the calibration's own, not the "
+            "survey's: the table carries it, the run's well does not take it).",
             "calibration",
+            False,
         ),
         (
             "read_free_gyro",
@@ -177,9 +181,12 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             FreeGyroReadings,
             "Read free-gyro in-run/out-run station readings.",
             "readings",
+            True,
         ),
     ):
-        register(read_stage_def(name, kind, contract, description, default_input))
+        register(
+            read_stage_def(name, kind, contract, description, default_input, into_well=into_well)
+        )
     register(
         StageDef(
             name="calibrate_drift",

@@ -123,10 +123,11 @@ class WriteParams(BaseModel):
 
 
 def read_stage(
-    kind: str, *, streamed: bool = False
+    kind: str, *, streamed: bool = False, into_well: bool = True
 ) -> Callable[[Mapping[str, pa.Table], ReadParams, StageContext], dict[str, Port]]:
     """Stage function reading the pipeline input into a table of ``kind`` (``streamed``: a
-    stream of record batches, :meth:`StageContext.read_input_stream`)."""
+    stream of record batches, :meth:`StageContext.read_input_stream`; ``into_well``: the
+    file's header states the run's well, as :meth:`StageContext.read_input` takes it)."""
 
     def read(
         inputs: Mapping[str, pa.Table], params: ReadParams, ctx: StageContext
@@ -134,7 +135,11 @@ def read_stage(
         reading = ctx.read_input_stream if streamed else ctx.read_input
         try:
             value, header = reading(
-                params.input, kind, reader=params.reader, options=params.options
+                params.input,
+                kind,
+                reader=params.reader,
+                options=params.options,
+                into_well=into_well,
             )
         except WrongKindError as exc:
             hint = f"; {TAKEN_BY[exc.found]}" if exc.found in TAKEN_BY else ""
@@ -154,9 +159,11 @@ def read_stage_def(
     default_input: str,
     *,
     streamed: bool = False,
+    into_well: bool = True,
 ) -> StageDef:
     """A stage reading the pipeline input ``default_input`` (unless told another) into a
-    table of ``kind`` on the output port ``kind`` (``streamed``: a streamed port)."""
+    table of ``kind`` on the output port ``kind`` (``streamed``: a streamed port;
+    ``into_well``: :func:`read_stage`'s)."""
     params = create_model(
         f"{kind.title().replace('_', '')}ReadParams",
         __base__=ReadParams,
@@ -166,7 +173,7 @@ def read_stage_def(
     params.reads = kind
     return StageDef(
         name=name,
-        func=read_stage(kind, streamed=streamed),
+        func=read_stage(kind, streamed=streamed, into_well=into_well),
         description=description,
         outputs={kind: contract},
         params=params,
