@@ -242,6 +242,40 @@ def test_coverage_of_feet_files_is_judged_in_metres(
     assert f"gates.coverage     {status}" in result.stdout
 
 
+def test_a_table_of_two_surveys_is_refused(tmp_path: Path) -> None:
+    """An in-run file listing the main bore and its sidetrack (a SURVEY column, as an
+    operator's export of a wellbore lists both): paired by MD alone, the sidetrack's
+    stations were compared with the out-run's main-bore stations at the same depths; now
+    refused, naming the port and the surveys, no traceback."""
+    lines = (ROOT / "examples" / "stations-j-well.csv").read_text().splitlines()
+    head = lines.index("MD (m),Inc (deg),Azimuth True (deg)")
+    rows = lines[head + 1 : head + 41]
+    sidetrack = [f"{float(md) + 600:.2f},{float(inc) + 2:.2f},{azi}" for md, inc, azi in
+                 (r.split(",") for r in rows[20:30])]  # fmt: skip
+    inrun = tmp_path / "in.csv"
+    inrun.write_text(
+        "\n".join(
+            [*lines[:head], "Survey,MD (m),Inc (deg),Azimuth True (deg)"]
+            + [f"MAIN,{r}" for r in rows]
+            + [f"ST1,{r}" for r in sidetrack]
+        )
+    )
+    outrun = tmp_path / "out.csv"
+    outrun.write_text("\n".join([*lines[: head + 1], *rows]))
+    result = gyropipe_cli(
+        "run", ROOT / "pipelines" / "inout-gyro.yaml", "--input", f"inrun={inrun}",
+        "--input", f"outrun={outrun}", "--out", tmp_path / "out",
+    )  # fmt: skip
+    assert result.returncode != 0
+    assert "inrun: the table holds 2 surveys ('MAIN', 'ST1')" in result.stderr
+    assert "Traceback" not in result.output and not (tmp_path / "out").exists()
+    with pytest.raises(gp.GyropipeError, match="outrun: the table holds 2 surveys"):
+        gp.run(ROOT / "pipelines" / "inout-gyro.yaml", {"inrun": outrun, "outrun": inrun})
+    both = gp.read(inrun)  # the gates alone (no definitive stage after them to refuse)
+    with pytest.raises(gp.GyropipeError, match="inrun: the table holds 2 surveys"):
+        gp.acceptance_gates(both, gp.read(outrun))
+
+
 def test_a_bad_free_gyro_tie_in_fails_its_check(tmp_path: Path) -> None:
     """The drift rate from the tie-in misclosure makes the tie-in's two corrected readings
     equal: its pair is checked against the drift the other stations read twice show. The

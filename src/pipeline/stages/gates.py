@@ -14,7 +14,7 @@ from pipeline.qc.gates import GateOptions, acceptance_gates, compare_runs
 from pipeline.qc.tables import RunComparison
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
-from pipeline.survey.stations import north_reference_of
+from pipeline.survey.stations import north_reference_of, survey_offsets
 from pipeline.tables import AcceptanceGates, Stations
 from pipeline.well import one_well
 
@@ -22,8 +22,17 @@ from pipeline.well import one_well
 def gates_stage(
     inputs: Mapping[str, pa.Table], params: GateOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """In-run and out-run stations (of one well) → the pairs compared and the gates."""
+    """In-run and out-run stations (of one well, one survey each) → the pairs compared and
+    the gates."""
     one_well(inputs)
+    for port in ("inrun", "outrun"):
+        offsets = survey_offsets(inputs[port])
+        if len(offsets) > 2:  # paired by MD alone, stations of two holes would be compared
+            names = inputs[port].column("survey").take(offsets[:-1]).to_pylist()
+            raise ValueError(
+                f"{port}: the table holds {len(names)} surveys ({', '.join(map(repr, names))}); "
+                "the gates compare one run with one run: give one survey per port"
+            )
     north_in = north_reference_of(inputs["inrun"], "azi")
     north_out = north_reference_of(inputs["outrun"], "azi")
     if north_in != north_out:
