@@ -49,6 +49,10 @@ stages:
   - id: trajectory
     uses: minimum_curvature
     inputs: {stations: drift.stations}
+  - id: summary
+    uses: export
+    inputs: {trajectory: trajectory.trajectory, drift: drift.readings}
+    with: {writer: json_summary, filename: summary.json}
   - id: report
     uses: report
     inputs:
@@ -266,6 +270,17 @@ def test_the_calibration_header_is_not_the_surveys(
     page = unescape((out / "report.html").read_text())
     survey_date = re.search(r"Survey date</dt><dd>([^<]*)", page)
     assert (survey_date.group(1) if survey_date else None) == expected.get("survey_date")
+    summary = json.loads((out / "summary.json").read_text())
+    assert {k: v for k, v in summary["well"].items() if v is not None} == expected
+    drift = summary["drift"]  # the calibration applied, as its own file states it
+    assert (drift["source"], drift["instrument"], drift["method"]) == (
+        "calibration",
+        "IG50-1",
+        "fit",
+    )
+    assert drift["rate"] == selected_rate(files["both"], "IG50-1")
+    assert drift["calibration_date"] == "2026-05-12"
+    assert any("193 days before the survey" in c for c in drift["caveats"]) == dated
     result = gp.run(files["pipeline"], {"readings": readings, "calibration": files["both"]})
     assert result.well.tool_serial == "IG50-1" and result.well.survey_date_last is None
 

@@ -44,7 +44,12 @@ def test_summary_of_a_run(exports_run: RunResult):
     assert doc["run"]["inputs"] == {"stations": manifest["inputs"]["stations"]["sha256"]}
     assert doc["north_reference"] == "grid"
     assert doc["calculation"] == {"method": "minimum_curvature", "vs_azimuth": 30.0}
-    assert doc["units"] == {"length": "m", "angle": "deg", "dls": "deg/30m"}
+    assert doc["units"] == {
+        "length": "m",
+        "angle": "deg",
+        "dls": "deg/30m",
+        "drift_rate": "deg/h",
+    }
     assert doc["station_count"] == trajectory.num_rows == 85
     (survey,) = doc["surveys"]
     assert survey["final"] == {name: last[name] for name in survey["final"]}

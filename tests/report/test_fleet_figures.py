@@ -298,6 +298,14 @@ def test_a_free_gyro_survey_s_drift_sigma_is_persisted_and_shown(tmp_path: Path)
     assert float(shown_sigma) == pytest.approx(sigma, rel=0.05)
     report = html.unescape(re.sub(r"<[^>]+>", "", (out / "FG-1" / "report.html").read_text()))
     assert f"drift rate {value} °/h, σ {shown_sigma} °/h" in report
+    summary = json.loads((out / "FG-1" / "summary.json").read_text())
+    assert summary["units"]["drift_rate"] == "deg/h"
+    drift = summary["drift"]
+    assert (drift["source"], drift["instrument"], drift["caveats"]) == ("tie_in", None, [])
+    assert (drift["rate"], drift["sigma"]) == (
+        pytest.approx(rate, rel=1e-9),
+        pytest.approx(sigma, rel=1e-9),
+    )
 
 
 def test_figures_an_earlier_version_put_in_the_ledger_read_as_computed(

@@ -6,11 +6,12 @@ survey the station count, MD range, the final station's position, the largest do
 severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
 then QC counts per check (with ``file_positions``: the stations file's own positions against
 the recomputed ones, when the trajectory records that check), flagged and rejected
-stations. Lengths in m, angles in degrees, DLS in °/30 m (``units`` says so in the document
-too).
+stations. Lengths in m, angles in degrees, DLS in °/30 m, drift rates in °/h (``units``
+says so in the document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
-``stations`` and ``rejects``; through ``write`` one trajectory table.
+``stations``, ``rejects`` and ``drift`` (a free-gyro survey's corrected readings: the drift
+rate applied, its σ, source and caveats); through ``write`` one trajectory table.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import pyarrow.compute as pc
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.contracts import NORTH_KEY
+from pipeline.drift.correction import DriftRate, drift_rate_of
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
@@ -53,6 +55,7 @@ class Units(_Model):
     length: Literal["m"] = "m"
     angle: Literal["deg"] = "deg"
     dls: Literal["deg/30m"] = "deg/30m"
+    drift_rate: Literal["deg/h"] = "deg/h"
 
 
 class Station(_Model):
@@ -163,12 +166,20 @@ class SurveySummary(_Model):
     qc: Qc | None = Field(
         None, description="QC counts (null: no QC table given, no position check recorded)"
     )
+    drift: DriftRate | None = Field(
+        None,
+        description="the drift correction a free-gyro survey's readings were corrected with: "
+        "rate and σ in deg/h, its source (calibration, given, tie_in), the calibration's "
+        "instrument, estimate, day and linearity verdict, and each caveat where the "
+        "calibration does not cover the survey (null: no corrected readings given)",
+    )
 
 
 def summarize(
     tables: Mapping[str, pa.Table], well: WellMetadata, provenance: Provenance | None
 ) -> SurveySummary:
-    """The summary of a run's ``trajectory`` and its ``qc``, ``stations`` and ``rejects``."""
+    """The summary of a run's ``trajectory`` and its ``qc``, ``stations``, ``rejects`` and
+    drift-corrected readings (``drift``)."""
     if "trajectory" not in tables:
         raise ValueError("the JSON summary needs the trajectory (wire the port 'trajectory')")
     trajectory = tables["trajectory"]
@@ -185,7 +196,20 @@ def summarize(
         station_count=trajectory.num_rows,
         surveys=_surveys(trajectory),
         qc=_qc(tables) if _has_qc(tables) else None,
+        drift=_drift(tables["drift"]) if "drift" in tables else None,
     )
+
+
+def _drift(readings: pa.Table) -> DriftRate:
+    """The rate the corrected readings record; refused if they record none (a table of
+    other readings wired to the port: no rate is better than one made up)."""
+    rate = drift_rate_of(readings)
+    if rate is None:
+        raise ValueError(
+            "the JSON summary's drift port takes correct_drift's readings (they record the "
+            "rate applied); the table wired records none"
+        )
+    return rate
 
 
 def _run(provenance: Provenance) -> Run:
@@ -329,7 +353,7 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
         WriterDef(
             name="json_summary",
             description="machine-readable JSON summary: well, run, north reference, final "
-            "position, max DLS, uncertainty at TD, QC counts",
+            "position, max DLS, uncertainty at TD, QC counts, the drift correction applied",
             extension="json",
             write=write,
             write_tables=write_tables,

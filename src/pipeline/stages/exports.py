@@ -14,6 +14,7 @@ import pyarrow as pa
 from pydantic import Field
 
 from pipeline.contracts import TableContract, column
+from pipeline.drift.tables import CorrectedFreeGyroReadings
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import StageContext, StageDef, registered
 from pipeline.stages.files import WriteParams
@@ -37,9 +38,11 @@ PORTS: dict[str, type[TableContract]] = {
     "series": AnyTable,
     "qc": QcTable,
     "rejects": AnyTable,
+    "drift": CorrectedFreeGyroReadings,
 }
 """Input ports (all optional): the survey's trajectory, its stations (compassed, continuous),
-per-position readings, continuous series, QC results and the stations rejected."""
+per-position readings, continuous series, QC results, the stations rejected and a free-gyro
+survey's drift-corrected readings."""
 
 
 class ExportParams(WriteParams):
@@ -81,7 +84,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="export",
             func=export,
             description="Write several tables of the run (trajectory, stations, readings, "
-            "series, QC, rejects) into one file with a writer that holds several.",
+            "series, QC, rejects, drift-corrected readings) into one file with a writer that "
+            "holds several.",
             inputs=PORTS,
             params=ExportParams,
             optional_inputs=frozenset(PORTS),
