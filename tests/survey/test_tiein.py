@@ -5,9 +5,11 @@ is given a tie of its own; the tie applied is recorded and stated in the report.
 
 from __future__ import annotations
 
+import html
 import itertools
 import json
 import math
+import re
 import warnings
 from pathlib import Path
 
@@ -106,6 +108,11 @@ def witsml_export(directory: Path, *, second_unlisted: bool = False) -> Path:
     return path
 
 
+def plain(report: Path) -> str:
+    """The report's text, tags and entities undone."""
+    return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", report.read_text())).split())
+
+
 def positions(table: pa.Table) -> np.ndarray:
     return np.column_stack([table.column(c).to_numpy() for c in ("tvd", "north", "east")])
 
@@ -121,8 +128,14 @@ def test_a_csv_survey_is_tied_at_its_tie_on_row(tmp_path: Path) -> None:
     trajectory = pq.read_table(out / "trajectory.trajectory.parquet")
     np.testing.assert_allclose(positions(trajectory), LISTED, atol=1e-6)
     assert positions(trajectory)[-1] == pytest.approx(LISTED[-1], abs=1e-6)
-    words = "Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from the stations file)"
-    assert words in (out / "report.html").read_text()
+    report = plain(out / "report.html")
+    assert (
+        "Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from the stations file)" in report
+    )
+    assert (
+        "Tie-in (first station) MD 500.00 m, TVD 498.30 m, N 12.10 m, E −3.40 m (from the stations file)"
+        in report
+    )
     (tie,) = json.loads((out / "summary.json").read_text())["calculation"]["ties"]
     assert tie == {
         "survey": None, "md": 500.0, "tvd": 498.3, "north": 12.1, "east": -3.4,
@@ -172,7 +185,7 @@ def test_the_stages_own_tie_wins_and_a_different_one_is_warned(tmp_path: Path) -
     assert len(tie_warning) == 1, result.stderr
     assert f"{gap:.3f} m from the tie-on its stations file lists there" in tie_warning[0]
     assert "TVD 498.30 m, N 12.10 m, E -3.40 m" in tie_warning[0]
-    report = (out / "report.html").read_text()
+    report = plain(out / "report.html")
     assert "Tied at MD 500.00 m, TVD 499.00 m, N 12.00 m, E -3.00 m (from the pipeline)" in report
     # within position_tolerance of the file's: no word of it
     near = {"trajectory.tie_tvd": 498.35, "trajectory.tie_north": 12.1, "trajectory.tie_east": -3.4}
@@ -211,3 +224,42 @@ def test_a_listing_in_another_north_or_unit_is_refused(
     with pytest.raises(StageError, match=expected) as raised:
         gp.minimum_curvature(gp.read(stations))
     assert isinstance(raised.value.__cause__, InputFileError)
+
+
+DEFINITIVE = ROOT / "pipelines" / "definitive.yaml"
+MWD = [STATIONS[-1], *((830.0 + 30.0 * k, 19.0 + 0.5 * k, 330.0 + 1.0 * k) for k in range(8))]
+"""The MWD run from the gyro's last station (MD 800 m) down, listing no positions."""
+
+
+def mwd_run(directory: Path) -> Path:
+    path = directory / "mwd.csv"
+    rows = [f"{md:.2f},{inc:.2f},{azi:.2f}" for md, inc, azi in MWD]
+    header = HEADER.replace(",TVD (m),North (m),East (m)", "")
+    path.write_text(header + "\n".join(rows) + "\n")
+    return path
+
+
+def test_the_definitive_survey_starts_at_its_top_runs_tie_on(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    gyro, mwd = csv_listing(tmp_path), mwd_run(tmp_path)
+    result = gyropipe_cli(
+        "run", DEFINITIVE, "--input", f"gyro={gyro}", "--input", f"mwd={mwd}", "--out", out,
+        "--set", "report.formats=[html]",
+    )  # fmt: skip
+    assert result.returncode == 0, result.output
+    assert "warning:" not in result.stderr
+    survey = pq.read_table(out / "definitive.survey.parquet")
+    np.testing.assert_allclose(
+        positions(survey), hand_positions(STATIONS + MWD[1:], *TIE[1:]), atol=1e-6
+    )
+    words = "survey 'GYRO-1': Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from the stations file)"
+    assert words in plain(out / "report.html")
+    # the stage's own tie wins, warned
+    given = {"definitive.tie_tvd": 500.0, "definitive.tie_north": 0.0, "definitive.tie_east": 0.0}
+    with pytest.warns(SurveyCheckWarning, match="from the tie-on its stations file lists there"):
+        moved = gp.run(DEFINITIVE, {"gyro": gyro, "mwd": mwd}, set=given)
+    np.testing.assert_allclose(
+        positions(moved.tables["definitive.survey"]),
+        hand_positions(STATIONS + MWD[1:], 500.0, 0.0, 0.0),
+        atol=1e-6,
+    )

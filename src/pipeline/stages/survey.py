@@ -21,7 +21,7 @@ from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
 from pipeline.survey.tiein import (
     SurveyTie,
-    TieSource,
+    chosen_tie,
     listed_ties,
     tie_difference,
     ties_words,
@@ -88,27 +88,22 @@ def tie_ins(stations: pa.Table, params: MinCurveParams, ctx: StageContext) -> tu
     md = stations.column("md").to_numpy(zero_copy_only=False).astype(float)
     names = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
     given = (params.tie_tvd, params.tie_north, params.tie_east)
-    explicit = any(v is not None for v in given)
     ties = []
     for lo, listed in zip(offsets[:-1].tolist(), listed_ties(stations, offsets), strict=True):
         survey = None if names is None else str(names[lo])
-        if listed is not None and not explicit:
-            tvd, north, east = (float(v) for v in listed)
-            source: TieSource = "stations file"
-        else:
-            tvd = md[lo] if params.tie_tvd is None else params.tie_tvd
-            north, east = params.tie_north or 0.0, params.tie_east or 0.0
-            source = "pipeline"
-        tie = SurveyTie(survey=survey, md=md[lo], tvd=tvd, north=north, east=east, source=source)
-        if explicit and listed is not None:
-            _warn_other_tie(tie, listed, params.position_tolerance, ctx.stage_id)
+        tie = chosen_tie(survey, float(md[lo]), listed, given)
+        warn_other_tie(tie, listed, params.position_tolerance, ctx.stage_id)
         ties.append(tie)
     return tuple(ties)
 
 
-def _warn_other_tie(tie: SurveyTie, listed: np.ndarray, tolerance: float, stage_id: str) -> None:
+def warn_other_tie(
+    tie: SurveyTie, listed: np.ndarray | None, tolerance: float, stage_id: str
+) -> None:
     """Warn where the stage's ``tie`` lies more than ``tolerance`` (m) from the tie-on the
-    stations file lists (TVD, north, east, m)."""
+    stations file lists (TVD, north, east, m; None: it lists none)."""
+    if tie.source != "pipeline" or listed is None:
+        return
     gap = tie_difference(tie, listed)
     if gap <= tolerance:
         return

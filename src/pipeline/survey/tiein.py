@@ -118,6 +118,31 @@ def listed_ties(stations: pa.Table, offsets: np.ndarray) -> list[np.ndarray | No
     return [None if np.isnan(row).any() else row for row in firsts]
 
 
+def chosen_tie(
+    survey: str | None,
+    md: float,
+    listed: np.ndarray | None,
+    given: tuple[float | None, float | None, float | None],
+) -> SurveyTie:
+    """A survey's tie at its first station (MD ``md``, m): the pipeline's where any of
+    ``given`` (TVD, north, east, m) is set, the others at their fallbacks (TVD = MD,
+    N = E = 0); else the file's ``listed`` TVD, north, east there; else the fallbacks."""
+    if listed is not None and all(v is None for v in given):
+        tvd, north, east = (float(v) for v in listed)
+        return SurveyTie(
+            survey=survey, md=md, tvd=tvd, north=north, east=east, source="stations file"
+        )
+    tvd_given, north_given, east_given = given
+    return SurveyTie(
+        survey=survey,
+        md=md,
+        tvd=md if tvd_given is None else tvd_given,
+        north=north_given or 0.0,
+        east=east_given or 0.0,
+        source="pipeline",
+    )
+
+
 def tie_difference(tie: SurveyTie, listed: np.ndarray) -> float:
     """3-D distance (m) between an applied tie and the position a file lists there."""
     return float(np.linalg.norm(tie.position - listed))
