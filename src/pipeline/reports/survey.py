@@ -349,9 +349,9 @@ def _survey_names(traj: pa.Table, offsets: tuple[int, ...]) -> list[str | None]:
 
 
 def _tie_sources(traj: pa.Table) -> list[str]:
-    """" (from the stations file)" or " (from the pipeline)" for each survey, as the
-    trajectory records its ties (:mod:`pipeline.survey.tiein`); "" each where it records
-    none."""
+    """Where each survey's tie came from, as the trajectory records its ties
+    (:mod:`pipeline.survey.tiein`): ``" (from the stations file)"`` or ``" (from the
+    pipeline)"``; ``""`` each where it records none."""
     calculation = calculation_of(traj)
     ties = calculation.ties if calculation is not None else ()
     return [f" (from the {tie.source})" for tie in ties] or [""] * len(survey_offsets(traj))

@@ -92,7 +92,8 @@ def tie_ins(stations: pa.Table, params: MinCurveParams, ctx: StageContext) -> tu
     for lo, listed in zip(offsets[:-1].tolist(), listed_ties(stations, offsets), strict=True):
         survey = None if names is None else str(names[lo])
         tie = chosen_tie(survey, float(md[lo]), listed, given)
-        warn_other_tie(tie, listed, params.position_tolerance, ctx.stage_id)
+        if listed is not None:
+            warn_other_tie(tie, listed, params.position_tolerance, ctx.stage_id)
         ties.append(tie)
     return tuple(ties)
 

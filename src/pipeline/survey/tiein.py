@@ -41,7 +41,8 @@ class SurveyTie(BaseModel):
     )
 
     def words(self) -> str:
-        """ "Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from the stations file)"."""
+        """The tie in words: ``Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from
+        the stations file)``, after ``survey 'name': `` where it names its survey."""
         named = f"survey {self.survey!r}: " if self.survey is not None else ""
         return (
             f"{named}Tied at MD {self.md:.2f} m, TVD {self.tvd:.2f} m, N {self.north:.2f} m, "
