@@ -38,13 +38,13 @@ class OffsetWells(TableContract):
     hole_diameter: float = column(unit="m", gt=0, description="hole or casing diameter")
     north: float = column(
         unit="m",
-        description="its slot's north from the reference wellhead, in the reference's north: "
-        "its first station's plus the north its stations file lists there (tie_north)",
+        description="its slot's north from the reference wellhead, in the reference's north; "
+        "its first station lies there plus the tie_north its stations file lists",
     )
     east: float = column(
         unit="m",
-        description="its slot's east from the reference wellhead, in the reference's north: "
-        "its first station's plus the east its stations file lists there (tie_east)",
+        description="its slot's east from the reference wellhead, in the reference's north; "
+        "its first station lies there plus the tie_east its stations file lists",
     )
     tvd: float | None = column(
         unit="m",
