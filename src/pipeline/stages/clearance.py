@@ -28,6 +28,7 @@ from pipeline.anticollision.models import (
 from pipeline.anticollision.models import well_covariance as model_covariance
 from pipeline.anticollision.offset_north import (
     TIE_COLUMNS,
+    first_station,
     listed_tie,
     on_the_reference_grid,
     taken_words,
@@ -524,19 +525,6 @@ def _offset_tie(w: Mapping[str, Any], frame: _Frame) -> dict[str, float] | None:
     return {"tvd": w["tie_tvd"], "north": north, "east": east}
 
 
-def _offset_start(
-    w: Mapping[str, Any], md0: float, tie: Mapping[str, float] | None
-) -> tuple[float, float, float]:
-    """Where an offset well's first station is (north, east, TVD, m, the frame's north):
-    its slot (the wells table's north, east) plus the north and east of the ``tie`` its
-    stations file lists there (:func:`_offset_tie`); TVD the wells table's, else the
-    file's, else its first MD ``md0``."""
-    if tie is None:
-        return w["north"], w["east"], md0 if w["tvd"] is None else w["tvd"]
-    tvd = tie["tvd"] if w["tvd"] is None else w["tvd"]
-    return w["north"] + tie["north"], w["east"] + tie["east"], tvd
-
-
 def clearance(
     inputs: Mapping[str, pa.Table], params: ClearanceParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
@@ -591,7 +579,7 @@ def clearance(
         )
         arrays = _arrays(block, frame)
         ties[w["offset"]] = _offset_tie(w, frame)
-        start_at = _offset_start(w, float(arrays[0][0]), ties[w["offset"]])
+        start_at = first_station(w, float(arrays[0][0]), ties[w["offset"]])
         offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
         kick = _kickoff(w, ref, offset, params, well.well)
         if kick is None:
