@@ -555,9 +555,8 @@ def clearance(
     )
     ref_arrays = _arrays(reference, frame)
     ref_model, ref_diameter = params.reference_model, params.reference_hole_diameter
-    ref_tie = chosen_tie(
-        "reference", float(ref_arrays[0][0]), listed_ties(reference, np.array([0, 1]))[0], _UNSET
-    )
+    listed_at = listed_ties(reference, survey_offsets(reference)[:2])[0]
+    ref_tie = chosen_tie("reference", float(ref_arrays[0][0]), listed_at, _UNSET)
     ref_at = (ref_tie.north, ref_tie.east, ref_tie.tvd)
     ref = make.well("reference", ref_arrays, ref_at, ref_model, ref_diameter)
     offsets = survey_offsets(stations)
