@@ -132,6 +132,7 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
         "Well",
         "Slot north",
         "Slot east",
+        "Tie-on its file lists",
         "First-station TVD",
         "Hole diameter",
         "Hole diameter",
@@ -139,6 +140,7 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
     ]
     assert page.units["clearance-wells"] == [
         "",
+        "m",
         "m",
         "m",
         "m below the reference datum",
@@ -152,6 +154,7 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
         "Reference well",
         "0.00",
         "0.00",
+        "none listed",  # the set's files list no positions
         "its first MD",
         "36",
         "0.9144",
@@ -159,7 +162,9 @@ def test_clearance_report_states_the_wells_it_scanned(clearance_run: Path, brows
     ]
     assert [r[0] for r in offsets] == list(SLOTS)
     for row in offsets:
-        assert row[1:] == [*SLOTS[row[0]], "its first MD", "24", "0.6096", title], row[0]
+        assert row[1:] == [*SLOTS[row[0]], "none listed", "its first MD", "24", "0.6096", title], (
+            row[0]
+        )
     assert "SPE 90408" not in page.text  # no gyro model in this scan
 
 

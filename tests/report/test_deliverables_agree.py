@@ -202,7 +202,8 @@ def test_every_deliverable_of_a_run_says_the_same(
 
 def test_the_report_states_each_surveys_results_and_tie_in(runs: Callable[[str], Path]) -> None:
     # the summary gave the last survey's TD, position and closure as the well's, unnamed,
-    # and the method the first survey's tie-in only (ST1 is tied at TVD = MD, N = E = 0)
+    # and the method the first survey's tie-in only (ST1 is tied at TVD = MD, N = E = 0,
+    # its file listing no positions: the pipeline's tie, the report says)
     out = runs("sidetrack")
     blocks = report_blocks(out / "report.html")
     main, st1 = blocks["Results, survey MAIN"], blocks["Results, survey ST1"]
@@ -211,11 +212,11 @@ def test_the_report_states_each_surveys_results_and_tie_in(runs: Callable[[str],
     method = blocks["Method"]
     assert (
         method["Tie-in (first station of survey MAIN)"]
-        == "MD 0.00 m, TVD 0.00 m, N 0.00 m, E 0.00 m"
+        == "MD 0.00 m, TVD 0.00 m, N 0.00 m, E 0.00 m (from the pipeline)"
     )
     assert (
         method["Tie-in (first station of survey ST1)"]
-        == "MD 1200.00 m, TVD 1200.00 m, N 0.00 m, E 0.00 m"
+        == "MD 1200.00 m, TVD 1200.00 m, N 0.00 m, E 0.00 m (from the pipeline)"
     )
     assert "Results" in report_blocks(runs("survey") / "report.html")
 

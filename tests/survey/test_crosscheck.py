@@ -183,22 +183,24 @@ def test_a_witsml_export_is_checked_against_its_own_positions(tmp_path: Path) ->
     assert "file_positions: 6" in result.stdout.splitlines()[-1]
 
 
-def test_a_file_tied_elsewhere_is_told_to_set_the_tie_in(tmp_path: Path) -> None:
+def test_a_file_tied_elsewhere_is_tied_at_its_own_tie_on(tmp_path: Path) -> None:
     """A vertical listing from MD 500 m whose vendor placed its first station 0.5 m above
-    MD, 3 m north and 2 m east: every station is off by √(0.5² + 3² + 2²) m until the
-    tie-in is the file's."""
+    MD, 3 m north and 2 m east: tied there, every station agrees (it was tied at TVD = MD,
+    N = E = 0 and every station warned off by √(0.5² + 3² + 2²) m); the wellhead tie given
+    to the stage is applied, both it and the stations off by that much warned."""
     rows = [f"{500 + 30 * k:.2f},0.00,0.00,{499.5 + 30 * k:.2f},3.00,2.00" for k in range(6)]
     listing = tmp_path / "tied.csv"
     listing.write_text(HEADER + "\n".join(rows) + "\n")
-    with pytest.warns(SurveyCheckWarning) as caught:
-        gp.run(SURVEY, listing)
-    (message,) = [str(w.message) for w in caught]
-    assert f"first at MD 500.00 m by {math.sqrt(0.25 + 9 + 4):.3f} m" in message
-    assert "set the stage's tie_tvd, tie_north and tie_east" in message
-    tie = {"trajectory.tie_tvd": 499.5, "trajectory.tie_north": 3.0, "trajectory.tie_east": 2.0}
     with warnings.catch_warnings():
         warnings.simplefilter("error", SurveyCheckWarning)
+        gp.run(SURVEY, listing)
+    tie = {"trajectory.tie_tvd": 500.0, "trajectory.tie_north": 0.0, "trajectory.tie_east": 0.0}
+    with pytest.warns(SurveyCheckWarning) as caught:
         gp.run(SURVEY, listing, set=tie)
+    gap = f"{math.sqrt(0.25 + 9 + 4):.3f} m"
+    tied, check = (str(w.message) for w in caught)
+    assert f"{gap} from the tie-on its stations file lists there" in tied
+    assert f"first at MD 500.00 m by {gap}" in check
 
 
 def test_the_summary_counts_the_file_positions_check_the_run_and_report_state(

@@ -1,25 +1,36 @@
 """An offset well's azimuths referred to true north by its own corrections, never another
 well's: a declination is of a site and a date (secular change is tenths of a degree a year),
-a grid convergence of a grid and a place. Angles in degrees, east of true north positive."""
+a grid convergence of a grid and a place; the tie-on its stations file lists turned with
+them, and where its first station lies. Angles in degrees, east of true north positive;
+lengths in m."""
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
-from pipeline.survey.north import convert_azimuth
-from pipeline.survey.stations import north_reference_of
+from pipeline.survey.north import convert_azimuth, turned_positions
+from pipeline.survey.stations import north_reference_of, survey_offsets
+from pipeline.survey.tiein import listed_ties
 from pipeline.well import WellMetadata
 
-__all__ = ["on_the_reference_grid", "taken_words", "true_azimuths"]
+__all__ = ["first_station", "listed_tie", "on_the_reference_grid", "taken_words", "true_azimuths"]
+
+TIE_COLUMNS = ("tie_tvd", "tie_north", "tie_east")
+"""The offset-wells columns of the tie-on an offset's stations file lists (m)."""
 
 
 def true_azimuths(
     table: pa.Table, own: WellMetadata, reference: WellMetadata
-) -> tuple[np.ndarray, float | None]:
+) -> tuple[np.ndarray, float, float | None]:
     """A stations table's azimuths (deg, NaN kept) referred to true north by ``own`` (its
     well's metadata: its declination; of grid azimuths the convergence applied to them,
-    else its grid convergence), and the ``reference`` well's grid convergence where grid
+    else its grid convergence), the change δ that made (deg, A_true = A + δ mod 360: what
+    turns the positions it lists, :func:`~pipeline.survey.north.turned_positions`), and
+    the ``reference`` well's grid convergence where grid
     azimuths took it, stating none of their own (else None; the scan refuses it unless the
     reference is on grid north by it: :func:`on_the_reference_grid`).
 
@@ -44,7 +55,35 @@ def true_azimuths(
     true, _ = convert_azimuth(
         azi, north, "true", convergence_deg=convergence, declination_deg=declination
     )
-    return np.where(np.isnan(azi), np.nan, true), taken
+    shift, _ = convert_azimuth(
+        0.0, north, "true", convergence_deg=convergence, declination_deg=declination
+    )
+    return np.where(np.isnan(azi), np.nan, true), float(shift), taken
+
+
+def listed_tie(table: pa.Table, shift: float) -> dict[str, float | None]:
+    """The TVD, north and east (m, from its own wellhead) an offset's stations file lists at
+    its first station, horizontal ones turned by ``shift`` (deg, :func:`true_azimuths`' δ)
+    to true north as its azimuths are, by the names of :data:`TIE_COLUMNS` (all None: it
+    lists not all three there)."""
+    listed = listed_ties(table, survey_offsets(table)[:2])[0]
+    if listed is None:
+        return dict.fromkeys(TIE_COLUMNS)
+    north, east = turned_positions(listed[1], listed[2], shift)
+    return dict(zip(TIE_COLUMNS, (float(listed[0]), float(north), float(east)), strict=True))
+
+
+def first_station(
+    well: Mapping[str, Any], md0: float, tie: Mapping[str, float] | None
+) -> tuple[float, float, float]:
+    """Where an offset well's first station is (north, east, TVD, m, the scan's north): its
+    slot (the wells table's ``north``, ``east``) plus the north and east of the ``tie`` its
+    stations file lists there (TVD, north, east from its own wellhead, in the scan's north;
+    None: none listed); TVD the wells table's, else the file's, else its first MD ``md0``."""
+    tvd = well["tvd"] if well["tvd"] is not None else (md0 if tie is None else tie["tvd"])
+    if tie is None:
+        return well["north"], well["east"], tvd
+    return well["north"] + tie["north"], well["east"] + tie["east"], tvd
 
 
 def taken_words(convergence: float) -> str:

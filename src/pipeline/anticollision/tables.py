@@ -36,11 +36,38 @@ class OffsetWells(TableContract):
     offset: str = column(unit=None, description="offset well id (the stations' survey id)")
     model: str = column(unit=None, description="tool model of its survey")
     hole_diameter: float = column(unit="m", gt=0, description="hole or casing diameter")
-    north: float = column(unit="m", description="first station's north from the reference wellhead")
-    east: float = column(unit="m", description="first station's east from the reference wellhead")
+    north: float = column(
+        unit="m",
+        description="its slot's north from the reference wellhead, in the reference's north; "
+        "its first station lies there plus the tie_north its stations file lists",
+    )
+    east: float = column(
+        unit="m",
+        description="its slot's east from the reference wellhead, in the reference's north; "
+        "its first station lies there plus the tie_east its stations file lists",
+    )
     tvd: float | None = column(
         unit="m",
-        description="first station's TVD below the reference's depth datum (null: its MD)",
+        description="first station's TVD below the reference's depth datum (null: the TVD its "
+        "stations file lists there, else its MD)",
+        default=None,
+    )
+    tie_tvd: float | None = column(
+        unit="m",
+        description="TVD its stations file lists at its first station (null: it lists not "
+        "TVD, north and east there)",
+        default=None,
+    )
+    tie_north: float | None = column(
+        unit="m",
+        description="north its stations file lists at its first station, from its own "
+        "wellhead, referred to true north with its azimuths (null: none listed)",
+        default=None,
+    )
+    tie_east: float | None = column(
+        unit="m",
+        description="east its stations file lists at its first station, from its own "
+        "wellhead, referred to true north with its azimuths (null: none listed)",
         default=None,
     )
     parent: str | None = column(

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pipeline.anticollision.offset_north import taken_words, true_azimuths
+from pipeline.anticollision.offset_north import listed_tie, taken_words, true_azimuths
 from pipeline.anticollision.tables import OffsetWells
 from pipeline.api import stages
 from pipeline.api.frames import (
@@ -53,7 +53,9 @@ def clearance(
     tool model, hole diameter, first-station position; see docs/clearance.md), or stations
     by well id, or stations tables named by their well metadata; then ``offset_model``,
     ``offset_hole_diameter`` (m) and ``offset_position`` ((north, east[, tvd]) m from the
-    reference wellhead, default (0, 0) and TVD = first MD) give each well's, as one value or
+    reference wellhead, default (0, 0): its slot, its first station there plus the tie-on
+    its stations list there, if they do; TVD default the listed one, else the first MD)
+    give each well's, as one value or
     by well id; ``offset_kickoff`` names sidetracks of the reference, well id → kick-off MD
     on the reference (m) (a well whose first station lies on the reference path is found
     without it; the manifest's ``parent`` and ``kickoff_md`` columns). Each offset's
@@ -131,6 +133,7 @@ def _offsets(
     tables: dict[str, pa.Table] = {}
     true: dict[str, np.ndarray] = {}
     taken: dict[str, float | None] = {}
+    ties: dict[str, dict[str, float | None]] = {}
     for name, data in named.items():
         if isinstance(data, str | Path):
             tables[name], header = reg.read(Path(data), "stations", well=given)
@@ -139,7 +142,8 @@ def _offsets(
             own = given.merged(header)
             tables[name] = to_table(data, Stations, what=f"offset well {name!r}", well=own)
         try:
-            true[name], convergence = true_azimuths(tables[name], header, well)
+            true[name], shift, convergence = true_azimuths(tables[name], header, well)
+            ties[name] = listed_tie(tables[name], shift)
         except ValueError as exc:
             raise ParameterError(
                 f"clearance: offset well {name!r}: {exc}: state it in its well metadata"
@@ -174,6 +178,7 @@ def _offsets(
                 "parent": "reference" if kickoff and name in kickoff else None,
                 "kickoff_md": float(kickoff[name]) if kickoff and name in kickoff else None,
                 "reference_convergence": taken[name],
+                **ties[name],
             }
         )
     wells = OffsetWells.compiled().make_table({k: [r[k] for r in rows] for k in rows[0]})

@@ -147,7 +147,8 @@ def minimum_curvature(stations: TableLike, *, well: WellLike = None, **params: A
     """Trajectory of surveyed stations (md m, inc, azi deg) by minimum curvature: north, east,
     tvd (m, from the wellhead), dls (deg/30 m), vertical section and closure. ``params``:
     ``vs_azimuth`` (deg, same north as the azimuths), ``tie_north``, ``tie_east``,
-    ``tie_tvd`` (m; default TVD = MD of the first station)."""
+    ``tie_tvd`` (m; default: the TVD, north and east the stations list at each survey's
+    first station, else TVD = MD, N = E = 0)."""
     return _one("minimum_curvature", stations, {"stations": stations}, params, well)
 
 

@@ -7,13 +7,15 @@ unit in the header, ``hole_diameter (in)``, ``north [m]``):
 - ``file`` — its stations file (MD, inclination, azimuth), relative to the manifest's folder;
 - ``model`` — its tool model (e.g. ``ISCWSA-MWD-REV5``, ``GYRO-NS``);
 - ``hole_diameter`` — hole or casing diameter (a length);
-- ``north``, ``east`` — its slot: its first station's position relative to the reference
-  well's wellhead, in the north of the reference's azimuths (lengths; required on every
+- ``north``, ``east`` — its slot: its position relative to the reference well's wellhead,
+  in the north of the reference's azimuths; its first station lies there, plus the north and
+  east its stations file lists there where it lists TVD, north and east (its tie-on, from
+  its own wellhead) (lengths; required on every
   row: an empty cell or a null marker (``-999.25``…, :mod:`pipeline.io.nulls`) is an
   error, never the reference's wellhead or a slot 999.25 away; a well on the
   reference's own slot, a sidetrack or re-entry, says so with ``0,0``);
 - ``tvd`` — its first station's TVD below the reference's depth datum (a length; default:
-  the first station's MD);
+  the TVD its stations file lists there, else the first station's MD);
 - ``parent`` — optional: ``reference`` (or the reference well's name) for a sidetrack of the
   reference well; ``kickoff_md`` — optional: its kick-off MD on the reference (a length;
   naming it names the parent). Without them a well whose first station lies on the reference

@@ -168,12 +168,15 @@ def md_label_points(md: FloatArray, step: float) -> list[int]:
 
 def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
     """The wells the scan rests on: the reference well, then each offset well's slot (from
-    the reference wellhead, in the reference's north), first-station TVD, hole and model."""
+    the reference wellhead, in the reference's north), the tie-on its stations file lists,
+    first-station TVD, hole and model."""
+    tie = rule.get("reference_tie") or {}
     reference = {
         "model": rule.get("reference_model"),
         "hole_diameter": rule.get("reference_hole_diameter"),
         "north": 0.0,
         "east": 0.0,
+        **({"tie_on": tie} if tie.get("source") == "stations file" else {}),
     }
     assumed = {  # offsets whose grid azimuths took the reference's convergence
         name: well["reference_convergence"]
@@ -182,12 +185,16 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
     }
     rows = []
     for name, well in {"Reference well": reference, **rule.get("wells", {})}.items():
-        hole, tvd, model = well.get("hole_diameter"), well.get("tvd"), str(well.get("model"))
+        hole, model, tie = well.get("hole_diameter"), str(well.get("model")), well.get("tie_on")
+        tvd = well["tvd"] if well.get("tvd") is not None else (tie or {}).get("tvd")
         rows.append(
             (
                 name,
                 fmt(well.get("north")),
                 fmt(well.get("east")),
+                f"TVD {fmt(tie['tvd'])}, N {fmt(tie['north'])}, E {fmt(tie['east'])}"
+                if tie
+                else "none listed",
                 fmt(tvd) if tvd is not None else "its first MD",
                 fmt_inches(hole),
                 fmt(hole, 4),
@@ -200,6 +207,7 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
             Column("Well", align="left"),
             Column("Slot north", "m"),
             Column("Slot east", "m"),
+            Column("Tie-on its file lists", "m", align="left"),
             Column("First-station TVD", "m below the reference datum"),
             Column("Hole diameter", "in"),
             Column("Hole diameter", "m"),
@@ -207,8 +215,10 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
         ),
         tuple(rows),
         kind="clearance-wells",
-        note="Slot: the first station's position from the reference wellhead, in the north "
-        "of the reference's azimuths."
+        note="Slot: the well's position from the reference wellhead, in the north of the "
+        "reference's azimuths; its first station lies there plus the north and east of the "
+        "tie-on its stations file lists (from its own wellhead, turned to that north), where "
+        "it lists one."
         + (
             f" {', '.join(assumed)}: grid azimuths stating no grid convergence of their own; "
             f"the reference well's ({next(iter(assumed.values()))}°) applied, the same grid "

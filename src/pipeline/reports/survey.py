@@ -68,6 +68,7 @@ from pipeline.reports.sections import (
     unit_label,
 )
 from pipeline.reports.view3d import view_3d
+from pipeline.survey.calculation import calculation_of
 from pipeline.survey.courses import MIN_COURSE, max_dls, short_courses
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
@@ -347,6 +348,15 @@ def _survey_names(traj: pa.Table, offsets: tuple[int, ...]) -> list[str | None]:
     return [str(surveys[lo].as_py()) for lo in offsets[:-1]]
 
 
+def _tie_sources(traj: pa.Table) -> list[str]:
+    """Where each survey's tie came from, as the trajectory records its ties
+    (:mod:`pipeline.survey.tiein`): ``" (from the stations file)"`` or ``" (from the
+    pipeline)"``; ``""`` each where it records none."""
+    calculation = calculation_of(traj)
+    ties = calculation.ties if calculation is not None else ()
+    return [f" (from the {tie.source})" for tie in ties] or [""] * len(survey_offsets(traj))
+
+
 def _results(
     traj: pa.Table, path: plots.Path3, vs_azimuth: float | None, course: Course
 ) -> tuple[tuple[str, str], ...]:
@@ -399,9 +409,11 @@ def _method(
             (
                 f"Tie-in (first station of survey {name})" if name else "Tie-in (first station)",
                 f"MD {fmt(path.md[lo])} m, TVD {fmt(path.tvd[lo])} m, "
-                f"N {fmt(path.north[lo])} m, E {fmt(path.east[lo])} m",
+                f"N {fmt(path.north[lo])} m, E {fmt(path.east[lo])} m{source}",
             )
-            for name, lo in zip(_survey_names(traj, path.offsets), path.offsets, strict=False)
+            for name, lo, source in zip(
+                _survey_names(traj, path.offsets), path.offsets, _tie_sources(traj), strict=False
+            )
         ),
         ("Dogleg severity unit", unit_label(traj, "dls")),
         *parts.methods(),

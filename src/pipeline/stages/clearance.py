@@ -27,6 +27,9 @@ from pipeline.anticollision.models import (
 )
 from pipeline.anticollision.models import well_covariance as model_covariance
 from pipeline.anticollision.offset_north import (
+    TIE_COLUMNS,
+    first_station,
+    listed_tie,
     on_the_reference_grid,
     taken_words,
     true_azimuths,
@@ -46,8 +49,9 @@ from pipeline.registry import StageContext, StageDef, pipeline_input
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages import toolmodels
 from pipeline.survey.mincurve import minimum_curvature
-from pipeline.survey.north import convert_azimuth
+from pipeline.survey.north import convert_azimuth, turned_positions
 from pipeline.survey.stations import north_reference_of, survey_offsets
+from pipeline.survey.tiein import chosen_tie, listed_ties
 from pipeline.tables import Stations
 from pipeline.uncertainty.engine import (
     ModelCatalogue,
@@ -197,7 +201,7 @@ def _true_azimuths(
     table: pa.Table,
     header: WellMetadata,
     reference: WellMetadata,
-) -> tuple[np.ndarray, float | None]:
+) -> tuple[np.ndarray, float, float | None]:
     """An offset well's azimuths referred to true north by its own corrections, its file's
     (``header``) or the manifest's, which must agree (:func:`true_azimuths`; refused naming
     the manifest line, the reference's grid convergence taken with a warning)."""
@@ -210,7 +214,7 @@ def _true_azimuths(
         own = header.merged({field: value}) if value is not None else header
     where = f"offset well {entry.well_id!r} ({entry.file.name})"
     try:
-        true, taken = true_azimuths(table, own, reference)
+        true, shift, taken = true_azimuths(table, own, reference)
     except ValueError as exc:
         raise InputFileError(
             manifest,
@@ -224,7 +228,7 @@ def _true_azimuths(
             f"{where}: {taken_words(taken)} (else give the manifest's convergence column)",
             entry.line,
         )
-    return true, taken
+    return true, shift, taken
 
 
 def offset_tables(
@@ -246,6 +250,7 @@ def offset_tables(
     tables = []
     digests = []
     taken: list[float | None] = []  # the reference's grid convergence, where taken
+    ties: list[dict[str, float | None]] = []  # the tie-on each file lists, true north
     for entry in entries:
         if not entry.file.is_file():
             raise InputFileError(manifest, f"no stations file {entry.file}", entry.line, "file")
@@ -257,9 +262,10 @@ def offset_tables(
             raise InputFileError(
                 entry.file, f"offset well {entry.well_id!r}: fewer than 2 stations"
             )
-        true, convergence = _true_azimuths(manifest, entry, table, header, reference)
+        true, shift, convergence = _true_azimuths(manifest, entry, table, header, reference)
         tables.append((entry.well_id, table, true))
         taken.append(convergence)
+        ties.append(listed_tie(table, shift))
     stations = Stations.compiled().make_table(
         {
             "survey": [w for w, t, _ in tables for _ in range(t.num_rows)],
@@ -282,6 +288,7 @@ def offset_tables(
             "source": [str(e.file) for e in entries],
             "sha256": digests,
             "reference_convergence": taken,
+            **{name: [tie[name] for tie in ties] for name in TIE_COLUMNS},
         }
     )
     return wells, stations
@@ -364,6 +371,12 @@ class _Frame:
         rot = self.rotation()
         out: np.ndarray = rot @ cov @ rot.T
         return out
+
+    def positions(self, north: float, east: float) -> tuple[float, float]:
+        """A horizontal position (m) referred to true north, in the frame's north."""
+        shift, _ = convert_azimuth(0.0, "true", self.north, **self._corrections())  # type: ignore[arg-type]
+        n, e = turned_positions(north, east, shift)
+        return float(n), float(e)
 
     def rotation(self) -> np.ndarray:
         """True-north NEV → the frame's."""
@@ -499,6 +512,19 @@ def _kickoff(
     return kick
 
 
+_UNSET = (None, None, None)
+"""No tie of the stage's: the clearance scan ties each well where its file lists it."""
+
+
+def _offset_tie(w: Mapping[str, Any], frame: _Frame) -> dict[str, float] | None:
+    """The tie-on an offset well's stations file lists at its first station (TVD, north,
+    east, m, from its own wellhead, in the frame's north; None: none listed)."""
+    if w.get("tie_tvd") is None:
+        return None
+    north, east = frame.positions(w["tie_north"], w["tie_east"])
+    return {"tvd": w["tie_tvd"], "north": north, "east": east}
+
+
 def clearance(
     inputs: Mapping[str, pa.Table], params: ClearanceParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
@@ -529,16 +555,17 @@ def clearance(
     )
     ref_arrays = _arrays(reference, frame)
     ref_model, ref_diameter = params.reference_model, params.reference_hole_diameter
-    ref = make.well(
-        "reference", ref_arrays, (0.0, 0.0, float(ref_arrays[0][0])), ref_model, ref_diameter
-    )
+    listed_at = listed_ties(reference, survey_offsets(reference)[:2])[0]
+    ref_tie = chosen_tie("reference", float(ref_arrays[0][0]), listed_at, _UNSET)
+    ref_at = (ref_tie.north, ref_tie.east, ref_tie.tvd)
+    ref = make.well("reference", ref_arrays, ref_at, ref_model, ref_diameter)
     offsets = survey_offsets(stations)
     ids = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
     blocks = {
         (ids[lo] if ids is not None else ""): stations.slice(lo, hi - lo)
         for lo, hi in itertools.pairwise(offsets)
     }
-    pairs, kickoffs = [], {}
+    pairs, kickoffs, ties = [], {}, {}
     for w in listed:
         block = blocks.get(w["offset"])
         if block is None or block.num_rows < 2:
@@ -550,7 +577,8 @@ def clearance(
             w["offset"], w.get("reference_convergence"), frame.north, frame.convergence
         )
         arrays = _arrays(block, frame)
-        start_at = (w["north"], w["east"], float(arrays[0][0]) if w["tvd"] is None else w["tvd"])
+        ties[w["offset"]] = _offset_tie(w, frame)
+        start_at = first_station(w, float(arrays[0][0]), ties[w["offset"]])
         offset = make.well(w["offset"], arrays, start_at, w["model"], w["hole_diameter"])
         kick = _kickoff(w, ref, offset, params, well.well)
         if kick is None:
@@ -596,11 +624,13 @@ def clearance(
     )
     rule = {
         **params.model_dump(mode="json", exclude={"latitude", "magnetic"}),
+        "reference_tie": ref_tie.model_dump(mode="json"),
         **({"magnetic": applied.model_dump(mode="json")} if applied is not None else {}),
         "wells": {
             w["offset"]: {
                 **{k: w[k] for k in ("model", "hole_diameter", "source", "sha256") if w.get(k)},
                 **{k: w[k] for k in ("north", "east", "tvd")},  # the slot and datum (tvd null)
+                **({"tie_on": ties[w["offset"]]} if ties[w["offset"]] else {}),  # the file's
                 **(
                     {"reference_convergence": w["reference_convergence"]}
                     if w.get("reference_convergence") is not None

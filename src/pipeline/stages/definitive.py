@@ -23,6 +23,7 @@ from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages import toolmodels
+from pipeline.stages.survey import warn_other_tie
 from pipeline.stages.uncertainty import (
     PositionUncertainty,
     UncertaintyParams,
@@ -30,16 +31,18 @@ from pipeline.stages.uncertainty import (
     magnetic_words,
     with_magnetic,
 )
+from pipeline.survey.calculation import SurveyCalculation, calculation_of, with_calculation
 from pipeline.survey.definitive import OverlapRule, RunStations, plan_sections, roles
 from pipeline.survey.interpolate import interpolate_md
 from pipeline.survey.mincurve import closure, minimum_curvature, vertical_section
-from pipeline.survey.north import convert_azimuth
+from pipeline.survey.north import convert_azimuth, turned_positions
 from pipeline.survey.stations import (
     defined_azimuths,
     north_reference_of,
     station_angles,
     survey_offsets,
 )
+from pipeline.survey.tiein import SurveyTie, chosen_tie, listed_positions, ties_words
 from pipeline.tables import DLS_COURSE_M, Stations
 from pipeline.uncertainty.engine import (
     OutsideValidity,
@@ -189,9 +192,29 @@ class DefinitiveParams(BaseModel):
         "and an outside_validity column)",
     )
     vs_azimuth: float = Field(0.0, description="vertical-section azimuth, deg")
-    tie_north: float = Field(0.0, description="northing of the first station, m")
-    tie_east: float = Field(0.0, description="easting of the first station, m")
-    tie_tvd: float | None = Field(None, description="TVD of the first station, m (default MD)")
+    tie_north: float | None = Field(
+        None,
+        description="northing of the survey's first station, m; default: the one its run's "
+        "stations file lists there (with TVD and east), else 0",
+    )
+    tie_east: float | None = Field(
+        None,
+        description="easting of the survey's first station, m; default: the one its run's "
+        "stations file lists there (with TVD and north), else 0",
+    )
+    tie_tvd: float | None = Field(
+        None,
+        description="TVD of the survey's first station, m; default: the one its run's "
+        "stations file lists there (with north and east), else its MD. Giving any of "
+        "tie_tvd, tie_north, tie_east ties the survey at the stage's (the others at their "
+        "fallbacks), warned where the file lists another",
+    )
+    position_tolerance: float = Field(
+        0.1,
+        ge=0,
+        description="the largest 3-D distance, m, between the stage's tie and the tie-on "
+        "the file lists before a warning",
+    )
 
     @model_validator(mode="after")
     def _ports(self) -> DefinitiveParams:
@@ -211,6 +234,7 @@ class _Run:
     azi_true: np.ndarray  #: deg, true north (the error models')
     source: str
     tool: list[str | None]  #: each station's tool: its own, else its file header's
+    listed: np.ndarray | None  #: (n, 3) TVD, north, east its file lists, m, survey's north
 
     @property
     def name(self) -> str:
@@ -258,10 +282,8 @@ def definitive_survey(
     azi_deg = np.concatenate([run.azi[sec.listed] for sec, run in listed])
     azi_true = np.concatenate([run.azi_true[sec.listed] for sec, run in listed])
     inc, azi = np.radians(inc_deg), np.radians(defined_azimuths(azi_deg))
-    tie_tvd = md[0] if params.tie_tvd is None else params.tie_tvd
-    pos = minimum_curvature(
-        md, inc, azi, tie_north=params.tie_north, tie_east=params.tie_east, tie_tvd=tie_tvd
-    )
+    tie = _tie(listed[0], params, ctx.stage_id)
+    pos = minimum_curvature(md, inc, azi, tie_north=tie.north, tie_east=tie.east, tie_tvd=tie.tvd)
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
     survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
     cov = _valid_covariance(survey, listed, bounds, tools, sites, params)
@@ -285,10 +307,39 @@ def definitive_survey(
         _survey_table(parts, cov, params, north), params.confidence, models
     )
     survey_table = with_magnetic(survey_table, by_run)
+    calculation = SurveyCalculation(
+        method="minimum_curvature", vs_azimuth=params.vs_azimuth, ties=(tie,)
+    )
     return {
-        "survey": survey_table,
+        "survey": with_calculation(survey_table, calculation),
         "overlap": _overlap(runs, station_roles, survey_table, north),
     }
+
+
+def _tie(top: tuple[Any, _Run], params: DefinitiveParams, stage: str) -> SurveyTie:
+    """The survey's tie at its first listed station (``top``: the top section and its run):
+    the stage's where given (warned beyond ``position_tolerance`` of the file's), else the
+    TVD, north and east the run's file lists there, else TVD = MD, N = E = 0."""
+    section, run = top
+    first = int(section.listed[0])
+    listed = None if run.listed is None else run.listed[first]
+    if listed is not None and np.isnan(listed).any():
+        listed = None
+    given = (params.tie_tvd, params.tie_north, params.tie_east)
+    tie = chosen_tie(run.name, float(run.md[first]), listed, given)
+    warn_other_tie(tie, listed, params.position_tolerance, stage)
+    return tie
+
+
+def _listed(table: pa.Table, own: str, north: str, kw: Mapping[str, Any]) -> np.ndarray | None:
+    """The TVD, north, east a run's file lists ((n, 3) m; None: none), horizontal positions
+    turned from its azimuths' north ``own`` to the survey's ``north`` as its azimuths are."""
+    listed = listed_positions(table)
+    if listed is None or own == north:
+        return listed
+    shift, _ = convert_azimuth(0.0, own, north, **kw)  # type: ignore[arg-type]
+    listed[:, 1], listed[:, 2] = turned_positions(listed[:, 1], listed[:, 2], shift)
+    return listed
 
 
 def _read(
@@ -313,14 +364,15 @@ def _read(
     try:
         azi_out, _ = convert_azimuth(azi, own, north, **kw)  # type: ignore[arg-type]
         azi_true, _ = convert_azimuth(azi, own, "true", **kw)
+        listed = _listed(table, own, north, kw)
     except ValueError as exc:
         raise ValueError(f"{port}: {exc}") from None
     source = (table.schema.metadata or {}).get(SOURCE_KEY, b"").decode()
     header = (well_of(table) or WellMetadata()).tool_type
-    own = table.column("tool_type").to_pylist() if "tool_type" in table.column_names else []
-    tool = [t or header for t in own] if own else [header] * table.num_rows
+    tools = table.column("tool_type").to_pylist() if "tool_type" in table.column_names else []
+    tool = [t or header for t in tools] if tools else [header] * table.num_rows
     azi_out = np.where(np.isnan(azi), np.nan, azi_out)
-    return _Run(port, spec, md, inc, azi_out, azi_true, source, tool)
+    return _Run(port, spec, md, inc, azi_out, azi_true, source, tool, listed)
 
 
 def _needs_magnetic(tool: ToolModel, table: pa.Table, north: str) -> bool:
@@ -544,9 +596,12 @@ def definitive_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:
     gyro = any(ctx.error_model(m)[1] for m in models)
     cited = ctx.cite(ERROR_MODEL)
     cited += f" (the gyro terms as in {ctx.cite(GYRO_ERROR_MODEL)})" if gyro else ""
+    survey = ctx.tables.get("trajectory")
+    calculation = calculation_of(survey) if survey is not None else None
+    tied = f"{ties_words(calculation.ties)}; " if calculation and calculation.ties else ""
     return MethodNote(
         "Definitive survey",
-        "each run tied at the last listed station of the run above, positions by minimum "
+        f"{tied}each run tied at the last listed station of the run above, positions by minimum "
         "curvature through the listed stations; each station's errors from its own run's "
         f"error model (depth terms on the run's own MD), propagated as in "
         f"{cited} over the listed stations with a run's systematic errors "

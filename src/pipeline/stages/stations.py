@@ -20,6 +20,7 @@ from pipeline.stages.survey import (
     MinCurveParams,
     calculation_note,
     checked,
+    tie_ins,
     trajectory_columns,
 )
 from pipeline.survey.calculation import SurveyCalculation, with_calculation
@@ -79,7 +80,8 @@ def survey_method(
 ) -> dict[str, pa.Table]:
     """Stations → trajectory by the chosen method, with build and turn rates."""
     stations = inputs["stations"]
-    columns = trajectory_columns(stations, params, params.method)
+    ties = tie_ins(stations, params, ctx)
+    columns = trajectory_columns(stations, params, ties, params.method)
     md, inc, azi = station_angles(stations)
     build, turn = (
         build_turn_rates(md, np.radians(inc), np.radians(azi), offsets=survey_offsets(stations))
@@ -90,7 +92,7 @@ def survey_method(
         columns | {"build": build, "turn": turn},
         north_reference=north_reference_of(stations, "azi"),
     )
-    calculation = SurveyCalculation(method=params.method, vs_azimuth=params.vs_azimuth)
+    calculation = SurveyCalculation(method=params.method, vs_azimuth=params.vs_azimuth, ties=ties)
     return {"trajectory": checked(with_calculation(table, calculation), stations, params, ctx)}
 
 

@@ -14,11 +14,18 @@ from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import CheckDef, StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
-from pipeline.survey.calculation import SurveyCalculation, with_calculation
+from pipeline.survey.calculation import SurveyCalculation, calculation_of, with_calculation
 from pipeline.survey.crosscheck import check_positions, position_check_of, with_position_check
 from pipeline.survey.methods import Method, survey_positions
 from pipeline.survey.mincurve import closure, vertical_section
 from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
+from pipeline.survey.tiein import (
+    SurveyTie,
+    chosen_tie,
+    listed_ties,
+    tie_difference,
+    ties_words,
+)
 from pipeline.tables import (
     DLS_COURSE_M,
     DLS_UNIT,
@@ -37,19 +44,30 @@ class MinCurveParams(BaseModel):
     vs_azimuth: float = Field(
         0.0, description="vertical-section plane azimuth, deg, same north reference as the survey"
     )
-    tie_north: float = Field(0.0, description="northing of the first station from the wellhead, m")
-    tie_east: float = Field(0.0, description="easting of the first station from the wellhead, m")
+    tie_north: float | None = Field(
+        None,
+        description="northing of each survey's first station from the wellhead, m; default: "
+        "the stations file's own where it lists TVD, north and east there, else 0",
+    )
+    tie_east: float | None = Field(
+        None,
+        description="easting of each survey's first station from the wellhead, m; default: "
+        "the stations file's own where it lists TVD, north and east there, else 0",
+    )
     tie_tvd: float | None = Field(
         None,
-        description="TVD of the first station, m; default: its MD (straight vertical hole "
-        "above the first station)",
+        description="TVD of each survey's first station, m; default: the stations file's own "
+        "where it lists TVD, north and east there, else its MD (straight vertical hole above "
+        "the first station). Giving any of tie_tvd, tie_north, tie_east ties every survey "
+        "at the stage's (the others at their fallbacks), warned where the file lists another",
     )
     position_tolerance: float = Field(
         0.1,
         ge=0,
         description="where the stations file lists its own TVD/north/east: the largest 3-D "
-        "difference from the recomputed position at a survey's first station, m, before a "
-        "warning (a vendor's listing rounds positions to 0.01 m or 0.1 ft)",
+        "difference from the recomputed position at a survey's first station (and from the "
+        "stage's tie, where given), m, before a warning (a vendor's listing rounds positions "
+        "to 0.01 m or 0.1 ft)",
     )
     position_tolerance_rel: float = Field(
         1e-4,
@@ -59,11 +77,58 @@ class MinCurveParams(BaseModel):
     )
 
 
+def tie_ins(stations: pa.Table, params: MinCurveParams, ctx: StageContext) -> tuple[SurveyTie, ...]:
+    """Where each survey of ``stations`` is tied: at the stage's tie where any of
+    ``tie_tvd``, ``tie_north``, ``tie_east`` is given (a :class:`SurveyCheckWarning` where
+    the file lists a tie-on more than ``position_tolerance`` from it), else at the TVD,
+    north and east the file lists at its first station, else at TVD = MD, N = E = 0."""
+    if stations.num_rows == 0:
+        return ()
+    offsets = survey_offsets(stations)
+    md = stations.column("md").to_numpy(zero_copy_only=False).astype(float)
+    names = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
+    given = (params.tie_tvd, params.tie_north, params.tie_east)
+    ties = []
+    for lo, listed in zip(offsets[:-1].tolist(), listed_ties(stations, offsets), strict=True):
+        survey = None if names is None else str(names[lo])
+        tie = chosen_tie(survey, float(md[lo]), listed, given)
+        if listed is not None:
+            warn_other_tie(tie, listed, params.position_tolerance, ctx.stage_id)
+        ties.append(tie)
+    return tuple(ties)
+
+
+def warn_other_tie(
+    tie: SurveyTie, listed: np.ndarray | None, tolerance: float, stage_id: str
+) -> None:
+    """Warn where the stage's ``tie`` lies more than ``tolerance`` (m) from the tie-on the
+    stations file lists (TVD, north, east, m; None: it lists none)."""
+    if tie.source != "pipeline" or listed is None:
+        return
+    gap = tie_difference(tie, listed)
+    if gap <= tolerance:
+        return
+    named = f"survey {tie.survey!r}" if tie.survey is not None else "the survey"
+    warnings.warn(
+        f"stage {stage_id!r}: {named} is tied at the stage's tie_tvd, tie_north, tie_east "
+        f"(TVD {tie.tvd:.2f} m, N {tie.north:.2f} m, E {tie.east:.2f} m at MD {tie.md:.2f} m), "
+        f"{gap:.3f} m from the tie-on its stations file lists there (TVD {listed[0]:.2f} m, "
+        f"N {listed[1]:.2f} m, E {listed[2]:.2f} m; position_tolerance {tolerance:g} m): the "
+        "stage's applied (leave the three unset to tie at the file's)",
+        SurveyCheckWarning,
+        stacklevel=3,
+    )
+
+
 def trajectory_columns(
-    stations: pa.Table, params: MinCurveParams, method: Method = "minimum_curvature"
+    stations: pa.Table,
+    params: MinCurveParams,
+    ties: tuple[SurveyTie, ...],
+    method: Method = "minimum_curvature",
 ) -> dict[str, object]:
-    """Trajectory columns of every survey of ``stations`` by ``method``, in one call (none
-    of no stations: an empty table is a legal stage output)."""
+    """Trajectory columns of every survey of ``stations`` by ``method``, each tied at its
+    tie of ``ties`` (:func:`tie_ins`), in one call (none of no stations: an empty table is
+    a legal stage output)."""
     if stations.num_rows == 0:
         empty: dict[str, object] = {
             c.name: np.empty(0) for c in Trajectory.compiled().columns if c.required
@@ -72,17 +137,15 @@ def trajectory_columns(
             empty = {"survey": stations.column("survey"), **empty}
         return empty
     md, inc_deg, azi_deg = station_angles(stations)
-    offsets = survey_offsets(stations)
-    tie_tvd = md[offsets[:-1]] if params.tie_tvd is None else params.tie_tvd
     result = survey_positions(
         method,
         md,
         np.radians(inc_deg),
         np.radians(azi_deg),
-        offsets=offsets,
-        tie_north=params.tie_north,
-        tie_east=params.tie_east,
-        tie_tvd=tie_tvd,
+        offsets=survey_offsets(stations),
+        tie_north=np.array([t.north for t in ties]),
+        tie_east=np.array([t.east for t in ties]),
+        tie_tvd=np.array([t.tvd for t in ties]),
     )
     distance, direction = closure(result.north, result.east)
     columns: dict[str, object] = {
@@ -124,14 +187,8 @@ def checked(
     if check is None:
         return trajectory
     if check.beyond_md:
-        hint = (
-            "; already at the first station: the file's tie-in is not the one applied (set "
-            "the stage's tie_tvd, tie_north and tie_east)"
-            if check.beyond_md[0] == trajectory.column("md")[0].as_py()
-            else ""
-        )
         warnings.warn(
-            f"stage {ctx.stage_id!r}: {check.summary()}{hint}", SurveyCheckWarning, stacklevel=2
+            f"stage {ctx.stage_id!r}: {check.summary()}", SurveyCheckWarning, stacklevel=2
         )
     return with_position_check(trajectory, check)
 
@@ -140,12 +197,17 @@ def min_curve(
     inputs: Mapping[str, pa.Table], params: MinCurveParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Stations → trajectory by minimum curvature, every survey of the table in one call,
-    checked against the positions the stations file lists (:func:`checked`)."""
+    each tied at its tie-on (:func:`tie_ins`), checked against the positions the stations
+    file lists (:func:`checked`)."""
     stations = inputs["stations"]
+    ties = tie_ins(stations, params, ctx)
     table = Trajectory.compiled().make_table(
-        trajectory_columns(stations, params), north_reference=north_reference_of(stations, "azi")
+        trajectory_columns(stations, params, ties),
+        north_reference=north_reference_of(stations, "azi"),
     )
-    calculation = SurveyCalculation(method="minimum_curvature", vs_azimuth=params.vs_azimuth)
+    calculation = SurveyCalculation(
+        method="minimum_curvature", vs_azimuth=params.vs_azimuth, ties=ties
+    )
     warn_detached(table, ctx)
     return {"trajectory": checked(with_calculation(table, calculation), stations, params, ctx)}
 
@@ -159,7 +221,7 @@ linearly between the other's stations: centimetres off along a curve)."""
 def warn_detached(trajectory: pa.Table, ctx: StageContext) -> None:
     """Warn of each survey that begins within another survey's depths — a sidetrack listed
     beside its main bore, a second run continuing the first — yet is tied at the stage's
-    tie-in (default TVD = MD, N = E = 0: a vertical hole above it) more than
+    tie-in (its file listing none there: TVD = MD, N = E = 0, a vertical hole above it) more than
     :data:`DETACHED_M` from where the other survey puts the hole at that MD."""
     if "survey" not in trajectory.column_names:
         return
@@ -182,7 +244,8 @@ def warn_detached(trajectory: pa.Table, ctx: StageContext) -> None:
                 f"TVD {there[0]:.2f} m, N {there[1]:.2f} m, E {there[2]:.2f} m, but is tied at "
                 f"TVD {xyz[lo, 0]:.2f} m, N {xyz[lo, 1]:.2f} m, E {xyz[lo, 2]:.2f} m "
                 f"({gap:.2f} m away): its positions are not its hole's. Give its tie-in: "
-                "the stage's tie_tvd, tie_north and tie_east, with a stations file of that "
+                "its stations file's TVD, north and east at its first station, or the "
+                "stage's tie_tvd, tie_north and tie_east with a stations file of that "
                 "survey alone",
                 SurveyCheckWarning,
                 stacklevel=2,
@@ -242,11 +305,17 @@ def gyropipe_register_checks(register: Callable[[CheckDef], None]) -> None:
 
 
 def calculation_note(method: str, ctx: ReportContext) -> MethodNote:
-    """The survey calculation ``method`` (in words) in the report, with the check against
-    the stations file's own positions when there was one."""
-    check = position_check_of(ctx.tables["trajectory"]) if "trajectory" in ctx.tables else None
-    text = method if check is None else f"{method}; {check.summary()}"
-    return MethodNote("Survey calculation", text)
+    """The survey calculation ``method`` (in words) in the report, where each survey was
+    tied on, and the check against the stations file's own positions when there was one."""
+    trajectory = ctx.tables.get("trajectory")
+    check = position_check_of(trajectory) if trajectory is not None else None
+    calculation = calculation_of(trajectory) if trajectory is not None else None
+    parts = [method]
+    if calculation is not None and calculation.ties:
+        parts.append(ties_words(calculation.ties))
+    if check is not None:
+        parts.append(check.summary())
+    return MethodNote("Survey calculation", "; ".join(parts))
 
 
 def mincurve_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:

@@ -1,9 +1,10 @@
 """How a trajectory's positions were calculated, carried in its Arrow schema metadata.
 
-The stages that integrate stations record the survey calculation method and the azimuth of
-the vertical-section plane under ``gyropipe.survey_calculation`` (JSON), so exports state
-them (WITSML ``calcAlgorithm`` and ``aziVertSect``, the LAS ``~Parameter`` section, the JSON
-summary) instead of assuming them. Stages that add columns to a trajectory keep the record.
+The stages that integrate stations record the survey calculation method, the azimuth of
+the vertical-section plane and where each survey was tied on (:mod:`pipeline.survey.tiein`)
+under ``gyropipe.survey_calculation`` (JSON), so exports and the report state them (WITSML
+``calcAlgorithm`` and ``aziVertSect``, the LAS ``~Parameter`` section, the JSON summary)
+instead of assuming them. Stages that add columns to a trajectory keep the record.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.survey.methods import Method
+from pipeline.survey.tiein import SurveyTie
 
 CALCULATION_KEY = b"gyropipe.survey_calculation"
 Record = TypeVar("Record", bound=BaseModel)
@@ -28,6 +30,11 @@ class SurveyCalculation(BaseModel):
     vs_azimuth: float = Field(
         description="azimuth of the vertical-section plane, deg, in the azimuths' north "
         "reference; the section's origin is the wellhead"
+    )
+    ties: tuple[SurveyTie, ...] = Field(
+        (),
+        description="where each survey's first station was tied (empty: not recorded, a "
+        "trajectory computed before ties were)",
     )
 
 

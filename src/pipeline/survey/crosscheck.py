@@ -16,10 +16,9 @@ import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.survey.calculation import record_of, with_record
+from pipeline.survey.tiein import listed_positions
 
 POSITION_CHECK_KEY = b"gyropipe.position_check"
-STATED = ("tvd", "north", "east")
-"""the columns of a stations file's own positions (m, NED from the wellhead)"""
 
 
 class PositionCheck(BaseModel):
@@ -68,12 +67,12 @@ def check_positions(
 ) -> PositionCheck | None:
     """The stations' own ``tvd``, ``north``, ``east`` (where all three are given and not
     null) against ``computed`` (TVD, north, east of each station, m); None when the file
-    lists no position. ``offsets``: the CSR offsets of the table's surveys."""
-    if not all(c in stations.column_names for c in STATED):
+    lists no position. ``offsets``: the CSR offsets of the table's surveys. Positions in
+    another unit or north than the table's are refused
+    (:func:`~pipeline.survey.tiein.listed_positions`)."""
+    stated = listed_positions(stations)
+    if stated is None:
         return None
-    stated = np.column_stack(
-        [stations.column(c).to_numpy(zero_copy_only=False).astype(float) for c in STATED]
-    )
     given = ~np.isnan(stated).any(axis=1)
     if not given.any():
         return None

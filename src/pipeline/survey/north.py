@@ -30,6 +30,7 @@ __all__ = [
     "convert_azimuth",
     "convert_table",
     "declination_at",
+    "turned_positions",
     "wrap_360",
 ]
 
@@ -163,10 +164,20 @@ def _turned_positions(
         convergence_deg=convergence_deg,
         declination_deg=declination_deg,
     )
-    delta = np.radians(shift)
-    north = table.column("north").to_numpy(zero_copy_only=False).astype(float)
-    east = table.column("east").to_numpy(zero_copy_only=False).astype(float)
-    return {
-        "north": north * np.cos(delta) - east * np.sin(delta),
-        "east": east * np.cos(delta) + north * np.sin(delta),
-    }
+    north, east = turned_positions(
+        table.column("north").to_numpy(zero_copy_only=False).astype(float),
+        table.column("east").to_numpy(zero_copy_only=False).astype(float),
+        shift,
+    )
+    return {"north": north, "east": east}
+
+
+def turned_positions(
+    north: ArrayLike, east: ArrayLike, shift_deg: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Horizontal positions (m) referred to the north whose azimuths are A' = A + δ
+    (``shift_deg``: δ, deg, the change :func:`convert_azimuth` makes to an azimuth):
+    N' = N cos δ − E sin δ, E' = E cos δ + N sin δ."""
+    n, e = np.asarray(north, dtype=np.float64), np.asarray(east, dtype=np.float64)
+    delta = np.radians(shift_deg)
+    return n * np.cos(delta) - e * np.sin(delta), e * np.cos(delta) + n * np.sin(delta)
