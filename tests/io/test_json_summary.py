@@ -44,7 +44,8 @@ def test_summary_of_a_run(exports_run: RunResult):
     assert doc["run"]["inputs"] == {"stations": manifest["inputs"]["stations"]["sha256"]}
     assert doc["north_reference"] == "grid"
     # the sample lists no positions: tied at the pipeline's default, TVD = MD = 0 at the wellhead
-    tie = {"survey": None, "md": 0.0, "tvd": 0.0, "north": 0.0, "east": 0.0, "source": "pipeline"}
+    tie = {"survey": None, "md": 0.0, "tvd": 0.0, "north": 0.0, "east": 0.0}
+    tie |= {"source": "pipeline", "parent": None}
     assert trajectory.column("md")[0].as_py() == 0.0
     assert doc["calculation"] == {
         "method": "minimum_curvature",

@@ -202,8 +202,8 @@ def test_every_deliverable_of_a_run_says_the_same(
 
 def test_the_report_states_each_surveys_results_and_tie_in(runs: Callable[[str], Path]) -> None:
     # the summary gave the last survey's TD, position and closure as the well's, unnamed,
-    # and the method the first survey's tie-in only (ST1 is tied at TVD = MD, N = E = 0,
-    # its file listing no positions: the pipeline's tie, the report says)
+    # and each survey's tie-in (ST1, its file listing no positions, begins within MAIN's
+    # depths: tied on MAIN at its first MD, the report says; it was tied at TVD = MD, N = E = 0)
     out = runs("sidetrack")
     blocks = report_blocks(out / "report.html")
     main, st1 = blocks["Results, survey MAIN"], blocks["Results, survey ST1"]
@@ -216,7 +216,7 @@ def test_the_report_states_each_surveys_results_and_tie_in(runs: Callable[[str],
     )
     assert (
         method["Tie-in (first station of survey ST1)"]
-        == "MD 1200.00 m, TVD 1200.00 m, N 0.00 m, E 0.00 m (from the pipeline)"
+        == "MD 1200.00 m, TVD 1125.50 m, N 209.47 m, E 169.12 m (on survey 'MAIN' at that MD)"
     )
     assert "Results" in report_blocks(runs("survey") / "report.html")
 
@@ -267,21 +267,24 @@ def test_the_pdf_states_what_the_html_does(runs: Callable[[str], Path]) -> None:
     assert f"Stations {summary['station_count']} (" in text
 
 
-def test_a_sidetrack_listed_beside_its_main_bore_is_warned_of_as_untied(tmp_path: Path) -> None:
-    """A listing of a main bore and, from 1200 m, its sidetrack: the sidetrack was tied at
-    TVD = MD, N = E = 0 without a word (279 m from the main bore's hole at 1200 m). Warned,
-    naming both surveys and the two positions; a re-survey from surface is not."""
+def test_a_sidetrack_listed_beside_its_main_bore_is_tied_on_it(tmp_path: Path) -> None:
+    """A listing of a main bore and, from 1200 m (a main-bore station), its sidetrack: the
+    sidetrack was tied at TVD = MD, N = E = 0 without a word (279 m from the main bore's
+    hole at 1200 m), then with a warning; now it starts at the main bore's station there;
+    a re-survey from surface is tied at the wellhead as before."""
     out = tmp_path / "out"
     result = gyropipe_cli(
         "run", without_las(tmp_path), "--input", sidetrack(tmp_path), "--out", out,
         "--set", "report.formats=[html]",
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
-    assert (
-        "warning: stage 'trajectory': survey 'ST1' begins at MD 1200.00 m, where survey 'MAIN' "
-        "puts the hole at about TVD 1125.50 m, N 209.47 m, E 169.12 m, but is tied at "
-        "TVD 1200.00 m, N 0.00 m, E 0.00 m (279.34 m away)"
-    ) in result.stderr
+    assert "begins at MD" not in result.stderr
+    rows = pq.read_table(out / "trajectory.trajectory.parquet").to_pylist()
+    (kop,) = (r for r in rows if r["survey"] == "MAIN" and r["md"] == 1200.0)
+    first = next(r for r in rows if r["survey"] == "ST1")
+    assert [first[c] for c in ("tvd", "north", "east")] == pytest.approx(
+        [kop[c] for c in ("tvd", "north", "east")], abs=1e-9
+    )
     resurvey = tmp_path / "resurvey.csv"
     text = sidetrack(tmp_path).read_text().replace(",ST1", ",RUN2")
     lines = text.splitlines()

@@ -17,6 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+import yaml
 
 import pipeline as gp
 from pipeline.errors import InputFileError, StageError, SurveyCheckWarning
@@ -139,7 +140,7 @@ def test_a_csv_survey_is_tied_at_its_tie_on_row(tmp_path: Path) -> None:
     (tie,) = json.loads((out / "summary.json").read_text())["calculation"]["ties"]
     assert tie == {
         "survey": None, "md": 500.0, "tvd": 498.3, "north": 12.1, "east": -3.4,
-        "source": "stations file",
+        "source": "stations file", "parent": None,
     }  # fmt: skip
 
 
@@ -262,4 +263,143 @@ def test_the_definitive_survey_starts_at_its_top_runs_tie_on(tmp_path: Path) -> 
         positions(moved.tables["definitive.survey"]),
         hand_positions(STATIONS + MWD[1:], 500.0, 0.0, 0.0),
         atol=1e-6,
+    )
+
+
+MAIN = [(30.0 * k, max(0.0, 3.0 * (k - 5)), 40.0) for k in range(31)]
+"""The main bore: vertical to 150 m, then building 3°/30 m at 40° azimuth to 900 m."""
+
+
+def hand_arc_point(
+    station: tuple[float, float, float], below: tuple[float, float, float], md: float
+) -> tuple[float, float, float, float, float]:
+    """MD, inclination and azimuth (deg) on the circular arc between two stations at ``md``
+    (the arc's tangent turned by the fraction f of the dogleg: slerp of the two tangents)."""
+    (m1, i1, a1), (m2, i2, a2) = station, below
+    t1, t2 = (
+        np.array([math.sin(math.radians(i)) * math.cos(math.radians(a)),
+                  math.sin(math.radians(i)) * math.sin(math.radians(a)),
+                  math.cos(math.radians(i))])
+        for i, a in ((i1, a1), (i2, a2))
+    )  # fmt: skip
+    beta = math.acos(float(np.clip(t1 @ t2, -1, 1)))
+    f = (md - m1) / (m2 - m1)
+    t = (math.sin((1 - f) * beta) * t1 + math.sin(f * beta) * t2) / math.sin(beta)
+    inc = math.degrees(math.acos(t[2]))
+    return md, inc, math.degrees(math.atan2(t[1], t[0])) % 360.0, f, beta
+
+
+@pytest.mark.parametrize("kop", [600.0, 615.0], ids=["on-station", "between-stations"])
+def test_a_sidetrack_listed_beside_its_main_bore_starts_on_it(tmp_path: Path, kop: float) -> None:
+    """A wellbore export listing the main bore and a sidetrack kicking off at ``kop`` (no
+    positions listed): the sidetrack starts where the main bore's minimum-curvature path is
+    at that MD, worked out here by hand — it started at TVD = MD, N = E = 0 (a vertical hole
+    from the wellhead, 100 m and more off) with only a warning; the tie is recorded and
+    stated."""
+    k = int(kop // 30)
+    if kop % 30:
+        md, inc, azi, _, _ = hand_arc_point(MAIN[k], MAIN[k + 1], kop)
+        start = hand_positions(
+            [MAIN[k], (md, inc, azi)], *hand_positions(MAIN[: k + 1], 0, 0, 0)[-1]
+        )[-1]
+    else:
+        inc, azi = MAIN[k][1:]
+        start = hand_positions(MAIN[: k + 1], 0.0, 0.0, 0.0)[-1]
+    sidetrack = [(kop, inc, azi)] + [
+        (kop + 30.0 * j, inc - 2.0 * j, azi + 3.0 * j) for j in range(1, 9)
+    ]
+    path = tmp_path / "wellbores.csv"
+    path.write_text(
+        HEADER.replace("MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)\n", "")
+        + "Survey,MD (m),Inc (deg),Azimuth True (deg)\n"
+        + "".join(f"{name},{md:.4f},{i:.6f},{a:.6f}\n" for name, rows in
+                  (("MAIN", MAIN), ("ST1", sidetrack)) for md, i, a in rows)
+    )  # fmt: skip
+    spec = yaml.safe_load(SURVEY.read_text())  # a LAS file holds one path: not written
+    spec["stages"] = [st for st in spec["stages"] if st.get("with", {}).get("writer") != "las"]
+    pipeline = tmp_path / "survey.yaml"
+    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False))
+    out = tmp_path / "out"
+    result = gyropipe_cli(
+        "run", pipeline, "--input", path, "--out", out, "--set", "report.formats=[html]"
+    )  # fmt: skip
+    assert result.returncode == 0, result.output
+    assert "warning:" not in result.stderr  # (it warned that ST1 was detached from its hole)
+    trajectory = pq.read_table(out / "trajectory.trajectory.parquet")
+    st1 = np.asarray(trajectory.column("survey").to_pylist()) == "ST1"
+    expected = hand_positions(sidetrack, *start)
+    np.testing.assert_allclose(positions(trajectory)[st1], expected, atol=1e-6)
+    main = hand_positions(MAIN, 0.0, 0.0, 0.0)  # the main bore as it was
+    np.testing.assert_allclose(positions(trajectory)[~st1], main, atol=1e-6)
+    ties = json.loads((out / "summary.json").read_text())["calculation"]["ties"]
+    assert [t["source"] for t in ties] == ["pipeline", "survey"] and ties[1]["parent"] == "MAIN"
+    assert (ties[1]["tvd"], ties[1]["north"], ties[1]["east"]) == pytest.approx(start, abs=1e-6)
+    report = plain(out / "report.html")
+    assert f"survey 'ST1': Tied at MD {kop:.2f} m, TVD {start[0]:.2f} m" in report
+    assert "(on survey 'MAIN' at that MD)" in report
+    table = gp.run(pipeline, {"stations": path}).tables["trajectory.trajectory"]
+    np.testing.assert_allclose(positions(table)[st1], expected, atol=1e-6)
+
+
+UNCERTAIN = """\
+name: tied-uncertainty
+version: "1.0"
+inputs:
+  stations: {description: stations}
+stages:
+  - id: read
+    uses: read_stations
+  - id: trajectory
+    uses: minimum_curvature
+    inputs: {stations: read.stations}
+  - id: uncertainty
+    uses: position_uncertainty
+    inputs: {trajectory: trajectory.trajectory}
+    with: {model: GYRO-NS}
+    persist: [trajectory]
+"""
+COV = ["cov_nn", "cov_ne", "cov_nv", "cov_ee", "cov_ev", "cov_vv"]
+
+
+def test_a_sidetrack_carries_its_main_bores_uncertainty_at_the_kick_off(tmp_path: Path) -> None:
+    """The sidetrack tied on its main bore at 600 m: its errors are those of the hole it
+    was drilled from — the main bore's stations to the kick-off, then its own — as the
+    listing of that hole alone (main bore above 600 m, sidetrack below) gives them; it was
+    propagated from zero at the kick-off, as if that point were known exactly."""
+    inc, azi = MAIN[20][1:]
+    sidetrack = [(600.0, inc, azi)] + [
+        (600.0 + 30 * j, inc - 2.0 * j, azi + 3.0 * j) for j in range(1, 9)
+    ]
+    head = HEADER.replace("MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)\n", "")
+    both, hole = tmp_path / "both.csv", tmp_path / "hole.csv"
+    both.write_text(
+        head + "Survey,MD (m),Inc (deg),Azimuth True (deg)\n"
+        + "".join(f"{name},{md:.4f},{i:.6f},{a:.6f}\n" for name, rows in
+                  (("MAIN", MAIN), ("ST1", sidetrack)) for md, i, a in rows)
+    )  # fmt: skip
+    hole.write_text(
+        head + "MD (m),Inc (deg),Azimuth True (deg)\n"
+        + "".join(f"{md:.4f},{i:.6f},{a:.6f}\n" for md, i, a in [*MAIN[:20], *sidetrack])
+    )  # fmt: skip
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(UNCERTAIN)
+    runs = {}
+    for name, path in (("both", both), ("hole", hole)):
+        result = gyropipe_cli("run", pipeline, "--input", path, "--out", tmp_path / name)
+        assert result.returncode == 0, result.output
+        runs[name] = pq.read_table(tmp_path / name / "uncertainty.trajectory.parquet").to_pylist()
+    main = [r for r in runs["both"] if r["survey"] == "MAIN"]
+    st1 = [r for r in runs["both"] if r["survey"] == "ST1"]
+    for row, same in zip(st1, runs["hole"][20:], strict=True):
+        assert row["md"] == same["md"]
+        assert [row[c] for c in COV] == pytest.approx([same[c] for c in COV], rel=1e-9, abs=1e-12)
+        assert [row[c] for c in ("tvd", "north", "east")] == pytest.approx(
+            [same[c] for c in ("tvd", "north", "east")], abs=1e-6
+        )
+    (kop,) = (r for r in main if r["md"] == 600.0)
+    assert st1[0]["ellipse_major"] == pytest.approx(kop["ellipse_major"], rel=1e-6)  # continuous
+    assert kop["ellipse_major"] > 0.1  # m: not a point known exactly
+    alone = gp.run(pipeline, {"stations": both}).tables["uncertainty.trajectory"]
+    assert alone.column("cov_nn").to_pylist()[len(MAIN) :] == pytest.approx(
+        [r["cov_nn"] for r in st1], rel=1e-12
     )

@@ -350,11 +350,17 @@ def _survey_names(traj: pa.Table, offsets: tuple[int, ...]) -> list[str | None]:
 
 def _tie_sources(traj: pa.Table) -> list[str]:
     """Where each survey's tie came from, as the trajectory records its ties
-    (:mod:`pipeline.survey.tiein`): ``" (from the stations file)"`` or ``" (from the
-    pipeline)"``; ``""`` each where it records none."""
+    (:mod:`pipeline.survey.tiein`): ``" (from the stations file)"``, ``" (from the
+    pipeline)"`` or ``" (on survey 'MAIN' at that MD)"``; ``""`` each where it records none."""
     calculation = calculation_of(traj)
     ties = calculation.ties if calculation is not None else ()
-    return [f" (from the {tie.source})" for tie in ties] or [""] * len(survey_offsets(traj))
+    words = [
+        f" (on survey {tie.parent!r} at that MD)"
+        if tie.source == "survey"
+        else f" (from the {tie.source})"
+        for tie in ties
+    ]
+    return words or [""] * len(survey_offsets(traj))
 
 
 def _results(

@@ -80,8 +80,9 @@ def survey_method(
 ) -> dict[str, pa.Table]:
     """Stations → trajectory by the chosen method, with build and turn rates."""
     stations = inputs["stations"]
-    ties = tie_ins(stations, params, ctx)
-    columns = trajectory_columns(stations, params, ties, params.method)
+    columns, ties = trajectory_columns(
+        stations, params, tie_ins(stations, params, ctx), params.method
+    )
     md, inc, azi = station_angles(stations)
     build, turn = (
         build_turn_rates(md, np.radians(inc), np.radians(azi), offsets=survey_offsets(stations))

@@ -24,6 +24,7 @@ from pipeline.survey.tiein import (
     chosen_tie,
     listed_ties,
     tie_difference,
+    tie_to_parents,
     ties_words,
 )
 from pipeline.tables import (
@@ -125,41 +126,50 @@ def trajectory_columns(
     params: MinCurveParams,
     ties: tuple[SurveyTie, ...],
     method: Method = "minimum_curvature",
-) -> dict[str, object]:
+) -> tuple[dict[str, object], tuple[SurveyTie, ...]]:
     """Trajectory columns of every survey of ``stations`` by ``method``, each tied at its
     tie of ``ties`` (:func:`tie_ins`), in one call (none of no stations: an empty table is
-    a legal stage output)."""
+    a legal stage output), and the ties applied: where the stage gives no tie, a survey
+    whose file lists none that begins within another survey's depths (a sidetrack, a run
+    continuing another) is tied on that survey (:func:`~pipeline.survey.tiein.tie_to_parents`;
+    it was left at TVD = MD, N = E = 0 with a warning)."""
     if stations.num_rows == 0:
         empty: dict[str, object] = {
             c.name: np.empty(0) for c in Trajectory.compiled().columns if c.required
         }
         if "survey" in stations.column_names:
             empty = {"survey": stations.column("survey"), **empty}
-        return empty
+        return empty, ties
     md, inc_deg, azi_deg = station_angles(stations)
+    offsets = survey_offsets(stations)
+    inc, azi = np.radians(inc_deg), np.radians(azi_deg)
     result = survey_positions(
         method,
         md,
-        np.radians(inc_deg),
-        np.radians(azi_deg),
-        offsets=survey_offsets(stations),
+        inc,
+        azi,
+        offsets=offsets,
         tie_north=np.array([t.north for t in ties]),
         tie_east=np.array([t.east for t in ties]),
         tie_tvd=np.array([t.tvd for t in ties]),
     )
-    distance, direction = closure(result.north, result.east)
+    position = np.column_stack([result.tvd, result.north, result.east])
+    if len(ties) > 1 and all(
+        v is None for v in (params.tie_tvd, params.tie_north, params.tie_east)
+    ):
+        ties = tie_to_parents(md, inc, azi, offsets, position, ties)
+    tvd, north, east = position.T
+    distance, direction = closure(north, east)
     columns: dict[str, object] = {
         "md": md,
         "inc": inc_deg,
         "azi": azi_deg,
-        "tvd": result.tvd,
-        "north": result.north,
-        "east": result.east,
+        "tvd": tvd,
+        "north": north,
+        "east": east,
         "dogleg": np.degrees(result.dogleg),
         "dls": np.degrees(result.dls) * DLS_COURSE_M,
-        "vertical_section": vertical_section(
-            result.north, result.east, np.radians(params.vs_azimuth)
-        ),
+        "vertical_section": vertical_section(north, east, np.radians(params.vs_azimuth)),
         "closure_distance": distance,
         "closure_direction": np.degrees(direction) % 360.0,
     }
@@ -168,7 +178,7 @@ def trajectory_columns(
     for name in STATION_TEXT_COLUMNS:
         if name in stations.column_names:
             columns[name] = stations.column(name)
-    return columns
+    return columns, ties
 
 
 def checked(
@@ -200,10 +210,9 @@ def min_curve(
     each tied at its tie-on (:func:`tie_ins`), checked against the positions the stations
     file lists (:func:`checked`)."""
     stations = inputs["stations"]
-    ties = tie_ins(stations, params, ctx)
+    columns, ties = trajectory_columns(stations, params, tie_ins(stations, params, ctx))
     table = Trajectory.compiled().make_table(
-        trajectory_columns(stations, params, ties),
-        north_reference=north_reference_of(stations, "azi"),
+        columns, north_reference=north_reference_of(stations, "azi")
     )
     calculation = SurveyCalculation(
         method="minimum_curvature", vs_azimuth=params.vs_azimuth, ties=ties

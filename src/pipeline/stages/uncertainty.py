@@ -9,6 +9,7 @@ from typing import Literal
 
 import numpy as np
 import pyarrow as pa
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.contracts import column
@@ -19,7 +20,7 @@ from pipeline.provenance import StageSetup
 from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages import toolmodels
-from pipeline.survey.calculation import record_of, with_record
+from pipeline.survey.calculation import calculation_of, record_of, with_record
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
@@ -209,9 +210,11 @@ def position_uncertainty(
     tvd = table.column("tvd").to_numpy()
     cov = np.zeros((md.size, 3, 3))
     offsets = survey_offsets(table)
-    for lo, hi in itertools.pairwise(offsets):
+    paths = hole_paths(md, offsets, parent_surveys(table, offsets))
+    for k, path in enumerate(paths):
+        lo, hi = int(offsets[k]), int(offsets[k + 1])
         # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
-        survey = Survey.of(md[lo:hi], inc[lo:hi], defined_azimuths(azi[lo:hi]), tvd[lo:hi])
+        survey = Survey.of(md[path], inc[path], defined_azimuths(azi[path]), tvd[path])
         cov[lo:hi] = covariance(
             survey,
             tool,
@@ -219,7 +222,7 @@ def position_uncertainty(
             basis=params.basis,
             surface_tie=params.surface_tie,
             outside_validity=params.outside_validity,
-        )
+        )[path.size - (hi - lo) :]
     columns: dict[str, object] = {name: table.column(name) for name in table.column_names}
     columns.update(covariance_columns(cov, params.confidence, params.outside_validity))
     out = PositionUncertainty.compiled().make_table(
@@ -231,6 +234,35 @@ def position_uncertainty(
         _stated_model(configured, params, init_sigma),
     )
     return {"trajectory": with_magnetic(out, applied)}
+
+
+def parent_surveys(table: pa.Table, offsets: np.ndarray) -> list[int | None]:
+    """Per survey, the survey it was tied on (a sidetrack's main bore, the run it continues:
+    :func:`~pipeline.survey.tiein.tie_to_parents`, as the trajectory's ties record), None
+    for one tied elsewhere."""
+    calculation = calculation_of(table)
+    ties = calculation.ties if calculation is not None else ()
+    if len(ties) != len(offsets) - 1:
+        return [None] * (len(offsets) - 1)
+    index = {t.survey: k for k, t in enumerate(ties)}
+    return [index.get(t.parent) if t.source == "survey" else None for t in ties]
+
+
+def hole_paths(
+    md: np.ndarray, offsets: np.ndarray, parents: list[int | None]
+) -> list[NDArray[np.intp]]:
+    """Per survey, the rows of its hole from the wellhead: its own, below its parent's
+    (recursively) above its first MD — so that a sidetrack's errors are those of the hole
+    it was drilled from down to the kick-off, then its own, in one propagation (it was
+    propagated from zero at the kick-off, as if that point were known exactly)."""
+    paths: list[NDArray[np.intp] | None] = [None] * (len(offsets) - 1)
+    first = [float(md[a]) if b > a else 0.0 for a, b in itertools.pairwise(offsets)]
+    for k in sorted(range(len(paths)), key=first.__getitem__):
+        own = np.arange(offsets[k], offsets[k + 1], dtype=np.intp)
+        parent = parents[k]
+        above = None if parent is None else paths[parent]
+        paths[k] = own if above is None else np.concatenate([above[md[above] < md[own[0]]], own])
+    return [p for p in paths if p is not None]
 
 
 def covariance_columns(

@@ -21,7 +21,7 @@ from pipeline.errors import InputFileError
 
 STATED = ("tvd", "north", "east")
 """the columns of a stations file's own positions (m, NED from the wellhead)"""
-TieSource = Literal["stations file", "pipeline"]
+TieSource = Literal["stations file", "pipeline", "survey"]
 
 
 class SurveyTie(BaseModel):
@@ -36,17 +36,27 @@ class SurveyTie(BaseModel):
     north: float = Field(description="its northing from the wellhead, m")
     east: float = Field(description="its easting from the wellhead, m")
     source: TieSource = Field(
-        description="who gave it: the stations file's listing at that station, or the "
-        "pipeline (a stage's tie parameters or their defaults: TVD = MD, N = E = 0)"
+        description="who gave it: the stations file's listing at that station, the pipeline "
+        "(a stage's tie parameters or their defaults: TVD = MD, N = E = 0), or another "
+        "survey of the table (``parent``) whose depths it begins within"
+    )
+    parent: str | None = Field(
+        None,
+        description="source 'survey': the survey it begins on (a sidetrack's main bore, the "
+        "run it continues), its position there on that survey's minimum-curvature path",
     )
 
     def words(self) -> str:
         """The tie in words: ``Tied at MD 500.00 m, TVD 498.30 m, N 12.10 m, E -3.40 m (from
         the stations file)``, after ``survey 'name': `` where it names its survey."""
         named = f"survey {self.survey!r}: " if self.survey is not None else ""
+        origin = (
+            f"on survey {self.parent!r} at that MD" if self.source == "survey" else
+            f"from the {self.source}"
+        )  # fmt: skip
         return (
             f"{named}Tied at MD {self.md:.2f} m, TVD {self.tvd:.2f} m, N {self.north:.2f} m, "
-            f"E {self.east:.2f} m (from the {self.source})"
+            f"E {self.east:.2f} m ({origin})"
         )
 
     @property
@@ -147,3 +157,58 @@ def chosen_tie(
 def tie_difference(tie: SurveyTie, listed: np.ndarray) -> float:
     """3-D distance (m) between an applied tie and the position a file lists there."""
     return float(np.linalg.norm(tie.position - listed))
+
+
+def parent_of(md: np.ndarray, offsets: np.ndarray, k: int) -> int | None:
+    """The survey (index into the CSR ``offsets``) survey ``k`` begins within: the first
+    whose first MD is shallower than survey ``k``'s and whose last is not (None: none)."""
+    lo = int(offsets[k])
+    for j in range(len(offsets) - 1):
+        a, b = int(offsets[j]), int(offsets[j + 1])
+        if j != k and b > a and md[a] < md[lo] <= md[b - 1]:
+            return j
+    return None
+
+
+def tie_to_parents(
+    md: np.ndarray,
+    inc: np.ndarray,
+    azi: np.ndarray,
+    offsets: np.ndarray,
+    position: np.ndarray,
+    ties: tuple[SurveyTie, ...],
+) -> tuple[SurveyTie, ...]:
+    """Re-tie each survey tied at the pipeline's fallback (TVD = MD, N = E = 0: its file
+    lists no tie-on, the stage gives none) that begins within another survey's depths — a
+    sidetrack listed beside its main bore, a run continuing another — at the other's
+    position at that MD (on its minimum-curvature arc from the station above), shallowest
+    first so that a parent is placed before its children. ``position`` ((n, 3) TVD, north,
+    east, m, of stations at ``md`` m with ``inc``/``azi`` rad) is shifted in place;
+    returns the ties applied."""
+    from pipeline.survey.interpolate import interpolate_md
+
+    names = [t.survey for t in ties]
+    out = list(ties)
+    for k in sorted(range(len(ties)), key=lambda i: float(md[offsets[i]])):
+        lo, hi = int(offsets[k]), int(offsets[k + 1])
+        parent = parent_of(md, offsets, k) if ties[k].source == "pipeline" else None
+        if parent is None:
+            continue
+        a = int(offsets[parent])
+        step = a + int(np.searchsorted(md[a : int(offsets[parent + 1])], md[lo], "right")) - 1
+        step = min(step, int(offsets[parent + 1]) - 2)
+        s = slice(step, step + 2)
+        tvd0, north0, east0 = position[step]
+        there = interpolate_md(md[s], inc[s], azi[s], md[lo], tie=(north0, east0, tvd0))
+        at = np.array([there.tvd[0], there.north[0], there.east[0]])
+        position[lo:hi] += at - position[lo]
+        out[k] = SurveyTie(
+            survey=names[k],
+            md=float(md[lo]),
+            tvd=float(at[0]),
+            north=float(at[1]),
+            east=float(at[2]),
+            source="survey",
+            parent=names[parent],
+        )
+    return tuple(out)
