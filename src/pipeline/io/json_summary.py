@@ -4,10 +4,12 @@ One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): t
 header, the run's provenance, the azimuths' north reference, the calculation method, and per
 survey the station count, MD range, the final station's position, the largest dogleg
 severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
-then QC counts per check (with ``file_positions``: the stations file's own positions against
-the recomputed ones, when the trajectory records that check), flagged and rejected
-stations. Lengths in m, angles in degrees, DLS in °/30 m (``units`` says so in the document
-too).
+the uncertainty as its columns state it (``uncertainty``: error model, confidence, the σ
+convention of each column family, the largest horizontal semi-major axis and TD's; absent
+without uncertainty columns); then QC counts per check (with ``file_positions``: the
+stations file's own positions against the recomputed ones, when the trajectory records that
+check), flagged and rejected stations. Lengths in m, angles in degrees, DLS in °/30 m
+(``units`` says so in the document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
 ``stations`` and ``rejects``; through ``write`` one trajectory table.
@@ -35,6 +37,7 @@ from pipeline.survey.calculation import SurveyCalculation, calculation_of
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
+from pipeline.uncertainty.stated import statement_of
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -109,6 +112,53 @@ class Survey(_Model):
     )
 
 
+class ColumnFamily(_Model):
+    """Uncertainty columns of one σ convention."""
+
+    family: Literal["covariance", "ellipse", "ellipse_conf", "vertical_conf"]
+    columns: list[str] = Field(description="the trajectory's columns of the family")
+    scale: Literal["1 sigma squared", "1 sigma", "confidence"] = Field(
+        description="1 sigma squared: variances and covariances (m2); 1 sigma: semi-axes and "
+        "vertical σ (m), the major axis' azimuth (deg); confidence: sizes at the confidence "
+        "level (m)"
+    )
+    region: Literal["2-D, chi-square of 2 dof", "1-D, two-sided normal"] | None = Field(
+        None, description="how a size at the confidence level was scaled from 1σ"
+    )
+
+
+class SemiMajor(_Model):
+    """The horizontal error ellipse's semi-major axis at one station."""
+
+    md: float = Field(description="measured depth, m")
+    survey: str | None = Field(None, description="survey id (null: the table has one survey)")
+    semi_major: float | None = Field(description="at 1σ, m (null: no σ at the station)")
+    semi_major_conf: float | None = Field(
+        description="at the confidence level, m (null: no σ, or no such column)"
+    )
+
+
+class UncertaintyStatement(_Model):
+    """What the trajectory's uncertainty columns state of themselves."""
+
+    error_model: str | None = Field(
+        description="error model name and revision as the columns state it, with what the "
+        "run changed of it (null: not stated)"
+    )
+    confidence: float | None = Field(
+        description="probability content of the *_conf columns (null: not stated)"
+    )
+    columns: list[ColumnFamily] = Field(description="σ convention of each column family")
+    largest: SemiMajor | None = Field(
+        description="the station of the largest horizontal semi-major axis (null: no station "
+        "has a σ)"
+    )
+    at_td: SemiMajor = Field(description="the deepest station's")
+    stations_without_sigma: int = Field(
+        ge=0, description="stations without a σ (outside the error model's range, or below one)"
+    )
+
+
 class CheckCount(_Model):
     """Evaluations of one QC check."""
 
@@ -160,6 +210,9 @@ class SurveySummary(_Model):
     units: Units = Units()
     station_count: int = Field(ge=0, description="stations over all surveys")
     surveys: list[Survey]
+    uncertainty: UncertaintyStatement | None = Field(
+        None, description="the trajectory's position uncertainty (absent: none computed)"
+    )
     qc: Qc | None = Field(
         None, description="QC counts (null: no QC table given, no position check recorded)"
     )
@@ -176,6 +229,7 @@ def summarize(
     if trajectory.num_rows == 0:
         raise EmptyTableError("trajectory", "a survey summary needs at least one station")
     north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
+    stated = statement_of(trajectory)
     return SurveySummary(
         gyropipe=__version__,
         well=well,
@@ -183,7 +237,10 @@ def summarize(
         north_reference=north,
         calculation=calculation_of(trajectory),
         station_count=trajectory.num_rows,
-        surveys=_surveys(trajectory),
+        surveys=_surveys(trajectory, stated.confidence if stated is not None else None),
+        uncertainty=(
+            UncertaintyStatement.model_validate(stated.as_dict()) if stated is not None else None
+        ),
         qc=_qc(tables) if _has_qc(tables) else None,
     )
 
@@ -200,7 +257,8 @@ def _run(provenance: Provenance) -> Run:
     )
 
 
-def _surveys(trajectory: pa.Table) -> list[Survey]:
+def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
+    """Each survey's summary; ``confidence``: the one the *_conf columns state, if any."""
     cols = {
         name: trajectory.column(name).to_numpy(zero_copy_only=False)
         for name in Station.model_fields
@@ -218,7 +276,7 @@ def _surveys(trajectory: pa.Table) -> list[Survey]:
                 md_end=float(cols["md"][hi - 1]),
                 final=Station(**{name: _defined(v[hi - 1]) for name, v in cols.items()}),
                 max_dls=MaxDls(dls=float(dls[worst]), md=float(cols["md"][worst])),
-                uncertainty_at_td=_uncertainty(trajectory, hi - 1),
+                uncertainty_at_td=_uncertainty(trajectory, hi - 1, confidence),
             )
         )
     return found
@@ -229,7 +287,9 @@ def _defined(value: float) -> float | None:
     return None if np.isnan(value) else float(value)
 
 
-def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
+def _uncertainty(trajectory: pa.Table, row: int, stated: float | None) -> Uncertainty | None:
+    """The ellipse at ``row``; its confidence the ``stated`` one, else the ratio of the
+    *_conf semi-major axis to the 1σ one tells it."""
     if not set(ELLIPSE_COLUMNS) <= set(trajectory.column_names):
         return None
     at = {name: trajectory.column(name)[row].as_py() for name in trajectory.column_names}
@@ -237,7 +297,11 @@ def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
     major = at["ellipse_major"]
     # the stage scales the 1σ ellipse by k = √(−2 ln(1 − p)) (χ², 2 dof): p = 1 − e^(−k²/2)
     confidence = (
-        float(-np.expm1(-0.5 * (conf / major) ** 2)) if conf is not None and major > 0 else None
+        stated
+        if stated is not None
+        else float(-np.expm1(-0.5 * (conf / major) ** 2))
+        if conf is not None and major > 0
+        else None
     )
     return Uncertainty(
         md=at["md"],
@@ -329,7 +393,8 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
         WriterDef(
             name="json_summary",
             description="machine-readable JSON summary: well, run, north reference, final "
-            "position, max DLS, uncertainty at TD, QC counts",
+            "position, max DLS, uncertainty at TD and as stated (error model, confidence, "
+            "σ conventions, largest ellipse), QC counts",
             extension="json",
             write=write,
             write_tables=write_tables,

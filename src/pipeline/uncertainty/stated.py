@@ -5,10 +5,16 @@ level, that level (:data:`CONFIDENCE_KEY`, the probability content) and how the 
 scaled to it (:data:`DIMENSIONS_KEY`: 2 for the horizontal ellipse, √χ²₂; 1 for the vertical
 half-interval, the two-sided normal quantile; :mod:`pipeline.uncertainty.ellipse`); a
 description (:data:`~pipeline.contracts.DESCRIPTION_KEY`) says all of it in words.
+
+:func:`statement_of` gathers what a trajectory says of its uncertainty once, for the
+deliverables that sum it up (the JSON summary, a DataFrame's ``attrs``, the report).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import DESCRIPTION_KEY
@@ -17,8 +23,13 @@ __all__ = [
     "CONFIDENCE_KEY",
     "DIMENSIONS_KEY",
     "ERROR_MODEL_KEY",
+    "FAMILIES",
+    "Extent",
+    "Family",
+    "Statement",
     "file_statements",
     "model_words",
+    "statement_of",
     "with_statements",
 ]
 
@@ -49,6 +60,119 @@ WORDS = {
 AT_CONFIDENCE = {"ellipse_major_conf": 2, "ellipse_minor_conf": 2, "vertical_conf": 1}
 """The columns at the confidence level, by the dimensions of their region."""
 REGION = {2: "2-D, chi-square of 2 dof", 1: "1-D, two-sided normal"}
+
+
+@dataclass(frozen=True)
+class Family:
+    """Uncertainty columns of one σ convention: ``scale`` ``1 sigma squared`` (variances
+    and covariances, m²), ``1 sigma`` (m, deg) or ``confidence`` (m, at the confidence
+    level, the region :data:`REGION` of ``dimensions``)."""
+
+    name: str
+    columns: tuple[str, ...]
+    scale: str
+    dimensions: int | None = None
+
+
+FAMILIES = (
+    Family("covariance", tuple(c for c in WORDS if c.startswith("cov_")), "1 sigma squared"),
+    Family("ellipse", ("ellipse_major", "ellipse_minor", "ellipse_azimuth", "sigma_v"), "1 sigma"),
+    Family("ellipse_conf", ("ellipse_major_conf", "ellipse_minor_conf"), "confidence", 2),
+    Family("vertical_conf", ("vertical_conf",), "confidence", 1),
+)
+"""The uncertainty columns (:data:`WORDS`) by σ convention (``ellipse_azimuth``, a direction,
+goes with the 1σ axes it orients)."""
+
+
+@dataclass(frozen=True)
+class Extent:
+    """The horizontal error ellipse's semi-major axis at one station: at 1σ and at the
+    confidence level (m; None: no σ there, outside the error model's range, or no such
+    column)."""
+
+    md: float
+    survey: str | None
+    semi_major: float | None
+    semi_major_conf: float | None
+
+
+@dataclass(frozen=True)
+class Statement:
+    """What a trajectory says of its position uncertainty: the error model and confidence
+    its columns state (None: not stated), the σ convention of each family of columns it
+    has, the station of the largest horizontal semi-major axis (None: no station has a σ)
+    and the deepest station's (TD), and how many stations have no σ (NaN)."""
+
+    error_model: str | None
+    confidence: float | None
+    families: tuple[Family, ...]
+    largest: Extent | None
+    at_td: Extent
+    without_sigma: int
+
+    def as_dict(self) -> dict[str, object]:
+        """The statement as JSON values (the JSON summary's ``uncertainty`` object)."""
+        return {
+            "error_model": self.error_model,
+            "confidence": self.confidence,
+            "columns": [
+                {
+                    "family": f.name,
+                    "columns": list(f.columns),
+                    "scale": f.scale,
+                    "region": REGION[f.dimensions] if f.dimensions else None,
+                }
+                for f in self.families
+            ],
+            "largest": None if self.largest is None else vars(self.largest).copy(),
+            "at_td": vars(self.at_td).copy(),
+            "stations_without_sigma": self.without_sigma,
+        }
+
+
+def statement_of(table: pa.Table) -> Statement | None:
+    """:class:`Statement` of a trajectory with uncertainty columns (``ellipse_major`` and
+    ``md``; None without them or rows). TD: the station of the largest MD (the last of equal
+    ones). ``ValueError`` where columns state different models or confidences."""
+    names = set(table.column_names)
+    if not {"md", "ellipse_major"} <= names or table.num_rows == 0:
+        return None
+    stated = file_statements(pa.schema([f for f in table.schema if f.name in WORDS]))
+    md = table.column("md").to_numpy(zero_copy_only=False).astype(np.float64)
+    major = table.column("ellipse_major").to_numpy(zero_copy_only=False).astype(np.float64)
+    conf = (
+        table.column("ellipse_major_conf").to_numpy(zero_copy_only=False).astype(np.float64)
+        if "ellipse_major_conf" in names
+        else None
+    )
+    surveys = table.column("survey").to_pylist() if "survey" in names else None
+
+    def extent(row: int) -> Extent:
+        return Extent(
+            md=float(md[row]),
+            survey=None if surveys is None else surveys[row],
+            semi_major=_defined(major[row]),
+            semi_major_conf=None if conf is None else _defined(conf[row]),
+        )
+
+    sized = np.isfinite(major)
+    deepest = len(md) - 1 - int(np.argmax(md[::-1]))
+    return Statement(
+        error_model=stated.get("error_model"),
+        confidence=float(stated["confidence"]) if "confidence" in stated else None,
+        families=tuple(
+            Family(f.name, present, f.scale, f.dimensions)
+            for f in FAMILIES
+            if (present := tuple(c for c in f.columns if c in names))
+        ),
+        largest=extent(int(np.argmax(np.where(sized, major, -np.inf)))) if sized.any() else None,
+        at_td=extent(deepest),
+        without_sigma=int((~sized).sum()),
+    )
+
+
+def _defined(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
 
 
 def model_words(name: str, revision: str) -> str:
