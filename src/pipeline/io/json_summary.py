@@ -384,6 +384,8 @@ def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
 
 def _write(summary: SurveySummary, path: Path) -> None:
     doc = summary.model_dump(mode="json")
+    if summary.uncertainty is None:  # no uncertainty columns: the document says nothing of it
+        del doc["uncertainty"]
     path.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
 
 
