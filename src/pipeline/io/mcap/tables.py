@@ -9,7 +9,9 @@ the table has a complete float64 ``time`` column, else at 0. Metadata records:
 ``gyropipe.well`` (the header), ``gyropipe.units/<role>`` (column → unit, for tools without
 Arrow) and ``gyropipe.run`` (pipeline, its SHA-256, start, gyropipe version).
 
-:func:`read_tables` gives the tables back exactly as written.
+:func:`read_tables` gives the tables back exactly as written (less the engine's own
+``source_line`` column and ``gyropipe.source`` path, never written:
+:func:`~pipeline.io.mcap.arrow.for_client`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from pipeline.io.mcap.arrow import (
     arrow_batches,
     arrow_schema,
     check_encodable,
+    for_client,
     read_well,
     start_writer,
     units_of,
@@ -94,7 +97,7 @@ def _write(
             )
         writer.add_metadata(WELL_RECORD, well_strings(well))
         for role, table in tables.items():
-            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(table.schema))
+            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(for_client(table.schema)))
         writer.add_metadata(
             RUN_RECORD,
             {
