@@ -16,8 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
+from numpy.typing import NDArray
 
 from pipeline.contracts import DESCRIPTION_KEY
+from pipeline.uncertainty.ellipse import ellipses
 
 __all__ = [
     "CONFIDENCE_KEY",
@@ -131,20 +133,30 @@ class Statement:
 
 
 def statement_of(table: pa.Table) -> Statement | None:
-    """:class:`Statement` of a trajectory with uncertainty columns (``ellipse_major`` and
-    ``md``; None without them or rows). TD: the station of the largest MD (the last of equal
+    """:class:`Statement` of a trajectory with uncertainty columns (``md`` and
+    ``ellipse_major``, or the horizontal covariances whose ellipse it is; None without them
+    or rows). TD: the station of the largest MD (the last of equal
     ones). ``ValueError`` where columns state different models or confidences."""
     names = set(table.column_names)
-    if not {"md", "ellipse_major"} <= names or table.num_rows == 0:
+    horizontal = {"cov_nn", "cov_ne", "cov_ee"}
+    if "md" not in names or not ({"ellipse_major"} <= names or horizontal <= names):
         return None
+    if table.num_rows == 0:
+        return None
+
+    def values(name: str) -> NDArray[np.float64]:
+        found: NDArray[np.float64] = table.column(name).to_numpy(zero_copy_only=False)
+        return found.astype(np.float64)
+
     stated = file_statements(pa.schema([f for f in table.schema if f.name in WORDS]))
-    md = table.column("md").to_numpy(zero_copy_only=False).astype(np.float64)
-    major = table.column("ellipse_major").to_numpy(zero_copy_only=False).astype(np.float64)
-    conf = (
-        table.column("ellipse_major_conf").to_numpy(zero_copy_only=False).astype(np.float64)
-        if "ellipse_major_conf" in names
-        else None
-    )
+    md = values("md")
+    if "ellipse_major" in names:
+        major = values("ellipse_major")
+    else:  # covariances alone (a WITSML matrixCov)
+        nn, ne, ee = (values(c) for c in ("cov_nn", "cov_ne", "cov_ee"))
+        major = ellipses(nn, ne, ee, np.zeros_like(nn)).semi_major
+        major[~(np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee))] = np.nan
+    conf = values("ellipse_major_conf") if "ellipse_major_conf" in names else None
     surveys = table.column("survey").to_pylist() if "survey" in names else None
 
     def extent(row: int) -> Extent:
@@ -180,22 +192,27 @@ def model_words(name: str, revision: str) -> str:
     return f"{name} rev {revision}" if revision else name
 
 
-def with_statements(table: pa.Table, confidence: float, model: str) -> pa.Table:
+def with_statements(table: pa.Table, confidence: float | None, model: str | None) -> pa.Table:
     """``table`` with its uncertainty columns (:data:`WORDS`) stating ``model``
     (:func:`model_words`), those at a confidence level also ``confidence`` (probability,
-    0-1) and their dimensions, and a description of each saying so."""
+    0-1) and their dimensions, and a description of each saying so (None: not stated, left
+    as it is)."""
     fields = []
     for f in table.schema:
         words = WORDS.get(f.name)
         if words is None:
             fields.append(f)
             continue
-        meta = {**(f.metadata or {}), ERROR_MODEL_KEY: model.encode()}
-        if (dims := AT_CONFIDENCE.get(f.name)) is not None:
+        meta = dict(f.metadata or {})
+        if model is not None:
+            meta[ERROR_MODEL_KEY] = model.encode()
+        if (dims := AT_CONFIDENCE.get(f.name)) is not None and confidence is not None:
             meta[CONFIDENCE_KEY] = repr(confidence).encode()
             meta[DIMENSIONS_KEY] = str(dims).encode()
             words += f" at {confidence * 100:g} % confidence ({REGION[dims]})"
-        meta[DESCRIPTION_KEY] = f"{words}; error model {model}".encode()
+        if model is not None:
+            words += f"; error model {model}"
+        meta[DESCRIPTION_KEY] = words.encode()
         fields.append(f.with_metadata(meta))
     return pa.Table.from_arrays(table.columns, schema=pa.schema(fields, table.schema.metadata))
 
