@@ -13,6 +13,8 @@ from pathlib import Path
 
 import lasio
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 
 import pipeline as gp
@@ -134,3 +136,26 @@ def test_a_trajectory_without_uncertainty_states_none(tmp_path: Path) -> None:
     assert "uncertainty" not in doc
     assert doc["surveys"][0]["uncertainty_at_td"] is None
     assert "uncertainty" not in gp.read(tmp_path / "trajectory.trajectory.parquet").attrs
+
+
+def test_stations_without_sigma_are_counted_not_written_as_nan(out: Path, tmp_path: Path) -> None:
+    """Stations outside the error model's range (``outside_validity: flag``: NaN from the
+    first on) at the bottom: the summary was refused (NaN is no JSON); now null at TD, the
+    largest semi-major axis among the stations with a σ, and the count."""
+    facts = las_facts(out / "trajectory.las")
+    table = pq.read_table(out / "uncertainty.trajectory.parquet")
+    for name in ("cov_nn", "cov_ne", "cov_ee", "ellipse_major", "ellipse_major_conf", "sigma_v"):
+        i = table.schema.get_field_index(name)
+        values = table.column(name).to_numpy().copy()
+        values[-3:] = np.nan
+        table = table.set_column(i, table.schema.field(i), pa.array(values))
+    doc = json.loads(gp.write(table, tmp_path / "summary.json").read_text())
+    stated = doc["uncertainty"]
+    assert stated["stations_without_sigma"] == 3
+    assert (stated["at_td"]["semi_major"], stated["at_td"]["semi_major_conf"]) == (None, None)
+    assert stated["at_td"]["md"] == pytest.approx(facts["at_td"][0], abs=LAS_STEP)
+    las = lasio.read(out / "trajectory.las", mnemonic_case="preserve")
+    assert stated["largest"]["semi_major"] == pytest.approx(
+        max(las["ellipse_major"][:-3]), abs=LAS_STEP
+    )
+    assert doc["surveys"][0]["uncertainty_at_td"]["semi_major"] is None

@@ -22,7 +22,7 @@ import itertools
 import json
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Final, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 import pyarrow as pa
@@ -83,13 +83,14 @@ class MaxDls(_Model):
 
 
 class Uncertainty(_Model):
-    """Horizontal error ellipse and vertical σ of the final station."""
+    """Horizontal error ellipse and vertical σ of the final station (null: no σ there, the
+    station outside the error model's range or below one)."""
 
     md: float = Field(description="measured depth, m")
-    semi_major: float = Field(description="semi-major axis at 1σ, m")
-    semi_minor: float = Field(description="semi-minor axis at 1σ, m")
-    azimuth: float = Field(description="azimuth of the semi-major axis, deg")
-    sigma_vertical: float = Field(description="vertical σ, m")
+    semi_major: float | None = Field(description="semi-major axis at 1σ, m")
+    semi_minor: float | None = Field(description="semi-minor axis at 1σ, m")
+    azimuth: float | None = Field(description="azimuth of the semi-major axis, deg")
+    sigma_vertical: float | None = Field(description="vertical σ, m")
     confidence: float | None = Field(
         None, description="probability content of the *_conf values (null: not stated)"
     )
@@ -292,7 +293,9 @@ def _uncertainty(trajectory: pa.Table, row: int, stated: float | None) -> Uncert
     *_conf semi-major axis to the 1σ one tells it."""
     if not set(ELLIPSE_COLUMNS) <= set(trajectory.column_names):
         return None
-    at = {name: trajectory.column(name)[row].as_py() for name in trajectory.column_names}
+    at: dict[str, Any] = {
+        name: _value(trajectory.column(name)[row].as_py()) for name in trajectory.column_names
+    }
     conf = at.get("ellipse_major_conf")
     major = at["ellipse_major"]
     # the stage scales the 1σ ellipse by k = √(−2 ln(1 − p)) (χ², 2 dof): p = 1 − e^(−k²/2)
@@ -300,7 +303,7 @@ def _uncertainty(trajectory: pa.Table, row: int, stated: float | None) -> Uncert
         stated
         if stated is not None
         else float(-np.expm1(-0.5 * (conf / major) ** 2))
-        if conf is not None and major > 0
+        if conf is not None and major
         else None
     )
     return Uncertainty(
@@ -314,6 +317,11 @@ def _uncertainty(trajectory: pa.Table, row: int, stated: float | None) -> Uncert
         semi_minor_conf=at.get("ellipse_minor_conf"),
         vertical_conf=at.get("vertical_conf"),
     )
+
+
+def _value(value: object) -> object:
+    """A cell as the document holds it: a float that is NaN (no σ) as None, like a null."""
+    return None if isinstance(value, float) and np.isnan(value) else value
 
 
 def _has_qc(tables: Mapping[str, pa.Table]) -> bool:
