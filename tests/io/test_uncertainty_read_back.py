@@ -73,7 +73,7 @@ def test_las_and_csv_keep_confidence_and_model(out: Path, name: str) -> None:
     assert frame["cov_nn"].iloc[-1] == pytest.approx(las["cov_nn"][-1], abs=0.5e-8)
 
 
-def test_witsml_keeps_covariances_and_model(out: Path) -> None:
+def test_witsml_keeps_covariances_and_model(out: Path, tmp_path: Path) -> None:
     _, model = las_statements(out / "trajectory.las")
     text = (out / "trajectory.xml").read_text()
     last = re.findall(r'<varianceNN uom="m2">([^<]+)</varianceNN>', text)[-1]
@@ -82,6 +82,9 @@ def test_witsml_keeps_covariances_and_model(out: Path) -> None:
     stated = frame.attrs["uncertainty"]
     assert (stated["error_model"], stated["confidence"]) == (model, None)
     assert [f["family"] for f in stated["columns"]] == ["covariance"]
+    gp.write(frame, tmp_path / "again.las")  # the frame's model goes with it, no CONF
+    params = lasio.read(tmp_path / "again.las").params
+    assert params["ERRMODEL"].value == model and "CONF" not in params
 
 
 def test_conversion_writes_them_again(out: Path, tmp_path: Path) -> None:

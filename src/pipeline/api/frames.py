@@ -243,18 +243,17 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
 
 def _stated(table: pa.Table, uncertainty: object) -> pa.Table:
     """``table`` whose uncertainty columns state the error model and confidence of a frame's
-    ``attrs["uncertainty"]`` (as :func:`to_frame` put it there); as it is without both."""
+    ``attrs["uncertainty"]`` (as :func:`to_frame` put it there; either may be None)."""
     if uncertainty is None:
         return table
     if not isinstance(uncertainty, Mapping):
         raise ParameterError(f"attrs['uncertainty']: expected a mapping, got {uncertainty!r}")
     model, confidence = uncertainty.get("error_model"), uncertainty.get("confidence")
-    if model is None or confidence is None:
-        return table
-    if not isinstance(model, str) or not isinstance(confidence, float) or not 0 < confidence < 1:
+    if model is not None and not isinstance(model, str):
+        raise ParameterError(f"attrs['uncertainty']: error_model {model!r} is no text")
+    if confidence is not None and not (isinstance(confidence, float) and 0 < confidence < 1):
         raise ParameterError(
-            "attrs['uncertainty']: expected an error_model (text) and a confidence in (0, 1), "
-            f"got {model!r} and {confidence!r}"
+            f"attrs['uncertainty']: confidence {confidence!r} is no probability in (0, 1)"
         )
     return with_statements(table, confidence, model)
 
