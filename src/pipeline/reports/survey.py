@@ -239,9 +239,9 @@ def _ellipse_note(traj: pa.Table, provenance: Provenance, parts: Parts) -> list[
         return []
     names = [str(s.params["model"]) for s in provenance.stages if s.uses == "position_uncertainty"]
     stated = statement_of(traj)
-    titles = (stated.error_model if stated is not None else None) or " and ".join(
-        dict.fromkeys(parts.error_model(n)[0] for n in names)
-    )  # the columns' own statement: the model as the run changed it, every run's model
+    titles = " and ".join(dict.fromkeys(parts.error_model(n)[0] for n in names)) or (
+        stated.error_model if stated is not None else None
+    )  # the models' titles, else the columns' statement (a definitive survey's runs)
     model = f"; error model {titles}" if titles else ""
     level = confidence(traj)
     level = f"confidence level {level}" if level[0].isdigit() else "confidence level not stated"
