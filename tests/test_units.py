@@ -33,6 +33,12 @@ EXPECTED: dict[str, tuple[str, float]] = {
     "IN": ("length", 0.0254),
     "INCH": ("length", 0.0254),
     "INCHES": ("length", 0.0254),
+    "M2": ("area", 1.0),
+    "M^2": ("area", 1.0),
+    "m²": ("area", 1.0),
+    "FT2": ("area", FT * FT),
+    "FT^2": ("area", FT * FT),
+    "ft²": ("area", FT * FT),
     "DEG": ("angle", DEG),
     "DEGA": ("angle", DEG),
     "DEGREE": ("angle", DEG),
@@ -109,6 +115,7 @@ def test_canonical_units() -> None:
         "time": "s",
         "dogleg_severity": "deg/30m",
         "temperature": "degC",
+        "area": "m2",
     }
     for quantity in QUANTITIES:
         assert conversion_factor(canonical_unit(quantity), quantity) == 1.0

@@ -39,6 +39,13 @@ ALIASES: dict[str, str] = {
     "in": "inch",  # hole and casing sizes
     "inch": "inch",
     "inches": "inch",
+    # area: position variances and covariances
+    "m2": "meter ** 2",
+    "m^2": "meter ** 2",
+    "m²": "meter ** 2",
+    "ft2": "foot ** 2",
+    "ft^2": "foot ** 2",
+    "ft²": "foot ** 2",
     # angle
     "deg": "degree",
     "dega": "degree",
@@ -108,6 +115,7 @@ QUANTITIES: dict[str, Quantity] = {
     "time": Quantity("s", "a time"),
     "dogleg_severity": Quantity("deg/30m", "a dogleg severity"),
     "temperature": Quantity("degC", "a temperature"),
+    "area": Quantity("m2", "an area (a position variance)"),
 }
 """Quantity name → canonical unit. Every canonical unit is itself a spelling in ALIASES."""
 

@@ -110,7 +110,7 @@ def same_bits(a: pa.Table, b: pa.Table) -> None:
 
 
 def test_registered_through_hooks() -> None:
-    assert READER.kinds == {"samples": RawSamples}
+    assert READER.kinds == {"samples": RawSamples, "stations": Stations}
     assert WRITER.extension == "mcap"
 
 

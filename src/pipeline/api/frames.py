@@ -8,7 +8,11 @@ A table is given as a pandas DataFrame or an Arrow table and returned as the sam
 - **DataFrames** carry them in ``attrs``: ``attrs["units"]`` maps a column to its unit,
   ``attrs["north_reference"]`` names the azimuths' north (``true``, ``grid`` or
   ``magnetic``; ``attrs["north_references"]`` maps azimuth columns to theirs, as returned),
-  ``attrs["well"]`` holds the well metadata (a mapping). A column without a declared unit
+  ``attrs["well"]`` holds the well metadata (a mapping), ``attrs["uncertainty"]`` what a
+  trajectory's uncertainty columns state (error model, confidence, σ convention of each
+  column family, largest horizontal semi-major axis and TD's: the JSON summary's
+  ``uncertainty`` object; its error model and confidence go back to the columns when the
+  frame is written or passed on). A column without a declared unit
   is taken to be in its canonical unit (m, deg, deg/h, m/s², nT, s, deg/30 m). Integer
   columns come back as pandas' nullable ``Int64``; float columns as NumPy floats (NaN: an
   undefined value), or as nullable ``Float64`` when they have missing values (null).
@@ -32,6 +36,7 @@ from pydantic import ValidationError
 from pipeline.contracts import NORTH_KEY, NORTH_REFERENCES, UNIT_KEY, TableContract
 from pipeline.errors import ParameterError, UnitError
 from pipeline.io.mnemonics import CURVES
+from pipeline.uncertainty.stated import statement_of, with_statements
 from pipeline.units import QUANTITIES, canonical_unit, conversion_factor
 from pipeline.well import WELL_KEY, WellMetadata, attach, well_of
 
@@ -181,6 +186,12 @@ def to_frame(table: pa.Table) -> pd.DataFrame:
     well = _stored_well(table)
     if well is not None:
         frame.attrs["well"] = well.model_dump(mode="json", exclude_none=True)
+    try:
+        stated = statement_of(table)
+    except ValueError as exc:  # columns stating different models or confidences
+        raise ParameterError(f"the table's uncertainty columns: {exc}") from None
+    if stated is not None:
+        frame.attrs["uncertainty"] = stated.as_dict()
     return frame
 
 
@@ -226,7 +237,25 @@ def _from_frame(data: pd.DataFrame) -> pa.Table:
         )
     if north is not None and not norths and well.north_reference is None:
         well = well.merged(WellMetadata(north_reference=north))  # the azimuths' default
-    return attach(pa.Table.from_arrays(table.columns, schema=pa.schema(fields)), well)
+    table = pa.Table.from_arrays(table.columns, schema=pa.schema(fields))
+    return attach(_stated(table, data.attrs.get("uncertainty")), well)
+
+
+def _stated(table: pa.Table, uncertainty: object) -> pa.Table:
+    """``table`` whose uncertainty columns state the error model and confidence of a frame's
+    ``attrs["uncertainty"]`` (as :func:`to_frame` put it there; either may be None)."""
+    if uncertainty is None:
+        return table
+    if not isinstance(uncertainty, Mapping):
+        raise ParameterError(f"attrs['uncertainty']: expected a mapping, got {uncertainty!r}")
+    model, confidence = uncertainty.get("error_model"), uncertainty.get("confidence")
+    if model is not None and not isinstance(model, str):
+        raise ParameterError(f"attrs['uncertainty']: error_model {model!r} is no text")
+    if confidence is not None and not (isinstance(confidence, float) and 0 < confidence < 1):
+        raise ParameterError(
+            f"attrs['uncertainty']: confidence {confidence!r} is no probability in (0, 1)"
+        )
+    return with_statements(table, confidence, model)
 
 
 def as_stated(table: pa.Table) -> pa.Table:

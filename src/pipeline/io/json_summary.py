@@ -4,10 +4,12 @@ One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): t
 header, the run's provenance, the azimuths' north reference, the calculation method, and per
 survey the station count, MD range, the final station's position, the largest dogleg
 severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
-then QC counts per check (with ``file_positions``: the stations file's own positions against
-the recomputed ones, when the trajectory records that check), flagged and rejected
-stations. Lengths in m, angles in degrees, DLS in °/30 m, drift rates in °/h (``units``
-says so in the document too).
+the uncertainty as its columns state it (``uncertainty``: error model, confidence, the σ
+convention of each column family, the largest horizontal semi-major axis and TD's; absent
+without uncertainty columns); then QC counts per check (with ``file_positions``: the
+stations file's own positions against the recomputed ones, when the trajectory records that
+check), flagged and rejected stations. Lengths in m, angles in degrees, DLS in °/30 m,
+drift rates in °/h (``units`` says so in the document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
 ``stations``, ``rejects`` and ``drift`` (a free-gyro survey's corrected readings: the drift
@@ -21,7 +23,7 @@ import itertools
 import json
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Final, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 import pyarrow as pa
@@ -37,6 +39,7 @@ from pipeline.survey.calculation import SurveyCalculation, calculation_of
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
+from pipeline.uncertainty.stated import statement_of
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -83,13 +86,14 @@ class MaxDls(_Model):
 
 
 class Uncertainty(_Model):
-    """Horizontal error ellipse and vertical σ of the final station."""
+    """Horizontal error ellipse and vertical σ of the final station (null: no σ there, the
+    station outside the error model's range or below one)."""
 
     md: float = Field(description="measured depth, m")
-    semi_major: float = Field(description="semi-major axis at 1σ, m")
-    semi_minor: float = Field(description="semi-minor axis at 1σ, m")
-    azimuth: float = Field(description="azimuth of the semi-major axis, deg")
-    sigma_vertical: float = Field(description="vertical σ, m")
+    semi_major: float | None = Field(description="semi-major axis at 1σ, m")
+    semi_minor: float | None = Field(description="semi-minor axis at 1σ, m")
+    azimuth: float | None = Field(description="azimuth of the semi-major axis, deg")
+    sigma_vertical: float | None = Field(description="vertical σ, m")
     confidence: float | None = Field(
         None, description="probability content of the *_conf values (null: not stated)"
     )
@@ -109,6 +113,53 @@ class Survey(_Model):
     max_dls: MaxDls
     uncertainty_at_td: Uncertainty | None = Field(
         None, description="position uncertainty of the last station, when computed"
+    )
+
+
+class ColumnFamily(_Model):
+    """Uncertainty columns of one σ convention."""
+
+    family: Literal["covariance", "ellipse", "ellipse_conf", "vertical_conf"]
+    columns: list[str] = Field(description="the trajectory's columns of the family")
+    scale: Literal["1 sigma squared", "1 sigma", "confidence"] = Field(
+        description="1 sigma squared: variances and covariances (m2); 1 sigma: semi-axes and "
+        "vertical σ (m), the major axis' azimuth (deg); confidence: sizes at the confidence "
+        "level (m)"
+    )
+    region: Literal["2-D, chi-square of 2 dof", "1-D, two-sided normal"] | None = Field(
+        None, description="how a size at the confidence level was scaled from 1σ"
+    )
+
+
+class SemiMajor(_Model):
+    """The horizontal error ellipse's semi-major axis at one station."""
+
+    md: float = Field(description="measured depth, m")
+    survey: str | None = Field(None, description="survey id (null: the table has one survey)")
+    semi_major: float | None = Field(description="at 1σ, m (null: no σ at the station)")
+    semi_major_conf: float | None = Field(
+        description="at the confidence level, m (null: no σ, or no such column)"
+    )
+
+
+class UncertaintyStatement(_Model):
+    """What the trajectory's uncertainty columns state of themselves."""
+
+    error_model: str | None = Field(
+        description="error model name and revision as the columns state it, with what the "
+        "run changed of it (null: not stated)"
+    )
+    confidence: float | None = Field(
+        description="probability content of the *_conf columns (null: not stated)"
+    )
+    columns: list[ColumnFamily] = Field(description="σ convention of each column family")
+    largest: SemiMajor | None = Field(
+        description="the station of the largest horizontal semi-major axis (null: no station "
+        "has a σ)"
+    )
+    at_td: SemiMajor = Field(description="the deepest station's")
+    stations_without_sigma: int = Field(
+        ge=0, description="stations without a σ (outside the error model's range, or below one)"
     )
 
 
@@ -163,6 +214,9 @@ class SurveySummary(_Model):
     units: Units = Units()
     station_count: int = Field(ge=0, description="stations over all surveys")
     surveys: list[Survey]
+    uncertainty: UncertaintyStatement | None = Field(
+        None, description="the trajectory's position uncertainty (absent: none computed)"
+    )
     qc: Qc | None = Field(
         None, description="QC counts (null: no QC table given, no position check recorded)"
     )
@@ -187,6 +241,7 @@ def summarize(
     if trajectory.num_rows == 0:
         raise EmptyTableError("trajectory", "a survey summary needs at least one station")
     north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
+    stated = statement_of(trajectory)
     return SurveySummary(
         gyropipe=__version__,
         well=well,
@@ -194,7 +249,10 @@ def summarize(
         north_reference=north,
         calculation=calculation_of(trajectory),
         station_count=trajectory.num_rows,
-        surveys=_surveys(trajectory),
+        surveys=_surveys(trajectory, stated.confidence if stated is not None else None),
+        uncertainty=(
+            UncertaintyStatement.model_validate(stated.as_dict()) if stated is not None else None
+        ),
         qc=_qc(tables) if _has_qc(tables) else None,
         drift=_drift(tables["drift"]) if "drift" in tables else None,
     )
@@ -224,7 +282,8 @@ def _run(provenance: Provenance) -> Run:
     )
 
 
-def _surveys(trajectory: pa.Table) -> list[Survey]:
+def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
+    """Each survey's summary; ``confidence``: the one the *_conf columns state, if any."""
     cols = {
         name: trajectory.column(name).to_numpy(zero_copy_only=False)
         for name in Station.model_fields
@@ -242,7 +301,7 @@ def _surveys(trajectory: pa.Table) -> list[Survey]:
                 md_end=float(cols["md"][hi - 1]),
                 final=Station(**{name: _defined(v[hi - 1]) for name, v in cols.items()}),
                 max_dls=MaxDls(dls=float(dls[worst]), md=float(cols["md"][worst])),
-                uncertainty_at_td=_uncertainty(trajectory, hi - 1),
+                uncertainty_at_td=_uncertainty(trajectory, hi - 1, confidence),
             )
         )
     return found
@@ -253,15 +312,23 @@ def _defined(value: float) -> float | None:
     return None if np.isnan(value) else float(value)
 
 
-def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
+def _uncertainty(trajectory: pa.Table, row: int, stated: float | None) -> Uncertainty | None:
+    """The ellipse at ``row``; its confidence the ``stated`` one, else the ratio of the
+    *_conf semi-major axis to the 1σ one tells it."""
     if not set(ELLIPSE_COLUMNS) <= set(trajectory.column_names):
         return None
-    at = {name: trajectory.column(name)[row].as_py() for name in trajectory.column_names}
+    at: dict[str, Any] = {
+        name: _value(trajectory.column(name)[row].as_py()) for name in trajectory.column_names
+    }
     conf = at.get("ellipse_major_conf")
     major = at["ellipse_major"]
     # the stage scales the 1σ ellipse by k = √(−2 ln(1 − p)) (χ², 2 dof): p = 1 − e^(−k²/2)
     confidence = (
-        float(-np.expm1(-0.5 * (conf / major) ** 2)) if conf is not None and major > 0 else None
+        stated
+        if stated is not None
+        else float(-np.expm1(-0.5 * (conf / major) ** 2))
+        if conf is not None and major
+        else None
     )
     return Uncertainty(
         md=at["md"],
@@ -274,6 +341,11 @@ def _uncertainty(trajectory: pa.Table, row: int) -> Uncertainty | None:
         semi_minor_conf=at.get("ellipse_minor_conf"),
         vertical_conf=at.get("vertical_conf"),
     )
+
+
+def _value(value: object) -> object:
+    """A cell as the document holds it: a float that is NaN (no σ) as None, like a null."""
+    return None if isinstance(value, float) and np.isnan(value) else value
 
 
 def _has_qc(tables: Mapping[str, pa.Table]) -> bool:
@@ -344,6 +416,8 @@ def write(table: pa.Table, path: Path, well: WellMetadata) -> None:
 
 def _write(summary: SurveySummary, path: Path) -> None:
     doc = summary.model_dump(mode="json")
+    if summary.uncertainty is None:  # no uncertainty columns: the document says nothing of it
+        del doc["uncertainty"]
     path.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
 
 
@@ -353,7 +427,8 @@ def gyropipe_register_writers(register: Callable[[WriterDef], None]) -> None:
         WriterDef(
             name="json_summary",
             description="machine-readable JSON summary: well, run, north reference, final "
-            "position, max DLS, uncertainty at TD, QC counts, the drift correction applied",
+            "position, max DLS, uncertainty at TD and as stated (error model, confidence, "
+            "σ conventions, largest ellipse), QC counts, the drift correction applied",
             extension="json",
             write=write,
             write_tables=write_tables,

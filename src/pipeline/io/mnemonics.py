@@ -18,6 +18,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from pipeline.uncertainty.stated import WORDS
+
 _NOT_ALNUM = re.compile(r"[^0-9A-Z]+")
 
 
@@ -128,6 +130,15 @@ CURVES: dict[str, Curve] = {
             ("STATION TYPE", "STN TYPE", "SURVEY TYPE", "TYPE", "COMMENT", "COMMENTS", "REMARKS"),
             "station type, as the file names it (Tie-In, Projection to TD)",
         ),
+        *[  # a trajectory's own uncertainty columns, by the names gyropipe writes
+            Curve(
+                name,
+                "area" if name.startswith("cov_") else "angle" if "azimuth" in name else "length",
+                (),
+                words,
+            )
+            for name, words in WORDS.items()
+        ],
     ]
 }
 

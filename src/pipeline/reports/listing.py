@@ -16,6 +16,7 @@ from pipeline.reports.flags import AZI, SIGMA_AZI, Flag
 from pipeline.reports.numbers import UNDEFINED, fmt_azimuths, fmt_each, fmt_sigmas
 from pipeline.reports.sections import north_label, unit_label
 from pipeline.survey.courses import course_lengths
+from pipeline.uncertainty.stated import AT_CONFIDENCE, file_statements
 
 ELLIPSE_COLUMNS = ("ellipse_major_conf", "ellipse_minor_conf", "ellipse_azimuth", "vertical_conf")
 UNDEFINED_SIGMA = (
@@ -56,7 +57,11 @@ class Course:
 
 
 def confidence(traj: pa.Table) -> str:
-    """The probability content of the *_conf ellipses, from their ratio to the 1σ ones."""
+    """The probability content of the *_conf ellipses: as their columns state it, else
+    from their ratio to the 1σ ones."""
+    stated = file_statements(pa.schema([f for f in traj.schema if f.name in AT_CONFIDENCE]))
+    if "confidence" in stated:
+        return f"{100 * float(stated['confidence']):.3g} %"
     if "ellipse_major" not in traj.schema.names:
         return "confidence level"
     major, conf = col(traj, "ellipse_major"), col(traj, "ellipse_major_conf")

@@ -72,6 +72,7 @@ from pipeline.survey.calculation import calculation_of
 from pipeline.survey.courses import MIN_COURSE, max_dls, short_courses
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
+from pipeline.uncertainty.stated import Extent, Statement, statement_of
 from pipeline.well import WellMetadata
 
 
@@ -202,7 +203,7 @@ def survey_document(
     if program is not None:
         sections.insert(3, program)
     if all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
-        sections.append(_uncertainty(shown, shown_path))
+        sections.append(_uncertainty(shown, shown_path, statement_of(traj)))
     groups = all_series(src)
     explained = flag_table(flags or [])
     diagnosed = diagnosis_table(src.summary)
@@ -238,7 +239,10 @@ def _ellipse_note(traj: pa.Table, provenance: Provenance, parts: Parts) -> list[
     if not all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         return []
     names = [str(s.params["model"]) for s in provenance.stages if s.uses == "position_uncertainty"]
-    titles = " and ".join(dict.fromkeys(parts.error_model(n)[0] for n in names))
+    stated = statement_of(traj)
+    titles = " and ".join(dict.fromkeys(parts.error_model(n)[0] for n in names)) or (
+        stated.error_model if stated is not None else None
+    )  # the models' titles, else the columns' statement (a definitive survey's runs)
     model = f"; error model {titles}" if titles else ""
     level = confidence(traj)
     level = f"confidence level {level}" if level[0].isdigit() else "confidence level not stated"
@@ -517,7 +521,9 @@ def _trajectory_plots(
     )
 
 
-def _uncertainty(traj: pa.Table, path: plots.Path3) -> Section:
+def _uncertainty(traj: pa.Table, path: plots.Path3, stated: Statement | None) -> Section:
+    """Ellipses against MD (``traj``, ``path``: the stations drawn) and what the whole
+    trajectory's columns state of them (``stated``)."""
     conf = confidence(traj)
     ell = plots.Ellipses(
         md=path.md,
@@ -538,9 +544,43 @@ def _uncertainty(traj: pa.Table, path: plots.Path3) -> Section:
                 partial(plots.error_ellipses, ell=ell, north_label=path.north_label),
                 (6.9, 3.6),
             ),
+            *([Paragraph(_statement_words(stated, conf))] if stated is not None else []),
         ),
         key="uncertainty",
     )
+
+
+def _statement_words(stated: Statement, conf: str) -> str:
+    """The error model, the σ convention of the uncertainty columns and the largest
+    horizontal semi-major axis and TD's, in words (lengths m)."""
+    model = stated.error_model or "not stated"
+    level = f"{conf} confidence" if conf[0].isdigit() else "a confidence level not stated"
+
+    def where(extent: Extent) -> str:
+        if extent.semi_major is None:
+            return f"none at {fmt(extent.md)} m MD (no σ: outside the error model's range)"
+        survey = f" of survey {extent.survey}" if extent.survey is not None else ""
+        at_conf = (
+            f"{fmt(extent.semi_major_conf)} m at {level}, "
+            if extent.semi_major_conf is not None
+            else ""
+        )
+        return f"{at_conf}{fmt(extent.semi_major)} m at 1σ, at {fmt(extent.md)} m MD{survey}"
+
+    words = [
+        f"Error model {model}. Covariances are 1σ² (m²), semi-axes and vertical σ at 1σ, the "
+        f"charted and listed sizes at {level} (horizontal ellipse: 2-D, χ² of 2 degrees of "
+        "freedom; vertical: 1-D, two-sided normal).",
+        "Largest horizontal semi-major axis: "
+        + (where(stated.largest) if stated.largest is not None else "none (no station has a σ)")
+        + f"; at TD: {where(stated.at_td)}.",
+    ]
+    if stated.without_sigma:
+        words.append(
+            f"{stated.without_sigma} station(s) have no σ (outside the error model's range, "
+            "or below such a station)."
+        )
+    return " ".join(words)
 
 
 def _qc(

@@ -5,20 +5,33 @@ level, that level (:data:`CONFIDENCE_KEY`, the probability content) and how the 
 scaled to it (:data:`DIMENSIONS_KEY`: 2 for the horizontal ellipse, √χ²₂; 1 for the vertical
 half-interval, the two-sided normal quantile; :mod:`pipeline.uncertainty.ellipse`); a
 description (:data:`~pipeline.contracts.DESCRIPTION_KEY`) says all of it in words.
+
+:func:`statement_of` gathers what a trajectory says of its uncertainty once, for the
+deliverables that sum it up (the JSON summary, a DataFrame's ``attrs``, the report).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
 import pyarrow as pa
+from numpy.typing import NDArray
 
 from pipeline.contracts import DESCRIPTION_KEY
+from pipeline.uncertainty.ellipse import ellipses
 
 __all__ = [
     "CONFIDENCE_KEY",
     "DIMENSIONS_KEY",
     "ERROR_MODEL_KEY",
+    "FAMILIES",
+    "Extent",
+    "Family",
+    "Statement",
     "file_statements",
     "model_words",
+    "statement_of",
     "with_statements",
 ]
 
@@ -51,27 +64,155 @@ AT_CONFIDENCE = {"ellipse_major_conf": 2, "ellipse_minor_conf": 2, "vertical_con
 REGION = {2: "2-D, chi-square of 2 dof", 1: "1-D, two-sided normal"}
 
 
+@dataclass(frozen=True)
+class Family:
+    """Uncertainty columns of one σ convention: ``scale`` ``1 sigma squared`` (variances
+    and covariances, m²), ``1 sigma`` (m, deg) or ``confidence`` (m, at the confidence
+    level, the region :data:`REGION` of ``dimensions``)."""
+
+    name: str
+    columns: tuple[str, ...]
+    scale: str
+    dimensions: int | None = None
+
+
+FAMILIES = (
+    Family("covariance", tuple(c for c in WORDS if c.startswith("cov_")), "1 sigma squared"),
+    Family("ellipse", ("ellipse_major", "ellipse_minor", "ellipse_azimuth", "sigma_v"), "1 sigma"),
+    Family("ellipse_conf", ("ellipse_major_conf", "ellipse_minor_conf"), "confidence", 2),
+    Family("vertical_conf", ("vertical_conf",), "confidence", 1),
+)
+"""The uncertainty columns (:data:`WORDS`) by σ convention (``ellipse_azimuth``, a direction,
+goes with the 1σ axes it orients)."""
+
+
+@dataclass(frozen=True)
+class Extent:
+    """The horizontal error ellipse's semi-major axis at one station: at 1σ and at the
+    confidence level (m; None: no σ there, outside the error model's range, or no such
+    column)."""
+
+    md: float
+    survey: str | None
+    semi_major: float | None
+    semi_major_conf: float | None
+
+
+@dataclass(frozen=True)
+class Statement:
+    """What a trajectory says of its position uncertainty: the error model and confidence
+    its columns state (None: not stated), the σ convention of each family of columns it
+    has, the station of the largest horizontal semi-major axis (None: no station has a σ)
+    and the deepest station's (TD), and how many stations have no σ (NaN)."""
+
+    error_model: str | None
+    confidence: float | None
+    families: tuple[Family, ...]
+    largest: Extent | None
+    at_td: Extent
+    without_sigma: int
+
+    def as_dict(self) -> dict[str, object]:
+        """The statement as JSON values (the JSON summary's ``uncertainty`` object)."""
+        return {
+            "error_model": self.error_model,
+            "confidence": self.confidence,
+            "columns": [
+                {
+                    "family": f.name,
+                    "columns": list(f.columns),
+                    "scale": f.scale,
+                    "region": REGION[f.dimensions] if f.dimensions else None,
+                }
+                for f in self.families
+            ],
+            "largest": None if self.largest is None else vars(self.largest).copy(),
+            "at_td": vars(self.at_td).copy(),
+            "stations_without_sigma": self.without_sigma,
+        }
+
+
+def statement_of(table: pa.Table) -> Statement | None:
+    """:class:`Statement` of a trajectory with uncertainty columns (``md`` and
+    ``ellipse_major``, or the horizontal covariances whose ellipse it is; None without them
+    or rows). TD: the station of the largest MD (the last of equal
+    ones). ``ValueError`` where columns state different models or confidences."""
+    names = set(table.column_names)
+    horizontal = {"cov_nn", "cov_ne", "cov_ee"}
+    if "md" not in names or not ({"ellipse_major"} <= names or horizontal <= names):
+        return None
+    if table.num_rows == 0:
+        return None
+
+    def values(name: str) -> NDArray[np.float64]:
+        found: NDArray[np.float64] = table.column(name).to_numpy(zero_copy_only=False)
+        return found.astype(np.float64)
+
+    stated = file_statements(pa.schema([f for f in table.schema if f.name in WORDS]))
+    md = values("md")
+    if "ellipse_major" in names:
+        major = values("ellipse_major")
+    else:  # covariances alone (a WITSML matrixCov)
+        nn, ne, ee = (values(c) for c in ("cov_nn", "cov_ne", "cov_ee"))
+        major = ellipses(nn, ne, ee, np.zeros_like(nn)).semi_major
+        major[~(np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee))] = np.nan
+    conf = values("ellipse_major_conf") if "ellipse_major_conf" in names else None
+    surveys = table.column("survey").to_pylist() if "survey" in names else None
+
+    def extent(row: int) -> Extent:
+        return Extent(
+            md=float(md[row]),
+            survey=None if surveys is None else surveys[row],
+            semi_major=_defined(major[row]),
+            semi_major_conf=None if conf is None else _defined(conf[row]),
+        )
+
+    sized = np.isfinite(major)
+    deepest = len(md) - 1 - int(np.argmax(md[::-1]))
+    return Statement(
+        error_model=stated.get("error_model"),
+        confidence=float(stated["confidence"]) if "confidence" in stated else None,
+        families=tuple(
+            Family(f.name, present, f.scale, f.dimensions)
+            for f in FAMILIES
+            if (present := tuple(c for c in f.columns if c in names))
+        ),
+        largest=extent(int(np.argmax(np.where(sized, major, -np.inf)))) if sized.any() else None,
+        at_td=extent(deepest),
+        without_sigma=int((~sized).sum()),
+    )
+
+
+def _defined(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
+
+
 def model_words(name: str, revision: str) -> str:
     """An error model as stated: its name and revision (``GYRO-NS rev 5``)."""
     return f"{name} rev {revision}" if revision else name
 
 
-def with_statements(table: pa.Table, confidence: float, model: str) -> pa.Table:
+def with_statements(table: pa.Table, confidence: float | None, model: str | None) -> pa.Table:
     """``table`` with its uncertainty columns (:data:`WORDS`) stating ``model``
     (:func:`model_words`), those at a confidence level also ``confidence`` (probability,
-    0-1) and their dimensions, and a description of each saying so."""
+    0-1) and their dimensions, and a description of each saying so (None: not stated, left
+    as it is)."""
     fields = []
     for f in table.schema:
         words = WORDS.get(f.name)
         if words is None:
             fields.append(f)
             continue
-        meta = {**(f.metadata or {}), ERROR_MODEL_KEY: model.encode()}
-        if (dims := AT_CONFIDENCE.get(f.name)) is not None:
+        meta = dict(f.metadata or {})
+        if model is not None:
+            meta[ERROR_MODEL_KEY] = model.encode()
+        if (dims := AT_CONFIDENCE.get(f.name)) is not None and confidence is not None:
             meta[CONFIDENCE_KEY] = repr(confidence).encode()
             meta[DIMENSIONS_KEY] = str(dims).encode()
             words += f" at {confidence * 100:g} % confidence ({REGION[dims]})"
-        meta[DESCRIPTION_KEY] = f"{words}; error model {model}".encode()
+        if model is not None:
+            words += f"; error model {model}"
+        meta[DESCRIPTION_KEY] = words.encode()
         fields.append(f.with_metadata(meta))
     return pa.Table.from_arrays(table.columns, schema=pa.schema(fields, table.schema.metadata))
 

@@ -5,14 +5,16 @@ Kinds read (``read(path, kind, options)``):
 
 * ``stations`` → :class:`~pipeline.tables.Stations`: md (m), inc and azi (deg), optional
   survey id, plus any of tvd, north (+N/−S), east (+E/−W) in m and dls in deg/30m found in
-  the file (a wellpath report; empty cells of these are null), what each row is as the file
-  says it (``station_type``: a ``Station Type``, ``Survey Type``, ``Type`` or ``Comment``
-  column), and ``source_line``. A row whose ``station_type`` names a projection or an
-  interpolation (:data:`NOT_MEASURED`: ``Projection to TD``, ``PTB``, ``Interpolated``…) is
-  no survey station: left out with a warning at its line naming its md (the option
-  ``stations: all`` reads it; every row left out: refused at the column); a tie-in row
-  (``Tie-In``, ``Tie On``) is the survey's first station and read. A file without such a
-  column says nothing of its rows: each is read;
+  the file (a wellpath report; empty cells of these are null), a trajectory's uncertainty
+  columns by gyropipe's names (``cov_nn`` m², ``ellipse_major`` m…, stating the title's
+  ``confidence`` and ``error_model``: :mod:`pipeline.io.uncertainty_columns`), what each
+  row is as the file says it (``station_type``: a ``Station Type``, ``Survey Type``,
+  ``Type`` or ``Comment`` column), and ``source_line``. A row whose ``station_type`` names
+  a projection or an interpolation (:data:`NOT_MEASURED`: ``Projection to TD``, ``PTB``,
+  ``Interpolated``…) is no survey station: left out with a warning at its line naming its
+  md (the option ``stations: all`` reads it; every row left out: refused at the column); a
+  tie-in row (``Tie-In``, ``Tie On``) is the survey's first station and read. A file
+  without such a column says nothing of its rows: each is read;
 * ``samples`` → :class:`~pipeline.tables.RawSamples`: time (s) and the gyro (deg/h),
   accelerometer (m/s²) and optional magnetometer (nT) triads, optional md (m),
   frame_angle (deg), station and position (integers), and ``source_line``; empty cells of
@@ -113,6 +115,7 @@ from pipeline.io.csv.header import (
     length_units,
     north_reference,
     read_title,
+    title_statements,
     with_units_row,
 )
 from pipeline.io.csv.options import CsvOptions, profile_units
@@ -128,6 +131,7 @@ from pipeline.io.mnemonics import CURVES
 from pipeline.io.north import stated_north
 from pipeline.io.nulls import null_markers, refuse_null_markers, value_range
 from pipeline.io.precision import for_export
+from pipeline.io.uncertainty_columns import UNCERTAINTY_COLUMNS, Stated, readable, stating
 from pipeline.registry import Claim, ReaderDef, WriterDef
 from pipeline.streams import TableStream
 from pipeline.survey.calculation import calculation_of
@@ -182,7 +186,7 @@ def _unit_of(name: str) -> str:
     return canonical_unit(quantity)
 
 
-STATION_EXTRAS = ("tvd", "north", "east", "dls")
+STATION_EXTRAS = ("tvd", "north", "east", "dls", *UNCERTAINTY_COLUMNS)
 NOT_MEASURED = r"\b(proj\w*|ptb|ptd|interp\w*|extrap\w*)\b"
 """Words of a ``station_type`` cell (compared ignoring case) naming a projection (``Projection
 to TD``, ``Proj. to Bit``, ``PTB``, ``PTD``) or an inter- or extrapolation: not a survey
@@ -232,6 +236,8 @@ class _Rows:
     """the decimal mark; None: found (:func:`~pipeline.io.csv.rows.parse_blocks`)"""
     north: str | None
     opts: CsvOptions
+    stated: Stated
+    """what the title block states of the uncertainty columns"""
 
     @property
     def schema(self) -> pa.Schema:
@@ -336,7 +342,7 @@ class _Rows:
         """The contract's table of parsed columns, in canonical units and conventions."""
         data = {name: _scaled(values[name], self.factors.get(name, 1.0)) for name in self.chosen}
         data[SOURCE_LINE] = pa.array(lines, pa.int64())
-        table = self.layout.table(data, self.north)
+        table = stating(self.layout.table(data, self.north), self.stated)
         try:
             return to_canonical(table, self.opts.conventions)
         except ValueError as exc:
@@ -381,14 +387,22 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
         raise
     header = with_units_row(path, text.head, header)
     lengths = length_units(header, opts, layout.columns)
-    well, in_file = read_title(path, text.head[: header.index], header.delimiter, lengths)
+    title = text.head[: header.index]
+    well, in_file = read_title(path, title, header.delimiter, lengths)
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
     declared = in_file + option
-    chosen = {
-        name: choose(path, header, name, declared)
-        for name in layout.columns
-        if name in header.found
-    }
+    statements = title_statements(title, header.delimiter)
+    uncertainty = Stated.of(path, statements.get("confidence"), statements.get("error_model"))
+    chosen = readable(
+        path,
+        {
+            name: choose(path, header, name, declared)
+            for name in layout.columns
+            if name in header.found
+        },
+        uncertainty,
+        dict.fromkeys(header.found, header.index + 1),
+    )
     _one_name_per_cell(path, header, chosen)
     north = None
     if "azi" in chosen:
@@ -402,7 +416,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
         if CURVES[name].quantity is not None
     }
     rows = data_rows(path, text, header, [chosen[n].index for n in layout.required])
-    found = _Rows(path, layout, header, chosen, factors, rows, opts.decimal, north, opts)
+    found = _Rows(
+        path, layout, header, chosen, factors, rows, opts.decimal, north, opts, uncertainty
+    )
     found.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
     return found, well
 

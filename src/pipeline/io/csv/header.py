@@ -449,6 +449,21 @@ def read_title(
         raise InputFileError(path, str(error["ctx"]["error"]), line=last) from None
 
 
+STATEMENT_KEYS = {"confidence": "confidence", "errormodel": "error_model"}
+"""Title keys of what a file states of its uncertainty columns (gyropipe's ``# confidence=``,
+``# error_model=``), by their words."""
+
+
+def title_statements(lines: list[str], delimiter: str) -> dict[str, tuple[str, int]]:
+    """The :data:`STATEMENT_KEYS` lines above the header: each value and line number."""
+    found: dict[str, tuple[str, int]] = {}
+    for number, line in enumerate(lines, start=1):
+        entry = _key_value(line, delimiter)
+        if entry is not None and (name := STATEMENT_KEYS.get("".join(_words(entry[0])))):
+            found.setdefault(name, (entry[1], number))
+    return found
+
+
 def _datum(words: list[str]) -> str | None:
     """The datum whose elevation a title key names (``KB Elevation``, ``RKB``), if any."""
     return DATUM_WORDS.get("".join(w for w in words if w not in ELEVATION_WORDS))

@@ -60,6 +60,7 @@ from pipeline.io.las.write import write_las
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import ANGLE_NULL_MARKERS
 from pipeline.io.sniffing import file_head
+from pipeline.io.uncertainty_columns import Stated, readable, stating
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import TableStream
 from pipeline.tables import LogTable, RawSamples, Stations
@@ -69,9 +70,10 @@ from pipeline.well import WellMetadata
 
 
 def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
-    """Read a LAS file as ``stations`` (md m, inc/azi deg; tvd/north/east m and dls deg/30m
-    when present), ``samples`` (time s, gyros deg/h, accelerometers m/s2, magnetometers
-    nT, md m, frame_angle deg) or ``log`` (every curve as logged), plus ``source_line``
+    """Read a LAS file as ``stations`` (md m, inc/azi deg; tvd/north/east m, dls deg/30m
+    and the uncertainty curves gyropipe writes, stating CONF and ERRMODEL, when present),
+    ``samples`` (time s, gyros deg/h, accelerometers m/s2, magnetometers nT, md m,
+    frame_angle deg) or ``log`` (every curve as logged), plus ``source_line``
     (the file line of each row)."""
     rows, well = _open(path, kind, options)
     if isinstance(rows, pa.Table):
@@ -102,6 +104,8 @@ class _Rows:
     factors: dict[str, float]
     north: str | None
     opts: LasOptions
+    stated: Stated
+    """what CONF and ERRMODEL state of the uncertainty curves"""
 
     @property
     def schema(self) -> pa.Schema:
@@ -144,7 +148,7 @@ class _Rows:
     def _table(self, data: Data, masks: dict[int, Mask]) -> pa.Table:
         spec = KINDS[self.kind]
         cols = columns(self.path, spec, self.header, self.chosen, data, masks, self.factors)
-        table = make_table(spec, cols, self.north)
+        table = stating(make_table(spec, cols, self.north), self.stated)
         if self.kind != "samples":
             return table
         try:
@@ -166,16 +170,27 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
     spec = KINDS[kind]
     require_curves(path, header)
     declared = declared_north(path, header)
+    stated = _stated(path, header)
     chosen = choose(path, header, spec, opts, declared)
+    chosen = readable(
+        path, chosen, stated, {name: header.curves[i].line for name, i in chosen.items()}
+    )
     if source.title_line == 0:  # after the curves: a log's header alone reads as a log
         raise InputFileError(path, "no ~A (data) section")
     factors = {name: factor(path, header.curves[i], name, opts) for name, i in chosen.items()}
     north, file_north = None, one_north(path, declared)
     if "azi" in chosen:
         north, file_north = azimuth_north(path, header.curves[chosen["azi"]], declared, opts)
-    rows = _Rows(path, kind, source, header, chosen, factors, north, opts)
+    rows = _Rows(path, kind, source, header, chosen, factors, north, opts, stated)
     rows.schema  # noqa: B018  (a conventions option that cannot apply fails before the rows)
     return rows, well_metadata(path, header, file_north, depth_unit=opts.units.get("md"))
+
+
+def _stated(path: Path, header: Header) -> Stated:
+    """What the header's CONF and ERRMODEL items state of the uncertainty curves."""
+    items = {name: header.find(path, name) for name in ("CONF", "ERRMODEL")}
+    conf, model = ((i.value, i.line) if i is not None else None for i in items.values())
+    return Stated.of(path, conf, model)
 
 
 _TITLES = (b"~V", b"~W", b"~C", b"~A")

@@ -36,6 +36,7 @@ from pipeline.io.las.log import describe
 from pipeline.io.las.options import LasOptions
 from pipeline.io.las.rows import Data, Floats, Lines, Mask
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.io.uncertainty_columns import UNCERTAINTY_COLUMNS
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
 from pipeline.well import NORTH_WORDS, NorthReference
@@ -68,7 +69,7 @@ class Kind:
 KINDS = {
     "stations": Kind(
         Stations,
-        ("survey", "md", "inc", "azi", "tvd", "north", "east", "dls"),
+        ("survey", "md", "inc", "azi", "tvd", "north", "east", "dls", *UNCERTAINTY_COLUMNS),
         ("md", "inc", "azi"),
         "md",
     ),

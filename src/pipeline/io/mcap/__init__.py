@@ -1,4 +1,5 @@
-"""Built-in MCAP plugin: raw sensor streams (kind ``samples``) in and out of MCAP files.
+"""Built-in MCAP plugin: raw sensor streams (kind ``samples``) in and out of MCAP files,
+and a run's processed tables read back as survey stations (kind ``stations``).
 
 **Writer** ``mcap``: gyropipe's own batched, columnar layout — Arrow IPC record batches on
 ``/gyropipe/samples``, station/position events on ``/gyropipe/markers``, well metadata and
@@ -23,6 +24,10 @@ gyropipe's channel — zero-copy views of the file's bytes (read once into memor
 mapped: a file cut short while it is read is an error, not a SIGBUS); the other channels
 are decoded whole first.
 
+Kind ``stations``: the trajectory (else the stations) a run's ``export`` wrote, as written
+(:func:`pipeline.io.mcap.tables.read_stations`; the option ``topics`` names another topic,
+the other options are for samples).
+
 Well metadata comes from the ``gyropipe.well`` metadata record. Every CRC the file carries
 is checked first (:mod:`pipeline.io.mcap.records`); every problem raises
 :class:`~pipeline.errors.InputFileError` naming the file and the record or message.
@@ -36,6 +41,7 @@ from pathlib import Path
 import pyarrow as pa
 from mcap.records import Channel
 
+from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.mcap import sources
 from pipeline.io.mcap.arrow import (
@@ -49,10 +55,10 @@ from pipeline.io.mcap.arrow import (
 )
 from pipeline.io.mcap.options import SAMPLE_COLUMNS, McapOptions
 from pipeline.io.mcap.records import MAGIC, McapFile, scan
-from pipeline.io.mcap.tables import write_tables
+from pipeline.io.mcap.tables import processed_channels, read_stations, write_tables
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import TableStream
-from pipeline.tables import RawSamples
+from pipeline.tables import RawSamples, Stations
 from pipeline.well import WellMetadata
 
 # ---------------------------------------------------------------------------- reader
@@ -65,6 +71,16 @@ def sniff(path: Path) -> bool:
             return fh.read(len(MAGIC)) == MAGIC
     except OSError:
         return False
+
+
+def read_mcap(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table, WellMetadata]:
+    """The ``samples`` or ``stations`` of an MCAP file (module docstring), its well metadata."""
+    if kind != "stations":
+        return read_samples(path, kind, options)
+    given = options.model_dump(exclude_defaults=True, exclude={"topics"})
+    if given:
+        raise InputFileError(path, f"options {sorted(given)} are for samples, not stations")
+    return read_stations(path, options.topics)
 
 
 def read_samples(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table, WellMetadata]:
@@ -83,8 +99,8 @@ def read_samples(path: Path, kind: str, options: McapOptions) -> tuple[pa.Table,
 
 
 def stream_samples(path: Path, kind: str, options: McapOptions) -> tuple[TableStream, WellMetadata]:
-    """:func:`read_samples` as a stream of its record batches (module docstring)."""
-    table, well = read_samples(path, kind, options)
+    """:func:`read_mcap` as a stream of its record batches (module docstring)."""
+    table, well = read_mcap(path, kind, options)
     return TableStream(table.schema, lambda: iter(table.to_batches())), well
 
 
@@ -102,7 +118,10 @@ def _selected(file: McapFile, options: McapOptions) -> list[Channel]:
         ]
         if not chosen:
             found = ", ".join(f"{c.topic} ({c.message_encoding})" for c in channels)
-            raise file.fail(f"no channel readable as samples; channels: {found}")
+            message = f"no channel readable as samples; channels: {found}"
+            if processed_channels(file):  # a run's processed tables
+                raise WrongKindError(file.path, message, found="stations")
+            raise file.fail(message)
         return chosen
     by_topic = {c.topic: c for c in channels}
     missing = [t for t in options.topics if t not in by_topic]
@@ -142,9 +161,10 @@ def gyropipe_register_readers(register: Callable[[ReaderDef], None]) -> None:
         ReaderDef(
             name="mcap",
             description="raw sensor samples from MCAP: gyropipe's Arrow channel, per-sample "
-            "JSON, ROS 2 Imu/MagneticField or protobuf",
-            kinds={"samples": RawSamples},
-            read=read_samples,
+            "JSON, ROS 2 Imu/MagneticField or protobuf; a run's processed trajectory or "
+            "stations as survey stations",
+            kinds={"samples": RawSamples, "stations": Stations},
+            read=read_mcap,
             sniff=sniff,
             options=McapOptions,
             stream=stream_samples,
@@ -174,6 +194,7 @@ __all__ = [
     "MARKERS_TOPIC",
     "SAMPLES_TOPIC",
     "McapOptions",
+    "read_mcap",
     "read_samples",
     "sniff",
     "write_samples",

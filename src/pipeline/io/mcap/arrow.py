@@ -24,8 +24,10 @@
   read; the writer replaces a file by a new one rather than truncating it in place).
 
 Any table with a finite, strictly increasing float64 ``time`` column (s) is written, extra
-columns included; other tables (Stations, trajectories) are refused with a ``ValueError``
-naming the writers that take them, and so are dictionary-encoded columns.
+columns included (not the engine's own: ``source_line``, the lines of a file read, and the
+``gyropipe.source`` path it was read from, :func:`for_client`); other tables (Stations,
+trajectories) are refused with a ``ValueError`` naming the writers that take them, and so
+are dictionary-encoded columns.
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ from mcap.writer import CompressionType, Writer
 from pydantic import ValidationError
 
 from pipeline import jsontext
-from pipeline.contracts import UNIT_KEY
+from pipeline.contracts import SOURCE_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.errors import ParameterError
 from pipeline.io.mcap.crc import DataSection
 from pipeline.io.mcap.records import (
@@ -91,13 +93,12 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
     ]
     meta = {**(table.schema.metadata or {}), MARKERS_KEY: json.dumps(markers).encode()}
     data = table.drop_columns(markers)
+    schema = for_client(table.schema.with_metadata(meta))
     path.unlink(missing_ok=True)  # a new inode: tables still mapping an old file stay valid
     with path.open("wb") as fh:
         section = DataSection(fh)
         writer = start_writer(section)
-        add_arrow_channel(
-            writer, SAMPLES_TOPIC, SAMPLES_SCHEMA, data, table.schema.with_metadata(meta), times
-        )
+        add_arrow_channel(writer, SAMPLES_TOPIC, SAMPLES_SCHEMA, data, schema, times)
         if markers and table.num_rows:
             marker_schema = writer.register_schema(
                 MARKER_SCHEMA, "jsonschema", json.dumps(_marker_json_schema(markers)).encode()
@@ -109,7 +110,7 @@ def write_samples(table: pa.Table, path: Path, well: WellMetadata) -> None:
                     marker_channel, stamp, json.dumps(event).encode(), stamp, sequence
                 )
         writer.add_metadata(WELL_RECORD, well_strings(well))
-        writer.add_metadata(UNITS_RECORD, units_of(table))
+        writer.add_metadata(UNITS_RECORD, units_of(schema))
         writer.finish()  # type: ignore[no-untyped-call]
         section.seal()
 
@@ -142,7 +143,9 @@ def add_arrow_channel(
     with ``data`` (a table, or record batches as they come) as record batches of up to
     :data:`BATCH_ROWS` rows; each message's log time is ``times`` (s) at its first row —
     ``True``: the batch's own ``time`` column, which must be complete and finite
-    (:class:`UnstampedBatch` at the first batch whose column is not) — or 0."""
+    (:class:`UnstampedBatch` at the first batch whose column is not) — or 0. The engine's
+    own column and metadata are left out (:func:`for_client`)."""
+    schema = for_client(schema)
     schema_id = writer.register_schema(schema_name, ARROW_SCHEMA_ENCODING, schema.serialize())
     channel = writer.register_channel(topic, ARROW_MESSAGE_ENCODING, schema_id)
     batches = data.to_batches() if isinstance(data, pa.Table) else data
@@ -150,6 +153,8 @@ def add_arrow_channel(
     for whole in batches:
         if times is True and not _stamps(whole):
             raise UnstampedBatch(topic)
+        if SOURCE_LINE in whole.schema.names:
+            whole = whole.drop_columns([SOURCE_LINE])
         for batch in pa.Table.from_batches([whole]).to_batches(max_chunksize=BATCH_ROWS):
             if not batch.num_rows:
                 continue
@@ -161,6 +166,16 @@ def add_arrow_channel(
             writer.add_message(channel, stamp, data, stamp, sequence)
             row += batch.num_rows
             sequence += 1
+
+
+def for_client(schema: pa.Schema) -> pa.Schema:
+    """``schema`` as a file for others holds it: without ``source_line`` (the lines of the
+    file a table was read from mean nothing in another) and the ``gyropipe.source`` path of
+    that file (a path on the machine that ran, named in the engine's errors)."""
+    if SOURCE_LINE in schema.names:
+        schema = schema.remove(schema.get_field_index(SOURCE_LINE))
+    meta = {k: v for k, v in (schema.metadata or {}).items() if k != SOURCE_KEY}
+    return schema.with_metadata(meta) if meta else schema.remove_metadata()
 
 
 class UnstampedBatch(Exception):

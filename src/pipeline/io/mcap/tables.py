@@ -9,7 +9,12 @@ the table has a complete float64 ``time`` column, else at 0. Metadata records:
 ``gyropipe.well`` (the header), ``gyropipe.units/<role>`` (column → unit, for tools without
 Arrow) and ``gyropipe.run`` (pipeline, its SHA-256, start, gyropipe version).
 
-:func:`read_tables` gives the tables back exactly as written.
+:func:`read_tables` gives the tables back exactly as written (less the engine's own
+``source_line`` column and ``gyropipe.source`` path, never written:
+:func:`~pipeline.io.mcap.arrow.for_client`); :func:`read_stations` one of them as survey
+stations: ``/gyropipe/trajectory``, else ``/gyropipe/stations`` (the option ``topics``
+names another), every column and what it states (units, north reference, the error model
+and confidence of uncertainty columns) kept.
 """
 
 from __future__ import annotations
@@ -19,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+from mcap.records import Channel
 
+from pipeline.errors import WrongKindError
 from pipeline.io.mcap.arrow import (
     ARROW_MESSAGE_ENCODING,
     SAMPLES_TOPIC,
@@ -30,19 +37,23 @@ from pipeline.io.mcap.arrow import (
     arrow_batches,
     arrow_schema,
     check_encodable,
+    for_client,
     read_well,
     start_writer,
     units_of,
     well_strings,
 )
 from pipeline.io.mcap.crc import DataSection
-from pipeline.io.mcap.records import scan
+from pipeline.io.mcap.records import McapFile, scan
 from pipeline.registry import Provenance
 from pipeline.streams import Port
 from pipeline.well import WellMetadata
 
 TOPIC_PREFIX = "/gyropipe/"
 RUN_RECORD = "gyropipe.run"
+STATION_TOPICS = ("/gyropipe/trajectory", "/gyropipe/stations")
+"""Topics read as survey stations, the first the file has."""
+STATION_COLUMNS = ("md", "inc", "azi")
 CHUNK_BYTES = 512 << 10
 """Bytes of messages after which a chunk is closed: a chunk holds one or two messages, so
 the library's chunk buffer and chunk record (a message more than this) stay below the
@@ -94,7 +105,7 @@ def _write(
             )
         writer.add_metadata(WELL_RECORD, well_strings(well))
         for role, table in tables.items():
-            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(table.schema))
+            writer.add_metadata(f"{UNITS_RECORD}/{role}", units_of(for_client(table.schema)))
         writer.add_metadata(
             RUN_RECORD,
             {
@@ -128,11 +139,51 @@ def read_tables(path: Path) -> tuple[dict[str, pa.Table], WellMetadata]:
         channel.topic[len(TOPIC_PREFIX) :]: arrow_batches(
             file, channel, arrow_schema(file, channel)
         )
-        for channel in file.channels.values()
-        if channel.topic.startswith(TOPIC_PREFIX)
-        and channel.topic != SAMPLES_TOPIC
-        and channel.message_encoding == ARROW_MESSAGE_ENCODING
+        for channel in processed_channels(file)
     }
     if not tables:
         raise file.fail("no processed-table channel (/gyropipe/<role>) in the file")
     return tables, read_well(file)
+
+
+def processed_channels(file: McapFile) -> list[Channel]:
+    """The file's processed-table channels (``/gyropipe/<role>``, Arrow record batches)."""
+    return [
+        channel
+        for channel in file.channels.values()
+        if channel.topic.startswith(TOPIC_PREFIX)
+        and channel.topic != SAMPLES_TOPIC
+        and channel.message_encoding == ARROW_MESSAGE_ENCODING
+    ]
+
+
+def read_stations(path: Path, topics: list[str] | None) -> tuple[pa.Table, WellMetadata]:
+    """The survey stations of a processed-tables file: the table of the one topic of
+    ``topics``, else of the first of :data:`STATION_TOPICS` the file has, as written.
+    A file without such a topic is a :class:`~pipeline.errors.WrongKindError` (raw
+    samples say so); a topic without md, inc and azi an InputFileError naming it."""
+    file = scan(path)
+    channels = {c.topic: c for c in processed_channels(file)}
+    if topics is not None:
+        if len(topics) != 1 or topics[0] not in channels:
+            raise file.fail(
+                f"option topics: name one processed-table topic to read as stations, not "
+                f"{topics} (topics: {sorted(channels)})"
+            )
+        wanted = topics
+    else:
+        wanted = [t for t in STATION_TOPICS if t in channels]
+    if not wanted:
+        samples = any(c.topic == SAMPLES_TOPIC for c in file.channels.values())
+        raise WrongKindError(
+            path,
+            f"no survey stations topic ({' or '.join(STATION_TOPICS)}); topics: "
+            f"{sorted(c.topic for c in file.channels.values())}",
+            found="samples" if samples else None,
+        )
+    channel = channels[wanted[0]]
+    table = arrow_batches(file, channel, arrow_schema(file, channel))
+    missing = [c for c in STATION_COLUMNS if c not in table.column_names]
+    if missing:
+        raise file.fail(f"topic {channel.topic!r} is no survey: it has no column {missing}")
+    return table, read_well(file)

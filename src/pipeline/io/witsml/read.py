@@ -20,8 +20,17 @@ from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.numbers import file_number
 from pipeline.io.sniffing import file_head
+from pipeline.io.uncertainty_columns import Stated, stating
 from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
-from pipeline.io.witsml.terms import AZI_REF, EXTENSION_PREFIX, NS, survey_tool, uom_factor
+from pipeline.io.witsml.terms import (
+    AZI_REF,
+    COVARIANCE,
+    ERROR_MODEL_EXTENSION,
+    EXTENSION_PREFIX,
+    NS,
+    survey_tool,
+    uom_factor,
+)
 from pipeline.io.witsml.tree import Node, RepeatedElement, parse
 from pipeline.io.witsml.v2 import NS_2, as_1series
 from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
@@ -106,7 +115,8 @@ def sniff(path: Path) -> bool:
 
 
 def read_witsml(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
-    """Stations (md, inc, azi; tvd, north, east, dls when the file has them) of every
+    """Stations (md, inc, azi; tvd, north, east, dls and the matrixCov covariances, stating
+    their ``gyropipe.error_model``, when the file has them) of every
     trajectory of a WITSML 1.4.1.x ``trajectorys`` document, in canonical units, with a
     ``survey`` column when there are several, and the well metadata it holds."""
     if kind != "stations":
@@ -140,6 +150,7 @@ def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
     north = _north(path, trajectories, opts)
     labels = _labels(trajectories) if len(trajectories) > 1 else None
     data: dict[str, list[Any]] = {name: [] for name, *_ in STATION_MEASURES}
+    data.update({name: [] for name, *_ in COVARIANCE})
     data.update({name: [] for name, _ in STATION_TEXT})
     data[SOURCE_LINE] = []
     survey: list[str] = []
@@ -168,12 +179,27 @@ def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
             columns[name] = np.asarray(data[name], dtype=np.float64)
         elif any(v is not None for v in data[name]):
             columns[name] = data[name]
+    if all(any(v is not None for v in data[name]) for name, *_ in COVARIANCE):
+        columns.update({name: data[name] for name, *_ in COVARIANCE})
     for name, _ in STATION_TEXT:
         if any(v is not None for v in data[name]):
             columns[name] = pa.array(data[name], pa.string())
     columns[SOURCE_LINE] = pa.array(data[SOURCE_LINE], pa.int64())
-    table = LAYOUTS["stations"].table(columns, north)
+    table = stating(LAYOUTS["stations"].table(columns, north), _stated(trajectories))
     return table, _well(path, trajectories, north, datum)
+
+
+def _stated(trajectories: list[Node]) -> Stated:
+    """The error model of the trajectories' matrixCov (their ``gyropipe.error_model``
+    extension values, in order; several: all, as one statement)."""
+    models = [
+        (entry.get("value") or entry).text.strip()
+        for traj in trajectories
+        if (common := traj.get("commonData")) is not None
+        for entry in common.all("extensionNameValue")
+        if entry.text_of("name") == ERROR_MODEL_EXTENSION
+    ]
+    return Stated(error_model=", ".join(dict.fromkeys(m for m in models if m)) or None)
 
 
 def _chosen(path: Path, root: Node, wanted: str | None) -> list[Node]:
@@ -310,6 +336,11 @@ def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
     for column, element in STATION_TEXT:
         text = node.text_of(element)
         row[column] = text if text != "unknown" else None
+    cov = node.get("matrixCov")
+    if cov is not None:
+        for column, element, _ in COVARIANCE:
+            child = cov.get(element)
+            row[column] = _measure(path, child, "area") if child is not None else None
     return row
 
 

@@ -20,6 +20,17 @@ NS: Final = "http://www.witsml.org/schemas/1series"
 VERSION: Final = "1.4.1.1"
 EXTENSION_PREFIX: Final = "gyropipe.well."
 """``commonData/extensionNameValue`` names holding the well metadata WITSML has no element for."""
+COVARIANCE: tuple[tuple[str, str, str], ...] = (
+    ("cov_nn", "varianceNN", "m2"),
+    ("cov_ne", "varianceNE", "m2"),
+    ("cov_nv", "varianceNVert", "m2"),
+    ("cov_ee", "varianceEE", "m2"),
+    ("cov_ev", "varianceEVert", "m2"),
+    ("cov_vv", "varianceVertVert", "m2"),
+)
+"""Position covariance columns (NEV, vertical down) and their ``matrixCov`` elements."""
+ERROR_MODEL_EXTENSION = "gyropipe.error_model"
+"""Name of the extension value stating the error model of the matrixCov covariances."""
 
 NAME_MAX = 64
 """Longest name and uid (WITSML ``nameString``, ``uidString``)."""
@@ -126,7 +137,15 @@ to be executed in the future, ``model`` for what-if calculations."""
 
 UNIT_UOM = {"m": "m", "deg": "dega", "deg/30m": "dega/30m", "m2": "m2"}
 """Canonical column unit → WITSML uom (what the writer writes)."""
-_UOM_SPELLING = {"m": "m", "ft": "ft", "ftUS": "usft", "dega": "deg", "rad": "rad"}
+_UOM_SPELLING = {
+    "m": "m",
+    "ft": "ft",
+    "ftUS": "usft",
+    "dega": "deg",
+    "rad": "rad",
+    "m2": "m2",
+    "ft2": "ft2",
+}
 """WITSML uom → the spelling :mod:`pipeline.units` reads (what the reader accepts)."""
 _RATE_UOM = re.compile(r"(dega|rad)/([0-9]*)(m|ft|ftUS)")
 _TOOL_WORDS = (
@@ -161,7 +180,7 @@ def survey_tool(tool_type: str | None) -> str:
 
 def uom_factor(uom: str, quantity: str) -> float:
     """Multiplier taking values in the WITSML ``uom`` to the canonical unit of ``quantity``
-    (``length``, ``angle`` or ``dogleg_severity``). Raises :class:`UnitError`."""
+    (``length``, ``angle``, ``dogleg_severity`` or ``area``). Raises :class:`UnitError`."""
     if quantity == "dogleg_severity":
         match = _RATE_UOM.fullmatch(uom)
         if match is None:

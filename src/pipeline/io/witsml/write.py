@@ -16,6 +16,8 @@ from pipeline.io.nulls import refuse_null_markers
 from pipeline.io.witsml.terms import (
     AZI_REF,
     CALC_ALGORITHM,
+    COVARIANCE,
+    ERROR_MODEL_EXTENSION,
     EXTENSION_PREFIX,
     NAME_MAX,
     NS,
@@ -46,15 +48,6 @@ STATION_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("build", "rateBuild", "deg/30m"),
 )
 """Column, ``trajectoryStation`` element and the column's required unit, in schema order."""
-COVARIANCE: tuple[tuple[str, str, str], ...] = (
-    ("cov_nn", "varianceNN", "m2"),
-    ("cov_ne", "varianceNE", "m2"),
-    ("cov_nv", "varianceNVert", "m2"),
-    ("cov_ee", "varianceEE", "m2"),
-    ("cov_ev", "varianceEVert", "m2"),
-    ("cov_vv", "varianceVertVert", "m2"),
-)
-"""Position covariance columns (NEV, vertical down) and their ``matrixCov`` elements."""
 REQUIRED = ("md", "inc", "azi")
 UNNAMED = "unnamed"
 """``nameWell`` (and uid) when the header names no well: WITSML requires one."""
@@ -68,8 +61,6 @@ WELL_UOM = {
     "grid_convergence_applied": "dega",
 }
 """Units of the numeric well metadata fields written as extension values."""
-ERROR_MODEL_EXTENSION = "gyropipe.error_model"
-"""Name of the extension value stating the error model of the matrixCov covariances."""
 _XML_CHARS = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
 
 
