@@ -57,6 +57,8 @@ from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
 NULL = NULL_MARKERS[0]
+EXACT_INTEGER = 2**53
+"""The largest integer a double (what LAS readers read every value as) holds exactly."""
 """The NULL value written (-999.25)."""
 READ_AS_NUMBERS = frozenset(name for kind in KINDS.values() for name in kind.columns)
 """The columns the LAS readers read, each as numbers (a survey id from a numeric curve): a
@@ -198,7 +200,14 @@ def _writable(column: pa.ChunkedArray, name: str) -> pa.Array:
     if pa.types.is_string(array.type) or pa.types.is_large_string(array.type):
         return array.cast(pa.string())
     if pa.types.is_integer(array.type) and not array.null_count:
-        return array.cast(pa.int64())
+        whole = array.cast(pa.int64())
+        bounds = pc.min_max(whole)
+        if len(whole) and max(-bounds["min"].as_py(), bounds["max"].as_py()) > EXACT_INTEGER:
+            raise ValueError(
+                f"column {name!r} holds integers beyond ±2^53: a LAS value is read as a "
+                "double, which cannot hold them exactly"
+            )
+        return whole
     values = array.cast(pa.float64()).to_numpy(zero_copy_only=False)
     if np.isinf(values).any():
         raise ValueError(f"column {name!r} has infinite values: LAS cannot hold them")
