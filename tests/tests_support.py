@@ -445,3 +445,16 @@ def tables_of(html: Path) -> dict[str, list[list[str]]]:
     parser = _Tables()
     parser.feed(html.read_text(encoding="utf-8"))
     return parser.tables
+
+
+def point_gyro_run(root: Path, plan: str = "short-j-well") -> Path:
+    """``pipelines/point-gyro.yaml`` on ``examples/plans/PLAN.yaml`` simulated under
+    ``root``; returns its output directory."""
+    gyropipe_cli("simulate", ROOT / "examples" / "plans" / f"{plan}.yaml", "--out", root / "sim",
+                 check=True)  # fmt: skip
+    gyropipe_cli(
+        "run", ROOT / "pipelines" / "point-gyro.yaml",
+        "--input", f"samples={root / 'sim' / 'samples.parquet'}", "--out", root / "out",
+        check=True,
+    )  # fmt: skip
+    return root / "out"

@@ -14,9 +14,8 @@ import pytest
 
 import pipeline as gp
 from pipeline.errors import InputFileError, WrongKindError
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, point_gyro_run
 
-PLAN = ROOT / "examples" / "plans" / "short-j-well.yaml"
 STEP = {"md": 0.5e-4, "inc": 0.5e-6, "azi": 0.5e-6, "tvd": 0.5e-4, "north": 0.5e-4}
 """Half the step of each CSV column's decimals (m: 4, deg: 6)."""
 
@@ -24,14 +23,7 @@ STEP = {"md": 0.5e-4, "inc": 0.5e-6, "azi": 0.5e-6, "tvd": 0.5e-4, "north": 0.5e
 @pytest.fixture(scope="module")
 def gyro(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The outputs of a point-gyro run of the short well (no report)."""
-    root = tmp_path_factory.mktemp("mcap-stations")
-    gyropipe_cli("simulate", PLAN, "--out", root / "sim", check=True)
-    gyropipe_cli(
-        "run", ROOT / "pipelines" / "point-gyro.yaml",
-        "--input", f"samples={root / 'sim' / 'samples.parquet'}", "--out", root / "out",
-        check=True,
-    )  # fmt: skip
-    return root / "out"
+    return point_gyro_run(tmp_path_factory.mktemp("mcap-stations"))
 
 
 def csv_rows(path: Path) -> list[dict[str, float]]:

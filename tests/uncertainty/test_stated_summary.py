@@ -18,9 +18,8 @@ import pyarrow.parquet as pq
 import pytest
 
 import pipeline as gp
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, point_gyro_run
 
-PLAN = ROOT / "examples" / "plans" / "short-j-well.yaml"
 MODEL = "GYRO-NS rev 5 (2020-10-08)"
 """The bundled GYRO-NS model file's name and revision (gyro-ns.yaml), as stated."""
 LAS_STEP = 0.5e-4
@@ -56,14 +55,7 @@ FAMILIES = [
 @pytest.fixture(scope="module")
 def out(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A point-gyro run of the short well, report included."""
-    root = tmp_path_factory.mktemp("stated")
-    gyropipe_cli("simulate", PLAN, "--out", root / "sim", check=True)
-    gyropipe_cli(
-        "run", ROOT / "pipelines" / "point-gyro.yaml",
-        "--input", f"samples={root / 'sim' / 'samples.parquet'}", "--out", root / "out",
-        check=True,
-    )  # fmt: skip
-    return root / "out"
+    return point_gyro_run(tmp_path_factory.mktemp("stated"))
 
 
 def las_facts(path: Path) -> dict:
