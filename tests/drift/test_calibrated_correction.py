@@ -456,3 +456,33 @@ def test_a_calibration_date_that_is_no_day_is_refused(files: dict[str, Path], tm
     assert result.returncode != 0
     assert "states its date as '12/05/2026', not a day (2026-05-12)" in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_the_fleet_page_states_the_calibration_and_its_caveats(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    """A batch of two wells corrected with IG50-1's calibration, one surveyed 193 days after
+    it: the fleet page's drift cell names the instrument and, for that well, the age caveat
+    (it showed the rate alone: the caveat was in the well's report only)."""
+    fresh = tmp_path / "fresh.csv"
+    old = tmp_path / "old.csv"
+    for path, day in ((fresh, dt.date(2026, 6, 1)), (old, dt.date(2026, 11, 21))):
+        header = WellMetadata(tool_serial="IG50-1", survey_date=day)
+        write_csv(simulate_free_gyro(survey()), path, header)
+    manifest = tmp_path / "wells.csv"
+    manifest.write_text(
+        f"well_id,readings,calibration\nFRESH,{fresh},{files['both']}\nOLD,{old},{files['both']}\n"
+    )
+    out = tmp_path / "batch"
+    result = gyropipe_cli(
+        "batch", files["pipeline"], "--manifest", manifest, "--out", out, "--workers", "1"
+    )
+    assert result.returncode == 0, result.output
+    raw = (out / "fleet.html").read_text(encoding="utf-8")
+    rows = {}  # each well's row of the page, its text
+    for row in re.findall(r'<tr class="s-[a-z]+">(.*?)</tr>', raw, re.S):
+        text = " ".join(unescape(re.sub(r"<[^>]+>", " ", row)).split())
+        rows[text.split()[0]] = text
+    assert "IG50-1:" in rows["OLD"] and "IG50-1:" in rows["FRESH"]
+    assert "⚠" in rows["OLD"] and "193 days before the survey" in rows["OLD"]
+    assert "⚠" not in rows["FRESH"]

@@ -37,7 +37,7 @@ from pipeline.anticollision.rule import LEVELS
 from pipeline.anticollision.tables import Clearance, rule_of
 from pipeline.batch.publish import of_ledger
 from pipeline.contracts import TableContract
-from pipeline.drift.correction import correction_rate
+from pipeline.drift.correction import correction_rate, drift_rate_of
 from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
 from pipeline.graph import Plan
 from pipeline.hashing import open_regular, regular_bytes
@@ -88,6 +88,8 @@ class DriftFigure:
     rate_deg_h: float
     sigma_deg_h: float | None
     instrument: str | None
+    caveats: tuple[str, ...] = ()
+    """where the calibration applied does not cover the survey, one sentence each"""
 
 
 @dataclass(frozen=True)
@@ -165,7 +167,9 @@ def figures_of_record(record: Any) -> WellFigures | None:
             ),
             gates=None if gates is None else tuple(Gate(**g) for g in gates),
             clearance=None if worst is None else WorstClearance(**worst),
-            drift=None if drift is None else tuple(DriftFigure(**d) for d in drift),
+            drift=None
+            if drift is None
+            else tuple(DriftFigure(**{**d, "caveats": tuple(d.get("caveats", ()))}) for d in drift),
             td_md=record["td_md"],
             td_tvd=record["td_tvd"],
             max_dls=record["max_dls"],
@@ -390,7 +394,11 @@ class _Tables:
         before they were recorded, the slope of its correction (σ None)."""
         if set(table.column_names) >= RATE_COLUMNS and table.num_rows:
             rate, sigma = (_floats(table, c)[0] for c in ("drift_rate", "sigma_drift_rate"))
-            self.drift.append(DriftFigure(float(rate), float(sigma), None))
+            applied = drift_rate_of(table)  # (None: readings corrected before it was recorded)
+            instrument, caveats = (
+                (None, ()) if applied is None else (applied.instrument, applied.caveats)
+            )
+            self.drift.append(DriftFigure(float(rate), float(sigma), instrument, tuple(caveats)))
             return
         rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
         if math.isfinite(rate):

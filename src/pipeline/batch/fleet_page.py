@@ -240,7 +240,8 @@ def _drift(figures: WellFigures) -> str:
             rate = fmt_measured(d.rate_deg_h, d.sigma_deg_h, 3)
             sigma = f" ± {fmt_sigma(d.sigma_deg_h)}"
         who = f"{_e(d.instrument)}: " if d.instrument else ""
-        parts.append(f"{who}{rate}{sigma} °/h")
+        caveats = "".join(f'<div class="why">⚠ {_e(c)}</div>' for c in d.caveats)
+        parts.append(f"{who}{rate}{sigma} °/h{caveats}")
     return "<br>".join(parts)
 
 
