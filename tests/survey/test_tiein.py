@@ -270,6 +270,27 @@ MAIN = [(30.0 * k, max(0.0, 3.0 * (k - 5)), 40.0) for k in range(31)]
 """The main bore: vertical to 150 m, then building 3°/30 m at 40° azimuth to 900 m."""
 
 
+def sidetrack_of(kop: float, inc: float, azi: float) -> list[tuple[float, float, float]]:
+    """A sidetrack from MD ``kop`` at the main bore's ``inc``/``azi`` there (deg), dropping
+    2° and turning 3° per 30 m station, eight stations."""
+    return [(kop + 30.0 * j, inc - 2.0 * j, azi + 3.0 * j) for j in range(9)]
+
+
+def listing(path: Path, surveys: dict[str, list[tuple[float, float, float]]]) -> Path:
+    """A stations CSV (HEADER's well) of MD, inc, azi, with a Survey column where it lists
+    more than one survey (a wellbore export: main bore, then sidetrack)."""
+    head = HEADER.removesuffix("MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)\n")
+    named = len(surveys) > 1
+    columns = ("Survey," if named else "") + "MD (m),Inc (deg),Azimuth True (deg)\n"
+    rows = "".join(
+        (f"{name}," if named else "") + f"{md:.4f},{i:.6f},{a:.6f}\n"
+        for name, stations in surveys.items()
+        for md, i, a in stations
+    )
+    path.write_text(head + columns + rows)
+    return path
+
+
 def hand_arc_point(
     station: tuple[float, float, float], below: tuple[float, float, float], md: float
 ) -> tuple[float, float, float, float, float]:
@@ -305,16 +326,8 @@ def test_a_sidetrack_listed_beside_its_main_bore_starts_on_it(tmp_path: Path, ko
     else:
         inc, azi = MAIN[k][1:]
         start = hand_positions(MAIN[: k + 1], 0.0, 0.0, 0.0)[-1]
-    sidetrack = [(kop, inc, azi)] + [
-        (kop + 30.0 * j, inc - 2.0 * j, azi + 3.0 * j) for j in range(1, 9)
-    ]
-    path = tmp_path / "wellbores.csv"
-    path.write_text(
-        HEADER.replace("MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)\n", "")
-        + "Survey,MD (m),Inc (deg),Azimuth True (deg)\n"
-        + "".join(f"{name},{md:.4f},{i:.6f},{a:.6f}\n" for name, rows in
-                  (("MAIN", MAIN), ("ST1", sidetrack)) for md, i, a in rows)
-    )  # fmt: skip
+    sidetrack = sidetrack_of(kop, inc, azi)
+    path = listing(tmp_path / "wellbores.csv", {"MAIN": MAIN, "ST1": sidetrack})
     spec = yaml.safe_load(SURVEY.read_text())  # a LAS file holds one path: not written
     spec["stages"] = [st for st in spec["stages"] if st.get("with", {}).get("writer") != "las"]
     pipeline = tmp_path / "survey.yaml"
@@ -367,20 +380,9 @@ def test_a_sidetrack_carries_its_main_bores_uncertainty_at_the_kick_off(tmp_path
     listing of that hole alone (main bore above 600 m, sidetrack below) gives them; it was
     propagated from zero at the kick-off, as if that point were known exactly."""
     inc, azi = MAIN[20][1:]
-    sidetrack = [(600.0, inc, azi)] + [
-        (600.0 + 30 * j, inc - 2.0 * j, azi + 3.0 * j) for j in range(1, 9)
-    ]
-    head = HEADER.replace("MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)\n", "")
-    both, hole = tmp_path / "both.csv", tmp_path / "hole.csv"
-    both.write_text(
-        head + "Survey,MD (m),Inc (deg),Azimuth True (deg)\n"
-        + "".join(f"{name},{md:.4f},{i:.6f},{a:.6f}\n" for name, rows in
-                  (("MAIN", MAIN), ("ST1", sidetrack)) for md, i, a in rows)
-    )  # fmt: skip
-    hole.write_text(
-        head + "MD (m),Inc (deg),Azimuth True (deg)\n"
-        + "".join(f"{md:.4f},{i:.6f},{a:.6f}\n" for md, i, a in [*MAIN[:20], *sidetrack])
-    )  # fmt: skip
+    sidetrack = sidetrack_of(600.0, inc, azi)
+    both = listing(tmp_path / "both.csv", {"MAIN": MAIN, "ST1": sidetrack})
+    hole = listing(tmp_path / "hole.csv", {"HOLE": [*MAIN[:20], *sidetrack]})
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(UNCERTAIN)
     runs = {}
@@ -399,7 +401,7 @@ def test_a_sidetrack_carries_its_main_bores_uncertainty_at_the_kick_off(tmp_path
     (kop,) = (r for r in main if r["md"] == 600.0)
     assert st1[0]["ellipse_major"] == pytest.approx(kop["ellipse_major"], rel=1e-6)  # continuous
     assert kop["ellipse_major"] > 0.1  # m: not a point known exactly
-    alone = gp.run(pipeline, {"stations": both}).tables["uncertainty.trajectory"]
-    assert alone.column("cov_nn").to_pylist()[len(MAIN) :] == pytest.approx(
+    api = gp.run(pipeline, {"stations": both}).tables["uncertainty.trajectory"]
+    assert api.column("cov_nn").to_pylist()[len(MAIN) :] == pytest.approx(
         [r["cov_nn"] for r in st1], rel=1e-12
     )

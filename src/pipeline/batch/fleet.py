@@ -398,7 +398,7 @@ class _Tables:
             instrument, caveats = (
                 (None, ()) if applied is None else (applied.instrument, applied.caveats)
             )
-            self.drift.append(DriftFigure(float(rate), float(sigma), instrument, tuple(caveats)))
+            self.drift.append(DriftFigure(float(rate), float(sigma), instrument, caveats))
             return
         rate = correction_rate(_floats(table, "time"), _floats(table, "correction"))
         if math.isfinite(rate):

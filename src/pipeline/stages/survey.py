@@ -23,6 +23,7 @@ from pipeline.survey.tiein import (
     SurveyTie,
     chosen_tie,
     listed_ties,
+    parent_of,
     tie_difference,
     tie_to_parents,
     ties_words,
@@ -228,22 +229,22 @@ linearly between the other's stations: centimetres off along a curve)."""
 
 
 def warn_detached(trajectory: pa.Table, ctx: StageContext) -> None:
-    """Warn of each survey that begins within another survey's depths — a sidetrack listed
-    beside its main bore, a second run continuing the first — yet is tied at the stage's
-    tie-in (its file listing none there: TVD = MD, N = E = 0, a vertical hole above it) more than
-    :data:`DETACHED_M` from where the other survey puts the hole at that MD."""
+    """Warn of each survey that begins within another survey's depths
+    (:func:`~pipeline.survey.tiein.parent_of`) — a sidetrack listed beside its main bore, a
+    second run continuing the first — yet is tied elsewhere (at the stage's tie, or at the
+    tie-on its file lists) more than :data:`DETACHED_M` from where the other survey puts
+    the hole at that MD; one tied on the other (:func:`trajectory_columns`) is not."""
     if "survey" not in trajectory.column_names:
         return
     offsets = survey_offsets(trajectory)
-    spans = list(zip(offsets[:-1].tolist(), offsets[1:].tolist(), strict=True))
     md = trajectory.column("md").to_numpy()
     xyz = np.stack([trajectory.column(c).to_numpy() for c in ("tvd", "north", "east")], axis=1)
     names = trajectory.column("survey")
-    for lo, _ in spans:
-        other = next(((a, b) for a, b in spans if a != lo and md[a] < md[lo] <= md[b - 1]), None)
-        if other is None:
+    for k, lo in enumerate(offsets[:-1].tolist()):
+        parent = parent_of(md, offsets, k)
+        if parent is None:
             continue
-        a, b = other
+        a, b = int(offsets[parent]), int(offsets[parent + 1])
         there = np.array([np.interp(md[lo], md[a:b], xyz[a:b, i]) for i in range(3)])
         gap = float(np.linalg.norm(there - xyz[lo]))
         if gap > DETACHED_M:

@@ -18,6 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.contracts import NORTH_KEY, SOURCE_KEY, SOURCE_LINE, UNIT_KEY
 from pipeline.errors import InputFileError
+from pipeline.survey.interpolate import interpolate_md
 
 STATED = ("tvd", "north", "east")
 """the columns of a stations file's own positions (m, NED from the wellhead)"""
@@ -185,8 +186,6 @@ def tie_to_parents(
     first so that a parent is placed before its children. ``position`` ((n, 3) TVD, north,
     east, m, of stations at ``md`` m with ``inc``/``azi`` rad) is shifted in place;
     returns the ties applied."""
-    from pipeline.survey.interpolate import interpolate_md
-
     names = [t.survey for t in ties]
     out = list(ties)
     for k in sorted(range(len(ties)), key=lambda i: float(md[offsets[i]])):
