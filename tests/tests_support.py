@@ -49,12 +49,13 @@ class CliResult:
 
 def stage_context(well: WellMetadata, **attrs: Any) -> Any:
     """A stand-in StageContext of a run whose well is ``well`` (no overrides): a table's
-    own header over it (``well_for``), ``attrs`` beside (``provenance``, ``update_well``)."""
+    own header over it (``well_for``), ``attrs`` beside (``provenance``, ``update_well``;
+    ``stage_id`` "stage" unless given)."""
 
     def well_for(header: WellMetadata | None) -> WellMetadata:
         return well if header is None else well.merged(header)
 
-    return SimpleNamespace(well=well, well_for=well_for, **attrs)
+    return SimpleNamespace(well=well, well_for=well_for, **{"stage_id": "stage", **attrs})
 
 
 def gyropipe_cli(

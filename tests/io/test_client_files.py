@@ -38,9 +38,11 @@ TABLE_STATED = {
     b"gyropipe.survey_calculation",
     b"gyropipe.position_check",
     b"gyropipe.references",
+    b"gyropipe.uncertainty_tie_on",
 }
 """Schema metadata an MCAP table may carry: the well, the calculation, the file positions'
-check (the summary's and report's ``file_positions``), the QC's reference models."""
+check (the summary's and report's ``file_positions``), the QC's reference models, where the
+uncertainty columns start (each survey's tie-on)."""
 
 
 def survey_with_mcap(tmp_path: Path) -> Path:

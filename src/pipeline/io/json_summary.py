@@ -40,6 +40,7 @@ from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
 from pipeline.uncertainty.stated import statement_of
+from pipeline.uncertainty.tieon import TieOn
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -160,6 +161,13 @@ class UncertaintyStatement(_Model):
     at_td: SemiMajor = Field(description="the deepest station's")
     stations_without_sigma: int = Field(
         ge=0, description="stations without a σ (outside the error model's range, or below one)"
+    )
+    tie_on: list[TieOn] = Field(
+        default_factory=list,
+        description="each survey's first station and whether the uncertainty of its position "
+        "is in the σ: `wellhead` (MD 0), `survey` (carried down through `parent`), `given` "
+        "(the run was given it), `not included` (tied on a position from outside the run, "
+        "taken as exactly known)",
     )
 
 

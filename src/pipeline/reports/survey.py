@@ -575,6 +575,7 @@ def _statement_words(stated: Statement, conf: str) -> str:
         + (where(stated.largest) if stated.largest is not None else "none (no station has a σ)")
         + f"; at TD: {where(stated.at_td)}.",
     ]
+    words += [said for tie in stated.tie_on if (said := tie.words())]
     if stated.without_sigma:
         words.append(
             f"{stated.without_sigma} station(s) have no σ (outside the error model's range, "

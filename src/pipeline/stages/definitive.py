@@ -57,6 +57,14 @@ from pipeline.uncertainty.sections import Section as CovSection
 from pipeline.uncertainty.sections import WellByWell, definitive_covariance
 from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.tieon import (
+    TIE_COVARIANCE,
+    TieCovariance,
+    TieOnRecord,
+    outside_tie,
+    warn_missing,
+    with_tie_on,
+)
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, NorthReference, WellMetadata, one_well, well_of
 
@@ -179,6 +187,7 @@ class DefinitiveParams(BaseModel):
     surface_tie: bool = Field(
         True, description="ISCWSA surface tie-on allowance at the first station of the well"
     )
+    tie_covariance: TieCovariance | None = Field(None, description=TIE_COVARIANCE)
     well_by_well: WellByWell = Field(
         "shared",
         description="well-by-well terms shared by every run of the well (ISCWSA) or "
@@ -287,6 +296,12 @@ def definitive_survey(
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
     survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
     cov = _valid_covariance(survey, listed, bounds, tools, sites, params)
+    tie_on = TieOnRecord(surveys=(outside_tie(None, float(md[0]), params.tie_covariance),))
+    if params.tie_covariance is not None:
+        if tie_on.surveys[0].basis != "given":
+            raise ValueError("tie_covariance: the survey starts at MD 0, it has no tie-on above")
+        cov = cov + params.tie_covariance.matrix()
+    warn_missing(tie_on, ctx.stage_id)
     parts = {
         "md": md,
         "inc": inc_deg,
@@ -306,7 +321,7 @@ def definitive_survey(
     survey_table = with_statements(
         _survey_table(parts, cov, params, north), params.confidence, models
     )
-    survey_table = with_magnetic(survey_table, by_run)
+    survey_table = with_tie_on(with_magnetic(survey_table, by_run), tie_on)
     calculation = SurveyCalculation(
         method="minimum_curvature", vs_azimuth=params.vs_azimuth, ties=(tie,)
     )

@@ -36,6 +36,15 @@ from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.stated import model_words, with_statements
 from pipeline.uncertainty.terms import Survey
+from pipeline.uncertainty.tieon import (
+    TIE_COVARIANCE,
+    TieCovariance,
+    TieOn,
+    TieOnRecord,
+    outside_tie,
+    warn_missing,
+    with_tie_on,
+)
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, well_of
 
@@ -144,6 +153,7 @@ class UncertaintyParams(BaseModel):
         "a σ beyond any physical position error): refuse (an error naming it), or flag (NaN "
         "σ from it down and an outside_validity column)",
     )
+    tie_covariance: TieCovariance | None = Field(None, description=TIE_COVARIANCE)
     tool: dict[str, float] = Field(
         default_factory=dict,
         description="term magnitudes and model parameters overriding the model file's, by "
@@ -210,7 +220,8 @@ def position_uncertainty(
     tvd = table.column("tvd").to_numpy()
     cov = np.zeros((md.size, 3, 3))
     offsets = survey_offsets(table)
-    paths = hole_paths(md, offsets, parent_surveys(table, offsets))
+    parents = parent_surveys(table, offsets)
+    paths = hole_paths(md, offsets, parents)
     for k, path in enumerate(paths):
         lo, hi = int(offsets[k]), int(offsets[k + 1])
         # an undefined azimuth (vertical) moves nothing: the error model takes the next one's
@@ -223,6 +234,12 @@ def position_uncertainty(
             surface_tie=params.surface_tie,
             outside_validity=params.outside_validity,
         )[path.size - (hi - lo) :]
+    ties = tie_ons(table, offsets, parents, params.tie_covariance)
+    if params.tie_covariance is not None:
+        for k in range(len(parents)):
+            if ties.surveys[_root(parents, k)].basis == "given":
+                cov[int(offsets[k]) : int(offsets[k + 1])] += params.tie_covariance.matrix()
+    warn_missing(ties, ctx.stage_id)
     columns: dict[str, object] = {name: table.column(name) for name in table.column_names}
     columns.update(covariance_columns(cov, params.confidence, params.outside_validity))
     out = PositionUncertainty.compiled().make_table(
@@ -233,7 +250,47 @@ def position_uncertainty(
         params.confidence,
         _stated_model(configured, params, init_sigma),
     )
-    return {"trajectory": with_magnetic(out, applied)}
+    return {"trajectory": with_tie_on(with_magnetic(out, applied), ties)}
+
+
+def tie_ons(
+    table: pa.Table,
+    offsets: np.ndarray,
+    parents: list[int | None],
+    given: TieCovariance | None,
+) -> TieOnRecord:
+    """Each survey's :class:`~pipeline.uncertainty.tieon.TieOn`: at the wellhead (first MD
+    ≤ 0), on its parent survey, or tied on a position from outside the run — given
+    (``given``, for the one such survey; more than one is refused: which would it be?) or
+    not included."""
+    if table.num_rows == 0:
+        return TieOnRecord(surveys=())
+    md = table.column("md").to_numpy()
+    names = table.column("survey").to_pylist() if "survey" in table.column_names else None
+    outside = [k for k, p in enumerate(parents) if p is None and float(md[offsets[k]]) > 0.0]
+    if given is not None and len(outside) != 1:
+        found = "none does" if not outside else f"{len(outside)} do"
+        raise ValueError(
+            "tie_covariance is the tie-on uncertainty of the one survey tied on a position "
+            f"below MD 0 from outside the run; {found}"
+        )
+    ties = []
+    for k, parent in enumerate(parents):
+        survey = None if names is None else str(names[int(offsets[k])])
+        first = float(md[offsets[k]])
+        if parent is None:
+            ties.append(outside_tie(survey, first, given))
+        else:
+            parent_name = None if names is None else str(names[int(offsets[parent])])
+            ties.append(TieOn(survey=survey, md=first, basis="survey", parent=parent_name))
+    return TieOnRecord(surveys=tuple(ties))
+
+
+def _root(parents: list[int | None], k: int) -> int:
+    """The survey at the top of survey ``k``'s hole (itself where it has no parent)."""
+    while (parent := parents[k]) is not None:
+        k = parent
+    return k
 
 
 def parent_surveys(table: pa.Table, offsets: np.ndarray) -> list[int | None]:

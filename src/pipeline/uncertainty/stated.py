@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from pipeline.contracts import DESCRIPTION_KEY
 from pipeline.uncertainty.ellipse import ellipses
+from pipeline.uncertainty.tieon import TieOn, tie_on_of
 
 __all__ = [
     "CONFIDENCE_KEY",
@@ -103,7 +104,8 @@ class Statement:
     """What a trajectory says of its position uncertainty: the error model and confidence
     its columns state (None: not stated), the σ convention of each family of columns it
     has, the station of the largest horizontal semi-major axis (None: no station has a σ)
-    and the deepest station's (TD), and how many stations have no σ (NaN)."""
+    and the deepest station's (TD), how many stations have no σ (NaN), and where each
+    survey's σ starts (:class:`~pipeline.uncertainty.tieon.TieOn`)."""
 
     error_model: str | None
     confidence: float | None
@@ -111,6 +113,8 @@ class Statement:
     largest: Extent | None
     at_td: Extent
     without_sigma: int
+    tie_on: tuple[TieOn, ...] = ()
+    """each survey's tie-on and whether its uncertainty is in the σ (none recorded: empty)"""
 
     def as_dict(self) -> dict[str, object]:
         """The statement as JSON values (the JSON summary's ``uncertainty`` object)."""
@@ -129,6 +133,7 @@ class Statement:
             "largest": None if self.largest is None else vars(self.largest).copy(),
             "at_td": vars(self.at_td).copy(),
             "stations_without_sigma": self.without_sigma,
+            "tie_on": [t.model_dump(mode="json") for t in self.tie_on],
         }
 
 
@@ -180,6 +185,7 @@ def statement_of(table: pa.Table) -> Statement | None:
         largest=extent(int(np.argmax(np.where(sized, major, -np.inf)))) if sized.any() else None,
         at_td=extent(deepest),
         without_sigma=int((~sized).sum()),
+        tie_on=() if (ties := tie_on_of(table)) is None else ties.surveys,
     )
 
 
