@@ -173,3 +173,43 @@ def test_a_definitive_survey_from_below_md_0_says_so_and_takes_the_given(tmp_pat
         tmp_path / "bare", "definitive.survey"
     )
     np.testing.assert_allclose(added, np.tile(list(GIVEN.values()), (added.shape[0], 1)), atol=1e-9)
+
+
+def test_a_clearance_offset_surveyed_from_below_md_0_is_flagged(tmp_path: Path) -> None:
+    """The ISCWSA clearance set with offset 03's file listed from 1,020 m (its top hole
+    surveyed before): its separation factors leave the hole above out — warned and stated in
+    the report's clearance section; the set as published states nothing of a tie-on."""
+    given = ROOT / "examples" / "clearance"
+    (tmp_path / "offsets").mkdir()
+    for path in (given / "offsets").glob("*.csv"):
+        lines = path.read_text().splitlines()
+        if path.stem == "offset-03":
+            head = lines.index("MD (m),Inc (deg),Azimuth Grid (deg)") + 1
+            lines = lines[:head] + [r for r in lines[head:] if r and float(r.split(",")[0]) >= 1000]
+        (tmp_path / "offsets" / path.name).write_text("\n".join(lines) + "\n")
+    (tmp_path / "manifest.csv").write_text((given / "manifest.csv").read_text())
+    args = [
+        "--input", f"reference={given / 'reference.csv'}",
+        "--set", "clearance.reference_model=ISCWSA-MWD-REV4",
+        "--set", "clearance.reference_hole_diameter=0.9144",
+        "--set", "report.formats=[html]",
+    ]  # fmt: skip
+    clearance = ROOT / "pipelines" / "clearance.yaml"
+    cut = gyropipe_cli(
+        "run", clearance, "--input", f"offsets={tmp_path / 'manifest.csv'}", *args,
+        "--out", tmp_path / "cut", check=True,
+    )  # fmt: skip
+    assert (
+        "Survey offset-03: the position uncertainty is propagated from its tie-on at 1020.00 m"
+        in cut.stderr
+    )
+    assert (
+        "Tie-on uncertainty offset-03 from 1020.00 m MD: the survey starts at a tie-on taken as "
+        "exactly known" in text_of(tmp_path / "cut" / "report.html")
+    )
+    whole = gyropipe_cli(
+        "run", clearance, "--input", f"offsets={given / 'manifest.csv'}", *args,
+        "--out", tmp_path / "whole", check=True,
+    )  # fmt: skip
+    assert "tie-on" not in whole.stderr
+    assert "Tie-on uncertainty" not in text_of(tmp_path / "whole" / "report.html")

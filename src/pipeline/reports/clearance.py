@@ -21,6 +21,7 @@ from pipeline.reports.document import Block, Column, Fields, Plot, Section, Tabl
 from pipeline.reports.listing import col
 from pipeline.reports.literature import ERROR_MODEL, GYRO_ERROR_MODEL, SEPARATION_RULE, Citations
 from pipeline.reports.numbers import fmt_inches
+from pipeline.uncertainty.tieon import tie_on_of
 
 FloatArray = NDArray[np.float64]
 ErrorModel = Callable[[str], tuple[str, bool]]
@@ -229,6 +230,23 @@ def wells_table(rule: Mapping[str, Any], titles: Mapping[str, str]) -> Table:
     )
 
 
+def _tie_on_fields(table: pa.Table) -> list[tuple[str, str]]:
+    """The wells whose σ starts at a tie-on below MD 0 taken as exact, in words (none: [])."""
+    record = tie_on_of(table)
+    missing = [t for t in (record.surveys if record else ()) if t.missing()]
+    if not missing:
+        return []
+    listed = ", ".join(f"{t.survey} from {fmt(t.md)} m MD" for t in missing)
+    return [
+        (
+            "Tie-on uncertainty",
+            f"{listed}: the survey starts at a tie-on taken as exactly known; the uncertainty "
+            "of the hole above it is not included, so the separation factors against it are "
+            "optimistic.",
+        )
+    ]
+
+
 def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorModel) -> Section:
     """The clearance section of a clearance table (one block per offset well); its tool
     models titled (and the gyro paper cited for a gyro model) by ``error_model``."""
@@ -305,6 +323,7 @@ def clearance_section(table: pa.Table, citations: Citations, error_model: ErrorM
         ),
         ("Conventions", _convention_words(rule)),
         *_common_sections(wells, str(rule.get("sidetrack", "zeroed"))),
+        *_tie_on_fields(table),
     ]
     if "reference_model" in rule:
         hole = float(rule["reference_hole_diameter"])

@@ -59,6 +59,7 @@ from pipeline.uncertainty.engine import (
     OutsideValidityError,
     find_model,
 )
+from pipeline.uncertainty.tieon import TieOnRecord, outside_tie, warn_missing, with_tie_on
 from pipeline.well import AGREEING, Latitude, WellMetadata, well_of
 
 if TYPE_CHECKING:
@@ -596,6 +597,12 @@ def clearance(
         if params.sidetrack == "shared":
             pair = _shared(make, ref, ref_model, w["model"], kick, pair)
         pairs.append(pair)
+    firsts = {"reference": float(ref_arrays[0][0])}
+    firsts |= {w["offset"]: float(blocks[w["offset"]]["md"][0].as_py()) for w in listed}
+    tie_on = TieOnRecord(  # a sidetrack's σ is zeroed at its kick-off (the ISCWSA rule)
+        surveys=tuple(outside_tie(n, md, None) for n, md in firsts.items() if n not in kickoffs)
+    )
+    warn_missing(tie_on, ctx.stage_id, "The separation factors against it leave that out.")
     result = scan_pairs(
         pairs,
         SeparationRule(k=params.k, sigma_pa=params.sigma_pa, surface_margin=params.surface_margin),
@@ -645,7 +652,7 @@ def clearance(
             for w in listed
         },
     }
-    return {"clearance": with_rule(table, rule)}
+    return {"clearance": with_tie_on(with_rule(table, rule), tie_on)}
 
 
 @hookimpl

@@ -147,13 +147,16 @@ def outside_tie(survey: str | None, md: float, given: TieCovariance | None) -> T
     return TieOn(survey=survey, md=md, basis="not included")
 
 
-def warn_missing(record: TieOnRecord, stage_id: str) -> None:
-    """Warn of each survey whose tie-on's uncertainty is not included."""
+GIVE_IT = "Give it as tie_covariance (NEV, m²), e.g. the covariance of the survey above at that MD"
+"""What :func:`warn_missing` advises by default."""
+
+
+def warn_missing(record: TieOnRecord, stage_id: str, advice: str = GIVE_IT) -> None:
+    """Warn of each survey whose tie-on's uncertainty is not included, with ``advice``."""
     for tie in record.surveys:
         if tie.missing():
             warnings.warn(
-                f"stage {stage_id!r}: {tie.words()} Give it as tie_covariance (NEV, m²), "
-                "e.g. the covariance of the survey above at that MD",
+                f"stage {stage_id!r}: {tie.words()} {advice}",
                 SurveyCheckWarning,
                 stacklevel=3,
             )
