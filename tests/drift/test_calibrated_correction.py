@@ -514,8 +514,8 @@ def block(status: str, well: str) -> str:
 def test_the_ledger_records_the_calibration_applied(files: dict[str, Path], tmp_path: Path):
     """A batch of three wells: ONE and TWO surveyed by IG50-1 and IG50-2 (their readings'
     headers) with one calibration file of both tools, BLANK by a tool its readings do not
-    name with a calibration of IG50-2 alone (applied, with a caveat; the run's well states
-    no serial, which the ledger recorded as the tool). Each well's ledger row (read with
+    name with a calibration of IG50-2 alone (applied with a caveat; the run's well states
+    no serial, and the ledger named the run's serial, none, as the tool). Each well's ledger row (read with
     sqlite3), ``gyropipe status`` and ``history`` name the instrument applied at its rate and
     σ in the calibration file; the calibration entries name no tool; the fleet page shows
     the rate applied, not the other tool's estimate beside it. Corrected with a given rate,
@@ -525,6 +525,7 @@ def test_the_ledger_records_the_calibration_applied(files: dict[str, Path], tmp_
     write_csv(simulate_free_gyro(survey()), blank, WellMetadata())
     pipeline = tmp_path / "pipeline.yaml"  # the calibration read is persisted too
     read = "uses: read_calibration_result\n"
+    assert read in PIPELINE
     pipeline.write_text(PIPELINE.replace(read, f"{read}    persist: [calibration_result]\n"))
     manifest = tmp_path / "wells.csv"
     manifest.write_text(
