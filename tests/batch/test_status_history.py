@@ -1,10 +1,14 @@
 """``gyropipe status DIR`` and ``gyropipe history WELL`` read the ledger back; a run that
-consumes a drift calibration records which one (file hash, instrument, estimate)."""
+consumes a drift calibration records which one (file hash, instruments, selected
+estimates) and the drift correction it applied (instrument, estimate, rate and σ); a run
+that corrects none records none."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import sqlite3
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -56,6 +60,11 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
         "S2": "done",
         "S3": "failed",
     }
+    # a survey corrects no drift: none recorded (a failed run's: not recorded)
+    assert {w["well"]: w["drift"] for w in document["wells"]} == {"S1": [], "S2": [], "S3": None}
+    latest = {r["well"]: r["drift"] for r in runs(out / "ledger.sqlite")}  # (rows by id)
+    assert latest == {"S1": "[]", "S2": "[]", "S3": None}
+    assert "drift" not in status.stdout
 
     history = gyropipe_cli("history", "S1", "--dir", out)
     assert history.returncode == 0, history.output
@@ -71,6 +80,31 @@ def test_status_and_history_report_what_the_ledger_holds(tmp_path: Path, survey:
 
     assert gyropipe_cli("history", "nope", "--dir", out).returncode == 2
     assert gyropipe_cli("status", tmp_path / "elsewhere").returncode == 2
+    assert "drift" not in text
+
+
+def test_a_ledger_of_an_earlier_version_gains_the_drift_column(tmp_path: Path, survey: Path):
+    """A ledger an earlier version made has no column drift: opening it adds the column,
+    null for the runs it holds — not recorded, never read as no correction applied — and
+    the next run records its own."""
+    (path,) = make_wells(tmp_path / "in", ["S1"])
+    out = tmp_path / "out"
+    ledger = out / "ledger.sqlite"
+    command = ("batch", survey, "--inputs", tmp_path / "in" / "*.csv", "--out", out)
+    assert gyropipe_cli(*command).returncode == 0
+    with contextlib.closing(sqlite3.connect(ledger)) as db:
+        db.execute("ALTER TABLE runs DROP COLUMN drift")  # the runs table as it was made
+        assert "drift" not in {row[1] for row in db.execute("PRAGMA table_info(runs)")}
+
+    history = gyropipe_cli("history", "S1", "--dir", out)
+    assert history.returncode == 0, history.output
+    assert "  drift applied: not recorded (run by an earlier version, or recovered)\n" in (
+        history.stdout
+    )
+    assert [r["drift"] for r in runs(ledger)] == [None]
+    change_one_azimuth(path)
+    assert gyropipe_cli(*command, "--only-changed").returncode == 0
+    assert [r["drift"] for r in runs(ledger)] == [None, "[]"]
 
 
 FREE_GYRO_CALIBRATED = """\
@@ -126,17 +160,30 @@ def test_the_calibration_a_run_consumed_is_recorded(tmp_path: Path):
     (run,) = runs(out / "ledger.sqlite")
     (recorded,) = json.loads(run["calibration"])
     table = pq.read_table(result_file).to_pylist()
-    selected = [r for r in table if r["selected"]]
-    assert recorded == {
+    (chosen,) = [r for r in table if r["selected"]]
+    assert recorded == {  # which tool's estimate was applied is the drift column's
         "stage": "calibration",
         "input": "calibration",
         "sha256": hashlib.sha256(result_file.read_bytes()).hexdigest(),
         "instruments": ["IG50-0417"],
-        "selected": [{k: r[k] for k in ("instrument", "method", "drift_deg_h")} for r in selected],
-        "tool_serial": "IG50-0417",
+        "selected": [{k: chosen[k] for k in ("instrument", "method", "drift_deg_h")}],
     }
+    (applied,) = json.loads(run["drift"])  # the manifest's serial picked the one instrument
+    assert (applied["instrument"], applied["source"], applied["method"]) == (
+        "IG50-0417",
+        "calibration",
+        chosen["method"],
+    )
+    assert (applied["rate_deg_h"], applied["sigma_deg_h"]) == (
+        chosen["drift_deg_h"],
+        chosen["sigma_deg_h"],
+    )  # the same doubles
     text = gyropipe_cli("history", "FG-1", "--dir", out).stdout
     assert (
-        f"calibration (calibration, input calibration sha256 {recorded['sha256'][:16]}…): tool IG50-0417; IG50-0417 fit"
-        in text
+        f"calibration (calibration, input calibration sha256 {recorded['sha256'][:16]}…): "
+        f"selected IG50-0417 fit {chosen['drift_deg_h']:.4f} deg/h" in text
+    )
+    assert (
+        f"  drift applied (drift.readings): {chosen['drift_deg_h']:.4f} ± "
+        f"{chosen['sigma_deg_h']:.4f} deg/h, calibration of IG50-0417 (fit, " in text
     )

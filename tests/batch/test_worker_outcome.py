@@ -1,6 +1,7 @@
-"""What a batch worker reports of a well after its run: the drift calibrations it consumed,
-found without reading the run's streamed outputs whole (the series and the raw samples of a
-continuous well stay streams: a worker holds one well's batches at a time, issue #20)."""
+"""What a batch worker reports of a well after its run: the drift calibrations it consumed
+and the drift corrections it applied, found without reading the run's streamed outputs
+whole (the series and the raw samples of a continuous well stay streams: a worker holds one
+well's batches at a time, issue #20)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import yaml
 from batch_support import STATIONS, survey_pipeline
 
 from pipeline.batch.publish import staging_dir
-from pipeline.batch.worker import WellTask, _calibration, run_well
+from pipeline.batch.worker import WellTask, _calibration, _drift, run_well
 from pipeline.executing import PipelineRef
 from pipeline.graph import build_plan
 from pipeline.plugins import load_registry
@@ -42,6 +43,7 @@ def test_calibrations_are_found_without_reading_streamed_outputs(tmp_path: Path)
     assert ("continuous", "series") in streamed  # the run did stream
 
     assert _calibration(built, result) == []  # this pipeline consumes no calibration
+    assert _drift(built, result) == []  # and corrects no free-gyro drift
 
     assert sorted(k for k, v in ports.items() if isinstance(v, TableStream)) == streamed
 

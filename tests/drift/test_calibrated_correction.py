@@ -1,14 +1,18 @@
 """A calibrated drift correction applies the calibration of the tool that read the survey:
 the readings' own tool serial (their file's header) picks the calibration's row, a well or
 stage serial that contradicts it is refused, and so is a calibration that holds no row of
-it; the survey report states the estimate applied — driven through ``gyropipe run`` and
-``gp.run`` with files written to a temporary directory."""
+it; the survey report, the fleet page and a batch's ledger state the estimate applied —
+driven through ``gyropipe run``, ``gyropipe batch`` and ``gp.run`` with files written to a
+temporary directory."""
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
+import itertools
 import json
 import re
+import sqlite3
 from html import unescape
 from pathlib import Path
 
@@ -135,8 +139,7 @@ def applied_rate(out: Path) -> float:
 
 
 def selected_rate(calibration: Path, serial: str) -> float:
-    rows = pq.read_table(calibration).to_pylist()
-    return next(r["drift_deg_h"] for r in rows if r["instrument"] == serial and r["selected"])
+    return float(calibration_row(calibration, serial)["drift_deg_h"])
 
 
 def run(files: dict[str, Path], calibration: str, out: Path, *extra: str):
@@ -478,11 +481,134 @@ def test_the_fleet_page_states_the_calibration_and_its_caveats(
         "batch", files["pipeline"], "--manifest", manifest, "--out", out, "--workers", "1"
     )
     assert result.returncode == 0, result.output
-    raw = (out / "fleet.html").read_text(encoding="utf-8")
-    rows = {}  # each well's row of the page, its text
-    for row in re.findall(r'<tr class="s-[a-z]+">(.*?)</tr>', raw, re.S):
-        text = " ".join(unescape(re.sub(r"<[^>]+>", " ", row)).split())
-        rows[text.split()[0]] = text
+    rows = fleet_rows(out)
     assert "IG50-1:" in rows["OLD"] and "IG50-1:" in rows["FRESH"]
     assert "⚠" in rows["OLD"] and "193 days before the survey" in rows["OLD"]
     assert "⚠" not in rows["FRESH"]
+
+
+def fleet_rows(out: Path) -> dict[str, str]:
+    """Each well's row of a batch's fleet page, as text, by well."""
+    raw = (out / "fleet.html").read_text(encoding="utf-8")
+    rows = {}
+    for row in re.findall(r'<tr class="s-[a-z]+">(.*?)</tr>', raw, re.S):
+        text = " ".join(unescape(re.sub(r"<[^>]+>", " ", row)).split())
+        rows[text.split()[0]] = text
+    return rows
+
+
+def calibration_row(calibration: Path, serial: str) -> dict:
+    """The selected estimate of instrument ``serial`` in a calibration result file."""
+    rows = pq.read_table(calibration).to_pylist()
+    return next(r for r in rows if r["instrument"] == serial and r["selected"])
+
+
+def block(status: str, well: str) -> str:
+    """``well``'s line of ``gyropipe status`` and the lines under it, joined as one text."""
+    lines = status.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.split(" ")[0] == well)
+    under = itertools.takewhile(lambda line: line.startswith(" "), lines[start + 1 :])
+    return " ".join(" ".join(line.split()) for line in (lines[start], *under))
+
+
+def test_the_ledger_records_the_calibration_applied(files: dict[str, Path], tmp_path: Path):
+    """A batch of three wells: ONE and TWO surveyed by IG50-1 and IG50-2 (their readings'
+    headers) with one calibration file of both tools, BLANK by a tool its readings do not
+    name with a calibration of IG50-2 alone (applied with a caveat; the run's well states
+    no serial, and the ledger named the run's serial, none, as the tool). Each well's ledger row (read with
+    sqlite3), ``gyropipe status`` and ``history`` name the instrument applied at its rate and
+    σ in the calibration file; the calibration entries name no tool; the fleet page shows
+    the rate applied, not the other tool's estimate beside it. Corrected with a given rate,
+    a well records that rate and no instrument."""
+    two, blank = tmp_path / "two.csv", tmp_path / "blank.csv"
+    write_csv(simulate_free_gyro(survey()), two, WellMetadata(tool_serial="IG50-2"))
+    write_csv(simulate_free_gyro(survey()), blank, WellMetadata())
+    pipeline = tmp_path / "pipeline.yaml"  # the calibration read is persisted too
+    read = "uses: read_calibration_result\n"
+    assert read in PIPELINE
+    pipeline.write_text(PIPELINE.replace(read, f"{read}    persist: [calibration_result]\n"))
+    manifest = tmp_path / "wells.csv"
+    manifest.write_text(
+        "well_id,readings,calibration\n"
+        f"ONE,{files['readings']},{files['both']}\n"
+        f"TWO,{two},{files['both']}\n"
+        f"BLANK,{blank},{files['other']}\n"
+    )
+    out = tmp_path / "batch"
+    result = gyropipe_cli("batch", pipeline, "--manifest", manifest, "--out", out)
+    assert result.returncode == 0, result.output
+    assert "tool_serial" not in json.loads((out / "BLANK" / "run.json").read_text())["well"]
+
+    status = gyropipe_cli("status", out).stdout
+    listed = json.loads(gyropipe_cli("status", out, "--json").stdout)["wells"]
+    document = {w["well"]: w["drift"] for w in listed}
+    page = fleet_rows(out)
+    stated_nowhere = (
+        "the survey's tool serial is stated nowhere: the calibration's one instrument, "
+        "'IG50-2', was taken for the survey's tool"
+    )
+    applied = {  # the survey undated, shorter than the calibrations, of no temperatures
+        "ONE": ("IG50-1", "IG50-2", files["both"], []),
+        "TWO": ("IG50-2", "IG50-1", files["both"], []),
+        "BLANK": ("IG50-2", "IG50-1", files["other"], [stated_nowhere]),
+    }
+    for well, (serial, other, calibration, caveats) in applied.items():
+        row = calibration_row(calibration, serial)
+        (entry,), (drift,) = ledger_columns(out, well, "calibration", "drift")
+        assert "tool_serial" not in entry and entry["input"] == "calibration"
+        assert drift == {
+            "stage": "drift",
+            "port": "readings",
+            "instrument": serial,
+            "source": "calibration",
+            "method": row["method"],
+            "label": row["label"],
+            "rate_deg_h": row["drift_deg_h"],  # the same doubles as the file's
+            "sigma_deg_h": row["sigma_deg_h"],
+            "calibration_date": CALIBRATED.isoformat(),
+            "verdict": row["verdict"],
+            "caveats": caveats,
+        }
+        assert document[well] == [drift]
+        said = (
+            f"drift applied (drift.readings): {row['drift_deg_h']:.4f} ± "
+            f"{row['sigma_deg_h']:.4f} deg/h, calibration of {serial} ({row['method']}, "
+            f"2026-05-12, {row['verdict']})"
+        )
+        assert said in block(status, well)
+        assert f"  {said}" in gyropipe_cli("history", well, "--dir", out).stdout
+        assert f"{serial}:" in page[well] and other not in page[well]
+
+    given = tmp_path / "given"
+    command = ("batch", pipeline, "--manifest", manifest, "--out", given)
+    rate = ("--set", "drift.source=given", "--set", "drift.drift_rate=2.5")
+    assert gyropipe_cli(*command, *rate).returncode == 0
+    (entry,), drift = ledger_columns(given, "ONE", "calibration", "drift")
+    assert entry["instruments"] == ["IG50-1", "IG50-2"]  # read, not applied
+    assert drift == [
+        {
+            "stage": "drift",
+            "port": "readings",
+            "instrument": None,
+            "source": "given",
+            "method": None,
+            "label": None,
+            "rate_deg_h": 2.5,
+            "sigma_deg_h": 0.0,  # drift_sigma unset
+            "calibration_date": None,
+            "verdict": None,
+            "caveats": [],
+        }
+    ]
+    text = block(gyropipe_cli("status", given).stdout, "ONE")
+    assert "drift applied (drift.readings): 2.5000 ± 0.0000 deg/h, a given rate" in text
+    assert "IG50" not in text and "IG50" not in fleet_rows(given)["ONE"]
+
+
+def ledger_columns(out: Path, well: str, *columns: str) -> list:
+    """The JSON ``columns`` of ``well``'s latest run in ``out``'s ledger (plain sqlite3)."""
+    with contextlib.closing(sqlite3.connect(out / "ledger.sqlite")) as db:
+        found = db.execute(
+            f"SELECT {', '.join(columns)} FROM runs WHERE well = ? ORDER BY id DESC", (well,)
+        ).fetchone()
+    return [json.loads(value) for value in found]

@@ -1,6 +1,7 @@
 """The figures of one published well for the fleet page (:mod:`pipeline.batch.fleet_page`):
 QC checks passed and failed, the acceptance gates, the worst clearance separation factor,
-the drift rate (with its σ), TD and the largest dogleg severity.
+the drift rate applied (with its σ; a well that corrected none: its calibration's selected
+estimates), TD and the largest dogleg severity.
 
 The worker records them as it runs the well (:func:`run_figures`, into the ``batch.json``
 it publishes with the run): from the run's persisted tables as they are in memory, whatever
@@ -316,6 +317,10 @@ class _Tables:
         self.positions: list[tuple[str, int, list[float]]] = []
         self.clearance: WorstClearance | None = None
         self.drift: list[DriftFigure] = []
+        """the rates drift-corrected readings were corrected with"""
+        self.calibrated: list[DriftFigure] = []
+        """the selected estimates of calibration results (shown where none was applied:
+        beside a rate applied, another instrument's would read as one)"""
         self.td_md: float | None = None
         self.td_tvd: float | None = None
         self.max_dls: float | None = None
@@ -330,7 +335,7 @@ class _Tables:
             qc=qc if qc.evaluated else None,
             gates=_gates(manifest, problems),
             clearance=self.clearance,
-            drift=tuple(self.drift) if self.drift else None,
+            drift=tuple(self.drift or self.calibrated) or None,
             td_md=self.td_md,
             td_tvd=self.td_tvd,
             max_dls=self.max_dls,
@@ -424,7 +429,7 @@ class _Tables:
     def _calibration(self, table: pa.Table) -> None:
         for row in table.to_pylist():
             if row["selected"]:
-                self.drift.append(
+                self.calibrated.append(
                     DriftFigure(row["drift_deg_h"], row["sigma_deg_h"], row["instrument"])
                 )
 

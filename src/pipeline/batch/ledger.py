@@ -435,8 +435,8 @@ class Ledger:
         with self._write():
             self._db.execute(
                 "UPDATE runs SET status = ?, finished = ?, inputs = ?, outputs = ?, "
-                "calibration = ?, error = ?, note = ?, wall_time_s = ?, run_time_s = ?, "
-                "process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
+                "calibration = ?, drift = ?, error = ?, note = ?, wall_time_s = ?, "
+                "run_time_s = ?, process_time_s = ?, peak_rss_bytes = ?, worker = ?, "
                 "fingerprint = COALESCE(?, fingerprint), reasons = COALESCE(?, reasons) "
                 "WHERE id = ? AND well = ?",
                 (
@@ -445,6 +445,7 @@ class Ledger:
                     json.dumps(manifest.get("inputs", {})),
                     json.dumps(manifest.get("outputs", [])),
                     json.dumps(outcome.calibration),
+                    None if outcome.drift is None else json.dumps(outcome.drift),
                     error or outcome.error,
                     rejection(manifest) if status == "done" else None,
                     outcome.wall_time_s,

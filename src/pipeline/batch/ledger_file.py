@@ -70,6 +70,7 @@ CREATE TABLE IF NOT EXISTS runs (
     inputs TEXT NOT NULL DEFAULT '{}',
     outputs TEXT NOT NULL DEFAULT '[]',
     calibration TEXT NOT NULL DEFAULT '[]',
+    drift TEXT,
     error TEXT,
     note TEXT,
     wall_time_s REAL,
@@ -95,6 +96,10 @@ CREATE TABLE IF NOT EXISTS ledger (
 """
 LEDGER_TABLES = frozenset({"batches", "runs"})
 """tables every ledger has had: a database without them is not a ledger"""
+ADDED_COLUMNS = (("runs", "drift", "TEXT"),)
+"""(table, column, type) of the columns an earlier version's tables lack: each is added
+null, which reads as not recorded (a row an earlier version wrote, or writes still: the
+schema version is unchanged, as that version reads and writes the table as before)"""
 
 ADVICE = {
     "SQLITE_FULL": "its file system is full: free space there (or give --ledger on another "
@@ -240,11 +245,15 @@ def check(db: sqlite3.Connection, path: Path) -> None:
 
 def migrate(db: sqlite3.Connection, path: Path) -> str:
     """Bring the ledger ``path`` open in ``db`` (inside a write transaction) to this
-    version's schema — the tables and indexes an earlier version did not have are made, and
-    its identity where it has none — and return its identity."""
+    version's schema — the tables, indexes and columns (:data:`ADDED_COLUMNS`) an earlier
+    version did not have are made, and its identity where it has none — and return its
+    identity."""
     for statement in (SCHEMA + ";" + filestate.SCHEMA).split(";"):
         if statement.strip():
             db.execute(statement)
+    for table, column, kind in ADDED_COLUMNS:
+        if column not in {r[1] for r in db.execute(f"PRAGMA table_info({table})")}:
+            db.execute(f"ALTER TABLE {table} ADD COLUMN {column} {kind}")
     db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
     db.execute("INSERT OR IGNORE INTO ledger (one, id) VALUES (1, ?)", (str(uuid.uuid4()),))
     found = db.execute("SELECT id FROM ledger").fetchone()[0]

@@ -63,6 +63,17 @@ class RunRow:
     outputs: list[OutputEntry] = field(default_factory=list)
     """{file, path, sha256, bytes} of every published output"""
     calibration: list[dict[str, Any]] = field(default_factory=list)
+    """per drift calibration result the run read: its stage, input file and SHA-256, the
+    instruments it calibrates and its selected estimates"""
+    drift: list[dict[str, Any]] | None = None
+    """per drift-corrected output, the correction applied: ``stage`` and ``port`` of the
+    corrected readings, then the :class:`~pipeline.drift.correction.DriftRate` they record
+    — ``instrument`` (the calibrated one), ``source`` (calibration, given, tie_in),
+    ``method`` (the estimate) and ``label`` (the series it compares), ``rate_deg_h`` and
+    ``sigma_deg_h``, ``calibration_date`` (ISO 8601), ``verdict`` (linearity) and
+    ``caveats`` — each null where the readings record none; [] none was applied, None not
+    recorded (a failed run, a run of an earlier version, or one recovered after
+    its batch died)"""
     error: str | None = None
     note: str | None = None
     wall_time_s: float | None = None
@@ -117,6 +128,8 @@ def iso(seconds: float | None) -> str:
 
 
 JSON_RUN_COLUMNS = ("reasons", "fingerprint", "versions", "inputs", "outputs", "calibration")
+NULLABLE_RUN_COLUMNS = ("drift",)
+"""JSON columns a row may hold null in (not recorded)"""
 JSON_BATCH_COLUMNS = ("options", "counts")
 FINGERPRINT_KEYS = frozenset(f.name for f in dataclasses.fields(Fingerprint))
 
@@ -143,7 +156,7 @@ def decode_text(data: bytes) -> str | Undecodable:
 
 def run_row(values: Mapping[str, Any]) -> RunRow:
     """A ``runs`` row as a :class:`RunRow`; :class:`BadRow` if a column does not parse."""
-    parsed = _columns(values, JSON_RUN_COLUMNS)
+    parsed = _columns(values, JSON_RUN_COLUMNS, NULLABLE_RUN_COLUMNS)
     fingerprint = parsed["fingerprint"]
     if not isinstance(fingerprint, dict) or set(fingerprint) != FINGERPRINT_KEYS:
         keys = ", ".join(sorted(FINGERPRINT_KEYS))
@@ -163,12 +176,14 @@ def batch_row(values: Mapping[str, Any]) -> BatchRow:
     return row
 
 
-def _columns(values: Mapping[str, Any], json_columns: tuple[str, ...]) -> dict[str, Any]:
+def _columns(
+    values: Mapping[str, Any], json_columns: tuple[str, ...], nullable: tuple[str, ...] = ()
+) -> dict[str, Any]:
     parsed = dict(values)
     for column, value in parsed.items():
         if isinstance(value, Undecodable):
             raise BadRow(column, "is not valid UTF-8 text")
-    for column in json_columns:
+    for column in (*json_columns, *(c for c in nullable if parsed.get(c) is not None)):
         try:
             parsed[column] = json.loads(parsed[column])
         except (TypeError, ValueError):

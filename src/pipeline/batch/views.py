@@ -55,6 +55,8 @@ def status_text(ledger: Ledger) -> str:
             time_s = f"{r.wall_time_s:8.2f}" if r.wall_time_s is not None else f"{'-':>8}"
             prefix = f"{r.well:<{width}}  {_state(r, batches):<11} {iso(r.finished):<25} {time_s}  "
             lines += wrapped(prefix, _detail(r), columns)
+            for entry in r.drift if r.status == "done" and r.drift else ():
+                lines += wrapped(" " * len(prefix), _drift_text(entry), columns)
     return "\n".join(lines)
 
 
@@ -100,6 +102,8 @@ def history_text(well: str, runs: list[RunRow]) -> str:
         if r.fingerprint.well:
             lines.append(f"  well header: {dict(r.fingerprint.well)}")
         lines += [_calibration_line(cal) for cal in r.calibration]
+        if r.status == "done":
+            lines += _drift_lines(r.drift)
         if r.outputs:
             lines.append(f"  outputs: {r.out_dir} ({len(r.outputs)} files)")
     return "\n".join(lines)
@@ -113,10 +117,42 @@ def _calibration_line(cal: dict[str, Any]) -> str:
         )
         return (
             f"  calibration ({cal['stage']}, input {cal['input']} sha256 "
-            f"{(cal['sha256'] or '')[:16]}…): tool {cal['tool_serial']}; {chosen}"
+            f"{(cal['sha256'] or '')[:16]}…): selected {chosen}"
         )
     except (KeyError, TypeError, ValueError):
         return f"  calibration: {json.dumps(cal, sort_keys=True, default=str)}"
+
+
+def _drift_lines(found: list[dict[str, Any]] | None) -> list[str]:
+    """A done run's drift corrections, one line each (none: no line; None: not recorded)."""
+    if found is None:
+        return ["  drift applied: not recorded (run by an earlier version, or recovered)"]
+    return [f"  {_drift_text(entry)}" for entry in found]
+
+
+SOURCES = {"given": "a given rate", "tie_in": "the tie-in misclosure"}
+"""How a drift rate's source other than a calibration is worded"""
+
+
+def _drift_text(entry: dict[str, Any]) -> str:
+    """A ledger ``drift`` entry (:attr:`~pipeline.batch.records.RunRow.drift`) in words: the
+    rate applied, where it came from and the calibration's caveats; a damaged one as JSON."""
+    try:
+        where = f"drift applied ({entry['stage']}.{entry['port']})"
+        if entry["rate_deg_h"] is None:
+            return f"{where}: not recorded by the corrected readings"
+        rate = f"{entry['rate_deg_h']:.4f} ± {entry['sigma_deg_h']:.4f} deg/h"
+        if entry["source"] == "calibration":
+            day = entry["calibration_date"] or "day not stated"
+            source = (
+                f"calibration of {entry['instrument']} ({entry['method']}, {day}, "
+                f"{entry['verdict']})"
+            )
+        else:
+            source = SOURCES.get(entry["source"], str(entry["source"]))
+        return f"{where}: {rate}, {source}" + "".join(f"; ⚠ {c}" for c in entry["caveats"])
+    except (KeyError, TypeError, ValueError):
+        return f"drift applied: {json.dumps(entry, sort_keys=True, default=str)}"
 
 
 def history_document(well: str, runs: list[RunRow]) -> dict[str, Any]:

@@ -25,6 +25,7 @@ import socket
 import sys
 import threading
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,9 +33,12 @@ from typing import Any
 from threadpoolctl import threadpool_limits
 
 from pipeline.atomic import replace_dir
+from pipeline.contracts import TableContract
+from pipeline.drift.correction import DriftRate, drift_rate_of
+from pipeline.drift.tables import CorrectedFreeGyroReadings
 from pipeline.errors import GyropipeError
 from pipeline.executing import PipelineRef
-from pipeline.graph import Plan, build_plan
+from pipeline.graph import Plan, PlannedStage, build_plan
 from pipeline.hashing import FileKey, key_after
 from pipeline.io.threads import set_reader_threads
 from pipeline.lazy_pandas import defer_pandas
@@ -94,6 +98,9 @@ class WellOutcome:
     manifest: dict[str, Any] = field(default_factory=dict)
     """the published ``run.json``"""
     calibration: list[dict[str, Any]] = field(default_factory=list)
+    """the ledger's ``calibration`` entries of the run (:func:`_calibration`)"""
+    drift: list[dict[str, Any]] | None = None
+    """the ledger's ``drift`` entries of a done run (:func:`_drift`; None: a failed run's)"""
     wall_time_s: float = 0.0
     """the whole task in the worker"""
     run_time_s: float = 0.0
@@ -240,6 +247,7 @@ def run_well(task: WellTask, ref: PipelineRef | None = None) -> WellOutcome:
             "done",
             manifest=manifest,
             calibration=_calibration(plan, result),
+            drift=_drift(plan, result),
             wall_time_s=time.perf_counter() - t0,
             run_time_s=run_time,
             process_time_s=sum(s["wall_time_s"] for s in manifest["stages"]),
@@ -312,28 +320,55 @@ def _plan(ref: PipelineRef) -> tuple[Plan, Registry]:
 def _calibration(plan: Plan, result: RunResult) -> list[dict[str, Any]]:
     """What the ledger's ``calibration`` column holds of a run: per output whose contract
     is one the ledger records (:attr:`~pipeline.contracts.TableContract.in_ledger`, e.g. a
-    drift calibration result), the stage that brought it in, its input file, what the
-    contract says of the table, and the tool serial of the well (which picks the instrument)."""
+    drift calibration result), the stage that brought it in, its input file and what the
+    contract says of the table (which instrument's estimate was applied, if any, is the
+    ``drift`` column's: :func:`_drift`)."""
     inputs = result.manifest["inputs"]
     found = []
+    for st, port, contract in _outputs(plan, lambda c: c.in_ledger):
+        table = result.tables.get((st.id, port))
+        if table is None:
+            continue
+        name = getattr(st.params, "input", None)
+        found.append(
+            {
+                "stage": st.id,
+                "input": name,
+                "sha256": inputs[name]["sha256"] if name in inputs else None,
+                **contract.ledger_entry(table),
+            }
+        )
+    return found
+
+
+def _drift(plan: Plan, result: RunResult) -> list[dict[str, Any]]:
+    """What the ledger's ``drift`` column holds of a run: per output of drift-corrected
+    readings, the correction they record having applied (:attr:`~pipeline.batch.records.
+    RunRow.drift`, rate and σ in deg/h) — the instrument whose calibration the survey's own
+    tool serial picked, not the run's well serial; [] where the run corrected none."""
+    found = []
+    for st, port, _ in _outputs(plan, lambda c: issubclass(c, CorrectedFreeGyroReadings)):
+        table = result.tables.get((st.id, port))
+        if table is None:
+            continue
+        rate = drift_rate_of(table)
+        record: dict[str, Any] = (
+            dict.fromkeys(DriftRate.model_fields) if rate is None else rate.model_dump(mode="json")
+        )
+        record["rate_deg_h"], record["sigma_deg_h"] = record.pop("rate"), record.pop("sigma")
+        found.append({"stage": st.id, "port": port, **record})
+    return found
+
+
+def _outputs(
+    plan: Plan, wanted: Callable[[type[TableContract]], bool]
+) -> Iterator[tuple[PlannedStage, str, type[TableContract]]]:
+    """The (stage, port, contract) of every output whose contract is ``wanted`` (known by
+    its contract alone: looking a port up would read a streamed output whole)."""
     for st in plan.stages:
         for port, contract in st.definition.outputs.items():
-            if not contract.in_ledger:
-                continue  # (looking another port up would read a streamed output whole)
-            table = result.tables.get((st.id, port))
-            if table is None:
-                continue
-            name = getattr(st.params, "input", None)
-            found.append(
-                {
-                    "stage": st.id,
-                    "input": name,
-                    "sha256": inputs[name]["sha256"] if name in inputs else None,
-                    **contract.ledger_entry(table),
-                    "tool_serial": result.well.tool_serial,
-                }
-            )
-    return found
+            if wanted(contract):
+                yield st, port, contract
 
 
 def peak_rss_bytes() -> int:
