@@ -89,6 +89,9 @@ def test_summary_states_the_uncertainty_as_the_las_does(out: Path) -> None:
     facts = las_facts(out / "trajectory.las")
     doc = json.loads((out / "summary.json").read_text())
     assert_statement(doc["uncertainty"], facts)
+    # the first stop reads an MD of millimetres (odometer noise): at the depth reference
+    (tie,) = doc["uncertainty"]["tie_on"]
+    assert tie["basis"] == "wellhead" and abs(tie["md"]) < 0.5
     # the ellipse at TD keeps the stated confidence, not one recomputed from rounded axes
     assert doc["surveys"][0]["uncertainty_at_td"]["confidence"] == 0.95
 

@@ -13,6 +13,7 @@ import math
 import re
 from pathlib import Path
 
+import lasio
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -93,6 +94,12 @@ def test_a_tie_on_from_the_file_is_stated_not_included_and_warned(tmp_path: Path
     assert NOT_INCLUDED in text_of(out / "report.html")
     frame = gp.read(out / "uncertainty.trajectory.parquet")
     assert frame.attrs["uncertainty"]["tie_on"][0]["basis"] == "not included"
+    # a LAS file of it says so in its uncertainty curves' descriptions
+    las = lasio.read(gp.write(frame, tmp_path / "bare.las"))
+    for mnemonic in ("cov_nn", "ellipse_major"):
+        assert "from the tie-on at 500.00 m MD, its own uncertainty not included" in (
+            las.curves[mnemonic].descr
+        )
     # the first station's σ is the tie-on allowance's alone: far below a metre
     assert covariances(out)[0, 0] < 0.1
 

@@ -37,6 +37,7 @@ from pipeline.contracts import NORTH_KEY, NORTH_REFERENCES, UNIT_KEY, TableContr
 from pipeline.errors import ParameterError, UnitError
 from pipeline.io.mnemonics import CURVES
 from pipeline.uncertainty.stated import statement_of, with_statements
+from pipeline.uncertainty.tieon import TieOnRecord
 from pipeline.units import QUANTITIES, canonical_unit, conversion_factor
 from pipeline.well import WELL_KEY, WellMetadata, attach, well_of
 
@@ -255,7 +256,11 @@ def _stated(table: pa.Table, uncertainty: object) -> pa.Table:
         raise ParameterError(
             f"attrs['uncertainty']: confidence {confidence!r} is no probability in (0, 1)"
         )
-    return with_statements(table, confidence, model)
+    try:
+        tie_on = TieOnRecord(surveys=uncertainty.get("tie_on", ()))
+    except ValidationError as exc:
+        raise ParameterError(f"attrs['uncertainty']: tie_on: {exc.errors()[0]['msg']}") from None
+    return with_statements(table, confidence, model, tie_on if tie_on.surveys else None)
 
 
 def as_stated(table: pa.Table) -> pa.Table:

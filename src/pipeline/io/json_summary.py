@@ -165,9 +165,9 @@ class UncertaintyStatement(_Model):
     tie_on: list[TieOn] = Field(
         default_factory=list,
         description="each survey's first station and whether the uncertainty of its position "
-        "is in the σ: `wellhead` (MD 0), `survey` (carried down through `parent`), `given` "
-        "(the run was given it), `not included` (tied on a position from outside the run, "
-        "taken as exactly known)",
+        "is in the σ: `wellhead` (within 1 m of MD 0), `survey` (carried down through "
+        "`parent`), `given` (the run was given it), `not included` (tied on a position from "
+        "outside the run, taken as exactly known)",
     )
 
 

@@ -63,7 +63,6 @@ from pipeline.uncertainty.tieon import (
     TieOnRecord,
     outside_tie,
     warn_missing,
-    with_tie_on,
 )
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, NorthReference, WellMetadata, one_well, well_of
@@ -299,7 +298,9 @@ def definitive_survey(
     tie_on = TieOnRecord(surveys=(outside_tie(None, float(md[0]), params.tie_covariance),))
     if params.tie_covariance is not None:
         if tie_on.surveys[0].basis != "given":
-            raise ValueError("tie_covariance: the survey starts at MD 0, it has no tie-on above")
+            raise ValueError(
+                "tie_covariance: the survey starts at the depth reference, no tie-on above it"
+            )
         cov = cov + params.tie_covariance.matrix()
     warn_missing(tie_on, ctx.stage_id)
     parts = {
@@ -319,9 +320,9 @@ def definitive_survey(
     listed_tools = [tools[run.port] for _, run in listed]
     models = ", ".join(dict.fromkeys(model_words(t.name, t.revision) for t in listed_tools))
     survey_table = with_statements(
-        _survey_table(parts, cov, params, north), params.confidence, models
+        _survey_table(parts, cov, params, north), params.confidence, models, tie_on
     )
-    survey_table = with_tie_on(with_magnetic(survey_table, by_run), tie_on)
+    survey_table = with_magnetic(survey_table, by_run)
     calculation = SurveyCalculation(
         method="minimum_curvature", vs_azimuth=params.vs_azimuth, ties=(tie,)
     )

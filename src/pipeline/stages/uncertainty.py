@@ -41,9 +41,9 @@ from pipeline.uncertainty.tieon import (
     TieCovariance,
     TieOn,
     TieOnRecord,
+    below_reference,
     outside_tie,
     warn_missing,
-    with_tie_on,
 )
 from pipeline.uncertainty.toolmodel import ToolModel
 from pipeline.well import Latitude, well_of
@@ -249,8 +249,9 @@ def position_uncertainty(
         out.replace_schema_metadata(table.schema.metadata),
         params.confidence,
         _stated_model(configured, params, init_sigma),
+        ties,
     )
-    return {"trajectory": with_tie_on(with_magnetic(out, applied), ties)}
+    return {"trajectory": with_magnetic(out, applied)}
 
 
 def tie_ons(
@@ -260,19 +261,21 @@ def tie_ons(
     given: TieCovariance | None,
 ) -> TieOnRecord:
     """Each survey's :class:`~pipeline.uncertainty.tieon.TieOn`: at the wellhead (first MD
-    ≤ 0), on its parent survey, or tied on a position from outside the run — given
+    within a metre of 0), on its parent survey, or tied on a position from outside the run — given
     (``given``, for the one such survey; more than one is refused: which would it be?) or
     not included."""
     if table.num_rows == 0:
         return TieOnRecord(surveys=())
     md = table.column("md").to_numpy()
     names = table.column("survey").to_pylist() if "survey" in table.column_names else None
-    outside = [k for k, p in enumerate(parents) if p is None and float(md[offsets[k]]) > 0.0]
+    outside = [
+        k for k, p in enumerate(parents) if p is None and below_reference(float(md[offsets[k]]))
+    ]
     if given is not None and len(outside) != 1:
         found = "none does" if not outside else f"{len(outside)} do"
         raise ValueError(
             "tie_covariance is the tie-on uncertainty of the one survey tied on a position "
-            f"below MD 0 from outside the run; {found}"
+            f"below the depth reference from outside the run; {found}"
         )
     ties = []
     for k, parent in enumerate(parents):

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from pipeline.contracts import DESCRIPTION_KEY
 from pipeline.uncertainty.ellipse import ellipses
-from pipeline.uncertainty.tieon import TieOn, tie_on_of
+from pipeline.uncertainty.tieon import TieOn, TieOnRecord, tie_on_of, with_tie_on
 
 __all__ = [
     "CONFIDENCE_KEY",
@@ -198,11 +198,27 @@ def model_words(name: str, revision: str) -> str:
     return f"{name} rev {revision}" if revision else name
 
 
-def with_statements(table: pa.Table, confidence: float | None, model: str | None) -> pa.Table:
+def with_statements(
+    table: pa.Table,
+    confidence: float | None,
+    model: str | None,
+    tie_on: TieOnRecord | None = None,
+) -> pa.Table:
     """``table`` with its uncertainty columns (:data:`WORDS`) stating ``model``
     (:func:`model_words`), those at a confidence level also ``confidence`` (probability,
     0-1) and their dimensions, and a description of each saying so (None: not stated, left
-    as it is)."""
+    as it is); with ``tie_on`` recorded (:func:`~pipeline.uncertainty.tieon.with_tie_on`),
+    the descriptions also name each tie-on whose uncertainty is not included (a LAS
+    file's curve descriptions then say it)."""
+    if tie_on is not None:
+        table = with_tie_on(table, tie_on)
+    missing = [t for t in (tie_on.surveys if tie_on else ()) if t.missing()]
+    since = "".join(
+        f"; from the tie-on at {t.md:.2f} m MD"
+        + (f" of survey {t.survey}" if t.survey is not None else "")
+        + ", its own uncertainty not included"
+        for t in missing
+    )
     fields = []
     for f in table.schema:
         words = WORDS.get(f.name)
@@ -218,7 +234,7 @@ def with_statements(table: pa.Table, confidence: float | None, model: str | None
             words += f" at {confidence * 100:g} % confidence ({REGION[dims]})"
         if model is not None:
             words += f"; error model {model}"
-        meta[DESCRIPTION_KEY] = words.encode()
+        meta[DESCRIPTION_KEY] = (words + since).encode()
         fields.append(f.with_metadata(meta))
     return pa.Table.from_arrays(table.columns, schema=pa.schema(fields, table.schema.metadata))
 

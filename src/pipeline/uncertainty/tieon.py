@@ -4,9 +4,10 @@ Each survey's covariances are propagated down from its first station. A survey t
 another survey of the table (a sidetrack's main bore, the run it continues) is propagated
 from the wellhead through that survey's stations (the position-uncertainty stage's hole
 paths), so the hole above it is in its σ. A survey whose first station lies below the depth
-reference (MD > 0) and is tied on a position from outside the run — its stations file's
-listing, the pipeline's tie (TVD = MD, N = E = 0 by default) — starts from that position as
-if it were exactly known: the uncertainty of the surveys above it is not the run's to know.
+reference (MD > :data:`AT_REFERENCE_M`) and is tied on a position from outside the run — its
+stations file's listing, the pipeline's tie (TVD = MD, N = E = 0 by default) — starts from
+that position as if it were exactly known: the uncertainty of the surveys above it is not the
+run's to know.
 It is added where given (:class:`TieCovariance`: e.g. the previous survey's covariance at
 that MD, as its listing states), else recorded as not included, which every deliverable that
 states the uncertainty then says (:class:`TieOn`). Lengths m, covariances m² (NEV).
@@ -31,12 +32,18 @@ __all__ = [
     "TieCovariance",
     "TieOn",
     "TieOnRecord",
+    "below_reference",
     "outside_tie",
     "tie_on_of",
     "warn_missing",
     "with_tie_on",
 ]
 
+AT_REFERENCE_M = 1.0
+"""A first station this close to MD 0 (m) starts at the depth reference: the hole above it,
+under a metre, moves it by millimetres for any plausible angle error (1° over 1 m: 17 mm,
+within the ISCWSA surface tie-on allowance) — a point survey's first stop reads an MD of a
+few millimetres from the odometer's noise."""
 TIE_ON_KEY = b"gyropipe.uncertainty_tie_on"
 """Schema metadata: the :class:`TieOnRecord` of a trajectory's uncertainty columns."""
 
@@ -80,19 +87,20 @@ class TieCovariance(BaseModel):
 
 TIE_COVARIANCE = (
     "NEV covariance (1σ², m²: nn, ne, nv, ee, ev, vv) of the tie-on position of the survey "
-    "that starts below MD 0 tied on a position from outside the run (its stations file's "
-    "listing, the tie parameters): the uncertainty of the hole above it, e.g. the previous "
-    "survey's at that MD; added to its every station (and to those of surveys tied on it). "
-    "Default: not included, which the deliverables and a warning say"
+    "that starts below the depth reference (MD > 1 m) tied on a position from outside the "
+    "run (its stations file's listing, the tie parameters): the uncertainty of the hole "
+    "above it, e.g. the previous survey's at that MD; added to its every station (and to "
+    "those of surveys tied on it). Default: not included, which the deliverables and a warning say"
 )
 """The ``tie_covariance`` parameter of the stages that propagate position uncertainty."""
 
 
 class TieOn(BaseModel):
     """Where one survey's uncertainty starts and whether the tie-on's own is in it:
-    ``wellhead`` (its first station at MD 0: nothing above), ``survey`` (propagated through
-    ``parent`` above it), ``given`` (the run was given it, ``semi_major`` its horizontal
-    semi-major axis at 1σ, m), ``not included`` (taken as exactly known)."""
+    ``wellhead`` (its first station within :data:`AT_REFERENCE_M` of MD 0: nothing above),
+    ``survey`` (propagated through ``parent`` above it), ``given`` (the run was given it,
+    ``semi_major`` its horizontal semi-major axis at 1σ, m), ``not included`` (taken as
+    exactly known)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -137,10 +145,16 @@ class TieOnRecord(BaseModel):
     surveys: tuple[TieOn, ...]
 
 
+def below_reference(md: float) -> bool:
+    """A first station at ``md`` (m) lies below the depth reference (:data:`AT_REFERENCE_M`)."""
+    return md > AT_REFERENCE_M
+
+
 def outside_tie(survey: str | None, md: float, given: TieCovariance | None) -> TieOn:
     """The :class:`TieOn` of a survey not tied on another of its table, first station at
-    ``md`` (m): at the wellhead (``md`` ≤ 0), else ``given`` or not included."""
-    if md <= 0.0:
+    ``md`` (m): at the wellhead (within :data:`AT_REFERENCE_M` of MD 0), else ``given`` or
+    not included."""
+    if not below_reference(md):
         return TieOn(survey=survey, md=md, basis="wellhead")
     if given is not None:
         return TieOn(survey=survey, md=md, basis="given", semi_major=given.semi_major())
