@@ -176,6 +176,17 @@ TRUE_NORTH = {"north_reference": "true"}
 """A pipeline's well defaults: azimuths are to true north unless the file says otherwise."""
 
 
+LISTING_HEADER = """\
+Well: T-7
+Latitude: 61.25
+Longitude: 73.4
+Survey Date: 2026-11-21
+
+MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)
+"""
+"""The head of a vendor's stations listing (CSV) that lists each station's position."""
+
+
 def stage(
     id: str,
     uses: str,

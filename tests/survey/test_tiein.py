@@ -22,7 +22,7 @@ import yaml
 import pipeline as gp
 from pipeline.errors import InputFileError, StageError, SurveyCheckWarning
 from pipeline.survey.calculation import calculation_of
-from tests_support import ROOT, gyropipe_cli
+from tests_support import LISTING_HEADER, ROOT, gyropipe_cli
 
 SURVEY = ROOT / "pipelines" / "survey.yaml"
 TIE = (500.0, 498.30, 12.10, -3.40)
@@ -51,14 +51,7 @@ def hand_positions(
 
 LISTED = hand_positions(STATIONS, *TIE[1:])
 """The vendor's listing (from the tie-on), rounded to 0.01 m in the files."""
-HEADER = """\
-Well: T-7
-Latitude: 61.25
-Longitude: 73.4
-Survey Date: 2026-11-21
-
-MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)
-"""
+HEADER = LISTING_HEADER
 
 
 def csv_listing(directory: Path) -> Path:

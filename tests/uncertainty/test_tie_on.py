@@ -19,16 +19,17 @@ import pyarrow.parquet as pq
 import pytest
 
 import pipeline as gp
-from tests_support import ROOT, CliResult, gyropipe_cli, stage, survey_stages, write_pipeline
+from tests_support import (
+    LISTING_HEADER,
+    ROOT,
+    CliResult,
+    gyropipe_cli,
+    stage,
+    survey_stages,
+    write_pipeline,
+)
 
-HEADER = """\
-Well: T-7
-Latitude: 61.25
-Longitude: 73.4
-Survey Date: 2026-11-21
-
-MD (m),Inc (deg),Azimuth True (deg),TVD (m),North (m),East (m)
-"""
+HEADER = LISTING_HEADER
 TIE_ROW = "500.00,4.00,310.00,498.30,12.10,-3.40"
 """The tie-on point the vendor lists first: MD, inclination, azimuth, TVD, north, east."""
 ROWS = [f"{500.0 + 30.0 * k:.2f},{4.0 + 1.5 * k:.2f},{310.0 + 2.0 * k:.2f}" for k in range(1, 11)]
