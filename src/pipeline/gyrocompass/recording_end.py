@@ -74,6 +74,22 @@ def station_md(readings: pa.Table, station: int, fallback: float) -> float:
     return float(readings.column("md")[int(rows[0])].as_py()) if rows.size else fallback
 
 
+def shortfall(readings: pa.Table, end: RecordingEnd) -> tuple[float, float]:
+    """The survey's usual averaging time (s: the median ``duration`` of the readings other
+    than ``end``'s; NaN without any) and how much less ``end`` was averaged over (s, ≥ 0;
+    all of it when it was not averaged)."""
+    own = (readings.column("station").to_numpy() == end.station) & (
+        readings.column("position").to_numpy() == end.position
+    )
+    if "duration" in readings.column_names:
+        duration = readings.column("duration").to_numpy(zero_copy_only=False).astype(float)
+    else:
+        duration = np.full(readings.num_rows, np.nan)
+    others = duration[~own] if end.kept else duration
+    usual = float(np.median(others)) if others.size else float("nan")
+    return usual, max(usual - end.averaged, 0.0) if end.kept else usual
+
+
 def dropped_warning(end: RecordingEnd, min_dwell: float) -> str:
     """What a warning says of a dwell too short to average at the end of the recording."""
     return (

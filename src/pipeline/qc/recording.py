@@ -18,9 +18,8 @@ import pyarrow as pa
 
 from pipeline.earth.frames import FloatArray
 from pipeline.gyrocompass.positions import usual_positions
-from pipeline.gyrocompass.recording_end import RecordingEnd, recording_end
+from pipeline.gyrocompass.recording_end import RecordingEnd, recording_end, shortfall
 from pipeline.qc.options import QcOptions
-from pipeline.qc.sensors import float_column
 from pipeline.qc.vector_checks import IntArray, Keys, Rows, limit_rows
 
 
@@ -42,17 +41,7 @@ def recording_checks(
 
 def _end(readings: pa.Table, end: RecordingEnd, options: QcOptions) -> Rows:
     """The ``recording_end`` row of the dwell the recording ended in."""
-    own = (readings.column("station").to_numpy() == end.station) & (
-        readings.column("position").to_numpy() == end.position
-    )
-    duration = (
-        float_column(readings, "duration")
-        if "duration" in readings.column_names
-        else np.full(readings.num_rows, np.nan)
-    )
-    others = duration[~own] if end.kept else duration
-    usual = float(np.median(others)) if others.size else float("nan")
-    short = usual if not end.kept else max(usual - end.averaged, 0.0)
+    usual, short = shortfall(readings, end)
     keys = Keys(
         np.array([end.station]),
         np.array([end.position]),
@@ -110,7 +99,7 @@ def _positions(
             f"{have[i]} of the survey's usual {usual} frame positions (the most common number "
             "at its stations): "
             + (
-                "the station is solved from fewer positions than its neighbours"
+                "compassing has fewer positions to solve it from than at its neighbours"
                 if have[i]
                 else "none was averaged, the station is not surveyed"
             )

@@ -17,6 +17,7 @@ from pipeline.continuous.tables import (
     FLAG_NAMES,
     FLAG_NEAR_VERTICAL,
     FLAG_NO_CLOSURE,
+    FLAG_SHORT_STOP,
 )
 
 AZI, SIGMA_AZI = "azi", "sigma_azi"
@@ -70,6 +71,14 @@ CONTINUOUS: dict[int, Flag] = {
         "the azimuth (the horizontal direction of the tool axis) is ill-conditioned, its "
         "error growing as 1/sin I; at such inclinations it hardly moves the position.",
         (AZI, SIGMA_AZI),
+    ),
+    FLAG_SHORT_STOP: Flag(
+        FLAG_NAMES[FLAG_SHORT_STOP],
+        "a compassing stop this run's azimuth is tied to was read from fewer frame positions "
+        "than the survey's others (the recording ended, or positions were too short to "
+        "average): the stop's azimuth, and the closure of the run on it, rest on less data, "
+        "and the azimuths carry its larger uncertainty.",
+        (AZI,),
     ),
 }
 """Continuous-mode bit flags."""

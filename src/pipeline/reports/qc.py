@@ -321,15 +321,24 @@ def _recording_failures(qc: pa.Table | None, checks: tuple[str, ...]) -> list[di
 
 
 def recording_verdicts(qc: pa.Table | None) -> list[Verdict]:
-    """The summary's line on a frame position the end of the recording cut short."""
+    """The summary's lines on the stops the end of the recording cut short and the stations
+    that lack frame positions (one line a station)."""
+    lines: dict[float, str] = {}
+    for r in _recording_failures(qc, RECORDING_CHECKS):
+        if r["check"] == RECORDING_CHECKS[0]:
+            lines[r["md"]] = (
+                f"The recording ended during the stop at MD {fmt(r['md'])} m, before its frame "
+                f"position {r['position'] + 1} was complete"
+            )
+        else:
+            lines.setdefault(r["md"], f"The station at MD {fmt(r['md'])} m lacks frame positions")
     return [
         Verdict(
             "warn",
-            f"The recording ended during the stop at MD {fmt(r['md'])} m, before its frame "
-            f"position {r['position'] + 1} was complete: the stop rests on less data than its "
-            f"neighbours (see “{RECORDING_TITLE}” in the QC section).",
+            f"{line}: it rests on less data than its neighbours (see “{RECORDING_TITLE}” in "
+            "the QC section).",
         )
-        for r in _recording_failures(qc, RECORDING_CHECKS[:1])
+        for line in lines.values()
     ]
 
 
