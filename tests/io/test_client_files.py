@@ -38,9 +38,11 @@ TABLE_STATED = {
     b"gyropipe.survey_calculation",
     b"gyropipe.position_check",
     b"gyropipe.references",
+    b"gyropipe.recording_end",
 }
 """Schema metadata an MCAP table may carry: the well, the calculation, the file positions'
-check (the summary's and report's ``file_positions``), the QC's reference models."""
+check (the summary's and report's ``file_positions``), the QC's reference models, the frame
+position the recording ended in (the readings')."""
 
 
 def survey_with_mcap(tmp_path: Path) -> Path:
