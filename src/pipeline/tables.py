@@ -348,7 +348,8 @@ class CompassStations(Stations):
     flags: str = column(
         unit=None,
         description="comma-separated warnings (inconsistent, frame_mismatch, poor_azimuth, "
-        "azimuth_from_toolface, azimuth_undefined, bias_not_removed)",
+        "azimuth_from_toolface, azimuth_undefined, bias_not_removed, fewer_positions: fewer "
+        "frame positions than the survey's most common number)",
     )
     time: float = column(unit="s", description="mid-time of the station")
 

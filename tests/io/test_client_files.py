@@ -39,10 +39,12 @@ TABLE_STATED = {
     b"gyropipe.position_check",
     b"gyropipe.references",
     b"gyropipe.uncertainty_tie_on",
+    b"gyropipe.recording_end",
 }
 """Schema metadata an MCAP table may carry: the well, the calculation, the file positions'
 check (the summary's and report's ``file_positions``), the QC's reference models, where the
-uncertainty columns start (each survey's tie-on)."""
+uncertainty columns start (each survey's tie-on), the frame position the recording ended in
+(the readings')."""
 
 
 def survey_with_mcap(tmp_path: Path) -> Path:

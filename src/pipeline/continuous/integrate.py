@@ -40,17 +40,23 @@ above. A triad (xyz) is integrated as a strapdown attitude through vertical, wit
 closure on the end stop (:mod:`pipeline.continuous.strapdown`; flag
 ``FLAG_AZIMUTH_UNDEFINED`` where the azimuth is ill-defined, nothing held).
 
+A stop compassing flagged as read from fewer frame positions than the survey's others
+gives the run's stations ``FLAG_SHORT_STOP``; an x or xy run whose end
+stop was not compassed and whose start stop gives no azimuth (near vertical) is refused.
+
 Stations every ``spacing`` m of MD are placed on the odometer's cubic fit, not its noisy
 samples (:mod:`pipeline.continuous.stations`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Literal, NamedTuple
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 from numpy.typing import NDArray
 
 from pipeline.continuous.multiaxis import apsidal_components, resolve_gyro_axes
@@ -62,6 +68,7 @@ from pipeline.continuous.run import (
     RunStops,
     compassed_stop,
     is_compassed,
+    is_short,
     odometer_fit,
     run_bounds,
     uncompassed_stop,
@@ -71,7 +78,11 @@ from pipeline.continuous.series import StoredRun
 from pipeline.continuous.sigma import InclinationNoise
 from pipeline.continuous.stations import ContinuousResult, run_result
 from pipeline.continuous.store import CHUNK_ROWS, ColumnStore, chunks, savgol_range, savgol_span
-from pipeline.continuous.tables import FLAG_LARGE_MISALIGNMENT, FLAG_NEAR_VERTICAL
+from pipeline.continuous.tables import (
+    FLAG_LARGE_MISALIGNMENT,
+    FLAG_NEAR_VERTICAL,
+    FLAG_SHORT_STOP,
+)
 from pipeline.earth.frames import OMEGA_EARTH, FloatArray, sin_cos, turned_sin_cos
 from pipeline.errors import EmptyTableError
 from pipeline.streams import Port, as_stream
@@ -109,18 +120,30 @@ def integrate_continuous(
     begin, end, first_id, last_id = run_bounds(store, rows)
     # an x or xy run whose end stop compassing rejected is integrated from the start alone
     open_end = axes != "xyz" and not is_compassed(stops, last_id)
-    finish = (
-        uncompassed_stop(float(store.floats("md", end, end + 1)[0]))
-        if open_end
-        else compassed_stop(stops, last_id)
-    )
+    end_md = float(store.floats("md", end, end + 1)[0])
+    finish = uncompassed_stop(end_md) if open_end else compassed_stop(stops, last_id)
     ends = compassed_stop(stops, first_id), finish
+    if open_end and np.isnan(ends[0]["azi"]):
+        raise ContinuousError(
+            f"stop {last_id} (MD {end_md:.2f} m) was not compassed (see the rejected "
+            f"stations: too few frame positions, or the recording ended during it) and stop "
+            f"{first_id} gives no azimuth (near vertical): no stop to tie the run's azimuth to"
+        )
     odometer = odometer_fit(store, begin, end, options.odometer_window, rows)
     if axes != "xyz":
         run = _apsidal_run(odometer, axes == "xy", ends, open_end, latitude, options)
     else:
         run = _strapdown(odometer, ends, end, latitude, options)
-    return run_result(run, ends, options)
+    result = run_result(run, ends, options)
+    if not any(is_short(stops, s) for s in (first_id, last_id)):
+        return result
+    flags = pc.bit_wise_or(result.stations.column("flags"), pa.scalar(FLAG_SHORT_STOP, pa.int64()))
+    stations = result.stations.set_column(
+        result.stations.schema.get_field_index("flags"),
+        result.stations.schema.field("flags"),
+        flags,
+    )
+    return dataclasses.replace(result, stations=stations)
 
 
 def _strapdown(

@@ -24,6 +24,7 @@ __all__ = [
     "compassed_stop",
     "float_column",
     "is_compassed",
+    "is_short",
     "odometer_fit",
     "odometer_points",
     "run_bounds",
@@ -111,6 +112,20 @@ def compassed_stop(stops: pa.Table, station: int) -> dict[str, float]:
     if np.isnan(stop["azi"]):  # vertical: tied through the gyro toolface, and its σ
         stop["sigma_azi"] = stop["sigma_toolface"]
     return stop
+
+
+SHORT_STOP_FLAGS = frozenset({"fewer_positions"})
+"""Compassing flags of a stop compassed from less data than the survey's others."""
+
+
+def is_short(stops: pa.Table, station: int) -> bool:
+    """Whether compassing flagged stop ``station`` as read from fewer frame positions than
+    the survey's others (False where it is not compassed)."""
+    rows = _stop_rows(stops, station)
+    if rows.size == 0 or "flags" not in stops.column_names:
+        return False
+    flags = str(stops.column("flags")[int(rows[0])].as_py() or "").split(",")
+    return bool(SHORT_STOP_FLAGS.intersection(flags))
 
 
 def is_compassed(stops: pa.Table, station: int) -> bool:

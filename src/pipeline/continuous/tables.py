@@ -17,12 +17,17 @@ FLAG_AZIMUTH_UNDEFINED = 16
 """Near vertical on a three-axis tool: the attitude is integrated through (not held), but the
 azimuth — the tool axis's horizontal direction — is ill-conditioned (error ∝ 1/sin I)."""
 
+FLAG_SHORT_STOP = 32
+"""Tied to a stop read from fewer frame positions than the survey's others (the recording
+ended, positions too short): the azimuths (and a closure) rest on a stop of less data."""
+
 FLAG_NAMES = {
     FLAG_NEAR_VERTICAL: "near vertical (azimuth held)",
     FLAG_AFTER_VERTICAL: "after a held section",
     FLAG_LARGE_MISALIGNMENT: "gyro far from high side",
     FLAG_NO_CLOSURE: "no closure",
     FLAG_AZIMUTH_UNDEFINED: "azimuth ill-defined (near vertical)",
+    FLAG_SHORT_STOP: "tied to a stop with positions missing",
 }
 
 

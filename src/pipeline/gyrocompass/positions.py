@@ -22,3 +22,14 @@ def stacks(starts: IntArray, sizes: IntArray) -> Iterator[tuple[IntArray, IntArr
     for n in np.unique(sizes).tolist():
         members = np.flatnonzero(sizes == n)
         yield members, starts[members, None] + np.arange(n)
+
+
+def usual_positions(station: IntArray) -> int:
+    """The survey's usual number of frame positions per station, from the station of each
+    reading: the most common number (the larger of equally common ones); 0 without
+    readings."""
+    if station.size == 0:
+        return 0
+    _, sizes = np.unique(station, return_counts=True)
+    values, count = np.unique(sizes, return_counts=True)
+    return int(values[count == count.max()].max())

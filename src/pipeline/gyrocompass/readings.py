@@ -27,6 +27,7 @@ import pyarrow as pa
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
 from pipeline.tables import PositionReadings, RawSamples
 
 FloatArray = NDArray[np.float64]
@@ -74,6 +75,13 @@ class ReadingOptions(BaseModel):
         description="detection: a new station starts when the stop MD changes by more than "
         "this, or the MD strays farther than this between two dwells, m",
     )
+    end_stop: float = Field(
+        1.0,
+        ge=0,
+        description="detection: the recording's end, steady for at least this long (and "
+        "longer than the trims) but too short for a dwell, is reported as a frame position "
+        "the recording cut short, s",
+    )
 
 
 DEFAULTS = ReadingOptions()
@@ -85,10 +93,14 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     samples, m), the position, the mid-time of the averaged samples (s), the circular mean
     frame angle (deg, [0, 360)), the mean and sample standard deviation (ddof = 1) of every
     gyro (°/h) and accelerometer (m/s²) axis, the number of samples and their duration
-    (n / sample rate, s). Raises ``ValueError`` naming the problem: no markers and no frame
-    angle, a marked position repeated or too short after trimming, a station marked again
-    after other stations (:func:`remarked_stations`), non-uniform time, no positions
-    found."""
+    (n / sample rate, s). The dwell the recording ended in (ending at the last sample: a
+    marked run, a detected dwell, or a steady end at least ``end_stop`` long but too short
+    for a dwell) is recorded in the table's schema metadata
+    (:mod:`~pipeline.gyrocompass.recording_end`); too short after trimming, it is not
+    averaged (not an error). Raises ``ValueError`` naming the problem: no markers and no
+    frame angle, another marked position repeated or too short after trimming, a station
+    marked again after other stations (:func:`remarked_stations`), non-uniform time, no
+    positions found."""
     RawSamples.validate_table(samples)
     time = samples.column("time").to_numpy()
     rate = _sample_rate(time)
@@ -98,25 +110,96 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     angle = _optional(samples, "frame_angle")
     k_start, k_end, need, window = counts(options, rate)
     markers = _markers(samples)
+    last: tuple[int, int, int, int] | None = None
+    """the dwell the recording ended in: first and end sample, station, position"""
     if markers is not None:
         starts, ends, station, position = markers
+        if ends.size and ends[-1] == time.size:
+            last = (int(starts[-1]), int(ends[-1]), int(station[-1]), int(position[-1]))
+            if ends[-1] - starts[-1] - k_start - k_end < need:  # too short: dropped, reported
+                starts, ends, station, position = (
+                    starts[:-1],
+                    ends[:-1],
+                    station[:-1],
+                    position[:-1],
+                )
         check_lengths(ends - starts - k_start - k_end, need, time[starts], station, position)
     else:
         if angle is None:
             raise ValueError(NO_ANGLE)
         smooth_md = moving_average(md, window)
-        starts, ends = _detect_dwells(
-            (np.unwrap(angle, period=360.0), smooth_md),
-            (options.angle_tolerance, options.md_tolerance),
-            k_start + need + k_end,
+        watched = (np.unwrap(angle, period=360.0), smooth_md)
+        tolerances = (options.angle_tolerance, options.md_tolerance)
+        starts, ends = _detect_dwells(watched, tolerances, k_start + need + k_end)
+        begin = max(int(ends[-1]) if ends.size else 0, time.size - k_start - need - k_end)
+        tail = begin + steady_tail(tuple(x[begin:] for x in watched), tolerances)
+        cut = begin < time.size and time.size - tail >= end_stop_count(options, rate)
+        station, position = _number_stations(
+            smooth_md, np.append(starts, tail) if cut else starts, options.station_gap
         )
-        station, position = _number_stations(smooth_md, starts, options.station_gap)
+        if cut:
+            last = (tail, time.size, int(station[-1]), int(position[-1]))
+            station, position = station[:-1], position[:-1]
+        elif ends.size and ends[-1] == time.size:
+            last = (int(starts[-1]), int(ends[-1]), int(station[-1]), int(position[-1]))
     signals = {name: v for name in SIGNALS if (v := _optional(samples, name)) is not None}
-    return reduce_readings(
+    if starts.size == 0 and last is not None:
+        left = max(last[1] - last[0] - k_start - k_end, 0) / rate
+        raise ValueError(only_stop(time[last[0]], time[last[1] - 1], left))
+    readings = reduce_readings(
         signals, time, rate, md, angle, starts + k_start, ends - k_end, station, position
+    )
+    if last is None:
+        return readings
+    first, end, s, p = last
+    left = max(end - first - k_start - k_end, 0)
+    return attach(
+        readings,
+        RecordingEnd(
+            s,
+            p,
+            station_md(readings, s, float(np.median(md[first:end]))),
+            float(time[first]),
+            float(time[end - 1]),
+            left / rate,
+            left >= need,
+        ),
     )
 
 
+def end_stop_count(options: ReadingOptions, rate: float) -> int:
+    """The fewest samples of a steady end of the recording taken for a frame position cut
+    short (detection): ``end_stop`` and more than the trims leave nothing of."""
+    k_start, k_end, _, _ = counts(options, rate)
+    return max(round(options.end_stop * rate), k_start + k_end + 2)
+
+
+def only_stop(start: float, end: float, left: float) -> str:
+    """Why the only dwell, from ``start`` to ``end`` (s) and cut short by the end of the
+    recording with ``left`` s after trimming, gave no reading."""
+    return (
+        f"{NO_POSITIONS}: the recording ended {end - start:.2f} s into the only frame "
+        f"position (from t = {start:g} s), leaving {left:.2f} s after trimming"
+    )
+
+
+def steady_tail(signals: tuple[FloatArray, ...], tolerances: tuple[float, ...]) -> int:
+    """The first sample of the longest end of the signals over which each stays within its
+    tolerance of a middle value (its range at most twice the tolerance, as a dwell stays
+    within its tolerance of its median); 0 for empty signals. Detection looks for it after
+    the last dwell, in as many of the last samples as a dwell needs (a longer one is a
+    dwell: the streamed path has those samples at hand)."""
+    if signals[0].size == 0:
+        return 0
+    steady = np.ones(signals[0].size, dtype=bool)
+    for x, tol in zip(signals, tolerances, strict=True):
+        high = np.maximum.accumulate(x[::-1])[::-1]
+        low = np.minimum.accumulate(x[::-1])[::-1]
+        steady &= high - low <= 2 * tol
+    return int(np.argmax(steady))
+
+
+NO_POSITIONS = "no frame positions found"
 NO_MD = "samples have no md column: position readings need the station MD"
 NO_ANGLE = (
     "samples have neither station/position markers nor a frame_angle column: "
@@ -366,9 +449,7 @@ def reduce_readings(
     """PositionReadings from the samples [a, b) of each reading (``signals``: the sensor
     columns of :data:`SIGNALS` the samples have)."""
     if a.size == 0:
-        raise ValueError(
-            "no frame positions found: no dwell long enough for min_dwell after trimming"
-        )
+        raise ValueError(f"{NO_POSITIONS}: no dwell long enough for min_dwell after trimming")
     n = b - a
     groups, inverse = np.unique(station, return_inverse=True)
     label = inverse.ravel()  # station of each reading as 0 … groups − 1

@@ -49,15 +49,19 @@ from pipeline.gyrocompass.readings import (
     ReadingOptions,
     check_lengths,
     counts,
+    end_stop_count,
     exact_median,
     moving_average,
     not_uniform,
+    only_stop,
     reading_stats,
     reduce_readings,
     remarked_stations,
     steady_starts,
+    steady_tail,
     too_few,
 )
+from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
 from pipeline.streams import TableStream
 from pipeline.tables import PositionReadings, RawSamples
 
@@ -213,6 +217,9 @@ class _Stations:
         self.medians: list[FloatArray] = []
         """each station's MD, repeated for its readings"""
         self.station = -1
+        self.last: tuple[int, int, float, float, int, float, bool] | None = None
+        """the dwell the recording ended in: station, position, first and last time (s),
+        samples left after trimming, median MD (m), whether averaged"""
 
     def add(
         self,
@@ -244,9 +251,13 @@ class _Stations:
 
     def table(self) -> pa.Table:
         """Every station's readings, their durations at the rate set now (:class:`_MarkedAhead`
-        reduces at the first batch's rate; the scan's is the run's)."""
+        reduces at the first batch's rate; the scan's is the run's), and the dwell the
+        recording ended in (:attr:`last`) in the schema metadata."""
         self.close()
-        if not self.parts:  # the whole-table path's message
+        if not self.parts and self.last is not None:  # the whole-table path's messages
+            _, _, start, end, left, _, _ = self.last
+            raise ValueError(only_stop(start, end, left / self.rate))
+        if not self.parts:
             none = np.empty(0, np.intp)
             reduce_readings({}, np.empty(0), self.rate, np.empty(0), None, *[none] * 4)
         columns: dict[str, np.ndarray] = {
@@ -259,7 +270,14 @@ class _Stations:
             **columns,
         }
         columns["duration"] = columns["n"] / self.rate
-        return PositionReadings.compiled().make_table(columns)
+        table = PositionReadings.compiled().make_table(columns)
+        if self.last is None:
+            return table
+        station, position, start, end, left, md, kept = self.last
+        md = station_md(table, station, md)
+        return attach(
+            table, RecordingEnd(station, position, md, start, end, left / self.rate, kept)
+        )
 
 
 def _arrays(batch: pa.RecordBatch, names: Iterable[str]) -> dict[str, FloatArray]:
@@ -348,8 +366,14 @@ class _Marked:
 
     def finish(self) -> pa.Table:
         """The readings; before them the whole-table path's checks of the markers (orphans,
-        a position marked twice, positions too short), in its order."""
+        a position marked twice, positions too short but the last one, which the recording
+        ended in), in its order."""
+        last = self.current
         self.end_run()
+        if last:  # the recording ended in this run
+            s, p, start, n = self.runs[-1]
+            md, end = float(np.median(last["md"])), float(last["time"][-1])
+            self.stations.last = (s, p, start, end, max(n, 0), md, n >= self.need)
         if self.orphans:
             raise ValueError(f"{self.orphans} samples have a position marker but no station marker")
         seen = Counter((s, p) for s, p, _, _ in self.runs)
@@ -369,7 +393,8 @@ class _Marked:
             problem = remarked_stations(station, t0)
             if problem:
                 raise ValueError(problem)
-            check_lengths(left, self.need, t0, station, position)
+            whole = slice(None, -1) if last and left[-1] < self.need else slice(None)
+            check_lengths(left[whole], self.need, t0[whole], station[whole], position[whole])
         return self.stations.table()
 
     def end_run(self) -> None:
@@ -389,6 +414,7 @@ class _Detected:
     def __init__(self, options: ReadingOptions, rate: float, stations: _Stations) -> None:
         self.k_start, self.k_end, need, self.window = counts(options, rate)
         self.length = self.k_start + need + self.k_end
+        self.end_stop = end_stop_count(options, rate)
         self.tolerances = (options.angle_tolerance, options.md_tolerance)
         self.gap = options.station_gap
         self.stations = stations
@@ -436,6 +462,8 @@ class _Detected:
             if end is None:
                 break
             self.dwell(self.open - self.base, end, smooth)
+            if end == size:  # (final) the recording ended in it
+                self.ended(self.open - self.base, end, kept=True)
             self.open, self.resume = None, self.base + end
         keep = max((self.open if self.open is not None else self.resume) - self.window, self.base)
         self.buffer = {k: v[keep - self.base :] for k, v in self.buffer.items()}
@@ -449,6 +477,8 @@ class _Detected:
         r = self.resume - self.base
         window = tuple(x[r:limit] for x in signals)
         found = steady_starts(window, self.tolerances, self.length)
+        if found.size == 0 and final:
+            self.tail(signals, smooth, r, limit)
         if found.size == 0:
             until = limit if final else max(r, limit - self.length + 1)
             self._fold(smooth[r:until])
@@ -456,15 +486,38 @@ class _Detected:
             return None
         s = r + int(found[0])
         self._fold(smooth[r:s])
-        stop = float(smooth[s])
+        self._number(float(smooth[s]))
+        self.resume = self.base + s
+        return self.base + s
+
+    def _number(self, stop: float) -> None:
+        """Number the dwell whose smoothed MD at its start is ``stop`` (m)."""
         high, low = self.span[0] - self.stop, self.stop - self.span[1]
         if self.station < 0 or abs(stop - self.stop) > self.gap or max(high, low) > self.gap:
             self.station, self.position = self.station + 1, 0
         else:
             self.position += 1
         self.stop, self.span = stop, (-np.inf, np.inf)
-        self.resume = self.base + s
-        return self.base + s
+
+    def tail(self, signals: tuple[FloatArray, ...], smooth: FloatArray, r: int, end: int) -> None:
+        """At the end of the recording, from buffer index ``r`` (after the last dwell) to
+        ``end``: a steady end too short for a dwell (as the whole-table path finds it) is
+        numbered and recorded, unaveraged."""
+        begin = max(r, end - self.length)
+        s = begin + steady_tail(tuple(x[begin:end] for x in signals), self.tolerances)
+        if end - s < self.end_stop:
+            return
+        self._fold(smooth[r:s])
+        self._number(float(smooth[s]))
+        self.ended(s, end, kept=False)
+
+    def ended(self, s: int, e: int, *, kept: bool) -> None:
+        """Record the dwell of buffer indices [s, e) as the one the recording ended in."""
+        time = self.buffer["time"]
+        left = max(e - s - self.k_start - self.k_end, 0)
+        md = float(np.median(self.buffer["md"][s:e]))
+        last = (self.station, self.position, float(time[s]), float(time[e - 1]), left, md, kept)
+        self.stations.last = last
 
     def end(self, signals: tuple[FloatArray, ...], s: int, limit: int, final: bool) -> int | None:
         """Where the dwell from buffer index ``s`` ends (buffer index); None if not yet."""

@@ -55,7 +55,7 @@ from pipeline.gyrocompass.earth_rate import (
 )
 from pipeline.gyrocompass.fit import Design, Fit, design, fit_all
 from pipeline.gyrocompass.options import CompassOptions
-from pipeline.gyrocompass.positions import IntArray, stacks
+from pipeline.gyrocompass.positions import IntArray, stacks, usual_positions
 from pipeline.gyrocompass.precision import OMEGA_DEG_H
 from pipeline.gyrocompass.systematic import (
     ToolErrors,
@@ -213,7 +213,8 @@ def compass(
         "md": [r[1] for r in rejected],
         "reason": [r[2] for r in rejected],
     }
-    return _table(rows, options), CompassRejects.compiled().make_table(rejects)
+    usual = usual_positions(readings.column("station").to_numpy())
+    return _table(rows, options, usual), CompassRejects.compiled().make_table(rejects)
 
 
 def _ambiguous(azimuth: float, inclination: float, probability: float) -> str:
@@ -227,9 +228,12 @@ def _ambiguous(azimuth: float, inclination: float, probability: float) -> str:
     )
 
 
-def _table(rows: list[_Row], options: CompassOptions) -> pa.Table:
-    """CompassStations from solved rows: angles in degrees, the poor-azimuth flag added."""
+def _table(rows: list[_Row], options: CompassOptions, usual: int) -> pa.Table:
+    """CompassStations from solved rows: angles in degrees, the poor-azimuth flag added, and
+    the fewer-positions flag where a station has fewer than the survey's ``usual``."""
     for row in rows:
+        if row.positions < usual:
+            row.flags.append("fewer_positions")
         if "azimuth_undefined" in row.flags:
             continue
         if not np.isfinite(row.sigma_azi) or np.degrees(row.sigma_azi) > options.max_sigma_azi:

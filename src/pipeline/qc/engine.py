@@ -34,6 +34,7 @@ from pipeline.gyrocompass.fit import Design, design, fit_all
 from pipeline.qc.faults import Equation, Finding, isolate
 from pipeline.qc.magnetic import diagnose_magnetic
 from pipeline.qc.options import CHECKS, DEFAULTS, QcOptions, QcStop
+from pipeline.qc.recording import recording_checks
 from pipeline.qc.reference import EarthReference, earth_reference
 from pipeline.qc.sensors import Sensors, float_column, readings_sensors
 from pipeline.qc.tables import STATUSES, QcResults, QcSummary
@@ -292,7 +293,9 @@ def station_checks(
         np.full(n, np.nan),
         np.full(n, np.nan),
     )
+    recorded, listed, at = recording_checks(readings, options, station, md)
     rows = vector_checks(sensors, earth, options, keys) + rest_checks(readings, options, keys)
+    rows += recorded
     if sensors.gyro_axes != "xyz" and n:
         rows.append(fit_checks(readings, sensors, earth, options))
     findings = isolate_rows(rows, station, sensors, earth, options)
@@ -311,7 +314,7 @@ def station_checks(
             else found
         )
     qc = results_table(rows)
-    summary = _summary(rows, station, md, findings, options)
+    summary = _summary(rows, listed, at, findings, options)
     raise_on_stop(qc, options, summary)
     return qc, summary
 

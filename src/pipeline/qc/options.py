@@ -120,6 +120,17 @@ class QcOptions(_Options, AccelerometerOptions):
         description="at rest: largest per-axis sample std of the accelerometers, m/s² (also "
         "the stationary-window threshold)",
     )
+    recording_end: Limit = Field(
+        Limit(limit=1.0),
+        description="the frame position the recording ended in: averaging time short of the "
+        "survey's usual (the median of its other positions; all of it when too short to "
+        "average), s",
+    )
+    missing_positions: Tolerance = Field(
+        Tolerance(),
+        description="frame positions a station lacks of the survey's usual number (the most "
+        "common number at its stations), count",
+    )
     rest_speed: float = Field(
         0.02, gt=0, description="windows: largest |dMD/dt| (LSQ slope) of a stationary one, m/s"
     )
@@ -182,6 +193,8 @@ CHECKS = (
     "earth_rate_fit",
     "rest_gyro",
     "rest_acc",
+    "recording_end",
+    "missing_positions",
     "motion_rate",
     "motion_accel",
     "gyro_saturation",

@@ -30,6 +30,12 @@ CHECK_TITLES: dict[str, CheckTitle] = {
     "rest_acc": CheckTitle(
         "Tool at rest: accelerometers", "largest accelerometer-axis std. deviation", True
     ),
+    "recording_end": CheckTitle(
+        "Frame position at the end of the recording",
+        "averaging time short of the usual",
+        True,
+    ),
+    "missing_positions": CheckTitle("Frame positions per station", "positions missing", True),
     "motion_rate": CheckTitle("Turn rate while moving", "largest |ω|", True),
     "motion_accel": CheckTitle("Shocks while moving", "largest ||a| − g₀|", True),
     "gyro_saturation": CheckTitle("Gyro range", "largest |gyro axis|", True),

@@ -17,6 +17,7 @@ from pipeline.continuous.tables import (
     FLAG_NAMES,
     FLAG_NEAR_VERTICAL,
     FLAG_NO_CLOSURE,
+    FLAG_SHORT_STOP,
 )
 
 AZI, SIGMA_AZI = "azi", "sigma_azi"
@@ -71,6 +72,14 @@ CONTINUOUS: dict[int, Flag] = {
         "error growing as 1/sin I; at such inclinations it hardly moves the position.",
         (AZI, SIGMA_AZI),
     ),
+    FLAG_SHORT_STOP: Flag(
+        FLAG_NAMES[FLAG_SHORT_STOP],
+        "a compassing stop this run's azimuth is tied to was read from fewer frame positions "
+        "than the survey's others (the recording ended, or positions were too short to "
+        "average): the stop's azimuth, and the closure of the run on it, rest on less data, "
+        "and the azimuths carry its larger uncertainty.",
+        (AZI,),
+    ),
 }
 """Continuous-mode bit flags."""
 
@@ -109,6 +118,15 @@ COMPASS: dict[str, Flag] = {
         "the Earth's rotation and remain in the azimuth.",
         (AZI,),
     ),
+    "fewer_positions": Flag(
+        "fewer frame positions",
+        "the azimuth was solved from fewer frame positions than the survey's other stations "
+        "(the recording ended, or positions were too short to average): the gyro bias and "
+        "drift were separated from fewer readings than at its neighbours, so this azimuth "
+        "rests on a different, weaker set of positions; with no more readings than unknowns "
+        "they cannot be checked against each other.",
+        (AZI, SIGMA_AZI),
+    ),
     "inconsistent": Flag(
         "inconsistent readings",
         "the readings at the frame positions disagree with each other more than their noise "
@@ -140,6 +158,13 @@ CHECKS: dict[str, str] = {
     "tool was not at rest.",
     "rest_acc": "the accelerometer readings scattered more than the limit during the "
     "station: the tool was not at rest.",
+    "recording_end": "the recording ended while the tool was still reading this station's "
+    "last frame position (the logger stopped, or the file was cut short): that position was "
+    "averaged over less time than the survey's others, or not at all when too little was "
+    "left, so the station rests on less data than its neighbours.",
+    "missing_positions": "the station has fewer frame positions than the survey's other "
+    "stations (the recording ended before its last positions, or they were too short to "
+    "average): its azimuth rests on a different, weaker set of positions.",
     "motion_rate": "while moving, the tool turned faster than the limit: a spin or a shock.",
     "motion_accel": "while moving, the tool accelerated more than the limit: shocks or jerks.",
     "gyro_saturation": "a gyro reading reached the sensor's full scale: those data are clipped.",
@@ -169,10 +194,18 @@ def compass_flag(name: str) -> Flag:
     )
 
 
+LABELS: dict[str, str] = {
+    "recording_end": "cut short by end of recording",
+    "missing_positions": "frame positions missing",
+}
+"""How the listing labels the failure of a check that is no measurement (others: the
+check's name and "failed")."""
+
+
 def failed_check(name: str) -> Flag:
     """The failure of QC check ``name``."""
     meaning = CHECKS.get(name, f"the check {name!r} found a value beyond its limit.")
-    return Flag(f"{name} failed", meaning, failed=True)
+    return Flag(LABELS.get(name, f"{name} failed"), meaning, failed=True)
 
 
 def long_course(max_course: float) -> Flag:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -161,8 +162,10 @@ def summary_rows(series: list[QcSeries]) -> list[tuple[str, ...]]:
     """Per check: unit, evaluated, passed, failed, not evaluated, worst |value|/limit."""
     rows: list[tuple[str, ...]] = []
     for s in series:
-        span = np.maximum(np.abs(np.where(s.value >= 0, s.high, s.low)), 1e-300)
-        worst = float(np.max(np.abs(s.value) / span)) if len(s.value) else float("nan")
+        span = np.abs(np.where(s.value >= 0, s.high, s.low))
+        with np.errstate(divide="ignore", invalid="ignore"):  # a zero band: 0, or undefined
+            ratio = np.where(span > 0, np.abs(s.value) / span, np.where(s.value == 0, 0, np.nan))
+        worst = float(np.max(ratio)) if len(s.value) else float("nan")
         rows.append(
             (
                 s.title or s.name,
@@ -295,6 +298,76 @@ def diagnosis_table(summary: pa.Table | None) -> Table | None:
         kind="qc",
         note="The sensor a failure points to, from fitting one fault at a time to the "
         "readings at rest; 'undetermined' where the data cannot tell.",
+    )
+
+
+RECORDING_CHECKS = ("recording_end", "missing_positions")
+"""Checks of what the recording holds (:mod:`pipeline.qc.recording`): their failures are
+listed with their numbers (:func:`recording_table`)."""
+
+
+RECORDING_TITLE = "Stations cut short or incomplete"
+
+
+def _recording_failures(qc: pa.Table | None, checks: tuple[str, ...]) -> list[dict[str, Any]]:
+    """The failed rows of ``checks`` in ``qc`` (none without it)."""
+    if qc is None:
+        return []
+    return [
+        r
+        for r in qc.select(["md", "position", "check", "passed", "detail"]).to_pylist()
+        if r["check"] in checks and r["passed"] is False
+    ]
+
+
+def recording_verdicts(qc: pa.Table | None) -> list[Verdict]:
+    """The summary's lines on the stops the end of the recording cut short and the stations
+    that lack frame positions (one line a station)."""
+    lines: dict[float, str] = {}
+    for r in _recording_failures(qc, RECORDING_CHECKS):
+        if r["check"] == RECORDING_CHECKS[0]:
+            lines[r["md"]] = (
+                f"The recording ended during the stop at MD {fmt(r['md'])} m, before its frame "
+                f"position {r['position'] + 1} was complete"
+            )
+        else:
+            lines.setdefault(r["md"], f"The station at MD {fmt(r['md'])} m lacks frame positions")
+    return [
+        Verdict(
+            "warn",
+            f"{line}: it rests on less data than its neighbours (see “{RECORDING_TITLE}” in "
+            "the QC section).",
+        )
+        for line in lines.values()
+    ]
+
+
+def recording_table(qc: pa.Table | None) -> Table | None:
+    """The stations the end of the recording cut short, or that lack frame positions: MD,
+    position (numbered from 1) and what was found, with the averaging time used (None:
+    none)."""
+    found = _recording_failures(qc, RECORDING_CHECKS)
+    if not found:
+        return None
+    return Table(
+        RECORDING_TITLE,
+        (
+            Column("MD, m", align="left"),
+            Column("Frame position"),
+            Column("Finding", align="left", wrap=True),
+        ),
+        tuple(
+            (
+                "—" if r["md"] is None else fmt(r["md"]),
+                "—" if r["position"] is None else str(r["position"] + 1),
+                r["detail"][:1].upper() + r["detail"][1:] + ".",
+            )
+            for r in found
+        ),
+        kind="qc",
+        note="The survey's usual averaging time and number of frame positions are those of "
+        "its other positions and stations; a station cut short rests on less data than its "
+        "neighbours.",
     )
 
 

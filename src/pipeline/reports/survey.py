@@ -52,6 +52,8 @@ from pipeline.reports.qc import (
     flag_table,
     gates_table,
     gates_verdict,
+    recording_table,
+    recording_verdicts,
     station_flags,
     summary_rows,
 )
@@ -167,7 +169,7 @@ def survey_document(
     added = parts.sections()  # before the method section's reference list: they may cite
     tool = survey_tool(traj, well)
     verdicts = [b for b in clearance.blocks if isinstance(b, Verdict)] if clearance else []
-    verdicts += caveat_verdicts(tables.drift)
+    verdicts += caveat_verdicts(tables.drift) + recording_verdicts(src.qc)
 
     sections = [
         Section(
@@ -206,9 +208,9 @@ def survey_document(
         sections.append(_uncertainty(shown, shown_path, statement_of(traj)))
     groups = all_series(src)
     explained = flag_table(flags or [])
-    diagnosed = diagnosis_table(src.summary)
-    if groups or explained is not None or diagnosed is not None or src.gates is not None:
-        sections.append(_qc(groups, explained, diagnosed, src.gates))
+    notes = [t for t in (diagnosis_table(src.summary), recording_table(src.qc)) if t]
+    if groups or explained is not None or notes or src.gates is not None:
+        sections.append(_qc(groups, explained, notes, src.gates))
     if _rows(tables.drift) or _rows(tables.calibration):
         drift = tables.drift if _rows(tables.drift) else None
         sections.append(
@@ -587,13 +589,13 @@ def _statement_words(stated: Statement, conf: str) -> str:
 def _qc(
     groups: list[tuple[str, list[plots.QcSeries]]],
     explained: Table | None,
-    diagnosed: Table | None,
+    notes: list[Table],
     gates: pa.Table | None = None,
 ) -> Section:
     blocks: list[Block] = []
     if gates is not None:
         blocks += [gates_verdict(gates), gates_table(gates)]
-    blocks += [t for t in (explained, diagnosed) if t is not None]
+    blocks += [t for t in (explained, *notes) if t is not None]
     columns = (
         Column("Check", align="left"),
         Column("Unit", align="left"),

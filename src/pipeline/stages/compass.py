@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import warnings
 from collections import Counter
 from collections.abc import Callable, Mapping
 
@@ -10,10 +11,11 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.earth.site import SiteParams, resolve_site
-from pipeline.errors import GyropipeError
+from pipeline.errors import GyropipeError, SurveyCheckWarning
 from pipeline.gyrocompass.options import CompassOptions
 from pipeline.gyrocompass.readings import ReadingOptions
 from pipeline.gyrocompass.readings_stream import stream_position_readings
+from pipeline.gyrocompass.recording_end import dropped_warning, recording_end
 from pipeline.gyrocompass.solve import compass
 from pipeline.gyrocompass.systematic import ToolErrors
 from pipeline.hookspecs import hookimpl
@@ -36,8 +38,17 @@ def readings_stage(
     inputs: Mapping[str, TableStream], params: ReadingOptions, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Average each station's frame positions (transients trimmed) from the streamed
-    samples, a station at a time; no samples, no readings."""
-    return {"readings": stream_position_readings(inputs["samples"], params)}
+    samples, a station at a time; no samples, no readings. A frame position the recording
+    ended in too soon to average is warned of (:class:`SurveyCheckWarning`)."""
+    readings = stream_position_readings(inputs["samples"], params)
+    end = recording_end(readings)
+    if end is not None and not end.kept:
+        warnings.warn(
+            f"stage {ctx.stage_id!r}: {dropped_warning(end, params.min_dwell)}",
+            SurveyCheckWarning,
+            stacklevel=2,
+        )
+    return {"readings": readings}
 
 
 def compass_stage(
