@@ -16,6 +16,7 @@ import pytest
 
 from hostile_inputs import (
     csv_wide,
+    las_wide,
     mcap_channel_metadata,
     mcap_chunk,
     nested_json,
@@ -27,11 +28,11 @@ from hostile_inputs import (
 )
 from pipeline.errors import InputFileError
 from pipeline.io import parquet
-from pipeline.io.csv.header import MAX_COLUMNS as CSV_COLUMNS
+from pipeline.io.limits import MAX_COLUMNS
 from pipeline.io.mcap import read_samples, write_samples
 from pipeline.io.mcap.options import McapOptions
 from pipeline.io.mcap.records import MIN_DECOMPRESSED
-from pipeline.io.parquet import MAX_COLUMNS, MIN_DECODED
+from pipeline.io.parquet import MIN_DECODED
 from pipeline.jsontext import MAX_DEPTH
 from pipeline.plugins import load_registry
 from pipeline.well import WellMetadata
@@ -195,6 +196,19 @@ def test_witsml_with_huge_text_or_attributes_parses_in_linear_time(tmp_path: Pat
 def test_a_csv_header_of_too_many_columns_is_refused_at_its_line(tmp_path: Path):
     """Issue 32 item 16: a 12 MB CSV of 10⁶ columns converted in 26 s of CPU and 973 MB."""
     path = tmp_path / "wide.csv"
-    path.write_bytes(csv_wide(CSV_COLUMNS - 2))
+    path.write_bytes(csv_wide(MAX_COLUMNS - 2))
     stderr = refused_by_convert(path, "stations", ".parquet")
     assert f"{path}:1: 1,001 columns separated by ',', more than 1,000: refused" in stderr
+
+
+def test_a_las_file_of_too_many_curves_is_refused_at_its_line(tmp_path: Path):
+    """Fuzz campaign (seed 1212, by hand): a 2 MB LAS of 10⁵ curves converted in 12 s and
+    660 MB (CSV and Parquet inputs were bounded, LAS was not); refused at curve 1,001."""
+    path = tmp_path / "wide.las"
+    path.write_bytes(las_wide(MAX_COLUMNS - 3))  # with DEPT, INCL and AZIM: 1,000 curves
+    assert load_registry().read(path, "stations")[0].num_rows == 2
+    path.write_bytes(las_wide(100_000))
+    start = time.process_time()
+    stderr = refused_by_convert(path, "log", ".csv")
+    assert time.process_time() - start < 2.0
+    assert f"{path}:1009: more than 1,000 curves: refused" in stderr  # curve 1,001's line
