@@ -212,3 +212,47 @@ def test_a_las_file_of_too_many_curves_is_refused_at_its_line(tmp_path: Path):
     stderr = refused_by_convert(path, "log", ".csv")
     assert time.process_time() - start < 2.0
     assert f"{path}:1009: more than 1,000 curves: refused" in stderr  # curve 1,001's line
+
+
+MEGABYTE = "x" * 1_000_000
+HUGE_VALUES = {
+    "cell.las": (
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
+        " NULL. -999.25 :\n~Curve\n DEPT.M : depth\n INCL.DEG : inclination\n"
+        f" AZIM.DEG : azimuth (true north)\n~A\n0 0 0\n100 {MEGABYTE} 10\n",
+        "cell.las:14 (column 'INCL'): expected a number, got 'xxx",
+    ),
+    "uom.xml": (
+        witsml_text(1).decode().replace('<incl uom="dega">', f'<incl uom="{MEGABYTE}">', 1),
+        "uom.xml:2: <incl>: uom 'xxx",
+    ),
+    "north.csv": (
+        f"North Reference: {MEGABYTE}\nMD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n",
+        "north.csv:1: north reference 'xxx",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HUGE_VALUES))
+def test_a_megabyte_value_is_quoted_by_its_ends_in_a_one_line_error(tmp_path: Path, name: str):
+    """Fuzz campaign (seed 1212, by hand): a file's megabyte cell, unit or header value was
+    quoted in full, a megabyte error line (every reader, and pipeline values too)."""
+    text, where = HUGE_VALUES[name]
+    path = tmp_path / name
+    path.write_text(text)
+    stderr = refused_by_convert(path, "stations", ".csv")
+    assert len(stderr) < 500 and stderr.count("\n") == 1, stderr[:1000]
+    assert f"{tmp_path}/{where}" in stderr
+    assert "x" * 60 + "…" + "x" * 20 + "' (1,000,000 characters)" in stderr
+
+
+def test_a_megabyte_pipeline_value_is_quoted_by_its_ends(tmp_path: Path):
+    path = tmp_path / "survey.yaml"
+    path.write_text(
+        "name: survey\nversion: '1.0'\ninputs:\n  stations: {description: stations}\n"
+        f"stages:\n  - id: read\n    uses: read_stations\n    with: {{input: stations, "
+        f"reader: {MEGABYTE}}}\n"
+    )
+    result = gyropipe_cli("validate", str(path))
+    assert result.returncode == 2 and len(result.stderr) < 1000, result.stderr[:1000]
+    assert f"{path}:8:" in result.stderr and "' (1,000,000 characters)" in result.stderr
