@@ -256,3 +256,14 @@ def test_a_megabyte_pipeline_value_is_quoted_by_its_ends(tmp_path: Path):
     result = gyropipe_cli("validate", str(path))
     assert result.returncode == 2 and len(result.stderr) < 1000, result.stderr[:1000]
     assert f"{path}:8:" in result.stderr and "' (1,000,000 characters)" in result.stderr
+
+
+def test_a_megabyte_well_name_no_writer_holds_is_quoted_by_its_ends(tmp_path: Path):
+    """Fuzz finding (seed 1212, witsml #335): the WITSML writer's refusal of a megabyte well
+    name (it holds 64 characters) quoted the name in full."""
+    path = tmp_path / "named.xml"
+    path.write_bytes(witsml_text(1_000_000))
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "copy.xml"))
+    assert result.returncode == 2 and len(result.stderr) < 500, result.stderr[:1000]
+    assert f"{path}: the stations read cannot be written to copy.xml" in result.stderr
+    assert "' (1,000,000 characters) is longer than the 64 characters" in result.stderr
