@@ -30,4 +30,5 @@ def scaled(values: np.ndarray, factor: float, out: np.ndarray | None = None) -> 
     its row by the contract's finite check, without NumPy's overflow warning (printed over
     the reader's located error)."""
     with np.errstate(over="ignore"):
-        return np.multiply(values, factor, out=out)
+        product: np.ndarray = np.multiply(values, factor, out=out)
+    return product
