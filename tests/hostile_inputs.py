@@ -146,6 +146,17 @@ def csv_wide(columns: int) -> bytes:
     return f"md [m],inc [deg],azi true [deg],{names}\n0,0,0,{zeros}\n100,1,10,{zeros}\n".encode()
 
 
+def las_wide(curves: int) -> bytes:
+    """A LAS 2.0 stations file with ``curves`` extra curves (two rows)."""
+    names = "".join(f" C{i}.M : curve {i}\n" for i in range(curves))
+    zeros = " 0" * curves
+    return (
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
+        " NULL. -999.25 :\n~Curve\n DEPT.M : depth\n INCL.DEG : inclination\n"
+        f" AZIM.DEG : azimuth (true north)\n{names}~A\n0 0 0{zeros}\n100 1 10{zeros}\n"
+    ).encode()
+
+
 def yaml_binary_aliases(anchor_chars: int, aliases: int) -> bytes:
     """A pipeline whose ``!!binary`` anchor of ``anchor_chars`` base64 characters is
     aliased ``aliases`` times."""
@@ -182,6 +193,7 @@ HOSTILE: dict[str, tuple[Generator, ...]] = {
         lambda r: (witsml_attribute(_pick(r, 1_000_000, 5_000_000)), "huge attribute"),
     ),
     "csv-stations": (lambda r: (csv_wide(_pick(r, 1_001, 100_000)), "too many columns"),),
+    "las-stations": (lambda r: (las_wide(_pick(r, 998, 100_000)), "too many curves"),),
     "pipeline": (
         lambda r: (yaml_binary_aliases(100_000, _pick(r, 200, 20_000)), "binary aliases"),
         lambda r: (b"name: p\nversion: 1\nwhen: !!timestamp abc\n", "bad timestamp"),

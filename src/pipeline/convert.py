@@ -27,6 +27,7 @@ from pipeline.errors import (
     ReaderChoiceError,
     ReaderOptionsError,
     WrongKindError,
+    bounded,
 )
 from pipeline.hashing import file_kind
 from pipeline.registry import Registry, WriterDef
@@ -192,6 +193,6 @@ def convert(
     except ValueError as exc:  # a table the format cannot hold: say which file, and where to
         raise ValueError(
             f"{source}: the {read_as} read cannot be written to {target.name} "
-            f"(writer {writer.name!r}): {exc}"
+            f"(writer {writer.name!r}): {bounded(str(exc))}"
         ) from exc
     return Converted(table, target, read_as)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import difflib
 import os
+import re
 import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -18,8 +19,30 @@ def did_you_mean(name: str, known: Iterable[str]) -> str:
     return f"; did you mean {', '.join(map(repr, close))}?" if close else ""
 
 
+LONG_QUOTE = 300
+"""Characters of quoted text (a cell, a header value, a unit: what the file wrote) past
+which a message shows only its ends (:func:`bounded`)."""
+_LONG_QUOTE = re.compile(f"'[^'\\n]{{{LONG_QUOTE},}}'|\"[^\"\\n]{{{LONG_QUOTE},}}\"")
+
+
+def bounded(message: str) -> str:
+    """``message`` with each quoted text longer than :data:`LONG_QUOTE` characters shown by
+    its ends and length (``'xxxx…xxxx' (1,000,000 characters)``): a megabyte cell or header
+    value a file holds makes a one-line error, not a megabyte one."""
+
+    def ends(match: re.Match[str]) -> str:
+        text = match.group()
+        quote, inner = text[0], text[1:-1]
+        return f"{quote}{inner[:60]}…{inner[-20:]}{quote} ({len(inner):,} characters)"
+
+    return _LONG_QUOTE.sub(ends, message) if len(message) > LONG_QUOTE else message
+
+
 class GyropipeError(Exception):
-    """Base of every error gyropipe raises on purpose."""
+    """Base of every error gyropipe raises on purpose (its text :func:`bounded`)."""
+
+    def __init__(self, *args: object) -> None:
+        super().__init__(*(bounded(a) if isinstance(a, str) else a for a in args))
 
 
 @dataclass(frozen=True)
@@ -45,6 +68,9 @@ class Problem:
     location: Location
     message: str
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "message", bounded(self.message))
+
     def __str__(self) -> str:
         return f"{self.location}: {self.message}"
 
@@ -66,7 +92,7 @@ class InputFileError(GyropipeError):
         self.path = str(path)
         self.line = line
         self.column = column
-        self.reason = message
+        self.reason = message = bounded(message)
         where = f"{self.path}:{line}" if line else self.path
         col = f" (column {column!r})" if column else ""
         super().__init__(f"{where}{col}: {message}")
@@ -97,7 +123,7 @@ class SurveyCheckWarning(UserWarning):
 def warn_input(path: str | Path, message: str, line: int = 0) -> None:
     """Issue an :class:`InputFileWarning` located at ``path:line``."""
     where = f"{path}:{line}" if line else str(path)
-    warnings.warn(f"{where}: {message}", InputFileWarning, stacklevel=2)
+    warnings.warn(f"{where}: {bounded(message)}", InputFileWarning, stacklevel=2)
 
 
 WARNED_EACH = 10

@@ -16,6 +16,7 @@ import pytest
 
 from hostile_inputs import (
     csv_wide,
+    las_wide,
     mcap_channel_metadata,
     mcap_chunk,
     nested_json,
@@ -27,11 +28,11 @@ from hostile_inputs import (
 )
 from pipeline.errors import InputFileError
 from pipeline.io import parquet
-from pipeline.io.csv.header import MAX_COLUMNS as CSV_COLUMNS
+from pipeline.io.limits import MAX_COLUMNS
 from pipeline.io.mcap import read_samples, write_samples
 from pipeline.io.mcap.options import McapOptions
 from pipeline.io.mcap.records import MIN_DECOMPRESSED
-from pipeline.io.parquet import MAX_COLUMNS, MIN_DECODED
+from pipeline.io.parquet import MIN_DECODED
 from pipeline.jsontext import MAX_DEPTH
 from pipeline.plugins import load_registry
 from pipeline.well import WellMetadata
@@ -195,6 +196,74 @@ def test_witsml_with_huge_text_or_attributes_parses_in_linear_time(tmp_path: Pat
 def test_a_csv_header_of_too_many_columns_is_refused_at_its_line(tmp_path: Path):
     """Issue 32 item 16: a 12 MB CSV of 10⁶ columns converted in 26 s of CPU and 973 MB."""
     path = tmp_path / "wide.csv"
-    path.write_bytes(csv_wide(CSV_COLUMNS - 2))
+    path.write_bytes(csv_wide(MAX_COLUMNS - 2))
     stderr = refused_by_convert(path, "stations", ".parquet")
     assert f"{path}:1: 1,001 columns separated by ',', more than 1,000: refused" in stderr
+
+
+def test_a_las_file_of_too_many_curves_is_refused_at_its_line(tmp_path: Path):
+    """Fuzz campaign (seed 1212, by hand): a 2 MB LAS of 10⁵ curves converted in 12 s and
+    660 MB (CSV and Parquet inputs were bounded, LAS was not); refused at curve 1,001."""
+    path = tmp_path / "wide.las"
+    path.write_bytes(las_wide(MAX_COLUMNS - 3))  # with DEPT, INCL and AZIM: 1,000 curves
+    assert load_registry().read(path, "stations")[0].num_rows == 2
+    path.write_bytes(las_wide(100_000))
+    start = time.process_time()
+    stderr = refused_by_convert(path, "log", ".csv")
+    assert time.process_time() - start < 2.0
+    assert f"{path}:1009: more than 1,000 curves: refused" in stderr  # curve 1,001's line
+
+
+MEGABYTE = "x" * 1_000_000
+HUGE_VALUES = {
+    "cell.las": (
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
+        " NULL. -999.25 :\n~Curve\n DEPT.M : depth\n INCL.DEG : inclination\n"
+        f" AZIM.DEG : azimuth (true north)\n~A\n0 0 0\n100 {MEGABYTE} 10\n",
+        "cell.las:14 (column 'INCL'): expected a number, got 'xxx",
+    ),
+    "uom.xml": (
+        witsml_text(1).decode().replace('<incl uom="dega">', f'<incl uom="{MEGABYTE}">', 1),
+        "uom.xml:2: <incl>: uom 'xxx",
+    ),
+    "north.csv": (
+        f"North Reference: {MEGABYTE}\nMD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n",
+        "north.csv:1: north reference 'xxx",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HUGE_VALUES))
+def test_a_megabyte_value_is_quoted_by_its_ends_in_a_one_line_error(tmp_path: Path, name: str):
+    """Fuzz campaign (seed 1212, by hand): a file's megabyte cell, unit or header value was
+    quoted in full, a megabyte error line (every reader, and pipeline values too)."""
+    text, where = HUGE_VALUES[name]
+    path = tmp_path / name
+    path.write_text(text)
+    stderr = refused_by_convert(path, "stations", ".csv")
+    assert len(stderr) < 500 and stderr.count("\n") == 1, stderr[:1000]
+    assert f"{tmp_path}/{where}" in stderr
+    assert "x" * 60 + "…" + "x" * 20 + "' (1,000,000 characters)" in stderr
+
+
+def test_a_megabyte_pipeline_value_is_quoted_by_its_ends(tmp_path: Path):
+    path = tmp_path / "survey.yaml"
+    path.write_text(
+        "name: survey\nversion: '1.0'\ninputs:\n  stations: {description: stations}\n"
+        f"stages:\n  - id: read\n    uses: read_stations\n    with: {{input: stations, "
+        f"reader: {MEGABYTE}}}\n"
+    )
+    result = gyropipe_cli("validate", str(path))
+    assert result.returncode == 2 and len(result.stderr) < 1000, result.stderr[:1000]
+    assert f"{path}:8:" in result.stderr and "' (1,000,000 characters)" in result.stderr
+
+
+def test_a_megabyte_well_name_no_writer_holds_is_quoted_by_its_ends(tmp_path: Path):
+    """Fuzz finding (seed 1212, witsml #335): the WITSML writer's refusal of a megabyte well
+    name (it holds 64 characters) quoted the name in full."""
+    path = tmp_path / "named.xml"
+    path.write_bytes(witsml_text(1_000_000))
+    result = gyropipe_cli("convert", str(path), str(tmp_path / "copy.xml"))
+    assert result.returncode == 2 and len(result.stderr) < 500, result.stderr[:1000]
+    assert f"{path}: the stations read cannot be written to copy.xml" in result.stderr
+    assert "' (1,000,000 characters) is longer than the 64 characters" in result.stderr

@@ -291,3 +291,19 @@ def test_a_time_past_the_log_time_range_is_written_without_a_warning(tmp_path: P
     with path.open("rb") as fh:
         stamps = [m.log_time for _, _, m in make_reader(fh).iter_messages()]
     assert stamps == [2**64 - 1]  # one batch, logged at its first sample: clamped
+
+
+def test_a_json_value_scaled_past_the_largest_double_is_refused_without_a_warning(
+    tmp_path: Path,
+):
+    """Fuzz finding (seed 1212, as in LAS): a per-sample JSON acceleration of -1e308 g made
+    NumPy warn of an overflow scaling it to m/s²; it is refused as not finite, naming it."""
+    messages = flat_messages(imu_values(6) / [1, 1, 1, 9.80665, 9.80665, 9.80665])
+    messages[3]["gz"] = -1e308
+    path = tmp_path / "json.mcap"
+    write_json(path, messages)
+    units = {"columns": {"time": "t"}, "units": {"gyro": "deg/h", "acc": "g", "time": "s"}}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (NumPy's "overflow encountered in multiply")
+        with pytest.raises(InputFileError, match=r"json.mcap.*acc_z.*finite"):
+            load_registry().read(path, "samples", reader="mcap", options=units)

@@ -427,6 +427,18 @@ def _bad_station(**replace: str) -> list[str]:
         (document(_bad_station(azi="4_5")), {}, "<azi> '4_5' is not a number", 8),  # not 45
         (document(_bad_station(azi="-1e999")), {}, "<azi> '-1e999' is not a finite number", 8),
         (document(_bad_station(md="inf")), {}, "<md> 'inf' is not a finite number", 8),
+        (
+            document(_bad_station(md="100", inc="-999.2500")),  # the null, to 4 decimals
+            {},
+            "<incl> -999.2500 is a null marker: expected an angle",
+            8,
+        ),
+        (
+            document(_bad_station(md="-999.25")),
+            {},
+            "<md> -999.25 is a null marker: expected a length",
+            8,
+        ),
         (document(_bad_station(md_uom="furlong")), {}, "uom 'furlong' is not supported", 8),
         (
             document([STATION.replace(' uom="{md_uom}"', "").format(i=0, md=0, inc=0, azi=0)]),

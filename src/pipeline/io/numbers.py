@@ -1,8 +1,11 @@
-"""A number as a file writes it: decimal text, not Python's literal syntax."""
+"""A number as a file writes it: decimal text, not Python's literal syntax; values scaled
+to canonical units."""
 
 from __future__ import annotations
 
-__all__ = ["file_integer", "file_number"]
+import numpy as np
+
+__all__ = ["file_integer", "file_number", "scaled"]
 
 
 def file_number(text: str) -> float:
@@ -19,3 +22,13 @@ def file_integer(text: str) -> int:
     if "_" in text:
         raise ValueError(f"not an integer: {text!r}")
     return int(text)
+
+
+def scaled(values: np.ndarray, factor: float, out: np.ndarray | None = None) -> np.ndarray:
+    """``values`` times a unit's conversion ``factor``: a new array, or ``out`` (which may be
+    ``values``: scaled in place). A value scaled past the largest double is inf, refused at
+    its row by the contract's finite check, without NumPy's overflow warning (printed over
+    the reader's located error)."""
+    with np.errstate(over="ignore"):
+        product: np.ndarray = np.multiply(values, factor, out=out)
+    return product

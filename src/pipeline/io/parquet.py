@@ -29,6 +29,7 @@ from pipeline import jsontext
 from pipeline.contracts import NORTH_KEY, TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
+from pipeline.io.limits import MAX_COLUMNS
 from pipeline.io.north import stated_north
 from pipeline.io.threads import reader_threads
 from pipeline.registry import ReaderDef, WriterDef
@@ -41,8 +42,6 @@ READ_BUFFER = 1 << 20
 """Bytes read from the file at a time when streaming."""
 WRITE_BUFFER = 1 << 20
 """Bytes gathered before a write to the file (:func:`_sink`)."""
-MAX_COLUMNS = 1_000
-"""Most (leaf) columns a Parquet input may have (a survey table has tens)."""
 MAX_INFLATION = 100
 """Most times its own size a Parquet input may decode to (float sensor data: ~1.5)."""
 MIN_DECODED = 64 << 20

@@ -130,6 +130,7 @@ from pipeline.io.csv.rows import (
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.north import stated_north
 from pipeline.io.nulls import null_markers, refuse_null_markers, value_range
+from pipeline.io.numbers import scaled
 from pipeline.io.precision import for_export
 from pipeline.io.uncertainty_columns import UNCERTAINTY_COLUMNS, Stated, readable, stating
 from pipeline.registry import Claim, ReaderDef, WriterDef
@@ -367,8 +368,7 @@ def _scaled(values: Any, factor: float) -> Any:
         return pc.multiply(values, factor)
     for chunk, buffer in zip(chunks, buffers, strict=True):
         data = np.frombuffer(buffer, np.float64, len(chunk), chunk.offset * 8)
-        with np.errstate(over="ignore"):  # a value scaled past the doubles: inf, refused
-            np.multiply(data, factor, out=data)  # by the contract's finite check at its row
+        scaled(data, factor, out=data)
     return values
 
 

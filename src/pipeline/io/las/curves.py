@@ -36,6 +36,7 @@ from pipeline.io.las.log import describe
 from pipeline.io.las.options import LasOptions
 from pipeline.io.las.rows import Data, Floats, Lines, Mask
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
+from pipeline.io.numbers import scaled
 from pipeline.io.uncertainty_columns import UNCERTAINTY_COLUMNS
 from pipeline.tables import RawSamples, Stations
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of
@@ -316,8 +317,8 @@ def columns(
         elif name in TEXT_COLUMNS:
             columns[name] = _labels(values, mask)
         else:
-            scaled = values * factors[name] if factors[name] != 1.0 else values
-            columns[name] = _with_nulls(scaled, mask)
+            factor = factors[name]
+            columns[name] = _with_nulls(scaled(values, factor) if factor != 1.0 else values, mask)
     columns[SOURCE_LINE] = pa.array(data.lines)
     return columns
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Literal
 
 from pipeline.errors import InputFileError, WrongKindError
+from pipeline.io.limits import MAX_COLUMNS
 
 SNIFF_BYTES = 64 * 1024
 BOM = b"\xef\xbb\xbf"
@@ -262,6 +263,8 @@ def parse_header(path: Path, lines: list[str], data_set: str = LOG) -> Header:
         if text.startswith("~"):
             role = section_role(text, data_set)
         elif role is not None:
+            if role == "curves" and len(sections[role]) == MAX_COLUMNS:
+                raise InputFileError(path, f"more than {MAX_COLUMNS:,} curves: refused", number)
             sections[role].append(_item(path, text, number, role))
     version, wrapped, delimiter = _version(path, sections["version"])
     well = sections["well"]

@@ -57,9 +57,9 @@ from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
 NULL = NULL_MARKERS[0]
+"""The NULL value written (-999.25)."""
 EXACT_INTEGER = 2**53
 """The largest integer a double (what LAS readers read every value as) holds exactly."""
-"""The NULL value written (-999.25)."""
 READ_AS_NUMBERS = frozenset(name for kind in KINDS.values() for name in kind.columns)
 """The columns the LAS readers read, each as numbers (a survey id from a numeric curve): a
 text column of one of these names is not written."""

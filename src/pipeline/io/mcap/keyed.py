@@ -44,6 +44,7 @@ from pipeline.io.mcap.records import (
     iter_payloads,
 )
 from pipeline.io.mnemonics import CURVES, canonical_name
+from pipeline.io.numbers import scaled
 from pipeline.io.threads import reader_threads
 from pipeline.units import conversion_factor
 
@@ -323,7 +324,7 @@ def mapped(
                     f"metadata 'units' (a JSON object key → unit)"
                 )
             try:
-                columns[canonical] = values * conversion_factor(unit, quantity)
+                columns[canonical] = scaled(values, conversion_factor(unit, quantity))
             except UnitError as exc:
                 raise file.fail(f"{where}, key {key!r}: {exc}") from None
     time = columns.pop("time", None)

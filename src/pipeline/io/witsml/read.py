@@ -324,9 +324,10 @@ def _station(path: Path, node: Node, opts: WitsmlOptions) -> dict[str, Any]:
                 if opts.null_stations == "drop" and column != "md":
                     row[column] = float("nan")
                     continue
+                article = "an" if quantity[0] in "aeiou" else "a"
                 raise InputFileError(
                     path,
-                    f"{what}{where}: expected a {quantity} (or the reader option "
+                    f"{what}{where}: expected {article} {quantity} (or the reader option "
                     "null_stations: drop to leave such stations out)",
                     line=child.line if child is not None else node.line,
                     column=element,
