@@ -503,7 +503,6 @@ def _heun_series(
         sin_a, cos_a = (np.full(azi.size, x[0]) for x in sin_cos(azi[:1]))
     else:
         sin_a, cos_a = sin_cos(azi)
-    spare = np.empty(azi.size), np.empty(azi.size)
     for _ in range(_NEWTON_ITERATIONS):
         f, df = rate(sin_a, cos_a, slice(None))
         lead = step * f[:-1]
@@ -528,11 +527,7 @@ def _heun_series(
         largest = float(max(np.max(correction), -np.min(correction)))
         if not growth * largest**2 > tolerance:  # (NaN input propagates)
             return azi
-        # turned into the spare pair (the first sample's never changes), which then holds them
-        spare[0][0], spare[1][0] = sin_a[0], cos_a[0]
-        turned = spare[0][1:], spare[1][1:]
-        turned_sin_cos(sin_a[1:], cos_a[1:], correction, azi[1:], largest=largest, out=turned)
-        (sin_a, cos_a), spare = spare, (sin_a, cos_a)
+        sin_a[1:], cos_a[1:] = turned_sin_cos(sin_a[1:], cos_a[1:], correction, azi[1:])
     raise ContinuousError(
         f"the azimuth integration did not converge in {_NEWTON_ITERATIONS} Newton iterations "
         f"(last correction {largest:.3g} rad)"

@@ -111,47 +111,36 @@ class NoiseSums:
             self.prefix[row, keys] = running[: ends.size]
             self.carry[row] = running[-1]
         stations = np.flatnonzero((self.index >= lo) & (self.index < hi))
-        arrays = (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
-        # the stations whose neighbourhood lies inside the arrays apart from the others (by
-        # the run's ends, or the first's at sample 0): their rows are windows of the arrays,
-        # the others' are gathered with zeros beyond them (each ~4× the CPU)
-        first = self.index[stations] - self.halo - start
-        inside = (first >= 0) & (first + self.offsets.size <= step.size)
-        for group in (stations[inside], stations[~inside]):
-            for b in range(0, group.size, self.block):
-                self._near(group[b : b + self.block], start, arrays)
-
-    def _near(self, which: NDArray[np.int64], start: int, arrays: tuple[FloatArray, ...]) -> None:
-        """The near sums (:attr:`quadratic`) of the stations ``which`` from :meth:`add`'s
-        per-sample ``arrays`` (step, ∂Ȧ/∂I, ∂Ȧ/∂İ, sin I, and the free rows q and odo) given
-        from sample ``start`` on."""
-        length = arrays[0].size
-        columns = self.index[which, None] + self.offsets[None, :]  # sample index
-        first = columns[:, 0] - start
-        if first.min() >= 0 and first.max() + self.offsets.size <= length:  # rows inside
-            near = [sliding_window_view(x, self.offsets.size)[first] for x in arrays]
-        else:  # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
-            given = (columns >= start) & (columns < start + length)
-            at = np.clip(columns - start, 0, length - 1)
-            near = [np.where(given, x[at], 0.0) for x in arrays]
-        step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = near
-        qb, ob = self._station_rows(step_n, d_inc_n, d_rate_n, sin_n)
-        window = slice(self.halo - self.near, self.halo + self.near + 1)  # |offset| ≤ near
-        qa, oa = q_n[:, window] - qb, odo_n[:, window] - ob
-        within = (columns[:, window] >= 0) & (columns[:, window] < self.size)
-        if not within.all():  # a neighbourhood past the run's ends
-            qb, ob, qa, oa = (np.where(within, x, 0.0) for x in (qb, ob, qa, oa))
-        self.quadratic[which] = np.stack(
-            [
-                np.sum(qb * qb, axis=1),
-                np.sum(qb * qa, axis=1),
-                np.sum(qa * qa, axis=1),
-                np.sum(ob * ob, axis=1),
-                np.sum(ob * oa, axis=1),
-                np.sum(oa * oa, axis=1),
-            ],
-            axis=1,
-        )
+        length = step.size
+        for b in range(0, stations.size, self.block):
+            which = stations[b : b + self.block]
+            columns = self.index[which, None] + self.offsets[None, :]  # sample index
+            arrays = (step, d_inc, d_inc_rate, sin_i, q_free, odo_free)
+            first = columns[:, 0] - start
+            if first.min() >= 0 and first.max() + self.offsets.size <= length:  # rows inside
+                near = [sliding_window_view(x, self.offsets.size)[first] for x in arrays]
+            else:  # zeros beyond the arrays, which end at the run's ends or ≥ halo beyond [lo, hi)
+                given = (columns >= start) & (columns < start + length)
+                at = np.clip(columns - start, 0, length - 1)
+                near = [np.where(given, x[at], 0.0) for x in arrays]
+            step_n, d_inc_n, d_rate_n, sin_n, q_n, odo_n = near
+            qb, ob = self._station_rows(step_n, d_inc_n, d_rate_n, sin_n)
+            window = slice(self.halo - self.near, self.halo + self.near + 1)  # |offset| ≤ near
+            qa, oa = q_n[:, window] - qb, odo_n[:, window] - ob
+            within = (columns[:, window] >= 0) & (columns[:, window] < self.size)
+            if not within.all():  # a neighbourhood past the run's ends
+                qb, ob, qa, oa = (np.where(within, x, 0.0) for x in (qb, ob, qa, oa))
+            self.quadratic[which] = np.stack(
+                [
+                    np.sum(qb * qb, axis=1),
+                    np.sum(qb * qa, axis=1),
+                    np.sum(qa * qa, axis=1),
+                    np.sum(ob * ob, axis=1),
+                    np.sum(ob * oa, axis=1),
+                    np.sum(oa * oa, axis=1),
+                ],
+                axis=1,
+            )
 
     def _station_rows(
         self, step: FloatArray, d_inc: FloatArray, d_inc_rate: FloatArray, sin_i: FloatArray

@@ -56,13 +56,7 @@ _TURN_REMAINDER = 2.0**-60
 
 
 def turned_sin_cos(
-    sin: FloatArray,
-    cos: FloatArray,
-    turn: FloatArray,
-    angle: FloatArray,
-    *,
-    largest: float | None = None,
-    out: tuple[FloatArray, FloatArray] | None = None,
+    sin: FloatArray, cos: FloatArray, turn: FloatArray, angle: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Sine and cosine of ``angle`` = a + ``turn`` (rad) from those of a, rotated by the turn:
     ``sin(a + d) = sin a + (cos a·sin d − sin a·(1 − cos d))`` and likewise the cosine, with
@@ -70,16 +64,10 @@ def turned_sin_cos(
     for a truncation error under 2⁻⁶⁰ (one or two for the Newton corrections and predictor
     steps of an azimuth integration) — a quarter of :func:`sin_cos`'s CPU; the rounding adds
     ≤ 2.3e-16 (absolute) to that of ``sin`` and ``cos``. A turn beyond :data:`TURN_REACH`
-    (or not finite) takes :func:`sin_cos` of ``angle`` instead. ``largest``: the largest
-    |turn| where the caller has it (NaN where a turn is NaN); ``out``: two arrays, neither
-    ``sin`` nor ``cos``, that take the sine and cosine (else new ones)."""
-    if largest is None:
-        largest = float(max(np.max(turn), -np.min(turn))) if turn.size else 0.0  # (NaN: NaN)
+    (or not finite) takes :func:`sin_cos` of ``angle`` instead."""
+    largest = float(max(np.max(turn), -np.min(turn))) if turn.size else 0.0  # (NaN: NaN)
     if not largest <= TURN_REACH:
-        if out is None:
-            return sin_cos(angle)
-        out[0][...], out[1][...] = sin_cos(angle)
-        return out
+        return sin_cos(angle)
     square = np.multiply(turn, turn)
     terms = 0  # sin d = d·Σ (−d²)ʲ/(2j + 1)!, 1 − cos d = d²·Σ (−d²)ʲ/(2j + 2)!, j ≤ terms
     while largest ** (2 * terms + 3) / math.factorial(2 * terms + 3) > _TURN_REMAINDER:
@@ -97,10 +85,10 @@ def turned_sin_cos(
             odd *= square
         np.subtract(1.0, odd, out=odd)
         sine = np.multiply(odd, turn, out=odd)
-    new_sin = np.multiply(cos, sine, out=None if out is None else out[0])
+    new_sin = np.multiply(cos, sine)
     new_sin -= np.multiply(sin, versine, out=square)
     new_sin += sin
-    new_cos = np.multiply(sin, sine, out=square if out is None else out[1])
+    new_cos = np.multiply(sin, sine, out=square)
     new_cos += np.multiply(cos, versine, out=versine)
     np.subtract(cos, new_cos, out=new_cos)
     return new_sin, new_cos
