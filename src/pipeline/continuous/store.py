@@ -234,15 +234,19 @@ class CarriedUnwrap:
         step = np.empty(angle.size)  # from the last angle of the chunk before
         step[0] = angle[0] - (angle[0] if self._last is None else self._last)
         np.subtract(angle[1:], angle[:-1], out=step[1:])
-        if (np.abs(step) < np.pi).all():  # one correction throughout: added as a scalar
+        within = np.abs(step) < np.pi
+        if within.all():  # one correction throughout: added as a scalar
             self._last, self._correction = float(angle[-1]), self._correction + 0.0
             same: FloatArray = angle + self._correction
             return same
-        fix = np.mod(step + np.pi, 2 * np.pi) - np.pi
-        fix[(fix == -np.pi) & (step > 0)] = np.pi
-        fix = fix - step
-        fix[np.abs(step) < np.pi] = 0.0
-        corrections = carried_cumsum(fix, self._correction)
+        # np.unwrap's correction at the steps that reach π (or NaN), zeros elsewhere
+        wraps = np.flatnonzero(~within)
+        jump = step[wraps]
+        fix = np.mod(jump + np.pi, 2 * np.pi) - np.pi
+        fix[(fix == -np.pi) & (jump > 0)] = np.pi
+        fixes = np.zeros(angle.size)
+        fixes[wraps] = fix - jump
+        corrections = carried_cumsum(fixes, self._correction)
         self._last, self._correction = float(angle[-1]), float(corrections[-1])
         out: FloatArray = angle + corrections
         return out
