@@ -117,12 +117,7 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
         if ends.size and ends[-1] == time.size:
             last = (int(starts[-1]), int(ends[-1]), int(station[-1]), int(position[-1]))
             if ends[-1] - starts[-1] - k_start - k_end < need:  # too short: dropped, reported
-                starts, ends, station, position = (
-                    starts[:-1],
-                    ends[:-1],
-                    station[:-1],
-                    position[:-1],
-                )
+                starts, ends, station, position = (x[:-1] for x in markers)
         check_lengths(ends - starts - k_start - k_end, need, time[starts], station, position)
     else:
         if angle is None:

@@ -59,7 +59,7 @@ from pipeline.uncertainty.engine import (
     OutsideValidityError,
     find_model,
 )
-from pipeline.uncertainty.tieon import TieOnRecord, outside_tie, warn_missing, with_tie_on
+from pipeline.uncertainty.tieon import TieOnRecord, outside_ties, warn_missing, with_tie_on
 from pipeline.well import AGREEING, Latitude, WellMetadata, well_of
 
 if TYPE_CHECKING:
@@ -600,7 +600,7 @@ def clearance(
     firsts = {"reference": float(ref_arrays[0][0])}
     firsts |= {w["offset"]: float(blocks[w["offset"]]["md"][0].as_py()) for w in listed}
     tie_on = TieOnRecord(  # a sidetrack's σ is zeroed at its kick-off (the ISCWSA rule)
-        surveys=tuple(outside_tie(n, md, None) for n, md in firsts.items() if n not in kickoffs)
+        surveys=outside_ties([(n, md) for n, md in firsts.items() if n not in kickoffs], None)
     )
     warn_missing(tie_on, ctx.stage_id, "The separation factors against it leave that out.")
     result = scan_pairs(

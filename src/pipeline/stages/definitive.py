@@ -61,7 +61,7 @@ from pipeline.uncertainty.tieon import (
     TIE_COVARIANCE,
     TieCovariance,
     TieOnRecord,
-    outside_tie,
+    outside_ties,
     warn_missing,
 )
 from pipeline.uncertainty.toolmodel import ToolModel
@@ -295,12 +295,8 @@ def definitive_survey(
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
     survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
     cov = _valid_covariance(survey, listed, bounds, tools, sites, params)
-    tie_on = TieOnRecord(surveys=(outside_tie(None, float(md[0]), params.tie_covariance),))
-    if params.tie_covariance is not None:
-        if tie_on.surveys[0].basis != "given":
-            raise ValueError(
-                "tie_covariance: the survey starts at the depth reference, no tie-on above it"
-            )
+    tie_on = TieOnRecord(surveys=outside_ties([(None, float(md[0]))], params.tie_covariance))
+    if params.tie_covariance is not None:  # (outside_ties refuses one at the depth reference)
         cov = cov + params.tie_covariance.matrix()
     warn_missing(tie_on, ctx.stage_id)
     parts = {

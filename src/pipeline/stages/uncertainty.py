@@ -41,8 +41,7 @@ from pipeline.uncertainty.tieon import (
     TieCovariance,
     TieOn,
     TieOnRecord,
-    below_reference,
-    outside_tie,
+    outside_ties,
     warn_missing,
 )
 from pipeline.uncertainty.toolmodel import ToolModel
@@ -260,33 +259,31 @@ def tie_ons(
     parents: list[int | None],
     given: TieCovariance | None,
 ) -> TieOnRecord:
-    """Each survey's :class:`~pipeline.uncertainty.tieon.TieOn`: at the wellhead (first MD
-    within a metre of 0), on its parent survey, or tied on a position from outside the run — given
-    (``given``, for the one such survey; more than one is refused: which would it be?) or
-    not included."""
+    """Each survey's :class:`~pipeline.uncertainty.tieon.TieOn`: on its parent survey, else
+    as :func:`~pipeline.uncertainty.tieon.outside_ties` has it (at the wellhead, ``given``,
+    or not included)."""
     if table.num_rows == 0:
         return TieOnRecord(surveys=())
     md = table.column("md").to_numpy()
     names = table.column("survey").to_pylist() if "survey" in table.column_names else None
-    outside = [
-        k for k, p in enumerate(parents) if p is None and below_reference(float(md[offsets[k]]))
-    ]
-    if given is not None and len(outside) != 1:
-        found = "none does" if not outside else f"{len(outside)} do"
-        raise ValueError(
-            "tie_covariance is the tie-on uncertainty of the one survey tied on a position "
-            f"below the depth reference from outside the run; {found}"
+
+    def name(k: int) -> str | None:
+        return None if names is None else str(names[int(offsets[k])])
+
+    def first(k: int) -> float:
+        return float(md[offsets[k]])
+
+    orphans = [k for k, parent in enumerate(parents) if parent is None]
+    found = outside_ties([(name(k), first(k)) for k in orphans], given)
+    outside = dict(zip(orphans, found, strict=True))
+    return TieOnRecord(
+        surveys=tuple(
+            outside[k]
+            if parent is None
+            else TieOn(survey=name(k), md=first(k), basis="survey", parent=name(parent))
+            for k, parent in enumerate(parents)
         )
-    ties = []
-    for k, parent in enumerate(parents):
-        survey = None if names is None else str(names[int(offsets[k])])
-        first = float(md[offsets[k]])
-        if parent is None:
-            ties.append(outside_tie(survey, first, given))
-        else:
-            parent_name = None if names is None else str(names[int(offsets[parent])])
-            ties.append(TieOn(survey=survey, md=first, basis="survey", parent=parent_name))
-    return TieOnRecord(surveys=tuple(ties))
+    )
 
 
 def _root(parents: list[int | None], k: int) -> int:

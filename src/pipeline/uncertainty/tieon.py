@@ -16,6 +16,7 @@ states the uncertainty then says (:class:`TieOn`). Lengths m, covariances m² (N
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
@@ -32,8 +33,7 @@ __all__ = [
     "TieCovariance",
     "TieOn",
     "TieOnRecord",
-    "below_reference",
-    "outside_tie",
+    "outside_ties",
     "tie_on_of",
     "warn_missing",
     "with_tie_on",
@@ -145,20 +145,33 @@ class TieOnRecord(BaseModel):
     surveys: tuple[TieOn, ...]
 
 
-def below_reference(md: float) -> bool:
+def _below_reference(md: float) -> bool:
     """A first station at ``md`` (m) lies below the depth reference (:data:`AT_REFERENCE_M`)."""
     return md > AT_REFERENCE_M
 
 
-def outside_tie(survey: str | None, md: float, given: TieCovariance | None) -> TieOn:
-    """The :class:`TieOn` of a survey not tied on another of its table, first station at
-    ``md`` (m): at the wellhead (within :data:`AT_REFERENCE_M` of MD 0), else ``given`` or
-    not included."""
-    if not below_reference(md):
-        return TieOn(survey=survey, md=md, basis="wellhead")
-    if given is not None:
-        return TieOn(survey=survey, md=md, basis="given", semi_major=given.semi_major())
-    return TieOn(survey=survey, md=md, basis="not included")
+def outside_ties(
+    firsts: Sequence[tuple[str | None, float]], given: TieCovariance | None
+) -> tuple[TieOn, ...]:
+    """The :class:`TieOn` of each survey not tied on another of its table, by its name and
+    first station's MD (m): at the wellhead (within :data:`AT_REFERENCE_M` of MD 0), else
+    ``given`` or not included. ``given`` is the tie-on of one survey: ``ValueError`` unless
+    exactly one starts below the depth reference (which would it be?)."""
+    below = [md for _, md in firsts if _below_reference(md)]
+    if given is not None and len(below) != 1:
+        found = "none does" if not below else f"{len(below)} do"
+        raise ValueError(
+            "tie_covariance is the tie-on uncertainty of the one survey tied on a position "
+            f"below the depth reference from outside the run; {found}"
+        )
+    return tuple(
+        TieOn(survey=survey, md=md, basis="wellhead")
+        if not _below_reference(md)
+        else TieOn(survey=survey, md=md, basis="given", semi_major=given.semi_major())
+        if given is not None
+        else TieOn(survey=survey, md=md, basis="not included")
+        for survey, md in firsts
+    )
 
 
 GIVE_IT = "Give it as tie_covariance (NEV, m²), e.g. the covariance of the survey above at that MD"
