@@ -146,3 +146,30 @@ def test_the_survey_pipeline_integrates_a_witsml_2_trajectory(tmp_path: Path):
         positions.append([(r["md[m]"], r["tvd[m]"], r["north[m]"], r["east[m]"]) for r in rows])
     assert positions[0] == positions[1]
     assert float(positions[1][-1][2]) < 0 < float(positions[1][-1][3])  # south-east, 127.5°
+
+
+def test_a_witsml_2_stations_matrix_cov_is_read_in_square_metres(tmp_path: Path):
+    """2.0's ``MatrixCov`` (``VarianceNN`` … ``VarianceVertVert``, an AreaMeasure each) is
+    1.4.1.1's ``matrixCov``: ft² from the store read as m² (1 ft² = 0.09290304 m²), and the
+    frame states the covariances (1 σ², no error model named by the file)."""
+    names = ("NN", "NE", "NVert", "EE", "EVert", "VertVert")
+    body = ""
+    for k, row in enumerate(STATIONS):
+        values = (1.0 + k, 0.1, 0.01, 2.0 + k, 0.02, 0.5)
+        cov = "".join(
+            f'<Variance{n} uom="ft2">{v}</Variance{n}>' for n, v in zip(names, values, strict=True)
+        )
+        body += station(k, *row).replace(
+            "</TrajectoryStation>", f"<MatrixCov>{cov}</MatrixCov></TrajectoryStation>"
+        )
+    path = tmp_path / "trajectory.xml"
+    path.write_text(HEAD.format(version="2.0", growing="closed") + body + TAIL)
+    table = gp.read(path, kind="stations")
+    ft2 = 0.09290304
+    assert table["cov_nn"].tolist() == pytest.approx([(1 + k) * ft2 for k in range(4)], rel=1e-12)
+    assert table["cov_ee"].tolist() == pytest.approx([(2 + k) * ft2 for k in range(4)], rel=1e-12)
+    assert table["cov_nv"].tolist() == pytest.approx([0.01 * ft2] * 4, rel=1e-12)
+    assert table["cov_vv"].tolist() == pytest.approx([0.5 * ft2] * 4, rel=1e-12)
+    (family,) = table.attrs["uncertainty"]["columns"]
+    assert family["family"] == "covariance"
+    assert family["scale"] == "1 sigma squared"
