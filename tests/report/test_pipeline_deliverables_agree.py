@@ -519,3 +519,151 @@ def assert_uncertainty_agrees(run: Run, c: dict[str, list[float]], fields: dict[
         assert (big["md"], big["semi_major_conf"]) == (c["md"][largest], major[largest])
         td = doc["surveys"][0]["uncertainty_at_td"]
         assert (td["semi_major_conf"], td["semi_major"]) == (major[-1], one[-1])
+
+
+@pytest.mark.parametrize("name", ["survey", "point-gyro", "continuous-gyro", "free-gyro"])
+def test_the_qc_verdicts_agree(runs: Callable[[str], Run], name: str) -> None:
+    """The command line's ``QC:`` line, summary.json's counts and the report's verdict and
+    QC tables."""
+    run = runs(name)
+    qc = json.loads((run.out / "summary.json").read_text())["qc"]
+    text = html_text(run.out / "report.html")
+    verdict = re.search(r"QC: (.*?\.) ", text)
+    assert verdict, "the report states no QC verdict"
+    last = run.stdout.strip().splitlines()[-1]
+    said = re.search(r"QC: (all (\d+) checks passed|(\d+) failed checks)", last)
+    evaluated = sum(check["evaluated"] for check in qc["checks"]) if qc else 0
+    assert (said is None) == (evaluated == 0), last  # the line counts checks, not flags
+    if qc is None:  # free-gyro: its summary states no in/out-run QC (see the report's)
+        return
+    if said and said.group(2):
+        assert int(said.group(2)) == evaluated and qc["failed"] == 0
+    elif said:
+        assert int(said.group(3)) == qc["failed"] > 0
+    assert verdict.group(1).startswith(("all", "no station failed")) == (qc["failed"] == 0)
+    flagged = re.search(r"(\d+) of (\d+) stations carry processing flags", verdict.group(1))
+    assert (flagged is None) == (not qc["flagged_stations"]), (verdict.group(1), qc)
+    if flagged:  # the report adds flags of its own (long course)
+        assert int(flagged.group(1)) >= qc["flagged_stations"]
+    table = {check["check"]: check for check in qc["checks"] if check["evaluated"]}
+    if not table:
+        return
+    _, rows = html_table(run.out / "report.html", "qc")
+    assert len(rows) == len(table), (rows, sorted(table))
+    assert sorted(tuple(map(int, r[2:5])) for r in rows) == sorted(
+        (c["evaluated"], c["passed"], c["failed"]) for c in table.values()
+    )
+
+
+def test_the_drift_applied_agrees(runs: Callable[[str], Run]) -> None:
+    """free-gyro: the rate summary.json states, the one the corrected readings record and
+    apply, and the report's."""
+    run = runs("free-gyro")
+    drift = json.loads((run.out / "summary.json").read_text())["drift"]
+    readings = pq.read_table(run.out / "drift.readings.parquet").to_pydict()
+    assert set(readings["drift_rate"]) == {drift["rate"]}
+    assert set(readings["sigma_drift_rate"]) == {drift["sigma"]}
+    hours = [(t - readings["time"][0]) / 3600.0 for t in readings["time"]]
+    for raw, corrected, h in zip(readings["azi_raw"], readings["azi"], hours, strict=True):
+        assert (raw - drift["rate"] * h - corrected + 180.0) % 360.0 - 180.0 == pytest.approx(
+            0.0, abs=1e-6
+        )
+    text = html_text(run.out / "report.html")
+    found = re.search(r"drift rate ([\d.]+) °/h, σ ([\d.]+) °/h", text)
+    assert found, "the report states no drift rate"
+    _at_dp(found.group(1), drift["rate"], "drift rate")
+    _at_dp(found.group(2), drift["sigma"], "drift σ")
+    assert "misclosure at the tie-in station" in text and drift["source"] == "tie_in"
+
+
+def test_the_separation_factors_agree(runs: Callable[[str], Run]) -> None:
+    """clearance: each offset's least SF (at stations and between them) and where, in the
+    Parquet table, clearance.csv and the report; the summary sentence names the least."""
+    run = runs("clearance")
+    table = pq.read_table(run.out / "clearance.clearance.parquet").to_pylist()
+    written = read_csv(run.out / "clearance.csv")
+    assert [float(t) for t in written.columns["sf"].texts] == pytest.approx(
+        [r["sf"] for r in table], rel=1e-12
+    )
+    _, rows = html_table(run.out / "report.html", "clearance")
+    least: tuple[float, str, float] | None = None
+    for row in rows:
+        mine = [r for r in table if r["offset"] == row[0]]
+        at = min(mine, key=lambda r: r["sf"])
+        between = min(mine, key=lambda r: r["sf_between"])
+        _at_dp(row[3], at["sf"], f"{row[0]} SF")
+        _at_dp(row[4], at["md"], f"{row[0]} reference MD")
+        _at_dp(row[5], at["offset_md"], f"{row[0]} offset MD")
+        _at_dp(row[6], at["distance"], f"{row[0]} distance")
+        _at_dp(row[7], between["sf_between"], f"{row[0]} SF between")
+        _at_dp(row[8], between["md_between"], f"{row[0]} MD between")
+        if least is None or between["sf_between"] < least[0]:
+            least = (between["sf_between"], row[0], between["md_between"])
+    assert least is not None and len(rows) == len({r["offset"] for r in table})
+    sentence = re.search(
+        r"minimum separation factor ([\d.]+) against (\S+) at ([\d.]+) m MD",
+        html_text(run.out / "report.html"),
+    )
+    assert sentence, "the report states no minimum SF"
+    _at_dp(sentence.group(1), least[0], "minimum SF")
+    assert sentence.group(2) == least[1]
+    _at_dp(sentence.group(3), least[2], "minimum SF MD")
+
+
+def test_the_calibration_estimates_agree(runs: Callable[[str], Run]) -> None:
+    """calibration: every estimate's rate, σ, interval and the one used, in the Parquet
+    table, drift-calibration.csv and the report."""
+    run = runs("calibration")
+    table = pq.read_table(run.out / "drift.result.parquet").to_pylist()
+    written = read_csv(run.out / "drift-calibration.csv").columns
+    for key in ("drift_deg_h", "sigma_deg_h", "drift_deg_min", "interval"):
+        for row, (text, r) in enumerate(zip(written[key].texts, table, strict=True)):
+            assert _close(float(text), r[key], 5e-7), (key, row)
+    _, rows = html_table(run.out / "report.html", "estimates")
+    assert len(rows) == len(table)
+    for row, r in zip(rows, table, strict=True):
+        assert row[:2] == [r["method"], r["label"]]
+        for text, value in zip(
+            row[2:7],
+            [
+                r["drift_deg_h"],
+                r["sigma_deg_h"],
+                r["drift_deg_min"],
+                r["sigma_deg_min"],
+                r["interval"] / 60,
+            ],
+            strict=True,
+        ):
+            _at_dp(text, value, f"{r['method']} {r['label']}")
+        assert (row[8] == "selected") == r["selected"]
+    (used,) = [r for r in table if r["selected"]]
+    text = html_text(run.out / "report.html")
+    found = re.search(r"Drift \((\w+)\) ([\d.]+) ± ([\d.]+) °/h", text)
+    assert found and found.group(1) == used["method"]
+    _at_dp(found.group(2), used["drift_deg_h"], "drift used")
+    _at_dp(found.group(3), used["sigma_deg_h"], "σ used")
+
+
+def test_the_acceptance_gates_agree(runs: Callable[[str], Run]) -> None:
+    """inout-gyro: each gate's status and value in the Parquet table, run.json, the command
+    line and the report."""
+    run = runs("inout-gyro")
+    gates = pq.read_table(run.out / "gates.gates.parquet").to_pylist()
+    recorded = {
+        g["gate"]: g for g in json.loads((run.out / "run.json").read_text())["acceptance"]["gates"]
+    }
+    printed = {
+        line.split()[0]: line.split()
+        for line in run.stdout.splitlines()
+        if line.strip().startswith("gates.")
+    }
+    text = html_text(run.out / "report.html")
+    for gate in gates:
+        stated = recorded[gate["gate"]]
+        assert stated["status"] == gate["status"]
+        assert _same(stated["value"] if stated["value"] is not None else "nan", gate["value"]) or (
+            stated["value"] is None and math.isnan(gate["value"])
+        )
+        assert printed[f"gates.{gate['gate']}"][1] == gate["status"]
+    failed = [g for g in gates if g["status"] == "fail"]
+    assert failed and ("FAIL" in text or "fail" in text)
