@@ -63,9 +63,12 @@ def test_summary_of_a_run(exports_run: RunResult):
     assert survey["final"] == {name: last[name] for name in survey["final"]}
     assert (survey["md_start"], survey["md_end"]) == (0.0, last["md"])
     dls = trajectory.column("dls").to_numpy()
-    assert survey["max_dls"] == {
+    assert survey["max_dls"] == {  # every course of the sample is 30 m: none left out
         "dls": float(dls.max()),
         "md": trajectory.column("md")[int(dls.argmax())].as_py(),
+        "min_course_length": 10.0,
+        "courses_not_counted": 0,
+        "all_courses_short": False,
     }
     ellipse = survey["uncertainty_at_td"]
     assert ellipse["semi_major"] == last["ellipse_major"] > 1.0
@@ -129,7 +132,13 @@ def test_qc_counts_and_several_surveys(tmp_path: Path):
         ("a", 2, 10.0),
         ("b", 3, 9.0),
     ]
-    assert doc["surveys"][1]["max_dls"] == {"dls": 4.0, "md": 5.0}
+    assert doc["surveys"][1]["max_dls"] == {  # courses of 5 and 4 m: every one counted
+        "dls": 4.0,
+        "md": 5.0,
+        "min_course_length": 10.0,
+        "courses_not_counted": 0,
+        "all_courses_short": True,
+    }
     assert doc["surveys"][0]["uncertainty_at_td"] is None
     assert doc["north_reference"] == "magnetic" and doc["calculation"] is None
     assert doc["qc"] == {

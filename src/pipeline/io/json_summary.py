@@ -3,13 +3,15 @@
 One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): the well
 header, the run's provenance, the azimuths' north reference, the calculation method, and per
 survey the station count, MD range, the final station's position, the largest dogleg
-severity and, when the trajectory carries position uncertainty, the error ellipse at TD;
-the uncertainty as its columns state it (``uncertainty``: error model, confidence, the σ
-convention of each column family, the largest horizontal semi-major axis and TD's; absent
-without uncertainty columns); then QC counts per check (with ``file_positions``: the
-stations file's own positions against the recomputed ones, when the trajectory records that
-check), flagged and rejected stations. Lengths in m, angles in degrees, DLS in °/30 m,
-drift rates in °/h (``units`` says so in the document too).
+severity over the courses of at least 10 m (the report's rule: a shorter course's DLS is a
+spike of angle errors, not the hole's curvature) and, when the trajectory carries position
+uncertainty, the error ellipse at TD; the uncertainty as its columns state it
+(``uncertainty``: error model, confidence, the σ convention of each column family, the
+largest horizontal semi-major axis and TD's; absent without uncertainty columns); then QC
+counts per check (with ``file_positions``: the stations file's own positions against the
+recomputed ones, when the trajectory records that check), flagged and rejected stations.
+Lengths in m, angles in degrees, DLS in °/30 m, drift rates in °/h (``units`` says so in the
+document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
 ``stations``, ``rejects`` and ``drift`` (a free-gyro survey's corrected readings: the drift
@@ -36,6 +38,7 @@ from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.registry import Provenance, WriterDef
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
+from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
@@ -80,10 +83,20 @@ class Station(_Model):
 
 
 class MaxDls(_Model):
-    """The largest dogleg severity of a survey and where it is."""
+    """The largest dogleg severity of a survey over its courses of at least
+    ``min_course_length`` (the survey report's rule, :func:`pipeline.survey.courses.max_dls`)
+    and where it is."""
 
     dls: float = Field(description="dogleg severity, deg/30m")
     md: float = Field(description="measured depth of the station ending that course, m")
+    min_course_length: float = Field(
+        description="m: the DLS of a shorter course (a spike from angle errors over a few "
+        "metres) is not counted"
+    )
+    courses_not_counted: int = Field(ge=0, description="courses shorter than that, left out")
+    all_courses_short: bool = Field(
+        description="every course is shorter than min_course_length, so every one was counted"
+    )
 
 
 class Uncertainty(_Model):
@@ -111,7 +124,7 @@ class Survey(_Model):
     md_start: float = Field(description="first station MD, m")
     md_end: float = Field(description="last station MD, m")
     final: Station = Field(description="the last station (TD)")
-    max_dls: MaxDls
+    max_dls: MaxDls | None = Field(description="null: the survey has no course with a DLS")
     uncertainty_at_td: Uncertainty | None = Field(
         None, description="position uncertainty of the last station, when computed"
     )
@@ -296,11 +309,11 @@ def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
         name: trajectory.column(name).to_numpy(zero_copy_only=False)
         for name in Station.model_fields
     }
-    dls = trajectory.column("dls").to_numpy()
+    dls = trajectory.column("dls").to_numpy(zero_copy_only=False)
     ids = trajectory.column("survey").to_pylist() if "survey" in trajectory.column_names else None
     found = []
     for lo, hi in itertools.pairwise(survey_offsets(trajectory).tolist()):
-        worst = lo + int(np.argmax(dls[lo:hi]))
+        worst = max_dls(cols["md"][lo:hi], dls[lo:hi], (0, hi - lo), MIN_COURSE)
         found.append(
             Survey(
                 survey=ids[lo] if ids else None,
@@ -308,7 +321,15 @@ def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
                 md_start=float(cols["md"][lo]),
                 md_end=float(cols["md"][hi - 1]),
                 final=Station(**{name: _defined(v[hi - 1]) for name, v in cols.items()}),
-                max_dls=MaxDls(dls=float(dls[worst]), md=float(cols["md"][worst])),
+                max_dls=None
+                if worst is None
+                else MaxDls(
+                    dls=worst.dls,
+                    md=float(cols["md"][lo + worst.row]),
+                    min_course_length=MIN_COURSE,
+                    courses_not_counted=worst.left_out,
+                    all_courses_short=worst.all_short,
+                ),
                 uncertainty_at_td=_uncertainty(trajectory, hi - 1, confidence),
             )
         )
