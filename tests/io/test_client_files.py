@@ -1,7 +1,8 @@
 """Files written for clients (CSV, LAS, WITSML, summary.json, MCAP) carry none of the
 engine's own names: no ``source_line`` column (lines of the file read), no ``gyropipe.source``
 path of an input, no engine metadata key — only gyropipe's documented names (the summary's
-format, WITSML's ``gyropipe.well.*`` and ``gyropipe.error_model`` extensions, MCAP's own
+format, WITSML's ``gyropipe.well.*``, ``gyropipe.error_model`` and
+``gyropipe.uncertainty_tie_on`` extensions, MCAP's own
 topics and records). Runs of point-gyro and of survey.yaml (with an MCAP export), through
 the CLI, on a stations file in a folder of its own."""
 
@@ -19,7 +20,7 @@ from tests_support import ROOT, gyropipe_cli
 
 PLAN = ROOT / "examples" / "plans" / "short-j-well.yaml"
 TEXT_FILES = ("trajectory.csv", "trajectory.las", "trajectory.xml", "summary.json")
-DOCUMENTED = re.compile(r"gyropipe\.(survey-summary|error_model|well\.\w+)")
+DOCUMENTED = re.compile(r"gyropipe\.(survey-summary|error_model|uncertainty_tie_on|well\.\w+)")
 """The gyropipe names a client file may hold: the summary's format, WITSML's extensions."""
 MCAP_NAMES = re.compile(r"gyropipe\.(well|run|units/\w+|\w+)")
 """MCAP's records (``gyropipe.well``, ``gyropipe.run``, ``gyropipe.units/<role>``) and
@@ -31,8 +32,10 @@ STATED = {
     b"gyropipe.error_model",
     b"gyropipe.confidence",
     b"gyropipe.confidence_dimensions",
+    b"gyropipe.uncertainty_carried",
 }
-"""Field metadata an MCAP table may carry: what a column states of itself."""
+"""Field metadata an MCAP table may carry: what a column states of itself (an uncertainty
+column's: that it came with the stations file)."""
 TABLE_STATED = {
     b"gyropipe.well",
     b"gyropipe.survey_calculation",

@@ -182,6 +182,11 @@ class UncertaintyStatement(_Model):
         "`parent`), `given` (the run was given it), `not included` (tied on a position from "
         "outside the run, taken as exactly known)",
     )
+    from_stations_file: bool = Field(
+        False,
+        description="true: the columns are the stations file's, carried with its stations as "
+        "it stated them, not computed in this run; false: computed in this run",
+    )
 
 
 class CheckCount(_Model):

@@ -1,9 +1,11 @@
 """A trajectory file's uncertainty columns read back as stations carry them: what the file
-states of them (a CSV's ``# confidence=`` and ``# error_model=`` lines, a LAS file's CONF and
-ERRMODEL, a WITSML trajectory's ``gyropipe.error_model`` extension) goes back into their
-field metadata (:mod:`pipeline.uncertainty.stated`), ``ellipse_azimuth`` takes the azimuths'
-north reference. A column at a confidence level (``*_conf``) of a file stating none is left
-out, warned: a size at an unknown probability must pass for no level, 1σ least of all.
+states of them (a CSV's ``# confidence=``, ``# error_model=`` and ``# tie_on=`` lines, a LAS
+file's CONF and ERRMODEL, a WITSML trajectory's ``gyropipe.error_model`` and
+``gyropipe.uncertainty_tie_on`` extensions) goes back into their field metadata and the
+table's tie-on record (:mod:`pipeline.uncertainty.stated`,
+:mod:`pipeline.uncertainty.tieon`), ``ellipse_azimuth`` takes the azimuths' north reference.
+A column at a confidence level (``*_conf``) of a file stating none is left out, warned: a
+size at an unknown probability must pass for no level, 1σ least of all.
 """
 
 from __future__ import annotations
@@ -14,14 +16,17 @@ from pathlib import Path
 from typing import TypeVar
 
 import pyarrow as pa
+from pydantic import BaseModel, ValidationError
 
 from pipeline.contracts import NORTH_KEY
 from pipeline.errors import InputFileError, warn_input
 from pipeline.uncertainty.stated import AT_CONFIDENCE, WORDS, with_statements
+from pipeline.uncertainty.tieon import TieOnRecord
 
 UNCERTAINTY_COLUMNS = tuple(WORDS)
 """The uncertainty columns a stations reader carries, by the names gyropipe writes."""
 T = TypeVar("T")
+R = TypeVar("R", bound=BaseModel)
 
 
 @dataclass(frozen=True)
@@ -30,13 +35,19 @@ class Stated:
 
     confidence: float | None = None
     error_model: str | None = None
+    tie_on: TieOnRecord | None = None
 
     @classmethod
     def of(
-        cls, path: Path, confidence: tuple[str, int] | None, model: tuple[str, int] | None
+        cls,
+        path: Path,
+        confidence: tuple[str, int] | None,
+        model: tuple[str, int] | None,
+        tie_on: tuple[str, int] | None = None,
     ) -> Stated:
         """The statements of a file, each as its text and line; a confidence that is no
-        probability in (0, 1) is an :class:`InputFileError` at its line."""
+        probability in (0, 1) or a tie-on that is not the record gyropipe writes
+        (:func:`tie_on_record`) is an :class:`InputFileError` at its line."""
         level = None
         if confidence is not None:
             text, line = confidence
@@ -48,7 +59,28 @@ class Stated:
                 raise InputFileError(
                     path, f"confidence {text!r}: expected a probability in (0, 1)", line=line
                 )
-        return cls(level, model[0].strip() or None if model is not None else None)
+        return cls(
+            level,
+            model[0].strip() or None if model is not None else None,
+            None if tie_on is None else tie_on_record(path, *tie_on, TieOnRecord),
+        )
+
+
+def tie_on_record(path: Path, text: str, line: int, model: type[R]) -> R:
+    """The tie-on record (``model`` :class:`~pipeline.uncertainty.tieon.TieOnRecord`) or one
+    survey's tie-on (:class:`~pipeline.uncertainty.tieon.TieOn`) a file states as JSON, as
+    gyropipe's writers write it; an :class:`InputFileError` at ``line`` where it is not one."""
+    try:
+        return model.model_validate_json(text)
+    except ValidationError as exc:
+        error = exc.errors()[0]
+        where = ".".join(str(p) for p in error["loc"]) or "the value"
+        raise InputFileError(
+            path,
+            f"tie_on {where}: {error['msg']}; expected the tie-on as gyropipe writes it, JSON "
+            '{"survey": …, "md": …, "basis": …} (a record: {"surveys": [those]})',
+            line=line,
+        ) from None
 
 
 def readable(
@@ -76,7 +108,7 @@ def stating(table: pa.Table, stated: Stated) -> pa.Table:
     the north reference of ``azi``."""
     if not set(UNCERTAINTY_COLUMNS) & set(table.column_names):
         return table
-    table = with_statements(table, stated.confidence, stated.error_model)
+    table = with_statements(table, stated.confidence, stated.error_model, stated.tie_on)
     if "ellipse_azimuth" not in table.column_names or "azi" not in table.column_names:
         return table
     north = (table.schema.field("azi").metadata or {}).get(NORTH_KEY)

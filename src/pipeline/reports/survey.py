@@ -206,6 +206,9 @@ def survey_document(
         sections.insert(3, program)
     if all(c in traj.schema.names for c in ELLIPSE_COLUMNS):
         sections.append(_uncertainty(shown, shown_path, statement_of(traj)))
+    elif (stated := statement_of(traj)) is not None:  # covariances alone: no sizes to chart
+        words = Paragraph(_statement_words(stated, None))
+        sections.append(Section("Position uncertainty", (words,), key="uncertainty"))
     groups = all_series(src)
     explained = flag_table(flags or [])
     notes = [t for t in (diagnosis_table(src.summary), recording_table(src.qc)) if t]
@@ -552,11 +555,26 @@ def _uncertainty(traj: pa.Table, path: plots.Path3, stated: Statement | None) ->
     )
 
 
-def _statement_words(stated: Statement, conf: str) -> str:
+def _statement_words(stated: Statement, conf: str | None) -> str:
     """The error model, the σ convention of the uncertainty columns and the largest
-    horizontal semi-major axis and TD's, in words (lengths m)."""
+    horizontal semi-major axis and TD's, in words (lengths m); ``conf``: the charted sizes'
+    confidence level (None: the trajectory has covariances alone, none charted)."""
     model = stated.error_model or "not stated"
-    level = f"{conf} confidence" if conf[0].isdigit() else "a confidence level not stated"
+    level = (
+        ""
+        if conf is None
+        else f"{conf} confidence"
+        if conf[0].isdigit()
+        else "a confidence level not stated"
+    )
+    convention = (
+        "Covariances are 1σ² (m²); the semi-major axes stated here are those of their 1σ "
+        "horizontal ellipse."
+        if conf is None
+        else "Covariances are 1σ² (m²), semi-axes and vertical σ at 1σ, the charted and listed "
+        f"sizes at {level} (horizontal ellipse: 2-D, χ² of 2 degrees of freedom; vertical: "
+        "1-D, two-sided normal)."
+    )
 
     def where(extent: Extent) -> str:
         if extent.semi_major is None:
@@ -570,9 +588,8 @@ def _statement_words(stated: Statement, conf: str) -> str:
         return f"{at_conf}{fmt(extent.semi_major)} m at 1σ, at {fmt(extent.md)} m MD{survey}"
 
     words = [
-        f"Error model {model}. Covariances are 1σ² (m²), semi-axes and vertical σ at 1σ, the "
-        f"charted and listed sizes at {level} (horizontal ellipse: 2-D, χ² of 2 degrees of "
-        "freedom; vertical: 1-D, two-sided normal).",
+        *([said] if (said := stated.source_words()) else []),
+        f"Error model {model}. {convention}",
         "Largest horizontal semi-major axis: "
         + (where(stated.largest) if stated.largest is not None else "none (no station has a σ)")
         + f"; at TD: {where(stated.at_td)}.",

@@ -9,7 +9,8 @@ import numpy as np
 import pyarrow as pa
 from pydantic import BaseModel, ConfigDict, Field
 
-from pipeline.errors import SurveyCheckWarning
+from pipeline.contracts import SOURCE_KEY
+from pipeline.errors import SurveyCheckWarning, warn_input
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
 from pipeline.registry import CheckDef, StageContext, StageDef
@@ -36,6 +37,8 @@ from pipeline.tables import (
     Stations,
     Trajectory,
 )
+from pipeline.uncertainty.carried import carried_uncertainty
+from pipeline.uncertainty.stated import is_carried, statement_of
 from pipeline.well import WellMetadata
 
 
@@ -185,9 +188,12 @@ def trajectory_columns(
 def checked(
     trajectory: pa.Table, stations: pa.Table, params: MinCurveParams, ctx: StageContext
 ) -> pa.Table:
-    """``trajectory`` with the check of the stations file's own TVD/north/east against its
-    positions recorded (:mod:`pipeline.survey.crosscheck`; none if the file lists none); a
-    :class:`~pipeline.errors.SurveyCheckWarning` names the first station beyond tolerance."""
+    """``trajectory`` with the position uncertainty its stations file states carried
+    (:func:`carry`) and the check of the file's own TVD/north/east against its positions
+    recorded (:mod:`pipeline.survey.crosscheck`; none if the file lists none); a
+    :class:`~pipeline.errors.SurveyCheckWarning` names the first station beyond tolerance
+    (and, where uncertainty was carried, that it was computed for the file's positions)."""
+    trajectory = carry(trajectory, stations, ctx)
     check = check_positions(
         stations,
         survey_offsets(stations),
@@ -198,10 +204,32 @@ def checked(
     if check is None:
         return trajectory
     if check.beyond_md:
+        other = (
+            "; the position uncertainty the file states was computed for its own positions, "
+            "not for these (carried as it states it)"
+            if is_carried(trajectory)
+            else ""
+        )
         warnings.warn(
-            f"stage {ctx.stage_id!r}: {check.summary()}", SurveyCheckWarning, stacklevel=2
+            f"stage {ctx.stage_id!r}: {check.summary()}{other}", SurveyCheckWarning, stacklevel=2
         )
     return with_position_check(trajectory, check)
+
+
+def carry(trajectory: pa.Table, stations: pa.Table, ctx: StageContext) -> pa.Table:
+    """``trajectory`` (of ``stations``' rows, in their order) with the uncertainty columns
+    its stations file states, by :func:`~pipeline.uncertainty.carried.carried_uncertainty`;
+    an :class:`~pipeline.errors.InputFileWarning` naming the file and the columns of each
+    part of it refused."""
+    found = carried_uncertainty(stations)
+    source = (stations.schema.metadata or {}).get(SOURCE_KEY, b"").decode() or "the stations"
+    for reason in found.refused:
+        warn_input(
+            source,
+            f"stage {ctx.stage_id!r}: of the position uncertainty the file states, not carried "
+            f"to the trajectory: {reason}",
+        )
+    return found.onto(trajectory)
 
 
 def min_curve(
@@ -325,7 +353,11 @@ def calculation_note(method: str, ctx: ReportContext) -> MethodNote:
         parts.append(ties_words(calculation.ties))
     if check is not None:
         parts.append(check.summary())
-    return MethodNote("Survey calculation", "; ".join(parts))
+    note = "; ".join(parts)
+    stated = statement_of(trajectory) if trajectory is not None else None
+    if stated is not None and (carried := stated.source_words()):
+        note = f"{note}. {carried}"
+    return MethodNote("Survey calculation", note)
 
 
 def mincurve_method(stage: StageSetup, ctx: ReportContext) -> MethodNote:

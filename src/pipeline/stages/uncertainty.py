@@ -24,6 +24,7 @@ from pipeline.survey.calculation import calculation_of, record_of, with_record
 from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
+from pipeline.uncertainty.carried import without_uncertainty
 from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
 from pipeline.uncertainty.engine import (
     PARAMETER_ALIASES,
@@ -184,8 +185,9 @@ class UncertaintyParams(BaseModel):
 def position_uncertainty(
     inputs: Mapping[str, pa.Table], params: UncertaintyParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
-    """Trajectory → trajectory with NEV covariance and error ellipses per station."""
-    table = inputs["trajectory"]
+    """Trajectory → trajectory with NEV covariance and error ellipses per station (those a
+    trajectory carries from its stations file replaced)."""
+    table = without_uncertainty(inputs["trajectory"])
     azi_deg = table.column("azi").to_numpy()
     tool = configured = configure(params.model, params.tool, toolmodels.of_run(ctx))
     toolmodels.record(ctx, tool, "model")

@@ -103,6 +103,10 @@ def convergence_at(latitude_deg: float, longitude_deg: float, crs: str | int) ->
     return float(grid_convergence(latitude_deg, longitude_deg, crs))
 
 
+AXIS_COLUMNS = ("ellipse_azimuth",)
+"""Columns of an axis's direction (the error ellipse's major axis), in [0, 180)."""
+
+
 def convert_table(
     table: pa.Table,
     target: NorthReference,
@@ -111,9 +115,10 @@ def convert_table(
     declination_deg: float | None = None,
 ) -> pa.Table:
     """``table`` with every column whose field states a north reference converted to
-    ``target`` (values wrapped to [0, 360), metadata relabelled), and the positions a
-    stations file lists (``north``, ``east``: in the azimuths' reference) turned with them;
-    other columns untouched."""
+    ``target`` (values wrapped to [0, 360), an axis's, :data:`AXIS_COLUMNS`, to [0, 180);
+    metadata relabelled), and the positions and position covariances a stations file lists
+    (``north``, ``east``, ``cov_*``: in the azimuths' reference) turned with them; other
+    columns untouched."""
     columns: list[pa.Array | pa.ChunkedArray] = []
     fields: list[pa.Field] = []
     turned = _turned_positions(table, target, convergence_deg, declination_deg)
@@ -132,7 +137,7 @@ def convert_table(
                 declination_deg=declination_deg,
             )
             meta[NORTH_KEY] = label.encode()
-            column = pa.array(values, type=fld.type)
+            column = pa.array(values % 180.0 if name in AXIS_COLUMNS else values, type=fld.type)
             fld = fld.with_metadata(meta)
         columns.append(column)
         fields.append(fld)
@@ -147,29 +152,55 @@ def _turned_positions(
 ) -> dict[str, FloatArray]:
     """``north`` and ``east`` (a horizontal position, m, referred to the north of the
     ``azi`` column) referred to ``target`` north: turned by the azimuths' change δ
-    (A' = A + δ), so N' = N cos δ − E sin δ, E' = E cos δ + N sin δ. Nothing to turn: {}."""
-    names = table.column_names
-    if not {"azi", "north", "east"} <= set(names):
+    (A' = A + δ), so N' = N cos δ − E sin δ, E' = E cos δ + N sin δ; and the NEV position
+    covariance (``cov_nn`` … ``cov_vv``, m², the file's uncertainty in the same frame) turned
+    with them (:func:`turned_covariance`). Nothing to turn: {}."""
+    names = set(table.column_names)
+    meta = (table.schema.field("azi").metadata or {}) if "azi" in names else {}
+    if NORTH_KEY not in meta:
         return {}
-    meta = table.schema.field("azi").metadata or {}
-    if NORTH_KEY not in meta or any(
-        NORTH_KEY in (table.schema.field(c).metadata or {}) for c in ("north", "east")
-    ):
-        return {}
-    zero = np.zeros(table.num_rows)
     shift, _ = convert_azimuth(
-        zero,
+        np.zeros(table.num_rows),
         meta[NORTH_KEY].decode(),
         target,
         convergence_deg=convergence_deg,
         declination_deg=declination_deg,
     )
-    north, east = turned_positions(
-        table.column("north").to_numpy(zero_copy_only=False).astype(float),
-        table.column("east").to_numpy(zero_copy_only=False).astype(float),
-        shift,
+
+    def values(name: str) -> FloatArray:
+        found: FloatArray = table.column(name).to_numpy(zero_copy_only=False).astype(float)
+        return found
+
+    turned: dict[str, FloatArray] = {}
+    if {"north", "east"} <= names and not any(
+        NORTH_KEY in (table.schema.field(c).metadata or {}) for c in ("north", "east")
+    ):
+        turned["north"], turned["east"] = turned_positions(values("north"), values("east"), shift)
+    if set(COVARIANCE_COLUMNS) <= names:
+        cov = turned_covariance([values(c) for c in COVARIANCE_COLUMNS], shift)
+        turned.update(zip(COVARIANCE_COLUMNS, cov, strict=True))
+    return turned
+
+
+COVARIANCE_COLUMNS = ("cov_nn", "cov_ne", "cov_nv", "cov_ee", "cov_ev", "cov_vv")
+"""The NEV position covariance columns (m²) a stations file may list."""
+
+
+def turned_covariance(cov: list[FloatArray], shift_deg: ArrayLike) -> tuple[FloatArray, ...]:
+    """The NEV covariance entries ``cov`` (nn, ne, nv, ee, ev, vv; m²) referred to the north
+    whose azimuths are A' = A + δ (``shift_deg``): C' = R C Rᵀ with R turning (N, E) as
+    :func:`turned_positions` does; the vertical variance is unchanged."""
+    nn, ne, nv, ee, ev, vv = cov
+    delta = np.radians(shift_deg)
+    c, s = np.cos(delta), np.sin(delta)
+    return (
+        c * c * nn - 2 * c * s * ne + s * s * ee,
+        c * s * (nn - ee) + (c * c - s * s) * ne,
+        c * nv - s * ev,
+        s * s * nn + 2 * c * s * ne + c * c * ee,
+        s * nv + c * ev,
+        vv,
     )
-    return {"north": north, "east": east}
 
 
 def turned_positions(

@@ -23,6 +23,7 @@ from pipeline.uncertainty.ellipse import ellipses
 from pipeline.uncertainty.tieon import TieOn, TieOnRecord, tie_on_of, with_tie_on
 
 __all__ = [
+    "CARRIED_KEY",
     "CONFIDENCE_KEY",
     "DIMENSIONS_KEY",
     "ERROR_MODEL_KEY",
@@ -31,6 +32,7 @@ __all__ = [
     "Family",
     "Statement",
     "file_statements",
+    "is_carried",
     "model_words",
     "statement_of",
     "with_statements",
@@ -43,6 +45,9 @@ DIMENSIONS_KEY = b"gyropipe.confidence_dimensions"
 of freedom) or ``1`` (a two-sided interval of the normal distribution)."""
 ERROR_MODEL_KEY = b"gyropipe.error_model"
 """Field metadata: the error model a column was computed with (``GYRO-NS rev 5``)."""
+CARRIED_KEY = b"gyropipe.uncertainty_carried"
+"""Field metadata: ``stations file``, a column carried from the stations file as it stated it,
+not computed by the run that wrote it (:mod:`pipeline.uncertainty.carried`)."""
 
 WORDS = {
     "cov_nn": "north variance",
@@ -115,6 +120,18 @@ class Statement:
     without_sigma: int
     tie_on: tuple[TieOn, ...] = ()
     """each survey's tie-on and whether its uncertainty is in the σ (none recorded: empty)"""
+    from_stations_file: bool = False
+    """the columns are the stations file's, carried as it stated them (False: computed)"""
+
+    def source_words(self) -> str:
+        """Where the uncertainty comes from, in words, where the stations file stated it
+        ('': computed by the run)."""
+        if not self.from_stations_file:
+            return ""
+        return (
+            "The position uncertainty is the one the stations file states, carried with its "
+            "stations; it was not computed in this processing."
+        )
 
     def as_dict(self) -> dict[str, object]:
         """The statement as JSON values (the JSON summary's ``uncertainty`` object)."""
@@ -134,6 +151,7 @@ class Statement:
             "at_td": vars(self.at_td).copy(),
             "stations_without_sigma": self.without_sigma,
             "tie_on": [t.model_dump(mode="json") for t in self.tie_on],
+            "from_stations_file": self.from_stations_file,
         }
 
 
@@ -186,7 +204,14 @@ def statement_of(table: pa.Table) -> Statement | None:
         at_td=extent(deepest),
         without_sigma=int((~sized).sum()),
         tie_on=() if (ties := tie_on_of(table)) is None else ties.surveys,
+        from_stations_file=is_carried(table),
     )
+
+
+def is_carried(table: pa.Table) -> bool:
+    """Whether a trajectory's uncertainty columns were carried from its stations file (False:
+    computed by the run that wrote them, or no such columns)."""
+    return any(f.name in WORDS and CARRIED_KEY in (f.metadata or {}) for f in table.schema)
 
 
 def _defined(value: float) -> float | None:

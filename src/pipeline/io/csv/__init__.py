@@ -7,7 +7,7 @@ Kinds read (``read(path, kind, options)``):
   survey id, plus any of tvd, north (+N/−S), east (+E/−W) in m and dls in deg/30m found in
   the file (a wellpath report; empty cells of these are null), a trajectory's uncertainty
   columns by gyropipe's names (``cov_nn`` m², ``ellipse_major`` m…, stating the title's
-  ``confidence`` and ``error_model``: :mod:`pipeline.io.uncertainty_columns`), what each
+  ``confidence``, ``error_model`` and ``tie_on``: :mod:`pipeline.io.uncertainty_columns`), what each
   row is as the file says it (``station_type``: a ``Station Type``, ``Survey Type``,
   ``Type`` or ``Comment`` column), and ``source_line``. A row whose ``station_type`` names
   a projection or an interpolation (:data:`NOT_MEASURED`: ``Projection to TD``, ``PTB``,
@@ -138,6 +138,7 @@ from pipeline.streams import TableStream
 from pipeline.survey.calculation import calculation_of
 from pipeline.tables import PositionReadings, RawSamples, Stations
 from pipeline.uncertainty.stated import file_statements
+from pipeline.uncertainty.tieon import tie_on_of
 from pipeline.units import canonical_unit
 from pipeline.well import NorthReference, WellMetadata
 
@@ -393,7 +394,9 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
     declared = in_file + option
     statements = title_statements(title, header.delimiter)
-    uncertainty = Stated.of(path, statements.get("confidence"), statements.get("error_model"))
+    uncertainty = Stated.of(
+        path, statements.get("confidence"), statements.get("error_model"), statements.get("tie_on")
+    )
     chosen = readable(
         path,
         {
@@ -518,7 +521,8 @@ def sniff(path: Path) -> Claim:
 
 def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     """Write ``table`` as CSV: comment lines (well, north reference, survey calculation, the
-    confidence and error model the columns state), ``name[unit]`` header,
+    confidence and error model the columns state, the uncertainty's tie-on record as JSON),
+    ``name[unit]`` header,
     then the values (floats at their unit's precision, :mod:`pipeline.io.precision`; NaN and
     ±inf as an empty cell; a value that is a null marker, -999.25…, is refused, as in LAS:
     every reader would read it back as no value); ``source_line`` is not written, as in LAS
@@ -545,6 +549,8 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
             f"# vs_azimuth={calculation.vs_azimuth!r} deg",
         ]
     comments += [f"# {key}={value}" for key, value in file_statements(table.schema).items()]
+    if (tie_on := tie_on_of(table)) is not None:
+        comments.append(f"# tie_on={tie_on.model_dump_json()}")
     rounded = for_export(table)
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in rounded.schema])

@@ -448,9 +448,9 @@ def read_title(
         raise InputFileError(path, str(error["ctx"]["error"]), line=last) from None
 
 
-STATEMENT_KEYS = {"confidence": "confidence", "errormodel": "error_model"}
+STATEMENT_KEYS = {"confidence": "confidence", "errormodel": "error_model", "tieon": "tie_on"}
 """Title keys of what a file states of its uncertainty columns (gyropipe's ``# confidence=``,
-``# error_model=``), by their words."""
+``# error_model=``, ``# tie_on=``), by their words."""
 
 
 def title_statements(lines: list[str], delimiter: str) -> dict[str, tuple[str, int]]:

@@ -20,7 +20,7 @@ from pipeline.io.csv import LAYOUTS
 from pipeline.io.nulls import is_null_marker
 from pipeline.io.numbers import file_number
 from pipeline.io.sniffing import file_head
-from pipeline.io.uncertainty_columns import Stated, stating
+from pipeline.io.uncertainty_columns import Stated, stating, tie_on_record
 from pipeline.io.witsml.kinds import check_tie_in, check_trajectory, left_out
 from pipeline.io.witsml.terms import (
     AZI_REF,
@@ -28,12 +28,14 @@ from pipeline.io.witsml.terms import (
     ERROR_MODEL_EXTENSION,
     EXTENSION_PREFIX,
     NS,
+    TIE_ON_EXTENSION,
     survey_tool,
     uom_factor,
 )
 from pipeline.io.witsml.tree import Node, RepeatedElement, parse
 from pipeline.io.witsml.v2 import NS_2, as_1series
 from pipeline.plausibility import AngleUnitConfirmed, NullStations, SurveyStations
+from pipeline.uncertainty.tieon import TieOn, TieOnRecord
 from pipeline.well import (
     DATUM_WORDS,
     DefaultNorthReference,
@@ -185,21 +187,32 @@ def _read(path: Path, opts: WitsmlOptions) -> tuple[pa.Table, WellMetadata]:
         if any(v is not None for v in data[name]):
             columns[name] = pa.array(data[name], pa.string())
     columns[SOURCE_LINE] = pa.array(data[SOURCE_LINE], pa.int64())
-    table = stating(LAYOUTS["stations"].table(columns, north), _stated(trajectories))
+    stated = _stated(path, trajectories, labels)
+    table = stating(LAYOUTS["stations"].table(columns, north), stated)
     return table, _well(path, trajectories, north, datum)
 
 
-def _stated(trajectories: list[Node]) -> Stated:
+def _stated(path: Path, trajectories: list[Node], labels: list[str] | None) -> Stated:
     """The error model of the trajectories' matrixCov (their ``gyropipe.error_model``
-    extension values, in order; several: all, as one statement)."""
-    models = [
-        (entry.get("value") or entry).text.strip()
-        for traj in trajectories
-        if (common := traj.get("commonData")) is not None
-        for entry in common.all("extensionNameValue")
-        if entry.text_of("name") == ERROR_MODEL_EXTENSION
-    ]
-    return Stated(error_model=", ".join(dict.fromkeys(m for m in models if m)) or None)
+    extension values, in order; several: all, as one statement) and where each starts
+    (``gyropipe.uncertainty_tie_on``, each trajectory's named by its survey id of
+    ``labels``: recorded when every trajectory states it)."""
+    models: list[str] = []
+    ties: list[TieOn] = []
+    for index, traj in enumerate(trajectories):
+        common = traj.get("commonData")
+        for entry in common.all("extensionNameValue") if common is not None else []:
+            name, value = entry.text_of("name"), entry.get("value") or entry
+            if name == ERROR_MODEL_EXTENSION:
+                models.append(value.text.strip())
+            elif name == TIE_ON_EXTENSION:
+                tie = tie_on_record(path, value.text, value.line, TieOn)
+                survey = None if labels is None else labels[index]
+                ties.append(tie.model_copy(update={"survey": survey}))
+    return Stated(
+        error_model=", ".join(dict.fromkeys(m for m in models if m)) or None,
+        tie_on=TieOnRecord(surveys=tuple(ties)) if len(ties) == len(trajectories) else None,
+    )
 
 
 def _chosen(path: Path, root: Node, wanted: str | None) -> list[Node]:

@@ -31,6 +31,10 @@ COVARIANCE: tuple[tuple[str, str, str], ...] = (
 """Position covariance columns (NEV, vertical down) and their ``matrixCov`` elements."""
 ERROR_MODEL_EXTENSION = "gyropipe.error_model"
 """Name of the extension value stating the error model of the matrixCov covariances."""
+TIE_ON_EXTENSION = "gyropipe.uncertainty_tie_on"
+"""Name of the extension value stating where a trajectory's matrixCov starts: its tie-on and
+whether the tie-on's own uncertainty is in it (:class:`~pipeline.uncertainty.tieon.TieOn`,
+JSON)."""
 
 NAME_MAX = 64
 """Longest name and uid (WITSML ``nameString``, ``uidString``)."""

@@ -24,6 +24,7 @@ from pipeline.io.witsml.terms import (
     STATION_TYPES,
     SURVEY_TOOLS,
     TIE_IN,
+    TIE_ON_EXTENSION,
     UNIT_UOM,
     VERSION,
     survey_tool,
@@ -32,6 +33,7 @@ from pipeline.survey.calculation import calculation_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import STATION_TEXT_COLUMNS
 from pipeline.uncertainty.stated import file_statements
+from pipeline.uncertainty.tieon import TieOn, tie_on_of
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
 
@@ -93,7 +95,12 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
     )
     full_covariance = [False] * table.num_rows
     model = None
+    offsets = survey_offsets(table).tolist()
+    ties: list[TieOn | None] = [None] * (len(offsets) - 1)
     if all(c in texts for c, _, _ in COVARIANCE):
+        record = tie_on_of(table)
+        if record is not None and len(record.surveys) == len(ties):
+            ties = list(record.surveys)
         stated = file_statements(pa.schema([table.schema.field(c) for c, _, _ in COVARIANCE]))
         model = stated.get("error_model")
         covariance = _rows(
@@ -102,7 +109,7 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
         full_covariance = np.logical_and.reduce(
             [np.isfinite(values[c]) for c, _, _ in COVARIANCE]
         ).tolist()
-    for lo, hi in itertools.pairwise(survey_offsets(table).tolist()):
+    for (lo, hi), tie in zip(itertools.pairwise(offsets), ties, strict=True):
         label = str(labels[lo] or "") if labels else ""
         name = _name(label or _default_name(well), "survey id")
         doc.open(
@@ -144,7 +151,7 @@ def write_witsml(table: pa.Table, path: Path, well: WellMetadata) -> None:
                 doc.written(covariance[row])
                 doc.close()
             doc.close()
-        _common_data(doc, well, model)
+        _common_data(doc, well, model, tie)
         doc.close()
     doc.close()
     with path.open("wb") as fh:
@@ -310,9 +317,10 @@ def _attributes(attrs: dict[str, str]) -> str:
     return "".join(f' {k}="{v.translate(_ATTRIBUTE_ESCAPES)}"' for k, v in attrs.items())
 
 
-def _common_data(doc: _Document, well: WellMetadata, model: str | None) -> None:
+def _common_data(doc: _Document, well: WellMetadata, model: str | None, tie: TieOn | None) -> None:
     """Provenance comment, the error model of the covariances (``model``: None when not
-    stated) and every set well metadata field as an extension value."""
+    stated), where they start (``tie``, the trajectory's tie-on: None when not recorded) and
+    every set well metadata field as an extension value."""
     doc.open("commonData")
     comment = (
         f"Written by gyropipe {__version__}. dispNs/dispEw from the wellhead; tvd "
@@ -325,6 +333,12 @@ def _common_data(doc: _Document, well: WellMetadata, model: str | None) -> None:
         doc.open("extensionNameValue", uid="error_model")
         doc.leaf("name", ERROR_MODEL_EXTENSION)
         doc.leaf("value", _checked(model, "error model", None))
+        doc.leaf("dataType", "string")
+        doc.close()
+    if tie is not None:
+        doc.open("extensionNameValue", uid="uncertainty_tie_on")
+        doc.leaf("name", TIE_ON_EXTENSION)
+        doc.leaf("value", _checked(tie.model_dump_json(), "tie-on survey name", None))
         doc.leaf("dataType", "string")
         doc.close()
     for field, value in well.model_dump(exclude_none=True).items():

@@ -1,0 +1,182 @@
+"""The position uncertainty a stations file states, carried onto the trajectory integrated
+from its stations: the one rule of what is carried and what is refused.
+
+A stations file may list each station's uncertainty (a trajectory gyropipe wrote: Parquet,
+CSV, LAS, WITSML ``matrixCov``). Those columns belong to their rows, so a trajectory
+computed from the same stations keeps them row by row, each with its field metadata (error
+model, confidence, description, :mod:`pipeline.uncertainty.stated`) and the file's tie-on
+record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the file
+(:data:`~pipeline.uncertainty.stated.CARRIED_KEY`). A family of columns
+(:data:`~pipeline.uncertainty.stated.FAMILIES`) is carried whole or not at all: one with
+columns missing, in another unit, at a confidence level it does not state, holding a value
+no such column can hold (a negative variance, an infinite size) or in a north other than
+the azimuths' is refused, and the refusal said — a file's uncertainty is never dropped
+quietly. Lengths m, covariances m².
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.uncertainty.stated import (
+    CARRIED_KEY,
+    CONFIDENCE_KEY,
+    FAMILIES,
+    WORDS,
+    Family,
+    file_statements,
+)
+from pipeline.uncertainty.tieon import TIE_ON_KEY, TieOnRecord, tie_on_of, with_tie_on
+
+__all__ = [
+    "FLAG_COLUMN",
+    "Carried",
+    "carried_uncertainty",
+    "without_uncertainty",
+]
+
+FLAG_COLUMN = "outside_validity"
+"""The per-station flag of no σ (outside the error model's range), carried with the σ."""
+TIE_MD_M = 1e-3
+"""A tie-on record's first MD agrees with its survey's first station within this (m): a
+text file rounds MDs to 0.1 mm."""
+
+
+@dataclass(frozen=True)
+class Carried:
+    """The uncertainty columns carried (fields with their metadata, and values), the file's
+    tie-on record where it matches its stations, and each refusal in words."""
+
+    fields: tuple[pa.Field, ...]
+    columns: tuple[pa.ChunkedArray, ...]
+    tie_on: TieOnRecord | None
+    refused: tuple[str, ...]
+
+    def onto(self, trajectory: pa.Table) -> pa.Table:
+        """``trajectory`` (the stations' rows, in their order) with the carried columns,
+        each recording that it came with the stations file, and the tie-on record."""
+        for field, values in zip(self.fields, self.columns, strict=True):
+            meta = {**(field.metadata or {}), CARRIED_KEY: b"stations file"}
+            trajectory = trajectory.append_column(field.with_metadata(meta), values)
+        return trajectory if self.tie_on is None else with_tie_on(trajectory, self.tie_on)
+
+
+def carried_uncertainty(stations: pa.Table) -> Carried:
+    """What of ``stations``' uncertainty columns a trajectory of its rows carries
+    (module docstring); nothing, refusing nothing, for a table without them."""
+    refused: list[str] = []
+    kept: list[str] = []
+    for family in FAMILIES:
+        present = [c for c in family.columns if c in stations.column_names]
+        if present:
+            problem = _family_problem(stations, family, present)
+            if problem is None:
+                kept.extend(present)
+            else:
+                refused.append(f"columns {_listed(present)}: {problem}")
+    if kept:
+        try:
+            file_statements(pa.schema([stations.schema.field(c) for c in kept]))
+        except ValueError as exc:
+            refused.append(f"columns {_listed(kept)}: {exc}")
+            kept = []
+    if kept and FLAG_COLUMN in stations.column_names:
+        kept.append(FLAG_COLUMN)
+    tie_on = _tie_on(stations, refused) if kept else None
+    return Carried(
+        fields=tuple(stations.schema.field(c) for c in kept),
+        columns=tuple(stations.column(c) for c in kept),
+        tie_on=tie_on,
+        refused=tuple(refused),
+    )
+
+
+def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> str | None:
+    """Why ``family``'s columns ``present`` cannot be carried, or None."""
+    missing = [c for c in family.columns if c not in present]
+    if missing:
+        return f"without {_listed(missing)} (the {family.name} columns go all or none)"
+    for name in present:
+        field = stations.schema.field(name)
+        meta = field.metadata or {}
+        unit = meta.get(UNIT_KEY, b"").decode()
+        wanted = _unit(name, family)
+        if unit != wanted:
+            return f"{name} in {unit or 'no unit'!r}, expected {wanted!r}"
+        if family.dimensions is not None and CONFIDENCE_KEY not in meta:
+            return f"{name} states no confidence level (a size at an unknown level is no 1σ)"
+        if not pa.types.is_floating(field.type):
+            return f"{name} holds {field.type}, expected numbers"
+        bad = _bad_row(name, stations.column(name).to_numpy(zero_copy_only=False))
+        if bad is not None:
+            md = float(stations.column("md")[bad].as_py())
+            return f"{name} at MD {md:.2f} m holds {stations.column(name)[bad].as_py()!r}"
+    if "ellipse_azimuth" in present:
+        own = (stations.schema.field("ellipse_azimuth").metadata or {}).get(NORTH_KEY)
+        azi = (stations.schema.field("azi").metadata or {}).get(NORTH_KEY)
+        if own != azi:
+            said = own.decode() if own else "none"
+            return f"ellipse_azimuth in north reference {said!r}, not the azimuths'"
+    return None
+
+
+def _unit(name: str, family: Family) -> str:
+    """The unit a column of ``family`` is carried in."""
+    if family.scale == "1 sigma squared":
+        return "m2"
+    return "deg" if name == "ellipse_azimuth" else "m"
+
+
+def _bad_row(name: str, values: np.ndarray) -> int | None:
+    """The first row holding a value no such column holds (NaN, no σ, is one it does)."""
+    values = np.asarray(values, dtype=np.float64)
+    defined = ~np.isnan(values)
+    ok = ~defined | np.isfinite(values)
+    if name in ("cov_nn", "cov_ee", "cov_vv") or not name.startswith("cov_"):
+        ok &= ~defined | (values >= 0)
+    if name == "ellipse_azimuth":
+        ok &= ~defined | (values < 180)
+    bad = np.flatnonzero(~ok)
+    return int(bad[0]) if bad.size else None
+
+
+def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
+    """The file's tie-on record where each survey's first station is its (a refusal in
+    ``refused`` where it is not: it states another table's)."""
+    if TIE_ON_KEY not in (stations.schema.metadata or {}):
+        return None
+    record = tie_on_of(stations)
+    assert record is not None
+    md = stations.column("md").to_numpy(zero_copy_only=False)
+    names = stations.column("survey").to_pylist() if "survey" in stations.column_names else None
+    firsts = [0] + [i for i in range(1, len(md)) if names is not None and names[i] != names[i - 1]]
+    found = [(None if names is None else names[i], float(md[i])) for i in firsts]
+    stated = [(t.survey, t.md) for t in record.surveys]
+    if len(found) == len(stated) and all(
+        s == f and abs(m - n) <= TIE_MD_M for (s, m), (f, n) in zip(stated, found, strict=True)
+    ):
+        return record
+    refused.append(
+        "the tie-on statement (where each survey's uncertainty starts): it names surveys "
+        f"starting at {_starts(stated)}, the stations start at {_starts(found)}"
+    )
+    return None
+
+
+def _starts(firsts: list[tuple[str | None, float]]) -> str:
+    return ", ".join(f"MD {md:.2f} m" + (f" ({s})" if s is not None else "") for s, md in firsts)
+
+
+def _listed(names: list[str]) -> str:
+    return ", ".join(names)
+
+
+def without_uncertainty(table: pa.Table) -> pa.Table:
+    """``table`` less its uncertainty columns and tie-on record (a stage computing its own)."""
+    drop = [c for c in (*WORDS, FLAG_COLUMN) if c in table.column_names]
+    meta = {k: v for k, v in (table.schema.metadata or {}).items() if k != TIE_ON_KEY}
+    return table.drop_columns(drop).replace_schema_metadata(meta)
