@@ -466,8 +466,9 @@ def qc_verdict(flags: list[list[Flag]], md: FloatArray, dropped: Sequence[Droppe
         k = len(dropped)
         each = ", ".join(f"MD {fmt(d.md)} m ({dropped_by(d).lower()})" for d in dropped[:SHOWN])
         said.append(
-            f"{k} station{'s' * (k != 1)} recorded {'were' if k != 1 else 'was'} dropped and "
-            f"{'are' if k != 1 else 'is'} in neither the listing nor the trajectory — "
+            f"{k} station{'s' * (k != 1)} recorded {'were' if k != 1 else 'was'} dropped: "
+            f"{'their' if k != 1 else 'its'} readings are in neither the listing nor the "
+            "trajectory — "
             f"{each}{' …' if k > SHOWN else ''}, see “{DROPPED_TITLE}” in the QC section"
         )
     if failed:
@@ -548,6 +549,7 @@ def dropped_table(dropped: Sequence[Dropped], qc: pa.Table | None) -> Table | No
         tuple((fmt(d.md), dropped_by(d), _why(d, qc)) for d in dropped),
         kind="dropped",
         marked=frozenset(range(len(dropped))),
-        note="A station dropped was recorded but is not in the listing, the trajectory or the "
-        "exported files: the survey between its neighbours is one course without it.",
+        note="A station dropped was recorded, but its readings were not used: a point "
+        "survey's listing, trajectory and exported files lack it (one course spans it between "
+        "its neighbours); a continuous run is not tied to a stop dropped.",
     )
