@@ -56,24 +56,33 @@ def qc_lines(plan: Plan, result: RunResult) -> list[str]:
 
 def qc_verdict_of(plan: Plan, result: RunResult) -> str | None:
     """The run's QC verdict line (:func:`pipeline.qc.verdict.qc_verdict`) over its check
-    tables and the checks of stations files' own positions its trajectories record (each
-    once: later stages keep a trajectory's record)."""
-    from pipeline.qc.tables import QcResults
+    tables, the checks of stations files' own positions its trajectories record (each
+    once: later stages keep a trajectory's record) and the stations its validity summaries
+    and compassing rejects drop."""
+    from pipeline.qc.dropped import dropped_stations
+    from pipeline.qc.tables import QcResults, QcSummary
     from pipeline.qc.verdict import qc_verdict
     from pipeline.survey.crosscheck import PositionCheck, position_check_of
-    from pipeline.tables import CheckResults, Trajectory
+    from pipeline.tables import CheckResults, CompassRejects, Trajectory
 
     checks: list[pa.Table] = []
+    dropping: list[pa.Table] = []
     positions: list[PositionCheck] = []
     for stage in plan.stages:
         for port, contract in stage.definition.outputs.items():
             if issubclass(contract, CheckResults | QcResults):
                 checks.append(result.tables[f"{stage.id}.{port}"])
+            elif issubclass(contract, QcSummary | CompassRejects):
+                dropping.append(result.tables[f"{stage.id}.{port}"])
             elif issubclass(contract, Trajectory):
                 check = position_check_of(result.tables[f"{stage.id}.{port}"])
                 if check is not None and check not in positions:
                     positions.append(check)
-    return qc_verdict(checks, [("file_positions", c.compared, c.beyond_md) for c in positions])
+    return qc_verdict(
+        checks,
+        [("file_positions", c.compared, c.beyond_md) for c in positions],
+        dropped_stations(dropping),
+    )
 
 
 def verdict_line(plan: Plan, result: RunResult, manifest: Path) -> str:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 from pathlib import Path
+from typing import Any
 
 import jsonschema
 import numpy as np
@@ -92,6 +93,8 @@ def test_summary_of_a_run(exports_run: RunResult):
         "not_evaluated": 0,
         "flagged_stations": None,
         "rejected_stations": None,
+        "dropped_stations": None,
+        "dropped": [],
     }
 
 
@@ -123,9 +126,20 @@ def test_qc_counts_and_several_surveys(tmp_path: Path):
         }
     )
     stations = pa.table({"flags": ["", "inconsistent", "poor_azimuth,frame_mismatch", ""]})
-    rejects = pa.table({"station": [7, 9]})
+    rejects = pa.table({"station": [7, 9], "md": [30.0, 10.0], "reason": ["too few", "mirror"]})
+    verdicts = pa.table(
+        {
+            "station": [6, 7, 8],
+            "md": [20.0, 30.0, 40.0],
+            "status": ["drop", "ok", "flag"],
+            "failed_checks": ["rest_gyro,gravity", "", "gravity"],
+            "suspect": ["", "", ""],
+            "diagnosis": ["", "", ""],
+        }
+    )
     path = tmp_path / "s.json"
-    tables = {"trajectory": trajectory, "qc": qc, "stations": stations, "rejects": rejects}
+    tables = {"trajectory": trajectory, "qc": qc, "stations": stations, "rejects": rejects,
+              "qc_summary": verdicts}  # fmt: skip
     json_summary.write_tables(tables, path, WellMetadata(well="Q"), _provenance())
     doc = load(path)
     assert [(s["survey"], s["station_count"], s["md_end"]) for s in doc["surveys"]] == [
@@ -150,10 +164,24 @@ def test_qc_counts_and_several_surveys(tmp_path: Path):
         "not_evaluated": 2,
         "flagged_stations": 2,
         "rejected_stations": 2,
+        "dropped_stations": 3,  # the validity drop at 20 m and both rejects, in MD order
+        "dropped": [
+            _dropped(10.0, 9, "compassing", [], "mirror"),
+            _dropped(20.0, 6, "validity", ["rest_gyro", "gravity"], ""),
+            _dropped(30.0, 7, "compassing", [], "too few"),
+        ],
     }
+    unnamed = {"trajectory": trajectory, "rejects": pa.table({"station": [7, 9]})}
+    with pytest.raises(ValueError, match=r"rejects port takes .* the table wired has station$"):
+        json_summary.write_tables(unnamed, path, WellMetadata(well="Q"), _provenance())
     int_flags = {"trajectory": trajectory, "stations": pa.table({"flags": [0, 4, 0, 1, 1]})}
     json_summary.write_tables(int_flags, path, WellMetadata(well="Q"), _provenance())
     assert load(path)["qc"]["flagged_stations"] == 3
+
+
+def _dropped(md: float, station: int, by: str, checks: list[str], reason: str) -> dict[str, Any]:
+    """A station dropped as the summary states it."""
+    return {"md": md, "station": station, "dropped_by": by, "checks": checks, "reason": reason}
 
 
 def _provenance() -> Provenance:

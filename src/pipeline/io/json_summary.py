@@ -9,12 +9,14 @@ uncertainty, the error ellipse at TD; the uncertainty as its columns state it
 (``uncertainty``: error model, confidence, the σ convention of each column family, the
 largest horizontal semi-major axis and TD's; absent without uncertainty columns); then QC
 counts per check (with ``file_positions``: the stations file's own positions against the
-recomputed ones, when the trajectory records that check), flagged and rejected stations.
-Lengths in m, angles in degrees, DLS in °/30 m, drift rates in °/h (``units`` says so in the
-document too).
+recomputed ones, when the trajectory records that check), flagged and rejected stations,
+and every station recorded but dropped (by the validity checks or compassing: MD, what
+dropped it, why). Lengths in m, angles in degrees, DLS in °/30 m, drift rates in °/h
+(``units`` says so in the document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
-``stations``, ``rejects`` and ``drift`` (a free-gyro survey's corrected readings: the drift
+``qc_summary`` (the validity checks' verdict per station), ``stations``, ``rejects`` and
+``drift`` (a free-gyro survey's corrected readings: the drift
 rate applied, its σ, source and caveats); through ``write`` one trajectory table.
 """
 
@@ -36,6 +38,7 @@ from pipeline.contracts import NORTH_KEY
 from pipeline.drift.correction import DriftRate, drift_rate_of
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
+from pipeline.qc.dropped import dropped_stations, is_rejects
 from pipeline.registry import Provenance, WriterDef
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
 from pipeline.survey.courses import MIN_COURSE, max_dls
@@ -199,6 +202,17 @@ class CheckCount(_Model):
     not_evaluated: int = Field(ge=0, description="rows the check could not evaluate")
 
 
+class DroppedStation(_Model):
+    """A station recorded but not in the trajectory: dropped by the validity checks (its
+    readings removed before compassing) or not solved by compassing."""
+
+    md: float = Field(description="measured depth, m")
+    station: int = Field(ge=0, description="station index in the readings")
+    dropped_by: Literal["validity", "compassing"]
+    checks: list[str] = Field(description="the failed validity checks (empty: compassing)")
+    reason: str = Field(description="why compassing could not solve it ('' for validity)")
+
+
 class Qc(_Model):
     """QC counts."""
 
@@ -209,7 +223,16 @@ class Qc(_Model):
         None, description="stations with a warning flag (null: no stations table given)"
     )
     rejected_stations: int | None = Field(
-        None, description="stations rejected (null: no rejects table given)"
+        None, description="stations compassing rejected (null: no rejects table given)"
+    )
+    dropped_stations: int | None = Field(
+        None,
+        description="stations recorded but not in the trajectory: dropped by the validity "
+        "checks or rejected by compassing (null: neither a qc_summary nor a rejects table "
+        "given)",
+    )
+    dropped: list[DroppedStation] = Field(
+        default_factory=list, description="each station dropped, in MD order"
     )
 
 
@@ -258,8 +281,8 @@ class SurveySummary(_Model):
 def summarize(
     tables: Mapping[str, pa.Table], well: WellMetadata, provenance: Provenance | None
 ) -> SurveySummary:
-    """The summary of a run's ``trajectory`` and its ``qc``, ``stations``, ``rejects`` and
-    drift-corrected readings (``drift``)."""
+    """The summary of a run's ``trajectory`` and its ``qc``, ``qc_summary``, ``stations``,
+    ``rejects`` and drift-corrected readings (``drift``)."""
     if "trajectory" not in tables:
         raise ValueError("the JSON summary needs the trajectory (wire the port 'trajectory')")
     trajectory = tables["trajectory"]
@@ -383,13 +406,13 @@ def _value(value: object) -> object:
 
 
 def _has_qc(tables: Mapping[str, pa.Table]) -> bool:
-    given = {"qc", "stations", "rejects"} & set(tables)
+    given = {"qc", "qc_summary", "stations", "rejects"} & set(tables)
     return bool(given) or position_check_of(tables["trajectory"]) is not None
 
 
 def _qc(tables: Mapping[str, pa.Table]) -> Qc:
     """Counts of the ``qc`` table's checks and of the trajectory's position check, by
-    name, as the run's verdict line counts them; flagged and rejected stations."""
+    name, as the run's verdict line counts them; flagged, rejected and dropped stations."""
     checks: list[CheckCount] = []
     positions = position_check_of(tables["trajectory"])
     if positions is not None:
@@ -427,12 +450,26 @@ def _qc(tables: Mapping[str, pa.Table]) -> Qc:
         empty = "" if pa.types.is_string(flags.type) else 0
         flagged = int(pc.sum(pc.not_equal(flags, empty)).as_py() or 0)
     rejects = tables.get("rejects")
+    if rejects is not None and not is_rejects(rejects):
+        raise ValueError(
+            "the JSON summary's rejects port takes the stations compassing rejected (columns "
+            f"station, md, reason); the table wired has {', '.join(rejects.column_names)}"
+        )
+    dropping = [tables.get("qc_summary"), rejects]
+    dropped = [
+        DroppedStation(
+            md=d.md, station=d.station, dropped_by=d.by, checks=list(d.checks), reason=d.reason
+        )
+        for d in dropped_stations(dropping)
+    ]
     return Qc(
         checks=checks,
         failed=sum(c.failed for c in checks),
         not_evaluated=sum(c.not_evaluated for c in checks),
         flagged_stations=flagged,
         rejected_stations=rejects.num_rows if rejects is not None else None,
+        dropped_stations=len(dropped) if any(t is not None for t in dropping) else None,
+        dropped=dropped,
     )
 
 

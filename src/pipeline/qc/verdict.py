@@ -1,6 +1,6 @@
 """A run's QC verdict: how many check results passed and failed (by check) and at how many
-stations, over every check table the run produced — as numbers (:func:`qc_tally`, the fleet
-page) and in one line (:func:`qc_verdict`, the command line)."""
+stations, over every check table the run produced, and the stations it dropped — as numbers
+(:func:`qc_tally`, the fleet page) and in one line (:func:`qc_verdict`, the command line)."""
 
 from __future__ import annotations
 
@@ -10,19 +10,22 @@ from dataclasses import dataclass, field
 
 import pyarrow as pa
 
+from pipeline.qc.dropped import Dropped
+
 __all__ = ["QcTally", "qc_tally", "qc_verdict"]
 
 
 @dataclass
 class QcTally:
     """Check results counted: ``evaluated`` (a null ``passed`` is not), ``failed`` by check,
-    the MDs (m, rounded to 1 µm) of the stations with a failure and the failed data windows
-    (rows without MD)."""
+    the MDs (m, rounded to 1 µm) of the stations with a failure, the failed data windows
+    (rows without MD) and the stations dropped (:mod:`pipeline.qc.dropped`)."""
 
     evaluated: int = 0
     failed: Counter[str] = field(default_factory=Counter)
     stations: set[float] = field(default_factory=set)
     windows: int = 0
+    dropped: list[Dropped] = field(default_factory=list)
 
     @property
     def failures(self) -> int:
@@ -30,13 +33,16 @@ class QcTally:
 
 
 def qc_tally(
-    tables: Iterable[pa.Table], others: Iterable[tuple[str, int, Sequence[float]]] = ()
+    tables: Iterable[pa.Table],
+    others: Iterable[tuple[str, int, Sequence[float]]] = (),
+    dropped: Sequence[Dropped] = (),
 ) -> QcTally:
     """The results of ``tables`` (each with ``check``, ``passed`` and ``md`` columns: check
     results, validity results; a null ``passed`` was not evaluated and counts for neither).
     Stations are told apart by MD; a failed row without MD is a data window. ``others``:
-    checks recorded otherwise, as (name, stations evaluated, MD of each failed station)."""
-    tally = QcTally()
+    checks recorded otherwise, as (name, stations evaluated, MD of each failed station);
+    ``dropped``: the stations the run dropped."""
+    tally = QcTally(dropped=list(dropped))
     for table in tables:
         checks = table.column("check").to_pylist()
         passed = table.column("passed").to_pylist()
@@ -59,20 +65,35 @@ def qc_tally(
     return tally
 
 
+SHOWN = 8
+"""Stations dropped the verdict line names (the rest counted)."""
+
+
 def qc_verdict(
-    tables: Iterable[pa.Table], others: Iterable[tuple[str, int, Sequence[float]]] = ()
+    tables: Iterable[pa.Table],
+    others: Iterable[tuple[str, int, Sequence[float]]] = (),
+    dropped: Sequence[Dropped] = (),
 ) -> str | None:
     """``"QC: 8 failed checks (dls_limit: 8) at 8 stations"`` or ``"QC: all 60 checks
-    passed"`` over ``tables`` and ``others`` (:func:`qc_tally`); None when no table holds a
-    result."""
-    tally = qc_tally(tables, others)
-    if not tally.evaluated:
-        return None
+    passed"`` over ``tables`` and ``others`` (:func:`qc_tally`), then the stations
+    ``dropped`` (``"; 1 station dropped (MD 200.10 m: rest_acc)"``); None when no table holds
+    a result and nothing was dropped."""
+    tally = qc_tally(tables, others, dropped)
+    said = [_checks(tally)] if tally.evaluated else []
+    if tally.dropped:
+        shown = ", ".join(f"MD {d.md:.2f} m: {d.names()}" for d in tally.dropped[:SHOWN])
+        more = f", and {len(tally.dropped) - SHOWN} more" if len(tally.dropped) > SHOWN else ""
+        said.append(f"{_count(len(tally.dropped), 'station')} dropped ({shown}{more})")
+    return "QC: " + "; ".join(said) if said else None
+
+
+def _checks(tally: QcTally) -> str:
+    """What the line says of the check results (some evaluated)."""
     if not tally.failed:
-        return f"QC: all {tally.evaluated} checks passed"
+        return f"all {tally.evaluated} checks passed"
     by_check = ", ".join(f"{name}: {n}" for name, n in tally.failed.items())
     where = [_count(len(tally.stations), "station"), _count(tally.windows, "data window")]
-    return f"QC: {_count(tally.failures, 'failed check')} ({by_check}) at " + " and ".join(
+    return f"{_count(tally.failures, 'failed check')} ({by_check}) at " + " and ".join(
         w for w in where if w
     )
 

@@ -6,22 +6,26 @@ reference| ≤ tolerance) and :class:`~pipeline.qc.tables.QcSummary`, generic
 :class:`~pipeline.tables.CheckResults` (value ≤ limit), free-gyro
 :class:`~pipeline.drift.tables.InOutQc` and two runs'
 :class:`~pipeline.qc.tables.RunComparison` (in − out within tolerance), and the acceptance
-gates of a survey (:class:`~pipeline.tables.AcceptanceGates`).
+gates of a survey (:class:`~pipeline.tables.AcceptanceGates`); the stations dropped (the
+validity checks' drops and compassing's rejects, :mod:`pipeline.qc.dropped`), which the
+listing cannot show.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
+from pipeline.qc.dropped import Dropped
 from pipeline.qc.tables import diagnoses
 from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.document import Column, Table, Verdict, fmt_sig
-from pipeline.reports.flags import Flag, compass_flag, continuous_flags, failed_check
+from pipeline.reports.flags import CHECKS, Flag, compass_flag, continuous_flags, failed_check
 from pipeline.reports.numbers import fmt
 from pipeline.reports.plots import FloatArray, QcSeries
 
@@ -320,11 +324,15 @@ def _recording_failures(qc: pa.Table | None, checks: tuple[str, ...]) -> list[di
     ]
 
 
-def recording_verdicts(qc: pa.Table | None) -> list[Verdict]:
+def recording_verdicts(qc: pa.Table | None, dropped: Sequence[Dropped] = ()) -> list[Verdict]:
     """The summary's lines on the stops the end of the recording cut short and the stations
-    that lack frame positions (one line a station)."""
+    that lack frame positions (one line a station; none for a station ``dropped``: it is
+    not one the survey rests on, and the summary says why it was dropped)."""
     lines: dict[float, str] = {}
+    gone = np.array([d.md for d in dropped])
     for r in _recording_failures(qc, RECORDING_CHECKS):
+        if r["md"] is not None and (np.abs(gone - r["md"]) <= MD_MATCH).any():
+            continue
         if r["check"] == RECORDING_CHECKS[0]:
             lines[r["md"]] = (
                 f"The recording ended during the stop at MD {fmt(r['md'])} m, before its frame "
@@ -422,3 +430,126 @@ def gates_verdict(gates: pa.Table) -> Verdict:
     skipped = sum(1 for g in rows if g["status"] not in ("pass", "fail"))
     note = f" ({skipped} not evaluated)" if skipped else ""
     return Verdict("ok", f"Acceptance: PASSED — all {len(rows) - skipped} gates{note}.")
+
+
+DROPPED_TITLE = "Stations dropped"
+SHOWN = 8
+"""Stations a summary line names (failed, dropped); the rest are counted."""
+
+
+def _mds(md: Sequence[float]) -> str:
+    """``100.05 m, 200.10 m …`` (the first :data:`SHOWN`)."""
+    return ", ".join(f"{fmt(x)} m" for x in md[:SHOWN]) + (" …" if len(md) > SHOWN else "")
+
+
+def dropped_by(station: Dropped) -> str:
+    """What dropped a station, in the report's words: the failed checks' titles, or
+    gyrocompassing."""
+    if station.by == "compassing":
+        return "Gyrocompassing"
+    return "; ".join(check_title(c, "").title for c in station.checks) or "Validity checks"
+
+
+def qc_verdict(flags: list[list[Flag]], md: FloatArray, dropped: Sequence[Dropped]) -> Verdict:
+    """The summary's QC line: the stations recorded but ``dropped`` (a warning: the listing
+    cannot show them), the listed stations that failed a check (by MD), and how many carry
+    each processing flag."""
+    n = len(flags)
+    failed = [i for i, f in enumerate(flags) if any(x.failed for x in f)]
+    counts: dict[str, int] = {}
+    for station in flags:
+        for label in dict.fromkeys(x.label for x in station if not x.failed):
+            counts[label] = counts.get(label, 0) + 1
+    caveats = sum(1 for f in flags if any(not x.failed for x in f))
+    said = []
+    if dropped:
+        k = len(dropped)
+        each = ", ".join(f"MD {fmt(d.md)} m ({dropped_by(d).lower()})" for d in dropped[:SHOWN])
+        said.append(
+            f"{k} station{'s' * (k != 1)} recorded {'were' if k != 1 else 'was'} dropped: "
+            f"{'their' if k != 1 else 'its'} readings are in neither the listing nor the "
+            "trajectory — "
+            f"{each}{' …' if k > SHOWN else ''}, see “{DROPPED_TITLE}” in the QC section"
+        )
+    if failed:
+        said.append(
+            f"{len(failed)} of {n} stations failed a check (MD {_mds([md[i] for i in failed])}); "
+            "their rows are highlighted in the listing and the checks explained in the QC section"
+        )
+    elif dropped:
+        said.append(f"none of the {n} stations listed failed a check")
+    elif caveats:
+        said.append("no station failed a check")
+    if caveats:
+        said.append(
+            f"{caveats} of {n} stations carry processing flags "
+            f"({', '.join(f'{label}: {count}' for label, count in counts.items())}), marked in "
+            "the listing and explained in the QC section"
+        )
+    if not said:
+        return Verdict("ok", f"QC: all {n} stations passed.")
+    return Verdict("warn" if failed or dropped else "info", f"QC: {'; '.join(said)}.")
+
+
+def _finding(rows: list[dict[str, Any]]) -> str:
+    """A failed check's worst row of a station (its failed rows ``rows``) in words: the
+    quantity, its value against the tolerance, at which frame position."""
+    name = rows[0]["check"]
+    titled = check_title(name, "measured − reference")
+
+    def value(r: dict[str, Any]) -> float:
+        return float(r["measured"] if titled.limit else r["measured"] - r["reference"])
+
+    worst = max(rows, key=lambda r: abs(value(r)) / r["tolerance"] if r["tolerance"] else np.inf)
+    unit = printed_unit(worst["unit"])
+    bound = "limit " if titled.limit else "tolerance ±"
+    where = f" at frame position {worst['position'] + 1}" if worst["position"] is not None else ""
+    more = f" (failed at {len(rows)} positions)" if len(rows) > 1 else ""
+    return (
+        f"{titled.plotted[:1].upper()}{titled.plotted[1:]} {fmt_sig(value(worst), 3)} {unit}, "
+        f"{bound}{fmt_sig(worst['tolerance'], 3)} {unit}{where}{more}"
+    )
+
+
+def _why(station: Dropped, qc: pa.Table | None) -> str:
+    """Why a station was dropped, in words: each failed check's meaning and finding, or
+    why compassing could not solve it."""
+    if station.by == "compassing":
+        return f"Gyrocompassing could not solve this stop: {station.reason}."
+    failed = [
+        r
+        for r in (qc.to_pylist() if qc is not None else [])
+        if r["passed"] is False
+        and r["md"] is not None
+        and abs(r["md"] - station.md) <= MD_MATCH
+        and r["measured"] is not None
+        and r["tolerance"] is not None
+    ]
+    words = []
+    for check in station.checks:
+        meaning = CHECKS.get(check, f"the check {check!r} found a value beyond its limit.")
+        rows = [r for r in failed if r["check"] == check]
+        found = f" {_finding(rows)}." if rows else ""
+        words.append(f"{meaning[:1].upper()}{meaning[1:]}{found}")
+    return " ".join(words)
+
+
+def dropped_table(dropped: Sequence[Dropped], qc: pa.Table | None) -> Table | None:
+    """The stations recorded but dropped: MD, what dropped it and why, with the validity
+    checks' findings from ``qc`` (None: none dropped)."""
+    if not dropped:
+        return None
+    return Table(
+        DROPPED_TITLE,
+        (
+            Column("MD, m", align="left"),
+            Column("Dropped by", align="left"),
+            Column("Why", align="left", wrap=True),
+        ),
+        tuple((fmt(d.md), dropped_by(d), _why(d, qc)) for d in dropped),
+        kind="dropped",
+        marked=frozenset(range(len(dropped))),
+        note="A station dropped was recorded, but its readings were not used: a point "
+        "survey's listing, trajectory and exported files lack it (one course spans it between "
+        "its neighbours); a continuous run is not tied to a stop dropped.",
+    )

@@ -1,6 +1,6 @@
 """The survey report: well and run header, method, survey listing, trajectory plots,
-position uncertainty, QC, drift, sensor noise and provenance — each part present when the
-run produced its tables."""
+position uncertainty, QC (the stations dropped by a check too), drift, sensor noise and
+provenance — each part present when the run produced its tables."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.errors import GyropipeError
+from pipeline.qc.dropped import Dropped, dropped_stations
 from pipeline.registry import Provenance
 from pipeline.reports import plots
 from pipeline.reports.clearance import clearance_section
@@ -49,9 +50,11 @@ from pipeline.reports.qc import (
     QcSources,
     all_series,
     diagnosis_table,
+    dropped_table,
     flag_table,
     gates_table,
     gates_verdict,
+    qc_verdict,
     recording_table,
     recording_verdicts,
     station_flags,
@@ -90,6 +93,8 @@ class SurveyTables:
     stations: pa.Table | None = None
     qc: pa.Table | None = None
     qc_summary: pa.Table | None = None
+    rejects: pa.Table | None = None
+    """stations compassing could not solve (:class:`~pipeline.tables.CompassRejects`)"""
     checks: pa.Table | None = None
     inout: pa.Table | None = None
     drift: pa.Table | None = None
@@ -101,6 +106,10 @@ class SurveyTables:
     clearance: pa.Table | None = None
     series: FullRate | None = None
     """a full-rate series already reduced to its envelope (bounded, whatever its length)"""
+
+    def dropped(self) -> list[Dropped]:
+        """The stations recorded but dropped by the validity checks or compassing."""
+        return dropped_stations([self.qc_summary, self.rejects])
 
     def qc_sources(self) -> QcSources:
         return QcSources(
@@ -169,7 +178,9 @@ def survey_document(
     added = parts.sections()  # before the method section's reference list: they may cite
     tool = survey_tool(traj, well)
     verdicts = [b for b in clearance.blocks if isinstance(b, Verdict)] if clearance else []
-    verdicts += caveat_verdicts(tables.drift) + recording_verdicts(src.qc)
+    dropped = tables.dropped()
+    verdicts += caveat_verdicts(tables.drift) + recording_verdicts(src.qc, dropped)
+    recorded = f"; {len(dropped)} more recorded and dropped (see the QC section)" if dropped else ""
 
     sections = [
         Section(
@@ -179,12 +190,17 @@ def survey_document(
                 tool_fields(
                     well.model_copy(update={"tool_type": tool}),
                     provenance,
-                    [("Stations", f"{traj.num_rows} ({fmt(md[0])} – {fmt(md[-1])} m MD)")],
+                    [
+                        (
+                            "Stations",
+                            f"{traj.num_rows} ({fmt(md[0])} – {fmt(md[-1])} m MD){recorded}",
+                        )
+                    ],
                 ),
             ),
             key="well",
         ),
-        _summary(tables, path, vs_azimuth, flags, course, verdicts),
+        _summary(tables, path, vs_azimuth, flags, course, verdicts, dropped),
         _method(tables, path, vs_azimuth, parts),
         Section(
             "Survey listing",
@@ -211,7 +227,15 @@ def survey_document(
         sections.append(Section("Position uncertainty", (words,), key="uncertainty"))
     groups = all_series(src)
     explained = flag_table(flags or [])
-    notes = [t for t in (diagnosis_table(src.summary), recording_table(src.qc)) if t]
+    notes = [
+        t
+        for t in (
+            dropped_table(dropped, src.qc),
+            diagnosis_table(src.summary),
+            recording_table(src.qc),
+        )
+        if t
+    ]
     if groups or explained is not None or notes or src.gates is not None:
         sections.append(_qc(groups, explained, notes, src.gates))
     if _rows(tables.drift) or _rows(tables.calibration):
@@ -295,35 +319,6 @@ def _max_dls(traj: pa.Table, path: plots.Path3, course: Course) -> str:
     return f"{fmt(found.dls)} {unit_label(traj, 'dls')} at {fmt(path.md[found.row])} m MD{note}"
 
 
-def _qc_verdict(flags: list[list[Flag]], md: plots.FloatArray) -> Verdict:
-    """The summary's QC line: stations that failed a check (listed by MD), and how many
-    carry each processing flag."""
-    n = len(flags)
-    failed = [i for i, f in enumerate(flags) if any(x.failed for x in f)]
-    counts: dict[str, int] = {}
-    for station in flags:
-        for label in dict.fromkeys(x.label for x in station if not x.failed):
-            counts[label] = counts.get(label, 0) + 1
-    caveats = sum(1 for f in flags if any(not x.failed for x in f))
-    flagged = (
-        f"{caveats} of {n} stations carry processing flags "
-        f"({', '.join(f'{label}: {count}' for label, count in counts.items())}), marked in "
-        "the listing and explained in the QC section"
-    )
-    if failed:
-        listed = ", ".join(f"{fmt(md[i])} m" for i in failed[:8]) + (
-            " …" if len(failed) > 8 else ""
-        )
-        text = (
-            f"QC: {len(failed)} of {n} stations failed a check (MD {listed}); their rows are "
-            "highlighted in the listing and the checks explained in the QC section"
-        )
-        return Verdict("warn", f"{text}; {flagged}." if caveats else f"{text}.")
-    if caveats:
-        return Verdict("info", f"QC: no station failed a check; {flagged}.")
-    return Verdict("ok", f"QC: all {n} stations passed.")
-
-
 def _summary(
     tables: SurveyTables,
     path: plots.Path3,
@@ -331,10 +326,12 @@ def _summary(
     flags: list[list[Flag]] | None,
     course: Course,
     verdicts: list[Verdict],
+    dropped: list[Dropped],
 ) -> Section:
     """Results at TD (of each survey, named, when the trajectory holds several) and the
-    verdicts of the QC, the acceptance gates and ``verdicts`` (the clearance's and the drift
-    calibration's caveats, repeated from their sections)."""
+    verdicts of the QC (the stations ``dropped`` included), the acceptance gates and
+    ``verdicts`` (the clearance's and the drift calibration's caveats, repeated from their
+    sections)."""
     traj = tables.trajectory
     names = _survey_names(traj, path.offsets)
     blocks: list[Block] = []
@@ -342,8 +339,9 @@ def _summary(
         shorter = Course(course.short[lo : lo + len(one.md)], course.min_course)
         results = _results(traj.slice(lo, len(one.md)), one, vs_azimuth, shorter)
         blocks.append(Fields(f"Results, survey {name}" if name else "Results", results))
-    if flags is not None:
-        blocks.append(_qc_verdict(flags, path.md))
+    if flags is not None or dropped:
+        listed = flags if flags is not None else [[] for _ in range(len(path.md))]
+        blocks.append(qc_verdict(listed, path.md, dropped))
     if tables.gates is not None:
         blocks.append(gates_verdict(tables.gates))
     return Section("Summary", (*blocks, *verdicts), key="summary")

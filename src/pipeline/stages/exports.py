@@ -16,6 +16,7 @@ from pydantic import Field
 from pipeline.contracts import TableContract, column
 from pipeline.drift.tables import CorrectedFreeGyroReadings
 from pipeline.hookspecs import hookimpl
+from pipeline.qc.tables import QcSummary
 from pipeline.registry import StageContext, StageDef, registered
 from pipeline.stages.files import WriteParams
 from pipeline.streams import Port, TableStream, as_table
@@ -37,12 +38,14 @@ PORTS: dict[str, type[TableContract]] = {
     "readings": AnyTable,
     "series": AnyTable,
     "qc": QcTable,
+    "qc_summary": QcSummary,
     "rejects": AnyTable,
     "drift": CorrectedFreeGyroReadings,
 }
 """Input ports (all optional): the survey's trajectory, its stations (compassed, continuous),
-per-position readings, continuous series, QC results, the stations rejected and a free-gyro
-survey's drift-corrected readings."""
+per-position readings, continuous series, QC results, the validity checks' verdict per
+station (the stations they dropped), the stations rejected and a free-gyro survey's
+drift-corrected readings."""
 
 
 class ExportParams(WriteParams):
@@ -84,8 +87,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="export",
             func=export,
             description="Write several tables of the run (trajectory, stations, readings, "
-            "series, QC, rejects, drift-corrected readings) into one file with a writer that "
-            "holds several.",
+            "series, QC, the validity verdicts, rejects, drift-corrected readings) into one "
+            "file with a writer that holds several.",
             inputs=PORTS,
             params=ExportParams,
             optional_inputs=frozenset(PORTS),

@@ -32,7 +32,7 @@ from pipeline.qc.tables import QcResults, QcSummary, RunComparison
 from pipeline.registry import Registry, StageContext, StageDef
 from pipeline.streams import Port, as_stream
 from pipeline.survey.courses import MIN_COURSE
-from pipeline.tables import AcceptanceGates, CheckResults, Stations, Trajectory
+from pipeline.tables import AcceptanceGates, CheckResults, CompassRejects, Stations, Trajectory
 
 if TYPE_CHECKING:
     from pipeline.reports.document import Document
@@ -140,6 +140,7 @@ SURVEY_INPUTS: dict[str, type[TableContract]] = {
     "stations": Stations,
     "qc": QcResults,
     "qc_summary": QcSummary,
+    "rejects": CompassRejects,
     "checks": CheckResults,
     "inout": InOutQc,
     "drift": CorrectedFreeGyroReadings,
@@ -161,7 +162,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             func=survey_report,
             description="Survey report (HTML and PDF): header, method and reference models, "
             "listing, trajectory plots, the full-rate series (streamed, drawn from its "
-            "envelope), ellipses, QC charts, drift and Allan plots, provenance.",
+            "envelope), ellipses, QC charts and the stations dropped (validity summary, "
+            "compassing rejects), drift and Allan plots, provenance.",
             inputs=SURVEY_INPUTS,
             optional_inputs=frozenset(SURVEY_INPUTS) - {"trajectory"},
             streamed_inputs=frozenset({"series"}),
