@@ -168,5 +168,6 @@ def test_end_stop_not_deeper_than_the_start_is_refused() -> None:
     md[1] = md[0] - 1.0
     index = stops.schema.get_field_index("md")
     upward = stops.set_column(index, stops.schema.field("md"), pa.array(md))
-    with pytest.raises(ContinuousError, match=r"end stop's MD \(59\.\d+ m\) is not deeper"):
+    said = rf"end stop's MD \({md[1]:.3f} m\) is not deeper than the start stop's \({md[0]:.3f} m\)"
+    with pytest.raises(ContinuousError, match=said):
         integrate_continuous(sim.samples, upward, LAT, OPTIONS)

@@ -7,10 +7,12 @@ forward, two-axis forward, and single-axis integrated back from the end stop acr
 near-vertical section (series every ``series_every`` samples, all stations), given the
 compassed stops stored beside it (``stops-<case>.parquet``), so that a change in compassing
 does not touch this comparison. The stage must reproduce them within 1e-8° (:data:`TOLERANCE`).
-Should the simulator's samples change, regenerate the file by running ``integrate_continuous``
-of commit ``generated_by`` (a detached git worktree on PYTHONPATH) on each case's spec and
-stored stops with the file's options. The two vectorised solvers are also checked against the plain
-per-sample definitions written out here.
+Should the simulator's samples change, compass each case's new samples again
+(``continuous_support.compassed``) into its stops file, then regenerate the file by running
+``integrate_continuous`` of commit ``generated_by`` (a detached git worktree on PYTHONPATH, in
+an interpreter of its own) on each case's samples and stored stops with the file's options;
+the file's ``notes`` say how it was last made. The two vectorised solvers are also checked
+against the plain per-sample definitions written out here.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """A stop the end of the recording cuts short is flagged, never averaged quietly: simulated
-surveys truncated inside their last stop (pyarrow, on disk), run through the CLI.
+point and continuous surveys truncated inside their last stop (pyarrow, on disk), run
+through the CLI.
 
 The expected numbers come from the plans and the simulator's own station/position markers:
 10 s dwells at 100 Hz, 1 s trimmed at each dwell's start (pipelines/point-gyro.yaml), so a
@@ -186,6 +187,38 @@ def test_a_station_cut_between_positions_is_flagged_incomplete(
     assert stations[-1]["positions"] == 4 and "fewer_positions" in stations[-1]["flags"]
     report = (out / "report.html").read_text(encoding="utf-8")
     assert "frame positions missing" in report and "fewer frame positions" in report
+
+
+def test_a_continuous_closing_stop_cut_inside_its_last_position_is_flagged(
+    tmp_path: Path, continuous_samples: pa.Table
+) -> None:
+    """As a point survey's: the whole run's closing stop is averaged over the usual 9 s in
+    its last position and passes; cut 6 s into that position (not missing: 5.00 s averaged)
+    the stop is flagged in the QC table, summary.json and the report."""
+    whole, _ = _run(tmp_path / "whole", continuous_samples, None, "continuous-gyro.yaml")
+    (end,) = _rows(whole, "recording_end")
+    assert (end["station"], end["position"], end["passed"]) == (1, 4, True)
+    assert end["measured"] == pytest.approx(0.0, abs=1e-9)
+    assert _counted(whole, "recording_end")["failed"] == 0
+    report = (whole / "report.html").read_text(encoding="utf-8")
+    assert "cut short by end of recording" not in report and "recording ended" not in report
+    cut, _ = _run(
+        tmp_path / "cut",
+        continuous_samples,
+        _position_start(continuous_samples, 1, 4) + 6.0,
+        "continuous-gyro.yaml",
+    )
+    (end,) = _rows(cut, "recording_end")
+    assert (end["station"], end["position"], end["passed"]) == (1, 4, False)
+    assert end["measured"] == pytest.approx(USUAL - 5.0, abs=1e-9)
+    assert "averaged over 5.00 s" in str(end["detail"]) and "9.00 s" in str(end["detail"])
+    assert all(r["passed"] for r in _rows(cut, "missing_positions"))
+    assert _counted(cut, "recording_end")["failed"] == 1
+    report = (cut / "report.html").read_text(encoding="utf-8")
+    assert f"The recording ended during the stop at MD {end['md']:.2f} m" in report
+    assert "cut short by end of recording" in report
+    assert "Stations cut short or incomplete" in report
+    assert "recording_end" not in report.split("Appendix")[0]  # no internal names above
 
 
 def test_a_continuous_run_tied_to_an_incomplete_closing_stop_is_flagged(

@@ -99,5 +99,7 @@ def test_gyro_pipeline_exports(tmp_path: Path, name: str, mode: str):
         assert {c["check"] for c in summary["qc"]["checks"]} >= {"gravity", "rest_gyro"}
         assert summary["surveys"][0]["uncertainty_at_td"]["confidence"] == pytest.approx(0.95)
     else:
-        assert sorted(tables) == ["readings", "rejects", "series", "stations", "trajectory"]
+        expected = ["qc", "readings", "rejects", "series", "stations", "trajectory"]
+        assert sorted(tables) == expected
+        assert {c["check"] for c in summary["qc"]["checks"]} >= {"recording_end", "rest_gyro"}
         assert tables["series"].num_rows > 10 * tables["stations"].num_rows

@@ -396,7 +396,7 @@ def test_short_last_course_is_not_the_maximum_dls(continuous_run: Path, browser:
     md, dls = trajectory.column("md").to_numpy(), trajectory.column("dls").to_numpy()
     course = np.diff(md)
     assert course[-1] < 1.0 and (course[:-1] > 9.99).all()
-    assert dls[-1] > 5 * dls[:-1].max()  # the spike the old summary headlined
+    assert dls[-1] > 2 * dls[:-1].max()  # the spike the old summary headlined (8.3 vs 3.5)
     worst = int(np.argmax(dls[:-1]))
     expected = (
         f"Maximum DLS {dls[worst]:.2f} °/30 m at {md[worst]:.2f} m MD "

@@ -208,6 +208,35 @@ def test_continuous_mode_rates_and_stabilisation():
     assert md[moving].min() >= 30 - 1e-9 and md.max() == pytest.approx(plan_path(sections).end_md)
 
 
+@pytest.mark.parametrize("servo", [True, False], ids=["stabilised", "free"])
+def test_a_continuous_run_records_its_closing_stop_to_the_plans_end(servo: bool) -> None:
+    """The run lasts what its plan says, to the closing stop's last sample: opening stop
+    (settle 2 s, five 2 s dwells, four 1 s moves: 16 s), 1 s frame move, travel of 300 m at
+    2 m/s with 3 s ramps (300/2 + 3 = 153 s), closing stop (16 s, plus a 1 s move to its
+    first position when the servo left the frame at an angle of its own): 186 or 187 s. Every
+    position of the closing stop, the last one too, lasts its 2 s dwell."""
+    survey = {
+        "mode": "continuous",
+        "start_md": 0,
+        "end_md": 300,
+        "speed": 2.0,
+        "ramp_time": 3.0,
+        "stop": {"dwell": 2.0, "move_time": 1.0},
+        "stabilisation": {"enabled": servo},
+    }
+    sections = [{"kind": "vertical", "length": 100}, {"kind": "build", "dls": 3.0, "inc": 20}]
+    samples = simulate(spec(survey, sections=sections)).samples
+    end = 187.0 if servo else 186.0
+    t = samples.column("time").to_numpy()
+    assert end - 0.01 < t[-1] <= end + 1e-9  # 100 Hz: within one sample period
+    station = samples.column("station").to_numpy(zero_copy_only=False)
+    position = samples.column("position").to_numpy(zero_copy_only=False)
+    for j in range(5):
+        at = t[(station == 1) & (position == j)]
+        assert at[-1] - at[0] == pytest.approx(2.0, abs=0.01), f"position {j}"
+    assert position[-1] == 4 and station[-1] == 1
+
+
 def plan_path(sections) -> WellPath:
     return build_path(WellPlan.model_validate({"sections": sections}))
 

@@ -1,4 +1,5 @@
-"""The frame position a point survey's recording ended in.
+"""The frame position a survey's recording ended in (a point survey's last station, a
+continuous run's closing stop).
 
 When the recording stops while the tool is still at a stop (the logger stopped early, the
 file was truncated, the last positions were never recorded), the last dwell ends at the

@@ -1,6 +1,6 @@
-"""Checks of what a point survey's recording holds, beside the sensors: the frame position
-the recording ended in (``recording_end``) and the positions each station has
-(``missing_positions``).
+"""Checks of what a survey's recording of its stops holds (a point survey's stations, a
+continuous run's two stops), beside the sensors: the frame position the recording ended in
+(``recording_end``) and the positions each station has (``missing_positions``).
 
 - ``recording_end``: one row for the dwell the readings record as cut off by the end of the
   recording (:mod:`pipeline.gyrocompass.recording_end`): how much less time it was averaged

@@ -82,13 +82,15 @@ class Timeline:
         self.stabilised.append(stabilised)
         self.md, self.theta = md_b, th_b
 
-    def add_stop(self, scheme: StopScheme, station: int) -> None:
+    def add_stop(self, scheme: StopScheme, station: int, turn_first: bool = False) -> None:
         """A compassing stop: settle, then dwell at each frame position (frame angles
-        relative to the housing), turning the frame the short way to each."""
+        relative to the housing), turning the frame the short way to each. ``turn_first``:
+        the move to the first position is made even where the frame is there already (one of
+        no angle), so that the stop's timing does not depend on the angle it starts from."""
         self.add(scheme.settle_time, station=station)
         for j, angle in enumerate(np.radians(scheme.positions)):
             target = nearest_equivalent(angle, self.theta)
-            if abs(target - self.theta) > 1e-12:
+            if abs(target - self.theta) > 1e-12 or (turn_first and j == 0):
                 self.add(scheme.move_time, theta=(target, Profile.SMOOTH), station=station)
             self.add(scheme.dwell, station=station, position=j)
 
@@ -187,7 +189,10 @@ def continuous_timeline(
 ) -> Timeline:
     """Compassing stop, frame turned to ``align`` (rad), accelerate, log at constant
     speed, brake, compassing stop. While moving (``stabilised``) the servo's correction is
-    added to the frame angle by the caller."""
+    added to the frame angle by the caller. With the servo on, the closing stop always turns
+    the frame to its first position: the caller samples a timeline built with a provisional
+    ``align`` and then the one built with the servo's, and both must end at the same time
+    (a closing stop that skipped the move in one lost ``move_time`` of its last position)."""
     ramp_len = survey.speed * survey.ramp_time / 2
     cruise = end_md - start_md - 2 * ramp_len
     if cruise < 0:
@@ -202,5 +207,5 @@ def continuous_timeline(
     timeline.add(survey.ramp_time, md=(start_md + ramp_len, Profile.ACCEL), stabilised=True)
     timeline.add(cruise / survey.speed, md=(end_md - ramp_len, Profile.LINEAR), stabilised=True)
     timeline.add(survey.ramp_time, md=(end_md, Profile.DECEL), stabilised=True)
-    timeline.add_stop(survey.stop, station=1)
+    timeline.add_stop(survey.stop, station=1, turn_first=survey.stabilisation.enabled)
     return timeline
