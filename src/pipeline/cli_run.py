@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import click
@@ -56,22 +56,26 @@ def qc_lines(plan: Plan, result: RunResult) -> list[str]:
 
 def qc_verdict_of(plan: Plan, result: RunResult) -> str | None:
     """The run's QC verdict line (:func:`pipeline.qc.verdict.qc_verdict`) over its check
-    tables, the checks of stations files' own positions its trajectories record (each
-    once: later stages keep a trajectory's record) and the stations its validity summaries
-    and compassing rejects drop."""
+    tables, a free gyro's in-run/out-run comparisons, the checks of stations files' own
+    positions its trajectories record (each once: later stages keep a trajectory's record)
+    and the stations its validity summaries and compassing rejects drop."""
+    from pipeline.drift.tables import InOutQc
     from pipeline.qc.dropped import dropped_stations
     from pipeline.qc.tables import QcResults, QcSummary
-    from pipeline.qc.verdict import qc_verdict
+    from pipeline.qc.verdict import inout_checks, qc_verdict
     from pipeline.survey.crosscheck import PositionCheck, position_check_of
     from pipeline.tables import CheckResults, CompassRejects, Trajectory
 
     checks: list[pa.Table] = []
+    others: list[tuple[str, int, Sequence[float]]] = []
     dropping: list[pa.Table] = []
     positions: list[PositionCheck] = []
     for stage in plan.stages:
         for port, contract in stage.definition.outputs.items():
             if issubclass(contract, CheckResults | QcResults):
                 checks.append(result.tables[f"{stage.id}.{port}"])
+            elif issubclass(contract, InOutQc):
+                others.extend(inout_checks(result.tables[f"{stage.id}.{port}"]))
             elif issubclass(contract, QcSummary | CompassRejects):
                 dropping.append(result.tables[f"{stage.id}.{port}"])
             elif issubclass(contract, Trajectory):
@@ -80,7 +84,7 @@ def qc_verdict_of(plan: Plan, result: RunResult) -> str | None:
                     positions.append(check)
     return qc_verdict(
         checks,
-        [("file_positions", c.compared, c.beyond_md) for c in positions],
+        [*others, *(("file_positions", c.compared, c.beyond_md) for c in positions)],
         dropped_stations(dropping),
     )
 

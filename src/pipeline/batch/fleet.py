@@ -39,12 +39,12 @@ from pipeline.anticollision.tables import Clearance, rule_of
 from pipeline.batch.publish import of_ledger
 from pipeline.contracts import TableContract
 from pipeline.drift.correction import correction_rate, drift_rate_of
-from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings
+from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings, InOutQc
 from pipeline.graph import Plan
 from pipeline.hashing import open_regular, regular_bytes
 from pipeline.manifest import MANIFEST
 from pipeline.qc.tables import QcResults
-from pipeline.qc.verdict import QcTally, qc_tally
+from pipeline.qc.verdict import INOUT_COLUMNS, QcTally, inout_checks, qc_tally
 from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
@@ -225,6 +225,7 @@ CHECKS = (required(CheckResults), required(QcResults))
 CLEARANCE = required(Clearance)
 CALIBRATION = required(CalibrationResult)
 CORRECTED = required(CorrectedFreeGyroReadings)
+INOUT = required(InOutQc)
 RATE_COLUMNS = frozenset({"drift_rate", "sigma_drift_rate"})
 """the columns of a corrected survey that record its drift rate and σ"""
 
@@ -314,7 +315,8 @@ class _Tables:
         self.min_course = min_course
         self.rule = rule
         self.checks: list[pa.Table] = []
-        self.positions: list[tuple[str, int, list[float]]] = []
+        self.others: list[tuple[str, int, list[float]]] = []
+        """checks recorded otherwise: a stations file's positions, in-run/out-run QC"""
         self.clearance: WorstClearance | None = None
         self.drift: list[DriftFigure] = []
         """the rates drift-corrected readings were corrected with"""
@@ -329,7 +331,7 @@ class _Tables:
         """The figures of the tables taken, with what ``manifest`` says (``at``: where the
         report files are)."""
         problems = self.problems
-        qc = qc_tally(self.checks, self.positions)
+        qc = qc_tally(self.checks, self.others)
         return WellFigures(
             pipeline=_pipeline(manifest),
             qc=qc if qc.evaluated else None,
@@ -370,6 +372,8 @@ class _Tables:
         elif names >= CALIBRATION:
             columns = ["instrument", "drift_deg_h", "sigma_deg_h", "selected"]
             self._calibration(read(columns))
+        elif names >= INOUT:
+            self.others.extend(inout_checks(read(INOUT_COLUMNS)))
         elif names >= CORRECTED:
             self._corrected(read(["time", "correction", *(RATE_COLUMNS & names)]))
 
@@ -380,8 +384,8 @@ class _Tables:
         check = position_check_of(table)
         if check is not None:
             entry = ("file_positions", check.compared, list(check.beyond_md))
-            if entry not in self.positions:
-                self.positions.append(entry)
+            if entry not in self.others:
+                self.others.append(entry)
 
     def td_dls(self, table: pa.Table) -> None:
         """TD and the largest DLS of a trajectory (:func:`~pipeline.survey.courses.max_dls`

@@ -15,9 +15,10 @@ dropped it, why). Lengths in m, angles in degrees, DLS in °/30 m, drift rates i
 (``units`` says so in the document too).
 
 Through the ``export`` stage it takes the tables ``trajectory`` (required), ``qc``,
-``qc_summary`` (the validity checks' verdict per station), ``stations``, ``rejects`` and
-``drift`` (a free-gyro survey's corrected readings: the drift
-rate applied, its σ, source and caveats); through ``write`` one trajectory table.
+``qc_summary`` (the validity checks' verdict per station), ``stations``, ``rejects``,
+``drift`` (a free-gyro survey's corrected readings: the drift rate applied, its σ, source
+and caveats) and ``inout`` (its in-run/out-run comparison, counted as two checks);
+through ``write`` one trajectory table.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from pipeline.drift.correction import DriftRate, drift_rate_of
 from pipeline.errors import EmptyTableError
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.dropped import dropped_stations, is_rejects
+from pipeline.qc.verdict import inout_checks
 from pipeline.registry import Provenance, WriterDef
 from pipeline.survey.calculation import SurveyCalculation, calculation_of
 from pipeline.survey.courses import MIN_COURSE, max_dls
@@ -406,13 +408,15 @@ def _value(value: object) -> object:
 
 
 def _has_qc(tables: Mapping[str, pa.Table]) -> bool:
-    given = {"qc", "qc_summary", "stations", "rejects"} & set(tables)
+    given = {"qc", "qc_summary", "stations", "rejects", "inout"} & set(tables)
     return bool(given) or position_check_of(tables["trajectory"]) is not None
 
 
 def _qc(tables: Mapping[str, pa.Table]) -> Qc:
-    """Counts of the ``qc`` table's checks and of the trajectory's position check, by
-    name, as the run's verdict line counts them; flagged, rejected and dropped stations."""
+    """Counts of the ``qc`` table's checks, of a free gyro's in-run/out-run comparison
+    (``inout``: ``in_out_inclination``, ``in_out_azimuth``) and of the trajectory's position
+    check, by name, as the run's verdict line counts them; flagged, rejected and dropped
+    stations."""
     checks: list[CheckCount] = []
     positions = position_check_of(tables["trajectory"])
     if positions is not None:
@@ -440,6 +444,18 @@ def _qc(tables: Mapping[str, pa.Table]) -> Qc:
                     passed=true,
                     failed=len(rows) - rows.null_count - true,
                     not_evaluated=rows.null_count,
+                )
+            )
+    if "inout" in tables:
+        inout = tables["inout"]
+        for name, compared, failed_md in inout_checks(inout):
+            checks.append(
+                CheckCount(
+                    check=name,
+                    evaluated=compared,
+                    passed=compared - len(failed_md),
+                    failed=len(failed_md),
+                    not_evaluated=inout.num_rows - compared,
                 )
             )
     checks.sort(key=lambda c: c.check)

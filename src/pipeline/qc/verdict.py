@@ -8,11 +8,16 @@ from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
 import pyarrow as pa
 
 from pipeline.qc.dropped import Dropped
 
-__all__ = ["QcTally", "qc_tally", "qc_verdict"]
+__all__ = ["INOUT_COLUMNS", "QcTally", "inout_checks", "qc_tally", "qc_verdict"]
+
+INOUT_COLUMNS = ["md", "inc_diff", "azi_diff", "inc_tolerance", "azi_tolerance"]
+"""The columns of a free gyro's in-run/out-run comparison
+(:class:`~pipeline.drift.tables.InOutQc`) its checks are counted from."""
 
 
 @dataclass
@@ -63,6 +68,27 @@ def qc_tally(
             tally.failed[name] += len(failed_md)
             tally.stations.update(round(float(depth), 6) for depth in failed_md)
     return tally
+
+
+def inout_checks(inout: pa.Table) -> list[tuple[str, int, list[float]]]:
+    """A free gyro's in-run/out-run comparison as two checks, ``in_out_inclination`` and
+    ``in_out_azimuth`` (|in − out| within its tolerance, as the report's QC section judges
+    them), each as (name, stations compared, MD (m) of each that failed) — the ``others`` of
+    :func:`qc_tally`; an azimuth at vertical (no difference) is not compared."""
+    md = np.asarray(inout.column("md").to_numpy(zero_copy_only=False), dtype=np.float64)
+    found = []
+    for quantity, name in (("inc", "in_out_inclination"), ("azi", "in_out_azimuth")):
+        diff = np.asarray(
+            inout.column(f"{quantity}_diff").to_numpy(zero_copy_only=False), dtype=np.float64
+        )
+        tol = np.asarray(
+            inout.column(f"{quantity}_tolerance").to_numpy(zero_copy_only=False),
+            dtype=np.float64,
+        )
+        compared = ~np.isnan(diff)
+        failed = compared & ~(np.abs(diff) <= tol)
+        found.append((name, int(compared.sum()), md[failed].tolist()))
+    return found
 
 
 SHOWN = 8

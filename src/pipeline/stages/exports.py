@@ -14,7 +14,7 @@ import pyarrow as pa
 from pydantic import Field
 
 from pipeline.contracts import TableContract, column
-from pipeline.drift.tables import CorrectedFreeGyroReadings
+from pipeline.drift.tables import CorrectedFreeGyroReadings, InOutQc
 from pipeline.hookspecs import hookimpl
 from pipeline.qc.tables import QcSummary
 from pipeline.registry import StageContext, StageDef, registered
@@ -41,11 +41,12 @@ PORTS: dict[str, type[TableContract]] = {
     "qc_summary": QcSummary,
     "rejects": AnyTable,
     "drift": CorrectedFreeGyroReadings,
+    "inout": InOutQc,
 }
 """Input ports (all optional): the survey's trajectory, its stations (compassed, continuous),
 per-position readings, continuous series, QC results, the validity checks' verdict per
 station (the stations they dropped), the stations rejected and a free-gyro survey's
-drift-corrected readings."""
+drift-corrected readings and in-run/out-run comparison."""
 
 
 class ExportParams(WriteParams):
@@ -87,7 +88,8 @@ def gyropipe_register_stages(register: Callable[[StageDef], None]) -> None:
             name="export",
             func=export,
             description="Write several tables of the run (trajectory, stations, readings, "
-            "series, QC, the validity verdicts, rejects, drift-corrected readings) into one "
+            "series, QC, the validity verdicts, rejects, drift-corrected readings, in-run/out-run "
+            "comparison) into one "
             "file with a writer that holds several.",
             inputs=PORTS,
             params=ExportParams,
