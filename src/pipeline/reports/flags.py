@@ -221,6 +221,14 @@ def long_course(max_course: float) -> Flag:
     )
 
 
+NOT_COMPARED = Flag(
+    "read once",
+    "the station was read in one run only (the in-run's deepest station, where the tool "
+    "turned, or a station the other run did not stop at), so no in-run/out-run comparison "
+    "checks it: its drift-corrected reading rests on the correction alone.",
+)
+"""A free gyro's station with no in-run/out-run pair."""
+
 POSITION_MISMATCH = Flag(
     "position ≠ file",
     "the position the stations file lists for this station (its TVD, north, east) differs "

@@ -25,7 +25,14 @@ from pipeline.qc.dropped import Dropped
 from pipeline.qc.tables import diagnoses
 from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.document import Column, Table, Verdict, fmt_sig
-from pipeline.reports.flags import CHECKS, Flag, compass_flag, continuous_flags, failed_check
+from pipeline.reports.flags import (
+    CHECKS,
+    NOT_COMPARED,
+    Flag,
+    compass_flag,
+    continuous_flags,
+    failed_check,
+)
 from pipeline.reports.numbers import fmt
 from pipeline.reports.plots import FloatArray, QcSeries
 
@@ -235,6 +242,10 @@ def station_flags(md: FloatArray, src: QcSources) -> list[list[Flag]]:
             _floats(table, "md"),
             [[] if p else [failed_check("in/out")] for p in table.column("passed").to_pylist()],
         )
+    if src.inout is not None and src.inout.num_rows:  # a free gyro's station read once
+        pairs = _floats(src.inout, "md")
+        once = md[np.abs(md[:, None] - pairs[None, :]).min(axis=1) > MD_MATCH]
+        at(once, [[NOT_COMPARED] for _ in once])
     if src.stations is not None and "flags" in src.stations.schema.names:
         at(
             _floats(src.stations, "md"),
