@@ -274,6 +274,7 @@ def test_the_station_listings_agree(runs: Callable[[str], Run], name: str) -> No
         assert {k: c.unit for k, c in reference.columns.items()} == {
             k: units[k] for k in reference.columns
         }
+    assert_same_uncertainty_everywhere(run, csv)
     listed = report_listing(run)
     assert set(key) <= set(listed), sorted(listed)
     for column, shown in listed.items():
@@ -287,6 +288,27 @@ def test_the_station_listings_agree(runs: Callable[[str], Run], name: str) -> No
             _at_dp(text, value, what)
             assert _decimals(text) >= MIN_DECIMALS.get(column, 0), what
     assert_pdf_lists_the_html(run)
+
+
+UNCERTAINTY_COLUMNS = ("cov_nn", "cov_ne", "cov_nv", "cov_ee", "cov_ev", "cov_vv")
+"""columns that say a listing carries position uncertainty, the ones every trajectory format
+holds (WITSML 1.4.1.1 has no ellipse element): a trajectory file without them beside one
+with them would give a client σ in one deliverable and none in another"""
+
+
+def assert_same_uncertainty_everywhere(run: Run, csv: str | None) -> None:
+    """The run's trajectory files (CSV, LAS, WITSML) all carry the uncertainty columns
+    the persisted listing holds, or none does."""
+    held = {c for c in UNCERTAINTY_COLUMNS if c in run.listing().columns}
+    files = {
+        "CSV": (csv, read_csv),
+        "LAS": ("trajectory.las", read_las),
+        "XML": ("trajectory.xml", read_witsml),
+    }
+    for label, (name, read) in files.items():
+        if name and (run.out / name).exists():
+            found = {c for c in UNCERTAINTY_COLUMNS if c in read(run.out / name).columns}
+            assert found == held, (label, sorted(found), sorted(held))
 
 
 def assert_pdf_lists_the_html(run: Run) -> None:
