@@ -180,3 +180,41 @@ def test_a_stop_compassing_cannot_solve_is_named_in_the_readings_pipeline(
     assert float(md) == pytest.approx(PLAN_MD, abs=ODOMETER) and by == "Gyrocompassing"
     assert "3 position(s) cannot resolve 4 unknowns" in why
     assert re.fullmatch(r"ok: .* — QC: 1 station dropped \(MD 200\.\d\d m: compassing\)", line)
+
+
+def test_the_fleet_page_names_a_well_s_dropped_station(tmp_path: Path, samples: pa.Table):
+    """A batch of a clean well and one whose stop at 200 m vibrates: the fleet page's QC
+    cell of the vibrating well names the station dropped, its MD and the check (as the
+    worker recorded it, and as read back from the published tables when batch.json holds
+    no figures); the clean well's says nothing of a dropped station."""
+    folder = tmp_path / "wells"
+    folder.mkdir()
+    pq.write_table(samples, folder / "CLEAN.parquet")
+    pq.write_table(_vibrating(samples), folder / "SHAKEN.parquet")
+    batch = tmp_path / "batch"
+    gyropipe_cli(
+        "batch", ROOT / "pipelines" / "point-gyro.yaml", "--inputs", f"{folder}/*.parquet",
+        "--out", batch, check=True,
+    )  # fmt: skip
+
+    def qc_cells() -> dict[str, str]:
+        page = (batch / "fleet.html").read_text(encoding="utf-8")
+        rows = dict(re.findall(r'<tr class="s-[a-z]+"><th[^>]*>(.*?)</th>(.*?)</tr>', page))
+        assert set(rows) == {"CLEAN", "SHAKEN"}, sorted(rows)
+        return {w: re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)[1] for w, row in rows.items()}
+
+    def md_named(cell: str) -> float:
+        (md,) = re.findall(r"1 station dropped \(MD (\d+\.\d\d) m: rest_acc\)", cell)
+        return float(md)
+
+    cells = qc_cells()
+    assert md_named(cells["SHAKEN"]) == pytest.approx(PLAN_MD, abs=ODOMETER)
+    assert "dropped" not in cells["CLEAN"], cells["CLEAN"]
+
+    marker = batch / "SHAKEN" / "batch.json"
+    record = json.loads(marker.read_text(encoding="utf-8"))
+    record.pop("figures")  # as an earlier version published it: read from the tables
+    marker.write_text(json.dumps(record), encoding="utf-8")
+    gyropipe_cli("status", batch, "--html", check=True)
+    cells = qc_cells()
+    assert md_named(cells["SHAKEN"]) == pytest.approx(PLAN_MD, abs=ODOMETER)

@@ -1,5 +1,6 @@
 """The figures of one published well for the fleet page (:mod:`pipeline.batch.fleet_page`):
-QC checks passed and failed, the acceptance gates, the worst clearance separation factor,
+QC checks passed and failed and the stations dropped (recorded but not in the trajectory:
+:mod:`pipeline.qc.dropped`), the acceptance gates, the worst clearance separation factor,
 the drift rate applied (with its σ; a well that corrected none: its calibration's selected
 estimates), TD and the largest dogleg severity.
 
@@ -43,7 +44,8 @@ from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings, 
 from pipeline.graph import Plan
 from pipeline.hashing import open_regular, regular_bytes
 from pipeline.manifest import MANIFEST
-from pipeline.qc.tables import QcResults
+from pipeline.qc.dropped import REJECT_COLUMNS, Dropped, dropped_stations
+from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.qc.verdict import INOUT_COLUMNS, QcTally, inout_checks, qc_tally
 from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
@@ -135,6 +137,7 @@ def figures_record(figures: WellFigures) -> dict[str, Any]:
             "failed": dict(qc.failed),
             "stations": sorted(qc.stations),
             "windows": qc.windows,
+            "dropped": [dataclasses.asdict(d) for d in qc.dropped],
         }
     return record
 
@@ -164,7 +167,11 @@ def figures_of_record(record: Any) -> WellFigures | None:
             qc=None
             if qc is None
             else QcTally(
-                qc["evaluated"], Counter(qc["failed"]), set(qc["stations"]), qc["windows"]
+                qc["evaluated"],
+                Counter(qc["failed"]),
+                set(qc["stations"]),
+                qc["windows"],
+                [_dropped(d) for d in qc.get("dropped", ())],
             ),
             gates=None if gates is None else tuple(Gate(**g) for g in gates),
             clearance=None if worst is None else WorstClearance(**worst),
@@ -185,6 +192,11 @@ def figures_of_record(record: Any) -> WellFigures | None:
     return figures if _well_typed(figures) else None
 
 
+def _dropped(record: Mapping[str, Any]) -> Dropped:
+    """A station dropped as :func:`figures_record` wrote it."""
+    return Dropped(**{**record, "checks": tuple(record.get("checks", ()))})
+
+
 def _well_typed(figures: WellFigures) -> bool:
     """Whether the numbers of ``figures`` are numbers, its texts text, its clearance level
     one of the rule's and its reports plain file names of the well's directory (a record
@@ -201,6 +213,8 @@ def _well_typed(figures: WellFigures) -> bool:
     if figures.qc is not None:
         numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
         texts += list(figures.qc.failed)
+        numbers += [x for d in figures.qc.dropped for x in (d.md, d.station)]
+        texts += [t for d in figures.qc.dropped for t in (d.by, d.reason, *d.checks)]
     return (
         all(n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers)
         and all(isinstance(t, str) for t in texts)
@@ -226,6 +240,7 @@ CLEARANCE = required(Clearance)
 CALIBRATION = required(CalibrationResult)
 CORRECTED = required(CorrectedFreeGyroReadings)
 INOUT = required(InOutQc)
+SUMMARY = required(QcSummary)
 RATE_COLUMNS = frozenset({"drift_rate", "sigma_drift_rate"})
 """the columns of a corrected survey that record its drift rate and σ"""
 
@@ -315,6 +330,8 @@ class _Tables:
         self.min_course = min_course
         self.rule = rule
         self.checks: list[pa.Table] = []
+        self.dropping: list[pa.Table] = []
+        """validity summaries and compassing rejects: the stations the run dropped"""
         self.others: list[tuple[str, int, list[float]]] = []
         """checks recorded otherwise: a stations file's positions, in-run/out-run QC"""
         self.clearance: WorstClearance | None = None
@@ -331,10 +348,10 @@ class _Tables:
         """The figures of the tables taken, with what ``manifest`` says (``at``: where the
         report files are)."""
         problems = self.problems
-        qc = qc_tally(self.checks, self.others)
+        qc = qc_tally(self.checks, self.others, dropped_stations(self.dropping))
         return WellFigures(
             pipeline=_pipeline(manifest),
-            qc=qc if qc.evaluated else None,
+            qc=qc if qc.evaluated or qc.dropped else None,
             gates=_gates(manifest, problems),
             clearance=self.clearance,
             drift=tuple(self.drift or self.calibrated) or None,
@@ -376,6 +393,10 @@ class _Tables:
             self.others.extend(inout_checks(read(INOUT_COLUMNS)))
         elif names >= CORRECTED:
             self._corrected(read(["time", "correction", *(RATE_COLUMNS & names)]))
+        elif names >= SUMMARY:
+            self.dropping.append(read(sorted(SUMMARY)))
+        elif names >= REJECT_COLUMNS:
+            self.dropping.append(read(sorted(REJECT_COLUMNS)))
 
     def _trajectory(self, table: pa.Table) -> None:
         """The last trajectory persisted gives TD and the largest DLS (a later stage's is

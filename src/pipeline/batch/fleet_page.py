@@ -1,6 +1,6 @@
 """The fleet page: one self-contained HTML page of a batch output directory for whoever
 manages the work — wells counted by status, then one row per well, failing wells first,
-with its QC checks, acceptance gates, worst clearance separation factor, drift rate, TD,
+with its QC checks and stations dropped, acceptance gates, worst clearance separation factor, drift rate, TD,
 largest dogleg severity and a link to its report (:mod:`pipeline.batch.fleet`).
 
 Every batch writes it as ``OUT/fleet.html`` (:func:`pipeline.batch.summary.write_summary`);
@@ -25,6 +25,7 @@ from pathlib import Path
 from pipeline.atomic import atomic_write_bytes
 from pipeline.errors import file_errors
 from pipeline.qc.gates import FAIL, PASS
+from pipeline.qc.verdict import SHOWN
 from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.numbers import UNDEFINED, fmt, fmt_measured, fmt_sig, fmt_sigma
 from pipeline.tables import DLS_UNIT
@@ -188,16 +189,27 @@ def _detail(well: FleetWell) -> str:
 
 
 def _qc(figures: WellFigures) -> str:
+    """The checks passed or failed, then the stations dropped (recorded, not in the
+    trajectory) with their MDs and what dropped them."""
     qc = figures.qc
     if qc is None:
         return NONE
     if not qc.failures:
-        return f'<span class="ok">✔</span> {qc.evaluated} passed'
-    which = ", ".join(f"{check_title(n, n).title} {k}" for n, k in qc.failed.most_common())
-    return (
-        f'<span class="bad">✖</span> {qc.failures} of {qc.evaluated} failed'
-        f'<div class="why">{_e(which)}</div>'
-    )
+        said = f'<span class="ok">✔</span> {qc.evaluated} passed' if qc.evaluated else NONE
+    else:
+        which = ", ".join(f"{check_title(n, n).title} {k}" for n, k in qc.failed.most_common())
+        said = (
+            f'<span class="bad">✖</span> {qc.failures} of {qc.evaluated} failed'
+            f'<div class="why">{_e(which)}</div>'
+        )
+    if qc.dropped:
+        shown = "; ".join(f"MD {d.md:.2f} m: {d.names()}" for d in qc.dropped[:SHOWN])
+        more = f"; and {len(qc.dropped) - SHOWN} more" if len(qc.dropped) > SHOWN else ""
+        said += (
+            f'<div class="why dropped"><span class="bad">▲</span> '
+            f"{_plural(len(qc.dropped), 'station')} dropped ({_e(shown + more)})</div>"
+        )
+    return said
 
 
 def _gates(figures: WellFigures) -> str:
