@@ -204,7 +204,8 @@ def test_the_fleet_page_names_a_well_s_dropped_station(tmp_path: Path, samples: 
         return {w: re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)[1] for w, row in rows.items()}
 
     def md_named(cell: str) -> float:
-        (md,) = re.findall(r"1 station dropped \(MD (\d+\.\d\d) m: rest_acc\)", cell)
+        found = r"1 station dropped \(MD (\d+\.\d\d) m: Tool at rest: accelerometers\)"
+        (md,) = re.findall(found, cell)
         return float(md)
 
     cells = qc_cells()

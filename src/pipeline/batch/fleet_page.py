@@ -1,7 +1,8 @@
 """The fleet page: one self-contained HTML page of a batch output directory for whoever
 manages the work — wells counted by status, then one row per well, failing wells first,
-with its QC checks and stations dropped, acceptance gates, worst clearance separation factor, drift rate, TD,
-largest dogleg severity and a link to its report (:mod:`pipeline.batch.fleet`).
+with its QC checks and stations dropped, acceptance gates, worst clearance separation
+factor, drift rate, TD, largest dogleg severity and a link to its report
+(:mod:`pipeline.batch.fleet`).
 
 Every batch writes it as ``OUT/fleet.html`` (:func:`pipeline.batch.summary.write_summary`);
 ``gyropipe status DIR --html`` writes it from the ledger. A batch takes the figures of the
@@ -24,6 +25,7 @@ from pathlib import Path
 
 from pipeline.atomic import atomic_write_bytes
 from pipeline.errors import file_errors
+from pipeline.qc.dropped import Dropped
 from pipeline.qc.gates import FAIL, PASS
 from pipeline.qc.verdict import SHOWN
 from pipeline.reports.check_titles import check_title, printed_unit
@@ -178,6 +180,12 @@ def _row(well: FleetWell, figures: WellFigures, page_dir: Path) -> str:
     return f'<tr class="s-{_e(well.status)}">{"".join(cells)}</tr>'
 
 
+def _dropped_by(dropped: Dropped) -> str:
+    """What dropped a station, in the checks' titles (compassing: that it found no solution)."""
+    titles = [check_title(name, name).title for name in dropped.checks]
+    return ", ".join(titles) if titles else "compassing found no solution"
+
+
 def _detail(well: FleetWell) -> str:
     """The error or reason in a reader's words: a failure without the stage that raised it
     and its error class, paths shortened to file names; none for a well done."""
@@ -203,7 +211,7 @@ def _qc(figures: WellFigures) -> str:
             f'<div class="why">{_e(which)}</div>'
         )
     if qc.dropped:
-        shown = "; ".join(f"MD {d.md:.2f} m: {d.names()}" for d in qc.dropped[:SHOWN])
+        shown = "; ".join(f"MD {d.md:.2f} m: {_dropped_by(d)}" for d in qc.dropped[:SHOWN])
         more = f"; and {len(qc.dropped) - SHOWN} more" if len(qc.dropped) > SHOWN else ""
         said += (
             f'<div class="why dropped"><span class="bad">▲</span> '
