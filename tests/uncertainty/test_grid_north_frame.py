@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from tests_support import gyropipe_cli, stage, survey_stages, write_pipeline
+from tests_support import ROOT, gyropipe_cli, stage, survey_stages, without_report, write_pipeline
 
 MD = np.arange(0.0, 1501.0, 30.0)
 INC = np.clip((MD - 150.0) / 15.0, 0.0, 50.0)
@@ -151,3 +151,38 @@ def test_a_grid_listing_without_its_convergence_is_refused(tmp_path: Path) -> No
         "--well", f"grid_convergence={CONVERGENCE}",
     )  # fmt: skip
     assert given.returncode == 0, given.stderr
+
+
+def test_a_definitive_survey_in_grid_north_has_the_true_covariance_turned(tmp_path: Path) -> None:
+    """The shipped definitive example (gyro top hole, MWD below) and the same two runs
+    listed in grid north: the survey's covariance (each run's model in true north) is the
+    true-north survey's turned by γ, its ellipse azimuth the true one's less γ."""
+    pipeline = without_report("definitive", tmp_path)
+    surveys = {}
+    for north in ("true", "grid"):
+        inputs = []
+        for run_name in ("gyro", "mwd"):
+            text = (ROOT / "examples" / "definitive" / f"{run_name}-run.csv").read_text()
+            head, rows = text.split("\n\nMD (m),Inc (deg),Azimuth True (deg)\n")
+            if north == "grid":
+                head += f"\nGrid Convergence: {CONVERGENCE}"
+            stations = [row.split(",") for row in rows.splitlines()]
+            shifted = [
+                f"{md},{inc},{(float(azi) - SHIFT[north]) % 360.0:.10f}"
+                for md, inc, azi in stations
+            ]
+            path = tmp_path / f"{north}-{run_name}.csv"
+            column = f"Azimuth {north.capitalize()} (deg)"
+            path.write_text("\n".join([head, "", f"MD (m),Inc (deg),{column}", *shifted]) + "\n")
+            inputs += ["--input", f"{run_name}={path}"]
+        out = tmp_path / north
+        gyropipe_cli("run", pipeline, *inputs, "--out", out, check=True)
+        table = pq.read_table(out / "definitive.survey.parquet")
+        assert table.schema.field("ellipse_azimuth").metadata[b"north_reference"] == north.encode()
+        surveys[north] = {n: table.column(n).to_numpy() for n in table.column_names}
+    true, grid = surveys["true"], surveys["grid"]
+    np.testing.assert_allclose(matrices(grid), turned(matrices(true), CONVERGENCE), **TOLERANCE)
+    np.testing.assert_allclose(grid["ellipse_major"], true["ellipse_major"], rtol=1e-9)
+    shaped = true["ellipse_major"] - true["ellipse_minor"] > 1e-3 * true["ellipse_major"]
+    difference = (grid["ellipse_azimuth"] - true["ellipse_azimuth"] + CONVERGENCE + 90.0) % 180.0
+    np.testing.assert_allclose(difference[shaped] - 90.0, 0.0, atol=1e-6)
