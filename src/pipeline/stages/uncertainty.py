@@ -211,6 +211,7 @@ def position_uncertainty(
         stage=STAGE,
         convergence_deg=well.convergence_for(north),
         declination_deg=well.declination if applied is None else applied.reference.declination,
+        modelled=True,
     )
     azi_deg = frame.true_azimuths(table.column("azi").to_numpy())  # the model's: true north
     if "latitude" in tool.needs:

@@ -37,12 +37,15 @@ class MissingNorthError(MissingSiteError):
     """A stage's error model works in true north and the listing's grid or magnetic
     azimuths come without the correction that refers them to it."""
 
-    def __init__(self, stage: str, north: str, *, python: bool = False) -> None:
+    def __init__(
+        self, stage: str, north: str, *, modelled: bool = False, python: bool = False
+    ) -> None:
         field, name, sign = _CORRECTION[north]
         self.stage, self.missing, self.param, self.north = stage, [field], None, north
+        self.modelled = modelled
         model = (
             ", or the site (latitude, longitude, survey_date) for the geomagnetic model"
-            if north == "magnetic"
+            if modelled
             else ""
         )
         where = (
@@ -61,7 +64,7 @@ class MissingNorthError(MissingSiteError):
 
     def in_python(self) -> MissingSiteError:
         """The same error worded for the Python API (``well={…}``)."""
-        return MissingNorthError(self.stage, self.north, python=True)
+        return MissingNorthError(self.stage, self.north, modelled=self.modelled, python=True)
 
 
 @dataclass(frozen=True)
@@ -89,13 +92,16 @@ def listing_north(
     stage: str,
     convergence_deg: float | None = None,
     declination_deg: float | None = None,
+    modelled: bool = False,
 ) -> ListingNorth:
     """The listing's north with its correction to true north: γ (``convergence_deg``) of
     grid azimuths, D (``declination_deg``) of magnetic ones. Raises
-    :class:`MissingNorthError` naming ``stage`` and how to give the one missing."""
+    :class:`MissingNorthError` naming ``stage`` and how to give the one missing
+    (``modelled``: the stage would take a declination from the geomagnetic model at the
+    well's site)."""
     needed = {"grid": convergence_deg, "magnetic": declination_deg}
     if north in needed and needed[north] is None:
-        raise MissingNorthError(stage, north)
+        raise MissingNorthError(stage, north, modelled=modelled)
     shift, _ = convert_azimuth(
         0.0, north, "true", convergence_deg=convergence_deg, declination_deg=declination_deg
     )
