@@ -33,16 +33,16 @@ COV = ("cov_nn", "cov_ne", "cov_nv", "cov_ee", "cov_ev", "cov_vv")
 TOLERANCE = {"rtol": 1e-9, "atol": 1e-12}  # m²: the two listings differ by rounding only
 
 
-def listing(directory: Path, north: str, *, convergence: bool = True, first: int = 0) -> Path:
+def listing(directory: Path, north: str, *, corrections: bool = True, first: int = 0) -> Path:
     """The well's stations file in ``north`` north (azimuths less δ), from station
-    ``first``; its header states the site, the declination and (``convergence``) γ."""
+    ``first``; its header states the latitude and (``corrections``) the site for the
+    geomagnetic model, the declination and γ."""
+    site = ["Longitude: 73.4", "Survey Date: 2026-11-21"]
+    stated = [f"Magnetic Declination: {DECLINATION}", f"Grid Convergence: {CONVERGENCE}"]
     head = [
         "Well: G-1",
         "Latitude: 61.25",
-        "Longitude: 73.4",
-        "Survey Date: 2026-11-21",
-        f"Magnetic Declination: {DECLINATION}",
-        *([f"Grid Convergence: {CONVERGENCE}"] if convergence else []),
+        *([*site, *stated] if corrections else []),
         "",
         f"MD (m),Inc (deg),Azimuth {north.capitalize()} (deg)",
     ]
@@ -129,10 +129,20 @@ def test_a_given_tie_on_covariance_is_in_the_listings_north(tmp_path: Path) -> N
     np.testing.assert_allclose(added, np.tile(list(given.values()), (added.shape[0], 1)), atol=1e-9)
 
 
-def test_a_grid_listing_without_its_convergence_is_refused(tmp_path: Path) -> None:
-    """Grid azimuths and no grid convergence: refused, naming the stage and how to give it
-    (it was taken as true north)."""
-    stations = listing(tmp_path, "grid", convergence=False)
+@pytest.mark.parametrize(
+    ("north", "needed", "field", "value"),
+    [
+        ("grid", "grid convergence", "grid_convergence", CONVERGENCE),
+        ("magnetic", "magnetic declination", "declination", DECLINATION),
+    ],
+)
+def test_a_listing_without_its_correction_to_true_north_is_refused(
+    tmp_path: Path, north: str, needed: str, field: str, value: float
+) -> None:
+    """Grid azimuths without a grid convergence, magnetic ones without a declination (nor
+    the site for the geomagnetic model): refused, naming the stage and how to give it (they
+    were taken as true north); given on the command line, the run goes."""
+    stations = listing(tmp_path, north, corrections=False)
     pipeline = write_pipeline(
         tmp_path / "pipeline",
         [
@@ -144,11 +154,11 @@ def test_a_grid_listing_without_its_convergence_is_refused(tmp_path: Path) -> No
     done = gyropipe_cli("run", pipeline, "--input", stations, "--out", tmp_path / "out")
     assert done.returncode == 1, done.output
     assert "stage 'uncertainty' (position_uncertainty" in done.stderr
-    assert "needs the grid convergence of the grid-north azimuths" in done.stderr
-    assert "--well grid_convergence=" in done.stderr
+    assert f"needs the {needed} of the {north}-north azimuths" in done.stderr
+    assert f"--well {field}=" in done.stderr and "Traceback" not in done.stderr
     given = gyropipe_cli(
         "run", pipeline, "--input", stations, "--out", tmp_path / "given",
-        "--well", f"grid_convergence={CONVERGENCE}",
+        "--well", f"{field}={value}",
     )  # fmt: skip
     assert given.returncode == 0, given.stderr
 

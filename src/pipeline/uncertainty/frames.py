@@ -44,22 +44,21 @@ class MissingNorthError(MissingSiteError):
         self.stage, self.missing, self.param, self.north = stage, [field], None, north
         self.modelled = modelled
         model = (
-            ", or the site (latitude, longitude, survey_date) for the geomagnetic model"
-            if modelled
+            "; or its latitude, longitude and survey_date, for the geomagnetic model's"
+            if modelled and north == "magnetic"
             else ""
         )
         where = (
             f"the function's `well={{\"{field}\": …}}` (or the input's well metadata)"
             if python
-            else f"the pipeline's `well:` block, the command line (--well {field}=…) or "
-            "the input file's header"
+            else f"the pipeline's `well:` block, on the command line (--well {field}=…) or "
+            "in the input file's header"
         )
         GyropipeError.__init__(
             self,
-            f"the {stage} stage needs the {name} of the {north}-north azimuths: its error "
-            f"model's terms are referred to true north, and its covariance and ellipses are "
-            f"then turned into {north} north; give the well's `{field}` ({sign}){model} in "
-            f"{where}",
+            f"the {stage} stage needs the {name} of the {north}-north azimuths (the error "
+            f"models work in true north, their covariances turned back into {north} north): "
+            f"give the well's `{field}` ({sign}) in {where}{model}",
         )
 
     def in_python(self) -> MissingSiteError:
