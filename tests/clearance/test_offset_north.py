@@ -17,7 +17,7 @@ import pytest
 
 import pipeline as gp
 from pipeline.errors import InputFileError, InputFileWarning, ParameterError, StageError
-from tests_support import ROOT, gyropipe_cli
+from tests_support import ROOT, gyropipe_cli, without_report
 
 EXAMPLE = ROOT / "examples" / "clearance"
 RULE = {
@@ -282,6 +282,28 @@ def test_gyropipe_run_refuses_and_warns_naming_the_offset(tmp_path: Path):
         "convergence (0.0°), but the reference's azimuths are true north: give its own grid "
         "convergence"
     ) in result.stderr
+
+
+def test_a_grid_reference_without_its_convergence_is_refused_saying_how(tmp_path: Path):
+    """The reference's grid azimuths without a grid convergence: the scan (its frame the
+    reference's north, every model's covariance turned into it from true north) refuses,
+    naming the stage and how to give it; given on the command line, it runs."""
+    grid = (EXAMPLE / "reference.csv").read_text().replace("Grid Convergence: 0.0\n", "")
+    reference = tmp_path / "reference-grid.csv"
+    reference.write_text(grid)
+    offsets = manifest(tmp_path, ("offset-03", csv_file(tmp_path, "offset-03", "True", 0.0)))
+    args = [
+        "run", without_report("clearance", tmp_path), "--input", f"reference={reference}",
+        "--input", f"offsets={offsets}", "--set", "clearance.reference_model=ISCWSA-MWD-REV4",
+        "--set", "clearance.reference_hole_diameter=0.9144",
+    ]  # fmt: skip
+    result = gyropipe_cli(*args, "--out", str(tmp_path / "refused"))
+    assert result.returncode == 1, result.output
+    assert "stage 'clearance' (clearance" in result.stderr
+    assert "needs the grid convergence of the grid-north azimuths" in result.stderr
+    assert "--well grid_convergence=" in result.stderr and "Traceback" not in result.stderr
+    given = ["--well", "grid_convergence=0.0", "--out", str(tmp_path / "given")]
+    assert gyropipe_cli(*args, *given).returncode == 0
 
 
 def test_offsets_given_by_id_take_their_own_corrections(

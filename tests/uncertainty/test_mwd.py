@@ -330,7 +330,9 @@ def _trajectory(md: Floats, inc: Floats, azi: Floats, north: str, well: WellMeta
 def test_stage_mwd_model_matches_library(north: str, to_true: float) -> None:
     """Azimuths are referred to true north before the MWD terms see them: grid through the
     well's convergence (1.5°), magnetic through the reference declination (12°); the
-    magnetic azimuth of the terms is then true − declination."""
+    magnetic azimuth of the terms is then true − declination. The covariance comes back in
+    the listing's north: the true-north one turned by δ = ``to_true`` (N' = N cos δ + E sin δ,
+    E' = E cos δ − N sin δ)."""
     md = np.arange(0.0, 2001.0, 30.0)
     inc = np.clip((md - 300.0) / 20.0, 0.0, 60.0)
     azi = np.full(md.size, 120.0)
@@ -342,9 +344,13 @@ def test_stage_mwd_model_matches_library(north: str, to_true: float) -> None:
     i, a = np.radians(inc), np.radians(azi + to_true)
     survey = Survey.of(md, i, a, minimum_curvature(md, i, a).tvd)
     _, cov = _mwd(survey, field, configure("ISCWSA-MWD-REV5.11", {"amil": 300.0}))
-    total = cov.sum(axis=0)
-    for name, (r, c) in COMPONENTS.items():
-        np.testing.assert_allclose(out.column(f"cov_{name}").to_numpy(), total[:, r, c], rtol=1e-9)
+    c, s = np.cos(np.radians(to_true)), np.sin(np.radians(to_true))
+    turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    total = turn @ cov.sum(axis=0) @ turn.T
+    for name, (r, k) in COMPONENTS.items():
+        np.testing.assert_allclose(
+            out.column(f"cov_{name}").to_numpy(), total[:, r, k], rtol=1e-9, atol=1e-12
+        )
 
 
 def test_stage_mwd_field_from_wmm_at_the_wellhead() -> None:

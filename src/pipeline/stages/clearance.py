@@ -59,6 +59,7 @@ from pipeline.uncertainty.engine import (
     OutsideValidityError,
     find_model,
 )
+from pipeline.uncertainty.frames import listing_north
 from pipeline.uncertainty.tieon import TieOnRecord, outside_ties, warn_missing, with_tie_on
 from pipeline.well import AGREEING, Latitude, WellMetadata, well_of
 
@@ -334,8 +335,8 @@ class _Frame:
             if well.declination is not None
             else (magnetic.declination if magnetic is not None else None)
         )
-        zero, _ = convert_azimuth(0.0, "true", north, **self._corrections())  # type: ignore[arg-type]
-        self.delta = np.radians(-float(zero))  # A_frame = A_true − δ
+        frame = listing_north(north, stage=STAGE, **self._corrections())  # refused without γ / D
+        self.delta = np.radians(frame.to_true)  # A_frame = A_true − δ
 
     def _corrections(self) -> dict[str, Any]:
         return {"convergence_deg": self.convergence, "declination_deg": self.declination}

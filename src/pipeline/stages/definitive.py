@@ -52,6 +52,7 @@ from pipeline.uncertainty.engine import (
     model_terms,
     within_range,
 )
+from pipeline.uncertainty.frames import turned_matrices
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Section as CovSection
 from pipeline.uncertainty.sections import WellByWell, definitive_covariance
@@ -240,6 +241,7 @@ class _Run:
     inc: np.ndarray
     azi: np.ndarray  #: deg, in the survey's north reference
     azi_true: np.ndarray  #: deg, true north (the error models')
+    to_north: float  #: deg, the change true → the survey's north of its azimuths
     source: str
     tool: list[str | None]  #: each station's tool: its own, else its file header's
     listed: np.ndarray | None  #: (n, 3) TVD, north, east its file lists, m, survey's north
@@ -295,6 +297,8 @@ def definitive_survey(
     bounds = np.cumsum([0] + [sec.listed.size for sec in sections])
     survey = Survey.of(md, inc, np.radians(defined_azimuths(azi_true)), pos.tvd)
     cov = _valid_covariance(survey, listed, bounds, tools, sites, params)
+    # the models' true north → the survey's (a tie_covariance is stated in the survey's)
+    cov = turned_matrices(cov, np.repeat([run.to_north for _, run in listed], np.diff(bounds)))
     tie_on = TieOnRecord(surveys=outside_ties([(None, float(md[0]))], params.tie_covariance))
     if params.tie_covariance is not None:  # (outside_ties refuses one at the depth reference)
         cov = cov + params.tie_covariance.matrix()
@@ -376,6 +380,7 @@ def _read(
     try:
         azi_out, _ = convert_azimuth(azi, own, north, **kw)  # type: ignore[arg-type]
         azi_true, _ = convert_azimuth(azi, own, "true", **kw)
+        to_north, _ = convert_azimuth(0.0, "true", north, **kw)  # type: ignore[arg-type]
         listed = _listed(table, own, north, kw)
     except ValueError as exc:
         raise ValueError(f"{port}: {exc}") from None
@@ -384,7 +389,7 @@ def _read(
     tools = table.column("tool_type").to_pylist() if "tool_type" in table.column_names else []
     tool = [t or header for t in tools] if tools else [header] * table.num_rows
     azi_out = np.where(np.isnan(azi), np.nan, azi_out)
-    return _Run(port, spec, md, inc, azi_out, azi_true, source, tool, listed)
+    return _Run(port, spec, md, inc, azi_out, azi_true, float(to_north), source, tool, listed)
 
 
 def _needs_magnetic(tool: ToolModel, table: pa.Table, north: str) -> bool:

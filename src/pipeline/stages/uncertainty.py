@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, model_validator
 
 from pipeline.contracts import column
-from pipeline.earth.magnetic import AppliedMagnetic, applied_magnetic
+from pipeline.earth.magnetic import AppliedMagnetic, MissingMagneticError, applied_magnetic
 from pipeline.earth.site import MagneticReference, resolve_site
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
@@ -21,7 +21,6 @@ from pipeline.registry import StageContext, StageDef
 from pipeline.reporting import MethodNote, ReportContext, ReportDef
 from pipeline.stages import toolmodels
 from pipeline.survey.calculation import calculation_of, record_of, with_record
-from pipeline.survey.north import convert_azimuth
 from pipeline.survey.stations import defined_azimuths, north_reference_of, survey_offsets
 from pipeline.tables import CompassStations, Trajectory
 from pipeline.uncertainty.carried import without_uncertainty
@@ -33,6 +32,7 @@ from pipeline.uncertainty.engine import (
     covariance,
     term_for,
 )
+from pipeline.uncertainty.frames import listing_north
 from pipeline.uncertainty.gyro import with_initial_azimuth, with_measured_noise
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.stated import model_words, with_statements
@@ -46,15 +46,17 @@ from pipeline.uncertainty.tieon import (
     warn_missing,
 )
 from pipeline.uncertainty.toolmodel import ToolModel
-from pipeline.well import Latitude, well_of
+from pipeline.well import Latitude, WellMetadata, well_of
 
 AREA = "m2"
+STAGE = "position_uncertainty"
 
 
 class PositionUncertainty(Trajectory):
-    """A trajectory with each station's NEV position covariance (1σ², m²) and its
-    horizontal error ellipse (semi-axes at 1σ and at the stage's confidence) and vertical σ;
-    NaN at a station outside the error model's range and below it (``outside_validity``
+    """A trajectory with each station's NEV position covariance (1σ², m²; N and E referred
+    to the north of its azimuths, as the ellipse azimuth is) and its horizontal error
+    ellipse (semi-axes at 1σ and at the stage's confidence) and vertical σ; NaN at a
+    station outside the error model's range and below it (``outside_validity``
     flag; such a station is otherwise refused)."""
 
     cov_nn: float = column(unit=AREA, finite=False, description="north variance")
@@ -186,28 +188,35 @@ def position_uncertainty(
     inputs: Mapping[str, pa.Table], params: UncertaintyParams, ctx: StageContext
 ) -> dict[str, pa.Table]:
     """Trajectory → trajectory with NEV covariance and error ellipses per station (those a
-    trajectory carries from its stations file replaced)."""
+    trajectory carries from its stations file replaced), referred to the north of its
+    azimuths: the error model works in true north (grid azimuths referred to it by the
+    well's grid convergence, magnetic ones by the declination: the geomagnetic reference's,
+    else the well's, else the geomagnetic model's), its covariance turned back
+    (:func:`~pipeline.uncertainty.frames.listing_north`) before the ellipses are derived and
+    a given ``tie_covariance`` (stated in the trajectory's north) is added."""
     table = without_uncertainty(inputs["trajectory"])
-    azi_deg = table.column("azi").to_numpy()
     tool = configured = configure(params.model, params.tool, toolmodels.of_run(ctx))
     toolmodels.record(ctx, tool, "model")
     well = ctx.well_for(well_of(table))  # its own file's header, not another input's
+    north = north_reference_of(table, "azi")
     site = ModelSite()
     applied = None
     if "magnetic" in tool.needs:
-        applied = applied_magnetic(params.magnetic, well, stage="position_uncertainty")
+        applied = applied_magnetic(params.magnetic, well, stage=STAGE)
         site = replace(site, magnetic=applied.reference)
-        north = north_reference_of(table, "azi")
-        azi_deg, _ = convert_azimuth(
-            azi_deg,
-            north,
-            "true",
-            convergence_deg=well.convergence_for(north),
-            declination_deg=applied.reference.declination,
-        )
+    elif north == "magnetic" and well.declination is None:
+        applied = _modelled_declination(well)
+    frame = listing_north(
+        north,
+        stage=STAGE,
+        convergence_deg=well.convergence_for(north),
+        declination_deg=well.declination if applied is None else applied.reference.declination,
+        modelled=True,
+    )
+    azi_deg = frame.true_azimuths(table.column("azi").to_numpy())  # the model's: true north
     if "latitude" in tool.needs:
         latitude = resolve_site(
-            well, stage="position_uncertainty", latitude=params.latitude, north_seeking=True
+            well, stage=STAGE, latitude=params.latitude, north_seeking=True
         ).latitude
         site = replace(site, latitude=latitude)
         tool, init_sigma = _measured(
@@ -235,6 +244,7 @@ def position_uncertainty(
             surface_tie=params.surface_tie,
             outside_validity=params.outside_validity,
         )[path.size - (hi - lo) :]
+    cov = frame.covariance(cov)  # the model's true north → the trajectory's
     ties = tie_ons(table, offsets, parents, params.tie_covariance)
     if params.tie_covariance is not None:
         for k in range(len(parents)):
@@ -243,9 +253,7 @@ def position_uncertainty(
     warn_missing(ties, ctx.stage_id)
     columns: dict[str, object] = {name: table.column(name) for name in table.column_names}
     columns.update(covariance_columns(cov, params.confidence, params.outside_validity))
-    out = PositionUncertainty.compiled().make_table(
-        columns, north_reference=north_reference_of(table, "azi")
-    )
+    out = PositionUncertainty.compiled().make_table(columns, north_reference=north)
     out = with_statements(
         out.replace_schema_metadata(table.schema.metadata),
         params.confidence,
@@ -253,6 +261,16 @@ def position_uncertainty(
         ties,
     )
     return {"trajectory": with_magnetic(out, applied)}
+
+
+def _modelled_declination(well: WellMetadata) -> AppliedMagnetic | None:
+    """The geomagnetic model's reference at the well's site and date, whose declination
+    refers a gyro model's magnetic-north azimuths to true north (None: the well states no
+    site for it; the frame then refuses, saying how to give the declination)."""
+    try:
+        return applied_magnetic(None, well, stage=STAGE)
+    except MissingMagneticError:
+        return None
 
 
 def tie_ons(

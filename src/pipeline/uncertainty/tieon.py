@@ -86,7 +86,8 @@ class TieCovariance(BaseModel):
 
 
 TIE_COVARIANCE = (
-    "NEV covariance (1σ², m²: nn, ne, nv, ee, ev, vv) of the tie-on position of the survey "
+    "NEV covariance (1σ², m²: nn, ne, nv, ee, ev, vv; N and E referred to the north of the "
+    "listing's azimuths, as its covariance columns are) of the tie-on position of the survey "
     "that starts below the depth reference (MD > 1 m) tied on a position from outside the "
     "run (its stations file's listing, the tie parameters): the uncertainty of the hole "
     "above it, e.g. the previous survey's at that MD; added to its every station (and to "
