@@ -76,6 +76,8 @@ def test_las_header_is_complete_for_lasio(exports_run: RunResult, trajectory: pa
         "VSAZ": (30.0, "deg"),
         "CONF": (0.9, ""),  # the uncertainty stage's confidence (exports_run)
         "ERRMODEL": ("GYRO-NS rev 5 (2020-10-08)", ""),  # its model, the bundled file's
+        "TIEMD1": (md[0], "m"),  # its σ starts at the first station, at the wellhead
+        "TIEBASIS1": ("wellhead", ""),
     }
     numeric = [f for f in trajectory.schema if pa.types.is_floating(f.type)]
     assert [c.mnemonic for c in las.curves] == [f.name for f in numeric]

@@ -142,13 +142,14 @@ def test_survey_of_a_witsml_export_keeps_its_matrix_cov(point_gyro: Path, tmp_pa
     assert stated["tie_on"] == written
 
 
-def test_csv_and_witsml_round_trips_keep_the_tie_on_statement(tmp_path: Path) -> None:
+def test_csv_las_and_witsml_round_trips_keep_the_tie_on_statement(tmp_path: Path) -> None:
     with pytest.warns(InputFileWarning, match="Projection to TD"):
         gp.run(SURVEY, listing(tmp_path), out=tmp_path / "out")
     out = tmp_path / "out"
     assert summary(out)["tie_on"] == [NOT_INCLUDED]
     assert json.loads(csv_comments(out / "trajectory.csv")["tie_on"]) == {"surveys": [NOT_INCLUDED]}
-    for name in ("trajectory.csv", "trajectory.xml"):
+    assert las_tie_items(out / "trajectory.las") == {"TIEMD1": 500.0, "TIEBASIS1": "not included"}
+    for name in ("trajectory.csv", "trajectory.xml", "trajectory.las"):
         assert gp.read(out / name).attrs["uncertainty"]["tie_on"] == [NOT_INCLUDED], name
     # the projection at 800 m is left out with its covariance; the others follow their rows
     np.testing.assert_allclose(
@@ -160,6 +161,64 @@ def test_csv_and_witsml_round_trips_keep_the_tie_on_statement(tmp_path: Path) ->
     assert "the uncertainty of the tie-on position (of the hole above it) is not included" in (
         report
     )
+
+
+def las_tie_items(path: Path) -> dict[str, object]:
+    """The TIE… ~Parameter items of a LAS file, as lasio reads them."""
+    las = lasio.read(path, mnemonic_case="preserve")
+    return {i.mnemonic: i.value for i in las.params if i.mnemonic.startswith("TIE")}
+
+
+GIVEN = {"survey": None, "md": 500.0, "basis": "given", "parent": None, "semi_major": 0.15}
+
+
+def test_a_survey_of_a_las_export_carries_its_tie_on(tmp_path: Path) -> None:
+    with pytest.warns(InputFileWarning, match="Projection to TD"):
+        gp.run(SURVEY, listing(tmp_path, GIVEN), out=tmp_path / "first")
+    las = tmp_path / "first" / "trajectory.las"
+    assert las_tie_items(las) == {"TIEMD1": 500.0, "TIEBASIS1": "given", "TIESEMI1": 0.15}
+    gp.run(SURVEY, las, out=tmp_path / "again")
+    stated = summary(tmp_path / "again")
+    assert stated["tie_on"] == [GIVEN] and stated["from_stations_file"] is True
+    again = pq.read_table(tmp_path / "again" / "trajectory.trajectory.parquet")
+    assert json.loads(again.schema.metadata[TIE_KEY]) == {"surveys": [GIVEN]}
+    np.testing.assert_allclose(again.column("cov_ee").to_numpy(), [0.02, 0.08, 0.18], atol=1e-9)
+
+
+def test_a_las_without_tie_on_items_reads_as_before(tmp_path: Path) -> None:
+    with pytest.warns(InputFileWarning, match="Projection to TD"):
+        gp.run(SURVEY, listing(tmp_path), out=tmp_path / "out")
+    las = tmp_path / "out" / "trajectory.las"
+    lines = las.read_text().splitlines(keepends=True)
+    las.write_text("".join(ln for ln in lines if not ln.startswith(" TIE")))
+    frame = gp.read(las)
+    assert frame.attrs["uncertainty"]["tie_on"] == []
+    assert frame.attrs["uncertainty"]["error_model"] == "TEST-GYRO rev 2"
+    np.testing.assert_allclose(frame["cov_ee"], [0.02, 0.08, 0.18], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "at", "said"),
+    [
+        (" not included ", " somewhere    ", "TIEBASIS1", "TIEBASIS1 'somewhere': Input should be"),
+        ("TIEMD1  .m ", "TIEMD1  .ft", "TIEMD1", "TIEMD1 in 'ft': expected m"),
+        (" TIEMD1  .m ", " TIEMD2  .m ", "TIEBASIS1", "TIEMD1 missing: the tie-on of each"),
+    ],
+)
+def test_a_las_tie_on_item_not_as_written_is_refused_at_its_line(
+    tmp_path: Path, old: str, new: str, at: str, said: str
+) -> None:
+    with pytest.warns(InputFileWarning, match="Projection to TD"):
+        gp.run(SURVEY, listing(tmp_path), out=tmp_path / "out")
+    las = tmp_path / "out" / "trajectory.las"
+    text = las.read_text()
+    assert old in text
+    las.write_text(text.replace(old, new, 1))
+    lines = las.read_text().splitlines()
+    line = next(i for i, ln in enumerate(lines, 1) if re.match(rf"\s*{at}\s*\.", ln))
+    with pytest.raises(InputFileError) as err:
+        gp.read(las, kind="stations")
+    assert f"trajectory.las:{line}: {said}" in str(err.value)
 
 
 @pytest.mark.parametrize(

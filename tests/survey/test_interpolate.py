@@ -136,7 +136,7 @@ def trajectory_table() -> Any:
         },
         north_reference="true",
     )
-    ctx: Any = SimpleNamespace(well=WellMetadata())
+    ctx: Any = SimpleNamespace(well=WellMetadata(), stage_id="stage")
     return survey_method({"stations": stations}, SurveyMethodParams(), ctx)["trajectory"], ctx
 
 

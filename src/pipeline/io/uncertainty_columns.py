@@ -1,6 +1,6 @@
 """A trajectory file's uncertainty columns read back as stations carry them: what the file
 states of them (a CSV's ``# confidence=``, ``# error_model=`` and ``# tie_on=`` lines, a LAS
-file's CONF and ERRMODEL, a WITSML trajectory's ``gyropipe.error_model`` and
+file's CONF, ERRMODEL and TIE… items, a WITSML trajectory's ``gyropipe.error_model`` and
 ``gyropipe.uncertainty_tie_on`` extensions) goes back into their field metadata and the
 table's tie-on record (:mod:`pipeline.uncertainty.stated`,
 :mod:`pipeline.uncertainty.tieon`), ``ellipse_azimuth`` takes the azimuths' north reference.

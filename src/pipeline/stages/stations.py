@@ -8,6 +8,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 import pyarrow as pa
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from pipeline.contracts import column
@@ -29,6 +30,7 @@ from pipeline.survey.methods import Method, build_turn_rates
 from pipeline.survey.north import convergence_at, convert_table, declination_at
 from pipeline.survey.stations import north_reference_of, station_angles, survey_offsets
 from pipeline.tables import DLS_UNIT, Stations, Trajectory
+from pipeline.uncertainty.points import uncertainty_on_points
 from pipeline.well import NorthReference, WellMetadata, attach, well_of
 
 
@@ -58,6 +60,12 @@ class PathPoints(Stations):
     tvd: float = column(unit="m", description="true vertical depth below the depth reference")
     north: float = column(unit="m", description="northing from the wellhead")
     east: float = column(unit="m", description="easting from the wellhead")
+    interpolated: bool = column(
+        unit=None,
+        default=False,
+        description="the point lies between survey stations: its uncertainty columns are NaN "
+        "(written where the trajectory has them; a point at a station keeps the station's)",
+    )
 
 
 class TvdCrossings(PathPoints):
@@ -129,7 +137,10 @@ class InterpolateTvdParams(BaseModel):
 def _per_survey(
     trajectory: pa.Table,
     solve: Callable[[np.ndarray, np.ndarray, np.ndarray, tuple[float, float, float]], Interpolated],
-) -> tuple[list[Interpolated], list[int]]:
+) -> tuple[list[Interpolated], list[int], NDArray[np.intp], NDArray[np.bool_]]:
+    """The points of each survey of two stations or more, the first row of each, and per
+    point (in order) the trajectory row of the station at or above it and whether it is
+    that station."""
     md, inc_deg, azi_deg = station_angles(trajectory)
     north = trajectory.column("north").to_numpy()
     east = trajectory.column("east").to_numpy()
@@ -137,14 +148,19 @@ def _per_survey(
     offsets = survey_offsets(trajectory)
     found: list[Interpolated] = []
     firsts: list[int] = []
+    above: list[NDArray[np.intp]] = []
     for lo, hi in itertools.pairwise(offsets):
         if hi - lo < 2:
             continue
         tie = (float(north[lo]), float(east[lo]), float(tvd[lo]))
         sl = slice(int(lo), int(hi))
-        found.append(solve(md[sl], np.radians(inc_deg[sl]), np.radians(azi_deg[sl]), tie))
+        points = solve(md[sl], np.radians(inc_deg[sl]), np.radians(azi_deg[sl]), tie)
+        found.append(points)
         firsts.append(int(lo))
-    return found, firsts
+        above.append(lo + np.searchsorted(md[sl], points.md, side="right").astype(np.intp) - 1)
+    rows = np.concatenate(above) if above else np.zeros(0, np.intp)
+    at_station = md[rows] == (np.concatenate([p.md for p in found]) if found else np.zeros(0))
+    return found, firsts, rows, at_station
 
 
 def _points_table(
@@ -197,8 +213,9 @@ def interpolate_md_stage(
         at = at[(at >= md[0]) & (at <= md[-1])]
         return interpolate_md(md, inc, azi, at, tie=tie)
 
-    found, firsts = _per_survey(trajectory, solve)
-    return {"points": _points_table(trajectory, found, firsts, PathPoints)}
+    found, firsts, above, at_station = _per_survey(trajectory, solve)
+    table = _points_table(trajectory, found, firsts, PathPoints)
+    return {"points": uncertainty_on_points(trajectory, table, above, at_station, ctx.stage_id)}
 
 
 def interpolate_tvd_stage(
@@ -213,10 +230,10 @@ def interpolate_tvd_stage(
     ) -> Interpolated:
         return interpolate_tvd(md, inc, azi, targets, tie=tie)
 
-    found, firsts = _per_survey(trajectory, solve)
+    found, firsts, above, at_station = _per_survey(trajectory, solve)
     target_tvd = np.concatenate([targets[p.target] for p in found]) if found else np.zeros(0)
     table = _points_table(trajectory, found, firsts, TvdCrossings, extra={"target_tvd": target_tvd})
-    return {"crossings": table}
+    return {"crossings": uncertainty_on_points(trajectory, table, above, at_station, ctx.stage_id)}
 
 
 # --- north reference ----------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +55,7 @@ from pipeline.io.las.rows import (
     null_mask,
     null_values,
 )
+from pipeline.io.las.tieon import read_tie_on
 from pipeline.io.las.well import well_metadata
 from pipeline.io.las.write import write_las
 from pipeline.io.mnemonics import CURVES
@@ -71,7 +72,8 @@ from pipeline.well import WellMetadata
 
 def read_las(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     """Read a LAS file as ``stations`` (md m, inc/azi deg; tvd/north/east m, dls deg/30m
-    and the uncertainty curves gyropipe writes, stating CONF and ERRMODEL, when present),
+    and the uncertainty curves gyropipe writes, stating CONF, ERRMODEL and the tie-on
+    items, :mod:`pipeline.io.las.tieon`, when present),
     ``samples`` (time s, gyros deg/h, accelerometers m/s2, magnetometers nT, md m,
     frame_angle deg) or ``log`` (every curve as logged), plus ``source_line``
     (the file line of each row)."""
@@ -105,7 +107,7 @@ class _Rows:
     north: str | None
     opts: LasOptions
     stated: Stated
-    """what CONF and ERRMODEL state of the uncertainty curves"""
+    """what CONF, ERRMODEL and the tie-on items state of the uncertainty curves"""
 
     @property
     def schema(self) -> pa.Schema:
@@ -187,10 +189,10 @@ def _open(path: Path, kind: str, options: Any) -> tuple[pa.Table | _Rows, WellMe
 
 
 def _stated(path: Path, header: Header) -> Stated:
-    """What the header's CONF and ERRMODEL items state of the uncertainty curves."""
+    """What the header's CONF, ERRMODEL and TIE… items state of the uncertainty curves."""
     items = {name: header.find(path, name) for name in ("CONF", "ERRMODEL")}
     conf, model = ((i.value, i.line) if i is not None else None for i in items.values())
-    return Stated.of(path, conf, model)
+    return replace(Stated.of(path, conf, model), tie_on=read_tie_on(path, header))
 
 
 _TITLES = (b"~V", b"~W", b"~C", b"~A")

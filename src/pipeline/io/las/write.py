@@ -13,7 +13,8 @@ DECLUSED and GRIDUSED (the declination and convergence applied to the azimuths),
 METHOD and VSAZ (the survey calculation method and vertical-section azimuth a trajectory
 records, :mod:`pipeline.survey.calculation`), and CONF and ERRMODEL where the columns
 state them (the confidence of the ``*_conf`` curves, the error model of the uncertainty
-ones, :mod:`pipeline.uncertainty.stated`); ``~Curve`` (mnemonic = column name, unit =
+ones, :mod:`pipeline.uncertainty.stated`) and the TIE… items of where they start, each
+survey's tie-on (:mod:`pipeline.io.las.tieon`); ``~Curve`` (mnemonic = column name, unit =
 the field's ``unit`` metadata as stored, e.g. ``deg/h``; description = the field's
 ``description`` metadata, a log's own, else the canonical column's); ``~Other``;
 ``~ASCII`` with each float at its unit's decimals (:mod:`pipeline.io.precision`; others in
@@ -48,11 +49,13 @@ import pyarrow.csv as pacsv
 
 from pipeline.contracts import DESCRIPTION_KEY, NORTH_KEY, UNIT_KEY
 from pipeline.io.las.curves import KINDS
+from pipeline.io.las.tieon import tie_on_items
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
 from pipeline.io.precision import DECIMALS, for_export
 from pipeline.survey.calculation import calculation_of
 from pipeline.uncertainty.stated import file_statements
+from pipeline.uncertainty.tieon import tie_on_of
 from pipeline.version import __version__
 from pipeline.well import WellMetadata
 
@@ -314,6 +317,7 @@ def _header_text(
             "vertical section azimuth (origin: wellhead)",
         ),
         *(_line(STATED[key][0], "", value, STATED[key][1]) for key, value in stated.items()),
+        *(_line(*item) for item in _tie_on_items(table, written)),
         "~Curve Information",
         *(curve_lines[f.name] for f in written),
         "~Other",
@@ -324,6 +328,16 @@ def _header_text(
         lines.append("Columns not written: " + ", ".join(dropped))
     lines.append("~ASCII " + " ".join(_mnemonic(f.name) for f in written))
     return "\n".join(lines) + "\n"
+
+
+def _tie_on_items(
+    table: pa.Table, written: list[pa.Field]
+) -> list[tuple[str, str, str | float, str]]:
+    """The ~Parameter items of the table's tie-on record (:mod:`pipeline.io.las.tieon`)."""
+    record = tie_on_of(table)
+    if record is None:
+        return []
+    return tie_on_items(record, with_survey=any(f.name == "survey" for f in written))
 
 
 def _location(well: WellMetadata) -> str | None:
