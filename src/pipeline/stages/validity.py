@@ -8,16 +8,21 @@ in the options.
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Callable, Mapping
 
+import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 
 from pipeline.earth.frames import OMEGA_EARTH
 from pipeline.earth.geomagnetic import field_model
 from pipeline.earth.gravity import METHOD as GRAVITY_METHOD
 from pipeline.earth.site import Site, resolve_site
+from pipeline.errors import SurveyCheckWarning
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
+from pipeline.qc.dropped import dropped_stations
 from pipeline.qc.engine import drop_stations, station_checks
 from pipeline.qc.options import QcOptions
 from pipeline.qc.tables import MagneticAnomalies, QcResults, QcSummary
@@ -42,7 +47,39 @@ def station_stage(
     params = params.with_defaults(tool_errors(ctx.well))
     qc, summary = station_checks(readings, site, params, samples=samples)
     qc = with_references(qc, site, params, field=_has_field(samples))
-    return {"qc": qc, "summary": summary, "readings": drop_stations(readings, summary)}
+    kept = drop_stations(readings, summary)
+    if readings.num_rows and not kept.num_rows:
+        message = every_station_dropped(ctx.stage_id, qc, summary)
+        warnings.warn(SurveyCheckWarning(message), stacklevel=2)
+    return {"qc": qc, "summary": summary, "readings": kept}
+
+
+def every_station_dropped(stage: str, qc: pa.Table, summary: pa.Table) -> str:
+    """What to tell an engineer whose every station the checks dropped: the stations, and
+    for each check that dropped them the worst value measured against its limit (the
+    stage's parameter of that name: a tool whose sensors are noisier at rest than the
+    limit needs its own)."""
+    dropped = dropped_stations([summary])
+    shown = "; ".join(f"MD {d.md:.2f} m: {d.names()}" for d in dropped)
+    names = sorted({name for d in dropped for name in d.checks})
+    worst = []
+    for name in names:
+        rows = qc.filter(pc.equal(qc.column("check"), name)).to_pylist()
+        failed = [r for r in rows if r["passed"] is False and r["measured"] is not None]
+        if failed:
+            top = max(failed, key=lambda r: abs(r["measured"]))
+            limit = top["tolerance"]
+            worst.append(
+                f"{name}: up to {top['measured']:.4g} {top['unit']} measured"
+                + (f" against {limit:.4g} {top['unit']}" if np.isfinite(limit) else "")
+            )
+    return (
+        f"stage {stage!r}: the checks dropped every station recorded ({len(dropped)}: {shown}), "
+        "so no station is left to compass or survey"
+        + (f" — {'; '.join(worst)}" if worst else "")
+        + ". If the tool was still and its sensors are noisier at rest than these limits, "
+        "give the stage the tool's own (its `with:` parameter of each check's name)"
+    )
 
 
 def window_stage(
