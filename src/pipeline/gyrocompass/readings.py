@@ -117,10 +117,12 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     marked run, a detected dwell, or a steady end at least ``end_stop`` long but too short
     for a dwell) is recorded in the table's schema metadata
     (:mod:`~pipeline.gyrocompass.recording_end`); too short after trimming, it is not
-    averaged (not an error). Raises ``ValueError`` naming the problem: no markers and no
-    frame angle, another marked position repeated or too short after trimming, a station
-    marked again after other stations (:func:`remarked_stations`), non-uniform time, no
-    positions found."""
+    averaged (not an error). Detected dwells only: the stops the tool made without a dwell
+    are numbered as stations without readings and recorded in the schema metadata too
+    (:mod:`~pipeline.gyrocompass.stops`). Raises ``ValueError`` naming the problem: no
+    markers and no frame angle, another marked position repeated or too short after
+    trimming, a station marked again after other stations (:func:`remarked_stations`),
+    non-uniform time, no positions found."""
     RawSamples.validate_table(samples)
     time = samples.column("time").to_numpy()
     rate = _sample_rate(time)
