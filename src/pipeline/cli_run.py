@@ -85,7 +85,7 @@ def qc_verdict_of(plan: Plan, result: RunResult) -> str | None:
     return qc_verdict(
         checks,
         [*others, *(("file_positions", c.compared, c.beyond_md) for c in positions)],
-        dropped_stations(dropping),
+        dropped_stations([*dropping, *checks]),
     )
 
 

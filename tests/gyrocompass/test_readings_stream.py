@@ -14,6 +14,7 @@ from test_readings import profile, run, synthetic
 from pipeline.errors import ContractViolation
 from pipeline.gyrocompass.readings import ReadingOptions, position_readings
 from pipeline.gyrocompass.readings_stream import stream_position_readings
+from pipeline.gyrocompass.stops import unread_stops
 from pipeline.streams import TableStream
 
 BATCHES = [1, 7, 250, 801, 4096, 1 << 20]
@@ -62,6 +63,36 @@ def test_stations_numbered_by_detection_stream_alike(rows: int) -> None:
         whole, streamed = both(synthetic(md, angle), options, rows)
         assert whole.num_rows == 6
         assert streamed.equals(whole), smoothing
+
+
+@pytest.mark.parametrize("rows", BATCHES)
+def test_stops_without_a_dwell_are_numbered_and_recorded_alike(rows: int) -> None:
+    """Two stops with no dwell — the depth held 10 s at 110 m with the frame turning at
+    36°/s, 3 s at 115 m with the frame still (a dwell needs 6 s) — are stations 1 and 2 with
+    no readings, recorded with how long the depth held: the smoothed MD within 5 cm of its
+    level, which the 1 s moving average over the travel either side at 1 m/s reaches
+    (0.5 − τ)²/2 m short of it τ s into the stop, so the hold is up to half the window
+    shorter. 3 s held 0.3 m from the last station (less than station_gap) is that station's.
+    The streamed readings say the same."""
+    md, angle = profile(
+        [
+            (0, 100, 10), (10, 100, 10), (11, 100, 100), (21, 100, 100),  # station 0
+            (31, 110, 100), (41, 110, 460),  # held, the frame turning: station 1
+            (46, 115, 460), (49, 115, 460),  # held 3 s: station 2
+            (54, 120, 460), (64, 120, 460), (65, 120, 550), (75, 120, 550),  # station 3
+            (76, 120.3, 550), (79, 120.3, 550), (84, 125, 550),  # crept, held 3 s, left
+        ]
+    )  # fmt: skip
+    whole, streamed = both(synthetic(md, angle), ReadingOptions(), rows)
+    assert streamed.equals(whole)
+    assert unread_stops(streamed) == unread_stops(whole)
+    np.testing.assert_array_equal(whole.column("station").to_numpy(), [0, 0, 3, 3])
+    turning, short = unread_stops(whole)
+    assert (turning.station, short.station) == (1, 2)
+    np.testing.assert_allclose([turning.md, short.md], [110, 115])
+    assert 9.5 <= turning.held <= 10 and 2.5 <= short.held <= 3
+    assert "frame angle did not stay within 0.5°" in turning.reason()
+    assert f"held depth there for only {short.held:.1f} s" in short.reason()
 
 
 def test_a_batch_boundary_inside_a_stationary_position() -> None:

@@ -43,11 +43,12 @@ TABLE_STATED = {
     b"gyropipe.references",
     b"gyropipe.uncertainty_tie_on",
     b"gyropipe.recording_end",
+    b"gyropipe.unread_stops",
 }
 """Schema metadata an MCAP table may carry: the well, the calculation, the file positions'
 check (the summary's and report's ``file_positions``), the QC's reference models, where the
 uncertainty columns start (each survey's tie-on), the frame position the recording ended in
-(the readings')."""
+and the stops the tool made that gave no reading (the readings')."""
 
 
 def survey_with_mcap(tmp_path: Path) -> Path:

@@ -13,7 +13,12 @@ they are detected from the frame angle and the odometer MD:
   creeping in at the edge of the tolerance does not cut the dwell short);
 - consecutive dwells belong to one station until the stop MD differs from the previous one
   by more than ``station_gap``, or the MD strayed farther than that between them (the tool
-  moved and came back); stations and positions are numbered from 0.
+  moved and came back); stations and positions are numbered from 0;
+- a stop the tool made that holds no dwell — the smoothed MD held within ``md_tolerance``
+  for at least ``stop_hold``, farther than ``station_gap`` from the dwells either side (the
+  stop too short, or the frame or the tool not still enough) — is numbered as a station in
+  its place with no reading, and recorded for the validity checks to drop by name
+  (:mod:`~pipeline.gyrocompass.stops`).
 
 Each dwell loses ``trim_start`` seconds at its start and ``trim_end`` at its end (frame-move
 transients, settling); the rest is averaged. Rates in °/h, accelerations in m/s², MD in m,
@@ -28,6 +33,14 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
+from pipeline.gyrocompass.stops import (
+    Dwells,
+    Stop,
+    UnreadStop,
+    attach_unread,
+    place,
+    unread_records,
+)
 from pipeline.tables import PositionReadings, RawSamples
 
 FloatArray = NDArray[np.float64]
@@ -82,6 +95,13 @@ class ReadingOptions(BaseModel):
         "longer than the trims) but too short for a dwell, is reported as a frame position "
         "the recording cut short, s",
     )
+    stop_hold: float = Field(
+        2.0,
+        gt=0,
+        description="detection: the smoothed MD held within md_tolerance for at least this "
+        "long is a stop the tool made; one with no dwell, farther than station_gap from "
+        "the dwells either side, is numbered as a station without a reading and reported, s",
+    )
 
 
 DEFAULTS = ReadingOptions()
@@ -97,10 +117,12 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     marked run, a detected dwell, or a steady end at least ``end_stop`` long but too short
     for a dwell) is recorded in the table's schema metadata
     (:mod:`~pipeline.gyrocompass.recording_end`); too short after trimming, it is not
-    averaged (not an error). Raises ``ValueError`` naming the problem: no markers and no
-    frame angle, another marked position repeated or too short after trimming, a station
-    marked again after other stations (:func:`remarked_stations`), non-uniform time, no
-    positions found."""
+    averaged (not an error). Detected dwells only: the stops the tool made without a dwell
+    are numbered as stations without readings and recorded in the schema metadata too
+    (:mod:`~pipeline.gyrocompass.stops`). Raises ``ValueError`` naming the problem: no
+    markers and no frame angle, another marked position repeated or too short after
+    trimming, a station marked again after other stations (:func:`remarked_stations`),
+    non-uniform time, no positions found."""
     RawSamples.validate_table(samples)
     time = samples.column("time").to_numpy()
     rate = _sample_rate(time)
@@ -112,6 +134,7 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     markers = _markers(samples)
     last: tuple[int, int, int, int] | None = None
     """the dwell the recording ended in: first and end sample, station, position"""
+    unread: list[UnreadStop] = []
     if markers is not None:
         starts, ends, station, position = markers
         if ends.size and ends[-1] == time.size:
@@ -129,9 +152,13 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
         begin = max(int(ends[-1]) if ends.size else 0, time.size - k_start - need - k_end)
         tail = begin + steady_tail(tuple(x[begin:] for x in watched), tolerances)
         cut = begin < time.size and time.size - tail >= end_stop_count(options, rate)
-        station, position = _number_stations(
-            smooth_md, np.append(starts, tail) if cut else starts, options.station_gap
-        )
+        numbered = np.append(starts, tail) if cut else starts
+        station, position = _number_stations(smooth_md, numbered, options.station_gap)
+        closed = np.append(ends, time.size) if cut else ends
+        found = Dwells(numbered, closed, smooth_md[numbered], station)
+        placed = place(found, md_stops(smooth_md, md, time, options, rate), options.station_gap)
+        station = placed.renumber[station]
+        unread = unread_records(placed, rate, *stop_terms(options, rate))
         if cut:
             last = (tail, time.size, int(station[-1]), int(position[-1]))
             station, position = station[:-1], position[:-1]
@@ -144,6 +171,7 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     readings = reduce_readings(
         signals, time, rate, md, angle, starts + k_start, ends - k_end, station, position
     )
+    readings = attach_unread(readings, unread)
     if last is None:
         return readings
     first, end, s, p = last
@@ -167,6 +195,36 @@ def end_stop_count(options: ReadingOptions, rate: float) -> int:
     short (detection): ``end_stop`` and more than the trims leave nothing of."""
     k_start, k_end, _, _ = counts(options, rate)
     return max(round(options.end_stop * rate), k_start + k_end + 2)
+
+
+def stop_count(options: ReadingOptions, rate: float) -> int:
+    """The fewest samples of held MD that make a stop (``stop_hold``, at least 2)."""
+    return max(2, round(options.stop_hold * rate))
+
+
+def stop_terms(options: ReadingOptions, rate: float) -> tuple[float, float, float, float]:
+    """What an unread stop's record states of a dwell (:func:`~pipeline.gyrocompass.stops.
+    unread_records`): the steady time it needs (s: the trims and ``min_dwell`` in whole
+    samples), ``min_dwell`` (s) and the angle (deg) and MD (m) tolerances."""
+    k_start, k_end, need, _ = counts(options, rate)
+    return (
+        (k_start + need + k_end) / rate,
+        options.min_dwell,
+        options.angle_tolerance,
+        options.md_tolerance,
+    )
+
+
+def md_stops(
+    smooth_md: FloatArray, md: FloatArray, time: FloatArray, options: ReadingOptions, rate: float
+) -> list[Stop]:
+    """The stops of the MD (:mod:`~pipeline.gyrocompass.stops`): ``smooth_md`` the smoothed
+    MD, ``md`` the odometer's (m), ``time`` (s), at ``rate`` (Hz)."""
+    starts, ends = _detect_dwells((smooth_md,), (options.md_tolerance,), stop_count(options, rate))
+    return [
+        Stop(a, b, float(np.median(md[a:b])), float(time[a]), float(time[b - 1]))
+        for a, b in zip(starts.tolist(), ends.tolist(), strict=True)
+    ]
 
 
 def only_stop(start: float, end: float, left: float) -> str:

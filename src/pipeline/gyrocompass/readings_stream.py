@@ -59,9 +59,20 @@ from pipeline.gyrocompass.readings import (
     remarked_stations,
     steady_starts,
     steady_tail,
+    stop_count,
+    stop_terms,
     too_few,
 )
 from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
+from pipeline.gyrocompass.stops import (
+    Dwells,
+    Placed,
+    Stop,
+    UnreadStop,
+    attach_unread,
+    place,
+    unread_records,
+)
 from pipeline.streams import TableStream
 from pipeline.tables import PositionReadings, RawSamples
 
@@ -220,6 +231,10 @@ class _Stations:
         self.last: tuple[int, int, float, float, int, float, bool] | None = None
         """the dwell the recording ended in: station, position, first and last time (s),
         samples left after trimming, median MD (m), whether averaged"""
+        self.renumber: IndexArray | None = None
+        """the station numbers the readings take (``renumber[station]``: unread stops
+        counted), when detected"""
+        self.unread: list[UnreadStop] = []
 
     def add(
         self,
@@ -249,6 +264,10 @@ class _Stations:
             self.medians.append(np.full(len(self.md), md))
         self.md = []
 
+    def numbered(self, station: IndexArray) -> IndexArray:
+        """The numbers the readings give ``station`` (:attr:`renumber`)."""
+        return station if self.renumber is None else self.renumber[station]
+
     def table(self) -> pa.Table:
         """Every station's readings, their durations at the rate set now (:class:`_MarkedAhead`
         reduces at the first batch's rate; the scan's is the run's), and the dwell the
@@ -264,16 +283,17 @@ class _Stations:
             k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]
         }
         columns = {
-            "station": columns.pop("station"),
+            "station": self.numbered(columns.pop("station")),
             "md": np.concatenate(self.medians),
             "position": columns.pop("position"),
             **columns,
         }
         columns["duration"] = columns["n"] / self.rate
-        table = PositionReadings.compiled().make_table(columns)
+        table = attach_unread(PositionReadings.compiled().make_table(columns), self.unread)
         if self.last is None:
             return table
-        station, position, start, end, left, md, kept = self.last
+        s, position, start, end, left, md, kept = self.last
+        station = int(self.numbered(np.array([s]))[0])
         md = station_md(table, station, md)
         return attach(
             table, RecordingEnd(station, position, md, start, end, left / self.rate, kept)
@@ -430,6 +450,12 @@ class _Detected:
         self.span = (-np.inf, np.inf)
         """highest and lowest smoothed MD from the previous dwell's start to ``resume``"""
         self.station = self.position = -1
+        self.found: list[tuple[int, int, float, int]] = []
+        """every dwell and the steady end of the recording cut short: first and end sample
+        number, smoothed MD at the first (m), station (:class:`~pipeline.gyrocompass.stops.
+        Dwells`)"""
+        self.stops = _StopFinder(options, rate)
+        self.rate, self.terms = rate, stop_terms(options, rate)
 
     def run(self, samples: TableStream) -> pa.Table:
         for batch in samples:
@@ -441,7 +467,21 @@ class _Detected:
             )
             self.step(final=False)
         self.step(final=True)
+        placed = self.placed()
+        self.stations.renumber = placed.renumber
+        self.stations.unread = unread_records(placed, self.rate, *self.terms)
         return self.stations.table()
+
+    def placed(self) -> Placed:
+        """The stops the MD held without a dwell, among the dwells (:func:`~pipeline.
+        gyrocompass.stops.place`)."""
+        found = self.found
+
+        def column(i: int) -> IndexArray:
+            return np.array([d[i] for d in found], dtype=np.intp)
+
+        md = np.array([d[2] for d in found], dtype=np.float64)
+        return place(Dwells(column(0), column(1), md, column(3)), self.stops.found, self.gap)
 
     def step(self, *, final: bool) -> None:
         """Find every dwell the buffer settles, then drop the samples no longer needed."""
@@ -452,6 +492,7 @@ class _Detected:
         smooth = moving_average(self.buffer["md"], self.window)
         signals = (angle, smooth)
         limit = size if final else size - self.window  # smoothing settled below this
+        self.stops.step(self.buffer, smooth, self.base, limit, final=final)
         while True:
             if self.open is None:
                 start = self.start(signals, smooth, limit, final)
@@ -465,7 +506,8 @@ class _Detected:
             if end == size:  # (final) the recording ended in it
                 self.ended(self.open - self.base, end, kept=True)
             self.open, self.resume = None, self.base + end
-        keep = max((self.open if self.open is not None else self.resume) - self.window, self.base)
+        needed = min(self.open if self.open is not None else self.resume, self.stops.needed())
+        keep = max(needed - self.window, self.base)
         self.buffer = {k: v[keep - self.base :] for k, v in self.buffer.items()}
         self.base = keep
 
@@ -509,6 +551,7 @@ class _Detected:
             return
         self._fold(smooth[r:s])
         self._number(float(smooth[s]))
+        self.found.append((self.base + s, self.base + end, self.stop, self.station))
         self.ended(s, end, kept=False)
 
     def ended(self, s: int, e: int, *, kept: bool) -> None:
@@ -531,6 +574,7 @@ class _Detected:
         return limit if final else None
 
     def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
+        self.found.append((self.base + s, self.base + e, self.stop, self.station))
         self._fold(smooth[s:e])
         a, b = (np.array([i], dtype=np.intp) for i in (s + self.k_start, e - self.k_end))
         station, position = (np.array([k], dtype=np.intp) for k in (self.station, self.position))
@@ -539,3 +583,58 @@ class _Detected:
     def _fold(self, values: FloatArray) -> None:
         if values.size:
             self.span = (max(self.span[0], values.max()), min(self.span[1], values.min()))
+
+
+class _StopFinder:
+    """Stops of the smoothed MD (:func:`~pipeline.gyrocompass.readings.md_stops`, as
+    :class:`_Detected` finds dwells) on its buffer: only the samples from :meth:`needed` on
+    are looked at again, and an open stop keeps the odometer MD it has passed (its median)."""
+
+    def __init__(self, options: ReadingOptions, rate: float) -> None:
+        self.length = stop_count(options, rate)
+        self.tolerance = options.md_tolerance
+        self.found: list[Stop] = []
+        self.resume = 0
+        """the next stop starts here or later (sample number)"""
+        self.open: tuple[int, float, float] | None = None
+        """the open stop's first sample number, its time (s) and its level (m: the median
+        smoothed MD over its first ``length`` samples)"""
+        self.checked = 0
+        """the open stop's end is not before this sample number"""
+        self.md: list[FloatArray] = []
+        """the open stop's odometer MD up to :attr:`checked`"""
+
+    def needed(self) -> int:
+        """The first sample number the next step looks at."""
+        return self.checked if self.open is not None else self.resume
+
+    def step(
+        self, buffer: dict[str, FloatArray], smooth: FloatArray, base: int, limit: int, final: bool
+    ) -> None:
+        """Find the stops the buffer (first sample number ``base``; smoothing settled below
+        buffer index ``limit``) settles."""
+        md, time = buffer["md"], buffer["time"]
+        while True:
+            if self.open is None:
+                r = self.resume - base
+                found = steady_starts((smooth[r:limit],), (self.tolerance,), self.length)
+                if found.size == 0:
+                    self.resume = base + (limit if final else max(r, limit - self.length + 1))
+                    return
+                s = r + int(found[0])
+                level = float(np.median(smooth[s : s + self.length]))
+                self.open, self.checked = (base + s, float(time[s]), level), base + s
+                self.md = []
+            first, t0, level = self.open
+            b = max(self.checked - base, first - base + self.length)
+            self.md.append(md[self.checked - base : b].copy())
+            out = np.abs(smooth[b:limit] - level) > self.tolerance
+            if not out.any() and not final:
+                self.md.append(md[b:limit].copy())
+                self.checked = base + max(b, limit)
+                return
+            e = b + int(np.argmax(out)) if out.any() else limit
+            self.md.append(md[b:e])
+            median = float(np.median(np.concatenate(self.md)))
+            self.found.append(Stop(first, base + e, median, t0, float(time[e - 1])))
+            self.open, self.md, self.resume = None, [], base + e

@@ -476,7 +476,7 @@ def _qc(tables: Mapping[str, pa.Table]) -> Qc:
         DroppedStation(
             md=d.md, station=d.station, dropped_by=d.by, checks=list(d.checks), reason=d.reason
         )
-        for d in dropped_stations(dropping)
+        for d in dropped_stations([*dropping, tables.get("qc")])
     ]
     return Qc(
         checks=checks,

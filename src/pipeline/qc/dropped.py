@@ -1,8 +1,11 @@
 """The stations a run recorded but dropped: those whose validity checks said drop (a
 :class:`~pipeline.qc.tables.QcSummary` row of status ``drop``, its readings removed before
-compassing) and those compassing could not solve (:class:`~pipeline.tables.CompassRejects`).
+compassing, or one that failed a check of :data:`UNREAD`: it has no readings, whatever the
+check's policy) and those compassing could not solve (:class:`~pipeline.tables.CompassRejects`).
 Neither is in the trajectory, so whatever states a run's QC (the report, the JSON summary,
-the command line, the fleet page) counts and names them from here."""
+the command line, the fleet page) counts and names them from here. A validity drop's reason
+is the detail of its failed :data:`UNREAD` row, when the validity results
+(:class:`~pipeline.qc.tables.QcResults`) are among the tables."""
 
 from __future__ import annotations
 
@@ -12,13 +15,17 @@ from typing import Literal
 
 import pyarrow as pa
 
-from pipeline.qc.tables import is_summary
+from pipeline.qc.tables import QcResults, is_summary
 
 REJECT_COLUMNS = frozenset({"station", "md", "reason"})
 """The columns of a table of stations compassing could not solve."""
 
 MD_DIGITS = 6
 """Two stations dropped at MDs equal to this many decimals of a metre are one."""
+
+UNREAD = ("unread_stop",)
+"""Validity checks whose failure says the station has no readings (a stop the tool made
+that gave none, :mod:`pipeline.gyrocompass.stops`): its row's detail says why."""
 
 
 @dataclass(frozen=True)
@@ -37,6 +44,13 @@ class Dropped:
         """What dropped it, for an engineer: the failed checks' names, or ``compassing``."""
         return ", ".join(self.checks) if self.checks else self.by
 
+    def said(self) -> str:
+        """What dropped it and, for a validity drop with a reason (a stop with no readings),
+        why: the command line's words."""
+        if self.by == "validity" and self.reason:
+            return f"{self.names()} — {self.reason}"
+        return self.names()
+
 
 def is_rejects(table: pa.Table) -> bool:
     """Whether ``table`` has the columns of a table of stations compassing rejected."""
@@ -44,30 +58,34 @@ def is_rejects(table: pa.Table) -> bool:
 
 
 def dropped_stations(tables: Iterable[pa.Table | None]) -> list[Dropped]:
-    """The stations dropped in ``tables`` (validity summaries and compassing rejects; other
-    tables and None are skipped), in MD order, each MD once (the first table naming it
-    wins)."""
+    """The stations dropped in ``tables`` (validity summaries and compassing rejects; the
+    validity results give reasons; other tables and None are skipped), in MD order, each MD
+    once (the first table naming it wins)."""
+    present = [t for t in tables if t is not None]
+    reasons = {
+        (r["station"], round(r["md"], MD_DIGITS)): r["detail"]
+        for t in present
+        if set(QcResults.compiled().schema().names) <= set(t.column_names)
+        for r in t.select(["station", "md", "check", "passed", "detail"]).to_pylist()
+        if r["check"] in UNREAD and r["passed"] is False and r["md"] is not None
+    }
     found: dict[float, Dropped] = {}
-    for table in tables:
-        if table is None:
-            continue
-        for item in _of(table):
+    for table in present:
+        for item in _of(table, reasons):
             found.setdefault(round(item.md, MD_DIGITS), item)
     return [found[md] for md in sorted(found)]
 
 
-def _of(table: pa.Table) -> list[Dropped]:
+def _of(table: pa.Table, reasons: dict[tuple[int, float], str]) -> list[Dropped]:
     if is_summary(table):
-        return [
-            Dropped(
-                float(r["md"]),
-                int(r["station"]),
-                "validity",
-                checks=tuple(c for c in r["failed_checks"].split(",") if c),
-            )
-            for r in table.select(["md", "station", "status", "failed_checks"]).to_pylist()
-            if r["status"] == "drop"
-        ]
+        rows = table.select(["md", "station", "status", "failed_checks"]).to_pylist()
+        out = []
+        for r in rows:
+            checks = tuple(c for c in r["failed_checks"].split(",") if c)
+            if r["status"] == "drop" or any(c in UNREAD for c in checks):
+                why = reasons.get((r["station"], round(r["md"], MD_DIGITS)), "")
+                out.append(Dropped(float(r["md"]), int(r["station"]), "validity", checks, why))
+        return out
     if is_rejects(table):
         return [
             Dropped(float(r["md"]), int(r["station"]), "compassing", reason=r["reason"])

@@ -131,6 +131,11 @@ class QcOptions(_Options, AccelerometerOptions):
         description="frame positions a station lacks of the survey's usual number (the most "
         "common number at its stations), count",
     )
+    unread_stop: Tolerance = Field(
+        Tolerance(policy="drop"),
+        description="a stop the tool made (its depth held) with no dwell long or steady "
+        "enough to read, numbered as a station without readings: stops unread, count",
+    )
     rest_speed: float = Field(
         0.02, gt=0, description="windows: largest |dMD/dt| (LSQ slope) of a stationary one, m/s"
     )
@@ -195,6 +200,7 @@ CHECKS = (
     "rest_acc",
     "recording_end",
     "missing_positions",
+    "unread_stop",
     "motion_rate",
     "motion_accel",
     "gyro_saturation",

@@ -1,6 +1,7 @@
 """Checks of what a survey's recording of its stops holds (a point survey's stations, a
 continuous run's two stops), beside the sensors: the frame position the recording ended in
-(``recording_end``) and the positions each station has (``missing_positions``).
+(``recording_end``), the positions each station has (``missing_positions``) and the stops
+that gave no reading (``unread_stop``).
 
 - ``recording_end``: one row for the dwell the readings record as cut off by the end of the
   recording (:mod:`pipeline.gyrocompass.recording_end`): how much less time it was averaged
@@ -8,7 +9,12 @@ continuous run's two stops), beside the sensors: the frame position the recordin
   it when it was too short to average — against the limit.
 - ``missing_positions``: one row per station (the station of an unaveraged last dwell too,
   when it has no reading): how many frame positions it lacks of the survey's usual number
-  (the most common number of positions at its stations).
+  (the most common number of positions at its stations); not the unread stops', which
+  have their own check.
+- ``unread_stop``: one row per stop the readings record as made but not read
+  (:mod:`pipeline.gyrocompass.stops`: the depth held, no dwell): 1 stop unread against
+  none, the reason with its numbers in the detail; by default its station is dropped, so
+  the run names it among the stations it recorded but dropped.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import pyarrow as pa
 from pipeline.earth.frames import FloatArray
 from pipeline.gyrocompass.positions import usual_positions
 from pipeline.gyrocompass.recording_end import RecordingEnd, recording_end, shortfall
+from pipeline.gyrocompass.stops import UnreadStop, unread_stops
 from pipeline.qc.options import QcOptions
 from pipeline.qc.vector_checks import IntArray, Keys, Rows, limit_rows
 
@@ -26,9 +33,10 @@ from pipeline.qc.vector_checks import IntArray, Keys, Rows, limit_rows
 def recording_checks(
     readings: pa.Table, options: QcOptions, station: IntArray, md: FloatArray
 ) -> tuple[list[Rows], IntArray, FloatArray]:
-    """The rows of both checks (module docstring) for the readings of ``station`` at ``md``
+    """The rows of the checks (module docstring) for the readings of ``station`` at ``md``
     (m, of each reading), and the station and MD of each reading with, after them, the
-    station of an unaveraged last dwell that has no reading (the stations to summarise)."""
+    station of an unaveraged last dwell that has no reading and those of the unread stops
+    (the stations to summarise)."""
     end = recording_end(readings)
     listed, at = station, md
     if end is not None and not np.isin(end.station, station):
@@ -36,7 +44,26 @@ def recording_checks(
     rows = [_positions(station, listed, at, options, end)]
     if end is not None:
         rows.insert(0, _end(readings, end, options))
+    unread = unread_stops(readings)
+    if unread:
+        rows.append(_unread(unread, options))
+        listed = np.append(listed, [u.station for u in unread])
+        at = np.append(at, [u.md for u in unread])
     return rows, listed, at
+
+
+def _unread(unread: list[UnreadStop], options: QcOptions) -> Rows:
+    """The ``unread_stop`` row of every unread stop."""
+    n = len(unread)
+    nan = np.full(n, np.nan)
+    keys = Keys(
+        np.array([u.station for u in unread]), np.full(n, -1), np.array([u.md for u in unread]),
+        nan, nan,
+    )  # fmt: skip
+    zero = np.zeros(n)
+    detail = np.array([u.reason() for u in unread], dtype=object)
+    tolerance = options.unread_stop.of(zero, zero)
+    return Rows("unread_stop", "stops", np.ones(n), zero, tolerance, np.ones(n, bool), detail, keys)
 
 
 def _end(readings: pa.Table, end: RecordingEnd, options: QcOptions) -> Rows:

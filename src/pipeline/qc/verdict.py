@@ -107,7 +107,7 @@ def qc_verdict(
     tally = qc_tally(tables, others, dropped)
     said = [_checks(tally)] if tally.evaluated else []
     if tally.dropped:
-        shown = ", ".join(f"MD {d.md:.2f} m: {d.names()}" for d in tally.dropped[:SHOWN])
+        shown = ", ".join(f"MD {d.md:.2f} m: {d.said()}" for d in tally.dropped[:SHOWN])
         more = f", and {len(tally.dropped) - SHOWN} more" if len(tally.dropped) > SHOWN else ""
         said.append(f"{_count(len(tally.dropped), 'station')} dropped ({shown}{more})")
     return "QC: " + "; ".join(said) if said else None

@@ -36,6 +36,7 @@ CHECK_TITLES: dict[str, CheckTitle] = {
         True,
     ),
     "missing_positions": CheckTitle("Frame positions per station", "positions missing", True),
+    "unread_stop": CheckTitle("Stop without a reading", "stops unread", True),
     "motion_rate": CheckTitle("Turn rate while moving", "largest |ω|", True),
     "motion_accel": CheckTitle("Shocks while moving", "largest ||a| − g₀|", True),
     "gyro_saturation": CheckTitle("Gyro range", "largest |gyro axis|", True),

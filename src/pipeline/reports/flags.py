@@ -165,6 +165,10 @@ CHECKS: dict[str, str] = {
     "missing_positions": "the station has fewer frame positions than the survey's other "
     "stations (the recording ended before its last positions, or they were too short to "
     "average): its azimuth rests on a different, weaker set of positions.",
+    "unread_stop": "the tool stopped here (its depth held) but no frame position was held "
+    "long and steadily enough to be averaged — the stop was too short, or the frame or the "
+    "tool was still moving or vibrating: the station has no reading, so it is in neither the "
+    "listing nor the trajectory.",
     "motion_rate": "while moving, the tool turned faster than the limit: a spin or a shock.",
     "motion_accel": "while moving, the tool accelerated more than the limit: shocks or jerks.",
     "gyro_saturation": "a gyro reading reached the sensor's full scale: those data are clipped.",
@@ -197,6 +201,7 @@ def compass_flag(name: str) -> Flag:
 LABELS: dict[str, str] = {
     "recording_end": "cut short by end of recording",
     "missing_positions": "frame positions missing",
+    "unread_stop": "stop not read",
 }
 """How the listing labels the failure of a check that is no measurement (others: the
 check's name and "failed")."""

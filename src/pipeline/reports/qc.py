@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pipeline.qc.dropped import Dropped
+from pipeline.qc.dropped import UNREAD, Dropped
 from pipeline.qc.tables import diagnoses
 from pipeline.reports.check_titles import check_title, printed_unit
 from pipeline.reports.document import Column, Table, Verdict, fmt_sig
@@ -541,6 +541,8 @@ def _why(station: Dropped, qc: pa.Table | None) -> str:
         meaning = CHECKS.get(check, f"the check {check!r} found a value beyond its limit.")
         rows = [r for r in failed if r["check"] == check]
         found = f" {_finding(rows)}." if rows else ""
+        if check in UNREAD and station.reason:
+            found = f" {station.reason[:1].upper()}{station.reason[1:]}."
         words.append(f"{meaning[:1].upper()}{meaning[1:]}{found}")
     return " ".join(words)
 

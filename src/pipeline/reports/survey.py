@@ -109,7 +109,7 @@ class SurveyTables:
 
     def dropped(self) -> list[Dropped]:
         """The stations recorded but dropped by the validity checks or compassing."""
-        return dropped_stations([self.qc_summary, self.rejects])
+        return dropped_stations([self.qc_summary, self.rejects, self.qc])
 
     def qc_sources(self) -> QcSources:
         return QcSources(

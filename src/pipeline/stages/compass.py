@@ -17,6 +17,7 @@ from pipeline.gyrocompass.readings import ReadingOptions
 from pipeline.gyrocompass.readings_stream import stream_position_readings
 from pipeline.gyrocompass.recording_end import dropped_warning, recording_end
 from pipeline.gyrocompass.solve import compass
+from pipeline.gyrocompass.stops import unread_stops
 from pipeline.gyrocompass.systematic import ToolErrors
 from pipeline.hookspecs import hookimpl
 from pipeline.provenance import StageSetup
@@ -39,15 +40,17 @@ def readings_stage(
 ) -> dict[str, pa.Table]:
     """Average each station's frame positions (transients trimmed) from the streamed
     samples, a station at a time; no samples, no readings. A frame position the recording
-    ended in too soon to average is warned of (:class:`SurveyCheckWarning`)."""
+    ended in too soon to average, and a stop the tool made without a dwell to read
+    (:mod:`~pipeline.gyrocompass.stops`), are warned of (:class:`SurveyCheckWarning`)."""
     readings = stream_position_readings(inputs["samples"], params)
     end = recording_end(readings)
-    if end is not None and not end.kept:
-        warnings.warn(
-            f"stage {ctx.stage_id!r}: {dropped_warning(end, params.min_dwell)}",
-            SurveyCheckWarning,
-            stacklevel=2,
-        )
+    said = [dropped_warning(end, params.min_dwell)] if end is not None and not end.kept else []
+    said += [
+        f"{stop.reason()}; it is numbered station {stop.station} and has no reading"
+        for stop in unread_stops(readings)
+    ]
+    for text in said:
+        warnings.warn(f"stage {ctx.stage_id!r}: {text}", SurveyCheckWarning, stacklevel=2)
     return {"readings": readings}
 
 
