@@ -32,9 +32,11 @@ from pipeline.hookspecs import hookimpl
 from pipeline.io.limits import MAX_COLUMNS
 from pipeline.io.north import stated_north
 from pipeline.io.threads import reader_threads
+from pipeline.io.uncertainty_columns import tie_on_record
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
+from pipeline.uncertainty.tieon import TIE_ON_KEY, TieOnRecord
 from pipeline.well import NORTH_WORDS, WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
@@ -81,6 +83,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, table.schema)
+    _check_tie_on(path, table.schema)
     return table, _well(path, table.schema)
 
 
@@ -105,6 +108,7 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     except (OSError, pa.ArrowException) as exc:
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, schema)
+    _check_tie_on(path, schema)
     buffer = 0 if _largest_group(meta) <= READ_WHOLE else READ_BUFFER
 
     def batches() -> Iterator[pa.RecordBatch]:
@@ -155,6 +159,14 @@ def _check_bounds(path: Path) -> tuple[pq.FileMetaData, int]:
             f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
         )
     return meta, decoded
+
+
+def _check_tie_on(path: Path, schema: pa.Schema) -> None:
+    """The tie-on record of the file's uncertainty columns (:data:`TIE_ON_KEY`), where it has
+    one, is the record gyropipe writes: else an :class:`InputFileError` saying what is wrong."""
+    raw = (schema.metadata or {}).get(TIE_ON_KEY)
+    if raw is not None:
+        tie_on_record(path, raw.decode(errors="replace"), 0, TieOnRecord)
 
 
 def _unreadable(path: Path, exc: Exception) -> InputFileError:

@@ -9,8 +9,8 @@ record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the 
 (:data:`~pipeline.uncertainty.stated.CARRIED_KEY`). A family of columns
 (:data:`~pipeline.uncertainty.stated.FAMILIES`) is carried whole or not at all: one with
 columns missing, in another unit, at a confidence level it does not state, holding a value
-no such column can hold (a negative variance, an infinite size) or in a north other than
-the azimuths' is refused, and the refusal said — a file's uncertainty is never dropped
+no such column can hold (a negative variance, an infinite size), a station's values partly
+null, covariances of no covariance matrix, or in a north other than the azimuths' is refused, and the refusal said — a file's uncertainty is never dropped
 quietly. Lengths m, covariances m².
 """
 
@@ -44,6 +44,12 @@ FLAG_COLUMN = "outside_validity"
 TIE_MD_M = 1e-3
 """A tie-on record's first MD agrees with its survey's first station within this (m): a
 text file rounds MDs to 0.1 mm."""
+
+PSD_M2 = 2e-8
+"""How far below 0 (m²) a covariance's smallest eigenvalue may lie from its file's rounding:
+8 decimals of m², the writers' (an error of at most 5e-9 an entry, 1.5e-8 on an eigenvalue)."""
+PSD_REL = 1e-6
+"""And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +121,9 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
         if bad is not None:
             md = float(stations.column("md")[bad].as_py())
             return f"{name} at MD {md:.2f} m holds {stations.column(name)[bad].as_py()!r}"
+    problem = _row_problem(stations, family)
+    if problem is not None:
+        return problem
     if "ellipse_azimuth" in present:
         own = (stations.schema.field("ellipse_azimuth").metadata or {}).get(NORTH_KEY)
         azi = (stations.schema.field("azi").metadata or {}).get(NORTH_KEY)
@@ -142,6 +151,42 @@ def _bad_row(name: str, values: np.ndarray) -> int | None:
         ok &= ~defined | (values < 180)
     bad = np.flatnonzero(~ok)
     return int(bad[0]) if bad.size else None
+
+
+def _row_problem(stations: pa.Table, family: Family) -> str | None:
+    """Why a station's values of ``family`` (all present, each a value such a column holds)
+    are not one statement: some null where others are not (a hand edit's emptied cell:
+    the rest then belongs to no σ), or covariances of no covariance matrix (an eigenvalue
+    below 0 by more than the file's rounding, :data:`PSD_M2`: ``cov_ne² > cov_nn·cov_ee``)."""
+    values = np.column_stack(
+        [stations.column(c).to_numpy(zero_copy_only=False) for c in family.columns]
+    ).astype(np.float64)
+    null = np.isnan(values)
+    md = stations.column("md").to_numpy(zero_copy_only=False)
+    for row in np.flatnonzero(null.any(axis=1) & ~null.all(axis=1)).tolist():
+        empty = [c for c, n in zip(family.columns, null[row], strict=True) if n]
+        return (
+            f"at MD {md[row]:.2f} m {_listed(empty)} null where the other {family.name} "
+            "columns are not (a station's are all stated or all null)"
+        )
+    if family.name != "covariance":
+        return None
+    whole = ~null.any(axis=1)
+    nn, ne, nv, ee, ev, vv = values[whole].T
+    matrices = np.stack(
+        [np.stack(r, axis=-1) for r in ((nn, ne, nv), (ne, ee, ev), (nv, ev, vv))], axis=-2
+    )
+    least = np.linalg.eigvalsh(matrices)[:, 0] if len(nn) else np.zeros(0)
+    allowed = PSD_M2 + PSD_REL * np.max(np.stack((nn, ee, vv)), axis=0, initial=0.0)
+    bad = np.flatnonzero(least < -allowed)
+    if not bad.size:
+        return None
+    row = int(np.flatnonzero(whole)[bad[0]])
+    return (
+        f"at MD {md[row]:.2f} m the covariances are no covariance matrix: its smallest "
+        f"eigenvalue is {least[bad[0]]:.3g} m² (a covariance has none below 0; check "
+        "cov_ne² ≤ cov_nn·cov_ee and the other off-diagonal entries)"
+    )
 
 
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:

@@ -175,10 +175,11 @@ def statement_of(table: pa.Table) -> Statement | None:
     md = values("md")
     if "ellipse_major" in names:
         major = values("ellipse_major")
-    else:  # covariances alone (a WITSML matrixCov)
+    else:  # covariances alone (a WITSML matrixCov); no size where one is not finite
         nn, ne, ee = (values(c) for c in ("cov_nn", "cov_ne", "cov_ee"))
+        finite = np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee)
+        nn, ne, ee = (np.where(finite, v, np.nan) for v in (nn, ne, ee))
         major = ellipses(nn, ne, ee, np.zeros_like(nn)).semi_major
-        major[~(np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee))] = np.nan
     conf = values("ellipse_major_conf") if "ellipse_major_conf" in names else None
     surveys = table.column("survey").to_pylist() if "survey" in names else None
 
