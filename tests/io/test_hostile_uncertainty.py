@@ -226,13 +226,22 @@ def test_a_witsml_matrix_cov_of_no_covariance_is_not_carried(witsml: str, tmp_pa
     assert json.loads((tmp_path / "out" / "summary.json").read_text()).get("uncertainty") is None
 
 
-def parquet_listing(tmp_path: Path, tie: bytes | None, nn: list[float] | None = None) -> Path:
-    """The listing's stations as a Parquet table whose metadata holds ``tie`` as its tie-on
-    record, ``nn`` its north variances."""
-    table = gp.read_table(listing(tmp_path))
+def parquet_listing(
+    tmp_path: Path,
+    tie: bytes | None,
+    nn: list[float] | None = None,
+    nv_unit: bytes = b"m2",
+    rows: int = len(ROWS),
+) -> Path:
+    """The listing's first ``rows`` stations as a Parquet table whose metadata holds ``tie``
+    as its tie-on record, ``nn`` its north variances, ``nv_unit`` the unit of cov_nv."""
+    table = gp.read_table(listing(tmp_path)).slice(0, rows)
     if nn is not None:
         i = table.schema.get_field_index("cov_nn")
         table = table.set_column(i, table.schema.field(i), pa.array(nn, pa.float64()))
+    i = table.schema.get_field_index("cov_nv")
+    field = table.schema.field(i)
+    table = table.set_column(i, field.with_metadata({**field.metadata, b"unit": nv_unit}), table[i])
     meta = dict(table.schema.metadata or {})
     if tie is not None:
         meta[b"gyropipe.uncertainty_tie_on"] = tie
@@ -269,3 +278,19 @@ def test_infinite_covariances_read_without_a_numpy_warning(tmp_path: Path) -> No
         frame = gp.read(path)
     assert frame.attrs["uncertainty"]["at_td"]["md"] == 700.0
     assert frame.attrs["uncertainty"]["stations_without_sigma"] == 1
+
+
+def test_a_parquet_covariance_in_a_length_unit_is_refused_by_its_column(tmp_path: Path) -> None:
+    """Before, the table was read, and ``gyropipe convert`` wrote a CSV column cov_nv[FT]
+    that no reader reads back (a variance in a length unit)."""
+    path = parquet_listing(tmp_path, TIE.encode(), nv_unit=b"FT")
+    with pytest.raises(InputFileError, match=r"in\.parquet \(column 'cov_nv'\): unit 'FT': "):
+        gp.read(path)
+
+
+def test_stations_without_rows_with_a_tie_on_record_integrate(tmp_path: Path) -> None:
+    """A table of no stations keeping its covariance columns and tie-on record (a filter
+    that kept none): before, minimum curvature died of an IndexError."""
+    path = parquet_listing(tmp_path, TIE.encode(), rows=0)
+    got = gp.minimum_curvature(gp.read_table(path))
+    assert got.num_rows == 0

@@ -10,8 +10,9 @@ record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the 
 (:data:`~pipeline.uncertainty.stated.FAMILIES`) is carried whole or not at all: one with
 columns missing, in another unit, at a confidence level it does not state, holding a value
 no such column can hold (a negative variance, an infinite size), a station's values partly
-null, covariances of no covariance matrix, or in a north other than the azimuths' is refused, and the refusal said — a file's uncertainty is never dropped
-quietly. Lengths m, covariances m².
+null, covariances of no covariance matrix, or in a north other than the azimuths' is
+refused, and the refusal said — a file's uncertainty is never dropped quietly.
+Lengths m, covariances m².
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from pipeline.uncertainty.stated import (
     WORDS,
     Family,
     file_statements,
+    unit_of,
 )
 from pipeline.uncertainty.tieon import TIE_ON_KEY, TieOnRecord, tie_on_of, with_tie_on
 
@@ -110,7 +112,7 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
         field = stations.schema.field(name)
         meta = field.metadata or {}
         unit = meta.get(UNIT_KEY, b"").decode()
-        wanted = _unit(name, family)
+        wanted = unit_of(name)
         if unit != wanted:
             return f"{name} in {unit or 'no unit'!r}, expected {wanted!r}"
         if family.dimensions is not None and CONFIDENCE_KEY not in meta:
@@ -131,13 +133,6 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
             said = own.decode() if own else "none"
             return f"ellipse_azimuth in north reference {said!r}, not the azimuths'"
     return None
-
-
-def _unit(name: str, family: Family) -> str:
-    """The unit a column of ``family`` is carried in."""
-    if family.scale == "1 sigma squared":
-        return "m2"
-    return "deg" if name == "ellipse_azimuth" else "m"
 
 
 def _bad_row(name: str, values: np.ndarray) -> int | None:
@@ -192,8 +187,8 @@ def _row_problem(stations: pa.Table, family: Family) -> str | None:
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
     """The file's tie-on record where each survey's first station is its (a refusal in
     ``refused`` where it is not: it states another table's)."""
-    if TIE_ON_KEY not in (stations.schema.metadata or {}):
-        return None
+    if TIE_ON_KEY not in (stations.schema.metadata or {}) or stations.num_rows == 0:
+        return None  # (no stations: no survey starts, and no uncertainty to state)
     record = tie_on_of(stations)
     assert record is not None
     md = stations.column("md").to_numpy(zero_copy_only=False)

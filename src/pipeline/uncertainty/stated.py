@@ -35,6 +35,7 @@ __all__ = [
     "is_carried",
     "model_words",
     "statement_of",
+    "unit_of",
     "with_statements",
 ]
 
@@ -65,6 +66,14 @@ WORDS = {
     "vertical_conf": "vertical error half-interval",
 }
 """The uncertainty columns, each described in words (ASCII: a LAS file's descriptions)."""
+
+
+def unit_of(name: str) -> str:
+    """The unit an uncertainty column (:data:`WORDS`) is in: m² for the covariances, deg for
+    ``ellipse_azimuth``, m for the sizes."""
+    return "m2" if name.startswith("cov_") else "deg" if name == "ellipse_azimuth" else "m"
+
+
 AT_CONFIDENCE = {"ellipse_major_conf": 2, "ellipse_minor_conf": 2, "vertical_conf": 1}
 """The columns at the confidence level, by the dimensions of their region."""
 REGION = {2: "2-D, chi-square of 2 dof", 1: "1-D, two-sided normal"}
