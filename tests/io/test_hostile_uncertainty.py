@@ -2,8 +2,9 @@
 them: a tie-on record holding NaN, an infinite MD, a negative size or a basis its fields
 contradict; a statement (``# tie_on=``, ``# confidence=``, a WITSML extension value) given
 twice with different values; covariances of no covariance matrix (cov_ne² > cov_nn·cov_ee),
-or a station's covariance with one entry emptied (a -999.25 null, a missing element); a
-Parquet table's tie-on record that is no JSON; infinite covariances read by ``gp.read``.
+or a station's covariance with one entry emptied (a -999.25 null, a missing element); 1σ
+ellipses unlike the covariances beside them; a Parquet table's tie-on record that is no
+JSON, a variance in a length unit, no rows; infinite covariances read by ``gp.read``.
 Each is refused at its file and line, or warned of and not carried — never a NumPy warning,
 a pydantic traceback, or a covariance no matrix has in a deliverable. Inputs are written
 here; expected values are their own text."""
@@ -15,6 +16,7 @@ import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -294,3 +296,57 @@ def test_stations_without_rows_with_a_tie_on_record_integrate(tmp_path: Path) ->
     path = parquet_listing(tmp_path, TIE.encode(), rows=0)
     got = gp.minimum_curvature(gp.read_table(path))
     assert got.num_rows == 0
+
+
+def with_ellipses(
+    rows: tuple[str, ...], edit: dict[int, tuple[float, float]] | None = None
+) -> tuple[str, ...]:
+    """``rows`` with each station's 1σ ellipse (major, minor, azimuth, σ_V) of its covariance
+    (the eigen-decomposition of its horizontal block, computed here, 4 decimals as the
+    writers write m), ``edit`` replacing a row's (major, minor)."""
+    out = []
+    for k, row in enumerate(rows):
+        nn, ne, _, ee, _, vv = (float(v) for v in row.split(",")[3:])
+        values, vectors = np.linalg.eigh(np.array([[nn, ne], [ne, ee]]))
+        major, minor = np.sqrt(values[1]), np.sqrt(values[0])
+        azimuth = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1])) % 180.0
+        major, minor = (edit or {}).get(k, (major, minor))
+        out.append(f"{row},{major:.4f},{minor:.4f},{azimuth:.6f},{np.sqrt(vv):.4f}")
+    return tuple(out)
+
+
+def ellipse_listing(tmp_path: Path, rows: tuple[str, ...]) -> Path:
+    path = listing(tmp_path, rows=rows)
+    names = ("ellipse_major[m]", "ellipse_minor[m]", "ellipse_azimuth[deg]", "sigma_v[m]")
+    text = path.read_text().replace("cov_vv[m2]\n", "cov_vv[m2]," + ",".join(names) + "\n")
+    path.write_text(text)
+    return path
+
+
+def test_ellipses_beside_their_covariances_are_carried(tmp_path: Path) -> None:
+    """A listing stating both, as gyropipe writes them (rounded): both carried."""
+    rows = with_ellipses(ROWS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        got = gp.run(SURVEY, ellipse_listing(tmp_path, rows)).tables["trajectory.trajectory"]
+    assert [float(r.split(",")[9]) for r in rows] == got.column("ellipse_major").to_pylist()
+
+
+@pytest.mark.parametrize(
+    ("edit", "said"),
+    [
+        ({1: (0.1, 0.05)}, r"at MD 600.00 m ellipse_major is 0.1000 m, the covariances' 0.28"),
+        ({2: (0.3, 0.5)}, r"at MD 700.00 m ellipse_minor 0.5 m exceeds ellipse_major 0.3 m"),
+    ],
+)
+def test_ellipses_unlike_their_covariances_are_not_carried(
+    tmp_path: Path, edit: dict[int, tuple[float, float]], said: str
+) -> None:
+    """Before, both were carried and the summary's largest ellipse was the edited
+    ellipse_major's, whatever the covariances beside it said."""
+    out = tmp_path / "out"
+    with pytest.warns(InputFileWarning) as caught:
+        gp.run(SURVEY, ellipse_listing(tmp_path, with_ellipses(ROWS, edit)), out=out)
+    refused = [str(w.message) for w in caught if "not carried" in str(w.message)]
+    assert len(refused) == 1 and re.search(said, refused[0]), refused
+    assert json.loads((out / "summary.json").read_text()).get("uncertainty") is None

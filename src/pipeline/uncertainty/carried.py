@@ -11,8 +11,9 @@ record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the 
 columns missing, in another unit, at a confidence level it does not state, holding a value
 no such column can hold (a negative variance, an infinite size), a station's values partly
 null, covariances of no covariance matrix, or in a north other than the azimuths' is
-refused, and the refusal said — a file's uncertainty is never dropped quietly.
-Lengths m, covariances m².
+refused; so are 1σ ellipses that are not those of the covariances beside them (or whose
+semi-minor axis is the longer), and the refusal said — a file's uncertainty is never
+dropped quietly. Lengths m, covariances m².
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.uncertainty.ellipse import ellipses
 from pipeline.uncertainty.stated import (
     CARRIED_KEY,
     CONFIDENCE_KEY,
@@ -50,6 +52,12 @@ text file rounds MDs to 0.1 mm."""
 PSD_M2 = 2e-8
 """How far below 0 (m²) a covariance's smallest eigenvalue may lie from its file's rounding:
 8 decimals of m², the writers' (an error of at most 5e-9 an entry, 1.5e-8 on an eigenvalue)."""
+ELLIPSE_M = 1e-3
+"""How far (m) a 1σ size may lie from the one its covariances give, or a semi-minor axis
+above its semi-major: 0.1 mm rounding of each, and of the covariances, 8 decimals of m²
+(√5e-9 ≈ 0.07 mm at a size near 0), well within."""
+ELLIPSE_REL = 1e-3
+"""And in proportion to the size (a file written to fewer significant digits)."""
 PSD_REL = 1e-6
 """And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 
@@ -86,6 +94,10 @@ def carried_uncertainty(stations: pa.Table) -> Carried:
                 kept.extend(present)
             else:
                 refused.append(f"columns {_listed(present)}: {problem}")
+    disagree = _disagreement(stations, kept)
+    if disagree is not None:
+        refused.append(f"columns {_listed(kept)}: {disagree}")
+        kept = []
     if kept:
         try:
             file_statements(pa.schema([stations.schema.field(c) for c in kept]))
@@ -182,6 +194,44 @@ def _row_problem(stations: pa.Table, family: Family) -> str | None:
         f"eigenvalue is {least[bad[0]]:.3g} m² (a covariance has none below 0; check "
         "cov_ne² ≤ cov_nn·cov_ee and the other off-diagonal entries)"
     )
+
+
+def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
+    """Why the 1σ ellipses (``ellipse_major``, ``ellipse_minor``, ``sigma_v``) of ``kept``
+    are not those of its covariances, kept with them (two uncertainties, a hand edit's), to
+    :data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of a size; or a semi-minor axis longer than
+    its semi-major (no such ellipse) beyond :data:`ELLIPSE_M`; None where they agree."""
+    if "ellipse_major" not in kept:
+        return None
+
+    def values(name: str) -> np.ndarray:
+        return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
+
+    md = values("md")
+    major, minor, sigma_v = (values(c) for c in ("ellipse_major", "ellipse_minor", "sigma_v"))
+    longer = np.flatnonzero(minor > major + ELLIPSE_M)
+    if longer.size:
+        row = int(longer[0])
+        return (
+            f"at MD {md[row]:.2f} m ellipse_minor {minor[row]:g} m exceeds ellipse_major "
+            f"{major[row]:g} m (no ellipse's semi-minor axis is its longer)"
+        )
+    if "cov_nn" not in kept:
+        return None
+    of = ellipses(*(values(c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
+    for name, stated, computed in (
+        ("ellipse_major", major, of.semi_major),
+        ("ellipse_minor", minor, of.semi_minor),
+        ("sigma_v", sigma_v, of.sigma_v),
+    ):
+        off = np.abs(stated - computed) > ELLIPSE_M + ELLIPSE_REL * np.abs(computed)
+        if (bad := np.flatnonzero(off)).size:  # (NaN compares false: no σ, nothing to agree)
+            row = int(bad[0])
+            return (
+                f"at MD {md[row]:.2f} m {name} is {stated[row]:.4f} m, the covariances' "
+                f"{computed[row]:.4f} m (the file states two uncertainties that disagree)"
+            )
+    return None
 
 
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
