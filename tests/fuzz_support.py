@@ -3,7 +3,9 @@ the CLI uses. Shared by ``tests/test_fuzz_inputs.py`` (a few hundred inputs) and
 ``benchmarks/fuzz_inputs.py`` (the long run).
 
 Every input starts from a valid seed file (``examples/``, ``tests/data``, ``pipelines/`` or
-written by gyropipe's own writers from a small simulation) and is mutated a few times:
+written by gyropipe's own writers from a small simulation, or from a listing stating its
+covariances, error model and tie-on: the carried-uncertainty read paths of CSV, WITSML
+and Parquet) and is mutated a few times:
 bytes flipped, inserted or deleted, truncated, lines deleted, duplicated or swapped,
 columns swapped, numbers replaced by NaN/inf/huge/odd spellings, units swapped, the file
 emptied or replaced by binary junk, re-encoded (UTF-16, latin-1, CRLF, BOM); tables
@@ -367,6 +369,19 @@ MD (m),Inc (deg),Azi (deg),TVD (m),Survey Type
 """
 """A vendor's listing whose Survey Type column names its tie-in, an interpolation and the
 projection to TD, its north grid, its survey two days."""
+UNCERTAINTY = b"""# confidence=0.95
+# error_model=TEST-GYRO rev 2
+# tie_on={"surveys":[{"md":500.0,"basis":"not included"}]}
+north_reference: true
+md[m],inc[deg],azi[deg],cov_nn[m2],cov_ne[m2],cov_nv[m2],cov_ee[m2],cov_ev[m2],cov_vv[m2]
+500,10,30,0.01,0.001,0.0005,0.02,0.0002,0.004
+600,12,32,0.04,0.004,0.002,0.08,0.0008,0.016
+700,14,34,,,,,,
+800,16,36,0.16,0.016,0.008,0.32,0.0032,0.064
+"""
+"""A trajectory listing tied on at 500 m MD stating its NEV covariance (one station without),
+error model, confidence and tie-on (the carried-uncertainty read paths: written again as
+WITSML matrixCov with its extension values, and as Parquet with its tie-on record)."""
 
 
 INPUT_KIND_NAMES = (
@@ -398,6 +413,7 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
     stations_csv = (ROOT / "examples/stations-j-well.csv").read_bytes()
     (work / "stations-j-well.csv").write_bytes(stations_csv)  # read by the stations plan
     readings = registry.read(_put(work, "readings.csv", readings_csv), "readings")[0]
+    carried = registry.read(_put(work, "uncertainty.csv", UNCERTAINTY), "stations")[0]
     las_data = ROOT / "tests/data/las"
     kinds = [
         InputKind(
@@ -440,6 +456,7 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
                 Seed("example", stations_csv),
                 Seed("sim", _written(registry, "csv", stations, work, "s.csv")),
                 Seed("listing", LISTING),
+                Seed("uncertainty", UNCERTAINTY),
             ),
         ),
         InputKind(
@@ -469,13 +486,22 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             ".parquet",
             "binary",
             None,
-            tuple(
-                Seed(name, _written(registry, "parquet", table, work, f"{name}.parquet"), table=t)
-                for name, table, t in (
-                    ("stations", stations, stations),
-                    ("samples", samples, samples),
-                    ("readings", readings, readings),
-                )
+            (
+                *(
+                    Seed(
+                        name, _written(registry, "parquet", table, work, f"{name}.parquet"), table=t
+                    )
+                    for name, table, t in (
+                        ("stations", stations, stations),
+                        ("samples", samples, samples),
+                        ("readings", readings, readings),
+                    )
+                ),
+                Seed(  # named by its kind, as the others: a stations file's covariances
+                    "stations",
+                    _written(registry, "parquet", carried, work, "uncertainty.parquet"),
+                    table=carried,
+                ),
             ),
         ),
         InputKind(
@@ -486,6 +512,7 @@ def build_kinds(registry: Registry, work: Path) -> dict[str, InputKind]:
             (
                 Seed("sim", _written(registry, "witsml", stations, work, "s.xml")),
                 Seed("store", STORE_TRAJECTORY),
+                Seed("uncertainty", _written(registry, "witsml", carried, work, "u.xml")),
             ),
         ),
         InputKind(

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
@@ -351,6 +352,8 @@ def test_figures_edited_in_batch_json_are_not_shown(tmp_path: Path) -> None:
     )
 
 
+DROPPED = {"md": 1234.5, "station": 7, "by": "validity", "checks": ["gravity_total"]}
+"""A station dropped, as a worker records it in ``batch.json``."""
 EDITED_FIGURES = {
     "a clearance level of markup": {
         "clearance": {"sf": 1.0, "offset": "X", "md": 1.0, "level": "<script>x</script>"}
@@ -364,6 +367,23 @@ EDITED_FIGURES = {
     "a pipeline not text": {"pipeline": {"name": "bare"}},
     "an instrument not text": {
         "drift": [{"rate_deg_h": 0.1, "sigma_deg_h": 0.01, "instrument": ["<i>g</i>"]}]
+    },
+    **{
+        f"QC: {what}": {
+            "qc": {"evaluated": 10, "failed": {}, "stations": [], "windows": 0, "dropped": []} | qc
+        }
+        for what, qc in {
+            "a dropped station at MD NaN": {"dropped": [{**DROPPED, "md": math.nan}]},
+            "a dropped station at MD inf": {"dropped": [{**DROPPED, "md": math.inf}]},
+            "a station index of 7.5": {"dropped": [{**DROPPED, "station": 7.5}]},
+            "checks a text (its letters read as checks)": {
+                "dropped": [{**DROPPED, "checks": "gravity_total"}]
+            },
+            "dropped by no stage that drops": {"dropped": [{**DROPPED, "by": "me"}]},
+            "a negative count": {"evaluated": -4},
+            "a count of NaN": {"failed": {"gravity_total": math.nan}},
+            "stations a text": {"stations": "abc"},
+        }.items()
     },
 }
 
@@ -387,6 +407,33 @@ def test_figures_of_the_wrong_kinds_in_batch_json_are_not_shown(tmp_path: Path) 
         assert "<script>" not in page and "<i>" not in page, what
         assert "href=" not in page, what  # the well has no report: nothing is linked
         assert cell(rows, "SHORT", "clearance") == "—", what
+
+
+def test_a_published_rejects_table_of_a_null_md_is_named_not_a_traceback(
+    tmp_path: Path,
+) -> None:
+    """A well published before figures were recorded, whose compassing rejects (Parquet)
+    hold a station of no MD (a table edited, or another writer's): the page is written and
+    names the table it could not read — before, ``gyropipe status --html`` died of a
+    TypeError; a NaN MD was shown as 'MD nan m'."""
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
+    marker, manifest = out / "SHORT" / "batch.json", out / "SHORT" / "run.json"
+    record = json.loads(marker.read_text())
+    del record["figures"]  # as an earlier version wrote it
+    marker.write_text(json.dumps(record))
+    run = json.loads(manifest.read_text())
+    run["outputs"].append({"file": "compass.rejects.parquet"})
+    manifest.write_text(json.dumps(run))
+    for md, said in ((None, "md None"), (math.nan, "md nan")):
+        rejects = {"station": [3], "md": pa.array([md], pa.float64()), "reason": ["no fix"]}
+        pq.write_table(pa.table(rejects), out / "SHORT" / "compass.rejects.parquet")
+        gyropipe_cli("status", out, "--html", check=True)
+        rows = page_rows(out / "fleet.html")
+        assert (
+            f"compass.rejects.parquet cannot be read (row 0: {said}, expected a finite MD (m))"
+        ) in cell(rows, "SHORT", "status"), said
+        assert cell(rows, "SHORT", "qc") == "—", said
 
 
 def test_a_damaged_run_json_of_a_well_without_recorded_figures_is_shown(

@@ -44,7 +44,7 @@ from pipeline.drift.tables import CalibrationResult, CorrectedFreeGyroReadings, 
 from pipeline.graph import Plan
 from pipeline.hashing import open_regular, regular_bytes
 from pipeline.manifest import MANIFEST
-from pipeline.qc.dropped import REJECT_COLUMNS, Dropped, dropped_stations
+from pipeline.qc.dropped import DROPPED_BY, REJECT_COLUMNS, Dropped, dropped_stations
 from pipeline.qc.tables import QcResults, QcSummary
 from pipeline.qc.verdict import INOUT_COLUMNS, QcTally, inout_checks, qc_tally
 from pipeline.survey.courses import MIN_COURSE, max_dls
@@ -193,14 +193,20 @@ def figures_of_record(record: Any) -> WellFigures | None:
 
 
 def _dropped(record: Mapping[str, Any]) -> Dropped:
-    """A station dropped as :func:`figures_record` wrote it."""
-    return Dropped(**{**record, "checks": tuple(record.get("checks", ()))})
+    """A station dropped as :func:`figures_record` wrote it (its checks a list: a text's
+    letters are no check names)."""
+    checks = record.get("checks", [])
+    if not isinstance(checks, list):
+        raise TypeError(f"checks {checks!r}: expected a list of check names")
+    return Dropped(**{**record, "checks": tuple(checks)})
 
 
 def _well_typed(figures: WellFigures) -> bool:
-    """Whether the numbers of ``figures`` are numbers, its texts text, its clearance level
-    one of the rule's and its reports plain file names of the well's directory (a record
-    read from a file could hold anything: the page shows these, and links the reports)."""
+    """Whether the numbers of ``figures`` are numbers (its QC counts and station indices
+    integers ≥ 0, its dropped stations' MDs finite), its texts text, what dropped a station one of
+    :data:`~pipeline.qc.dropped.DROPPED_BY`, its clearance level one of the rule's and its
+    reports plain file names of the well's directory (a record read from a file could hold
+    anything: the page shows these, and links the reports)."""
     numbers: list[object] = [figures.td_md, figures.td_tvd, figures.max_dls]
     texts: list[object] = [*figures.reports, *figures.problems]
     optional: list[object] = [figures.pipeline, figures.missing]
@@ -210,18 +216,32 @@ def _well_typed(figures: WellFigures) -> bool:
     numbers += [x for d in figures.drift or () for x in (d.rate_deg_h, d.sigma_deg_h)]
     optional += [d.instrument for d in figures.drift or ()]
     texts += [t for g in figures.gates or () for t in (g.name, g.status, g.description)]
+    counts: list[object] = []
+    mds: list[object] = []
     if figures.qc is not None:
-        numbers += [figures.qc.evaluated, figures.qc.windows, *figures.qc.failed.values()]
-        texts += list(figures.qc.failed)
-        numbers += [x for d in figures.qc.dropped for x in (d.md, d.station)]
-        texts += [t for d in figures.qc.dropped for t in (d.by, d.reason, *d.checks)]
+        qc = figures.qc
+        counts += [qc.evaluated, qc.windows, *qc.failed.values()]
+        counts += [d.station for d in qc.dropped]
+        texts += list(qc.failed)
+        numbers += list(qc.stations)
+        mds += [d.md for d in qc.dropped]
+        texts += [t for d in qc.dropped for t in (d.reason, *d.checks)]
+        if not all(d.by in DROPPED_BY for d in qc.dropped):
+            return False
     return (
         all(n is None or (isinstance(n, int | float) and not isinstance(n, bool)) for n in numbers)
+        and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in counts)
+        and all(_finite(m) for m in mds)
         and all(isinstance(t, str) for t in texts)
         and all(t is None or isinstance(t, str) for t in optional)
         and (figures.clearance is None or figures.clearance.level in LEVELS)
         and all(_report_name(name) for name in figures.reports)
     )
+
+
+def _finite(value: object) -> bool:
+    """Whether ``value`` is a finite number (not a bool)."""
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _report_name(name: str) -> bool:
@@ -393,10 +413,10 @@ class _Tables:
             self.others.extend(inout_checks(read(INOUT_COLUMNS)))
         elif names >= CORRECTED:
             self._corrected(read(["time", "correction", *(RATE_COLUMNS & names)]))
-        elif names >= SUMMARY:
-            self.dropping.append(read(sorted(SUMMARY)))
-        elif names >= REJECT_COLUMNS:
-            self.dropping.append(read(sorted(REJECT_COLUMNS)))
+        elif names >= SUMMARY or names >= REJECT_COLUMNS:
+            table = read(sorted(SUMMARY if names >= SUMMARY else REJECT_COLUMNS))
+            dropped_stations([table])  # a row no such table holds: ValueError, a problem
+            self.dropping.append(table)
 
     def _trajectory(self, table: pa.Table) -> None:
         """The last trajectory persisted gives TD and the largest DLS (a later stage's is

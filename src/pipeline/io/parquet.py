@@ -26,15 +26,19 @@ import pyarrow.parquet as pq
 from pydantic import ValidationError
 
 from pipeline import jsontext
-from pipeline.contracts import NORTH_KEY, TableContract
+from pipeline.contracts import NORTH_KEY, UNIT_KEY, TableContract
 from pipeline.errors import InputFileError, WrongKindError
 from pipeline.hookspecs import hookimpl
 from pipeline.io.limits import MAX_COLUMNS
 from pipeline.io.north import stated_north
 from pipeline.io.threads import reader_threads
+from pipeline.io.uncertainty_columns import UNCERTAINTY_COLUMNS, tie_on_record
 from pipeline.registry import ReaderDef, WriterDef
 from pipeline.streams import BATCH_ROWS, TableStream
 from pipeline.tables import LogTable, PositionReadings, RawSamples, Stations
+from pipeline.uncertainty.stated import unit_of
+from pipeline.uncertainty.tieon import TIE_ON_KEY, TieOnRecord
+from pipeline.units import quantity_of
 from pipeline.well import NORTH_WORDS, WELL_KEY, WellMetadata, well_of
 
 MAGIC = b"PAR1"
@@ -81,6 +85,7 @@ def read(path: Path, kind: str, options: Any) -> tuple[pa.Table, WellMetadata]:
     except (OSError, pa.ArrowException) as exc:  # Arrow's messages may span lines
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, table.schema)
+    _check_uncertainty(path, table.schema)
     return table, _well(path, table.schema)
 
 
@@ -105,6 +110,7 @@ def stream(path: Path, kind: str, options: Any) -> tuple[TableStream, WellMetada
     except (OSError, pa.ArrowException) as exc:
         raise _unreadable(path, exc) from exc
     _check_kind(path, kind, schema)
+    _check_uncertainty(path, schema)
     buffer = 0 if _largest_group(meta) <= READ_WHOLE else READ_BUFFER
 
     def batches() -> Iterator[pa.RecordBatch]:
@@ -155,6 +161,23 @@ def _check_bounds(path: Path) -> tuple[pq.FileMetaData, int]:
             f"{size:,} bytes, at least {MIN_DECODED:,}): refused",
         )
     return meta, decoded
+
+
+def _check_uncertainty(path: Path, schema: pa.Schema) -> None:
+    """The file's uncertainty columns: each unit it states a unit of the column's quantity
+    (a variance in 'ft' is no variance; one in ft², not carried, the stages say), the tie-on
+    record (:data:`TIE_ON_KEY`), where it has one, the record gyropipe writes; else an
+    :class:`InputFileError` saying what is wrong."""
+    for name in UNCERTAINTY_COLUMNS:
+        if name not in schema.names:
+            continue
+        unit = (schema.field(name).metadata or {}).get(UNIT_KEY, b"").decode(errors="replace")
+        wanted = unit_of(name)
+        if unit and quantity_of(unit) != quantity_of(wanted):
+            raise InputFileError(path, f"unit {unit!r}: expected a unit of {wanted!r}", column=name)
+    raw = (schema.metadata or {}).get(TIE_ON_KEY)
+    if raw is not None:
+        tie_on_record(path, raw.decode(errors="replace"), 0, TieOnRecord)
 
 
 def _unreadable(path: Path, exc: Exception) -> InputFileError:

@@ -9,9 +9,10 @@ is the detail of its failed :data:`UNREAD` row, when the validity results
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, get_args
 
 import pyarrow as pa
 
@@ -20,6 +21,9 @@ from pipeline.qc.tables import QcResults, is_summary
 REJECT_COLUMNS = frozenset({"station", "md", "reason"})
 """The columns of a table of stations compassing could not solve."""
 
+DroppedBy = Literal["validity", "compassing"]
+DROPPED_BY: tuple[str, ...] = get_args(DroppedBy)
+"""What may drop a station."""
 MD_DIGITS = 6
 """Two stations dropped at MDs equal to this many decimals of a metre are one."""
 
@@ -36,7 +40,7 @@ class Dropped:
 
     md: float
     station: int
-    by: Literal["validity", "compassing"]
+    by: DroppedBy
     checks: tuple[str, ...] = ()
     reason: str = ""
 
@@ -77,18 +81,42 @@ def dropped_stations(tables: Iterable[pa.Table | None]) -> list[Dropped]:
 
 
 def _of(table: pa.Table, reasons: dict[tuple[int, float], str]) -> list[Dropped]:
+    """The stations ``table`` drops; ``ValueError`` at a row holding what its contract does
+    not (a null or non-finite MD, no station index ≥ 0, no text): a table read back from a
+    published file could hold anything."""
     if is_summary(table):
         rows = table.select(["md", "station", "status", "failed_checks"]).to_pylist()
         out = []
-        for r in rows:
-            checks = tuple(c for c in r["failed_checks"].split(",") if c)
+        for i, r in enumerate(rows):
+            checks = tuple(c for c in _text(r, i, "failed_checks").split(",") if c)
             if r["status"] == "drop" or any(c in UNREAD for c in checks):
-                why = reasons.get((r["station"], round(r["md"], MD_DIGITS)), "")
-                out.append(Dropped(float(r["md"]), int(r["station"]), "validity", checks, why))
+                dropped = _row(r, i, "validity", checks=checks)
+                why = reasons.get((dropped.station, round(dropped.md, MD_DIGITS)), "")
+                out.append(Dropped(dropped.md, dropped.station, "validity", checks, why))
         return out
     if is_rejects(table):
-        return [
-            Dropped(float(r["md"]), int(r["station"]), "compassing", reason=r["reason"])
-            for r in table.select(["md", "station", "reason"]).to_pylist()
-        ]
+        rows = table.select(["md", "station", "reason"]).to_pylist()
+        return [_row(r, i, "compassing", reason=_text(r, i, "reason")) for i, r in enumerate(rows)]
     return []
+
+
+def _row(
+    row: dict[str, object],
+    index: int,
+    by: DroppedBy,
+    checks: tuple[str, ...] = (),
+    reason: str = "",
+) -> Dropped:
+    md, station = row["md"], row["station"]
+    if not isinstance(md, float | int) or not math.isfinite(md):
+        raise ValueError(f"row {index}: md {md!r}, expected a finite MD (m)")
+    if not isinstance(station, int) or station < 0:
+        raise ValueError(f"row {index}: station {station!r}, expected a station index ≥ 0")
+    return Dropped(float(md), station, by, checks, reason)
+
+
+def _text(row: dict[str, object], index: int, name: str) -> str:
+    value = row[name]
+    if not isinstance(value, str):
+        raise ValueError(f"row {index}: {name} {value!r}, expected text")
+    return value

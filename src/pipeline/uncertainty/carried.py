@@ -9,9 +9,11 @@ record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the 
 (:data:`~pipeline.uncertainty.stated.CARRIED_KEY`). A family of columns
 (:data:`~pipeline.uncertainty.stated.FAMILIES`) is carried whole or not at all: one with
 columns missing, in another unit, at a confidence level it does not state, holding a value
-no such column can hold (a negative variance, an infinite size) or in a north other than
-the azimuths' is refused, and the refusal said — a file's uncertainty is never dropped
-quietly. Lengths m, covariances m².
+no such column can hold (a negative variance, an infinite size), a station's values partly
+null, covariances of no covariance matrix, or in a north other than the azimuths' is
+refused; so are 1σ ellipses that are not those of the covariances beside them (or whose
+semi-minor axis is the longer), and the refusal said — a file's uncertainty is never
+dropped quietly. Lengths m, covariances m².
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
+from pipeline.uncertainty.ellipse import ellipses
 from pipeline.uncertainty.stated import (
     CARRIED_KEY,
     CONFIDENCE_KEY,
@@ -29,6 +32,7 @@ from pipeline.uncertainty.stated import (
     WORDS,
     Family,
     file_statements,
+    unit_of,
 )
 from pipeline.uncertainty.tieon import TIE_ON_KEY, TieOnRecord, tie_on_of, with_tie_on
 
@@ -44,6 +48,18 @@ FLAG_COLUMN = "outside_validity"
 TIE_MD_M = 1e-3
 """A tie-on record's first MD agrees with its survey's first station within this (m): a
 text file rounds MDs to 0.1 mm."""
+
+PSD_M2 = 2e-8
+"""How far below 0 (m²) a covariance's smallest eigenvalue may lie from its file's rounding:
+8 decimals of m², the writers' (an error of at most 5e-9 an entry, 1.5e-8 on an eigenvalue)."""
+ELLIPSE_M = 1e-3
+"""How far (m) a 1σ size may lie from the one its covariances give, or a semi-minor axis
+above its semi-major: 0.1 mm rounding of each, and of the covariances, 8 decimals of m²
+(√5e-9 ≈ 0.07 mm at a size near 0), well within."""
+ELLIPSE_REL = 1e-3
+"""And in proportion to the size (a file written to fewer significant digits)."""
+PSD_REL = 1e-6
+"""And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +94,10 @@ def carried_uncertainty(stations: pa.Table) -> Carried:
                 kept.extend(present)
             else:
                 refused.append(f"columns {_listed(present)}: {problem}")
+    disagree = _disagreement(stations, kept)
+    if disagree is not None:
+        refused.append(f"columns {_listed(kept)}: {disagree}")
+        kept = []
     if kept:
         try:
             file_statements(pa.schema([stations.schema.field(c) for c in kept]))
@@ -104,7 +124,7 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
         field = stations.schema.field(name)
         meta = field.metadata or {}
         unit = meta.get(UNIT_KEY, b"").decode()
-        wanted = _unit(name, family)
+        wanted = unit_of(name)
         if unit != wanted:
             return f"{name} in {unit or 'no unit'!r}, expected {wanted!r}"
         if family.dimensions is not None and CONFIDENCE_KEY not in meta:
@@ -115,6 +135,9 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
         if bad is not None:
             md = float(stations.column("md")[bad].as_py())
             return f"{name} at MD {md:.2f} m holds {stations.column(name)[bad].as_py()!r}"
+    problem = _row_problem(stations, family)
+    if problem is not None:
+        return problem
     if "ellipse_azimuth" in present:
         own = (stations.schema.field("ellipse_azimuth").metadata or {}).get(NORTH_KEY)
         azi = (stations.schema.field("azi").metadata or {}).get(NORTH_KEY)
@@ -122,13 +145,6 @@ def _family_problem(stations: pa.Table, family: Family, present: list[str]) -> s
             said = own.decode() if own else "none"
             return f"ellipse_azimuth in north reference {said!r}, not the azimuths'"
     return None
-
-
-def _unit(name: str, family: Family) -> str:
-    """The unit a column of ``family`` is carried in."""
-    if family.scale == "1 sigma squared":
-        return "m2"
-    return "deg" if name == "ellipse_azimuth" else "m"
 
 
 def _bad_row(name: str, values: np.ndarray) -> int | None:
@@ -144,11 +160,85 @@ def _bad_row(name: str, values: np.ndarray) -> int | None:
     return int(bad[0]) if bad.size else None
 
 
+def _row_problem(stations: pa.Table, family: Family) -> str | None:
+    """Why a station's values of ``family`` (all present, each a value such a column holds)
+    are not one statement: some null where others are not (a hand edit's emptied cell:
+    the rest then belongs to no σ), or covariances of no covariance matrix (an eigenvalue
+    below 0 by more than the file's rounding, :data:`PSD_M2`: ``cov_ne² > cov_nn·cov_ee``)."""
+    values = np.column_stack(
+        [stations.column(c).to_numpy(zero_copy_only=False) for c in family.columns]
+    ).astype(np.float64)
+    null = np.isnan(values)
+    md = stations.column("md").to_numpy(zero_copy_only=False)
+    for row in np.flatnonzero(null.any(axis=1) & ~null.all(axis=1)).tolist():
+        empty = [c for c, n in zip(family.columns, null[row], strict=True) if n]
+        return (
+            f"at MD {md[row]:.2f} m {_listed(empty)} null where the other {family.name} "
+            "columns are not (a station's are all stated or all null)"
+        )
+    if family.name != "covariance":
+        return None
+    whole = ~null.any(axis=1)
+    nn, ne, nv, ee, ev, vv = values[whole].T
+    matrices = np.stack(
+        [np.stack(r, axis=-1) for r in ((nn, ne, nv), (ne, ee, ev), (nv, ev, vv))], axis=-2
+    )
+    least = np.linalg.eigvalsh(matrices)[:, 0] if len(nn) else np.zeros(0)
+    allowed = PSD_M2 + PSD_REL * np.max(np.stack((nn, ee, vv)), axis=0, initial=0.0)
+    bad = np.flatnonzero(least < -allowed)
+    if not bad.size:
+        return None
+    row = int(np.flatnonzero(whole)[bad[0]])
+    return (
+        f"at MD {md[row]:.2f} m the covariances are no covariance matrix: its smallest "
+        f"eigenvalue is {least[bad[0]]:.3g} m² (a covariance has none below 0; check "
+        "cov_ne² ≤ cov_nn·cov_ee and the other off-diagonal entries)"
+    )
+
+
+def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
+    """Why the 1σ ellipses (``ellipse_major``, ``ellipse_minor``, ``sigma_v``) of ``kept``
+    are not those of its covariances, kept with them (two uncertainties, a hand edit's), to
+    :data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of a size; or a semi-minor axis longer than
+    its semi-major (no such ellipse) beyond :data:`ELLIPSE_M`; None where they agree."""
+    if "ellipse_major" not in kept:
+        return None
+
+    def values(name: str) -> np.ndarray:
+        return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
+
+    md = values("md")
+    major, minor, sigma_v = (values(c) for c in ("ellipse_major", "ellipse_minor", "sigma_v"))
+    longer = np.flatnonzero(minor > major + ELLIPSE_M)
+    if longer.size:
+        row = int(longer[0])
+        return (
+            f"at MD {md[row]:.2f} m ellipse_minor {minor[row]:g} m exceeds ellipse_major "
+            f"{major[row]:g} m (no ellipse's semi-minor axis is its longer)"
+        )
+    if "cov_nn" not in kept:
+        return None
+    of = ellipses(*(values(c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
+    for name, stated, computed in (
+        ("ellipse_major", major, of.semi_major),
+        ("ellipse_minor", minor, of.semi_minor),
+        ("sigma_v", sigma_v, of.sigma_v),
+    ):
+        off = np.abs(stated - computed) > ELLIPSE_M + ELLIPSE_REL * np.abs(computed)
+        if (bad := np.flatnonzero(off)).size:  # (NaN compares false: no σ, nothing to agree)
+            row = int(bad[0])
+            return (
+                f"at MD {md[row]:.2f} m {name} is {stated[row]:.4f} m, the covariances' "
+                f"{computed[row]:.4f} m (the file states two uncertainties that disagree)"
+            )
+    return None
+
+
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
     """The file's tie-on record where each survey's first station is its (a refusal in
     ``refused`` where it is not: it states another table's)."""
-    if TIE_ON_KEY not in (stations.schema.metadata or {}):
-        return None
+    if TIE_ON_KEY not in (stations.schema.metadata or {}) or stations.num_rows == 0:
+        return None  # (no stations: no survey starts, and no uncertainty to state)
     record = tie_on_of(stations)
     assert record is not None
     md = stations.column("md").to_numpy(zero_copy_only=False)

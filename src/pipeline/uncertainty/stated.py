@@ -35,6 +35,7 @@ __all__ = [
     "is_carried",
     "model_words",
     "statement_of",
+    "unit_of",
     "with_statements",
 ]
 
@@ -65,6 +66,14 @@ WORDS = {
     "vertical_conf": "vertical error half-interval",
 }
 """The uncertainty columns, each described in words (ASCII: a LAS file's descriptions)."""
+
+
+def unit_of(name: str) -> str:
+    """The unit an uncertainty column (:data:`WORDS`) is in: m² for the covariances, deg for
+    ``ellipse_azimuth``, m for the sizes."""
+    return "m2" if name.startswith("cov_") else "deg" if name == "ellipse_azimuth" else "m"
+
+
 AT_CONFIDENCE = {"ellipse_major_conf": 2, "ellipse_minor_conf": 2, "vertical_conf": 1}
 """The columns at the confidence level, by the dimensions of their region."""
 REGION = {2: "2-D, chi-square of 2 dof", 1: "1-D, two-sided normal"}
@@ -175,10 +184,11 @@ def statement_of(table: pa.Table) -> Statement | None:
     md = values("md")
     if "ellipse_major" in names:
         major = values("ellipse_major")
-    else:  # covariances alone (a WITSML matrixCov)
+    else:  # covariances alone (a WITSML matrixCov); no size where one is not finite
         nn, ne, ee = (values(c) for c in ("cov_nn", "cov_ne", "cov_ee"))
+        finite = np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee)
+        nn, ne, ee = (np.where(finite, v, np.nan) for v in (nn, ne, ee))
         major = ellipses(nn, ne, ee, np.zeros_like(nn)).semi_major
-        major[~(np.isfinite(nn) & np.isfinite(ne) & np.isfinite(ee))] = np.nan
     conf = values("ellipse_major_conf") if "ellipse_major_conf" in names else None
     surveys = table.column("survey").to_pylist() if "survey" in names else None
 

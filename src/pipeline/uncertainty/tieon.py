@@ -103,15 +103,39 @@ class TieOn(BaseModel):
     ``semi_major`` its horizontal semi-major axis at 1σ, m), ``not included`` (taken as
     exactly known)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
     survey: str | None = Field(None, description="survey id (None: the table's one survey)")
     md: float = Field(description="MD of the survey's first station, m")
     basis: TieBasis
     parent: str | None = Field(None, description="basis 'survey': the survey it is tied on")
     semi_major: float | None = Field(
-        None, description="basis 'given': horizontal semi-major axis of the given covariance, 1σ, m"
+        None,
+        ge=0,
+        description="basis 'given': horizontal semi-major axis of the given covariance, 1σ, m",
     )
+
+    @model_validator(mode="after")
+    def _consistent(self) -> TieOn:
+        """A tie-on as :func:`outside_ties` and the uncertainty stage make them: a parent
+        with basis ``survey`` only, a size with ``given`` only, ``wellhead`` at the depth
+        reference only (a file stating otherwise states another tie-on than its own)."""
+        if (self.parent is None) == (self.basis == "survey"):
+            raise ValueError(
+                f"basis {self.basis!r} with parent {self.parent!r}: a parent "
+                "survey goes with basis 'survey', and only with it"
+            )
+        if self.semi_major is not None and self.basis != "given":
+            raise ValueError(
+                f"basis {self.basis!r} with a semi_major: only a given tie-on "
+                "uncertainty has a size"
+            )
+        if self.basis == "wellhead" and _below_reference(self.md):
+            raise ValueError(
+                f"basis 'wellhead' at MD {self.md:.2f} m: the wellhead tie-on "
+                f"is within {AT_REFERENCE_M:g} m of MD 0"
+            )
+        return self
 
     def missing(self) -> bool:
         """The tie-on lies below the depth reference and its uncertainty is not in the σ."""

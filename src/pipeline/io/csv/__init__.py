@@ -393,7 +393,7 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     well, in_file = read_title(path, title, header.delimiter, lengths)
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
     declared = in_file + option
-    statements = title_statements(title, header.delimiter)
+    statements = title_statements(path, title, header.delimiter)
     uncertainty = Stated.of(
         path, statements.get("confidence"), statements.get("error_model"), statements.get("tie_on")
     )

@@ -453,13 +453,23 @@ STATEMENT_KEYS = {"confidence": "confidence", "errormodel": "error_model", "tieo
 ``# error_model=``, ``# tie_on=``), by their words."""
 
 
-def title_statements(lines: list[str], delimiter: str) -> dict[str, tuple[str, int]]:
-    """The :data:`STATEMENT_KEYS` lines above the header: each value and line number."""
+def title_statements(path: Path, lines: list[str], delimiter: str) -> dict[str, tuple[str, int]]:
+    """The :data:`STATEMENT_KEYS` lines above the header: each value and line number; one
+    given again with another value is an :class:`InputFileError` at its second line (which
+    of two error models, or tie-ons, would the columns have?)."""
     found: dict[str, tuple[str, int]] = {}
     for number, line in enumerate(lines, start=1):
         entry = _key_value(line, delimiter)
-        if entry is not None and (name := STATEMENT_KEYS.get("".join(_words(entry[0])))):
-            found.setdefault(name, (entry[1], number))
+        if entry is None or not (name := STATEMENT_KEYS.get("".join(_words(entry[0])))):
+            continue
+        first = found.setdefault(name, (entry[1], number))
+        if first[0] != entry[1]:
+            raise InputFileError(
+                path,
+                f"{name} is given twice with different values (also on line {first[1]}: "
+                f"{first[0]!r}); expected one statement of the uncertainty columns' {name}",
+                line=number,
+            )
     return found
 
 

@@ -196,19 +196,32 @@ def _stated(path: Path, trajectories: list[Node], labels: list[str] | None) -> S
     """The error model of the trajectories' matrixCov (their ``gyropipe.error_model``
     extension values, in order; several: all, as one statement) and where each starts
     (``gyropipe.uncertainty_tie_on``, each trajectory's named by its survey id of
-    ``labels``: recorded when every trajectory states it)."""
+    ``labels``: recorded when every trajectory states it). A trajectory stating either
+    twice with different values is an :class:`InputFileError` at the second."""
     models: list[str] = []
     ties: list[TieOn] = []
     for index, traj in enumerate(trajectories):
         common = traj.get("commonData")
+        own: dict[str, tuple[str, int]] = {}
         for entry in common.all("extensionNameValue") if common is not None else []:
             name, value = entry.text_of("name"), entry.get("value") or entry
-            if name == ERROR_MODEL_EXTENSION:
-                models.append(value.text.strip())
-            elif name == TIE_ON_EXTENSION:
-                tie = tie_on_record(path, value.text, value.line, TieOn)
-                survey = None if labels is None else labels[index]
-                ties.append(tie.model_copy(update={"survey": survey}))
+            if name not in (ERROR_MODEL_EXTENSION, TIE_ON_EXTENSION):
+                continue
+            text = value.text.strip()
+            first = own.setdefault(name, (text, value.line))
+            if first[0] != text:
+                raise InputFileError(
+                    path,
+                    f"extension {name} is given twice in a trajectory with different values "
+                    f"(also on line {first[1]}: {first[0]!r}); expected one",
+                    line=value.line,
+                )
+        if (model := own.get(ERROR_MODEL_EXTENSION)) is not None:
+            models.append(model[0])
+        if (stated := own.get(TIE_ON_EXTENSION)) is not None:
+            tie = tie_on_record(path, *stated, TieOn)
+            survey = None if labels is None else labels[index]
+            ties.append(tie.model_copy(update={"survey": survey}))
     return Stated(
         error_model=", ".join(dict.fromkeys(m for m in models if m)) or None,
         tie_on=TieOnRecord(surveys=tuple(ties)) if len(ties) == len(trajectories) else None,
