@@ -15,6 +15,23 @@ from tests_support import read_stations
 MAGNETIC = {"total_field": 59731.0, "dip": 78.29, "declination": 17.0}
 SITE = {"latitude": 61.25, "longitude": 73.4, "date": "2026-11-21", "magnetic": MAGNETIC}
 TRIM = ReadingOptions(trim_start=0.5, min_dwell=1.0)
+FOUR_STOPS = """name: {name}
+seed: 3
+site:
+  latitude: 61.25
+  longitude: 73.4
+  elevation: 54.3
+  date: 2026-11-21
+tool: {{preset: mems-vrg}}
+well:
+  sections:
+    - {{kind: vertical, length: 50}}
+    - {{kind: build, dls: 6.0, inc: 30, azi: 37}}
+    - {{kind: hold, to_md: 300}}
+survey: {{mode: point, every: 100, positions: [0, 90, 180, 270, 0], dwell: 10}}
+"""
+"""A simulation plan (``name`` to fill in): a point survey with stops at MD 0, 100, 200
+and 300 m, five frame positions of 10 s each."""
 
 
 def random_well(path: Path, n: int, seed: int, inc: tuple[float, float] = (5, 120)) -> Path:

@@ -21,24 +21,11 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
+from qc_support import FOUR_STOPS
 
 from tests_support import ROOT, gyropipe_cli, tables_of
 
-PLAN = """name: dropped-stop
-seed: 3
-site:
-  latitude: 61.25
-  longitude: 73.4
-  elevation: 54.3
-  date: 2026-11-21
-tool: {preset: mems-vrg}
-well:
-  sections:
-    - {kind: vertical, length: 50}
-    - {kind: build, dls: 6.0, inc: 30, azi: 37}
-    - {kind: hold, to_md: 300}
-survey: {mode: point, every: 100, positions: [0, 90, 180, 270, 0], dwell: 10}
-"""
+PLAN = FOUR_STOPS.format(name="dropped-stop")
 DISTURBED, POSITION = 2, 1
 """the station (MD 200 m by the plan) and the frame position (the 2nd) made to vibrate"""
 PLAN_MD = 200.0

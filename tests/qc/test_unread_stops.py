@@ -30,24 +30,11 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from qc_support import FOUR_STOPS
 
 from tests_support import ROOT, gyropipe_cli, tables_of
 
-PLAN = """name: unread-stop
-seed: 3
-site:
-  latitude: 61.25
-  longitude: 73.4
-  elevation: 54.3
-  date: 2026-11-21
-tool: {preset: mems-vrg}
-well:
-  sections:
-    - {kind: vertical, length: 50}
-    - {kind: build, dls: 6.0, inc: 30, azi: 37}
-    - {kind: hold, to_md: 300}
-survey: {mode: point, every: 100, positions: [0, 90, 180, 270, 0], dwell: 10}
-"""
+PLAN = FOUR_STOPS.format(name="unread-stop")
 DISTURBED, PLAN_MD = 2, 200.0
 ODOMETER = 0.5
 """m: how far the survey's MD of a station may be from the plan's (odometer errors)"""

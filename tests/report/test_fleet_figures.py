@@ -409,6 +409,18 @@ def test_figures_of_the_wrong_kinds_in_batch_json_are_not_shown(tmp_path: Path) 
         assert cell(rows, "SHORT", "clearance") == "—", what
 
 
+def _unrecorded_short_well(tmp_path: Path) -> tuple[Path, Path]:
+    """A batch of the short well published as before figures were recorded (its batch.json
+    holds none): the batch directory and the well's run.json."""
+    args, out = short_well_batch(tmp_path)
+    gyropipe_cli(*args, check=True)
+    marker = out / "SHORT" / "batch.json"
+    record = json.loads(marker.read_text())
+    del record["figures"]  # as an earlier version wrote it
+    marker.write_text(json.dumps(record))
+    return out, out / "SHORT" / "run.json"
+
+
 def test_a_published_rejects_table_of_a_null_md_is_named_not_a_traceback(
     tmp_path: Path,
 ) -> None:
@@ -416,12 +428,7 @@ def test_a_published_rejects_table_of_a_null_md_is_named_not_a_traceback(
     hold a station of no MD (a table edited, or another writer's): the page is written and
     names the table it could not read — before, ``gyropipe status --html`` died of a
     TypeError; a NaN MD was shown as 'MD nan m'."""
-    args, out = short_well_batch(tmp_path)
-    gyropipe_cli(*args, check=True)
-    marker, manifest = out / "SHORT" / "batch.json", out / "SHORT" / "run.json"
-    record = json.loads(marker.read_text())
-    del record["figures"]  # as an earlier version wrote it
-    marker.write_text(json.dumps(record))
+    out, manifest = _unrecorded_short_well(tmp_path)
     run = json.loads(manifest.read_text())
     run["outputs"].append({"file": "compass.rejects.parquet"})
     manifest.write_text(json.dumps(run))
@@ -442,12 +449,7 @@ def test_a_damaged_run_json_of_a_well_without_recorded_figures_is_shown(
     """A well published before figures were recorded whose ``run.json`` lists its stages as
     something other than a list (damaged): the page is written, the figures read back from
     the well's Parquet tables."""
-    args, out = short_well_batch(tmp_path)
-    gyropipe_cli(*args, check=True)
-    marker, manifest = out / "SHORT" / "batch.json", out / "SHORT" / "run.json"
-    record = json.loads(marker.read_text())
-    del record["figures"]  # as an earlier version wrote it
-    marker.write_text(json.dumps(record))
+    out, manifest = _unrecorded_short_well(tmp_path)
     run = json.loads(manifest.read_text())
     run["stages"] = 5
     manifest.write_text(json.dumps(run))
