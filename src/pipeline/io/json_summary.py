@@ -3,8 +3,9 @@
 One JSON object (:class:`SurveySummary`, JSON Schema in ``schemas/writers/``): the well
 header, the run's provenance, the azimuths' north reference, the calculation method, and per
 survey the station count, MD range, the final station's position, the largest dogleg
-severity over the courses of at least 10 m (the report's rule: a shorter course's DLS is a
-spike of angle errors, not the hole's curvature) and, when the trajectory carries position
+severity over the courses of at least 10 m, or the run's survey report's
+``min_course_length`` (the report's rule: a shorter course's DLS is a spike of angle errors,
+not the hole's curvature) and, when the trajectory carries position
 uncertainty, the error ellipse at TD; the uncertainty as its columns state it
 (``uncertainty``: error model, confidence, the σ convention of each column family, the
 largest horizontal semi-major axis and TD's; absent without uncertainty columns); then QC
@@ -300,7 +301,11 @@ def summarize(
         north_reference=north,
         calculation=calculation_of(trajectory),
         station_count=trajectory.num_rows,
-        surveys=_surveys(trajectory, stated.confidence if stated is not None else None),
+        surveys=_surveys(
+            trajectory,
+            stated.confidence if stated is not None else None,
+            _min_course(provenance),
+        ),
         uncertainty=(
             UncertaintyStatement.model_validate(stated.as_dict()) if stated is not None else None
         ),
@@ -333,8 +338,21 @@ def _run(provenance: Provenance) -> Run:
     )
 
 
-def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
-    """Each survey's summary; ``confidence``: the one the *_conf columns state, if any."""
+def _min_course(provenance: Provenance | None) -> float:
+    """m: the shortest course whose DLS the maximum counts — the run's survey report's
+    ``min_course_length`` (the last report's, as the fleet page takes it), else the
+    report's default: so summary.json and the report state one maximum DLS."""
+    stated = [
+        float(value)
+        for stage in (provenance.stages if provenance is not None else ())
+        if isinstance(value := stage.params.get("min_course_length"), int | float)
+    ]
+    return stated[-1] if stated else MIN_COURSE
+
+
+def _surveys(trajectory: pa.Table, confidence: float | None, min_course: float) -> list[Survey]:
+    """Each survey's summary; ``confidence``: the one the *_conf columns state, if any;
+    the largest DLS over courses at least ``min_course`` m long."""
     cols = {
         name: trajectory.column(name).to_numpy(zero_copy_only=False)
         for name in Station.model_fields
@@ -343,7 +361,7 @@ def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
     ids = trajectory.column("survey").to_pylist() if "survey" in trajectory.column_names else None
     found = []
     for lo, hi in itertools.pairwise(survey_offsets(trajectory).tolist()):
-        worst = max_dls(cols["md"][lo:hi], dls[lo:hi], (0, hi - lo), MIN_COURSE)
+        worst = max_dls(cols["md"][lo:hi], dls[lo:hi], (0, hi - lo), min_course)
         found.append(
             Survey(
                 survey=ids[lo] if ids else None,
@@ -356,7 +374,7 @@ def _surveys(trajectory: pa.Table, confidence: float | None) -> list[Survey]:
                 else MaxDls(
                     dls=worst.dls,
                     md=float(cols["md"][lo + worst.row]),
-                    min_course_length=MIN_COURSE,
+                    min_course_length=min_course,
                     courses_not_counted=worst.left_out,
                     all_courses_short=worst.all_short,
                 ),
