@@ -299,11 +299,14 @@ def test_stations_without_rows_with_a_tie_on_record_integrate(tmp_path: Path) ->
 
 
 def with_ellipses(
-    rows: tuple[str, ...], edit: dict[int, tuple[float, float]] | None = None
+    rows: tuple[str, ...],
+    edit: dict[int, tuple[float, float]] | None = None,
+    turn: dict[int, float] | None = None,
 ) -> tuple[str, ...]:
     """``rows`` with each station's 1σ ellipse (major, minor, azimuth, σ_V) of its covariance
     (the eigen-decomposition of its horizontal block, computed here, 4 decimals as the
-    writers write m), ``edit`` replacing a row's (major, minor)."""
+    writers write m), ``edit`` replacing a row's (major, minor), ``turn`` adding degrees to
+    a row's azimuth."""
     out = []
     for k, row in enumerate(rows):
         nn, ne, _, ee, _, vv = (float(v) for v in row.split(",")[3:])
@@ -311,6 +314,7 @@ def with_ellipses(
         major, minor = np.sqrt(values[1]), np.sqrt(values[0])
         azimuth = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1])) % 180.0
         major, minor = (edit or {}).get(k, (major, minor))
+        azimuth = (azimuth + (turn or {}).get(k, 0.0)) % 180.0
         out.append(f"{row},{major:.4f},{minor:.4f},{azimuth:.6f},{np.sqrt(vv):.4f}")
     return tuple(out)
 
@@ -333,20 +337,23 @@ def test_ellipses_beside_their_covariances_are_carried(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("edit", "said"),
+    ("edit", "turn", "said"),
     [
-        ({1: (0.1, 0.05)}, r"at MD 600.00 m ellipse_major is 0.1000 m, the covariances' 0.28"),
-        ({2: (0.3, 0.5)}, r"at MD 700.00 m ellipse_minor 0.5 m exceeds ellipse_major 0.3 m"),
+        ({1: (0.1, 0.05)}, {}, r"at MD 600.00 m ellipse_major is 0.1000 m, the covariances' 0.28"),
+        ({2: (0.3, 0.5)}, {}, r"at MD 700.00 m ellipse_minor 0.5 m exceeds ellipse_major 0.3 m"),
+        ({}, {1: 1.5}, r"at MD 600.00 m ellipse_azimuth is \d+\.\d\d°, the covariances' "),
     ],
 )
 def test_ellipses_unlike_their_covariances_are_not_carried(
-    tmp_path: Path, edit: dict[int, tuple[float, float]], said: str
+    tmp_path: Path, edit: dict[int, tuple[float, float]], turn: dict[int, float], said: str
 ) -> None:
     """Before, both were carried and the summary's largest ellipse was the edited
-    ellipse_major's, whatever the covariances beside it said."""
+    ellipse_major's, whatever the covariances beside it said; an ellipse azimuth turned
+    1.5° from its covariances' (a convergence applied to one of them) was carried too."""
     out = tmp_path / "out"
+    rows = with_ellipses(ROWS, edit, turn)
     with pytest.warns(InputFileWarning) as caught:
-        gp.run(SURVEY, ellipse_listing(tmp_path, with_ellipses(ROWS, edit)), out=out)
+        gp.run(SURVEY, ellipse_listing(tmp_path, rows), out=out)
     refused = [str(w.message) for w in caught if "not carried" in str(w.message)]
     assert len(refused) == 1 and re.search(said, refused[0]), refused
     assert json.loads((out / "summary.json").read_text()).get("uncertainty") is None

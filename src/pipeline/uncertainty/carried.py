@@ -58,6 +58,11 @@ above its semi-major: 0.1 mm rounding of each, and of the covariances, 8 decimal
 (√5e-9 ≈ 0.07 mm at a size near 0), well within."""
 ELLIPSE_REL = 1e-3
 """And in proportion to the size (a file written to fewer significant digits)."""
+ELLIPSE_AZIMUTH_DEG = 0.1
+"""deg: how far a stated ellipse azimuth may be from its covariances' (a file writing the
+azimuth to 0.1° rounds by 0.05°; a covariance in another north is off by its convergence or
+declination), where the ellipse has an axis: its semi-axes differ by more than
+:data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of the semi-major."""
 PSD_REL = 1e-6
 """And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 
@@ -199,7 +204,8 @@ def _row_problem(stations: pa.Table, family: Family) -> str | None:
 def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
     """Why the 1σ ellipses (``ellipse_major``, ``ellipse_minor``, ``sigma_v``) of ``kept``
     are not those of its covariances, kept with them (two uncertainties, a hand edit's), to
-    :data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of a size; or a semi-minor axis longer than
+    :data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of a size and :data:`ELLIPSE_AZIMUTH_DEG` of
+    the azimuth of an ellipse with an axis; or a semi-minor axis longer than
     its semi-major (no such ellipse) beyond :data:`ELLIPSE_M`; None where they agree."""
     if "ellipse_major" not in kept:
         return None
@@ -230,6 +236,18 @@ def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
             return (
                 f"at MD {md[row]:.2f} m {name} is {stated[row]:.4f} m, the covariances' "
                 f"{computed[row]:.4f} m (the file states two uncertainties that disagree)"
+            )
+    if "ellipse_azimuth" in kept:
+        stated_deg = values("ellipse_azimuth")
+        computed_deg = np.degrees(of.azimuth)
+        off = np.abs(np.mod(stated_deg - computed_deg + 90.0, 180.0) - 90.0)
+        axis = of.semi_major - of.semi_minor > ELLIPSE_M + ELLIPSE_REL * of.semi_major
+        if (bad := np.flatnonzero(axis & (off > ELLIPSE_AZIMUTH_DEG))).size:
+            row = int(bad[0])
+            return (
+                f"at MD {md[row]:.2f} m ellipse_azimuth is {stated_deg[row]:.2f}°, the "
+                f"covariances' {computed_deg[row]:.2f}° (the ellipse and the covariances are "
+                "turned apart: one of them in another north, or edited)"
             )
     return None
 
