@@ -1,10 +1,10 @@
 """The XML tree of a WITSML document, parsed with expat a MiB of the file at a time (never held
 whole), each element's text joined once (appending to a string per piece copies it), keeping
-each element's line so every problem names it; a DOCTYPE or an entity declaration is refused (a WITSML document needs
-neither, and they are how XML documents attack their readers), as is an element's text (its
-ends stripped) or an attribute's value longer than :data:`~pipeline.io.witsml.terms.TEXT_MAX`
-characters, naming the element and its line: no WITSML store writes one, and one would be
-copied into every table and file read from it."""
+each element's line so every problem names it; a DOCTYPE or an entity declaration is refused
+(a WITSML document needs neither, and they are how XML documents attack their readers), as
+is an element's text (its ends stripped) or an attribute's value longer than
+:data:`~pipeline.io.witsml.terms.TEXT_MAX` characters, naming the element and its line: no
+WITSML store writes one, and one would be copied into every table and file read from it."""
 
 from __future__ import annotations
 
