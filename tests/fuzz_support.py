@@ -629,6 +629,11 @@ def _lines(data: bytes) -> list[bytes]:
     return data.split(b"\n")
 
 
+REPEATED = 32 << 20
+"""Most bytes a line repeated many times adds to an input (the harness holds every input,
+and its copies, in the process whose peak memory the long run bounds)."""
+
+
 def _line_op(rng: random.Random, data: bytes, ctx: Context) -> tuple[bytes, str]:
     lines = _lines(data)
     i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
@@ -645,8 +650,9 @@ def _line_op(rng: random.Random, data: bytes, ctx: Context) -> tuple[bytes, str]
         lines.insert(i, rng.choice([b"#", b"# x: y", b"~", b"~Other", b"--", b"//", b";"]))
     elif op == "junk":
         lines.insert(i, bytes(rng.randrange(32, 127) for _ in range(rng.randint(1, 80))))
-    else:
-        lines[i:i] = [lines[i]] * rng.randint(2, 200)
+    else:  # at most REPEATED bytes more: a hostile 5 MB line 200 times is the harness's GiB
+        times = min(rng.randint(2, 200), max(2, REPEATED // max(1, len(lines[i]))))
+        lines[i:i] = [lines[i]] * times
     return b"\n".join(lines), f"line-{op}@{i},{j}"
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,7 @@ from pipeline.io.mcap import read_samples, write_samples
 from pipeline.io.mcap.options import McapOptions
 from pipeline.io.mcap.records import MIN_DECOMPRESSED
 from pipeline.io.parquet import MIN_DECODED
+from pipeline.io.witsml.terms import TEXT_MAX
 from pipeline.jsontext import MAX_DEPTH
 from pipeline.plugins import load_registry
 from pipeline.well import WellMetadata
@@ -173,21 +175,83 @@ def test_deeply_nested_parquet_well_metadata_is_located(tmp_path: Path):
 # ------------------------------------------------------- item 11: WITSML in linear time
 
 
+TOO_LONG = f"is longer than {TEXT_MAX:,} characters (WITSML 1.4.1.1's longest text, a comment, is"
+TOO_LONG_TOKEN = "over 8 MiB of one tag or text from its '<' on (no WITSML element comes near)"
+
+
 @pytest.mark.parametrize(
-    "make",
-    [lambda: witsml_text(20_000_000), lambda: witsml_attribute(4_000_000)],
-    ids=["text-20MB", "attribute-4MB"],
+    ("make", "problem"),
+    [
+        (lambda: witsml_text(5_000_000), f"the text of <nameWell> {TOO_LONG} 4,000)"),
+        (
+            lambda: witsml_attribute(4_000_000),
+            f"attribute 'note' of <trajectory> {TOO_LONG} 4,000)",
+        ),
+        (lambda: witsml_text(20_000_000), TOO_LONG_TOKEN),
+        (lambda: witsml_attribute(20_000_000), TOO_LONG_TOKEN),
+    ],
+    ids=["text-5MB", "attribute-4MB", "text-20MB", "attribute-20MB"],
 )
-def test_witsml_with_huge_text_or_attributes_parses_in_linear_time(tmp_path: Path, make):
+def test_witsml_with_huge_text_or_attributes_is_refused_at_its_line_in_linear_time(
+    tmp_path: Path, make, problem: str
+):
     """Issue 32 item 11: a 20 MB well name took 5.5 s of CPU (text appended per expat chunk),
-    an 8 MB attribute over 120 s (expat re-parsing it on every ParseFile chunk); now 0.2 s."""
+    an 8 MB attribute over 120 s (expat re-parsing it on every ParseFile chunk); then 0.2 s.
+    Fuzz run (seed 1, witsml): a hostile 5 MB line repeated (925 MiB) was read whole before
+    its first error (a 1,059 MiB peak), a 5-million-character well name carried into every
+    table, header and file written from it; now the file is parsed a MiB at a time, and a
+    text or value longer than WITSML ever writes is refused at its line."""
     path = tmp_path / "huge.xml"
     path.write_bytes(make())
     start = time.process_time()
-    table, well = load_registry().read(path, "stations")
+    stderr = refused_by_convert(path, "stations", ".parquet")
     assert time.process_time() - start < 2.0
-    assert table.column("md").to_pylist() == [0.0, 100.0]
-    assert well.well is not None and len(well.well) in (1, 20_000_000)
+    assert stderr.startswith(f"error: {path}:2: {problem}") and stderr.count("\n") == 1, stderr
+
+
+def test_a_huge_witsml_file_is_parsed_without_being_held_whole(tmp_path: Path):
+    """Fuzz run (seed 1, witsml #1946): the hostile line repeated, 925 MiB, was read into
+    memory whole before its first error (a 1,059 MiB peak); now a MiB at a time. Here
+    100 MB of it: Python's allocations stay under 32 MiB (before: over 100 MB)."""
+    path = tmp_path / "repeated.xml"
+    path.write_bytes(witsml_text(5_000_000) * 20)
+    tracemalloc.start()
+    try:
+        with pytest.raises(InputFileError, match=r"repeated\.xml:2: the text of <nameWell>"):
+            load_registry().read(path, "stations")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 32 * 2**20, f"{peak / 2**20:.0f} MiB"
+
+
+def test_a_witsml_text_of_the_longest_length_is_read_one_more_is_refused(tmp_path: Path):
+    """The bound is TEXT_MAX characters of text, the whitespace around them not counted."""
+    path = tmp_path / "longest.xml"
+    path.write_bytes(witsml_text(TEXT_MAX).replace(b"<nameWell>", b"<nameWell>\n  "))
+    table, well = load_registry().read(path, "stations")
+    assert table.column("md").to_pylist() == [0.0, 100.0] and well.well == "x" * TEXT_MAX
+    path.write_bytes(witsml_text(TEXT_MAX + 1))
+    assert "2: the text of <nameWell> is longer than" in refused_by_convert(
+        path, "stations", ".csv"
+    )
+
+
+def test_a_witsml_trajectory_of_many_indented_stations_is_read(tmp_path: Path):
+    """The whitespace between a container's children is no text of it (a guard): 12,000
+    stations indented by 16 spaces are over 10⁵ characters of it in <trajectory>."""
+    indent = "\n" + " " * 16
+    stations = "".join(
+        f'{indent}<trajectoryStation uid="s{i}"><md uom="m">{i}</md><incl uom="dega">1</incl>'
+        '<azi uom="dega">10</azi></trajectoryStation>'
+        for i in range(12_000)
+    )
+    head, _, rest = witsml_text(1).decode().partition("<trajectoryStation")
+    path = tmp_path / "long.xml"
+    path.write_text(head + stations + "\n" + rest[rest.index("</trajectory>") :])
+    assert 12_000 * len(indent) > TEXT_MAX
+    table, _ = load_registry().read(path, "stations")
+    assert table.num_rows == 12_000
 
 
 # ---------------------------------------------------------- item 16: huge valid inputs
@@ -215,6 +279,8 @@ def test_a_las_file_of_too_many_curves_is_refused_at_its_line(tmp_path: Path):
 
 
 MEGABYTE = "x" * 1_000_000
+LONGEST = "x" * TEXT_MAX
+"""The longest value a WITSML reader takes (a megabyte one is refused for its length)."""
 HUGE_VALUES = {
     "cell.las": (
         "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
@@ -223,7 +289,7 @@ HUGE_VALUES = {
         "cell.las:14 (column 'INCL'): expected a number, got 'xxx",
     ),
     "uom.xml": (
-        witsml_text(1).decode().replace('<incl uom="dega">', f'<incl uom="{MEGABYTE}">', 1),
+        witsml_text(1).decode().replace('<incl uom="dega">', f'<incl uom="{LONGEST}">', 1),
         "uom.xml:2: <incl>: uom 'xxx",
     ),
     "north.csv": (
@@ -243,7 +309,8 @@ def test_a_megabyte_value_is_quoted_by_its_ends_in_a_one_line_error(tmp_path: Pa
     stderr = refused_by_convert(path, "stations", ".csv")
     assert len(stderr) < 500 and stderr.count("\n") == 1, stderr[:1000]
     assert f"{tmp_path}/{where}" in stderr
-    assert "x" * 60 + "…" + "x" * 20 + "' (1,000,000 characters)" in stderr
+    chars = TEXT_MAX if name.endswith(".xml") else 1_000_000
+    assert "x" * 60 + "…" + "x" * 20 + f"' ({chars:,} characters)" in stderr
 
 
 def test_a_megabyte_pipeline_value_is_quoted_by_its_ends(tmp_path: Path):
@@ -258,12 +325,36 @@ def test_a_megabyte_pipeline_value_is_quoted_by_its_ends(tmp_path: Path):
     assert f"{path}:8:" in result.stderr and "' (1,000,000 characters)" in result.stderr
 
 
-def test_a_megabyte_well_name_no_writer_holds_is_quoted_by_its_ends(tmp_path: Path):
+def test_a_long_well_name_no_writer_holds_is_quoted_by_its_ends(tmp_path: Path):
     """Fuzz finding (seed 1212, witsml #335): the WITSML writer's refusal of a megabyte well
-    name (it holds 64 characters) quoted the name in full."""
+    name (it holds 64 characters) quoted the name in full (now the reader refuses a name
+    that long: the longest it reads)."""
     path = tmp_path / "named.xml"
-    path.write_bytes(witsml_text(1_000_000))
+    path.write_bytes(witsml_text(TEXT_MAX))
     result = gyropipe_cli("convert", str(path), str(tmp_path / "copy.xml"))
     assert result.returncode == 2 and len(result.stderr) < 500, result.stderr[:1000]
     assert f"{path}: the stations read cannot be written to copy.xml" in result.stderr
-    assert "' (1,000,000 characters) is longer than the 64 characters" in result.stderr
+    assert "' (65,536 characters) is longer than the 64 characters" in result.stderr
+
+
+def test_a_header_value_longer_than_the_witsml_reader_takes_is_not_written(tmp_path: Path):
+    """gyropipe writes no WITSML text it refuses to read back: a listing's company one
+    character longer than TEXT_MAX is refused by the writer naming it (before: written, and
+    the copy unreadable); one of TEXT_MAX characters reads back whole."""
+    results = {}
+    for chars in (TEXT_MAX + 1, TEXT_MAX):
+        path = tmp_path / f"company-{chars}.csv"
+        path.write_text(
+            f"Well: W-1\nCompany: {'c' * chars}\nNorth Reference: true\n"
+            "MD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n"
+        )
+        results[chars] = gyropipe_cli("convert", str(path), str(tmp_path / f"{chars}.xml"))
+    refused = results[TEXT_MAX + 1]
+    assert refused.returncode == 2 and len(refused.stderr) < 500, refused.stderr[:1000]
+    assert f"cannot be written to {TEXT_MAX + 1}.xml (writer 'witsml'): well company 'ccc" in (
+        refused.stderr
+    )
+    assert "(65,537 characters) is longer than the 65,536 characters" in refused.stderr
+    assert results[TEXT_MAX].returncode == 0, results[TEXT_MAX].stderr
+    _, well = load_registry().read(tmp_path / f"{TEXT_MAX}.xml", "stations")
+    assert well.company == "c" * TEXT_MAX

@@ -196,3 +196,75 @@ def test_a_definitive_survey_in_grid_north_has_the_true_covariance_turned(tmp_pa
     shaped = true["ellipse_major"] - true["ellipse_minor"] > 1e-3 * true["ellipse_major"]
     difference = (grid["ellipse_azimuth"] - true["ellipse_azimuth"] + CONVERGENCE + 90.0) % 180.0
     np.testing.assert_allclose(difference[shaped] - 90.0, 0.0, atol=1e-6)
+
+
+RUN_DECLINATION = {"gyro": 12.0, "mwd": 14.5}
+"""Each run's own declination (deg): the two runs surveyed a year apart."""
+
+
+def definitive_runs(tmp_path: Path, north: str) -> list[str]:
+    """The shipped definitive example's two runs listed in ``north`` north, each run's
+    azimuths less its own declination and its header stating it (magnetic), as --input."""
+    inputs = []
+    for run_name, declination in RUN_DECLINATION.items():
+        text = (ROOT / "examples" / "definitive" / f"{run_name}-run.csv").read_text()
+        head, rows = text.split("\n\nMD (m),Inc (deg),Azimuth True (deg)\n")
+        shift = declination if north == "magnetic" else 0.0
+        head += f"\nMagnetic Declination: {declination}"
+        shifted = [
+            f"{md},{inc},{(float(azi) - shift) % 360.0:.13f}"
+            for md, inc, azi in (row.split(",") for row in rows.splitlines())
+        ]
+        path = tmp_path / f"{north}-{run_name}.csv"
+        column = f"Azimuth {north.capitalize()} (deg)"
+        path.write_text("\n".join([head, "", f"MD (m),Inc (deg),{column}", *shifted]) + "\n")
+        inputs += ["--input", f"{run_name}={path}"]
+    return inputs
+
+
+def test_a_definitive_survey_in_magnetic_north_turns_each_run_by_its_own_declination(
+    tmp_path: Path,
+) -> None:
+    """The definitive example's runs listed in magnetic north, the gyro's declination 12°,
+    the MWD's 14.5°: each station's azimuth and covariance is the true-north survey's turned
+    by its own run's declination (R C Rᵀ, written out here). The gyro's stations agree to
+    1e-15; the MWD's to 2e-8 relative (not the azimuths' rounding: the same at 13 decimals;
+    cause not found), hence rtol 1e-7."""
+    pipeline = without_report("definitive", tmp_path)
+    surveys = {}
+    for north in ("true", "magnetic"):
+        out = tmp_path / north
+        gyropipe_cli("run", pipeline, *definitive_runs(tmp_path, north), "--out", out, check=True)
+        table = pq.read_table(out / "definitive.survey.parquet")
+        surveys[north] = {n: table.column(n).to_numpy(zero_copy_only=False) for n in COV}
+        surveys[north] |= {n: table.column(n).to_pylist() for n in ("run",)}
+        surveys[north]["azi"] = table.column("azi").to_numpy()
+    true, magnetic = surveys["true"], surveys["magnetic"]
+    assert magnetic["run"] == true["run"] and set(true["run"]) == {"GYRO-1", "MWD-1"}
+    shift = np.array([RUN_DECLINATION["gyro" if r == "GYRO-1" else "mwd"] for r in true["run"]])
+    np.testing.assert_allclose(
+        (true["azi"] - shift - magnetic["azi"] + 180) % 360 - 180, 0, atol=1e-8
+    )
+    expected = np.stack([turned(c, d) for c, d in zip(matrices(true), shift, strict=True)])
+    np.testing.assert_allclose(matrices(magnetic), expected, rtol=1e-7, atol=1e-12)
+
+
+def test_a_definitive_run_in_grid_north_without_the_convergence_says_how_to_give_it(
+    tmp_path: Path,
+) -> None:
+    """Before: 'run1: grid north needs the grid convergence γ (deg)', not where to give it."""
+    pipeline = without_report("definitive", tmp_path)
+    inputs = definitive_runs(tmp_path, "grid")
+    refused = gyropipe_cli("run", pipeline, *inputs, "--out", tmp_path / "out")
+    assert refused.returncode != 0
+    assert (
+        "the definitive_survey stage needs the grid convergence of run1's grid-north azimuths"
+        in refused.stderr
+    )
+    assert (
+        "give the well's `grid_convergence` (deg, grid north east of true north positive) in "
+        "the pipeline's `well:` block, on the command line (--well grid_convergence=…) or in "
+        "the input file's header" in refused.stderr
+    )
+    given = ("--well", "grid_convergence=0.5", "--out", tmp_path / "given")
+    gyropipe_cli("run", pipeline, *inputs, *given, check=True)

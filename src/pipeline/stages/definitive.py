@@ -52,7 +52,7 @@ from pipeline.uncertainty.engine import (
     model_terms,
     within_range,
 )
-from pipeline.uncertainty.frames import turned_matrices
+from pipeline.uncertainty.frames import MissingNorthError, turned_matrices
 from pipeline.uncertainty.quantities import ModelSite
 from pipeline.uncertainty.sections import Section as CovSection
 from pipeline.uncertainty.sections import WellByWell, definitive_covariance
@@ -377,6 +377,9 @@ def _read(
     own = north_reference_of(table, "azi")
     declination = None if magnetic is None else magnetic.declination
     kw = {"convergence_deg": well.convergence_for(own), "declination_deg": declination}
+    for ref, value in (("grid", kw["convergence_deg"]), ("magnetic", declination)):
+        if value is None and ref in (own, north):
+            raise MissingNorthError("definitive_survey", ref, modelled=True, run=port)
     try:
         azi_out, _ = convert_azimuth(azi, own, north, **kw)  # type: ignore[arg-type]
         azi_true, _ = convert_azimuth(azi, own, "true", **kw)

@@ -35,14 +35,21 @@ _CORRECTION = {
 
 class MissingNorthError(MissingSiteError):
     """A stage's error model works in true north and the listing's grid or magnetic
-    azimuths come without the correction that refers them to it."""
+    azimuths come without the correction that refers them to it (``run``: the input whose
+    azimuths, where the stage takes several)."""
 
     def __init__(
-        self, stage: str, north: str, *, modelled: bool = False, python: bool = False
+        self,
+        stage: str,
+        north: str,
+        *,
+        modelled: bool = False,
+        python: bool = False,
+        run: str | None = None,
     ) -> None:
         field, name, sign = _CORRECTION[north]
         self.stage, self.missing, self.param, self.north = stage, [field], None, north
-        self.modelled = modelled
+        self.modelled, self.run = modelled, run
         model = (
             "; or its latitude, longitude and survey_date, for the geomagnetic model's"
             if modelled and north == "magnetic"
@@ -54,16 +61,19 @@ class MissingNorthError(MissingSiteError):
             else f"the pipeline's `well:` block, on the command line (--well {field}=…) or "
             "in the input file's header"
         )
+        whose = f"{run}'s" if run else "the"
         GyropipeError.__init__(
             self,
-            f"the {stage} stage needs the {name} of the {north}-north azimuths (the error "
+            f"the {stage} stage needs the {name} of {whose} {north}-north azimuths (the error "
             f"models work in true north, their covariances turned back into {north} north): "
             f"give the well's `{field}` ({sign}) in {where}{model}",
         )
 
     def in_python(self) -> MissingSiteError:
         """The same error worded for the Python API (``well={…}``)."""
-        return MissingNorthError(self.stage, self.north, modelled=self.modelled, python=True)
+        return MissingNorthError(
+            self.stage, self.north, modelled=self.modelled, python=True, run=self.run
+        )
 
 
 @dataclass(frozen=True)

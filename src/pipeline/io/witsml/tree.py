@@ -1,8 +1,10 @@
-"""The XML tree of a WITSML document, parsed with expat in one call over the whole file, each
-element's text joined once (linear time: fed in chunks, expat rescans a token split by every
-chunk, and appending to a string per chunk copies it), keeping each element's line so every
-problem names it; a DOCTYPE or an entity declaration is refused (a WITSML document needs
-neither, and they are how XML documents attack their readers)."""
+"""The XML tree of a WITSML document, parsed with expat a MiB of the file at a time (never held
+whole), each element's text joined once (appending to a string per piece copies it), keeping
+each element's line so every problem names it; a DOCTYPE or an entity declaration is refused
+(a WITSML document needs neither, and they are how XML documents attack their readers), as
+is an element's text (its ends stripped) or an attribute's value longer than
+:data:`~pipeline.io.witsml.terms.TEXT_MAX` characters, naming the element and its line: no
+WITSML store writes one, and one would be copied into every table and file read from it."""
 
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from typing import Any
 from xml.parsers import expat
 
 from pipeline.errors import InputFileError
-from pipeline.io.witsml.terms import NS
+from pipeline.io.witsml.terms import NS, TEXT_MAX
 
 
 @dataclass
@@ -58,7 +60,50 @@ class RepeatedElement(Exception):
 
 
 class _Refused(Exception):
-    """Something the parser refuses to read."""
+    """Something the parser refuses to read (``line``: where, else the parser's line)."""
+
+    def __init__(self, message: str, line: int | None = None) -> None:
+        super().__init__(message)
+        self.line = line
+
+
+def _too_long(what: str, line: int) -> _Refused:
+    return _Refused(
+        f"{what} is longer than {TEXT_MAX:,} characters (WITSML 1.4.1.1's longest text, a "
+        "comment, is 4,000): refused",
+        line,
+    )
+
+
+CHUNK = 1 << 20
+"""Bytes of the file read and parsed at a time (what one ``Parse`` call of the whole file
+feeds expat at a time too: a 30 MB attribute parses in 0.5 s; in 64 kB chunks, expat
+rescanning the token cut by each, minutes)."""
+RUN_MAX = 8 << 20
+"""Most bytes without a ``<`` (one tag or text: no WITSML element comes near) expat holds
+unparsed and rescans each chunk: a token past it is refused before it costs seconds."""
+
+
+def _feed(parser: Any, path: Path) -> None:
+    """Parse the file chunk by chunk: the document is never held whole (a 925 MiB file of
+    one hostile line repeated was read into memory before its first error: 1 GiB)."""
+    run, newlines, line = 0, 0, 1  # bytes since the last "<", lines read, the "<"'s line
+    with path.open("rb") as fh:
+        while chunk := fh.read(CHUNK):
+            at = chunk.rfind(b"<")
+            if at >= 0:
+                run, line = len(chunk) - at - 1, 1 + newlines + chunk.count(b"\n", 0, at)
+            else:
+                run += len(chunk)
+            newlines += chunk.count(b"\n")
+            if run > RUN_MAX:
+                raise _Refused(
+                    f"over {RUN_MAX >> 20} MiB of one tag or text from its '<' on (no WITSML "
+                    "element comes near): refused",
+                    line,
+                )
+            parser.Parse(chunk, False)
+    parser.Parse(b"", True)
 
 
 def parse(path: Path) -> Node:
@@ -72,12 +117,19 @@ def parse(path: Path) -> Node:
     def start(name: str, attrs: dict[str, str]) -> None:
         namespace, _, local = name.rpartition(" ")
         node = Node(local, namespace, attrs, parser.CurrentLineNumber)
+        for key, value in attrs.items():
+            if len(value) > TEXT_MAX:
+                raise _too_long(f"attribute {key.rpartition(' ')[2]!r} of <{local}>", node.line)
         (stack[-1].children if stack else roots).append(node)
         stack.append(node)
         pieces.append([])
 
     def end(name: str) -> None:
-        stack.pop().text = "".join(pieces.pop())
+        node = stack.pop()
+        node.text = "".join(pieces.pop())
+        # its ends stripped: the whitespace between a trajectory's 10⁵ indented stations is 10⁶
+        if len(node.text) > TEXT_MAX and len(node.text.strip()) > TEXT_MAX:
+            raise _too_long(f"the text of <{node.name}>", node.line)
 
     def text(data: str) -> None:
         if stack:
@@ -91,8 +143,8 @@ def parse(path: Path) -> Node:
     parser.CharacterDataHandler = text
     parser.StartDoctypeDeclHandler = refuse
     parser.EntityDeclHandler = refuse
-    try:  # one Parse call: fed in chunks, expat rescans a token cut by each chunk boundary
-        parser.Parse(path.read_bytes(), True)  # (a 30 MB attribute: minutes, not 0.05 s)
+    try:
+        _feed(parser, path)
     except expat.ExpatError as exc:
         raise InputFileError(
             path,
@@ -100,7 +152,8 @@ def parse(path: Path) -> Node:
             line=exc.lineno,
         ) from None
     except _Refused as exc:
-        raise InputFileError(path, str(exc), line=parser.CurrentLineNumber) from None
+        line = exc.line or parser.CurrentLineNumber
+        raise InputFileError(path, str(exc), line=line) from None
     except (LookupError, ValueError) as exc:  # UnicodeError is a ValueError
         # the encoding the XML declaration names is unknown, not text, or multi-byte
         raise InputFileError(

@@ -23,6 +23,7 @@ from pipeline.io.witsml.terms import (
     NS,
     STATION_TYPES,
     SURVEY_TOOLS,
+    TEXT_MAX,
     TIE_IN,
     TIE_ON_EXTENSION,
     UNIT_UOM,
@@ -222,9 +223,12 @@ def _uid(name: str) -> str:
     return _checked(name.replace(" ", "_"), "uid", NAME_MAX)
 
 
-def _checked(text: str, what: str, longest: int | None) -> str:
-    if longest is not None and len(text) > longest:
-        raise ValueError(f"{what} {text!r} is longer than the {longest} characters WITSML allows")
+def _checked(text: str, what: str, longest: int = TEXT_MAX) -> str:
+    """``text`` if XML holds it in at most ``longest`` characters (a name's, else any text's
+    gyropipe reads back), else a ValueError."""
+    if len(text) > longest:
+        whose = "WITSML allows" if longest == NAME_MAX else "gyropipe reads back from WITSML"
+        raise ValueError(f"{what} {text!r} is longer than the {longest:,} characters {whose}")
     bad = _XML_CHARS.search(text)
     if bad:
         raise ValueError(f"{what} {text!r} holds {bad[0]!r}, which XML cannot")
@@ -328,17 +332,17 @@ def _common_data(doc: _Document, well: WellMetadata, model: str | None, tie: Tie
         "position covariance north-east-vertical (vertical down), 1 sigma squared"
         + (f", error model {model}." if model else ".")
     )
-    doc.leaf("comments", _checked(comment, "depth reference or error model", None))
+    doc.leaf("comments", _checked(comment, "depth reference or error model"))
     if model:
         doc.open("extensionNameValue", uid="error_model")
         doc.leaf("name", ERROR_MODEL_EXTENSION)
-        doc.leaf("value", _checked(model, "error model", None))
+        doc.leaf("value", _checked(model, "error model"))
         doc.leaf("dataType", "string")
         doc.close()
     if tie is not None:
         doc.open("extensionNameValue", uid="uncertainty_tie_on")
         doc.leaf("name", TIE_ON_EXTENSION)
-        doc.leaf("value", _checked(tie.model_dump_json(), "tie-on survey name", None))
+        doc.leaf("value", _checked(tie.model_dump_json(), "tie-on survey name"))
         doc.leaf("dataType", "string")
         doc.close()
     for field, value in well.model_dump(exclude_none=True).items():
@@ -350,7 +354,7 @@ def _common_data(doc: _Document, well: WellMetadata, model: str | None, tie: Tie
             doc.leaf("value", _number(value), uom=WELL_UOM[field])
             kind = "double"
         else:
-            doc.leaf("value", _checked(str(value), f"well {field}", None))
+            doc.leaf("value", _checked(str(value), f"well {field}"))
             kind = "date" if field in ("survey_date", "survey_date_last") else "string"
         doc.leaf("dataType", kind)
         doc.close()
