@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+import yaml
 
 from tests_support import ROOT, gyropipe_cli, stage, survey_stages, without_report, write_pipeline
 
@@ -222,31 +223,45 @@ def definitive_runs(tmp_path: Path, north: str) -> list[str]:
     return inputs
 
 
-def test_a_definitive_survey_in_magnetic_north_turns_each_run_by_its_own_declination(
-    tmp_path: Path,
-) -> None:
+def test_a_definitive_survey_of_runs_in_two_magnetic_norths_is_refused(tmp_path: Path) -> None:
     """The definitive example's runs listed in magnetic north, the gyro's declination 12°,
-    the MWD's 14.5°: each station's azimuth and covariance is the true-north survey's turned
-    by its own run's declination (R C Rᵀ, written out here). The gyro's stations agree to
-    1e-15; the MWD's to 2e-8 relative (not the azimuths' rounding: the same at 13 decimals;
-    cause not found), hence rtol 1e-7."""
+    the MWD's 14.5°: one survey in "magnetic north" would be integrated from azimuths in two
+    norths (before: its MWD stations' positions were in neither run's frame, 126.0 N / 57.9 E
+    at 745 m where true north gives 110.6 / 83.7), so it is refused, naming both; given
+    north_reference: true, each run is referred to true north by its own declination and the
+    survey is the true-north listing's (azimuths, positions, covariances)."""
     pipeline = without_report("definitive", tmp_path)
+    refused = gyropipe_cli(
+        "run", pipeline, *definitive_runs(tmp_path, "magnetic"), "--out", tmp_path / "refused"
+    )
+    assert refused.returncode != 0 and "Traceback" not in refused.stderr
+    assert (
+        "the runs' magnetic norths are not one (magnetic north east of true north by "
+        "GYRO-1: 12°, MWD-1: 14.5°)" in refused.stderr
+    ), refused.stderr
+    assert "give the stage north_reference: true" in refused.stderr
+    spec = yaml.safe_load(pipeline.read_text(encoding="utf-8"))
+    (stage,) = [st for st in spec["stages"] if st["uses"] == "definitive_survey"]
+    stage["with"]["north_reference"] = "true"
+    pipeline.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
     surveys = {}
     for north in ("true", "magnetic"):
         out = tmp_path / north
         gyropipe_cli("run", pipeline, *definitive_runs(tmp_path, north), "--out", out, check=True)
         table = pq.read_table(out / "definitive.survey.parquet")
-        surveys[north] = {n: table.column(n).to_numpy(zero_copy_only=False) for n in COV}
-        surveys[north] |= {n: table.column(n).to_pylist() for n in ("run",)}
-        surveys[north]["azi"] = table.column("azi").to_numpy()
+        assert table.schema.field("azi").metadata[b"north_reference"] == b"true"
+        surveys[north] = table
     true, magnetic = surveys["true"], surveys["magnetic"]
-    assert magnetic["run"] == true["run"] and set(true["run"]) == {"GYRO-1", "MWD-1"}
-    shift = np.array([RUN_DECLINATION["gyro" if r == "GYRO-1" else "mwd"] for r in true["run"]])
+    for name in ("azi", "north", "east", "tvd"):
+        np.testing.assert_allclose(
+            magnetic.column(name).to_numpy(), true.column(name).to_numpy(), atol=1e-8
+        )
     np.testing.assert_allclose(
-        (true["azi"] - shift - magnetic["azi"] + 180) % 360 - 180, 0, atol=1e-8
+        matrices({n: magnetic.column(n).to_numpy() for n in COV}),
+        matrices({n: true.column(n).to_numpy() for n in COV}),
+        rtol=1e-7,
+        atol=1e-12,
     )
-    expected = np.stack([turned(c, d) for c, d in zip(matrices(true), shift, strict=True)])
-    np.testing.assert_allclose(matrices(magnetic), expected, rtol=1e-7, atol=1e-12)
 
 
 def test_a_definitive_run_in_grid_north_without_the_convergence_says_how_to_give_it(

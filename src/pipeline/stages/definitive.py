@@ -279,6 +279,7 @@ def definitive_survey(
     names = [r.name for r in runs]
     if len(set(names)) != len(names):
         raise ValueError(f"run names must differ; got {names}")
+    _one_north(runs, north)
     _one_datum(runs, wells)
     stations = [
         RunStations(r.name, r.md, r.spec.priority, r.spec.md_from, r.spec.md_to) for r in runs
@@ -393,6 +394,29 @@ def _read(
     tool = [t or header for t in tools] if tools else [header] * table.num_rows
     azi_out = np.where(np.isnan(azi), np.nan, azi_out)
     return _Run(port, spec, md, inc, azi_out, azi_true, float(to_north), source, tool, listed)
+
+
+NORTH_AGREE_DEG = 1e-9
+"""deg: runs whose corrections from true to the survey's north differ by more are in
+different norths"""
+
+
+def _one_north(runs: list[_Run], north: str) -> None:
+    """Refuse a survey in grid or magnetic north whose runs refer their azimuths to it by
+    different corrections (runs surveyed years apart in magnetic north, headers stating
+    different convergences): positions integrated from them would be in no one north."""
+    shifts = [run.to_north for run in runs]
+    apart = [abs((s - shifts[0] + 180.0) % 360.0 - 180.0) for s in shifts]
+    if max(apart) > NORTH_AGREE_DEG:
+        each = ", ".join(
+            f"{run.name}: {(-run.to_north + 180.0) % 360.0 - 180.0:g}°" for run in runs
+        )
+        raise ValueError(
+            f"the runs' {north} norths are not one ({north} north east of true north by "
+            f"{each}): a survey integrated from their azimuths would be in none of them; "
+            "give the stage north_reference: true (each run's azimuths referred to true "
+            "north by its own correction)"
+        )
 
 
 def _needs_magnetic(tool: ToolModel, table: pa.Table, north: str) -> bool:
