@@ -357,3 +357,46 @@ def test_ellipses_unlike_their_covariances_are_not_carried(
     refused = [str(w.message) for w in caught if "not carried" in str(w.message)]
     assert len(refused) == 1 and re.search(said, refused[0]), refused
     assert json.loads((out / "summary.json").read_text()).get("uncertainty") is None
+
+
+K2 = float(np.sqrt(-2.0 * np.log(1.0 - 0.95)))
+"""the 95 % ellipse's scale of its 1σ axes: P(χ²₂ ≤ k²) = 0.95, k = √(−2 ln 0.05) ≈ 2.4477"""
+K1 = 1.959963984540054
+"""the two-sided 95 % normal quantile, the vertical interval's scale"""
+
+
+def conf_listing(tmp_path: Path, ellipse_k: float) -> Path:
+    """The ellipse listing with the axes at the stated 95 % confidence beside them: the 1σ
+    semi-axes times ``ellipse_k``, σ_V times :data:`K1`, 4 decimals."""
+    rows = []
+    for row in with_ellipses(ROWS):
+        major, minor, _, sigma_v = (float(v) for v in row.split(",")[9:])
+        rows.append(f"{row},{ellipse_k * major:.4f},{ellipse_k * minor:.4f},{K1 * sigma_v:.4f}")
+    path = ellipse_listing(tmp_path, tuple(rows))
+    names = "ellipse_major_conf[m],ellipse_minor_conf[m],vertical_conf[m]"
+    path.write_text(path.read_text().replace("sigma_v[m]\n", f"sigma_v[m],{names}\n"))
+    return path
+
+
+def test_axes_at_the_stated_confidence_are_carried(tmp_path: Path) -> None:
+    """Axes scaled by the 2-D factor of the stated 95 %: carried with the rest."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputFileWarning)
+        run = gp.run(SURVEY, conf_listing(tmp_path, K2))
+    got = run.tables["trajectory.trajectory"]
+    assert "ellipse_major_conf" in got.column_names and "vertical_conf" in got.column_names
+
+
+def test_an_ellipse_scaled_by_the_1d_factor_is_not_carried(tmp_path: Path) -> None:
+    """A 95 % ellipse made with 1.96 (the 1-D quantile) is a 85 % one: a file stating 95 %
+    beside it states two confidences, and before it was carried as 95 %."""
+    out = tmp_path / "out"
+    with pytest.warns(InputFileWarning) as caught:
+        gp.run(SURVEY, conf_listing(tmp_path, K1), out=out)
+    refused = [str(w.message) for w in caught if "not carried" in str(w.message)]
+    said = (
+        r"at MD 500\.00 m ellipse_major_conf is \d\.\d{4} m, not the 1σ \d\.\d{4} m at the "
+        r"95 % confidence the file states \(2\.4477 × 1σ"
+    )
+    assert len(refused) == 1 and re.search(said, refused[0]), refused
+    assert json.loads((out / "summary.json").read_text()).get("uncertainty") is None

@@ -11,8 +11,9 @@ record (:mod:`pipeline.uncertainty.tieon`), and records that they came with the 
 columns missing, in another unit, at a confidence level it does not state, holding a value
 no such column can hold (a negative variance, an infinite size), a station's values partly
 null, covariances of no covariance matrix, or in a north other than the azimuths' is
-refused; so are 1σ ellipses that are not those of the covariances beside them (or whose
-semi-minor axis is the longer), and the refusal said — a file's uncertainty is never
+refused; so are 1σ ellipses that are not those of the covariances beside them (sizes, or the
+azimuth of an ellipse with an axis; or whose semi-minor axis is the longer) and sizes at the
+stated confidence that are not the 1σ ones scaled to it, and the refusal said — a file's uncertainty is never
 dropped quietly. Lengths m, covariances m².
 """
 
@@ -24,7 +25,7 @@ import numpy as np
 import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY
-from pipeline.uncertainty.ellipse import ellipses
+from pipeline.uncertainty.ellipse import ellipses, horizontal_scale, vertical_scale
 from pipeline.uncertainty.stated import (
     CARRIED_KEY,
     CONFIDENCE_KEY,
@@ -105,10 +106,14 @@ def carried_uncertainty(stations: pa.Table) -> Carried:
         kept = []
     if kept:
         try:
-            file_statements(pa.schema([stations.schema.field(c) for c in kept]))
+            stated = file_statements(pa.schema([stations.schema.field(c) for c in kept]))
         except ValueError as exc:
             refused.append(f"columns {_listed(kept)}: {exc}")
             kept = []
+        else:
+            if "confidence" in stated and (off := _off_confidence(stations, kept, stated)):
+                refused.append(f"columns {_listed(kept)}: {off}")
+                kept = []
     if kept and FLAG_COLUMN in stations.column_names:
         kept.append(FLAG_COLUMN)
     tie_on = _tie_on(stations, refused) if kept else None
@@ -250,6 +255,49 @@ def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
                 "turned apart: one of them in another north, or edited)"
             )
     return None
+
+
+def _off_confidence(stations: pa.Table, kept: list[str], stated: dict[str, str]) -> str | None:
+    """Why the sizes at the stated confidence of ``kept`` are not the 1σ ones (the
+    covariances', else the 1σ ellipse columns') scaled to it — k of χ²₂ for the ellipse's
+    axes, the two-sided normal quantile for the vertical — to :data:`ELLIPSE_M` and
+    :data:`ELLIPSE_REL`; None where they agree or there is nothing to compare."""
+
+    def values(name: str) -> np.ndarray:
+        return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
+
+    confidence = float(stated["confidence"])
+    if "cov_nn" in kept:
+        of = ellipses(*(values(c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
+        one = {"major": of.semi_major, "minor": of.semi_minor, "vertical": of.sigma_v}
+    elif "ellipse_major" in kept:
+        one = {k: values(c) for k, c in _ONE_SIGMA.items()}
+    else:
+        return None
+    md = values("md")
+    k2, k1 = horizontal_scale(confidence), vertical_scale(confidence)
+    for name, axis, k in (
+        ("ellipse_major_conf", "major", k2),
+        ("ellipse_minor_conf", "minor", k2),
+        ("vertical_conf", "vertical", k1),
+    ):
+        if name not in kept:
+            continue
+        expected = k * one[axis]
+        stated_m = values(name)
+        off = np.abs(stated_m - expected) > ELLIPSE_M + ELLIPSE_REL * np.abs(expected)
+        if (bad := np.flatnonzero(off)).size:
+            row = int(bad[0])
+            return (
+                f"at MD {md[row]:.2f} m {name} is {stated_m[row]:.4f} m, not the 1σ "
+                f"{one[axis][row]:.4f} m at the {confidence * 100:g} % confidence the file "
+                f"states ({k:.4f} × 1σ = {expected[row]:.4f} m)"
+            )
+    return None
+
+
+_ONE_SIGMA = {"major": "ellipse_major", "minor": "ellipse_minor", "vertical": "sigma_v"}
+"""The 1σ column of each axis."""
 
 
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
