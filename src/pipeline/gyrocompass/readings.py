@@ -424,12 +424,25 @@ def check_lengths(
 
 
 def moving_average(values: FloatArray, window: int) -> FloatArray:
-    """Centred moving average over ``window`` samples (edges: nearest value repeated)."""
-    if window == 1:
+    """Centred moving average over ``window`` samples; within half a window of either end,
+    the mean of the samples the window holds there (not the end sample repeated, which
+    would weigh one sample's noise half a window over)."""
+    if window == 1 or values.size == 0:
         return values
     from scipy.ndimage import uniform_filter1d  # imported on use: slow to import
 
     smooth: FloatArray = uniform_filter1d(values, window, mode="nearest")
+    lo = window // 2  # the window at sample i spans i − lo … i − lo + window − 1
+    hi = window - 1 - lo
+    n = values.size
+    head = np.arange(min(lo, n))
+    tail = np.arange(max(n - hi, 0), n)
+    sums = np.concatenate([[0.0], np.cumsum(values[: min(n, lo + hi + 1)])])
+    top = np.minimum(head + hi + 1, n)
+    smooth[head] = sums[top] / top
+    back = np.concatenate([[0.0], np.cumsum(values[::-1][: min(n, lo + hi + 1)])])
+    count = np.minimum(n - tail + lo, n)
+    smooth[tail] = back[count] / count
     return smooth
 
 
