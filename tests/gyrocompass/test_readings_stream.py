@@ -95,6 +95,33 @@ def test_stops_without_a_dwell_are_numbered_and_recorded_alike(rows: int) -> Non
     assert f"held depth there for only {short.held:.1f} s" in short.reason()
 
 
+@pytest.mark.parametrize("rows", BATCHES)
+def test_a_stop_the_tool_crept_through_is_unread_alike(rows: int) -> None:
+    """At 110 m the tool creeps 4 cm in 10 s, the frame still: the smoothed MD stays within
+    the 5 cm tolerance for longer than the 6 s a dwell needs, but the (exact) odometer MD
+    rests nowhere — the stop is station 1, unread (before: a reading of a moving tool).
+    Station 0 leaves at 1 m/s and station 2 arrives so: their readings take in no sample of
+    travel (nor of the 1 s trim after the arrival), and lose at most half the 1 s MD
+    smoothing window. The streamed readings say the same."""
+    md, angle = profile(
+        [
+            (0, 100, 10), (10, 100, 10), (11, 100, 100), (21, 100, 100),  # station 0
+            (31, 110, 100), (41, 110.04, 100),  # crept through: station 1
+            (51, 120, 100), (61, 120, 100), (62, 120, 10), (72, 120, 10),  # station 2
+        ]
+    )  # fmt: skip
+    whole, streamed = both(synthetic(md, angle), ReadingOptions(), rows)
+    assert streamed.equals(whole)
+    assert unread_stops(streamed) == unread_stops(whole)
+    np.testing.assert_array_equal(whole.column("station").to_numpy(), [0, 0, 2, 2])
+    (crept,) = unread_stops(whole)
+    assert crept.station == 1 and crept.md == pytest.approx(110.02, abs=0.01)
+    assert crept.held >= 9.5 and "at rest" in crept.reason()
+    t, n = whole.column("t").to_numpy(), whole.column("n").to_numpy()
+    first, last = t - (n - 1) / 20, t + (n - 1) / 20  # (10 Hz)
+    assert 20.5 <= last[1] <= 21.0 and 52.0 <= first[2] <= 52.5  # within half the smoothing
+
+
 def test_a_batch_boundary_inside_a_stationary_position() -> None:
     sim = run()
     station = sim.samples.column("station").to_numpy(zero_copy_only=False)

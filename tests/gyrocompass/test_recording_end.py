@@ -150,6 +150,30 @@ def test_a_last_position_cut_mid_dwell_is_flagged_with_its_averaging_time(
     assert "recording_end" not in report.split("Appendix")[0]  # no internal names above
 
 
+def test_a_last_position_cut_mid_dwell_is_flagged_without_markers_too(
+    tmp_path: Path, point_samples: pa.Table
+) -> None:
+    """The same cut, the dwells found from the signals (markers dropped), the last sample's
+    MD 12 cm over (2.4 σ of the odometer's 5 cm noise): the dwell the recording ended in
+    is found to its last sample — the smoothed MD there is the mean of the samples its
+    window holds, not the last sample repeated over half the window (6 cm over: out of the
+    5 cm tolerance, the dwell ended half a window before the recording and the cut went
+    unflagged) — and it is flagged, averaged over 5 s as marked (to the 0.6 s of frame
+    move the angle tolerance takes in)."""
+    last = _last_station(point_samples)
+    cut = point_samples.filter(
+        pc.less(point_samples.column("time"), _position_start(point_samples, last, 4) + 6.0)
+    )
+    md = cut.column("md").to_numpy().copy()
+    md[-1] += 0.12
+    i = cut.schema.get_field_index("md")
+    samples = cut.set_column(i, cut.schema.field(i), pa.array(md))
+    out, _ = _run(tmp_path, samples.drop_columns(["station", "position"]), None)
+    (end,) = _rows(out, "recording_end")
+    assert (end["station"], end["position"], end["passed"]) == (last, 4, False)
+    assert "averaged over 5." in str(end["detail"])
+
+
 @pytest.mark.parametrize("markers", [True, False], ids=["marked", "detected"])
 def test_a_last_position_too_short_to_average_is_said_not_dropped_silently(
     tmp_path: Path, point_samples: pa.Table, markers: bool

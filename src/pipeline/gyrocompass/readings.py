@@ -11,6 +11,10 @@ they are detected from the frame angle and the odometer MD:
   values for long enough to leave ``min_dwell`` after trimming; it ends at the first sample
   where either leaves its tolerance around its median over that first stretch (a stop
   creeping in at the edge of the tolerance does not cut the dwell short);
+- a dwell's ends are then cut back to where its odometer MD rests (the tool arriving or
+  leaving creeps within ``md_tolerance`` for seconds: :mod:`~pipeline.gyrocompass.still`);
+  one left too short for ``min_dwell`` after trimming is not a dwell (the tool crept
+  through it);
 - consecutive dwells belong to one station until the stop MD differs from the previous one
   by more than ``station_gap``, or the MD strayed farther than that between them (the tool
   moved and came back); stations and positions are numbered from 0;
@@ -33,6 +37,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
+from pipeline.gyrocompass.still import still_spans
 from pipeline.gyrocompass.stops import (
     Dwells,
     Stop,
@@ -51,6 +56,8 @@ SIGNALS = ("gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z")
 UNIFORM_RTOL = 0.01
 """Largest deviation of a time step from the mean step, as a fraction of it: a dropped or
 doubled sample, or a change of sample rate, breaks uniform sampling; clock jitter does not."""
+Ended = tuple[int, int, int, int]
+"""The dwell a recording ended in: first and end sample, station, position."""
 
 
 class ReadingOptions(BaseModel):
@@ -130,10 +137,9 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     if md is None:
         raise ValueError(NO_MD)
     angle = _optional(samples, "frame_angle")
-    k_start, k_end, need, window = counts(options, rate)
+    k_start, k_end, need, _ = counts(options, rate)
     markers = _markers(samples)
-    last: tuple[int, int, int, int] | None = None
-    """the dwell the recording ended in: first and end sample, station, position"""
+    last: Ended | None = None
     unread: list[UnreadStop] = []
     if markers is not None:
         starts, ends, station, position = markers
@@ -145,25 +151,7 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
     else:
         if angle is None:
             raise ValueError(NO_ANGLE)
-        smooth_md = moving_average(md, window)
-        watched = (np.unwrap(angle, period=360.0), smooth_md)
-        tolerances = (options.angle_tolerance, options.md_tolerance)
-        starts, ends = _detect_dwells(watched, tolerances, k_start + need + k_end)
-        begin = max(int(ends[-1]) if ends.size else 0, time.size - k_start - need - k_end)
-        tail = begin + steady_tail(tuple(x[begin:] for x in watched), tolerances)
-        cut = begin < time.size and time.size - tail >= end_stop_count(options, rate)
-        numbered = np.append(starts, tail) if cut else starts
-        station, position = _number_stations(smooth_md, numbered, options.station_gap)
-        closed = np.append(ends, time.size) if cut else ends
-        found = Dwells(numbered, closed, smooth_md[numbered], station)
-        placed = place(found, md_stops(smooth_md, md, time, options, rate), options.station_gap)
-        station = placed.renumber[station]
-        unread = unread_records(placed, rate, *stop_terms(options, rate))
-        if cut:
-            last = (tail, time.size, int(station[-1]), int(position[-1]))
-            station, position = station[:-1], position[:-1]
-        elif ends.size and ends[-1] == time.size:
-            last = (int(starts[-1]), int(ends[-1]), int(station[-1]), int(position[-1]))
+        starts, ends, station, position, last, unread = _detected(md, angle, time, options, rate)
     signals = {name: v for name in SIGNALS if (v := _optional(samples, name)) is not None}
     if starts.size == 0 and last is not None:
         left = max(last[1] - last[0] - k_start - k_end, 0) / rate
@@ -188,6 +176,39 @@ def position_readings(samples: pa.Table, options: ReadingOptions = DEFAULTS) -> 
             left >= need,
         ),
     )
+
+
+def _detected(
+    md: FloatArray, angle: FloatArray, time: FloatArray, options: ReadingOptions, rate: float
+) -> tuple[IndexArray, IndexArray, IndexArray, IndexArray, Ended | None, list[UnreadStop]]:
+    """The detected dwells' still samples (first and end, before the trims), stations and
+    positions; the dwell the recording ended in (first and end sample, station, position)
+    and the unread stops (module docstring)."""
+    k_start, k_end, need, window = counts(options, rate)
+    smooth_md = moving_average(md, window)
+    watched = (np.unwrap(angle, period=360.0), smooth_md)
+    tolerances = (options.angle_tolerance, options.md_tolerance)
+    starts, ends = _detect_dwells(watched, tolerances, k_start + need + k_end)
+    begin = max(int(ends[-1]) if ends.size else 0, time.size - k_start - need - k_end)
+    first, end = still_spans(md, starts, ends, window)
+    keep = end - first - k_start - k_end >= need  # else the tool crept through it: no dwell
+    starts, ends, first, end = starts[keep], ends[keep], first[keep], end[keep]
+    tail = begin + steady_tail(tuple(x[begin:] for x in watched), tolerances)
+    cut = begin < time.size and time.size - tail >= end_stop_count(options, rate)
+    numbered = np.append(starts, tail) if cut else starts
+    station, position = _number_stations(smooth_md, numbered, options.station_gap)
+    closed = np.append(ends, time.size) if cut else ends
+    found = Dwells(numbered, closed, smooth_md[numbered], station)
+    placed = place(found, md_stops(smooth_md, md, time, options, rate), options.station_gap)
+    station = placed.renumber[station]
+    unread = unread_records(placed, rate, *stop_terms(options, rate))
+    last = None
+    if cut:
+        last = (tail, time.size, int(station[-1]), int(position[-1]))
+        station, position = station[:-1], position[:-1]
+    elif ends.size and ends[-1] == time.size:
+        last = (int(first[-1]), int(end[-1]), int(station[-1]), int(position[-1]))
+    return first, end, station, position, last, unread
 
 
 def end_stop_count(options: ReadingOptions, rate: float) -> int:
@@ -403,12 +424,25 @@ def check_lengths(
 
 
 def moving_average(values: FloatArray, window: int) -> FloatArray:
-    """Centred moving average over ``window`` samples (edges: nearest value repeated)."""
-    if window == 1:
+    """Centred moving average over ``window`` samples; within half a window of either end,
+    the mean of the samples the window holds there (not the end sample repeated, which
+    would weigh one sample's noise half a window over)."""
+    if window == 1 or values.size == 0:
         return values
     from scipy.ndimage import uniform_filter1d  # imported on use: slow to import
 
     smooth: FloatArray = uniform_filter1d(values, window, mode="nearest")
+    lo = window // 2  # the window at sample i spans i − lo … i − lo + window − 1
+    hi = window - 1 - lo
+    n = values.size
+    head = np.arange(min(lo, n))
+    tail = np.arange(max(n - hi, 0), n)
+    sums = np.concatenate([[0.0], np.cumsum(values[: min(n, lo + hi + 1)])])
+    top = np.minimum(head + hi + 1, n)
+    smooth[head] = sums[top] / top
+    back = np.concatenate([[0.0], np.cumsum(values[::-1][: min(n, lo + hi + 1)])])
+    count = np.minimum(n - tail + lo, n)
+    smooth[tail] = back[count] / count
     return smooth
 
 

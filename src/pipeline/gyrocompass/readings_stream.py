@@ -64,6 +64,7 @@ from pipeline.gyrocompass.readings import (
     too_few,
 )
 from pipeline.gyrocompass.recording_end import RecordingEnd, attach, station_md
+from pipeline.gyrocompass.still import still_span
 from pipeline.gyrocompass.stops import (
     Dwells,
     Placed,
@@ -432,8 +433,8 @@ class _Detected:
     buffer that slides along the stream."""
 
     def __init__(self, options: ReadingOptions, rate: float, stations: _Stations) -> None:
-        self.k_start, self.k_end, need, self.window = counts(options, rate)
-        self.length = self.k_start + need + self.k_end
+        self.k_start, self.k_end, self.need, self.window = counts(options, rate)
+        self.length = self.k_start + self.need + self.k_end
         self.end_stop = end_stop_count(options, rate)
         self.tolerances = (options.angle_tolerance, options.md_tolerance)
         self.gap = options.station_gap
@@ -450,6 +451,9 @@ class _Detected:
         self.span = (-np.inf, np.inf)
         """highest and lowest smoothed MD from the previous dwell's start to ``resume``"""
         self.station = self.position = -1
+        self.numbering = (self.station, self.position, self.stop, self.span)
+        """the numbering before the open dwell's start: taken back if the tool crept
+        through it (:meth:`dwell`)"""
         self.found: list[tuple[int, int, float, int]] = []
         """every dwell and the steady end of the recording cut short: first and end sample
         number, smoothed MD at the first (m), station (:class:`~pipeline.gyrocompass.stops.
@@ -502,9 +506,7 @@ class _Detected:
             end = self.end(signals, self.open - self.base, limit, final)
             if end is None:
                 break
-            self.dwell(self.open - self.base, end, smooth)
-            if end == size:  # (final) the recording ended in it
-                self.ended(self.open - self.base, end, kept=True)
+            self.dwell(self.open - self.base, end, smooth, final=end == size)
             self.open, self.resume = None, self.base + end
         needed = min(self.open if self.open is not None else self.resume, self.stops.needed())
         keep = max(needed - self.window, self.base)
@@ -534,6 +536,7 @@ class _Detected:
 
     def _number(self, stop: float) -> None:
         """Number the dwell whose smoothed MD at its start is ``stop`` (m)."""
+        self.numbering = (self.station, self.position, self.stop, self.span)
         high, low = self.span[0] - self.stop, self.stop - self.span[1]
         if self.station < 0 or abs(stop - self.stop) > self.gap or max(high, low) > self.gap:
             self.station, self.position = self.station + 1, 0
@@ -573,12 +576,21 @@ class _Detected:
             return begin + int(np.argmax(out))
         return limit if final else None
 
-    def dwell(self, s: int, e: int, smooth: FloatArray) -> None:
+    def dwell(self, s: int, e: int, smooth: FloatArray, *, final: bool) -> None:
+        """The dwell of buffer indices [s, e): its still samples averaged (``final``: the
+        recording ended in it), or, too few (the tool crept through it), not a dwell."""
+        a, b = still_span(self.buffer["md"], s, e, self.window)
+        if b - a - self.k_start - self.k_end < self.need:
+            self.station, self.position, self.stop, self.span = self.numbering
+            self._fold(smooth[s:e])
+            return
         self.found.append((self.base + s, self.base + e, self.stop, self.station))
         self._fold(smooth[s:e])
-        a, b = (np.array([i], dtype=np.intp) for i in (s + self.k_start, e - self.k_end))
+        first, end = (np.array([i], dtype=np.intp) for i in (a + self.k_start, b - self.k_end))
         station, position = (np.array([k], dtype=np.intp) for k in (self.station, self.position))
-        self.stations.add(station, position, self.buffer, a, b)
+        self.stations.add(station, position, self.buffer, first, end)
+        if final:
+            self.ended(a, b, kept=True)
 
     def _fold(self, values: FloatArray) -> None:
         if values.size:

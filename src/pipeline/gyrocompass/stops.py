@@ -82,7 +82,7 @@ class UnreadStop:
         return (
             f"{found}: the tool held depth there for {self.held:.1f} s (t = {self.start:.1f}–"
             f"{self.end:.1f} s), but its frame angle did not stay within "
-            f"{self.angle_tolerance:g}° (and its MD within {self.md_tolerance:g} m) for "
+            f"{self.angle_tolerance:g}° (and its MD within {self.md_tolerance:g} m, at rest) for "
             f"{self.need:.1f} s of it: the frame still turning, or the tool vibrating or "
             "creeping"
         )
