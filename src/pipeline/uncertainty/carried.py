@@ -13,8 +13,8 @@ no such column can hold (a negative variance, an infinite size), a station's val
 null, covariances of no covariance matrix, or in a north other than the azimuths' is
 refused; so are 1σ ellipses that are not those of the covariances beside them (sizes, or the
 azimuth of an ellipse with an axis; or whose semi-minor axis is the longer) and sizes at the
-stated confidence that are not the 1σ ones scaled to it, and the refusal said — a file's uncertainty is never
-dropped quietly. Lengths m, covariances m².
+stated confidence that are not the 1σ ones scaled to it, and the refusal said — a file's
+uncertainty is never dropped quietly. Lengths m, covariances m².
 """
 
 from __future__ import annotations
