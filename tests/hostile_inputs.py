@@ -146,6 +146,23 @@ def csv_wide(columns: int) -> bytes:
     return f"md [m],inc [deg],azi true [deg],{names}\n0,0,0,{zeros}\n100,1,10,{zeros}\n".encode()
 
 
+def csv_named(chars: int, key: str = "Well: ") -> bytes:
+    """A stations CSV whose title line ``key`` gives a well name ``chars`` characters long."""
+    return (
+        f"{key}{'x' * chars}\nNorth Reference: true\nMD (m),Inc (deg),Azimuth (deg)\n"
+        "0,0,0\n100,1,10\n"
+    ).encode()
+
+
+def las_named(chars: int) -> bytes:
+    """A LAS 2.0 stations file whose ~Well WELL item is ``chars`` characters long."""
+    return (
+        "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
+        f" NULL. -999.25 :\n WELL. {'x' * chars} : well\n~Curve\n DEPT.M : depth\n"
+        " INCL.DEG : inclination\n AZIM.DEG : azimuth (true north)\n~A\n0 0 0\n100 1 10\n"
+    ).encode()
+
+
 def las_wide(curves: int) -> bytes:
     """A LAS 2.0 stations file with ``curves`` extra curves (two rows)."""
     names = "".join(f" C{i}.M : curve {i}\n" for i in range(curves))
@@ -192,8 +209,14 @@ HOSTILE: dict[str, tuple[Generator, ...]] = {
         lambda r: (witsml_text(_pick(r, 1_000_000, 5_000_000)), "huge text"),
         lambda r: (witsml_attribute(_pick(r, 1_000_000, 5_000_000)), "huge attribute"),
     ),
-    "csv-stations": (lambda r: (csv_wide(_pick(r, 1_001, 100_000)), "too many columns"),),
-    "las-stations": (lambda r: (las_wide(_pick(r, 998, 100_000)), "too many curves"),),
+    "csv-stations": (
+        lambda r: (csv_wide(_pick(r, 1_001, 100_000)), "too many columns"),
+        lambda r: (csv_named(_pick(r, 1_000_000, 5_000_000)), "huge well name"),
+    ),
+    "las-stations": (
+        lambda r: (las_wide(_pick(r, 998, 100_000)), "too many curves"),
+        lambda r: (las_named(_pick(r, 1_000_000, 5_000_000)), "huge well name"),
+    ),
     "pipeline": (
         lambda r: (yaml_binary_aliases(100_000, _pick(r, 200, 20_000)), "binary aliases"),
         lambda r: (b"name: p\nversion: 1\nwhen: !!timestamp abc\n", "bad timestamp"),

@@ -29,12 +29,11 @@ from hostile_inputs import (
 )
 from pipeline.errors import InputFileError
 from pipeline.io import parquet
-from pipeline.io.limits import MAX_COLUMNS
+from pipeline.io.limits import MAX_COLUMNS, TEXT_MAX
 from pipeline.io.mcap import read_samples, write_samples
 from pipeline.io.mcap.options import McapOptions
 from pipeline.io.mcap.records import MIN_DECOMPRESSED
 from pipeline.io.parquet import MIN_DECODED
-from pipeline.io.witsml.terms import TEXT_MAX
 from pipeline.jsontext import MAX_DEPTH
 from pipeline.plugins import load_registry
 from pipeline.well import WellMetadata
@@ -280,7 +279,7 @@ def test_a_las_file_of_too_many_curves_is_refused_at_its_line(tmp_path: Path):
 
 MEGABYTE = "x" * 1_000_000
 LONGEST = "x" * TEXT_MAX
-"""The longest value a WITSML reader takes (a megabyte one is refused for its length)."""
+"""The longest header value a reader takes (a megabyte one is refused for its length)."""
 HUGE_VALUES = {
     "cell.las": (
         "~Version\n VERS. 2.0 :\n WRAP. NO :\n~Well\n STRT.M 0 :\n STOP.M 100 :\n"
@@ -293,7 +292,7 @@ HUGE_VALUES = {
         "uom.xml:2: <incl>: uom 'xxx",
     ),
     "north.csv": (
-        f"North Reference: {MEGABYTE}\nMD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n",
+        f"North Reference: {LONGEST}\nMD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n",
         "north.csv:1: north reference 'xxx",
     ),
 }
@@ -309,7 +308,7 @@ def test_a_megabyte_value_is_quoted_by_its_ends_in_a_one_line_error(tmp_path: Pa
     stderr = refused_by_convert(path, "stations", ".csv")
     assert len(stderr) < 500 and stderr.count("\n") == 1, stderr[:1000]
     assert f"{tmp_path}/{where}" in stderr
-    chars = TEXT_MAX if name.endswith(".xml") else 1_000_000
+    chars = 1_000_000 if name == "cell.las" else TEXT_MAX  # a data cell: no header text
     assert "x" * 60 + "…" + "x" * 20 + f"' ({chars:,} characters)" in stderr
 
 
@@ -335,26 +334,3 @@ def test_a_long_well_name_no_writer_holds_is_quoted_by_its_ends(tmp_path: Path):
     assert result.returncode == 2 and len(result.stderr) < 500, result.stderr[:1000]
     assert f"{path}: the stations read cannot be written to copy.xml" in result.stderr
     assert "' (65,536 characters) is longer than the 64 characters" in result.stderr
-
-
-def test_a_header_value_longer_than_the_witsml_reader_takes_is_not_written(tmp_path: Path):
-    """gyropipe writes no WITSML text it refuses to read back: a listing's company one
-    character longer than TEXT_MAX is refused by the writer naming it (before: written, and
-    the copy unreadable); one of TEXT_MAX characters reads back whole."""
-    results = {}
-    for chars in (TEXT_MAX + 1, TEXT_MAX):
-        path = tmp_path / f"company-{chars}.csv"
-        path.write_text(
-            f"Well: W-1\nCompany: {'c' * chars}\nNorth Reference: true\n"
-            "MD (m),Inc (deg),Azimuth (deg)\n0,0,0\n100,1,10\n"
-        )
-        results[chars] = gyropipe_cli("convert", str(path), str(tmp_path / f"{chars}.xml"))
-    refused = results[TEXT_MAX + 1]
-    assert refused.returncode == 2 and len(refused.stderr) < 500, refused.stderr[:1000]
-    assert f"cannot be written to {TEXT_MAX + 1}.xml (writer 'witsml'): well company 'ccc" in (
-        refused.stderr
-    )
-    assert "(65,537 characters) is longer than the 65,536 characters" in refused.stderr
-    assert results[TEXT_MAX].returncode == 0, results[TEXT_MAX].stderr
-    _, well = load_registry().read(tmp_path / f"{TEXT_MAX}.xml", "stations")
-    assert well.company == "c" * TEXT_MAX

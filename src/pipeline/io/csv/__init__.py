@@ -46,7 +46,9 @@ File layout, in order:
   a latitude, longitude, declination or convergence may end in its hemisphere letter
   (``33.5 S``, ``2.5° W``: negative);
   a date as a LAS DATE (:mod:`pipeline.io.dates`: ISO, ``21-Nov-2026``, ``21/11/2026``);
-  a null marker (``Elevation: -999.25``) is no value;
+  a null marker (``Elevation: -999.25``) is no value; a value longer than
+  :data:`~pipeline.io.limits.TEXT_MAX` characters (or a line than
+  :data:`~pipeline.io.limits.HEADER_LINE_MAX`) is refused at its line;
 * **header row**: line ``header_line`` if that option is set, else the first line (within
   :data:`~pipeline.io.csv.header.HEADER_SEARCH_LINES`, never a ``#`` line) whose cells,
   split by one of ``, ; tab |``, name every required column of the kind. Names are looked up
@@ -81,9 +83,11 @@ invalid UTF-8, NUL bytes, a quote left open.
 
 Writing puts ``# gyropipe <well>``, ``# north_reference=<ref>``, ``# well.<field>=<value>``
 and, for a trajectory, ``# survey_method=…`` and ``# vs_azimuth=… deg`` lines above a
-``name[unit]`` header, floats at their unit's decimals (:mod:`pipeline.io.precision`); the
-reader reads stations and samples back to within half a step of those decimals (of several
-columns that look like one, the one whose unit fits: ``dogleg[deg]`` is no DLS).
+``name[unit]`` header (a title line the reader would refuse for its length is refused,
+:func:`~pipeline.io.csv.header.title_problem`), floats at their unit's decimals
+(:mod:`pipeline.io.precision`); the reader reads stations and samples back to within half a
+step of those decimals (of several columns that look like one, the one whose unit fits:
+``dogleg[deg]`` is no DLS).
 """
 
 from __future__ import annotations
@@ -109,12 +113,14 @@ from pipeline.io.csv.header import (
     HEADER_SEARCH_LINES,
     Cell,
     Header,
+    check_title,
     choose,
     factor,
     find_header,
     length_units,
     north_reference,
     read_title,
+    title_problem,
     title_statements,
     with_units_row,
 )
@@ -390,6 +396,7 @@ def _open(path: Path, kind: str, options: CsvOptions | None) -> tuple[_Rows, Wel
     header = with_units_row(path, text.head, header)
     lengths = length_units(header, opts, layout.columns)
     title = text.head[: header.index]
+    check_title(path, title, header.delimiter)
     well, in_file = read_title(path, title, header.delimiter, lengths)
     option = [("option north_reference", opts.north_reference)] if opts.north_reference else []
     declared = in_file + option
@@ -551,6 +558,9 @@ def write_csv(table: pa.Table, path: Path, well: WellMetadata) -> None:
     comments += [f"# {key}={value}" for key, value in file_statements(table.schema).items()]
     if (tie_on := tie_on_of(table)) is not None:
         comments.append(f"# tie_on={tie_on.model_dump_json()}")
+    for comment in comments:  # none the reader would refuse
+        if (reason := title_problem(comment, ",")) is not None:
+            raise ValueError(f"title line {comment[:40]!r}…: {reason}")
     rounded = for_export(table)
     head = io.StringIO()
     stdcsv.writer(head, lineterminator="\n").writerow([_header_cell(f) for f in rounded.schema])

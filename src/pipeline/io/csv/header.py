@@ -19,7 +19,7 @@ from pydantic import ValidationError
 from pipeline.errors import InputFileError, UnitError, warn_input
 from pipeline.io.csv.options import SHORTHANDS, CsvOptions
 from pipeline.io.dates import header_date
-from pipeline.io.limits import MAX_COLUMNS
+from pipeline.io.limits import HEADER_LINE_MAX, MAX_COLUMNS, TEXT_MAX, too_long
 from pipeline.io.mnemonics import CURVES, canonical_name, normalise
 from pipeline.io.nulls import is_null_marker
 from pipeline.units import canonical_unit, conversion_factor, is_unit_of, quantity_of
@@ -81,6 +81,8 @@ UNIT_HINTS = {"length": ("m", "ft"), "angle": ("deg", "rad"), "dogleg_severity":
 _BRACKETS = re.compile(r"[\[(]([^\[\]()]*)[\])]")
 _TITLE_KEY = re.compile(r"[A-Za-z][\w .\-/]*(?:[\[(][^\[\]()]*[\])])?")
 _TITLE_SEPARATOR = re.compile(r"[:=]")
+KEY_ROOM = HEADER_LINE_MAX - TEXT_MAX
+"""Characters of a title line its key's separator lies within (a key is a name: tens)."""
 
 
 @dataclass(frozen=True)
@@ -396,6 +398,26 @@ def length_units(header: Header, opts: CsvOptions, columns: tuple[str, ...]) -> 
     return units
 
 
+def check_title(path: Path, lines: list[str], delimiter: str) -> None:
+    """Refuse, at its line, a title line longer than :func:`title_problem` allows."""
+    for number, line in enumerate(lines, start=1):
+        if (reason := title_problem(line, delimiter)) is not None:
+            raise InputFileError(path, reason, line=number)
+
+
+def title_problem(line: str, delimiter: str) -> str | None:
+    """Why a title-block line is refused for its length, else None: a ``key: value`` line's
+    value over :data:`~pipeline.io.limits.TEXT_MAX` characters (naming the key), any line
+    over :data:`~pipeline.io.limits.HEADER_LINE_MAX` (a megabyte well name was read and
+    copied into every table, header and file written from it)."""
+    if len(line) <= TEXT_MAX:
+        return None
+    entry = _key_value(line, delimiter)
+    if entry is not None and (reason := too_long(entry[1], f"the value of {entry[0]!r}")):
+        return reason
+    return too_long(line, "the title line", HEADER_LINE_MAX)
+
+
 def read_title(
     path: Path, lines: list[str], delimiter: str, lengths: dict[str, str]
 ) -> tuple[WellMetadata, list[tuple[str, NorthReference]]]:
@@ -517,11 +539,12 @@ def _datum_elevation(
 
 
 def _key_value(line: str, delimiter: str) -> tuple[str, str] | None:
-    """``(key, value)`` of a ``key: value`` / ``# key=value`` line with a non-empty value."""
+    """``(key, value)`` of a ``key: value`` / ``# key=value`` line with a non-empty value (its
+    separator within the first :data:`KEY_ROOM` characters)."""
     comment = line.lstrip().startswith("#")
     junk = " \t" if comment else ' \t"' + delimiter
     text = line.strip().lstrip("#").strip(junk)
-    separator = _TITLE_SEPARATOR.search(text)
+    separator = _TITLE_SEPARATOR.search(text, 0, KEY_ROOM)
     if separator is None:
         return None
     key, value = text[: separator.start()].strip(), text[separator.end() :].strip(junk)

@@ -8,7 +8,9 @@ sections read as items.
   raw text and line of every item (``lasio.read`` turns a UWI ``0012`` into ``12``, and
   even with ``ignore_data`` scans the whole file: 4 s for 100 MB). LAS 1.x ``~W`` items
   other than STRT/STOP/STEP/NULL hold their value after the colon, as the 1.2 standard
-  (and lasio) says. Other sections (``~O``, unknown ones) are skipped.
+  (and lasio) says. Other sections (``~O``, unknown ones) are skipped. An item line longer
+  than :data:`~pipeline.io.limits.HEADER_LINE_MAX` characters, or its mnemonic, unit, value
+  or description than :data:`~pipeline.io.limits.TEXT_MAX`, is refused at its line.
 * **Text** — UTF-16 with a byte-order mark, or without one when every other byte of the
   head is a NUL (as Windows tools write it), is transcoded to UTF-8 first (lasio cannot read
   it); then UTF-8 (BOM or not) when the bytes are valid UTF-8, else Windows-1252 (Latin-1
@@ -25,7 +27,7 @@ from pathlib import Path
 from typing import Literal
 
 from pipeline.errors import InputFileError, WrongKindError
-from pipeline.io.limits import MAX_COLUMNS
+from pipeline.io.limits import HEADER_LINE_MAX, MAX_COLUMNS, too_long
 
 SNIFF_BYTES = 64 * 1024
 BOM = b"\xef\xbb\xbf"
@@ -265,7 +267,7 @@ def parse_header(path: Path, lines: list[str], data_set: str = LOG) -> Header:
         elif role is not None:
             if role == "curves" and len(sections[role]) == MAX_COLUMNS:
                 raise InputFileError(path, f"more than {MAX_COLUMNS:,} curves: refused", number)
-            sections[role].append(_item(path, text, number, role))
+            sections[role].append(_bounded(path, text, number, role))
     version, wrapped, delimiter = _version(path, sections["version"])
     well = sections["well"]
     if version < 2:
@@ -305,6 +307,28 @@ def section_role(title: str, data_set: str = LOG) -> Role | None:
     if name.startswith("W"):
         return "well"
     return None
+
+
+def _bounded(path: Path, text: str, number: int, role: Role) -> Item:
+    """The item of a header line, refused at its line for its length (:func:`item_problem`)."""
+    item = _item(path, text, number, role)
+    if (reason := item_problem(item, text)) is not None:
+        raise InputFileError(path, reason, line=number)
+    return item
+
+
+def item_problem(item: Item, line: str) -> str | None:
+    """Why a header item (on ``line``) is refused for its length, else None: its mnemonic,
+    unit, value or description over :data:`~pipeline.io.limits.TEXT_MAX` characters, or
+    the line over :data:`~pipeline.io.limits.HEADER_LINE_MAX` (a megabyte well name was read
+    and copied into every table, header and file written from it)."""
+    parts = {"mnemonic": item.mnemonic, "unit": item.unit, "value": item.value}
+    reasons = [too_long(part, f"the {what} of {item.mnemonic!r}") for what, part in parts.items()]
+    reasons += [
+        too_long(item.descr, f"the description of {item.mnemonic!r}"),
+        too_long(line, f"the header line of {item.mnemonic!r}", HEADER_LINE_MAX),
+    ]
+    return next((reason for reason in reasons if reason is not None), None)
 
 
 def _item(path: Path, text: str, number: int, role: Role) -> Item:

@@ -34,7 +34,8 @@ file holds one north reference: the azimuth columns' (else the well's), in NREF 
 azimuth curve's description. Header numbers are written in shortest round-trip form,
 STEP at its unit's decimals and the LOC text's degrees at 6 decimals. The file is UTF-8
 without a byte-order mark (ASCII unless the well's or a column's own text is not: strict
-LAS readers expect ``~V`` as the first bytes).
+LAS readers expect ``~V`` as the first bytes). A header line the reader would refuse for its
+length (:func:`~pipeline.io.las.header.item_problem`) is refused.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ import pyarrow.csv as pacsv
 
 from pipeline.contracts import DESCRIPTION_KEY, NORTH_KEY, UNIT_KEY
 from pipeline.io.las.curves import KINDS
+from pipeline.io.las.header import Item, item_problem
 from pipeline.io.las.tieon import tie_on_items
 from pipeline.io.mnemonics import CURVES
 from pipeline.io.nulls import NULL_MARKERS, refuse_null_markers
@@ -175,7 +177,7 @@ def _curve_line(f: pa.Field) -> str:
             f"column {f.name!r} (unit {unit!r}) cannot be a LAS curve: a name or unit with "
             "':', or a unit with spaces"
         )
-    return line
+    return _readable(line, Item(mnemonic, unit, "", descr, 0))
 
 
 def _mnemonic(name: str) -> str:
@@ -381,7 +383,17 @@ def _line(mnemonic: str, unit: str, value: object, descr: str) -> str:
         text = repr(float(value))  # type: ignore[arg-type]
     if "\n" in text or "\r" in text:
         raise ValueError(f"{mnemonic} {text!r} has a line break: a LAS header line cannot")
-    return f" {mnemonic:<8}.{unit:<8} {text:<24} : {descr}"
+    line = f" {mnemonic:<8}.{unit:<8} {text:<24} : {descr}"
+    return _readable(line, Item(mnemonic, unit, text, descr, 0))
+
+
+def _readable(line: str, item: Item) -> str:
+    """``line`` (of ``item``) if the reader takes its length, else a ValueError: gyropipe
+    writes no header line it refuses to read back (:func:`~pipeline.io.las.header.item_problem`)."""
+    reason = item_problem(item, line)
+    if reason is not None:
+        raise ValueError(reason)
+    return line
 
 
 def _description(f: pa.Field) -> str:

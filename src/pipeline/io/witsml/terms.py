@@ -40,11 +40,6 @@ NAME_MAX = 64
 """Longest name and uid (WITSML ``nameString``, ``uidString``)."""
 TYPE_MAX = 40
 """Longest value of an extensible enumeration (WITSML ``abstractTypeEnum``)."""
-TEXT_MAX = 65_536
-"""Most characters of an element's text or an attribute's value gyropipe reads or writes:
-16 times WITSML 1.4.1.1's longest string (``abstractCommentString``, 4,000 characters; a
-store never writes more). Bounds what one text costs: a 5-million-character well name was
-read and copied into every table, header and file written from it (1 GiB peaks)."""
 
 AZI_REF: dict[NorthReference, str] = {
     "true": "true north",

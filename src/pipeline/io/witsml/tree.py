@@ -3,7 +3,7 @@ whole), each element's text joined once (appending to a string per piece copies 
 each element's line so every problem names it; a DOCTYPE or an entity declaration is refused
 (a WITSML document needs neither, and they are how XML documents attack their readers), as
 is an element's text (its ends stripped) or an attribute's value longer than
-:data:`~pipeline.io.witsml.terms.TEXT_MAX` characters, naming the element and its line: no
+:data:`~pipeline.io.limits.TEXT_MAX` characters, naming the element and its line: no
 WITSML store writes one, and one would be copied into every table and file read from it."""
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ from typing import Any
 from xml.parsers import expat
 
 from pipeline.errors import InputFileError
-from pipeline.io.witsml.terms import NS, TEXT_MAX
+from pipeline.io.limits import TEXT_MAX
+from pipeline.io.witsml.terms import NS
 
 
 @dataclass

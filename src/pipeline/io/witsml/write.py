@@ -12,6 +12,7 @@ import pyarrow as pa
 
 from pipeline.contracts import NORTH_KEY, UNIT_KEY, VERTICAL_TOLERANCE
 from pipeline.errors import EmptyTableError
+from pipeline.io.limits import TEXT_MAX
 from pipeline.io.nulls import refuse_null_markers
 from pipeline.io.witsml.terms import (
     AZI_REF,
@@ -23,7 +24,6 @@ from pipeline.io.witsml.terms import (
     NS,
     STATION_TYPES,
     SURVEY_TOOLS,
-    TEXT_MAX,
     TIE_IN,
     TIE_ON_EXTENSION,
     UNIT_UOM,
