@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from agreement_support import LISTED as SURVEY_LISTED
 from agreement_support import report_fields
 from readback_support import (
     TO_CANONICAL,
@@ -44,22 +45,7 @@ PIPELINES = ROOT / "pipelines"
 EXAMPLES = ROOT / "examples"
 STEP = {"m": 5e-5, "deg": 5e-7, "deg/30m": 5e-5, "m2": 5e-9}
 """canonical unit → the most a machine export may differ from the table (half its step)"""
-LISTED = {
-    "MD": "md",
-    "INC": "inc",
-    "AZI": "azi",
-    "TVD": "tvd",
-    "North": "north",
-    "East": "east",
-    "DLS": "dls",
-    "VS": "vertical_section",
-    "σ INC": "sigma_inc",
-    "σ AZI": "sigma_azi",
-    "Semi-major": "ellipse_major_conf",
-    "Semi-minor": "ellipse_minor_conf",
-    "Major az": "ellipse_azimuth",
-    "Vertical": "vertical_conf",
-}
+LISTED = {**SURVEY_LISTED, "σ INC": "sigma_inc", "σ AZI": "sigma_azi"}
 """the report listing's column names → the table columns they show"""
 LISTED_UNITS = {"m": "m", "°": "deg", "°/30 m": "deg/30m"}
 """the report listing's units (their first word) → canonical units"""
