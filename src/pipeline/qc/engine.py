@@ -9,7 +9,10 @@ leaves ``Ω cos φ·n_b``, n the north direction in the body), giving
 ``(u', v') = Ω cos φ (cos A cos I, −sin A)`` in the high-side frame, hence k. Near vertical
 (I below ``vertical_below``) the fit is referenced to the frame-angle sensor and
 k ≈ √(u'² + v'²), low by at most 1 − cos I (0.14 % at 3°). Near horizontal σ_k grows as
-1/cos I: the check weakens there. A fit cannot see a constant gyro bias (it removes it).
+1/cos I: the check weakens there, and where σ_k exceeds Ω cos φ / :data:`RESOLVED` the fit
+cannot tell k at all (at 90° its estimate is thousands of °/h, passing or failing by chance):
+the station is not evaluated, its row saying why. A fit cannot see a constant gyro bias (it
+removes it).
 
 Checks are made per reading (station × frame position), so a fault that changes sign as the
 frame turns is not averaged away; a station of N positions has N rows per check and fails
@@ -58,6 +61,8 @@ FIT_UNDETERMINED = (
     "error, motion or a frame fault"
 )
 """Diagnosis of a failed earth_rate_fit (single-axis and XY tools are not isolated)."""
+RESOLVED = 3.0
+"""earth_rate_fit is evaluated where its k is known to a third of Ω cos φ (σ_k ≤ Ω cos φ / 3)"""
 ISOLATED = ("earth_rate", "gravity", "latitude", "horizontal_rate", "rate_along_gravity")
 """Checks whose failure starts fault isolation (:mod:`pipeline.qc.faults`)."""
 
@@ -139,6 +144,13 @@ def fit_checks(
             sigma_inc = np.sqrt((sigma_inc_k[a:b] ** 2).sum()) / (b - a)
             var += (u * u * np.sin(inc) / (k * c**3) * sigma_inc) ** 2
         measured[i], sig[i] = k, np.sqrt(var)
+        if sig[i] > reference / RESOLVED:
+            detail[i] = (
+                f"skipped: at I = {np.degrees(inc):.2f}° the fit cannot tell k (σ "
+                f"{sig[i]:.3g} deg/h against Ω cos φ = {reference:.3f} deg/h): the high-side "
+                "gyro sees the Earth rate times cos I"
+            )
+            measured[i] = np.nan
     keys = Keys(station[starts], np.full(s, -1), md[starts], np.full(s, np.nan), np.full(s, np.nan))
     rows = judge(
         "earth_rate_fit",
@@ -154,6 +166,7 @@ def fit_checks(
     skipped = np.isnan(measured)
     rows.evaluated &= ~skipped
     rows.detail[skipped] = detail[skipped]
+    rows.tolerance[skipped] = np.nan
     failed = rows.failed
     rows.suspect[failed] = "undetermined"
     rows.detail[failed] = [f"{text}; {FIT_UNDETERMINED}" for text in rows.detail[failed]]
