@@ -405,12 +405,9 @@ def _one_north(runs: list[_Run], north: str) -> None:
     """Refuse a survey in grid or magnetic north whose runs refer their azimuths to it by
     different corrections (runs surveyed years apart in magnetic north, headers stating
     different convergences): positions integrated from them would be in no one north."""
-    shifts = [run.to_north for run in runs]
-    apart = [abs((s - shifts[0] + 180.0) % 360.0 - 180.0) for s in shifts]
-    if max(apart) > NORTH_AGREE_DEG:
-        each = ", ".join(
-            f"{run.name}: {(-run.to_north + 180.0) % 360.0 - 180.0:g}°" for run in runs
-        )
+    east_of_true = {run.name: (180.0 - run.to_north) % 360.0 - 180.0 for run in runs}
+    if max(east_of_true.values()) - min(east_of_true.values()) > NORTH_AGREE_DEG:
+        each = ", ".join(f"{name}: {value:g}°" for name, value in east_of_true.items())
         raise ValueError(
             f"the runs' {north} norths are not one ({north} north east of true north by "
             f"{each}): a survey integrated from their azimuths would be in none of them; "

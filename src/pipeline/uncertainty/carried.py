@@ -53,6 +53,8 @@ text file rounds MDs to 0.1 mm."""
 PSD_M2 = 2e-8
 """How far below 0 (m²) a covariance's smallest eigenvalue may lie from its file's rounding:
 8 decimals of m², the writers' (an error of at most 5e-9 an entry, 1.5e-8 on an eigenvalue)."""
+PSD_REL = 1e-6
+"""And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 ELLIPSE_M = 1e-3
 """How far (m) a 1σ size may lie from the one its covariances give, or a semi-minor axis
 above its semi-major: 0.1 mm rounding of each, and of the covariances, 8 decimals of m²
@@ -64,8 +66,6 @@ ELLIPSE_AZIMUTH_DEG = 0.1
 azimuth to 0.1° rounds by 0.05°; a covariance in another north is off by its convergence or
 declination), where the ellipse has an axis: its semi-axes differ by more than
 :data:`ELLIPSE_M` and :data:`ELLIPSE_REL` of the semi-major."""
-PSD_REL = 1e-6
-"""And in proportion to its largest variance (a file written to 6 or 7 significant digits)."""
 
 
 @dataclass(frozen=True)
@@ -215,11 +215,10 @@ def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
     if "ellipse_major" not in kept:
         return None
 
-    def values(name: str) -> np.ndarray:
-        return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
-
-    md = values("md")
-    major, minor, sigma_v = (values(c) for c in ("ellipse_major", "ellipse_minor", "sigma_v"))
+    md = _floats(stations, "md")
+    major, minor, sigma_v = (
+        _floats(stations, c) for c in ("ellipse_major", "ellipse_minor", "sigma_v")
+    )
     longer = np.flatnonzero(minor > major + ELLIPSE_M)
     if longer.size:
         row = int(longer[0])
@@ -229,7 +228,7 @@ def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
         )
     if "cov_nn" not in kept:
         return None
-    of = ellipses(*(values(c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
+    of = ellipses(*(_floats(stations, c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
     for name, stated, computed in (
         ("ellipse_major", major, of.semi_major),
         ("ellipse_minor", minor, of.semi_minor),
@@ -243,7 +242,7 @@ def _disagreement(stations: pa.Table, kept: list[str]) -> str | None:
                 f"{computed[row]:.4f} m (the file states two uncertainties that disagree)"
             )
     if "ellipse_azimuth" in kept:
-        stated_deg = values("ellipse_azimuth")
+        stated_deg = _floats(stations, "ellipse_azimuth")
         computed_deg = np.degrees(of.azimuth)
         off = np.abs(np.mod(stated_deg - computed_deg + 90.0, 180.0) - 90.0)
         axis = of.semi_major - of.semi_minor > ELLIPSE_M + ELLIPSE_REL * of.semi_major
@@ -263,18 +262,15 @@ def _off_confidence(stations: pa.Table, kept: list[str], stated: dict[str, str])
     axes, the two-sided normal quantile for the vertical — to :data:`ELLIPSE_M` and
     :data:`ELLIPSE_REL`; None where they agree or there is nothing to compare."""
 
-    def values(name: str) -> np.ndarray:
-        return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
-
     confidence = float(stated["confidence"])
     if "cov_nn" in kept:
-        of = ellipses(*(values(c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
+        of = ellipses(*(_floats(stations, c) for c in ("cov_nn", "cov_ne", "cov_ee", "cov_vv")))
         one = {"major": of.semi_major, "minor": of.semi_minor, "vertical": of.sigma_v}
     elif "ellipse_major" in kept:
-        one = {k: values(c) for k, c in _ONE_SIGMA.items()}
+        one = {k: _floats(stations, c) for k, c in _ONE_SIGMA.items()}
     else:
         return None
-    md = values("md")
+    md = _floats(stations, "md")
     k2, k1 = horizontal_scale(confidence), vertical_scale(confidence)
     for name, axis, k in (
         ("ellipse_major_conf", "major", k2),
@@ -284,7 +280,7 @@ def _off_confidence(stations: pa.Table, kept: list[str], stated: dict[str, str])
         if name not in kept:
             continue
         expected = k * one[axis]
-        stated_m = values(name)
+        stated_m = _floats(stations, name)
         off = np.abs(stated_m - expected) > ELLIPSE_M + ELLIPSE_REL * np.abs(expected)
         if (bad := np.flatnonzero(off)).size:
             row = int(bad[0])
@@ -298,6 +294,11 @@ def _off_confidence(stations: pa.Table, kept: list[str], stated: dict[str, str])
 
 _ONE_SIGMA = {"major": "ellipse_major", "minor": "ellipse_minor", "vertical": "sigma_v"}
 """The 1σ column of each axis."""
+
+
+def _floats(stations: pa.Table, name: str) -> np.ndarray:
+    """Column ``name`` of ``stations`` as float64 (nulls NaN)."""
+    return np.asarray(stations.column(name).to_numpy(zero_copy_only=False), np.float64)
 
 
 def _tie_on(stations: pa.Table, refused: list[str]) -> TieOnRecord | None:
