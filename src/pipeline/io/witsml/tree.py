@@ -18,9 +18,10 @@ from pipeline.io.limits import TEXT_MAX
 from pipeline.io.witsml.terms import NS
 
 
-@dataclass
+@dataclass(slots=True)
 class Node:
-    """One XML element: local name, namespace, attributes, text, children and its line."""
+    """One XML element: local name, namespace, attributes, text, children and its line (no
+    per-instance ``__dict__``: a trajectory of 10⁵ stations is 1.2 million of them)."""
 
     name: str
     namespace: str
@@ -107,6 +108,13 @@ def _feed(parser: Any, path: Path) -> None:
     parser.Parse(b"", True)
 
 
+SHARED_MAX = 64
+"""Longest name, attribute or text kept once however often it repeats (a uom, a namespace, a
+``typeTrajStation``: the same few strings on every station); longer ones are each their own."""
+_SHARED_COUNT = 1 << 14
+"""Most distinct strings shared per document (a station's uid or md repeats no other's)."""
+
+
 def parse(path: Path) -> Node:
     """The document's root element, with lines; malformed XML is an InputFileError."""
     parser = expat.ParserCreate(namespace_separator=" ")
@@ -114,20 +122,39 @@ def parse(path: Path) -> Node:
     stack: list[Node] = []
     pieces: list[list[str]] = []  # the text pieces of each open element, joined at its end
     roots: list[Node] = []
+    shared: dict[str, str] = {}  # one copy of each short repeated string
+    once_attrs: dict[tuple[tuple[str, str], ...], dict[str, str]] = {}
+
+    def once(value: str) -> str:
+        found = shared.get(value)
+        if found is None:
+            found = value
+            if len(shared) < _SHARED_COUNT:
+                shared[value] = value
+        return found
 
     def start(name: str, attrs: dict[str, str]) -> None:
         namespace, _, local = name.rpartition(" ")
-        node = Node(local, namespace, attrs, parser.CurrentLineNumber)
         for key, value in attrs.items():
             if len(value) > TEXT_MAX:
-                raise _too_long(f"attribute {key.rpartition(' ')[2]!r} of <{local}>", node.line)
+                line = parser.CurrentLineNumber
+                raise _too_long(f"attribute {key.rpartition(' ')[2]!r} of <{local}>", line)
+        if attrs:  # {"uom": "m"} on every md: one dict (attributes are only read)
+            items = tuple(
+                (once(k), once(v) if len(v) <= SHARED_MAX else v) for k, v in attrs.items()
+            )
+            attrs = once_attrs.get(items) or dict(items)
+            if len(once_attrs) < _SHARED_COUNT and all(len(v) <= SHARED_MAX for _, v in items):
+                once_attrs.setdefault(items, attrs)
+        node = Node(once(local), once(namespace), attrs, parser.CurrentLineNumber)
         (stack[-1].children if stack else roots).append(node)
         stack.append(node)
         pieces.append([])
 
     def end(name: str) -> None:
         node = stack.pop()
-        node.text = "".join(pieces.pop())
+        text = "".join(pieces.pop())
+        node.text = once(text) if len(text) <= SHARED_MAX else text
         # its ends stripped: the whitespace between a trajectory's 10⁵ indented stations is 10⁶
         if len(node.text) > TEXT_MAX and len(node.text.strip()) > TEXT_MAX:
             raise _too_long(f"the text of <{node.name}>", node.line)
