@@ -131,3 +131,61 @@ def test_a_trajectory_without_sigma_interpolates_as_before():
         warnings.simplefilter("error")
         got = gp.interpolate(gp.minimum_curvature(gp.read(STATIONS)), spacing=50.0)
     assert list(got.columns) == ["md", "inc", "azi", "tvd", "north", "east"]
+
+
+def test_a_summary_of_a_trajectory_of_interpolated_points_counts_its_stations(tmp_path: Path):
+    """The points integrated again (minimum_curvature of interpolate_md's points) keep their
+    ``interpolated`` flag with the σ they carry; summary.json counts and measures the survey
+    stations, the points apart — as the stations' own survey says."""
+    spec = write_pipeline(
+        tmp_path,
+        [
+            stage("read", "read_stations"),
+            stage("trajectory", "minimum_curvature", {"stations": "read.stations"}),
+            stage(
+                "sigma",
+                "position_uncertainty",
+                {"trajectory": "trajectory.trajectory"},
+                latitude=61.25,
+            ),
+            stage(
+                "every25",
+                "interpolate_md",
+                {"trajectory": "sigma.trajectory"},
+                spacing=25.0,
+                include_stations=True,
+            ),
+            stage("again", "minimum_curvature", {"stations": "every25.points"}, ["trajectory"]),
+            stage(
+                "summary",
+                "export",
+                {"trajectory": "again.trajectory"},
+                writer="json_summary",
+                filename="summary.json",
+            ),
+            stage("report", "report", {"trajectory": "again.trajectory"}, formats=["html"]),
+        ],
+    )
+    gyropipe_cli("run", spec, "--input", STATIONS, "--out", tmp_path / "out", check=True)
+    again = pq.read_table(tmp_path / "out" / "again.trajectory.parquet")
+    doc = json.loads((tmp_path / "out" / "summary.json").read_text())
+    direct = _with_sigma(gp.read(STATIONS))
+    between = again.num_rows - len(direct)
+    assert between > 10 and int(np.sum(again.column("interpolated").to_numpy())) == between
+    assert (doc["station_count"], doc["interpolated_points"]) == (len(direct), between)
+    (survey,) = doc["surveys"]
+    assert survey["station_count"] == len(direct)
+    assert survey["final"]["md"] == direct["md"].iloc[-1]
+    # the largest DLS over the stations' courses of at least 10 m, from the stations alone
+    md, dls = direct["md"].to_numpy(), direct["dls"].to_numpy()
+    counted = np.r_[False, np.diff(md) >= 10.0]
+    worst = int(np.argmax(np.where(counted, dls, -np.inf)))
+    assert survey["max_dls"]["dls"] == pytest.approx(dls[worst], rel=1e-9)
+    assert survey["max_dls"]["md"] == md[worst]
+    assert survey["max_dls"]["courses_not_counted"] == int((~counted[1:]).sum())
+    stated = doc["uncertainty"]
+    assert stated["stations_without_sigma"] == int(direct["ellipse_major"].isna().sum())
+    assert stated["interpolated_points"] == between
+    assert stated["at_td"]["semi_major"] == pytest.approx(direct["ellipse_major"].iloc[-1], 1e-4)
+    html = (tmp_path / "out" / "report.html").read_text()
+    assert f"{between} row(s) are points interpolated between survey stations" in html

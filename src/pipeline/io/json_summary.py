@@ -48,7 +48,7 @@ from pipeline.survey.courses import MIN_COURSE, max_dls
 from pipeline.survey.crosscheck import position_check_of
 from pipeline.survey.stations import survey_offsets
 from pipeline.tables import Trajectory
-from pipeline.uncertainty.stated import statement_of
+from pipeline.uncertainty.stated import interpolated_rows, statement_of
 from pipeline.uncertainty.tieon import TieOn
 from pipeline.version import __version__
 from pipeline.well import NorthReference, WellMetadata
@@ -193,6 +193,12 @@ class UncertaintyStatement(_Model):
         description="true: the columns are the stations file's, carried with its stations as "
         "it stated them, not computed in this run; false: computed in this run",
     )
+    interpolated_points: int = Field(
+        0,
+        ge=0,
+        description="rows flagged `interpolated`: points between survey stations, without σ "
+        "and not stations (not in stations_without_sigma, largest or at_td)",
+    )
 
 
 class CheckCount(_Model):
@@ -264,7 +270,16 @@ class SurveySummary(_Model):
         description="survey calculation method and vertical-section azimuth (null: unknown)"
     )
     units: Units = Units()
-    station_count: int = Field(ge=0, description="stations over all surveys")
+    station_count: int = Field(
+        ge=0, description="survey stations over all surveys (interpolated points not counted)"
+    )
+    interpolated_points: int = Field(
+        0,
+        ge=0,
+        description="rows of the trajectory flagged `interpolated` (points between survey "
+        "stations): left out of every survey's station count, MD range, TD, maximum DLS and "
+        "uncertainty",
+    )
     surveys: list[Survey]
     uncertainty: UncertaintyStatement | None = Field(
         None, description="the trajectory's position uncertainty (absent: none computed)"
@@ -292,6 +307,7 @@ def summarize(
     Trajectory.validate_table(trajectory)
     if trajectory.num_rows == 0:
         raise EmptyTableError("trajectory", "a survey summary needs at least one station")
+    stations = _stations(trajectory)
     north = (trajectory.schema.field("azi").metadata or {})[NORTH_KEY].decode()
     stated = statement_of(trajectory)
     return SurveySummary(
@@ -300,9 +316,10 @@ def summarize(
         run=_run(provenance) if provenance is not None else None,
         north_reference=north,
         calculation=calculation_of(trajectory),
-        station_count=trajectory.num_rows,
+        station_count=stations.num_rows,
+        interpolated_points=trajectory.num_rows - stations.num_rows,
         surveys=_surveys(
-            trajectory,
+            stations,
             stated.confidence if stated is not None else None,
             _min_course(provenance),
         ),
@@ -312,6 +329,33 @@ def summarize(
         qc=_qc(tables) if _has_qc(tables) else None,
         drift=_drift(tables["drift"]) if "drift" in tables else None,
     )
+
+
+def _stations(trajectory: pa.Table) -> pa.Table:
+    """The survey stations of ``trajectory``: its rows less the points between stations
+    (:data:`~pipeline.uncertainty.stated.INTERPOLATED_COLUMN`). On the minimum-curvature
+    arc a point splits, each piece's DLS is the course's, so a station's ``dls`` stays its
+    course's. A survey of points only is refused: it has no station to summarize."""
+    between = interpolated_rows(trajectory)
+    if not between.any():
+        return trajectory
+    stations = trajectory.filter(pa.array(~between))
+    if "survey" not in trajectory.column_names:
+        if stations.num_rows == 0:
+            raise ValueError(
+                f"every one of the trajectory's {trajectory.num_rows} rows is flagged "
+                "interpolated (a point between survey stations): a survey summary needs at "
+                "least one station"
+            )
+        return stations
+    kept = set(stations.column("survey").to_pylist())
+    for name in dict.fromkeys(trajectory.column("survey").to_pylist()):
+        if name not in kept:
+            raise ValueError(
+                f"every row of the trajectory's survey {name!r} is flagged interpolated (a "
+                "point between survey stations): a survey summary needs each survey's stations"
+            )
+    return stations
 
 
 def _drift(readings: pa.Table) -> DriftRate:

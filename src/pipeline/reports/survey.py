@@ -598,6 +598,11 @@ def _statement_words(stated: Statement, conf: str | None) -> str:
             f"{stated.without_sigma} station(s) have no σ (outside the error model's range, "
             "or below such a station)."
         )
+    if stated.interpolated_points:
+        words.append(
+            f"{stated.interpolated_points} row(s) are points interpolated between survey "
+            "stations: no σ, and not counted as stations."
+        )
     return " ".join(words)
 
 

@@ -30,6 +30,7 @@ from pipeline.uncertainty.stated import (
     CARRIED_KEY,
     CONFIDENCE_KEY,
     FAMILIES,
+    INTERPOLATED_COLUMN,
     WORDS,
     Family,
     file_statements,
@@ -114,8 +115,8 @@ def carried_uncertainty(stations: pa.Table) -> Carried:
             if "confidence" in stated and (off := _off_confidence(stations, kept, stated)):
                 refused.append(f"columns {_listed(kept)}: {off}")
                 kept = []
-    if kept and FLAG_COLUMN in stations.column_names:
-        kept.append(FLAG_COLUMN)
+    if kept:  # the flags of the σ go with it: no σ outside the model, or between stations
+        kept.extend(c for c in (FLAG_COLUMN, INTERPOLATED_COLUMN) if c in stations.column_names)
     tie_on = _tie_on(stations, refused) if kept else None
     return Carried(
         fields=tuple(stations.schema.field(c) for c in kept),

@@ -18,13 +18,10 @@ from numpy.typing import NDArray
 
 from pipeline.errors import SurveyCheckWarning
 from pipeline.uncertainty.carried import FLAG_COLUMN
-from pipeline.uncertainty.stated import WORDS
+from pipeline.uncertainty.stated import INTERPOLATED_COLUMN, WORDS
 from pipeline.uncertainty.tieon import tie_on_of, with_tie_on
 
 __all__ = ["INTERPOLATED_COLUMN", "uncertainty_on_points"]
-
-INTERPOLATED_COLUMN = "interpolated"
-"""Per point: it lies between survey stations (True), so its uncertainty columns are NaN."""
 
 
 def uncertainty_on_points(

@@ -22,16 +22,22 @@ from pipeline.contracts import DESCRIPTION_KEY
 from pipeline.uncertainty.ellipse import ellipses
 from pipeline.uncertainty.tieon import TieOn, TieOnRecord, tie_on_of, with_tie_on
 
+INTERPOLATED_COLUMN = "interpolated"
+"""Per row: a point between survey stations (True), not a station: its uncertainty columns
+are NaN (the error model gives stations' σ, and a point's is no interpolation of theirs)."""
+
 __all__ = [
     "CARRIED_KEY",
     "CONFIDENCE_KEY",
     "DIMENSIONS_KEY",
     "ERROR_MODEL_KEY",
     "FAMILIES",
+    "INTERPOLATED_COLUMN",
     "Extent",
     "Family",
     "Statement",
     "file_statements",
+    "interpolated_rows",
     "is_carried",
     "model_words",
     "statement_of",
@@ -131,6 +137,8 @@ class Statement:
     """each survey's tie-on and whether its uncertainty is in the σ (none recorded: empty)"""
     from_stations_file: bool = False
     """the columns are the stations file's, carried as it stated them (False: computed)"""
+    interpolated_points: int = 0
+    """rows between survey stations (:data:`INTERPOLATED_COLUMN`): no σ, and not stations"""
 
     def source_words(self) -> str:
         """Where the uncertainty comes from, in words, where the stations file stated it
@@ -161,14 +169,17 @@ class Statement:
             "stations_without_sigma": self.without_sigma,
             "tie_on": [t.model_dump(mode="json") for t in self.tie_on],
             "from_stations_file": self.from_stations_file,
+            "interpolated_points": self.interpolated_points,
         }
 
 
 def statement_of(table: pa.Table) -> Statement | None:
     """:class:`Statement` of a trajectory with uncertainty columns (``md`` and
     ``ellipse_major``, or the horizontal covariances whose ellipse it is; None without them
-    or rows). TD: the station of the largest MD (the last of equal
-    ones). ``ValueError`` where columns state different models or confidences."""
+    or rows). Rows flagged :data:`INTERPOLATED_COLUMN` are points between stations, not
+    stations: counted apart, never the largest, TD or a station without σ (None: no row is
+    a station). TD: the station of the largest MD (the last of equal ones). ``ValueError``
+    where columns state different models or confidences."""
     names = set(table.column_names)
     horizontal = {"cov_nn", "cov_ne", "cov_ee"}
     if "md" not in names or not ({"ellipse_major"} <= names or horizontal <= names):
@@ -200,8 +211,11 @@ def statement_of(table: pa.Table) -> Statement | None:
             semi_major_conf=None if conf is None else _defined(conf[row]),
         )
 
-    sized = np.isfinite(major)
-    deepest = len(md) - 1 - int(np.argmax(md[::-1]))
+    station = ~interpolated_rows(table)
+    if not station.any():
+        return None
+    sized = np.isfinite(major) & station
+    deepest = len(md) - 1 - int(np.argmax(np.where(station, md, -np.inf)[::-1]))
     return Statement(
         error_model=stated.get("error_model"),
         confidence=float(stated["confidence"]) if "confidence" in stated else None,
@@ -212,10 +226,20 @@ def statement_of(table: pa.Table) -> Statement | None:
         ),
         largest=extent(int(np.argmax(np.where(sized, major, -np.inf)))) if sized.any() else None,
         at_td=extent(deepest),
-        without_sigma=int((~sized).sum()),
+        without_sigma=int((station & ~sized).sum()),
         tie_on=() if (ties := tie_on_of(table)) is None else ties.surveys,
         from_stations_file=is_carried(table),
+        interpolated_points=int((~station).sum()),
     )
+
+
+def interpolated_rows(table: pa.Table) -> NDArray[np.bool_]:
+    """Per row, whether :data:`INTERPOLATED_COLUMN` flags it a point between survey
+    stations (all False without the column; a null is a station)."""
+    if INTERPOLATED_COLUMN not in table.column_names:
+        return np.zeros(table.num_rows, np.bool_)
+    flags = table.column(INTERPOLATED_COLUMN).fill_null(False)
+    return np.asarray(flags.to_numpy(zero_copy_only=False), np.bool_)
 
 
 def is_carried(table: pa.Table) -> bool:
