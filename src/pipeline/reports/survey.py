@@ -578,11 +578,8 @@ def _statement_words(stated: Statement, conf: str | None) -> str:
         if extent.semi_major is None:
             return f"none at {fmt(extent.md)} m MD (no σ: outside the error model's range)"
         survey = f" of survey {extent.survey}" if extent.survey is not None else ""
-        at_conf = (
-            f"{fmt(extent.semi_major_conf)} m at {level}, "
-            if extent.semi_major_conf is not None
-            else ""
-        )
+        conf_m = extent.semi_major_conf
+        at_conf = f"{fmt(conf_m)} m at {level}, " if conf_m is not None else ""
         return f"{at_conf}{fmt(extent.semi_major)} m at 1σ, at {fmt(extent.md)} m MD{survey}"
 
     words = [
